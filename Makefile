@@ -1,0 +1,52 @@
+# The two commands: `make run` (the paper scene, end to end) and `make test`.
+# Every target builds its own virtual environment in .venv from pyproject.toml when needed.
+
+PYTHON ?= python3
+VENV   := .venv
+BIN    := $(VENV)/bin
+STAMP  := $(VENV)/.installed
+SCENE  ?= configs/paper-2009.toml
+ARGS   ?=
+
+export MPLBACKEND := Agg
+export PYTHONHASHSEED := 0
+
+.PHONY: setup run test test-fast test-slow bench sweep clean \
+        roughness dmw interface calibrate simulate accuracy report
+
+setup: $(STAMP)
+
+$(STAMP): pyproject.toml
+	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+	$(BIN)/python -m pip install --quiet -e .
+	touch $(STAMP)
+
+## the main job: the paper scene through every stage, on a local dask cluster
+run: $(STAMP)
+	$(BIN)/hdi run $(SCENE) $(ARGS)
+
+## the tests: the default (fast) suite, then the slow suite
+test: test-fast test-slow
+
+test-fast: $(STAMP)
+	$(BIN)/python -m pytest -q -m "not slow" tests
+
+# exit code 5 (no test collected) must not pass silently in the default suite; the slow suite may be empty
+test-slow: $(STAMP)
+	$(BIN)/python -m pytest -q -m slow tests; rc=$$?; \
+	if [ $$rc -eq 5 ]; then echo "no slow tests collected"; exit 0; fi; exit $$rc
+
+## speed and memory: medians and ratios against baselines measured in the same run
+bench: $(STAMP)
+	$(BIN)/python -m benchmarks.run --out benchmarks/results/bench.json
+
+## a larger default grid: paper protrusions x 3 roughness sets x 3 damping ratios
+sweep: $(STAMP)
+	$(BIN)/hdi sweep configs/sweep-3x3.toml $(ARGS)
+
+roughness dmw interface calibrate simulate accuracy report: $(STAMP)
+	$(BIN)/hdi $@ $(SCENE) $(ARGS)
+
+clean:
+	rm -rf results .pytest_cache

@@ -1,0 +1,137 @@
+"""Asperity statistics of a Gaussian rough surface (McCool / Nayak) and the plasticity index.
+
+All lengths in SI inside the functions unless the name says otherwise; docstrings give units.
+
+References
+----------
+.. [Nayak71] P. R. Nayak, "Random process model of rough surfaces", J. Lubr. Technol. 93 (1971) 398-407.
+.. [McCool86] J. I. McCool, "Comparison of models for the contact of rough surfaces", Wear 107 (1986) 37-60.
+.. [GW66] J. A. Greenwood, J. B. P. Williamson, Proc. R. Soc. Lond. A 295 (1966) 300-319.
+.. [KE03] L. Kogut, I. Etsion, "A finite element based elastic-plastic model for the contact of rough
+   surfaces", Tribol. Trans. 46 (2003) 383-390 (plasticity index in the CEB/KE form).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: Lower bound of the bandwidth parameter for which McCool's summit-height variance is positive.
+ALPHA_MIN = 0.8968
+
+
+def moments_from_statistics(sigma: float, eta: float, R: float) -> tuple[float, float, float]:
+    """Profile spectral moments that reproduce ``(sigma, eta, R)`` [McCool86].
+
+    Inverts ``eta = m4/(6 pi sqrt(3) m2)`` and ``R = 0.375 sqrt(pi/m4)``.
+
+    Parameters
+    ----------
+    sigma : rms height [m]
+    eta : summit density [m^-2]
+    R : mean summit radius [m]
+
+    Returns
+    -------
+    m0 [m^2], m2 [1], m4 [m^-2]
+    """
+    m4 = np.pi * (0.375 / R) ** 2
+    m2 = m4 / (6.0 * np.pi * np.sqrt(3.0) * eta)
+    return sigma**2, m2, m4
+
+
+def statistics_from_moments(m0: float, m2: float, m4: float) -> dict[str, float]:
+    """Summit density, radius and bandwidth from profile moments [Nayak71, McCool86].
+
+    ``eta = m4 / (6 pi sqrt(3) m2)``, ``R = 0.375 sqrt(pi/m4)``, ``alpha = m0 m4 / m2^2``.
+
+    Parameters
+    ----------
+    m0 : height variance [m^2]
+    m2 : slope variance [1]
+    m4 : curvature variance [m^-2]
+
+    Returns
+    -------
+    dict with ``sigma`` [m], ``eta`` [m^-2], ``R`` [m], ``alpha`` [1]
+    """
+    eta = m4 / (6.0 * np.pi * np.sqrt(3.0) * m2)
+    R = 0.375 * np.sqrt(np.pi / m4)
+    return {"sigma": float(np.sqrt(m0)), "eta": float(eta), "R": float(R), "alpha": float(m0 * m4 / m2**2)}
+
+
+def bandwidth_alpha(sigma: float, eta: float, R: float) -> float:
+    """Nayak bandwidth parameter ``alpha = 2412.74 (sigma eta R)^2`` [McCool86] [1].
+
+    Parameters
+    ----------
+    sigma : rms height [m]
+    eta : summit density [m^-2]
+    R : summit radius [m]
+    """
+    return 2412.74 * (sigma * eta * R) ** 2
+
+
+def summit_sigma(sigma: float, eta: float, R: float) -> float:
+    """Standard deviation of summit heights [m] [McCool86].
+
+    ``sigma_s = sqrt(sigma^2 - 3.717e-4 / (eta R)^2)``; needs ``alpha > 0.8968``.
+
+    Raises
+    ------
+    ValueError
+        When ``alpha <= 0.8968`` (the summit-height variance would be negative): the surface is
+        outside the validity of McCool's relations.
+    """
+    alpha = bandwidth_alpha(sigma, eta, R)
+    if not alpha > ALPHA_MIN:
+        raise ValueError(f"bandwidth alpha = {alpha:.4g} <= {ALPHA_MIN}: McCool's summit statistics need "
+                         f"alpha > {ALPHA_MIN} (sigma={sigma:.3g} m, eta={eta:.3g} m^-2, R={R:.3g} m)")
+    return float(np.sqrt(sigma**2 - 3.717e-4 / (eta * R) ** 2))
+
+
+def summit_offset(sigma: float, eta: float, R: float) -> float:
+    """Distance between the mean of surface heights and the mean of summit heights ``y_s`` [m].
+
+    ``y_s = 4 sigma / sqrt(pi alpha)`` [McCool86].
+    """
+    return float(4.0 * sigma / np.sqrt(np.pi * bandwidth_alpha(sigma, eta, R)))
+
+
+def composite_modulus(E1: float, E2: float, nu1: float, nu2: float | None = None) -> float:
+    """Composite (Hertz) modulus ``1/E' = (1-nu1^2)/E1 + (1-nu2^2)/E2`` [any pressure unit].
+
+    SPEC.md section 1 (Johnson, Contact Mechanics, 1985, eq. 4.22).
+    """
+    nu2 = nu1 if nu2 is None else nu2
+    return 1.0 / ((1 - nu1**2) / E1 + (1 - nu2**2) / E2)
+
+
+def ke_hardness_factor(nu: float) -> float:
+    """Hardness coefficient ``K = 0.454 + 0.41 nu`` [1] (Chang-Etsion-Bogy 1987; Kogut-Etsion 2002)."""
+    return 0.454 + 0.41 * nu
+
+
+def plasticity_index_gw(E: float, H: float, sigma_s: float, R: float) -> float:
+    """Greenwood-Williamson plasticity index ``psi = (E'/H) sqrt(sigma_s/R)`` [GW66] [1].
+
+    Parameters
+    ----------
+    E : composite modulus E' [Pa]
+    H : hardness [Pa]
+    sigma_s : summit-height standard deviation [m]
+    R : summit radius [m]
+    """
+    return E / H * np.sqrt(sigma_s / R)
+
+
+def plasticity_index_ke(E: float, H: float, sigma_s: float, R: float, nu: float) -> float:
+    """CEB / Kogut-Etsion plasticity index ``psi = (2E'/(pi K H)) sqrt(sigma_s/R)`` [KE03] [1].
+
+    Equals ``sqrt(sigma_s / w_c)`` with the critical interference ``w_c`` of Kogut-Etsion 2002.
+    """
+    return 2.0 * E / (np.pi * ke_hardness_factor(nu) * H) * np.sqrt(sigma_s / R)
+
+
+def hardness_from_plasticity_gw(psi: float, E: float, sigma_s: float, R: float) -> float:
+    """Hardness [Pa] that gives the GW plasticity index ``psi`` (inverse of :func:`plasticity_index_gw`)."""
+    return E / psi * np.sqrt(sigma_s / R)

@@ -1,0 +1,476 @@
+"""Scene files: load, validate and override a TOML scene.
+
+A scene is one TOML file with the sections of ``DESIGN.md``. Units are part of the key names
+(``flying_height_nm``), so a key with the right quantity in another unit (``flying_height_um``)
+is reported as a unit error rather than silently misread. Every key has a documented default
+(the paper scene's value), so a scene only states what it changes; a disabled effect's inputs
+are never required.
+
+Validation errors are :class:`SceneError` and always name the file, the ``section.key`` and
+what was expected.
+"""
+
+from __future__ import annotations
+
+import copy
+import hashlib
+import json
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Iterable
+
+try:  # Python >= 3.11
+    import tomllib
+except ModuleNotFoundError:  # pragma: no cover - Python 3.10
+    import tomli as tomllib  # type: ignore[no-redef]
+
+#: Effects a scene may ask for (DESIGN.md, "Scenes and effects").
+EFFECTS = ("air_bearing", "pitch", "dmw", "adhesion", "contact", "friction")
+
+#: Unit suffixes that may end a key name; used to tell "wrong unit" from "unknown key".
+UNIT_SUFFIXES = (
+    "nm", "um", "mm", "m", "gpa", "mpa", "pa", "khz", "hz", "mhz", "ms", "us", "ns", "s",
+    "j_m2", "n_s_m", "kg_m3", "per_um2", "per_m2", "kg", "n", "mn", "rpm", "sigma",
+)
+
+
+class SceneError(ValueError):
+    """A scene file (or an override) is invalid. The message names file, key and expectation."""
+
+
+@dataclass(frozen=True)
+class Key:
+    """Schema of one scene key.
+
+    Parameters
+    ----------
+    kind
+        ``"float"``, ``"int"``, ``"str"``, ``"bool"``, ``"floats"`` (list of numbers),
+        ``"strs"`` (list of strings), ``"range"`` (table ``{start, stop, step}``),
+        ``"float_or_str"`` or ``"tables"`` (list of tables; validated by the stage using it).
+    default
+        Value when absent (``None``: optional, no default).
+    check
+        ``(predicate, expectation)``; the expectation text goes into the error message.
+    length
+        Required list length for ``floats``.
+    path
+        The value names a file that must exist (relative paths are taken from the scene's folder).
+    doc
+        One line with unit and source, shown in errors and ``hdi ... --help-keys``.
+    """
+
+    kind: str
+    default: Any = None
+    check: tuple[Callable[[Any], bool], str] | None = None
+    length: int | None = None
+    path: bool = False
+    choices: tuple[str, ...] | None = None
+    doc: str = ""
+
+
+_pos = (lambda v: v > 0, "a positive number")
+_nonneg = (lambda v: v >= 0, "a number >= 0")
+_frac = (lambda v: 0 <= v < 1, "a number in [0, 1)")
+
+#: The schema: section -> key -> Key. Defaults are the paper scene (SPEC.md section 6).
+SCHEMA: dict[str, dict[str, Key]] = {
+    "scene": {
+        "name": Key("str", None, (lambda v: bool(re.fullmatch(r"[A-Za-z0-9_.-]+", v)),
+                                  "a name of letters, digits, '.', '_' or '-'"),
+                    doc="scene name; outputs go to results/<name>/"),
+        "effects": Key("strs", list(EFFECTS), choices=EFFECTS,
+                       doc="effects to simulate; others are not evaluated at all"),
+        "description": Key("str", "", doc="free text"),
+    },
+    "slider": {
+        "length_mm": Key("float", 0.85, _pos, doc="slider length [mm] (femto, recon)"),
+        "width_mm": Key("float", 0.70, _pos, doc="slider width [mm] (recon)"),
+        "thickness_mm": Key("float", 0.23, _pos, doc="slider thickness [mm] (recon)"),
+        "density_kg_m3": Key("float", 4250.0, _pos, doc="slider density [kg/m^3] (Al2O3-TiC, recon)"),
+        "front_arm_mm": Key("float", 0.30, _pos, doc="front air-bearing centre ahead of the CG [mm] (recon)"),
+        "rear_arm_mm": Key("float", 0.40, _pos, doc="rear air-bearing centre behind the CG [mm] (recon)"),
+        "tfc_from_trailing_edge_um": Key("float", 8.0, _nonneg,
+                                         doc="TFC bulge centre from the trailing edge [um] (paper)"),
+    },
+    "air_bearing": {
+        "flying_height_nm": Key("float", 11.0, _pos, doc="nominal flying height FH0 [nm] (paper)"),
+        "frequencies_khz": Key("floats", [120.0, 300.0], (lambda v: all(x > 0 for x in v) and v[0] < v[1],
+                                                          "two positive increasing frequencies"), length=2,
+                               doc="air-bearing natural frequencies [kHz] (recon)"),
+        "damping_ratio": Key("float", 0.05, _frac, doc="modal damping ratio [1] (recon)"),
+        "rear_exponent": Key("float", 2.0, _pos, doc="rear bearing nonlinearity exponent n [1] (recon)"),
+        "rear_reference_gap_nm": Key("float", None, _pos,
+                                     doc="rear bearing reference gap g0 [nm] (recon; default FH0)"),
+        "stiffness_root": Key("str", "pitch-first", choices=("pitch-first", "bounce-first"),
+                              doc="which root of the modal inversion to use (SPEC.md section 4)"),
+    },
+    "tfc": {
+        "half_length_um": Key("float", 3.0, _pos, doc="ellipsoid semi-axis along sliding a [um] (paper)"),
+        "half_width_um": Key("float", 25.0, _pos, doc="ellipsoid semi-axis across b [um] (paper)"),
+        "protrusion_nm": Key("float", 11.0, _nonneg, doc="TFC protrusion delta [nm]"),
+    },
+    "roughness": {
+        "sigma_nm": Key("float", 0.52, _pos, doc="combined rms roughness sigma [nm] (recon)"),
+        "summit_radius_um": Key("float", 5.0, _pos, doc="summit radius R [um] (recon)"),
+        "summit_density_per_um2": Key("float", 10.0, _pos, doc="summit density eta [um^-2] (recon)"),
+        "afm": Key("strs", None, path=True, doc="AFM scans (any SurfaceTopography format); overrides the statistics"),
+        "route": Key("str", "spectral", choices=("spectral", "summits"),
+                     doc="which AFM route feeds the interface model"),
+        "channel": Key("str", None, doc="AFM channel name (default: the height channel)"),
+        "detrend": Key("str", "plane", choices=("center", "height", "plane", "curvature"),
+                       doc="detrending of AFM scans (SurfaceTopography detrend_mode)"),
+    },
+    "materials": {
+        "disk_modulus_gpa": Key("float", 150.0, _pos, doc="disk Young's modulus [GPa] (recon)"),
+        "tfc_modulus_gpa": Key("float", 200.0, _pos, doc="TFC/slider Young's modulus [GPa] (recon)"),
+        "poisson_ratio": Key("float", 0.3, (lambda v: 0 <= v < 0.5, "a number in [0, 0.5)"),
+                             doc="Poisson ratio of both bodies [1] (recon)"),
+        "hardness_gpa": Key("float", None, _pos, doc="hardness of the softer body H [GPa]"),
+        "plasticity_index": Key("float", 0.52, _pos,
+                                doc="GW plasticity index psi [1] (paper); sets H when hardness_gpa is absent"),
+        "composite_modulus_gpa": Key("float", None, _pos,
+                                     doc="composite modulus E' [GPa]; overrides the one from the two moduli"),
+    },
+    "lubricant": {
+        "thickness_nm": Key("float", 0.75, _nonneg, doc="bonded lubricant thickness t [nm] (paper)"),
+        "work_of_adhesion_j_m2": Key("float", 0.106, _nonneg, doc="work of adhesion dgamma [J/m^2] (recon, CML)"),
+        "intermolecular_distance_nm": Key("float", 0.3, _pos, doc="intermolecular distance eps [nm] (recon, CML)"),
+    },
+    "contact": {
+        "k": Key("float", None, doc="contact criterion d < k sigma [1]; absent: from calibration"),
+        "section_depth_sigma": Key("float", 3.0, _pos, doc="nominal-area section depth s_n [sigma] (recon)"),
+        "damping_n_s_m": Key("float", 0.0, _nonneg, doc="contact damping c_c [N s/m] (recon)"),
+        "friction_law": Key("str", "shear-strength", choices=("shear-strength",),
+                            doc="single-asperity friction law (SPEC.md section 2)"),
+    },
+    "dmw": {
+        "source": Key("str", "synthetic", doc='"synthetic" or a measured record (CSV or NetCDF)'),
+        "quantity": Key("str", "displacement", choices=("displacement", "velocity"),
+                        doc="what a measured record holds"),
+        "column": Key("str", None, doc="column/variable of a measured record"),
+        "rms_nm": Key("float", 0.5, _nonneg, doc="DMW rms [nm] (recon: set for FHM ~12.5 %)"),
+        "band_khz": Key("floats", [10.0, 500.0], (lambda v: 0 <= v[0] < v[1], "0 <= lo < hi"), length=2,
+                        doc="DMW band [kHz] (paper)"),
+        "exponent": Key("float", -2.0, doc="power-law exponent of the displacement PSD [1] (recon)"),
+        "rpm": Key("float", 5425.0, _pos, doc="disk speed [rpm] (paper)"),
+        "radius_mm": Key("float", 34.3, _pos, doc="track radius [mm] (paper)"),
+        "seed": Key("int", 20090601, _nonneg, doc="seed of the synthetic record (numpy SeedSequence)"),
+        "sample_rate_mhz": Key("float", 4.0, _pos, doc="sampling rate [MS/s] (paper)"),
+        "duration_ms": Key("float", None, _pos, doc="record length [ms] (default: the simulated duration)"),
+        "sample_rate_hz": Key("float", None, _pos, doc="sampling rate of a measured record [Hz] if it has no time axis"),
+    },
+    "touchdown": {
+        "onset_nm": Key("float", 9.8, _nonneg, doc="measured touchdown protrusion [nm] (paper)"),
+        "previous_nm": Key("float", 9.6, _nonneg, doc="previous actuation step, no contact [nm] (paper)"),
+    },
+    "solver": {
+        "rtol": Key("float", 1e-6, _pos, doc="relative error tolerance of the adaptive integrator [1]"),
+        "atol_nm": Key("float", 1e-4, _pos, doc="absolute error tolerance on displacements [nm]"),
+        "max_step_ns": Key("float", 250.0, _pos, doc="largest time step [ns]"),
+        "duration_ms": Key("float", 2.0, _pos, doc="simulated time [ms]"),
+        "transient_ms": Key("float", 0.5, _nonneg, doc="discarded start-up transient [ms]"),
+        "output_step_ns": Key("float", 250.0, _pos, doc="sampling of histories and steady-window statistics [ns]"),
+        "table_step_nm": Key("float", 0.01, _pos, doc="interface-table separation step [nm]"),
+        "table_min_sigma": Key("float", -8.0, doc="interface table starts at this separation [sigma_s]"),
+        "table_max_nm": Key("float", 30.0, _pos, doc="interface table ends at this separation [nm]"),
+        "interpolation_order": Key("int", 3, (lambda v: v in (1, 3), "1 (linear) or 3 (cubic Hermite)"),
+                                   doc="interpolation of interface tables in the dynamics"),
+        "quadrature_nodes": Key("int", 24, (lambda v: 4 <= v <= 200, "an integer in [4, 200]"),
+                                doc="Gauss-Legendre nodes per panel of the ISBL integrals"),
+        "quadrature_panels": Key("int", 4, (lambda v: 1 <= v <= 64, "an integer in [1, 64]"),
+                                 doc="panels per population range of the ISBL integrals"),
+        "fhm_measure": Key("str", "peak-to-peak", choices=("peak-to-peak", "3std"),
+                           doc="FHM/BV measure (SPEC.md section 4)"),
+    },
+    "sweep": {
+        "protrusion_nm": Key("range", {"start": 0.0, "stop": 15.0, "step": 0.2},
+                             doc="protrusion grid {start, stop, step} [nm] (paper)"),
+        "roughness": Key("tables", None, doc="labelled roughness sets: [{label=..., sigma_nm=...}, ...]"),
+        "damping_ratio": Key("floats", None, (lambda v: len(v) > 0 and all(0 <= x < 1 for x in v),
+                                              "a non-empty list of numbers in [0, 1)"),
+                             doc="modal damping ratios [1]"),
+        "batch_size": Key("int", 8, (lambda v: v >= 1, "an integer >= 1"), doc="scenes per dask task"),
+        "histories_nm": Key("floats", None, doc="protrusions whose time histories are kept [nm]"),
+    },
+    "report": {
+        "histories_nm": Key("floats", [5.0, 11.0], doc="protrusions shown in the history figures [nm]"),
+    },
+}
+
+
+def _strip_unit(key: str) -> tuple[str, str | None]:
+    for suffix in sorted(UNIT_SUFFIXES, key=len, reverse=True):
+        if key.endswith("_" + suffix):
+            return key[: -len(suffix) - 1], suffix
+    return key, None
+
+
+@dataclass
+class Scene:
+    """A validated scene.
+
+    Attributes
+    ----------
+    path
+        The TOML file it came from (``None`` for scenes built in code).
+    config
+        ``section -> key -> value`` with every default filled in.
+    overrides
+        The ``--set`` strings applied, in order (kept for provenance).
+    """
+
+    path: Path | None
+    config: dict[str, dict[str, Any]]
+    overrides: list[str] = field(default_factory=list)
+
+    @property
+    def name(self) -> str:
+        return self.config["scene"]["name"]
+
+    @property
+    def effects(self) -> frozenset[str]:
+        return frozenset(self.config["scene"]["effects"])
+
+    def __getitem__(self, section: str) -> dict[str, Any]:
+        return self.config[section]
+
+    def has(self, effect: str) -> bool:
+        """Whether the scene asks for ``effect`` (one of :data:`EFFECTS`)."""
+        return effect in self.effects
+
+    @property
+    def hash(self) -> str:
+        """SHA-256 of the canonical (sorted-key JSON) configuration: the scene's identity."""
+        blob = json.dumps(self.config, sort_keys=True, default=str).encode()
+        return hashlib.sha256(blob).hexdigest()
+
+    def replace(self, **sections: dict[str, Any]) -> "Scene":
+        """A copy with some keys changed, validated again: ``scene.replace(tfc={"protrusion_nm": 9})``."""
+        cfg = copy.deepcopy(self.config)
+        for sec, keys in sections.items():
+            cfg.setdefault(sec, {}).update(keys)
+        raw = {s: {k: v for k, v in d.items() if v is not None} for s, d in cfg.items()}
+        return validate(raw, self.path, overrides=self.overrides, resolve_paths=False)
+
+    def to_toml_text(self) -> str:
+        """The configuration as JSON text (stored in dataset provenance)."""
+        return json.dumps(self.config, sort_keys=True, default=str)
+
+
+def _where(path: Path | None) -> str:
+    return str(path) if path is not None else "<scene>"
+
+
+def _check_value(section: str, key: str, spec: Key, value: Any, where: str, base: Path | None) -> Any:
+    name = f"{section}.{key}"
+    doc = f" ({spec.doc})" if spec.doc else ""
+
+    def fail(expected: str, got: Any = value) -> SceneError:
+        return SceneError(f"{where}: {name} = {got!r}: expected {expected}{doc}")
+
+    kind = spec.kind
+    if kind == "float":
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise fail("a number")
+        value = float(value)
+        if value != value or value in (float("inf"), float("-inf")):
+            raise fail("a finite number")
+    elif kind == "int":
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise fail("an integer")
+    elif kind == "str":
+        if not isinstance(value, str):
+            raise fail("a string")
+        if spec.choices and value not in spec.choices:
+            raise fail("one of " + ", ".join(map(repr, spec.choices)))
+    elif kind == "bool":
+        if not isinstance(value, bool):
+            raise fail("true or false")
+    elif kind == "floats":
+        if not isinstance(value, list) or any(isinstance(v, bool) or not isinstance(v, (int, float)) for v in value):
+            raise fail("a list of numbers")
+        value = [float(v) for v in value]
+        if spec.length is not None and len(value) != spec.length:
+            raise fail(f"a list of {spec.length} numbers")
+    elif kind == "strs":
+        if not isinstance(value, list) or any(not isinstance(v, str) for v in value):
+            raise fail("a list of strings")
+        if spec.choices:
+            bad = [v for v in value if v not in spec.choices]
+            if bad:
+                raise fail(f"names from {list(spec.choices)}; {bad[0]!r} is not an effect that exists"
+                           if key == "effects" else f"values from {list(spec.choices)}")
+            if len(set(value)) != len(value):
+                raise fail("no repeated names")
+    elif kind == "range":
+        if not isinstance(value, dict) or set(value) != {"start", "stop", "step"}:
+            raise fail("a table {start = ..., stop = ..., step = ...}")
+        if any(isinstance(v, bool) or not isinstance(v, (int, float)) for v in value.values()):
+            raise fail("numbers for start, stop and step")
+        value = {k: float(v) for k, v in value.items()}
+        if value["step"] <= 0:
+            raise fail("step > 0")
+        if value["stop"] < value["start"]:
+            raise fail("stop >= start (the grid is not reversed)")
+        if value["start"] < 0:
+            raise fail("protrusions >= 0 (start is negative)")
+    elif kind == "tables":
+        if not isinstance(value, list) or not value or any(not isinstance(v, dict) for v in value):
+            raise fail("a non-empty list of tables")
+    if spec.check is not None and kind not in ("tables",):
+        pred, expected = spec.check
+        if not pred(value):
+            raise fail(expected)
+    if spec.path and value is not None:
+        items = value if isinstance(value, list) else [value]
+        resolved = []
+        for item in items:
+            p = Path(item).expanduser()
+            if not p.is_absolute() and base is not None:
+                p = (base / p).resolve()
+            if not p.exists():
+                raise SceneError(f"{where}: {name}: file {item!r} does not exist (looked for {p}){doc}")
+            resolved.append(str(p))
+        value = resolved if isinstance(value, list) else resolved[0]
+    return value
+
+
+def validate(raw: dict[str, Any], path: Path | None = None, *, overrides: Iterable[str] = (),
+             resolve_paths: bool = True) -> Scene:
+    """Validate a parsed scene and fill in defaults.
+
+    Parameters
+    ----------
+    raw
+        The parsed TOML (``section -> key -> value``).
+    path
+        The file it came from, for error messages and relative file paths.
+
+    Returns
+    -------
+    Scene
+
+    Raises
+    ------
+    SceneError
+        For an unknown section or key, a key in the wrong unit, a value of the wrong type or out of
+        range, an effect that does not exist, or a file that does not exist.
+    """
+    where = _where(path)
+    base = path.parent if (path is not None and resolve_paths) else None
+    config: dict[str, dict[str, Any]] = {}
+    for section, table in raw.items():
+        if section not in SCHEMA:
+            raise SceneError(f"{where}: unknown section [{section}]: expected one of "
+                             + ", ".join(f"[{s}]" for s in SCHEMA))
+        if not isinstance(table, dict):
+            raise SceneError(f"{where}: {section} must be a table [{section}]")
+    for section, keys in SCHEMA.items():
+        table = raw.get(section, {})
+        out: dict[str, Any] = {}
+        for key, value in table.items():
+            if key not in keys:
+                stem, unit = _strip_unit(key)
+                twins = [k for k in keys if _strip_unit(k)[0] == stem]
+                if twins and unit is not None:
+                    want = _strip_unit(twins[0])[1]
+                    raise SceneError(f"{where}: {section}.{key}: wrong unit {unit!r}; expected {want!r} "
+                                     f"(write it as {section}.{twins[0]}; units are part of key names)")
+                raise SceneError(f"{where}: unknown key {section}.{key}: expected one of "
+                                 + ", ".join(keys))
+            out[key] = _check_value(section, key, keys[key], value, where, base)
+        for key, spec in keys.items():
+            if key not in out:
+                out[key] = copy.deepcopy(spec.default)
+        config[section] = out
+    if config["scene"]["name"] is None:
+        if path is None:
+            raise SceneError(f"{where}: scene.name is missing: expected a name")
+        config["scene"]["name"] = path.stem
+    _cross_checks(config, where)
+    return Scene(path=path, config=config, overrides=list(overrides))
+
+
+def _cross_checks(config: dict[str, dict[str, Any]], where: str) -> None:
+    td = config["touchdown"]
+    if td["previous_nm"] >= td["onset_nm"]:
+        raise SceneError(f"{where}: touchdown.previous_nm = {td['previous_nm']} must be below "
+                         f"touchdown.onset_nm = {td['onset_nm']}")
+    sol = config["solver"]
+    if sol["transient_ms"] >= sol["duration_ms"]:
+        raise SceneError(f"{where}: solver.transient_ms = {sol['transient_ms']} must be shorter than "
+                         f"solver.duration_ms = {sol['duration_ms']}")
+    eff = set(config["scene"]["effects"])
+    if "friction" in eff and "contact" not in eff:
+        raise SceneError(f"{where}: scene.effects: 'friction' needs 'contact' (friction acts only in contact)")
+    if "pitch" in eff and "air_bearing" not in eff:
+        raise SceneError(f"{where}: scene.effects: 'pitch' needs 'air_bearing'")
+    if "dmw" in eff:
+        src = config["dmw"]["source"]
+        if src != "synthetic":
+            p = Path(src)
+            if not p.is_absolute() and where != "<scene>":
+                p = Path(where).parent / p
+            if not p.exists():
+                raise SceneError(f"{where}: dmw.source: file {src!r} does not exist (looked for {p}); "
+                                 f"expected \"synthetic\" or a record file")
+            config["dmw"]["source"] = str(p.resolve())
+    lo, hi = config["dmw"]["band_khz"]
+    nyq = config["dmw"]["sample_rate_mhz"] * 1e3 / 2
+    if hi > nyq:
+        raise SceneError(f"{where}: dmw.band_khz upper edge {hi} kHz is above the Nyquist frequency "
+                         f"{nyq} kHz of dmw.sample_rate_mhz = {config['dmw']['sample_rate_mhz']}")
+
+
+def parse_override(text: str) -> tuple[str, str, Any]:
+    """Parse ``section.key=value`` (value in TOML syntax; bare words are strings)."""
+    m = re.fullmatch(r"\s*([A-Za-z_]+)\.([A-Za-z0-9_]+)\s*=\s*(.*)", text, re.S)
+    if not m:
+        raise SceneError(f"--set {text!r}: expected section.key=value")
+    section, key, value = m.groups()
+    try:
+        parsed = tomllib.loads(f"v = {value}")["v"]
+    except tomllib.TOMLDecodeError:
+        parsed = value.strip()
+    return section, key, parsed
+
+
+def load_scene(path: str | Path, overrides: Iterable[str] = ()) -> Scene:
+    """Read, override and validate a scene file.
+
+    Parameters
+    ----------
+    path
+        The TOML scene.
+    overrides
+        ``section.key=value`` strings applied after reading (``--set`` on the command line).
+
+    Raises
+    ------
+    SceneError
+        For a missing or unreadable file, bad TOML, or any invalid field (see :func:`validate`).
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise SceneError(f"{path}: scene file does not exist")
+    try:
+        raw = tomllib.loads(path.read_text())
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise SceneError(f"{path}: not valid TOML: {exc}") from None
+    overrides = list(overrides)
+    for text in overrides:
+        section, key, value = parse_override(text)
+        raw.setdefault(section, {})
+        if not isinstance(raw[section], dict):
+            raise SceneError(f"{path}: --set {text!r}: [{section}] is not a table")
+        raw[section][key] = value
+    return validate(raw, path, overrides=overrides)
+
+
+def scene_from_dict(raw: dict[str, Any], base: Path | None = None) -> Scene:
+    """Validate a scene given as a dict (for tests and notebooks)."""
+    raw = copy.deepcopy(raw)
+    raw.setdefault("scene", {}).setdefault("name", "scene")
+    return validate(raw, base / "scene.toml" if base else None)
