@@ -27,6 +27,15 @@ from . import __version__
 
 ENGINE = "netcdf4"
 
+#: The scene keys each stage's output depends on (``"section"`` or ``"section.key"``): a stage
+#: whose dataset carries the same key hash (attribute ``stage_key``) is up to date and not rerun.
+STAGE_INPUTS: dict[str, tuple[str, ...]] = {
+    "roughness": ("roughness", "materials"),
+    "dmw": ("dmw", "solver.duration_ms", "scene.effects", "slider.length_mm", "slider.front_arm_mm"),
+    "interface": ("roughness", "materials", "lubricant", "solver.table_step_nm", "solver.table_min_sigma",
+                  "solver.table_max_nm", "solver.quadrature_nodes", "solver.quadrature_panels", "scene.effects"),
+}
+
 
 class DatasetError(ValueError):
     """A dataset on disk is missing, unreadable, or lacks what a stage needs."""
@@ -53,6 +62,30 @@ def file_hash(path: str | Path, chunk: int = 1 << 20) -> str:
         while block := fh.read(chunk):
             h.update(block)
     return h.hexdigest()
+
+
+def stage_key(scene: Any, stage: str) -> str:
+    """SHA-256 of the scene keys a stage depends on (:data:`STAGE_INPUTS`); the whole config otherwise."""
+    items = STAGE_INPUTS.get(stage)
+    if items is None:
+        return scene.hash
+    picked = {}
+    for item in items:
+        section, _, key = item.partition(".")
+        picked[item] = scene.config[section][key] if key else scene.config[section]
+    return hashlib.sha256(json.dumps(picked, sort_keys=True, default=str).encode()).hexdigest()
+
+
+def is_current(path: str | Path, scene: Any, stage: str) -> bool:
+    """Whether ``path`` exists and was written by ``stage`` from the same inputs (by hash)."""
+    path = Path(path)
+    if not path.is_file():
+        return False
+    try:
+        with xr.open_dataset(path, engine=ENGINE) as ds:
+            return ds.attrs.get("stage_key") == stage_key(scene, stage)
+    except (OSError, ValueError):
+        return False
 
 
 def check_cf(ds: xr.Dataset, where: str = "dataset") -> None:
@@ -92,6 +125,7 @@ def provenance(scene: Any = None, *, stage: str, inputs: Iterable[str | Path] = 
     if scene is not None:
         attrs["scene_name"] = scene.name
         attrs["config_hash"] = scene.hash
+        attrs["stage_key"] = stage_key(scene, stage)
         attrs["config"] = scene.to_toml_text()
         attrs["effects"] = " ".join(sorted(scene.effects))
         if scene.overrides:

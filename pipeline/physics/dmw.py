@@ -1,0 +1,690 @@
+"""Dynamic microwaviness (DMW): synthesis, LDV-style processing and measured records.
+
+The DMW is the disk's vertical displacement under the slider versus time, ``w(t)`` [nm]. The paper
+measured it with a laser Doppler vibrometer (LDV) at mid-diameter, 5425 rpm, high-passed at 10 kHz,
+content up to 500 kHz, 4 MS/s, averaged over 100 revolutions, velocity integrated to displacement
+[VLP09]_ (SPEC.md section 5).
+
+Conventions
+-----------
+* Displacements in [nm], velocities in [nm/s], times in [s], frequencies in [Hz].
+* Every filter here is a zero-phase *brick-wall* filter in the discrete Fourier domain: bins with
+  ``lo <= f <= hi`` are kept unchanged, all others set to zero. This is the same band definition as
+  the synthesis, so a synthetic record passes the processing unchanged, and nothing inside the band
+  is attenuated (a Butterworth high-pass at ``lo``, even run forward-backward, halves the amplitude
+  at ``lo``, where a red DMW spectrum has most of its energy). The DFT treats the record as one
+  period of a periodic signal: exact for the synthetic record (periodic by construction) and for a
+  synchronous average over whole revolutions (the paper's record); for any other record the wrap
+  discontinuity leaks, which the linear detrend of displacement records keeps small, and which
+  integration suppresses for velocity records (leakage ~ 1/f^2 after division by ``i 2 pi f``).
+* A synthetic record is periodic with period equal to its duration, so circular delays
+  (``np.roll``, or interpolation modulo the duration) are seamless.
+
+References
+----------
+.. [VLP09] A. I. Vakis, S.-C. Lee, A. A. Polycarpou, "Dynamic head-disk interface instabilities with
+   friction for light contact (surfing) recording", IEEE Trans. Magn. 45(11) (2009) 4966-4971,
+   DOI 10.1109/TMAG.2009.2029410.
+.. [SD91] M. Shinozuka, G. Deodatis, "Simulation of stochastic processes by spectral representation",
+   Appl. Mech. Rev. 44(4) (1991) 191-204 (random-phase / random-amplitude spectral synthesis).
+.. [PW93] D. B. Percival, A. T. Walden, *Spectral Analysis for Physical Applications*, Cambridge
+   University Press (1993), ch. 6 (periodogram) and 6.17 (Welch's overlapped segment averaging).
+.. [Bra11] A. Brandt, *Noise and Vibration Analysis*, Wiley (2011), sec. 3.4 and 9.5 (integration of
+   vibration signals in the frequency domain).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+import re
+from dataclasses import dataclass, field
+from fractions import Fraction
+from pathlib import Path
+
+import numpy as np
+from scipy import signal
+
+#: Largest relative deviation of a record's time axis from a uniform grid (in sampling intervals).
+TIME_JITTER_TOL = 1e-6
+#: Relative tolerance used to decide whether a DFT bin lies on a band edge (floating-point round-off).
+EDGE_TOL = 1e-9
+
+#: Unit conversion factors to [nm] (displacement), [nm/s] (velocity) and [s] (time).
+LENGTH_UNITS = {"nm": 1.0, "um": 1e3, "micron": 1e3, "mm": 1e6, "m": 1e9, "a": 0.1, "angstrom": 0.1}
+TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9, "second": 1.0, "seconds": 1.0}
+VELOCITY_UNITS = {f"{k}/s": v for k, v in LENGTH_UNITS.items() if k in ("nm", "um", "mm", "m")}
+
+
+class DMWError(ValueError):
+    """A DMW record is unusable. The message names the file, the field and what was expected."""
+
+
+# --------------------------------------------------------------------------------------------------
+# Synthesis
+# --------------------------------------------------------------------------------------------------
+
+def n_samples(duration_s: float, sample_rate_hz: float) -> int:
+    """Number of samples of a record of ``duration_s`` [s] at ``sample_rate_hz`` [Hz] (rounded)."""
+    return int(round(duration_s * sample_rate_hz))
+
+
+def band_bins(n: int, sample_rate_hz: float, band_hz: tuple[float, float]) -> tuple[int, int]:
+    """Indices ``(k_lo, k_hi)`` of the first and last ``rfft`` bins inside ``[lo, hi]``.
+
+    Bin ``k`` has frequency ``k fs / n`` [Hz] (resolution ``1/duration``). A bin is inside when
+    ``lo <= f_k <= hi`` up to a relative :data:`EDGE_TOL`, so a band edge that is a multiple of the
+    resolution (10 kHz and 500 kHz on a 2 ms record) is included exactly; otherwise the realised
+    band ``[f_klo, f_khi]`` lies inside ``[lo, hi]`` by less than one resolution step. The DC bin is
+    never included (the DMW has zero mean).
+
+    Parameters
+    ----------
+    n : number of samples
+    sample_rate_hz : sampling rate fs [Hz]
+    band_hz : ``(lo, hi)`` [Hz]
+
+    Raises
+    ------
+    ValueError
+        When no bin lies in the band (record shorter than about ``1/(hi - lo)``).
+    """
+    lo, hi = band_hz
+    df = sample_rate_hz / n
+    k_lo = max(1, math.ceil(lo / df * (1 - EDGE_TOL)))
+    k_hi = min(n // 2, math.floor(hi / df * (1 + EDGE_TOL)))
+    if k_hi < k_lo:
+        raise ValueError(f"band [{lo:g}, {hi:g}] Hz holds no frequency of a {n}-sample record at "
+                         f"{sample_rate_hz:g} Hz (resolution {df:g} Hz): make the record longer")
+    return k_lo, k_hi
+
+
+def synthesize(rms_nm: float, band_hz: tuple[float, float], exponent: float, duration_s: float,
+               sample_rate_hz: float, seed: int, *, amplitudes: str = "gaussian") -> np.ndarray:
+    """A Gaussian, band-limited, power-law DMW record [nm] with exactly the prescribed rms.
+
+    Spectral representation [SD91]_: the ``rfft`` coefficient of bin ``k`` is
+    ``c_k = A_k (g1 + i g2) / sqrt(2)`` with ``g1, g2`` standard normal and ``A_k = f_k^(exponent/2)``
+    inside the band (:func:`band_bins`), zero outside; the record is ``irfft(c)``, rescaled to
+    ``rms_nm``. Complex-normal coefficients (Rayleigh amplitude, uniform phase) make the record an
+    exactly Gaussian, stationary, periodic process; ``amplitudes="fixed"`` keeps ``|c_k| = A_k``
+    (random phase only), whose periodogram equals the target spectrum bin by bin.
+
+    The normals are drawn for *every* ``rfft`` bin, in bin order, from
+    ``numpy.random.default_rng(numpy.random.SeedSequence(seed))``, so for one seed and record length
+    a change of band, exponent or rms keeps the phase of each bin (comparable parameter studies).
+
+    Parameters
+    ----------
+    rms_nm : rms displacement [nm] (0 gives zeros)
+    band_hz : ``(lo, hi)`` band [Hz]; ``0 <= lo < hi <= fs/2``
+    exponent : exponent of the one-sided displacement PSD, ``S(f) ~ f^exponent`` [1] (e.g. -2)
+    duration_s : record length [s]; the number of samples is ``round(duration_s * fs)``
+    sample_rate_hz : sampling rate fs [Hz]
+    seed : seed of the ``SeedSequence``
+    amplitudes : ``"gaussian"`` (default) or ``"fixed"``
+
+    Returns
+    -------
+    numpy.ndarray
+        ``w`` [nm], ``round(duration_s * fs)`` samples at times ``i / fs``; zero mean, rms ``rms_nm``.
+    """
+    if not (rms_nm >= 0 and math.isfinite(rms_nm)):
+        raise ValueError(f"rms_nm = {rms_nm!r}: expected a finite number >= 0")
+    lo, hi = float(band_hz[0]), float(band_hz[1])
+    if not (0 <= lo < hi):
+        raise ValueError(f"band_hz = {band_hz!r}: expected 0 <= lo < hi")
+    if sample_rate_hz <= 0 or hi > sample_rate_hz / 2 * (1 + EDGE_TOL):
+        raise ValueError(f"band_hz upper edge {hi:g} Hz is above the Nyquist frequency "
+                         f"{sample_rate_hz / 2:g} Hz of sample_rate_hz = {sample_rate_hz:g}")
+    if amplitudes not in ("gaussian", "fixed"):
+        raise ValueError(f"amplitudes = {amplitudes!r}: expected 'gaussian' or 'fixed'")
+    n = n_samples(duration_s, sample_rate_hz)
+    if n < 2:
+        raise ValueError(f"duration_s = {duration_s!r} at {sample_rate_hz:g} Hz gives {n} samples: expected >= 2")
+    k_lo, k_hi = band_bins(n, sample_rate_hz, (lo, hi))
+    rng = np.random.default_rng(np.random.SeedSequence(seed))
+    g = rng.standard_normal((n // 2 + 1, 2))
+    if rms_nm == 0:
+        return np.zeros(n)
+    k = np.arange(k_lo, k_hi + 1)
+    amp = (k * (sample_rate_hz / n)) ** (0.5 * exponent)
+    z = g[k, 0] + 1j * g[k, 1]
+    if amplitudes == "fixed":
+        z = z / np.abs(z)  # unit modulus, the same uniform phase as the gaussian draw
+    else:
+        z = z / np.sqrt(2.0)
+    c = np.zeros(n // 2 + 1, dtype=complex)
+    c[k] = amp * z
+    if n % 2 == 0 and k_hi == n // 2:
+        # The Nyquist coefficient of a real signal is real; sqrt(2) keeps its expected power that
+        # of an interior bin (which counts twice, for +f and -f).
+        c[-1] = np.sqrt(2.0) * c[-1].real
+    w = np.fft.irfft(c, n)
+    return w * (rms_nm / np.sqrt(np.mean(w * w)))
+
+
+def displacement_to_velocity(x: np.ndarray, sample_rate_hz: float) -> np.ndarray:
+    """Exact spectral derivative of a periodic, band-limited record: ``v = irfft(i 2 pi f X)``.
+
+    Parameters
+    ----------
+    x : displacement [nm], uniformly sampled, treated as one period
+    sample_rate_hz : sampling rate [Hz]
+
+    Returns
+    -------
+    numpy.ndarray
+        velocity [nm/s]. The Nyquist bin (no defined sign of derivative) is set to zero.
+    """
+    x = np.asarray(x, dtype=float)
+    n = x.size
+    f = np.fft.rfftfreq(n, 1.0 / sample_rate_hz)
+    X = np.fft.rfft(x) * (2j * np.pi * f)
+    if n % 2 == 0:
+        X[-1] = 0.0
+    return np.fft.irfft(X, n)
+
+
+# --------------------------------------------------------------------------------------------------
+# Processing (the paper's LDV chain)
+# --------------------------------------------------------------------------------------------------
+
+def _band_mask(n: int, sample_rate_hz: float, highpass_hz: float,
+               lowpass_hz: float | None) -> tuple[np.ndarray, np.ndarray]:
+    f = np.fft.rfftfreq(n, 1.0 / sample_rate_hz)
+    keep = (f > 0) & (f >= highpass_hz * (1 - EDGE_TOL))
+    if lowpass_hz is not None:
+        keep &= f <= lowpass_hz * (1 + EDGE_TOL)
+    return f, keep
+
+
+def _check_filter_args(x: np.ndarray, sample_rate_hz: float, highpass_hz: float,
+                       lowpass_hz: float | None) -> np.ndarray:
+    x = np.asarray(x, dtype=float)
+    if x.ndim != 1 or x.size < 2:
+        raise ValueError(f"expected a 1-D record of >= 2 samples, got shape {x.shape}")
+    if not np.all(np.isfinite(x)):
+        raise ValueError("record holds NaN or infinite values")
+    if not sample_rate_hz > 0:
+        raise ValueError(f"sample_rate_hz = {sample_rate_hz!r}: expected > 0")
+    if not highpass_hz >= 0:
+        raise ValueError(f"highpass_hz = {highpass_hz!r}: expected >= 0")
+    if lowpass_hz is not None and not lowpass_hz > highpass_hz:
+        raise ValueError(f"lowpass_hz = {lowpass_hz!r}: expected > highpass_hz = {highpass_hz!r}")
+    return x
+
+
+def velocity_to_displacement(v: np.ndarray, sample_rate_hz: float, highpass_hz: float,
+                             lowpass_hz: float | None = None) -> np.ndarray:
+    """Displacement [nm] from an LDV velocity record [nm/s]: high-pass, integrate, remove drift.
+
+    One zero-phase step in the discrete Fourier domain [Bra11]_: ``X(f) = V(f) / (i 2 pi f)`` for
+    ``highpass_hz <= f (<= lowpass_hz)``, ``X = 0`` elsewhere, ``x = irfft(X)``. This is the paper's
+    chain (high-pass at 10 kHz, integrate velocity to displacement [VLP09]_) with a brick-wall filter:
+    the mean velocity (LDV offset), whose integral is a linear drift, and all content below the
+    high-pass (the integral's low-frequency wander, runout) are removed in the same step, so no
+    separate drift removal is needed and in-band content is integrated exactly (no trapezoid error,
+    which is ~5 % at 500 kHz for 4 MS/s). See the module notes on periodicity.
+
+    Parameters
+    ----------
+    v : velocity [nm/s], uniformly sampled
+    sample_rate_hz : sampling rate [Hz]
+    highpass_hz : high-pass edge [Hz] (the band's lower edge; > 0 is needed to remove drift)
+    lowpass_hz : optional low-pass edge [Hz] (the band's upper edge)
+
+    Returns
+    -------
+    numpy.ndarray
+        displacement [nm], same length, zero mean.
+    """
+    v = _check_filter_args(v, sample_rate_hz, highpass_hz, lowpass_hz)
+    n = v.size
+    f, keep = _band_mask(n, sample_rate_hz, highpass_hz, lowpass_hz)
+    V = np.fft.rfft(v)
+    X = np.zeros_like(V)
+    X[keep] = V[keep] / (2j * np.pi * f[keep])
+    if n % 2 == 0:
+        X[-1] = 0.0  # the Nyquist bin has no defined phase for an integral
+    return np.fft.irfft(X, n)
+
+
+def process_displacement(x: np.ndarray, sample_rate_hz: float, highpass_hz: float,
+                         lowpass_hz: float | None = None) -> np.ndarray:
+    """A displacement record [nm] processed like the paper's: drift removal and high-pass.
+
+    Linear detrend (least squares; removes offset and drift, and the wrap discontinuity a drift
+    would cause in the periodic DFT), then the zero-phase brick-wall filter of
+    :func:`velocity_to_displacement` without the integration.
+
+    Parameters
+    ----------
+    x : displacement [nm], uniformly sampled
+    sample_rate_hz : sampling rate [Hz]
+    highpass_hz : high-pass edge [Hz]
+    lowpass_hz : optional low-pass edge [Hz]
+
+    Returns
+    -------
+    numpy.ndarray
+        displacement [nm], same length, zero mean.
+    """
+    x = _check_filter_args(x, sample_rate_hz, highpass_hz, lowpass_hz)
+    x = signal.detrend(x, type="linear")
+    _, keep = _band_mask(x.size, sample_rate_hz, highpass_hz, lowpass_hz)
+    X = np.fft.rfft(x)
+    X[~keep] = 0.0
+    return np.fft.irfft(X, x.size)
+
+
+def spectrum(x: np.ndarray, sample_rate_hz: float, nperseg: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """One-sided power spectral density of a record.
+
+    Default: the periodogram with a rectangular window and no detrending [PW93]_ (scipy
+    ``periodogram(..., window="boxcar", detrend=False)``): resolution ``1/duration``, no leakage for a
+    periodic record such as the synthetic one, and Parseval exact,
+    ``sum(psd) * df == mean(x**2)`` (for zero-mean ``x``). With ``nperseg``: Welch's average of
+    Hann-windowed, half-overlapping segments [PW93]_ (smoother, for measured records; leaks by the
+    Hann sidelobes).
+
+    Parameters
+    ----------
+    x : record [nm]
+    sample_rate_hz : sampling rate [Hz]
+    nperseg : Welch segment length [samples], or ``None`` for the periodogram
+
+    Returns
+    -------
+    frequency : [Hz]
+    psd : [nm^2/Hz]
+    """
+    x = np.asarray(x, dtype=float)
+    if nperseg is None:
+        return signal.periodogram(x, fs=sample_rate_hz, window="boxcar", detrend=False, scaling="density")
+    return signal.welch(x, fs=sample_rate_hz, window="hann", nperseg=min(nperseg, x.size),
+                        detrend="constant", scaling="density")
+
+
+def power_law_fit(frequency: np.ndarray, psd: np.ndarray, band_hz: tuple[float, float]) -> tuple[float, float]:
+    """Least-squares fit of ``log psd = log C + exponent log f`` over the bins in ``band_hz``.
+
+    For Gaussian coefficients each periodogram bin is ``S(f)`` times an exponential variable, whose
+    logarithm has a constant mean: the slope is unbiased, ``C`` is low by ``exp(-0.577)``.
+
+    Returns
+    -------
+    exponent : [1]
+    prefactor : C [nm^2/Hz / Hz^exponent]
+    """
+    lo, hi = band_hz
+    sel = (frequency >= lo * (1 - EDGE_TOL)) & (frequency <= hi * (1 + EDGE_TOL)) & (psd > 0)
+    if np.count_nonzero(sel) < 2:
+        raise ValueError(f"fewer than 2 positive PSD bins in [{lo:g}, {hi:g}] Hz: cannot fit a power law")
+    slope, icpt = np.polyfit(np.log(frequency[sel]), np.log(psd[sel]), 1)
+    return float(slope), float(np.exp(icpt))
+
+
+def resample(x: np.ndarray, sample_rate_hz: float, new_rate_hz: float) -> tuple[np.ndarray, str]:
+    """Resample a band-limited record to ``new_rate_hz`` [Hz].
+
+    When the rate ratio is a fraction ``up/down`` with ``down <= 1000`` (exact to 1e-9), polyphase
+    filtering (``scipy.signal.resample_poly``, Kaiser-windowed FIR, ``padtype="line"`` to limit edge
+    transients); otherwise cubic-spline interpolation (accurate when the content is well below both
+    Nyquist frequencies, as after the band filter). The output has ``floor(n * new / old)`` samples.
+
+    Returns
+    -------
+    y : resampled record (same units)
+    method : a description for provenance
+    """
+    x = np.asarray(x, dtype=float)
+    ratio = new_rate_hz / sample_rate_hz
+    if abs(ratio - 1) < 1e-12:
+        return x.copy(), "none"
+    frac = Fraction(ratio).limit_denominator(1000)
+    m = int(math.floor(x.size * ratio + 1e-9))
+    if abs(float(frac) - ratio) <= 1e-9 * ratio:
+        y = signal.resample_poly(x, frac.numerator, frac.denominator, padtype="line")
+        return y[:m], f"scipy.signal.resample_poly(up={frac.numerator}, down={frac.denominator}, padtype='line')"
+    from scipy.interpolate import CubicSpline
+    t = np.arange(x.size) / sample_rate_hz
+    tn = np.arange(m) / new_rate_hz
+    tn = tn[tn <= t[-1]]
+    return CubicSpline(t, x)(tn), "scipy.interpolate.CubicSpline"
+
+
+# --------------------------------------------------------------------------------------------------
+# Measured records
+# --------------------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Record:
+    """A measured record, validated and converted to [nm] or [nm/s].
+
+    Attributes
+    ----------
+    values : displacement [nm] or velocity [nm/s]
+    sample_rate_hz : sampling rate [Hz]
+    quantity : ``"displacement"`` or ``"velocity"``
+    path : the file
+    column : the column / variable read (a CSV column without header: its index)
+    field : how the column is named in messages (``column 'velocity [mm/s]'``, ``variable 'w'``)
+    units : the record's own units (as found, or assumed)
+    notes : what was assumed (e.g. units not stated)
+    """
+
+    values: np.ndarray
+    sample_rate_hz: float
+    quantity: str
+    path: str
+    column: str
+    field: str
+    units: str
+    notes: tuple[str, ...] = field(default_factory=tuple)
+
+    @property
+    def duration_s(self) -> float:
+        """Record length ``n / fs`` [s]."""
+        return self.values.size / self.sample_rate_hz
+
+
+_BRACKET = re.compile(r"^\s*(.*?)\s*[\[\(]\s*([^\]\)]*?)\s*[\]\)]\s*$")
+_SUFFIXES = ("nm_s", "um_s", "mm_s", "m_s", "nm", "um", "mm", "m", "ms", "us", "ns", "s")
+
+
+def _norm_unit(u: str) -> str:
+    u = u.strip().lower().replace("µ", "u").replace("μ", "u")
+    u = re.sub(r"\s*(s\^?-1|s⁻¹)$", "/s", u)          # "m s-1" -> "m/s"
+    u = re.sub(r"\s*/\s*", "/", u)
+    u = re.sub(r"_s$", "/s", u) if u.count("_") == 1 else u   # "m_s" -> "m/s"
+    return {"micrometre": "um", "micrometer": "um", "nanometre": "nm", "nanometer": "nm",
+            "meter": "m", "metre": "m", "sec": "s"}.get(u, u)
+
+
+def _split_header(name: str) -> tuple[str, str | None]:
+    """``"velocity [mm/s]"`` -> ``("velocity", "mm/s")``; ``"time_s"`` -> ``("time", "s")``."""
+    m = _BRACKET.match(name)
+    if m:
+        return m.group(1).strip(), _norm_unit(m.group(2))
+    low = name.strip()
+    for suf in _SUFFIXES:
+        if low.lower().endswith("_" + suf) and len(low) > len(suf) + 1:
+            return low[: -len(suf) - 1], _norm_unit(suf)
+    return low, None
+
+
+def _value_factor(path: Path, field_name: str, unit: str | None,
+                  quantity: str) -> tuple[float, str, tuple[str, ...]]:
+    """Factor to [nm] / [nm/s] for a value column, and the unit used."""
+    if unit is None or unit == "":
+        assumed = "nm" if quantity == "displacement" else "nm/s"
+        return 1.0, assumed, (f"{field_name}: no unit stated, assumed {assumed}",)
+    if quantity == "displacement":
+        if unit in LENGTH_UNITS:
+            return LENGTH_UNITS[unit], unit, ()
+        if unit in VELOCITY_UNITS:
+            raise DMWError(f"{path}: {field_name}: has velocity units {unit!r} but the quantity is "
+                           f"'displacement': set dmw.quantity = \"velocity\"")
+        raise DMWError(f"{path}: {field_name}: unknown length unit {unit!r}; expected one of "
+                       + ", ".join(LENGTH_UNITS))
+    if unit in VELOCITY_UNITS:
+        return VELOCITY_UNITS[unit], unit, ()
+    if unit in LENGTH_UNITS:
+        raise DMWError(f"{path}: {field_name}: has length units {unit!r} but the quantity is "
+                       f"'velocity': set dmw.quantity = \"displacement\"")
+    raise DMWError(f"{path}: {field_name}: unknown velocity unit {unit!r}; expected one of "
+                   + ", ".join(VELOCITY_UNITS))
+
+
+def _time_factor(path: Path, field_name: str, unit: str | None) -> float:
+    if unit is None or unit == "":
+        return 1.0
+    unit = unit.split(" since ")[0].strip()
+    if unit not in TIME_UNITS:
+        raise DMWError(f"{path}: {field_name}: unknown time unit {unit!r}; expected one of "
+                       + ", ".join(TIME_UNITS))
+    return TIME_UNITS[unit]
+
+
+def _is_time_name(base: str) -> bool:
+    return base.strip().lower() in ("time", "t", "times")
+
+
+def _rate_from_time(path: Path, field_name: str, t: np.ndarray) -> float:
+    """Sampling rate [Hz] of a time axis [s]; rejects non-increasing or non-uniform axes."""
+    if t.size < 2:
+        raise DMWError(f"{path}: {field_name}: {t.size} sample(s); expected at least 2")
+    if not np.all(np.isfinite(t)):
+        bad = int(np.flatnonzero(~np.isfinite(t))[0])
+        raise DMWError(f"{path}: {field_name}: non-finite time at sample {bad}; expected finite times")
+    dt_all = np.diff(t)
+    if np.any(dt_all <= 0):
+        bad = int(np.flatnonzero(dt_all <= 0)[0])
+        raise DMWError(f"{path}: {field_name}: time does not increase at sample {bad + 1} "
+                       f"({t[bad]!r} -> {t[bad + 1]!r}); expected strictly increasing times")
+    dt = (t[-1] - t[0]) / (t.size - 1)
+    jitter = float(np.max(np.abs(t - (t[0] + dt * np.arange(t.size)))) / dt)
+    if jitter > TIME_JITTER_TOL:
+        raise DMWError(f"{path}: {field_name}: non-uniform time axis (largest deviation from a uniform "
+                       f"grid {jitter:.3g} sampling intervals); expected uniform sampling within "
+                       f"{TIME_JITTER_TOL:g} (write times with full precision, or drop the time column "
+                       f"and give dmw.sample_rate_hz)")
+    return 1.0 / dt
+
+
+def _check_values(path: Path, field_name: str, x: np.ndarray) -> None:
+    if x.size < 2:
+        raise DMWError(f"{path}: {field_name}: {x.size} sample(s); expected at least 2")
+    bad = np.flatnonzero(~np.isfinite(x))
+    if bad.size:
+        raise DMWError(f"{path}: {field_name}: {bad.size} NaN/infinite value(s), first at sample "
+                       f"{int(bad[0])}; expected finite numbers")
+
+
+def _sniff_delimiter(line: str) -> str | None:
+    for d in (",", ";", "\t"):
+        if d in line:
+            return d
+    return None  # whitespace
+
+
+def _read_csv(path: Path, quantity: str, column: str | None,
+              sample_rate_hz: float | None) -> tuple[np.ndarray, float, str, str, str, tuple[str, ...]]:
+    try:
+        text = path.read_text()
+    except UnicodeDecodeError:
+        raise DMWError(f"{path}: not a text (CSV) file; expected CSV or NetCDF (.nc)") from None
+    numbered = [(i + 1, ln) for i, ln in enumerate(text.splitlines())
+                if ln.strip() and not ln.lstrip().startswith("#")]
+    lines = [ln for _, ln in numbered]
+    line_nos = [i for i, _ in numbered]
+    if not lines:
+        raise DMWError(f"{path}: no data rows; expected a CSV record")
+    delim = _sniff_delimiter(lines[0])
+    if delim is None:
+        rows = [ln.split() for ln in lines]
+    else:
+        rows = [[c.strip() for c in r] for r in csv.reader(io.StringIO("\n".join(lines)), delimiter=delim)]
+
+    def numeric(s: str) -> bool:
+        try:
+            float(s)
+            return True
+        except ValueError:
+            return False
+
+    header = None
+    if not all(numeric(c) for c in rows[0] if c != ""):
+        header, rows, line_nos = rows[0], rows[1:], line_nos[1:]
+    ncol = len(header) if header is not None else len(rows[0]) if rows else 0
+    names = header if header is not None else [str(i) for i in range(ncol)]
+    labels = ([f"column {h!r}" for h in header] if header is not None
+              else [f"column {i}" for i in range(ncol)])  # how a column is named in messages
+    split = [_split_header(h) for h in names] if header is not None else [(n, None) for n in names]
+
+    # Which column is time, which holds the values.
+    time_idx = next((i for i, (b, _) in enumerate(split) if header is not None and _is_time_name(b)), None)
+    if time_idx is None and header is None and ncol == 2 and sample_rate_hz is None:
+        time_idx = 0  # headerless two-column file: time, value
+    if column is not None:
+        key = column.strip().lower()
+        matches = [i for i, (b, _) in enumerate(split) if key in (names[i].strip().lower(), b.lower())]
+        if not matches and key.isdigit() and int(key) < ncol:
+            matches = [int(key)]
+        if not matches:
+            raise DMWError(f"{path}: column {column!r} not found; expected one of {names} "
+                           f"(or a column index 0..{ncol - 1}) (dmw.column)")
+        val_idx = matches[0]
+    else:
+        candidates = [i for i in range(ncol) if i != time_idx]
+        named = [i for i in candidates if split[i][0].lower() == quantity]
+        if len(named) == 1:
+            val_idx = named[0]
+        elif len(candidates) == 1:
+            val_idx = candidates[0]
+        else:
+            raise DMWError(f"{path}: {len(candidates)} value columns {[names[i] for i in candidates]}; "
+                           f"expected one: set dmw.column")
+    if time_idx is None and sample_rate_hz is None:
+        raise DMWError(f"{path}: no time column (a header 'time', 'time [s]', 'time_s', ...) and no "
+                       f"sample rate; expected a time column or dmw.sample_rate_hz")
+
+    def col(i: int) -> np.ndarray:
+        out = np.empty(len(rows))
+        for r, row in enumerate(rows):
+            line_no = line_nos[r]
+            if i >= len(row) or row[i] == "":
+                raise DMWError(f"{path}: {labels[i]}: missing value on line {line_no}; "
+                               f"expected a number")
+            try:
+                out[r] = float(row[i])
+            except ValueError:
+                raise DMWError(f"{path}: {labels[i]}: non-numeric value {row[i]!r} on line {line_no}; "
+                               f"expected a number") from None
+        return out
+
+    field_name = labels[val_idx]
+    x = col(val_idx)
+    _check_values(path, field_name, x)
+    factor, unit, notes = _value_factor(path, field_name, split[val_idx][1], quantity)
+    if time_idx is not None:
+        t = col(time_idx) * _time_factor(path, labels[time_idx], split[time_idx][1])
+        rate = _rate_from_time(path, labels[time_idx], t)
+        if sample_rate_hz is not None and abs(rate / sample_rate_hz - 1) > 1e-6:
+            raise DMWError(f"{path}: {labels[time_idx]}: time axis gives {rate:.9g} Hz but "
+                           f"dmw.sample_rate_hz = {sample_rate_hz:g}; expected them to agree")
+    else:
+        rate = float(sample_rate_hz)  # type: ignore[arg-type]
+    return x * factor, rate, names[val_idx], field_name, unit, notes
+
+
+def _read_netcdf(path: Path, quantity: str, column: str | None,
+                 sample_rate_hz: float | None) -> tuple[np.ndarray, float, str, str, str, tuple[str, ...]]:
+    import xarray as xr
+    try:
+        with xr.open_dataset(path, engine="netcdf4", decode_times=False, decode_timedelta=False) as ds:
+            ds = ds.load()
+    except (OSError, ValueError) as exc:
+        raise DMWError(f"{path}: not a readable NetCDF file ({exc}); expected NetCDF with a variable "
+                       f"on a 'time' coordinate") from None
+    if column is not None:
+        if column not in ds.data_vars:
+            raise DMWError(f"{path}: variable {column!r} not found; expected one of "
+                           f"{sorted(map(str, ds.data_vars))} (dmw.column)")
+        name = column
+    else:
+        cands = [str(v) for v in ds.data_vars if ds[v].dims == ("time",)]
+        named = [v for v in cands if v == quantity]
+        if named:
+            name = named[0]
+        elif len(cands) == 1:
+            name = cands[0]
+        else:
+            raise DMWError(f"{path}: {len(cands)} variables on 'time' {cands}; expected one: set dmw.column")
+    da = ds[name]
+    field_name = f"variable {name!r}"
+    if da.dims != ("time",):
+        raise DMWError(f"{path}: {field_name}: dimensions {da.dims}; expected ('time',)")
+    try:
+        x = np.asarray(da.values, dtype=float)
+    except (TypeError, ValueError):
+        raise DMWError(f"{path}: {field_name}: non-numeric data ({da.dtype}); expected numbers") from None
+    _check_values(path, field_name, x)
+    unit = da.attrs.get("units")
+    factor, unit, notes = _value_factor(path, field_name, _norm_unit(unit) if unit else None, quantity)
+    if "time" in ds.coords or "time" in ds.variables:
+        tv = ds["time"]
+        try:
+            t = np.asarray(tv.values, dtype=float)
+        except (TypeError, ValueError):
+            raise DMWError(f"{path}: coordinate 'time': non-numeric ({tv.dtype}); expected seconds") from None
+        tu = tv.attrs.get("units")
+        t = t * _time_factor(path, "coordinate 'time'", _norm_unit(tu) if tu else None)
+        rate = _rate_from_time(path, "coordinate 'time'", t)
+        if sample_rate_hz is not None and abs(rate / sample_rate_hz - 1) > 1e-6:
+            raise DMWError(f"{path}: coordinate 'time' gives {rate:.9g} Hz but dmw.sample_rate_hz = "
+                           f"{sample_rate_hz:g}; expected them to agree")
+    elif sample_rate_hz is not None:
+        rate = float(sample_rate_hz)
+    else:
+        raise DMWError(f"{path}: no 'time' coordinate and no sample rate; expected a 'time' "
+                       f"coordinate [s] or dmw.sample_rate_hz")
+    return x * factor, rate, name, field_name, unit, notes
+
+
+def load_record(path: str | Path, quantity: str = "displacement", column: str | None = None,
+                sample_rate_hz: float | None = None, *, min_duration_s: float | None = None) -> Record:
+    """Read and validate a measured DMW record (CSV or NetCDF).
+
+    CSV (any other suffix than ``.nc``/``.nc4``/``.cdf``): comma, semicolon, tab or whitespace
+    separated; ``#`` comment lines skipped; an optional header row. The time column is the one named
+    ``time``/``t`` (unit in brackets or as a suffix: ``time [s]``, ``time (ms)``, ``time_us``; default
+    s); without a header, a two-column file is ``time, value`` unless ``sample_rate_hz`` is given. The
+    value column is ``column`` (header name, with or without its unit, or index), else the one named
+    like ``quantity``, else the only non-time column. Units of values: ``nm``, ``um``, ``mm``, ``m``
+    (displacement) or ``nm/s``, ``um/s``, ``mm/s``, ``m/s`` (velocity); unstated units are assumed
+    ``nm`` / ``nm/s`` and noted in :attr:`Record.notes`.
+
+    NetCDF: the variable ``column``, else the one named like ``quantity``, else the only variable on
+    ``time``; units from the ``units`` attributes; the ``time`` coordinate in s (or ``ms``, ``us``).
+
+    Parameters
+    ----------
+    path : the record file
+    quantity : ``"displacement"`` [nm] or ``"velocity"`` [nm/s]
+    column : column or variable name (``None``: see above)
+    sample_rate_hz : sampling rate [Hz] of a record without a time axis (checked against one if present)
+    min_duration_s : required length [s] (``None``: no check)
+
+    Returns
+    -------
+    Record
+        values in [nm] or [nm/s].
+
+    Raises
+    ------
+    DMWError
+        Missing or unreadable file, missing column, non-numeric or NaN/infinite values, fewer than 2
+        samples, a time axis that is not strictly increasing or not uniform (relative deviation
+        > :data:`TIME_JITTER_TOL`), units that contradict ``quantity``, or a record shorter than
+        ``min_duration_s``. The message names the file and the field.
+    """
+    path = Path(path)
+    if quantity not in ("displacement", "velocity"):
+        raise DMWError(f"{path}: quantity = {quantity!r}: expected 'displacement' or 'velocity' (dmw.quantity)")
+    if sample_rate_hz is not None and not (sample_rate_hz > 0 and math.isfinite(sample_rate_hz)):
+        raise DMWError(f"{path}: sample_rate_hz = {sample_rate_hz!r}: expected a positive number "
+                       f"(dmw.sample_rate_hz)")
+    if not path.is_file():
+        raise DMWError(f"{path}: record file does not exist (dmw.source)")
+    reader = _read_netcdf if path.suffix.lower() in (".nc", ".nc4", ".cdf", ".netcdf") else _read_csv
+    x, rate, name, field_name, unit, notes = reader(path, quantity, column, sample_rate_hz)
+    rec = Record(values=x, sample_rate_hz=float(rate), quantity=quantity, path=str(path), column=name,
+                 field=field_name, units=unit, notes=notes)
+    if min_duration_s is not None and rec.duration_s < min_duration_s * (1 - 1e-9):
+        raise DMWError(f"{path}: {field_name}: record is "
+                       f"{rec.duration_s * 1e3:.6g} ms long ({x.size} samples at {rate:.6g} Hz); expected "
+                       f"at least the requested duration {min_duration_s * 1e3:.6g} ms (dmw.duration_ms)")
+    return rec

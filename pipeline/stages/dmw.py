@@ -1,0 +1,304 @@
+"""Stage ``dmw``: the disk's dynamic microwaviness ``w(t)`` [nm], synthesised or measured.
+
+Reads ``[dmw]`` of the scene (SPEC.md section 5) and writes ``dmw.nc``:
+
+=================  ===============  =========  ====================================================
+name               dims             units      meaning
+=================  ===============  =========  ====================================================
+``time``           time             s          sample times ``i / fs`` (coordinate)
+``displacement``   time             nm         DMW ``w(t)``, zero mean
+``frequency``      frequency        Hz         periodogram frequencies, ``k / duration`` (coordinate)
+``psd``            frequency        nm2 Hz-1   one-sided periodogram of ``displacement``
+``rms``            --               nm         rms of ``displacement`` (measured: as found)
+``band_low``       --               Hz         band lower edge (``dmw.band_khz[0]``)
+``band_high``      --               Hz         band upper edge (``dmw.band_khz[1]``)
+``sample_rate``    --               Hz         ``fs`` (``dmw.sample_rate_mhz``)
+``disk_speed``     --               m s-1      ``V = 2 pi r rpm / 60`` (19.49 m/s in the paper scene)
+=================  ===============  =========  ====================================================
+
+``band_low``/``band_high`` carry the realised edges (the first/last frequency bin inside the band)
+as the attribute ``realised``. Global attributes record the provenance: ``dmw_source``
+(``"synthetic"`` or the record's path), ``dmw_quantity``, ``processing`` (the steps applied, in
+order), ``exponent`` and ``amplitudes`` (synthetic), the record's own sample rate, column, units,
+rms and fitted spectral exponent (measured), ``periodic`` and ``dmw_enabled``; plus the usual
+provenance of :func:`pipeline.io.write_dataset` (seed for a synthetic record, the record's hash for
+a measured one).
+
+Record length: ``dmw.duration_ms`` when given; otherwise ``solver.duration_ms`` plus the disk's
+travel time over the slider (the dynamics reads the record ahead of ``t`` for the front pad), rounded
+up to whole periods of the band's lower edge: 2.1 ms (8400 samples) in the paper scene. See
+:func:`default_duration`.
+
+Synthetic: :func:`pipeline.physics.dmw.synthesize` with ``rms_nm``, ``band_khz``, ``exponent``,
+``seed``, ``sample_rate_mhz`` and that duration.
+
+Measured (``source`` a path): :func:`~pipeline.physics.dmw.load_record`, then the paper's processing
+at the record's own rate (velocity integrated, :func:`~pipeline.physics.dmw.velocity_to_displacement`;
+displacement detrended, :func:`~pipeline.physics.dmw.process_displacement`; both band-passed to
+``band_khz``), resampled to ``sample_rate_mhz`` (:func:`~pipeline.physics.dmw.resample`) and cut to
+the first ``duration_ms``. A measured record is never rescaled: ``rms_nm`` is ignored and the
+record's own rms is written (and a warning logged when it differs from ``rms_nm`` by more than 2x).
+The record is validated before anything is written, so a bad record never replaces an existing
+``dmw.nc``.
+
+Effect switched off (``"dmw"`` not in ``scene.effects``): the stage writes ``dmw.nc`` with zero
+displacement (``rms = 0``, ``dmw_enabled = 0``, attribute ``disabled``), reading no record and
+drawing no random numbers. A downstream stage that reads it therefore gets exactly "no DMW" even if
+it forgets to check the effect, and a scene with the effect off never needs a record file.
+
+Up to date: an existing ``dmw.nc`` with the same stage key (:func:`pipeline.io.is_current`), the
+same record length and, for a measured record, the same record bytes is kept (``force=True``
+recomputes).
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from ..io import DatasetError, file_hash, is_current, read_dataset, var, write_dataset
+from ..physics import dmw as phys
+
+log = logging.getLogger(__name__)
+
+FILENAME = "dmw.nc"
+
+
+def settings(scene: Any) -> dict[str, Any]:
+    """The stage's settings in SI units, with defaults resolved.
+
+    Returns
+    -------
+    dict with ``source`` (``"synthetic"`` or an absolute path), ``quantity``, ``column``,
+    ``rms_nm`` [nm], ``band_hz`` (lo, hi) [Hz], ``exponent`` [1], ``seed``, ``sample_rate_hz`` [Hz],
+    ``duration_s`` [s], ``record_rate_hz`` [Hz] or ``None``, ``disk_speed_m_s`` [m/s].
+    """
+    d = scene["dmw"]
+    band_hz = (float(d["band_khz"][0]) * 1e3, float(d["band_khz"][1]) * 1e3)
+    speed = 2.0 * math.pi * float(d["radius_mm"]) * 1e-3 * float(d["rpm"]) / 60.0
+    if d["duration_ms"] is not None:
+        duration_s = float(d["duration_ms"]) * 1e-3
+    else:
+        duration_s = default_duration(scene["solver"]["duration_ms"] * 1e-3, scene["slider"], speed,
+                                      band_hz[0], float(d["sample_rate_mhz"]) * 1e6)
+    source = d["source"]
+    if source != "synthetic":
+        p = Path(source).expanduser()
+        if not p.is_absolute() and getattr(scene, "path", None) is not None:
+            p = Path(scene.path).parent / p
+        source = str(p)
+    return {
+        "source": source,
+        "quantity": d["quantity"],
+        "column": d["column"],
+        "rms_nm": float(d["rms_nm"]),
+        "band_hz": band_hz,
+        "exponent": float(d["exponent"]),
+        "seed": int(d["seed"]),
+        "sample_rate_hz": float(d["sample_rate_mhz"]) * 1e6,
+        "duration_s": duration_s,
+        "record_rate_hz": d["sample_rate_hz"],
+        "disk_speed_m_s": speed,
+    }
+
+
+def default_duration(sim_duration_s: float, slider: dict[str, Any], disk_speed_m_s: float,
+                     band_low_hz: float, sample_rate_hz: float) -> float:
+    """Record length [s] when ``dmw.duration_ms`` is not given.
+
+    The dynamics reads the record at ``t`` plus the disk's travel time from the front pad to the
+    TFC point (``pipeline.slider.build_model`` requires ``duration + (l_f + l_c)/V + 2/fs``). This
+    takes the simulated duration plus ``(front_arm + length)/V`` (an upper bound of that delay,
+    since the TFC point is less than a slider length behind the centre of gravity) plus 4 samples,
+    rounded up to a whole number of periods ``1/band_low`` so that the band's lower edge, where a
+    red spectrum has most of its energy, is a frequency bin of the record (2 ms -> 2.1 ms in the
+    paper scene: 8400 samples, resolution 476.2 Hz, edges 10 kHz = bin 21 and 500 kHz = bin 1050).
+    """
+    margin = (slider["front_arm_mm"] + slider["length_mm"]) * 1e-3 / disk_speed_m_s + 4.0 / sample_rate_hz
+    need = sim_duration_s + margin
+    if band_low_hz <= 0:
+        return math.ceil(need * sample_rate_hz) / sample_rate_hz
+    return math.ceil(need * band_low_hz * (1 - 1e-12)) / band_low_hz
+
+
+def _measured(s: dict[str, Any]) -> tuple[np.ndarray, dict[str, Any]]:
+    """Load, process, resample and cut a measured record; raise before anything is written."""
+    fs, (lo, hi), dur = s["sample_rate_hz"], s["band_hz"], s["duration_s"]
+    rec = phys.load_record(s["source"], s["quantity"], s["column"], s["record_rate_hz"], min_duration_s=dur)
+    where = f"{rec.path}: {rec.field}"
+    if hi > rec.sample_rate_hz / 2:
+        raise phys.DMWError(f"{where}: sampled at {rec.sample_rate_hz:g} Hz, whose Nyquist frequency is "
+                            f"below the band's upper edge {hi:g} Hz (dmw.band_khz); expected a record "
+                            f"sampled at > {2 * hi:g} Hz")
+    steps = []
+    if rec.quantity == "velocity":
+        x = phys.velocity_to_displacement(rec.values, rec.sample_rate_hz, lo, hi)
+        steps.append(f"FFT band-pass [{lo:g}, {hi:g}] Hz (zero-phase brick-wall) with spectral "
+                     f"integration of velocity to displacement (mean velocity and drift removed)")
+    else:
+        x = phys.process_displacement(rec.values, rec.sample_rate_hz, lo, hi)
+        steps.append("linear detrend")
+        steps.append(f"FFT band-pass [{lo:g}, {hi:g}] Hz (zero-phase brick-wall)")
+    x, how = phys.resample(x, rec.sample_rate_hz, fs)
+    if how != "none":
+        steps.append(f"resampled {rec.sample_rate_hz:g} -> {fs:g} Hz by {how}")
+    n = phys.n_samples(dur, fs)
+    if x.size < n:  # resampling may lose the last sample or two of a record just long enough
+        raise phys.DMWError(f"{where}: after resampling to {fs:g} Hz the record has {x.size} samples; "
+                            f"expected at least {n} for dmw.duration_ms = {dur * 1e3:g}")
+    if x.size > n:
+        steps.append(f"first {n} samples kept (of {x.size})")
+    x = x[:n]
+    f, p = phys.spectrum(x, fs)
+    try:
+        expo = phys.power_law_fit(f, p, (lo, hi))[0]
+    except ValueError:
+        expo = float("nan")
+    attrs = {
+        "dmw_quantity": rec.quantity,
+        "processing": "; ".join(steps),
+        "record_column": rec.column,
+        "record_units": rec.units,
+        "record_sample_rate_hz": rec.sample_rate_hz,
+        "record_samples": int(rec.values.size),
+        "record_rms_nm": float(np.sqrt(np.mean(x * x))),
+        "record_fitted_exponent": expo,
+        "record_notes": "; ".join(rec.notes) if rec.notes else "none",
+        "rescaled": "no (a measured record is never rescaled; dmw.rms_nm is not used)",
+        "periodic": "no (a measured record is not assumed periodic)",
+    }
+    rms = attrs["record_rms_nm"]
+    if s["rms_nm"] > 0 and not (0.5 <= rms / s["rms_nm"] <= 2.0):
+        log.warning("%s: measured DMW rms %.3g nm differs from dmw.rms_nm = %.3g nm; the record is used "
+                    "as measured (check its units)", rec.path, rms, s["rms_nm"])
+    return x, attrs
+
+
+def _up_to_date(path: Path, scene: Any, s: dict[str, Any]) -> bool:
+    """Whether ``path`` was written from the same scene keys, record length and record bytes.
+
+    The record length is compared too because its default depends on ``[slider]`` keys that the
+    stage key of :mod:`pipeline.io` does not cover.
+    """
+    if not is_current(path, scene, "dmw"):
+        return False
+    try:
+        attrs = read_dataset(path).attrs
+    except DatasetError:
+        return False
+    if not math.isclose(float(attrs.get("duration_s", -1.0)), s["duration_s"], rel_tol=1e-12):
+        return False
+    if "dmw" in scene.effects and s["source"] != "synthetic":
+        try:
+            return json.loads(attrs.get("input_hashes", "{}")) == {s["source"]: file_hash(s["source"])}
+        except (OSError, ValueError):
+            return False
+    return True
+
+
+def run(scene: Any, out: Path, **options: Any) -> Path:
+    """Write ``out/dmw.nc`` for the scene (see the module docstring).
+
+    Parameters
+    ----------
+    scene : :class:`pipeline.scene.Scene`
+    out : output folder
+    options : ``force=True`` recomputes even when ``dmw.nc`` is up to date (same stage key of
+        :func:`pipeline.io.is_current`, same record length, same record file bytes); other options
+        (``scheduler``, ``workers``) are ignored.
+
+    Returns
+    -------
+    Path
+        The written ``dmw.nc``.
+
+    Raises
+    ------
+    pipeline.physics.dmw.DMWError
+        For an unusable measured record (the existing ``dmw.nc`` is left untouched).
+    """
+    s = settings(scene)
+    fs, (lo, hi), dur = s["sample_rate_hz"], s["band_hz"], s["duration_s"]
+    n = phys.n_samples(dur, fs)
+    target = Path(out) / FILENAME
+    if not options.get("force") and _up_to_date(target, scene, s):
+        return target
+    inputs: list[str] = []
+    seed = None
+    enabled = "dmw" in scene.effects
+    if not enabled:
+        w = np.zeros(n)
+        attrs = {"dmw_quantity": "displacement", "processing": "none (effect off)",
+                 "disabled": "dmw effect not in scene: zero displacement, no record read",
+                 "periodic": "yes"}
+        source = "none"
+    elif s["source"] == "synthetic":
+        seed = s["seed"]
+        w = phys.synthesize(s["rms_nm"], (lo, hi), s["exponent"], dur, fs, seed)
+        attrs = {"dmw_quantity": "displacement",
+                 "processing": "spectral synthesis (pipeline.physics.dmw.synthesize): complex-normal "
+                               "rfft coefficients, power-law amplitudes in the band, zero outside, "
+                               "rescaled to rms_nm",
+                 "exponent": s["exponent"], "amplitudes": "gaussian", "synthesis_rms_nm": s["rms_nm"],
+                 "periodic": f"yes (period {dur:g} s = the record length)"}
+        source = "synthetic"
+    else:
+        w, attrs = _measured(s)
+        inputs = [s["source"]]
+        source = s["source"]
+    time = np.arange(n) / fs
+    f, p = phys.spectrum(w, fs)
+    try:
+        k_lo, k_hi = phys.band_bins(n, fs, (lo, hi))
+        realised = [k_lo * fs / n, k_hi * fs / n]
+    except ValueError:
+        realised = [float("nan"), float("nan")]
+    rms = float(np.sqrt(np.mean(w * w)))
+    ds = xr.Dataset(
+        {
+            "displacement": var(w, ("time",), "nm",
+                                "disk dynamic microwaviness (vertical displacement under the slider)"),
+            "psd": var(p, ("frequency",), "nm2 Hz-1", "one-sided power spectral density of the displacement",
+                       method="periodogram, rectangular window, no detrend (scipy.signal.periodogram)"),
+            "rms": var(rms, (), "nm", "rms of the displacement"),
+            "band_low": var(lo, (), "Hz", "lower edge of the DMW band", realised=realised[0]),
+            "band_high": var(hi, (), "Hz", "upper edge of the DMW band", realised=realised[1]),
+            "sample_rate": var(fs, (), "Hz", "sampling rate of the displacement"),
+            "disk_speed": var(s["disk_speed_m_s"], (), "m s-1", "disk surface speed under the slider",
+                              formula="2 pi radius rpm / 60"),
+        },
+        coords={
+            "time": var(time, ("time",), "s", "time"),
+            "frequency": var(f, ("frequency",), "Hz", "frequency"),
+        },
+    )
+    extra = {"dmw_source": source, "dmw_enabled": int(enabled), "duration_s": dur, **attrs}
+    return write_dataset(ds, target, scene, stage="dmw", inputs=inputs, seed=seed,
+                         extra_attrs=extra)
+
+
+def load(path: str | Path) -> tuple[np.ndarray, np.ndarray, float]:
+    """Read a ``dmw.nc`` back for the dynamics.
+
+    Parameters
+    ----------
+    path : ``dmw.nc`` or the folder holding it
+
+    Returns
+    -------
+    time_s : [s]
+    displacement_nm : [nm]
+    sample_rate_hz : [Hz]
+    """
+    path = Path(path)
+    if path.is_dir():
+        path = path / FILENAME
+    ds = read_dataset(path, stage="dmw", variables=("displacement", "time", "sample_rate"))
+    return (np.asarray(ds["time"].values, dtype=float), np.asarray(ds["displacement"].values, dtype=float),
+            float(ds["sample_rate"].values))
