@@ -1,0 +1,269 @@
+"""Stage ``roughness``: AFM scans (or explicit statistics) to asperity statistics, ``roughness.nc``.
+
+Reads ``scene["roughness"]``: either ``afm`` (a list of files in any format SurfaceTopography reads,
+already resolved to absolute paths by the scene loader), with ``channel`` and ``detrend``; or, when
+``afm`` is absent, the explicit ``sigma_nm``, ``summit_radius_um``, ``summit_density_per_um2``.
+
+Output layout (``out/roughness.nc``)
+------------------------------------
+coordinates
+    ``surface`` : one label per input file (its stem, made unique), then always ``"combined"``, the
+    surface the interface stage uses (SPEC.md 1: moments add). For explicit statistics the labels are
+    ``"explicit"`` and ``"combined"`` (identical rows).
+    ``method`` : ``"spectral"`` (McCool/Nayak from profile moments), ``"summits"`` (direct count).
+variables on (surface, method)
+    ``sigma`` [nm], ``sigma_s`` [nm], ``y_s`` [nm], ``summit_radius`` [um], ``summit_density`` [um-2],
+    ``bandwidth_alpha`` [1], ``plasticity_index`` [1] (GW form), ``plasticity_index_ke`` [1] (CEB/KE).
+variables on (surface)
+    ``pixel_size`` [nm], ``m0`` [nm2], ``m2`` [1], ``m4`` [nm-2], ``summit_count`` [1].
+global attributes
+    ``source_files`` (JSON label -> file), ``source_file_<label>`` per file, ``channels`` (JSON label ->
+    channel read), ``detrend``, ``plasticity_index_form``, ``composite_modulus_gpa``, ``hardness_gpa``,
+    ``combination_rule``, ``warnings`` (JSON list), plus the provenance of :func:`pipeline.io.write_dataset`.
+
+The combined surface: the spectral route uses the summed moments; the summit route cannot be combined
+(the scans have different grids), so for several files its row holds only ``sigma`` (quadrature sum) and
+NaN elsewhere; for a single file ``combined`` is a copy of that file's rows.
+
+Everything is computed before anything is written, and the write is atomic: a failing input leaves an
+existing ``roughness.nc`` untouched.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+import xarray as xr
+
+from ..io import DatasetError, file_hash, is_current, read_dataset, var, write_dataset
+from ..physics import statistics as st
+from ..physics import surface as sf
+
+FILENAME = "roughness.nc"
+METHODS = ("spectral", "summits")
+COMBINED = "combined"
+
+
+def _unique_labels(files: Sequence[Path]) -> list[str]:
+    """File stems, made unique (``name``, ``name-2``, ...) and never ``"combined"``."""
+    labels: list[str] = []
+    for f in files:
+        base = f.stem or f.name
+        if base == COMBINED:
+            base = f"{base}-file"
+        label, n = base, 2
+        while label in labels:
+            label, n = f"{base}-{n}", n + 1
+        labels.append(label)
+    return labels
+
+
+def _materials(scene: Any) -> dict[str, float]:
+    """Composite modulus E' [GPa], hardness H [GPa] and Poisson ratio of the scene (NaN without a scene)."""
+    if scene is None:
+        return {"E": math.nan, "H": math.nan, "nu": math.nan}
+    mat = scene["materials"]
+    E = mat.get("composite_modulus_gpa")
+    if E is None:
+        E = st.composite_modulus(mat["disk_modulus_gpa"], mat["tfc_modulus_gpa"], mat["poisson_ratio"])
+    H = mat.get("hardness_gpa")
+    return {"E": float(E), "H": math.nan if H is None else float(H), "nu": float(mat["poisson_ratio"])}
+
+
+def _plasticity(E: float, H: float, nu: float, sigma_s: float, R: float) -> tuple[float, float]:
+    """GW and CEB/KE plasticity indices (NaN when an input is missing) [GW66, KE03]."""
+    if not all(np.isfinite([E, H, nu, sigma_s, R])) or R <= 0 or sigma_s < 0:
+        return math.nan, math.nan
+    return (float(st.plasticity_index_gw(E, H, sigma_s, R)), float(st.plasticity_index_ke(E, H, sigma_s, R, nu)))
+
+
+def build_dataset(summaries: Sequence[sf.SurfaceSummary], scene: Any = None, detrend: str = "") -> xr.Dataset:
+    """The ``roughness.nc`` dataset of some surfaces plus their ``"combined"`` surface.
+
+    Parameters
+    ----------
+    summaries : per-surface results (:func:`pipeline.physics.surface.summarise_file` or ``from_statistics``)
+    scene : the scene (materials for the plasticity index), or ``None``
+    detrend : detrend mode used (recorded)
+    """
+    surfaces = list(summaries) + [sf.combine(summaries, label=COMBINED)]
+    mat = _materials(scene)
+    n = len(surfaces)
+    cols = {k: np.full((n, 2), np.nan) for k in
+            ("sigma", "sigma_s", "y_s", "R", "eta", "alpha", "psi", "psi_ke")}
+    for i, s in enumerate(surfaces):
+        for j, r in enumerate((s.spectral, s.summits)):
+            cols["sigma"][i, j], cols["sigma_s"][i, j], cols["y_s"][i, j] = r.sigma, r.sigma_s, r.y_s
+            cols["R"][i, j], cols["eta"][i, j], cols["alpha"][i, j] = r.R * 1e-3, r.eta * 1e6, r.alpha
+            cols["psi"][i, j], cols["psi_ke"][i, j] = _plasticity(mat["E"], mat["H"], mat["nu"], r.sigma_s, r.R)
+    sm = ("surface", "method")
+    per = ("surface",)
+    gw = "Greenwood & Williamson 1966"
+    ds = xr.Dataset(
+        {
+            "sigma": var(cols["sigma"], sm, "nm", "rms roughness of the (detrended) surface heights"),
+            "sigma_s": var(cols["sigma_s"], sm, "nm", "standard deviation of summit heights",
+                           formula="spectral: sqrt(sigma^2 - 3.717e-4/(eta R)^2) (McCool 1986); "
+                                   "summits: std of counted summit heights"),
+            "y_s": var(cols["y_s"], sm, "nm", "mean of summit heights minus mean of surface heights",
+                       formula="spectral: 4 sigma/sqrt(pi alpha) (McCool 1986); summits: direct"),
+            "summit_radius": var(cols["R"], sm, "um", "mean summit radius of curvature",
+                                 formula="spectral: 0.375 sqrt(pi/m4) (Nayak 1971, McCool 1986); "
+                                         "summits: 1/mean(-(d2z/dx2 + d2z/dy2)/2) at summits"),
+            "summit_density": var(cols["eta"], sm, "um-2", "summit density (summits per nominal area)",
+                                  formula="spectral: m4/(6 pi sqrt(3) m2) (Nayak 1971); "
+                                          "summits: 8-neighbour maxima per interior area"),
+            "bandwidth_alpha": var(cols["alpha"], sm, "1", "Nayak bandwidth parameter",
+                                   formula="spectral: m0 m4/m2^2; summits: 2412.74 (sigma eta R)^2 "
+                                           "(McCool 1986) with the counted eta and R"),
+            "plasticity_index": var(cols["psi"], sm, "1", "plasticity index, Greenwood-Williamson form",
+                                    formula=f"(E'/H) sqrt(sigma_s/R) ({gw})"),
+            "plasticity_index_ke": var(cols["psi_ke"], sm, "1", "plasticity index, CEB/Kogut-Etsion form",
+                                       formula="(2E'/(pi K H)) sqrt(sigma_s/R), K = 0.454 + 0.41 nu "
+                                               "(Kogut & Etsion 2003)"),
+            "pixel_size": var(np.array([s.pixel_size for s in surfaces]), per, "nm",
+                              "lateral sampling interval of the scan (geometric mean of x and y)"),
+            "m0": var(np.array([s.m0 for s in surfaces]), per, "nm2", "profile spectral moment m0 (height variance)"),
+            "m2": var(np.array([s.m2 for s in surfaces]), per, "1",
+                      "profile spectral moment m2 (slope variance, mean of x and y profiles)"),
+            "m4": var(np.array([s.m4 for s in surfaces]), per, "nm-2",
+                      "profile spectral moment m4 (curvature variance, mean of x and y profiles)"),
+            "summit_count": var(np.array([s.summits.count for s in surfaces]), per, "1",
+                                "number of summits counted (summit route)"),
+        },
+        coords={
+            "surface": var(np.array([s.label for s in surfaces], dtype=object), per, "1",
+                           "surface (input file stem, 'explicit', or 'combined' = all surfaces combined)"),
+            "method": var(np.array(METHODS, dtype=object), ("method",), "1",
+                          "route to the asperity statistics ('spectral': McCool/Nayak from profile moments, "
+                          "'summits': direct summit count)"),
+        },
+    )
+    files = {s.label: s.source for s in summaries if s.source}
+    attrs: dict[str, Any] = {
+        "source_files": files,
+        "channels": {s.label: s.channel for s in summaries if s.channel},
+        "detrend": detrend,
+        "plasticity_index_form": "plasticity_index: GW (E'/H) sqrt(sigma_s/R) [Greenwood & Williamson 1966]; "
+                                 "plasticity_index_ke: CEB/KE (2E'/(pi K H)) sqrt(sigma_s/R); "
+                                 "NaN where the scene gives no hardness_gpa",
+        "composite_modulus_gpa": mat["E"],
+        "hardness_gpa": mat["H"],
+        "combination_rule": "combined: spectral moments m0, m2, m4 add (sigma^2 adds); the summit route "
+                            "cannot be combined across scans (NaN except sigma) unless there is one surface",
+        "references": "Nayak, J. Lubr. Technol. 93 (1971) 398; McCool, Wear 107 (1986) 37; "
+                      "Greenwood & Williamson, Proc. R. Soc. A 295 (1966) 300",
+        "warnings": [w for s in surfaces for w in s.warnings],
+    }
+    if scene is not None:
+        attrs["route"] = scene["roughness"].get("route", "spectral")
+    for label, path in files.items():
+        attrs["source_file_" + re.sub(r"[^A-Za-z0-9_]", "_", label)] = Path(path).name
+    ds.attrs = attrs
+    return ds
+
+
+def _up_to_date(path: Path, scene: Any, files: Sequence[Path]) -> bool:
+    """Whether ``path`` was written from the same scene keys (:func:`pipeline.io.is_current`) and the same
+    input bytes (a file edited in place keeps its path but not its hash)."""
+    if scene is None or not is_current(path, scene, "roughness"):
+        return False
+    try:
+        hashes = json.loads(read_dataset(path).attrs.get("input_hashes", "{}"))
+    except (DatasetError, ValueError):
+        return False
+    return hashes == {str(f): file_hash(f) for f in files if Path(f).is_file()}
+
+
+def _write(summaries: Sequence[sf.SurfaceSummary], out: Path, scene: Any, files: Sequence[Path],
+           detrend: str) -> Path:
+    ds = build_dataset(summaries, scene, detrend)
+    return write_dataset(ds, Path(out) / FILENAME, scene, stage="roughness", inputs=files)
+
+
+def run_files(files: Sequence[Path], out: Path, channel: str | None = None, detrend: str = "plane",
+              scene: Any = None) -> Path:
+    """Summarise AFM files by both routes and write ``out/roughness.nc`` (see the module docstring).
+
+    Parameters
+    ----------
+    files : AFM scans (any format SurfaceTopography reads)
+    out : output folder
+    channel : channel name for every file (``None``: the height channel)
+    detrend : ``"plane"``, ``"center"``, ``"height"`` or ``"curvature"``
+    scene : optional scene (materials, provenance)
+
+    Raises
+    ------
+    pipeline.physics.surface.AFMError
+        For an unusable file; nothing is written then.
+    """
+    files = [Path(f) for f in files]
+    if not files:
+        raise ValueError("roughness: expected at least one AFM file")
+    labels = _unique_labels(files)
+    summaries = [sf.summarise_file(f, channel=channel, detrend_mode=detrend, label=lab)
+                 for f, lab in zip(files, labels)]
+    return _write(summaries, Path(out), scene, files, detrend)
+
+
+def run(scene: Any, out: Path, **options: Any) -> Path:
+    """Stage entry point: ``roughness.nc`` from ``scene["roughness"]``.
+
+    Parameters
+    ----------
+    scene : :class:`pipeline.scene.Scene`
+    out : output folder
+    options : ``force=True`` recomputes even when the output matches the scene and input files;
+        other options (``scheduler``, ``workers``) are ignored.
+    """
+    cfg = scene["roughness"]
+    out = Path(out)
+    files = [Path(f) for f in (cfg.get("afm") or [])]
+    if not options.get("force") and _up_to_date(out / FILENAME, scene, files):
+        return out / FILENAME
+    if files:
+        return run_files(files, out, channel=cfg.get("channel"), detrend=cfg.get("detrend", "plane"),
+                         scene=scene)
+    summary = sf.from_statistics(cfg["sigma_nm"], cfg["summit_density_per_um2"] * 1e-6,
+                                 cfg["summit_radius_um"] * 1e3, label="explicit")
+    return _write([summary], out, scene, [], "")
+
+
+def combined_statistics(path: str | Path, route: str = "spectral") -> dict[str, float]:
+    """Statistics of the ``"combined"`` surface of a ``roughness.nc`` for the interface model.
+
+    Parameters
+    ----------
+    path : the ``roughness.nc`` file
+    route : ``"spectral"`` or ``"summits"``
+
+    Returns
+    -------
+    dict with ``sigma_nm``, ``sigma_s_nm``, ``y_s_nm``, ``summit_radius_um``, ``summit_density_per_um2``,
+    ``alpha``
+
+    Raises
+    ------
+    pipeline.io.DatasetError
+        When the file is missing or incomplete, or the route has no combined statistics (the summit
+        route for several scans).
+    """
+    if route not in METHODS:
+        raise ValueError(f"route {route!r}: expected one of {METHODS}")
+    names = ("sigma", "sigma_s", "y_s", "summit_radius", "summit_density", "bandwidth_alpha")
+    ds = read_dataset(path, stage="roughness", variables=names)
+    if COMBINED not in ds["surface"].values:
+        raise DatasetError(f"{path}: no '{COMBINED}' surface")
+    row = ds.sel({"surface": COMBINED, "method": route})  # dict: `method` is also a keyword of sel
+    keys = ("sigma_nm", "sigma_s_nm", "y_s_nm", "summit_radius_um", "summit_density_per_um2", "alpha")
+    result = {k: float(row[n]) for k, n in zip(keys, names)}
+    if not all(np.isfinite(result[k]) for k in ("sigma_nm", "summit_radius_um", "summit_density_per_um2")):
+        raise DatasetError(f"{path}: the {route!r} route has no combined statistics (the summit route cannot "
+                           f"combine several scans); use route='spectral'")
+    return result
