@@ -142,6 +142,9 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "k": Key("float", None, doc="contact criterion d < k sigma [1]; absent: from calibration"),
         "section_depth_sigma": Key("float", 3.0, _pos, doc="nominal-area section depth s_n [sigma] (recon)"),
         "damping_n_s_m": Key("float", 0.0, _nonneg, doc="contact damping c_c [N s/m] (recon)"),
+        "fallback_probability": Key("float", None, (lambda v: 0 < v < 1, "a probability in (0, 1)"),
+                                    doc="when calibration finds no admissible k: use the k of this one-sided "
+                                        "contact probability P(z > k sigma) [1]"),
         "friction_law": Key("str", "shear-strength", choices=("shear-strength",),
                             doc="single-asperity friction law (SPEC.md section 2)"),
     },
@@ -164,11 +167,19 @@ SCHEMA: dict[str, dict[str, Key]] = {
     "touchdown": {
         "onset_nm": Key("float", 9.8, _nonneg, doc="measured touchdown protrusion [nm] (paper)"),
         "previous_nm": Key("float", 9.6, _nonneg, doc="previous actuation step, no contact [nm] (paper)"),
+        "k_range": Key("floats", [-3.0, 3.0], (lambda v: v[0] < v[1], "lo < hi"), length=2,
+                       doc="physically meaningful k searched by the calibration [1] (contact probability "
+                           "0.1 % to 99.9 %)"),
+        "k_tolerance": Key("float", 1e-3, _pos, doc="bisection tolerance on k [1]"),
+        "curve_points": Key("int", 25, (lambda v: 2 <= v <= 1000, "an integer in [2, 1000]"),
+                            doc="k values of the touchdown-versus-k curve"),
     },
     "solver": {
         "rtol": Key("float", 1e-6, _pos, doc="relative error tolerance of the adaptive integrator [1]"),
         "atol_nm": Key("float", 1e-4, _pos, doc="absolute error tolerance on displacements [nm]"),
         "max_step_ns": Key("float", 250.0, _pos, doc="largest time step [ns]"),
+        "min_dwell_ns": Key("float", 20.0, _nonneg,
+                            doc="shortest time a contact mode is held after a switch [ns] (chattering guard)"),
         "duration_ms": Key("float", 2.0, _pos, doc="simulated time [ms]"),
         "transient_ms": Key("float", 0.5, _nonneg, doc="discarded start-up transient [ms]"),
         "output_step_ns": Key("float", 250.0, _pos, doc="sampling of histories and steady-window statistics [ns]"),
@@ -403,6 +414,9 @@ def _cross_checks(config: dict[str, dict[str, Any]], where: str) -> None:
         raise SceneError(f"{where}: solver.transient_ms = {sol['transient_ms']} must be shorter than "
                          f"solver.duration_ms = {sol['duration_ms']}")
     eff = set(config["scene"]["effects"])
+    if "air_bearing" not in eff:
+        raise SceneError(f"{where}: scene.effects = {sorted(eff)}: expected 'air_bearing' among them "
+                         "(nothing else holds the slider up)")
     if "friction" in eff and "contact" not in eff:
         raise SceneError(f"{where}: scene.effects: 'friction' needs 'contact' (friction acts only in contact)")
     if "pitch" in eff and "air_bearing" not in eff:

@@ -1,0 +1,345 @@
+"""Numba kernels of the 2-DOF slider: equations of motion and the adaptive integrator.
+
+Equations of motion (SPEC.md section 4), states ``y = (z, theta, z', theta')`` in SI units::
+
+    m z''     = F_f + F_r + F_i
+    I theta'' = l_f F_f - l_r F_r - l_c F_i - h_cg Q
+
+* front pad (``l_f`` ahead of the CG), linear:   ``F_f = -k_f (z + l_f theta - w_f) - c_f (...)'``
+* rear pad (``l_r`` behind), nonlinear [recon]:  ``F_r = F_r0 [(g0/g_r)^n - 1] - c_r g_r'``,
+  ``g_r = g0 + z - l_r theta - w_r``
+* interface at the TFC point (``l_c`` behind), separation ``d = FH0 - delta + z - l_c theta - w_c``:
+  ``F_i = -A_n p_a(d)`` always (adhesion effect), plus ``A_n p_c(d) - c_c d'`` while in contact
+  (``d < k sigma``, the paper's criterion)
+* friction ``Q = A_n tau(d)`` in contact, along the disk's motion (leading to trailing edge) at the
+  air-bearing surface; its moment about the CG is ``-h_cg Q`` (it pitches the leading edge down).
+* the disk under each point moves with the DMW ``w(t)`` delayed by the disk's travel time.
+
+Effects are selected by passing ``None`` for a disabled effect's data: numba compiles one
+specialised kernel per combination and prunes the dead branches at compile time (branch pruning of
+``arg is None``), so a disabled effect is never evaluated, with no run-time test in the hot loop.
+All kernels are cached on disk (``cache=True``).
+
+Integrator: Dormand-Prince 5(4) with PI-free classical step control (Hairer, Norsett & Wanner,
+*Solving ODEs I*, II.4 and II.5), local extrapolation, error norm the RMS of the embedded error
+scaled by ``atol + rtol |y|``. The contact switch is a discontinuity of the force, handled as an
+event: a sign change of ``g = d - k sigma`` over an accepted step is located by bisection on the
+cubic Hermite interpolant of the step, the step is redone exactly up to the switch, and
+integration restarts in the new mode (no FSAL reuse across the switch). Outputs are sampled on a
+uniform grid with the same Hermite interpolant.
+
+Chattering. Where the contact force at the threshold exceeds the pull into contact (a large
+``p_c(k sigma)``, e.g. a negative k), the exact solution slides along ``d = k sigma`` (a Filippov
+sliding mode) and an exact event method would switch infinitely often. A mode is therefore held
+for at least ``P_DWELL`` seconds after a switch (``solver.min_dwell_ns``); if the criterion says
+otherwise when the dwell ends, the mode switches there. The resulting fast switching averages the
+contact force to the sliding-mode value with an error of the order of the dwell; the dwell is an
+accuracy knob of the accuracy stage. Crossings further apart than the dwell are located exactly.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+# Layout of the parameter vector ``p`` (all SI).
+(P_M, P_I, P_LF, P_LR, P_LC, P_HCG, P_KF, P_KR, P_CF, P_CR, P_G0, P_N, P_FR0, P_FH0, P_DELTA, P_AN,
+ P_KSIG, P_CC, P_OFF_F, P_OFF_R, P_OFF_C, P_DMW_T0, P_DMW_DT, P_TAB_X0, P_TAB_H, P_DWELL) = range(26)
+N_PARAMS = 26
+
+# Status codes returned by :func:`integrate`.
+OK, MAX_STEPS, STEP_UNDERFLOW, NOT_FINITE = 0, 1, 2, 3
+STATUS_TEXT = {OK: "ok", MAX_STEPS: "too many steps", STEP_UNDERFLOW: "step size underflow",
+               NOT_FINITE: "state became non-finite"}
+
+
+# ---------------------------------------------------------------------------------------------
+# piecewise cubics on a uniform grid (interface tables, DMW record)
+
+def piecewise_coefficients(y: np.ndarray, h: float, order: int) -> np.ndarray:
+    """Coefficients ``c`` (shape ``(4, n-1)``) of a piecewise polynomial through ``y`` on a grid of step ``h``.
+
+    On piece ``i``, ``f(x_i + s) = c[0,i] s^3 + c[1,i] s^2 + c[2,i] s + c[3,i]``. ``order=1``: linear
+    interpolation; ``order=3``: not-a-knot cubic spline (``scipy.interpolate.CubicSpline``, C2).
+    """
+    y = np.asarray(y, dtype=float)
+    if order == 1:
+        c = np.zeros((4, y.size - 1))
+        c[2] = np.diff(y) / h
+        c[3] = y[:-1]
+        return c
+    if order == 3:
+        from scipy.interpolate import CubicSpline
+        x = h * np.arange(y.size)
+        return np.ascontiguousarray(CubicSpline(x, y).c)
+    raise ValueError(f"interpolation order {order}: expected 1 or 3")
+
+
+@njit(cache=True, inline="always")
+def _ppval(c, x0, h, x):
+    """Value and slope of the piecewise cubic at ``x`` (linear extrapolation below, constant above)."""
+    n = c.shape[1]
+    u = (x - x0) / h
+    if u < 0.0:
+        return c[3, 0] + c[2, 0] * (x - x0), c[2, 0]
+    i = int(u)
+    if i >= n:
+        s = h
+        i = n - 1
+        return ((c[0, i] * s + c[1, i]) * s + c[2, i]) * s + c[3, i], 0.0
+    s = x - (x0 + i * h)
+    return (((c[0, i] * s + c[1, i]) * s + c[2, i]) * s + c[3, i],
+            (3.0 * c[0, i] * s + 2.0 * c[1, i]) * s + c[2, i])
+
+
+@njit(cache=True)
+def ppval(c, x0, h, x):
+    """Vectorised :func:`_ppval` (values only) for post-processing."""
+    out = np.empty(x.shape[0])
+    for j in range(x.shape[0]):
+        out[j] = _ppval(c, x0, h, x[j])[0]
+    return out
+
+
+# ---------------------------------------------------------------------------------------------
+# right-hand side
+
+@njit(cache=True, inline="always")
+def _disk(p, dmw, t, off):
+    if dmw is None:
+        return 0.0, 0.0
+    return _ppval(dmw, p[P_DMW_T0], p[P_DMW_DT], t + p[off])
+
+
+@njit(cache=True, inline="always")
+def separation(p, dmw, t, y):
+    """TFC separation ``d`` [m] and its rate [m/s] (SPEC.md 4)."""
+    wc, vc = _disk(p, dmw, t, P_OFF_C)
+    return (p[P_FH0] - p[P_DELTA] + y[0] - p[P_LC] * y[1] - wc,
+            y[2] - p[P_LC] * y[3] - vc)
+
+
+@njit(cache=True)
+def rhs(t, y, p, dmw, cp, pa, ft, pitch, contact, out):
+    """Write ``dy/dt`` into ``out`` (see the module docstring for the equations)."""
+    z, th, vz, vth = y[0], y[1], y[2], y[3]
+    wf, vf = _disk(p, dmw, t, P_OFF_F)
+    wr, vr = _disk(p, dmw, t, P_OFF_R)
+    lf, lr = p[P_LF], p[P_LR]
+    F_f = -p[P_KF] * (z + lf * th - wf) - p[P_CF] * (vz + lf * vth - vf)
+    g_r = p[P_G0] + z - lr * th - wr
+    g_r = max(g_r, 1e-3 * p[P_G0])  # the rear law is singular at zero gap; never reached in practice
+    F_r = p[P_FR0] * ((p[P_G0] / g_r) ** p[P_N] - 1.0) - p[P_CR] * (vz - lr * vth - vr)
+    F_i = 0.0
+    Q = 0.0
+    if pa is not None or cp is not None:
+        d, dd = separation(p, dmw, t, y)
+        x0, h = p[P_TAB_X0], p[P_TAB_H]
+        if pa is not None:
+            F_i -= p[P_AN] * _ppval(pa, x0, h, d)[0]
+        if cp is not None:
+            if contact:
+                F_i += p[P_AN] * max(_ppval(cp, x0, h, d)[0], 0.0) - p[P_CC] * dd
+                if ft is not None:
+                    Q = p[P_AN] * max(_ppval(ft, x0, h, d)[0], 0.0)
+    out[0] = vz
+    out[2] = (F_f + F_r + F_i) / p[P_M]
+    if pitch is None:
+        out[1] = 0.0
+        out[3] = 0.0
+    else:
+        out[1] = vth
+        out[3] = (lf * F_f - lr * F_r - p[P_LC] * F_i - p[P_HCG] * Q) / p[P_I]
+
+
+# ---------------------------------------------------------------------------------------------
+# Dormand-Prince 5(4) tableau (Hairer, Norsett & Wanner, Table II.5.2)
+A21 = 1 / 5
+A31, A32 = 3 / 40, 9 / 40
+A41, A42, A43 = 44 / 45, -56 / 15, 32 / 9
+A51, A52, A53, A54 = 19372 / 6561, -25360 / 2187, 64448 / 6561, -212 / 729
+A61, A62, A63, A64, A65 = 9017 / 3168, -355 / 33, 46732 / 5247, 49 / 176, -5103 / 18656
+B1, B3, B4, B5, B6 = 35 / 384, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84
+E1, E3, E4, E5, E6, E7 = (71 / 57600, -71 / 16695, 71 / 1920, -17253 / 339200, 22 / 525, -1 / 40)
+
+
+@njit(cache=True)
+def _step(t, y, k1, h, p, dmw, cp, pa, ft, pitch, contact, ynew, k7, err, tmp, k2, k3, k4, k5, k6):
+    """One Dormand-Prince step: ``ynew``, its derivative ``k7`` and the error estimate ``err``."""
+    for i in range(4):
+        tmp[i] = y[i] + h * A21 * k1[i]
+    rhs(t + h / 5, tmp, p, dmw, cp, pa, ft, pitch, contact, k2)
+    for i in range(4):
+        tmp[i] = y[i] + h * (A31 * k1[i] + A32 * k2[i])
+    rhs(t + 3 * h / 10, tmp, p, dmw, cp, pa, ft, pitch, contact, k3)
+    for i in range(4):
+        tmp[i] = y[i] + h * (A41 * k1[i] + A42 * k2[i] + A43 * k3[i])
+    rhs(t + 4 * h / 5, tmp, p, dmw, cp, pa, ft, pitch, contact, k4)
+    for i in range(4):
+        tmp[i] = y[i] + h * (A51 * k1[i] + A52 * k2[i] + A53 * k3[i] + A54 * k4[i])
+    rhs(t + 8 * h / 9, tmp, p, dmw, cp, pa, ft, pitch, contact, k5)
+    for i in range(4):
+        tmp[i] = y[i] + h * (A61 * k1[i] + A62 * k2[i] + A63 * k3[i] + A64 * k4[i] + A65 * k5[i])
+    rhs(t + h, tmp, p, dmw, cp, pa, ft, pitch, contact, k6)
+    for i in range(4):
+        ynew[i] = y[i] + h * (B1 * k1[i] + B3 * k3[i] + B4 * k4[i] + B5 * k5[i] + B6 * k6[i])
+    rhs(t + h, ynew, p, dmw, cp, pa, ft, pitch, contact, k7)
+    for i in range(4):
+        err[i] = h * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i] + E7 * k7[i])
+
+
+@njit(cache=True, inline="always")
+def _hermite(y0, f0, y1, f1, h, theta, i):
+    """Cubic Hermite interpolant of component ``i`` at ``t0 + theta h``."""
+    t2 = theta * theta
+    t3 = t2 * theta
+    return ((2 * t3 - 3 * t2 + 1) * y0[i] + (t3 - 2 * t2 + theta) * h * f0[i]
+            + (-2 * t3 + 3 * t2) * y1[i] + (t3 - t2) * h * f1[i])
+
+
+@njit(cache=True)
+def _interp_state(y0, f0, y1, f1, h, theta, out):
+    for i in range(4):
+        out[i] = _hermite(y0, f0, y1, f1, h, theta, i)
+
+
+@njit(cache=True)
+def integrate(y0, t_end, t_out, p, dmw, cp, pa, ft, pitch, rtol, atol, h_max, max_steps):
+    """Integrate from ``t = 0`` to ``t_end`` [s]; sample the state at ``t_out`` (ascending).
+
+    Parameters
+    ----------
+    y0 : initial state ``(z [m], theta [rad], z' [m/s], theta' [rad/s])``
+    p : parameter vector (layout ``P_*``)
+    dmw, cp, pa, ft : piecewise-cubic coefficients of the DMW record [m], contact pressure,
+        adhesion pressure and friction stress [Pa] versus separation [m]; ``None`` disables
+    pitch : any array to enable the pitch degree of freedom, ``None`` to lock it
+    rtol, atol : relative tolerance [1] and per-component absolute tolerances (SI)
+    h_max : largest step [s]; max_steps : guard against a stalled integration
+
+    Returns
+    -------
+    Y : states at ``t_out`` (n_out, 4); C : contact flag at ``t_out``;
+    info : ``[status, accepted steps, rejected steps, contact switches, rhs evaluations]``
+    """
+    n_out = t_out.shape[0]
+    Y = np.full((n_out, 4), np.nan)
+    C = np.zeros(n_out, dtype=np.bool_)
+    info = np.zeros(5, dtype=np.int64)
+    y = y0.copy()
+    k1 = np.empty(4)
+    k7 = np.empty(4)
+    ynew = np.empty(4)
+    err = np.empty(4)
+    tmp = np.empty(4)
+    k2, k3, k4, k5, k6 = np.empty(4), np.empty(4), np.empty(4), np.empty(4), np.empty(4)
+    ys = np.empty(4)
+    ev_y = np.empty(4)
+    ev_f = np.empty(4)
+    t = 0.0
+    # The initial mode follows the criterion at t = 0.
+    contact = False
+    if cp is not None:
+        contact = separation(p, dmw, t, y)[0] < p[P_KSIG]
+    rhs(t, y, p, dmw, cp, pa, ft, pitch, contact, k1)
+    info[4] += 1
+    h = min(h_max, 1e-8)
+    t_hold = -1.0  # no switch may happen before t_hold (minimum dwell after a switch)
+    j = 0
+    while j < n_out and t_out[j] <= t:
+        Y[j, :] = y
+        C[j] = contact
+        j += 1
+    steps = 0
+    while t < t_end:
+        if steps >= max_steps:
+            info[0] = MAX_STEPS
+            return Y, C, info
+        steps += 1
+        if cp is not None and t_hold > 0.0 and t >= t_hold:
+            # the dwell has ended: switch now if the criterion disagrees with the mode
+            t_hold = -1.0
+            if (separation(p, dmw, t, y)[0] - p[P_KSIG] < 0.0) != contact:
+                contact = not contact
+                info[3] += 1
+                t_hold = t + p[P_DWELL]
+                rhs(t, y, p, dmw, cp, pa, ft, pitch, contact, k1)
+                info[4] += 1
+        h = min(h, h_max, t_end - t)
+        if t_hold > t:
+            h = min(h, t_hold - t)
+        if h < 1e-12 * max(t, 1e-9) or h < 1e-18:
+            info[0] = STEP_UNDERFLOW
+            return Y, C, info
+        _step(t, y, k1, h, p, dmw, cp, pa, ft, pitch, contact, ynew, k7, err, tmp, k2, k3, k4, k5, k6)
+        info[4] += 6
+        e = 0.0
+        for i in range(4):
+            sc = atol[i] + rtol * max(abs(y[i]), abs(ynew[i]))
+            e += (err[i] / sc) ** 2
+        e = np.sqrt(e / 4.0)
+        if not np.isfinite(e):
+            h *= 0.1
+            info[2] += 1
+            continue
+        if e > 1.0:
+            h *= max(0.2, 0.9 * e ** -0.2)
+            info[2] += 1
+            continue
+        # accepted step [t, t + h]
+        h_acc = h
+        switched = False
+        if cp is not None and t_hold < 0.0:
+            g1 = separation(p, dmw, t + h, ynew)[0] - p[P_KSIG]
+            if (g1 < 0.0) != contact:
+                # locate the switch on the Hermite interpolant by bisection
+                lo, hi = 0.0, 1.0
+                for _ in range(60):
+                    mid = 0.5 * (lo + hi)
+                    _interp_state(y, k1, ynew, k7, h, mid, ys)
+                    g = separation(p, dmw, t + mid * h, ys)[0] - p[P_KSIG]
+                    if (g < 0.0) != contact:
+                        hi = mid
+                    else:
+                        lo = mid
+                    if (hi - lo) * h < 1e-16:
+                        break
+                h_ev = hi * h
+                if h_ev < h:
+                    # redo the step exactly up to the switch (in the old mode)
+                    _step(t, y, k1, h_ev, p, dmw, cp, pa, ft, pitch, contact, ev_y, ev_f, err, tmp,
+                          k2, k3, k4, k5, k6)
+                    info[4] += 6
+                    for i in range(4):
+                        ynew[i] = ev_y[i]
+                        k7[i] = ev_f[i]
+                    h_acc = h_ev
+                switched = True
+                info[3] += 1
+        t_new = t + h_acc
+        while j < n_out and t_out[j] <= t_new:
+            theta = (t_out[j] - t) / h_acc
+            _interp_state(y, k1, ynew, k7, h_acc, theta, ys)
+            for i in range(4):
+                Y[j, i] = ys[i]
+            C[j] = contact
+            j += 1
+        for i in range(4):
+            y[i] = ynew[i]
+            if not np.isfinite(y[i]):
+                info[0] = NOT_FINITE
+                return Y, C, info
+        t = t_new
+        info[1] += 1
+        if t_hold > 0.0 and t >= t_hold * (1.0 - 1e-15):
+            t = t_hold  # land exactly on the end of the dwell (checked at the top of the loop)
+        if switched:
+            contact = not contact
+            t_hold = t + p[P_DWELL] if p[P_DWELL] > 0.0 else -1.0
+            rhs(t, y, p, dmw, cp, pa, ft, pitch, contact, k1)
+            info[4] += 1
+        else:
+            for i in range(4):
+                k1[i] = k7[i]
+        h = h * min(5.0, max(0.2, 0.9 * max(e, 1e-10) ** -0.2))
+    return Y, C, info

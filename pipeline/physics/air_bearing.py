@@ -1,0 +1,196 @@
+"""The slider's rigid body and its air bearing: mass properties, modal inversion, damping, rear law.
+
+Two degrees of freedom: vertical displacement ``z`` of the centre of gravity (CG, up positive) and
+pitch ``theta`` (positive: leading edge up, trailing edge down, so a point at ``x`` ahead of the CG
+moves by ``z + x theta``). The front air bearing acts ``l_f`` ahead of the CG, the rear one ``l_r``
+behind it (SPEC.md section 4).
+
+References
+----------
+.. [Meirovitch] L. Meirovitch, Fundamentals of Vibrations (2001), ch. 7 (two-DOF modal analysis).
+.. [Zeng01] Q. H. Zeng, D. B. Bogy, "A simplified 4-DOF suspension model for dynamic load/unload
+   simulation and its application", J. Tribol. 122 (2000) 274-279 (lumped air-bearing springs).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Slider:
+    """Rigid slider and air-bearing parameters (SI units).
+
+    Attributes
+    ----------
+    m : mass [kg]; I : pitch inertia about the CG [kg m^2]
+    l_f, l_r, l_c : arms of the front pad, rear pad, TFC point from the CG [m] (front ahead, others behind)
+    h_cg : height of the CG above the air-bearing surface [m] (friction moment arm)
+    k_f, k_r : front and rear bearing stiffness [N/m]; c_f, c_r : their dampers [N s/m]
+    g0 : rear reference gap [m]; n : rear exponent [1]
+    """
+
+    m: float
+    I: float
+    l_f: float
+    l_r: float
+    l_c: float
+    h_cg: float
+    k_f: float
+    k_r: float
+    c_f: float
+    c_r: float
+    g0: float
+    n: float
+
+    @property
+    def mass_matrix(self) -> np.ndarray:
+        """``M = diag(m, I)``."""
+        return np.diag([self.m, self.I])
+
+    @property
+    def stiffness_matrix(self) -> np.ndarray:
+        """Linearised stiffness ``K`` in coordinates ``(z, theta)`` (SPEC.md section 4)."""
+        return pad_matrix(self.k_f, self.k_r, self.l_f, self.l_r)
+
+    @property
+    def damping_matrix(self) -> np.ndarray:
+        """Damping ``C`` of the two pad dampers in ``(z, theta)``."""
+        return pad_matrix(self.c_f, self.c_r, self.l_f, self.l_r)
+
+    @property
+    def rear_preload(self) -> float:
+        """``F_r0 = k_r g0 / n`` [N]: the rear law's stiffness at ``g0`` equals ``k_r`` (SPEC.md 4)."""
+        return self.k_r * self.g0 / self.n
+
+
+def pad_matrix(a_f: float, a_r: float, l_f: float, l_r: float) -> np.ndarray:
+    """``[[a_f + a_r, a_f l_f - a_r l_r], [., a_f l_f^2 + a_r l_r^2]]`` for pads at ``+l_f`` and ``-l_r``."""
+    return np.array([[a_f + a_r, a_f * l_f - a_r * l_r],
+                     [a_f * l_f - a_r * l_r, a_f * l_f**2 + a_r * l_r**2]])
+
+
+def mass_properties(length: float, width: float, thickness: float, density: float) -> tuple[float, float]:
+    """Mass [kg] and pitch inertia about the CG [kg m^2] of a uniform block.
+
+    ``m = rho L W T``, ``I = m (L^2 + T^2) / 12`` (pitch about the width axis). The paper's femto
+    slider (0.85 x 0.70 x 0.23 mm, 4250 kg/m^3) gives 0.58 mg and 3.75e-14 kg m^2 (SPEC.md 6).
+    """
+    m = density * length * width * thickness
+    return m, m * (length**2 + thickness**2) / 12.0
+
+
+def stiffness_roots(f1: float, f2: float, m: float, I: float, l_f: float, l_r: float) -> list[tuple[float, float]]:
+    """Both ``(k_f, k_r)`` pairs [N/m] giving the natural frequencies ``f1 < f2`` [Hz].
+
+    From ``w1^2 w2^2 = k_f k_r (l_f + l_r)^2 / (m I)`` and
+    ``w1^2 + w2^2 = k_f (1/m + l_f^2/I) + k_r (1/m + l_r^2/I)`` (SPEC.md section 4):
+    ``b k_r^2 - S k_r + a P = 0``, with ``P = k_f k_r``. Returns the root with the larger rear
+    stiffness first.
+
+    Raises
+    ------
+    ValueError
+        When no real positive pair exists (the frequencies are too far apart for this geometry).
+    """
+    w1, w2 = 2 * np.pi * f1, 2 * np.pi * f2
+    P = w1**2 * w2**2 * m * I / (l_f + l_r) ** 2
+    S = w1**2 + w2**2
+    a, b = 1 / m + l_f**2 / I, 1 / m + l_r**2 / I
+    disc = S**2 - 4 * a * b * P
+    if disc < 0:
+        raise ValueError(f"no real air-bearing stiffness gives {f1:g} and {f2:g} Hz for this slider "
+                         f"(discriminant {disc:.3g} < 0)")
+    roots = []
+    for sign in (+1, -1):
+        k_r = (S + sign * np.sqrt(disc)) / (2 * b)
+        roots.append((P / k_r, k_r))
+    return roots
+
+
+def modes(K: np.ndarray, M: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Natural angular frequencies [rad/s] (ascending) and mass-normalised mode shapes (columns)."""
+    from scipy.linalg import eigh
+    w2, phi = eigh(K, M)
+    return np.sqrt(w2), phi
+
+
+def node_position(shape: np.ndarray) -> float:
+    """Position ahead of the CG [m] that does not move in a mode ``(z, theta)`` (``inf`` for pure bounce)."""
+    return -shape[0] / shape[1] if shape[1] != 0 else np.inf
+
+
+def choose_stiffness(f1: float, f2: float, m: float, I: float, l_f: float, l_r: float, length: float,
+                     root: str = "pitch-first") -> tuple[float, float, dict]:
+    """Pick one ``(k_f, k_r)`` root by its mode shapes.
+
+    A mode is *pitch-like* when its node (the point that does not move) lies on the slider,
+    ``|x_node| < L/2``, and *bounce-like* otherwise. ``root="pitch-first"`` (default, SPEC.md 4)
+    takes the root whose lower mode is pitch-like (the first air-bearing mode of a femto slider
+    is pitch-dominated); ``"bounce-first"`` the other.
+
+    Returns
+    -------
+    k_f, k_r [N/m], info (both roots, their node positions [m], which one was taken and why)
+    """
+    info: dict = {"roots": [], "chosen": None}
+    chosen = None
+    for k_f, k_r in stiffness_roots(f1, f2, m, I, l_f, l_r):
+        w, phi = modes(pad_matrix(k_f, k_r, l_f, l_r), np.diag([m, I]))
+        nodes = [node_position(phi[:, i]) for i in range(2)]
+        first_pitch = abs(nodes[0]) < length / 2
+        info["roots"].append({"k_f": k_f, "k_r": k_r, "node_mode1": nodes[0], "node_mode2": nodes[1],
+                              "mode1_pitch_like": first_pitch})
+        want_pitch = root == "pitch-first"
+        if chosen is None and first_pitch == want_pitch:
+            chosen = (k_f, k_r)
+    if chosen is None:
+        raise ValueError(f"no stiffness root of {f1:g}/{f2:g} Hz has a {root} mode order; roots: {info['roots']}")
+    info["chosen"] = root
+    return chosen[0], chosen[1], info
+
+
+def pad_damping(k_f: float, k_r: float, m: float, I: float, l_f: float, l_r: float, zeta: float) -> tuple[float, float]:
+    """Front and rear pad dampers [N s/m] that give both modes the damping ratio ``zeta``.
+
+    Projecting the pad damping ``C(c_f, c_r)`` on the mass-normalised modes gives two linear
+    equations ``phi_i^T C phi_i = 2 zeta w_i`` for ``(c_f, c_r)``. The small off-diagonal modal
+    term that pad dampers also produce is kept (not a proportional damping); the exact damping
+    ratios of the resulting system are reported by :func:`damping_ratios`.
+    """
+    w, phi = modes(pad_matrix(k_f, k_r, l_f, l_r), np.diag([m, I]))
+    A = np.empty((2, 2))
+    for i in range(2):
+        A[i, 0] = (phi[0, i] + l_f * phi[1, i]) ** 2
+        A[i, 1] = (phi[0, i] - l_r * phi[1, i]) ** 2
+    c = np.linalg.solve(A, 2 * zeta * w)
+    if np.any(c < 0):
+        raise ValueError(f"pad dampers for damping ratio {zeta} would be negative ({c}); "
+                         "this geometry cannot damp both modes equally with two pads")
+    return float(c[0]), float(c[1])
+
+
+def damping_ratios(s: Slider) -> tuple[np.ndarray, np.ndarray]:
+    """Exact damped natural frequencies [Hz] and damping ratios [1] of the linearised slider.
+
+    From the eigenvalues ``lambda = -zeta w +- i w sqrt(1 - zeta^2)`` of the first-order system.
+    """
+    M, K, C = s.mass_matrix, s.stiffness_matrix, s.damping_matrix
+    Minv = np.linalg.inv(M)
+    A = np.block([[np.zeros((2, 2)), np.eye(2)], [-Minv @ K, -Minv @ C]])
+    lam = np.linalg.eigvals(A)
+    lam = lam[np.imag(lam) > 0] if np.any(np.imag(lam) > 0) else lam[:2]
+    lam = lam[np.argsort(np.abs(lam))]
+    wn = np.abs(lam)
+    return wn / (2 * np.pi), -np.real(lam) / wn
+
+
+def rear_force(g: np.ndarray, g0: float, n: float, F0: float) -> np.ndarray:
+    """Nonlinear rear bearing force [N] (positive: pushes the slider up) on gap ``g`` [m].
+
+    ``F_r = F0 [(g0/g)^n - 1]`` (SPEC.md section 4, [recon]); zero at ``g = g0``, stiffness
+    ``n F0 / g0`` there.
+    """
+    return F0 * ((g0 / np.asarray(g, dtype=float)) ** n - 1.0)

@@ -1,0 +1,319 @@
+"""The 2-DOF slider model: assemble it from a scene, run it, and summarise a run.
+
+:func:`build_model` turns a scene, its interface tables (``interface.nc`` content) and its DMW
+record into the arrays the numba kernel of :mod:`pipeline.dynamics` takes; :func:`run_model`
+integrates one protrusion; :func:`histories` and :func:`summarize` turn a run into the paper's
+time series (Figs 3-5) and the steady-window scalars of the sweep.
+
+Steady-window definitions (over ``transient_ms <= t <= duration_ms``, sampled every
+``output_step_ns``):
+
+* ``fhm_bv`` [%]: peak-to-peak of the separation ``d`` over ``FH0`` (or 3 std, ``solver.fhm_measure``);
+  called FHM while flying and BV (bouncing vibration) in contact, as in the paper.
+* ``clearance``/``min_clearance`` [nm]: mean/minimum of ``c = d - k sigma``.
+* ``interference`` [nm]: mean of ``-c`` over the samples in contact (NaN if none).
+* forces [mN]: time means over the window (zero while out of contact); ``net_force`` is the
+  vertical interface force on the slider, contact + contact damping - adhesion.
+* ``friction_coefficient`` [1]: mean friction / mean contact force.
+* ``mean_pressure``, ``shear_stress`` [MPa]: total contact / friction force over total real area,
+  over the samples in contact; ``real_area`` [um2]: mean real area while in contact.
+* ``contact_fraction`` [1]: fraction of the window's samples in contact.
+* ``regime``: 0 flying (no sample in contact), 2 surfing (steady sliding: in contact in at least
+  99 % of the samples), 1 bouncing (otherwise).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+from . import dynamics as dyn
+from .physics import air_bearing as ab
+from .physics.geometry import effective_radius, nominal_area
+
+NM, UM, MM = 1e-9, 1e-6, 1e-3
+
+#: Regime codes (``flag_values``/``flag_meanings`` of the ``regime`` variable).
+FLYING, BOUNCING, SURFING = 0, 1, 2
+REGIMES = {FLYING: "flying", BOUNCING: "bouncing", SURFING: "surfing"}
+SURFING_FRACTION = 0.99
+
+
+@dataclass
+class Model:
+    """Everything one scene needs to run at any protrusion (SI units).
+
+    Attributes
+    ----------
+    slider : the rigid body and air bearing
+    p : kernel parameter vector (protrusion-dependent entries are set by :func:`run_model`)
+    dmw : DMW coefficients [m] or ``None``; contact, adhesion, friction, area : interface-table
+        coefficients [Pa] / [1] versus separation [m], or ``None`` when the effect is off
+    pitch : ``None`` when the pitch DOF is locked
+    k_sigma : contact criterion threshold ``k sigma`` [m] (``nan`` without contact)
+    """
+
+    slider: ab.Slider
+    p: np.ndarray
+    dmw: np.ndarray | None
+    contact: np.ndarray | None
+    adhesion: np.ndarray | None
+    friction: np.ndarray | None
+    area: np.ndarray | None
+    pitch: np.ndarray | None
+    sigma: float
+    k: float
+    section_depth: float
+    half_length: float
+    half_width: float
+    duration: float
+    transient: float
+    output_step: float
+    rtol: float
+    atol: np.ndarray
+    max_step: float
+    fhm_measure: str
+    effects: frozenset
+    info: dict = field(default_factory=dict)
+
+    @property
+    def k_sigma(self) -> float:
+        return self.k * self.sigma if np.isfinite(self.k) else 0.0
+
+
+def slider_from_scene(scene: Any, damping_ratio: float | None = None) -> tuple[ab.Slider, dict]:
+    """The rigid slider and its air bearing from ``[slider]`` and ``[air_bearing]`` (SPEC.md 4).
+
+    Stiffnesses by modal inversion of the two natural frequencies (root chosen by mode order,
+    ``air_bearing.stiffness_root``), pad dampers for the modal damping ratio.
+    """
+    s, a = scene["slider"], scene["air_bearing"]
+    L, W, T = s["length_mm"] * MM, s["width_mm"] * MM, s["thickness_mm"] * MM
+    m, I = ab.mass_properties(L, W, T, s["density_kg_m3"])
+    l_f, l_r = s["front_arm_mm"] * MM, s["rear_arm_mm"] * MM
+    l_c = L / 2 - s["tfc_from_trailing_edge_um"] * UM
+    f1, f2 = (f * 1e3 for f in a["frequencies_khz"])
+    k_f, k_r, info = ab.choose_stiffness(f1, f2, m, I, l_f, l_r, L, a["stiffness_root"])
+    zeta = a["damping_ratio"] if damping_ratio is None else damping_ratio
+    c_f, c_r = ab.pad_damping(k_f, k_r, m, I, l_f, l_r, zeta) if zeta > 0 else (0.0, 0.0)
+    g0 = (a["rear_reference_gap_nm"] or a["flying_height_nm"]) * NM
+    slider = ab.Slider(m=m, I=I, l_f=l_f, l_r=l_r, l_c=l_c, h_cg=T / 2, k_f=k_f, k_r=k_r,
+                       c_f=c_f, c_r=c_r, g0=g0, n=a["rear_exponent"])
+    info["damping_ratio"] = zeta
+    return slider, info
+
+
+def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float] | None, k: float | None,
+                damping_ratio: float | None = None) -> Model:
+    """Assemble the model of a scene.
+
+    Parameters
+    ----------
+    scene : the validated scene
+    interface : the interface dataset (``xarray.Dataset`` as written by the interface stage), or
+        ``None`` for a scene with neither contact nor adhesion
+    dmw : ``(displacement [nm] sampled uniformly from t = 0, sample rate [Hz])`` or ``None``
+    k : contact criterion constant [1] (required with the contact effect)
+    damping_ratio : overrides ``air_bearing.damping_ratio`` (sweeps)
+    """
+    eff = scene.effects
+    if "air_bearing" not in eff:
+        raise ValueError("scene.effects must include 'air_bearing': nothing else holds the slider up")
+    slider, info = slider_from_scene(scene, damping_ratio)
+    a, sol, dm = scene["air_bearing"], scene["solver"], scene["dmw"]
+    p = np.zeros(dyn.N_PARAMS)
+    p[dyn.P_M], p[dyn.P_I] = slider.m, slider.I
+    p[dyn.P_LF], p[dyn.P_LR], p[dyn.P_LC], p[dyn.P_HCG] = slider.l_f, slider.l_r, slider.l_c, slider.h_cg
+    p[dyn.P_KF], p[dyn.P_KR], p[dyn.P_CF], p[dyn.P_CR] = slider.k_f, slider.k_r, slider.c_f, slider.c_r
+    p[dyn.P_G0], p[dyn.P_N], p[dyn.P_FR0] = slider.g0, slider.n, slider.rear_preload
+    p[dyn.P_FH0] = a["flying_height_nm"] * NM
+    p[dyn.P_CC] = scene["contact"]["damping_n_s_m"]
+    p[dyn.P_DWELL] = sol["min_dwell_ns"] * 1e-9
+    # The record gives the disk under the TFC point at time t; the front and rear pads see the same
+    # disk point earlier, by the travel time from pad to TFC (the disk moves leading -> trailing edge).
+    V = 2 * np.pi * dm["radius_mm"] * MM * dm["rpm"] / 60.0
+    p[dyn.P_OFF_F] = (slider.l_f + slider.l_c) / V
+    p[dyn.P_OFF_R] = (slider.l_c - slider.l_r) / V
+    p[dyn.P_OFF_C] = 0.0
+    order = sol["interpolation_order"]
+    duration = sol["duration_ms"] * 1e-3
+
+    dmw_c = None
+    if "dmw" in eff:
+        if dmw is None:
+            raise ValueError("the dmw effect needs a DMW record")
+        w_nm, fs = dmw
+        need = duration + max(p[dyn.P_OFF_F], 0.0) + 2.0 / fs
+        have = (w_nm.size - 1) / fs
+        if have < need:
+            raise ValueError(f"DMW record of {have * 1e3:.4g} ms is shorter than the {need * 1e3:.4g} ms the "
+                             f"simulation needs (duration plus the pad-to-TFC travel time); set "
+                             f"dmw.duration_ms >= {np.ceil(need * 1e5) / 1e2:g}")
+        dmw_c = dyn.piecewise_coefficients(np.asarray(w_nm, float) * NM, 1.0 / fs, order)
+        p[dyn.P_DMW_T0], p[dyn.P_DMW_DT] = 0.0, 1.0 / fs
+        info["disk_speed_m_s"] = V
+
+    tabs = {"contact": None, "adhesion": None, "friction": None, "area": None}
+    if interface is not None and "separation" in interface.coords:
+        x = interface["separation"].values * NM
+        h = float(x[1] - x[0])
+        p[dyn.P_TAB_X0], p[dyn.P_TAB_H] = x[0], h
+        names = {"contact": ("contact_pressure", 1e6, "contact"), "adhesion": ("adhesion_pressure", 1e6, "adhesion"),
+                 "friction": ("friction_stress", 1e6, "friction"), "area": ("real_area_fraction", 1.0, "contact")}
+        for key, (var, scale, effect) in names.items():
+            if effect in eff:
+                if var not in interface:
+                    raise ValueError(f"interface tables lack {var!r}, needed by the {effect} effect; "
+                                     "re-run `hdi interface`")
+                tabs[key] = dyn.piecewise_coefficients(interface[var].values * scale, h, order)
+    elif eff & {"contact", "adhesion"}:
+        raise ValueError("the contact/adhesion effects need interface tables (run `hdi interface`)")
+    sigma = float(interface["sigma"]) * NM if interface is not None else np.nan
+    if "contact" in eff:
+        if k is None or not np.isfinite(k):
+            raise ValueError("the contact effect needs the criterion k: set contact.k or run `hdi calibrate`")
+    k = float(k) if k is not None else np.nan
+    atol_len = sol["atol_nm"] * NM
+    w2 = 2 * np.pi * a["frequencies_khz"][1] * 1e3
+    atol = np.array([atol_len, atol_len / slider.l_c, atol_len * w2, atol_len / slider.l_c * w2])
+    info.update({"k_f": slider.k_f, "k_r": slider.k_r, "c_f": slider.c_f, "c_r": slider.c_r})
+    return Model(slider=slider, p=p, dmw=dmw_c, contact=tabs["contact"], adhesion=tabs["adhesion"],
+                 friction=tabs["friction"], area=tabs["area"],
+                 pitch=np.ones(1) if "pitch" in eff else None, sigma=sigma, k=k,
+                 section_depth=scene["contact"]["section_depth_sigma"] * sigma,
+                 half_length=scene["tfc"]["half_length_um"] * UM, half_width=scene["tfc"]["half_width_um"] * UM,
+                 duration=duration, transient=sol["transient_ms"] * 1e-3,
+                 output_step=sol["output_step_ns"] * 1e-9, rtol=sol["rtol"], atol=atol,
+                 max_step=sol["max_step_ns"] * 1e-9, fhm_measure=sol["fhm_measure"], effects=eff, info=info)
+
+
+@dataclass
+class Run:
+    """One integrated protrusion: states and contact flags sampled at ``time``."""
+
+    model: Model
+    protrusion: float
+    nominal_area: float
+    time: np.ndarray
+    state: np.ndarray
+    contact: np.ndarray
+    info: np.ndarray
+
+
+class IntegrationError(RuntimeError):
+    """The integrator failed (too many steps, step underflow, or a non-finite state)."""
+
+
+def run_model(model: Model, protrusion: float, y0: np.ndarray | None = None, max_steps: int = 5_000_000) -> Run:
+    """Integrate the model at protrusion ``protrusion`` [m] from the nominal attitude (or ``y0``)."""
+    p = model.p.copy()
+    p[dyn.P_DELTA] = protrusion
+    An = float(nominal_area(protrusion, model.half_length, model.half_width, model.section_depth)) \
+        if np.isfinite(model.section_depth) else 0.0
+    p[dyn.P_AN] = An
+    p[dyn.P_KSIG] = model.k_sigma
+    n_out = int(round(model.duration / model.output_step)) + 1
+    t_out = np.minimum(np.arange(n_out) * model.output_step, model.duration)
+    y0 = np.zeros(4) if y0 is None else np.asarray(y0, float)
+    Y, C, info = dyn.integrate(y0, model.duration, t_out, p, model.dmw, model.contact, model.adhesion,
+                               model.friction, model.pitch, model.rtol, model.atol, model.max_step, max_steps)
+    if info[0] != dyn.OK:
+        raise IntegrationError(f"integration failed at protrusion {protrusion / NM:.3g} nm: "
+                               f"{dyn.STATUS_TEXT[int(info[0])]} (steps {info[1]}, rejected {info[2]})")
+    return Run(model=model, protrusion=protrusion, nominal_area=An, time=t_out, state=Y, contact=C, info=info)
+
+
+def histories(run: Run) -> dict[str, np.ndarray]:
+    """Time series of a run [SI]: separation, clearance, forces, friction coefficient, stresses.
+
+    Only the quantities of the scene's effects are returned (no adhesion history without the
+    adhesion effect, and so on).
+    """
+    m, p = run.model, run.model.p
+    Y, t = run.state, run.time
+    w = np.zeros_like(t)
+    wdot = np.zeros_like(t)
+    if m.dmw is not None:
+        w = dyn.ppval(m.dmw, p[dyn.P_DMW_T0], p[dyn.P_DMW_DT], t + p[dyn.P_OFF_C])
+        eps = 1e-3 * p[dyn.P_DMW_DT]
+        wdot = (dyn.ppval(m.dmw, p[dyn.P_DMW_T0], p[dyn.P_DMW_DT], t + eps)
+                - dyn.ppval(m.dmw, p[dyn.P_DMW_T0], p[dyn.P_DMW_DT], t - eps)) / (2 * eps)
+    d = p[dyn.P_FH0] - run.protrusion + Y[:, 0] - m.slider.l_c * Y[:, 1] - w
+    out: dict[str, np.ndarray] = {"separation": d, "disk_displacement": w, "z": Y[:, 0], "pitch": Y[:, 1]}
+    out["clearance"] = d - m.k_sigma
+    x0, h, An = p[dyn.P_TAB_X0], p[dyn.P_TAB_H], run.nominal_area
+    net = np.zeros_like(t)
+    if m.adhesion is not None:
+        out["adhesion_force"] = An * dyn.ppval(m.adhesion, x0, h, d)
+        net -= out["adhesion_force"]
+    if m.contact is not None:
+        c = run.contact
+        out["in_contact"] = c
+        fc = np.where(c, An * np.maximum(dyn.ppval(m.contact, x0, h, d), 0.0), 0.0)
+        ddot = Y[:, 2] - m.slider.l_c * Y[:, 3] - wdot
+        out["contact_force"] = fc
+        out["contact_damping_force"] = np.where(c, -p[dyn.P_CC] * ddot, 0.0)
+        net += fc + out["contact_damping_force"]
+        area = np.where(c, An * np.maximum(dyn.ppval(m.area, x0, h, d), 0.0), 0.0)
+        out["real_area"] = area
+        with np.errstate(invalid="ignore", divide="ignore"):
+            out["mean_pressure"] = np.where(c & (area > 0), fc / np.where(area > 0, area, 1.0), np.nan)
+            if m.friction is not None:
+                ff = np.where(c, An * np.maximum(dyn.ppval(m.friction, x0, h, d), 0.0), 0.0)
+                out["friction_force"] = ff
+                out["friction_coefficient"] = np.where(c & (fc > 0), ff / np.where(fc > 0, fc, 1.0), np.nan)
+                out["shear_stress"] = np.where(c & (area > 0), ff / np.where(area > 0, area, 1.0), np.nan)
+    if m.adhesion is not None or m.contact is not None:
+        out["net_force"] = net
+    return out
+
+
+def fhm(d: np.ndarray, fh0: float, measure: str = "peak-to-peak") -> float:
+    """Flying-height modulation / bouncing vibration [%] of separation samples ``d`` [m] (SPEC.md 4)."""
+    spread = np.ptp(d) if measure == "peak-to-peak" else 3.0 * np.std(d)
+    return float(100.0 * spread / fh0)
+
+
+def summarize(run: Run, hist: dict[str, np.ndarray] | None = None) -> dict[str, float]:
+    """Steady-window scalars of a run (SI units; definitions in the module docstring)."""
+    m = run.model
+    hist = histories(run) if hist is None else hist
+    win = run.time >= m.transient - 1e-15
+    d = hist["separation"][win]
+    c = hist["clearance"][win]
+    out = {
+        "fhm_bv": fhm(d, m.p[dyn.P_FH0], m.fhm_measure),
+        "clearance": float(np.mean(c)),
+        "min_clearance": float(np.min(c)),
+        "nominal_area": run.nominal_area,
+        "protrusion_radius": float(effective_radius(run.protrusion, m.half_length, m.section_depth))
+        if np.isfinite(m.section_depth) else np.nan,
+    }
+    if "adhesion_force" in hist:
+        out["adhesion_force"] = float(np.mean(hist["adhesion_force"][win]))
+    if "net_force" in hist:
+        out["net_force"] = float(np.mean(hist["net_force"][win]))
+    if "in_contact" in hist:
+        inc = hist["in_contact"][win]
+        frac = float(np.mean(inc))
+        out["contact_fraction"] = frac
+        out["regime"] = FLYING if frac == 0 else (SURFING if frac >= SURFING_FRACTION else BOUNCING)
+        fc = hist["contact_force"][win]
+        area = hist["real_area"][win]
+        out["contact_force"] = float(np.mean(fc))
+        out["interference"] = float(np.mean(-c[inc])) if inc.any() else np.nan
+        out["real_area"] = float(np.mean(area[inc])) if inc.any() else np.nan
+        out["mean_pressure"] = float(fc.sum() / area.sum()) if area.sum() > 0 else np.nan
+        if "friction_force" in hist:
+            ff = hist["friction_force"][win]
+            out["friction_force"] = float(np.mean(ff))
+            out["friction_coefficient"] = float(ff.sum() / fc.sum()) if fc.sum() > 0 else np.nan
+            out["shear_stress"] = float(ff.sum() / area.sum()) if area.sum() > 0 else np.nan
+    return out
+
+
+def with_solver(model: Model, **changes: Any) -> Model:
+    """A copy of the model with solver settings changed (``rtol``, ``atol``, ``max_step``, ...)."""
+    return replace(model, **changes)

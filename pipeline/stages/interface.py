@@ -1,0 +1,161 @@
+"""Stage ``interface``: ISBL tables versus separation for the scene's roughness and materials.
+
+Writes ``interface.nc``: ``contact_pressure``, ``adhesion_pressure``, ``friction_stress`` [MPa],
+``real_area_fraction``, ``contact_fraction`` [1] on a uniform ``separation`` grid [nm] (from the
+mean of summit heights; the grid is the solver's ``table_step_nm`` from ``table_min_sigma``
+summit sigmas to ``table_max_nm``), plus the interface parameters as scalar variables.
+
+Only what the scene's effects need is computed: no ``adhesion`` effect, no adhesion column;
+no ``friction``, no friction column; a scene with neither ``contact`` nor ``adhesion`` (flying only)
+gets no tables at all.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from ..io import read_dataset, var, write_dataset
+from ..physics import isbl
+from ..physics.asperity import critical_interference
+from ..physics.friction import shear_strength
+from ..physics.statistics import (bandwidth_alpha, composite_modulus, hardness_from_plasticity_gw,
+                                  plasticity_index_gw, plasticity_index_ke, summit_offset, summit_sigma)
+
+NM, UM = 1e-9, 1e-6
+
+
+def roughness_statistics(scene: Any, out: Path | None = None) -> dict[str, float]:
+    """Combined-surface statistics [SI] for the scene: from AFM scans or the explicit values.
+
+    With ``[roughness] afm``, the statistics of the ``combined`` surface of ``roughness.nc`` (route
+    ``[roughness] route``) are used, computing it first when absent. Otherwise ``sigma_nm``,
+    ``summit_radius_um`` and ``summit_density_per_um2`` give ``sigma_s`` and ``y_s`` by McCool's
+    relations (SPEC.md section 1).
+
+    Returns
+    -------
+    dict with ``sigma``, ``sigma_s``, ``y_s``, ``R`` [m], ``eta`` [m^-2], ``alpha`` [1], ``source``.
+    """
+    r = scene["roughness"]
+    if r["afm"]:
+        from . import roughness as roughness_stage
+        path = Path(out) / "roughness.nc" if out is not None else None
+        if path is None or not path.is_file():
+            import tempfile
+            path = roughness_stage.run(scene, Path(out) if out is not None else Path(tempfile.mkdtemp()))
+        st = roughness_stage.combined_statistics(path, route=r["route"])
+        return {"sigma": st["sigma_nm"] * NM, "sigma_s": st["sigma_s_nm"] * NM, "y_s": st["y_s_nm"] * NM,
+                "R": st["summit_radius_um"] * UM, "eta": st["summit_density_per_um2"] / UM**2,
+                "alpha": st["alpha"], "source": f"AFM ({r['route']} route): {', '.join(r['afm'])}"}
+    sigma, R, eta = r["sigma_nm"] * NM, r["summit_radius_um"] * UM, r["summit_density_per_um2"] / UM**2
+    return {"sigma": sigma, "sigma_s": summit_sigma(sigma, eta, R), "y_s": summit_offset(sigma, eta, R),
+            "R": R, "eta": eta, "alpha": bandwidth_alpha(sigma, eta, R), "source": "explicit statistics"}
+
+
+def interface_parameters(scene: Any, stats: dict[str, float]) -> isbl.Interface:
+    """The :class:`~pipeline.physics.isbl.Interface` of a scene and its roughness statistics.
+
+    ``E'`` from the two moduli (or ``composite_modulus_gpa``); ``H`` from ``hardness_gpa`` or, when
+    absent, from the GW plasticity index (SPEC.md section 6: ``H`` is set so that psi(GW) = 0.52).
+    """
+    m, lub = scene["materials"], scene["lubricant"]
+    nu = m["poisson_ratio"]
+    E = (m["composite_modulus_gpa"] * 1e9 if m["composite_modulus_gpa"]
+         else composite_modulus(m["disk_modulus_gpa"] * 1e9, m["tfc_modulus_gpa"] * 1e9, nu))
+    H = (m["hardness_gpa"] * 1e9 if m["hardness_gpa"]
+         else hardness_from_plasticity_gw(m["plasticity_index"], E, stats["sigma_s"], stats["R"]))
+    return isbl.Interface(sigma_s=stats["sigma_s"], eta=stats["eta"], R=stats["R"], E=E, H=H, nu=nu,
+                          t=lub["thickness_nm"] * NM, dgamma=lub["work_of_adhesion_j_m2"],
+                          eps=lub["intermolecular_distance_nm"] * NM)
+
+
+def needed_quantities(effects: frozenset[str]) -> tuple[str, ...]:
+    """The ISBL quantities a set of effects needs (empty for a flying-only scene)."""
+    q = []
+    if "contact" in effects:
+        q += ["contact_pressure", "real_area_fraction", "contact_fraction"]
+    if "friction" in effects:
+        q += ["friction_stress"]
+    if "adhesion" in effects:
+        q += ["adhesion_pressure"]
+    return tuple(q)
+
+
+_META = {
+    "contact_pressure": ("MPa", "contact pressure per nominal area"),
+    "adhesion_pressure": ("MPa", "adhesion pressure per nominal area (positive: attractive)"),
+    "friction_stress": ("MPa", "friction stress per nominal area"),
+    "real_area_fraction": ("1", "real contact area per nominal area"),
+    "contact_fraction": ("1", "fraction of summits in contact"),
+    "elastic_fraction": ("1", "fraction of summits in elastic contact"),
+    "plastic_fraction": ("1", "fraction of summits in fully plastic contact"),
+}
+
+
+def build_tables(scene: Any, stats: dict[str, float]) -> xr.Dataset:
+    """Compute the interface dataset of a scene for given roughness statistics (no I/O)."""
+    p = interface_parameters(scene, stats)
+    sol = scene["solver"]
+    wanted = needed_quantities(scene.effects)
+    scalars = {
+        "sigma": (stats["sigma"] / NM, "nm", "combined rms roughness"),
+        "sigma_s": (p.sigma_s / NM, "nm", "standard deviation of summit heights"),
+        "y_s": (stats["y_s"] / NM, "nm", "mean of summit heights above the mean of surface heights"),
+        "summit_radius": (p.R / UM, "um", "summit radius"),
+        "summit_density": (p.eta * UM**2, "um-2", "summit density"),
+        "bandwidth_alpha": (stats["alpha"], "1", "Nayak bandwidth parameter"),
+        "composite_modulus": (p.E / 1e9, "GPa", "composite modulus E'"),
+        "hardness": (p.H / 1e9, "GPa", "hardness of the softer body"),
+        "critical_interference": (critical_interference(p.R, p.E, p.H, p.nu) / NM, "nm",
+                                  "Kogut-Etsion critical interference w_c"),
+        "shear_strength": (shear_strength(p.H) / 1e6, "MPa", "shear strength tau_y = H/(2.8 sqrt 3)"),
+        "plasticity_index_gw": (plasticity_index_gw(p.E, p.H, p.sigma_s, p.R), "1",
+                                "plasticity index, Greenwood-Williamson form"),
+        "plasticity_index_ke": (plasticity_index_ke(p.E, p.H, p.sigma_s, p.R, p.nu), "1",
+                                "plasticity index, CEB/Kogut-Etsion form"),
+        "lubricant_thickness": (p.t / NM, "nm", "lubricant thickness"),
+        "work_of_adhesion": (p.dgamma, "J m-2", "work of adhesion"),
+        "intermolecular_distance": (p.eps / NM, "nm", "intermolecular distance"),
+    }
+    data = {k: var(v, (), u, n) for k, (v, u, n) in scalars.items()}
+    coords = {}
+    if wanted:
+        d = isbl.separation_grid(p.sigma_s, sol["table_step_nm"] * NM, sol["table_min_sigma"],
+                                 sol["table_max_nm"] * NM)
+        tables = isbl.isbl_tables(d, p, quantities=wanted, nodes=sol["quadrature_nodes"],
+                                  panels=sol["quadrature_panels"])
+        coords["separation"] = var(d / NM, "separation", "nm",
+                                   "separation of the TFC surface from the mean of summit heights")
+        for name, values in tables.items():
+            units, long_name = _META[name]
+            scale = 1e-6 if units == "MPa" else 1.0
+            data[name] = var(values * scale, "separation", units, long_name)
+    ds = xr.Dataset(data, coords=coords)
+    ds.attrs.update({
+        "roughness_source": stats.get("source", ""),
+        "plasticity_index_form": "both: plasticity_index_gw (GW 1966) and plasticity_index_ke (CEB/KE)",
+        "quadrature": f"composite Gauss-Legendre, {sol['quadrature_panels']} panels x "
+                      f"{sol['quadrature_nodes']} nodes per population range, |z| <= {isbl.TAIL} sigma_s",
+        "quantities": " ".join(wanted) if wanted else "none (flying-only scene: no interface tables)",
+        "references": "Greenwood & Williamson 1966; Kogut & Etsion 2002; Stanley, Etsion & Bogy 1990; "
+                      "Vakis, Lee & Polycarpou 2009",
+    })
+    return ds
+
+
+def run(scene: Any, out: Path, **options: Any) -> Path:
+    """Write ``out/interface.nc`` for the scene (see module docstring)."""
+    out = Path(out)
+    stats = roughness_statistics(scene, out)
+    ds = build_tables(scene, stats)
+    inputs = [out / "roughness.nc"] if scene["roughness"]["afm"] else []
+    return write_dataset(ds, out / "interface.nc", scene, stage="interface", inputs=inputs)
+
+
+def load(path: Path) -> xr.Dataset:
+    """Read ``interface.nc`` (clear error when missing)."""
+    return read_dataset(path, stage="interface")

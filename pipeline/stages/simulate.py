@@ -1,0 +1,152 @@
+"""Stage ``simulate``: one scene in time (the material of the paper's Figs 3-5).
+
+``hdi simulate CONFIG --set tfc.protrusion_nm=11`` integrates the 2-DOF slider at the scene's
+protrusion and writes ``histories.nc``: time series (dims ``protrusion``, ``time``) of separation,
+clearance, forces, friction coefficient, mean pressure and shear stress; and ``summary.nc``: the
+steady-window scalars (dim ``protrusion``, the variables of ``sweep.nc``) defined in
+:mod:`pipeline.slider`. Only the scene's effects are simulated and written.
+
+Inputs come from earlier stages' datasets in the same folder (``interface.nc``, ``dmw.nc``), made
+first when missing or stale; the criterion constant ``k`` from ``contact.k`` or ``calibration.nc``.
+"""
+
+from __future__ import annotations
+
+import logging
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import xarray as xr
+from scipy.stats import norm
+
+from .. import slider as sl
+from ..io import read_dataset, var, write_dataset
+from ..outputs import history_variable, scalar_variable
+from . import ensure
+
+log = logging.getLogger(__name__)
+NM = 1e-9
+
+
+def model_inputs(scene: Any, out: Path, force: bool = False) -> tuple[xr.Dataset | None, tuple | None]:
+    """Interface tables and DMW record of a scene, from (and, if needed, into) ``out``.
+
+    Returns ``(interface dataset or None, (displacement [nm], sample rate [Hz]) or None)``; the
+    interface is ``None`` for a scene with neither contact nor adhesion (no tables are built), the
+    DMW ``None`` without the dmw effect.
+    """
+    from . import dmw as dmw_stage
+    interface = None
+    if scene.effects & {"contact", "adhesion"}:
+        interface = read_dataset(ensure("interface", scene, out, force), stage="interface")
+    record = None
+    if scene.has("dmw"):
+        _, w_nm, fs = dmw_stage.load(ensure("dmw", scene, out, force))
+        record = (w_nm, fs)
+    return interface, record
+
+
+def resolve_k(scene: Any, out: Path) -> tuple[float | None, str]:
+    """The contact criterion constant and where it came from.
+
+    ``contact.k`` when the scene fixes it; else ``k_calibrated`` of ``calibration.nc``; when the
+    calibration found no admissible k and the scene gives ``contact.fallback_probability``, the k
+    whose one-sided contact probability ``P(z > k sigma)`` equals it (said in every output).
+    """
+    if not scene.has("contact"):
+        return None, "no contact effect"
+    c = scene["contact"]
+    if c["k"] is not None:
+        return float(c["k"]), "scene (contact.k)"
+    path = Path(out) / "calibration.nc"
+    if not path.is_file():
+        raise ValueError(f"no contact criterion k: the scene sets no contact.k and {path} does not exist; "
+                         "run `hdi calibrate` first or pass --set contact.k=VALUE")
+    cal = read_dataset(path, stage="calibrate")
+    k = float(cal["k_calibrated"])
+    if np.isfinite(k):
+        return k, f"calibration ({path})"
+    fb = c.get("fallback_probability")
+    if fb is None:
+        raise ValueError(f"{path}: the calibration found no admissible k ({cal.attrs.get('outcome', '')}); "
+                         "set contact.k or contact.fallback_probability")
+    k = float(norm.isf(fb))
+    return k, (f"fallback: no admissible k in {path}; k = {k:.4f} from contact.fallback_probability = {fb} "
+               "(one-sided)")
+
+
+def run_scene(scene: Any, out: Path, protrusion_nm: float | None = None, force: bool = False,
+              damping_ratio: float | None = None) -> tuple[sl.Run, dict, dict, str]:
+    """Build and integrate one scene; returns the run, its histories, its scalars and the k source."""
+    interface, record = model_inputs(scene, out, force)
+    k, k_source = resolve_k(scene, out)
+    model = sl.build_model(scene, interface, record, k, damping_ratio)
+    delta = scene["tfc"]["protrusion_nm"] if protrusion_nm is None else protrusion_nm
+    run = sl.run_model(model, delta * NM)
+    hist = sl.histories(run)
+    return run, hist, sl.summarize(run, hist), k_source
+
+
+def histories_dataset(runs: list[tuple[float, sl.Run, dict, dict]]) -> xr.Dataset:
+    """Dataset of time histories for runs ``(protrusion [nm], run, histories, scalars)``."""
+    prot = np.array([r[0] for r in runs])
+    time = runs[0][1].time
+    data = {}
+    for name in runs[0][2]:
+        if name in ("z", "pitch"):
+            continue
+        data[name] = history_variable(name, np.stack([r[2][name] for r in runs]), ("protrusion", "time"))
+    data["z"] = var(np.stack([r[2]["z"] for r in runs]) * 1e9, ("protrusion", "time"), "nm",
+                    "vertical displacement of the centre of gravity (up positive)")
+    data["pitch"] = var(np.stack([r[2]["pitch"] for r in runs]) * 1e6, ("protrusion", "time"), "urad",
+                        "pitch angle (leading edge up positive)")
+    info = np.stack([r[1].info for r in runs])
+    data["steps"] = var(info[:, 1], ("protrusion",), "1", "accepted integrator steps")
+    data["rejected_steps"] = var(info[:, 2], ("protrusion",), "1", "rejected integrator steps")
+    data["contact_switches"] = var(info[:, 3], ("protrusion",), "1", "contact on/off events located")
+    coords = {"protrusion": var(prot, "protrusion", "nm", "TFC protrusion"),
+              "time": var(time, "time", "s", "time")}
+    return xr.Dataset(data, coords=coords)
+
+
+def summary_dataset(runs: list[tuple[float, sl.Run, dict, dict]]) -> xr.Dataset:
+    """Dataset of the steady-window scalars (dim ``protrusion``) of runs."""
+    prot = np.array([r[0] for r in runs])
+    data = {name: scalar_variable(name, np.array([r[3][name] for r in runs]), ("protrusion",))
+            for name in runs[0][3]}
+    return xr.Dataset(data, coords={"protrusion": var(prot, "protrusion", "nm", "TFC protrusion")})
+
+
+def model_attrs(model: sl.Model, k_source: str) -> dict[str, Any]:
+    """Global attributes describing the assembled model (stiffness roots, damping, k)."""
+    info = model.info
+    return {
+        "k": model.k if np.isfinite(model.k) else "none",
+        "k_source": k_source,
+        "k_sigma_nm": model.k_sigma / NM,
+        "front_stiffness_n_m": info["k_f"], "rear_stiffness_n_m": info["k_r"],
+        "front_damper_n_s_m": info["c_f"], "rear_damper_n_s_m": info["c_r"],
+        "stiffness_roots": str([{k: float(v) for k, v in r.items()} for r in info["roots"]]),
+        "stiffness_root_chosen": info["chosen"],
+        "damping_ratio": info["damping_ratio"],
+        "steady_window": f"{model.transient * 1e3:g} ms to {model.duration * 1e3:g} ms",
+        "fhm_measure": model.fhm_measure,
+    }
+
+
+def run(scene: Any, out: Path, force: bool = False, **options: Any) -> Path:
+    """Write ``out/histories.nc`` and ``out/summary.nc`` for the scene's protrusion (module docstring)."""
+    out = Path(out)
+    run_, hist, scalars, k_source = run_scene(scene, out, force=force)
+    runs = [(scene["tfc"]["protrusion_nm"], run_, hist, scalars)]
+    inputs = [p for p in (out / "interface.nc", out / "dmw.nc", out / "calibration.nc") if p.is_file()]
+    attrs = model_attrs(run_.model, k_source)
+    summary = summary_dataset(runs)
+    path = write_dataset(histories_dataset(runs), out / "histories.nc", scene, stage="simulate",
+                         inputs=inputs, extra_attrs=attrs)
+    write_dataset(summary, out / "summary.nc", scene, stage="simulate", inputs=inputs, extra_attrs=attrs)
+    for name in summary.data_vars:
+        v = summary[name]
+        print(f"  {name:<22} {float(v[0]):>12.5g} {v.attrs['units']}")
+    return path

@@ -1,0 +1,63 @@
+"""The sweep's grid: protrusions, labelled roughness sets and damping ratios, validated.
+
+``[sweep] protrusion_nm = {start, stop, step}`` (inclusive of ``stop`` when it falls on the grid),
+``roughness = [{label = "...", sigma_nm = ..., ...} | {label = "...", afm = [...]}]`` (keys of
+``[roughness]``; missing ones are taken from ``[roughness]``), ``damping_ratio = [...]``.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..scene import SCHEMA, SceneError, _check_value
+
+
+def protrusion_grid(scene: Any) -> np.ndarray:
+    """Protrusions [nm] of ``[sweep] protrusion_nm``, rounded to 1e-9 nm so labels are exact."""
+    g = scene["sweep"]["protrusion_nm"]
+    n = int(np.floor((g["stop"] - g["start"]) / g["step"] + 1e-9)) + 1
+    return np.round(g["start"] + g["step"] * np.arange(n), 9)
+
+
+def damping_grid(scene: Any) -> list[float]:
+    """Modal damping ratios [1] of the sweep (default: the scene's ``air_bearing.damping_ratio``)."""
+    d = scene["sweep"]["damping_ratio"]
+    return list(d) if d else [scene["air_bearing"]["damping_ratio"]]
+
+
+def roughness_sets(scene: Any) -> dict[str, dict[str, Any]]:
+    """Labelled roughness sets: label -> full ``[roughness]`` table (validated).
+
+    Default: one set labelled ``"scene"``, the scene's own ``[roughness]``.
+    """
+    items = scene["sweep"]["roughness"]
+    base = dict(scene["roughness"])
+    if not items:
+        return {"scene": base}
+    where = str(scene.path) if scene.path else "<scene>"
+    folder = Path(scene.path).parent if scene.path else None
+    sets: dict[str, dict[str, Any]] = {}
+    for i, item in enumerate(items):
+        label = item.get("label")
+        if not isinstance(label, str) or not re.fullmatch(r"[A-Za-z0-9_.+-]+", label):
+            raise SceneError(f"{where}: sweep.roughness[{i}].label = {label!r}: expected a label of letters, "
+                             "digits, '.', '_', '+' or '-'")
+        if label in sets:
+            raise SceneError(f"{where}: sweep.roughness[{i}].label = {label!r}: labels must be unique")
+        table = dict(base)
+        if "afm" in item:  # AFM sets replace the explicit statistics
+            table["afm"] = None
+        for key, value in item.items():
+            if key == "label":
+                continue
+            if key not in SCHEMA["roughness"]:
+                raise SceneError(f"{where}: unknown key sweep.roughness[{i}].{key} (set {label!r}): expected "
+                                 "label or one of " + ", ".join(SCHEMA["roughness"]))
+            table[key] = _check_value("sweep.roughness", f"{key} (set {label!r})", SCHEMA["roughness"][key],
+                                      value, where, folder)
+        sets[label] = table
+    return sets

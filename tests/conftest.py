@@ -1,0 +1,42 @@
+"""Shared fixtures: the repository root, the paper scene, and a helper to write scene files."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from pipeline.scene import load_scene
+
+#: The repository root (this file is tests/conftest.py).
+REPO = Path(__file__).resolve().parent.parent
+PAPER_CONFIG = REPO / "configs" / "paper-2009.toml"
+
+
+@pytest.fixture(scope="session")
+def repo_root() -> Path:
+    return REPO
+
+
+@pytest.fixture(scope="session")
+def paper_config() -> Path:
+    """Path of configs/paper-2009.toml."""
+    return PAPER_CONFIG
+
+
+@pytest.fixture()
+def paper_scene():
+    """The paper scene, freshly loaded (tests may not share a mutated scene)."""
+    return load_scene(PAPER_CONFIG)
+
+
+@pytest.fixture()
+def write_scene(tmp_path):
+    """``write_scene(text, name="scene.toml") -> Path``: a scene file in ``tmp_path``."""
+
+    def _write(text: str, name: str = "scene.toml") -> Path:
+        path = tmp_path / name
+        path.write_text(text)
+        return path
+
+    return _write

@@ -1,0 +1,189 @@
+"""Stage ``interface`` end to end through ``hdi interface`` (DESIGN.md: interface.nc, provenance,
+effects, atomic writes)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import xarray as xr
+
+import pipeline
+from pipeline import cli, io
+from pipeline.scene import load_scene
+from pipeline.stages import interface
+
+TABLES = ("contact_pressure", "adhesion_pressure", "friction_stress", "real_area_fraction", "contact_fraction")
+
+
+def _run(config, out, *overrides):
+    argv = ["interface", str(config), "--out", str(out)]
+    for o in overrides:
+        argv += ["--set", o]
+    assert cli.main(argv) == 0
+    path = out / "interface.nc"
+    assert path.is_file()
+    with xr.open_dataset(path, engine="netcdf4") as ds:
+        return ds.load()
+
+
+@pytest.fixture(scope="module")
+def paper_ds(tmp_path_factory, paper_config):
+    return _run(paper_config, tmp_path_factory.mktemp("paper"))
+
+
+def test_every_variable_has_units_and_long_name(paper_ds):
+    for name in list(paper_ds.data_vars) + list(paper_ds.coords):
+        assert paper_ds[name].attrs.get("units"), name
+        assert paper_ds[name].attrs.get("long_name"), name
+    # DESIGN.md units of interface.nc
+    for name, units in [("separation", "nm"), ("contact_pressure", "MPa"), ("adhesion_pressure", "MPa"),
+                        ("friction_stress", "MPa"), ("real_area_fraction", "1"), ("contact_fraction", "1")]:
+        assert paper_ds[name].attrs["units"] == units
+
+
+def test_paper_tables_present_and_grid(paper_ds):
+    for name in TABLES:
+        assert name in paper_ds.data_vars
+        assert paper_ds[name].dims == ("separation",)
+        assert np.all(np.isfinite(paper_ds[name].values))
+    d = paper_ds["separation"].values
+    sigma_s = float(paper_ds["sigma_s"])
+    # SPEC.md 2 / the brief: tables span at least -5 sigma_s .. 30 nm, uniform at table_step_nm = 0.01
+    assert d[0] <= -5 * sigma_s
+    assert d[-1] >= 30.0
+    np.testing.assert_allclose(np.diff(d), 0.01, rtol=1e-9)
+
+
+def test_paper_scalars(paper_ds):
+    # Hand values (tests/test_statistics.py): sigma_s = 0.348884 nm, y_s = 0.918882 nm,
+    # E' = 94.1915 GPa, H = 1.51309 GPa, psi_GW = 0.52 [paper], psi_KE = 0.573730
+    assert float(paper_ds["sigma"]) == pytest.approx(0.52)
+    assert float(paper_ds["sigma_s"]) == pytest.approx(0.348884, rel=1e-6)
+    assert float(paper_ds["y_s"]) == pytest.approx(0.918882, rel=1e-6)
+    assert float(paper_ds["composite_modulus"]) == pytest.approx(94.1915, rel=1e-6)
+    assert float(paper_ds["hardness"]) == pytest.approx(1.51309, rel=1e-5)
+    assert float(paper_ds["plasticity_index_gw"]) == pytest.approx(0.52, rel=1e-12)
+    assert float(paper_ds["plasticity_index_ke"]) == pytest.approx(0.573730, rel=1e-5)
+    assert float(paper_ds["summit_radius"]) == pytest.approx(5.0)
+    assert float(paper_ds["summit_density"]) == pytest.approx(10.0)
+    # the contact fraction at d = 0 is one half (the separation is from the mean of summit heights)
+    assert float(paper_ds["contact_fraction"].interp(separation=0.0)) == pytest.approx(0.5, abs=1e-4)
+
+
+def test_tables_match_the_physics_module(paper_ds, paper_scene):
+    # the stage writes isbl_tables in MPa on its grid
+    from pipeline.physics import isbl
+    p = interface.interface_parameters(paper_scene, interface.roughness_statistics(paper_scene))
+    d = paper_ds["separation"].values[::97] * 1e-9
+    ref = isbl.isbl_tables(d, p)
+    np.testing.assert_allclose(paper_ds["contact_pressure"].values[::97], ref["contact_pressure"] / 1e6, rtol=1e-12)
+    np.testing.assert_allclose(paper_ds["adhesion_pressure"].values[::97], ref["adhesion_pressure"] / 1e6,
+                               rtol=1e-12)
+
+
+def test_provenance(paper_ds, paper_scene):
+    attrs = paper_ds.attrs
+    assert attrs["config_hash"] == paper_scene.hash
+    assert attrs["pipeline_version"] == pipeline.__version__
+    assert isinstance(attrs["git_revision"], str) and attrs["git_revision"]
+    for key in ("title", "history", "source", "Conventions", "input_hashes", "stage"):
+        assert key in attrs, key
+    assert attrs["stage"] == "interface"
+
+
+def test_override_reaches_the_dataset(tmp_path, paper_config, paper_scene):
+    ds = _run(paper_config, tmp_path, "lubricant.thickness_nm=1.0")
+    assert float(ds["lubricant_thickness"]) == 1.0
+    assert ds.attrs["config_hash"] == load_scene(paper_config, ["lubricant.thickness_nm=1.0"]).hash
+    assert ds.attrs["config_hash"] != paper_scene.hash
+    assert "lubricant.thickness_nm=1.0" in ds.attrs["overrides"]
+
+
+def test_without_adhesion_no_adhesion_variable(tmp_path, paper_config):
+    ds = _run(paper_config, tmp_path, 'scene.effects=["air_bearing", "pitch", "dmw", "contact", "friction"]')
+    assert "adhesion_pressure" not in ds.variables
+    for name in ("contact_pressure", "friction_stress", "real_area_fraction", "contact_fraction"):
+        assert name in ds.data_vars
+
+
+def test_without_friction_no_friction_variable(tmp_path, paper_config):
+    ds = _run(paper_config, tmp_path, 'scene.effects=["air_bearing", "pitch", "dmw", "adhesion", "contact"]')
+    assert "friction_stress" not in ds.variables
+    assert "adhesion_pressure" in ds.data_vars and "contact_pressure" in ds.data_vars
+
+
+def test_adhesion_only(tmp_path, paper_config):
+    ds = _run(paper_config, tmp_path, 'scene.effects=["air_bearing", "adhesion"]')
+    assert "adhesion_pressure" in ds.data_vars
+    for name in ("contact_pressure", "friction_stress", "real_area_fraction", "contact_fraction"):
+        assert name not in ds.variables
+
+
+def test_flying_only_scene_has_no_tables(tmp_path, paper_config):
+    ds = _run(paper_config, tmp_path, 'scene.effects=["air_bearing"]')
+    assert "separation" not in ds.dims and "separation" not in ds.variables
+    for name in TABLES:
+        assert name not in ds.variables
+    # the interface parameters are still recorded
+    assert "sigma_s" in ds.data_vars and "hardness" in ds.data_vars
+    assert ds.attrs["effects"] == "air_bearing"
+
+
+def test_bad_scene_is_a_clean_cli_error(tmp_path, paper_config, capsys):
+    rc = cli.main(["interface", str(paper_config), "--out", str(tmp_path), "--set", "lubricant.thickness_nm=-1"])
+    assert rc == 2
+    err = capsys.readouterr().err
+    assert "lubricant.thickness_nm" in err and str(paper_config) in err
+    assert not (tmp_path / "interface.nc").exists()
+
+
+@pytest.mark.parametrize("exc", [RuntimeError("disk full"), KeyboardInterrupt()])
+def test_failed_write_keeps_previous_file(tmp_path, paper_config, monkeypatch, exc):
+    _run(paper_config, tmp_path)
+    path = tmp_path / "interface.nc"
+    before = path.read_bytes()
+
+    def broken(self, target, *args, **kwargs):
+        with open(target, "wb") as fh:           # a half-written file, then the failure
+            fh.write(b"CDF\x01 half written")
+        raise exc
+
+    monkeypatch.setattr(xr.Dataset, "to_netcdf", broken)
+    scene = load_scene(paper_config, ["lubricant.thickness_nm=1.0"])
+    with pytest.raises(type(exc)):
+        interface.run(scene, tmp_path)
+    assert path.read_bytes() == before                       # the old file is intact
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["interface.nc"]  # no temporary left
+    monkeypatch.undo()
+    with xr.open_dataset(path, engine="netcdf4") as ds:
+        assert float(ds["lubricant_thickness"]) == 0.75
+
+
+def test_interrupted_cli_run_keeps_previous_file(tmp_path, paper_config, monkeypatch, capsys):
+    _run(paper_config, tmp_path)
+    before = (tmp_path / "interface.nc").read_bytes()
+
+    def broken(self, target, *args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(xr.Dataset, "to_netcdf", broken)
+    assert cli.main(["interface", str(paper_config), "--out", str(tmp_path)]) == 130
+    assert (tmp_path / "interface.nc").read_bytes() == before
+    assert [p.name for p in tmp_path.iterdir()] == ["interface.nc"]
+
+
+def test_write_dataset_refuses_variables_without_units(tmp_path):
+    ds = xr.Dataset({"x": ("n", np.arange(3.0))})
+    with pytest.raises(io.DatasetError, match="units/long_name"):
+        io.write_dataset(ds, tmp_path / "bad.nc", stage="test")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_load_missing_interface_dataset(tmp_path):
+    with pytest.raises(io.DatasetError, match="hdi interface"):
+        interface.load(tmp_path / "interface.nc")
+
+
+def test_needed_quantities():
+    assert interface.needed_quantities(frozenset({"air_bearing"})) == ()
+    assert set(interface.needed_quantities(frozenset({"contact", "friction", "adhesion"}))) == set(TABLES)
