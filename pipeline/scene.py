@@ -83,6 +83,7 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "effects": Key("strs", list(EFFECTS), choices=EFFECTS,
                        doc="effects to simulate; others are not evaluated at all"),
         "description": Key("str", "", doc="free text"),
+        "extends": Key("str", None, doc="a base scene file (relative to this one) whose keys this one overrides"),
     },
     "slider": {
         "length_mm": Key("float", 0.85, _pos, doc="slider length [mm] (femto, recon)"),
@@ -184,7 +185,9 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "transient_ms": Key("float", 0.5, _nonneg, doc="discarded start-up transient [ms]"),
         "output_step_ns": Key("float", 250.0, _pos, doc="sampling of histories and steady-window statistics [ns]"),
         "table_step_nm": Key("float", 0.01, _pos, doc="interface-table separation step [nm]"),
-        "table_min_sigma": Key("float", -8.0, doc="interface table starts at this separation [sigma_s]"),
+        "table_min_sigma": Key("float", -8.0, (lambda v: v <= -5.0, "a number <= -5 (tables must reach deep "
+                                                                   "interference)"),
+                               doc="interface table starts at this separation [sigma_s]"),
         "table_max_nm": Key("float", 30.0, _pos, doc="interface table ends at this separation [nm]"),
         "interpolation_order": Key("int", 3, (lambda v: v in (1, 3), "1 (linear) or 3 (cubic Hermite)"),
                                    doc="interpolation of interface tables in the dynamics"),
@@ -467,12 +470,7 @@ def load_scene(path: str | Path, overrides: Iterable[str] = ()) -> Scene:
         For a missing or unreadable file, bad TOML, or any invalid field (see :func:`validate`).
     """
     path = Path(path)
-    if not path.is_file():
-        raise SceneError(f"{path}: scene file does not exist")
-    try:
-        raw = tomllib.loads(path.read_text())
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise SceneError(f"{path}: not valid TOML: {exc}") from None
+    raw = _read_raw(path)
     overrides = list(overrides)
     for text in overrides:
         section, key, value = parse_override(text)
@@ -481,6 +479,35 @@ def load_scene(path: str | Path, overrides: Iterable[str] = ()) -> Scene:
             raise SceneError(f"{path}: --set {text!r}: [{section}] is not a table")
         raw[section][key] = value
     return validate(raw, path, overrides=overrides)
+
+
+def _read_raw(path: Path, seen: tuple[Path, ...] = ()) -> dict[str, Any]:
+    """Parse a scene file, merging in the base scene it ``extends`` (keys of this file win)."""
+    if not path.is_file():
+        raise SceneError(f"{path}: scene file does not exist")
+    try:
+        raw = tomllib.loads(path.read_text())
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise SceneError(f"{path}: not valid TOML: {exc}") from None
+    base_name = raw.get("scene", {}).get("extends") if isinstance(raw.get("scene"), dict) else None
+    if base_name is None:
+        return raw
+    if not isinstance(base_name, str):
+        raise SceneError(f"{path}: scene.extends = {base_name!r}: expected a file name")
+    base_path = (path.parent / base_name).resolve()
+    if base_path in seen or base_path == path.resolve():
+        raise SceneError(f"{path}: scene.extends = {base_name!r}: circular extension")
+    if not base_path.is_file():
+        raise SceneError(f"{path}: scene.extends: file {base_name!r} does not exist (looked for {base_path})")
+    base = _read_raw(base_path, seen + (path.resolve(),))
+    base.get("scene", {}).pop("name", None)
+    for section, table in raw.items():
+        if isinstance(table, dict) and isinstance(base.get(section), dict):
+            base[section].update(table)
+        else:
+            base[section] = table
+    base["scene"]["extends"] = str(base_path)
+    return base
 
 
 def scene_from_dict(raw: dict[str, Any], base: Path | None = None) -> Scene:

@@ -43,11 +43,14 @@ def roughness_statistics(scene: Any, out: Path | None = None) -> dict[str, float
     r = scene["roughness"]
     if r["afm"]:
         from . import roughness as roughness_stage
-        path = Path(out) / "roughness.nc" if out is not None else None
-        if path is None or not path.is_file():
+        if out is None:
             import tempfile
-            path = roughness_stage.run(scene, Path(out) if out is not None else Path(tempfile.mkdtemp()))
-        st = roughness_stage.combined_statistics(path, route=r["route"])
+            with tempfile.TemporaryDirectory() as tmp:
+                path = roughness_stage.run(scene, Path(tmp))
+                st = roughness_stage.combined_statistics(path, route=r["route"])
+        else:
+            from . import ensure
+            st = roughness_stage.combined_statistics(ensure("roughness", scene, Path(out)), route=r["route"])
         return {"sigma": st["sigma_nm"] * NM, "sigma_s": st["sigma_s_nm"] * NM, "y_s": st["y_s_nm"] * NM,
                 "R": st["summit_radius_um"] * UM, "eta": st["summit_density_per_um2"] / UM**2,
                 "alpha": st["alpha"], "source": f"AFM ({r['route']} route): {', '.join(r['afm'])}"}
