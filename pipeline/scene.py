@@ -331,8 +331,8 @@ def _check_value(section: str, key: str, spec: Key, value: Any, where: str, base
         if value["start"] < 0:
             raise fail("protrusions >= 0 (start is negative)")
     elif kind == "tables":
-        if not isinstance(value, list) or not value or any(not isinstance(v, dict) for v in value):
-            raise fail("a non-empty list of tables")
+        if not isinstance(value, list) or not value or any(not isinstance(v, (dict, str)) for v in value):
+            raise fail("a non-empty list of tables (or labels of sets defined elsewhere)")
     if spec.check is not None and kind not in ("tables",):
         pred, expected = spec.check
         if not pred(value):

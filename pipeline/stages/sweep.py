@@ -186,11 +186,12 @@ def prepare_inputs(scene: Any, out: Path, sets: dict[str, dict], force: bool = F
 
 
 def run_sweep(scene: Any, out: Path, scheduler: str | None = None, workers: int | None = None,
-              force: bool = False, stop_after: int | None = None) -> Path:
+              force: bool = False, stop_after: int | None = None,
+              on_batch: Callable[[str], None] | None = None) -> Path:
     """Run (or resume) the sweep and assemble ``sweep.nc``; see the module docstring.
 
-    ``stop_after``: raise ``KeyboardInterrupt`` after that many batches finish in this call (tests of
-    resuming).
+    ``stop_after``: raise ``KeyboardInterrupt`` after that many batches finish in this call;
+    ``on_batch``: called with each finished part's path (both for tests of resuming and failures).
     """
     out = Path(out)
     prot, sets, damp, batches = plan(scene)
@@ -208,6 +209,8 @@ def run_sweep(scene: Any, out: Path, scheduler: str | None = None, workers: int 
 
     def on_done(path: str) -> None:
         done[0] += 1
+        if on_batch is not None:
+            on_batch(path)
         if bar is not None:
             bar.update(1)
         if stop_after is not None and done[0] >= stop_after:

@@ -42,6 +42,11 @@ def roughness_sets(scene: Any) -> dict[str, dict[str, Any]]:
     folder = Path(scene.path).parent if scene.path else None
     sets: dict[str, dict[str, Any]] = {}
     for i, item in enumerate(items):
+        if isinstance(item, str):  # a bare label: only "scene" (the scene's own [roughness]) is predefined
+            if item != "scene":
+                raise SceneError(f"{where}: sweep.roughness[{i}] = {item!r}: unknown roughness label; expected "
+                                 "\"scene\" or a table {label = ..., sigma_nm = ..., ...}")
+            item = {"label": "scene"}
         label = item.get("label")
         if not isinstance(label, str) or not re.fullmatch(r"[A-Za-z0-9_.+-]+", label):
             raise SceneError(f"{where}: sweep.roughness[{i}].label = {label!r}: expected a label of letters, "
