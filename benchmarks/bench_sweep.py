@@ -23,8 +23,13 @@ def _hdi(*args: str) -> float:
     return time.perf_counter() - t0
 
 
-def _sweep_wall(config: str, workers: int, inputs: Path, repeat: int = 3) -> list[float]:
-    """Wall time of `hdi sweep` (process start-up, cluster start-up, compute, assembly)."""
+def _sweep_wall(config: str, workers: int, inputs: Path, repeat: int = 3,
+                compute: list | None = None) -> list[float]:
+    """Wall time of `hdi sweep` (process start-up, cluster start-up, compute, assembly).
+
+    ``compute`` collects the wall time of the batch phase alone (``compute_seconds`` of sweep.nc).
+    """
+    import xarray as xr
     times = []
     for _ in range(repeat):
         with tempfile.TemporaryDirectory() as tmp:
@@ -32,6 +37,10 @@ def _sweep_wall(config: str, workers: int, inputs: Path, repeat: int = 3) -> lis
             for f in inputs.glob("*.nc"):
                 shutil.copy(f, out / f.name)
             times.append(_hdi("sweep", config, "--out", str(out), "--workers", str(workers)))
+            if compute is not None:
+                name = "paper-2009" if "paper" in config else "sweep-3x3"
+                with xr.open_dataset(out / "sweep.nc", engine="netcdf4") as ds:
+                    compute.append(float(ds.attrs["compute_seconds"]))
     return times
 
 
@@ -47,10 +56,16 @@ def run(results: list[dict]) -> None:
         record(results, "paper sweep, 76 protrusions, 1 worker (wall, incl. start-up)", one)
         record(results, "paper sweep, 76 protrusions, 2 workers (wall, incl. start-up)", two, target_s=30.0,
                speedup_vs_1_worker=min(one) / min(two) if two else None)
-        g1 = _sweep_wall(grid, 1, inputs, repeat=1)
-        g2 = _sweep_wall(grid, 2, inputs, repeat=2)
+        c1, c2 = [], []
+        g1 = _sweep_wall(grid, 1, inputs, repeat=2, compute=c1)
+        g2 = _sweep_wall(grid, 2, inputs, repeat=2, compute=c2)
         speedup = min(g1) / min(g2)
+        speedup_c = min(c1) / min(c2)
         record(results, "sweep-3x3 grid, 684 scenes, 2 workers (wall, incl. start-up)", g2, target_s=120.0,
                speedup_vs_1_worker=speedup, speedup_target=1.8)
         record(results, "sweep-3x3 grid, 684 scenes, 1 worker (wall, incl. start-up)", g1)
-        print(f"  speed-up of 2 workers over 1 on the 684-scene grid: {speedup:.2f} (target >= 1.8)")
+        record(results, "sweep-3x3 grid, batch phase only, 2 workers", c2, speedup_vs_1_worker=speedup_c,
+               speedup_target=1.8)
+        record(results, "sweep-3x3 grid, batch phase only, 1 worker", c1)
+        print(f"  speed-up of 2 workers over 1 on the 684-scene grid: {speedup:.2f} whole command, "
+              f"{speedup_c:.2f} batch phase (target >= 1.8)")

@@ -23,6 +23,7 @@ import json
 import logging
 import os
 import sys
+import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Iterable
@@ -216,6 +217,7 @@ def run_sweep(scene: Any, out: Path, scheduler: str | None = None, workers: int 
         if stop_after is not None and done[0] >= stop_after:
             raise KeyboardInterrupt(f"stopped after {done[0]} batches (stop_after)")
 
+    t0 = time.perf_counter()
     try:
         execute(tasks, scheduler, workers, on_done)
     finally:
@@ -223,7 +225,10 @@ def run_sweep(scene: Any, out: Path, scheduler: str | None = None, workers: int 
             bar.close()
     model = sl.build_model(scene, read_dataset(interface_paths[next(iter(sets))]) if interface_paths[next(iter(sets))] else None,
                            _dmw_tuple(dmw_path), k)
-    return assemble(scene, out, prot, list(sets), damp, batches, key, k_source, model_attrs(model, k_source),
+    attrs = model_attrs(model, k_source)
+    attrs["compute_seconds"] = round(time.perf_counter() - t0, 3)  # wall time of the batches (cluster start-up included)
+    attrs["batches_run"] = len(todo)
+    return assemble(scene, out, prot, list(sets), damp, batches, key, k_source, attrs,
                     [dmw_path] if dmw_path else [])
 
 
