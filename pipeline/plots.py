@@ -1,0 +1,504 @@
+"""Figures of the report stage (matplotlib object API: no pyplot, no global state).
+
+Every function takes datasets as written by the stages (dataset units, see DESIGN.md), draws one
+figure, writes it as PNG with :func:`save` and returns the path. Figures are
+:class:`matplotlib.figure.Figure` objects that are never registered with pyplot, so nothing leaks
+between calls and nothing needs a display (``MPLBACKEND=Agg`` or not).
+
+Conventions: every axis is labelled ``quantity [units]`` (:func:`axis_label`, units taken from the
+variable's ``units`` attribute and written in plain text: ``um2`` -> ``µm²``); every title says what
+is shown and for which scene (:func:`title`); regimes use :data:`REGIME_COLOURS`.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+import xarray as xr
+from matplotlib.figure import Figure
+
+#: Regime code -> (name, shading colour).
+REGIME_COLOURS = {0: ("flying", "#cfe8ff"), 1: ("bouncing", "#ffe1b3"), 2: ("surfing", "#d5f5d0")}
+DPI = 150
+LINE_COLOURS = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf")
+
+_UNIT_TEXT = {"1": "1", "um2": "µm²", "um": "µm", "um-2": "µm⁻²", "nm2 Hz-1": "nm²/Hz", "nm2": "nm²",
+              "m s-1": "m/s", "J m-2": "J/m²", "nm-2": "nm⁻²", "%": "%"}
+
+
+def unit_text(units: str | None) -> str:
+    """Printable form of a CF ``units`` string (``"um2"`` -> ``"µm²"``)."""
+    if units is None:
+        return ""
+    return _UNIT_TEXT.get(units, units)
+
+
+def axis_label(quantity: str, units: str | None) -> str:
+    """``"quantity [units]"`` (``[-]`` for dimensionless quantities)."""
+    u = unit_text(units)
+    return f"{quantity} [{'-' if u in ('', '1') else u}]"
+
+
+def var_label(da: xr.DataArray, quantity: str | None = None) -> str:
+    """Axis label of a data array from its ``units`` attribute (and ``long_name`` if no quantity)."""
+    return axis_label(quantity or da.attrs.get("long_name", da.name or ""), da.attrs.get("units"))
+
+
+def title(what: str, scene: str) -> str:
+    """A figure title naming what is shown and the scene."""
+    return f"{what}\nscene: {scene}"
+
+
+def new_figure(nrows: int = 1, ncols: int = 1, *, size: tuple[float, float] = (7.5, 4.8),
+               sharex: bool = False, squeeze: bool = True) -> tuple[Figure, Any]:
+    """A pyplot-free figure with a grid of axes (constrained layout)."""
+    fig = Figure(figsize=size, layout="constrained")
+    axes = fig.subplots(nrows, ncols, sharex=sharex, squeeze=squeeze)
+    return fig, axes
+
+
+def save(fig: Figure, path: str | Path, dpi: int = DPI) -> Path:
+    """Write ``fig`` as PNG to ``path`` (folder created) and release its artists."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.tmp")
+    fig.savefig(tmp, dpi=dpi, format="png")
+    tmp.replace(path)
+    fig.clear()
+    return path
+
+
+def note(ax: Any, text: str, loc: str = "upper right", **kw: Any) -> None:
+    """A boxed note inside the axes."""
+    x, ha = (0.98, "right") if "right" in loc else (0.02, "left")
+    y, va = (0.96, "top") if "upper" in loc else (0.04, "bottom")
+    ax.text(x, y, text, transform=ax.transAxes, ha=ha, va=va, fontsize=kw.pop("fontsize", 8),
+            bbox=dict(boxstyle="round,pad=0.3", fc="white", ec="0.6", alpha=0.9), **kw)
+
+
+def shade_regimes(ax: Any, x: np.ndarray, regime: np.ndarray, legend: bool = True) -> None:
+    """Shade contiguous runs of equal regime code along x (half a grid step either side)."""
+    x = np.asarray(x, float)
+    regime = np.asarray(regime)
+    if x.size == 0:
+        return
+    edges = np.empty(x.size + 1)
+    if x.size > 1:
+        mid = 0.5 * (x[1:] + x[:-1])
+        edges[1:-1] = mid
+        edges[0] = x[0] - (mid[0] - x[0])
+        edges[-1] = x[-1] + (x[-1] - mid[-1])
+    else:
+        edges[:] = [x[0] - 0.5, x[0] + 0.5]
+    seen: set[int] = set()
+    start = 0
+    for i in range(1, x.size + 1):
+        if i == x.size or regime[i] != regime[start]:
+            code = int(regime[start])
+            if code in REGIME_COLOURS:
+                name, colour = REGIME_COLOURS[code]
+                ax.axvspan(edges[start], edges[i], color=colour, alpha=0.8, lw=0, zorder=0,
+                           label=(name if legend and code not in seen else None))
+                seen.add(code)
+            start = i
+
+
+def runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    """``(first, last)`` index pairs of the runs of True in ``mask``."""
+    mask = np.asarray(mask, bool)
+    out, start = [], None
+    for i, m in enumerate(mask):
+        if m and start is None:
+            start = i
+        if not m and start is not None:
+            out.append((start, i - 1))
+            start = None
+    if start is not None:
+        out.append((start, mask.size - 1))
+    return out
+
+
+def _shade_transient(ax: Any, transient_ms: float | None) -> None:
+    if transient_ms and transient_ms > 0:
+        ax.axvspan(0.0, transient_ms, color="0.88", lw=0, zorder=0, label="start-up transient (discarded)")
+
+
+def _regime_name(code: int | None) -> str:
+    return REGIME_COLOURS.get(int(code), ("unknown", ""))[0] if code is not None and code >= 0 else "unknown"
+
+
+# --------------------------------------------------------------------------------------------- Fig. 3
+def fig_clearance(hist: Sequence[tuple[float, xr.Dataset, int | None]], scene: str, path: Path,
+                  transient_ms: float | None = None) -> Path:
+    """Clearance (separation when absent) time histories, one panel per protrusion (paper Fig. 3).
+
+    ``hist``: ``(protrusion [nm], one-slice history dataset (dim time), regime code or None)``.
+    """
+    fig, axes = new_figure(len(hist), 1, size=(7.5, 2.6 * len(hist) + 0.8), sharex=True, squeeze=False)
+    for ax, (delta, h, code) in zip(axes[:, 0], hist):
+        t = h["time"].values * 1e3
+        name = "clearance" if "clearance" in h else "separation"
+        y = h[name]
+        _shade_transient(ax, transient_ms)
+        ax.plot(t, y.values, lw=0.6, color=LINE_COLOURS[0], label=name)
+        if name == "clearance":
+            ax.axhline(0.0, color="k", lw=0.8, ls="--", label="contact threshold d = k σ")
+        if "in_contact" in h:
+            c = np.nan_to_num(h["in_contact"].values) > 0.5
+            frac = c.mean() if c.size else 0.0
+            for n, (i0, i1) in enumerate(runs(c)[:400]):
+                ax.axvspan(t[i0], t[i1], color="#d62728", alpha=0.12, lw=0, zorder=0,
+                           label="in contact" if n == 0 else None)
+            state = f"{_regime_name(code)}; in contact {100 * frac:.0f} % of the time"
+        else:
+            state = _regime_name(code)
+        ax.set_ylabel(var_label(y, name))
+        ax.set_title(f"protrusion δ = {delta:g} nm ({state})", fontsize=10)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7, loc="best", framealpha=0.9)
+    axes[-1, 0].set_xlabel(axis_label("time", "ms"))
+    fig.suptitle(title("Fig. 3: clearance histories, flying and light contact", scene), fontsize=11)
+    return save(fig, path)
+
+
+# --------------------------------------------------------------------------------------------- Fig. 4
+FORCES = (("contact_force", "contact", LINE_COLOURS[0]), ("friction_force", "friction", LINE_COLOURS[1]),
+          ("adhesion_force", "adhesion (attractive)", LINE_COLOURS[2]), ("net_force", "net vertical", "k"))
+
+
+def fig_forces(h: xr.Dataset, delta: float, scene: str, path: Path, transient_ms: float | None = None) -> Path:
+    """Contact, friction, adhesion and net force histories at one protrusion (paper Fig. 4)."""
+    fig, ax = new_figure(size=(7.5, 4.6))
+    t = h["time"].values * 1e3
+    _shade_transient(ax, transient_ms)
+    units = None
+    for name, label, colour in FORCES:
+        if name in h:
+            ax.plot(t, h[name].values, lw=0.8, color=colour, label=label)
+            units = h[name].attrs.get("units", units)
+    ax.axhline(0.0, color="0.5", lw=0.6)
+    ax.set_xlabel(axis_label("time", "ms"))
+    ax.set_ylabel(axis_label("force", units or "mN"))
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, loc="best", framealpha=0.9)
+    fig.suptitle(title(f"Fig. 4: interface forces in light contact, protrusion {delta:g} nm", scene), fontsize=11)
+    return save(fig, path)
+
+
+# --------------------------------------------------------------------------------------------- Fig. 5
+STRESSES = (("friction_coefficient", "friction coefficient μ"), ("mean_pressure", "mean contact pressure"),
+            ("shear_stress", "shear stress"))
+
+
+def fig_stresses(h: xr.Dataset, delta: float, scene: str, path: Path, transient_ms: float | None = None) -> Path:
+    """Friction coefficient, mean contact pressure and shear stress histories (paper Fig. 5)."""
+    names = [(n, q) for n, q in STRESSES if n in h]
+    fig, axes = new_figure(max(len(names), 1), 1, size=(7.5, 2.2 * max(len(names), 1) + 0.8), sharex=True,
+                           squeeze=False)
+    t = h["time"].values * 1e3
+    for i, (ax, (name, q)) in enumerate(zip(axes[:, 0], names)):
+        _shade_transient(ax, transient_ms)
+        y = h[name].values
+        ax.plot(t, y, lw=0.8, color=LINE_COLOURS[i])
+        ax.set_ylabel(var_label(h[name], q), fontsize=9)
+        ax.grid(alpha=0.3)
+        fin = y[np.isfinite(y)]
+        if fin.size:
+            lo, hi = float(fin.min()), float(fin.max())
+            scale = max(abs(lo), abs(hi), 1e-12)
+            if hi - lo < 0.02 * scale:  # (nearly) constant: show it as a flat line, not amplified noise
+                mid = 0.5 * (lo + hi)
+                lo, hi = mid - 0.05 * scale, mid + 0.05 * scale
+            pad = 0.05 * (hi - lo)
+            ax.set_ylim(lo - pad, hi + pad)
+            ax.ticklabel_format(axis="y", useOffset=False)
+            win = fin if transient_ms is None else y[(t >= transient_ms) & np.isfinite(y)]
+            if win.size:
+                note(ax, f"steady-window mean {np.mean(win):.4g}", loc="lower right")
+        else:
+            note(ax, "no contact: undefined", loc="lower right")
+    if not names:
+        note(axes[0, 0], "no stress histories in the dataset", loc="upper left")
+    axes[-1, 0].set_xlabel(axis_label("time", "ms"))
+    fig.suptitle(title(f"Fig. 5: friction coefficient and contact stresses, protrusion {delta:g} nm", scene),
+                 fontsize=11)
+    return save(fig, path)
+
+
+# --------------------------------------------------------------------------------------------- Fig. 6
+def _combo_label(labels: dict[str, Any]) -> str:
+    parts = []
+    if labels.get("roughness") is not None:
+        parts.append(f"roughness {labels['roughness']}")
+    if labels.get("damping") is not None:
+        parts.append(f"ζ = {labels['damping']:g}")
+    return ", ".join(parts) or "sweep"
+
+
+def fig_fhm(combos: Sequence[tuple[dict[str, Any], xr.Dataset]], scene: str, path: Path, *,
+            touchdown_nm: float | None = None, previous_nm: float | None = None, limit: float = 10.0,
+            first_contact: float | None = None) -> Path:
+    """FHM/BV [%] versus protrusion with regimes shaded (from the first combination), paper Fig. 6.
+
+    A log scale is used when FHM (flying) and BV (in contact) differ by more than a factor 20, so
+    both stay readable.
+    """
+    fig, ax = new_figure(size=(10.0, 5.0))
+    first = combos[0][1]
+    x0 = first["protrusion"].values
+    if "regime" in first:
+        shade_regimes(ax, x0, np.asarray(first["regime"].values).reshape(-1))
+    allv = []
+    for i, (labels, ds) in enumerate(combos):
+        y = np.asarray(ds["fhm_bv"].values, float).reshape(-1)
+        allv.append(y)
+        ax.plot(ds["protrusion"].values, y, marker="o", ms=2.5, lw=1.2, color=LINE_COLOURS[i % len(LINE_COLOURS)],
+                label=_combo_label(labels) if len(combos) > 1 else "FHM (flying) / BV (contact)")
+    v = np.concatenate(allv)
+    v = v[np.isfinite(v) & (v > 0)]
+    if v.size and v.max() / v.min() > 20:
+        ax.set_yscale("log")
+    ax.axhline(limit, color="k", ls="--", lw=1.0, label=f"stable flying: FHM < {limit:g} %")
+    if touchdown_nm is not None:
+        ax.axvline(touchdown_nm, color="#d62728", lw=1.4, label=f"measured touchdown {touchdown_nm:g} nm")
+    if previous_nm is not None:
+        ax.axvline(previous_nm, color="#d62728", lw=0.8, ls=":", label=f"no contact at {previous_nm:g} nm (measured)")
+    if first_contact is not None:
+        ax.axvline(first_contact, color="#9467bd", lw=1.2, ls="-.", label=f"first contact here: {first_contact:g} nm")
+    ax.set_xlabel(axis_label("TFC protrusion δ", "nm"))
+    ax.set_ylabel(axis_label("FHM / BV (peak-to-peak / FH0)", "%"))
+    ax.grid(alpha=0.3, which="both")
+    shade_note = "regimes shaded for " + _combo_label(combos[0][0]) if len(combos) > 1 else None
+    ax.legend(fontsize=7.5, loc="upper left", bbox_to_anchor=(1.01, 1.0), framealpha=0.9, title=shade_note,
+              title_fontsize=7.5)
+    fig.suptitle(title("Fig. 6: flying-height modulation / bouncing vibration versus protrusion", scene), fontsize=11)
+    return save(fig, path)
+
+
+# --------------------------------------------------------------------------------------------- Fig. 7
+def fig_shear(combos: Sequence[tuple[dict[str, Any], xr.Dataset]], scene: str, path: Path, *,
+              touchdown_nm: float | None = None, shear_strength: float | None = None) -> Path:
+    """Shear stress (top) and mean contact pressure (bottom) versus protrusion past touchdown (Fig. 7)."""
+    fig, (ax, ax2) = new_figure(2, 1, size=(7.5, 6.0), sharex=True)
+    any_points = False
+    xmin = None
+    for i, (labels, ds) in enumerate(combos):
+        x = ds["protrusion"].values
+        tau = np.asarray(ds["shear_stress"].values, float).reshape(-1)
+        ok = np.isfinite(tau)
+        if not ok.any():
+            continue
+        any_points = True
+        xmin = x[ok].min() if xmin is None else min(xmin, x[ok].min())
+        colour = LINE_COLOURS[i % len(LINE_COLOURS)]
+        lab = _combo_label(labels) if len(combos) > 1 else None
+        ax.plot(x[ok], tau[ok], marker="o", ms=2.5, lw=1.2, color=colour, label=lab or "shear stress")
+        if "mean_pressure" in ds:
+            p = np.asarray(ds["mean_pressure"].values, float).reshape(-1)
+            ax2.plot(x[ok], p[ok], marker="s", ms=2.5, lw=1.2, color=colour, label=lab or "mean contact pressure")
+    if shear_strength is not None and np.isfinite(shear_strength):
+        ax.axhline(shear_strength, color="0.4", ls="--", lw=1.0,
+                   label=f"shear strength τ_y = H/(2.8√3) = {shear_strength:.4g} MPa")
+    for a in (ax, ax2):
+        if touchdown_nm is not None:
+            a.axvline(touchdown_nm, color="#d62728", lw=1.2, label=f"measured touchdown {touchdown_nm:g} nm")
+        a.grid(alpha=0.3)
+    if not any_points:
+        note(ax, "no contact anywhere in the sweep: shear stress undefined", loc="upper left", fontsize=10)
+    else:
+        ax.set_xlim(left=xmin - 0.3)
+        if touchdown_nm is not None:
+            ax.set_xlim(left=min(xmin, touchdown_nm) - 0.3)
+        y = ax.get_ylim()
+        if y[1] - y[0] < 1e-6 * max(abs(y[1]), 1.0) * 10:
+            ax.set_ylim(y[0] * 0.9, y[1] * 1.1)
+    ax.set_ylabel(axis_label("shear stress", "MPa"))
+    ax2.set_ylabel(axis_label("mean contact pressure", "MPa"))
+    ax2.set_xlabel(axis_label("TFC protrusion δ", "nm"))
+    ax.legend(fontsize=7.5, loc="best", framealpha=0.9)
+    ax2.legend(fontsize=7.5, loc="best", framealpha=0.9)
+    fig.suptitle(title("Fig. 7: contact shear stress and mean pressure past touchdown", scene), fontsize=11)
+    return save(fig, path)
+
+
+# ------------------------------------------------------------------------------------------ calibration
+def fig_calibration(cal: xr.Dataset, scene: str, path: Path, *, onset_nm: float, previous_nm: float,
+                    k_used: float | None = None, k_source: str = "") -> Path:
+    """Touchdown protrusion versus k, the measured band and the admissible k interval."""
+    fig, ax = new_figure(size=(7.5, 5.0))
+    k = cal["k"].values
+    td = np.asarray(cal["touchdown"].values, float)
+    ax.axhspan(previous_nm, onset_nm, color="#ffd6d6", lw=0, zorder=0,
+               label=f"measured: contact at {onset_nm:g} nm, none at {previous_nm:g} nm")
+    ax.axhline(onset_nm, color="#d62728", lw=0.8)
+    ax.axhline(previous_nm, color="#d62728", lw=0.8, ls=":")
+    ax.plot(k, td, marker="o", ms=4, lw=1.2, color=LINE_COLOURS[0], label="touchdown protrusion (simulated)")
+    none = ~np.isfinite(td)
+    if none.any():
+        top = np.nanmax(td) if np.isfinite(td).any() else onset_nm
+        ax.plot(k[none], np.full(none.sum(), top + 0.5), "x", color="0.3", label="no contact on the grid")
+    lo, hi = float(cal["k_low"]) if "k_low" in cal else np.nan, float(cal["k_high"]) if "k_high" in cal else np.nan
+    kc = float(cal["k_calibrated"]) if "k_calibrated" in cal else np.nan
+    if np.isfinite(lo) and np.isfinite(hi):
+        ax.axvspan(lo, hi, color="#c9f0c2", alpha=0.9, lw=0, zorder=0, label=f"admissible k: ({lo:.3f}, {hi:.3f}]")
+        ax.axvline(kc, color="#2ca02c", lw=1.2, label=f"calibrated k = {kc:.3f}")
+    else:
+        outcome = str(cal.attrs.get("outcome", "no admissible k"))
+        short = outcome.split(":")[0]
+        finite = td[np.isfinite(td)]
+        extra = (f"\ntouchdown at {finite[0]:g} nm for every k scanned" if finite.size == td.size and finite.size
+                 and np.ptp(finite) == 0 else "")
+        note(ax, f"{short}{extra}", loc="lower left", fontsize=9, color="#a00000")
+    if k_used is not None and np.isfinite(k_used) and not (np.isfinite(kc) and abs(kc - k_used) < 1e-9):
+        src = "fallback" if "fallback" in k_source else "used"
+        ax.axvline(k_used, color="#9467bd", lw=1.2, ls="-.", label=f"k {src} in the sweep: {k_used:.3f}")
+    ax.set_xlabel(axis_label("contact criterion constant k (contact when d < k σ)", "1"))
+    ax.set_ylabel(axis_label("touchdown protrusion", "nm"))
+    ylo = np.nanmin(np.concatenate([td[np.isfinite(td)], [previous_nm]])) - 1.0
+    yhi = np.nanmax(np.concatenate([td[np.isfinite(td)], [onset_nm]])) + 1.0
+    ax.set_ylim(ylo, yhi)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7.5, loc="best", framealpha=0.9)
+    fig.suptitle(title("Calibration of the contact criterion k against the measured touchdown", scene), fontsize=11)
+    return save(fig, path)
+
+
+# -------------------------------------------------------------------------------------------- roughness
+ROUGH_BARS = (("sigma", "σ (rms)"), ("summit_density", "η (summit density)"), ("summit_radius", "R (summit radius)"))
+ROUGH_TABLE = (("sigma", "rms roughness σ"), ("sigma_s", "summit-height std σ_s"), ("y_s", "summit-mean offset y_s"),
+               ("summit_radius", "summit radius R"), ("summit_density", "summit density η"),
+               ("bandwidth_alpha", "bandwidth α"), ("plasticity_index", "plasticity index ψ (GW)"),
+               ("plasticity_index_ke", "plasticity index ψ (CEB/KE)"))
+
+
+def has_afm_surfaces(rough: xr.Dataset) -> bool:
+    """Whether ``roughness.nc`` holds measured surfaces (anything but ``explicit``/``combined``)."""
+    return any(str(s) not in ("explicit", "combined") for s in rough["surface"].values)
+
+
+def fig_roughness(rough: xr.Dataset, scene: str, path: Path, interface: xr.Dataset | None = None) -> Path:
+    """Per-surface bars of sigma, eta, R by route (AFM input), or a table of the explicit statistics."""
+    if has_afm_surfaces(rough):
+        return _roughness_bars(rough, scene, path)
+    return _roughness_table(rough, scene, path, interface)
+
+
+def _roughness_bars(rough: xr.Dataset, scene: str, path: Path) -> Path:
+    surfaces = [str(s) for s in rough["surface"].values]
+    methods = [str(m) for m in rough["method"].values]
+    fig, axes = new_figure(1, len(ROUGH_BARS), size=(4.0 * len(ROUGH_BARS), 4.4), squeeze=False)
+    x = np.arange(len(surfaces))
+    w = 0.8 / max(len(methods), 1)
+    for ax, (name, q) in zip(axes[0], ROUGH_BARS):
+        for j, m in enumerate(methods):
+            vals = np.asarray(rough[name].sel({"method": m}).values, float)
+            bars = ax.bar(x + (j - (len(methods) - 1) / 2) * w, np.nan_to_num(vals), w,
+                          color=LINE_COLOURS[j], label=f"{m} route")
+            for b, v in zip(bars, vals):
+                if not np.isfinite(v):
+                    ax.text(b.get_x() + b.get_width() / 2, 0, "n/a", ha="center", va="bottom", fontsize=7,
+                            rotation=90)
+        ax.set_xticks(x, surfaces, rotation=30, ha="right", fontsize=8)
+        ax.set_ylabel(var_label(rough[name], q))
+        ax.grid(alpha=0.3, axis="y")
+    axes[0, 0].legend(fontsize=8)
+    if "pixel_size" in rough:
+        px = ", ".join(f"{s}: {p:.3g} nm" for s, p in zip(surfaces, rough["pixel_size"].values) if np.isfinite(p))
+        if px:
+            fig.text(0.01, 0.005, f"pixel size {px}", fontsize=7)
+    fig.suptitle(title("Asperity statistics per AFM surface and route", scene), fontsize=11)
+    return save(fig, path)
+
+
+def _fmt(v: float) -> str:
+    return "n/a" if not np.isfinite(v) else f"{v:.4g}"
+
+
+def _roughness_table(rough: xr.Dataset, scene: str, path: Path, interface: xr.Dataset | None) -> Path:
+    surface = "explicit" if "explicit" in [str(s) for s in rough["surface"].values] else str(rough["surface"].values[0])
+    methods = [str(m) for m in rough["method"].values]
+    rows, cells, dropped = [], [], []
+    for name, q in ROUGH_TABLE:
+        if name not in rough:
+            continue
+        da = rough[name].sel(surface=surface)
+        vals = [float(da.sel({"method": m})) for m in methods] if "method" in da.dims else [float(da)] * len(methods)
+        if not np.isfinite(vals).any():
+            dropped.append(q)
+            continue
+        rows.append(f"{q} [{unit_text(rough[name].attrs.get('units')) if rough[name].attrs.get('units') != '1' else '-'}]")
+        cells.append([_fmt(v) for v in vals])
+    if interface is not None:
+        for name, q in (("plasticity_index_gw", "ψ (GW) used by the interface"),
+                        ("plasticity_index_ke", "ψ (CEB/KE) used by the interface"),
+                        ("hardness", "hardness H"), ("composite_modulus", "composite modulus E'")):
+            if name in interface:
+                u = interface[name].attrs.get("units", "1")
+                rows.append(f"{q} [{'-' if u == '1' else unit_text(u)}]")
+                cells.append([_fmt(float(interface[name]))] + [""] * (len(methods) - 1))
+    fig, ax = new_figure(size=(8.0, 0.32 * (len(rows) + 1) + 1.3))
+    ax.axis("off")
+    tab = ax.table(cellText=cells, rowLabels=rows, colLabels=[f"{m} route" for m in methods],
+                   cellLoc="center", bbox=[0.45, 0.0, 0.55, 1.0])
+    tab.auto_set_font_size(False)
+    tab.set_fontsize(9)
+    for (r, c), cell in tab.get_celld().items():
+        if r == 0:
+            cell.set_facecolor("#dde7f3")
+        elif r % 2 == 0:
+            cell.set_facecolor("#f5f5f5")
+        if c == -1:
+            cell.set_text_props(ha="left")
+    sub = f"surface '{surface}' (explicit statistics, no AFM scan): the summit route needs a scan (n/a)"
+    if dropped:
+        sub += "\nnot in roughness.nc (no hardness given there): " + "; ".join(dropped)
+    ax.set_title(sub, fontsize=8.5)
+    fig.suptitle(title("Roughness statistics of the combined surface", scene), fontsize=11)
+    return save(fig, path)
+
+
+# ------------------------------------------------------------------------------------------------- DMW
+def fig_dmw(dmw: xr.Dataset, scene: str, path: Path) -> Path:
+    """The DMW record (top) and its one-sided PSD, log-log, with the band edges (bottom)."""
+    fig, (ax, ax2) = new_figure(2, 1, size=(7.5, 6.4))
+    t = dmw["time"].values * 1e3
+    w = dmw["displacement"]
+    ax.plot(t, w.values, lw=0.5, color=LINE_COLOURS[0])
+    rms = float(dmw["rms"]) if "rms" in dmw else float(np.sqrt(np.mean(w.values ** 2)))
+    src = dmw.attrs.get("dmw_source", "unknown")
+    note(ax, f"rms {rms:.4g} nm; source: {src}", loc="upper right")
+    ax.set_xlabel(axis_label("time", "ms"))
+    ax.set_ylabel(var_label(w, "disk displacement w"))
+    ax.grid(alpha=0.3)
+    ax.set_title("record", fontsize=10)
+    if "psd" in dmw and "frequency" in dmw.coords:
+        f = dmw["frequency"].values
+        p = dmw["psd"].values
+        ok = (f > 0) & np.isfinite(p) & (p > 0)
+        ax2.loglog(f[ok] / 1e3, p[ok], lw=0.6, color=LINE_COLOURS[0], label="periodogram")
+        for name, ls in (("band_low", "--"), ("band_high", "--")):
+            if name in dmw:
+                edge = float(dmw[name]) / 1e3
+                ax2.axvline(edge, color="#d62728", ls=ls, lw=1.0,
+                            label=f"band {'lower' if name == 'band_low' else 'upper'} edge {edge:g} kHz")
+        if ok.any():
+            lo_e = float(dmw["band_low"]) if "band_low" in dmw else 0.0
+            hi_e = float(dmw["band_high"]) if "band_high" in dmw else np.inf
+            inband = p[ok & (f > lo_e * 1.0001) & (f < hi_e * 0.9999)]
+            pos = inband if inband.size else p[ok]
+            ax2.set_ylim(np.percentile(pos, 0.5) / 10, pos.max() * 10)
+            fmax = f[ok].max() if not np.isfinite(hi_e) else min(hi_e * 4, f.max())
+            ax2.set_xlim((lo_e / 4 if lo_e > 0 else f[ok].min()) / 1e3, fmax / 1e3)
+        ax2.set_xlabel(axis_label("frequency", "kHz"))
+        ax2.set_ylabel(var_label(dmw["psd"], "PSD of w"))
+        ax2.legend(fontsize=7.5, loc="lower left", framealpha=0.9)
+    else:
+        ax2.axis("off")
+        note(ax2, "no spectrum in dmw.nc", loc="upper left")
+    ax2.grid(alpha=0.3, which="both")
+    ax2.set_title("spectrum", fontsize=10)
+    fig.suptitle(title("Dynamic microwaviness (DMW) of the disk", scene), fontsize=11)
+    return save(fig, path)
+
