@@ -23,8 +23,9 @@ All kernels are cached on disk (``cache=True``).
 Integrator: Dormand-Prince 5(4) with PI-free classical step control (Hairer, Norsett & Wanner,
 *Solving ODEs I*, II.4 and II.5), local extrapolation, error norm the RMS of the embedded error
 scaled by ``atol + rtol |y|``. The contact switch is a discontinuity of the force, handled as an
-event: a sign change of ``g = d - k sigma`` over an accepted step is located by bisection on the
-cubic Hermite interpolant of the step, the step is redone exactly up to the switch, and
+event: a sign change of ``g = d - k sigma`` over an accepted step (at its ends, or at an interior
+extremum of ``g`` when ``g'`` changes sign, so a grazing contact shorter than a step is not missed)
+is located by bisection on the cubic Hermite interpolant of the step, the step is redone exactly up to the switch, and
 integration restarts in the new mode (no FSAL reuse across the switch). Outputs are sampled on a
 uniform grid with the same Hermite interpolant.
 
@@ -44,8 +45,9 @@ from numba import njit
 
 # Layout of the parameter vector ``p`` (all SI).
 (P_M, P_I, P_LF, P_LR, P_LC, P_HCG, P_KF, P_KR, P_CF, P_CR, P_G0, P_N, P_FR0, P_FH0, P_DELTA, P_AN,
- P_KSIG, P_CC, P_OFF_F, P_OFF_R, P_OFF_C, P_DMW_T0, P_DMW_DT, P_TAB_X0, P_TAB_H, P_DWELL) = range(26)
-N_PARAMS = 26
+ P_KSIG, P_CC, P_OFF_F, P_OFF_R, P_OFF_C, P_DMW_T0, P_DMW_DT, P_TAB_X0, P_TAB_H, P_DWELL,
+ P_TWIN) = range(27)
+N_PARAMS = 27
 
 # Status codes returned by :func:`integrate`.
 OK, MAX_STEPS, STEP_UNDERFLOW, NOT_FINITE = 0, 1, 2, 3
@@ -220,12 +222,14 @@ def integrate(y0, t_end, t_out, p, dmw, cp, pa, ft, pitch, rtol, atol, h_max, ma
     Returns
     -------
     Y : states at ``t_out`` (n_out, 4); C : contact flag at ``t_out``;
-    info : ``[status, accepted steps, rejected steps, contact switches, rhs evaluations]``
+    info : ``[status, accepted steps, rejected steps, contact switches, rhs evaluations]``;
+    ext : exact minimum and maximum of the separation ``d`` [m] over ``t >= p[P_TWIN]``
     """
     n_out = t_out.shape[0]
     Y = np.full((n_out, 4), np.nan)
     C = np.zeros(n_out, dtype=np.bool_)
     info = np.zeros(5, dtype=np.int64)
+    ext = np.array([np.inf, -np.inf])  # min and max of d over t >= P_TWIN
     y = y0.copy()
     k1 = np.empty(4)
     k7 = np.empty(4)
@@ -245,6 +249,8 @@ def integrate(y0, t_end, t_out, p, dmw, cp, pa, ft, pitch, rtol, atol, h_max, ma
     info[4] += 1
     h = min(h_max, 1e-8)
     t_hold = -1.0  # no switch may happen before t_hold (minimum dwell after a switch)
+    h_stiff = h_max  # step cap from the local interface stiffness (see below)
+    m_eff_inv = 1.0 / p[P_M] + (p[P_LC] ** 2 / p[P_I] if pitch is not None else 0.0)
     j = 0
     while j < n_out and t_out[j] <= t:
         Y[j, :] = y
@@ -254,7 +260,7 @@ def integrate(y0, t_end, t_out, p, dmw, cp, pa, ft, pitch, rtol, atol, h_max, ma
     while t < t_end:
         if steps >= max_steps:
             info[0] = MAX_STEPS
-            return Y, C, info
+            return Y, C, info, ext
         steps += 1
         if cp is not None and t_hold > 0.0 and t >= t_hold:
             # the dwell has ended: switch now if the criterion disagrees with the mode
@@ -265,12 +271,14 @@ def integrate(y0, t_end, t_out, p, dmw, cp, pa, ft, pitch, rtol, atol, h_max, ma
                 t_hold = t + p[P_DWELL]
                 rhs(t, y, p, dmw, cp, pa, ft, pitch, contact, k1)
                 info[4] += 1
-        h = min(h, h_max, t_end - t)
+        h = min(h, h_max, h_stiff)
+        if t + 1.01 * h >= t_end:  # land on t_end exactly, never leave a sliver (Hairer's DOPRI5 rule)
+            h = t_end - t
         if t_hold > t:
             h = min(h, t_hold - t)
-        if h < 1e-12 * max(t, 1e-9) or h < 1e-18:
+        if h < 1e-12 * max(t, 1e-9) or h < 1e-18:  # (h = t_end - t is never a sliver, see above)
             info[0] = STEP_UNDERFLOW
-            return Y, C, info
+            return Y, C, info, ext
         _step(t, y, k1, h, p, dmw, cp, pa, ft, pitch, contact, ynew, k7, err, tmp, k2, k3, k4, k5, k6)
         info[4] += 6
         e = 0.0
@@ -290,10 +298,29 @@ def integrate(y0, t_end, t_out, p, dmw, cp, pa, ft, pitch, rtol, atol, h_max, ma
         h_acc = h
         switched = False
         if cp is not None and t_hold < 0.0:
-            g1 = separation(p, dmw, t + h, ynew)[0] - p[P_KSIG]
-            if (g1 < 0.0) != contact:
-                # locate the switch on the Hermite interpolant by bisection
-                lo, hi = 0.0, 1.0
+            g1, gd1 = separation(p, dmw, t + h, ynew)
+            g1 -= p[P_KSIG]
+            hi = 1.0 if (g1 < 0.0) != contact else -1.0
+            if hi < 0.0:
+                # no sign change at the ends: look for an excursion across the threshold inside the
+                # step (a grazing contact or a brief lift-off), at the extremum of g on the interpolant
+                gd0 = separation(p, dmw, t, y)[1]
+                if (gd0 < 0.0 and gd1 > 0.0 and not contact) or (gd0 > 0.0 and gd1 < 0.0 and contact):
+                    a, b = 0.0, 1.0
+                    for _ in range(50):
+                        mid = 0.5 * (a + b)
+                        _interp_state(y, k1, ynew, k7, h, mid, ys)
+                        gd = separation(p, dmw, t + mid * h, ys)[1]
+                        if (gd < 0.0) == (gd0 < 0.0):
+                            a = mid
+                        else:
+                            b = mid
+                    _interp_state(y, k1, ynew, k7, h, b, ys)
+                    if (separation(p, dmw, t + b * h, ys)[0] - p[P_KSIG] < 0.0) != contact:
+                        hi = b
+            if hi > 0.0:
+                # locate the switch on the Hermite interpolant by bisection in [0, hi]
+                lo = 0.0
                 for _ in range(60):
                     mid = 0.5 * (lo + hi)
                     _interp_state(y, k1, ynew, k7, h, mid, ys)
@@ -317,6 +344,27 @@ def integrate(y0, t_end, t_out, p, dmw, cp, pa, ft, pitch, rtol, atol, h_max, ma
                 switched = True
                 info[3] += 1
         t_new = t + h_acc
+        if t_new >= p[P_TWIN]:
+            # exact extremes of d over the steady window: at the step's end and at an interior
+            # extremum of d on the interpolant (peak-to-peak without aliasing by the output grid)
+            dd0 = separation(p, dmw, t, y)[1]
+            d1, dd1 = separation(p, dmw, t_new, ynew)
+            ext[0] = min(ext[0], d1)
+            ext[1] = max(ext[1], d1)
+            if (dd0 < 0.0) != (dd1 < 0.0):
+                a, b = 0.0, 1.0
+                for _ in range(40):
+                    mid = 0.5 * (a + b)
+                    _interp_state(y, k1, ynew, k7, h_acc, mid, ys)
+                    if (separation(p, dmw, t + mid * h_acc, ys)[1] < 0.0) == (dd0 < 0.0):
+                        a = mid
+                    else:
+                        b = mid
+                if t + a * h_acc >= p[P_TWIN]:
+                    _interp_state(y, k1, ynew, k7, h_acc, a, ys)
+                    de = separation(p, dmw, t + a * h_acc, ys)[0]
+                    ext[0] = min(ext[0], de)
+                    ext[1] = max(ext[1], de)
         while j < n_out and t_out[j] <= t_new:
             theta = (t_out[j] - t) / h_acc
             _interp_state(y, k1, ynew, k7, h_acc, theta, ys)
@@ -328,9 +376,21 @@ def integrate(y0, t_end, t_out, p, dmw, cp, pa, ft, pitch, rtol, atol, h_max, ma
             y[i] = ynew[i]
             if not np.isfinite(y[i]):
                 info[0] = NOT_FINITE
-                return Y, C, info
+                return Y, C, info, ext
         t = t_new
         info[1] += 1
+        if pa is not None or cp is not None:
+            # Cap the next step at 1/omega of the local interface spring: a stiff contact would
+            # otherwise run the explicit method at its stability limit, where the step controller
+            # is erratic (Hairer & Wanner, Solving ODEs II, IV.2).
+            d_now = separation(p, dmw, t, y)[0]
+            kk = 0.0
+            if cp is not None and contact:
+                kk -= p[P_AN] * _ppval(cp, p[P_TAB_X0], p[P_TAB_H], d_now)[1]
+            if pa is not None:
+                kk += p[P_AN] * _ppval(pa, p[P_TAB_X0], p[P_TAB_H], d_now)[1]
+            kk = abs(kk)
+            h_stiff = 0.5 / np.sqrt(kk * m_eff_inv) if kk > 0.0 else h_max
         if t_hold > 0.0 and t >= t_hold * (1.0 - 1e-15):
             t = t_hold  # land exactly on the end of the dwell (checked at the top of the loop)
         if switched:
@@ -342,4 +402,4 @@ def integrate(y0, t_end, t_out, p, dmw, cp, pa, ft, pitch, rtol, atol, h_max, ma
             for i in range(4):
                 k1[i] = k7[i]
         h = h * min(5.0, max(0.2, 0.9 * max(e, 1e-10) ** -0.2))
-    return Y, C, info
+    return Y, C, info, ext

@@ -9,8 +9,9 @@ Steady-window definitions (over ``transient_ms <= t <= duration_ms``, sampled ev
 ``output_step_ns``):
 
 * ``fhm_bv`` [%]: peak-to-peak of the separation ``d`` over ``FH0`` (or 3 std, ``solver.fhm_measure``);
-  called FHM while flying and BV (bouncing vibration) in contact, as in the paper.
-* ``clearance``/``min_clearance`` [nm]: mean/minimum of ``c = d - k sigma``.
+  called FHM while flying and BV (bouncing vibration) in contact, as in the paper. The extremes
+  are the exact ones tracked by the integrator, not those of the output samples.
+* ``clearance``/``min_clearance`` [nm]: mean/minimum of ``c = d - k sigma`` (the minimum exact, as above).
 * ``interference`` [nm]: mean of ``-c`` over the samples in contact (NaN if none).
 * forces [mN]: time means over the window (zero while out of contact); ``net_force`` is the
   vertical interface force on the slider, contact + contact damping - adhesion.
@@ -191,7 +192,11 @@ def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float]
 
 @dataclass
 class Run:
-    """One integrated protrusion: states and contact flags sampled at ``time``."""
+    """One integrated protrusion: states and contact flags sampled at ``time``.
+
+    ``d_extremes``: exact minimum and maximum of the separation [m] over the steady window, tracked by
+    the integrator (step ends and interior extrema), free of aliasing by the output grid.
+    """
 
     model: Model
     protrusion: float
@@ -200,6 +205,7 @@ class Run:
     state: np.ndarray
     contact: np.ndarray
     info: np.ndarray
+    d_extremes: tuple[float, float] = (np.nan, np.nan)
 
 
 class IntegrationError(RuntimeError):
@@ -217,12 +223,15 @@ def run_model(model: Model, protrusion: float, y0: np.ndarray | None = None, max
     n_out = int(round(model.duration / model.output_step)) + 1
     t_out = np.minimum(np.arange(n_out) * model.output_step, model.duration)
     y0 = np.zeros(4) if y0 is None else np.asarray(y0, float)
-    Y, C, info = dyn.integrate(y0, model.duration, t_out, p, model.dmw, model.contact, model.adhesion,
-                               model.friction, model.pitch, model.rtol, model.atol, model.max_step, max_steps)
+    p[dyn.P_TWIN] = model.transient
+    Y, C, info, ext = dyn.integrate(y0, model.duration, t_out, p, model.dmw, model.contact, model.adhesion,
+                                    model.friction, model.pitch, model.rtol, model.atol, model.max_step,
+                                    max_steps)
     if info[0] != dyn.OK:
         raise IntegrationError(f"integration failed at protrusion {protrusion / NM:.3g} nm: "
                                f"{dyn.STATUS_TEXT[int(info[0])]} (steps {info[1]}, rejected {info[2]})")
-    return Run(model=model, protrusion=protrusion, nominal_area=An, time=t_out, state=Y, contact=C, info=info)
+    return Run(model=model, protrusion=protrusion, nominal_area=An, time=t_out, state=Y, contact=C, info=info,
+               d_extremes=(float(ext[0]), float(ext[1])))
 
 
 def histories(run: Run) -> dict[str, np.ndarray]:
@@ -283,10 +292,16 @@ def summarize(run: Run, hist: dict[str, np.ndarray] | None = None) -> dict[str, 
     win = run.time >= m.transient - 1e-15
     d = hist["separation"][win]
     c = hist["clearance"][win]
+    lo, hi = run.d_extremes
+    exact = np.isfinite(lo) and np.isfinite(hi)
+    if m.fhm_measure == "peak-to-peak" and exact:
+        fhm_bv = float(100.0 * (hi - lo) / m.p[dyn.P_FH0])
+    else:
+        fhm_bv = fhm(d, m.p[dyn.P_FH0], m.fhm_measure)
     out = {
-        "fhm_bv": fhm(d, m.p[dyn.P_FH0], m.fhm_measure),
+        "fhm_bv": fhm_bv,
         "clearance": float(np.mean(c)),
-        "min_clearance": float(np.min(c)),
+        "min_clearance": float(lo - m.k_sigma) if exact else float(np.min(c)),
         "nominal_area": run.nominal_area,
         "protrusion_radius": float(effective_radius(run.protrusion, m.half_length, m.section_depth))
         if np.isfinite(m.section_depth) else np.nan,

@@ -173,9 +173,10 @@ def pad_damping(k_f: float, k_r: float, m: float, I: float, l_f: float, l_r: flo
 
 
 def damping_ratios(s: Slider) -> tuple[np.ndarray, np.ndarray]:
-    """Exact damped natural frequencies [Hz] and damping ratios [1] of the linearised slider.
+    """Exact (undamped) natural frequencies ``|lambda| / 2 pi`` [Hz] and damping ratios [1].
 
-    From the eigenvalues ``lambda = -zeta w +- i w sqrt(1 - zeta^2)`` of the first-order system.
+    From the eigenvalues ``lambda = -zeta w +- i w sqrt(1 - zeta^2)`` of the first-order system of
+    the linearised slider; the damped frequencies are ``w sqrt(1 - zeta^2) / 2 pi``.
     """
     M, K, C = s.mass_matrix, s.stiffness_matrix, s.damping_matrix
     Minv = np.linalg.inv(M)

@@ -127,8 +127,10 @@ def build_tables(scene: Any, stats: dict[str, float]) -> xr.Dataset:
     data = {k: var(v, (), u, n) for k, (v, u, n) in scalars.items()}
     coords = {}
     if wanted:
-        d = isbl.separation_grid(p.sigma_s, sol["table_step_nm"] * NM, sol["table_min_sigma"],
-                                 sol["table_max_nm"] * NM)
+        # The table must reach past the Gaussian window (TAIL sigma_s), where the contact terms vanish,
+        # so that holding the last value beyond the table is exact for them (very rough surfaces).
+        d_max = max(sol["table_max_nm"] * NM, (isbl.TAIL + 0.5) * p.sigma_s)
+        d = isbl.separation_grid(p.sigma_s, sol["table_step_nm"] * NM, sol["table_min_sigma"], d_max)
         tables = isbl.isbl_tables(d, p, quantities=wanted, nodes=sol["quadrature_nodes"],
                                   panels=sol["quadrature_panels"])
         coords["separation"] = var(d / NM, "separation", "nm",

@@ -1,0 +1,297 @@
+"""Hard cases of the slider dynamics on the paper scene: they must stay finite, physical and converged.
+
+Every case starts from configs/paper-2009.toml (pipeline.scene.load_scene) with contact.k = 0.445 and a
+short run (duration 1.0 ms, transient 0.3 ms), and changes one thing:
+
+* deep interference: protrusion 15 nm (the top of the paper's range);
+* zero air-bearing damping (damping_ratio 0);
+* a surface 100 x rougher: sigma x 100 with R x 100 and eta / 10^4, so that sigma*eta*R, hence the
+  McCool bandwidth alpha = 2412.74 (sigma eta R)^2, and sigma_s/R, hence the plasticity index (and
+  the hardness derived from it) stay the same: a geometrically scaled copy of the paper surface.
+  (sigma x 100 alone would give alpha ~ 1.6e4, a different kind of surface.) The interface table is
+  scaled with it (step 1 nm, up to 300 nm);
+* a surface 10 x smoother: sigma / 10, R / 10, eta x 100 (same alpha and psi), table step 0.001 nm;
+* a step in the DMW: the paper record plus a 0.5 nm jump at t = 0.5 ms, inside the steady window;
+* a very stiff contact: composite_modulus_gpa x 100 with hardness_gpa fixed at the paper value.
+
+Convergence: the hard-case solver is the scene's (rtol 1e-6, atol 1e-4 nm, 20 ns dwell) with
+max_step 50 ns instead of 250 ns, which resolves the contact mode (0.9 MHz in the paper scene at
+11 nm, 1.4 MHz on the smooth surface; see test_smooth_surface_converges_at_the_default_max_step for
+what 250 ns does), and output_step 10 ns instead of 250 ns, so that the time means of summarize()
+(sample means on the output grid) do not alias a contact flag that switches every 20-40 ns in a
+sliding mode (at 250 ns that sampling error is ~1-2 % of the mean contact force). At 50 ns the steps
+are mostly pinned at max_step, so halving rtol/atol alone (the brief's criterion) changes little;
+the test also halves max_step. Headline outputs fhm_bv, clearance, contact_force must agree within
+1 % relative or 1e-3 nm absolute (FHM converted to nm of peak-to-peak separation; forces relative
+only). In the two sliding-mode cases (rough_x100, stiff_contact) the FHM is the amplitude of the
+chattering about d = k sigma, an O(dwell) artefact (test_sliding_mode_outputs_versus_the_dwell), and
+is left out of the max_step comparison.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from pipeline import dynamics as dyn
+from pipeline import slider as sl
+from pipeline.physics import dmw as pdmw
+from pipeline.scene import load_scene
+from pipeline.stages import dmw as dmw_stage
+from pipeline.stages.interface import build_tables, roughness_statistics
+
+NM = 1e-9
+K = 0.445
+HARD_SOLVER = {"duration_ms": 1.0, "transient_ms": 0.3, "max_step_ns": 50.0, "output_step_ns": 10.0}
+NAN_OUTSIDE_CONTACT = {"mean_pressure", "friction_coefficient", "shear_stress"}
+
+
+@pytest.fixture(scope="module")
+def base(paper_config):
+    return load_scene(paper_config).replace(contact={"k": K}, solver=HARD_SOLVER)
+
+
+@pytest.fixture(scope="module")
+def record(base, tmp_path_factory):
+    """The scene's DMW record (displacement [nm], sample rate [Hz]), as the dmw stage makes it."""
+    s = dmw_stage.settings(base)
+    if s["source"] == "synthetic":
+        w = pdmw.synthesize(s["rms_nm"], s["band_hz"], s["exponent"], s["duration_s"], s["sample_rate_hz"],
+                            s["seed"])
+        return w, s["sample_rate_hz"]
+    _, w, fs = dmw_stage.load(dmw_stage.run(base, tmp_path_factory.mktemp("dmw")))
+    return w, fs
+
+
+@pytest.fixture(scope="module")
+def paper_hardness(base):
+    ds = build_tables(base, roughness_statistics(base))
+    return float(ds["hardness"]), float(ds["composite_modulus"])
+
+
+def case_scene(base, name, paper_hardness):
+    r = base["roughness"]
+    if name == "rough_x100":
+        return base.replace(roughness={"sigma_nm": r["sigma_nm"] * 100, "summit_radius_um": r["summit_radius_um"] * 100,
+                                       "summit_density_per_um2": r["summit_density_per_um2"] / 1e4},
+                            solver={"table_step_nm": 1.0, "table_max_nm": 300.0})
+    if name == "smooth_div10":
+        return base.replace(roughness={"sigma_nm": r["sigma_nm"] / 10, "summit_radius_um": r["summit_radius_um"] / 10,
+                                       "summit_density_per_um2": r["summit_density_per_um2"] * 100},
+                            solver={"table_step_nm": 0.001, "table_max_nm": 15.0})
+    if name == "zero_damping":
+        return base.replace(air_bearing={"damping_ratio": 0.0})
+    if name == "zero_damping_frictionless":
+        effects = [e for e in base["scene"]["effects"] if e != "friction"]
+        return base.replace(air_bearing={"damping_ratio": 0.0}, scene={"effects": effects})
+    if name == "stiff_contact":
+        H, E = paper_hardness
+        return base.replace(materials={"composite_modulus_gpa": 100 * E, "hardness_gpa": H})
+    return base
+
+
+def build(scene, record):
+    interface = build_tables(scene, roughness_statistics(scene))
+    return sl.build_model(scene, interface, record, scene["contact"]["k"]), interface
+
+
+def case_record(name, record):
+    w, fs = record
+    if name == "dmw_step":
+        t = np.arange(w.size) / fs
+        return w + np.where(t >= 0.5e-3, 0.5, 0.0), fs
+    return record
+
+
+def assert_physical(run, hist, summary):
+    """Every history finite (the documented NaN-outside-contact ones where defined), forces >= 0,
+    real area within the nominal area, fractions in [0, 1]."""
+    assert np.all(np.isfinite(run.state))
+    inc = hist["in_contact"]
+    for name, v in hist.items():
+        v = np.asarray(v)
+        if name in NAN_OUTSIDE_CONTACT:
+            defined = inc & (hist["real_area"] > 0) & (hist["contact_force"] > 0)
+            assert np.all(np.isfinite(v[defined])), name
+            assert np.all(np.isnan(v[~inc])), name
+            assert np.all(v[defined] >= 0), name
+        else:
+            assert np.all(np.isfinite(v)), name
+    for name in ("contact_force", "friction_force", "adhesion_force", "real_area"):
+        assert np.all(hist[name] >= 0), name
+    assert np.all(hist["contact_force"][~inc] == 0) and np.all(hist["friction_force"][~inc] == 0)
+    assert run.nominal_area > 0
+    assert np.all(hist["real_area"] <= run.nominal_area * (1 + 1e-12))
+    assert 0.0 <= summary["contact_fraction"] <= 1.0
+    for name, v in summary.items():
+        if summary["contact_fraction"] > 0 or name not in {"interference", "real_area", "mean_pressure",
+                                                            "friction_coefficient", "shear_stress"}:
+            assert np.isfinite(v), name
+    for name in ("contact_force", "friction_force", "adhesion_force"):
+        assert summary[name] >= 0, name
+    assert summary["real_area"] <= run.nominal_area or np.isnan(summary["real_area"])
+
+
+def deltas(a, b, fh0=11 * NM):
+    """Relative and absolute [nm] changes of the headline outputs between two summaries."""
+    out = {}
+    for name, to_nm in (("fhm_bv", fh0 / 100 / NM), ("clearance", 1 / NM), ("contact_force", None)):
+        x, y = a[name], b[name]
+        rel = abs(x - y) / max(abs(x), abs(y)) if max(abs(x), abs(y)) > 0 else 0.0
+        out[name] = (rel, abs(x - y) * to_nm if to_nm else np.inf)
+    return out
+
+
+def assert_converged(d, what, skip=()):
+    for name, (rel, abs_nm) in d.items():
+        if name in skip:
+            continue
+        assert rel < 0.01 or abs_nm < 1e-3, f"{what}: {name} changed by {rel:.3%} ({abs_nm:.3g} nm)"
+
+
+CASES = [
+    # name, protrusion [nm], sliding mode
+    ("deep_interference", 15.0, False),
+    ("zero_damping", 11.0, False),
+    ("rough_x100", 11.0, True),
+    ("smooth_div10", 11.0, False),
+    ("dmw_step", 11.0, False),
+    ("stiff_contact", 11.0, True),
+]
+
+
+@pytest.mark.parametrize("name, protrusion, sliding", CASES, ids=[c[0] for c in CASES])
+def test_hard_case_is_finite_physical_and_converged(base, record, paper_hardness, name, protrusion, sliding):
+    # Measured changes (rtol/atol halved | rtol, atol and max_step halved), relative (absolute):
+    #   deep_interference  fhm 3e-8 | 1e-8,  clearance 5e-13 | 1e-11,  contact_force 2e-12 | 2e-10
+    #   zero_damping       fhm 0 | 0.06 % (7e-4 nm), clearance 0 | 0.01 % (6e-5 nm), force 0 | 3e-5
+    #   rough_x100         fhm 0 | (skipped; 0.5 %), clearance 0 | 0.02 % (5e-8 nm), force 0 | 0.06 %
+    #   smooth_div10       fhm 0 | 3e-6,     clearance 0 | 6e-11,    contact_force 0 | 3e-10
+    #   dmw_step           fhm 0 | 2e-5,     clearance 0 | 2e-7,     contact_force 0 | 8e-8
+    #   stiff_contact      fhm 0 | (skipped; 14 %, 5e-3 nm), clearance 0 | 0.4 % (4e-5 nm), force 0 | 6e-5
+    # (0 = bit-identical: with max_step 50 ns and the 20 ns dwell the steps do not depend on rtol/atol.)
+    scene = case_scene(base, name, paper_hardness)
+    model, interface = build(scene, case_record(name, record))
+    if name in ("rough_x100", "smooth_div10"):
+        # the scaled copies keep the bandwidth and the plasticity index of the paper surface
+        ref = build_tables(base, roughness_statistics(base))
+        assert float(interface["bandwidth_alpha"]) == pytest.approx(float(ref["bandwidth_alpha"]), rel=1e-9)
+        assert float(interface["plasticity_index_gw"]) == pytest.approx(float(ref["plasticity_index_gw"]), rel=1e-9)
+    if name == "stiff_contact":
+        assert float(interface["composite_modulus"]) == pytest.approx(100 * paper_hardness[1], rel=1e-12)
+        assert float(interface["hardness"]) == pytest.approx(paper_hardness[0], rel=1e-12)
+
+    delta = protrusion * NM
+    run = sl.run_model(model, delta)
+    hist = sl.histories(run)
+    s = sl.summarize(run, hist)
+    assert_physical(run, hist, s)
+    assert s["contact_fraction"] > 0  # every case is in contact at these protrusions
+
+    half_tol = sl.with_solver(model, rtol=model.rtol / 2, atol=model.atol / 2)
+    s_tol = sl.summarize(sl.run_model(half_tol, delta))
+    assert_converged(deltas(s, s_tol), f"{name}, rtol/atol halved")
+    half_all = sl.with_solver(half_tol, max_step=model.max_step / 2)
+    s_all = sl.summarize(sl.run_model(half_all, delta))
+    assert_converged(deltas(s, s_all), f"{name}, rtol/atol/max_step halved", skip=("fhm_bv",) if sliding else ())
+
+
+# Undamped surfing with friction is not a converging case at the default solver: the friction moment
+# -h_cg A_n tau(d) is a circulatory force that, with no damping, destabilises surfing (at rtol 1e-8 the
+# slider leaves contact; at 1e-6 the error-controlled steps damp it slightly: FHM/BV 10.6 % vs 13.5 %
+# over 2 ms). The undamped case is therefore checked here without friction, and with friction only
+# for finiteness and physical bounds (below and in test_hard_case_is_finite_physical_and_converged).
+@pytest.mark.parametrize("name, protrusion", [("deep_interference", 15.0), ("zero_damping_frictionless", 11.0),
+                                              ("dmw_step", 11.0)])
+def test_default_solver_converges_under_tolerance_halving(base, record, paper_hardness, name, protrusion):
+    # The brief's criterion at the scene's own solver (max_step 250 ns, output 250 ns), where the steps
+    # are set by the error control, so halving rtol/atol really changes them. Measured: deep
+    # interference fhm 9e-6, zero damping fhm 0.34 % (4e-3 nm) and clearance 0.13 %, dmw step fhm 0.04 %;
+    # forces < 1e-4. (The smooth surface fails here: see the xfail below; the stiff contact is
+    # marginal, fhm 3.7 % / 1.07e-3 nm, because of its sliding mode.)
+    scene = case_scene(base, name, paper_hardness).replace(solver={"max_step_ns": 250.0, "output_step_ns": 250.0})
+    model, _ = build(scene, case_record(name, record))
+    delta = protrusion * NM
+    s = sl.summarize(sl.run_model(model, delta))
+    s_half = sl.summarize(sl.run_model(sl.with_solver(model, rtol=model.rtol / 2, atol=model.atol / 2), delta))
+    assert_converged(deltas(s, s_half), f"{name} at the default solver")
+
+
+def test_dmw_step_is_followed_and_settles(base, record):
+    # The 0.5 nm jump in the record is a 0.5 nm jump of the disk under each point (the pads see it
+    # 0.9-37 us before the TFC point). The slider, surfing at 11 nm, must follow it: a transient of
+    # d (measured 1.16 nm peak-to-peak in the 0.1 ms after the jump, BV of the window 10.6 % against
+    # 0.41 % without the step) that dies out, leaving the same mean separation (measured: equal to
+    # 1e-4 nm) and the same vibration as the run without the step (late peak-to-peak 0.0418 nm in both).
+    runs = {}
+    for label, rec in (("plain", record), ("step", case_record("dmw_step", record))):
+        model, _ = build(base, rec)
+        run = sl.run_model(model, 11 * NM)
+        runs[label] = (run.time, sl.histories(run))
+    t, h = runs["step"]
+    _, h0 = runs["plain"]
+    d, d0 = h["separation"], h0["separation"]
+    before, after, jump = (t > 0.4e-3) & (t < 0.49e-3), t > 0.9e-3, (t > 0.5e-3) & (t < 0.6e-3)
+    assert h["disk_displacement"][after].mean() - h["disk_displacement"][before].mean() > 0.4 * NM
+    assert abs(d[after].mean() - d[before].mean()) < 0.01 * NM
+    assert np.ptp(d[jump]) > 10 * np.ptp(d0[jump])
+    assert np.ptp(d[after]) == pytest.approx(np.ptp(d0[after]), rel=0.01)
+
+
+def test_zero_damping_deep_interference_stays_finite(base, record, paper_hardness):
+    # Zero damping at 15 nm: friction (a moment -h_cg A_n tau(d) that depends on d, a circulatory,
+    # non-conservative force) and the DMW pump energy into the slider and nothing takes it out: it
+    # bounces violently (measured FHM/BV ~700-1000 %, contact in 5-7 % of the window). This motion is
+    # chaotic, so it does not converge under tolerance changes (FHM changes ~15 %); it must still stay
+    # finite and physical.
+    model, _ = build(case_scene(base, "zero_damping", paper_hardness), record)
+    run = sl.run_model(model, 15 * NM)
+    hist = sl.histories(run)
+    s = sl.summarize(run, hist)
+    assert_physical(run, hist, s)
+    assert s["regime"] == sl.BOUNCING
+
+
+@pytest.mark.parametrize("name", ["rough_x100", "stiff_contact"])
+def test_sliding_mode_outputs_versus_the_dwell(base, record, paper_hardness, name):
+    # In these two cases the contact force at d = k sigma exceeds the pull into contact, so the exact
+    # solution slides along d = k sigma (a Filippov sliding mode; ~5000 and ~20000 switches per ms).
+    # The integrator holds a mode for solver.min_dwell_ns after a switch. Halving the dwell
+    # (20 -> 10 -> 5 ns): the mean contact force converges (changes <= 0.4 % measured), while
+    # the clearance (overshoot past k sigma) and the FHM shrink with the dwell: they are chattering
+    # artefacts of size O(dwell), not physics. Measured (10 ns output): clearance -8.1e-3, -4.8e-3,
+    # -2.6e-3 nm and FHM 0.30, 0.18, 0.14 % for the stiff contact; clearance -2.6e-4, -6.5e-5,
+    # -1.6e-5 nm and FHM 0.020, 0.0049, 0.0012 % for the rough surface.
+    model, _ = build(case_scene(base, name, paper_hardness), record)
+    out = []
+    for dwell in (20e-9, 10e-9, 5e-9):
+        p = model.p.copy()
+        p[dyn.P_DWELL] = dwell
+        run = sl.run_model(dataclasses.replace(model, p=p), 11 * NM)
+        out.append((sl.summarize(run), run.info[3]))
+    forces = np.array([s["contact_force"] for s, _ in out])
+    clearance = np.array([abs(s["clearance"]) for s, _ in out])
+    fhm = np.array([s["fhm_bv"] for s, _ in out])
+    assert all(n > 2000 for _, n in out)                       # switching, many times per ms
+    assert np.all(np.abs(np.diff(forces)) / forces[1:] < 0.01)   # force: converged to < 1 %
+    assert np.all(np.diff(clearance) < 0)                       # overshoot shrinks with the dwell
+    assert np.all(np.diff(fhm) < 0)                             # and so does the chattering FHM
+    assert clearance[-1] < 1e-3 * NM * 5                        # and is a few thousandths of a nm at most
+
+
+# Regression test (fixed): pipeline/slider.py build_model (solver defaults): with the default
+# max_step 250 ns the contact mode of the smooth surface (~1.4 MHz, A_n dp_c/dd = 1.2e7 N/m on the
+# TFC point's effective mass) is integrated at the DP5 stability boundary (h*omega ~ 2.3, 34 %
+# rejected steps); its ringing error accumulates to 0.002-0.003 nm (20-30 x atol), FHM is 0.190 %
+# against the converged 0.151 % and halving rtol/atol changes it by 13 % (0.0027 nm). Fix: in
+# build_model cap max_step below the contact-mode period (e.g. h_max <= 0.5/f_c with f_c from A_n
+# max|dp_c/dd| and 1/m + l_c^2/I), and scale the velocity atol with that frequency instead of the
+# 300 kHz air-bearing mode.
+def test_smooth_surface_converges_at_the_default_max_step(base, record, paper_hardness):
+    scene = case_scene(base, "smooth_div10", paper_hardness).replace(solver={"max_step_ns": 250.0})
+    model, _ = build(scene, record)
+    s = sl.summarize(sl.run_model(model, 11 * NM))
+    s_half = sl.summarize(sl.run_model(sl.with_solver(model, rtol=model.rtol / 2, atol=model.atol / 2), 11 * NM))
+    assert_converged(deltas(s, s_half), "smooth surface at max_step 250 ns")
