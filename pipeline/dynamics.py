@@ -46,8 +46,8 @@ from numba import njit
 # Layout of the parameter vector ``p`` (all SI).
 (P_M, P_I, P_LF, P_LR, P_LC, P_HCG, P_KF, P_KR, P_CF, P_CR, P_G0, P_N, P_FR0, P_FH0, P_DELTA, P_AN,
  P_KSIG, P_CC, P_OFF_F, P_OFF_R, P_OFF_C, P_DMW_T0, P_DMW_DT, P_TAB_X0, P_TAB_H, P_DWELL,
- P_TWIN) = range(27)
-N_PARAMS = 27
+ P_TWIN, P_HSTIFF) = range(28)
+N_PARAMS = 28
 
 # Status codes returned by :func:`integrate`.
 OK, MAX_STEPS, STEP_UNDERFLOW, NOT_FINITE = 0, 1, 2, 3
@@ -390,7 +390,7 @@ def integrate(y0, t_end, t_out, p, dmw, cp, pa, ft, pitch, rtol, atol, h_max, ma
             if pa is not None:
                 kk += p[P_AN] * _ppval(pa, p[P_TAB_X0], p[P_TAB_H], d_now)[1]
             kk = abs(kk)
-            h_stiff = 0.5 / np.sqrt(kk * m_eff_inv) if kk > 0.0 else h_max
+            h_stiff = p[P_HSTIFF] / np.sqrt(kk * m_eff_inv) if kk > 0.0 else h_max
         if t_hold > 0.0 and t >= t_hold * (1.0 - 1e-15):
             t = t_hold  # land exactly on the end of the dwell (checked at the top of the loop)
         if switched:

@@ -179,6 +179,8 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "rtol": Key("float", 1e-6, _pos, doc="relative error tolerance of the adaptive integrator [1]"),
         "atol_nm": Key("float", 1e-4, _pos, doc="absolute error tolerance on displacements [nm]"),
         "max_step_ns": Key("float", 250.0, _pos, doc="largest time step [ns]"),
+        "stiffness_step": Key("float", 0.5, _pos,
+                              doc="step cap h <= c / omega of the local interface spring [1] (stiff contact)"),
         "min_dwell_ns": Key("float", 20.0, _nonneg,
                             doc="shortest time a contact mode is held after a switch [ns] (chattering guard)"),
         "duration_ms": Key("float", 2.0, _pos, doc="simulated time [ms]"),

@@ -132,6 +132,7 @@ def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float]
     p[dyn.P_FH0] = a["flying_height_nm"] * NM
     p[dyn.P_CC] = scene["contact"]["damping_n_s_m"]
     p[dyn.P_DWELL] = sol["min_dwell_ns"] * 1e-9
+    p[dyn.P_HSTIFF] = sol["stiffness_step"]
     # The record gives the disk under the TFC point at time t; the front and rear pads see the same
     # disk point earlier, by the travel time from pad to TFC (the disk moves leading -> trailing edge).
     V = 2 * np.pi * dm["radius_mm"] * MM * dm["rpm"] / 60.0
