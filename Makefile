@@ -11,7 +11,7 @@ ARGS   ?=
 export MPLBACKEND := Agg
 export PYTHONHASHSEED := 0
 
-.PHONY: setup run test test-fast test-slow bench sweep clean \
+.PHONY: setup run test test-fast test-slow bench sweep readme clean \
         roughness dmw interface calibrate simulate accuracy report
 
 setup: $(STAMP)
@@ -44,6 +44,10 @@ bench: $(STAMP)
 ## a larger default grid: paper protrusions x 3 roughness sets x 3 damping ratios
 sweep: $(STAMP)
 	$(BIN)/hdi sweep configs/sweep-3x3.toml $(ARGS)
+
+## rewrite the README's generated comparison section and figures from the last `make run`
+readme: $(STAMP)
+	$(BIN)/hdi report $(SCENE) --readme README.md
 
 roughness dmw interface calibrate simulate accuracy report: $(STAMP)
 	$(BIN)/hdi $@ $(SCENE) $(ARGS)

@@ -39,6 +39,8 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--detrend", default="plane", choices=("center", "height", "plane", "curvature"),
                    help="roughness: detrending of AFM scans")
     p.add_argument("--force", action="store_true", help="recompute even when outputs are up to date")
+    p.add_argument("--readme", type=Path, default=None,
+                   help="report: also rewrite the generated comparison section of this README")
     p.add_argument("-v", "--verbose", action="store_true")
     return p
 
@@ -66,7 +68,8 @@ def main(argv: list[str] | None = None) -> int:
             raise SceneError(f"hdi {args.stage}: expected one scene file, got {args.inputs}")
         scene = load_scene(args.inputs[0], args.overrides)
         out = results_dir(scene, args.out)
-        options = {"scheduler": args.scheduler, "workers": args.workers, "force": args.force}
+        options = {"scheduler": args.scheduler, "workers": args.workers, "force": args.force,
+                   "readme": args.readme}
         stages = MAIN_JOB if args.stage == "run" else (args.stage,)
         for stage in stages:
             t0 = time.perf_counter()
