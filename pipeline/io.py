@@ -64,9 +64,25 @@ def file_hash(path: str | Path, chunk: int = 1 << 20) -> str:
     return h.hexdigest()
 
 
+#: Stages that depend on the whole scene except these keys.
+STAGE_EXCLUDES: dict[str, tuple[str, ...]] = {
+    "calibrate": ("tfc.protrusion_nm", "sweep", "report", "scene.name", "scene.description"),
+}
+
+
 def stage_key(scene: Any, stage: str) -> str:
-    """SHA-256 of the scene keys a stage depends on (:data:`STAGE_INPUTS`); the whole config otherwise."""
+    """SHA-256 of the scene keys a stage depends on (:data:`STAGE_INPUTS`, :data:`STAGE_EXCLUDES`);
+    the whole config otherwise."""
     items = STAGE_INPUTS.get(stage)
+    if items is None and stage in STAGE_EXCLUDES:
+        cfg = json.loads(json.dumps(scene.config, default=str))
+        for item in STAGE_EXCLUDES[stage]:
+            section, _, key = item.partition(".")
+            if key:
+                cfg.get(section, {}).pop(key, None)
+            else:
+                cfg.pop(section, None)
+        return hashlib.sha256(json.dumps(cfg, sort_keys=True).encode()).hexdigest()
     if items is None:
         return scene.hash
     picked = {}

@@ -35,7 +35,7 @@ import xarray as xr
 from scipy.stats import norm
 
 from .. import slider as sl
-from ..io import var, write_dataset
+from ..io import is_current, var, write_dataset
 from .simulate import model_inputs
 from .sweep_grid import protrusion_grid
 
@@ -157,8 +157,17 @@ def calibrate(scene: Any, out: Path, force: bool = False) -> xr.Dataset:
 
 
 def run(scene: Any, out: Path, force: bool = False, **options: Any) -> Path:
-    """Write ``out/calibration.nc`` (see the module docstring) and say the outcome."""
+    """Write ``out/calibration.nc`` (see the module docstring) and say the outcome.
+
+    Not recomputed when ``calibration.nc`` was made from the same scene (protrusion, sweep and
+    report settings aside) and its inputs, unless ``force``.
+    """
     out = Path(out)
+    path = out / "calibration.nc"
+    if not force and is_current(path, scene, "calibrate"):
+        with xr.open_dataset(path, engine="netcdf4") as old:
+            print(f"  calibration (up to date): {old.attrs.get('outcome', '')}")
+        return path
     ds = calibrate(scene, out, force)
     print(f"  calibration: {ds.attrs['outcome']}")
     if np.isfinite(float(ds["k_calibrated"])):
