@@ -59,39 +59,39 @@ STATUS_TEXT = {OK: "ok", MAX_STEPS: "too many steps", STEP_UNDERFLOW: "step size
 # piecewise cubics on a uniform grid (interface tables, DMW record)
 
 def piecewise_coefficients(y: np.ndarray, h: float, order: int) -> np.ndarray:
-    """Coefficients ``c`` (shape ``(4, n-1)``) of a piecewise polynomial through ``y`` on a grid of step ``h``.
+    """Coefficients ``c`` (shape ``(n-1, 4)``) of a piecewise polynomial through ``y`` on a grid of step ``h``.
 
-    On piece ``i``, ``f(x_i + s) = c[0,i] s^3 + c[1,i] s^2 + c[2,i] s + c[3,i]``. ``order=1``: linear
+    On piece ``i``, ``f(x_i + s) = c[i,0] s^3 + c[i,1] s^2 + c[i,2] s + c[i,3]``. ``order=1``: linear
     interpolation; ``order=3``: not-a-knot cubic spline (``scipy.interpolate.CubicSpline``, C2).
+    The four coefficients of a piece are contiguous in memory: one cache line per evaluation.
     """
     y = np.asarray(y, dtype=float)
     if order == 1:
-        c = np.zeros((4, y.size - 1))
-        c[2] = np.diff(y) / h
-        c[3] = y[:-1]
+        c = np.zeros((y.size - 1, 4))
+        c[:, 2] = np.diff(y) / h
+        c[:, 3] = y[:-1]
         return c
     if order == 3:
         from scipy.interpolate import CubicSpline
         x = h * np.arange(y.size)
-        return np.ascontiguousarray(CubicSpline(x, y).c)
+        return np.ascontiguousarray(CubicSpline(x, y).c.T)
     raise ValueError(f"interpolation order {order}: expected 1 or 3")
 
 
 @njit(cache=True, inline="always")
 def _ppval(c, x0, h, x):
     """Value and slope of the piecewise cubic at ``x`` (linear extrapolation below, constant above)."""
-    n = c.shape[1]
+    n = c.shape[0]
     u = (x - x0) / h
     if u < 0.0:
-        return c[3, 0] + c[2, 0] * (x - x0), c[2, 0]
+        return c[0, 3] + c[0, 2] * (x - x0), c[0, 2]
     i = int(u)
     if i >= n:
-        s = h
         i = n - 1
-        return ((c[0, i] * s + c[1, i]) * s + c[2, i]) * s + c[3, i], 0.0
+        return ((c[i, 0] * h + c[i, 1]) * h + c[i, 2]) * h + c[i, 3], 0.0
     s = x - (x0 + i * h)
-    return (((c[0, i] * s + c[1, i]) * s + c[2, i]) * s + c[3, i],
-            (3.0 * c[0, i] * s + 2.0 * c[1, i]) * s + c[2, i])
+    c0, c1, c2, c3 = c[i, 0], c[i, 1], c[i, 2], c[i, 3]
+    return ((c0 * s + c1) * s + c2) * s + c3, (3.0 * c0 * s + 2.0 * c1) * s + c2
 
 
 @njit(cache=True)
@@ -131,7 +131,9 @@ def rhs(t, y, p, dmw, cp, pa, ft, pitch, contact, out):
     F_f = -p[P_KF] * (z + lf * th - wf) - p[P_CF] * (vz + lf * vth - vf)
     g_r = p[P_G0] + z - lr * th - wr
     g_r = max(g_r, 1e-3 * p[P_G0])  # the rear law is singular at zero gap; never reached in practice
-    F_r = p[P_FR0] * ((p[P_G0] / g_r) ** p[P_N] - 1.0) - p[P_CR] * (vz - lr * vth - vr)
+    ratio = p[P_G0] / g_r
+    law = ratio * ratio if p[P_N] == 2.0 else ratio ** p[P_N]  # pow() is the costliest call here
+    F_r = p[P_FR0] * (law - 1.0) - p[P_CR] * (vz - lr * vth - vr)
     F_i = 0.0
     Q = 0.0
     if pa is not None or cp is not None:
@@ -199,10 +201,81 @@ def _hermite(y0, f0, y1, f1, h, theta, i):
             + (-2 * t3 + 3 * t2) * y1[i] + (t3 - t2) * h * f1[i])
 
 
+@njit(cache=True, inline="always")
+def _dcubic(d0, dd0, d1, dd1, h):
+    """Coefficients ``(a, b, c, e)`` of the cubic Hermite ``d(theta) = a theta^3 + b theta^2 + c theta + e``
+    through ``d0, d1`` with slopes ``dd0, dd1`` [per unit time] over a step ``h``: locates the interior
+    extrema of ``d`` in closed form (their values are then taken on the state interpolant)."""
+    return (2.0 * d0 + h * dd0 - 2.0 * d1 + h * dd1,
+            -3.0 * d0 - 2.0 * h * dd0 + 3.0 * d1 - h * dd1,
+            h * dd0, d0)
+
+
+@njit(cache=True, inline="always")
+def _extrema(a, b, c):
+    """Roots in (0, 1), ascending, of ``3 a x^2 + 2 b x + c`` (the extrema of the cubic): ``(n, x1, x2)``."""
+    A, B, C = 3.0 * a, 2.0 * b, c
+    r1, r2 = -1.0, -1.0
+    if abs(A) <= 1e-14 * (abs(B) + abs(C)):
+        if B != 0.0:
+            r1 = -C / B
+    else:
+        disc = B * B - 4.0 * A * C
+        if disc >= 0.0:
+            q = -0.5 * (B + (np.sqrt(disc) if B >= 0.0 else -np.sqrt(disc)))
+            if q != 0.0:
+                r1, r2 = q / A, C / q
+            else:
+                r1 = 0.0
+    if r2 < r1:
+        r1, r2 = r2, r1
+    n = 0
+    x1, x2 = 0.0, 0.0
+    if 0.0 < r1 < 1.0:
+        x1 = r1
+        n = 1
+    if 0.0 < r2 < 1.0 and r2 != r1:
+        if n == 0:
+            x1 = r2
+        else:
+            x2 = r2
+        n += 1
+    return n, x1, x2
+
+
 @njit(cache=True)
 def _interp_state(y0, f0, y1, f1, h, theta, out):
     for i in range(4):
         out[i] = _hermite(y0, f0, y1, f1, h, theta, i)
+
+
+@njit(cache=True)
+def _first_wrong_side(p, dmw, cp, contact, t, y, k1, ynew, k7, h, d0, dd0, d1, dd1, ys):
+    """Smallest ``theta`` in (0, 1] of the step where the criterion disagrees with the mode, or -1.
+
+    Checks the step's end, the interior extrema of ``d`` (closed form on the cubic through the end
+    values and slopes) and, when ``d`` passes near the threshold, a few interior points; values are
+    taken on the state interpolant, the one outputs and the bisection use.
+    """
+    ks = p[P_KSIG]
+    best = 2.0
+    if (d1 - ks < 0.0) != contact:
+        best = 1.0
+    ca, cb, cc, ce = _dcubic(d0, dd0, d1, dd1, h)
+    n_ex, th1, th2 = _extrema(ca, cb, cc)
+    near = min(abs(d0 - ks), abs(d1 - ks)) < 0.5 * h * max(abs(dd0), abs(dd1))
+    n_try = n_ex + (3 if near else 0)
+    for i_ex in range(n_try):
+        if i_ex < n_ex:
+            th = th1 if i_ex == 0 else th2
+        else:
+            th = 0.25 * (i_ex - n_ex + 1)
+        if th >= best:
+            continue
+        _interp_state(y, k1, ynew, k7, h, th, ys)
+        if (separation(p, dmw, t + th * h, ys)[0] - ks < 0.0) != contact:
+            best = th
+    return best if best <= 1.0 else -1.0
 
 
 @njit(cache=True)
@@ -247,6 +320,7 @@ def integrate(y0, t_end, t_out, p, dmw, cp, pa, ft, pitch, rtol, atol, h_max, ma
         contact = separation(p, dmw, t, y)[0] < p[P_KSIG]
     rhs(t, y, p, dmw, cp, pa, ft, pitch, contact, k1)
     info[4] += 1
+    d0, dd0 = separation(p, dmw, t, y)  # d and d' at the current step start (kept step to step)
     h = min(h_max, 1e-8)
     t_hold = -1.0  # no switch may happen before t_hold (minimum dwell after a switch)
     h_stiff = h_max  # step cap from the local interface stiffness (see below)
@@ -265,7 +339,7 @@ def integrate(y0, t_end, t_out, p, dmw, cp, pa, ft, pitch, rtol, atol, h_max, ma
         if cp is not None and t_hold > 0.0 and t >= t_hold:
             # the dwell has ended: switch now if the criterion disagrees with the mode
             t_hold = -1.0
-            if (separation(p, dmw, t, y)[0] - p[P_KSIG] < 0.0) != contact:
+            if (d0 - p[P_KSIG] < 0.0) != contact:
                 contact = not contact
                 info[3] += 1
                 t_hold = t + p[P_DWELL]
@@ -274,8 +348,8 @@ def integrate(y0, t_end, t_out, p, dmw, cp, pa, ft, pitch, rtol, atol, h_max, ma
         h = min(h, h_max, h_stiff)
         if t + 1.01 * h >= t_end:  # land on t_end exactly, never leave a sliver (Hairer's DOPRI5 rule)
             h = t_end - t
-        if t_hold > t:
-            h = min(h, t_hold - t)
+        if t_hold > t and t + 1.01 * h >= t_hold:  # land on the end of the dwell, no sliver
+            h = t_hold - t
         if h < 1e-12 * max(t, 1e-9) or h < 1e-18:  # (h = t_end - t is never a sliver, see above)
             info[0] = STEP_UNDERFLOW
             return Y, C, info, ext
@@ -297,72 +371,52 @@ def integrate(y0, t_end, t_out, p, dmw, cp, pa, ft, pitch, rtol, atol, h_max, ma
         # accepted step [t, t + h]
         h_acc = h
         switched = False
+        d1, dd1 = separation(p, dmw, t + h, ynew)
         if cp is not None and t_hold < 0.0:
-            g1, gd1 = separation(p, dmw, t + h, ynew)
-            g1 -= p[P_KSIG]
-            hi = 1.0 if (g1 < 0.0) != contact else -1.0
-            if hi < 0.0:
-                # no sign change at the ends: look for an excursion across the threshold inside the
-                # step (a grazing contact or a brief lift-off), at the extremum of g on the interpolant
-                gd0 = separation(p, dmw, t, y)[1]
-                if (gd0 < 0.0 and gd1 > 0.0 and not contact) or (gd0 > 0.0 and gd1 < 0.0 and contact):
-                    a, b = 0.0, 1.0
-                    for _ in range(50):
-                        mid = 0.5 * (a + b)
-                        _interp_state(y, k1, ynew, k7, h, mid, ys)
-                        gd = separation(p, dmw, t + mid * h, ys)[1]
-                        if (gd < 0.0) == (gd0 < 0.0):
-                            a = mid
-                        else:
-                            b = mid
-                    _interp_state(y, k1, ynew, k7, h, b, ys)
-                    if (separation(p, dmw, t + b * h, ys)[0] - p[P_KSIG] < 0.0) != contact:
-                        hi = b
-            if hi > 0.0:
-                # locate the switch on the Hermite interpolant by bisection in [0, hi]
+            # Locate a contact switch in the step; a redone (shorter) step is more accurate than the
+            # long step's interpolant and may show the crossing earlier, so repeat on the redone step.
+            for _ in range(8):
+                hi = _first_wrong_side(p, dmw, cp, contact, t, y, k1, ynew, k7, h_acc, d0, dd0, d1, dd1, ys)
+                if hi < 0.0:
+                    break
                 lo = 0.0
                 for _ in range(60):
                     mid = 0.5 * (lo + hi)
-                    _interp_state(y, k1, ynew, k7, h, mid, ys)
-                    g = separation(p, dmw, t + mid * h, ys)[0] - p[P_KSIG]
+                    _interp_state(y, k1, ynew, k7, h_acc, mid, ys)
+                    g = separation(p, dmw, t + mid * h_acc, ys)[0] - p[P_KSIG]
                     if (g < 0.0) != contact:
                         hi = mid
                     else:
                         lo = mid
-                    if (hi - lo) * h < 1e-16:
+                    if (hi - lo) * h_acc < 1e-16:
                         break
-                h_ev = hi * h
-                if h_ev < h:
-                    # redo the step exactly up to the switch (in the old mode)
-                    _step(t, y, k1, h_ev, p, dmw, cp, pa, ft, pitch, contact, ev_y, ev_f, err, tmp,
-                          k2, k3, k4, k5, k6)
-                    info[4] += 6
-                    for i in range(4):
-                        ynew[i] = ev_y[i]
-                        k7[i] = ev_f[i]
-                    h_acc = h_ev
+                if not switched:
+                    info[3] += 1
                 switched = True
-                info[3] += 1
+                if hi >= 1.0:
+                    break  # the switch is at the end of the step
+                # redo the step exactly up to the switch (in the old mode)
+                h_acc = hi * h_acc
+                _step(t, y, k1, h_acc, p, dmw, cp, pa, ft, pitch, contact, ev_y, ev_f, err, tmp,
+                      k2, k3, k4, k5, k6)
+                info[4] += 6
+                for i in range(4):
+                    ynew[i] = ev_y[i]
+                    k7[i] = ev_f[i]
+                d1, dd1 = separation(p, dmw, t + h_acc, ynew)
         t_new = t + h_acc
         if t_new >= p[P_TWIN]:
-            # exact extremes of d over the steady window: at the step's end and at an interior
-            # extremum of d on the interpolant (peak-to-peak without aliasing by the output grid)
-            dd0 = separation(p, dmw, t, y)[1]
-            d1, dd1 = separation(p, dmw, t_new, ynew)
+            # exact extremes of d over the steady window: at the step's end and at the interior
+            # extrema of d on the step's cubic (peak-to-peak free of aliasing by the output grid)
             ext[0] = min(ext[0], d1)
             ext[1] = max(ext[1], d1)
-            if (dd0 < 0.0) != (dd1 < 0.0):
-                a, b = 0.0, 1.0
-                for _ in range(40):
-                    mid = 0.5 * (a + b)
-                    _interp_state(y, k1, ynew, k7, h_acc, mid, ys)
-                    if (separation(p, dmw, t + mid * h_acc, ys)[1] < 0.0) == (dd0 < 0.0):
-                        a = mid
-                    else:
-                        b = mid
-                if t + a * h_acc >= p[P_TWIN]:
-                    _interp_state(y, k1, ynew, k7, h_acc, a, ys)
-                    de = separation(p, dmw, t + a * h_acc, ys)[0]
+            ca, cb, cc, ce = _dcubic(d0, dd0, d1, dd1, h_acc)
+            n_ex, th1, th2 = _extrema(ca, cb, cc)
+            for i_ex in range(n_ex):
+                th = th1 if i_ex == 0 else th2
+                if t + th * h_acc >= p[P_TWIN]:
+                    _interp_state(y, k1, ynew, k7, h_acc, th, ys)
+                    de = separation(p, dmw, t + th * h_acc, ys)[0]
                     ext[0] = min(ext[0], de)
                     ext[1] = max(ext[1], de)
         while j < n_out and t_out[j] <= t_new:
@@ -378,12 +432,13 @@ def integrate(y0, t_end, t_out, p, dmw, cp, pa, ft, pitch, rtol, atol, h_max, ma
                 info[0] = NOT_FINITE
                 return Y, C, info, ext
         t = t_new
+        d0, dd0 = d1, dd1
         info[1] += 1
         if pa is not None or cp is not None:
             # Cap the next step at 1/omega of the local interface spring: a stiff contact would
             # otherwise run the explicit method at its stability limit, where the step controller
             # is erratic (Hairer & Wanner, Solving ODEs II, IV.2).
-            d_now = separation(p, dmw, t, y)[0]
+            d_now = d0
             kk = 0.0
             if cp is not None and contact:
                 kk -= p[P_AN] * _ppval(cp, p[P_TAB_X0], p[P_TAB_H], d_now)[1]
@@ -391,7 +446,7 @@ def integrate(y0, t_end, t_out, p, dmw, cp, pa, ft, pitch, rtol, atol, h_max, ma
                 kk += p[P_AN] * _ppval(pa, p[P_TAB_X0], p[P_TAB_H], d_now)[1]
             kk = abs(kk)
             h_stiff = p[P_HSTIFF] / np.sqrt(kk * m_eff_inv) if kk > 0.0 else h_max
-        if t_hold > 0.0 and t >= t_hold * (1.0 - 1e-15):
+        if t_hold > 0.0 and abs(t - t_hold) <= 1e-12 * t_hold:
             t = t_hold  # land exactly on the end of the dwell (checked at the top of the loop)
         if switched:
             contact = not contact

@@ -178,15 +178,15 @@ SCHEMA: dict[str, dict[str, Key]] = {
     "solver": {
         "rtol": Key("float", 1e-6, _pos, doc="relative error tolerance of the adaptive integrator [1]"),
         "atol_nm": Key("float", 1e-4, _pos, doc="absolute error tolerance on displacements [nm]"),
-        "max_step_ns": Key("float", 250.0, _pos, doc="largest time step [ns]"),
-        "stiffness_step": Key("float", 0.5, _pos,
+        "max_step_ns": Key("float", 500.0, _pos, doc="largest time step [ns]"),
+        "stiffness_step": Key("float", 1.0, _pos,
                               doc="step cap h <= c / omega of the local interface spring [1] (stiff contact)"),
         "min_dwell_ns": Key("float", 20.0, _nonneg,
                             doc="shortest time a contact mode is held after a switch [ns] (chattering guard)"),
         "duration_ms": Key("float", 2.0, _pos, doc="simulated time [ms]"),
         "transient_ms": Key("float", 0.5, _nonneg, doc="discarded start-up transient [ms]"),
         "output_step_ns": Key("float", 250.0, _pos, doc="sampling of histories and steady-window statistics [ns]"),
-        "table_step_nm": Key("float", 0.01, _pos, doc="interface-table separation step [nm]"),
+        "table_step_nm": Key("float", 0.05, _pos, doc="interface-table separation step [nm]"),
         "table_min_sigma": Key("float", -8.0, (lambda v: v <= -5.0, "a number <= -5 (tables must reach deep "
                                                                    "interference)"),
                                doc="interface table starts at this separation [sigma_s]"),

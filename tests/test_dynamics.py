@@ -305,14 +305,17 @@ def test_fhm_falls_to_the_rigid_following_limit_as_the_bearing_stiffens():
 
 def unexplained_flag_mismatches(hist):
     """Samples whose contact flag disagrees with d < k sigma, other than within one output step of a
-    change of the recorded flag (the switch itself lies between two samples)."""
+    change of the recorded flag (the switch itself lies between two samples), or within 1e-3 nm of
+    the threshold (an excursion that shallow may fall inside the 20 ns minimum dwell after a switch,
+    or between the interpolant of a long step and the exactly redone one)."""
     flag = hist["in_contact"]
     expected = hist["clearance"] < 0.0
+    ambiguous = np.abs(hist["clearance"]) < 1e-12
     near = np.zeros_like(flag)
     change = np.nonzero(flag[1:] != flag[:-1])[0]
     near[change] = True
     near[change + 1] = True
-    return np.nonzero((flag != expected) & ~near)[0], change.size
+    return np.nonzero((flag != expected) & ~near & ~ambiguous)[0], change.size
 
 
 def test_contact_flag_matches_the_criterion_while_bouncing():

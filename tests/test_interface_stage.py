@@ -9,7 +9,7 @@ import xarray as xr
 
 import pipeline
 from pipeline import cli, io
-from pipeline.scene import load_scene
+from pipeline.scene import SCHEMA, load_scene
 from pipeline.stages import interface
 
 TABLES = ("contact_pressure", "adhesion_pressure", "friction_stress", "real_area_fraction", "contact_fraction")
@@ -48,10 +48,10 @@ def test_paper_tables_present_and_grid(paper_ds):
         assert np.all(np.isfinite(paper_ds[name].values))
     d = paper_ds["separation"].values
     sigma_s = float(paper_ds["sigma_s"])
-    # SPEC.md 2 / the brief: tables span at least -5 sigma_s .. 30 nm, uniform at table_step_nm = 0.01
+    # SPEC.md 2 / the brief: tables span at least -5 sigma_s .. 30 nm, uniform at solver.table_step_nm
     assert d[0] <= -5 * sigma_s
     assert d[-1] >= 30.0
-    np.testing.assert_allclose(np.diff(d), 0.01, rtol=1e-9)
+    np.testing.assert_allclose(np.diff(d), SCHEMA["solver"]["table_step_nm"].default, rtol=1e-9)
 
 
 def test_paper_scalars(paper_ds):

@@ -1,0 +1,321 @@
+"""The naive baseline: the slider model as a competent user would write it first.
+
+Same physics as :func:`pipeline.dynamics.rhs` (SPEC.md section 4): linear front pad, nonlinear rear
+pad ``F_r0 [(g0/g)^n - 1]``, the disk under each point moving with the DMW record delayed by the
+travel time, adhesion ``-A_n p_a(d)`` always, contact ``A_n p_c(d) - c_c d'`` and friction
+``A_n tau(d)`` (moment ``-h_cg Q``) while ``d < k sigma``. Written the plain way:
+
+* :func:`scipy.integrate.solve_ivp` with ``RK45`` (the same Dormand-Prince 5(4) pair as the project's
+  kernel) at the scene's ``rtol``, per-component ``atol`` and ``max_step`` (the same values the
+  project uses, taken from :func:`pipeline.slider.build_model`);
+* a Python right-hand side that interpolates the ``interface.nc`` tables with :func:`numpy.interp`;
+* the contact switch as a terminal ``solve_ivp`` event on ``g = d - k sigma`` (direction: leaving
+  the current mode), integration restarted in the new mode from the event state; after a switch the
+  mode is held for ``solver.min_dwell_ns`` (integrated without events), then the criterion is
+  checked, exactly as the project's chattering guard does;
+* the DMW record: with ``dmw_interpolation="cubic"`` (default) the same not-a-knot cubic spline as
+  the project (:class:`scipy.interpolate.CubicSpline` coefficients, evaluated in Python for the
+  displacement and its slope), so both integrate exactly the same right-hand side up to the table
+  interpolation; ``"linear"``: :func:`numpy.interp` on the record and on its :func:`numpy.gradient`
+  (the first thing one writes; slower in Python -- two ``np.interp`` calls per point -- and the
+  bouncing vibration at 11 nm moves by ~0.5 %). The tables are fine with ``np.interp`` (0.01 nm
+  spacing: linear versus cubic changes the headline outputs by < 1e-5).
+
+Nothing here is deliberately slow: the model constants are computed once, the right-hand side is
+plain scalar Python with no allocation beyond the returned list, and there is no per-step Python
+logic other than what ``solve_ivp`` does itself.
+
+:func:`simulate_naive` returns the same steady-window scalars as :func:`pipeline.slider.summarize`
+(SI units, same definitions), computed here directly from the naive run: means over the output grid;
+the peak-to-peak (FHM/BV) and minimum of the separation, which the project takes from the exact
+extremes tracked by its integrator, from ``solve_ivp``'s dense output sampled 10x finer than the
+output grid (:data:`REFINE`).
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+import numpy as np
+from scipy.integrate import solve_ivp
+from scipy.interpolate import CubicSpline
+
+from pipeline import dynamics as dyn
+from pipeline import slider as sl
+from pipeline.physics.geometry import effective_radius, nominal_area
+
+NM, UM, MM = 1e-9, 1e-6, 1e-3
+
+#: Samples per output step for the peak-to-peak and minimum of the separation.
+REFINE = 10
+
+
+class _Disk:
+    """DMW displacement [m] and velocity [m/s] at time ``t`` [s]."""
+
+    def __init__(self, w_nm: np.ndarray, fs: float, how: str):
+        w = np.asarray(w_nm, float) * NM
+        self.dt = 1.0 / fs
+        self.t = np.arange(w.size) * self.dt
+        self.how = how
+        if how == "cubic":
+            c = CubicSpline(self.t, w).c
+            self.c0, self.c1, self.c2, self.c3 = (c[i].tolist() for i in range(4))
+            self.last = w.size - 2
+        elif how == "linear":
+            self.w = w
+            self.v = np.gradient(w, self.dt)
+        else:
+            raise ValueError(f"dmw_interpolation = {how!r}: expected 'cubic' or 'linear'")
+
+    def __call__(self, t: float) -> tuple[float, float]:
+        if self.how == "linear":
+            return float(np.interp(t, self.t, self.w)), float(np.interp(t, self.t, self.v))
+        i = int(t / self.dt)
+        i = 0 if i < 0 else (self.last if i > self.last else i)
+        s = t - i * self.dt
+        c0, c1, c2 = self.c0[i], self.c1[i], self.c2[i]
+        return ((c0 * s + c1) * s + c2) * s + self.c3[i], (3.0 * c0 * s + 2.0 * c1) * s + c2
+
+    def many(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Vectorised evaluation for post-processing (same interpolant)."""
+        t = np.asarray(t, float)
+        if self.how == "linear":
+            return np.interp(t, self.t, self.w), np.interp(t, self.t, self.v)
+        i = np.clip((t / self.dt).astype(int), 0, self.last)
+        s = t - i * self.dt
+        c0, c1, c2, c3 = (np.asarray(c)[i] for c in (self.c0, self.c1, self.c2, self.c3))
+        return ((c0 * s + c1) * s + c2) * s + c3, (3.0 * c0 * s + 2.0 * c1) * s + c2
+
+
+def _no_disk(t: float) -> tuple[float, float]:
+    return 0.0, 0.0
+
+
+def simulate_naive(scene: Any, interface_ds: Any, dmw_tuple: tuple[np.ndarray, float] | None, k: float | None,
+                   protrusion_nm: float, *, dmw_interpolation: str = "cubic",
+                   return_history: bool = False) -> dict[str, Any]:
+    """Integrate one protrusion the naive way and return its steady-window scalars.
+
+    Parameters
+    ----------
+    scene : the validated scene (effects, solver settings)
+    interface_ds : the ``interface.nc`` dataset (or ``None`` without contact and adhesion)
+    dmw_tuple : ``(displacement [nm], sample rate [Hz])`` or ``None`` without the dmw effect
+    k : contact criterion constant [1]
+    protrusion_nm : TFC protrusion [nm]
+    dmw_interpolation : ``"cubic"`` (as the project) or ``"linear"`` (``np.interp``)
+    return_history : also return ``time``, ``state``, ``contact`` arrays
+
+    Returns
+    -------
+    dict
+        The keys of :func:`pipeline.slider.summarize` (SI units) plus ``rhs_evaluations``,
+        ``segments`` (``solve_ivp`` calls) and ``contact_switches``.
+    """
+    eff = scene.effects
+    # The model constants: the same assembly as the project (parameters, not dynamics).
+    model = sl.build_model(scene, interface_ds, dmw_tuple, k)
+    s = model.slider
+    m, I, lf, lr, lc, hcg = s.m, s.I, s.l_f, s.l_r, s.l_c, s.h_cg
+    kf, cf, cr, g0, n, Fr0 = s.k_f, s.c_f, s.c_r, s.g0, s.n, s.rear_preload
+    a = scene["air_bearing"]
+    FH0 = a["flying_height_nm"] * NM
+    delta = protrusion_nm * NM
+    cc = scene["contact"]["damping_n_s_m"]
+    sol_cfg = scene["solver"]
+    dwell = sol_cfg["min_dwell_ns"] * 1e-9
+    t_end = model.duration
+    dm = scene["dmw"]
+    V = 2 * np.pi * dm["radius_mm"] * MM * dm["rpm"] / 60.0
+    off_f, off_r, off_c = (lf + lc) / V, (lc - lr) / V, 0.0
+    disk = _Disk(*dmw_tuple, dmw_interpolation) if "dmw" in eff else _no_disk
+
+    use_tables = interface_ds is not None and bool(eff & {"contact", "adhesion"})
+    if use_tables:
+        x = interface_ds["separation"].values * NM
+        pa = interface_ds["adhesion_pressure"].values * 1e6 if "adhesion" in eff else None
+        pc = interface_ds["contact_pressure"].values * 1e6 if "contact" in eff else None
+        ar = interface_ds["real_area_fraction"].values if "contact" in eff else None
+        ft = interface_ds["friction_stress"].values * 1e6 if "friction" in eff else None
+        sigma = float(interface_ds["sigma"]) * NM
+        s_n = scene["contact"]["section_depth_sigma"] * sigma
+        An = float(nominal_area(delta, model.half_length, model.half_width, s_n))
+    else:
+        x = pa = pc = ar = ft = None
+        sigma, s_n, An = np.nan, np.nan, 0.0
+    has_contact = "contact" in eff
+    ksig = k * sigma if has_contact else 0.0
+    pitch = "pitch" in eff
+    counter = [0]
+
+    def rhs(t: float, y: np.ndarray, contact: bool) -> list[float]:
+        counter[0] += 1
+        z, th, vz, vth = y
+        wf, vf = disk(t + off_f)
+        wr, vr = disk(t + off_r)
+        F_f = -kf * (z + lf * th - wf) - cf * (vz + lf * vth - vf)
+        g_r = g0 + z - lr * th - wr
+        if g_r < 1e-3 * g0:
+            g_r = 1e-3 * g0
+        F_r = Fr0 * ((g0 / g_r) ** n - 1.0) - cr * (vz - lr * vth - vr)
+        F_i = 0.0
+        Q = 0.0
+        if use_tables:
+            wc, vc = disk(t + off_c)
+            d = FH0 - delta + z - lc * th - wc
+            if pa is not None:
+                F_i -= An * np.interp(d, x, pa)
+            if contact:
+                F_i += An * max(np.interp(d, x, pc), 0.0) - cc * (vz - lc * vth - vc)
+                if ft is not None:
+                    Q = An * max(np.interp(d, x, ft), 0.0)
+        if pitch:
+            return [vz, vth, (F_f + F_r + F_i) / m, (lf * F_f - lr * F_r - lc * F_i - hcg * Q) / I]
+        return [vz, 0.0, (F_f + F_r + F_i) / m, 0.0]
+
+    def gap(t: float, y: np.ndarray) -> float:
+        return FH0 - delta + y[0] - lc * y[1] - disk(t + off_c)[0] - ksig
+
+    # output grid, as pipeline.slider.run_model, refined REFINE times for the peak-to-peak of d (the
+    # project tracks the exact extremes of d; sampling 10x finer than the output grid comes within
+    # ~0.3 % of them for the content of these runs, while the output grid alone aliases by a few %)
+    n_coarse = int(round(model.duration / model.output_step)) + 1
+    t_coarse = np.minimum(np.arange(n_coarse) * model.output_step, model.duration)
+    t_out = (t_coarse[:, None] + np.arange(REFINE)[None, :] * (model.output_step / REFINE)).ravel()
+    t_out = t_out[: (n_coarse - 1) * REFINE + 1]
+    t_out[-1] = t_coarse[-1]
+    n_out = t_out.size
+    Y = np.full((n_out, 4), np.nan)
+    C = np.zeros(n_out, dtype=bool)
+    opts = dict(method="RK45", rtol=model.rtol, atol=model.atol, max_step=model.max_step)
+    m_eff_inv = 1.0 / model.slider.m + (model.slider.l_c ** 2 / model.slider.I if "pitch" in eff else 0.0)
+    dpa = np.gradient(pa, x) if x is not None and pa is not None else None
+    dpc = np.gradient(pc, x) if x is not None and pc is not None else None
+
+    t, y = 0.0, np.zeros(4)
+    contact = bool(has_contact and gap(t, y) < 0.0)
+    hold_until = -1.0
+    j = 0
+    segments = switches = 0
+    while t < t_end and j < n_out:
+        holding = hold_until > t
+        t_stop = min(hold_until, t_end) if holding else t_end
+        jj = j
+        while jj < n_out and t_out[jj] <= t_stop:
+            jj += 1
+        events = None
+        if has_contact and not holding:
+            def ev(tt, yy, _mode):  # solve_ivp passes the rhs's args to events too
+                return gap(tt, yy)
+            ev.terminal = True
+            ev.direction = 1.0 if contact else -1.0  # leaving contact: g rises through 0; entering: falls
+            events = ev
+        # the output samples of this segment, plus its end (for the state to continue from)
+        t_eval = t_out[j:jj]
+        if not (t_eval.size and t_eval[-1] == t_stop):
+            t_eval = np.append(t_eval, t_stop)
+        if x is not None:
+            # a competent user resolves the interface spring: max_step <= stiffness_step / omega at
+            # the segment's start (the project caps every step the same way)
+            d_here = gap(t, y) + ksig
+            kk = abs(An * np.interp(d_here, x, dpa)) if pa is not None else 0.0
+            if pc is not None and contact:
+                kk = abs(kk - An * np.interp(d_here, x, dpc))
+            if kk > 0:
+                opts["max_step"] = min(model.max_step, model.p[dyn.P_HSTIFF] / np.sqrt(kk * m_eff_inv))
+            else:
+                opts["max_step"] = model.max_step
+        sol = solve_ivp(rhs, (t, t_stop), y, t_eval=t_eval, events=events, args=(contact,), **opts)
+        segments += 1
+        if sol.status < 0:
+            raise sl.IntegrationError(f"naive solve_ivp failed at t = {t:.6g} s: {sol.message}")
+        got = min(np.size(sol.t), jj - j)  # (sol.t is an empty list when no t_eval point was reached)
+        if got:
+            Y[j:j + got] = np.asarray(sol.y)[:, :got].T
+        C[j:j + got] = contact
+        j += got
+        if sol.status == 1:  # contact event: switch and hold the new mode
+            t, y = float(sol.t_events[0][0]), sol.y_events[0][0].copy()
+            contact = not contact
+            switches += 1
+            hold_until = t + dwell if dwell > 0 else -1.0
+        else:
+            t, y = float(t_stop), sol.y[:, -1].copy()
+            if holding:
+                hold_until = -1.0
+                if (gap(t, y) < 0.0) != contact:  # the dwell has ended: switch now if the criterion disagrees
+                    contact = not contact
+                    switches += 1
+                    hold_until = t + dwell
+    out = _summarize(scene, model, t_out, Y, C, REFINE, disk, off_c, x, pa, pc, ar, ft, An, ksig, cc, FH0,
+                     delta, s_n, has_contact)
+    out.update(rhs_evaluations=counter[0], segments=segments, contact_switches=switches)
+    if return_history:
+        out.update(time=t_out[::REFINE], state=Y[::REFINE], contact=C[::REFINE])
+    return out
+
+
+def _summarize(scene, model, t_fine, Y_fine, C_fine, refine, disk, off_c, x, pa, pc, ar, ft, An, ksig, cc, FH0,
+               delta, s_n, has_contact) -> dict[str, float]:
+    """The steady-window scalars of :func:`pipeline.slider.summarize`, from the naive run.
+
+    Means over the output grid (every ``refine``-th sample); the peak-to-peak and the minimum of ``d``
+    over all samples of the window (``refine`` per output step).
+    """
+    def sep(tt, YY):
+        w, v = disk.many(tt + off_c) if hasattr(disk, "many") else (np.zeros_like(tt), np.zeros_like(tt))
+        return FH0 - delta + YY[:, 0] - model.slider.l_c * YY[:, 1] - w, v
+
+    d_fine = sep(t_fine, Y_fine)[0][t_fine >= model.transient - 1e-15]
+    t, Y, C = t_fine[::refine], Y_fine[::refine], C_fine[::refine]
+    d, vc = sep(t, Y)
+    c = d - ksig
+    win = t >= model.transient - 1e-15
+    dw, cw = d[win], c[win]
+    spread = np.ptp(d_fine) if model.fhm_measure == "peak-to-peak" else 3.0 * np.std(dw)
+    out: dict[str, float] = {
+        "fhm_bv": float(100.0 * spread / FH0),
+        "clearance": float(np.mean(cw)),
+        "min_clearance": float(np.min(d_fine) - ksig),
+        "nominal_area": An,
+        "protrusion_radius": float(effective_radius(delta, model.half_length, s_n)) if np.isfinite(s_n) else np.nan,
+    }
+    net = np.zeros_like(t)
+    if pa is not None:
+        adh = An * np.interp(d, x, pa)
+        out["adhesion_force"] = float(np.mean(adh[win]))
+        net -= adh
+    if has_contact:
+        inc = C[win]
+        fc = np.where(C, An * np.maximum(np.interp(d, x, pc), 0.0), 0.0)
+        area = np.where(C, An * np.maximum(np.interp(d, x, ar), 0.0), 0.0)
+        ddot = Y[:, 2] - model.slider.l_c * Y[:, 3] - vc
+        net += fc + np.where(C, -cc * ddot, 0.0)
+        frac = float(np.mean(inc))
+        out["contact_fraction"] = frac
+        out["regime"] = sl.FLYING if frac == 0 else (sl.SURFING if frac >= sl.SURFING_FRACTION else sl.BOUNCING)
+        fcw, aw = fc[win], area[win]
+        out["contact_force"] = float(np.mean(fcw))
+        out["interference"] = float(np.mean(-cw[inc])) if inc.any() else np.nan
+        out["real_area"] = float(np.mean(aw[inc])) if inc.any() else np.nan
+        out["mean_pressure"] = float(fcw.sum() / aw.sum()) if aw.sum() > 0 else np.nan
+        if ft is not None:
+            ff = np.where(C, An * np.maximum(np.interp(d, x, ft), 0.0), 0.0)[win]
+            out["friction_force"] = float(np.mean(ff))
+            out["friction_coefficient"] = float(ff.sum() / fcw.sum()) if fcw.sum() > 0 else np.nan
+            out["shear_stress"] = float(ff.sum() / aw.sum()) if aw.sum() > 0 else np.nan
+    if pa is not None or has_contact:
+        out["net_force"] = float(np.mean(net[win]))
+    return out
+
+
+def time_naive(scene, interface_ds, dmw_tuple, k, protrusion_nm, repeat: int = 3, **kw) -> tuple[list[float], dict]:
+    """Wall times [s] of ``repeat`` naive runs and the last result."""
+    times, res = [], {}
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        res = simulate_naive(scene, interface_ds, dmw_tuple, k, protrusion_nm, **kw)
+        times.append(time.perf_counter() - t0)
+    return times, res

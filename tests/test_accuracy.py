@@ -1,0 +1,107 @@
+"""The accuracy stage on a tiny configuration: dataset layout, zero error of the reference itself,
+errors shrinking as the tolerance tightens, the chosen defaults and the work-precision figure."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from pipeline.io import check_cf
+from pipeline.scene import load_scene
+from pipeline.stages import accuracy
+
+#: A light reference and two settings per knob (three for rtol, to see a trend).
+REFERENCE = {"table_step_nm": 0.005, "quadrature_nodes": 16, "quadrature_panels": 2, "sample_rate_mhz": 8.0}
+KNOBS = {"rtol": [1e-9, 1e-7, 1e-5], "max_step_ns": [25.0, 250.0], "stiffness_step": [0.25, 1.0],
+         "table_step_nm": [0.005, 0.02],
+         "interpolation_order": [3, 1], "quadrature_nodes": [16, 8], "quadrature_panels": [2, 1],
+         "sample_rate_mhz": [8.0, 4.0], "min_dwell_ns": [1.0, 20.0]}
+
+
+@pytest.fixture(scope="module")
+def result(tmp_path_factory, paper_config):
+    out = tmp_path_factory.mktemp("accuracy")
+    scene = load_scene(paper_config, ["solver.duration_ms=0.6", "solver.transient_ms=0.2", "contact.k=0.445"])
+    path = accuracy.run(scene, out, reference=REFERENCE, knobs=KNOBS, repeat=1)
+    with xr.open_dataset(path, engine="netcdf4") as ds:
+        ds = ds.load()
+    return out, path, ds
+
+
+def test_dataset_layout(result):
+    out, path, ds = result
+    assert path == out / "accuracy.nc"
+    assert dict(ds.sizes) == {"point": 3, "knob": len(KNOBS), "level": 3, "output": len(accuracy.HEADLINE),
+                              "configuration": 2}
+    assert list(ds["knob"].values) == [kb.name for kb in accuracy.KNOBS]
+    assert list(ds["point"].values) == ["flying", "touchdown", "sliding"]
+    np.testing.assert_allclose(ds["protrusion"].values, [5.0, 7.6, 11.0])
+    assert ds["error"].dims == ("point", "knob", "level", "output")
+    assert ds["wall_time"].dims == ("point", "knob", "level")
+    assert ds["error"].attrs["units"] == "1" and ds["wall_time"].attrs["units"] == "s"
+    assert ds["fhm_bv"].attrs["units"] == "%" and ds["reference_clearance"].attrs["units"] == "nm"
+    check_cf(ds)  # units and long_name on every variable and coordinate
+    assert ds.attrs["stage"] == "accuracy"
+    # settings per knob, NaN-padded
+    np.testing.assert_allclose(ds["setting"].sel(knob="rtol").values, KNOBS["rtol"])
+    assert np.isnan(ds["setting"].sel(knob="interpolation_order").values[2])
+    assert (ds["wall_time"].values[np.isfinite(ds["setting"].values)[None].repeat(3, 0)] > 0).all()
+
+
+def test_reference_setting_has_zero_error(result):
+    _, _, ds = result
+    ref = ds["is_reference"].values.astype(bool)
+    # every knob but the step-size controllers (whose rows move the other controllers) contains it
+    names = list(ds["knob"].values)
+    for name in set(names) - {"rtol", "max_step_ns", "stiffness_step"}:
+        assert ref[names.index(name), 0], name
+    err = ds["error"].values[:, ref, :]
+    assert np.all((err == 0) | np.isnan(err))
+    # outputs that do not apply while flying are NaN, not errors
+    flying = ds["error"].sel(point="flying", knob="table_step_nm", level=1)
+    assert np.isnan(flying.sel(output="interference")) and np.isnan(flying.sel(output="friction_coefficient"))
+    assert np.isfinite(flying.sel(output="fhm_bv"))
+
+
+def test_error_decreases_as_rtol_tightens(result):
+    _, _, ds = result
+    e = ds["max_error"].sel(knob="rtol").values[:, :3]  # (point, level): rtol 1e-9, 1e-7, 1e-5
+    assert np.all(np.isfinite(e))
+    # monotone within noise (a factor 2, or 1e-5 absolute where the error is at round-off level:
+    # in contact the integrator's stiffness step cap, not the tolerance, may set the step)
+    for p in range(e.shape[0]):
+        assert e[p, 1] >= 0.5 * e[p, 0] - 1e-5 and e[p, 2] >= 0.5 * e[p, 1] - 1e-5, e[p]
+    assert e[:, 0].max() < 1e-4
+    # flying, the tolerance alone sets the step: a clear trend over four decades
+    fly = list(ds["point"].values).index("flying")
+    assert e[fly, 2] > e[fly, 1] > e[fly, 0] and e[fly, 2] > 30 * e[fly, 0], e[fly]
+
+
+def test_chosen_defaults_and_figure(result):
+    out, _, ds = result
+    chosen = json.loads(ds.attrs["chosen_defaults"])
+    assert set(chosen) == set(KNOBS)
+    for name, value in chosen.items():
+        lvl = int(ds["chosen_level"].sel(knob=name))
+        if value is None:
+            assert lvl == -1
+            continue
+        assert value == pytest.approx(float(ds["setting"].sel(knob=name).values[lvl]))
+        assert ds["passes"].sel(knob=name).values[lvl] == 1
+    # the chosen settings are checked together, against a tenth of the tolerance
+    assert ds["combined_max_error"].dims == ("configuration", "point")
+    assert float(ds.attrs["combined_tolerance"]) == pytest.approx(0.1 * float(ds.attrs["tolerance"]))
+    assert (ds["combined_max_error"].sel(configuration="chosen").values < float(ds.attrs["combined_tolerance"])).all()
+    fig = out / "figures" / "work_precision.png"
+    assert fig.is_file() and fig.stat().st_size > 10_000
+    assert fig.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_relative_error_definition():
+    nan, inf = np.nan, np.inf
+    err = accuracy.relative_error(np.array([1.1, 0.002, nan, nan, 1.0]), np.array([1.0, 0.0, nan, 2.0, nan]), 0.01)
+    np.testing.assert_allclose(err[:2], [0.1, 0.2])
+    assert np.isnan(err[2]) and err[3] == inf and err[4] == inf
