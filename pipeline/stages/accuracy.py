@@ -38,7 +38,7 @@ controllers, which the reference would mask:
   ``atol_nm = 1``) and lifts the stiffness cap: the cap alone sets the step.
 * ``stiffness_step`` (the integrator's cap ``h <= c / omega`` of the local interface spring): it acts
   only in contact, so something else must hold the flying step: this row relaxes the tolerance and
-  keeps ``max_step_ns`` at the scene's value (250 ns in the paper scene).
+  keeps ``max_step_ns`` at the scene's value (500 ns by default).
 * The ``rtol`` row also lifts the stiffness cap (``stiffness_step = 1e3``), which would otherwise
   set the step in contact at every tolerance.
 
