@@ -153,7 +153,8 @@ def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float]
             raise ValueError(f"DMW record of {have * 1e3:.4g} ms is shorter than the {need * 1e3:.4g} ms the "
                              f"simulation needs (duration plus the pad-to-TFC travel time); set "
                              f"dmw.duration_ms >= {np.ceil(need * 1e5) / 1e2:g}")
-        dmw_c = dyn.piecewise_coefficients(np.asarray(w_nm, float) * NM, 1.0 / fs, order)
+        dmw_c = dyn.disk_coefficients(np.asarray(w_nm, float) * NM, 1.0 / fs, order,
+                                      (p[dyn.P_OFF_C], p[dyn.P_OFF_F], p[dyn.P_OFF_R]))
         p[dyn.P_DMW_T0], p[dyn.P_DMW_DT] = 0.0, 1.0 / fs
         info["disk_speed_m_s"] = V
 
@@ -246,10 +247,11 @@ def histories(run: Run) -> dict[str, np.ndarray]:
     w = np.zeros_like(t)
     wdot = np.zeros_like(t)
     if m.dmw is not None:
-        w = dyn.ppval(m.dmw, p[dyn.P_DMW_T0], p[dyn.P_DMW_DT], t + p[dyn.P_OFF_C])
+        tfc = np.ascontiguousarray(m.dmw[:, :4])  # the TFC columns (see dynamics.disk_coefficients)
+        w = dyn.ppval(tfc, p[dyn.P_DMW_T0], p[dyn.P_DMW_DT], t)
         eps = 1e-3 * p[dyn.P_DMW_DT]
-        wdot = (dyn.ppval(m.dmw, p[dyn.P_DMW_T0], p[dyn.P_DMW_DT], t + eps)
-                - dyn.ppval(m.dmw, p[dyn.P_DMW_T0], p[dyn.P_DMW_DT], t - eps)) / (2 * eps)
+        wdot = (dyn.ppval(tfc, p[dyn.P_DMW_T0], p[dyn.P_DMW_DT], t + eps)
+                - dyn.ppval(tfc, p[dyn.P_DMW_T0], p[dyn.P_DMW_DT], t - eps)) / (2 * eps)
     d = p[dyn.P_FH0] - run.protrusion + Y[:, 0] - m.slider.l_c * Y[:, 1] - w
     out: dict[str, np.ndarray] = {"separation": d, "disk_displacement": w, "z": Y[:, 0], "pitch": Y[:, 1]}
     out["clearance"] = d - m.k_sigma
