@@ -42,6 +42,9 @@ from scipy.integrate import solve_ivp
 from scipy.interpolate import CubicSpline
 
 from pipeline import dynamics as dyn
+
+#: Longest solve_ivp segment [s] with interface tables: the step cap is renewed at each segment start.
+SEGMENT = 20e-6
 from pipeline import slider as sl
 from pipeline.physics.geometry import effective_radius, nominal_area
 
@@ -202,6 +205,10 @@ def simulate_naive(scene: Any, interface_ds: Any, dmw_tuple: tuple[np.ndarray, f
     while t < t_end and j < n_out:
         holding = hold_until > t
         t_stop = min(hold_until, t_end) if holding else t_end
+        if x is not None:
+            # short segments, so the step cap below follows the local interface stiffness as the
+            # project's per-step cap does
+            t_stop = min(t_stop, t + SEGMENT)
         jj = j
         while jj < n_out and t_out[jj] <= t_stop:
             jj += 1
@@ -236,6 +243,9 @@ def simulate_naive(scene: Any, interface_ds: Any, dmw_tuple: tuple[np.ndarray, f
             Y[j:j + got] = np.asarray(sol.y)[:, :got].T
         C[j:j + got] = contact
         j += got
+        if sol.status == 0 and t_stop < t_end and not holding and abs(float(sol.t[-1]) - t_stop) < 1e-18:
+            t, y = float(t_stop), sol.y[:, -1].copy()
+            continue
         if sol.status == 1:  # contact event: switch and hold the new mode
             t, y = float(sol.t_events[0][0]), sol.y_events[0][0].copy()
             contact = not contact

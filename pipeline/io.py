@@ -33,7 +33,8 @@ STAGE_INPUTS: dict[str, tuple[str, ...]] = {
     "roughness": ("roughness", "materials"),
     "dmw": ("dmw", "solver.duration_ms", "scene.effects", "slider.length_mm", "slider.front_arm_mm"),
     "interface": ("roughness", "materials", "lubricant", "solver.table_step_nm", "solver.table_min_sigma",
-                  "solver.table_max_nm", "solver.quadrature_nodes", "solver.quadrature_panels", "scene.effects"),
+                  "solver.table_max_nm", "solver.quadrature_nodes", "solver.quadrature_panels", "scene.effects",
+                  "air_bearing.flying_height_nm", "tfc.protrusion_nm", "sweep.protrusion_nm"),
 }
 
 

@@ -268,7 +268,8 @@ def histories(run: Run) -> dict[str, np.ndarray]:
         out["contact_force"] = fc
         out["contact_damping_force"] = np.where(c, -p[dyn.P_CC] * ddot, 0.0)
         net += fc + out["contact_damping_force"]
-        area = np.where(c, An * np.maximum(dyn.ppval(m.area, x0, h, d), 0.0), 0.0)
+        # (clipped to [0, A_n]: the spline through the capped table may overshoot by ~1e-6 at the cap)
+        area = np.where(c, An * np.clip(dyn.ppval(m.area, x0, h, d), 0.0, 1.0), 0.0)
         out["real_area"] = area
         with np.errstate(invalid="ignore", divide="ignore"):
             out["mean_pressure"] = np.where(c & (area > 0), fc / np.where(area > 0, area, 1.0), np.nan)

@@ -83,10 +83,12 @@ def summit_sigma(sigma: float, eta: float, R: float) -> float:
         outside the validity of McCool's relations.
     """
     alpha = bandwidth_alpha(sigma, eta, R)
-    if not alpha > ALPHA_MIN:
-        raise ValueError(f"bandwidth alpha = {alpha:.4g} <= {ALPHA_MIN}: McCool's summit statistics need "
-                         f"alpha > {ALPHA_MIN} (sigma={sigma:.3g} m, eta={eta:.3g} m^-2, R={R:.3g} m)")
-    return float(np.sqrt(sigma**2 - 3.717e-4 / (eta * R) ** 2))
+    radicand = sigma**2 - 3.717e-4 / (eta * R) ** 2
+    # (the exact limit of these constants is alpha = 3.717e-4 * 2412.74 = 0.8968155; test the radicand)
+    if not (alpha > ALPHA_MIN and radicand > 0):
+        raise ValueError(f"bandwidth alpha = {alpha:.7g} <= {3.717e-4 * 2412.74:.7g}: McCool's summit statistics "
+                         f"need alpha > {ALPHA_MIN} (sigma={sigma:.3g} m, eta={eta:.3g} m^-2, R={R:.3g} m)")
+    return float(np.sqrt(radicand))
 
 
 def summit_offset(sigma: float, eta: float, R: float) -> float:

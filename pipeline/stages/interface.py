@@ -130,7 +130,14 @@ def build_tables(scene: Any, stats: dict[str, float]) -> xr.Dataset:
         # The table must reach past the Gaussian window (TAIL sigma_s), where the contact terms vanish,
         # so that holding the last value beyond the table is exact for them (very rough surfaces).
         d_max = max(sol["table_max_nm"] * NM, (isbl.TAIL + 0.5) * p.sigma_s)
-        d = isbl.separation_grid(p.sigma_s, sol["table_step_nm"] * NM, sol["table_min_sigma"], d_max)
+        # ... and start below every separation the slider can reach: table_min_sigma summit (and
+        # surface) sigmas, and 1 nm below the deepest nominal interference FH0 - protrusion of the scene
+        # and its sweep (below the table the kernel extrapolates linearly).
+        fh0 = scene["air_bearing"]["flying_height_nm"]
+        deepest = max(scene["tfc"]["protrusion_nm"], scene["sweep"]["protrusion_nm"]["stop"])
+        d_min = min(sol["table_min_sigma"] * p.sigma_s, sol["table_min_sigma"] * stats["sigma"],
+                    (fh0 - deepest - 1.0) * NM)
+        d = isbl.separation_grid(1.0, sol["table_step_nm"] * NM, d_min, d_max)  # (d_min in m: sigma 1)
         tables = isbl.isbl_tables(d, p, quantities=wanted, nodes=sol["quadrature_nodes"],
                                   panels=sol["quadrature_panels"])
         coords["separation"] = var(d / NM, "separation", "nm",
