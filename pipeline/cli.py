@@ -56,7 +56,8 @@ def main(argv: list[str] | None = None) -> int:
     logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
                         format="%(levelname)s %(name)s: %(message)s")
     if not args.verbose:  # dask.distributed configures its own INFO loggers; keep the terminal quiet
-        for name in ("distributed", "distributed.scheduler", "distributed.nanny", "distributed.core"):
+        for name in ("distributed", "distributed.scheduler", "distributed.nanny", "distributed.core",
+                     "distributed.http.proxy"):
             logging.getLogger(name).setLevel(logging.ERROR)
     try:
         if args.stage == "roughness" and not (len(args.inputs) == 1 and args.inputs[0].endswith(".toml")):
