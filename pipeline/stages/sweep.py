@@ -144,7 +144,7 @@ def _client(scheduler: str | None, workers: int | None):
         return Client(scheduler), None
     n = workers or os.cpu_count() or 1
     cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
-                           silence_logs=logging.ERROR)
+                           silence_logs=logging.CRITICAL)  # shutdown races log CommClosedError
     return Client(cluster), cluster
 
 
