@@ -58,7 +58,7 @@ def main(argv: list[str] | None = None) -> int:
     if not args.verbose:  # dask.distributed configures its own INFO loggers; keep the terminal quiet
         for name in ("distributed", "distributed.scheduler", "distributed.nanny", "distributed.core",
                      "distributed.http.proxy"):
-            logging.getLogger(name).setLevel(logging.ERROR)
+            logging.getLogger(name).setLevel(logging.CRITICAL)  # (shutdown races log CommClosedError)
     try:
         if args.stage == "roughness" and not (len(args.inputs) == 1 and args.inputs[0].endswith(".toml")):
             from .stages import roughness
