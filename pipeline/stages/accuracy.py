@@ -103,6 +103,7 @@ from .. import slider as sl
 from ..io import read_dataset, var, write_dataset
 from ..outputs import SCALARS
 from .interface import build_tables, roughness_statistics
+from .simulate import resolve_k
 
 log = logging.getLogger(__name__)
 NM = 1e-9
@@ -212,23 +213,19 @@ TABLE_KEYS = ("table_step_nm", "quadrature_nodes", "quadrature_panels")
 # helpers
 
 def _contact_k(scene: Any, out: Path, k: float | None) -> tuple[float | None, str]:
-    """``k`` from the option, the scene, ``calibration.nc`` or ``contact.fallback_probability``."""
+    """``k`` from the option, else as every later stage takes it (:func:`simulate.resolve_k`); without
+    ``calibration.nc``, from ``contact.fallback_probability`` (the accuracy study needs some k)."""
     if not scene.has("contact"):
         return None, "no contact effect"
     if k is not None:
         return float(k), "option k"
-    if scene["contact"]["k"] is not None:
-        return float(scene["contact"]["k"]), "scene (contact.k)"
-    path = Path(out) / "calibration.nc"
-    if path.is_file():
-        kc = float(read_dataset(path, stage="calibrate")["k_calibrated"])
-        if np.isfinite(kc):
-            return kc, f"calibration ({path})"
-    fb = scene["contact"]["fallback_probability"]
-    if fb is None:
-        raise ValueError("the accuracy stage needs the contact criterion k: set contact.k, run `hdi calibrate`, "
-                         "or set contact.fallback_probability")
-    return float(norm.isf(fb)), f"contact.fallback_probability = {fb} (one-sided)"
+    try:
+        return resolve_k(scene, out)
+    except ValueError:
+        fb = scene["contact"]["fallback_probability"]
+        if fb is None:
+            raise
+        return float(norm.isf(fb)), f"contact.fallback_probability = {fb} (one-sided; no calibration.nc)"
 
 
 def relative_error(x: np.ndarray, ref: np.ndarray, floor: float) -> np.ndarray:
