@@ -47,6 +47,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as hst
 from scipy import integrate
 
+from convergence import assert_converged, deltas
 from pipeline import dynamics as dyn
 from pipeline import slider as sl
 from pipeline.physics import air_bearing as ab
@@ -172,26 +173,6 @@ def assert_physical(run, hist, s, area_mask=None, area_bound=1.0):
         assert s["friction_coefficient"] >= 0
     if "real_area" in s and np.isfinite(s["real_area"]) and area_mask is None:
         assert s["real_area"] <= area_bound * run.nominal_area * (1 + 1e-9)
-
-
-def deltas(a, b):
-    """Relative and absolute [nm] changes of the headline outputs between two summaries."""
-    out = {}
-    for name, to_nm in (("fhm_bv", FH0 / 100 / NM), ("clearance", 1 / NM), ("contact_force", None)):
-        if name not in a:
-            continue
-        x, y = a[name], b[name]
-        big = max(abs(x), abs(y))
-        rel = abs(x - y) / big if big > 0 else 0.0
-        out[name] = (rel, abs(x - y) * to_nm if to_nm else np.inf)
-    return out
-
-
-def assert_converged(d, what, skip=()):
-    for name, (rel, abs_nm) in d.items():
-        if name in skip:
-            continue
-        assert rel < 0.01 or abs_nm < 1e-3, f"{what}: {name} changed by {rel:.3%} ({abs_nm:.3g} nm)"
 
 
 def refine(model, delta, max_step=True):

@@ -35,6 +35,7 @@ import dataclasses
 import numpy as np
 import pytest
 
+from convergence import assert_converged, deltas
 from pipeline import dynamics as dyn
 from pipeline import slider as sl
 from pipeline.physics import dmw as pdmw
@@ -132,23 +133,6 @@ def assert_physical(run, hist, summary):
     for name in ("contact_force", "friction_force", "adhesion_force"):
         assert summary[name] >= 0, name
     assert summary["real_area"] <= run.nominal_area or np.isnan(summary["real_area"])
-
-
-def deltas(a, b, fh0=11 * NM):
-    """Relative and absolute [nm] changes of the headline outputs between two summaries."""
-    out = {}
-    for name, to_nm in (("fhm_bv", fh0 / 100 / NM), ("clearance", 1 / NM), ("contact_force", None)):
-        x, y = a[name], b[name]
-        rel = abs(x - y) / max(abs(x), abs(y)) if max(abs(x), abs(y)) > 0 else 0.0
-        out[name] = (rel, abs(x - y) * to_nm if to_nm else np.inf)
-    return out
-
-
-def assert_converged(d, what, skip=()):
-    for name, (rel, abs_nm) in d.items():
-        if name in skip:
-            continue
-        assert rel < 0.01 or abs_nm < 1e-3, f"{what}: {name} changed by {rel:.3%} ({abs_nm:.3g} nm)"
 
 
 CASES = [
