@@ -46,8 +46,8 @@ from numba import njit
 # Layout of the parameter vector ``p`` (all SI).
 (P_M, P_I, P_LF, P_LR, P_LC, P_HCG, P_KF, P_KR, P_CF, P_CR, P_G0, P_N, P_FR0, P_FH0, P_DELTA, P_AN,
  P_KSIG, P_CC, P_OFF_F, P_OFF_R, P_OFF_C, P_DMW_T0, P_DMW_DT, P_TAB_X0, P_TAB_H, P_DWELL,
- P_TWIN, P_HSTIFF) = range(28)
-N_PARAMS = 28
+ P_TWIN, P_HSTIFF, P_TAB_N) = range(29)
+N_PARAMS = 29
 
 # Status codes returned by :func:`integrate`.
 OK, MAX_STEPS, STEP_UNDERFLOW, NOT_FINITE = 0, 1, 2, 3
@@ -92,6 +92,30 @@ def _ppval(c, x0, h, x):
     s = x - (x0 + i * h)
     c0, c1, c2, c3 = c[i, 0], c[i, 1], c[i, 2], c[i, 3]
     return ((c0 * s + c1) * s + c2) * s + c3, (3.0 * c0 * s + 2.0 * c1) * s + c2
+
+
+@njit(cache=True, inline="always")
+def _ppindex(n, x0, h, x):
+    """Piece ``i`` and offset ``s`` of ``x`` on a uniform grid of ``n`` pieces (``i = -1`` below the
+    grid, ``i = n`` above it): computed once and shared by the tables of one grid."""
+    u = (x - x0) / h
+    if u < 0.0:
+        return -1, x - x0
+    i = int(u)
+    if i >= n:
+        return n, h
+    return i, x - (x0 + i * h)
+
+
+@njit(cache=True, inline="always")
+def _ppat(c, i, s):
+    """Value of a piecewise cubic at a point located by :func:`_ppindex` (as :func:`_ppval`)."""
+    if i < 0:
+        return c[0, 3] + c[0, 2] * s
+    if i >= c.shape[0]:
+        j = c.shape[0] - 1
+        return ((c[j, 0] * s + c[j, 1]) * s + c[j, 2]) * s + c[j, 3]
+    return ((c[i, 0] * s + c[i, 1]) * s + c[i, 2]) * s + c[i, 3]
 
 
 @njit(cache=True)
@@ -182,14 +206,15 @@ def rhs(t, y, p, dmw, cp, pa, ft, pitch, contact, out):
     Q = 0.0
     if pa is not None or cp is not None:
         d, dd = _separation(p, y, wc, vc)
-        x0, h = p[P_TAB_X0], p[P_TAB_H]
+        # one index for every table (they share the separation grid)
+        i, s = _ppindex(int(p[P_TAB_N]), p[P_TAB_X0], p[P_TAB_H], d)
         if pa is not None:
-            F_i -= p[P_AN] * _ppval(pa, x0, h, d)[0]
+            F_i -= p[P_AN] * _ppat(pa, i, s)
         if cp is not None:
             if contact:
-                F_i += p[P_AN] * max(_ppval(cp, x0, h, d)[0], 0.0) - p[P_CC] * dd
+                F_i += p[P_AN] * max(_ppat(cp, i, s), 0.0) - p[P_CC] * dd
                 if ft is not None:
-                    Q = p[P_AN] * max(_ppval(ft, x0, h, d)[0], 0.0)
+                    Q = p[P_AN] * max(_ppat(ft, i, s), 0.0)
     out[0] = vz
     out[2] = (F_f + F_r + F_i) / p[P_M]
     if pitch is None:

@@ -162,7 +162,7 @@ def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float]
     if interface is not None and "separation" in interface.coords:
         x = interface["separation"].values * NM
         h = float(x[1] - x[0])
-        p[dyn.P_TAB_X0], p[dyn.P_TAB_H] = x[0], h
+        p[dyn.P_TAB_X0], p[dyn.P_TAB_H], p[dyn.P_TAB_N] = x[0], h, x.size - 1
         names = {"contact": ("contact_pressure", 1e6, "contact"), "adhesion": ("adhesion_pressure", 1e6, "adhesion"),
                  "friction": ("friction_stress", 1e6, "friction"), "area": ("real_area_fraction", 1.0, "contact")}
         for key, (var, scale, effect) in names.items():
