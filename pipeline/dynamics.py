@@ -312,13 +312,13 @@ def _extrema(a, b, c):
     return n, x1, x2
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def _interp_state(y0, f0, y1, f1, h, theta, out):
     for i in range(4):
         out[i] = _hermite(y0, f0, y1, f1, h, theta, i)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def _first_wrong_side(p, dmw, cp, contact, t, y, k1, ynew, k7, h, d0, dd0, d1, dd1, ys):
     """Smallest ``theta`` in (0, 1] of the step where the criterion disagrees with the mode, or -1.
 
