@@ -153,6 +153,16 @@ def disk_coefficients(w: np.ndarray, dt: float, order: int, offsets: tuple[float
     return np.ascontiguousarray(np.hstack(cols))
 
 
+@njit(cache=True, error_model="numpy")
+def disk_history(dmw, p, t):
+    """Disk displacement [m] and velocity [m/s] under the TFC point at the times ``t`` (outputs)."""
+    w = np.empty(t.shape[0])
+    v = np.empty(t.shape[0])
+    for j in range(t.shape[0]):
+        w[j], v[j] = _disk(p, dmw, t[j])
+    return w, v
+
+
 @njit(cache=True, inline="always", error_model="numpy")
 def _disk(p, dmw, t):
     """Disk displacement [m] and velocity [m/s] under the TFC point at time ``t``."""

@@ -247,11 +247,7 @@ def histories(run: Run) -> dict[str, np.ndarray]:
     w = np.zeros_like(t)
     wdot = np.zeros_like(t)
     if m.dmw is not None:
-        tfc = np.ascontiguousarray(m.dmw[:, :4])  # the TFC columns (see dynamics.disk_coefficients)
-        w = dyn.ppval(tfc, p[dyn.P_DMW_T0], p[dyn.P_DMW_DT], t)
-        eps = 1e-3 * p[dyn.P_DMW_DT]
-        wdot = (dyn.ppval(tfc, p[dyn.P_DMW_T0], p[dyn.P_DMW_DT], t + eps)
-                - dyn.ppval(tfc, p[dyn.P_DMW_T0], p[dyn.P_DMW_DT], t - eps)) / (2 * eps)
+        w, wdot = dyn.disk_history(m.dmw, p, t)
     d = p[dyn.P_FH0] - run.protrusion + Y[:, 0] - m.slider.l_c * Y[:, 1] - w
     out: dict[str, np.ndarray] = {"separation": d, "disk_displacement": w, "z": Y[:, 0], "pitch": Y[:, 1]}
     out["clearance"] = d - m.k_sigma
@@ -262,19 +258,27 @@ def histories(run: Run) -> dict[str, np.ndarray]:
         net -= out["adhesion_force"]
     if m.contact is not None:
         c = run.contact
+
+        def on_contact(table: np.ndarray, upper: float = np.inf) -> np.ndarray:
+            """``A_n`` times a table at the samples in contact (its laws are off elsewhere: 0)."""
+            v = np.zeros_like(t)
+            if c.any():
+                v[c] = An * np.clip(dyn.ppval(table, x0, h, d[c]), 0.0, upper)
+            return v
+
         out["in_contact"] = c
-        fc = np.where(c, An * np.maximum(dyn.ppval(m.contact, x0, h, d), 0.0), 0.0)
+        fc = on_contact(m.contact)
         ddot = Y[:, 2] - m.slider.l_c * Y[:, 3] - wdot
         out["contact_force"] = fc
         out["contact_damping_force"] = np.where(c, -p[dyn.P_CC] * ddot, 0.0)
         net += fc + out["contact_damping_force"]
         # (clipped to [0, A_n]: the spline through the capped table may overshoot by ~1e-6 at the cap)
-        area = np.where(c, An * np.clip(dyn.ppval(m.area, x0, h, d), 0.0, 1.0), 0.0)
+        area = on_contact(m.area, 1.0)
         out["real_area"] = area
         with np.errstate(invalid="ignore", divide="ignore"):
             out["mean_pressure"] = np.where(c & (area > 0), fc / np.where(area > 0, area, 1.0), np.nan)
             if m.friction is not None:
-                ff = np.where(c, An * np.maximum(dyn.ppval(m.friction, x0, h, d), 0.0), 0.0)
+                ff = on_contact(m.friction)
                 out["friction_force"] = ff
                 out["friction_coefficient"] = np.where(c & (fc > 0), ff / np.where(fc > 0, fc, 1.0), np.nan)
                 out["shear_stress"] = np.where(c & (area > 0), ff / np.where(area > 0, area, 1.0), np.nan)
