@@ -38,7 +38,6 @@ def _sweep_wall(config: str, workers: int, inputs: Path, repeat: int = 3,
                 shutil.copy(f, out / f.name)
             times.append(_hdi("sweep", config, "--out", str(out), "--workers", str(workers)))
             if compute is not None:
-                name = "paper-2009" if "paper" in config else "sweep-3x3"
                 with xr.open_dataset(out / "sweep.nc", engine="netcdf4") as ds:
                     compute.append(float(ds.attrs["compute_seconds"]))
     return times

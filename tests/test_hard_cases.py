@@ -340,7 +340,7 @@ def test_summit_sigma_just_above_alpha_min_is_positive_or_rejected():
 
 
 # Regression test (fixed): pipeline/stages/interface.py:build_tables (grid from
-# isbl.separation_grid(sigma_s, step, table_min_sigma, ...)): the tables start at
+# isbl.separation_grid(table_min_sigma * sigma_s, ...)): the tables start at
 # table_min_sigma*sigma_s = -0.25 nm for alpha = 0.9 (sigma_s = 0.031 nm), but adhesion pulls the
 # surfing slider to d = -0.58 nm (-19 sigma_s), so the kernel extrapolates the tables linearly below
 # their range (dynamics._ppval) for the whole steady window (d down to -0.625 nm): FHM 0.826 %

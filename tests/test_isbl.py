@@ -308,7 +308,7 @@ def test_quadrature_converged_over_physical_ranges(p):
 def test_tables_smooth_across_population_boundaries(case):
     p = _paper_interface() if case == "paper" else _ep_interface()
     step = 0.01 * NM                                  # the default solver.table_step_nm
-    d = isbl.separation_grid(p.sigma_s, step)
+    d = isbl.separation_grid(-8.0 * p.sigma_s, 30e-9, step)
     out = isbl.isbl_tables(d, p)
     # A Gaussian tail has (log p)'' -> -1/sigma_s^2, i.e. a second difference of step^2/sigma_s^2
     # (8e-4 for the paper surface); a per-cent jump of the tables would show as a spike ~1e-2.
@@ -346,7 +346,7 @@ def test_interface_rejects_bad_parameters():
 
 def test_separation_grid():
     s, step = 0.35e-9, 0.01e-9
-    d = isbl.separation_grid(s, step, -8.0, 30e-9)
+    d = isbl.separation_grid(-8.0 * s, 30e-9, step)
     assert d[0] == pytest.approx(-8 * s, rel=1e-15)
     np.testing.assert_allclose(np.diff(d), step, rtol=1e-9)
     assert 30e-9 <= d[-1] < 30e-9 + step

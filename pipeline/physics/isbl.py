@@ -236,11 +236,10 @@ def isbl_tables(d: np.ndarray, p: Interface, *, quantities=QUANTITIES, nodes: in
     return out
 
 
-def separation_grid(sigma_s: float, step: float, d_min_sigma: float = -8.0, d_max: float = 30e-9) -> np.ndarray:
-    """Uniform separation grid [m] from ``d_min_sigma * sigma_s`` to ``d_max`` with spacing ``step``.
+def separation_grid(d_min: float, d_max: float, step: float) -> np.ndarray:
+    """Uniform separation grid [m] from ``d_min`` [m] to at least ``d_max`` [m] with spacing ``step`` [m].
 
     The dynamics interpolates the tables on this grid in O(1) (uniform spacing).
     """
-    lo = d_min_sigma * sigma_s
-    n = int(np.ceil((d_max - lo) / step)) + 1
-    return lo + step * np.arange(n)
+    n = int(np.ceil((d_max - d_min) / step)) + 1
+    return d_min + step * np.arange(n)

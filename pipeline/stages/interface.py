@@ -137,7 +137,7 @@ def build_tables(scene: Any, stats: dict[str, float]) -> xr.Dataset:
         deepest = max(scene["tfc"]["protrusion_nm"], scene["sweep"]["protrusion_nm"]["stop"])
         d_min = min(sol["table_min_sigma"] * p.sigma_s, sol["table_min_sigma"] * stats["sigma"],
                     (fh0 - deepest - 1.0) * NM)
-        d = isbl.separation_grid(1.0, sol["table_step_nm"] * NM, d_min, d_max)  # (d_min in m: sigma 1)
+        d = isbl.separation_grid(d_min, d_max, sol["table_step_nm"] * NM)
         tables = isbl.isbl_tables(d, p, quantities=wanted, nodes=sol["quadrature_nodes"],
                                   panels=sol["quadrature_panels"])
         coords["separation"] = var(d / NM, "separation", "nm",

@@ -32,7 +32,7 @@ import numpy as np
 import xarray as xr
 
 from .. import slider as sl
-from ..io import read_dataset, var, write_dataset
+from ..io import is_current, read_dataset, var, write_dataset
 from ..outputs import HISTORIES, SCALARS, history_variable, scalar_variable
 from . import ensure
 from .interface import build_tables, roughness_statistics
@@ -190,7 +190,6 @@ def prepare_inputs(scene: Any, out: Path, sets: dict[str, dict], force: bool = F
             continue
         sub = scene.replace(roughness={k: v for k, v in table.items()})
         path = parts / f"interface-{label}.nc"
-        from ..io import is_current
         if force or not is_current(path, sub, "interface"):
             stats = roughness_statistics(sub, parts / f"roughness-{label}" if table.get("afm") else None)
             write_dataset(build_tables(sub, stats), path, sub, stage="interface")
