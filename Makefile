@@ -26,16 +26,17 @@ $(STAMP): pyproject.toml
 run: $(STAMP)
 	$(BIN)/hdi run $(SCENE) $(ARGS)
 
-## the tests: the default (fast) suite, then the slow suite
-test: test-fast test-slow
+## the tests: one pytest session over the whole suite, slow tests included (CI runs this).
+## Its closing line ("N passed ...") counts what ran; exit code 5 (no test collected) fails.
+test: $(STAMP)
+	$(BIN)/python -m pytest -q tests
 
+## the quick suite for development: everything but the tests marked slow
 test-fast: $(STAMP)
 	$(BIN)/python -m pytest -q -m "not slow" tests
 
-# exit code 5 (no test collected) must not pass silently in the default suite; the slow suite may be empty
 test-slow: $(STAMP)
-	$(BIN)/python -m pytest -q -m slow tests; rc=$$?; \
-	if [ $$rc -eq 5 ]; then echo "no slow tests collected"; exit 0; fi; exit $$rc
+	$(BIN)/python -m pytest -q -m slow tests
 
 ## speed and memory: medians and ratios against baselines measured in the same run
 bench: $(STAMP)

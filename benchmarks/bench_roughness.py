@@ -1,6 +1,6 @@
 """Benchmark of the roughness stage's physics: summarise a 512 x 512 scan by both routes (target < 2 s).
 
-Uses the shared Bruker scan ``di-5.di`` (512 x 512) when present, else a synthetic 512 x 512 map written to
+Uses the Bruker scan ``tests/data/afm/di-5.di`` (512 x 512) when present, else a synthetic 512 x 512 map written to
 a temporary SurfaceTopography NetCDF file, so the timing always includes reading and detrending.
 """
 
@@ -15,7 +15,7 @@ import numpy as np
 from benchmarks.common import record, timeit
 from pipeline.physics import surface as sf
 
-SCAN = Path(__file__).resolve().parents[2] / "shared/data/afm/di-5.di"
+SCAN = Path(__file__).resolve().parents[1] / "tests/data/afm/di-5.di"
 
 
 def _synthetic(folder: Path) -> Path:

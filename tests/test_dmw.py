@@ -367,7 +367,7 @@ def test_disk_speed_formula():
 
 
 def test_default_record_is_long_enough_for_the_dynamics(tmp_path):
-    slider = pytest.importorskip("pipeline.slider")
+    from pipeline import slider
     scene = scene_from_dict({"scene": {"effects": ["air_bearing", "pitch", "dmw"]}})
     _, w, fs = stage.load(stage.run(scene, tmp_path))
     model = slider.build_model(scene, None, (w, fs), None)   # raises if the record is too short
