@@ -106,11 +106,47 @@ def is_current(path: str | Path, scene: Any, stage: str) -> bool:
 
 
 def check_cf(ds: xr.Dataset, where: str = "dataset") -> None:
-    """Raise unless every variable and coordinate has ``units`` and ``long_name`` attributes."""
+    """Raise unless every variable and coordinate has a ``long_name`` and, unless it is a label
+    (strings carry no units in CF) or names the variable holding its units (``unit_variable``),
+    a ``units`` attribute."""
     missing = [name for name in list(ds.data_vars) + list(ds.coords)
-               if "units" not in ds[name].attrs or "long_name" not in ds[name].attrs]
+               if "long_name" not in ds[name].attrs
+               or ("units" not in ds[name].attrs and ds[name].dtype.kind not in "OUS"
+                   and "unit_variable" not in ds[name].attrs)]
     if missing:
         raise DatasetError(f"{where}: variables without units/long_name: {missing}")
+
+
+#: On disk, ``time`` (elapsed simulated time [s]) carries the reference date CF 4.4 asks for;
+#: :func:`read_dataset` turns it back into plain seconds.
+TIME_UNITS_ON_DISK = "s since 1970-01-01 00:00:00"
+
+
+def cf_encoding(ds: xr.Dataset) -> tuple[xr.Dataset, dict[str, dict[str, Any]]]:
+    """A copy of ``ds`` and its NetCDF encoding, arranged for CF-1.8 (see :mod:`pipeline.variables`).
+
+    Coordinates get no ``_FillValue``; labels (strings) lose ``units`` and are stored as character
+    arrays; 64-bit integers are stored as 32-bit (CF 2.2) when their values fit; ``time`` gets
+    ``standard_name``, ``axis`` and units with a reference date. Declared missing values already in a
+    variable's encoding (``regime``) are kept.
+    """
+    out = ds.copy()
+    encoding: dict[str, dict[str, Any]] = {}
+    for name in list(out.variables):
+        v = out[name]
+        enc: dict[str, Any] = {k: val for k, val in v.encoding.items() if k == "_FillValue"}
+        if name in out.coords:
+            enc["_FillValue"] = None
+        if v.dtype.kind in "OUS":
+            out[name].attrs.pop("units", None)
+            enc["dtype"] = "S1"
+            enc.pop("_FillValue", None)
+        elif v.dtype == "int64" and (v.size == 0 or (abs(v.values).max() < 2**31)):
+            enc["dtype"] = "int32"
+        if name == "time" and v.attrs.get("units") == "s":
+            out[name].attrs.update(units=TIME_UNITS_ON_DISK, standard_name="time", axis="T")
+        encoding[name] = enc
+    return out, encoding
 
 
 def provenance(scene: Any = None, *, stage: str, inputs: Iterable[str | Path] = (),
@@ -178,7 +214,7 @@ def write_dataset(ds: xr.Dataset, path: str | Path, scene: Any = None, *, stage:
     path = Path(path)
     check_cf(ds, str(path))
     path.parent.mkdir(parents=True, exist_ok=True)
-    out = ds.copy()
+    out, encoding = cf_encoding(ds)
     attrs = dict(ds.attrs)
     attrs.update(provenance(scene, stage=stage, inputs=inputs, seed=seed))
     if extra_attrs:
@@ -187,7 +223,7 @@ def write_dataset(ds: xr.Dataset, path: str | Path, scene: Any = None, *, stage:
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     os.close(fd)
     try:
-        out.to_netcdf(tmp, engine=ENGINE)
+        out.to_netcdf(tmp, engine=ENGINE, encoding=encoding)
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
@@ -208,10 +244,12 @@ def read_dataset(path: str | Path, *, stage: str | None = None, variables: Itera
         hint = f" (run `hdi {stage}` first)" if stage else ""
         raise DatasetError(f"{path}: dataset does not exist{hint}")
     try:
-        with xr.open_dataset(path, engine=ENGINE) as ds:
+        with xr.open_dataset(path, engine=ENGINE, decode_times=False, decode_timedelta=False) as ds:
             ds = ds.load()
     except (OSError, ValueError) as exc:
         raise DatasetError(f"{path}: not a readable NetCDF dataset: {exc}") from None
+    if "time" in ds.variables and ds["time"].attrs.get("units") == TIME_UNITS_ON_DISK:
+        ds["time"].attrs["units"] = "s"
     missing = [v for v in variables if v not in ds.variables]
     if missing:
         raise DatasetError(f"{path}: missing variables {missing}")
@@ -224,5 +262,5 @@ def results_dir(scene: Any, out: str | Path | None = None) -> Path:
 
 
 def var(data: Any, dims: Any, units: str, long_name: str, **attrs: Any) -> xr.Variable:
-    """An ``xarray.Variable`` with its CF ``units`` and ``long_name``."""
-    return xr.Variable(dims, data, attrs={"units": units, "long_name": long_name, **attrs})
+    """An ``xarray.Variable`` with its CF ``units`` (none when ``units`` is empty) and ``long_name``."""
+    return xr.Variable(dims, data, attrs={**({"units": units} if units else {}), "long_name": long_name, **attrs})

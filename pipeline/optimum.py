@@ -17,7 +17,8 @@ Both work on one roughness/damping slice of ``sweep.nc`` (variables ``regime``, 
 
 Rules shared by both finders:
 
-* a point with a NaN (or missing-regime ``-1``) in any quantity the rule uses is not a candidate;
+* a point with a NaN (or a missing regime: NaN as xarray decodes the declared ``_FillValue``) in any
+  quantity the rule uses is not a candidate;
 * the FHM/BV limit is strict (``fhm_bv < limit``);
 * ties in the minimised quantity (equal within ``atol`` [nm]) go to the *smallest protrusion*:
   the same clearance or interference for less heater power and less thermal bulge is preferable,
@@ -35,16 +36,17 @@ from typing import Any, Iterator
 import numpy as np
 import xarray as xr
 
-FLYING, BOUNCING, SURFING = 0, 1, 2
+from .variables import SCALARS, Regime, regime_name
+
+FLYING, BOUNCING, SURFING = Regime.FLYING, Regime.BOUNCING, Regime.SURFING
 
 #: Stable-flying criterion on the FHM [%] (the paper).
 FHM_LIMIT = 10.0
 #: Small-bouncing criterion on the BV [%] for the steady-sliding optimum.
 BV_LIMIT = 2.0
-#: Quantities copied into :attr:`Optimum.values` when the sweep has them.
-REPORTED = ("fhm_bv", "clearance", "min_clearance", "interference", "contact_force", "friction_force",
-            "adhesion_force", "net_force", "friction_coefficient", "mean_pressure", "shear_stress",
-            "real_area", "nominal_area", "contact_fraction", "regime")
+#: Quantities copied into :attr:`Optimum.values` when the sweep has them: every steady-window scalar
+#: of the variable schema but the bulge geometry.
+REPORTED = tuple(n for n in SCALARS if n != "protrusion_radius")
 
 
 @dataclass
@@ -139,7 +141,7 @@ def _values_at(ds: xr.Dataset, i: int) -> tuple[dict[str, float], dict[str, str]
     for name in REPORTED:
         if name in ds:
             vals[name] = float(np.asarray(ds[name].values).reshape(-1)[i])
-            units[name] = str(ds[name].attrs.get("units", ""))
+            units[name] = str(ds[name].attrs.get("units", SCALARS[name].units))
     return vals, units
 
 
@@ -155,26 +157,26 @@ def _find(ds: xr.Dataset, *, kind: str, regime: int, limit: float, minimise: str
           atol: float) -> Optimum:
     ds = one_slice(ds)
     prot = np.asarray(ds["protrusion"].values, dtype=float)
-    reg = _column(ds, "regime", fill=-1)
+    reg = _column(ds, "regime")
     fhm = _column(ds, "fhm_bv")
     key = _column(ds, minimise)
-    regime_name = {FLYING: "flying", BOUNCING: "bouncing", SURFING: "surfing"}[regime]
-    criterion = (f"{regime_name} (regime {regime}) with {limit_name} < {limit:g} %, least {minimise}; "
+    name = regime_name(regime)
+    criterion = (f"{name} (regime {int(regime)}) with {limit_name} < {limit:g} %, least {minimise}; "
                  f"ties -> smallest protrusion")
     if "regime" not in ds:
         return Optimum(kind, criterion, None, reason="the sweep has no 'regime' variable (no contact effect)")
     in_regime = (reg == regime) & np.isfinite(prot)
     if not in_regime.any():
-        return Optimum(kind, criterion, None, reason=f"no {regime_name} point in the sweep")
+        return Optimum(kind, criterion, None, reason=f"no {name} point in the sweep")
     usable = in_regime & np.isfinite(fhm) & np.isfinite(key)
     if not usable.any():
         return Optimum(kind, criterion, None,
-                       reason=f"every {regime_name} point has NaN {limit_name} or {minimise}")
+                       reason=f"every {name} point has NaN {limit_name} or {minimise}")
     ok = usable & (fhm < limit)
     if not ok.any():
         j = np.flatnonzero(usable)[np.argmin(fhm[usable])]
         return Optimum(kind, criterion, None,
-                       reason=f"no {regime_name} point has {limit_name} < {limit:g} %; the smallest is "
+                       reason=f"no {name} point has {limit_name} < {limit:g} %; the smallest is "
                               f"{fhm[j]:.3g} % at {prot[j]:g} nm")
     i = _pick(prot, key, ok, atol)
     vals, units = _values_at(ds, i)

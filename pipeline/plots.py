@@ -19,8 +19,10 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
-#: Regime code -> (name, shading colour).
-REGIME_COLOURS = {0: ("flying", "#cfe8ff"), 1: ("bouncing", "#ffe1b3"), 2: ("surfing", "#d5f5d0")}
+from .variables import GROUPS, Regime, regime_name
+
+#: Regime code -> (name, shading colour); names from the variable schema.
+REGIME_COLOURS = {int(r): (regime_name(r), c) for r, c in zip(Regime, ("#cfe8ff", "#ffe1b3", "#d5f5d0"))}
 DPI = 150
 LINE_COLOURS = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf")
 
@@ -42,8 +44,12 @@ def axis_label(quantity: str, units: str | None) -> str:
 
 
 def var_label(da: xr.DataArray, quantity: str | None = None) -> str:
-    """Axis label of a data array from its ``units`` attribute (and ``long_name`` if no quantity)."""
-    return axis_label(quantity or da.attrs.get("long_name", da.name or ""), da.attrs.get("units"))
+    """Axis label of a data array from its ``units`` attribute (and ``long_name`` if no quantity); a
+    variable without them takes both from its declaration in :mod:`pipeline.variables`."""
+    decl = next((g[str(da.name)] for g in GROUPS.values() if str(da.name) in g), None)
+    units = da.attrs.get("units", decl.units if decl else None)
+    name = quantity or da.attrs.get("long_name") or (decl.long_name if decl else str(da.name or ""))
+    return axis_label(name, units)
 
 
 def title(what: str, scene: str) -> str:
@@ -96,7 +102,7 @@ def shade_regimes(ax: Any, x: np.ndarray, regime: np.ndarray, legend: bool = Tru
     start = 0
     for i in range(1, x.size + 1):
         if i == x.size or regime[i] != regime[start]:
-            code = int(regime[start])
+            code = int(regime[start]) if np.isfinite(regime[start]) else -1  # NaN: missing (not shaded)
             if code in REGIME_COLOURS:
                 name, colour = REGIME_COLOURS[code]
                 ax.axvspan(edges[start], edges[i], color=colour, alpha=0.8, lw=0, zorder=0,
@@ -126,7 +132,7 @@ def _shade_transient(ax: Any, transient_ms: float | None) -> None:
 
 
 def _regime_name(code: int | None) -> str:
-    return REGIME_COLOURS.get(int(code), ("unknown", ""))[0] if code is not None and code >= 0 else "unknown"
+    return "unknown" if code is None else {"missing": "unknown"}.get(regime_name(code), regime_name(code))
 
 
 # --------------------------------------------------------------------------------------------- Fig. 3
@@ -387,13 +393,13 @@ def fig_roughness(rough: xr.Dataset, scene: str, path: Path, interface: xr.Datas
 
 def _roughness_bars(rough: xr.Dataset, scene: str, path: Path) -> Path:
     surfaces = [str(s) for s in rough["surface"].values]
-    methods = [str(m) for m in rough["method"].values]
+    methods = [str(m) for m in rough["route"].values]
     fig, axes = new_figure(1, len(ROUGH_BARS), size=(4.0 * len(ROUGH_BARS), 4.4), squeeze=False)
     x = np.arange(len(surfaces))
     w = 0.8 / max(len(methods), 1)
     for ax, (name, q) in zip(axes[0], ROUGH_BARS):
         for j, m in enumerate(methods):
-            vals = np.asarray(rough[name].sel({"method": m}).values, float)
+            vals = np.asarray(rough[name].sel(route=m).values, float)
             bars = ax.bar(x + (j - (len(methods) - 1) / 2) * w, np.nan_to_num(vals), w,
                           color=LINE_COLOURS[j], label=f"{m} route")
             for b, v in zip(bars, vals):
@@ -418,13 +424,13 @@ def _fmt(v: float) -> str:
 
 def _roughness_table(rough: xr.Dataset, scene: str, path: Path, interface: xr.Dataset | None) -> Path:
     surface = "explicit" if "explicit" in [str(s) for s in rough["surface"].values] else str(rough["surface"].values[0])
-    methods = [str(m) for m in rough["method"].values]
+    methods = [str(m) for m in rough["route"].values]
     rows, cells, dropped = [], [], []
     for name, q in ROUGH_TABLE:
         if name not in rough:
             continue
         da = rough[name].sel(surface=surface)
-        vals = [float(da.sel({"method": m})) for m in methods] if "method" in da.dims else [float(da)] * len(methods)
+        vals = [float(da.sel(route=m)) for m in methods] if "route" in da.dims else [float(da)] * len(methods)
         if not np.isfinite(vals).any():
             dropped.append(q)
             continue

@@ -33,12 +33,13 @@ import numpy as np
 from . import dynamics as dyn
 from .physics import air_bearing as ab
 from .physics.geometry import effective_radius, nominal_area
+from .variables import Regime, regime_name
 
 NM, UM, MM = 1e-9, 1e-6, 1e-3
 
 #: Regime codes (``flag_values``/``flag_meanings`` of the ``regime`` variable).
-FLYING, BOUNCING, SURFING = 0, 1, 2
-REGIMES = {FLYING: "flying", BOUNCING: "bouncing", SURFING: "surfing"}
+FLYING, BOUNCING, SURFING = Regime.FLYING, Regime.BOUNCING, Regime.SURFING
+REGIMES = {r: regime_name(r) for r in Regime}
 SURFING_FRACTION = 0.99
 
 

@@ -11,7 +11,7 @@ import xarray as xr
 
 from pipeline import cli
 from pipeline.io import DatasetError, write_dataset
-from pipeline.outputs import HISTORIES, REGIME_ATTRS, SCALARS
+from pipeline.variables import HISTORIES, SCALARS
 from pipeline.stages import report
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
@@ -21,12 +21,7 @@ K = 0.4454
 
 
 def _scalar_var(name, values, dims):
-    units, _, long_name = SCALARS[name]
-    attrs = {"units": units, "long_name": long_name}
-    if name == "regime":
-        attrs.update(REGIME_ATTRS)
-        return xr.Variable(dims, np.asarray(values, np.int8), attrs=attrs)
-    return xr.Variable(dims, np.asarray(values, float), attrs=attrs)
+    return SCALARS[name].data(values, dims)
 
 
 def slice_values(scale: float = 1.0) -> dict[str, np.ndarray]:
@@ -89,7 +84,7 @@ def write_histories(out):
         "shear_stress": np.where(contact > 0, 312 + 1 * wave, np.nan),
     }
     dims = ("protrusion", "roughness", "damping", "time")
-    data = {n: xr.Variable(dims, v.reshape(shape), attrs={"units": HISTORIES[n][0], "long_name": HISTORIES[n][2]})
+    data = {n: xr.Variable(dims, v.reshape(shape), attrs=HISTORIES[n].attrs())
             for n, v in values.items()}
     coords = {"protrusion": ("protrusion", prot, {"units": "nm", "long_name": "TFC protrusion"}),
               "roughness": ("roughness", np.array(["scene"], dtype=object), {"units": "1", "long_name": "set"}),
@@ -129,7 +124,7 @@ def write_dmw(out):
 
 def write_roughness(out):
     surfaces = np.array(["disk", "tfc", "combined"], dtype=object)
-    sm = ("surface", "method")
+    sm = ("surface", "route")
     vals = {"sigma": [[0.4, 0.41], [0.3, 0.31], [0.5, np.nan]], "sigma_s": [[0.3, 0.3], [0.2, 0.2], [0.35, np.nan]],
             "summit_radius": [[4.0, 3.0], [6.0, 5.0], [5.0, np.nan]],
             "summit_density": [[12.0, 9.0], [8.0, 7.0], [10.0, np.nan]]}
@@ -137,7 +132,7 @@ def write_roughness(out):
     data = {k: (sm, np.array(v), {"units": units[k], "long_name": k}) for k, v in vals.items()}
     data["pixel_size"] = ("surface", [5.0, 5.0, np.nan], {"units": "nm", "long_name": "pixel size"})
     ds = xr.Dataset(data, coords={"surface": ("surface", surfaces, {"units": "1", "long_name": "surface"}),
-                                  "method": ("method", np.array(["spectral", "summits"], dtype=object),
+                                  "route": ("route", np.array(["spectral", "summits"], dtype=object),
                                              {"units": "1", "long_name": "route"})})
     write_dataset(ds, out / "roughness.nc", stage="roughness")
 

@@ -101,7 +101,7 @@ from scipy.stats import norm
 
 from .. import slider as sl
 from ..io import read_dataset, var, write_dataset
-from ..outputs import SCALARS
+from ..variables import SCALARS
 from .interface import build_tables, roughness_statistics
 from .simulate import resolve_k
 
@@ -384,7 +384,7 @@ def _evaluate(scene: Any, values: dict[str, float], inputs: _Inputs, k: float | 
         info[i] = r.info[1:4]
         for j, name in enumerate(HEADLINE):
             if name in s:
-                vals[i, j] = s[name] * SCALARS[name][1]
+                vals[i, j] = s[name] * SCALARS[name].si_factor
     return Result(vals, sim, build, info, failed, msgs)
 
 
@@ -546,7 +546,7 @@ def run(scene: Any, out: Path, **options: Any) -> Path:
         "error_definition": "|x - x_ref| / max(|x_ref|, floor); NaN if both NaN (output does not apply), inf if "
                             "only one is NaN or the integration failed",
         "error_floors": {o: ERROR_FLOORS[o] for o in HEADLINE},
-        "error_floor_units": {o: SCALARS[o][0] for o in HEADLINE},
+        "error_floor_units": {o: SCALARS[o].units for o in HEADLINE},
         "tolerance": tol,
         "combined_tolerance": combined_tol,
         "choice_rule": "cheapest setting (summed wall_time over the points) whose every headline error is below "
@@ -649,8 +649,8 @@ def _dataset(points, knobs, setting, error, values, sim_time, setup_time, wall, 
     P, K, L, O = ("point",), ("knob",), ("level",), ("output",)
     PKL = ("point", "knob", "level")
     data = {
-        "setting": var(setting, ("knob", "level"), "various", "value of the knob at this level (unit: the knob's "
-                       "setting_units; NaN pads knobs with fewer settings)"),
+        "setting": var(setting, ("knob", "level"), "", "value of the knob at this level (unit: the knob's "
+                       "setting_units; NaN pads knobs with fewer settings)", unit_variable="setting_units"),
         "setting_units": var(np.array([kb.units for kb in knobs], dtype=object), K, "1",
                              "unit of the knob's settings"),
         "knob_description": var(np.array([kb.long_name for kb in knobs], dtype=object), K, "1",
@@ -674,11 +674,11 @@ def _dataset(points, knobs, setting, error, values, sim_time, setup_time, wall, 
         "chosen_level": var(np.array([chosen_level[n] if chosen_level[n] is not None else -1 for n in names]), K,
                             "1", "level of the chosen default (-1: no setting passes)"),
         "chosen_setting": var(np.array([kb.settings[chosen_level[kb.name]] if chosen_level[kb.name] is not None
-                                        else np.nan for kb in knobs], float), K, "various",
-                              "chosen default of the knob (unit: setting_units)"),
+                                        else np.nan for kb in knobs], float), K, "",
+                              "chosen default of the knob (unit: setting_units)", unit_variable="setting_units"),
     }
     for j, name in enumerate(HEADLINE):
-        units, _, long_name = SCALARS[name]
+        units, long_name = SCALARS[name].units, SCALARS[name].long_name
         data[name] = var(values[..., j], PKL, units, long_name + " (at this setting)",
                          error_floor=ERROR_FLOORS[name])
         data[f"reference_{name}"] = var(ref.values[:, j], P, units, long_name + " (reference)",

@@ -59,6 +59,7 @@ import xarray as xr
 from .. import optimum as opt
 from .. import plots
 from ..io import DatasetError, read_dataset
+from ..variables import regime_name
 
 log = logging.getLogger(__name__)
 
@@ -81,7 +82,6 @@ COLUMNS = (("clearance", "clearance"), ("fhm_bv", "FHM/BV"), ("interference", "i
            ("friction_coefficient", "friction coefficient"), ("contact_force", "contact force"),
            ("friction_force", "friction force"), ("adhesion_force", "adhesion force"),
            ("contact_fraction", "contact fraction"))
-REGIME_NAMES = {0: "flying", 1: "bouncing", 2: "surfing"}
 BEFORE_CONTACT_NM = 2.0
 TOL = 1e-6
 
@@ -216,7 +216,7 @@ def summary_table(combos: list[tuple[dict[str, Any], xr.Dataset]]) -> tuple[list
         reg = np.asarray(ds["regime"].values).reshape(-1) if "regime" in ds else np.full(x.size, -1)
         for i in table_rows(ds):
             row: list[Any] = [labels["roughness"] or "", labels["damping"] if labels["damping"] is not None else "",
-                              float(x[i]), REGIME_NAMES.get(int(reg[i]), "")]
+                              float(x[i]), regime_name(reg[i])]
             for n, _ in present:
                 row.append(float(np.asarray(ds[n].values).reshape(-1)[i]) if n in ds else math.nan)
             rows.append(row)
@@ -276,7 +276,8 @@ def _regime_at(ds: xr.Dataset, delta: float) -> int | None:
         return None
     x = ds["protrusion"].values
     j = int(np.argmin(np.abs(x - delta)))
-    return int(np.asarray(ds["regime"].values).reshape(-1)[j]) if abs(x[j] - delta) < TOL else None
+    code = float(np.asarray(ds["regime"].values).reshape(-1)[j])
+    return int(code) if abs(x[j] - delta) < TOL and np.isfinite(code) else None
 
 
 def history_protrusions(hist: xr.Dataset, scene: Any) -> list[float]:
@@ -448,7 +449,7 @@ def comparison_markdown(combos: list, data: dict, scene: Any, name: str) -> str:
         if j is not None:
             n.append(f"Between {x[j]:g} nm (flying, mean clearance {_g(clr[j])} nm, minimum "
                      f"{_g(min_before)} nm, mean adhesion {_g(adh[j])} mN) and {fc:g} nm "
-                     f"({REGIME_NAMES.get(int(reg[i_fc]), '?')}, clearance {_g(clr[i_fc])} nm, adhesion "
+                     f"({regime_name(reg[i_fc])}, clearance {_g(clr[i_fc])} nm, adhesion "
                      f"{_g(adh[i_fc])} mN against a contact force of {_g(con[i_fc])} mN, net interface force "
                      f"{_g(net[i_fc])} mN) the bulge "
                      + ("jumps into contact." if snap else "comes into contact."))

@@ -10,8 +10,10 @@ coordinates
     ``surface`` : one label per input file (its stem, made unique), then always ``"combined"``, the
     surface the interface stage uses (SPEC.md 1: moments add). For explicit statistics the labels are
     ``"explicit"`` and ``"combined"`` (identical rows).
-    ``method`` : ``"spectral"`` (McCool/Nayak from profile moments), ``"summits"`` (direct count).
-variables on (surface, method)
+    ``route`` : ``"spectral"`` (McCool/Nayak from profile moments), ``"summits"`` (direct count); the
+    scene key ``roughness.route`` picks one of them for the interface model. (Formerly ``method``, which
+    collided with the ``method=`` keyword of xarray's ``sel``.)
+variables on (surface, route)
     ``sigma`` [nm], ``sigma_s`` [nm], ``y_s`` [nm], ``summit_radius`` [um], ``summit_density`` [um-2],
     ``bandwidth_alpha`` [1], ``plasticity_index`` [1] (GW form), ``plasticity_index_ke`` [1] (CEB/KE).
 variables on (surface)
@@ -40,12 +42,13 @@ from typing import Any, Sequence
 import numpy as np
 import xarray as xr
 
-from ..io import DatasetError, file_hash, is_current, read_dataset, var, write_dataset
+from ..io import DatasetError, file_hash, is_current, read_dataset, write_dataset
 from ..physics import statistics as st
 from ..physics import surface as sf
+from ..variables import ROUGHNESS
 
 FILENAME = "roughness.nc"
-METHODS = ("spectral", "summits")
+ROUTES = ("spectral", "summits")
 COMBINED = "combined"
 
 
@@ -101,49 +104,31 @@ def build_dataset(summaries: Sequence[sf.SurfaceSummary], scene: Any = None, det
             cols["sigma"][i, j], cols["sigma_s"][i, j], cols["y_s"][i, j] = r.sigma, r.sigma_s, r.y_s
             cols["R"][i, j], cols["eta"][i, j], cols["alpha"][i, j] = r.R * 1e-3, r.eta * 1e6, r.alpha
             cols["psi"][i, j], cols["psi_ke"][i, j] = _plasticity(mat["E"], mat["H"], mat["nu"], r.sigma_s, r.R)
-    sm = ("surface", "method")
+    sm = ("surface", "route")
     per = ("surface",)
     gw = "Greenwood & Williamson 1966"
-    ds = xr.Dataset(
-        {
-            "sigma": var(cols["sigma"], sm, "nm", "rms roughness of the (detrended) surface heights"),
-            "sigma_s": var(cols["sigma_s"], sm, "nm", "standard deviation of summit heights",
-                           formula="spectral: sqrt(sigma^2 - 3.717e-4/(eta R)^2) (McCool 1986); "
-                                   "summits: std of counted summit heights"),
-            "y_s": var(cols["y_s"], sm, "nm", "mean of summit heights minus mean of surface heights",
-                       formula="spectral: 4 sigma/sqrt(pi alpha) (McCool 1986); summits: direct"),
-            "summit_radius": var(cols["R"], sm, "um", "mean summit radius of curvature",
-                                 formula="spectral: 0.375 sqrt(pi/m4) (Nayak 1971, McCool 1986); "
-                                         "summits: 1/mean(-(d2z/dx2 + d2z/dy2)/2) at summits"),
-            "summit_density": var(cols["eta"], sm, "um-2", "summit density (summits per nominal area)",
-                                  formula="spectral: m4/(6 pi sqrt(3) m2) (Nayak 1971); "
-                                          "summits: 8-neighbour maxima per interior area"),
-            "bandwidth_alpha": var(cols["alpha"], sm, "1", "Nayak bandwidth parameter",
-                                   formula="spectral: m0 m4/m2^2; summits: 2412.74 (sigma eta R)^2 "
-                                           "(McCool 1986) with the counted eta and R"),
-            "plasticity_index": var(cols["psi"], sm, "1", "plasticity index, Greenwood-Williamson form",
-                                    formula=f"(E'/H) sqrt(sigma_s/R) ({gw})"),
-            "plasticity_index_ke": var(cols["psi_ke"], sm, "1", "plasticity index, CEB/Kogut-Etsion form",
-                                       formula="(2E'/(pi K H)) sqrt(sigma_s/R), K = 0.454 + 0.41 nu "
-                                               "(Kogut & Etsion 2003)"),
-            "pixel_size": var(np.array([s.pixel_size for s in surfaces]), per, "nm",
-                              "lateral sampling interval of the scan (geometric mean of x and y)"),
-            "m0": var(np.array([s.m0 for s in surfaces]), per, "nm2", "profile spectral moment m0 (height variance)"),
-            "m2": var(np.array([s.m2 for s in surfaces]), per, "1",
-                      "profile spectral moment m2 (slope variance, mean of x and y profiles)"),
-            "m4": var(np.array([s.m4 for s in surfaces]), per, "nm-2",
-                      "profile spectral moment m4 (curvature variance, mean of x and y profiles)"),
-            "summit_count": var(np.array([s.summits.count for s in surfaces]), per, "1",
-                                "number of summits counted (summit route)"),
-        },
-        coords={
-            "surface": var(np.array([s.label for s in surfaces], dtype=object), per, "1",
-                           "surface (input file stem, 'explicit', or 'combined' = all surfaces combined)"),
-            "method": var(np.array(METHODS, dtype=object), ("method",), "1",
-                          "route to the asperity statistics ('spectral': McCool/Nayak from profile moments, "
-                          "'summits': direct summit count)"),
-        },
-    )
+    formulas = {
+        "sigma_s": "spectral: sqrt(sigma^2 - 3.717e-4/(eta R)^2) (McCool 1986); summits: std of counted summit "
+                   "heights",
+        "y_s": "spectral: 4 sigma/sqrt(pi alpha) (McCool 1986); summits: direct",
+        "summit_radius": "spectral: 0.375 sqrt(pi/m4) (Nayak 1971, McCool 1986); "
+                         "summits: 1/mean(-(d2z/dx2 + d2z/dy2)/2) at summits",
+        "summit_density": "spectral: m4/(6 pi sqrt(3) m2) (Nayak 1971); summits: 8-neighbour maxima per interior area",
+        "bandwidth_alpha": "spectral: m0 m4/m2^2; summits: 2412.74 (sigma eta R)^2 (McCool 1986) with the counted "
+                           "eta and R",
+        "plasticity_index": f"(E'/H) sqrt(sigma_s/R) ({gw})",
+        "plasticity_index_ke": "(2E'/(pi K H)) sqrt(sigma_s/R), K = 0.454 + 0.41 nu (Kogut & Etsion 2003)",
+    }
+    per_route = {"sigma": "sigma", "sigma_s": "sigma_s", "y_s": "y_s", "summit_radius": "R", "summit_density": "eta",
+                 "bandwidth_alpha": "alpha", "plasticity_index": "psi", "plasticity_index_ke": "psi_ke"}
+    per_surface = {"pixel_size": [s.pixel_size for s in surfaces], "m0": [s.m0 for s in surfaces],
+                   "m2": [s.m2 for s in surfaces], "m4": [s.m4 for s in surfaces],
+                   "summit_count": [s.summits.count for s in surfaces]}
+    data = {name: ROUGHNESS[name].data(cols[col], sm, **({"formula": formulas[name]} if name in formulas else {}))
+            for name, col in per_route.items()}
+    data.update({name: ROUGHNESS[name].data(np.array(values), per) for name, values in per_surface.items()})
+    ds = xr.Dataset(data, coords={"surface": ROUGHNESS["surface"].data([s.label for s in surfaces], per),
+                                  "route": ROUGHNESS["route"].data(ROUTES, ("route",))})
     files = {s.label: s.source for s in summaries if s.source}
     attrs: dict[str, Any] = {
         "source_files": files,
@@ -254,13 +239,13 @@ def combined_statistics(path: str | Path, route: str = "spectral") -> dict[str, 
         When the file is missing or incomplete, or the route has no combined statistics (the summit
         route for several scans).
     """
-    if route not in METHODS:
-        raise ValueError(f"route {route!r}: expected one of {METHODS}")
+    if route not in ROUTES:
+        raise ValueError(f"route {route!r}: expected one of {ROUTES}")
     names = ("sigma", "sigma_s", "y_s", "summit_radius", "summit_density", "bandwidth_alpha")
     ds = read_dataset(path, stage="roughness", variables=names)
     if COMBINED not in ds["surface"].values:
         raise DatasetError(f"{path}: no '{COMBINED}' surface")
-    row = ds.sel({"surface": COMBINED, "method": route})  # dict: `method` is also a keyword of sel
+    row = ds.sel(surface=COMBINED, route=route)
     keys = ("sigma_nm", "sigma_s_nm", "y_s_nm", "summit_radius_um", "summit_density_per_um2", "alpha")
     result = {k: float(row[n]) for k, n in zip(keys, names)}
     if not all(np.isfinite(result[k]) for k in ("sigma_nm", "summit_radius_um", "summit_density_per_um2")):

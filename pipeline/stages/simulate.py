@@ -21,8 +21,8 @@ import xarray as xr
 from scipy.stats import norm
 
 from .. import slider as sl
-from ..io import read_dataset, var, write_dataset
-from ..outputs import history_variable, scalar_variable
+from ..io import read_dataset, write_dataset
+from ..variables import HISTORIES, coordinate, history, scalar
 from . import ensure
 
 log = logging.getLogger(__name__)
@@ -94,28 +94,19 @@ def histories_dataset(runs: list[tuple[float, sl.Run, dict, dict]]) -> xr.Datase
     time = runs[0][1].time
     data = {}
     for name in runs[0][2]:
-        if name in ("z", "pitch"):
-            continue
-        data[name] = history_variable(name, np.stack([r[2][name] for r in runs]), ("protrusion", "time"))
-    data["z"] = var(np.stack([r[2]["z"] for r in runs]) * 1e9, ("protrusion", "time"), "nm",
-                    "vertical displacement of the centre of gravity (up positive)")
-    data["pitch"] = var(np.stack([r[2]["pitch"] for r in runs]) * 1e6, ("protrusion", "time"), "urad",
-                        "pitch angle (leading edge up positive)")
+        data[name] = history(name, np.stack([r[2][name] for r in runs]), ("protrusion", "time"))
     info = np.stack([r[1].info for r in runs])
-    data["steps"] = var(info[:, 1], ("protrusion",), "1", "accepted integrator steps")
-    data["rejected_steps"] = var(info[:, 2], ("protrusion",), "1", "rejected integrator steps")
-    data["contact_switches"] = var(info[:, 3], ("protrusion",), "1", "contact on/off events located")
-    coords = {"protrusion": var(prot, "protrusion", "nm", "TFC protrusion"),
-              "time": var(time, "time", "s", "time")}
+    for j, name in enumerate(("steps", "rejected_steps", "contact_switches"), start=1):
+        data[name] = HISTORIES[name].data(info[:, j], ("protrusion",))
+    coords = {"protrusion": coordinate("protrusion", prot), "time": coordinate("time", time)}
     return xr.Dataset(data, coords=coords)
 
 
 def summary_dataset(runs: list[tuple[float, sl.Run, dict, dict]]) -> xr.Dataset:
     """Dataset of the steady-window scalars (dim ``protrusion``) of runs."""
     prot = np.array([r[0] for r in runs])
-    data = {name: scalar_variable(name, np.array([r[3][name] for r in runs]), ("protrusion",))
-            for name in runs[0][3]}
-    return xr.Dataset(data, coords={"protrusion": var(prot, "protrusion", "nm", "TFC protrusion")})
+    data = {name: scalar(name, np.array([r[3][name] for r in runs]), ("protrusion",)) for name in runs[0][3]}
+    return xr.Dataset(data, coords={"protrusion": coordinate("protrusion", prot)})
 
 
 def model_attrs(model: sl.Model, k_source: str) -> dict[str, Any]:

@@ -32,8 +32,8 @@ import numpy as np
 import xarray as xr
 
 from .. import slider as sl
-from ..io import is_current, read_dataset, var, write_dataset
-from ..outputs import HISTORIES, SCALARS, history_variable, scalar_variable
+from ..io import is_current, read_dataset, write_dataset
+from ..variables import HISTORIES, SCALARS, coordinate, history, scalar
 from . import ensure
 from .interface import build_tables, roughness_statistics
 from .simulate import model_attrs, resolve_k
@@ -111,17 +111,16 @@ def run_batch(scene: Any, batch: Batch, interface_path: str | None, dmw_path: st
         rows.append(sl.summarize(run, hist))
         if any(abs(delta - h) < 1e-9 for h in history_nm):
             hist_rows.append((delta, run.time, hist))
-    data = {name: scalar_variable(name, np.array([r[name] for r in rows]), ("protrusion",)) for name in rows[0]}
-    coords = {"protrusion": var(np.array(batch.protrusions), "protrusion", "nm", "TFC protrusion")}
+    data = {name: scalar(name, np.array([r[name] for r in rows]), ("protrusion",)) for name in rows[0]}
+    coords = {"protrusion": coordinate("protrusion", np.array(batch.protrusions))}
     ds = xr.Dataset(data, coords=coords)
     if hist_rows:
-        coords_h = {"hist_protrusion": var(np.array([h[0] for h in hist_rows]), "hist_protrusion", "nm",
-                                           "protrusion of the kept histories"),
-                    "time": var(hist_rows[0][1], "time", "s", "time")}
+        coords_h = {"hist_protrusion": coordinate("hist_protrusion", np.array([h[0] for h in hist_rows])),
+                    "time": coordinate("time", hist_rows[0][1])}
         for name in hist_rows[0][2]:
             if name in HISTORIES:
-                ds["h_" + name] = history_variable(name, np.stack([h[2][name] for h in hist_rows]),
-                                                   ("hist_protrusion", "time"))
+                ds["h_" + name] = history(name, np.stack([h[2][name] for h in hist_rows]),
+                                          ("hist_protrusion", "time"))
         ds = ds.assign_coords(coords_h)
     ds.attrs.update({"sweep_key": key, "roughness_label": batch.label, "damping_ratio": batch.damping,
                      "batch": batch.index})
@@ -269,9 +268,8 @@ def assemble(scene: Any, out: Path, prot: np.ndarray, labels: list[str], damp: l
         for name in ds.data_vars:
             if name.startswith("h_"):
                 continue
-            if name not in arrays:
-                arrays[name] = np.full(shape, -1 if name == "regime" else np.nan,
-                                       dtype=np.int8 if name == "regime" else float)
+            if name not in arrays:  # NaN: not computed (regime: its declared _FillValue on disk)
+                arrays[name] = np.full(shape, np.nan)
             arrays[name][list(b.indices), r, d] = ds[name].values
         if "hist_protrusion" in ds.coords:
             if hist_prot is None:
@@ -286,18 +284,10 @@ def assemble(scene: Any, out: Path, prot: np.ndarray, labels: list[str], damp: l
                     for i, hp in enumerate(ds["hist_protrusion"].values):
                         j = int(np.argmin(np.abs(hist_prot - hp)))
                         hist[base][j, r, d] = ds[name].values[i]
-    coords = {"protrusion": var(prot, "protrusion", "nm", "TFC protrusion"),
-              "roughness": var(np.array(labels, dtype=object), "roughness", "1", "roughness set label"),
-              "damping": var(np.array(damp), "damping", "1", "modal damping ratio of the air bearing")}
+    coords = {"protrusion": coordinate("protrusion", prot), "roughness": coordinate("roughness", labels),
+              "damping": coordinate("damping", damp)}
     dims = ("protrusion", "roughness", "damping")
-    data = {}
-    for name, a in arrays.items():
-        units, _, long_name = SCALARS[name]
-        attrs_v = {"units": units, "long_name": long_name}
-        if name == "regime":
-            from ..outputs import REGIME_ATTRS
-            attrs_v.update(REGIME_ATTRS)
-        data[name] = xr.Variable(dims, a, attrs=attrs_v)
+    data = {name: SCALARS[name].data(a, dims) for name, a in arrays.items()}
     ds = xr.Dataset(data, coords=coords)
     sets = roughness_sets(scene)
     for label in labels:
@@ -307,10 +297,9 @@ def assemble(scene: Any, out: Path, prot: np.ndarray, labels: list[str], damp: l
     path = write_dataset(ds, out / "sweep.nc", scene, stage="sweep", inputs=inputs, extra_attrs=extra)
     if hist:
         hc = dict(coords)
-        hc["protrusion"] = var(hist_prot, "protrusion", "nm", "TFC protrusion")
-        hc["time"] = var(time, "time", "s", "time")
-        hds = xr.Dataset({name: xr.Variable(("protrusion", "roughness", "damping", "time"), a,
-                                            attrs={"units": HISTORIES[name][0], "long_name": HISTORIES[name][2]})
+        hc["protrusion"] = coordinate("protrusion", hist_prot)
+        hc["time"] = coordinate("time", time)
+        hds = xr.Dataset({name: HISTORIES[name].data(a, ("protrusion", "roughness", "damping", "time"))
                           for name, a in hist.items()}, coords=hc)
         write_dataset(hds, out / "sweep_histories.nc", scene, stage="sweep", inputs=inputs, extra_attrs=extra)
     return path

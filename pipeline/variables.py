@@ -1,0 +1,381 @@
+"""Every output variable of the pipeline, declared once (the variable schema).
+
+Each :class:`Variable` states its name, its dataset units (the paper's units, a UDUNITS string),
+the factor from SI (dataset value = SI value x ``si_factor``), its ``long_name``, its CF
+``standard_name`` where the CF table has one (only ``time`` here: CF has no standard names for
+tribology), the dimensions it carries beyond the grid of its dataset, the scene effect that
+produces it (absent without that effect), and for flag variables their values and missing value.
+
+Groups (:data:`GROUPS`) collect the variables of one kind; :data:`DATASETS` says which groups each
+dataset file may hold. Datasets (:mod:`pipeline.stages`), plots (:mod:`pipeline.plots`), the report's
+tables and the optimum finder (:mod:`pipeline.optimum`) read names, units and flags from here, and
+``tests/test_variables.py`` checks that every variable every stage writes is declared here with the
+units it is written in.
+
+How the datasets meet CF-1.8 (:func:`encoding`, applied by :func:`pipeline.io.write_dataset`):
+
+* coordinates carry no ``_FillValue`` (CF 2.5.1);
+* ``time`` is an elapsed simulated time in seconds; CF 4.4 wants a reference date in its units,
+  so on disk it reads ``s since 1970-01-01 00:00:00`` with ``standard_name = "time"`` and
+  ``axis = "T"``; :func:`pipeline.io.read_dataset` gives back plain seconds (``units = "s"``).
+  Readers using xarray directly get datetimes from 1970-01-01 unless they pass ``decode_times=False``;
+* labels (string coordinates such as ``roughness`` or ``route``) have no units and are stored as
+  character arrays (CF 2.2), which xarray decodes back to strings;
+* ``regime`` is a flag variable (:class:`Regime`) whose missing value (-1, a point not computed)
+  is declared as ``_FillValue``; xarray reads it as a float with NaN there.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import IntEnum
+from typing import Any, Iterable
+
+import numpy as np
+import xarray as xr
+
+
+class Regime(IntEnum):
+    """Regime of a steady window (the ``regime`` variable's ``flag_values``).
+
+    Rule (:mod:`pipeline.slider`): flying = no sample in contact; surfing = in contact in at least
+    99 % of the samples (steady sliding); bouncing = otherwise.
+    """
+
+    FLYING = 0
+    BOUNCING = 1
+    SURFING = 2
+
+
+#: Missing value of ``regime`` (a grid point not computed): declared as ``_FillValue``.
+REGIME_FILL = -1
+
+
+def regime_name(code: Any) -> str:
+    """``"flying"``, ``"bouncing"``, ``"surfing"``, or ``"missing"`` for NaN / the fill value."""
+    try:
+        return Regime(int(code)).name.lower()
+    except (TypeError, ValueError):  # NaN (decoded fill) or an unknown code
+        return "missing"
+
+
+@dataclass(frozen=True)
+class Variable:
+    """Declaration of one output variable.
+
+    Attributes
+    ----------
+    name : variable name in the datasets
+    units : dataset units (UDUNITS; ``""`` for labels, which have none)
+    long_name : CF ``long_name``
+    si_factor : dataset value = SI value x ``si_factor``
+    standard_name : CF standard name, where CF has one
+    dims : dimensions beyond the grid of the dataset (e.g. ``("time",)`` for histories)
+    effect : scene effect producing the variable (``None``: always present)
+    dtype : numpy dtype on disk
+    flag_values, flag_meanings : for flag variables
+    fill_value : declared missing value (``_FillValue``), for integer variables
+    extra : further attributes (``rule``, ``formula``, ``axis``, ...)
+    """
+
+    name: str
+    units: str
+    long_name: str
+    si_factor: float = 1.0
+    standard_name: str | None = None
+    dims: tuple[str, ...] = ()
+    effect: str | None = None
+    dtype: str = "float64"
+    flag_values: tuple[int, ...] | None = None
+    flag_meanings: str | None = None
+    fill_value: int | None = None
+    extra: tuple[tuple[str, str], ...] = ()
+
+    def attrs(self) -> dict[str, Any]:
+        """CF attributes of the variable (``_FillValue`` goes into the encoding, not here)."""
+        a: dict[str, Any] = {"long_name": self.long_name}
+        if self.units:
+            a["units"] = self.units
+        if self.standard_name:
+            a["standard_name"] = self.standard_name
+        if self.flag_values is not None:
+            a["flag_values"] = np.array(self.flag_values, dtype=self.dtype)
+            a["flag_meanings"] = self.flag_meanings
+        a.update(dict(self.extra))
+        return a
+
+    def data(self, values: Any, dims: Iterable[str], **attrs: Any) -> xr.Variable:
+        """A variable from values already in dataset units (NaN -> fill value for flags)."""
+        values = np.asarray(values)
+        if self.fill_value is not None:  # NaN (not computed, or a decoded fill) -> the declared fill
+            values = np.where(np.isfinite(values.astype(float)), values, self.fill_value)
+        if self.dtype == "str":
+            return xr.Variable(tuple(dims), values.astype(object), attrs={**self.attrs(), **attrs})
+        return xr.Variable(tuple(dims), values.astype(self.dtype), attrs={**self.attrs(), **attrs},
+                           encoding=self.encoding())
+
+    def from_si(self, values: Any, dims: Iterable[str], **attrs: Any) -> xr.Variable:
+        """A variable from SI values (scaled by ``si_factor``; flags and labels unscaled)."""
+        values = np.asarray(values)
+        if values.dtype.kind in "fiub" and self.si_factor != 1.0:
+            values = values * self.si_factor
+        return self.data(values, dims, **attrs)
+
+    def encoding(self) -> dict[str, Any]:
+        """NetCDF encoding of the variable: its declared missing value."""
+        return {"_FillValue": np.array(self.fill_value, dtype=self.dtype)} if self.fill_value is not None else {}
+
+
+def _group(*items: Variable) -> dict[str, Variable]:
+    return {v.name: v for v in items}
+
+
+V = Variable
+NM, MN, MPA, UM2 = 1e9, 1e3, 1e-6, 1e12
+
+#: Coordinates shared by the datasets.
+COORDINATES = _group(
+    V("protrusion", "nm", "TFC protrusion", NM, dims=("protrusion",)),
+    V("roughness", "", "roughness set label", dims=("roughness",), dtype="str"),
+    V("damping", "1", "modal damping ratio of the air bearing", dims=("damping",)),
+    V("time", "s", "time", standard_name="time", dims=("time",),
+      extra=(("axis", "T"),)),
+    V("hist_protrusion", "nm", "protrusion of the kept histories", NM, dims=("hist_protrusion",)),
+)
+
+#: Steady-window scalars of one scene (:func:`pipeline.slider.summarize`; ``summary.nc``, ``sweep.nc``).
+SCALARS = _group(
+    V("fhm_bv", "%", "flying-height modulation (flying) / bouncing vibration (contact), peak-to-peak over FH0"),
+    V("clearance", "nm", "mean clearance d - k sigma over the steady window", NM),
+    V("min_clearance", "nm", "minimum clearance over the steady window", NM),
+    V("interference", "nm", "mean interference -(d - k sigma) while in contact", NM, effect="contact"),
+    V("contact_force", "mN", "time-mean asperity contact force", MN, effect="contact"),
+    V("friction_force", "mN", "time-mean friction force", MN, effect="friction"),
+    V("adhesion_force", "mN", "time-mean adhesion force (attractive)", MN, effect="adhesion"),
+    V("net_force", "mN", "time-mean vertical interface force on the slider (contact + damping - adhesion)", MN),
+    V("friction_coefficient", "1", "friction coefficient: mean friction / mean contact force", effect="friction"),
+    V("mean_pressure", "MPa", "mean contact pressure over the real area while in contact", MPA, effect="contact"),
+    V("shear_stress", "MPa", "mean shear stress over the real area while in contact", MPA, effect="friction"),
+    V("real_area", "um2", "mean real contact area while in contact", UM2, effect="contact"),
+    V("nominal_area", "um2", "nominal contact area of the TFC bulge", UM2),
+    V("protrusion_radius", "um", "effective radius of the bulge in the sliding direction", 1e6),
+    V("contact_fraction", "1", "fraction of the steady window spent in contact", effect="contact"),
+    V("regime", "1", "regime of the steady window", effect="contact", dtype="int8",
+      flag_values=tuple(int(r) for r in Regime), flag_meanings=" ".join(r.name.lower() for r in Regime),
+      fill_value=REGIME_FILL,
+      extra=(("rule", "flying: no contact in the steady window; surfing: in contact >= 99 % of it; "
+                      "bouncing: otherwise"),)),
+)
+
+#: Time histories of one scene (:func:`pipeline.slider.histories`; ``histories.nc``,
+#: ``sweep_histories.nc``, and ``h_<name>`` in sweep part files).
+HISTORIES = _group(
+    V("separation", "nm", "separation d of the TFC surface from the mean of summit heights", NM, dims=("time",)),
+    V("clearance", "nm", "clearance d - k sigma", NM, dims=("time",)),
+    V("disk_displacement", "nm", "disk displacement (DMW) under the TFC point", NM, dims=("time",)),
+    V("contact_force", "mN", "asperity contact force", MN, dims=("time",), effect="contact"),
+    V("contact_damping_force", "mN", "contact damping force", MN, dims=("time",), effect="contact"),
+    V("friction_force", "mN", "friction force", MN, dims=("time",), effect="friction"),
+    V("adhesion_force", "mN", "adhesion force (attractive)", MN, dims=("time",), effect="adhesion"),
+    V("net_force", "mN", "vertical interface force on the slider (contact + damping - adhesion)", MN,
+      dims=("time",)),
+    V("friction_coefficient", "1", "friction coefficient F_friction / F_contact", dims=("time",), effect="friction"),
+    V("mean_pressure", "MPa", "mean contact pressure over the real area", MPA, dims=("time",), effect="contact"),
+    V("shear_stress", "MPa", "shear stress over the real area", MPA, dims=("time",), effect="friction"),
+    V("real_area", "um2", "real contact area", UM2, dims=("time",), effect="contact"),
+    V("in_contact", "1", "contact criterion d < k sigma satisfied (1) or not (0)", dims=("time",),
+      effect="contact", dtype="int8", flag_values=(0, 1), flag_meanings="not_in_contact in_contact",
+      fill_value=-1),
+    V("z", "nm", "vertical displacement of the centre of gravity (up positive)", NM, dims=("time",)),
+    V("pitch", "urad", "pitch angle (leading edge up positive)", 1e6, dims=("time",), effect="pitch"),
+    V("steps", "1", "accepted integrator steps", dtype="int64"),
+    V("rejected_steps", "1", "rejected integrator steps", dtype="int64"),
+    V("contact_switches", "1", "contact on/off events located", dtype="int64"),
+)
+
+#: ``roughness.nc`` (:mod:`pipeline.stages.roughness`): on (surface, route) unless said otherwise.
+_SR = ("surface", "route")
+ROUGHNESS = _group(
+    V("surface", "", "surface (input file stem, 'explicit', or 'combined' = all surfaces combined)",
+      dims=("surface",), dtype="str"),
+    V("route", "", "route to the asperity statistics ('spectral': McCool/Nayak from profile moments, "
+                   "'summits': direct summit count)", dims=("route",), dtype="str"),
+    V("sigma", "nm", "rms roughness of the (detrended) surface heights", NM, dims=_SR),
+    V("sigma_s", "nm", "standard deviation of summit heights", NM, dims=_SR),
+    V("y_s", "nm", "mean of summit heights minus mean of surface heights", NM, dims=_SR),
+    V("summit_radius", "um", "mean summit radius of curvature", 1e6, dims=_SR),
+    V("summit_density", "um-2", "summit density (summits per nominal area)", 1e-12, dims=_SR),
+    V("bandwidth_alpha", "1", "Nayak bandwidth parameter", dims=_SR),
+    V("plasticity_index", "1", "plasticity index, Greenwood-Williamson form", dims=_SR),
+    V("plasticity_index_ke", "1", "plasticity index, CEB/Kogut-Etsion form", dims=_SR),
+    V("pixel_size", "nm", "lateral sampling interval of the scan (geometric mean of x and y)", NM,
+      dims=("surface",)),
+    V("m0", "nm2", "profile spectral moment m0 (height variance)", 1e18, dims=("surface",)),
+    V("m2", "1", "profile spectral moment m2 (slope variance, mean of x and y profiles)", dims=("surface",)),
+    V("m4", "nm-2", "profile spectral moment m4 (curvature variance, mean of x and y profiles)", 1e-18,
+      dims=("surface",)),
+    V("summit_count", "1", "number of summits counted (summit route)", dims=("surface",)),
+)
+
+#: ``dmw.nc`` (:mod:`pipeline.stages.dmw`).
+DMW = _group(
+    V("frequency", "Hz", "frequency", dims=("frequency",)),
+    V("displacement", "nm", "disk dynamic microwaviness (vertical displacement under the slider)", NM,
+      dims=("time",)),
+    V("psd", "nm2 Hz-1", "one-sided power spectral density of the displacement", 1e18, dims=("frequency",)),
+    V("rms", "nm", "rms of the displacement", NM),
+    V("band_low", "Hz", "lower edge of the DMW band"),
+    V("band_high", "Hz", "upper edge of the DMW band"),
+    V("sample_rate", "Hz", "sampling rate of the displacement"),
+    V("disk_speed", "m s-1", "disk surface speed under the slider"),
+)
+
+#: ``interface.nc`` (:mod:`pipeline.stages.interface`): tables versus separation and their inputs.
+_S = ("separation",)
+INTERFACE = _group(
+    V("separation", "nm", "separation of the TFC surface from the mean of summit heights", NM, dims=_S),
+    V("sigma", "nm", "combined rms roughness", NM),
+    V("sigma_s", "nm", "standard deviation of summit heights", NM),
+    V("y_s", "nm", "mean of summit heights above the mean of surface heights", NM),
+    V("summit_radius", "um", "summit radius", 1e6),
+    V("summit_density", "um-2", "summit density", 1e-12),
+    V("bandwidth_alpha", "1", "Nayak bandwidth parameter"),
+    V("composite_modulus", "GPa", "composite modulus E'", 1e-9),
+    V("hardness", "GPa", "hardness of the softer body", 1e-9),
+    V("critical_interference", "nm", "Kogut-Etsion critical interference w_c", NM),
+    V("shear_strength", "MPa", "shear strength tau_y = H/(2.8 sqrt 3)", MPA),
+    V("plasticity_index_gw", "1", "plasticity index, Greenwood-Williamson form"),
+    V("plasticity_index_ke", "1", "plasticity index, CEB/Kogut-Etsion form"),
+    V("lubricant_thickness", "nm", "lubricant thickness", NM),
+    V("work_of_adhesion", "J m-2", "work of adhesion"),
+    V("intermolecular_distance", "nm", "intermolecular distance", NM),
+    V("contact_pressure", "MPa", "contact pressure per nominal area", MPA, dims=_S, effect="contact"),
+    V("elastic_fraction", "1", "fraction of summits in elastic contact", dims=_S, effect="contact"),
+    V("plastic_fraction", "1", "fraction of summits in fully plastic contact", dims=_S, effect="contact"),
+    V("friction_stress", "MPa", "friction stress per nominal area", MPA, dims=_S, effect="friction"),
+    V("real_area_fraction", "1", "real contact area per nominal area", dims=_S, effect="contact"),
+    V("adhesion_pressure", "MPa", "adhesion pressure per nominal area (positive: attractive)", MPA, dims=_S,
+      effect="adhesion"),
+    V("contact_fraction", "1", "fraction of summits in contact", dims=_S, effect="contact"),
+)
+
+#: ``calibration.nc`` (:mod:`pipeline.stages.calibrate`).
+CALIBRATION = _group(
+    V("k", "1", "contact criterion constant", dims=("k",)),
+    V("touchdown", "nm", "first protrusion of the sweep grid in contact", dims=("k",)),
+    V("k_calibrated", "1", "calibrated contact criterion constant k (NaN: none admissible)"),
+    V("k_low", "1", "lower (exclusive) end of the admissible k interval"),
+    V("k_high", "1", "upper (inclusive) end of the admissible k interval"),
+    V("k_onset", "1", "smallest k giving contact at the touchdown protrusion"),
+    V("k_previous", "1", "smallest k giving contact at the previous step"),
+    V("contact_probability_one_sided", "1", "P(z > k sigma) of the calibrated k"),
+    V("contact_probability_two_sided", "1", "P(|z| > k sigma) of the calibrated k"),
+    V("sigma", "nm", "rms roughness of the criterion d < k sigma", NM),
+)
+
+#: ``accuracy.nc`` (:mod:`pipeline.stages.accuracy`): errors and costs per operating point, knob and level.
+_PKL = ("point", "knob", "level")
+ACCURACY = _group(
+    V("point", "", "operating point", dims=("point",), dtype="str"),
+    V("protrusion", "nm", "TFC protrusion of the operating point", NM, dims=("point",)),
+    V("knob", "", "accuracy knob (scene key: its suffix is the unit, sample_rate_mhz is in [dmw])",
+      dims=("knob",), dtype="str"),
+    V("level", "1", "setting index within a knob, 0 = tightest", dims=("level",), dtype="int32"),
+    V("output", "", "headline output", dims=("output",), dtype="str"),
+    V("configuration", "", "chosen: all chosen defaults together; scene: the scene's own settings",
+      dims=("configuration",), dtype="str"),
+    # the knobs differ in unit: the unit of each row is in setting_units (no common units attribute)
+    V("setting", "", "value of the knob at this level (unit: the knob's setting_units; NaN pads knobs with "
+                     "fewer settings)", dims=("knob", "level")),
+    V("setting_units", "", "unit of the knob's settings", dims=("knob",), dtype="str"),
+    V("knob_description", "", "what the knob sets", dims=("knob",), dtype="str"),
+    V("error", "1", "relative error of the headline output against the reference", dims=_PKL + ("output",)),
+    V("max_error", "1", "largest relative error over the headline outputs", dims=_PKL),
+    V("wall_time", "s", "wall time: setup_time + simulation_time", dims=_PKL),
+    V("simulation_time", "s", "median wall time of integration + steady-window statistics", dims=_PKL),
+    V("setup_time", "s", "wall time of building what the knob changes (tables, DMW record, model)",
+      dims=("knob", "level")),
+    V("steps", "1", "accepted integrator steps", dims=_PKL, dtype="int32"),
+    V("rejected_steps", "1", "rejected integrator steps", dims=_PKL, dtype="int32"),
+    V("contact_switches", "1", "contact mode switches", dims=_PKL, dtype="int32"),
+    V("failed", "1", "integration failed (1) or not (0)", dims=_PKL, dtype="int8", flag_values=(0, 1),
+      flag_meanings="ok failed"),
+    V("is_reference", "1", "this run is the reference configuration (1)", dims=("knob", "level"), dtype="int8"),
+    V("passes", "1", "every headline error below the tolerance at every point (1) or not (0)",
+      dims=("knob", "level"), dtype="int8"),
+    V("chosen_level", "1", "level of the chosen default (-1: no setting passes)", dims=("knob",), dtype="int32"),
+    V("chosen_setting", "", "chosen default of the knob (unit: setting_units)", dims=("knob",)),
+    V("combined_error", "1", "relative error of all settings of a configuration together",
+      dims=("configuration", "point", "output")),
+    V("combined_max_error", "1", "largest relative error over the headline outputs, configuration",
+      dims=("configuration", "point")),
+    V("combined_wall_time", "s", "wall time of the configuration: tables, record, model and simulation",
+      dims=("configuration", "point")),
+    V("combined_simulation_time", "s", "simulation time of the configuration", dims=("configuration", "point")),
+    # the headline outputs themselves (and their reference values) keep the units of SCALARS
+    *(V(n, v.units, v.long_name + " (at this setting)", v.si_factor, dims=_PKL) for n, v in SCALARS.items()),
+    *(V("reference_" + n, v.units, v.long_name + " (reference)", v.si_factor, dims=("point",))
+      for n, v in SCALARS.items()),
+)
+
+#: Groups by name.
+GROUPS: dict[str, dict[str, Variable]] = {
+    "coordinates": COORDINATES, "scalars": SCALARS, "histories": HISTORIES, "roughness": ROUGHNESS,
+    "dmw": DMW, "interface": INTERFACE, "calibration": CALIBRATION, "accuracy": ACCURACY,
+}
+
+#: The groups each dataset file (by stem) may hold, first match wins.
+DATASETS: dict[str, tuple[str, ...]] = {
+    "roughness": ("roughness",),
+    "dmw": ("coordinates", "dmw"),
+    "interface": ("interface",),
+    "calibration": ("calibration",),
+    "summary": ("coordinates", "scalars"),
+    "histories": ("coordinates", "histories"),
+    "sweep": ("coordinates", "scalars"),
+    "sweep_histories": ("coordinates", "histories"),
+    "sweep-part": ("coordinates", "scalars", "histories"),
+    "accuracy": ("accuracy",),
+}
+
+
+def lookup(name: str, groups: Iterable[str] = ("coordinates", "scalars", "histories")) -> Variable:
+    """The declaration of ``name`` in the first of ``groups`` that has it.
+
+    Raises
+    ------
+    KeyError
+        When no group declares it.
+    """
+    groups = tuple(groups)
+    for g in groups:
+        if name in GROUPS[g]:
+            return GROUPS[g][name]
+    raise KeyError(f"variable {name!r} is not declared in pipeline/variables.py groups {list(groups)}")
+
+
+def declared(dataset: str, name: str) -> Variable:
+    """The declaration of variable ``name`` of the dataset file ``<dataset>.nc``.
+
+    Sweep part files prefix history variables with ``h_``.
+    """
+    groups = DATASETS[dataset]
+    if dataset == "sweep-part" and name.startswith("h_"):
+        return lookup(name[2:], ("histories",))
+    return lookup(name, groups)
+
+
+def scalar(name: str, values_si: Any, dims: Iterable[str]) -> xr.Variable:
+    """A steady-window scalar from SI values (:data:`SCALARS`)."""
+    return SCALARS[name].from_si(values_si, dims)
+
+
+def history(name: str, values_si: Any, dims: Iterable[str]) -> xr.Variable:
+    """A time history from SI values (:data:`HISTORIES`)."""
+    return HISTORIES[name].from_si(values_si, dims)
+
+
+def coordinate(name: str, values: Any, dim: str | None = None) -> xr.Variable:
+    """A coordinate from values in dataset units (:data:`COORDINATES`)."""
+    return COORDINATES[name].data(values, (dim or name,))
+

@@ -1,0 +1,147 @@
+"""The variable schema and CF compliance: every variable every stage writes is declared (with the
+units it is written in), and the CF-1.8 compliance checker finds no error in any dataset."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from cf_check import cf_report
+from pipeline import variables as vs
+from pipeline.io import TIME_UNITS_ON_DISK, read_dataset, write_dataset
+from pipeline.scene import load_scene
+from pipeline.stages import calibrate, dmw, interface, roughness, simulate, sweep
+
+ROOT = Path(__file__).resolve().parents[1]
+AFM = ROOT / "tests" / "data" / "afm"
+
+#: A small scene: 3 protrusions (one kept as history), short runs, fixed k (no calibration needed by
+#: the sweep), and 2 roughness sets x 2 damping ratios so that the labels and grid dims are > 1.
+SMALL = [
+    "solver.duration_ms=0.6", "solver.transient_ms=0.2", "touchdown.curve_points=3", "contact.k=0.5",
+    "sweep.protrusion_nm={start=9.5, stop=10.5, step=0.5}", "sweep.batch_size=3", "sweep.histories_nm=[10.0]",
+    "report.histories_nm=[10.0]",
+    'sweep.roughness=[{label="smooth", sigma_nm=0.4}, {label="rough", sigma_nm=0.6}]',
+    "sweep.damping_ratio=[0.03, 0.05]",
+]
+
+
+@pytest.fixture(scope="module")
+def datasets(tmp_path_factory) -> dict[str, Path]:
+    """Every dataset of a small run: stage -> file (accuracy.nc is checked in test_accuracy.py)."""
+    out = tmp_path_factory.mktemp("small")
+    scene = load_scene(ROOT / "configs" / "paper-2009.toml", SMALL)
+    paths = {
+        "dmw": dmw.run(scene, out),
+        "interface": interface.run(scene, out),
+        "calibration": calibrate.run(scene, out),
+        "histories": simulate.run(scene, out),
+        "summary": out / "summary.nc",
+        "sweep": sweep.run_sweep(scene, out, scheduler="synchronous"),
+        "sweep_histories": out / "sweep_histories.nc",
+        "sweep-part": out / sweep.PARTS / "batch-00000.nc",
+    }
+    # several AFM surfaces: string labels of length > 1 on two dims (this crashed the checker once)
+    paths["roughness"] = roughness.run_files([AFM / "di-3.di", AFM / "mi-1.mi"], out / "afm")
+    return paths
+
+
+def test_every_written_variable_is_declared_with_its_units(datasets):
+    for dataset, path in datasets.items():
+        ds = read_dataset(path)
+        for name in list(ds.coords) + list(ds.data_vars):
+            decl = vs.declared(dataset, name)
+            assert ds[name].attrs.get("units", "") == decl.units, (dataset, name)
+            assert ds[name].attrs["long_name"].startswith(decl.long_name.split(" (")[0]), (dataset, name)
+            assert ds[name].dims[len(ds[name].dims) - len(decl.dims):] == decl.dims, (dataset, name)
+
+
+def test_effects_off_leave_their_variables_out(datasets, tmp_path):
+    """Variables declared for an effect the scene lacks are absent (and the rest is declared)."""
+    scene = load_scene(ROOT / "configs" / "paper-2009.toml",
+                       SMALL + ['scene.effects=["air_bearing","pitch","dmw","contact"]'])
+    simulate.run(scene, tmp_path)
+    ds = read_dataset(tmp_path / "summary.nc")
+    absent = {n for n, v in vs.SCALARS.items() if v.effect in ("friction", "adhesion")}
+    assert absent == {"friction_force", "adhesion_force", "friction_coefficient", "shear_stress"}
+    assert not absent & set(ds.data_vars)
+    assert {"contact_force", "regime", "interference"} <= set(ds.data_vars)
+
+
+#: The datasets of :func:`datasets` (one checker run each, about 3 s on a loaded 2-core machine).
+DATASETS = ("roughness", "dmw", "interface", "calibration", "histories", "summary", "sweep", "sweep_histories",
+            "sweep-part")
+
+
+@pytest.mark.parametrize("dataset", DATASETS)
+def test_cf_checker_finds_no_error(datasets, dataset):
+    """No high-priority failure and no crashed check; what remains at medium/low priority today is
+    nothing either (asserted, so a regression shows up here)."""
+    failures, crashed = cf_report(datasets[dataset])
+    assert crashed == []
+    assert failures[3] == []
+    assert failures[2] + failures[1] == []
+
+
+def test_time_is_cf_time_on_disk_and_seconds_when_read(datasets):
+    path = datasets["sweep_histories"]
+    with xr.open_dataset(path, engine="netcdf4", decode_times=False) as raw:
+        t = raw["time"]
+        assert (t.attrs["units"], t.attrs["standard_name"], t.attrs["axis"]) == (TIME_UNITS_ON_DISK, "time", "T")
+    ds = read_dataset(path)
+    assert ds["time"].attrs["units"] == "s"
+    # the output step of the scene (solver.output_step_ns = 250) in seconds
+    np.testing.assert_allclose(np.diff(ds["time"].values), 250e-9, rtol=1e-9)
+
+
+def test_coordinates_have_no_fill_value(datasets):
+    import netCDF4
+    for dataset, path in datasets.items():
+        with netCDF4.Dataset(path) as nc:
+            for dim in nc.dimensions:
+                if dim in nc.variables:
+                    assert "_FillValue" not in nc.variables[dim].ncattrs(), (dataset, dim)
+
+
+def test_regime_is_an_intenum_with_a_declared_missing_value(tmp_path):
+    assert [(r.name, int(r)) for r in vs.Regime] == [("FLYING", 0), ("BOUNCING", 1), ("SURFING", 2)]
+    decl = vs.SCALARS["regime"]
+    assert decl.flag_values == (0, 1, 2) and decl.flag_meanings == "flying bouncing surfing"
+    assert decl.fill_value not in decl.flag_values
+    # a grid point not computed (NaN) is written as the declared _FillValue and read back as NaN
+    ds = xr.Dataset({"regime": vs.scalar("regime", np.array([0, np.nan, 2]), ("protrusion",))},
+                    coords={"protrusion": vs.coordinate("protrusion", [1.0, 2.0, 3.0])})
+    path = write_dataset(ds, tmp_path / "summary.nc", stage="simulate")
+    with xr.open_dataset(path, engine="netcdf4", mask_and_scale=False) as raw:
+        assert raw["regime"].dtype == np.int8
+        assert raw["regime"].values.tolist() == [0, vs.REGIME_FILL, 2]
+        assert raw["regime"].attrs["_FillValue"] == vs.REGIME_FILL
+    back = read_dataset(path)["regime"].values
+    assert back[0] == 0 and np.isnan(back[1]) and back[2] == 2
+    assert [vs.regime_name(c) for c in back] == ["flying", "missing", "surfing"]
+    failures, crashed = cf_report(path)
+    assert failures[3] == [] and crashed == []
+
+
+def test_roughness_route_dimension_works_with_sel(datasets):
+    """The former ``method`` dimension collided with ``sel(method=...)``; ``route`` does not."""
+    ds = read_dataset(datasets["roughness"])
+    assert ds["sigma"].dims == ("surface", "route")
+    assert list(ds["route"].values) == ["spectral", "summits"]
+    assert list(ds["surface"].values) == ["di-3", "mi-1", "combined"]
+    row = ds.sel(surface="combined", route="spectral")
+    # combined sigma: quadrature sum of the two scans' (SPEC.md 1)
+    s = ds["sigma"].sel(route="spectral").values
+    assert float(row["sigma"]) == pytest.approx(float(np.hypot(s[0], s[1])), rel=1e-9)
+    assert "method" not in ds.dims  # sel's own method= keyword is free again
+
+
+def test_scaling_from_si_matches_the_declared_units():
+    """``from_si`` multiplies by si_factor: 1 mN = 1e-3 N, 1 um2 = 1e-12 m2, 1 MPa = 1e6 Pa."""
+    assert float(vs.scalar("contact_force", 2.5e-3, ()).values) == pytest.approx(2.5)
+    assert float(vs.scalar("real_area", 3e-12, ()).values) == pytest.approx(3.0)
+    assert float(vs.scalar("mean_pressure", 4.2e8, ()).values) == pytest.approx(420.0)
+    assert float(vs.history("separation", 1.5e-9, ()).values) == pytest.approx(1.5)
