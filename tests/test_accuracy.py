@@ -105,3 +105,20 @@ def test_relative_error_definition():
     err = accuracy.relative_error(np.array([1.1, 0.002, nan, nan, 1.0]), np.array([1.0, 0.0, nan, 2.0, nan]), 0.01)
     np.testing.assert_allclose(err[:2], [0.1, 0.2])
     assert np.isnan(err[2]) and err[3] == inf and err[4] == inf
+
+
+def test_accuracy_dataset_is_declared_and_cf_clean(result):
+    """Every variable of accuracy.nc is declared in the variable schema with its units, and the CF-1.8
+    compliance checker finds nothing (the knob settings, whose units differ per knob, name the variable
+    holding their units instead of a wrong common one)."""
+    from cf_check import cf_report
+    from pipeline.io import read_dataset
+    from pipeline.variables import declared
+
+    _, path, _ = result
+    ds = read_dataset(path)
+    for name in list(ds.coords) + list(ds.data_vars):
+        assert ds[name].attrs.get("units", "") == declared("accuracy", name).units, name
+    assert ds["setting"].attrs["unit_variable"] == "setting_units"
+    failures, crashed = cf_report(path)
+    assert crashed == [] and failures[3] == [] and failures[2] + failures[1] == []

@@ -57,7 +57,7 @@ def test_layout_units_and_combination(two_files: list[Path], tmp_path: Path) -> 
     assert path == tmp_path / "out" / "roughness.nc"
     ds = _open(path)
     assert list(ds["surface"].values) == ["disk", "tfc", "combined"]
-    assert list(ds["method"].values) == ["spectral", "summits"]
+    assert list(ds["route"].values) == ["spectral", "summits"]
     units = {"sigma": "nm", "sigma_s": "nm", "y_s": "nm", "summit_radius": "um", "summit_density": "um-2",
              "bandwidth_alpha": "1", "plasticity_index": "1", "pixel_size": "nm", "m0": "nm2", "m2": "1",
              "m4": "nm-2", "summit_count": "1"}
@@ -65,25 +65,25 @@ def test_layout_units_and_combination(two_files: list[Path], tmp_path: Path) -> 
         assert ds[name].attrs["units"] == unit, name
     for name in list(ds.variables):
         assert ds[name].attrs.get("long_name"), name
-    assert ds["sigma"].dims == ("surface", "method") and ds["m0"].dims == ("surface",)
+    assert ds["sigma"].dims == ("surface", "route") and ds["m0"].dims == ("surface",)
     # per-surface values against the physics module
     for f in two_files:
         s = sf.summarise(sf.read_topography(f, detrend_mode="center"))
         row = ds.sel(surface=f.stem)
         assert float(row["m0"]) == pytest.approx(s.m0, rel=1e-12)
-        assert float(row["sigma"].sel({"method": "summits"})) == pytest.approx(s.summits.sigma, rel=1e-12)
-        assert float(row["summit_radius"].sel({"method": "spectral"})) == pytest.approx(s.spectral.R * 1e-3)
-        assert float(row["summit_density"].sel({"method": "summits"})) == pytest.approx(s.summits.eta * 1e6)
+        assert float(row["sigma"].sel({"route": "summits"})) == pytest.approx(s.summits.sigma, rel=1e-12)
+        assert float(row["summit_radius"].sel({"route": "spectral"})) == pytest.approx(s.spectral.R * 1e-3)
+        assert float(row["summit_density"].sel({"route": "summits"})) == pytest.approx(s.summits.eta * 1e6)
         assert float(row["summit_count"]) == s.summits.count
         assert float(row["pixel_size"]) == pytest.approx(4.0)
     # combined: moments add, so sigma^2 adds
     c = ds.sel(surface="combined")
     for m in ("m0", "m2", "m4"):
         assert float(c[m]) == pytest.approx(float(ds[m].sel(surface=["disk", "tfc"]).sum()), rel=1e-12)
-    sig = ds["sigma"].sel({"method": "spectral"})
+    sig = ds["sigma"].sel({"route": "spectral"})
     assert float(sig.sel(surface="combined")) ** 2 == pytest.approx(
         float(sig.sel(surface="disk")) ** 2 + float(sig.sel(surface="tfc")) ** 2, rel=1e-12)
-    assert math.isnan(float(c["summit_density"].sel({"method": "summits"})))
+    assert math.isnan(float(c["summit_density"].sel({"route": "summits"})))
     # provenance and per-file sources
     assert ds.attrs["source_file_disk"] == "disk.nc" and ds.attrs["source_file_tfc"] == "tfc.nc"
     assert "disk.nc" in ds.attrs["source_files"] and str(two_files[0]) in ds.attrs["input_hashes"]
@@ -95,7 +95,7 @@ def test_combined_statistics(two_files: list[Path], tmp_path: Path) -> None:
     path = _run(two_files, tmp_path)
     stats = rg.combined_statistics(path)
     ds = _open(path)
-    row = ds.sel({"surface": "combined", "method": "spectral"})
+    row = ds.sel(surface="combined", route="spectral")
     assert set(stats) == {"sigma_nm", "sigma_s_nm", "y_s_nm", "summit_radius_um", "summit_density_per_um2", "alpha"}
     assert stats["sigma_nm"] == float(row["sigma"]) and stats["summit_radius_um"] == float(row["summit_radius"])
     assert stats["alpha"] == pytest.approx(float(ds["m0"][-1] * ds["m4"][-1] / ds["m2"][-1] ** 2))
@@ -111,14 +111,14 @@ def test_single_file_combined_is_the_file(two_files: list[Path], tmp_path: Path)
     for name in ("sigma", "sigma_s", "summit_radius", "summit_density", "pixel_size", "summit_count"):
         np.testing.assert_array_equal(ds[name].sel(surface="disk").values, ds[name].sel(surface="combined").values)
     stats = rg.combined_statistics(tmp_path / "roughness.nc", route="summits")
-    assert stats["summit_density_per_um2"] == float(ds["summit_density"].sel({"surface": "disk", "method": "summits"}))
+    assert stats["summit_density_per_um2"] == float(ds["summit_density"].sel({"surface": "disk", "route": "summits"}))
 
 
 def test_explicit_statistics_use_mccool(tmp_path: Path) -> None:
     scene = scene_from_dict({"scene": {"name": "paper"}, "materials": {"hardness_gpa": 1.5}})
     ds = _open(rg.run(scene, tmp_path))
     assert list(ds["surface"].values) == ["explicit", "combined"]
-    sp = ds.sel({"surface": "combined", "method": "spectral"})
+    sp = ds.sel(surface="combined", route="spectral")
     sigma, eta, R = 0.52, 10e-6, 5000.0  # nm, nm^-2, nm (the paper scene's defaults)
     assert float(sp["sigma"]) == pytest.approx(sigma)
     assert float(sp["summit_radius"]) == pytest.approx(5.0)
@@ -131,7 +131,7 @@ def test_explicit_statistics_use_mccool(tmp_path: Path) -> None:
     assert float(sp["plasticity_index"]) == pytest.approx(E / 1.5 * math.sqrt(st.summit_sigma(sigma, eta, R) / R),
                                                           rel=1e-5)
     assert float(sp["plasticity_index"]) == pytest.approx(0.52, abs=0.01)  # the paper's psi [paper]
-    assert np.isnan(ds["sigma"].sel({"method": "summits"}).values).all()
+    assert np.isnan(ds["sigma"].sel({"route": "summits"}).values).all()
     assert ds.attrs["scene_name"] == "paper"
     # without a hardness, the plasticity index is not defined
     ds2 = _open(rg.run(scene_from_dict({}), tmp_path / "nohardness"))
@@ -181,6 +181,6 @@ def test_shared_afm_files(tmp_path: Path) -> None:
     ds = _open(_run(files, tmp_path))
     assert ds.attrs["channels"] == '{"di-3": "ZSensor", "mi-1": "Topography"}'
     np.testing.assert_allclose(ds["pixel_size"].values[:2], [10000 / 256, 20000 / 256])
-    s = ds["sigma"].sel({"method": "spectral"}).values
+    s = ds["sigma"].sel({"route": "spectral"}).values
     assert s[2] ** 2 == pytest.approx(s[0] ** 2 + s[1] ** 2, rel=1e-12)
     assert "mi-1: summit density eta differs" in ds.attrs["warnings"]
