@@ -16,6 +16,7 @@ from pathlib import Path
 
 from .io import DatasetError, results_dir
 from .scene import SceneError, load_scene
+from .validation import MAX_SCENES, check_options, one_line_warnings
 
 STAGES = ("roughness", "dmw", "interface", "calibrate", "simulate", "sweep", "accuracy", "report", "run")
 #: The main job, in order (``hdi run`` / ``make run``).
@@ -36,11 +37,13 @@ def _parser() -> argparse.ArgumentParser:
                    help="attach the sweep to an existing dask.distributed scheduler")
     p.add_argument("--workers", type=int, default=None, help="local dask workers (default: one per core)")
     p.add_argument("--channel", default=None, help="roughness: AFM channel (default: the height channel)")
-    p.add_argument("--detrend", default="plane", choices=("center", "height", "plane", "curvature"),
-                   help="roughness: detrending of AFM scans")
+    p.add_argument("--detrend", default=None, choices=("center", "height", "plane", "curvature"),
+                   help="roughness: detrending of AFM scans (default plane)")
     p.add_argument("--force", action="store_true", help="recompute even when outputs are up to date")
     p.add_argument("--readme", type=Path, default=None,
                    help="report: also rewrite the generated comparison section of this README")
+    p.add_argument("--yes", action="store_true",
+                   help=f"sweep: run a grid of more than {MAX_SCENES:,} scenes")
     p.add_argument("-v", "--verbose", action="store_true")
     return p
 
@@ -51,8 +54,15 @@ def run_stage(stage: str, scene, out: Path, **options) -> Path:
     return module.run(scene, out, **options)
 
 
+def _given(args: argparse.Namespace) -> dict:
+    """The options :func:`pipeline.validation.check_options` checks."""
+    return {name: getattr(args, name) for name in ("out", "scheduler", "workers", "yes", "readme", "channel",
+                                                    "detrend")}
+
+
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
+    one_line_warnings()
     logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
                         format="%(levelname)s %(name)s: %(message)s")
     if not args.verbose:  # dask.distributed configures its own INFO loggers; keep the terminal quiet
@@ -64,13 +74,15 @@ def main(argv: list[str] | None = None) -> int:
             from .stages import roughness
             if args.out is None:
                 raise SceneError("hdi roughness FILE...: --out DIR is required when AFM files are given")
+            check_options("roughness", None, **_given(args))
             path = roughness.run_files([Path(f) for f in args.inputs], args.out,
-                                       channel=args.channel, detrend=args.detrend)
+                                       channel=args.channel, detrend=args.detrend or "plane")
             print(path)
             return 0
         if len(args.inputs) != 1:
             raise SceneError(f"hdi {args.stage}: expected one scene file, got {args.inputs}")
         scene = load_scene(args.inputs[0], args.overrides)
+        check_options(args.stage, scene, **_given(args))
         out = results_dir(scene, args.out)
         options = {"scheduler": args.scheduler, "workers": args.workers, "force": args.force,
                    "readme": args.readme}

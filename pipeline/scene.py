@@ -15,6 +15,7 @@ from __future__ import annotations
 import copy
 import hashlib
 import json
+import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -310,6 +311,8 @@ def _check_value(section: str, key: str, spec: Key, value: Any, where: str, base
         if not isinstance(value, list) or any(isinstance(v, bool) or not isinstance(v, (int, float)) for v in value):
             raise fail("a list of numbers")
         value = [float(v) for v in value]
+        if not all(math.isfinite(v) for v in value):
+            raise fail("a list of finite numbers (no nan or inf)")
         if spec.length is not None and len(value) != spec.length:
             raise fail(f"a list of {spec.length} numbers")
     elif kind == "strs":
@@ -328,6 +331,8 @@ def _check_value(section: str, key: str, spec: Key, value: Any, where: str, base
         if any(isinstance(v, bool) or not isinstance(v, (int, float)) for v in value.values()):
             raise fail("numbers for start, stop and step")
         value = {k: float(v) for k, v in value.items()}
+        if not all(math.isfinite(v) for v in value.values()):
+            raise fail("finite numbers for start, stop and step (no nan or inf)")
         if value["step"] <= 0:
             raise fail("step > 0")
         if value["stop"] < value["start"]:
@@ -356,7 +361,7 @@ def _check_value(section: str, key: str, spec: Key, value: Any, where: str, base
 
 
 def validate(raw: dict[str, Any], path: Path | None = None, *, overrides: Iterable[str] = (),
-             resolve_paths: bool = True) -> Scene:
+             resolve_paths: bool = True, blame: dict[tuple[str, str], str] | None = None) -> Scene:
     """Validate a parsed scene and fill in defaults.
 
     Parameters
@@ -365,6 +370,9 @@ def validate(raw: dict[str, Any], path: Path | None = None, *, overrides: Iterab
         The parsed TOML (``section -> key -> value``).
     path
         The file it came from, for error messages and relative file paths.
+    blame
+        ``(section, key) -> "--set TEXT"`` for keys set on the command line: their errors name the
+        ``--set`` option, not the file.
 
     Returns
     -------
@@ -381,14 +389,17 @@ def validate(raw: dict[str, Any], path: Path | None = None, *, overrides: Iterab
     config: dict[str, dict[str, Any]] = {}
     for section, table in raw.items():
         if section not in SCHEMA:
-            raise SceneError(f"{where}: unknown section [{section}]: expected one of "
+            culprit = next((b for (sec, _), b in (blame or {}).items() if sec == section), where)
+            raise SceneError(f"{culprit}: unknown section [{section}]: expected one of "
                              + ", ".join(f"[{s}]" for s in SCHEMA))
         if not isinstance(table, dict):
             raise SceneError(f"{where}: {section} must be a table [{section}]")
+    blame = blame or {}
     for section, keys in SCHEMA.items():
         table = raw.get(section, {})
         out: dict[str, Any] = {}
         for key, value in table.items():
+            where = blame.get((section, key), _where(path))
             if key not in keys:
                 stem, unit = _strip_unit(key)
                 twins = [k for k in keys if _strip_unit(k)[0] == stem]
@@ -399,6 +410,7 @@ def validate(raw: dict[str, Any], path: Path | None = None, *, overrides: Iterab
                 raise SceneError(f"{where}: unknown key {section}.{key}: expected one of "
                                  + ", ".join(keys))
             out[key] = _check_value(section, key, keys[key], value, where, base)
+        where = _where(path)
         for key, spec in keys.items():
             if key not in out:
                 out[key] = copy.deepcopy(spec.default)
@@ -476,13 +488,15 @@ def load_scene(path: str | Path, overrides: Iterable[str] = ()) -> Scene:
     path = Path(path)
     raw = _read_raw(path)
     overrides = list(overrides)
+    blame: dict[tuple[str, str], str] = {}
     for text in overrides:
         section, key, value = parse_override(text)
         raw.setdefault(section, {})
         if not isinstance(raw[section], dict):
             raise SceneError(f"{path}: --set {text!r}: [{section}] is not a table")
         raw[section][key] = value
-    return validate(raw, path, overrides=overrides)
+        blame[(section, key)] = f"--set {text}"
+    return validate(raw, path, overrides=overrides, blame=blame)
 
 
 def _read_raw(path: Path, seen: tuple[Path, ...] = ()) -> dict[str, Any]:

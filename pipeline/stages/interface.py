@@ -24,6 +24,7 @@ from ..physics.asperity import critical_interference
 from ..physics.friction import shear_strength
 from ..physics.statistics import (bandwidth_alpha, composite_modulus, hardness_from_plasticity_gw,
                                   plasticity_index_gw, plasticity_index_ke, summit_offset, summit_sigma)
+from ..validation import check_materials
 
 NM, UM = 1e-9, 1e-6
 
@@ -71,6 +72,8 @@ def interface_parameters(scene: Any, stats: dict[str, float]) -> isbl.Interface:
          else composite_modulus(m["disk_modulus_gpa"] * 1e9, m["tfc_modulus_gpa"] * 1e9, nu))
     H = (m["hardness_gpa"] * 1e9 if m["hardness_gpa"]
          else hardness_from_plasticity_gw(m["plasticity_index"], E, stats["sigma_s"], stats["R"]))
+    check_materials(E, H, stats["sigma_s"], stats["R"],
+                    derived="plasticity_index" if m["hardness_gpa"] else "hardness")
     return isbl.Interface(sigma_s=stats["sigma_s"], eta=stats["eta"], R=stats["R"], E=E, H=H, nu=nu,
                           t=lub["thickness_nm"] * NM, dgamma=lub["work_of_adhesion_j_m2"],
                           eps=lub["intermolecular_distance_nm"] * NM)

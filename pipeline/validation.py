@@ -1,0 +1,214 @@
+"""Checks of the command line and of derived material parameters, before anything runs.
+
+:func:`check_options` validates the options of ``hdi STAGE`` against the stage and the scene, so a
+mistake ends in one line naming the option (exit 2, :class:`OptionError`) before any stage starts
+and before anything is written: ``--workers`` must be a positive integer, ``--scheduler`` must
+answer (a TCP connect with a short timeout, :data:`CONNECT_TIMEOUT_S`, instead of dask's 30 s and a
+traceback), ``--out`` must be a folder we can write in, the sweep grid must not exceed
+:data:`MAX_SCENES` unless ``--yes``, the report's history protrusions must lie on the sweep grid, and
+an option the stage does not use is an error naming the option and the stages that use it.
+
+:func:`check_materials` warns (:class:`PhysicsWarning`, with the numbers) when a hardness derived
+from the plasticity index, or a plasticity index derived from the hardness, lies outside physical
+bounds: e.g. an AFM scan with the paper's fixed psi = 0.52 can imply H = 58.5 GPa.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import socket
+import tempfile
+import warnings
+from pathlib import Path
+from typing import Any
+from urllib.parse import urlsplit
+
+
+class OptionError(ValueError):
+    """A command-line option is invalid for this stage or scene (one line, names the option)."""
+
+
+class PhysicsWarning(UserWarning):
+    """A derived material parameter lies outside physical bounds; results may be meaningless."""
+
+
+#: Seconds to wait for a TCP connection to ``--scheduler`` before giving up.
+CONNECT_TIMEOUT_S = 3.0
+#: Largest sweep grid (protrusions x roughness sets x damping ratios) run without ``--yes``:
+#: about 30 CPU-minutes at ~20 ms per 2 ms scene on one core (README, "Tests and benchmarks").
+MAX_SCENES = 100_000
+#: Hardness over composite modulus H/E' [1]: real solids lie within these bounds (soft metals
+#: ~1e-3; diamond and tetrahedral amorphous carbon ~0.1, Tabor's H ~ 3Y with the ideal strength
+#: Y ~ E/10 caps it near 0.3).
+HARDNESS_RATIO_BOUNDS = (1e-3, 0.3)
+#: GW plasticity index [1]: measured engineering surfaces lie within these bounds (Greenwood &
+#: Williamson 1966 report 0.1-100; HDI interfaces are near 0.5, the paper's 0.52).
+PLASTICITY_BOUNDS = (0.05, 100.0)
+
+#: Options and the stages that use them (``run`` uses those of all its stages; ``--force`` and
+#: ``--out`` apply to every stage). ``--channel``/``--detrend`` act only on AFM files given directly.
+OPTION_STAGES: dict[str, tuple[str, ...]] = {
+    "scheduler": ("sweep", "run"),
+    "workers": ("sweep", "run"),
+    "yes": ("sweep", "run"),
+    "readme": ("report", "run"),
+    "channel": ("roughness FILE...",),
+    "detrend": ("roughness FILE...",),
+}
+_FLAG = {"scheduler": "--scheduler", "workers": "--workers", "yes": "--yes", "readme": "--readme",
+         "channel": "--channel", "detrend": "--detrend"}
+_SCENE_KEY = {"channel": "roughness.channel", "detrend": "roughness.detrend"}
+
+
+def check_workers(workers: int | None) -> None:
+    """``--workers`` is absent or a positive integer."""
+    if workers is not None and workers < 1:
+        raise OptionError(f"--workers {workers}: expected a positive number of local workers (1 or more)")
+
+
+def check_scheduler(address: str | None, timeout: float = CONNECT_TIMEOUT_S) -> None:
+    """``--scheduler`` is absent, ``synchronous``, or a ``[tcp://]HOST:PORT`` that accepts a connection."""
+    if address is None or address == "synchronous":
+        return
+    parts = urlsplit(address if "://" in address else f"tcp://{address}")
+    if parts.scheme not in ("tcp", "tls"):
+        raise OptionError(f"--scheduler {address}: expected tcp://HOST:PORT (or tls://), got scheme "
+                          f"{parts.scheme!r}")
+    try:
+        host, port = parts.hostname, parts.port
+    except ValueError:
+        host, port = None, None
+    if not host or port is None:
+        raise OptionError(f"--scheduler {address}: expected tcp://HOST:PORT")
+    try:
+        with socket.create_connection((host, port), timeout=timeout):
+            pass
+    except OSError as exc:
+        reason = "timed out" if isinstance(exc, socket.timeout) else (exc.strerror or str(exc))
+        raise OptionError(f"--scheduler {address}: no scheduler answers at {host}:{port} ({reason}, "
+                          f"{timeout:g} s connect timeout); start one (`dask scheduler`) or leave "
+                          "--scheduler out to use a local cluster") from None
+
+
+def check_out(out: str | Path | None) -> None:
+    """``--out`` is a folder that exists or can be created, and that we can write in."""
+    if out is None:
+        return
+    path = Path(out)
+    probe = path
+    while not probe.exists():  # the nearest existing ancestor decides whether the folder can be made
+        if probe.parent == probe:
+            break
+        probe = probe.parent
+    if probe.exists() and not probe.is_dir():
+        what = "is a file" if probe == path else f"cannot be created: {probe} is a file"
+        raise OptionError(f"--out {out}: {what}; expected a folder")
+    try:  # os.access alone misses read-only mounts and says yes to root everywhere
+        fd, tmp = tempfile.mkstemp(prefix=".hdi-write-test.", dir=probe)
+        os.close(fd)
+        os.unlink(tmp)
+    except OSError as exc:
+        where = "" if probe == path else f" (cannot create it in {probe})"
+        raise OptionError(f"--out {out}: not writable{where}: {exc.strerror or exc}") from None
+
+
+def grid_size(scene: Any) -> tuple[int, int, int]:
+    """Number of protrusions, roughness sets and damping ratios of the sweep (no grid is built)."""
+    g = scene["sweep"]["protrusion_nm"]
+    n_prot = int(math.floor((g["stop"] - g["start"]) / g["step"] + 1e-9)) + 1
+    n_sets = len(scene["sweep"]["roughness"] or [None])
+    n_damp = len(scene["sweep"]["damping_ratio"] or [None])
+    return n_prot, n_sets, n_damp
+
+
+def check_grid(scene: Any, yes: bool = False, limit: int = MAX_SCENES) -> None:
+    """Refuse a sweep of more than ``limit`` scenes unless ``yes``."""
+    n_prot, n_sets, n_damp = grid_size(scene)
+    total = n_prot * n_sets * n_damp
+    if total > limit and not yes:
+        g = scene["sweep"]["protrusion_nm"]
+        raise OptionError(f"sweep.protrusion_nm = {{start={g['start']:g}, stop={g['stop']:g}, step={g['step']:g}}}: "
+                          f"{total:,} scenes ({n_prot:,} protrusions x {n_sets} roughness sets x {n_damp} damping "
+                          f"ratios) exceed {limit:,}; pass --yes to run them anyway")
+
+
+def check_report_histories(scene: Any, tol: float = 1e-6) -> None:
+    """Every protrusion of ``report.histories_nm`` lies on the sweep's protrusion grid."""
+    g = scene["sweep"]["protrusion_nm"]
+    off = []
+    for h in scene["report"]["histories_nm"] or []:
+        j = round((h - g["start"]) / g["step"])
+        if not (g["start"] - tol <= h <= g["stop"] + tol) or abs(g["start"] + j * g["step"] - h) > tol:
+            off.append(h)
+    if off:
+        raise OptionError(f"report.histories_nm: {', '.join(f'{h:g}' for h in off)} nm not on the sweep grid "
+                          f"(sweep.protrusion_nm: {g['start']:g} to {g['stop']:g} nm in steps of {g['step']:g}); "
+                          "choose protrusions of the grid")
+
+
+def check_stage_options(stage: str, given: dict[str, Any], afm_files: bool = False) -> None:
+    """An option the stage does not use is an error naming the option and the stages that use it."""
+    for name, value in given.items():
+        if name not in OPTION_STAGES or value in (None, False):
+            continue
+        users = OPTION_STAGES[name]
+        used = (stage == "roughness" and afm_files) if name in ("channel", "detrend") else stage in users
+        if not used:
+            hint = f" (for a scene, use --set {_SCENE_KEY[name]}=...)" if name in _SCENE_KEY else ""
+            raise OptionError(f"{_FLAG[name]}: not used by `hdi {stage}`; only by {', '.join(users)}{hint}")
+
+
+def check_options(stage: str, scene: Any, *, out: str | Path | None = None, scheduler: str | None = None,
+                  workers: int | None = None, yes: bool = False, **given: Any) -> None:
+    """Every check of this module that applies to ``hdi STAGE`` (``scene`` may be ``None`` for AFM files).
+
+    Raises
+    ------
+    OptionError
+        The first problem found, in one line naming the option.
+    """
+    check_stage_options(stage, {"scheduler": scheduler, "workers": workers, "yes": yes, **given},
+                        afm_files=scene is None)
+    check_workers(workers)
+    check_out(out)
+    if scene is not None and stage in ("sweep", "run"):
+        check_grid(scene, yes)
+    if scene is not None and stage in ("report", "run"):
+        check_report_histories(scene)
+    if stage in ("sweep", "run"):
+        check_scheduler(scheduler)
+
+
+def check_materials(E: float, H: float, sigma_s: float, R: float, *, derived: str) -> None:
+    """Warn when the hardness or the GW plasticity index of an interface is outside physical bounds.
+
+    Parameters
+    ----------
+    E : composite modulus E' [Pa]
+    H : hardness [Pa]
+    sigma_s : summit-height standard deviation [m]
+    R : summit radius [m]
+    derived : ``"hardness"`` (H from the scene's plasticity index) or ``"plasticity_index"`` (psi from the
+        scene's hardness): which one was computed, named in the warning
+    """
+    psi = E / H * math.sqrt(sigma_s / R)  # GW form, Greenwood & Williamson 1966 (SPEC.md 1)
+    lo, hi = HARDNESS_RATIO_BOUNDS
+    if not lo <= H / E <= hi:
+        cause = (f"derived from materials.plasticity_index = {psi:.3g} with sigma_s = {sigma_s * 1e9:.3g} nm and "
+                 f"R = {R * 1e6:.3g} um" if derived == "hardness" else "materials.hardness_gpa")
+        warnings.warn(f"hardness H = {H / 1e9:.3g} GPa ({cause}) is {H / E:.3g} E' (E' = {E / 1e9:.3g} GPa), outside "
+                      f"the physical range {lo:g}-{hi:g} E'; set materials.hardness_gpa for these surfaces",
+                      PhysicsWarning, stacklevel=2)
+    plo, phi = PLASTICITY_BOUNDS
+    if not plo <= psi <= phi:
+        warnings.warn(f"GW plasticity index psi = {psi:.3g} (from H = {H / 1e9:.3g} GPa, E' = {E / 1e9:.3g} GPa, "
+                      f"sigma_s = {sigma_s * 1e9:.3g} nm, R = {R * 1e6:.3g} um) is outside {plo:g}-{phi:g}, the range "
+                      "of measured surfaces", PhysicsWarning, stacklevel=2)
+
+
+def one_line_warnings() -> None:
+    """Show warnings as ``hdi: warning: MESSAGE`` (no file and line: they are about the input)."""
+    warnings.formatwarning = lambda message, category, *args, **kw: (
+        f"hdi: warning: {message}\n" if issubclass(category, PhysicsWarning)
+        else f"{category.__name__}: {message}\n")

@@ -1,0 +1,171 @@
+"""Bad input on the command line: one clear line, exit 2, nothing written or lost (pipeline.validation),
+and warnings with the numbers for derived material parameters outside physical bounds."""
+
+from __future__ import annotations
+
+import math
+import os
+import socket
+import tempfile
+import warnings
+from pathlib import Path
+
+import pytest
+
+from pipeline import cli
+from pipeline.scene import SceneError, load_scene
+from pipeline.stages import interface
+from pipeline.validation import (CONNECT_TIMEOUT_S, MAX_SCENES, OptionError, PhysicsWarning, check_grid,
+                                 check_materials, check_out, grid_size)
+
+ROOT = Path(__file__).resolve().parents[1]
+PAPER = ROOT / "configs" / "paper-2009.toml"
+
+
+@pytest.fixture()
+def folder(tmp_path):
+    """An output folder holding an earlier result that no failed command may touch."""
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "sweep.nc").write_bytes(b"earlier result")
+    return out
+
+
+def _fails(capsys, folder: Path, *argv: str) -> str:
+    """Run ``hdi ARGV --out FOLDER``: exit 2, one line on stderr, the folder unchanged. Returns the line."""
+    code = cli.main([*argv, "--out", str(folder)] if folder is not None else list(argv))
+    err = capsys.readouterr().err.strip()
+    assert code == 2, err
+    assert len(err.splitlines()) == 1, err
+    if folder is not None:
+        assert sorted(p.name for p in folder.iterdir()) == ["sweep.nc"]
+        assert (folder / "sweep.nc").read_bytes() == b"earlier result"
+    return err
+
+
+def test_workers_negative(capsys, folder):
+    err = _fails(capsys, folder, "sweep", str(PAPER), "--workers", "-1")
+    assert "--workers -1" in err and "positive" in err
+
+
+def test_workers_zero(capsys, folder):
+    err = _fails(capsys, folder, "sweep", str(PAPER), "--workers", "0")
+    assert "--workers 0" in err
+
+
+def test_unreachable_scheduler_fails_fast_with_one_line(capsys, folder):
+    with socket.socket() as s:  # a free port nobody listens on once closed
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    err = _fails(capsys, folder, "sweep", str(PAPER), "--scheduler", f"tcp://127.0.0.1:{port}")
+    assert f"127.0.0.1:{port}" in err and f"{CONNECT_TIMEOUT_S:g} s connect timeout" in err
+    err = _fails(capsys, folder, "sweep", str(PAPER), "--scheduler", "http://127.0.0.1:8786")
+    assert "tcp://HOST:PORT" in err
+
+
+def test_out_is_a_file(capsys, folder):
+    err = _fails(capsys, None, "dmw", str(PAPER), "--out", str(folder / "sweep.nc"))
+    assert "is a file" in err
+    err = _fails(capsys, None, "dmw", str(PAPER), "--out", str(folder / "sweep.nc" / "sub"))
+    assert "is a file" in err and "cannot be created" in err
+    assert (folder / "sweep.nc").read_bytes() == b"earlier result"
+
+
+def test_out_read_only(capsys, folder):
+    # a folder no process may create files in, root included
+    err = _fails(capsys, None, "dmw", str(PAPER), "--out", "/proc/hdi-results")
+    assert "not writable" in err and "/proc" in err
+    # a folder without write permission: refused exactly when writing there really fails (root may write)
+    ro = folder.parent / "read-only"
+    ro.mkdir()
+    ro.chmod(0o555)
+    try:
+        try:
+            fd, probe = tempfile.mkstemp(dir=ro)
+            os.close(fd)
+            os.unlink(probe)
+            writable = True
+        except OSError:
+            writable = False
+        if writable:
+            check_out(ro)  # no error where writing works
+        else:
+            err = _fails(capsys, None, "dmw", str(PAPER), "--out", str(ro))
+            assert "not writable" in err
+    finally:
+        ro.chmod(0o755)
+
+
+def test_stop_inf_in_the_scene_file(capsys, folder, write_scene):
+    path = write_scene(f'[scene]\nextends = "{PAPER}"\n[sweep]\nprotrusion_nm = {{start = 0.0, stop = inf, step = 0.2}}\n')
+    err = _fails(capsys, folder, "sweep", str(path))
+    assert err.startswith(f"hdi sweep: error: {path}: sweep.protrusion_nm") and "finite" in err
+
+
+def test_a_grid_of_millions_is_refused_unless_yes(capsys, folder):
+    err = _fails(capsys, folder, "sweep", str(PAPER), "--set", "sweep.protrusion_nm={start=0, stop=2e4, step=0.01}",
+                 "--set", "sweep.damping_ratio=[0.03, 0.05]")
+    assert "4,000,002 scenes (2,000,001 protrusions x 1 roughness sets x 2 damping ratios)" in err
+    assert "--yes" in err
+    scene = load_scene(PAPER, ["sweep.protrusion_nm={start=0, stop=2e4, step=0.01}"])
+    assert grid_size(scene) == (2_000_001, 1, 1)
+    check_grid(scene, yes=True)  # allowed with --yes
+    check_grid(load_scene(PAPER))  # the paper grid: 76 scenes
+    assert math.prod(grid_size(load_scene(PAPER))) == 76 < MAX_SCENES
+
+
+def test_nan_and_inf_inside_lists(capsys, folder, write_scene):
+    path = write_scene(f'[scene]\nextends = "{PAPER}"\n[air_bearing]\nfrequencies_khz = [120.0, nan]\n')
+    err = _fails(capsys, folder, "dmw", str(path))
+    assert f"{path}: air_bearing.frequencies_khz" in err and "finite" in err
+    with pytest.raises(SceneError, match=r"sweep.damping_ratio = \[0.05, inf\]: expected a list of finite"):
+        load_scene(PAPER, ["sweep.damping_ratio=[0.05, inf]"])
+
+
+def test_errors_from_set_name_the_set_option_not_the_file(capsys, folder):
+    err = _fails(capsys, folder, "dmw", str(PAPER), "--set", "dmw.rms_nm=-1")
+    assert err.startswith("hdi dmw: error: --set dmw.rms_nm=-1: dmw.rms_nm = -1") and "expected a number >= 0" in err
+    assert str(PAPER) not in err
+    err = _fails(capsys, folder, "dmw", str(PAPER), "--set", "dmw.rms_um=0.1")
+    assert err.startswith("hdi dmw: error: --set dmw.rms_um=0.1: dmw.rms_um: wrong unit 'um'")
+
+
+def test_an_option_the_stage_ignores_is_an_error(capsys, folder):
+    err = _fails(capsys, folder, "sweep", str(PAPER), "--readme", "README.md")
+    assert "--readme: not used by `hdi sweep`; only by report, run" in err
+    err = _fails(capsys, folder, "interface", str(PAPER), "--workers", "2")
+    assert "--workers: not used by `hdi interface`" in err
+    err = _fails(capsys, folder, "dmw", str(PAPER), "--channel", "Height")
+    assert "--set roughness.channel=" in err
+
+
+def test_report_history_protrusion_off_the_grid(capsys, folder):
+    err = _fails(capsys, folder, "report", str(PAPER), "--set", "report.histories_nm=[5.0, 11.1]")
+    assert "report.histories_nm: 11.1 nm not on the sweep grid" in err and "steps of 0.2" in err
+    err = _fails(capsys, folder, "report", str(PAPER), "--set", "report.histories_nm=[16.0]")
+    assert "16 nm not on the sweep grid" in err
+
+
+def test_hardness_derived_from_a_fixed_psi_outside_physical_bounds_warns():
+    """The paper's psi = 0.52 with the statistics of the di-5 AFM scan (sigma_s = 1.53 nm,
+    R = 14.7 nm) implies H = E'/psi sqrt(sigma_s/R) = 58.5 GPa > 0.3 E'."""
+    scene = load_scene(PAPER)
+    stats = {"sigma": 1.6e-9, "sigma_s": 1.53e-9, "y_s": 0.5e-9, "R": 14.7e-9, "eta": 1e15, "alpha": 3.0}
+    with pytest.warns(PhysicsWarning, match=r"H = 58\.\d GPa \(derived from materials.plasticity_index = 0.52"):
+        p = interface.interface_parameters(scene, stats)
+    assert p.H / 1e9 == pytest.approx(94.23 / 0.52 * math.sqrt(1.53 / 14.7), rel=1e-3)
+    # the paper's own statistics give H = 1.51 GPa = 0.016 E': no warning
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", PhysicsWarning)
+        interface.interface_parameters(scene, interface.roughness_statistics(scene))
+
+
+def test_plasticity_index_derived_from_a_given_hardness_outside_bounds_warns():
+    E, sigma_s, R = 94e9, 0.4e-9, 5e-6
+    # H = 0.01 GPa: H/E' = 1.1e-4 and psi = 9400 * sqrt(8e-5) = 84 (inside 0.05-100): only the hardness warns
+    with pytest.warns(PhysicsWarning) as rec:
+        check_materials(E, 0.01e9, sigma_s, R, derived="plasticity_index")
+    assert len(rec) == 1 and "0.000106 E'" in str(rec[0].message)
+    # a very smooth, very hard pair: psi = (94/20) sqrt(1e-12/1e-4) = 4.7e-4 < 0.05
+    with pytest.warns(PhysicsWarning, match=r"psi = 0.00047 .* outside 0.05-100"):
+        check_materials(E, 20e9, 1e-12, 1e-4, derived="plasticity_index")
