@@ -24,6 +24,8 @@ from pathlib import Path
 from typing import Any
 from urllib.parse import urlsplit
 
+from .physics.statistics import plasticity_index_gw
+
 
 class OptionError(ValueError):
     """A command-line option is invalid for this stage or scene (one line, names the option)."""
@@ -185,14 +187,11 @@ def check_materials(E: float, H: float, sigma_s: float, R: float, *, derived: st
 
     Parameters
     ----------
-    E : composite modulus E' [Pa]
-    H : hardness [Pa]
-    sigma_s : summit-height standard deviation [m]
-    R : summit radius [m]
+    E, H, sigma_s, R : as :func:`pipeline.physics.statistics.plasticity_index_gw` [Pa, Pa, m, m]
     derived : ``"hardness"`` (H from the scene's plasticity index) or ``"plasticity_index"`` (psi from the
         scene's hardness): which one was computed, named in the warning
     """
-    psi = E / H * math.sqrt(sigma_s / R)  # GW form, Greenwood & Williamson 1966 (SPEC.md 1)
+    psi = float(plasticity_index_gw(E, H, sigma_s, R))
     lo, hi = HARDNESS_RATIO_BOUNDS
     if not lo <= H / E <= hi:
         cause = (f"derived from materials.plasticity_index = {psi:.3g} with sigma_s = {sigma_s * 1e9:.3g} nm and "

@@ -1,7 +1,8 @@
 """Every output variable of the pipeline, declared once (the variable schema).
 
 Each :class:`Variable` states its name, its dataset units (the paper's units, a UDUNITS string),
-the factor from SI (dataset value = SI value x ``si_factor``), its ``long_name``, its CF
+the SI value of one dataset unit (``si_unit``; dataset value = SI value / ``si_unit``, i.e. the SI
+factor ``si_factor = 1/si_unit``), its ``long_name``, its CF
 ``standard_name`` where the CF table has one (only ``time`` here: CF has no standard names for
 tribology), the dimensions it carries beyond the grid of its dataset, the scene effect that
 produces it (absent without that effect), and for flag variables their values and missing value.
@@ -68,7 +69,8 @@ class Variable:
     name : variable name in the datasets
     units : dataset units (UDUNITS; ``""`` for labels, which have none)
     long_name : CF ``long_name``
-    si_factor : dataset value = SI value x ``si_factor``
+    si_unit : SI value of one dataset unit (1e-9 for nm): dataset value = SI value / ``si_unit`` (dividing
+        undoes the scene's ``x_nm * 1e-9`` exactly, multiplying by 1e9 would not)
     standard_name : CF standard name, where CF has one
     dims : dimensions beyond the grid of the dataset (e.g. ``("time",)`` for histories)
     effect : scene effect producing the variable (``None``: always present)
@@ -81,7 +83,7 @@ class Variable:
     name: str
     units: str
     long_name: str
-    si_factor: float = 1.0
+    si_unit: float = 1.0
     standard_name: str | None = None
     dims: tuple[str, ...] = ()
     effect: str | None = None
@@ -90,6 +92,11 @@ class Variable:
     flag_meanings: str | None = None
     fill_value: int | None = None
     extra: tuple[tuple[str, str], ...] = ()
+
+    @property
+    def si_factor(self) -> float:
+        """Factor from SI to dataset units [dataset unit per SI unit]."""
+        return 1.0 / self.si_unit
 
     def attrs(self) -> dict[str, Any]:
         """CF attributes of the variable (``_FillValue`` goes into the encoding, not here)."""
@@ -115,10 +122,10 @@ class Variable:
                            encoding=self.encoding())
 
     def from_si(self, values: Any, dims: Iterable[str], **attrs: Any) -> xr.Variable:
-        """A variable from SI values (scaled by ``si_factor``; flags and labels unscaled)."""
+        """A variable from SI values (divided by ``si_unit``; flags and labels unscaled)."""
         values = np.asarray(values)
-        if values.dtype.kind in "fiub" and self.si_factor != 1.0:
-            values = values * self.si_factor
+        if values.dtype.kind in "fiub" and self.si_unit != 1.0:
+            values = values / self.si_unit
         return self.data(values, dims, **attrs)
 
     def encoding(self) -> dict[str, Any]:
@@ -131,7 +138,8 @@ def _group(*items: Variable) -> dict[str, Variable]:
 
 
 V = Variable
-NM, MN, MPA, UM2 = 1e9, 1e3, 1e-6, 1e12
+#: SI value of one dataset unit
+NM, UM, MN, MPA, GPA, UM2 = 1e-9, 1e-6, 1e-3, 1e6, 1e9, 1e-12
 
 #: Coordinates shared by the datasets.
 COORDINATES = _group(
@@ -158,7 +166,7 @@ SCALARS = _group(
     V("shear_stress", "MPa", "mean shear stress over the real area while in contact", MPA, effect="friction"),
     V("real_area", "um2", "mean real contact area while in contact", UM2, effect="contact"),
     V("nominal_area", "um2", "nominal contact area of the TFC bulge", UM2),
-    V("protrusion_radius", "um", "effective radius of the bulge in the sliding direction", 1e6),
+    V("protrusion_radius", "um", "effective radius of the bulge in the sliding direction", UM),
     V("contact_fraction", "1", "fraction of the steady window spent in contact", effect="contact"),
     V("regime", "1", "regime of the steady window", effect="contact", dtype="int8",
       flag_values=tuple(int(r) for r in Regime), flag_meanings=" ".join(r.name.lower() for r in Regime),
@@ -187,7 +195,7 @@ HISTORIES = _group(
       effect="contact", dtype="int8", flag_values=(0, 1), flag_meanings="not_in_contact in_contact",
       fill_value=-1),
     V("z", "nm", "vertical displacement of the centre of gravity (up positive)", NM, dims=("time",)),
-    V("pitch", "urad", "pitch angle (leading edge up positive)", 1e6, dims=("time",), effect="pitch"),
+    V("pitch", "urad", "pitch angle (leading edge up positive)", 1e-6, dims=("time",)),  # 0 when locked
     V("steps", "1", "accepted integrator steps", dtype="int64"),
     V("rejected_steps", "1", "rejected integrator steps", dtype="int64"),
     V("contact_switches", "1", "contact on/off events located", dtype="int64"),
@@ -203,16 +211,16 @@ ROUGHNESS = _group(
     V("sigma", "nm", "rms roughness of the (detrended) surface heights", NM, dims=_SR),
     V("sigma_s", "nm", "standard deviation of summit heights", NM, dims=_SR),
     V("y_s", "nm", "mean of summit heights minus mean of surface heights", NM, dims=_SR),
-    V("summit_radius", "um", "mean summit radius of curvature", 1e6, dims=_SR),
-    V("summit_density", "um-2", "summit density (summits per nominal area)", 1e-12, dims=_SR),
+    V("summit_radius", "um", "mean summit radius of curvature", UM, dims=_SR),
+    V("summit_density", "um-2", "summit density (summits per nominal area)", 1e12, dims=_SR),
     V("bandwidth_alpha", "1", "Nayak bandwidth parameter", dims=_SR),
     V("plasticity_index", "1", "plasticity index, Greenwood-Williamson form", dims=_SR),
     V("plasticity_index_ke", "1", "plasticity index, CEB/Kogut-Etsion form", dims=_SR),
     V("pixel_size", "nm", "lateral sampling interval of the scan (geometric mean of x and y)", NM,
       dims=("surface",)),
-    V("m0", "nm2", "profile spectral moment m0 (height variance)", 1e18, dims=("surface",)),
+    V("m0", "nm2", "profile spectral moment m0 (height variance)", 1e-18, dims=("surface",)),
     V("m2", "1", "profile spectral moment m2 (slope variance, mean of x and y profiles)", dims=("surface",)),
-    V("m4", "nm-2", "profile spectral moment m4 (curvature variance, mean of x and y profiles)", 1e-18,
+    V("m4", "nm-2", "profile spectral moment m4 (curvature variance, mean of x and y profiles)", 1e18,
       dims=("surface",)),
     V("summit_count", "1", "number of summits counted (summit route)", dims=("surface",)),
 )
@@ -222,7 +230,7 @@ DMW = _group(
     V("frequency", "Hz", "frequency", dims=("frequency",)),
     V("displacement", "nm", "disk dynamic microwaviness (vertical displacement under the slider)", NM,
       dims=("time",)),
-    V("psd", "nm2 Hz-1", "one-sided power spectral density of the displacement", 1e18, dims=("frequency",)),
+    V("psd", "nm2 Hz-1", "one-sided power spectral density of the displacement", 1e-18, dims=("frequency",)),
     V("rms", "nm", "rms of the displacement", NM),
     V("band_low", "Hz", "lower edge of the DMW band"),
     V("band_high", "Hz", "upper edge of the DMW band"),
@@ -237,11 +245,11 @@ INTERFACE = _group(
     V("sigma", "nm", "combined rms roughness", NM),
     V("sigma_s", "nm", "standard deviation of summit heights", NM),
     V("y_s", "nm", "mean of summit heights above the mean of surface heights", NM),
-    V("summit_radius", "um", "summit radius", 1e6),
-    V("summit_density", "um-2", "summit density", 1e-12),
+    V("summit_radius", "um", "summit radius", UM),
+    V("summit_density", "um-2", "summit density", 1e12),
     V("bandwidth_alpha", "1", "Nayak bandwidth parameter"),
-    V("composite_modulus", "GPa", "composite modulus E'", 1e-9),
-    V("hardness", "GPa", "hardness of the softer body", 1e-9),
+    V("composite_modulus", "GPa", "composite modulus E'", GPA),
+    V("hardness", "GPa", "hardness of the softer body", GPA),
     V("critical_interference", "nm", "Kogut-Etsion critical interference w_c", NM),
     V("shear_strength", "MPa", "shear strength tau_y = H/(2.8 sqrt 3)", MPA),
     V("plasticity_index_gw", "1", "plasticity index, Greenwood-Williamson form"),
@@ -313,8 +321,8 @@ ACCURACY = _group(
       dims=("configuration", "point")),
     V("combined_simulation_time", "s", "simulation time of the configuration", dims=("configuration", "point")),
     # the headline outputs themselves (and their reference values) keep the units of SCALARS
-    *(V(n, v.units, v.long_name + " (at this setting)", v.si_factor, dims=_PKL) for n, v in SCALARS.items()),
-    *(V("reference_" + n, v.units, v.long_name + " (reference)", v.si_factor, dims=("point",))
+    *(V(n, v.units, v.long_name + " (at this setting)", v.si_unit, dims=_PKL) for n, v in SCALARS.items()),
+    *(V("reference_" + n, v.units, v.long_name + " (reference)", v.si_unit, dims=("point",))
       for n, v in SCALARS.items()),
 )
 

@@ -100,7 +100,8 @@ import xarray as xr
 from scipy.stats import norm
 
 from .. import slider as sl
-from ..io import read_dataset, var, write_dataset
+from ..io import read_dataset, write_dataset
+from ..variables import ACCURACY as ACC
 from ..variables import SCALARS
 from .interface import build_tables, roughness_statistics
 from .simulate import resolve_k
@@ -384,7 +385,7 @@ def _evaluate(scene: Any, values: dict[str, float], inputs: _Inputs, k: float | 
         info[i] = r.info[1:4]
         for j, name in enumerate(HEADLINE):
             if name in s:
-                vals[i, j] = s[name] * SCALARS[name].si_factor
+                vals[i, j] = s[name] / SCALARS[name].si_unit
     return Result(vals, sim, build, info, failed, msgs)
 
 
@@ -648,61 +649,51 @@ def _dataset(points, knobs, setting, error, values, sim_time, setup_time, wall, 
     names = [kb.name for kb in knobs]
     P, K, L, O = ("point",), ("knob",), ("level",), ("output",)
     PKL = ("point", "knob", "level")
+    # units and long names: pipeline/variables.py ACCURACY
     data = {
-        "setting": var(setting, ("knob", "level"), "", "value of the knob at this level (unit: the knob's "
-                       "setting_units; NaN pads knobs with fewer settings)", unit_variable="setting_units"),
-        "setting_units": var(np.array([kb.units for kb in knobs], dtype=object), K, "1",
-                             "unit of the knob's settings"),
-        "knob_description": var(np.array([kb.long_name for kb in knobs], dtype=object), K, "1",
-                                "what the knob sets"),
-        "error": var(error, PKL + O, "1", "relative error of the headline output against the reference",
-                     definition="|x - x_ref| / max(|x_ref|, floor); NaN: output does not apply; inf: regime "
-                                "differs or the integration failed"),
-        "max_error": var(max_err, PKL, "1", "largest relative error over the headline outputs"),
-        "wall_time": var(wall, PKL, "s", "wall time: setup_time + simulation_time"),
-        "simulation_time": var(sim_time, PKL, "s", "median wall time of integration + steady-window statistics"),
-        "setup_time": var(setup_time, ("knob", "level"), "s",
-                          "wall time of building what the knob changes (tables, DMW record, model)"),
-        "steps": var(steps[..., 0], PKL, "1", "accepted integrator steps"),
-        "rejected_steps": var(steps[..., 1], PKL, "1", "rejected integrator steps"),
-        "contact_switches": var(steps[..., 2], PKL, "1", "contact mode switches"),
-        "failed": var(failed, PKL, "1", "integration failed (1) or not (0)", flag_values=np.array([0, 1], np.int8),
-                      flag_meanings="ok failed"),
-        "is_reference": var(is_ref, ("knob", "level"), "1", "this run is the reference configuration (1)"),
-        "passes": var(passes, ("knob", "level"), "1",
-                      f"every headline error below {tol:g} at every point (1) or not (0)"),
-        "chosen_level": var(np.array([chosen_level[n] if chosen_level[n] is not None else -1 for n in names]), K,
-                            "1", "level of the chosen default (-1: no setting passes)"),
-        "chosen_setting": var(np.array([kb.settings[chosen_level[kb.name]] if chosen_level[kb.name] is not None
-                                        else np.nan for kb in knobs], float), K, "",
-                              "chosen default of the knob (unit: setting_units)", unit_variable="setting_units"),
+        "setting": ACC["setting"].data(setting, ("knob", "level"), unit_variable="setting_units"),
+        "setting_units": ACC["setting_units"].data([kb.units for kb in knobs], K),
+        "knob_description": ACC["knob_description"].data([kb.long_name for kb in knobs], K),
+        "error": ACC["error"].data(error, PKL + O,
+                                   definition="|x - x_ref| / max(|x_ref|, floor); NaN: output does not apply; "
+                                              "inf: regime differs or the integration failed"),
+        "max_error": ACC["max_error"].data(max_err, PKL),
+        "wall_time": ACC["wall_time"].data(wall, PKL),
+        "simulation_time": ACC["simulation_time"].data(sim_time, PKL),
+        "setup_time": ACC["setup_time"].data(setup_time, ("knob", "level")),
+        "steps": ACC["steps"].data(steps[..., 0], PKL),
+        "rejected_steps": ACC["rejected_steps"].data(steps[..., 1], PKL),
+        "contact_switches": ACC["contact_switches"].data(steps[..., 2], PKL),
+        "failed": ACC["failed"].data(failed, PKL),
+        "is_reference": ACC["is_reference"].data(is_ref, ("knob", "level")),
+        "passes": ACC["passes"].data(passes, ("knob", "level"),
+                                     long_name=f"every headline error below {tol:g} at every point (1) or not (0)"),
+        "chosen_level": ACC["chosen_level"].data([chosen_level[n] if chosen_level[n] is not None else -1
+                                                  for n in names], K),
+        "chosen_setting": ACC["chosen_setting"].data([kb.settings[chosen_level[kb.name]]
+                                                      if chosen_level[kb.name] is not None else np.nan
+                                                      for kb in knobs], K, unit_variable="setting_units"),
     }
     for j, name in enumerate(HEADLINE):
-        units, long_name = SCALARS[name].units, SCALARS[name].long_name
-        data[name] = var(values[..., j], PKL, units, long_name + " (at this setting)",
-                         error_floor=ERROR_FLOORS[name])
-        data[f"reference_{name}"] = var(ref.values[:, j], P, units, long_name + " (reference)",
-                                        error_floor=ERROR_FLOORS[name])
+        data[name] = ACC[name].data(values[..., j], PKL, error_floor=ERROR_FLOORS[name])
+        data[f"reference_{name}"] = ACC[f"reference_{name}"].data(ref.values[:, j], P,
+                                                                  error_floor=ERROR_FLOORS[name])
     conf = list(combos)
     comb_err = np.stack([_errors(combos[c], ref) for c in conf])
-    data["combined_error"] = var(comb_err, ("configuration",) + P + O, "1",
-                                 "relative error of all settings of a configuration together")
-    data["combined_max_error"] = var(_max_error(comb_err), ("configuration",) + P, "1",
-                                     "largest relative error over the headline outputs, configuration")
-    data["combined_wall_time"] = var(np.stack([combos[c].sim_time + combos[c].setup_time("all") for c in conf]),
-                                     ("configuration",) + P, "s",
-                                     "wall time of the configuration: tables, record, model and simulation")
-    data["combined_simulation_time"] = var(np.stack([combos[c].sim_time for c in conf]),
-                                           ("configuration",) + P, "s", "simulation time of the configuration")
+    CP = ("configuration",) + P
+    data["combined_error"] = ACC["combined_error"].data(comb_err, CP + O)
+    data["combined_max_error"] = ACC["combined_max_error"].data(_max_error(comb_err), CP)
+    data["combined_wall_time"] = ACC["combined_wall_time"].data(
+        np.stack([combos[c].sim_time + combos[c].setup_time("all") for c in conf]), CP)
+    data["combined_simulation_time"] = ACC["combined_simulation_time"].data(
+        np.stack([combos[c].sim_time for c in conf]), CP)
     coords = {
-        "point": var(np.array(list(points), dtype=object), P, "1", "operating point"),
-        "protrusion": var(np.array(list(points.values()), float), P, "nm", "TFC protrusion of the operating point"),
-        "knob": var(np.array(names, dtype=object), K, "1",
-                    "accuracy knob (scene key: its suffix is the unit, sample_rate_mhz is in [dmw])"),
-        "level": var(np.arange(setting.shape[1]), L, "1", "setting index within a knob, 0 = tightest"),
-        "output": var(np.array(HEADLINE, dtype=object), O, "1", "headline output"),
-        "configuration": var(np.array(conf, dtype=object), ("configuration",), "1",
-                             "chosen: all chosen defaults together; scene: the scene's own settings"),
+        "point": ACC["point"].data(list(points), P),
+        "protrusion": ACC["protrusion"].data(list(points.values()), P),
+        "knob": ACC["knob"].data(names, K),
+        "level": ACC["level"].data(np.arange(setting.shape[1]), L),
+        "output": ACC["output"].data(list(HEADLINE), O),
+        "configuration": ACC["configuration"].data(conf, ("configuration",)),
     }
     return xr.Dataset(data, coords=coords)
 

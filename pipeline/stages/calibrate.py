@@ -35,7 +35,8 @@ import xarray as xr
 from scipy.stats import norm
 
 from .. import slider as sl
-from ..io import is_current, var, write_dataset
+from ..io import is_current, write_dataset
+from ..variables import CALIBRATION
 from .simulate import model_inputs
 from .sweep_grid import protrusion_grid
 
@@ -136,18 +137,19 @@ def calibrate(scene: Any, out: Path, force: bool = False) -> xr.Dataset:
                     "depend on the criterion here, the slider is pulled into contact (adhesive snap-in) before "
                     "the separation reaches any k sigma of the range")
     p1, p2 = probabilities(k_cal) if np.isfinite(k_cal) else (np.nan, np.nan)
+    c = CALIBRATION
     data = {
-        "touchdown": var(curve, "k", "nm", "first protrusion of the sweep grid in contact"),
-        "k_calibrated": var(k_cal, (), "1", "calibrated contact criterion constant k (NaN: none admissible)"),
-        "k_low": var(k_low, (), "1", "lower (exclusive) end of the admissible k interval"),
-        "k_high": var(k_high, (), "1", "upper (inclusive) end of the admissible k interval"),
-        "k_onset": var(k_on, (), "1", f"smallest k giving contact at the touchdown protrusion ({st_on})"),
-        "k_previous": var(k_prev, (), "1", f"smallest k giving contact at the previous step ({st_prev})"),
-        "contact_probability_one_sided": var(p1, (), "1", "P(z > k sigma) of the calibrated k"),
-        "contact_probability_two_sided": var(p2, (), "1", "P(|z| > k sigma) of the calibrated k"),
-        "sigma": var(model.sigma / NM, (), "nm", "rms roughness of the criterion d < k sigma"),
+        "touchdown": c["touchdown"].data(curve, ("k",)),
+        "k_calibrated": c["k_calibrated"].data(k_cal, ()),
+        "k_low": c["k_low"].data(k_low, ()),
+        "k_high": c["k_high"].data(k_high, ()),
+        "k_onset": c["k_onset"].data(k_on, (), long_name=f"{c['k_onset'].long_name} ({st_on})"),
+        "k_previous": c["k_previous"].data(k_prev, (), long_name=f"{c['k_previous'].long_name} ({st_prev})"),
+        "contact_probability_one_sided": c["contact_probability_one_sided"].data(p1, ()),
+        "contact_probability_two_sided": c["contact_probability_two_sided"].data(p2, ()),
+        "sigma": c["sigma"].from_si(model.sigma, ()),
     }
-    ds = xr.Dataset(data, coords={"k": var(ks, "k", "1", "contact criterion constant")})
+    ds = xr.Dataset(data, coords={"k": c["k"].data(ks, ("k",))})
     ds.attrs.update({"outcome": outcome, "touchdown_onset_nm": onset, "touchdown_previous_nm": prev,
                      "k_range": str(list(k_range)), "k_tolerance": tol,
                      "simulations": n_on + n_prev,

@@ -62,8 +62,9 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from ..io import DatasetError, file_hash, is_current, read_dataset, var, write_dataset
+from ..io import DatasetError, file_hash, is_current, read_dataset, write_dataset
 from ..physics import dmw as phys
+from ..variables import DMW, coordinate
 
 log = logging.getLogger(__name__)
 
@@ -262,21 +263,16 @@ def run(scene: Any, out: Path, **options: Any) -> Path:
     rms = float(np.sqrt(np.mean(w * w)))
     ds = xr.Dataset(
         {
-            "displacement": var(w, ("time",), "nm",
-                                "disk dynamic microwaviness (vertical displacement under the slider)"),
-            "psd": var(p, ("frequency",), "nm2 Hz-1", "one-sided power spectral density of the displacement",
-                       method="periodogram, rectangular window, no detrend (scipy.signal.periodogram)"),
-            "rms": var(rms, (), "nm", "rms of the displacement"),
-            "band_low": var(lo, (), "Hz", "lower edge of the DMW band", realised=realised[0]),
-            "band_high": var(hi, (), "Hz", "upper edge of the DMW band", realised=realised[1]),
-            "sample_rate": var(fs, (), "Hz", "sampling rate of the displacement"),
-            "disk_speed": var(s["disk_speed_m_s"], (), "m s-1", "disk surface speed under the slider",
-                              formula="2 pi radius rpm / 60"),
+            "displacement": DMW["displacement"].data(w, ("time",)),
+            "psd": DMW["psd"].data(p, ("frequency",),
+                                   method="periodogram, rectangular window, no detrend (scipy.signal.periodogram)"),
+            "rms": DMW["rms"].data(rms, ()),
+            "band_low": DMW["band_low"].data(lo, (), realised=realised[0]),
+            "band_high": DMW["band_high"].data(hi, (), realised=realised[1]),
+            "sample_rate": DMW["sample_rate"].data(fs, ()),
+            "disk_speed": DMW["disk_speed"].data(s["disk_speed_m_s"], (), formula="2 pi radius rpm / 60"),
         },
-        coords={
-            "time": var(time, ("time",), "s", "time"),
-            "frequency": var(f, ("frequency",), "Hz", "frequency"),
-        },
+        coords={"time": coordinate("time", time), "frequency": DMW["frequency"].data(f, ("frequency",))},
     )
     extra = {"dmw_source": source, "dmw_enabled": int(enabled), "duration_s": dur, **attrs}
     return write_dataset(ds, target, scene, stage="dmw", inputs=inputs, seed=seed,

@@ -18,13 +18,14 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from ..io import read_dataset, var, write_dataset
+from ..io import read_dataset, write_dataset
 from ..physics import isbl
 from ..physics.asperity import critical_interference
 from ..physics.friction import shear_strength
 from ..physics.statistics import (bandwidth_alpha, composite_modulus, hardness_from_plasticity_gw,
                                   plasticity_index_gw, plasticity_index_ke, summit_offset, summit_sigma)
 from ..validation import check_materials
+from ..variables import INTERFACE
 
 NM, UM = 1e-9, 1e-6
 
@@ -91,43 +92,22 @@ def needed_quantities(effects: frozenset[str]) -> tuple[str, ...]:
     return tuple(q)
 
 
-_META = {
-    "contact_pressure": ("MPa", "contact pressure per nominal area"),
-    "adhesion_pressure": ("MPa", "adhesion pressure per nominal area (positive: attractive)"),
-    "friction_stress": ("MPa", "friction stress per nominal area"),
-    "real_area_fraction": ("1", "real contact area per nominal area"),
-    "contact_fraction": ("1", "fraction of summits in contact"),
-    "elastic_fraction": ("1", "fraction of summits in elastic contact"),
-    "plastic_fraction": ("1", "fraction of summits in fully plastic contact"),
-}
-
-
 def build_tables(scene: Any, stats: dict[str, float]) -> xr.Dataset:
     """Compute the interface dataset of a scene for given roughness statistics (no I/O)."""
     p = interface_parameters(scene, stats)
     sol = scene["solver"]
     wanted = needed_quantities(scene.effects)
+    # dataset units and long names: pipeline/variables.py INTERFACE; values in SI here
     scalars = {
-        "sigma": (stats["sigma"] / NM, "nm", "combined rms roughness"),
-        "sigma_s": (p.sigma_s / NM, "nm", "standard deviation of summit heights"),
-        "y_s": (stats["y_s"] / NM, "nm", "mean of summit heights above the mean of surface heights"),
-        "summit_radius": (p.R / UM, "um", "summit radius"),
-        "summit_density": (p.eta * UM**2, "um-2", "summit density"),
-        "bandwidth_alpha": (stats["alpha"], "1", "Nayak bandwidth parameter"),
-        "composite_modulus": (p.E / 1e9, "GPa", "composite modulus E'"),
-        "hardness": (p.H / 1e9, "GPa", "hardness of the softer body"),
-        "critical_interference": (critical_interference(p.R, p.E, p.H, p.nu) / NM, "nm",
-                                  "Kogut-Etsion critical interference w_c"),
-        "shear_strength": (shear_strength(p.H) / 1e6, "MPa", "shear strength tau_y = H/(2.8 sqrt 3)"),
-        "plasticity_index_gw": (plasticity_index_gw(p.E, p.H, p.sigma_s, p.R), "1",
-                                "plasticity index, Greenwood-Williamson form"),
-        "plasticity_index_ke": (plasticity_index_ke(p.E, p.H, p.sigma_s, p.R, p.nu), "1",
-                                "plasticity index, CEB/Kogut-Etsion form"),
-        "lubricant_thickness": (p.t / NM, "nm", "lubricant thickness"),
-        "work_of_adhesion": (p.dgamma, "J m-2", "work of adhesion"),
-        "intermolecular_distance": (p.eps / NM, "nm", "intermolecular distance"),
+        "sigma": stats["sigma"], "sigma_s": p.sigma_s, "y_s": stats["y_s"], "summit_radius": p.R,
+        "summit_density": p.eta, "bandwidth_alpha": stats["alpha"], "composite_modulus": p.E, "hardness": p.H,
+        "critical_interference": critical_interference(p.R, p.E, p.H, p.nu),
+        "shear_strength": shear_strength(p.H),
+        "plasticity_index_gw": plasticity_index_gw(p.E, p.H, p.sigma_s, p.R),
+        "plasticity_index_ke": plasticity_index_ke(p.E, p.H, p.sigma_s, p.R, p.nu),
+        "lubricant_thickness": p.t, "work_of_adhesion": p.dgamma, "intermolecular_distance": p.eps,
     }
-    data = {k: var(v, (), u, n) for k, (v, u, n) in scalars.items()}
+    data = {k: INTERFACE[k].from_si(v, ()) for k, v in scalars.items()}
     coords = {}
     if wanted:
         # The table must reach past the Gaussian window (TAIL sigma_s), where the contact terms vanish,
@@ -143,12 +123,9 @@ def build_tables(scene: Any, stats: dict[str, float]) -> xr.Dataset:
         d = isbl.separation_grid(d_min, d_max, sol["table_step_nm"] * NM)
         tables = isbl.isbl_tables(d, p, quantities=wanted, nodes=sol["quadrature_nodes"],
                                   panels=sol["quadrature_panels"])
-        coords["separation"] = var(d / NM, "separation", "nm",
-                                   "separation of the TFC surface from the mean of summit heights")
+        coords["separation"] = INTERFACE["separation"].from_si(d, ("separation",))
         for name, values in tables.items():
-            units, long_name = _META[name]
-            scale = 1e-6 if units == "MPa" else 1.0
-            data[name] = var(values * scale, "separation", units, long_name)
+            data[name] = INTERFACE[name].from_si(values, ("separation",))
     ds = xr.Dataset(data, coords=coords)
     ds.attrs.update({
         "roughness_source": stats.get("source", ""),

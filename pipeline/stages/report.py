@@ -59,7 +59,7 @@ import xarray as xr
 from .. import optimum as opt
 from .. import plots
 from ..io import DatasetError, read_dataset
-from ..variables import regime_name
+from ..variables import SCALARS, regime_name
 
 log = logging.getLogger(__name__)
 
@@ -157,7 +157,9 @@ def table_rows(ds: xr.Dataset) -> np.ndarray:
 
 
 def _unit(ds: xr.Dataset, name: str) -> str:
-    return str(ds[name].attrs.get("units", "")) if name in ds else ""
+    """Units of a sweep variable: its attribute, else its declaration in pipeline/variables.py."""
+    declared = SCALARS[name].units if name in SCALARS else ""
+    return str(ds[name].attrs.get("units", declared)) if name in ds else declared
 
 
 def _header(label: str, unit: str) -> str:
