@@ -27,9 +27,10 @@ def _sweep_wall(config: str, workers: int, inputs: Path, repeat: int = 3,
                 compute: list | None = None) -> list[float]:
     """Wall time of `hdi sweep` (process start-up, cluster start-up, compute, assembly).
 
-    ``compute`` collects the wall time of the batch phase alone (``compute_seconds`` of sweep.nc).
+    ``compute`` collects the wall time of the batch phase alone (``compute_seconds`` of the sweep's entry
+    in the run log, ``.hdi/runs.jsonl``: timings are kept out of the datasets).
     """
-    import xarray as xr
+    from pipeline.runner import last_run
     times = []
     for _ in range(repeat):
         with tempfile.TemporaryDirectory() as tmp:
@@ -38,8 +39,7 @@ def _sweep_wall(config: str, workers: int, inputs: Path, repeat: int = 3,
                 shutil.copy(f, out / f.name)
             times.append(_hdi("sweep", config, "--out", str(out), "--workers", str(workers)))
             if compute is not None:
-                with xr.open_dataset(out / "sweep.nc", engine="netcdf4") as ds:
-                    compute.append(float(ds.attrs["compute_seconds"]))
+                compute.append(float(last_run(out, "sweep")["compute_seconds"]))
     return times
 
 

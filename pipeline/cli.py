@@ -1,33 +1,41 @@
 """The ``hdi`` command: ``hdi STAGE CONFIG [--set section.key=value ...] [--out DIR] [--scheduler ADDRESS]``.
 
-Each stage lives in ``pipeline.stages.<stage>`` and exposes ``run(scene, out, **options) -> Path``.
-``hdi run`` runs every stage of the main job in order. ``hdi roughness FILE... --out DIR`` summarises
-AFM files without a scene.
+The stages are the declarations :mod:`pipeline.runner` discovers in :mod:`pipeline.stages`; the runner
+makes the asked stage current, with everything upstream of it (a stage whose inputs did not change is
+not recomputed). ``hdi run`` makes the main job current. ``hdi roughness FILE... --out DIR``
+summarises AFM files without a scene.
 """
 
 from __future__ import annotations
 
 import argparse
-import importlib
 import logging
 import sys
-import time
 from pathlib import Path
 
+from . import runner
 from .io import DatasetError, results_dir
 from .scene import SceneError, load_scene
 from .validation import MAX_SCENES, check_options, one_line_warnings
 
-STAGES = ("roughness", "dmw", "interface", "calibrate", "simulate", "sweep", "accuracy", "report", "run")
-#: The main job, in order (``hdi run`` / ``make run``).
-MAIN_JOB = ("roughness", "dmw", "interface", "calibrate", "sweep", "report")
-
 log = logging.getLogger("pipeline")
 
 
-def _parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="hdi", description=__doc__.split("\n\n")[0])
-    p.add_argument("stage", choices=STAGES, help="the stage to run (run = the whole main job)")
+class _Format(logging.Formatter):
+    """Progress as plain lines; warnings and errors say so."""
+
+    def format(self, record: logging.LogRecord) -> str:
+        text = super().format(record)
+        return text if record.levelno < logging.WARNING else f"{record.levelname.lower()}: {text}"
+
+
+def _parser(stages: dict[str, runner.Stage]) -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="hdi", description=__doc__.split("\n\n")[0],
+                                formatter_class=argparse.RawDescriptionHelpFormatter,
+                                epilog="stages:\n" + "\n".join(f"  {n:<11} {s.doc}" for n, s in stages.items())
+                                + "\n  run         the main job: " + " ".join(n for n, s in stages.items()
+                                                                               if s.main_job))
+    p.add_argument("stage", choices=[*stages, "run"], help="the stage to run (run = the whole main job)")
     p.add_argument("inputs", nargs="+", metavar="CONFIG",
                    help="a scene file (TOML); for `roughness`, AFM files may be given instead")
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="SECTION.KEY=VALUE",
@@ -48,10 +56,16 @@ def _parser() -> argparse.ArgumentParser:
     return p
 
 
-def run_stage(stage: str, scene, out: Path, **options) -> Path:
-    """Import ``pipeline.stages.<stage>`` and run it."""
-    module = importlib.import_module(f"pipeline.stages.{stage}")
-    return module.run(scene, out, **options)
+class _Stderr(logging.StreamHandler):
+    """Writes to whatever ``sys.stderr`` is now (the CLI may be called repeatedly in one process)."""
+
+    @property
+    def stream(self):  # type: ignore[override]
+        return sys.stderr
+
+    @stream.setter
+    def stream(self, value) -> None:
+        pass
 
 
 def _given(args: argparse.Namespace) -> dict:
@@ -60,23 +74,33 @@ def _given(args: argparse.Namespace) -> dict:
                                                     "detrend")}
 
 
-def main(argv: list[str] | None = None) -> int:
-    args = _parser().parse_args(argv)
+def _logging(verbose: bool) -> None:
+    """The stages' progress (INFO of the ``pipeline`` loggers) on stderr; more with ``-v``."""
     one_line_warnings()
-    logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
-                        format="%(levelname)s %(name)s: %(message)s")
-    if not args.verbose:  # dask.distributed configures its own INFO loggers; keep the terminal quiet
+    if not any(isinstance(h, _Stderr) for h in log.handlers):
+        handler = _Stderr()
+        handler.setFormatter(_Format("%(message)s"))
+        log.addHandler(handler)
+    log.setLevel(logging.DEBUG if verbose else logging.INFO)
+    if not verbose:  # dask.distributed configures its own INFO loggers; keep the terminal quiet
         for name in ("distributed", "distributed.scheduler", "distributed.nanny", "distributed.core",
                      "distributed.http.proxy"):
             logging.getLogger(name).setLevel(logging.CRITICAL)  # (shutdown races log CommClosedError)
+
+
+def main(argv: list[str] | None = None) -> int:
+    stages = runner.registry()
+    args = _parser(stages).parse_args(argv)
+    _logging(args.verbose)
     try:
         if args.stage == "roughness" and not (len(args.inputs) == 1 and args.inputs[0].endswith(".toml")):
             from .stages import roughness
             if args.out is None:
                 raise SceneError("hdi roughness FILE...: --out DIR is required when AFM files are given")
             check_options("roughness", None, **_given(args))
-            path = roughness.run_files([Path(f) for f in args.inputs], args.out,
-                                       channel=args.channel, detrend=args.detrend or "plane")
+            with runner.folder_lock(args.out):
+                path = roughness.run_files([Path(f) for f in args.inputs], args.out,
+                                           channel=args.channel, detrend=args.detrend or "plane")
             print(path)
             return 0
         if len(args.inputs) != 1:
@@ -84,13 +108,11 @@ def main(argv: list[str] | None = None) -> int:
         scene = load_scene(args.inputs[0], args.overrides)
         check_options(args.stage, scene, **_given(args))
         out = results_dir(scene, args.out)
-        options = {"scheduler": args.scheduler, "workers": args.workers, "force": args.force,
-                   "readme": args.readme}
-        stages = MAIN_JOB if args.stage == "run" else (args.stage,)
-        for stage in stages:
-            t0 = time.perf_counter()
-            path = run_stage(stage, scene, out, **options)
-            print(f"{stage:>10}: {path}  ({time.perf_counter() - t0:.1f} s)", flush=True)
+        targets = runner.main_job(scene, stages) if args.stage == "run" else [args.stage]
+        options = {"scheduler": args.scheduler, "workers": args.workers, "readme": args.readme}
+        made = runner.Runner(scene, out, stages, **options).build(targets, force=args.force)
+        for stage, paths in made.items():  # the dataset, or the folder of figures and tables
+            print(f"{stage:>10}: {paths[0] if paths[0].suffix == '.nc' else paths[0].parent}", flush=True)
         return 0
     except (SceneError, DatasetError, FileNotFoundError, ValueError) as exc:
         print(f"hdi {args.stage}: error: {exc}", file=sys.stderr)

@@ -1,6 +1,6 @@
 """Datasets on disk: provenance attributes, atomic writes, explicit-engine reads.
 
-Every stage writes exactly one NetCDF file through :func:`write_dataset`, which
+Every dataset is written through :func:`write_dataset` (by :mod:`pipeline.runner` for the stages), which
 
 * refuses a variable or coordinate without ``units`` and ``long_name`` (CF conventions),
 * adds the global attributes of DESIGN.md (title, history, source, Conventions, package version,
@@ -26,16 +26,6 @@ import xarray as xr
 from . import __version__
 
 ENGINE = "netcdf4"
-
-#: The scene keys each stage's output depends on (``"section"`` or ``"section.key"``): a stage
-#: whose dataset carries the same key hash (attribute ``stage_key``) is up to date and not rerun.
-STAGE_INPUTS: dict[str, tuple[str, ...]] = {
-    "roughness": ("roughness", "materials"),
-    "dmw": ("dmw", "solver.duration_ms", "scene.effects", "slider.length_mm", "slider.front_arm_mm"),
-    "interface": ("roughness", "materials", "lubricant", "solver.table_step_nm", "solver.table_min_sigma",
-                  "solver.table_max_nm", "solver.quadrature_nodes", "solver.quadrature_panels", "scene.effects",
-                  "air_bearing.flying_height_nm", "tfc.protrusion_nm", "sweep.protrusion_nm"),
-}
 
 
 class DatasetError(ValueError):
@@ -63,46 +53,6 @@ def file_hash(path: str | Path, chunk: int = 1 << 20) -> str:
         while block := fh.read(chunk):
             h.update(block)
     return h.hexdigest()
-
-
-#: Stages that depend on the whole scene except these keys.
-STAGE_EXCLUDES: dict[str, tuple[str, ...]] = {
-    "calibrate": ("tfc.protrusion_nm", "sweep", "report", "scene.name", "scene.description"),
-}
-
-
-def stage_key(scene: Any, stage: str) -> str:
-    """SHA-256 of the scene keys a stage depends on (:data:`STAGE_INPUTS`, :data:`STAGE_EXCLUDES`);
-    the whole config otherwise."""
-    items = STAGE_INPUTS.get(stage)
-    if items is None and stage in STAGE_EXCLUDES:
-        cfg = json.loads(json.dumps(scene.config, default=str))
-        for item in STAGE_EXCLUDES[stage]:
-            section, _, key = item.partition(".")
-            if key:
-                cfg.get(section, {}).pop(key, None)
-            else:
-                cfg.pop(section, None)
-        return hashlib.sha256(json.dumps(cfg, sort_keys=True).encode()).hexdigest()
-    if items is None:
-        return scene.hash
-    picked = {}
-    for item in items:
-        section, _, key = item.partition(".")
-        picked[item] = scene.config[section][key] if key else scene.config[section]
-    return hashlib.sha256(json.dumps(picked, sort_keys=True, default=str).encode()).hexdigest()
-
-
-def is_current(path: str | Path, scene: Any, stage: str) -> bool:
-    """Whether ``path`` exists and was written by ``stage`` from the same inputs (by hash)."""
-    path = Path(path)
-    if not path.is_file():
-        return False
-    try:
-        with xr.open_dataset(path, engine=ENGINE) as ds:
-            return ds.attrs.get("stage_key") == stage_key(scene, stage)
-    except (OSError, ValueError):
-        return False
 
 
 def check_cf(ds: xr.Dataset, where: str = "dataset") -> None:
@@ -178,7 +128,6 @@ def provenance(scene: Any = None, *, stage: str, inputs: Iterable[str | Path] = 
     if scene is not None:
         attrs["scene_name"] = scene.name
         attrs["config_hash"] = scene.hash
-        attrs["stage_key"] = stage_key(scene, stage)
         attrs["config"] = scene.to_toml_text()
         attrs["effects"] = " ".join(sorted(scene.effects))
         if scene.overrides:

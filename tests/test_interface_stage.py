@@ -168,7 +168,7 @@ def test_interrupted_cli_run_keeps_previous_file(tmp_path, paper_config, monkeyp
         raise KeyboardInterrupt
 
     monkeypatch.setattr(xr.Dataset, "to_netcdf", broken)
-    assert cli.main(["interface", str(paper_config), "--out", str(tmp_path)]) == 130
+    assert cli.main(["interface", str(paper_config), "--out", str(tmp_path), "--force"]) == 130
     assert (tmp_path / "interface.nc").read_bytes() == before
     assert [p.name for p in tmp_path.iterdir()] == ["interface.nc"]
 

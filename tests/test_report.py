@@ -9,10 +9,17 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from pipeline import cli
 from pipeline.io import DatasetError, write_dataset
 from pipeline.variables import HISTORIES, SCALARS
+from pipeline.runner import Inputs
 from pipeline.stages import report
+
+
+def render(scene, out):
+    """The report of the hand-made datasets in ``out``, written straight into it (the stage's compute:
+    through the runner, the datasets would first be made current for the scene, i.e. recomputed)."""
+    report.compute(scene, Inputs.folder(out))
+    return out / "figures"
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 PROT = np.round(np.arange(0.0, 6.01, 0.5), 9)          # 13 protrusions [nm]
@@ -170,7 +177,7 @@ def full_out(tmp_path):
 def test_every_figure_is_a_real_png(full_out, paper_scene):
     import matplotlib.pyplot as plt
     before = plt.get_fignums()
-    figdir = report.run(paper_scene, full_out)
+    figdir = render(paper_scene, full_out)
     assert figdir == full_out / "figures"
     for name in report.FIGURES:
         check_png(figdir / name)
@@ -179,7 +186,7 @@ def test_every_figure_is_a_real_png(full_out, paper_scene):
 
 
 def test_summary_csv_rows_columns_and_values(full_out, paper_scene):
-    report.run(paper_scene, full_out)
+    render(paper_scene, full_out)
     header, rows = read_csv(full_out / "report" / "summary.csv")
     assert header[:4] == ["roughness", "damping [1]", "protrusion [nm]", "regime"]
     for col in ("clearance [nm]", "FHM/BV [%]", "interference [nm]", "mean pressure [MPa]",
@@ -204,7 +211,7 @@ def test_summary_csv_rows_columns_and_values(full_out, paper_scene):
 
 
 def test_summary_and_comparison_text(full_out, paper_scene):
-    report.run(paper_scene, full_out)
+    render(paper_scene, full_out)
     md = (full_out / "report" / "summary.md").read_text()
     assert "First contact at 3 nm." in md
     # optimum (a): flying with FHM < 10 %: 0 nm (9 %), 0.5 nm (9.25 %), ..., 1.5 nm (9.75 %); least clearance
@@ -225,7 +232,7 @@ def test_summary_and_comparison_text(full_out, paper_scene):
 def test_default_combination_first(tmp_path, paper_scene):
     # damping 0.02 comes first on the grid; the scene's air_bearing.damping_ratio = 0.05 must lead
     write_sweep(tmp_path, dampings=(0.02, 0.05), scales={0.02: 2.0, 0.05: 1.0})
-    report.run(paper_scene, tmp_path)
+    render(paper_scene, tmp_path)
     header, rows = read_csv(tmp_path / "report" / "summary.csv")
     damping = [float(r[1]) for r in rows]
     assert damping == [0.05] * 11 + [0.02] * 11
@@ -237,12 +244,13 @@ def test_default_combination_first(tmp_path, paper_scene):
     check_png(tmp_path / "figures" / "fig6_fhm.png")
 
 
-def test_missing_optional_inputs_skip_their_figures(tmp_path, paper_scene, capsys):
+def test_missing_optional_inputs_skip_their_figures(tmp_path, paper_scene, caplog):
+    caplog.set_level("INFO", logger="pipeline")
     write_sweep(tmp_path)
     stale = tmp_path / "figures" / "dmw.png"
     stale.parent.mkdir()
     stale.write_bytes(b"old figure of an earlier run")
-    figdir = report.run(paper_scene, tmp_path)
+    figdir = render(paper_scene, tmp_path)
     for name in ("fig6_fhm.png", "fig7_shear.png"):
         check_png(figdir / name)
     for name in ("fig3_clearance.png", "fig4_forces.png", "fig5_stresses.png", "calibration.png",
@@ -251,7 +259,7 @@ def test_missing_optional_inputs_skip_their_figures(tmp_path, paper_scene, capsy
     md = (tmp_path / "report" / "summary.md").read_text()
     assert "`figures/dmw.png`: skipped, dmw.nc is absent" in md
     assert "`figures/fig3_clearance.png`: skipped, sweep_histories.nc is absent" in md
-    assert "skipped calibration.png" in capsys.readouterr().out
+    assert "skipped calibration.png" in caplog.text
     assert (tmp_path / "report" / "summary.csv").is_file()
     assert "interface.nc absent" in (tmp_path / "report" / "comparison.md").read_text()
 
@@ -263,7 +271,7 @@ def test_no_contact_anywhere_keeps_the_whole_grid(tmp_path, paper_scene):
     for name in ("interference", "mean_pressure", "shear_stress", "friction_coefficient"):
         ds[name][:] = np.nan
     write_dataset(ds, tmp_path / "sweep.nc", stage="sweep")
-    report.run(paper_scene, tmp_path)
+    render(paper_scene, tmp_path)
     _, rows = read_csv(tmp_path / "report" / "summary.csv")
     assert len(rows) == PROT.size
     assert "No contact anywhere on the grid." in (tmp_path / "report" / "summary.md").read_text()
@@ -281,7 +289,7 @@ def test_snap_in_is_named_when_the_evidence_shows_it(tmp_path, paper_scene):
                      coords={"k": ("k", [-1.0, 0.0, 1.0], {"units": "1", "long_name": "k"})})
     write_dataset(cal, tmp_path / "calibration.nc", stage="calibrate",
                   extra_attrs={"outcome": "no admissible k", "k_range": "[-1, 1]"})
-    report.run(paper_scene, tmp_path)
+    render(paper_scene, tmp_path)
     cmp_ = (tmp_path / "report" / "comparison.md").read_text()
     assert "jumps into contact" in cmp_
     assert "Likely cause: adhesive snap-in" in cmp_
@@ -289,7 +297,6 @@ def test_snap_in_is_named_when_the_evidence_shows_it(tmp_path, paper_scene):
     check_png(tmp_path / "figures" / "calibration.png")
 
 
-def test_sweep_is_required(tmp_path, paper_scene, paper_config):
+def test_sweep_is_required(tmp_path, paper_scene):
     with pytest.raises(DatasetError, match="sweep.nc"):
-        report.run(paper_scene, tmp_path)
-    assert cli.main(["report", str(paper_config), "--out", str(tmp_path)]) == 2
+        render(paper_scene, tmp_path)

@@ -100,7 +100,7 @@ import xarray as xr
 from scipy.stats import norm
 
 from .. import slider as sl
-from ..io import read_dataset, write_dataset
+from ..runner import Inputs, Stage, build
 from ..variables import ACCURACY as ACC
 from ..variables import SCALARS
 from .interface import build_tables, roughness_statistics
@@ -414,11 +414,11 @@ def _passes(err: np.ndarray, tol: float) -> bool:
 # ---------------------------------------------------------------------------------------------
 # the stage
 
-def run(scene: Any, out: Path, **options: Any) -> Path:
-    """Write ``out/accuracy.nc`` and ``out/figures/work_precision.png`` (module docstring).
+def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
+    """The ``accuracy.nc`` dataset; draws ``figures/work_precision.png`` under ``inputs.staging``.
 
-    Options
-    -------
+    Options (``inputs.options``; those that change the result are part of the stage's inputs key)
+    -------------------------------------------------------------------------------------------------
     points : ``{label: protrusion [nm]}`` (default :data:`POINTS`)
     reference : changes to :data:`REFERENCE`
     knobs : ``{knob name: [settings, tightest first]}`` replacing settings (knobs not named keep
@@ -426,8 +426,7 @@ def run(scene: Any, out: Path, **options: Any) -> Path:
     repeat : timed repeats per run (default 5); tolerance : error tolerance for the defaults (0.01)
     k : contact criterion (default: scene, calibration, fallback probability)
     """
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
+    out, options = inputs.out, inputs.options
     points = dict(options.get("points") or POINTS)
     present = set(scene["solver"]) | {"sample_rate_mhz"}
     reference = {k_: v for k_, v in {**REFERENCE, **(options.get("reference") or {})}.items() if k_ in present}
@@ -457,10 +456,11 @@ def run(scene: Any, out: Path, **options: Any) -> Path:
     if not knobs:
         raise ValueError("no accuracy knob applies to the scene's effects")
     t_start = time.perf_counter()
-    inputs = _Inputs(scene, out, repeat)
+    staging = inputs.staging
+    inputs = _Inputs(scene, out, repeat)  # (the stage's inputs are read above; from here, the run cache)
 
     # the reference (its first run also compiles the kernels: run it once untimed)
-    print(f"accuracy: reference {reference}", flush=True)
+    log.info("accuracy: reference %s", reference)
     _evaluate(scene, reference, inputs, k, points, 1)
     ref = _evaluate(scene, reference, inputs, k, points, repeat)
     if ref.failed.any():
@@ -494,10 +494,10 @@ def run(scene: Any, out: Path, **options: Any) -> Path:
             steps[:, ik, il] = res.info
             failed[:, ik, il] = res.failed
             me = _max_error(e)
-            print(f"  {kb.name:>20} = {value:<8g} max error " + "  ".join(
+            log.info(f"  {kb.name:>20} = {value:<8g} max error " + "  ".join(
                 f"{p}: {m:9.3g}" for p, m in zip(points, me))
                 + f"   time {np.nansum(res.sim_time) + res.setup_time(kb.kind):7.3f} s"
-                + ("  FAILED: " + "; ".join(res.messages) if res.failed.any() else ""), flush=True)
+                + ("  FAILED: " + "; ".join(res.messages) if res.failed.any() else ""))
     wall = sim_time + setup_time[None, :, :]
     max_err = _max_error(error)
     passes = np.zeros((n_k, n_l), dtype=np.int8)
@@ -573,10 +573,30 @@ def run(scene: Any, out: Path, **options: Any) -> Path:
                               for kb in [knobs[ik]] for m in r.messages) or "none",
         "stage_wall_time_s": time.perf_counter() - t_start,
     }
-    path = write_dataset(ds, out / "accuracy.nc", scene, stage="accuracy", extra_attrs=attrs)
-    fig = work_precision_figure(ds, out / "figures" / "work_precision.png")
-    _print_summary(ds, chosen, chosen_err, comb_err, configs, combo_cost, fig)
-    return path
+    ds.attrs.update(attrs)
+    fig = work_precision_figure(ds, staging / "figures" / "work_precision.png")
+    _log_summary(ds, chosen, chosen_err, comb_err, configs, combo_cost, fig)
+    return ds
+
+
+def _upstream(scene: Any) -> tuple[str, ...]:
+    """Roughness scans (statistics) and, when the scene fixes no k, the calibration (:func:`_contact_k`)."""
+    up = ["roughness"] if scene["roughness"]["afm"] else []
+    if scene.has("contact") and scene["contact"]["k"] is None:
+        up.append("calibrate")
+    return tuple(up)
+
+
+STAGE = Stage(
+    "accuracy", compute, outputs=("accuracy.nc", "figures/work_precision.png"),
+    reads=("*",), excludes=("sweep", "report", "scene.name", "scene.description"), upstream=_upstream,
+    options=("points", "reference", "knobs", "only", "repeat", "tolerance", "combined_tolerance", "k"),
+    order=55, doc="error and wall time of each accuracy knob, accuracy.nc and figures/work_precision.png")
+
+
+def run(scene: Any, out: Path, **options: Any) -> Path:
+    """``accuracy.nc`` (and the work-precision figure) in ``out``, recomputed when its inputs changed."""
+    return build("accuracy", scene, out, **options)["accuracy"][0]
 
 
 def _configuration(reference: dict[str, float], knobs: list[Knob], levels: dict[str, int | None]) -> dict:
@@ -747,9 +767,9 @@ def work_precision_figure(ds: xr.Dataset, path: Path) -> Path:
     return path
 
 
-def _print_summary(ds, chosen, chosen_err, comb_err, configs, combo_cost, fig) -> None:
+def _log_summary(ds, chosen, chosen_err, comb_err, configs, combo_cost, fig) -> None:
     points = list(ds["point"].values)
-    print("accuracy: max relative error (wall time [s]) per setting", flush=True)
+    log.info("accuracy: max relative error (wall time [s]) per setting")
     for ik, kb in enumerate(ds["knob"].values):
         for il in range(ds.sizes["level"]):
             v = ds["setting"].values[ik, il]
@@ -758,13 +778,13 @@ def _print_summary(ds, chosen, chosen_err, comb_err, configs, combo_cost, fig) -
             cells = "  ".join(f"{ds['max_error'].values[ip, ik, il]:9.2e} ({ds['wall_time'].values[ip, ik, il]:7.3f})"
                               for ip in range(len(points)))
             mark = " *" if ds["chosen_level"].values[ik] == il else ""
-            print(f"  {kb:>20} {v:<8g} {cells}{mark}")
-    print("accuracy: chosen defaults (max error at " + ", ".join(points) + "):")
+            log.info(f"  {kb:>20} {v:<8g} {cells}{mark}")
+    log.info("accuracy: chosen defaults (max error at " + ", ".join(points) + "):")
     for name, v in chosen.items():
         e = chosen_err[name]
-        print(f"  {name:>20} = {v if v is not None else 'none':<8} "
+        log.info(f"  {name:>20} = {v if v is not None else 'none':<8} "
               + ("" if e is None else "  ".join(f"{x:.2e}" for x in e.values())))
     for c, e in comb_err.items():
-        print(f"  combined {c:>8}: " + "  ".join(f"{p} {x:.2e}" for p, x in e.items())
+        log.info(f"  combined {c:>8}: " + "  ".join(f"{p} {x:.2e}" for p, x in e.items())
               + f"   wall time {combo_cost[c]:.3f} s   {configs[c]}")
-    print(f"accuracy: figure {fig}", flush=True)
+    log.info("accuracy: figure %s", fig.name)

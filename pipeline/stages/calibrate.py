@@ -35,9 +35,9 @@ import xarray as xr
 from scipy.stats import norm
 
 from .. import slider as sl
-from ..io import is_current, write_dataset
+from ..runner import Inputs, Stage, build
 from ..variables import CALIBRATION
-from .simulate import model_inputs
+from .simulate import model_inputs, upstream
 from .sweep_grid import protrusion_grid
 
 log = logging.getLogger(__name__)
@@ -95,11 +95,11 @@ def probabilities(k: float) -> tuple[float, float]:
     return float(norm.sf(k)), float(2 * norm.sf(abs(k)))
 
 
-def calibrate(scene: Any, out: Path, force: bool = False) -> xr.Dataset:
+def calibrate(scene: Any, out: Path) -> xr.Dataset:
     """Run the calibration of a scene (no I/O of its own result); returns ``calibration.nc``'s dataset."""
     if not scene.has("contact"):
         raise ValueError("calibration needs the contact effect in scene.effects")
-    interface, record = model_inputs(scene, out, force)
+    interface, record = model_inputs(scene, out)
     td = scene["touchdown"]
     model = sl.build_model(scene, interface, record, k=0.0)
     k_range = tuple(td["k_range"])
@@ -158,23 +158,28 @@ def calibrate(scene: Any, out: Path, force: bool = False) -> xr.Dataset:
     return ds
 
 
-def run(scene: Any, out: Path, force: bool = False, **options: Any) -> Path:
-    """Write ``out/calibration.nc`` (see the module docstring) and say the outcome.
-
-    Not recomputed when ``calibration.nc`` was made from the same scene (protrusion, sweep and
-    report settings aside) and its inputs, unless ``force``.
-    """
-    out = Path(out)
-    path = out / "calibration.nc"
-    if not force and is_current(path, scene, "calibrate"):
-        with xr.open_dataset(path, engine="netcdf4") as old:
-            print(f"  calibration (up to date): {old.attrs.get('outcome', '')}")
-        return path
-    ds = calibrate(scene, out, force)
-    print(f"  calibration: {ds.attrs['outcome']}")
+def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
+    """The ``calibration.nc`` dataset (module docstring); logs the outcome."""
+    ds = calibrate(scene, inputs.out)
+    log.info("calibration: %s", ds.attrs["outcome"])
     if np.isfinite(float(ds["k_calibrated"])):
-        print(f"  k = {float(ds['k_calibrated']):.4f}; contact probability "
-              f"{float(ds['contact_probability_one_sided']):.3f} (one-sided), "
-              f"{float(ds['contact_probability_two_sided']):.3f} (two-sided)")
-    inputs = [p for p in (out / "interface.nc", out / "dmw.nc") if p.is_file()]
-    return write_dataset(ds, out / "calibration.nc", scene, stage="calibrate", inputs=inputs)
+        log.info("calibration: k = %.4f; contact probability %.3f (one-sided), %.3f (two-sided)",
+                 float(ds["k_calibrated"]), float(ds["contact_probability_one_sided"]),
+                 float(ds["contact_probability_two_sided"]))
+    return ds
+
+
+STAGE = Stage(
+    "calibrate", compute, outputs=("calibration.nc",),
+    # everything but the single protrusion, the report and the sweep (except its protrusion grid,
+    # on which the touchdown curve is evaluated)
+    reads=("*", "sweep.protrusion_nm"),
+    excludes=("tfc.protrusion_nm", "sweep", "report", "scene.name", "scene.description"),
+    upstream=lambda scene: tuple(u for u in upstream(scene) if u != "calibrate"),
+    order=40, main_job=True, applies=lambda scene: scene.has("contact"),
+    doc="the contact-criterion constant k from the measured touchdown, calibration.nc")
+
+
+def run(scene: Any, out: Path, **options: Any) -> Path:
+    """``calibration.nc`` in ``out``, recomputed only when its inputs changed (:func:`pipeline.runner.build`)."""
+    return build("calibrate", scene, out, **options)["calibrate"][0]

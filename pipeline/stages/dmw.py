@@ -46,14 +46,13 @@ displacement (``rms = 0``, ``dmw_enabled = 0``, attribute ``disabled``), reading
 drawing no random numbers. A downstream stage that reads it therefore gets exactly "no DMW" even if
 it forgets to check the effect, and a scene with the effect off never needs a record file.
 
-Up to date: an existing ``dmw.nc`` with the same stage key (:func:`pipeline.io.is_current`), the
-same record length and, for a measured record, the same record bytes is kept (``force=True``
-recomputes).
+Up to date (:mod:`pipeline.runner`): the stage reads ``[dmw]``, ``solver.duration_ms``, the effects,
+the slider's length and front arm (the default record length) and the bytes of a measured record;
+``dmw.nc`` is recomputed only when one of them changed (``force=True`` recomputes).
 """
 
 from __future__ import annotations
 
-import json
 import logging
 import math
 from pathlib import Path
@@ -62,9 +61,10 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from ..io import DatasetError, file_hash, is_current, read_dataset, write_dataset
-from ..physics import dmw as phys
+from ..io import read_dataset
+from ..runner import Inputs, Stage, build
 from ..variables import DMW, coordinate
+from ..physics import dmw as phys
 
 log = logging.getLogger(__name__)
 
@@ -181,56 +181,24 @@ def _measured(s: dict[str, Any]) -> tuple[np.ndarray, dict[str, Any]]:
     return x, attrs
 
 
-def _up_to_date(path: Path, scene: Any, s: dict[str, Any]) -> bool:
-    """Whether ``path`` was written from the same scene keys, record length and record bytes.
-
-    The record length is compared too because its default depends on ``[slider]`` keys that the
-    stage key of :mod:`pipeline.io` does not cover.
-    """
-    if not is_current(path, scene, "dmw"):
-        return False
-    try:
-        attrs = read_dataset(path).attrs
-    except DatasetError:
-        return False
-    if not math.isclose(float(attrs.get("duration_s", -1.0)), s["duration_s"], rel_tol=1e-12):
-        return False
-    if "dmw" in scene.effects and s["source"] != "synthetic":
-        try:
-            return json.loads(attrs.get("input_hashes", "{}")) == {s["source"]: file_hash(s["source"])}
-        except (OSError, ValueError):
-            return False
-    return True
+def _files(scene: Any) -> dict[str, str]:
+    """The measured record, when the stage reads one (effect on, ``source`` a path)."""
+    if "dmw" not in scene.effects or scene["dmw"]["source"] == "synthetic":
+        return {}
+    return {"dmw.source": settings(scene)["source"]}
 
 
-def run(scene: Any, out: Path, **options: Any) -> Path:
-    """Write ``out/dmw.nc`` for the scene (see the module docstring).
-
-    Parameters
-    ----------
-    scene : :class:`pipeline.scene.Scene`
-    out : output folder
-    options : ``force=True`` recomputes even when ``dmw.nc`` is up to date (same stage key of
-        :func:`pipeline.io.is_current`, same record length, same record file bytes); other options
-        (``scheduler``, ``workers``) are ignored.
-
-    Returns
-    -------
-    Path
-        The written ``dmw.nc``.
+def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
+    """The ``dmw.nc`` dataset of the scene (see the module docstring).
 
     Raises
     ------
     pipeline.physics.dmw.DMWError
-        For an unusable measured record (the existing ``dmw.nc`` is left untouched).
+        For an unusable measured record (nothing is written then).
     """
     s = settings(scene)
     fs, (lo, hi), dur = s["sample_rate_hz"], s["band_hz"], s["duration_s"]
     n = phys.n_samples(dur, fs)
-    target = Path(out) / FILENAME
-    if not options.get("force") and _up_to_date(target, scene, s):
-        return target
-    inputs: list[str] = []
     seed = None
     enabled = "dmw" in scene.effects
     if not enabled:
@@ -251,7 +219,6 @@ def run(scene: Any, out: Path, **options: Any) -> Path:
         source = "synthetic"
     else:
         w, attrs = _measured(s)
-        inputs = [s["source"]]
         source = s["source"]
     time = np.arange(n) / fs
     f, p = phys.spectrum(w, fs)
@@ -274,9 +241,23 @@ def run(scene: Any, out: Path, **options: Any) -> Path:
         },
         coords={"time": coordinate("time", time), "frequency": DMW["frequency"].data(f, ("frequency",))},
     )
-    extra = {"dmw_source": source, "dmw_enabled": int(enabled), "duration_s": dur, **attrs}
-    return write_dataset(ds, target, scene, stage="dmw", inputs=inputs, seed=seed,
-                         extra_attrs=extra)
+    ds.attrs.update({"dmw_source": source, "dmw_enabled": int(enabled), "duration_s": dur, **attrs})
+    if seed is not None:
+        ds.attrs["seed"] = int(seed)
+    return ds
+
+
+STAGE = Stage(
+    "dmw", compute, outputs=(FILENAME,),
+    # the default record length depends on the slider's size (default_duration)
+    reads=("dmw", "solver.duration_ms", "scene.effects", "slider.length_mm", "slider.front_arm_mm"),
+    files=_files, order=20, main_job=True,
+    doc="the disk's dynamic microwaviness, synthesised or measured, dmw.nc")
+
+
+def run(scene: Any, out: Path, **options: Any) -> Path:
+    """``dmw.nc`` in ``out``, recomputed only when its inputs changed (:func:`pipeline.runner.build`)."""
+    return build("dmw", scene, out, **options)["dmw"][0]
 
 
 def load(path: str | Path) -> tuple[np.ndarray, np.ndarray, float]:

@@ -15,10 +15,9 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import xarray as xr
 
-from ..io import read_dataset, write_dataset
+from ..io import read_dataset
 from ..physics import isbl
 from ..physics.asperity import critical_interference
 from ..physics.friction import shear_strength
@@ -26,6 +25,7 @@ from ..physics.statistics import (bandwidth_alpha, composite_modulus, hardness_f
                                   plasticity_index_gw, plasticity_index_ke, summit_offset, summit_sigma)
 from ..validation import check_materials
 from ..variables import INTERFACE
+from ..runner import Inputs, Stage, build, ensure
 
 NM, UM = 1e-9, 1e-6
 
@@ -33,8 +33,9 @@ NM, UM = 1e-9, 1e-6
 def roughness_statistics(scene: Any, out: Path | None = None) -> dict[str, float]:
     """Combined-surface statistics [SI] for the scene: from AFM scans or the explicit values.
 
-    With ``[roughness] afm``, the statistics of the ``combined`` surface of ``roughness.nc`` (route
-    ``[roughness] route``) are used, computing it first when absent. Otherwise ``sigma_nm``,
+    With ``[roughness] afm``, the statistics of the ``combined`` surface of ``roughness.nc`` in ``out``
+    (route ``[roughness] route``) are used, made current first (:func:`pipeline.runner.ensure`; in a
+    temporary folder when ``out`` is ``None``). Otherwise ``sigma_nm``,
     ``summit_radius_um`` and ``summit_density_per_um2`` give ``sigma_s`` and ``y_s`` by McCool's
     relations (SPEC.md section 1).
 
@@ -48,11 +49,9 @@ def roughness_statistics(scene: Any, out: Path | None = None) -> dict[str, float
         if out is None:
             import tempfile
             with tempfile.TemporaryDirectory() as tmp:
-                path = roughness_stage.run(scene, Path(tmp))
-                st = roughness_stage.combined_statistics(path, route=r["route"])
+                st = roughness_stage.combined_statistics(ensure("roughness", scene, tmp), route=r["route"])
         else:
-            from . import ensure
-            st = roughness_stage.combined_statistics(ensure("roughness", scene, Path(out)), route=r["route"])
+            st = roughness_stage.combined_statistics(ensure("roughness", scene, out), route=r["route"])
         return {"sigma": st["sigma_nm"] * NM, "sigma_s": st["sigma_s_nm"] * NM, "y_s": st["y_s_nm"] * NM,
                 "R": st["summit_radius_um"] * UM, "eta": st["summit_density_per_um2"] / UM**2,
                 "alpha": st["alpha"], "source": f"AFM ({r['route']} route): {', '.join(r['afm'])}"}
@@ -139,13 +138,23 @@ def build_tables(scene: Any, stats: dict[str, float]) -> xr.Dataset:
     return ds
 
 
+def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
+    """The ``interface.nc`` dataset of the scene (see module docstring)."""
+    return build_tables(scene, roughness_statistics(scene, inputs.out))
+
+
+STAGE = Stage(
+    "interface", compute, outputs=("interface.nc",),
+    reads=("roughness", "materials", "lubricant", "solver.table_step_nm", "solver.table_min_sigma",
+           "solver.table_max_nm", "solver.quadrature_nodes", "solver.quadrature_panels", "scene.effects",
+           "air_bearing.flying_height_nm", "tfc.protrusion_nm", "sweep.protrusion_nm"),
+    upstream=lambda scene: ("roughness",) if scene["roughness"]["afm"] else (),
+    order=30, main_job=True, doc="ISBL tables versus separation, interface.nc")
+
+
 def run(scene: Any, out: Path, **options: Any) -> Path:
-    """Write ``out/interface.nc`` for the scene (see module docstring)."""
-    out = Path(out)
-    stats = roughness_statistics(scene, out)
-    ds = build_tables(scene, stats)
-    inputs = [out / "roughness.nc"] if scene["roughness"]["afm"] else []
-    return write_dataset(ds, out / "interface.nc", scene, stage="interface", inputs=inputs)
+    """``interface.nc`` in ``out``, recomputed only when its inputs changed (:func:`pipeline.runner.build`)."""
+    return build("interface", scene, out, **options)["interface"][0]
 
 
 def load(path: Path) -> xr.Dataset:

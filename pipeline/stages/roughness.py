@@ -28,12 +28,12 @@ The combined surface: the spectral route uses the summed moments; the summit rou
 NaN elsewhere; for a single file ``combined`` is a copy of that file's rows.
 
 Everything is computed before anything is written, and the write is atomic: a failing input leaves an
-existing ``roughness.nc`` untouched.
+existing ``roughness.nc`` untouched. Reads (for :mod:`pipeline.runner`): ``[roughness]``, ``[materials]``
+and the bytes of the ``afm`` files.
 """
 
 from __future__ import annotations
 
-import json
 import math
 import re
 from pathlib import Path
@@ -42,7 +42,8 @@ from typing import Any, Sequence
 import numpy as np
 import xarray as xr
 
-from ..io import DatasetError, file_hash, is_current, read_dataset, write_dataset
+from ..io import DatasetError, read_dataset, write_dataset
+from ..runner import Inputs, Stage, build
 from ..physics import statistics as st
 from ..physics import surface as sf
 from ..variables import ROUGHNESS
@@ -153,22 +154,9 @@ def build_dataset(summaries: Sequence[sf.SurfaceSummary], scene: Any = None, det
     return ds
 
 
-def _up_to_date(path: Path, scene: Any, files: Sequence[Path]) -> bool:
-    """Whether ``path`` was written from the same scene keys (:func:`pipeline.io.is_current`) and the same
-    input bytes (a file edited in place keeps its path but not its hash)."""
-    if scene is None or not is_current(path, scene, "roughness"):
-        return False
-    try:
-        hashes = json.loads(read_dataset(path).attrs.get("input_hashes", "{}"))
-    except (DatasetError, ValueError):
-        return False
-    return hashes == {str(f): file_hash(f) for f in files if Path(f).is_file()}
-
-
-def _write(summaries: Sequence[sf.SurfaceSummary], out: Path, scene: Any, files: Sequence[Path],
-           detrend: str) -> Path:
-    ds = build_dataset(summaries, scene, detrend)
-    return write_dataset(ds, Path(out) / FILENAME, scene, stage="roughness", inputs=files)
+def _summaries(files: Sequence[Path], channel: str | None, detrend: str) -> list[sf.SurfaceSummary]:
+    labels = _unique_labels(files)
+    return [sf.summarise_file(f, channel=channel, detrend_mode=detrend, label=lab) for f, lab in zip(files, labels)]
 
 
 def run_files(files: Sequence[Path], out: Path, channel: str | None = None, detrend: str = "plane",
@@ -191,33 +179,32 @@ def run_files(files: Sequence[Path], out: Path, channel: str | None = None, detr
     files = [Path(f) for f in files]
     if not files:
         raise ValueError("roughness: expected at least one AFM file")
-    labels = _unique_labels(files)
-    summaries = [sf.summarise_file(f, channel=channel, detrend_mode=detrend, label=lab)
-                 for f, lab in zip(files, labels)]
-    return _write(summaries, Path(out), scene, files, detrend)
+    ds = build_dataset(_summaries(files, channel, detrend), scene, detrend)
+    return write_dataset(ds, Path(out) / FILENAME, scene, stage="roughness", inputs=files)
+
+
+def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
+    """The ``roughness.nc`` dataset of ``scene["roughness"]`` (module docstring): the AFM scans of
+    ``afm`` by both routes, or the explicit statistics."""
+    cfg = scene["roughness"]
+    files = [Path(f) for f in (cfg.get("afm") or [])]
+    if files:
+        detrend = cfg.get("detrend", "plane")
+        return build_dataset(_summaries(files, cfg.get("channel"), detrend), scene, detrend)
+    summary = sf.from_statistics(cfg["sigma_nm"], cfg["summit_density_per_um2"] * 1e-6,
+                                 cfg["summit_radius_um"] * 1e3, label="explicit")
+    return build_dataset([summary], scene, "")
+
+
+STAGE = Stage(
+    "roughness", compute, outputs=(FILENAME,), reads=("roughness", "materials"),
+    files=lambda scene: {f"roughness.afm[{i}]": f for i, f in enumerate(scene["roughness"]["afm"] or [])},
+    order=10, main_job=True, doc="AFM scans (or explicit statistics) to asperity statistics, roughness.nc")
 
 
 def run(scene: Any, out: Path, **options: Any) -> Path:
-    """Stage entry point: ``roughness.nc`` from ``scene["roughness"]``.
-
-    Parameters
-    ----------
-    scene : :class:`pipeline.scene.Scene`
-    out : output folder
-    options : ``force=True`` recomputes even when the output matches the scene and input files;
-        other options (``scheduler``, ``workers``) are ignored.
-    """
-    cfg = scene["roughness"]
-    out = Path(out)
-    files = [Path(f) for f in (cfg.get("afm") or [])]
-    if not options.get("force") and _up_to_date(out / FILENAME, scene, files):
-        return out / FILENAME
-    if files:
-        return run_files(files, out, channel=cfg.get("channel"), detrend=cfg.get("detrend", "plane"),
-                         scene=scene)
-    summary = sf.from_statistics(cfg["sigma_nm"], cfg["summit_density_per_um2"] * 1e-6,
-                                 cfg["summit_radius_um"] * 1e3, label="explicit")
-    return _write([summary], out, scene, [], "")
+    """``roughness.nc`` in ``out``, recomputed only when its inputs changed (:func:`pipeline.runner.build`)."""
+    return build("roughness", scene, out, **options)["roughness"][0]
 
 
 def combined_statistics(path: str | Path, route: str = "spectral") -> dict[str, float]:

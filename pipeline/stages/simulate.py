@@ -6,8 +6,8 @@ clearance, forces, friction coefficient, mean pressure and shear stress; and ``s
 steady-window scalars (dim ``protrusion``, the variables of ``sweep.nc``) defined in
 :mod:`pipeline.slider`. Only the scene's effects are simulated and written.
 
-Inputs come from earlier stages' datasets in the same folder (``interface.nc``, ``dmw.nc``), made
-first when missing or stale; the criterion constant ``k`` from ``contact.k`` or ``calibration.nc``.
+Inputs come from earlier stages' datasets in the same folder (``interface.nc``, ``dmw.nc``, and
+``calibration.nc`` when the scene sets no ``contact.k``), made current first by :mod:`pipeline.runner`.
 """
 
 from __future__ import annotations
@@ -21,16 +21,16 @@ import xarray as xr
 from scipy.stats import norm
 
 from .. import slider as sl
-from ..io import read_dataset, write_dataset
+from ..io import read_dataset
+from ..runner import Inputs, Stage, build, ensure
 from ..variables import HISTORIES, coordinate, history, scalar
-from . import ensure
 
 log = logging.getLogger(__name__)
 NM = 1e-9
 
 
-def model_inputs(scene: Any, out: Path, force: bool = False) -> tuple[xr.Dataset | None, tuple | None]:
-    """Interface tables and DMW record of a scene, from (and, if needed, into) ``out``.
+def model_inputs(scene: Any, out: Path) -> tuple[xr.Dataset | None, tuple | None]:
+    """Interface tables and DMW record of a scene, from ``out`` (made current first, :func:`pipeline.runner.ensure`).
 
     Returns ``(interface dataset or None, (displacement [nm], sample rate [Hz]) or None)``; the
     interface is ``None`` for a scene with neither contact nor adhesion (no tables are built), the
@@ -39,10 +39,10 @@ def model_inputs(scene: Any, out: Path, force: bool = False) -> tuple[xr.Dataset
     from . import dmw as dmw_stage
     interface = None
     if scene.effects & {"contact", "adhesion"}:
-        interface = read_dataset(ensure("interface", scene, out, force), stage="interface")
+        interface = read_dataset(ensure("interface", scene, out), stage="interface")
     record = None
     if scene.has("dmw"):
-        _, w_nm, fs = dmw_stage.load(ensure("dmw", scene, out, force))
+        _, w_nm, fs = dmw_stage.load(ensure("dmw", scene, out))
         record = (w_nm, fs)
     return interface, record
 
@@ -52,7 +52,8 @@ def resolve_k(scene: Any, out: Path) -> tuple[float | None, str]:
 
     ``contact.k`` when the scene fixes it; else ``k_calibrated`` of ``calibration.nc``; when the
     calibration found no admissible k and the scene gives ``contact.fallback_probability``, the k
-    whose one-sided contact probability ``P(z > k sigma)`` equals it (said in every output).
+    whose one-sided contact probability ``P(z > k sigma)`` equals it (said in every output). The source
+    names the file, not its folder, so datasets of one scene in two folders are identical.
     """
     if not scene.has("contact"):
         return None, "no contact effect"
@@ -66,20 +67,20 @@ def resolve_k(scene: Any, out: Path) -> tuple[float | None, str]:
     cal = read_dataset(path, stage="calibrate")
     k = float(cal["k_calibrated"])
     if np.isfinite(k):
-        return k, f"calibration ({path})"
+        return k, f"calibration ({path.name})"
     fb = c.get("fallback_probability")
     if fb is None:
         raise ValueError(f"{path}: the calibration found no admissible k ({cal.attrs.get('outcome', '')}); "
                          "set contact.k or contact.fallback_probability")
     k = float(norm.isf(fb))
-    return k, (f"fallback: no admissible k in {path}; k = {k:.4f} from contact.fallback_probability = {fb} "
+    return k, (f"fallback: no admissible k in {path.name}; k = {k:.4f} from contact.fallback_probability = {fb} "
                "(one-sided)")
 
 
-def run_scene(scene: Any, out: Path, protrusion_nm: float | None = None, force: bool = False,
+def run_scene(scene: Any, out: Path, protrusion_nm: float | None = None,
               damping_ratio: float | None = None) -> tuple[sl.Run, dict, dict, str]:
     """Build and integrate one scene; returns the run, its histories, its scalars and the k source."""
-    interface, record = model_inputs(scene, out, force)
+    interface, record = model_inputs(scene, out)
     k, k_source = resolve_k(scene, out)
     model = sl.build_model(scene, interface, record, k, damping_ratio)
     delta = scene["tfc"]["protrusion_nm"] if protrusion_nm is None else protrusion_nm
@@ -126,18 +127,38 @@ def model_attrs(model: sl.Model, k_source: str) -> dict[str, Any]:
     }
 
 
-def run(scene: Any, out: Path, force: bool = False, **options: Any) -> Path:
-    """Write ``out/histories.nc`` and ``out/summary.nc`` for the scene's protrusion (module docstring)."""
-    out = Path(out)
-    run_, hist, scalars, k_source = run_scene(scene, out, force=force)
+def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset]:
+    """``histories.nc`` and ``summary.nc`` for the scene's protrusion (module docstring)."""
+    run_, hist, scalars, k_source = run_scene(scene, inputs.out)
     runs = [(scene["tfc"]["protrusion_nm"], run_, hist, scalars)]
-    inputs = [p for p in (out / "interface.nc", out / "dmw.nc", out / "calibration.nc") if p.is_file()]
     attrs = model_attrs(run_.model, k_source)
-    summary = summary_dataset(runs)
-    path = write_dataset(histories_dataset(runs), out / "histories.nc", scene, stage="simulate",
-                         inputs=inputs, extra_attrs=attrs)
-    write_dataset(summary, out / "summary.nc", scene, stage="simulate", inputs=inputs, extra_attrs=attrs)
+    histories, summary = histories_dataset(runs), summary_dataset(runs)
+    histories.attrs.update(attrs)
+    summary.attrs.update(attrs)
     for name in summary.data_vars:
         v = summary[name]
-        print(f"  {name:<22} {float(v[0]):>12.5g} {v.attrs['units']}")
-    return path
+        log.info("  %-22s %12.5g %s", name, float(v[0]), v.attrs["units"])
+    return {"histories.nc": histories, "summary.nc": summary}
+
+
+def upstream(scene: Any) -> tuple[str, ...]:
+    """The datasets a single simulation reads: interface tables, DMW record, calibration (for k)."""
+    up = []
+    if scene.effects & {"contact", "adhesion"}:
+        up.append("interface")
+    if scene.has("dmw"):
+        up.append("dmw")
+    if scene.has("contact") and scene["contact"]["k"] is None:
+        up.append("calibrate")
+    return tuple(up)
+
+
+STAGE = Stage(
+    "simulate", compute, outputs=("histories.nc", "summary.nc"),
+    reads=("*",), excludes=("sweep", "report", "scene.name", "scene.description"),
+    upstream=upstream, order=45, doc="one protrusion in time, histories.nc and summary.nc")
+
+
+def run(scene: Any, out: Path, **options: Any) -> Path:
+    """``histories.nc`` (and ``summary.nc``) in ``out``, recomputed only when their inputs changed."""
+    return build("simulate", scene, out, **options)["simulate"][0]

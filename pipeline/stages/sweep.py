@@ -7,9 +7,14 @@ record and the interface tables reach the workers by file path (``dmw.nc``,
 parts are assembled, one at a time, into ``sweep.nc`` (dims ``protrusion``, ``roughness``,
 ``damping``) and ``sweep_histories.nc`` (time histories of the protrusions in ``histories_nm``).
 
-Resuming: a part whose ``sweep_key`` matches the current sweep is not recomputed, so an
-interrupted sweep (Ctrl-C, kill, a lost worker) picks up where it stopped and gives the same
-dataset as an uninterrupted run: every batch is a deterministic function of its inputs.
+Resuming: a part is kept when it carries the sweep's inputs key (:mod:`pipeline.runner`: the scene,
+the bytes of every AFM scan of every roughness set, the DMW and calibration datasets), its own batch
+index and its batch's coordinates (roughness label, damping ratio, protrusions), so an interrupted
+sweep (Ctrl-C, kill, a lost worker) picks up where it stopped and gives a dataset identical to an
+uninterrupted run (every batch is a deterministic function of its inputs; no timings or folder paths
+are stored in the datasets: the batch-phase wall time goes to the run log, ``.hdi/runs.jsonl``). A part
+copied to another batch's name, or made for other inputs, is recomputed. The interface tables in
+``sweep.parts`` carry the same key.
 
 Scheduler: by default a ``distributed.LocalCluster`` with one single-threaded worker process per
 core and no dashboard; ``scheduler="ADDRESS"`` attaches to a running dask.distributed cluster;
@@ -18,25 +23,27 @@ core and no dashboard; ``scheduler="ADDRESS"`` attaches to a running dask.distri
 
 from __future__ import annotations
 
-import hashlib
+import contextlib
 import json
 import logging
 import os
+import signal
 import sys
+import threading
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable, Iterable
+from typing import Any, Callable
 
 import numpy as np
 import xarray as xr
 
 from .. import slider as sl
-from ..io import is_current, read_dataset, write_dataset
+from ..io import read_dataset, write_dataset
+from ..runner import KEY_ATTR, Inputs, Stage, build
 from ..variables import HISTORIES, SCALARS, coordinate, history, scalar
-from . import ensure
 from .interface import build_tables, roughness_statistics
-from .simulate import model_attrs, resolve_k
+from .simulate import model_attrs, resolve_k, upstream
 from .sweep_grid import damping_grid, protrusion_grid, roughness_sets
 
 log = logging.getLogger(__name__)
@@ -70,28 +77,34 @@ def plan(scene: Any) -> tuple[np.ndarray, dict[str, dict], list[float], list[Bat
     return prot, sets, damp, batches
 
 
-def sweep_key(scene: Any, k: float | None) -> str:
-    """Identity of a sweep: the whole scene (protrusion of [tfc] excluded) and k."""
-    cfg = json.loads(scene.to_toml_text())
-    cfg["tfc"].pop("protrusion_nm", None)
-    cfg.pop("report", None)
-    blob = json.dumps({"config": cfg, "k": k}, sort_keys=True)
-    return hashlib.sha256(blob.encode()).hexdigest()
-
-
 def _part_path(parts: Path, b: Batch) -> Path:
     return parts / f"batch-{b.index:05d}.nc"
 
 
-def part_is_done(path: Path, key: str) -> bool:
-    """Whether a part file exists, is readable and belongs to this sweep."""
+def part_problem(path: Path, key: str, batch: Batch) -> str | None:
+    """Why a part file cannot be used for ``batch`` of the sweep with inputs ``key`` (``None``: it can).
+
+    A part must exist, be readable, carry the sweep's inputs key, and be the part of this very batch:
+    its batch index, roughness label, damping ratio and protrusions.
+    """
     if not path.is_file():
-        return False
+        return "missing"
     try:
         with xr.open_dataset(path, engine="netcdf4") as ds:
-            return ds.attrs.get("sweep_key") == key
-    except (OSError, ValueError):
-        return False
+            attrs = ds.attrs
+            prot = np.asarray(ds["protrusion"].values, float) if "protrusion" in ds.coords else np.array([])
+    except (OSError, ValueError) as exc:
+        return f"unreadable ({exc})"
+    if attrs.get(KEY_ATTR) != key:
+        return "made from other inputs"
+    if attrs.get("batch") != batch.index:
+        return f"holds batch {attrs.get('batch')}, not {batch.index}"
+    if attrs.get("roughness_label") != batch.label or attrs.get("damping_ratio") != batch.damping:
+        return (f"holds roughness {attrs.get('roughness_label')!r}, damping {attrs.get('damping_ratio')}; "
+                f"expected {batch.label!r}, {batch.damping}")
+    if prot.shape != (len(batch.protrusions),) or not np.array_equal(prot, batch.protrusions):
+        return f"holds protrusions {prot.tolist()}, expected {list(batch.protrusions)}"
+    return None
 
 
 def run_batch(scene: Any, batch: Batch, interface_path: str | None, dmw_path: str | None, k: float | None,
@@ -122,7 +135,7 @@ def run_batch(scene: Any, batch: Batch, interface_path: str | None, dmw_path: st
                 ds["h_" + name] = history(name, np.stack([h[2][name] for h in hist_rows]),
                                           ("hist_protrusion", "time"))
         ds = ds.assign_coords(coords_h)
-    ds.attrs.update({"sweep_key": key, "roughness_label": batch.label, "damping_ratio": batch.damping,
+    ds.attrs.update({KEY_ATTR: key, "roughness_label": batch.label, "damping_ratio": batch.damping,
                      "batch": batch.index})
     write_dataset(ds, part_path, scene, stage="sweep-part")
     return part_path
@@ -142,8 +155,16 @@ def _client(scheduler: str | None, workers: int | None):
     if scheduler:
         return Client(scheduler), None
     n = workers or os.cpu_count() or 1
-    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
-                           silence_logs=logging.CRITICAL)  # shutdown races log CommClosedError
+    # The worker processes inherit an ignored SIGINT: Ctrl-C reaches the whole process group, and only
+    # this process should answer it (one line from the CLI, not a traceback per worker).
+    main = threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN) if main else None
+    try:
+        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
+                               silence_logs=logging.CRITICAL)  # shutdown races log CommClosedError
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGINT, previous)
     return Client(cluster), cluster
 
 
@@ -178,8 +199,14 @@ def execute(tasks: list[tuple], scheduler: str | None, workers: int | None,
             cluster.close()
 
 
-def prepare_inputs(scene: Any, out: Path, sets: dict[str, dict], force: bool = False) -> tuple[dict[str, str | None], str | None]:
-    """Interface tables per roughness set and the DMW record, as files the workers read."""
+def prepare_inputs(scene: Any, out: Path, sets: dict[str, dict], key: str,
+                   force: bool = False) -> tuple[dict[str, str | None], str | None]:
+    """Interface tables per roughness set and the DMW record, as files the workers read.
+
+    A table in ``sweep.parts`` is kept only when it carries the sweep's inputs ``key`` (which covers
+    every set's statistics and AFM bytes); an AFM set's ``roughness.nc`` is made current by the runner
+    in ``sweep.parts/roughness-<label>`` (the scene's own set: ``roughness.nc`` of ``out``).
+    """
     parts = out / PARTS
     parts.mkdir(parents=True, exist_ok=True)
     interface_paths: dict[str, str | None] = {}
@@ -189,35 +216,45 @@ def prepare_inputs(scene: Any, out: Path, sets: dict[str, dict], force: bool = F
             continue
         sub = scene.replace(roughness={k: v for k, v in table.items()})
         path = parts / f"interface-{label}.nc"
-        if force or not is_current(path, sub, "interface"):
-            stats = roughness_statistics(sub, parts / f"roughness-{label}" if table.get("afm") else None)
-            write_dataset(build_tables(sub, stats), path, sub, stage="interface")
+        current = False
+        with contextlib.suppress(OSError, ValueError), xr.open_dataset(path, engine="netcdf4") as old:
+            current = old.attrs.get(KEY_ATTR) == key
+        if force or not current:
+            # the scene's own roughness is the roughness stage's (same key): made once, in ``out``
+            folder = out if table == dict(scene["roughness"]) else parts / f"roughness-{label}"
+            stats = roughness_statistics(sub, folder if table.get("afm") else None)
+            write_dataset(build_tables(sub, stats), path, sub, stage="interface", extra_attrs={KEY_ATTR: key})
         interface_paths[label] = str(path)
-    dmw_path = str(ensure("dmw", scene, out, force)) if scene.has("dmw") else None
+    dmw_path = str(out / "dmw.nc") if scene.has("dmw") else None
     return interface_paths, dmw_path
 
 
-def run_sweep(scene: Any, out: Path, scheduler: str | None = None, workers: int | None = None,
-              force: bool = False, stop_after: int | None = None,
-              on_batch: Callable[[str], None] | None = None) -> Path:
-    """Run (or resume) the sweep and assemble ``sweep.nc``; see the module docstring.
+def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset | None]:
+    """Run (or resume) the sweep; returns ``sweep.nc`` and ``sweep_histories.nc`` (module docstring).
 
-    ``stop_after``: raise ``KeyboardInterrupt`` after that many batches finish in this call;
-    ``on_batch``: called with each finished part's path (both for tests of resuming and failures).
+    Options (``inputs.options``): ``scheduler``, ``workers``; for tests of resuming and failures,
+    ``stop_after`` (raise ``KeyboardInterrupt`` after that many batches finish in this call) and
+    ``on_batch`` (called with each finished part's path); ``force`` recomputes every part.
     """
-    out = Path(out)
+    out, key, opts = inputs.out, inputs.key, inputs.options
     prot, sets, damp, batches = plan(scene)
     k, k_source = resolve_k(scene, out)
-    key = sweep_key(scene, k)
-    interface_paths, dmw_path = prepare_inputs(scene, out, sets, force)
+    interface_paths, dmw_path = prepare_inputs(scene, out, sets, key, bool(opts.get("force")))
     parts = out / PARTS
     hist_nm = tuple(scene["sweep"]["histories_nm"] or scene["report"]["histories_nm"])
-    todo = [b for b in batches if force or not part_is_done(_part_path(parts, b), key)]
+    todo = []
+    for b in batches:
+        why = "forced" if opts.get("force") else part_problem(_part_path(parts, b), key, b)
+        if why is not None:
+            if why != "missing":
+                log.info("sweep: batch %d: part %s: recomputed", b.index, why)
+            todo.append(b)
     log.info("sweep: %d batches, %d to run", len(batches), len(todo))
     tasks = [(scene, b, interface_paths[b.label], dmw_path, k, str(_part_path(parts, b)), key, hist_nm)
              for b in todo]
     bar = _progress(len(batches), len(batches) - len(todo))
     done = [0]
+    stop_after, on_batch = opts.get("stop_after"), opts.get("on_batch")
 
     def on_done(path: str) -> None:
         done[0] += 1
@@ -229,17 +266,24 @@ def run_sweep(scene: Any, out: Path, scheduler: str | None = None, workers: int 
             raise KeyboardInterrupt(f"stopped after {done[0]} batches (stop_after)")
 
     try:
-        batch_seconds = execute(tasks, scheduler, workers, on_done)
+        batch_seconds = execute(tasks, opts.get("scheduler"), opts.get("workers"), on_done)
     finally:
         if bar is not None:
             bar.close()
-    model = sl.build_model(scene, read_dataset(interface_paths[next(iter(sets))]) if interface_paths[next(iter(sets))] else None,
-                           _dmw_tuple(dmw_path), k)
+    log.info("sweep: batch phase %.2f s for %d batches", batch_seconds, len(todo))
+    inputs.record(compute_seconds=round(batch_seconds, 3), batches_run=len(todo), batches=len(batches))
+    first = interface_paths[next(iter(sets))]
+    model = sl.build_model(scene, read_dataset(first) if first else None, _dmw_tuple(dmw_path), k)
     attrs = model_attrs(model, k_source)
-    attrs["compute_seconds"] = round(batch_seconds, 3)  # wall time of the batch phase (workers already up)
-    attrs["batches_run"] = len(todo)
-    return assemble(scene, out, prot, list(sets), damp, batches, key, k_source, attrs,
-                    [dmw_path] if dmw_path else [])
+    return assemble(scene, out, prot, list(sets), damp, batches, key, k_source, attrs)
+
+
+def run_sweep(scene: Any, out: Path, scheduler: str | None = None, workers: int | None = None,
+              force: bool = False, stop_after: int | None = None,
+              on_batch: Callable[[str], None] | None = None) -> Path:
+    """Make ``sweep.nc`` current in ``out`` (running, resuming or keeping the sweep); see :func:`compute`."""
+    return build("sweep", scene, out, force=force, scheduler=scheduler, workers=workers,
+                 stop_after=stop_after, on_batch=on_batch)["sweep"][0]
 
 
 def _dmw_tuple(path: str | None):
@@ -251,8 +295,14 @@ def _dmw_tuple(path: str | None):
 
 
 def assemble(scene: Any, out: Path, prot: np.ndarray, labels: list[str], damp: list[float], batches: list[Batch],
-             key: str, k_source: str, attrs: dict, inputs: Iterable[str]) -> Path:
-    """Fill ``sweep.nc`` (and ``sweep_histories.nc``) from the part files, one part at a time."""
+             key: str, k_source: str, attrs: dict) -> dict[str, xr.Dataset | None]:
+    """``sweep.nc`` (and ``sweep_histories.nc``) filled from the part files, one part at a time.
+
+    Raises
+    ------
+    RuntimeError
+        When a part is missing or is not the part of its batch (:func:`part_problem`).
+    """
     parts = out / PARTS
     shape = (len(prot), len(labels), len(damp))
     arrays: dict[str, np.ndarray] = {}
@@ -261,8 +311,9 @@ def assemble(scene: Any, out: Path, prot: np.ndarray, labels: list[str], damp: l
     time: np.ndarray | None = None
     for b in batches:
         path = _part_path(parts, b)
-        if not part_is_done(path, key):
-            raise RuntimeError(f"{path}: batch {b.index} missing or from another sweep; run the sweep again")
+        why = part_problem(path, key, b)
+        if why is not None:
+            raise RuntimeError(f"{path}: batch {b.index}: part {why}; run the sweep again")
         ds = read_dataset(path)
         r, d = labels.index(b.label), damp.index(b.damping)
         for name in ds.data_vars:
@@ -292,20 +343,39 @@ def assemble(scene: Any, out: Path, prot: np.ndarray, labels: list[str], damp: l
     sets = roughness_sets(scene)
     for label in labels:
         ds.attrs[f"roughness_{label}"] = json.dumps(sets[label], default=str)
-    extra = dict(attrs)
-    extra.update({"sweep_key": key, "batches": len(batches), "k_source": k_source})
-    path = write_dataset(ds, out / "sweep.nc", scene, stage="sweep", inputs=inputs, extra_attrs=extra)
+    ds.attrs.update(attrs)
+    ds.attrs["k_source"] = k_source
+    hds = None
     if hist:
         hc = dict(coords)
         hc["protrusion"] = coordinate("protrusion", hist_prot)
         hc["time"] = coordinate("time", time)
         hds = xr.Dataset({name: HISTORIES[name].data(a, ("protrusion", "roughness", "damping", "time"))
                           for name, a in hist.items()}, coords=hc)
-        write_dataset(hds, out / "sweep_histories.nc", scene, stage="sweep", inputs=inputs, extra_attrs=extra)
-    return path
+        hds.attrs.update(ds.attrs)
+    return {"sweep.nc": ds, "sweep_histories.nc": hds}
 
 
-def run(scene: Any, out: Path, scheduler: str | None = None, workers: int | None = None, force: bool = False,
-        **options: Any) -> Path:
-    """Stage entry point (``hdi sweep``)."""
-    return run_sweep(scene, Path(out), scheduler=scheduler, workers=workers, force=force)
+def _files(scene: Any) -> dict[str, str]:
+    """The AFM scans of every roughness set (their bytes are inputs of the sweep)."""
+    return {f"sweep.roughness[{label}].afm[{i}]": f
+            for label, table in roughness_sets(scene).items() for i, f in enumerate(table.get("afm") or [])}
+
+
+def _upstream(scene: Any) -> tuple[str, ...]:
+    # the sweep builds its own interface tables per roughness set (sweep.parts), so not "interface"
+    return tuple(u for u in upstream(scene) if u != "interface")
+
+
+STAGE = Stage(
+    "sweep", compute, outputs=("sweep.nc", "sweep_histories.nc"),
+    reads=("*", "report.histories_nm"),
+    # (the batch size changes how the work is cut, not the result: parts of another cut are rejected)
+    excludes=("tfc.protrusion_nm", "report", "scene.name", "scene.description", "sweep.batch_size"),
+    files=_files, upstream=_upstream, order=50, main_job=True,
+    doc="protrusion x roughness x damping on dask, sweep.nc and sweep_histories.nc")
+
+
+def run(scene: Any, out: Path, **options: Any) -> Path:
+    """Stage entry point (``hdi sweep``): :func:`run_sweep`."""
+    return build("sweep", scene, out, **options)["sweep"][0]

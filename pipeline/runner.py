@@ -1,0 +1,568 @@
+"""One stage runner: declared inputs hashed by content, current outputs kept, atomic writes, one lock.
+
+A stage is a declaration, :class:`Stage`, bound to the name ``STAGE`` in its module of
+:mod:`pipeline.stages`; :func:`registry` discovers every such module, so a new stage plugs in by
+declaring itself (no list to edit). A declaration says
+
+* what the stage reads: scene keys (``reads``/``excludes``), files named by scene keys (``files``,
+  e.g. ``roughness.afm`` or ``dmw.source``) and other stages' datasets (``upstream``);
+* what it writes (``outputs``, paths relative to the results folder);
+* how it computes: a pure ``compute(scene, inputs) -> xr.Dataset | {output: xr.Dataset | None}``
+  that reads only what it declared (through :class:`Inputs`) and writes nothing itself, except
+  non-NetCDF outputs (figures, tables) which it writes under ``inputs.staging``.
+
+The runner gives each stage an *inputs key*: the SHA-256 of the scene keys it reads, the bytes of
+the files it reads, the keys of its upstream stages (so a change propagates downstream), the options
+that change its result and its ``version``. Every dataset it writes carries that key (attribute
+``inputs_key``); non-NetCDF outputs are listed with their hashes in ``.hdi/<stage>.json``. A stage
+whose outputs carry the key of its current inputs is not recomputed; otherwise it is, and everything
+downstream of it too. Datasets are written through :func:`pipeline.io.write_dataset` (temporary file
+and rename), other outputs are renamed into place from the staging folder.
+
+A results folder is used by one ``hdi`` process at a time: :func:`folder_lock` holds
+``.hdi.lock`` (pid, host, start time) and refuses a second process, naming the first; a lock whose
+process is gone (same host) is taken over. Temporary files an interrupted run left behind
+(``.NAME.*.tmp``, ``.hdi-staging-*``) are removed when the lock is taken.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import datetime as _dt
+import hashlib
+import importlib
+import json
+import logging
+import os
+import pkgutil
+import shutil
+import socket
+import tempfile
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Iterable, Iterator, Mapping
+
+import xarray as xr
+
+from .io import ENGINE, DatasetError, file_hash, read_dataset, write_dataset
+
+log = logging.getLogger(__name__)
+
+#: Global attribute of every dataset the runner writes: the stage's inputs key.
+KEY_ATTR = "inputs_key"
+#: Global attribute of a stage's first dataset: JSON list of the outputs this computation produced.
+OUTPUTS_ATTR = "stage_outputs"
+#: Hidden folder of the runner inside a results folder (manifests of non-NetCDF outputs, run log).
+STATE_DIR = ".hdi"
+LOCK_NAME = ".hdi.lock"
+STAGING_PREFIX = ".hdi-staging-"
+#: Sub-folders of a results folder searched for orphaned temporary files.
+_TMP_GLOBS = (".*.tmp", "*/.*.tmp", "*/*/.*.tmp")
+
+Scene = Any
+Result = "xr.Dataset | Mapping[str, xr.Dataset | None]"
+
+
+def _constant(value: Any) -> Callable[[Scene], Any]:
+    return lambda scene: value
+
+
+@dataclass(frozen=True)
+class Stage:
+    """Declaration of a stage (bind it to ``STAGE`` in a module of :mod:`pipeline.stages`).
+
+    Attributes
+    ----------
+    name
+        The stage's name on the command line (``hdi NAME CONFIG``).
+    compute
+        ``compute(scene, inputs) -> xr.Dataset | {output: xr.Dataset | None}``: a dataset for a stage
+        with one NetCDF output, else a mapping from output name to dataset (``None``: not produced
+        this time, any old file of that name is removed). Non-NetCDF outputs are written by
+        ``compute`` under ``inputs.staging`` at their declared relative paths.
+    outputs
+        Output paths relative to the results folder (a tuple, or a function of the scene). The first
+        is the stage's primary output (returned by :func:`build`).
+    reads
+        Scene keys the result depends on, ``"section"`` or ``"section.key"``; ``"*"`` = the whole
+        scene minus ``excludes``.
+    excludes
+        Keys removed from ``"*"``.
+    files
+        ``files(scene) -> {role: path}``: input files named by scene keys (hashed by content).
+    upstream
+        Stages whose datasets this one reads (a tuple, or a function of the scene); they are made
+        current first.
+    options
+        Options (keyword arguments of :func:`build`) that change the result: part of the key.
+    order
+        Position in listings and in ``hdi run``.
+    main_job
+        Part of ``hdi run`` (when :attr:`applies` to the scene).
+    applies
+        ``applies(scene) -> bool``: whether ``hdi run`` includes the stage for this scene.
+    finish
+        ``finish(scene, out, options)``: run after the stage was asked for and is current (computed or
+        not), for side effects outside the results folder (``report --readme``).
+    version
+        Bump when the stage's code changes its results, so old outputs are recomputed.
+    doc
+        One line for ``hdi --help``.
+    """
+
+    name: str
+    compute: Callable[[Scene, "Inputs"], Any]
+    outputs: tuple[str, ...] | Callable[[Scene], tuple[str, ...]]
+    reads: tuple[str, ...] = ("*",)
+    excludes: tuple[str, ...] = ()
+    files: Callable[[Scene], Mapping[str, str | Path]] = _constant({})
+    upstream: tuple[str, ...] | Callable[[Scene], tuple[str, ...]] = ()
+    options: tuple[str, ...] = ()
+    order: float = 100.0
+    main_job: bool = False
+    applies: Callable[[Scene], bool] = _constant(True)
+    finish: Callable[[Scene, Path, dict], None] | None = None
+    version: int = 1
+    doc: str = ""
+
+    def output_names(self, scene: Scene) -> tuple[str, ...]:
+        return tuple(self.outputs(scene) if callable(self.outputs) else self.outputs)
+
+    def upstream_names(self, scene: Scene) -> tuple[str, ...]:
+        return tuple(self.upstream(scene) if callable(self.upstream) else self.upstream)
+
+
+@dataclass
+class Inputs:
+    """What a stage's ``compute`` may read, and where it writes non-NetCDF outputs.
+
+    Attributes
+    ----------
+    out
+        The results folder (upstream datasets live there, made current by the runner).
+    key
+        The stage's inputs key (e.g. to tag intermediate files it keeps, like sweep parts).
+    files
+        The declared input files, role -> path.
+    upstream
+        Keys of the upstream stages, name -> inputs key.
+    options
+        Every option given to :func:`build` (the stage uses those it knows), and ``force``: whether
+        the stage was forced (it then also remakes what it keeps between runs, like sweep parts).
+    staging
+        Folder for non-NetCDF outputs (their declared relative paths below it).
+    """
+
+    out: Path
+    key: str = ""
+    files: dict[str, Path] = field(default_factory=dict)
+    upstream: dict[str, str] = field(default_factory=dict)
+    options: dict[str, Any] = field(default_factory=dict)
+    staging: Path | None = None
+    metrics: dict[str, Any] = field(default_factory=dict)
+
+    @classmethod
+    def folder(cls, out: str | Path, **options: Any) -> "Inputs":
+        """Inputs read from ``out`` as they are, outputs written straight into it (tests, scripts).
+
+        No key is checked: the caller vouches for the datasets in ``out``.
+        """
+        out = Path(out)
+        return cls(out=out, options=options, staging=out)
+
+    def path(self, name: str) -> Path:
+        """Path of a file in the results folder."""
+        return self.out / name
+
+    def dataset(self, name: str, stage: str | None = None, variables: Iterable[str] = ()) -> xr.Dataset:
+        """Read an upstream dataset, refusing one made from other inputs than the runner expects."""
+        ds = read_dataset(self.out / name, stage=stage, variables=variables)
+        if stage is not None and stage in self.upstream:
+            have = ds.attrs.get(KEY_ATTR)
+            if have != self.upstream[stage]:
+                raise DatasetError(f"{self.out / name}: made from other inputs (inputs_key {str(have)[:12]}) than "
+                                   f"this run's {stage} stage (inputs_key {self.upstream[stage][:12]})")
+        return ds
+
+    def record(self, **metrics: Any) -> None:
+        """Numbers about this run (timings, counts) for the run log, never for the datasets."""
+        self.metrics.update(metrics)
+
+
+# --------------------------------------------------------------------------------------- registry
+def registry() -> dict[str, Stage]:
+    """Every stage declared in :mod:`pipeline.stages` (a module-level ``STAGE``), in ``order``."""
+    from . import stages as package
+    found: dict[str, Stage] = {}
+    for info in pkgutil.iter_modules(package.__path__):
+        module = importlib.import_module(f"{package.__name__}.{info.name}")
+        stage = getattr(module, "STAGE", None)
+        if isinstance(stage, Stage):
+            if stage.name in found:
+                raise RuntimeError(f"stage {stage.name!r} declared twice (pipeline.stages.{info.name})")
+            found[stage.name] = stage
+    return dict(sorted(found.items(), key=lambda kv: (kv[1].order, kv[0])))
+
+
+def main_job(scene: Scene, stages: Mapping[str, Stage] | None = None) -> list[str]:
+    """The stages of ``hdi run`` for a scene, in order."""
+    stages = registry() if stages is None else stages
+    return [n for n, s in stages.items() if s.main_job and s.applies(scene)]
+
+
+# --------------------------------------------------------------------------------------------- keys
+def scene_part(scene: Scene, reads: Iterable[str], excludes: Iterable[str] = ()) -> dict[str, Any]:
+    """The scene keys named by ``reads``/``excludes`` (see :class:`Stage`), JSON-normalised."""
+    cfg = json.loads(json.dumps(scene.config, default=str))
+    picked: dict[str, Any] = {}
+    reads = tuple(reads)
+    if "*" in reads:
+        picked = {s: dict(v) for s, v in cfg.items()}
+        for item in excludes:
+            section, _, key = item.partition(".")
+            if key:
+                picked.get(section, {}).pop(key, None)
+            else:
+                picked.pop(section, None)
+        picked = {"*": picked}
+    for item in reads:
+        if item == "*":
+            continue
+        section, _, key = item.partition(".")
+        picked[item] = cfg[section][key] if key else cfg[section]
+    return picked
+
+
+def _digest(payload: Any) -> str:
+    return hashlib.sha256(json.dumps(payload, sort_keys=True, default=str).encode()).hexdigest()
+
+
+def _dataset_key(path: Path) -> tuple[str | None, list[str] | None]:
+    """The ``inputs_key`` and produced-outputs list of a dataset (``None`` when unreadable)."""
+    try:
+        with xr.open_dataset(path, engine=ENGINE) as ds:
+            outputs = ds.attrs.get(OUTPUTS_ATTR)
+            return ds.attrs.get(KEY_ATTR), (json.loads(outputs) if outputs else None)
+    except (OSError, ValueError):
+        return None, None
+
+
+# ---------------------------------------------------------------------------------------- the lock
+class FolderBusy(DatasetError):
+    """Another ``hdi`` process is working in the results folder."""
+
+
+_HELD: dict[Path, int] = {}
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def clean_orphans(out: Path) -> list[Path]:
+    """Remove the temporary files and staging folders an interrupted run left in ``out``."""
+    removed = []
+    for pattern in _TMP_GLOBS:
+        for p in out.glob(pattern):
+            if p.is_file():
+                p.unlink(missing_ok=True)
+                removed.append(p)
+    for p in out.glob(STAGING_PREFIX + "*"):
+        shutil.rmtree(p, ignore_errors=True)
+        removed.append(p)
+    if removed:
+        log.info("%s: removed %d temporary file(s) of an interrupted run", out, len(removed))
+    return removed
+
+
+@contextlib.contextmanager
+def folder_lock(out: str | Path) -> Iterator[Path]:
+    """Hold ``out/.hdi.lock`` (re-entrant within a process); refuse when another live process holds it.
+
+    Raises
+    ------
+    FolderBusy
+        Naming the other process and the lock file.
+    """
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    path = (out / LOCK_NAME).resolve()
+    if _HELD.get(path):
+        _HELD[path] += 1
+        try:
+            yield path
+        finally:
+            _HELD[path] -= 1
+        return
+    me = {"pid": os.getpid(), "host": socket.gethostname(),
+          "started": _dt.datetime.now(_dt.timezone.utc).replace(microsecond=0).isoformat()}
+    for _ in range(3):
+        try:
+            fd = os.open(path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+        except FileExistsError:
+            try:
+                other = json.loads(path.read_text() or "{}")
+            except (OSError, ValueError):
+                other = {}
+            pid, host = other.get("pid"), other.get("host")
+            if isinstance(pid, int) and host == me["host"] and not _alive(pid):
+                log.warning("%s: taking over the lock of hdi process %d, which is gone", out, pid)
+                path.unlink(missing_ok=True)
+                continue
+            if not other:  # being written this instant, or garbage: give the writer a moment
+                time.sleep(0.2)
+                if path.is_file() and not path.read_text():
+                    path.unlink(missing_ok=True)
+                continue
+            raise FolderBusy(f"{out}: in use by hdi process {pid} on {host} since {other.get('started')} "
+                             f"(lock file {path}); wait for it to finish, or delete the lock file if that "
+                             "process no longer exists") from None
+        with os.fdopen(fd, "w") as fh:
+            json.dump(me, fh)
+        break
+    else:
+        raise FolderBusy(f"{out}: could not take the lock file {path}")
+    _HELD[path] = 1
+    try:
+        clean_orphans(out)
+        yield path
+    finally:
+        _HELD.pop(path, None)
+        path.unlink(missing_ok=True)
+
+
+# -------------------------------------------------------------------------------------- the runner
+class Runner:
+    """Makes stages of one scene current in one results folder (see the module docstring)."""
+
+    def __init__(self, scene: Scene, out: str | Path, stages: Mapping[str, Stage] | None = None,
+                 **options: Any):
+        self.scene = scene
+        self.out = Path(out)
+        self.stages = dict(registry() if stages is None else stages)
+        self.options = options
+        self._keys: dict[str, str] = {}
+        self._files: dict[str, dict[str, Path]] = {}
+        self._hashes: dict[Path, str] = {}
+        self._done: set[str] = set()
+        self._level = logging.INFO
+
+    # ---- planning
+    def stage(self, name: str) -> Stage:
+        try:
+            return self.stages[name]
+        except KeyError:
+            raise ValueError(f"unknown stage {name!r}; expected one of {', '.join(self.stages)}") from None
+
+    def plan(self, targets: Iterable[str]) -> list[str]:
+        """``targets`` and everything upstream of them, upstream first."""
+        order: list[str] = []
+        visiting: set[str] = set()
+
+        def visit(name: str) -> None:
+            if name in order:
+                return
+            if name in visiting:
+                raise RuntimeError(f"stage {name!r} depends on itself")
+            visiting.add(name)
+            for up in self.stage(name).upstream_names(self.scene):
+                visit(up)
+            visiting.discard(name)
+            order.append(name)
+
+        for t in targets:
+            visit(t)
+        return order
+
+    # ---- keys
+    def files(self, name: str) -> dict[str, Path]:
+        if name not in self._files:
+            files = {role: Path(p) for role, p in self.stage(name).files(self.scene).items()}
+            for role, p in files.items():
+                if not p.is_file():
+                    raise FileNotFoundError(f"{name}: input file {p} ({role}) does not exist")
+            self._files[name] = files
+        return self._files[name]
+
+    def _hash(self, path: Path) -> str:
+        if path not in self._hashes:  # each file hashed once per run (a run does not edit its inputs)
+            self._hashes[path] = file_hash(path)
+        return self._hashes[path]
+
+    def key(self, name: str) -> str:
+        """The inputs key of a stage (module docstring)."""
+        if name not in self._keys:
+            st = self.stage(name)
+            payload = {
+                "stage": name, "version": st.version,
+                "scene": scene_part(self.scene, st.reads, st.excludes),
+                "files": {role: self._hash(p) for role, p in self.files(name).items()},
+                "upstream": {u: self.key(u) for u in st.upstream_names(self.scene)},
+                "options": {o: self.options.get(o) for o in st.options},
+            }
+            self._keys[name] = _digest(payload)
+        return self._keys[name]
+
+    # ---- state of the outputs
+    def _manifest(self, name: str) -> Path:
+        return self.out / STATE_DIR / f"{name}.json"
+
+    def stale_reason(self, name: str) -> str | None:
+        """Why a stage must be computed (``None``: its outputs are current)."""
+        st, key = self.stage(name), self.key(name)
+        outputs = st.output_names(self.scene)
+        datasets = [o for o in outputs if o.endswith(".nc")]
+        others = [o for o in outputs if not o.endswith(".nc")]
+        produced: list[str] | None = None
+        if others:
+            try:
+                manifest = json.loads(self._manifest(name).read_text())
+            except (OSError, ValueError):
+                return "no record of its outputs"
+            if manifest.get("key") != key:
+                return "inputs changed"
+            produced = manifest.get("outputs", [])
+            for o, digest in manifest.get("hashes", {}).items():
+                p = self.out / o
+                if not p.is_file() or self._hash(p) != digest:
+                    return f"{o} missing or changed"
+        for i, o in enumerate(datasets):
+            if produced is not None and o not in produced:
+                continue
+            p = self.out / o
+            if not p.is_file():
+                return f"{o} missing"
+            have, listed = _dataset_key(p)
+            if have != key:
+                return f"{o} made from other inputs" if have else f"{o} has no inputs key"
+            if i == 0 and listed is not None:
+                produced = listed
+        return None
+
+    # ---- making
+    def build(self, targets: Iterable[str], force: bool = False) -> dict[str, tuple[Path, ...]]:
+        """Make ``targets`` current (and everything upstream); returns each target's output paths.
+
+        ``force`` recomputes the targets themselves even when current (not their upstream stages).
+        """
+        targets = list(targets)
+        # a build inside a stage's compute (a helper making sure of an input) checks quietly
+        self._level = logging.DEBUG if _HELD.get((self.out / LOCK_NAME).resolve()) else logging.INFO
+        with folder_lock(self.out):
+            for name in self.plan(targets):
+                self._make(name, force and name in targets)
+            for name in targets:
+                if self.stage(name).finish is not None:
+                    self.stage(name).finish(self.scene, self.out, self.options)
+        return {t: tuple(self.out / o for o in self.stage(t).output_names(self.scene)) for t in targets}
+
+    def _make(self, name: str, force: bool) -> None:
+        if name in self._done:
+            return
+        reason = "forced" if force else self.stale_reason(name)
+        key = self.key(name)
+        if reason is None:
+            log.log(self._level, "%s: up to date (inputs %s)", name, key[:12])
+            self._done.add(name)
+            return
+        st = self.stage(name)
+        log.info("%s: computing (%s)", name, reason)
+        t0 = time.perf_counter()
+        staging = Path(tempfile.mkdtemp(prefix=STAGING_PREFIX, dir=self.out))
+        try:
+            inputs = Inputs(out=self.out, key=key, files=dict(self.files(name)),
+                            upstream={u: self.key(u) for u in st.upstream_names(self.scene)},
+                            options={**self.options, "force": force}, staging=staging)
+            result = st.compute(self.scene, inputs)
+            written = self._write(st, key, inputs, result, staging)
+        finally:
+            shutil.rmtree(staging, ignore_errors=True)
+        seconds = time.perf_counter() - t0
+        log.info("%s: wrote %s (%.1f s)", name, ", ".join(written) or "nothing", seconds)
+        self._log_run(name, key, written, seconds, inputs.metrics)
+        self._done.add(name)
+
+    def _write(self, st: Stage, key: str, inputs: Inputs, result: Any, staging: Path) -> list[str]:
+        outputs = st.output_names(self.scene)
+        if isinstance(result, xr.Dataset):
+            result = {outputs[0]: result}
+        result = dict(result or {})
+        unknown = [o for o in result if o not in outputs]
+        if unknown:
+            raise RuntimeError(f"stage {st.name} produced undeclared outputs {unknown}; declared {list(outputs)}")
+        others = [o for o in outputs if not o.endswith(".nc")]
+        produced = [o for o in outputs if (result.get(o) is not None if o.endswith(".nc")
+                                           else (staging / o).is_file())]
+        attrs = {KEY_ATTR: key, "upstream_keys": json.dumps(inputs.upstream, sort_keys=True)}
+        first = True
+        for o in outputs:
+            if not o.endswith(".nc"):
+                continue
+            ds = result.get(o)
+            if ds is None:
+                (self.out / o).unlink(missing_ok=True)  # not produced this time: no stale file of an older run
+                continue
+            extra = dict(attrs)
+            if first:
+                extra[OUTPUTS_ATTR] = json.dumps(produced)
+                first = False
+            write_dataset(ds, self.out / o, self.scene, stage=st.name, inputs=inputs.files.values(),
+                          extra_attrs=extra)
+        hashes = {}
+        for o in others:
+            target = self.out / o
+            if (staging / o).is_file():
+                target.parent.mkdir(parents=True, exist_ok=True)
+                os.replace(staging / o, target)
+                hashes[o] = file_hash(target)
+                self._hashes[target] = hashes[o]
+            else:
+                target.unlink(missing_ok=True)
+        if others:
+            manifest = self._manifest(st.name)
+            manifest.parent.mkdir(parents=True, exist_ok=True)
+            tmp = manifest.with_name(f".{manifest.name}.{os.getpid()}.tmp")
+            tmp.write_text(json.dumps({"key": key, "outputs": produced, "hashes": hashes}, indent=1))
+            os.replace(tmp, manifest)
+        return produced
+
+    def _log_run(self, name: str, key: str, written: list[str], seconds: float, metrics: dict) -> None:
+        """Append the run's timings to ``.hdi/runs.jsonl`` (kept out of the datasets) when it has metrics."""
+        if not metrics:
+            return
+        entry = {"stage": name, "inputs_key": key, "finished": _dt.datetime.now(_dt.timezone.utc).isoformat(),
+                 "seconds": round(seconds, 3), "outputs": written, **metrics}
+        path = self.out / STATE_DIR / "runs.jsonl"
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with open(path, "a") as fh:
+            fh.write(json.dumps(entry, default=str) + "\n")
+
+
+def build(targets: str | Iterable[str], scene: Scene, out: str | Path, *, force: bool = False,
+          **options: Any) -> dict[str, tuple[Path, ...]]:
+    """Make stages current in ``out`` (see :class:`Runner`); returns each target's output paths."""
+    if isinstance(targets, str):
+        targets = [targets]
+    return Runner(scene, out, **options).build(targets, force=force)
+
+
+def ensure(name: str, scene: Scene, out: str | Path, **options: Any) -> Path:
+    """The primary output of stage ``name`` in ``out``, made current first."""
+    return build([name], scene, out, **options)[name][0]
+
+
+def last_run(out: str | Path, stage: str) -> dict[str, Any] | None:
+    """The last run-log entry of a stage in ``out`` (``None`` when there is none)."""
+    path = Path(out) / STATE_DIR / "runs.jsonl"
+    if not path.is_file():
+        return None
+    entries = [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+    entries = [e for e in entries if e.get("stage") == stage]
+    return entries[-1] if entries else None
