@@ -11,9 +11,9 @@ Resuming: a part whose ``sweep_key`` matches the current sweep is not recomputed
 interrupted sweep (Ctrl-C, kill, a lost worker) picks up where it stopped and gives the same
 dataset as an uninterrupted run: every batch is a deterministic function of its inputs.
 
-Scheduler: by default a ``distributed.LocalCluster`` with one single-threaded worker process per
-core and no dashboard; ``scheduler="ADDRESS"`` attaches to a running dask.distributed cluster;
-``scheduler="synchronous"`` runs the batches in this process (tests, debugging).
+Execution: :func:`pipeline.fanout.run_tasks` (by default a pool of one thread per core in this
+process, the kernels releasing the GIL; ``scheduler="ADDRESS"`` attaches to a running
+dask.distributed cluster; ``scheduler="synchronous"`` runs the batches one after the other).
 """
 
 from __future__ import annotations
@@ -23,7 +23,6 @@ import json
 import logging
 import os
 import sys
-import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Iterable
@@ -32,6 +31,7 @@ import numpy as np
 import xarray as xr
 
 from .. import slider as sl
+from ..fanout import run_tasks
 from ..io import is_current, read_dataset, var, write_dataset
 from ..outputs import HISTORIES, SCALARS, history_variable, scalar_variable
 from . import ensure
@@ -138,47 +138,6 @@ def _progress(total: int, initial: int):
     return tqdm(total=total, initial=initial, unit="batch", desc="sweep", file=sys.stderr)
 
 
-def _client(scheduler: str | None, workers: int | None):
-    from distributed import Client, LocalCluster
-    if scheduler:
-        return Client(scheduler), None
-    n = workers or os.cpu_count() or 1
-    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
-                           silence_logs=logging.CRITICAL)  # shutdown races log CommClosedError
-    return Client(cluster), cluster
-
-
-def _warm_worker() -> None:
-    """Import the model on a worker (and load its numba cache index) before timing starts."""
-    from .. import slider  # noqa: F401
-
-
-def execute(tasks: list[tuple], scheduler: str | None, workers: int | None,
-            on_done: Callable[[str], None]) -> float:
-    """Run ``run_batch(*args)`` for every task; call ``on_done(path)`` as each finishes.
-
-    Returns the wall time [s] of the batch phase alone (workers started and warmed before it).
-    """
-    if scheduler == "synchronous" or not tasks:
-        t0 = time.perf_counter()
-        for args in tasks:
-            on_done(run_batch(*args))
-        return time.perf_counter() - t0
-    from distributed import as_completed
-    client, cluster = _client(scheduler, workers)
-    try:
-        client.run(_warm_worker)
-        t0 = time.perf_counter()
-        futures = [client.submit(run_batch, *args, pure=False, retries=2) for args in tasks]
-        for fut in as_completed(futures):
-            on_done(fut.result())
-        return time.perf_counter() - t0
-    finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
-
-
 def prepare_inputs(scene: Any, out: Path, sets: dict[str, dict], force: bool = False) -> tuple[dict[str, str | None], str | None]:
     """Interface tables per roughness set and the DMW record, as files the workers read."""
     parts = out / PARTS
@@ -230,7 +189,7 @@ def run_sweep(scene: Any, out: Path, scheduler: str | None = None, workers: int 
             raise KeyboardInterrupt(f"stopped after {done[0]} batches (stop_after)")
 
     try:
-        batch_seconds = execute(tasks, scheduler, workers, on_done)
+        batch_seconds = run_tasks(run_batch, tasks, scheduler=scheduler, workers=workers, on_done=on_done)
     finally:
         if bar is not None:
             bar.close()
