@@ -213,6 +213,8 @@ SCHEMA: dict[str, dict[str, Key]] = {
                           doc="scenes per dask task (19: a quarter of the paper grid; fewer, larger tasks "
                               "amortise the part files and scheduling)"),
         "histories_nm": Key("floats", None, doc="protrusions whose time histories are kept [nm]"),
+        "realisations": Key("int", 1, (lambda v: 1 <= v <= 100000, "an integer in [1, 100000]"),
+                            doc="DMW realisations (seeds) per grid point; > 1 adds the realisation dimension"),
     },
     "report": {
         "histories_nm": Key("floats", [5.0, 11.0], doc="protrusions shown in the history figures [nm]"),

@@ -23,6 +23,7 @@ import json
 import logging
 import os
 import sys
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Iterable
@@ -53,20 +54,22 @@ class Batch:
     damping: float
     indices: tuple[int, ...]
     protrusions: tuple[float, ...]
+    realisation: int = 0
 
 
 def plan(scene: Any) -> tuple[np.ndarray, dict[str, dict], list[float], list[Batch]]:
-    """The grid and its batches (roughness-major, then damping, then protrusion)."""
+    """The grid and its batches (realisation-major, then roughness, then damping, then protrusion)."""
     prot = protrusion_grid(scene)
     sets = roughness_sets(scene)
     damp = damping_grid(scene)
     size = scene["sweep"]["batch_size"]
     batches = []
-    for label in sets:
-        for dz in damp:
-            for start in range(0, len(prot), size):
-                idx = tuple(range(start, min(start + size, len(prot))))
-                batches.append(Batch(len(batches), label, float(dz), idx, tuple(float(prot[i]) for i in idx)))
+    for r in range(scene["sweep"]["realisations"]):
+        for label in sets:
+            for dz in damp:
+                for start in range(0, len(prot), size):
+                    idx = tuple(range(start, min(start + size, len(prot))))
+                    batches.append(Batch(len(batches), label, float(dz), idx, tuple(float(prot[i]) for i in idx), r))
     return prot, sets, damp, batches
 
 
@@ -124,7 +127,7 @@ def run_batch(scene: Any, batch: Batch, interface_path: str | None, dmw_path: st
                                                    ("hist_protrusion", "time"))
         ds = ds.assign_coords(coords_h)
     ds.attrs.update({"sweep_key": key, "roughness_label": batch.label, "damping_ratio": batch.damping,
-                     "batch": batch.index})
+                     "batch": batch.index, "realisation": batch.realisation})
     write_dataset(ds, part_path, scene, stage="sweep-part")
     return part_path
 
@@ -139,7 +142,10 @@ def _progress(total: int, initial: int):
 
 
 def prepare_inputs(scene: Any, out: Path, sets: dict[str, dict], force: bool = False) -> tuple[dict[str, str | None], str | None]:
-    """Interface tables per roughness set and the DMW record, as files the workers read."""
+    """Interface tables per roughness set and the DMW record, as files the workers read.
+
+    (The records of realisations beyond the first: :func:`realisation_inputs`.)
+    """
     parts = out / PARTS
     parts.mkdir(parents=True, exist_ok=True)
     interface_paths: dict[str, str | None] = {}
@@ -157,6 +163,27 @@ def prepare_inputs(scene: Any, out: Path, sets: dict[str, dict], force: bool = F
     return interface_paths, dmw_path
 
 
+def realisation_inputs(scene: Any, out: Path, dmw_path: str | None, force: bool = False) -> tuple[list[str | None], list[int]]:
+    """DMW record paths and seeds of the ``[sweep] realisations`` (realisation 0: the scene's ``dmw.nc``).
+
+    Records of realisations ``r >= 1`` are written once into ``sweep.parts/dmw-<r>/dmw.nc``
+    (:func:`pipeline.stages.dmw.realisation_seeds`); workers read them by path.
+    """
+    from .dmw import realisation_record, realisation_seeds
+    n = scene["sweep"]["realisations"]
+    if n == 1:
+        return [dmw_path], [scene["dmw"]["seed"]]
+    if dmw_path is None:
+        where = str(scene.path) if scene.path else "<scene>"
+        raise ValueError(f"{where}: sweep.realisations = {n} needs the dmw effect in scene.effects "
+                         "(the realisations are DMW records)")
+    seeds = realisation_seeds(scene["dmw"]["seed"], n)
+    paths: list[str | None] = [dmw_path]
+    for r in range(1, n):
+        paths.append(str(realisation_record(scene, out / PARTS / f"dmw-{r:05d}", seeds[r], force)))
+    return paths, seeds
+
+
 def run_sweep(scene: Any, out: Path, scheduler: str | None = None, workers: int | None = None,
               force: bool = False, stop_after: int | None = None,
               on_batch: Callable[[str], None] | None = None) -> Path:
@@ -170,12 +197,14 @@ def run_sweep(scene: Any, out: Path, scheduler: str | None = None, workers: int 
     k, k_source = resolve_k(scene, out)
     key = sweep_key(scene, k)
     interface_paths, dmw_path = prepare_inputs(scene, out, sets, force)
+    dmw_paths, seeds = realisation_inputs(scene, out, dmw_path, force)
     parts = out / PARTS
     hist_nm = tuple(scene["sweep"]["histories_nm"] or scene["report"]["histories_nm"])
     todo = [b for b in batches if force or not part_is_done(_part_path(parts, b), key)]
     log.info("sweep: %d batches, %d to run", len(batches), len(todo))
-    tasks = [(scene, b, interface_paths[b.label], dmw_path, k, str(_part_path(parts, b)), key, hist_nm)
-             for b in todo]
+    # time histories of the first realisation only (the scene's own record)
+    tasks = [(scene, b, interface_paths[b.label], dmw_paths[b.realisation], k, str(_part_path(parts, b)), key,
+              hist_nm if b.realisation == 0 else ()) for b in todo]
     bar = _progress(len(batches), len(batches) - len(todo))
     done = [0]
 
@@ -199,7 +228,7 @@ def run_sweep(scene: Any, out: Path, scheduler: str | None = None, workers: int 
     attrs["compute_seconds"] = round(batch_seconds, 3)  # wall time of the batch phase (workers already up)
     attrs["batches_run"] = len(todo)
     return assemble(scene, out, prot, list(sets), damp, batches, key, k_source, attrs,
-                    [dmw_path] if dmw_path else [])
+                    [dmw_path] if dmw_path else [], seeds)
 
 
 def _dmw_tuple(path: str | None):
@@ -211,10 +240,15 @@ def _dmw_tuple(path: str | None):
 
 
 def assemble(scene: Any, out: Path, prot: np.ndarray, labels: list[str], damp: list[float], batches: list[Batch],
-             key: str, k_source: str, attrs: dict, inputs: Iterable[str]) -> Path:
-    """Fill ``sweep.nc`` (and ``sweep_histories.nc``) from the part files, one part at a time."""
+             key: str, k_source: str, attrs: dict, inputs: Iterable[str], seeds: list[int] | None = None) -> Path:
+    """Fill ``sweep.nc`` (and ``sweep_histories.nc``) from the part files, one part at a time.
+
+    With more than one realisation the scalars gain a last dimension ``realisation`` and the
+    ensemble statistics of :func:`ensemble_statistics` are added.
+    """
     parts = out / PARTS
-    shape = (len(prot), len(labels), len(damp))
+    n_real = len(seeds) if seeds else 1
+    shape = (len(prot), len(labels), len(damp)) + ((n_real,) if n_real > 1 else ())
     arrays: dict[str, np.ndarray] = {}
     hist: dict[str, np.ndarray] = {}
     hist_prot: np.ndarray | None = None
@@ -231,7 +265,10 @@ def assemble(scene: Any, out: Path, prot: np.ndarray, labels: list[str], damp: l
             if name not in arrays:
                 arrays[name] = np.full(shape, -1 if name == "regime" else np.nan,
                                        dtype=np.int8 if name == "regime" else float)
-            arrays[name][list(b.indices), r, d] = ds[name].values
+            if n_real > 1:
+                arrays[name][list(b.indices), r, d, b.realisation] = ds[name].values
+            else:
+                arrays[name][list(b.indices), r, d] = ds[name].values
         if "hist_protrusion" in ds.coords:
             if hist_prot is None:
                 hist_prot = np.array([h for h in scene["sweep"]["histories_nm"] or scene["report"]["histories_nm"]
@@ -248,7 +285,7 @@ def assemble(scene: Any, out: Path, prot: np.ndarray, labels: list[str], damp: l
     coords = {"protrusion": var(prot, "protrusion", "nm", "TFC protrusion"),
               "roughness": var(np.array(labels, dtype=object), "roughness", "1", "roughness set label"),
               "damping": var(np.array(damp), "damping", "1", "modal damping ratio of the air bearing")}
-    dims = ("protrusion", "roughness", "damping")
+    dims = ("protrusion", "roughness", "damping") + (("realisation",) if n_real > 1 else ())
     data = {}
     for name, a in arrays.items():
         units, _, long_name = SCALARS[name]
@@ -257,6 +294,12 @@ def assemble(scene: Any, out: Path, prot: np.ndarray, labels: list[str], damp: l
             from ..outputs import REGIME_ATTRS
             attrs_v.update(REGIME_ATTRS)
         data[name] = xr.Variable(dims, a, attrs=attrs_v)
+    if n_real > 1:
+        coords["realisation"] = var(np.arange(n_real), "realisation", "1",
+                                    "DMW realisation (0: the scene's own record)")
+        data["dmw_seed"] = var(np.array(seeds, dtype=np.int64), "realisation", "1",
+                               "seed of the synthetic DMW record of the realisation")
+        data.update(ensemble_statistics(data))
     ds = xr.Dataset(data, coords=coords)
     sets = roughness_sets(scene)
     for label in labels:
@@ -265,7 +308,7 @@ def assemble(scene: Any, out: Path, prot: np.ndarray, labels: list[str], damp: l
     extra.update({"sweep_key": key, "batches": len(batches), "k_source": k_source})
     path = write_dataset(ds, out / "sweep.nc", scene, stage="sweep", inputs=inputs, extra_attrs=extra)
     if hist:
-        hc = dict(coords)
+        hc = {name: c for name, c in coords.items() if name != "realisation"}  # (realisation 0 only)
         hc["protrusion"] = var(hist_prot, "protrusion", "nm", "TFC protrusion")
         hc["time"] = var(time, "time", "s", "time")
         hds = xr.Dataset({name: xr.Variable(("protrusion", "roughness", "damping", "time"), a,
@@ -273,6 +316,42 @@ def assemble(scene: Any, out: Path, prot: np.ndarray, labels: list[str], damp: l
                           for name, a in hist.items()}, coords=hc)
         write_dataset(hds, out / "sweep_histories.nc", scene, stage="sweep", inputs=inputs, extra_attrs=extra)
     return path
+
+
+#: Scalars whose ensemble mean and spread ``sweep.nc`` carries when there are several realisations.
+ENSEMBLE = ("fhm_bv", "clearance", "min_clearance", "interference", "contact_force", "friction_force",
+            "net_force", "mean_pressure", "contact_fraction")
+
+
+def ensemble_statistics(data: dict[str, xr.Variable]) -> dict[str, xr.Variable]:
+    """Mean, standard deviation and touchdown probability over the ``realisation`` dimension.
+
+    ``<name>_mean``/``<name>_std`` [units of name]: mean and sample standard deviation (ddof = 1) over
+    the realisations with a value (``interference`` and the stresses are NaN while flying);
+    ``touchdown_probability`` [1]: fraction of realisations in contact at some time of the steady
+    window (regime not flying), versus protrusion, roughness and damping.
+    """
+    out: dict[str, xr.Variable] = {}
+    for name in ENSEMBLE:
+        if name not in data:
+            continue
+        v = data[name]
+        a = np.asarray(v.values, dtype=float)
+        with warnings.catch_warnings():  # all-NaN slices (never in contact) give NaN, as documented
+            warnings.simplefilter("ignore", RuntimeWarning)
+            mean = np.nanmean(a, axis=-1)
+            std = np.nanstd(a, axis=-1, ddof=1)
+        dims = v.dims[:-1]
+        out[name + "_mean"] = xr.Variable(dims, mean, attrs={"units": v.attrs["units"], "long_name":
+                                                             f"ensemble mean of {v.attrs['long_name']}"})
+        out[name + "_std"] = xr.Variable(dims, std, attrs={"units": v.attrs["units"], "long_name":
+                                                           f"ensemble standard deviation of {v.attrs['long_name']}"})
+    if "regime" in data:
+        reg = np.asarray(data["regime"].values)
+        p = np.mean(reg != sl.FLYING, axis=-1)
+        out["touchdown_probability"] = xr.Variable(data["regime"].dims[:-1], p, attrs={
+            "units": "1", "long_name": "fraction of DMW realisations in contact in the steady window"})
+    return out
 
 
 def run(scene: Any, out: Path, scheduler: str | None = None, workers: int | None = None, force: bool = False,
