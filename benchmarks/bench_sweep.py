@@ -20,7 +20,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from .common import record
+from .common import record, run_process
 
 ROOT = Path(__file__).resolve().parents[1]
 PAPER = str(ROOT / "configs" / "paper-2009.toml")
@@ -28,12 +28,16 @@ GRID = str(ROOT / "configs" / "sweep-3x3.toml")
 INPUTS = ("roughness.nc", "dmw.nc", "interface.nc", "calibration.nc")
 
 
-def _hdi(*args: str) -> float:
-    """Wall time [s] of one fresh `hdi` process (interpreter start included)."""
-    t0 = time.perf_counter()
-    subprocess.run([sys.executable, "-m", "pipeline.cli", *args], cwd=ROOT, check=True,
-                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    return time.perf_counter() - t0
+CPU: dict[str, list[float]] = {}  # CPU seconds [s] of the timed commands, by label
+
+
+def _hdi(*args: str, label: str | None = None) -> float:
+    """Wall time [s] of one fresh `hdi` process (interpreter start included); its CPU time under ``label``."""
+    wall, cpu, _ = run_process([sys.executable, "-m", "pipeline.cli", *args], ROOT,
+                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    if label:
+        CPU.setdefault(label, []).append(cpu)
+    return wall
 
 
 def interpreter_start(repeat: int = 5) -> list[float]:
@@ -67,7 +71,8 @@ def kernel_seconds(config: str, inputs: Path, repeat: int = 3) -> list[float]:
     return times
 
 
-def sweep_wall(config: str, inputs: Path, *args: str, repeat: int = 3, compute: list | None = None) -> list[float]:
+def sweep_wall(config: str, inputs: Path, *args: str, repeat: int = 3, compute: list | None = None,
+               label: str | None = None) -> list[float]:
     """Wall times [s] of `hdi sweep` (process start, inputs, batches, assembly) in fresh folders.
 
     ``compute`` collects the batch phase alone (``compute_seconds`` of sweep.nc).
@@ -80,11 +85,15 @@ def sweep_wall(config: str, inputs: Path, *args: str, repeat: int = 3, compute: 
             for name in INPUTS:
                 if (inputs / name).is_file():
                     shutil.copy(inputs / name, out / name)
-            times.append(_hdi("sweep", config, "--out", str(out), *args))
+            times.append(_hdi("sweep", config, "--out", str(out), *args, label=label))
             if compute is not None:
                 with xr.open_dataset(out / "sweep.nc", engine="netcdf4") as ds:
                     compute.append(float(ds.attrs["compute_seconds"]))
     return times
+
+
+def _cpu(label: str) -> float | None:
+    return statistics.median(CPU[label]) if CPU.get(label) else None
 
 
 def run(results: list[dict]) -> None:
@@ -97,26 +106,28 @@ def run(results: list[dict]) -> None:
         record(results, "interpreter start + imports of hdi sweep (fresh process)", start)
         record(results, "paper sweep, 76 scenes, sequential kernel time (run_model only)", kernel)
         budget = 2 * k0 + s0
-        wall = sweep_wall(PAPER, inputs)
+        wall = sweep_wall(PAPER, inputs, label="paper")
         record(results, "paper sweep, 76 scenes, hdi sweep (local default), whole command", wall,
                target_s=budget, target_rule="2 x sequential kernel + one interpreter start (same run)",
-               ratio_to_target=statistics.median(wall) / budget)
+               ratio_to_target=statistics.median(wall) / budget, cpu_median_s=_cpu("paper"))
         for sched in ("synchronous", "threads", "processes"):
             comp: list[float] = []
-            w = sweep_wall(PAPER, inputs, "--scheduler", sched, "--workers", "2", compute=comp)
+            w = sweep_wall(PAPER, inputs, "--scheduler", sched, "--workers", "2", compute=comp, label=sched)
             record(results, f"paper sweep, --scheduler {sched}, 2 workers: whole command", w,
-                   batch_phase_median_s=statistics.median(comp))
+                   batch_phase_median_s=statistics.median(comp), cpu_median_s=_cpu(sched))
         c1: list[float] = []
         c2: list[float] = []
-        g1 = sweep_wall(GRID, inputs, "--workers", "1", repeat=2, compute=c1)
-        g2 = sweep_wall(GRID, inputs, "--workers", "2", repeat=2, compute=c2)
+        g1 = sweep_wall(GRID, inputs, "--workers", "1", repeat=2, compute=c1, label="grid1")
+        g2 = sweep_wall(GRID, inputs, "--workers", "2", repeat=2, compute=c2, label="grid2")
         speedup = statistics.median(g1) / statistics.median(g2)
         speedup_c = statistics.median(c1) / statistics.median(c2)
-        record(results, "sweep-3x3 grid, 684 scenes, 1 worker, whole command", g1)
+        record(results, "sweep-3x3 grid, 684 scenes, 1 worker, whole command", g1, cpu_median_s=_cpu("grid1"),
+               batch_phase_median_s=statistics.median(c1))
         record(results, "sweep-3x3 grid, 684 scenes, 2 workers, whole command", g2, speedup_vs_1_worker=speedup,
-               speedup_target=1.8, meets_speedup_target=bool(speedup >= 1.8), batch_phase_speedup=speedup_c)
+               speedup_target=1.8, meets_speedup_target=bool(speedup >= 1.8), batch_phase_speedup=speedup_c,
+               batch_phase_median_s=statistics.median(c2), cpu_median_s=_cpu("grid2"))
         print(f"  speed-up of 2 workers over 1 on the 684-scene grid: {speedup:.2f} whole command, "
               f"{speedup_c:.2f} batch phase (target >= 1.8)")
-        ens = sweep_wall(PAPER, inputs, "--set", "sweep.realisations=32", repeat=1)
+        ens = sweep_wall(PAPER, inputs, "--set", "sweep.realisations=32", repeat=1, label="ensemble")
         record(results, "DMW ensemble, 32 realisations x 76 protrusions (2432 scenes), whole command", ens,
-               target_s=60.0, ratio_to_one_realisation=ens[0] / statistics.median(wall))
+               target_s=60.0, ratio_to_one_realisation=ens[0] / statistics.median(wall), cpu_median_s=_cpu("ensemble"))

@@ -122,7 +122,9 @@ def flying_minimum(model: sl.Model, delta_nm: float) -> tuple[float, float, str]
     off = replace(model, contact=None, friction=None, area=None)
     try:
         run = sl.run_model(off, delta_nm * NM)
-        lo_all = min(run.d_extremes[0], float(sl.histories(run)["separation"][0]))
+        # the initial separation (at rest, y = 0): d(0) = FH0 - delta - w(0)
+        w0 = dyn.disk_history(model.dmw, model.p, np.zeros(1))[0][0] if model.dmw is not None else 0.0
+        lo_all = min(run.d_extremes[0], model.p[dyn.P_FH0] - delta_nm * NM - w0)
         if model.transient > 0:
             early = sl.run_model(replace(off, duration=off.transient, transient=0.0), delta_nm * NM)
             lo_all = min(lo_all, early.d_extremes[0])
