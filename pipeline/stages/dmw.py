@@ -63,7 +63,6 @@ import numpy as np
 import xarray as xr
 
 from ..io import DatasetError, file_hash, is_current, read_dataset, var, write_dataset
-from ..physics import dmw as phys
 
 log = logging.getLogger(__name__)
 
@@ -129,6 +128,7 @@ def default_duration(sim_duration_s: float, slider: dict[str, Any], disk_speed_m
 
 def _measured(s: dict[str, Any]) -> tuple[np.ndarray, dict[str, Any]]:
     """Load, process, resample and cut a measured record; raise before anything is written."""
+    from ..physics import dmw as phys
     fs, (lo, hi), dur = s["sample_rate_hz"], s["band_hz"], s["duration_s"]
     rec = phys.load_record(s["source"], s["quantity"], s["column"], s["record_rate_hz"], min_duration_s=dur)
     where = f"{rec.path}: {rec.field}"
@@ -223,6 +223,8 @@ def run(scene: Any, out: Path, **options: Any) -> Path:
     pipeline.physics.dmw.DMWError
         For an unusable measured record (the existing ``dmw.nc`` is left untouched).
     """
+    # (imported here: scipy.signal costs about a second, and the sweep's workers only :func:`load`)
+    from ..physics import dmw as phys
     s = settings(scene)
     fs, (lo, hi), dur = s["sample_rate_hz"], s["band_hz"], s["duration_s"]
     n = phys.n_samples(dur, fs)

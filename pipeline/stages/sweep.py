@@ -18,6 +18,7 @@ dask.distributed cluster; ``scheduler="synchronous"`` runs the batches one after
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 import logging
@@ -97,15 +98,38 @@ def part_is_done(path: Path, key: str) -> bool:
         return False
 
 
+def _file_id(path: str | None) -> tuple | None:
+    if path is None:
+        return None
+    st = os.stat(path)
+    return (path, st.st_mtime_ns, st.st_size)
+
+
+@functools.lru_cache(maxsize=8)
+def _read_inputs(interface_id: tuple | None, dmw_id: tuple | None) -> tuple[xr.Dataset | None, tuple | None]:
+    from .dmw import load as load_dmw
+    interface = read_dataset(interface_id[0], stage="interface") if interface_id else None
+    record = None
+    if dmw_id:
+        _, w_nm, fs = load_dmw(dmw_id[0])
+        w_nm.setflags(write=False)  # shared by the batches of this process: read-only
+        record = (w_nm, fs)
+    return interface, record
+
+
+def batch_inputs(interface_path: str | None, dmw_path: str | None) -> tuple[xr.Dataset | None, tuple | None]:
+    """Interface tables and DMW record of a batch, read once per process (and file version).
+
+    The batches of a threaded sweep share the process, so they share one copy instead of reading
+    both files per batch (NetCDF reads are serialised, see :data:`pipeline.io.NETCDF_LOCK`).
+    """
+    return _read_inputs(_file_id(interface_path), _file_id(dmw_path))
+
+
 def run_batch(scene: Any, batch: Batch, interface_path: str | None, dmw_path: str | None, k: float | None,
               part_path: str, key: str, history_nm: tuple[float, ...]) -> str:
     """Run one batch and write its part file (executed on a worker). Returns the part's path."""
-    from .dmw import load as load_dmw
-    interface = read_dataset(interface_path, stage="interface") if interface_path else None
-    record = None
-    if dmw_path:
-        _, w_nm, fs = load_dmw(dmw_path)
-        record = (w_nm, fs)
+    interface, record = batch_inputs(interface_path, dmw_path)
     model = sl.build_model(scene, interface, record, k, damping_ratio=batch.damping)
     rows, hist_rows = [], []
     for delta in batch.protrusions:
