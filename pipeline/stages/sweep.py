@@ -177,6 +177,10 @@ def prepare_inputs(scene: Any, out: Path, sets: dict[str, dict], force: bool = F
         if not scene.effects & {"contact", "adhesion"}:
             interface_paths[label] = None
             continue
+        if table == dict(scene["roughness"]) and not table.get("afm"):
+            # the scene's own roughness: its tables are the interface stage's (made once, not per sweep)
+            interface_paths[label] = str(ensure("interface", scene, out, force))
+            continue
         sub = scene.replace(roughness={k: v for k, v in table.items()})
         path = parts / f"interface-{label}.nc"
         if force or not is_current(path, sub, "interface"):
@@ -246,21 +250,12 @@ def run_sweep(scene: Any, out: Path, scheduler: str | None = None, workers: int 
     finally:
         if bar is not None:
             bar.close()
-    model = sl.build_model(scene, read_dataset(interface_paths[next(iter(sets))]) if interface_paths[next(iter(sets))] else None,
-                           _dmw_tuple(dmw_path), k)
+    model = sl.build_model(scene, *batch_inputs(interface_paths[next(iter(sets))], dmw_path), k)
     attrs = model_attrs(model, k_source)
     attrs["compute_seconds"] = round(batch_seconds, 3)  # wall time of the batch phase (workers already up)
     attrs["batches_run"] = len(todo)
     return assemble(scene, out, prot, list(sets), damp, batches, key, k_source, attrs,
                     [dmw_path] if dmw_path else [], seeds)
-
-
-def _dmw_tuple(path: str | None):
-    if path is None:
-        return None
-    from .dmw import load as load_dmw
-    _, w, fs = load_dmw(path)
-    return (w, fs)
 
 
 def assemble(scene: Any, out: Path, prot: np.ndarray, labels: list[str], damp: list[float], batches: list[Batch],
