@@ -36,3 +36,20 @@ def record(results: list[dict], name: str, times: list[float], target_s: float |
     flag = "" if target_s is None else ("  OK" if med < target_s else f"  MISSES target {target_s:g} s")
     print(f"{name:<55} median {med * 1e3:10.2f} ms{flag}", flush=True)
     return row
+
+
+def run_process(cmd: list[str], cwd: Any, **kwargs: Any) -> tuple[float, float, Any]:
+    """Run ``cmd`` to completion: ``(wall [s], CPU of the child, user + system [s], CompletedProcess)``.
+
+    On a shared machine the CPU time says what the command costs when the wall time is inflated
+    by other load (CPU time above wall time: the command ran in parallel).
+    """
+    import resource
+    import subprocess
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    done = subprocess.run(cmd, cwd=cwd, check=True, **kwargs)
+    wall = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return wall, cpu, done

@@ -78,7 +78,7 @@ def piecewise_coefficients(y: np.ndarray, h: float, order: int) -> np.ndarray:
     raise ValueError(f"interpolation order {order}: expected 1 or 3")
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
 def _ppval(c, x0, h, x):
     """Value and slope of the piecewise cubic at ``x`` (linear extrapolation below, constant above)."""
     n = c.shape[0]
@@ -94,7 +94,7 @@ def _ppval(c, x0, h, x):
     return ((c0 * s + c1) * s + c2) * s + c3, (3.0 * c0 * s + 2.0 * c1) * s + c2
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
 def _ppindex(n, x0, h, x):
     """Piece ``i`` and offset ``s`` of ``x`` on a uniform grid of ``n`` pieces (``i = -1`` below the
     grid, ``i = n`` above it): computed once and shared by the tables of one grid."""
@@ -107,7 +107,7 @@ def _ppindex(n, x0, h, x):
     return i, x - (x0 + i * h)
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
 def _ppat(c, i, s):
     """Value of a piecewise cubic at a point located by :func:`_ppindex` (as :func:`_ppval`)."""
     if i < 0:
@@ -118,7 +118,7 @@ def _ppat(c, i, s):
     return ((c[i, 0] * s + c[i, 1]) * s + c[i, 2]) * s + c[i, 3]
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy")
 def ppval(c, x0, h, x):
     """Vectorised :func:`_ppval` (values only) for post-processing."""
     out = np.empty(x.shape[0])
@@ -153,7 +153,7 @@ def disk_coefficients(w: np.ndarray, dt: float, order: int, offsets: tuple[float
     return np.ascontiguousarray(np.hstack(cols))
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy")
 def disk_history(dmw, p, t):
     """Disk displacement [m] and velocity [m/s] under the TFC point at the times ``t`` (outputs)."""
     w = np.empty(t.shape[0])
@@ -163,7 +163,7 @@ def disk_history(dmw, p, t):
     return w, v
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
 def _disk(p, dmw, t):
     """Disk displacement [m] and velocity [m/s] under the TFC point at time ``t``."""
     if dmw is None:
@@ -171,7 +171,7 @@ def _disk(p, dmw, t):
     return _ppval(dmw, p[P_DMW_T0], p[P_DMW_DT], t)
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
 def _disk3(p, dmw, t):
     """Disk displacement and velocity under the TFC point, the front and the rear pad at ``t``."""
     if dmw is None:
@@ -187,20 +187,20 @@ def _disk3(p, dmw, t):
             ((r[8] * s + r[9]) * s + r[10]) * s + r[11], (3.0 * r[8] * s + 2.0 * r[9]) * s + r[10])
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
 def separation(p, dmw, t, y):
     """TFC separation ``d`` [m] and its rate [m/s] (SPEC.md 4)."""
     wc, vc = _disk(p, dmw, t)
     return _separation(p, y, wc, vc)
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
 def _separation(p, y, wc, vc):
     return (p[P_FH0] - p[P_DELTA] + y[0] - p[P_LC] * y[1] - wc,
             y[2] - p[P_LC] * y[3] - vc)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy")
 def rhs(t, y, p, dmw, cp, pa, ft, pitch, contact, out):
     """Write ``dy/dt`` into ``out`` (see the module docstring for the equations)."""
     z, th, vz, vth = y[0], y[1], y[2], y[3]
@@ -246,7 +246,7 @@ B1, B3, B4, B5, B6 = 35 / 384, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84
 E1, E3, E4, E5, E6, E7 = (71 / 57600, -71 / 16695, 71 / 1920, -17253 / 339200, 22 / 525, -1 / 40)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy")
 def _step(t, y, k1, h, p, dmw, cp, pa, ft, pitch, contact, ynew, k7, err, tmp, k2, k3, k4, k5, k6):
     """One Dormand-Prince step: ``ynew``, its derivative ``k7`` and the error estimate ``err``."""
     for i in range(4):
@@ -271,7 +271,7 @@ def _step(t, y, k1, h, p, dmw, cp, pa, ft, pitch, contact, ynew, k7, err, tmp, k
         err[i] = h * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i] + E7 * k7[i])
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
 def _hermite(y0, f0, y1, f1, h, theta, i):
     """Cubic Hermite interpolant of component ``i`` at ``t0 + theta h``."""
     t2 = theta * theta
@@ -280,7 +280,7 @@ def _hermite(y0, f0, y1, f1, h, theta, i):
             + (-2 * t3 + 3 * t2) * y1[i] + (t3 - t2) * h * f1[i])
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
 def _dcubic(d0, dd0, d1, dd1, h):
     """Coefficients ``(a, b, c, e)`` of the cubic Hermite ``d(theta) = a theta^3 + b theta^2 + c theta + e``
     through ``d0, d1`` with slopes ``dd0, dd1`` [per unit time] over a step ``h``: locates the interior
@@ -290,7 +290,7 @@ def _dcubic(d0, dd0, d1, dd1, h):
             h * dd0, d0)
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
 def _extrema(a, b, c):
     """Roots in (0, 1), ascending, of ``3 a x^2 + 2 b x + c`` (the extrema of the cubic): ``(n, x1, x2)``."""
     A, B, C = 3.0 * a, 2.0 * b, c
@@ -322,13 +322,13 @@ def _extrema(a, b, c):
     return n, x1, x2
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
 def _interp_state(y0, f0, y1, f1, h, theta, out):
     for i in range(4):
         out[i] = _hermite(y0, f0, y1, f1, h, theta, i)
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
 def _first_wrong_side(p, dmw, cp, contact, t, y, k1, ynew, k7, h, d0, dd0, d1, dd1, ys):
     """Smallest ``theta`` in (0, 1] of the step where the criterion disagrees with the mode, or -1.
 
@@ -357,7 +357,7 @@ def _first_wrong_side(p, dmw, cp, contact, t, y, k1, ynew, k7, h, d0, dd0, d1, d
     return best if best <= 1.0 else -1.0
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy")
 def integrate(y0, t_end, t_out, p, dmw, cp, pa, ft, pitch, rtol, atol, h_max, max_steps):
     """Integrate from ``t = 0`` to ``t_end`` [s]; sample the state at ``t_out`` (ascending).
 

@@ -17,6 +17,7 @@ import json
 import os
 import subprocess
 import tempfile
+import threading
 from functools import lru_cache
 from pathlib import Path
 from typing import Any, Iterable
@@ -26,6 +27,9 @@ import xarray as xr
 from . import __version__
 
 ENGINE = "netcdf4"
+#: Serialises NetCDF I/O between threads of one process (pipeline.fanout runs tasks on threads):
+#: the HDF5 library under netCDF4 is not thread-safe, and xarray does not lock file creation.
+NETCDF_LOCK = threading.RLock()
 
 
 class DatasetError(ValueError):
@@ -172,7 +176,8 @@ def write_dataset(ds: xr.Dataset, path: str | Path, scene: Any = None, *, stage:
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     os.close(fd)
     try:
-        out.to_netcdf(tmp, engine=ENGINE, encoding=encoding)
+        with NETCDF_LOCK:
+            out.to_netcdf(tmp, engine=ENGINE, encoding=encoding)
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
@@ -193,7 +198,7 @@ def read_dataset(path: str | Path, *, stage: str | None = None, variables: Itera
         hint = f" (run `hdi {stage}` first)" if stage else ""
         raise DatasetError(f"{path}: dataset does not exist{hint}")
     try:
-        with xr.open_dataset(path, engine=ENGINE, decode_times=False, decode_timedelta=False) as ds:
+        with NETCDF_LOCK, xr.open_dataset(path, engine=ENGINE, decode_times=False, decode_timedelta=False) as ds:
             ds = ds.load()
     except (OSError, ValueError) as exc:
         raise DatasetError(f"{path}: not a readable NetCDF dataset: {exc}") from None

@@ -283,6 +283,44 @@ def fig_fhm(combos: Sequence[tuple[dict[str, Any], xr.Dataset]], scene: str, pat
     return save(fig, path)
 
 
+# ------------------------------------------------------------------------------------ DMW ensemble
+def fig_ensemble(sweep: xr.Dataset, scene: str, path: Path, *, touchdown_nm: float | None = None,
+                 previous_nm: float | None = None) -> Path:
+    """Touchdown probability (top) and FHM/BV ensemble mean with a +-1 std band (bottom) versus protrusion.
+
+    From the ``realisation`` statistics of ``sweep.nc`` (``[sweep] realisations > 1``), the first
+    roughness set and damping ratio; each realisation's FHM/BV is drawn faintly behind the band.
+    """
+    sel = {d: 0 for d in ("roughness", "damping") if d in sweep.dims}
+    ds = sweep.isel(sel)
+    x = ds["protrusion"].values
+    n = ds.sizes.get("realisation", 1)
+    fig, (ax, ax2) = new_figure(2, 1, size=(8.5, 6.4), sharex=True)
+    p = ds["touchdown_probability"]
+    ax.step(x, p.values, where="mid", color=LINE_COLOURS[3], lw=1.4, label=f"{n} DMW realisations")
+    ax.set_ylim(-0.03, 1.03)
+    ax.set_ylabel(var_label(p, "touchdown probability"))
+    ax2.plot(x, np.asarray(ds["fhm_bv"].values).reshape(x.size, -1), color="0.6", lw=0.4, alpha=0.5)
+    m, s = ds["fhm_bv_mean"].values, ds["fhm_bv_std"].values
+    ax2.fill_between(x, m - s, m + s, color=LINE_COLOURS[0], alpha=0.25, lw=0, label="mean ± 1 std")
+    ax2.plot(x, m, color=LINE_COLOURS[0], lw=1.4, marker="o", ms=2.5, label="ensemble mean")
+    ax2.set_ylabel(axis_label("FHM / BV (peak-to-peak / FH0)", ds["fhm_bv"].attrs.get("units", "%")))
+    ax2.set_xlabel(axis_label("TFC protrusion δ", "nm"))
+    for a in (ax, ax2):
+        if touchdown_nm is not None:
+            a.axvline(touchdown_nm, color="#d62728", lw=1.2, label=f"measured touchdown {touchdown_nm:g} nm"
+                      if a is ax else None)
+        if previous_nm is not None:
+            a.axvline(previous_nm, color="#d62728", lw=0.8, ls=":")
+        a.grid(alpha=0.3)
+    ax.legend(fontsize=7.5, loc="upper left", framealpha=0.9)
+    ax2.legend(fontsize=7.5, loc="upper left", framealpha=0.9)
+    what = ", ".join(f"{d} {ds[d].values.item()}" for d in sel)
+    ax.set_title(f"first grid combination ({what})" if what else "", fontsize=9)
+    fig.suptitle(title("Touchdown and FHM/BV over DMW realisations", scene), fontsize=11)
+    return save(fig, path)
+
+
 # --------------------------------------------------------------------------------------------- Fig. 7
 def fig_shear(combos: Sequence[tuple[dict[str, Any], xr.Dataset]], scene: str, path: Path, *,
               touchdown_nm: float | None = None, shear_strength: float | None = None) -> Path:

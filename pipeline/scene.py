@@ -173,6 +173,8 @@ SCHEMA: dict[str, dict[str, Key]] = {
                        doc="physically meaningful k searched by the calibration [1] (contact probability "
                            "0.1 % to 99.9 %)"),
         "k_tolerance": Key("float", 1e-3, _pos, doc="bisection tolerance on k [1]"),
+        "method": Key("str", "exact", choices=("exact", "bisection"),
+                      doc="k* from one flying run per protrusion (exact) or by bisection on k"),
         "curve_points": Key("int", 25, (lambda v: 2 <= v <= 1000, "an integer in [2, 1000]"),
                             doc="k values of the touchdown-versus-k curve"),
     },
@@ -212,6 +214,8 @@ SCHEMA: dict[str, dict[str, Key]] = {
                           doc="scenes per dask task (19: a quarter of the paper grid; fewer, larger tasks "
                               "amortise the part files and scheduling)"),
         "histories_nm": Key("floats", None, doc="protrusions whose time histories are kept [nm]"),
+        "realisations": Key("int", 1, (lambda v: 1 <= v <= 100000, "an integer in [1, 100000]"),
+                            doc="DMW realisations (seeds) per grid point; > 1 adds the realisation dimension"),
     },
     "report": {
         "histories_nm": Key("floats", [5.0, 11.0], doc="protrusions shown in the history figures [nm]"),

@@ -279,6 +279,12 @@ CALIBRATION = _group(
     V("contact_probability_one_sided", "1", "P(z > k sigma) of the calibrated k"),
     V("contact_probability_two_sided", "1", "P(|z| > k sigma) of the calibrated k"),
     V("sigma", "nm", "rms roughness of the criterion d < k sigma", NM),
+    # the exact method (touchdown.method = "exact"): one flying run per protrusion of the grid
+    V("protrusion", "nm", "TFC protrusion of the sweep grid", NM, dims=("protrusion",)),
+    V("k_threshold", "1", "smallest k giving contact at the protrusion (-inf: contact for every k, adhesive "
+                          "snap-in)", dims=("protrusion",)),
+    V("min_separation", "nm", "minimum separation over the steady window with the contact law off (-inf: "
+                              "separation collapsed)", NM, dims=("protrusion",)),
 )
 
 #: ``accuracy.nc`` (:mod:`pipeline.stages.accuracy`): errors and costs per operating point, knob and level.
@@ -326,10 +332,28 @@ ACCURACY = _group(
       for n, v in SCALARS.items()),
 )
 
+#: Scalars whose ensemble mean and spread ``sweep.nc`` carries with ``[sweep] realisations`` > 1.
+ENSEMBLE_OF = ("fhm_bv", "clearance", "min_clearance", "interference", "contact_force", "friction_force",
+               "net_force", "mean_pressure", "contact_fraction")
+
+#: ``sweep.nc`` of a DMW ensemble (:func:`pipeline.stages.sweep.ensemble_statistics`).
+ENSEMBLE = _group(
+    V("realisation", "1", "DMW realisation (0: the scene's own record)", dims=("realisation",), dtype="int32"),
+    V("dmw_seed", "1", "seed of the synthetic DMW record of the realisation", dims=("realisation",),
+      dtype="int64"),
+    *(V(n + "_mean", SCALARS[n].units, "ensemble mean of " + SCALARS[n].long_name, SCALARS[n].si_unit,
+        effect=SCALARS[n].effect) for n in ENSEMBLE_OF),
+    *(V(n + "_std", SCALARS[n].units, "ensemble standard deviation (ddof 1) of " + SCALARS[n].long_name,
+        SCALARS[n].si_unit, effect=SCALARS[n].effect) for n in ENSEMBLE_OF),
+    V("touchdown_probability", "1", "fraction of DMW realisations in contact in the steady window",
+      effect="contact"),
+)
+
 #: Groups by name.
 GROUPS: dict[str, dict[str, Variable]] = {
     "coordinates": COORDINATES, "scalars": SCALARS, "histories": HISTORIES, "roughness": ROUGHNESS,
     "dmw": DMW, "interface": INTERFACE, "calibration": CALIBRATION, "accuracy": ACCURACY,
+    "ensemble": ENSEMBLE,
 }
 
 #: The groups each dataset file (by stem) may hold, first match wins.
@@ -340,7 +364,7 @@ DATASETS: dict[str, tuple[str, ...]] = {
     "calibration": ("calibration",),
     "summary": ("coordinates", "scalars"),
     "histories": ("coordinates", "histories"),
-    "sweep": ("coordinates", "scalars"),
+    "sweep": ("coordinates", "scalars", "ensemble"),
     "sweep_histories": ("coordinates", "histories"),
     "sweep-part": ("coordinates", "scalars", "histories"),
     "accuracy": ("accuracy",),

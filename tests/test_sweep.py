@@ -189,7 +189,8 @@ def test_lost_worker_loses_no_results(calibrated, tmp_path):
             time.sleep(0.05)
         killed.append((worker, worker not in client.scheduler_info()["workers"]))
 
-    path = sweep_stage.run_sweep(small, run_dir, workers=2, on_batch=kill_one)
+    small = load_scene(PAPER, FAST + ["sweep.batch_size=1"])
+    path = sweep_stage.run_sweep(small, run_dir, scheduler="processes", workers=2, on_batch=kill_one)
     assert killed and killed[0][1], "the worker process was not lost"
     xr.testing.assert_identical(_values(reference), _values(path))
 

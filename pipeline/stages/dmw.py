@@ -64,7 +64,6 @@ import xarray as xr
 from ..io import read_dataset
 from ..runner import Inputs, Stage, build
 from ..variables import DMW, coordinate
-from ..physics import dmw as phys
 
 log = logging.getLogger(__name__)
 
@@ -130,6 +129,7 @@ def default_duration(sim_duration_s: float, slider: dict[str, Any], disk_speed_m
 
 def _measured(s: dict[str, Any]) -> tuple[np.ndarray, dict[str, Any]]:
     """Load, process, resample and cut a measured record; raise before anything is written."""
+    from ..physics import dmw as phys
     fs, (lo, hi), dur = s["sample_rate_hz"], s["band_hz"], s["duration_s"]
     rec = phys.load_record(s["source"], s["quantity"], s["column"], s["record_rate_hz"], min_duration_s=dur)
     where = f"{rec.path}: {rec.field}"
@@ -196,6 +196,8 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
     pipeline.physics.dmw.DMWError
         For an unusable measured record (nothing is written then).
     """
+    # (imported here: scipy.signal costs about a second, and the sweep's workers only :func:`load`)
+    from ..physics import dmw as phys
     s = settings(scene)
     fs, (lo, hi), dur = s["sample_rate_hz"], s["band_hz"], s["duration_s"]
     n = phys.n_samples(dur, fs)
@@ -279,3 +281,27 @@ def load(path: str | Path) -> tuple[np.ndarray, np.ndarray, float]:
     ds = read_dataset(path, stage="dmw", variables=("displacement", "time", "sample_rate"))
     return (np.asarray(ds["time"].values, dtype=float), np.asarray(ds["displacement"].values, dtype=float),
             float(ds["sample_rate"].values))
+
+
+def realisation_seeds(seed: int, n: int) -> list[int]:
+    """Seeds [1] of ``n`` DMW realisations (``[sweep] realisations``): the scene's own first.
+
+    Realisation 0 is the scene's record (``dmw.seed``), so one realisation is today's sweep; realisation
+    ``r >= 1`` is seeded from ``numpy.random.SeedSequence(seed).spawn(n - 1)[r - 1]`` (its first 32-bit
+    word), independent streams by construction. A child depends only on its index, so the first ``m``
+    realisations of ``n`` are those of ``m`` (ensembles nest).
+    """
+    if n < 1:
+        raise ValueError(f"realisations = {n}: expected an integer >= 1")
+    children = np.random.SeedSequence(seed).spawn(n - 1)
+    return [int(seed)] + [int(c.generate_state(1, np.uint32)[0]) for c in children]
+
+
+def realisation_record(scene: Any, folder: Path, seed: int, force: bool = False) -> Path:
+    """``folder/dmw.nc``: the scene's synthetic record with ``dmw.seed = seed`` (kept when up to date)."""
+    if scene["dmw"]["source"] != "synthetic":
+        where = str(scene.path) if getattr(scene, "path", None) else "<scene>"
+        raise ValueError(f"{where}: sweep.realisations > 1 needs dmw.source = \"synthetic\" (a measured record "
+                         f"has one realisation); got dmw.source = {scene['dmw']['source']!r}")
+    sub = scene.replace(dmw={"seed": int(seed)})
+    return run(sub, folder, force=force)

@@ -89,13 +89,23 @@ TOL = 1e-6
 
 FIGURES = ("fig3_clearance.png", "fig4_forces.png", "fig5_stresses.png", "fig6_fhm.png", "fig7_shear.png",
            "calibration.png", "roughness.png", "dmw.png")
+#: Drawn only for a sweep with several DMW realisations (``[sweep] realisations > 1``).
+ENSEMBLE_FIGURE = "ensemble.png"
 
 
 # ----------------------------------------------------------------------------------------- inputs
 def load_inputs(out: Path) -> dict[str, xr.Dataset | None]:
-    """The datasets of ``out`` (``sweep`` required; the others ``None`` when absent or unreadable)."""
+    """The datasets of ``out`` (``sweep`` required; the others ``None`` when absent or unreadable).
+
+    A sweep over DMW realisations is reported through its first realisation (the scene's own record);
+    the whole ensemble is ``"ensemble"`` (``None`` for a single realisation).
+    """
     ds: dict[str, xr.Dataset | None] = {"sweep": read_dataset(out / "sweep.nc", stage="sweep",
                                                               variables=("fhm_bv", "protrusion"))}
+    ds["ensemble"] = None
+    if "realisation" in ds["sweep"].dims:
+        ds["ensemble"] = ds["sweep"]
+        ds["sweep"] = ds["sweep"].isel(realisation=0)
     for name, stage in (("sweep_histories", "sweep"), ("calibration", "calibrate"), ("roughness", "roughness"),
                         ("dmw", "dmw"), ("interface", "interface")):
         path = out / f"{name}.nc"
@@ -349,6 +359,11 @@ def make_figures(data: dict[str, xr.Dataset | None], combos: list, scene: Any, n
         skipped["dmw.png"] = "dmw.nc is absent (`hdi dmw` not run)"
     else:
         made.append(plots.fig_dmw(data["dmw"], name, figdir / "dmw.png"))
+    if data.get("ensemble") is not None:
+        made.append(plots.fig_ensemble(data["ensemble"], name, figdir / ENSEMBLE_FIGURE, touchdown_nm=onset,
+                                       previous_nm=previous))
+    else:  # one realisation: no ensemble figure (and none left from an earlier run)
+        (figdir / ENSEMBLE_FIGURE).unlink(missing_ok=True)
     for f in skipped:  # never leave a figure of an earlier run next to the new ones
         (figdir / f).unlink(missing_ok=True)
     return made, skipped

@@ -16,21 +16,20 @@ are stored in the datasets: the batch-phase wall time goes to the run log, ``.hd
 copied to another batch's name, or made for other inputs, is recomputed. The interface tables in
 ``sweep.parts`` carry the same key.
 
-Scheduler: by default a ``distributed.LocalCluster`` with one single-threaded worker process per
-core and no dashboard; ``scheduler="ADDRESS"`` attaches to a running dask.distributed cluster;
-``scheduler="synchronous"`` runs the batches in this process (tests, debugging).
+Execution: :func:`pipeline.fanout.run_tasks` (by default a pool of one thread per core in this
+process, the kernels releasing the GIL; ``scheduler="ADDRESS"`` attaches to a running
+dask.distributed cluster; ``scheduler="synchronous"`` runs the batches one after the other).
 """
 
 from __future__ import annotations
 
 import contextlib
+import functools
 import json
 import logging
 import os
-import signal
 import sys
-import threading
-import time
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable
@@ -39,9 +38,10 @@ import numpy as np
 import xarray as xr
 
 from .. import slider as sl
+from ..fanout import run_tasks
 from ..io import read_dataset, write_dataset
-from ..runner import KEY_ATTR, Inputs, Stage, build
-from ..variables import HISTORIES, SCALARS, coordinate, history, scalar
+from ..runner import KEY_ATTR, Inputs, Stage, build, ensure
+from ..variables import ENSEMBLE, ENSEMBLE_OF, HISTORIES, SCALARS, coordinate, history, scalar
 from .interface import build_tables, roughness_statistics
 from .simulate import model_attrs, resolve_k, upstream
 from .sweep_grid import damping_grid, protrusion_grid, roughness_sets
@@ -60,20 +60,22 @@ class Batch:
     damping: float
     indices: tuple[int, ...]
     protrusions: tuple[float, ...]
+    realisation: int = 0
 
 
 def plan(scene: Any) -> tuple[np.ndarray, dict[str, dict], list[float], list[Batch]]:
-    """The grid and its batches (roughness-major, then damping, then protrusion)."""
+    """The grid and its batches (realisation-major, then roughness, then damping, then protrusion)."""
     prot = protrusion_grid(scene)
     sets = roughness_sets(scene)
     damp = damping_grid(scene)
     size = scene["sweep"]["batch_size"]
     batches = []
-    for label in sets:
-        for dz in damp:
-            for start in range(0, len(prot), size):
-                idx = tuple(range(start, min(start + size, len(prot))))
-                batches.append(Batch(len(batches), label, float(dz), idx, tuple(float(prot[i]) for i in idx)))
+    for r in range(scene["sweep"]["realisations"]):
+        for label in sets:
+            for dz in damp:
+                for start in range(0, len(prot), size):
+                    idx = tuple(range(start, min(start + size, len(prot))))
+                    batches.append(Batch(len(batches), label, float(dz), idx, tuple(float(prot[i]) for i in idx), r))
     return prot, sets, damp, batches
 
 
@@ -107,15 +109,38 @@ def part_problem(path: Path, key: str, batch: Batch) -> str | None:
     return None
 
 
+def _file_id(path: str | None) -> tuple | None:
+    if path is None:
+        return None
+    st = os.stat(path)
+    return (path, st.st_mtime_ns, st.st_size)
+
+
+@functools.lru_cache(maxsize=8)
+def _read_inputs(interface_id: tuple | None, dmw_id: tuple | None) -> tuple[xr.Dataset | None, tuple | None]:
+    from .dmw import load as load_dmw
+    interface = read_dataset(interface_id[0], stage="interface") if interface_id else None
+    record = None
+    if dmw_id:
+        _, w_nm, fs = load_dmw(dmw_id[0])
+        w_nm.setflags(write=False)  # shared by the batches of this process: read-only
+        record = (w_nm, fs)
+    return interface, record
+
+
+def batch_inputs(interface_path: str | None, dmw_path: str | None) -> tuple[xr.Dataset | None, tuple | None]:
+    """Interface tables and DMW record of a batch, read once per process (and file version).
+
+    The batches of a threaded sweep share the process, so they share one copy instead of reading
+    both files per batch (NetCDF reads are serialised, see :data:`pipeline.io.NETCDF_LOCK`).
+    """
+    return _read_inputs(_file_id(interface_path), _file_id(dmw_path))
+
+
 def run_batch(scene: Any, batch: Batch, interface_path: str | None, dmw_path: str | None, k: float | None,
               part_path: str, key: str, history_nm: tuple[float, ...]) -> str:
     """Run one batch and write its part file (executed on a worker). Returns the part's path."""
-    from .dmw import load as load_dmw
-    interface = read_dataset(interface_path, stage="interface") if interface_path else None
-    record = None
-    if dmw_path:
-        _, w_nm, fs = load_dmw(dmw_path)
-        record = (w_nm, fs)
+    interface, record = batch_inputs(interface_path, dmw_path)
     model = sl.build_model(scene, interface, record, k, damping_ratio=batch.damping)
     rows, hist_rows = [], []
     for delta in batch.protrusions:
@@ -136,7 +161,7 @@ def run_batch(scene: Any, batch: Batch, interface_path: str | None, dmw_path: st
                                           ("hist_protrusion", "time"))
         ds = ds.assign_coords(coords_h)
     ds.attrs.update({KEY_ATTR: key, "roughness_label": batch.label, "damping_ratio": batch.damping,
-                     "batch": batch.index})
+                     "batch": batch.index, "realisation": batch.realisation})
     write_dataset(ds, part_path, scene, stage="sweep-part")
     return part_path
 
@@ -150,62 +175,14 @@ def _progress(total: int, initial: int):
     return tqdm(total=total, initial=initial, unit="batch", desc="sweep", file=sys.stderr)
 
 
-def _client(scheduler: str | None, workers: int | None):
-    from distributed import Client, LocalCluster
-    if scheduler:
-        return Client(scheduler), None
-    n = workers or os.cpu_count() or 1
-    # The worker processes inherit an ignored SIGINT: Ctrl-C reaches the whole process group, and only
-    # this process should answer it (one line from the CLI, not a traceback per worker).
-    main = threading.current_thread() is threading.main_thread()
-    previous = signal.signal(signal.SIGINT, signal.SIG_IGN) if main else None
-    try:
-        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
-                               silence_logs=logging.CRITICAL)  # shutdown races log CommClosedError
-    finally:
-        if previous is not None:
-            signal.signal(signal.SIGINT, previous)
-    return Client(cluster), cluster
-
-
-def _warm_worker() -> None:
-    """Import the model on a worker (and load its numba cache index) before timing starts."""
-    from .. import slider  # noqa: F401
-
-
-def execute(tasks: list[tuple], scheduler: str | None, workers: int | None,
-            on_done: Callable[[str], None]) -> float:
-    """Run ``run_batch(*args)`` for every task; call ``on_done(path)`` as each finishes.
-
-    Returns the wall time [s] of the batch phase alone (workers started and warmed before it).
-    """
-    if scheduler == "synchronous" or not tasks:
-        t0 = time.perf_counter()
-        for args in tasks:
-            on_done(run_batch(*args))
-        return time.perf_counter() - t0
-    from distributed import as_completed
-    client, cluster = _client(scheduler, workers)
-    try:
-        client.run(_warm_worker)
-        t0 = time.perf_counter()
-        futures = [client.submit(run_batch, *args, pure=False, retries=2) for args in tasks]
-        for fut in as_completed(futures):
-            on_done(fut.result())
-        return time.perf_counter() - t0
-    finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
-
-
 def prepare_inputs(scene: Any, out: Path, sets: dict[str, dict], key: str,
                    force: bool = False) -> tuple[dict[str, str | None], str | None]:
     """Interface tables per roughness set and the DMW record, as files the workers read.
 
     A table in ``sweep.parts`` is kept only when it carries the sweep's inputs ``key`` (which covers
     every set's statistics and AFM bytes); an AFM set's ``roughness.nc`` is made current by the runner
-    in ``sweep.parts/roughness-<label>`` (the scene's own set: ``roughness.nc`` of ``out``).
+    in ``sweep.parts/roughness-<label>``. The scene's own set uses the interface stage's ``interface.nc``
+    (made once, not per sweep). The records of realisations beyond the first: :func:`realisation_inputs`.
     """
     parts = out / PARTS
     parts.mkdir(parents=True, exist_ok=True)
@@ -214,19 +191,42 @@ def prepare_inputs(scene: Any, out: Path, sets: dict[str, dict], key: str,
         if not scene.effects & {"contact", "adhesion"}:
             interface_paths[label] = None
             continue
+        if table == dict(scene["roughness"]):
+            # the scene's own roughness: its tables are the interface stage's (made once, not per sweep)
+            interface_paths[label] = str(ensure("interface", scene, out))
+            continue
         sub = scene.replace(roughness={k: v for k, v in table.items()})
         path = parts / f"interface-{label}.nc"
         current = False
         with contextlib.suppress(OSError, ValueError), xr.open_dataset(path, engine="netcdf4") as old:
             current = old.attrs.get(KEY_ATTR) == key
         if force or not current:
-            # the scene's own roughness is the roughness stage's (same key): made once, in ``out``
-            folder = out if table == dict(scene["roughness"]) else parts / f"roughness-{label}"
-            stats = roughness_statistics(sub, folder if table.get("afm") else None)
+            stats = roughness_statistics(sub, parts / f"roughness-{label}" if table.get("afm") else None)
             write_dataset(build_tables(sub, stats), path, sub, stage="interface", extra_attrs={KEY_ATTR: key})
         interface_paths[label] = str(path)
     dmw_path = str(out / "dmw.nc") if scene.has("dmw") else None
     return interface_paths, dmw_path
+
+
+def realisation_inputs(scene: Any, out: Path, dmw_path: str | None, force: bool = False) -> tuple[list[str | None], list[int]]:
+    """DMW record paths and seeds of the ``[sweep] realisations`` (realisation 0: the scene's ``dmw.nc``).
+
+    Records of realisations ``r >= 1`` are written once into ``sweep.parts/dmw-<r>/dmw.nc``
+    (:func:`pipeline.stages.dmw.realisation_seeds`); workers read them by path.
+    """
+    from .dmw import realisation_record, realisation_seeds
+    n = scene["sweep"]["realisations"]
+    if n == 1:
+        return [dmw_path], [scene["dmw"]["seed"]]
+    if dmw_path is None:
+        where = str(scene.path) if scene.path else "<scene>"
+        raise ValueError(f"{where}: sweep.realisations = {n} needs the dmw effect in scene.effects "
+                         "(the realisations are DMW records)")
+    seeds = realisation_seeds(scene["dmw"]["seed"], n)
+    paths: list[str | None] = [dmw_path]
+    for r in range(1, n):
+        paths.append(str(realisation_record(scene, out / PARTS / f"dmw-{r:05d}", seeds[r], force)))
+    return paths, seeds
 
 
 def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset | None]:
@@ -240,6 +240,7 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset | None]:
     prot, sets, damp, batches = plan(scene)
     k, k_source = resolve_k(scene, out)
     interface_paths, dmw_path = prepare_inputs(scene, out, sets, key, bool(opts.get("force")))
+    dmw_paths, seeds = realisation_inputs(scene, out, dmw_path, bool(opts.get("force")))
     parts = out / PARTS
     hist_nm = tuple(scene["sweep"]["histories_nm"] or scene["report"]["histories_nm"])
     todo = []
@@ -250,8 +251,9 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset | None]:
                 log.info("sweep: batch %d: part %s: recomputed", b.index, why)
             todo.append(b)
     log.info("sweep: %d batches, %d to run", len(batches), len(todo))
-    tasks = [(scene, b, interface_paths[b.label], dmw_path, k, str(_part_path(parts, b)), key, hist_nm)
-             for b in todo]
+    # time histories of the first realisation only (the scene's own record)
+    tasks = [(scene, b, interface_paths[b.label], dmw_paths[b.realisation], k, str(_part_path(parts, b)), key,
+              hist_nm if b.realisation == 0 else ()) for b in todo]
     bar = _progress(len(batches), len(batches) - len(todo))
     done = [0]
     stop_after, on_batch = opts.get("stop_after"), opts.get("on_batch")
@@ -266,16 +268,17 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset | None]:
             raise KeyboardInterrupt(f"stopped after {done[0]} batches (stop_after)")
 
     try:
-        batch_seconds = execute(tasks, opts.get("scheduler"), opts.get("workers"), on_done)
+        batch_seconds = run_tasks(run_batch, tasks, scheduler=opts.get("scheduler"), workers=opts.get("workers"),
+                                  on_done=on_done)
     finally:
         if bar is not None:
             bar.close()
     log.info("sweep: batch phase %.2f s for %d batches", batch_seconds, len(todo))
     inputs.record(compute_seconds=round(batch_seconds, 3), batches_run=len(todo), batches=len(batches))
     first = interface_paths[next(iter(sets))]
-    model = sl.build_model(scene, read_dataset(first) if first else None, _dmw_tuple(dmw_path), k)
+    model = sl.build_model(scene, *batch_inputs(first, dmw_path), k)
     attrs = model_attrs(model, k_source)
-    return assemble(scene, out, prot, list(sets), damp, batches, key, k_source, attrs)
+    return assemble(scene, out, prot, list(sets), damp, batches, key, k_source, attrs, seeds)
 
 
 def run_sweep(scene: Any, out: Path, scheduler: str | None = None, workers: int | None = None,
@@ -286,17 +289,12 @@ def run_sweep(scene: Any, out: Path, scheduler: str | None = None, workers: int 
                  stop_after=stop_after, on_batch=on_batch)["sweep"][0]
 
 
-def _dmw_tuple(path: str | None):
-    if path is None:
-        return None
-    from .dmw import load as load_dmw
-    _, w, fs = load_dmw(path)
-    return (w, fs)
-
-
 def assemble(scene: Any, out: Path, prot: np.ndarray, labels: list[str], damp: list[float], batches: list[Batch],
-             key: str, k_source: str, attrs: dict) -> dict[str, xr.Dataset | None]:
+             key: str, k_source: str, attrs: dict, seeds: list[int] | None = None) -> dict[str, xr.Dataset | None]:
     """``sweep.nc`` (and ``sweep_histories.nc``) filled from the part files, one part at a time.
+
+    With more than one realisation the scalars gain a last dimension ``realisation`` and the
+    ensemble statistics of :func:`ensemble_statistics` are added.
 
     Raises
     ------
@@ -304,7 +302,8 @@ def assemble(scene: Any, out: Path, prot: np.ndarray, labels: list[str], damp: l
         When a part is missing or is not the part of its batch (:func:`part_problem`).
     """
     parts = out / PARTS
-    shape = (len(prot), len(labels), len(damp))
+    n_real = len(seeds) if seeds else 1
+    shape = (len(prot), len(labels), len(damp)) + ((n_real,) if n_real > 1 else ())
     arrays: dict[str, np.ndarray] = {}
     hist: dict[str, np.ndarray] = {}
     hist_prot: np.ndarray | None = None
@@ -321,7 +320,10 @@ def assemble(scene: Any, out: Path, prot: np.ndarray, labels: list[str], damp: l
                 continue
             if name not in arrays:  # NaN: not computed (regime: its declared _FillValue on disk)
                 arrays[name] = np.full(shape, np.nan)
-            arrays[name][list(b.indices), r, d] = ds[name].values
+            if n_real > 1:
+                arrays[name][list(b.indices), r, d, b.realisation] = ds[name].values
+            else:
+                arrays[name][list(b.indices), r, d] = ds[name].values
         if "hist_protrusion" in ds.coords:
             if hist_prot is None:
                 hist_prot = np.array([h for h in scene["sweep"]["histories_nm"] or scene["report"]["histories_nm"]
@@ -337,8 +339,12 @@ def assemble(scene: Any, out: Path, prot: np.ndarray, labels: list[str], damp: l
                         hist[base][j, r, d] = ds[name].values[i]
     coords = {"protrusion": coordinate("protrusion", prot), "roughness": coordinate("roughness", labels),
               "damping": coordinate("damping", damp)}
-    dims = ("protrusion", "roughness", "damping")
+    dims = ("protrusion", "roughness", "damping") + (("realisation",) if n_real > 1 else ())
     data = {name: SCALARS[name].data(a, dims) for name, a in arrays.items()}
+    if n_real > 1:
+        coords["realisation"] = ENSEMBLE["realisation"].data(np.arange(n_real), ("realisation",))
+        data["dmw_seed"] = ENSEMBLE["dmw_seed"].data(np.array(seeds), ("realisation",))
+        data.update(ensemble_statistics(data))
     ds = xr.Dataset(data, coords=coords)
     sets = roughness_sets(scene)
     for label in labels:
@@ -347,7 +353,7 @@ def assemble(scene: Any, out: Path, prot: np.ndarray, labels: list[str], damp: l
     ds.attrs["k_source"] = k_source
     hds = None
     if hist:
-        hc = dict(coords)
+        hc = {name: c for name, c in coords.items() if name != "realisation"}  # (realisation 0 only)
         hc["protrusion"] = coordinate("protrusion", hist_prot)
         hc["time"] = coordinate("time", time)
         hds = xr.Dataset({name: HISTORIES[name].data(a, ("protrusion", "roughness", "damping", "time"))
@@ -356,15 +362,38 @@ def assemble(scene: Any, out: Path, prot: np.ndarray, labels: list[str], damp: l
     return {"sweep.nc": ds, "sweep_histories.nc": hds}
 
 
+def ensemble_statistics(data: dict[str, xr.Variable]) -> dict[str, xr.Variable]:
+    """Mean, standard deviation and touchdown probability over the ``realisation`` dimension.
+
+    ``<name>_mean``/``<name>_std`` [units of name]: mean and sample standard deviation (ddof = 1) over
+    the realisations with a value (``interference`` and the stresses are NaN while flying);
+    ``touchdown_probability`` [1]: fraction of realisations in contact at some time of the steady
+    window (regime not flying), versus protrusion, roughness and damping.
+    """
+    out: dict[str, xr.Variable] = {}
+    for name in ENSEMBLE_OF:
+        if name not in data:
+            continue
+        v = data[name]
+        a = np.asarray(v.values, dtype=float)
+        with warnings.catch_warnings():  # all-NaN slices (never in contact) give NaN, as documented
+            warnings.simplefilter("ignore", RuntimeWarning)
+            mean = np.nanmean(a, axis=-1)
+            std = np.nanstd(a, axis=-1, ddof=1)
+        dims = v.dims[:-1]
+        out[name + "_mean"] = ENSEMBLE[name + "_mean"].data(mean, dims)
+        out[name + "_std"] = ENSEMBLE[name + "_std"].data(std, dims)
+    if "regime" in data:
+        reg = np.asarray(data["regime"].values)
+        p = np.mean(reg != sl.FLYING, axis=-1)
+        out["touchdown_probability"] = ENSEMBLE["touchdown_probability"].data(p, data["regime"].dims[:-1])
+    return out
+
+
 def _files(scene: Any) -> dict[str, str]:
     """The AFM scans of every roughness set (their bytes are inputs of the sweep)."""
     return {f"sweep.roughness[{label}].afm[{i}]": f
             for label, table in roughness_sets(scene).items() for i, f in enumerate(table.get("afm") or [])}
-
-
-def _upstream(scene: Any) -> tuple[str, ...]:
-    # the sweep builds its own interface tables per roughness set (sweep.parts), so not "interface"
-    return tuple(u for u in upstream(scene) if u != "interface")
 
 
 STAGE = Stage(
@@ -372,7 +401,7 @@ STAGE = Stage(
     reads=("*", "report.histories_nm"),
     # (the batch size changes how the work is cut, not the result: parts of another cut are rejected)
     excludes=("tfc.protrusion_nm", "report", "scene.name", "scene.description", "sweep.batch_size"),
-    files=_files, upstream=_upstream, order=50, main_job=True,
+    files=_files, upstream=upstream, order=50, main_job=True,
     doc="protrusion x roughness x damping on dask, sweep.nc and sweep_histories.nc")
 
 

@@ -1,0 +1,63 @@
+"""Calibration benchmarks (issue 12): the exact method's kernel time on the paper scene, against bisection.
+
+Rows: (1) the exact k*(protrusion) over the paper grid (76 protrusions plus the two touchdown
+protrusions: two flying runs each, bisection only where the transient dips lower), in process, after
+compilation: target < 1 s; (2) the bisection method for the two touchdown protrusions alone (what the
+exact method replaces), same run, as the baseline of the speed-up; (3) `hdi calibrate` as a fresh
+process, whole command.
+"""
+
+from __future__ import annotations
+
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from benchmarks.common import record, timeit
+from pipeline import slider as sl
+from pipeline.scene import load_scene
+from pipeline.stages import calibrate as cal
+from pipeline.stages.simulate import model_inputs
+from pipeline.stages.sweep_grid import protrusion_grid
+
+ROOT = Path(__file__).resolve().parents[1]
+PAPER = ROOT / "configs" / "paper-2009.toml"
+
+
+def run(results: list[dict]) -> None:
+    scene = load_scene(PAPER)
+    td = scene["touchdown"]
+    k_range, tol = tuple(td["k_range"]), td["k_tolerance"]
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp)
+        interface, rec = model_inputs(scene, out)
+        model = sl.build_model(scene, interface, rec, k=0.0)
+        todo = np.union1d(protrusion_grid(scene), [td["onset_nm"], td["previous_nm"]])
+
+        def exact() -> None:
+            for p in todo:
+                lo, lo_all, _ = cal.flying_minimum(model, float(p))
+                cal.k_star(model, float(p), lo, lo_all, k_range, tol)
+
+        def bisection() -> None:
+            for p in (td["onset_nm"], td["previous_nm"]):
+                cal.k_threshold(model, p, k_range, tol)
+
+        t_exact = timeit(exact, repeat=5)
+        t_bis = timeit(bisection, repeat=3)
+        record(results, f"calibration, exact k* at {todo.size} protrusions (kernel, in process)", t_exact,
+               target_s=1.0)
+        record(results, "calibration, bisection k* at the 2 touchdown protrusions only (kernel, in process)", t_bis,
+               exact_whole_curve_over_bisection_two_points=statistics.median(t_exact) / statistics.median(t_bis))
+        times = []
+        for _ in range(3):
+            t0 = time.perf_counter()
+            subprocess.run([sys.executable, "-m", "pipeline.cli", "calibrate", str(PAPER), "--out", str(out),
+                            "--force"], cwd=ROOT, check=True, stdout=subprocess.DEVNULL)
+            times.append(time.perf_counter() - t0)
+        record(results, "hdi calibrate --force, paper scene, whole command (fresh process)", times)

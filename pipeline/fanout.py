@@ -1,0 +1,136 @@
+"""Fan a list of tasks out over the local machine or a dask.distributed cluster.
+
+:func:`run_tasks` calls ``fn(*args)`` for every ``args`` of ``tasks`` and hands each result to
+``on_done`` in the calling thread as soon as it is ready (in completion order). Where the tasks run:
+
+* ``scheduler=None`` (the local default): in this process, one after the other, when there is a
+  single task or a single worker (``workers=1``, or a one-core machine); otherwise on a pool of
+  ``workers`` threads (default: one per core) in this process. The numba kernels of
+  :mod:`pipeline.dynamics` release the GIL (``nogil=True``), so threads run them in parallel and the
+  job pays no start-up: no worker processes to spawn, no modules to import again, no numba cache
+  to reload, no task graph to serialise. The Python around the kernels (histories, summaries,
+  NetCDF I/O, which xarray serialises with its HDF5 lock) is the part that does not scale.
+  Measured on 2 cores (benchmarks/bench_fanout.py): see the README's benchmark table.
+* ``scheduler="threads"`` / ``"processes"``: force the thread pool / a ``distributed.LocalCluster``
+  of ``workers`` single-threaded worker processes (the process cluster isolates tasks that hold
+  the GIL, at a start-up cost of about a second per job).
+* ``scheduler="synchronous"``: in this process, one after the other (tests, debugging, profiling).
+* any other string: the address of a running dask.distributed scheduler (e.g. one started by
+  dask-jobqueue), which is how a study outgrows one machine. Tasks are retried twice on a lost worker.
+
+Tasks must be deterministic functions of their arguments and safe to run twice (retries); large
+inputs travel by file path inside ``args``, not as arrays.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import signal
+import threading
+import time
+from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
+from typing import Any, Callable, Iterable
+
+log = logging.getLogger(__name__)
+
+LOCAL = ("synchronous", "threads", "processes")
+
+
+def local_workers(workers: int | None, n_tasks: int) -> int:
+    """Workers a local run uses: ``workers`` (default one per core), never more than the tasks."""
+    n = workers if workers else (os.cpu_count() or 1)
+    if n < 1:
+        raise ValueError(f"workers = {n}: expected an integer >= 1")
+    return max(1, min(n, n_tasks))
+
+
+def run_tasks(fn: Callable[..., Any], tasks: Iterable[tuple], *, scheduler: str | None = None,
+              workers: int | None = None, on_done: Callable[[Any], None] | None = None) -> float:
+    """Run ``fn(*args)`` for every ``args`` in ``tasks``; call ``on_done(result)`` as each finishes.
+
+    Parameters
+    ----------
+    fn : a picklable (module-level) function
+    tasks : argument tuples, one per task
+    scheduler : ``None`` (local default, see the module docstring), ``"synchronous"``, ``"threads"``,
+        ``"processes"`` or a dask.distributed scheduler address
+    workers : local workers (default: one per core); ignored for a scheduler address
+    on_done : called with each result in the calling thread; an exception it raises (e.g.
+        ``KeyboardInterrupt``) cancels the tasks not yet started and is re-raised once the running
+        ones have finished (each task's own output is then complete, never half-written)
+
+    Returns
+    -------
+    float
+        Wall time [s] of the batch phase: from the first task submitted to the last result handed
+        to ``on_done`` (a process cluster is started and warmed up before it).
+    """
+    tasks = list(tasks)
+    done = on_done if on_done is not None else (lambda result: None)
+    if scheduler is None:
+        n = local_workers(workers, len(tasks))
+        scheduler = "synchronous" if n == 1 else "threads"
+    if scheduler == "synchronous" or not tasks:
+        t0 = time.perf_counter()
+        for args in tasks:
+            done(fn(*args))
+        return time.perf_counter() - t0
+    if scheduler == "threads":
+        return _threads(fn, tasks, local_workers(workers, len(tasks)), done)
+    return _distributed(fn, tasks, scheduler, workers, done)
+
+
+def _threads(fn: Callable[..., Any], tasks: list[tuple], n: int, done: Callable[[Any], None]) -> float:
+    """A pool of ``n`` threads in this process; results in completion order."""
+    log.info("fan-out: %d tasks on %d threads", len(tasks), n)
+    pool = ThreadPoolExecutor(max_workers=n, thread_name_prefix="hdi-task")
+    try:
+        t0 = time.perf_counter()
+        pending = {pool.submit(fn, *args) for args in tasks}
+        while pending:
+            finished, pending = wait(pending, return_when=FIRST_COMPLETED)
+            for fut in finished:
+                done(fut.result())
+        return time.perf_counter() - t0
+    finally:
+        # on an error (or Ctrl-C) drop what has not started; the running tasks finish their output
+        pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _warm_worker() -> None:
+    """Import the model on a worker (and load its numba cache index) before timing starts."""
+    from . import slider  # noqa: F401 (imported for its side effect)
+
+
+def _distributed(fn: Callable[..., Any], tasks: list[tuple], scheduler: str, workers: int | None,
+                 done: Callable[[Any], None]) -> float:
+    """A local process cluster (``scheduler="processes"``) or the cluster at a scheduler address."""
+    from distributed import Client, LocalCluster, as_completed
+    cluster = None
+    if scheduler == "processes":
+        n = local_workers(workers, len(tasks))
+        # The worker processes inherit an ignored SIGINT: Ctrl-C reaches the whole process group, and only
+        # this process should answer it (one line from the CLI, not a traceback per worker).
+        main = threading.current_thread() is threading.main_thread()
+        previous = signal.signal(signal.SIGINT, signal.SIG_IGN) if main else None
+        try:
+            cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
+                                   silence_logs=logging.CRITICAL)  # shutdown races log CommClosedError
+        finally:
+            if previous is not None:
+                signal.signal(signal.SIGINT, previous)
+        client = Client(cluster)
+    else:
+        client = Client(scheduler)
+    try:
+        client.run(_warm_worker)
+        t0 = time.perf_counter()
+        futures = [client.submit(fn, *args, pure=False, retries=2) for args in tasks]
+        for fut in as_completed(futures):
+            done(fut.result())
+        return time.perf_counter() - t0
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
