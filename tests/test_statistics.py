@@ -113,3 +113,17 @@ def test_explicit_hardness_overrides_plasticity_index(paper_config):
     scene = load_scene(paper_config, ["materials.hardness_gpa=3.0", "materials.composite_modulus_gpa=120"])
     p = interface_parameters(scene, roughness_statistics(scene))
     assert p.H == 3.0e9 and p.E == 120e9
+
+
+def test_contact_probabilities_are_two_sided_first():
+    # SPEC.md 7.1: the paper's "3 sigma = 0.3 %" is 2 Q(3) = 0.27 %; its 32.8 % is k = 0.978
+    two, one = st.contact_probabilities(3.0)
+    assert two == pytest.approx(0.0026998, rel=1e-4) and one == pytest.approx(0.0013499, rel=1e-4)
+    assert st.k_from_probability(0.328) == pytest.approx(0.978, abs=5e-4)
+    assert st.contact_probabilities(0.978)[0] == pytest.approx(0.328, abs=2e-4)
+    # the inverse round-trips and is symmetric in k
+    for k in (0.1, 0.978, 2.5):
+        assert st.k_from_probability(st.contact_probabilities(k)[0]) == pytest.approx(k, rel=1e-12)
+        assert st.contact_probabilities(-k)[0] == st.contact_probabilities(k)[0]
+    with pytest.raises(ValueError, match=r"\(0, 1\)"):
+        st.k_from_probability(1.0)
