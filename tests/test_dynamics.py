@@ -272,7 +272,7 @@ def rigid_following_separation(run):
     w_f, w_r, w_c = disk(dyn.P_OFF_F), disk(dyn.P_OFF_R), disk(dyn.P_OFF_C)
     theta = (w_f - w_r) / (s.l_f + s.l_r)
     z = w_r + s.l_r * theta
-    return p[dyn.P_FH0] - run.protrusion + z - s.l_c * theta - w_c
+    return p[dyn.P_FH0] - run.protrusion + z - s.l_c * theta - w_c - p[dyn.P_YS]
 
 
 def test_fhm_falls_to_the_rigid_following_limit_as_the_bearing_stiffens():
