@@ -5,6 +5,14 @@ record into the arrays the numba kernel of :mod:`pipeline.dynamics` takes; :func
 integrates one protrusion; :func:`histories` and :func:`summarize` turn a run into the paper's
 time series (Figs 3-5) and the steady-window scalars of the sweep.
 
+The separation ``d`` is measured to the mean of summit heights, ``y_s`` above the mean of surface
+heights to which ``FH0`` is measured (SPEC.md 7.2; one home: :func:`pipeline.dynamics.separation_at`).
+Named model variants (scene keys, one registry each): ``air_bearing.stiffness_root``
+(:data:`pipeline.physics.air_bearing.STIFFNESS_ROOTS`), ``air_bearing.rear_law`` (``REAR_LAWS``),
+``air_bearing.tfc_stiffening`` (``TFC_STIFFENING``), ``contact.friction_law``
+(:data:`pipeline.physics.friction.FRICTION_LAWS`) and ``solver.fhm_measure``
+(:data:`pipeline.physics.fhm.FHM_MEASURES`).
+
 Steady-window definitions (over ``transient_ms <= t <= duration_ms``, sampled every
 ``output_step_ns``):
 

@@ -119,10 +119,10 @@ def test_explicit_statistics_use_mccool(tmp_path: Path) -> None:
     ds = _open(rg.run(scene, tmp_path))
     assert list(ds["surface"].values) == ["explicit", "combined"]
     sp = ds.sel({"surface": "combined", "method": "spectral"})
-    sigma, eta, R = 0.52, 10e-6, 5000.0  # nm, nm^-2, nm (the paper scene's defaults)
+    sigma, eta, R = 0.52, 13.3e-6, 5000.0  # nm, nm^-2, nm (the paper scene's defaults, SPEC.md 7.2)
     assert float(sp["sigma"]) == pytest.approx(sigma)
     assert float(sp["summit_radius"]) == pytest.approx(5.0)
-    assert float(sp["summit_density"]) == pytest.approx(10.0)
+    assert float(sp["summit_density"]) == pytest.approx(13.3)
     assert float(sp["bandwidth_alpha"]) == pytest.approx(st.bandwidth_alpha(sigma, eta, R), rel=1e-5)
     assert float(sp["sigma_s"]) == pytest.approx(st.summit_sigma(sigma, eta, R), rel=1e-5)
     assert float(sp["y_s"]) == pytest.approx(st.summit_offset(sigma, eta, R), rel=1e-5)
