@@ -8,12 +8,18 @@ Equations of motion (SPEC.md section 4), states ``y = (z, theta, z', theta')`` i
 * front pad (``l_f`` ahead of the CG), linear:   ``F_f = -k_f (z + l_f theta - w_f) - c_f (...)'``
 * rear pad (``l_r`` behind), nonlinear [recon]:  ``F_r = F_r0 [(g0/g_r)^n - 1] - c_r g_r'``,
   ``g_r = g0 + z - l_r theta - w_r``
-* interface at the TFC point (``l_c`` behind), separation ``d = FH0 - delta + z - l_c theta - w_c``:
+* interface at the TFC point (``l_c`` behind), gap ``g = FH0 - delta + z - l_c theta - w_c`` to the mean
+  of surface heights and ISBL separation ``d = g - y_s`` to the mean of summit heights (SPEC.md 7.2):
   ``F_i = -A_n p_a(d)`` always (adhesion effect), plus ``A_n p_c(d) - c_c d'`` while in contact
   (``d < k sigma``, the paper's criterion)
 * friction ``Q = A_n tau(d)`` in contact, along the disk's motion (leading to trailing edge) at the
   air-bearing surface; its moment about the CG is ``-h_cg Q`` (it pitches the leading edge down).
 * the disk under each point moves with the DMW ``w(t)`` delayed by the disk's travel time.
+* optional, named model variants (SPEC.md 7.4, 4): the rear law ``F_r = k_r (g0 - g_r)`` (``rear_linear``
+  not ``None``) instead of the power law; a stiffening spring at the TFC point, force
+  ``F_t = k_t [G(g_n) - G(g)]``, ``G(s) = g0^p s^(1-p) / (1-p) - s`` (``g0 ln s - s`` for ``p = 1``),
+  whose stiffness is ``-dF_t/dg = k_t [(g0/g)^p - 1]`` (``tfc_stiff`` not ``None``;
+  :func:`pipeline.physics.air_bearing.tfc_stiffening_force`).
 
 Effects are selected by passing ``None`` for a disabled effect's data: numba compiles one
 specialised kernel per combination and prunes the dead branches at compile time (branch pruning of
@@ -28,6 +34,13 @@ extremum of ``g`` when ``g'`` changes sign, so a grazing contact shorter than a 
 is located by bisection on the cubic Hermite interpolant of the step, the step is redone exactly up to the switch, and
 integration restarts in the new mode (no FSAL reuse across the switch). Outputs are sampled on a
 uniform grid with the same Hermite interpolant.
+
+Interior extrema of ``d`` in a step (the event search and the exact steady-window extremes) are those
+of ``d(t) = const + s(t) - w(t)``: ``s = z - l_c theta`` on the state's Hermite cubic and ``w`` the DMW
+spline. Between two DMW knots both are cubics, so the step is split at the knots it contains and each
+piece's extrema come in closed form: exact for DMW content up to the Nyquist frequency, where a
+500-ns step spans several 250-ns knots (one cubic through the step's ends would miss the peaks in
+between).
 
 Chattering. Where the contact force at the threshold exceeds the pull into contact (a large
 ``p_c(k sigma)``, e.g. a negative k), the exact solution slides along ``d = k sigma`` (a Filippov
@@ -46,8 +59,8 @@ from numba import njit
 # Layout of the parameter vector ``p`` (all SI).
 (P_M, P_I, P_LF, P_LR, P_LC, P_HCG, P_KF, P_KR, P_CF, P_CR, P_G0, P_N, P_FR0, P_FH0, P_DELTA, P_AN,
  P_KSIG, P_CC, P_OFF_F, P_OFF_R, P_OFF_C, P_DMW_T0, P_DMW_DT, P_TAB_X0, P_TAB_H, P_DWELL,
- P_TWIN, P_HSTIFF, P_TAB_N) = range(29)
-N_PARAMS = 29
+ P_TWIN, P_HSTIFF, P_TAB_N, P_YS, P_TK, P_TP, P_TG0, P_TF0, P_TGMIN, P_TKMIN) = range(36)
+N_PARAMS = 36
 
 # Status codes returned by :func:`integrate`.
 OK, MAX_STEPS, STEP_UNDERFLOW, NOT_FINITE = 0, 1, 2, 3
@@ -187,33 +200,81 @@ def _disk3(p, dmw, t):
             ((r[8] * s + r[9]) * s + r[10]) * s + r[11], (3.0 * r[8] * s + 2.0 * r[9]) * s + r[10])
 
 
+@njit(cache=True, nogil=True, error_model="numpy")
+def gap_at(p, z, theta, w):
+    """Gap [m] at the TFC point to the mean of the disk's surface heights, ``FH0 - delta + z - l_c theta - w``.
+
+    ``FH0`` is measured to the mean of surface heights (SPEC.md 7.2); scalars or arrays of ``z`` [m],
+    ``theta`` [rad], ``w`` [m] alike (the one home of the datum, for the kernel and post-processing).
+    """
+    return p[P_FH0] - p[P_DELTA] + z - p[P_LC] * theta - w
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def separation_at(p, z, theta, w):
+    """ISBL separation ``d`` [m] to the mean of summit heights: :func:`gap_at` minus ``y_s = p[P_YS]``.
+
+    ``d = FH0 - delta + z - l_c theta - w - y_s`` (SPEC.md 7.2; the ISBL tables are functions of this d).
+    """
+    return gap_at(p, z, theta, w) - p[P_YS]
+
+
 @njit(cache=True, nogil=True, inline="always", error_model="numpy")
 def separation(p, dmw, t, y):
-    """TFC separation ``d`` [m] and its rate [m/s] (SPEC.md 4)."""
+    """TFC separation ``d`` [m] and its rate [m/s] (SPEC.md 4, 7.2)."""
     wc, vc = _disk(p, dmw, t)
     return _separation(p, y, wc, vc)
 
 
 @njit(cache=True, nogil=True, inline="always", error_model="numpy")
 def _separation(p, y, wc, vc):
-    return (p[P_FH0] - p[P_DELTA] + y[0] - p[P_LC] * y[1] - wc,
-            y[2] - p[P_LC] * y[3] - vc)
+    return separation_at(p, y[0], y[1], wc), y[2] - p[P_LC] * y[3] - vc
+
+
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
+def _stiffening(p, g):
+    """Force [N] (up positive) and stiffness [N/m] of the TFC stiffening spring at the gap ``g`` [m].
+
+    ``k(g) = k_t [(g0/g)^p - 1]``, force its integral from the nominal gap (constant ``P_TF0`` =
+    ``G(g_n)``), continued linearly below ``P_TGMIN`` where the law is singular.
+    """
+    gm = p[P_TGMIN]
+    gg = max(g, gm)
+    q = p[P_TP]
+    if q == 1.0:
+        G = p[P_TG0] * np.log(gg) - gg
+    else:
+        G = p[P_TG0] ** q * gg ** (1.0 - q) / (1.0 - q) - gg
+    f = p[P_TK] * (p[P_TF0] - G)
+    if g < gm:
+        return f + p[P_TKMIN] * (gm - g), p[P_TKMIN]
+    return f, p[P_TK] * ((p[P_TG0] / gg) ** q - 1.0)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def rhs(t, y, p, dmw, cp, pa, ft, pitch, contact, out):
-    """Write ``dy/dt`` into ``out`` (see the module docstring for the equations)."""
+def rhs(t, y, p, dmw, cp, pa, ft, pitch, tfs, rlin, contact, out):
+    """Write ``dy/dt`` into ``out`` (see the module docstring for the equations).
+
+    ``tfs``: any array to enable the TFC stiffening spring, ``None`` to disable it; ``rlin``: any array
+    for the linear rear law, ``None`` for the power law (compile-time choices, see the module docstring).
+    """
     z, th, vz, vth = y[0], y[1], y[2], y[3]
     wc, vc, wf, vf, wr, vr = _disk3(p, dmw, t)
     lf, lr = p[P_LF], p[P_LR]
     F_f = -p[P_KF] * (z + lf * th - wf) - p[P_CF] * (vz + lf * vth - vf)
     g_r = p[P_G0] + z - lr * th - wr
-    g_r = max(g_r, 1e-3 * p[P_G0])  # the rear law is singular at zero gap; never reached in practice
-    ratio = p[P_G0] / g_r
-    law = ratio * ratio if p[P_N] == 2.0 else ratio ** p[P_N]  # pow() is the costliest call here
-    F_r = p[P_FR0] * (law - 1.0) - p[P_CR] * (vz - lr * vth - vr)
+    if rlin is not None:
+        F_r = p[P_KR] * (p[P_G0] - g_r)  # "linear" rear law
+    else:
+        g_r = max(g_r, 1e-3 * p[P_G0])  # the rear law is singular at zero gap; never reached in practice
+        ratio = p[P_G0] / g_r
+        law = ratio * ratio if p[P_N] == 2.0 else ratio ** p[P_N]  # pow() is the costliest call here
+        F_r = p[P_FR0] * (law - 1.0)
+    F_r -= p[P_CR] * (vz - lr * vth - vr)
     F_i = 0.0
     Q = 0.0
+    if tfs is not None:
+        F_i += _stiffening(p, gap_at(p, z, th, wc))[0]
     if pa is not None or cp is not None:
         d, dd = _separation(p, y, wc, vc)
         # one index for every table (they share the separation grid)
@@ -247,26 +308,26 @@ E1, E3, E4, E5, E6, E7 = (71 / 57600, -71 / 16695, 71 / 1920, -17253 / 339200, 2
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _step(t, y, k1, h, p, dmw, cp, pa, ft, pitch, contact, ynew, k7, err, tmp, k2, k3, k4, k5, k6):
+def _step(t, y, k1, h, p, dmw, cp, pa, ft, pitch, tfs, rlin, contact, ynew, k7, err, tmp, k2, k3, k4, k5, k6):
     """One Dormand-Prince step: ``ynew``, its derivative ``k7`` and the error estimate ``err``."""
     for i in range(4):
         tmp[i] = y[i] + h * A21 * k1[i]
-    rhs(t + h / 5, tmp, p, dmw, cp, pa, ft, pitch, contact, k2)
+    rhs(t + h / 5, tmp, p, dmw, cp, pa, ft, pitch, tfs, rlin, contact, k2)
     for i in range(4):
         tmp[i] = y[i] + h * (A31 * k1[i] + A32 * k2[i])
-    rhs(t + 3 * h / 10, tmp, p, dmw, cp, pa, ft, pitch, contact, k3)
+    rhs(t + 3 * h / 10, tmp, p, dmw, cp, pa, ft, pitch, tfs, rlin, contact, k3)
     for i in range(4):
         tmp[i] = y[i] + h * (A41 * k1[i] + A42 * k2[i] + A43 * k3[i])
-    rhs(t + 4 * h / 5, tmp, p, dmw, cp, pa, ft, pitch, contact, k4)
+    rhs(t + 4 * h / 5, tmp, p, dmw, cp, pa, ft, pitch, tfs, rlin, contact, k4)
     for i in range(4):
         tmp[i] = y[i] + h * (A51 * k1[i] + A52 * k2[i] + A53 * k3[i] + A54 * k4[i])
-    rhs(t + 8 * h / 9, tmp, p, dmw, cp, pa, ft, pitch, contact, k5)
+    rhs(t + 8 * h / 9, tmp, p, dmw, cp, pa, ft, pitch, tfs, rlin, contact, k5)
     for i in range(4):
         tmp[i] = y[i] + h * (A61 * k1[i] + A62 * k2[i] + A63 * k3[i] + A64 * k4[i] + A65 * k5[i])
-    rhs(t + h, tmp, p, dmw, cp, pa, ft, pitch, contact, k6)
+    rhs(t + h, tmp, p, dmw, cp, pa, ft, pitch, tfs, rlin, contact, k6)
     for i in range(4):
         ynew[i] = y[i] + h * (B1 * k1[i] + B3 * k3[i] + B4 * k4[i] + B5 * k5[i] + B6 * k6[i])
-    rhs(t + h, ynew, p, dmw, cp, pa, ft, pitch, contact, k7)
+    rhs(t + h, ynew, p, dmw, cp, pa, ft, pitch, tfs, rlin, contact, k7)
     for i in range(4):
         err[i] = h * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i] + E7 * k7[i])
 
@@ -323,30 +384,84 @@ def _extrema(a, b, c):
 
 
 @njit(cache=True, nogil=True, inline="always", error_model="numpy")
+def _d_extrema(p, dmw, t, h, y, k1, ynew, k7, d0, dd0, d1, dd1, buf):
+    """Interior extrema of ``d`` in the step ``[t, t + h]``: their ``theta`` in (0, 1) go into ``buf``;
+    returns how many.
+
+    Without a knot of the DMW spline inside the step, ``d`` is one cubic, the Hermite through its end
+    values and slopes. Otherwise the step is split at the knots and on each piece ``d = const + s - w``
+    (``s = z - l_c theta`` on the state's Hermite cubic, ``w`` the spline piece) is a cubic whose
+    Taylor coefficients at the piece's start give the extrema in closed form (module docstring).
+    """
+    n_b = 0
+    if dmw is not None:
+        t0, hd = p[P_DMW_T0], p[P_DMW_DT]
+        i_a = int((t - t0) / hd)
+        first_knot = t0 + (i_a + 1) * hd
+        if first_knot < t + h:
+            lc = p[P_LC]
+            # s(theta) = A theta^3 + B theta^2 + C theta + E over the whole step
+            A, B, C, E = _dcubic(y[0] - lc * y[1], k1[0] - lc * k1[1], ynew[0] - lc * ynew[1],
+                                 k7[0] - lc * k7[1], h)
+            n_pieces = dmw.shape[0]
+            ta = t
+            i = i_a
+            while ta < t + h and n_b + 2 <= buf.shape[0]:
+                tb = min(t0 + (i + 1) * hd, t + h)
+                tha, L = (ta - t) / h, (tb - ta) / h
+                if L > 0.0:
+                    S1 = (3.0 * A * tha + 2.0 * B) * tha + C
+                    S2 = 6.0 * A * tha + 2.0 * B
+                    j = min(max(i, 0), n_pieces - 1)
+                    sg = ta - (t0 + j * hd)
+                    r0, r1, r2 = dmw[j, 0], dmw[j, 1], dmw[j, 2]
+                    W1 = (3.0 * r0 * sg + 2.0 * r1) * sg + r2
+                    W2 = 6.0 * r0 * sg + 2.0 * r1
+                    Lh = L * h
+                    n_ex, x1, x2 = _extrema((A * L ** 3 - r0 * Lh ** 3), 0.5 * (S2 * L * L - W2 * Lh * Lh),
+                                            S1 * L - W1 * Lh)
+                    if n_ex > 0:
+                        buf[n_b] = tha + x1 * L
+                        n_b += 1
+                    if n_ex > 1:
+                        buf[n_b] = tha + x2 * L
+                        n_b += 1
+                ta = tb
+                i += 1
+            return n_b
+    ca, cb, cc, ce = _dcubic(d0, dd0, d1, dd1, h)
+    n_ex, th1, th2 = _extrema(ca, cb, cc)
+    if n_ex > 0:
+        buf[0] = th1
+    if n_ex > 1:
+        buf[1] = th2
+    return n_ex
+
+
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
 def _interp_state(y0, f0, y1, f1, h, theta, out):
     for i in range(4):
         out[i] = _hermite(y0, f0, y1, f1, h, theta, i)
 
 
 @njit(cache=True, nogil=True, inline="always", error_model="numpy")
-def _first_wrong_side(p, dmw, cp, contact, t, y, k1, ynew, k7, h, d0, dd0, d1, dd1, ys):
+def _first_wrong_side(p, dmw, cp, contact, t, y, k1, ynew, k7, h, d0, dd0, d1, dd1, ys, buf):
     """Smallest ``theta`` in (0, 1] of the step where the criterion disagrees with the mode, or -1.
 
-    Checks the step's end, the interior extrema of ``d`` (closed form on the cubic through the end
-    values and slopes) and, when ``d`` passes near the threshold, a few interior points; values are
-    taken on the state interpolant, the one outputs and the bisection use.
+    Checks the step's end, the interior extrema of ``d`` (closed form, :func:`_d_extrema`) and, when
+    ``d`` passes near the threshold, a few interior points; values are taken on the state
+    interpolant, the one outputs and the bisection use.
     """
     ks = p[P_KSIG]
     best = 2.0
     if (d1 - ks < 0.0) != contact:
         best = 1.0
-    ca, cb, cc, ce = _dcubic(d0, dd0, d1, dd1, h)
-    n_ex, th1, th2 = _extrema(ca, cb, cc)
+    n_ex = _d_extrema(p, dmw, t, h, y, k1, ynew, k7, d0, dd0, d1, dd1, buf)
     near = min(abs(d0 - ks), abs(d1 - ks)) < 0.5 * h * max(abs(dd0), abs(dd1))
     n_try = n_ex + (3 if near else 0)
     for i_ex in range(n_try):
         if i_ex < n_ex:
-            th = th1 if i_ex == 0 else th2
+            th = buf[i_ex]
         else:
             th = 0.25 * (i_ex - n_ex + 1)
         if th >= best:
@@ -358,7 +473,7 @@ def _first_wrong_side(p, dmw, cp, contact, t, y, k1, ynew, k7, h, d0, dd0, d1, d
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def integrate(y0, t_end, t_out, p, dmw, cp, pa, ft, pitch, rtol, atol, h_max, max_steps):
+def integrate(y0, t_end, t_out, p, dmw, cp, pa, ft, pitch, tfs, rlin, rtol, atol, h_max, max_steps):
     """Integrate from ``t = 0`` to ``t_end`` [s]; sample the state at ``t_out`` (ascending).
 
     Parameters
@@ -369,6 +484,8 @@ def integrate(y0, t_end, t_out, p, dmw, cp, pa, ft, pitch, rtol, atol, h_max, ma
         (:func:`disk_coefficients`) [m], and of the contact pressure,
         adhesion pressure and friction stress [Pa] versus separation [m]; ``None`` disables
     pitch : any array to enable the pitch degree of freedom, ``None`` to lock it
+    tfs : any array to enable the TFC stiffening spring (parameters ``P_TK``...), ``None`` to disable
+    rlin : any array for the linear rear law, ``None`` for the power law
     rtol, atol : relative tolerance [1] and per-component absolute tolerances (SI)
     h_max : largest step [s]; max_steps : guard against a stalled integration
 
@@ -391,6 +508,8 @@ def integrate(y0, t_end, t_out, p, dmw, cp, pa, ft, pitch, rtol, atol, h_max, ma
     tmp = np.empty(4)
     k2, k3, k4, k5, k6 = np.empty(4), np.empty(4), np.empty(4), np.empty(4), np.empty(4)
     ys = np.empty(4)
+    # interior extrema of d: at most 2 per DMW spline piece a step spans
+    buf = np.empty(2 * (int(h_max / p[P_DMW_DT]) + 3) if dmw is not None else 2)
     ev_y = np.empty(4)
     ev_f = np.empty(4)
     t = 0.0
@@ -398,7 +517,7 @@ def integrate(y0, t_end, t_out, p, dmw, cp, pa, ft, pitch, rtol, atol, h_max, ma
     contact = False
     if cp is not None:
         contact = separation(p, dmw, t, y)[0] < p[P_KSIG]
-    rhs(t, y, p, dmw, cp, pa, ft, pitch, contact, k1)
+    rhs(t, y, p, dmw, cp, pa, ft, pitch, tfs, rlin, contact, k1)
     info[4] += 1
     d0, dd0 = separation(p, dmw, t, y)  # d and d' at the current step start (kept step to step)
     h = min(h_max, 1e-8)
@@ -423,7 +542,7 @@ def integrate(y0, t_end, t_out, p, dmw, cp, pa, ft, pitch, rtol, atol, h_max, ma
                 contact = not contact
                 info[3] += 1
                 t_hold = t + p[P_DWELL]
-                rhs(t, y, p, dmw, cp, pa, ft, pitch, contact, k1)
+                rhs(t, y, p, dmw, cp, pa, ft, pitch, tfs, rlin, contact, k1)
                 info[4] += 1
         h = min(h, h_max, h_stiff)
         if t + 1.01 * h >= t_end:  # land on t_end exactly, never leave a sliver (Hairer's DOPRI5 rule)
@@ -433,7 +552,7 @@ def integrate(y0, t_end, t_out, p, dmw, cp, pa, ft, pitch, rtol, atol, h_max, ma
         if h < 1e-12 * max(t, 1e-9) or h < 1e-18:  # (h = t_end - t is never a sliver, see above)
             info[0] = STEP_UNDERFLOW
             return Y, C, info, ext
-        _step(t, y, k1, h, p, dmw, cp, pa, ft, pitch, contact, ynew, k7, err, tmp, k2, k3, k4, k5, k6)
+        _step(t, y, k1, h, p, dmw, cp, pa, ft, pitch, tfs, rlin, contact, ynew, k7, err, tmp, k2, k3, k4, k5, k6)
         info[4] += 6
         e = 0.0
         for i in range(4):
@@ -456,7 +575,8 @@ def integrate(y0, t_end, t_out, p, dmw, cp, pa, ft, pitch, rtol, atol, h_max, ma
             # Locate a contact switch in the step; a redone (shorter) step is more accurate than the
             # long step's interpolant and may show the crossing earlier, so repeat on the redone step.
             for _ in range(8):
-                hi = _first_wrong_side(p, dmw, cp, contact, t, y, k1, ynew, k7, h_acc, d0, dd0, d1, dd1, ys)
+                hi = _first_wrong_side(p, dmw, cp, contact, t, y, k1, ynew, k7, h_acc, d0, dd0, d1, dd1, ys,
+                                       buf)
                 if hi < 0.0:
                     break
                 lo = 0.0
@@ -477,7 +597,7 @@ def integrate(y0, t_end, t_out, p, dmw, cp, pa, ft, pitch, rtol, atol, h_max, ma
                     break  # the switch is at the end of the step
                 # redo the step exactly up to the switch (in the old mode)
                 h_acc = hi * h_acc
-                _step(t, y, k1, h_acc, p, dmw, cp, pa, ft, pitch, contact, ev_y, ev_f, err, tmp,
+                _step(t, y, k1, h_acc, p, dmw, cp, pa, ft, pitch, tfs, rlin, contact, ev_y, ev_f, err, tmp,
                       k2, k3, k4, k5, k6)
                 info[4] += 6
                 for i in range(4):
@@ -490,10 +610,9 @@ def integrate(y0, t_end, t_out, p, dmw, cp, pa, ft, pitch, rtol, atol, h_max, ma
             # extrema of d on the step's cubic (peak-to-peak free of aliasing by the output grid)
             ext[0] = min(ext[0], d1)
             ext[1] = max(ext[1], d1)
-            ca, cb, cc, ce = _dcubic(d0, dd0, d1, dd1, h_acc)
-            n_ex, th1, th2 = _extrema(ca, cb, cc)
+            n_ex = _d_extrema(p, dmw, t, h_acc, y, k1, ynew, k7, d0, dd0, d1, dd1, buf)
             for i_ex in range(n_ex):
-                th = th1 if i_ex == 0 else th2
+                th = buf[i_ex]
                 if t + th * h_acc >= p[P_TWIN]:
                     _interp_state(y, k1, ynew, k7, h_acc, th, ys)
                     de = separation(p, dmw, t + th * h_acc, ys)[0]
@@ -514,12 +633,14 @@ def integrate(y0, t_end, t_out, p, dmw, cp, pa, ft, pitch, rtol, atol, h_max, ma
         t = t_new
         d0, dd0 = d1, dd1
         info[1] += 1
-        if pa is not None or cp is not None:
+        if pa is not None or cp is not None or tfs is not None:
             # Cap the next step at 1/omega of the local interface spring: a stiff contact would
             # otherwise run the explicit method at its stability limit, where the step controller
             # is erratic (Hairer & Wanner, Solving ODEs II, IV.2).
             d_now = d0
             kk = 0.0
+            if tfs is not None:
+                kk += _stiffening(p, d_now + p[P_YS])[1]
             if cp is not None and contact:
                 kk -= p[P_AN] * _ppval(cp, p[P_TAB_X0], p[P_TAB_H], d_now)[1]
             if pa is not None:
@@ -531,7 +652,7 @@ def integrate(y0, t_end, t_out, p, dmw, cp, pa, ft, pitch, rtol, atol, h_max, ma
         if switched:
             contact = not contact
             t_hold = t + p[P_DWELL] if p[P_DWELL] > 0.0 else -1.0
-            rhs(t, y, p, dmw, cp, pa, ft, pitch, contact, k1)
+            rhs(t, y, p, dmw, cp, pa, ft, pitch, tfs, rlin, contact, k1)
             info[4] += 1
         else:
             for i in range(4):

@@ -21,6 +21,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Iterable
 
+from .physics.air_bearing import REAR_LAWS, STIFFNESS_ROOTS, TFC_STIFFENING
+from .physics.fhm import FHM_MEASURES
+from .physics.friction import FRICTION_LAWS
+
 try:  # Python >= 3.11
     import tomllib
 except ModuleNotFoundError:  # pragma: no cover - Python 3.10
@@ -32,7 +36,7 @@ EFFECTS = ("air_bearing", "pitch", "dmw", "adhesion", "contact", "friction")
 #: Unit suffixes that may end a key name; used to tell "wrong unit" from "unknown key".
 UNIT_SUFFIXES = (
     "nm", "um", "mm", "m", "gpa", "mpa", "pa", "khz", "hz", "mhz", "ms", "us", "ns", "s",
-    "j_m2", "n_s_m", "kg_m3", "per_um2", "per_m2", "kg", "n", "mn", "rpm", "sigma",
+    "j_m2", "n_s_m", "n_m", "kg_m3", "per_um2", "per_m2", "kg", "n", "mn", "rpm", "sigma",
 )
 
 
@@ -105,8 +109,18 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "rear_exponent": Key("float", 2.0, _pos, doc="rear bearing nonlinearity exponent n [1] (recon)"),
         "rear_reference_gap_nm": Key("float", None, _pos,
                                      doc="rear bearing reference gap g0 [nm] (recon; default FH0)"),
-        "stiffness_root": Key("str", "pitch-first", choices=("pitch-first", "bounce-first"),
-                              doc="which root of the modal inversion to use (SPEC.md section 4)"),
+        "stiffness_root": Key("str", "stiff-rear", choices=tuple(STIFFNESS_ROOTS),
+                              doc="root of the modal inversion: 'stiff-rear' k_r > k_f (SPEC.md 7.3, recon), "
+                                  "'pitch-first' (first reconstruction), 'bounce-first'"),
+        "rear_law": Key("str", "power", choices=tuple(REAR_LAWS),
+                        doc="rear bearing law: 'power' F_r0[(g0/g)^n - 1] (recon), 'linear' k_r (g0 - g)"),
+        "tfc_stiffening": Key("str", "none", choices=tuple(TFC_STIFFENING),
+                              doc="air-bearing stiffening under the TFC bulge (SPEC.md 7.4): 'none' or "
+                                  "'gap-power', added stiffness k_t[(FH0/g)^p - 1] at the TFC gap g"),
+        "tfc_stiffness_n_m": Key("float", 1.0e5, _nonneg,
+                                 doc="stiffness scale k_t of the TFC stiffening spring [N/m] (recon, to be identified)"),
+        "tfc_stiffening_exponent": Key("float", 1.5, (lambda v: 0 <= v <= 4, "a number in [0, 4]"),
+                                       doc="exponent p of the TFC stiffening law [1] (recon, SPEC.md 7.4: ~1.5-1.75)"),
     },
     "tfc": {
         "half_length_um": Key("float", 3.0, _pos, doc="ellipsoid semi-axis along sliding a [um] (paper)"),
@@ -116,7 +130,8 @@ SCHEMA: dict[str, dict[str, Key]] = {
     "roughness": {
         "sigma_nm": Key("float", 0.52, _pos, doc="combined rms roughness sigma [nm] (recon)"),
         "summit_radius_um": Key("float", 5.0, _pos, doc="summit radius R [um] (recon)"),
-        "summit_density_per_um2": Key("float", 10.0, _pos, doc="summit density eta [um^-2] (recon)"),
+        "summit_density_per_um2": Key("float", 13.3, _pos,
+                                      doc="summit density eta [um^-2] (inferred: y_s = 0.69 nm, SPEC.md 7.2)"),
         "afm": Key("strs", None, path=True, doc="AFM scans (any SurfaceTopography format); overrides the statistics"),
         "route": Key("str", "spectral", choices=("spectral", "summits"),
                      doc="which AFM route feeds the interface model"),
@@ -145,10 +160,13 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "section_depth_sigma": Key("float", 3.0, _pos, doc="nominal-area section depth s_n [sigma] (recon)"),
         "damping_n_s_m": Key("float", 0.0, _nonneg, doc="contact damping c_c [N s/m] (recon)"),
         "fallback_probability": Key("float", None, (lambda v: 0 < v < 1, "a probability in (0, 1)"),
-                                    doc="when calibration finds no admissible k: use the k of this one-sided "
-                                        "contact probability P(z > k sigma) [1]"),
-        "friction_law": Key("str", "shear-strength", choices=("shear-strength",),
-                            doc="single-asperity friction law (SPEC.md section 2)"),
+                                    doc="when calibration finds no admissible k: use the k of this two-sided "
+                                        "contact probability P(|z| > k sigma) = 2 Q(k) [1] (SPEC.md 7.1)"),
+        "friction_law": Key("str", "shear-strength", choices=tuple(FRICTION_LAWS),
+                            doc="friction law: 'shear-strength' tau_y = H/(2.8 sqrt 3) (SPEC.md 2) or "
+                                "'coefficient' Q = mu P (SPEC.md 7.6)"),
+        "friction_coefficient": Key("float", None, _nonneg,
+                                    doc="friction coefficient mu of the 'coefficient' law [1] (paper: ~1.2)"),
     },
     "dmw": {
         "source": Key("str", "synthetic", doc='"synthetic" or a measured record (CSV or NetCDF)'),
@@ -200,7 +218,7 @@ SCHEMA: dict[str, dict[str, Key]] = {
                                 doc="Gauss-Legendre nodes per panel of the ISBL integrals"),
         "quadrature_panels": Key("int", 4, (lambda v: 1 <= v <= 64, "an integer in [1, 64]"),
                                  doc="panels per population range of the ISBL integrals"),
-        "fhm_measure": Key("str", "peak-to-peak", choices=("peak-to-peak", "3std"),
+        "fhm_measure": Key("str", "peak-to-peak", choices=tuple(FHM_MEASURES),
                            doc="FHM/BV measure (SPEC.md section 4)"),
     },
     "sweep": {
@@ -440,6 +458,10 @@ def _cross_checks(config: dict[str, dict[str, Any]], where: str) -> None:
     if "air_bearing" not in eff:
         raise SceneError(f"{where}: scene.effects = {sorted(eff)}: expected 'air_bearing' among them "
                          "(nothing else holds the slider up)")
+    c = config["contact"]
+    if c["friction_law"] == "coefficient" and c["friction_coefficient"] is None:
+        raise SceneError(f"{where}: contact.friction_law = 'coefficient' needs contact.friction_coefficient "
+                         "(a number >= 0, the paper's mu is ~1.2)")
     if "friction" in eff and "contact" not in eff:
         raise SceneError(f"{where}: scene.effects: 'friction' needs 'contact' (friction acts only in contact)")
     if "pitch" in eff and "air_bearing" not in eff:

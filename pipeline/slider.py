@@ -5,6 +5,14 @@ record into the arrays the numba kernel of :mod:`pipeline.dynamics` takes; :func
 integrates one protrusion; :func:`histories` and :func:`summarize` turn a run into the paper's
 time series (Figs 3-5) and the steady-window scalars of the sweep.
 
+The separation ``d`` is measured to the mean of summit heights, ``y_s`` above the mean of surface
+heights to which ``FH0`` is measured (SPEC.md 7.2; one home: :func:`pipeline.dynamics.separation_at`).
+Named model variants (scene keys, one registry each): ``air_bearing.stiffness_root``
+(:data:`pipeline.physics.air_bearing.STIFFNESS_ROOTS`), ``air_bearing.rear_law`` (``REAR_LAWS``),
+``air_bearing.tfc_stiffening`` (``TFC_STIFFENING``), ``contact.friction_law``
+(:data:`pipeline.physics.friction.FRICTION_LAWS`) and ``solver.fhm_measure``
+(:data:`pipeline.physics.fhm.FHM_MEASURES`).
+
 Steady-window definitions (over ``transient_ms <= t <= duration_ms``, sampled every
 ``output_step_ns``):
 
@@ -19,8 +27,9 @@ Steady-window definitions (over ``transient_ms <= t <= duration_ms``, sampled ev
 * ``mean_pressure``, ``shear_stress`` [MPa]: total contact / friction force over total real area,
   over the samples in contact; ``real_area`` [um2]: mean real area while in contact.
 * ``contact_fraction`` [1]: fraction of the window's samples in contact.
-* ``regime``: 0 flying (no sample in contact), 2 surfing (steady sliding: in contact in at least
-  99 % of the samples), 1 bouncing (otherwise).
+* ``regime``: 0 flying (no contact in the steady window: no sample in contact and the exact minimum
+  of d above k sigma), 2 surfing (steady sliding: in contact in at least 99 % of the samples),
+  1 bouncing (otherwise, including contacts shorter than the output step).
 """
 
 from __future__ import annotations
@@ -32,6 +41,8 @@ import numpy as np
 
 from . import dynamics as dyn
 from .physics import air_bearing as ab
+from .physics.fhm import fhm as fhm_percent
+from .physics.friction import friction_stress_table
 from .physics.geometry import effective_radius, nominal_area
 from .variables import Regime, regime_name
 
@@ -54,6 +65,8 @@ class Model:
     dmw : DMW coefficients [m] or ``None``; contact, adhesion, friction, area : interface-table
         coefficients [Pa] / [1] versus separation [m], or ``None`` when the effect is off
     pitch : ``None`` when the pitch DOF is locked
+    tfc_stiffening : ``None`` without the TFC stiffening spring (``air_bearing.tfc_stiffening = "none"``)
+    rear_linear : ``None`` for the power rear law, an array for the linear one (``air_bearing.rear_law``)
     k_sigma : contact criterion threshold ``k sigma`` [m] (``nan`` without contact)
     """
 
@@ -79,6 +92,8 @@ class Model:
     fhm_measure: str
     effects: frozenset
     info: dict = field(default_factory=dict)
+    tfc_stiffening: np.ndarray | None = None
+    rear_linear: np.ndarray | None = None
 
     @property
     def k_sigma(self) -> float:
@@ -88,8 +103,9 @@ class Model:
 def slider_from_scene(scene: Any, damping_ratio: float | None = None) -> tuple[ab.Slider, dict]:
     """The rigid slider and its air bearing from ``[slider]`` and ``[air_bearing]`` (SPEC.md 4).
 
-    Stiffnesses by modal inversion of the two natural frequencies (root chosen by mode order,
-    ``air_bearing.stiffness_root``), pad dampers for the modal damping ratio.
+    Stiffnesses by modal inversion of the two natural frequencies (root chosen by the named rule
+    ``air_bearing.stiffness_root``, default ``"stiff-rear"``: SPEC.md 7.3), pad dampers for the modal
+    damping ratio.
     """
     s, a = scene["slider"], scene["air_bearing"]
     L, W, T = s["length_mm"] * MM, s["width_mm"] * MM, s["thickness_mm"] * MM
@@ -131,6 +147,17 @@ def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float]
     p[dyn.P_KF], p[dyn.P_KR], p[dyn.P_CF], p[dyn.P_CR] = slider.k_f, slider.k_r, slider.c_f, slider.c_r
     p[dyn.P_G0], p[dyn.P_N], p[dyn.P_FR0] = slider.g0, slider.n, slider.rear_preload
     p[dyn.P_FH0] = a["flying_height_nm"] * NM
+    # TFC stiffening spring (SPEC.md 7.4): compiled in only when selected (None prunes it)
+    tfs = None
+    if a["tfc_stiffening"] != "none":
+        tfs = np.ones(1)
+        p[dyn.P_TK], p[dyn.P_TP], p[dyn.P_TG0] = a["tfc_stiffness_n_m"], a["tfc_stiffening_exponent"], p[dyn.P_FH0]
+        p[dyn.P_TGMIN] = ab.TFC_MIN_GAP * p[dyn.P_FH0]
+        p[dyn.P_TKMIN] = p[dyn.P_TK] * ((1.0 / ab.TFC_MIN_GAP) ** p[dyn.P_TP] - 1.0)
+    rear_linear = np.ones(1) if ab.REAR_LAWS[a["rear_law"]].linear else None
+    info.update({"rear_law": a["rear_law"], "tfc_stiffening": a["tfc_stiffening"],
+                 "friction_law": scene["contact"]["friction_law"],
+                 "friction_coefficient": scene["contact"]["friction_coefficient"]})
     p[dyn.P_CC] = scene["contact"]["damping_n_s_m"]
     p[dyn.P_DWELL] = sol["min_dwell_ns"] * 1e-9
     p[dyn.P_HSTIFF] = sol["stiffness_step"]
@@ -171,10 +198,23 @@ def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float]
                 if var not in interface:
                     raise ValueError(f"interface tables lack {var!r}, needed by the {effect} effect; "
                                      "re-run `hdi interface`")
-                tabs[key] = dyn.piecewise_coefficients(interface[var].values * scale, h, order)
+                values = interface[var].values * scale
+                if key == "friction":  # the named friction law (SPEC.md 7.6) acts through the table
+                    c = scene["contact"]
+                    values = friction_stress_table(c["friction_law"], interface["contact_pressure"].values * 1e6,
+                                                   values, c["friction_coefficient"])
+                tabs[key] = dyn.piecewise_coefficients(values, h, order)
     elif eff & {"contact", "adhesion"}:
         raise ValueError("the contact/adhesion effects need interface tables (run `hdi interface`)")
     sigma = float(interface["sigma"]) * NM if interface is not None else np.nan
+    # separation datum: d is measured to the mean of summit heights, y_s above the mean of surface
+    # heights to which FH0 is measured (SPEC.md 7.2)
+    if interface is not None and "y_s" in interface:
+        p[dyn.P_YS] = float(interface["y_s"]) * NM
+    else:
+        from .stages.interface import roughness_statistics
+        p[dyn.P_YS] = roughness_statistics(scene)["y_s"]
+    info["y_s"] = p[dyn.P_YS]
     if "contact" in eff:
         if k is None or not np.isfinite(k):
             raise ValueError("the contact effect needs the criterion k: set contact.k or run `hdi calibrate`")
@@ -190,7 +230,8 @@ def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float]
                  half_length=scene["tfc"]["half_length_um"] * UM, half_width=scene["tfc"]["half_width_um"] * UM,
                  duration=duration, transient=sol["transient_ms"] * 1e-3,
                  output_step=sol["output_step_ns"] * 1e-9, rtol=sol["rtol"], atol=atol,
-                 max_step=sol["max_step_ns"] * 1e-9, fhm_measure=sol["fhm_measure"], effects=eff, info=info)
+                 max_step=sol["max_step_ns"] * 1e-9, fhm_measure=sol["fhm_measure"], effects=eff, info=info,
+                 tfc_stiffening=tfs, rear_linear=rear_linear)
 
 
 @dataclass
@@ -227,14 +268,22 @@ def run_model(model: Model, protrusion: float, y0: np.ndarray | None = None, max
     t_out = np.minimum(np.arange(n_out) * model.output_step, model.duration)
     y0 = np.zeros(4) if y0 is None else np.asarray(y0, float)
     p[dyn.P_TWIN] = model.transient
+    if model.tfc_stiffening is not None:  # the stiffening force is zero at this protrusion's nominal gap
+        p[dyn.P_TF0] = _stiffening_potential(p[dyn.P_FH0] - protrusion, p[dyn.P_TG0], p[dyn.P_TP], p[dyn.P_TGMIN])
     Y, C, info, ext = dyn.integrate(y0, model.duration, t_out, p, model.dmw, model.contact, model.adhesion,
-                                    model.friction, model.pitch, model.rtol, model.atol, model.max_step,
-                                    max_steps)
+                                    model.friction, model.pitch, model.tfc_stiffening, model.rear_linear,
+                                    model.rtol, model.atol, model.max_step, max_steps)
     if info[0] != dyn.OK:
         raise IntegrationError(f"integration failed at protrusion {protrusion / NM:.3g} nm: "
                                f"{dyn.STATUS_TEXT[int(info[0])]} (steps {info[1]}, rejected {info[2]})")
     return Run(model=model, protrusion=protrusion, nominal_area=An, time=t_out, state=Y, contact=C, info=info,
                d_extremes=(float(ext[0]), float(ext[1])))
+
+
+def _stiffening_potential(g: float, g0: float, q: float, g_min: float) -> float:
+    """``G(max(g, g_min))`` [m] of the stiffening law (:func:`pipeline.physics.air_bearing.tfc_stiffening_force`)."""
+    g = max(g, g_min)
+    return g0 * np.log(g) - g if q == 1.0 else g0**q * g ** (1.0 - q) / (1.0 - q) - g
 
 
 def histories(run: Run) -> dict[str, np.ndarray]:
@@ -249,7 +298,9 @@ def histories(run: Run) -> dict[str, np.ndarray]:
     wdot = np.zeros_like(t)
     if m.dmw is not None:
         w, wdot = dyn.disk_history(m.dmw, p, t)
-    d = p[dyn.P_FH0] - run.protrusion + Y[:, 0] - m.slider.l_c * Y[:, 1] - w
+    pp = p.copy()
+    pp[dyn.P_DELTA] = run.protrusion
+    d = dyn.separation_at(pp, Y[:, 0], Y[:, 1], w)
     out: dict[str, np.ndarray] = {"separation": d, "disk_displacement": w, "z": Y[:, 0], "pitch": Y[:, 1]}
     out["clearance"] = d - m.k_sigma
     x0, h, An = p[dyn.P_TAB_X0], p[dyn.P_TAB_H], run.nominal_area
@@ -289,9 +340,9 @@ def histories(run: Run) -> dict[str, np.ndarray]:
 
 
 def fhm(d: np.ndarray, fh0: float, measure: str = "peak-to-peak") -> float:
-    """Flying-height modulation / bouncing vibration [%] of separation samples ``d`` [m] (SPEC.md 4)."""
-    spread = np.ptp(d) if measure == "peak-to-peak" else 3.0 * np.std(d)
-    return float(100.0 * spread / fh0)
+    """Flying-height modulation / bouncing vibration [%] of separation samples ``d`` [m] (SPEC.md 4):
+    the named measure of :data:`pipeline.physics.fhm.FHM_MEASURES`."""
+    return fhm_percent(d, fh0, measure)
 
 
 def summarize(run: Run, hist: dict[str, np.ndarray] | None = None) -> dict[str, float]:
@@ -323,7 +374,10 @@ def summarize(run: Run, hist: dict[str, np.ndarray] | None = None) -> dict[str, 
         inc = hist["in_contact"][win]
         frac = float(np.mean(inc))
         out["contact_fraction"] = frac
-        out["regime"] = FLYING if frac == 0 else (SURFING if frac >= SURFING_FRACTION else BOUNCING)
+        # a contact shorter than the output step is between samples (frac = 0) but seen by the exact
+        # minimum of d: the run touched, as the calibration's criterion (calibrate.touches) counts it
+        touched = frac > 0 or (exact and lo < m.k_sigma)
+        out["regime"] = FLYING if not touched else (SURFING if frac >= SURFING_FRACTION else BOUNCING)
         fc = hist["contact_force"][win]
         area = hist["real_area"][win]
         out["contact_force"] = float(np.mean(fc))

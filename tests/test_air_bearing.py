@@ -59,25 +59,47 @@ def test_both_stiffness_roots_reproduce_the_frequencies(mass, f1, f2):
     assert roots[0][1] > roots[1][1]
 
 
-def test_chosen_root_is_the_documented_pitch_first_one(mass):
+def test_default_root_is_the_stiff_rear_one_with_the_documented_numbers(mass):
+    # SPEC.md 7.3: of the two roots the one with k_r > k_f: k_f 1.54e5, k_r 5.83e5 N/m at 120/300 kHz
     m, I = mass
     k_f, k_r, info = ab.choose_stiffness(F1, F2, m, I, L_F, L_R, L)
-    assert info["chosen"] == "pitch-first"
-    w, phi = ab.modes(ab.pad_matrix(k_f, k_r, L_F, L_R), np.diag([m, I]))
-    # pitch-first: the node of the first (120 kHz) mode lies on the slider, |x_node| < L/2
-    assert abs(ab.node_position(phi[:, 0])) < L / 2
-    # For the paper slider that is the second root (small rear stiffness, k_f ~ 8 k_r):
-    # root 1 has its first-mode node 0.459 mm behind the CG, off the 0.425 mm half-length.
+    assert info["chosen"] == "stiff-rear"
+    assert k_f == pytest.approx(1.545e5, rel=1e-3) and k_r == pytest.approx(5.833e5, rel=1e-3)
     roots = ab.stiffness_roots(F1, F2, m, I, L_F, L_R)
-    assert (k_f, k_r) == pytest.approx(roots[1], rel=1e-12)
-    assert [r["mode1_pitch_like"] for r in info["roots"]] == [False, True]
+    assert (k_f, k_r) == pytest.approx(roots[0], rel=1e-12)
+    # its mode shapes: 120 kHz node 0.459 mm behind the CG (beyond the 0.425 mm half-length: bounce-like),
+    # 300 kHz node 0.141 mm ahead of the CG
     assert info["roots"][0]["node_mode1"] == pytest.approx(-0.459e-3, abs=1e-6)
+    assert info["roots"][0]["node_mode2"] == pytest.approx(0.141e-3, abs=1e-6)
+    assert not info["roots"][0]["mode1_pitch_like"]
+    # stiffness at the TFC point (8 um before the trailing edge): the static compliance of the
+    # bearing there, 1 / (e^T K^-1 e) with e = (1, -l_c): 5.5e5 N/m (SPEC.md 7.3)
+    l_c = L / 2 - 8e-6
+    e = np.array([1.0, -l_c])
+    k_tfc = 1.0 / (e @ np.linalg.solve(ab.pad_matrix(k_f, k_r, L_F, L_R), e))
+    assert k_tfc == pytest.approx(5.5e5, rel=0.01)
+
+
+def test_named_alternative_roots_and_their_mode_shapes(mass):
+    m, I = mass
+    roots = ab.stiffness_roots(F1, F2, m, I, L_F, L_R)
+    k_f, k_r, info = ab.choose_stiffness(F1, F2, m, I, L_F, L_R, L, root="pitch-first")
+    # pitch-first (the first reconstruction): the node of the first (120 kHz) mode lies on the slider
+    w, phi = ab.modes(ab.pad_matrix(k_f, k_r, L_F, L_R), np.diag([m, I]))
+    assert abs(ab.node_position(phi[:, 0])) < L / 2
+    # for the paper slider that is the second root (small rear stiffness, k_f ~ 8 k_r)
+    assert (k_f, k_r) == pytest.approx(roots[1], rel=1e-12)
+    assert k_f == pytest.approx(8.473e5, rel=1e-3) and k_r == pytest.approx(1.063e5, rel=1e-3)
+    assert [r["mode1_pitch_like"] for r in info["roots"]] == [False, True]
     assert info["roots"][1]["node_mode1"] == pytest.approx(0.340e-3, abs=1e-6)
-    # bounce-first takes the other one
+    assert info["roots"][1]["node_mode2"] == pytest.approx(-0.190e-3, abs=1e-6)
+    # bounce-first takes the other one (here the stiff-rear root)
     k_f2, k_r2, info2 = ab.choose_stiffness(F1, F2, m, I, L_F, L_R, L, root="bounce-first")
     assert (k_f2, k_r2) == pytest.approx(roots[0], rel=1e-12)
     w2, phi2 = ab.modes(ab.pad_matrix(k_f2, k_r2, L_F, L_R), np.diag([m, I]))
     assert abs(ab.node_position(phi2[:, 0])) >= L / 2
+    with pytest.raises(ValueError, match="stiff-rear"):
+        ab.choose_stiffness(F1, F2, m, I, L_F, L_R, L, root="stiffest")
 
 
 def test_scene_slider_uses_the_chosen_root_and_frequencies():
@@ -147,7 +169,7 @@ def test_no_pitch_first_root_raises(mass):
     m, I = mass
     assert len(ab.stiffness_roots(120e3, 200e3, m, I, L_F, L_R)) == 2
     with pytest.raises(ValueError, match="pitch-first"):
-        ab.choose_stiffness(120e3, 200e3, m, I, L_F, L_R, L)
+        ab.choose_stiffness(120e3, 200e3, m, I, L_F, L_R, L, root="pitch-first")
 
 
 def test_scene_with_impossible_frequencies_fails_to_build():

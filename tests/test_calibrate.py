@@ -17,7 +17,7 @@ SHORT = ["solver.duration_ms=1.0", "solver.transient_ms=0.3", "touchdown.curve_p
 # without adhesion there is no snap-in: a k exists that puts contact at 9.8 nm and not at 9.6 nm
 NO_ADHESION = SHORT + ['scene.effects=["air_bearing","pitch","dmw","contact","friction"]',
                        "sweep.protrusion_nm={start=9.0, stop=10.4, step=0.2}"]
-# the paper scene snaps in by adhesion at 7.6 nm: touchdown there for every k
+# the paper scene (with adhesion) touches at 7.6 nm for every k of the range
 WITH_ADHESION = SHORT + ["sweep.protrusion_nm={start=7.0, stop=8.0, step=0.2}"]
 
 
@@ -44,10 +44,13 @@ def test_exact_agrees_with_bisection_without_adhesion(tmp_path):
     near = np.array([np.any(np.abs(kstar - k) <= tol) for k in exact.k.values])
     a, b = exact.touchdown.values[~near], bis.touchdown.values[~near]
     assert np.array_equal(np.isnan(a), np.isnan(b)) and np.allclose(a[~np.isnan(a)], b[~np.isnan(b)])
-    # k*(protrusion) is the flying run's minimum separation over sigma
-    assert np.allclose(kstar, exact.min_separation.values / float(exact.sigma))
-    # two flying runs per protrusion, no bisection needed on this scene
-    assert exact.attrs["simulations"] == 2 * (exact.protrusion.size)
+    # k*(protrusion) is the flying run's minimum separation over sigma, except where the transient dips
+    # below the steady window (here 10.4 nm, by 2.8e-4 nm): there bisection with real runs resolves k*
+    # (a contact in the transient changes the trajectory after it: k* moved by 5e-4 here)
+    flying = exact.min_separation.values / float(exact.sigma)
+    assert np.allclose(kstar[:-1], flying[:-1]) and 1e-6 < abs(kstar[-1] - flying[-1]) < 0.01
+    # two flying runs per protrusion, and bisection only at 10.4 nm
+    assert exact.attrs["simulations"] > 2 * exact.protrusion.size
 
 
 @pytest.mark.slow
@@ -57,7 +60,9 @@ def test_exact_agrees_with_bisection_on_the_snapping_paper_scene(tmp_path):
     assert np.array_equal(exact.touchdown.values, bis.touchdown.values)
     assert np.all(exact.touchdown.values == pytest.approx(7.6))
     kstar = exact.k_threshold.sel(protrusion=[7.6, 7.8, 8.0]).values
-    assert np.all(np.isneginf(kstar)), kstar  # snap-in: contact for every k
+    # adhesion pulls the flying slider (contact law off) 1.3 nm below the mean of summit heights or
+    # further: contact for every k of the range
+    assert np.all(kstar < -3.0), kstar
     assert float(exact.k_threshold.sel(protrusion=7.4)) > 3.0  # flying clear of every k in range
     assert "every k" in exact.attrs["outcome"]
 
@@ -72,7 +77,10 @@ def test_threshold_is_where_touching_starts():
         interface, record = model_inputs(scene, Path(tmp))
         model = sl.build_model(scene, interface, record, k=0.0)
         lo, lo_all, note = calibrate_stage.flying_minimum(model, 9.8)
-        assert note == "" and lo_all >= lo
-        k = lo / model.sigma
-        assert calibrate_stage.touches(model, 9.8, k + 1e-6)
-        assert not calibrate_stage.touches(model, 9.8, k - 1e-6)
+        assert note == "" and lo_all <= lo
+        tol = 1e-6
+        k, sims = calibrate_stage.k_star(model, 9.8, lo, lo_all, (-3.0, 3.0), tol)
+        if sims == 0:  # k* straight from the flying run: exact
+            assert k == lo / model.sigma
+        assert calibrate_stage.touches(model, 9.8, k + tol)
+        assert not calibrate_stage.touches(model, 9.8, k - tol)

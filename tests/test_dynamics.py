@@ -249,11 +249,14 @@ def test_dense_output_order(smooth_reference):
 
 @pytest.mark.parametrize("effects", [FLYING, ["air_bearing"]])
 def test_fhm_is_zero_without_dmw_and_contact(effects):
-    # No DMW and no interface forces: the slider stays at its nominal attitude, d = FH0 - delta.
+    # No DMW and no interface forces: the slider stays at its nominal attitude, d = FH0 - delta - y_s
+    # (SPEC.md 7.2: d to the mean of summit heights, y_s = 0.691 nm for the default roughness).
     run = sl.run_model(build(make_scene(effects)), 5 * NM)
     s = sl.summarize(run)
     assert s["fhm_bv"] < 1e-9
-    assert sl.histories(run)["separation"] == pytest.approx(6 * NM, abs=1e-18)
+    y_s = run.model.p[dyn.P_YS]
+    assert y_s == pytest.approx(0.691 * NM, abs=1e-3 * NM)
+    assert sl.histories(run)["separation"] == pytest.approx(6 * NM - y_s, abs=1e-18)
 
 
 def rigid_following_separation(run):
@@ -272,7 +275,7 @@ def rigid_following_separation(run):
     w_f, w_r, w_c = disk(dyn.P_OFF_F), disk(dyn.P_OFF_R), disk(dyn.P_OFF_C)
     theta = (w_f - w_r) / (s.l_f + s.l_r)
     z = w_r + s.l_r * theta
-    return p[dyn.P_FH0] - run.protrusion + z - s.l_c * theta - w_c
+    return p[dyn.P_FH0] - run.protrusion + z - s.l_c * theta - w_c - p[dyn.P_YS]
 
 
 def test_fhm_falls_to_the_rigid_following_limit_as_the_bearing_stiffens():
@@ -338,10 +341,11 @@ def test_contact_flag_matches_the_criterion_while_bouncing():
 
 
 def test_contact_events_located_at_touchdown_with_adhesion():
-    # With adhesion, the 7.6 nm protrusion snaps from flying into contact during the transient
-    # (measured: 21 located switches, surfing afterwards).
+    # With adhesion, the 7.8 nm protrusion snaps from flying into contact during the transient
+    # (measured with the summit datum and the stiff-rear bearing of SPEC.md 7: 23 located switches,
+    # in contact in 97.5 % of the samples afterwards; 7.6 nm stays flying).
     sc = make_scene(ALL, dmw={"rms_nm": 0.163})
-    run = sl.run_model(build(sc), 7.6 * NM)
+    run = sl.run_model(build(sc), 7.8 * NM)
     assert run.info[3] > 0
     assert run.contact[-1] and not run.contact[0]
 

@@ -6,7 +6,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import xarray as xr
 
 from pipeline.io import read_dataset
 from pipeline.scene import load_scene

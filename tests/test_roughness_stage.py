@@ -115,20 +115,21 @@ def test_single_file_combined_is_the_file(two_files: list[Path], tmp_path: Path)
 
 
 def test_explicit_statistics_use_mccool(tmp_path: Path) -> None:
-    scene = scene_from_dict({"scene": {"name": "paper"}, "materials": {"hardness_gpa": 1.5}})
+    # H = 1.683 GPa: the hardness psi = 0.52 gives with the corrected statistics (SPEC.md 7.2)
+    scene = scene_from_dict({"scene": {"name": "paper"}, "materials": {"hardness_gpa": 1.683}})
     ds = _open(rg.run(scene, tmp_path))
     assert list(ds["surface"].values) == ["explicit", "combined"]
-    sp = ds.sel(surface="combined", route="spectral")
-    sigma, eta, R = 0.52, 10e-6, 5000.0  # nm, nm^-2, nm (the paper scene's defaults)
+    sp = ds.sel({"surface": "combined", "route": "spectral"})
+    sigma, eta, R = 0.52, 13.3e-6, 5000.0  # nm, nm^-2, nm (the paper scene's defaults, SPEC.md 7.2)
     assert float(sp["sigma"]) == pytest.approx(sigma)
     assert float(sp["summit_radius"]) == pytest.approx(5.0)
-    assert float(sp["summit_density"]) == pytest.approx(10.0)
+    assert float(sp["summit_density"]) == pytest.approx(13.3)
     assert float(sp["bandwidth_alpha"]) == pytest.approx(st.bandwidth_alpha(sigma, eta, R), rel=1e-5)
     assert float(sp["sigma_s"]) == pytest.approx(st.summit_sigma(sigma, eta, R), rel=1e-5)
     assert float(sp["y_s"]) == pytest.approx(st.summit_offset(sigma, eta, R), rel=1e-5)
     E = st.composite_modulus(150.0, 200.0, 0.3)
     assert ds.attrs["composite_modulus_gpa"] == pytest.approx(E)
-    assert float(sp["plasticity_index"]) == pytest.approx(E / 1.5 * math.sqrt(st.summit_sigma(sigma, eta, R) / R),
+    assert float(sp["plasticity_index"]) == pytest.approx(E / 1.683 * math.sqrt(st.summit_sigma(sigma, eta, R) / R),
                                                           rel=1e-5)
     assert float(sp["plasticity_index"]) == pytest.approx(0.52, abs=0.01)  # the paper's psi [paper]
     assert np.isnan(ds["sigma"].sel({"route": "summits"}).values).all()

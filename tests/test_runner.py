@@ -222,15 +222,15 @@ def test_runner_recomputes_exactly_what_changed(tmp_path, paper_scene):
         return list(calls)
 
     assert build(paper_scene) == ["a", "b"]
-    assert float(read_dataset(out / "b.nc").y) == pytest.approx(2.0 * 0.163 + 11.0)  # tfc.protrusion_nm = 11
-    assert (out / "notes" / "b.txt").read_text() == "0.326\n"
+    assert float(read_dataset(out / "b.nc").y) == pytest.approx(2.0 * 0.266 + 11.0)  # tfc.protrusion_nm = 11
+    assert (out / "notes" / "b.txt").read_text() == "0.532\n"
     assert build(paper_scene) == []                                           # nothing changed
     assert build(paper_scene.replace(air_bearing={"damping_ratio": 0.07})) == []  # a key nobody reads
     assert build(paper_scene.replace(tfc={"protrusion_nm": 3.0})) == ["b"]   # only b reads it
     assert build(paper_scene.replace(tfc={"protrusion_nm": 3.0})) == []
     (tmp_path / "input.txt").write_text("4.0\n")                              # a's file, edited in place
     assert build(paper_scene.replace(tfc={"protrusion_nm": 3.0})) == ["a", "b"]  # ... propagates to b
-    assert float(read_dataset(out / "b.nc").y) == pytest.approx(4.0 * 0.163 + 3.0)
+    assert float(read_dataset(out / "b.nc").y) == pytest.approx(4.0 * 0.266 + 3.0)
     (out / "notes" / "b.txt").write_text("tampered\n")                         # a non-NetCDF output changed
     assert build(paper_scene.replace(tfc={"protrusion_nm": 3.0})) == ["b"]
     (out / "b_extra.nc").write_bytes(b"stale")                                 # not produced: not required ...
@@ -330,7 +330,7 @@ def test_a_new_stage_plugs_in_by_declaring_itself(tmp_path, paper_config, monkey
     monkeypatch.delitem(sys.modules, "pipeline.stages.toy_plugin", raising=False)
     assert "toy" in runner.registry()
     assert cli.main(["toy", str(paper_config), "--out", str(tmp_path / "out")]) == 0
-    assert float(read_dataset(tmp_path / "out" / "toy.nc").twice_rms) == pytest.approx(2 * 0.163, rel=1e-9)
+    assert float(read_dataset(tmp_path / "out" / "toy.nc").twice_rms) == pytest.approx(2 * 0.266, rel=1e-9)
     sys.modules.pop("pipeline.stages.toy_plugin", None)
 
 

@@ -75,9 +75,16 @@ def paper_hardness(base):
 def case_scene(base, name, paper_hardness):
     r = base["roughness"]
     if name == "rough_x100":
-        return base.replace(roughness={"sigma_nm": r["sigma_nm"] * 100, "summit_radius_um": r["summit_radius_um"] * 100,
-                                       "summit_density_per_um2": r["summit_density_per_um2"] / 1e4},
-                            solver={"table_step_nm": 1.0, "table_max_nm": 300.0})
+        rough = base.replace(roughness={"sigma_nm": r["sigma_nm"] * 100, "summit_radius_um": r["summit_radius_um"] * 100,
+                                        "summit_density_per_um2": r["summit_density_per_um2"] / 1e4},
+                             solver={"table_step_nm": 1.0, "table_max_nm": 300.0})
+        # y_s scales with sigma (69 nm here): FH0 is raised by it so that the nominal attitude at 11 nm
+        # protrusion keeps d = 0 (SPEC.md 7.2). The sliding mode about d = k sigma this case is about
+        # needs a contact force at k sigma above the bearing's pull: with the stiff-rear bearing
+        # (SPEC.md 7.3) this surface sits in steady contact 10 nm below k sigma (2 switches), so the
+        # case keeps the softer pitch-first root (measured: 27027 switches at the 20 ns dwell).
+        fh0 = base["air_bearing"]["flying_height_nm"] + roughness_statistics(rough)["y_s"] / NM
+        return rough.replace(air_bearing={"flying_height_nm": fh0, "stiffness_root": "pitch-first"})
     if name == "smooth_div10":
         return base.replace(roughness={"sigma_nm": r["sigma_nm"] / 10, "summit_radius_um": r["summit_radius_um"] / 10,
                                        "summit_density_per_um2": r["summit_density_per_um2"] * 100},

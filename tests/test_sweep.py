@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from pipeline import slider as sl
 from pipeline.io import read_dataset
 from pipeline.scene import SceneError, load_scene
 from pipeline.stages import calibrate as calibrate_stage
@@ -75,10 +76,11 @@ def test_calibrated_k_puts_first_contact_at_touchdown(calibrated, tmp_path):
     _copy_inputs(out, tmp_path)
     path = sweep_stage.run_sweep(scene, tmp_path, scheduler="synchronous")
     ds = read_dataset(path)
-    frac = ds.contact_fraction.isel(roughness=0, damping=0)
-    touching = frac.protrusion.values[frac.values > 0]
+    regime = ds.regime.isel(roughness=0, damping=0)
+    touching = regime.protrusion.values[regime.values != sl.FLYING]
     assert touching.min() == pytest.approx(9.8)
-    assert float(frac.sel(protrusion=9.6)) == 0.0
+    assert float(ds.min_clearance.isel(roughness=0, damping=0).sel(protrusion=9.6)) > 0
+    assert float(ds.min_clearance.isel(roughness=0, damping=0).sel(protrusion=9.8)) < 0
     assert "calibration" in ds.attrs["k_source"]
 
 

@@ -122,32 +122,53 @@ def node_position(shape: np.ndarray) -> float:
     return -shape[0] / shape[1] if shape[1] != 0 else np.inf
 
 
-def choose_stiffness(f1: float, f2: float, m: float, I: float, l_f: float, l_r: float, length: float,
-                     root: str = "pitch-first") -> tuple[float, float, dict]:
-    """Pick one ``(k_f, k_r)`` root by its mode shapes.
+#: Rules picking one root of the modal inversion (``air_bearing.stiffness_root``): name -> predicate on
+#: the root's ``info`` entry (``k_f``, ``k_r`` [N/m], ``mode1_pitch_like``).
+STIFFNESS_ROOTS = {
+    "stiff-rear": lambda r: r["k_r"] > r["k_f"],
+    "pitch-first": lambda r: bool(r["mode1_pitch_like"]),
+    "bounce-first": lambda r: not r["mode1_pitch_like"],
+}
 
+
+def choose_stiffness(f1: float, f2: float, m: float, I: float, l_f: float, l_r: float, length: float,
+                     root: str = "stiff-rear") -> tuple[float, float, dict]:
+    """Pick one ``(k_f, k_r)`` root of the modal inversion by a named rule (:data:`STIFFNESS_ROOTS`).
+
+    ``"stiff-rear"`` (default, SPEC.md 7.3) takes the root with ``k_r > k_f``: the trailing pad of a
+    femto slider is the stiffest part of its bearing (order ``n F / h ~ 0.01 N / 10 nm = 1e6 N/m``).
     A mode is *pitch-like* when its node (the point that does not move) lies on the slider,
-    ``|x_node| < L/2``, and *bounce-like* otherwise. ``root="pitch-first"`` (default, SPEC.md 4)
-    takes the root whose lower mode is pitch-like (the first air-bearing mode of a femto slider
-    is pitch-dominated); ``"bounce-first"`` the other.
+    ``|x_node| < L/2``, and *bounce-like* otherwise; ``"pitch-first"`` (the first reconstruction,
+    SPEC.md 4) takes the root whose lower mode is pitch-like, ``"bounce-first"`` the other.
+
+    For the paper slider (m = 0.58 mg, I = 3.75e-14 kg m^2, l_f = 0.30 mm, l_r = 0.40 mm) at
+    120/300 kHz the two roots and their mode shapes (node positions ahead of the CG) are:
+
+    * stiff-rear: ``k_f = 1.54e5``, ``k_r = 5.83e5`` N/m; 120 kHz mode node at -0.459 mm (just behind
+      the trailing edge at -0.425 mm: a bounce-like mode rocking about the trailing pad), 300 kHz
+      mode node at +0.141 mm (pitch about a point between CG and leading pad);
+    * pitch-first: ``k_f = 8.47e5``, ``k_r = 1.06e5`` N/m; 120 kHz node at +0.340 mm (pitch about the
+      leading pad), 300 kHz node at -0.190 mm.
 
     Returns
     -------
     k_f, k_r [N/m], info (both roots, their node positions [m], which one was taken and why)
     """
+    if root not in STIFFNESS_ROOTS:
+        raise ValueError(f"stiffness root {root!r} unknown; expected one of {list(STIFFNESS_ROOTS)}")
     info: dict = {"roots": [], "chosen": None}
     chosen = None
     for k_f, k_r in stiffness_roots(f1, f2, m, I, l_f, l_r):
         w, phi = modes(pad_matrix(k_f, k_r, l_f, l_r), np.diag([m, I]))
         nodes = [node_position(phi[:, i]) for i in range(2)]
         first_pitch = abs(nodes[0]) < length / 2
-        info["roots"].append({"k_f": k_f, "k_r": k_r, "node_mode1": nodes[0], "node_mode2": nodes[1],
-                              "mode1_pitch_like": first_pitch})
-        want_pitch = root == "pitch-first"
-        if chosen is None and first_pitch == want_pitch:
+        entry = {"k_f": k_f, "k_r": k_r, "node_mode1": nodes[0], "node_mode2": nodes[1],
+                 "mode1_pitch_like": first_pitch}
+        info["roots"].append(entry)
+        if chosen is None and STIFFNESS_ROOTS[root](entry):
             chosen = (k_f, k_r)
     if chosen is None:
-        raise ValueError(f"no stiffness root of {f1:g}/{f2:g} Hz has a {root} mode order; roots: {info['roots']}")
+        raise ValueError(f"no stiffness root of {f1:g}/{f2:g} Hz satisfies the {root!r} rule; roots: {info['roots']}")
     info["chosen"] = root
     return chosen[0], chosen[1], info
 
@@ -195,3 +216,65 @@ def rear_force(g: np.ndarray, g0: float, n: float, F0: float) -> np.ndarray:
     ``n F0 / g0`` there.
     """
     return F0 * ((g0 / np.asarray(g, dtype=float)) ** n - 1.0)
+
+
+def rear_force_linear(g: np.ndarray, g0: float, n: float, F0: float) -> np.ndarray:
+    """Linear rear bearing force [N] ``F_r = k_r (g0 - g)`` with ``k_r = n F0 / g0`` [N/m] on gap ``g`` [m]:
+    the tangent of :func:`rear_force` at ``g0`` (same modal stiffness, no nonlinearity)."""
+    return n * F0 / g0 * (g0 - np.asarray(g, dtype=float))
+
+
+@dataclass(frozen=True)
+class RearLaw:
+    """A rear-bearing law: its force (Python, for outputs and tests) and the kernel's compile-time switch
+    (``linear``: :func:`pipeline.dynamics.rhs` gets an array for ``rlin``, else ``None``)."""
+
+    force: object
+    linear: bool
+    doc: str
+
+
+#: Rear bearing laws (``air_bearing.rear_law``), SPEC.md 4.
+REAR_LAWS = {
+    "power": RearLaw(rear_force, False, "F_r = F_r0 [(g0/g)^n - 1], F_r0 = k_r g0 / n [recon]"),
+    "linear": RearLaw(rear_force_linear, True, "F_r = k_r (g0 - g)"),
+}
+
+#: Gap below which the stiffening law is continued linearly, as a fraction of ``g0`` [1]: the law is
+#: singular at zero gap (reached only in deep contact, where the contact force dominates).
+TFC_MIN_GAP = 0.02
+
+
+def tfc_stiffening_force(g: np.ndarray, g_n: float, g0: float, k_t: float, p: float) -> tuple[np.ndarray, np.ndarray]:
+    """Force [N] (up positive) and stiffness [N/m] of the TFC stiffening spring at the TFC gap ``g`` [m].
+
+    SPEC.md 7.4 (named option ``"gap-power"``, our form): as the TFC clearance closes the air
+    pressure under the bulge rises and the local bearing stiffens (Vakis, Hadjicostis & Polycarpou,
+    J. Phys. D 45 135402 (2012)). Added stiffness ``k(g) = k_t [(g0/g)^p - 1]`` with ``g0 = FH0``: zero at
+    the nominal flying gap, so the modal stiffness of the bearing is unchanged there. The force is its
+    integral from the nominal gap of the current protrusion ``g_n = FH0 - delta``,
+    ``F = int_g^{g_n} k(s) ds = k_t [G(g_n) - G(g)]``, ``G(s) = g0^p s^(1-p) / (1-p) - s``
+    (``g0 ln s - s`` for ``p = 1``): zero at the nominal attitude, so the static flying attitude
+    (the paper's assumption) is unchanged. Below ``TFC_MIN_GAP g0`` it continues linearly.
+
+    Parameters
+    ----------
+    g : gap at the TFC point to the mean of surface heights [m]
+    g_n : nominal gap ``FH0 - delta`` [m]; g0 : reference gap ``FH0`` [m]
+    k_t : stiffness scale [N/m]; p : exponent [1]
+    """
+    g = np.asarray(g, dtype=float)
+    gm = TFC_MIN_GAP * g0
+
+    def G(s):
+        s = np.maximum(s, gm)
+        return g0 * np.log(s) - s if p == 1.0 else g0**p * s ** (1.0 - p) / (1.0 - p) - s
+
+    k_min = k_t * ((g0 / gm) ** p - 1.0)
+    F = k_t * (G(g_n) - G(g)) + np.where(g < gm, k_min * (gm - g), 0.0)
+    k = np.where(g < gm, k_min, k_t * ((g0 / np.maximum(g, gm)) ** p - 1.0))
+    return F, k
+
+
+#: TFC stiffening laws (``air_bearing.tfc_stiffening``): ``"none"`` = the model without it.
+TFC_STIFFENING = {"none": None, "gap-power": tfc_stiffening_force}

@@ -137,3 +137,25 @@ def plasticity_index_ke(E: float, H: float, sigma_s: float, R: float, nu: float)
 def hardness_from_plasticity_gw(psi: float, E: float, sigma_s: float, R: float) -> float:
     """Hardness [Pa] that gives the GW plasticity index ``psi`` (inverse of :func:`plasticity_index_gw`)."""
     return E / psi * np.sqrt(sigma_s / R)
+
+
+def contact_probabilities(k: float) -> tuple[float, float]:
+    """Two-sided ``P(|z| > k sigma) = 2 Q(|k|)`` and one-sided ``P(z > k sigma) = Q(k)`` [1].
+
+    ``z`` Gaussian with rms ``sigma``, ``Q`` the standard normal tail. The two-sided value comes
+    first: it is the paper's convention (SPEC.md 7.1: its "3 sigma = 0.3 %" is ``2 Q(3) = 0.27 %``,
+    so its 32.8 % means ``k = 0.978``).
+    """
+    from scipy.stats import norm
+    return float(2.0 * norm.sf(abs(k))), float(norm.sf(k))
+
+
+def k_from_probability(probability: float) -> float:
+    """Criterion constant ``k >= 0`` [1] whose two-sided contact probability ``2 Q(k)`` is ``probability``.
+
+    The inverse of the first value of :func:`contact_probabilities` (SPEC.md 7.1); 0.328 gives 0.978.
+    """
+    from scipy.stats import norm
+    if not 0.0 < probability < 1.0:
+        raise ValueError(f"contact probability {probability}: expected a number in (0, 1)")
+    return float(norm.isf(0.5 * probability))

@@ -97,12 +97,12 @@ from typing import Any
 
 import numpy as np
 import xarray as xr
-from scipy.stats import norm
 
 from .. import slider as sl
 from ..runner import Inputs, Stage, build
 from ..variables import ACCURACY as ACC
 from ..variables import SCALARS
+from ..physics.statistics import k_from_probability
 from .interface import build_tables, roughness_statistics
 from .simulate import resolve_k
 
@@ -226,7 +226,7 @@ def _contact_k(scene: Any, out: Path, k: float | None) -> tuple[float | None, st
         fb = scene["contact"]["fallback_probability"]
         if fb is None:
             raise
-        return float(norm.isf(fb)), f"contact.fallback_probability = {fb} (one-sided; no calibration.nc)"
+        return k_from_probability(fb), f"contact.fallback_probability = {fb} (two-sided; no calibration.nc)"
 
 
 def relative_error(x: np.ndarray, ref: np.ndarray, floor: float) -> np.ndarray:

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import logging
 from pathlib import Path
-from statistics import NormalDist
 from typing import Any
 
 import numpy as np
@@ -22,6 +21,7 @@ import xarray as xr
 
 from .. import slider as sl
 from ..io import read_dataset
+from ..physics.statistics import contact_probabilities, k_from_probability
 from ..runner import Inputs, Stage, build, ensure
 from ..variables import HISTORIES, coordinate, history, scalar
 
@@ -52,8 +52,9 @@ def resolve_k(scene: Any, out: Path) -> tuple[float | None, str]:
 
     ``contact.k`` when the scene fixes it; else ``k_calibrated`` of ``calibration.nc``; when the
     calibration found no admissible k and the scene gives ``contact.fallback_probability``, the k
-    whose one-sided contact probability ``P(z > k sigma)`` equals it (said in every output). The source
-    names the file, not its folder, so datasets of one scene in two folders are identical.
+    whose two-sided contact probability ``P(|z| > k sigma) = 2 Q(k)`` equals it (the paper's convention,
+    SPEC.md 7.1; said in every output). The source names the file, not its folder, so datasets of one
+    scene in two folders are identical.
     """
     if not scene.has("contact"):
         return None, "no contact effect"
@@ -72,9 +73,9 @@ def resolve_k(scene: Any, out: Path) -> tuple[float | None, str]:
     if fb is None:
         raise ValueError(f"{path}: the calibration found no admissible k ({cal.attrs.get('outcome', '')}); "
                          "set contact.k or contact.fallback_probability")
-    k = -NormalDist().inv_cdf(fb)  # = scipy.stats.norm.isf(fb), without importing scipy.stats (~1 s)
+    k = k_from_probability(fb)
     return k, (f"fallback: no admissible k in {path.name}; k = {k:.4f} from contact.fallback_probability = {fb} "
-               "(one-sided)")
+               f"(two-sided; one-sided {contact_probabilities(k)[1]:.3f})")
 
 
 def run_scene(scene: Any, out: Path, protrusion_nm: float | None = None,
@@ -113,7 +114,12 @@ def summary_dataset(runs: list[tuple[float, sl.Run, dict, dict]]) -> xr.Dataset:
 def model_attrs(model: sl.Model, k_source: str) -> dict[str, Any]:
     """Global attributes describing the assembled model (stiffness roots, damping, k)."""
     info = model.info
-    return {
+    extra: dict[str, Any] = {}
+    if model.tfc_stiffening is not None:
+        extra = {"tfc_stiffness_n_m": float(model.p[sl.dyn.P_TK]), "tfc_stiffening_exponent": float(model.p[sl.dyn.P_TP])}
+    if info["friction_law"] == "coefficient":
+        extra["friction_coefficient"] = float(info["friction_coefficient"])
+    return extra | {
         "k": model.k if np.isfinite(model.k) else "none",
         "k_source": k_source,
         "k_sigma_nm": model.k_sigma / NM,
@@ -121,6 +127,13 @@ def model_attrs(model: sl.Model, k_source: str) -> dict[str, Any]:
         "front_damper_n_s_m": info["c_f"], "rear_damper_n_s_m": info["c_r"],
         "stiffness_roots": str([{k: float(v) for k, v in r.items()} for r in info["roots"]]),
         "stiffness_root_chosen": info["chosen"],
+        "stiffness_roots_note": "node_mode1/2: position ahead of the CG [m] that does not move in the "
+                                "120/300 kHz modes; 'stiff-rear' takes k_r > k_f (SPEC.md 7.3)",
+        "rear_law": info["rear_law"],
+        "tfc_stiffening": info["tfc_stiffening"],
+        "friction_law": info["friction_law"],
+        "summit_offset_y_s_nm": info["y_s"] / NM,
+        "separation_datum": "d = FH0 - delta + z - l_c theta - w - y_s: to the mean of summit heights (SPEC.md 7.2)",
         "damping_ratio": info["damping_ratio"],
         "steady_window": f"{model.transient * 1e3:g} ms to {model.duration * 1e3:g} ms",
         "fhm_measure": model.fhm_measure,

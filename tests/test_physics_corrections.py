@@ -1,0 +1,253 @@
+"""The corrections of SPEC.md section 7 and the named model variants (issue 10, part A).
+
+* 7.2 the separation datum: d to the mean of summit heights, y_s below the mean of surface heights
+  to which FH0 is measured; the paper's clearances 5.8 and 2.8 nm at 4 and 7 nm protrusion.
+* 7.4 the TFC stiffening spring: zero force at the nominal attitude, stiffness law, no effect when off.
+* the variant registries (rear law, friction law, FHM measure): named choices, clear errors.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from pipeline import dynamics as dyn
+from pipeline import slider as sl
+from pipeline.physics import air_bearing as ab
+from pipeline.physics import dmw as pdmw
+from pipeline.physics import friction
+from pipeline.physics.fhm import FHM_MEASURES, fhm
+from pipeline.scene import SceneError, load_scene, scene_from_dict
+from pipeline.stages.interface import build_tables, roughness_statistics
+from pipeline.stages.simulate import model_attrs
+
+NM = 1e-9
+K = 0.978  # SPEC.md 7.1: the paper's 32.8 % two-sided
+NO_ADHESION = ["air_bearing", "pitch", "dmw", "contact", "friction"]
+
+
+def record_of(scene):
+    d = scene["dmw"]
+    fs = d["sample_rate_mhz"] * 1e6
+    w = pdmw.synthesize(d["rms_nm"], tuple(b * 1e3 for b in d["band_khz"]), d["exponent"],
+                        scene["solver"]["duration_ms"] * 1e-3 + 0.1e-3, fs, d["seed"])
+    return w, fs
+
+
+def build(scene, k=K):
+    interface = build_tables(scene, roughness_statistics(scene))
+    return sl.build_model(scene, interface, record_of(scene), k), interface
+
+
+@pytest.fixture(scope="module")
+def paper(paper_config):
+    return load_scene(paper_config, ["solver.duration_ms=1.0", "solver.transient_ms=0.3"])
+
+
+# ---------------------------------------------------------------------------------------------
+# 7.2 separation datum
+
+def test_paper_summit_offset_and_hardness(paper):
+    # sigma 0.52 nm, R 5 um, eta 13.3 um^-2: alpha = 2412.74 (sigma eta R)^2 = 2.885,
+    # y_s = 4 sigma / sqrt(pi alpha) = 0.691 nm (SPEC.md 7.2); H derived from psi = 0.52, not set
+    assert paper["materials"]["hardness_gpa"] is None
+    interface = build_tables(paper, roughness_statistics(paper))
+    assert float(interface["y_s"]) == pytest.approx(0.691, abs=1e-3)
+    assert float(interface["bandwidth_alpha"]) == pytest.approx(2.885, abs=1e-3)
+    assert float(interface["plasticity_index_gw"]) == pytest.approx(0.52, rel=1e-9)
+    assert float(interface["hardness"]) == pytest.approx(1.683, abs=1e-3)
+
+
+@pytest.mark.parametrize("delta, paper_clearance", [(4.0, 5.8), (7.0, 2.8)])
+def test_paper_clearances_follow_from_the_summit_datum(paper, delta, paper_clearance):
+    # SPEC.md 7.2: clearance = 11 - delta - (y_s + k sigma), y_s + k sigma = 0.691 + 0.509 = 1.200 nm.
+    # Without adhesion the slider flies at its nominal attitude (the DMW has zero mean; the rear law's
+    # rectification of the 0.266 nm rms DMW lifts it by 0.006 nm): the mean clearance is the paper's
+    # to its 0.1 nm rounding (0.05 nm; measured 5.8065 and 2.8065 nm). Adhesion pulls the TFC point down by a measured 0.04 and 0.13 nm
+    # (k_TFC 5.5e5 N/m against ~20 and ~70 uN): the paper's values assume the nominal attitude.
+    scene = paper.replace(scene={"effects": NO_ADHESION})
+    model, interface = build(scene)
+    nominal = 11.0 - delta - float(interface["y_s"]) - K * float(interface["sigma"])
+    assert nominal == pytest.approx(paper_clearance, abs=0.01)
+    run = sl.run_model(model, delta * NM)
+    s = sl.summarize(run)
+    assert s["contact_fraction"] == 0.0
+    assert s["clearance"] / NM == pytest.approx(paper_clearance, abs=0.05)
+    assert s["clearance"] / NM == pytest.approx(nominal, abs=0.01)
+    with_adhesion = sl.summarize(sl.run_model(build(paper)[0], delta * NM))
+    assert 0.0 < (s["clearance"] - with_adhesion["clearance"]) / NM < 0.15
+
+
+def test_separation_has_one_home(paper):
+    # histories, the kernel's exact extremes and the datum function agree: d = gap - y_s
+    model, interface = build(paper.replace(scene={"effects": NO_ADHESION}))
+    run = sl.run_model(model, 5 * NM)
+    hist = sl.histories(run)
+    p = model.p.copy()
+    p[dyn.P_DELTA] = 5 * NM
+    w = hist["disk_displacement"]
+    gap = dyn.gap_at(p, run.state[:, 0], run.state[:, 1], w)
+    np.testing.assert_array_equal(hist["separation"], dyn.separation_at(p, run.state[:, 0], run.state[:, 1], w))
+    np.testing.assert_allclose(gap - hist["separation"], float(interface["y_s"]) * NM, rtol=1e-9)
+    win = run.time >= model.transient
+    lo, hi = run.d_extremes
+    assert lo <= hist["separation"][win].min() + 1e-15 and hi >= hist["separation"][win].max() - 1e-15
+    # same datum: the 250-ns samples come within the output grid's aliasing (measured 0.004 nm) of the
+    # exact minimum, far below the 0.69 nm a datum mismatch would show
+    assert hist["separation"][win].min() - lo < 0.05 * NM
+
+
+# ---------------------------------------------------------------------------------------------
+# 7.4 TFC stiffening spring
+
+@pytest.mark.parametrize("p_exp", [0.0, 1.0, 1.5, 1.75, 4.0])
+def test_stiffening_law_zero_force_and_stiffness_by_finite_differences(p_exp):
+    g0, k_t = 11 * NM, 2e5
+    for g_n in (11 * NM, 6 * NM, 1.5 * NM):
+        F, k = ab.tfc_stiffening_force(g_n, g_n, g0, k_t, p_exp)
+        assert F == 0.0  # zero force at the nominal gap of the protrusion
+        g = np.linspace(0.5, 12.0, 47) * NM
+        h = 1e-6 * NM
+        Fp, _ = ab.tfc_stiffening_force(g + h, g_n, g0, k_t, p_exp)
+        Fm, _ = ab.tfc_stiffening_force(g - h, g_n, g0, k_t, p_exp)
+        _, kg = ab.tfc_stiffening_force(g, g_n, g0, k_t, p_exp)
+        law = k_t * ((g0 / g) ** p_exp - 1.0)
+        np.testing.assert_allclose(kg, law, rtol=1e-12)
+        np.testing.assert_allclose(-(Fp - Fm) / (2 * h), law, rtol=1e-6, atol=1e-6 * k_t)
+    # no added stiffness at g0 = FH0: the modal stiffness of the bearing is unchanged there
+    assert ab.tfc_stiffening_force(g0, g0, g0, k_t, p_exp)[1] == 0.0
+    # below TFC_MIN_GAP g0 the force continues linearly, continuous at the junction
+    gm = ab.TFC_MIN_GAP * g0
+    f_lo = ab.tfc_stiffening_force(gm * (1 - 1e-9), 6 * NM, g0, k_t, p_exp)[0]
+    f_hi = ab.tfc_stiffening_force(gm * (1 + 1e-9), 6 * NM, g0, k_t, p_exp)[0]
+    assert f_lo == pytest.approx(f_hi, rel=1e-6)
+
+
+def stiffening_scene(paper, k_t=3e5, p_exp=1.5, effects=NO_ADHESION, **extra):
+    return paper.replace(scene={"effects": effects},
+                         air_bearing={"tfc_stiffening": "gap-power", "tfc_stiffness_n_m": k_t,
+                                      "tfc_stiffening_exponent": p_exp, **extra})
+
+
+def kernel_rhs(model, delta, y, tfs=True):
+    """dy/dt of the kernel at t = 0 for state ``y`` (flying mode), with the scene's stiffening or none."""
+    p = model.p.copy()
+    p[dyn.P_DELTA] = delta
+    if model.tfc_stiffening is not None:
+        p[dyn.P_TF0] = sl._stiffening_potential(p[dyn.P_FH0] - delta, p[dyn.P_TG0], p[dyn.P_TP], p[dyn.P_TGMIN])
+    out = np.empty(4)
+    dyn.rhs(0.0, np.asarray(y, float), p, None, None, None, None, model.pitch,
+            model.tfc_stiffening if tfs else None, model.rear_linear, False, out)
+    return out
+
+
+def test_stiffening_kernel_force_matches_the_law(paper):
+    model, _ = build(stiffening_scene(paper))
+    s = model.slider
+    for delta in (0.0, 5 * NM, 9 * NM):
+        # zero force at the nominal attitude of every protrusion: static attitude unchanged
+        np.testing.assert_array_equal(kernel_rhs(model, delta, np.zeros(4)), kernel_rhs(model, delta, np.zeros(4), False))
+        # displaced: the difference of the accelerations is the law's force at the TFC point
+        y = np.array([-0.8 * NM, 0.3e-6, 0.0, 0.0])
+        g = 11 * NM - delta + y[0] - s.l_c * y[1]
+        F, _ = ab.tfc_stiffening_force(g, 11 * NM - delta, 11 * NM, 3e5, 1.5)
+        dv = kernel_rhs(model, delta, y) - kernel_rhs(model, delta, y, False)
+        assert dv[2] * s.m == pytest.approx(F, rel=1e-9)
+        assert dv[3] * s.I == pytest.approx(-s.l_c * F, rel=1e-9)
+
+
+def test_stiffening_leaves_the_modal_stiffness_at_the_nominal_gap(paper):
+    # at delta = 0 the TFC gap is g0 = FH0: the added force is second order in the displacement
+    model, _ = build(stiffening_scene(paper))
+    for amp in (1e-3 * NM, 1e-4 * NM):
+        y = np.array([amp, 0.0, 0.0, 0.0])
+        dv = kernel_rhs(model, 0.0, y) - kernel_rhs(model, 0.0, y, False)
+        # k(g0 + a) ~ k_t p a / g0: force ~ k_t p a^2 / (2 g0), i.e. stiffness / k_t ~ p a / (2 g0)
+        assert abs(dv[2] * model.slider.m / amp) < 3e5 * 1.5 * amp / (2 * 11 * NM) * 1.01
+
+
+def test_stiffening_off_is_bit_identical(paper):
+    # "none" ignores the stiffening keys, and k_t = 0 adds an exact zero: identical runs
+    base = paper.replace(scene={"effects": NO_ADHESION})
+    ref = sl.run_model(build(base)[0], 10 * NM)
+    other = sl.run_model(build(base.replace(air_bearing={"tfc_stiffness_n_m": 7e5,
+                                                         "tfc_stiffening_exponent": 3.0}))[0], 10 * NM)
+    zero = sl.run_model(build(stiffening_scene(paper, k_t=0.0))[0], 10 * NM)
+    assert ref.model.tfc_stiffening is None and zero.model.tfc_stiffening is not None
+    for r in (other, zero):
+        np.testing.assert_array_equal(r.state, ref.state)
+        np.testing.assert_array_equal(r.contact, ref.contact)
+        assert r.d_extremes == ref.d_extremes
+    # switched on, it changes the run (the spring acts)
+    on = sl.run_model(build(stiffening_scene(paper))[0], 10 * NM)
+    assert not np.array_equal(on.state, ref.state)
+
+
+def test_stiffening_scene_keys_are_checked(paper_config):
+    with pytest.raises(SceneError, match=r"tfc_stiffening_exponent.*\[0, 4\]"):
+        load_scene(paper_config, ["air_bearing.tfc_stiffening_exponent=5"])
+    with pytest.raises(SceneError, match="'none', 'gap-power'"):
+        load_scene(paper_config, ["air_bearing.tfc_stiffening=quadratic"])
+
+
+# ---------------------------------------------------------------------------------------------
+# variant registries
+
+def test_rear_law_registry_and_kernel(paper):
+    scene = paper.replace(scene={"effects": ["air_bearing", "pitch"]}, air_bearing={"rear_law": "linear"})
+    model = sl.build_model(scene, None, None, None)
+    assert model.rear_linear is not None
+    s = model.slider
+    y = np.array([-2 * NM, 1e-6, 0.0, 0.0])
+    out = kernel_rhs(model, 0.0, y)
+    g_r = s.g0 + y[0] - s.l_r * y[1]
+    F_f = -s.k_f * (y[0] + s.l_f * y[1])
+    F_r = ab.rear_force_linear(g_r, s.g0, s.n, s.rear_preload)
+    assert F_r == pytest.approx(s.k_r * (s.g0 - g_r), rel=1e-12)
+    assert out[2] == pytest.approx((F_f + F_r) / s.m, rel=1e-12)
+    # the power law differs at this 2 nm displacement by its curvature, n (n+1)/2 k_r x^2 / g0
+    power = sl.build_model(paper.replace(scene={"effects": ["air_bearing", "pitch"]}), None, None, None)
+    F_p = ab.rear_force(g_r, s.g0, s.n, s.rear_preload)
+    assert kernel_rhs(power, 0.0, y)[2] == pytest.approx((F_f + F_p) / s.m, rel=1e-12)
+    with pytest.raises(SceneError, match="'power', 'linear'"):
+        paper.replace(air_bearing={"rear_law": "cubic"})
+
+
+def test_friction_coefficient_law_gives_its_mu(paper):
+    scene = paper.replace(contact={"friction_law": "coefficient", "friction_coefficient": 1.2})
+    model, _ = build(scene)
+    run = sl.run_model(model, 11 * NM)
+    s = sl.summarize(run)
+    assert s["contact_fraction"] > 0.99
+    assert s["friction_coefficient"] == pytest.approx(1.2, rel=1e-9)
+    attrs = model_attrs(model, "test")
+    assert attrs["friction_law"] == "coefficient" and attrs["friction_coefficient"] == 1.2
+    # the default law's attribute says which one it is
+    assert model_attrs(build(paper)[0], "test")["friction_law"] == "shear-strength"
+    with pytest.raises(SceneError, match="friction_coefficient"):
+        paper.replace(contact={"friction_law": "coefficient"})
+    with pytest.raises(SceneError, match="'shear-strength', 'coefficient'"):
+        paper.replace(contact={"friction_law": "coulomb"})
+    with pytest.raises(ValueError, match="unknown"):
+        friction.friction_stress_table("coulomb", np.ones(2), np.ones(2))
+
+
+def test_fhm_measures(paper):
+    t = np.linspace(0.0, 1.0, 100001)
+    d = 1 * NM + 0.2 * NM * np.sin(2 * np.pi * 7 * t)
+    assert fhm(d, 11 * NM, "peak-to-peak") == pytest.approx(100 * 0.4 / 11, rel=1e-6)
+    assert fhm(d, 11 * NM, "3std") == pytest.approx(100 * 3 * 0.2 / np.sqrt(2) / 11, rel=1e-4)
+    assert set(FHM_MEASURES) == {"peak-to-peak", "3std"}
+    with pytest.raises(ValueError, match="peak-to-peak"):
+        fhm(d, 11 * NM, "rms")
+    with pytest.raises(SceneError, match="'peak-to-peak', '3std'"):
+        paper.replace(solver={"fhm_measure": "rms"})
+
+
+def test_scene_defaults_are_the_corrected_paper_values():
+    sc = scene_from_dict({})
+    assert sc["air_bearing"]["stiffness_root"] == "stiff-rear"
+    assert sc["air_bearing"]["tfc_stiffening"] == "none"
+    assert sc["air_bearing"]["rear_law"] == "power"
+    assert sc["roughness"]["summit_density_per_um2"] == 13.3
+    assert sc["contact"]["friction_law"] == "shear-strength"
