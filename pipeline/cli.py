@@ -17,7 +17,8 @@ from pathlib import Path
 from .io import DatasetError, results_dir
 from .scene import SceneError, load_scene
 
-STAGES = ("roughness", "dmw", "interface", "calibrate", "simulate", "sweep", "accuracy", "report", "run")
+STAGES = ("roughness", "dmw", "interface", "calibrate", "simulate", "sweep", "accuracy", "report", "run",
+          "identify", "sensitivity")
 #: The main job, in order (``hdi run`` / ``make run``).
 MAIN_JOB = ("roughness", "dmw", "interface", "calibrate", "sweep", "report")
 
@@ -33,7 +34,7 @@ def _parser() -> argparse.ArgumentParser:
                    help="override a scene key (TOML value syntax); repeatable")
     p.add_argument("--out", type=Path, default=None, help="output folder (default results/<scene name>/)")
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                   help="attach the sweep to an existing dask.distributed scheduler")
+                   help="attach the sweep (identify, sensitivity) to an existing dask.distributed scheduler")
     p.add_argument("--workers", type=int, default=None, help="local dask workers (default: one per core)")
     p.add_argument("--channel", default=None, help="roughness: AFM channel (default: the height channel)")
     p.add_argument("--detrend", default="plane", choices=("center", "height", "plane", "curvature"),

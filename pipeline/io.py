@@ -67,7 +67,8 @@ def file_hash(path: str | Path, chunk: int = 1 << 20) -> str:
 
 #: Stages that depend on the whole scene except these keys.
 STAGE_EXCLUDES: dict[str, tuple[str, ...]] = {
-    "calibrate": ("tfc.protrusion_nm", "sweep", "report", "scene.name", "scene.description"),
+    "calibrate": ("tfc.protrusion_nm", "sweep", "report", "identify", "sensitivity", "scene.name",
+                  "scene.description"),
 }
 
 

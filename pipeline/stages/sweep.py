@@ -74,7 +74,8 @@ def sweep_key(scene: Any, k: float | None) -> str:
     """Identity of a sweep: the whole scene (protrusion of [tfc] excluded) and k."""
     cfg = json.loads(scene.to_toml_text())
     cfg["tfc"].pop("protrusion_nm", None)
-    cfg.pop("report", None)
+    for section in ("report", "identify", "sensitivity"):  # settings of other stages
+        cfg.pop(section, None)
     blob = json.dumps({"config": cfg, "k": k}, sort_keys=True)
     return hashlib.sha256(blob.encode()).hexdigest()
 
