@@ -309,17 +309,20 @@ class EvaluationStore:
     def __getitem__(self, key: str) -> dict[str, Any]:
         return self.records[key]
 
-    def put(self, key: str, record: dict[str, Any]) -> None:
-        if key in self.records:
+    def put(self, items: Iterable[tuple[str, dict[str, Any]]]) -> None:
+        """Append ``(key, record)`` pairs not yet stored: one write, flushed and synced."""
+        new = [(k, {"key": k, **rec}) for k, rec in items if k not in self.records]
+        if not new:
             return
-        rec = {"key": key, **record}
         self.path.parent.mkdir(parents=True, exist_ok=True)
         with open(self.path, "a") as fh:
-            fh.write(json.dumps(rec, allow_nan=True) + "\n")
+            fh.write("".join(json.dumps(rec, allow_nan=True) + "\n" for _, rec in new))
             fh.flush()
             os.fsync(fh.fileno())
-        self.records[key] = rec
-        self.order.append(key)
+        for k, rec in new:
+            if k not in self.records:
+                self.records[k] = rec
+                self.order.append(k)
 
 
 @dataclass
@@ -361,13 +364,9 @@ class Evaluator:
         tasks = [(self.base, list(self.params), rows[i:i + self.batch_size], list(self.protrusions), self.inputs)
                  for i in range(0, len(rows), self.batch_size)]
 
-        def done(results: list[tuple[str, dict[str, Any]]]) -> None:
-            for k, rec in results:
-                self.store.put(k, rec)
-
         if tasks:
             self.batch_seconds += run_tasks(self.task, tasks, scheduler=self.scheduler, workers=self.workers,
-                                            on_done=done)
+                                            on_done=self.store.put)
             self.evaluated += len(rows)
         return [self.store[k] for k in keys]
 
