@@ -344,6 +344,7 @@ class Evaluator:
     task: Callable[..., list] = evaluate_batch
     batch_seconds: float = 0.0
     evaluated: int = 0
+    kernel_seconds: float = 0.0
 
     def __post_init__(self) -> None:
         self.base_hash = base_key(self.base)
@@ -368,6 +369,7 @@ class Evaluator:
             self.batch_seconds += run_tasks(self.task, tasks, scheduler=self.scheduler, workers=self.workers,
                                             on_done=self.store.put)
             self.evaluated += len(rows)
+            self.kernel_seconds += sum(self.store[k]["kernel_seconds"] for k in todo)
         return [self.store[k] for k in keys]
 
 

@@ -214,6 +214,7 @@ def run(scene: Any, out: Path, scheduler: str | None = None, workers: int | None
             results[method] = (morris if method == "morris" else sobol)(ev, params, scene)
     ds = dataset(params, results, scene)
     ds.attrs.update({"evaluations_computed": ev.evaluated, "batch_seconds": round(ev.batch_seconds, 3),
+                     "kernel_seconds": round(ev.kernel_seconds, 3),
                      "protrusions_per_evaluation": len(prots)})
     path = write_dataset(ds, out / "sensitivity.nc", scene, stage="sensitivity",
                          inputs=[p for p in (inputs.interface_path, inputs.dmw_path) if p])
