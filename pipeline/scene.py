@@ -74,6 +74,17 @@ _pos = (lambda v: v > 0, "a positive number")
 _nonneg = (lambda v: v >= 0, "a number >= 0")
 _frac = (lambda v: 0 <= v < 1, "a number in [0, 1)")
 
+#: Free [recon] parameters of ``hdi identify`` and ``hdi sensitivity`` with their bounds (SPEC.md 7): work of
+#: adhesion (7.5), DMW rms (5), modal damping, the two frequencies, contact damping.
+_FREE = [
+    {"key": "lubricant.work_of_adhesion_j_m2", "low": 0.03, "high": 0.11},
+    {"key": "dmw.rms_nm", "low": 0.08, "high": 0.30},
+    {"key": "air_bearing.damping_ratio", "low": 0.01, "high": 0.20},
+    {"key": "air_bearing.frequencies_khz[0]", "low": 60.0, "high": 200.0},
+    {"key": "air_bearing.frequencies_khz[1]", "low": 210.0, "high": 500.0},
+    {"key": "contact.damping_n_s_m", "low": 0.0, "high": 0.05},
+]
+
 #: The schema: section -> key -> Key. Defaults are the paper scene (SPEC.md section 6).
 SCHEMA: dict[str, dict[str, Key]] = {
     "scene": {
@@ -217,14 +228,7 @@ SCHEMA: dict[str, dict[str, Key]] = {
     },
     # hdi identify: free parameters with bounds, the paper's targets with tolerances, the optimiser budget
     "identify": {
-        "parameters": Key("tables", [
-            {"key": "lubricant.work_of_adhesion_j_m2", "low": 0.03, "high": 0.11},
-            {"key": "dmw.rms_nm", "low": 0.08, "high": 0.30},
-            {"key": "air_bearing.damping_ratio", "low": 0.01, "high": 0.20},
-            {"key": "air_bearing.frequencies_khz[0]", "low": 60.0, "high": 200.0},
-            {"key": "air_bearing.frequencies_khz[1]", "low": 210.0, "high": 500.0},
-            {"key": "contact.damping_n_s_m", "low": 0.0, "high": 0.05},
-        ], doc="free parameters: [{key = \"section.key\" or \"section.key[i]\", low, high}] (bounds in the key's "
+        "parameters": Key("tables", _FREE, doc="free parameters: [{key = \"section.key\" or \"section.key[i]\", low, high}] (bounds in the key's "
                "unit; SPEC.md 7) [recon]"),
         "targets": Key("strs", ["touchdown", "fhm_flying", "fhm_touchdown", "bouncing", "sliding_bv", "interference",
                                 "contact_force", "real_area", "mean_pressure", "friction_coefficient", "net_force"],
@@ -275,15 +279,9 @@ SCHEMA: dict[str, dict[str, Key]] = {
     },
     # hdi sensitivity: [recon] parameters with bounds; Morris screening and Sobol indices (SALib)
     "sensitivity": {
-        "parameters": Key("tables", [
-            {"key": "dmw.rms_nm", "low": 0.08, "high": 0.30},
-            {"key": "lubricant.work_of_adhesion_j_m2", "low": 0.03, "high": 0.11},
-            {"key": "air_bearing.damping_ratio", "low": 0.01, "high": 0.20},
-            {"key": "air_bearing.frequencies_khz[0]", "low": 60.0, "high": 200.0},
-            {"key": "air_bearing.frequencies_khz[1]", "low": 210.0, "high": 500.0},
+        "parameters": Key("tables", _FREE + [
             {"key": "air_bearing.rear_exponent", "low": 1.0, "high": 3.0},
             {"key": "roughness.summit_density_per_um2", "low": 5.0, "high": 20.0},
-            {"key": "contact.damping_n_s_m", "low": 0.0, "high": 0.05},
         ], doc="[recon] parameters and bounds: [{key = \"section.key\" or \"section.key[i]\", low, high}]"),
         "methods": Key("strs", ["morris", "sobol"], choices=("morris", "sobol"), doc="methods to run"),
         "morris_trajectories": Key("int", 10, (lambda v: v >= 2, "an integer >= 2"),

@@ -373,6 +373,18 @@ class Evaluator:
         return [self.store[k] for k in keys]
 
 
+def setup(scene: Any, out: Path, section: str, force: bool = False) -> tuple[list[Parameter], Inputs, EvaluationStore]:
+    """The free parameters of ``[section]``, the base inputs in ``out`` and the evaluation store
+    ``out/<section>.evals.jsonl`` (emptied first with ``force``)."""
+    where = str(scene.path) if scene.path else "<scene>"
+    params = parse_parameters(scene[section]["parameters"], where, f"{section}.parameters")
+    inputs = prepare_inputs(scene, out, force)
+    store_path = Path(out) / f"{section}.evals.jsonl"
+    if force:
+        store_path.unlink(missing_ok=True)
+    return params, inputs, EvaluationStore(store_path)
+
+
 def prepare_inputs(scene: Any, out: Path, force: bool = False) -> Inputs:
     """The base scene's ``interface.nc`` and ``dmw.nc`` in ``out`` (made when missing or stale), by path."""
     from .stages import ensure
@@ -451,9 +463,10 @@ class Target:
 
 
 def _grid(lo: float, hi: float, step: float, open_low: bool = False) -> tuple[float, ...]:
-    n = int(math.floor((hi - lo) / step + 1e-9))
-    pts = [round(lo + i * step, 9) for i in range(n + 1)]
-    return tuple(pts[1:] if open_low else pts)
+    """Protrusions ``lo, lo + step, ... <= hi`` [nm] (without ``lo`` when ``open_low``)."""
+    from .stages.sweep_grid import range_grid
+    pts = tuple(float(x) for x in range_grid({"start": lo, "stop": hi, "step": step}))
+    return pts[1:] if open_low else pts
 
 
 #: Target names, in report order.
@@ -515,24 +528,19 @@ def targets(scene: Any) -> list[Target]:
         "sliding_bv": Target("sliding_bv", f"BV {sl_}", "%", "below", c["sliding_bv_max_percent"],
                              c["sliding_bv_tolerance_percent"], (at,), at_sliding("fhm_bv"),
                              f"< {c['sliding_bv_max_percent']:g} %"),
-        "interference": Target("interference", f"interference {sl_}", "nm", "equal", c["interference_nm"],
-                               c["interference_tolerance_nm"], (at,), at_sliding("interference"),
-                               f"{c['interference_nm']:g} nm"),
-        "contact_force": Target("contact_force", f"contact force {sl_}", "mN", "equal", c["contact_force_mn"],
-                                c["contact_force_tolerance_mn"], (at,), at_sliding("contact_force"),
-                                f"about {c['contact_force_mn']:g} mN"),
-        "real_area": Target("real_area", f"real contact area {sl_}", "um2", "equal", c["real_area_um2"],
-                            c["real_area_tolerance_um2"], (at,), at_sliding("real_area"),
-                            f"{c['real_area_um2']:g} um2"),
-        "mean_pressure": Target("mean_pressure", f"mean contact pressure {sl_}", "MPa", "equal",
-                                c["mean_pressure_mpa"], c["mean_pressure_tolerance_mpa"], (at,),
-                                at_sliding("mean_pressure"), f"about {c['mean_pressure_mpa']:g} MPa"),
-        "friction_coefficient": Target("friction_coefficient", f"friction coefficient {sl_}", "1", "equal",
-                                       c["friction_coefficient"], c["friction_coefficient_tolerance"], (at,),
-                                       at_sliding("friction_coefficient"), f"about {c['friction_coefficient']:g}"),
         "net_force": Target("net_force", f"net interface force {sl_} (negative: attractive)", "mN", "below", 0.0,
                             c["net_force_tolerance_mn"], (at,), at_sliding("net_force"), "attractive (< 0)"),
     }
+    # the paper's light-contact numbers: name -> (long name, units, scene key of the value, of the tolerance)
+    for name, (long_name, units, key, tol) in {
+            "interference": ("interference", "nm", "interference_nm", "interference_tolerance_nm"),
+            "contact_force": ("contact force", "mN", "contact_force_mn", "contact_force_tolerance_mn"),
+            "real_area": ("real contact area", "um2", "real_area_um2", "real_area_tolerance_um2"),
+            "mean_pressure": ("mean contact pressure", "MPa", "mean_pressure_mpa", "mean_pressure_tolerance_mpa"),
+            "friction_coefficient": ("friction coefficient", "1", "friction_coefficient",
+                                     "friction_coefficient_tolerance")}.items():
+        all_targets[name] = Target(name, f"{long_name} {sl_}", units, "equal", c[key], c[tol], (at,), at_sliding(name),
+                                   f"{c[key]:g}" + ("" if units == "1" else f" {units}"))
     return [all_targets[name] for name in TARGET_NAMES if name in c["targets"]]
 
 

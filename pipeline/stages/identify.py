@@ -59,8 +59,8 @@ from scipy.optimize import differential_evolution
 from .. import plots
 from ..fanout import local_cluster
 from ..io import git_revision, var, write_dataset
-from ..study import (EvaluationStore, Evaluator, Parameter, Target, cost, evaluate_batch, parse_parameters,
-                     prepare_inputs, residuals, scene_value, target_protrusions, targets)
+from ..study import (Evaluator, Parameter, Target, cost, evaluate_batch, residuals, scene_value, setup,
+                     target_protrusions, targets)
 
 log = logging.getLogger(__name__)
 
@@ -371,21 +371,17 @@ def run(scene: Any, out: Path, scheduler: str | None = None, workers: int | None
     out = Path(out)
     cfg = scene["identify"]
     where = str(scene.path) if scene.path else "<scene>"
-    params = parse_parameters(cfg["parameters"], where, "identify.parameters")
     tlist = targets(scene)
     if not tlist:
         raise ValueError(f"{where}: identify.targets is empty: expected at least one target")
     prots = target_protrusions(tlist)
-    inputs = prepare_inputs(scene, out, force)
-    store_path = out / "identify.evals.jsonl"
-    if force:
-        store_path.unlink(missing_ok=True)
+    params, inputs, store = setup(scene, out, "identify", force)
     x_base = np.array([scene_value(scene, p) for p in params])
     if not np.all(np.isfinite(x_base)):
         bad = [p.name for p, v in zip(params, x_base) if not np.isfinite(v)]
         raise ValueError(f"{where}: identify.parameters {bad}: the scene sets no value for these keys")
     with local_cluster(scheduler, workers) as address:
-        ev = Evaluator(scene, params, prots, inputs, EvaluationStore(store_path), cfg["batch_size"], address, workers,
+        ev = Evaluator(scene, params, prots, inputs, store, cfg["batch_size"], address, workers,
                        task=options.get("task") or evaluate_batch)
         ident = Identification(ev, tlist, cfg["missing_residual"])
         result = identify(ident, params, x_base, cfg)

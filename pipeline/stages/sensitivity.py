@@ -53,10 +53,9 @@ import xarray as xr
 from .. import plots
 from ..fanout import local_cluster
 from ..io import var, write_dataset
-from ..study import (HEADLINES, EvaluationStore, Evaluator, Parameter, evaluate_batch, headline, parse_parameters,
-                     prepare_inputs)
+from ..study import HEADLINES, Evaluator, Parameter, evaluate_batch, headline, setup
 from .identify import _cf_units, var_name
-from .sweep_grid import protrusion_grid
+from .sweep_grid import protrusion_grid, range_grid
 
 log = logging.getLogger(__name__)
 
@@ -64,10 +63,7 @@ log = logging.getLogger(__name__)
 def grid(scene: Any) -> np.ndarray:
     """Protrusions [nm] of each evaluation: ``[sensitivity] protrusion_nm``, else the ``[sweep]`` grid."""
     g = scene["sensitivity"]["protrusion_nm"]
-    if g is None:
-        return protrusion_grid(scene)
-    n = int(np.floor((g["stop"] - g["start"]) / g["step"] + 1e-9)) + 1
-    return np.round(g["start"] + g["step"] * np.arange(n), 9)
+    return protrusion_grid(scene) if g is None else range_grid(g)
 
 
 def problem(params: Sequence[Parameter]) -> dict[str, Any]:
@@ -199,16 +195,11 @@ def run(scene: Any, out: Path, scheduler: str | None = None, workers: int | None
     """Stage entry point (``hdi sensitivity``): see the module docstring. Returns ``sensitivity.nc``."""
     out = Path(out)
     c = scene["sensitivity"]
-    where = str(scene.path) if scene.path else "<scene>"
-    params = parse_parameters(c["parameters"], where, "sensitivity.parameters")
     prots = [float(x) for x in grid(scene)]
-    inputs = prepare_inputs(scene, out, force)
-    store_path = out / "sensitivity.evals.jsonl"
-    if force:
-        store_path.unlink(missing_ok=True)
+    params, inputs, store = setup(scene, out, "sensitivity", force)
     results = {}
     with local_cluster(scheduler, workers) as address:
-        ev = Evaluator(scene, params, prots, inputs, EvaluationStore(store_path), c["batch_size"], address, workers,
+        ev = Evaluator(scene, params, prots, inputs, store, c["batch_size"], address, workers,
                        task=options.get("task") or evaluate_batch)
         for method in c["methods"]:
             results[method] = (morris if method == "morris" else sobol)(ev, params, scene)
