@@ -279,7 +279,10 @@ SCHEMA: dict[str, dict[str, Key]] = {
     },
     # hdi sensitivity: [recon] parameters with bounds; Morris screening and Sobol indices (SALib)
     "sensitivity": {
-        "parameters": Key("tables", _FREE + [
+        "parameters": Key("tables", [p for p in _FREE if "frequencies" not in p["key"]] + [
+            # frequency bounds with f1/f2 <= 0.54: closer pairs have no real (or no pitch-first) bearing root
+            {"key": "air_bearing.frequencies_khz[0]", "low": 90.0, "high": 140.0},
+            {"key": "air_bearing.frequencies_khz[1]", "low": 260.0, "high": 400.0},
             {"key": "air_bearing.rear_exponent", "low": 1.0, "high": 3.0},
             {"key": "roughness.summit_density_per_um2", "low": 5.0, "high": 20.0},
         ], doc="[recon] parameters and bounds: [{key = \"section.key\" or \"section.key[i]\", low, high}]"),

@@ -85,3 +85,26 @@ def test_indices_of_known_models_through_the_evaluation_path(write_scene, paper_
     np.testing.assert_allclose(ds["mu_star_touchdown"].values, 0.0)
     for v in ds.data_vars:
         assert "units" in ds[v].attrs and "long_name" in ds[v].attrs
+
+
+def stub_with_holes(base, params, rows, protrusions, inputs):
+    """The linear stand-in, with no contact at 11 nm (undefined contact force) when x4 > 2."""
+    out = stub_batch(base, params, rows, protrusions, inputs)
+    for (_, x), (_, rec) in zip(rows, out):
+        if x[3] > 2.0:
+            rec["outputs"]["contact_force"] = [float("nan")] * len(rec["protrusions"])
+    return out
+
+
+def test_morris_leaves_out_trajectories_with_undefined_points(write_scene, paper_config, tmp_path):
+    text = SCENE.format(paper=paper_config).replace("[sensitivity]", '[sensitivity]\nmethods = ["morris"]')
+    scene = load_scene(write_scene(text))
+    ds = xr.open_dataset(sensitivity.run(scene, tmp_path / "out", scheduler="synchronous", task=stub_with_holes),
+                         engine="netcdf4")
+    used = ds["mu_star_contact_force"].attrs["trajectories_used"]
+    undefined = ds["mu_star_contact_force"].attrs["undefined_samples"]
+    assert 2 <= used < 20 and undefined > 0
+    assert np.all(np.isfinite(ds["mu_star_contact_force"].values))
+    # the output without holes keeps every trajectory and its exact indices
+    assert ds["mu_star_fhm_flying"].attrs["trajectories_used"] == 20
+    np.testing.assert_allclose(ds["mu_star_fhm_flying"].values, np.abs(A) * 2 * math.pi, rtol=1e-9)

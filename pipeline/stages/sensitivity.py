@@ -18,9 +18,11 @@ Methods (SALib [HU17]_):
   extension of a Sobol' sequence, ``N (parameters + 2)`` evaluations (``sobol_samples = N``), with
   bootstrap confidence intervals.
 
-A sample whose output does not exist (no touchdown on the grid, no contact at 11 nm, a failed run)
-leaves that output undefined for the sample; the indices of an output with any undefined sample are
-NaN, and ``undefined_samples`` says how many (a parameter range that removes the contact is itself a
+A sample whose output does not exist (no touchdown on the grid, no contact at 11 nm, a failed run:
+e.g. two frequencies no real air bearing has) leaves that output undefined for the sample. Morris
+leaves out the trajectories with an undefined point (``trajectories_used`` on each index); the Sobol
+indices of an output with any undefined sample are NaN (the estimator needs every sample);
+``undefined_samples`` says how many (a parameter range that removes the contact is itself a
 finding). An output that does not vary at all has NaN Sobol indices (zero variance).
 
 Writes ``sensitivity.nc`` (indices with confidence intervals per output and parameter, the samples
@@ -86,13 +88,18 @@ def morris(ev: Evaluator, params: Sequence[Parameter], scene: Any) -> tuple[np.n
     X = sample.sample(prob, N=c["morris_trajectories"], num_levels=c["morris_levels"], seed=c["seed"])
     Y = _outputs(ev, X, scene)
     out = {}
+    step = len(params) + 1
     for name, y in Y.items():
-        if not np.all(np.isfinite(y)):
+        # a trajectory with an undefined point has no complete elementary effects: leave it out
+        whole = np.all(np.isfinite(y.reshape(-1, step)), axis=1)
+        if whole.sum() < 2:
             out[name] = None
             continue
-        si = analyze.analyze(prob, X, y, num_resamples=c["bootstrap"], conf_level=c["confidence_level"],
+        rows = np.repeat(whole, step)
+        si = analyze.analyze(prob, X[rows], y[rows], num_resamples=c["bootstrap"], conf_level=c["confidence_level"],
                              num_levels=c["morris_levels"], seed=c["seed"])
         out[name] = {k: np.asarray(si[k], float) for k in ("mu", "mu_star", "sigma", "mu_star_conf")}
+        out[name]["trajectories_used"] = int(whole.sum())
     return X, Y, out
 
 
@@ -149,9 +156,10 @@ def dataset(params: Sequence[Parameter], results: dict[str, tuple], scene: Any) 
                 if m != method:
                     continue
                 values = ind[key] if ind is not None else np.full(len(params), np.nan)
+                extra = {"trajectories_used": ind["trajectories_used"]} if ind and "trajectories_used" in ind else {}
                 data[f"{key}_{out}"] = var(values, "parameter", u or units, f"{text} of the {long_name}",
-                                           confidence_level=level,
-                                           undefined_samples=int(np.sum(~np.isfinite(y))))
+                                           confidence_level=level, undefined_samples=int(np.sum(~np.isfinite(y))),
+                                           **extra)
     ds = xr.Dataset(data, coords=coords)
     ds.attrs.update({"methods": " ".join(results), "outputs": " ".join(HEADLINES),
                      "sampling": "uniform within [low, high] of each parameter (SALib)",
