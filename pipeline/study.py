@@ -315,7 +315,14 @@ class EvaluationStore:
         if not new:
             return
         self.path.parent.mkdir(parents=True, exist_ok=True)
+        cut = False
+        if self.path.is_file() and self.path.stat().st_size > 0:
+            with open(self.path, "rb") as fh:
+                fh.seek(-1, os.SEEK_END)
+                cut = fh.read(1) != b"\n"
         with open(self.path, "a") as fh:
+            if cut:  # a line cut short by a kill: end it, so the new records start on their own lines
+                fh.write("\n")
             fh.write("".join(json.dumps(rec, allow_nan=True) + "\n" for _, rec in new))
             fh.flush()
             os.fsync(fh.fileno())

@@ -123,3 +123,16 @@ def test_interval_interpolates_crossings():
     lo, hi = identify._interval(g, m, 1.0, 2.0)
     assert lo == pytest.approx(1.0)
     assert hi == pytest.approx(3.0 + 0.5 / 1.5)
+
+
+def test_store_ignores_a_line_cut_short_by_a_kill(tmp_path):
+    path = tmp_path / "identify.evals.jsonl"
+    store = study.EvaluationStore(path)
+    store.put([("a", {"params": [1.0], "outputs": {}}), ("b", {"params": [2.0], "outputs": {}})])
+    with open(path, "a") as fh:
+        fh.write('{"key": "c", "params": [3.')  # the process died mid-write
+    again = study.EvaluationStore(path)
+    assert list(again.records) == ["a", "b"] and again["b"]["params"] == [2.0]
+    again.put([("c", {"params": [3.0], "outputs": {}})])  # the rerun computes it again and appends it
+    assert study.EvaluationStore(path)["c"]["params"] == [3.0]
+    assert path.read_text().count("\n\n") == 0  # no empty lines from whole appends
