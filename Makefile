@@ -12,7 +12,7 @@ export MPLBACKEND := Agg
 export PYTHONHASHSEED := 0
 
 .PHONY: setup run test test-fast test-slow bench sweep readme clean \
-        roughness dmw interface calibrate simulate accuracy report
+        roughness dmw interface calibrate simulate accuracy report identify sensitivity
 
 setup: $(STAMP)
 
@@ -50,7 +50,8 @@ sweep: $(STAMP)
 readme: $(STAMP)
 	$(BIN)/hdi report $(SCENE) --readme README.md
 
-roughness dmw interface calibrate simulate accuracy report: $(STAMP)
+## parameter studies: identify the free [recon] parameters from the paper's targets; their sensitivity
+roughness dmw interface calibrate simulate accuracy report identify sensitivity: $(STAMP)
 	$(BIN)/hdi $@ $(SCENE) $(ARGS)
 
 clean:

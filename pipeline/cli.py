@@ -42,7 +42,7 @@ def _parser(stages: dict[str, runner.Stage]) -> argparse.ArgumentParser:
                    help="override a scene key (TOML value syntax); repeatable")
     p.add_argument("--out", type=Path, default=None, help="output folder (default results/<scene name>/)")
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                   help="attach the sweep to an existing dask.distributed scheduler")
+                   help="attach the sweep (identify, sensitivity) to an existing dask.distributed scheduler")
     p.add_argument("--workers", type=int, default=None, help="local dask workers (default: one per core)")
     p.add_argument("--channel", default=None, help="roughness: AFM channel (default: the height channel)")
     p.add_argument("--detrend", default=None, choices=("center", "height", "plane", "curvature"),

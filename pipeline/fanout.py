@@ -24,13 +24,14 @@ inputs travel by file path inside ``args``, not as arrays.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
 import signal
 import threading
 import time
 from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
-from typing import Any, Callable, Iterable
+from typing import Any, Callable, Iterable, Iterator
 
 log = logging.getLogger(__name__)
 
@@ -98,6 +99,39 @@ def _threads(fn: Callable[..., Any], tasks: list[tuple], n: int, done: Callable[
         pool.shutdown(wait=True, cancel_futures=True)
 
 
+def _process_cluster(n: int):
+    """A ``distributed.LocalCluster`` of ``n`` single-threaded worker processes, no dashboard."""
+    from distributed import LocalCluster
+    # The worker processes inherit an ignored SIGINT: Ctrl-C reaches the whole process group, and only
+    # this process should answer it (one line from the CLI, not a traceback per worker).
+    main = threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN) if main else None
+    try:
+        return LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
+                            silence_logs=logging.CRITICAL)  # shutdown races log CommClosedError
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGINT, previous)
+
+
+@contextlib.contextmanager
+def local_cluster(scheduler: str | None = None, workers: int | None = None) -> Iterator[str | None]:
+    """A ``scheduler`` for repeated :func:`run_tasks` calls (one optimiser generation after another).
+
+    ``"processes"`` starts one process cluster for the whole ``with`` block and yields its address, so
+    its start-up is paid once; anything else (``None``: threads, ``"synchronous"``, an address) costs
+    nothing to start and is yielded unchanged.
+    """
+    if scheduler != "processes":
+        yield scheduler
+        return
+    cluster = _process_cluster(workers or os.cpu_count() or 1)
+    try:
+        yield cluster.scheduler_address
+    finally:
+        cluster.close()
+
+
 def _warm_worker() -> None:
     """Import the model on a worker (and load its numba cache index) before timing starts."""
     from . import slider  # noqa: F401 (imported for its side effect)
@@ -106,20 +140,10 @@ def _warm_worker() -> None:
 def _distributed(fn: Callable[..., Any], tasks: list[tuple], scheduler: str, workers: int | None,
                  done: Callable[[Any], None]) -> float:
     """A local process cluster (``scheduler="processes"``) or the cluster at a scheduler address."""
-    from distributed import Client, LocalCluster, as_completed
+    from distributed import Client, as_completed
     cluster = None
     if scheduler == "processes":
-        n = local_workers(workers, len(tasks))
-        # The worker processes inherit an ignored SIGINT: Ctrl-C reaches the whole process group, and only
-        # this process should answer it (one line from the CLI, not a traceback per worker).
-        main = threading.current_thread() is threading.main_thread()
-        previous = signal.signal(signal.SIGINT, signal.SIG_IGN) if main else None
-        try:
-            cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
-                                   silence_logs=logging.CRITICAL)  # shutdown races log CommClosedError
-        finally:
-            if previous is not None:
-                signal.signal(signal.SIGINT, previous)
+        cluster = _process_cluster(local_workers(workers, len(tasks)))
         client = Client(cluster)
     else:
         client = Client(scheduler)

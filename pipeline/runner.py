@@ -102,6 +102,9 @@ class Stage:
         Part of ``hdi run`` (when :attr:`applies` to the scene).
     applies
         ``applies(scene) -> bool``: whether ``hdi run`` includes the stage for this scene.
+    optional
+        Files of the results folder the stage reads when they exist (made by stages it does not depend
+        on, e.g. ``identify.nc`` for the report): hashed by content into the key, absent or not.
     finish
         ``finish(scene, out, options)``: run after the stage was asked for and is current (computed or
         not), for side effects outside the results folder (``report --readme``).
@@ -122,6 +125,7 @@ class Stage:
     order: float = 100.0
     main_job: bool = False
     applies: Callable[[Scene], bool] = _constant(True)
+    optional: tuple[str, ...] = ()
     finish: Callable[[Scene, Path, dict], None] | None = None
     version: int = 1
     doc: str = ""
@@ -406,6 +410,8 @@ class Runner:
                 "files": {role: self._hash(p) for role, p in self.files(name).items()},
                 "upstream": {u: self.key(u) for u in st.upstream_names(self.scene)},
                 "options": {o: self.options.get(o) for o in st.options},
+                "optional": {o: self._hash(self.out / o) if (self.out / o).is_file() else None
+                             for o in st.optional},
             }
             self._keys[name] = _digest(payload)
         return self._keys[name]

@@ -79,6 +79,17 @@ _pos = (lambda v: v > 0, "a positive number")
 _nonneg = (lambda v: v >= 0, "a number >= 0")
 _frac = (lambda v: 0 <= v < 1, "a number in [0, 1)")
 
+#: Free [recon] parameters of ``hdi identify`` and ``hdi sensitivity`` with their bounds (SPEC.md 7): work of
+#: adhesion (7.5), DMW rms (5), modal damping, the two frequencies, contact damping.
+_FREE = [
+    {"key": "lubricant.work_of_adhesion_j_m2", "low": 0.03, "high": 0.11},
+    {"key": "dmw.rms_nm", "low": 0.08, "high": 0.30},
+    {"key": "air_bearing.damping_ratio", "low": 0.01, "high": 0.20},
+    {"key": "air_bearing.frequencies_khz[0]", "low": 60.0, "high": 200.0},
+    {"key": "air_bearing.frequencies_khz[1]", "low": 210.0, "high": 500.0},
+    {"key": "contact.damping_n_s_m", "low": 0.0, "high": 0.05},
+]
+
 #: The schema: section -> key -> Key. Defaults are the paper scene (SPEC.md section 6).
 SCHEMA: dict[str, dict[str, Key]] = {
     "scene": {
@@ -237,6 +248,81 @@ SCHEMA: dict[str, dict[str, Key]] = {
     },
     "report": {
         "histories_nm": Key("floats", [5.0, 11.0], doc="protrusions shown in the history figures [nm]"),
+    },
+    # hdi identify: free parameters with bounds, the paper's targets with tolerances, the optimiser budget
+    "identify": {
+        "parameters": Key("tables", _FREE, doc="free parameters: [{key = \"section.key\" or \"section.key[i]\", low, high}] (bounds in the key's "
+               "unit; SPEC.md 7) [recon]"),
+        "targets": Key("strs", ["touchdown", "fhm_flying", "fhm_touchdown", "bouncing", "sliding_bv", "interference",
+                                "contact_force", "real_area", "mean_pressure", "friction_coefficient", "net_force"],
+                       choices=("touchdown", "fhm_flying", "fhm_touchdown", "bouncing", "sliding_bv", "interference",
+                                "contact_force", "real_area", "mean_pressure", "friction_coefficient", "net_force"),
+                       doc="targets the identification fits (touchdown uses [touchdown] onset_nm/previous_nm)"),
+        "touchdown_tolerance_nm": Key("float", 0.1, _pos,
+                                      doc="tolerance of the touchdown target on the minimum clearance [nm] (recon: "
+                                          "half the 0.2 nm actuation step)"),
+        "fhm_flying_percent": Key("float", 12.5, _pos, doc="flying FHM over fhm_flying_range_nm [%] (paper)"),
+        "fhm_flying_range_nm": Key("floats", [4.0, 7.0], (lambda v: v[0] <= v[1], "lo <= hi"), length=2,
+                                   doc="protrusions of the flying FHM target [nm] (paper)"),
+        "fhm_flying_tolerance_percent": Key("float", 1.0, _pos, doc="tolerance of the flying FHM [%] (recon)"),
+        "fhm_touchdown_percent": Key("float", 9.0, _pos, doc="FHM just before touchdown [%] (paper)"),
+        "fhm_touchdown_at_nm": Key("float", 9.0, _nonneg, doc="protrusion of that FHM [nm] (paper)"),
+        "fhm_touchdown_tolerance_percent": Key("float", 1.0, _pos, doc="its tolerance [%] (recon)"),
+        "bouncing_min_percent": Key("float", 20.0, _pos, doc="BV exceeds this after touchdown [%] (paper)"),
+        "bouncing_range_nm": Key("floats", [9.8, 10.8], (lambda v: v[0] < v[1], "lo < hi"), length=2,
+                                 doc="bouncing band (lo, hi] [nm] (paper)"),
+        "bouncing_tolerance_percent": Key("float", 2.0, _pos, doc="tolerance of the bouncing target [%] (recon)"),
+        "sliding_at_nm": Key("float", 11.0, _nonneg, doc="protrusion of the light-contact targets [nm] (paper)"),
+        "sliding_bv_max_percent": Key("float", 2.0, _pos, doc="BV in light contact below this [%] (paper)"),
+        "sliding_bv_tolerance_percent": Key("float", 0.5, _pos, doc="its tolerance [%] (recon)"),
+        "interference_nm": Key("float", 0.58, _pos, doc="interference in light contact [nm] (paper)"),
+        "interference_tolerance_nm": Key("float", 0.05, _pos, doc="its tolerance [nm] (recon)"),
+        "contact_force_mn": Key("float", 1.0, _pos, doc="contact force in light contact [mN] (paper, ~1 mN)"),
+        "contact_force_tolerance_mn": Key("float", 0.2, _pos, doc="its tolerance [mN] (recon)"),
+        "real_area_um2": Key("float", 2.7, _pos, doc="real contact area in light contact [um^2] (paper)"),
+        "real_area_tolerance_um2": Key("float", 0.3, _pos, doc="its tolerance [um^2] (recon)"),
+        "mean_pressure_mpa": Key("float", 400.0, _pos, doc="mean contact pressure in light contact [MPa] (paper)"),
+        "mean_pressure_tolerance_mpa": Key("float", 50.0, _pos, doc="its tolerance [MPa] (recon)"),
+        "friction_coefficient": Key("float", 1.2, _pos, doc="friction coefficient in light contact [1] (paper)"),
+        "friction_coefficient_tolerance": Key("float", 0.15, _pos, doc="its tolerance [1] (recon)"),
+        "net_force_tolerance_mn": Key("float", 0.05, _pos,
+                                      doc="tolerance of the attractive net force (< 0) in light contact [mN] (recon)"),
+        "flying_step_nm": Key("float", 1.0, _pos, doc="protrusion step over the flying FHM range [nm]"),
+        "band_step_nm": Key("float", 0.2, _pos, doc="protrusion step over the bouncing band [nm] (paper's step)"),
+        "missing_residual": Key("float", 10.0, _pos,
+                                doc="residual of a target a candidate cannot produce (no contact, failed run) [1]"),
+        "population": Key("int", 10, (lambda v: v >= 4, "an integer >= 4"),
+                          doc="differential evolution: population = population x parameters"),
+        "generations": Key("int", 20, (lambda v: v >= 1, "an integer >= 1"),
+                           doc="differential evolution: largest number of generations"),
+        "seed": Key("int", 20090601, _nonneg, doc="seed of the optimiser"),
+        "batch_size": Key("int", 6, (lambda v: v >= 1, "an integer >= 1"), doc="candidates per dask task"),
+        "profile_points": Key("int", 11, (lambda v: v >= 3, "an integer >= 3"),
+                              doc="points of each parameter profile across its bounds"),
+    },
+    # hdi sensitivity: [recon] parameters with bounds; Morris screening and Sobol indices (SALib)
+    "sensitivity": {
+        "parameters": Key("tables", [p for p in _FREE if "frequencies" not in p["key"]] + [
+            # frequency bounds with f1/f2 <= 0.54: closer pairs have no real (or no pitch-first) bearing root
+            {"key": "air_bearing.frequencies_khz[0]", "low": 90.0, "high": 140.0},
+            {"key": "air_bearing.frequencies_khz[1]", "low": 260.0, "high": 400.0},
+            {"key": "air_bearing.rear_exponent", "low": 1.0, "high": 3.0},
+            {"key": "roughness.summit_density_per_um2", "low": 5.0, "high": 20.0},
+        ], doc="[recon] parameters and bounds: [{key = \"section.key\" or \"section.key[i]\", low, high}]"),
+        "methods": Key("strs", ["morris", "sobol"], choices=("morris", "sobol"), doc="methods to run"),
+        "morris_trajectories": Key("int", 10, (lambda v: v >= 2, "an integer >= 2"),
+                                   doc="Morris trajectories (each parameters + 1 evaluations)"),
+        "morris_levels": Key("int", 4, (lambda v: v >= 2 and v % 2 == 0, "an even integer >= 2"),
+                             doc="Morris grid levels"),
+        "sobol_samples": Key("int", 32, (lambda v: v >= 2 and v & (v - 1) == 0, "a power of 2"),
+                             doc="Sobol base samples N (N x (parameters + 2) evaluations)"),
+        "confidence_level": Key("float", 0.95, (lambda v: 0 < v < 1, "a number in (0, 1)"),
+                                doc="level of the bootstrap confidence intervals [1]"),
+        "bootstrap": Key("int", 200, (lambda v: v >= 10, "an integer >= 10"), doc="bootstrap resamples"),
+        "protrusion_nm": Key("range", None, doc="protrusion grid of each evaluation {start, stop, step} [nm] "
+                                                "(default: [sweep] protrusion_nm)"),
+        "seed": Key("int", 20090601, _nonneg, doc="seed of the samples and the bootstrap"),
+        "batch_size": Key("int", 2, (lambda v: v >= 1, "an integer >= 1"), doc="evaluations per dask task"),
     },
 }
 

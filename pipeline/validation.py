@@ -51,8 +51,8 @@ PLASTICITY_BOUNDS = (0.05, 100.0)
 #: Options and the stages that use them (``run`` uses those of all its stages; ``--force`` and
 #: ``--out`` apply to every stage). ``--channel``/``--detrend`` act only on AFM files given directly.
 OPTION_STAGES: dict[str, tuple[str, ...]] = {
-    "scheduler": ("sweep", "run"),
-    "workers": ("sweep", "run"),
+    "scheduler": ("sweep", "run", "calibrate", "identify", "sensitivity"),
+    "workers": ("sweep", "run", "calibrate", "identify", "sensitivity"),
     "yes": ("sweep", "run"),
     "readme": ("report", "run"),
     "channel": ("roughness FILE...",),
@@ -178,7 +178,7 @@ def check_options(stage: str, scene: Any, *, out: str | Path | None = None, sche
         check_grid(scene, yes)
     if scene is not None and stage in ("report", "run"):
         check_report_histories(scene)
-    if stage in ("sweep", "run"):
+    if stage in OPTION_STAGES["scheduler"]:
         check_scheduler(scheduler)
 
 

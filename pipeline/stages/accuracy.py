@@ -589,7 +589,8 @@ def _upstream(scene: Any) -> tuple[str, ...]:
 
 STAGE = Stage(
     "accuracy", compute, outputs=("accuracy.nc", "figures/work_precision.png"),
-    reads=("*",), excludes=("sweep", "report", "scene.name", "scene.description"), upstream=_upstream,
+    reads=("*",), excludes=("sweep", "report", "identify", "sensitivity", "scene.name", "scene.description"),
+    upstream=_upstream,
     options=("points", "reference", "knobs", "only", "repeat", "tolerance", "combined_tolerance", "k"),
     order=55, doc="error and wall time of each accuracy knob, accuracy.nc and figures/work_precision.png")
 

@@ -338,7 +338,8 @@ STAGE = Stage(
     # everything but the single protrusion, the report and the sweep (except its protrusion grid,
     # on which the touchdown curve is evaluated)
     reads=("*", "sweep.protrusion_nm"),
-    excludes=("tfc.protrusion_nm", "sweep", "report", "scene.name", "scene.description"),
+    excludes=("tfc.protrusion_nm", "sweep", "report", "identify", "sensitivity", "scene.name",
+              "scene.description"),
     upstream=lambda scene: tuple(u for u in upstream(scene) if u != "calibrate"),
     order=40, main_job=True, applies=lambda scene: scene.has("contact"),
     doc="the contact-criterion constant k from the measured touchdown, calibration.nc")

@@ -699,6 +699,70 @@ def comparison_markdown(combos: list, data: dict, scene: Any, name: str) -> str:
     return "\n".join(text) + "\n"
 
 
+# ------------------------------------------------------------------- comparison: paper / reconstructed / identified
+def identification_markdown(ident: xr.Dataset) -> str:
+    """Three columns per target of ``identify.nc``: the paper, the reconstructed scene, the identified scene.
+
+    Both scenes are evaluated the same way (the target protrusions, k of :func:`pipeline.study.criterion_k`).
+    A target that no evaluation brought within tolerance (smallest ``|residual|`` over all of them > 1)
+    is listed with the closest value reached and the range of values over every evaluation (measured).
+    """
+    i0, i1 = int(ident.attrs["reconstructed_evaluation"]), int(ident.attrs["best_evaluation"])
+    names = [str(t) for t in ident["target"].values]
+    res = ident["residual"].values
+    rows, unreached = [], []
+    for j, t in enumerate(names):
+        v = ident[f"value_{t}"]
+        u = "" if v.attrs["units"] == "1" else f" {v.attrs['units']}"
+        vals = v.values
+
+        def cell(i: int) -> str:
+            return (f"{_g(vals[i])}{u}" if np.isfinite(vals[i]) else "none") + f" (r = {res[i, j]:+.2g})"
+
+        rows.append([v.attrs["long_name"], str(v.attrs["paper"]), cell(i0), cell(i1)])
+        best = float(ident["best_abs_residual"][j])
+        if best > 1.0:
+            k = int(np.nanargmin(np.abs(res[:, j])))
+            fin = vals[np.isfinite(vals)]
+            span = f"{_g(fin.min())}-{_g(fin.max())}{u}" if fin.size else "never defined"
+            unreached.append(f"**{v.attrs['long_name']}** (paper: {v.attrs['paper']}): the closest of "
+                             f"{len(vals)} evaluations within the bounds reached "
+                             f"{_g(vals[k]) if np.isfinite(vals[k]) else 'none'}{u} (residual {res[k, j]:+.3g}; "
+                             f"tolerance {_g(float(v.attrs['tolerance']))}{u}); over all evaluations it spans {span}"
+                             f" ({int(np.sum(~np.isfinite(vals)))} without a value).")
+    fly = ident.get("value_fhm_flying")
+    band = ident.get("value_bouncing")
+    if fly is not None and band is not None and any("bouncing" in u_ for u_ in unreached):
+        ratio = band.values / fly.values
+        ok = np.isfinite(ratio)
+        if ok.any():
+            unreached.append(f"Why the bouncing band is out of reach (measured): the smallest BV after touchdown is at "
+                             f"most {_g(float(np.nanmax(ratio)))} x the flying FHM over all {int(ok.sum())} "
+                             "evaluations with both, so BV > 20 % with a flying FHM of about 12.5 % needs a "
+                             "mechanism the free parameters do not provide (SPEC.md 7.4, 7.7).")
+    params = [str(p) for p in ident["parameter"].values]
+    prow = []
+    for p in params:
+        best = ident[f"{p}_best"]
+        lo, hi = ident[f"{p}_interval"].values
+        prow.append([best.attrs["scene_key"], f"{_g(float(ident[f'{p}_reconstructed']))}",
+                     f"{_g(float(best))}", f"[{_g(lo)}, {_g(hi)}]" if np.isfinite(lo) else "none",
+                     plots.unit_text(best.attrs["units"])])
+    text = ["", "## Paper, reconstructed scene, identified scene", "",
+            f"From `identify.nc` ({ident.sizes['evaluation']} evaluations; identified scene "
+            f"`{Path(str(ident.attrs.get('identified_scene', ''))).name}`). r = residual / tolerance "
+            "(inequality targets: 0 on the admissible side); both scenes evaluated at the target protrusions "
+            "with the same k.", "",
+            _md_table(["target", "paper", "reconstructed", "identified"], rows), "",
+            _md_table(["parameter", "reconstructed", "identified", "interval", "unit"], prow), "",
+            f"Interval: {ident.attrs['interval_criterion']}. Correlation: {ident.attrs['correlation_method']}.", ""]
+    if unreached:
+        text += ["### Targets no parameter set within the bounds reaches", ""] + [f"- {u}" for u in unreached]
+    else:
+        text += ["Every target is reached within tolerance by the identified scene."]
+    return "\n".join(text) + "\n"
+
+
 # ------------------------------------------------------------------------------------------ entry point
 def compute(scene: Any, inputs: Inputs) -> dict:
     """Draw the figures (``figures/``) and write the tables (``report/``) under ``inputs.staging``
@@ -715,7 +779,10 @@ def compute(scene: Any, inputs: Inputs) -> dict:
     header, rows = summary_table(combos)
     write_csv(repdir / "summary.csv", header, rows)
     _write_text(repdir / "summary.md", summary_markdown(combos, data, name, made, skipped))
-    _write_text(repdir / "comparison.md", comparison_markdown(combos, data, scene, name))
+    comparison = comparison_markdown(combos, data, scene, name)
+    if (inputs.out / "identify.nc").is_file():  # hdi identify has run for this scene: the three-column comparison
+        comparison += identification_markdown(read_dataset(inputs.out / "identify.nc", stage="identify"))
+    _write_text(repdir / "comparison.md", comparison)
     for f, why in skipped.items():
         log.info("report: skipped %s: %s", f, why)
     log.info("report: %d figures, 3 tables", len(made))
@@ -741,7 +808,7 @@ STAGE = Stage(
     "report", compute,
     outputs=tuple(f"figures/{f}" for f in FIGURES) + ("report/summary.csv", "report/summary.md",
                                                        "report/comparison.md"),
-    reads=("*",), upstream=_upstream, finish=_finish, order=60, main_job=True,
+    reads=("*",), upstream=_upstream, optional=("identify.nc",), finish=_finish, order=60, main_job=True,
     doc="the paper's figures, a summary table and the comparison with the paper")
 
 

@@ -168,7 +168,7 @@ def upstream(scene: Any) -> tuple[str, ...]:
 
 STAGE = Stage(
     "simulate", compute, outputs=("histories.nc", "summary.nc"),
-    reads=("*",), excludes=("sweep", "report", "scene.name", "scene.description"),
+    reads=("*",), excludes=("sweep", "report", "identify", "sensitivity", "scene.name", "scene.description"),
     upstream=upstream, order=45, doc="one protrusion in time, histories.nc and summary.nc")
 
 

@@ -400,7 +400,8 @@ STAGE = Stage(
     "sweep", compute, outputs=("sweep.nc", "sweep_histories.nc"),
     reads=("*", "report.histories_nm"),
     # (the batch size changes how the work is cut, not the result: parts of another cut are rejected)
-    excludes=("tfc.protrusion_nm", "report", "scene.name", "scene.description", "sweep.batch_size"),
+    excludes=("tfc.protrusion_nm", "report", "identify", "sensitivity", "scene.name", "scene.description",
+              "sweep.batch_size"),
     files=_files, upstream=upstream, order=50, main_job=True,
     doc="protrusion x roughness x damping on dask, sweep.nc and sweep_histories.nc")
 

@@ -18,7 +18,11 @@ from ..scene import SCHEMA, SceneError, _check_value
 
 def protrusion_grid(scene: Any) -> np.ndarray:
     """Protrusions [nm] of ``[sweep] protrusion_nm``, rounded to 1e-9 nm so labels are exact."""
-    g = scene["sweep"]["protrusion_nm"]
+    return range_grid(scene["sweep"]["protrusion_nm"])
+
+
+def range_grid(g: dict[str, float]) -> np.ndarray:
+    """Points [nm] of a range table ``{start, stop, step}`` (``stop`` included when on the grid), rounded to 1e-9."""
     n = int(np.floor((g["stop"] - g["start"]) / g["step"] + 1e-9)) + 1
     return np.round(g["start"] + g["step"] * np.arange(n), 9)
 

@@ -1,0 +1,442 @@
+"""Stage ``identify``: the unknown [recon] parameters from the paper's published targets.
+
+``hdi identify CONFIG`` fits the free parameters of ``[identify] parameters`` (scene keys with bounds)
+to the targets of ``[identify]`` (:func:`pipeline.study.targets`: touchdown at 9.8 nm and not 9.6,
+FHM 12.5 % at 4-7 nm and ~9 % at 9 nm, BV > 20 % after touchdown, and the light-contact numbers at
+11 nm), each candidate evaluated as a small sweep at the protrusions the targets need
+(:mod:`pipeline.study`) on the dask fan-out (:mod:`pipeline.fanout`; local process cluster by
+default, ``--scheduler`` for a cluster). The objective is the sum of squared residuals, each
+normalised by its tolerance (SPEC.md section 7).
+
+Method
+------
+1. **Global search**: :func:`scipy.optimize.differential_evolution` [SP97]_ (``best1bin``, Latin
+   hypercube start seeded with the reconstructed scene, ``vectorized=True`` so each generation is one
+   fan-out of batches, ``updating="deferred"``, seeded). The objective is noisy and partly discrete
+   (a contact flag switches; a run snaps into contact or not), so no gradient polish (``polish=False``):
+   L-BFGS-B on a piecewise-constant residual stops where it starts.
+2. **Profiles**: each parameter alone across its bounds (``profile_points``), the others at the
+   optimum. The interval of a parameter is the connected range around the optimum where **every target
+   stays within tolerance** (all ``|r| <= 1``); when the optimum itself misses a target, that range
+   does not exist and the stage reports instead the range where the objective stays within 1 of its
+   profile minimum (the 68 % profile interval if tolerances were one standard deviation) and says so.
+   Crossings are interpolated linearly between profile points.
+3. **Correlation**: Gauss-Newton at the optimum, ``C = (J^T J)^+`` with ``J`` the central-difference
+   Jacobian of the residuals in parameters scaled to their bounds (steps of 2 % of the range);
+   ``corr_ij = C_ij / sqrt(C_ii C_jj)``. A direction with no curvature (a parameter no target sees)
+   gives a zero eigenvalue; its variance is then reported as infinite and its correlations as NaN.
+
+Resuming: the stage runs under :mod:`pipeline.runner` (skipped when its inputs did not change); every
+evaluation is appended to ``identify.evals.jsonl`` as it finishes
+(:class:`pipeline.study.EvaluationStore`); the optimiser is seeded and deterministic, so a rerun
+after an interrupt replays the same candidates and reads the finished ones back. ``--force`` starts
+afresh.
+
+Outputs: ``identify.nc`` (every evaluation with its parameter values, target values, residuals and
+wall time; the best point, intervals, profiles, correlation matrix), the scene
+``<scene>-identified.toml`` next to the scene file (``extends`` the scene; each identified value with
+its interval in a comment) and ``figures/identify.png`` (residuals per target, parameter profiles).
+
+References
+----------
+.. [SP97] R. Storn, K. Price, "Differential evolution -- a simple and efficient heuristic for global
+   optimization over continuous spaces", J. Global Optim. 11 (1997) 341-359.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import re
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+import xarray as xr
+from matplotlib.figure import Figure
+from scipy.optimize import differential_evolution
+
+from .. import plots
+from ..fanout import local_cluster
+from ..io import git_revision, read_dataset, var
+from ..runner import Inputs, Stage, build
+from ..study import (Evaluator, Parameter, Target, cost, evaluate_batch, parse_parameters, residuals, scene_value,
+                     setup, target_protrusions, targets)
+
+log = logging.getLogger(__name__)
+
+#: Role of an evaluation (``stage`` variable of identify.nc).
+ROLES = {0: "reconstructed", 1: "optimiser", 2: "profile", 3: "gauss-newton"}
+GN_STEP = 0.02
+
+
+def var_name(p: Parameter) -> str:
+    """NetCDF-safe variable name of a parameter: ``air_bearing.frequencies_khz[0]`` -> ``air_bearing__frequencies_khz_0``."""
+    return re.sub(r"\[(\d+)\]", r"_\1", p.name).replace(".", "__")
+
+
+def _cf_units(units: str) -> str:
+    return {"J/m^2": "J m-2", "N s/m": "N s m-1", "um^-2": "um-2", "um^2": "um2"}.get(units, units)
+
+
+class Identification:
+    """The state of one identification: the evaluator, every record it asked for, and their scores."""
+
+    def __init__(self, ev: Evaluator, tlist: Sequence[Target], missing: float):
+        self.ev, self.tlist, self.missing = ev, list(tlist), missing
+        self.keys: list[str] = []
+        self.roles: dict[str, int] = {}
+
+    def evaluate(self, points: np.ndarray, role: int) -> tuple[list[dict], np.ndarray, np.ndarray]:
+        """Records, target values and residuals of ``points`` (shape (n, parameters))."""
+        recs = self.ev(points)
+        for r in recs:
+            if r["key"] not in self.roles:
+                self.roles[r["key"]] = role
+                self.keys.append(r["key"])
+        vals, res = zip(*(residuals(r, self.tlist, self.missing) for r in recs)) if recs else ((), ())
+        return recs, np.array(vals).reshape(len(recs), -1), np.array(res).reshape(len(recs), -1)
+
+    def costs(self, points: np.ndarray, role: int) -> np.ndarray:
+        return np.array([cost(r) for r in self.evaluate(points, role)[2]])
+
+
+def _interval(grid: np.ndarray, metric: np.ndarray, limit: float, centre: float) -> tuple[float, float]:
+    """Connected range of ``grid`` around ``centre`` where ``metric <= limit`` (linear crossings)."""
+    order = np.argsort(grid)
+    g, m = grid[order], metric[order]
+    i0 = int(np.argmin(np.abs(g - centre)))
+    if not m[i0] <= limit:
+        return float("nan"), float("nan")
+
+    def walk(step: int) -> float:
+        i = i0
+        while 0 <= i + step < len(g) and m[i + step] <= limit:
+            i += step
+        j = i + step
+        if not 0 <= j < len(g):
+            return float(g[i])
+        if not np.isfinite(m[j]):
+            return float(g[i])
+        f = (limit - m[i]) / (m[j] - m[i]) if m[j] != m[i] else 0.0
+        return float(g[i] + f * (g[j] - g[i]))
+
+    return walk(-1), walk(+1)
+
+
+def identify(ident: Identification, params: Sequence[Parameter], x_base: np.ndarray, cfg: dict) -> dict[str, Any]:
+    """Run the three steps of the module docstring; returns arrays for :func:`dataset`."""
+    lo = np.array([p.low for p in params])
+    hi = np.array([p.high for p in params])
+    n = len(params)
+    ident.evaluate(x_base[None, :], 0)
+    inside = bool(np.all((x_base >= lo) & (x_base <= hi)))
+
+    def objective(X: np.ndarray) -> np.ndarray:  # vectorized: X has shape (parameters, S)
+        return ident.costs(np.atleast_2d(X.T), 1)
+
+    result = differential_evolution(objective, list(zip(lo, hi)), strategy="best1bin", maxiter=cfg["generations"],
+                                    popsize=cfg["population"], tol=0.01, seed=cfg["seed"], polish=False,
+                                    init="latinhypercube", x0=x_base if inside else None, vectorized=True,
+                                    updating="deferred")
+    # the best of everything evaluated so far (the reconstruction included)
+    pts, res = _all(ident, params)
+    c = np.sum(res**2, axis=1)
+    best = pts[int(np.nanargmin(c))]
+    best_res = res[int(np.nanargmin(c))]
+    within = bool(np.all(np.abs(best_res) <= 1.0))
+
+    # profiles
+    m = cfg["profile_points"]
+    grids = [np.unique(np.append(np.linspace(lo[i], hi[i], m), best[i])) for i in range(n)]
+    size = max(len(g) for g in grids)
+    prof_x = np.full((n, size), np.nan)
+    prof_cost = np.full((n, size), np.nan)
+    prof_max = np.full((n, size), np.nan)
+    rows = []
+    for i, g in enumerate(grids):
+        for v in g:
+            x = best.copy()
+            x[i] = v
+            rows.append(x)
+    _, _, r_prof = ident.evaluate(np.array(rows), 2)
+    k = 0
+    intervals = np.full((n, 2), np.nan)
+    criterion = "all targets within tolerance (|r| <= 1)" if within else \
+        "objective within 1 of its profile minimum (the optimum misses a target, so no range keeps all within tolerance)"
+    for i, g in enumerate(grids):
+        rr = r_prof[k:k + len(g)]
+        k += len(g)
+        prof_x[i, :len(g)] = g
+        prof_cost[i, :len(g)] = np.sum(rr**2, axis=1)
+        prof_max[i, :len(g)] = np.max(np.abs(rr), axis=1)
+        if within:
+            intervals[i] = _interval(g, prof_max[i, :len(g)], 1.0, best[i])
+        else:
+            cc = prof_cost[i, :len(g)]
+            intervals[i] = _interval(g, cc - np.nanmin(cc), 1.0, best[i])
+
+    # Gauss-Newton correlation (parameters scaled to their bounds)
+    h = GN_STEP * (hi - lo)
+    plus = np.minimum(best + h, hi)
+    minus = np.maximum(best - h, lo)
+    gn_pts = []
+    for i in range(n):
+        a, b = best.copy(), best.copy()
+        a[i], b[i] = plus[i], minus[i]
+        gn_pts += [a, b]
+    _, _, r_gn = ident.evaluate(np.array(gn_pts), 3)
+    J = np.stack([(r_gn[2 * i] - r_gn[2 * i + 1]) / ((plus[i] - minus[i]) / (hi[i] - lo[i])) for i in range(n)],
+                 axis=1)
+    JTJ = J.T @ J
+    w, V = np.linalg.eigh(JTJ)
+    tiny = w <= max(w.max(), 0.0) * 1e-10
+    C = (V[:, ~tiny] / w[~tiny]) @ V[:, ~tiny].T
+    var_u = np.diag(C).copy()
+    free = np.abs(V[:, tiny]).max(axis=1) > 1e-6 if tiny.any() else np.zeros(n, bool)
+    var_u[free] = np.inf
+    with np.errstate(invalid="ignore", divide="ignore"):
+        corr = C / np.sqrt(np.outer(np.diag(C), np.diag(C)))
+    corr[free, :] = np.nan
+    corr[:, free] = np.nan
+    return {"best": best, "best_residuals": best_res, "within": within, "intervals": intervals,
+            "criterion": criterion, "profile_value": prof_x, "profile_cost": prof_cost, "profile_max": prof_max,
+            "correlation": corr, "gn_std": np.sqrt(var_u) * (hi - lo), "de_message": str(result.message),
+            "de_generations": int(result.nit), "de_evaluations": int(result.nfev)}
+
+
+def _all(ident: Identification, params: Sequence[Parameter]) -> tuple[np.ndarray, np.ndarray]:
+    """Parameter values and residuals of every evaluation so far (in request order)."""
+    recs = [ident.ev.store[k] for k in ident.keys]
+    pts = np.array([r["params"] for r in recs])
+    res = np.array([residuals(r, ident.tlist, ident.missing)[1] for r in recs])
+    return pts, res
+
+
+def dataset(ident: Identification, params: Sequence[Parameter], out: dict[str, Any], x_base: np.ndarray) -> xr.Dataset:
+    """``identify.nc``: every evaluation and the result (CF units and long_name on every variable)."""
+    recs = [ident.ev.store[k] for k in ident.keys]
+    tl = ident.tlist
+    vals = np.array([residuals(r, tl, ident.missing)[0] for r in recs])
+    res = np.array([residuals(r, tl, ident.missing)[1] for r in recs])
+    pts = np.array([r["params"] for r in recs])
+    costs = np.sum(res**2, axis=1)
+    i_best = int(np.nanargmin(costs))
+    data: dict[str, Any] = {}
+    for j, p in enumerate(params):
+        u = _cf_units(p.units)
+        name = var_name(p)
+        data[name] = var(pts[:, j], "evaluation", u, f"{p.name}: {p.doc}", scene_key=p.name)
+        data[f"{name}_best"] = var(out["best"][j], (), u, f"identified {p.name}", scene_key=p.name)
+        data[f"{name}_reconstructed"] = var(x_base[j], (), u, f"reconstructed (scene) value of {p.name}")
+        data[f"{name}_bounds"] = var(np.array([p.low, p.high]), "bound", u, f"search bounds of {p.name}")
+        data[f"{name}_interval"] = var(out["intervals"][j], "bound", u, f"interval of {p.name}",
+                                       criterion=out["criterion"])
+        data[f"{name}_gauss_newton_std"] = var(out["gn_std"][j], (), u,
+                                               f"Gauss-Newton standard deviation of {p.name} (tolerances as 1 sigma)")
+        data[f"{name}_profile"] = var(out["profile_value"][j], "profile_point", u, f"profile values of {p.name}")
+        data[f"{name}_profile_cost"] = var(out["profile_cost"][j], "profile_point", "1",
+                                           f"objective along the profile of {p.name}")
+        data[f"{name}_profile_max_residual"] = var(out["profile_max"][j], "profile_point", "1",
+                                                   f"largest |residual| along the profile of {p.name}")
+    for j, t in enumerate(tl):
+        data[f"value_{t.name}"] = var(vals[:, j], "evaluation", t.units, t.long_name, paper=t.paper,
+                                      target=t.target, tolerance=t.tolerance, kind=t.kind)
+    data["residual"] = var(res, ("evaluation", "target"), "1", "residual of each target normalised by its tolerance "
+                           "(inequality targets: zero on the admissible side)")
+    data["cost"] = var(costs, "evaluation", "1", "objective: sum of squared normalised residuals")
+    data["best_abs_residual"] = var(np.nanmin(np.abs(res), axis=0), "target", "1",
+                                    "smallest |residual| of each target over all evaluations")
+    data["tolerance"] = var(np.array([t.tolerance for t in tl]), "target", "1",
+                            "tolerance of each target, in the target's units (see value_<target>)")
+    data["seconds"] = var(np.array([r["seconds"] for r in recs]), "evaluation", "s", "wall time of the evaluation")
+    data["kernel_seconds"] = var(np.array([r["kernel_seconds"] for r in recs]), "evaluation", "s",
+                                 "time in the integrator (run_model) of the evaluation")
+    data["role"] = var(np.array([ident.roles[k] for k in ident.keys], np.int8), "evaluation", "1",
+                       "role of the evaluation", flag_values=np.array(sorted(ROLES), np.int8),
+                       flag_meanings=" ".join(ROLES[k] for k in sorted(ROLES)))
+    data["failed"] = var(np.array([r["error"] is not None for r in recs], np.int8), "evaluation", "1",
+                         "1 when a run of the evaluation failed (its message in the evaluation store)")
+    names = [var_name(p) for p in params]
+    data["correlation"] = var(out["correlation"], ("parameter", "parameter_b"), "1",
+                              "correlation of the parameters, Gauss-Newton (J^T J)^+ at the optimum")
+    coords = {
+        "evaluation": var(np.arange(len(recs)), "evaluation", "1", "evaluation index (request order)"),
+        "target": var(np.array([t.name for t in tl], dtype=object), "target", "1", "target name"),
+        "parameter": var(np.array(names, dtype=object), "parameter", "1", "free parameter"),
+        "parameter_b": var(np.array(names, dtype=object), "parameter_b", "1", "free parameter"),
+        "bound": var(np.array(["low", "high"], dtype=object), "bound", "1", "lower/upper end"),
+        "profile_point": var(np.arange(out["profile_value"].shape[1]), "profile_point", "1", "profile point index"),
+    }
+    ds = xr.Dataset(data, coords=coords)
+    ds.attrs.update({
+        "best_evaluation": i_best, "reconstructed_evaluation": 0,
+        "within_tolerance": int(out["within"]), "interval_criterion": out["criterion"],
+        "optimiser": "scipy.optimize.differential_evolution best1bin, latinhypercube + reconstructed x0, "
+                     "vectorized (one fan-out per generation), deferred updating, polish=False",
+        "optimiser_message": out["de_message"], "generations": out["de_generations"],
+        "optimiser_evaluations": out["de_evaluations"],
+        "correlation_method": f"Gauss-Newton (J^T J)^+ at the optimum, central differences of {GN_STEP:g} x range",
+        "protrusions_nm": ident.ev.protrusions,
+        # (this run's counts and fan-out time go to the run log, .hdi/runs.jsonl, not the dataset)
+    })
+    return ds
+
+
+def write_identified_scene(scene: Any, params: Sequence[Parameter], ds: xr.Dataset, path: Path) -> Path:
+    """Write ``path``: a scene that ``extends`` the identified one, every identified value commented."""
+    base = Path(scene.path) if scene.path else None
+    rel = os.path.relpath(base, path.parent) if base else "<scene>"
+    now = str(ds.attrs.get("history", "")).split(": hdi", 1)[0] or "?"  # when identify.nc was made
+    lines = [f"# Identified by `hdi identify {base.name if base else ''}` on {now} (git {git_revision()[:12]});",
+             "# every value below is [identified]: fitted to the paper's targets ([identify] of the base scene),",
+             f"# with its interval ({ds.attrs['interval_criterion']}).",
+             f"# Within tolerance on every target: {'yes' if ds.attrs['within_tolerance'] else 'no'} "
+             f"(see identify.nc and the report's comparison).", "",
+             "[scene]", f'extends = "{rel}"', f'name = "{scene.name}-identified"',
+             f'description = "{scene.name} with its free [recon] parameters identified from the paper\'s targets"',
+             ""]
+    sections: dict[str, list[str]] = {}
+    lists: dict[tuple[str, str], list] = {}
+    for p in params:
+        section, key, index = p.parts
+        name = var_name(p)
+        best = float(ds[f"{name}_best"])
+        lo_i, hi_i = (float(v) for v in ds[f"{name}_interval"].values)
+        note = (f"[identified] interval [{lo_i:.4g}, {hi_i:.4g}]" if np.isfinite(lo_i)
+                else "[identified] interval: none (see identify.nc)") + \
+            f", bounds [{p.low:g}, {p.high:g}], reconstructed {float(ds[f'{name}_reconstructed']):.4g}"
+        if index is None:
+            sections.setdefault(section, []).append(f"{key} = {best:.6g}  # {note}")
+        else:
+            lst = lists.setdefault((section, key), list(scene[section][key]))
+            lst[index] = best
+            sections.setdefault(section, []).append(f"# {key}[{index}]: {note}")
+    for (section, key), lst in lists.items():
+        sections[section].append(f"{key} = [{', '.join(f'{v:.6g}' for v in lst)}]  # [identified]")
+    for section, body in sections.items():
+        lines += [f"[{section}]", *body, ""]
+    text = "\n".join(lines)
+    if path.is_file() and path.read_text() == text:
+        return path
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.tmp")
+    tmp.write_text(text)
+    tmp.replace(path)
+    return path
+
+
+def figure(ds: xr.Dataset, params: Sequence[Parameter], scene: str, path: Path) -> Path:
+    """Residuals per target (reconstructed vs identified) and the parameter profiles."""
+    n = len(params)
+    ncols = min(3, n)
+    nrows = 1 + (n + ncols - 1) // ncols
+    fig = Figure(figsize=(4.0 * ncols, 3.0 * nrows), layout="constrained")
+    gs = fig.add_gridspec(nrows, ncols)
+    ax = fig.add_subplot(gs[0, :])
+    names = [str(t) for t in ds["target"].values]
+    x = np.arange(len(names))
+    r0 = ds["residual"].isel(evaluation=int(ds.attrs["reconstructed_evaluation"])).values
+    r1 = ds["residual"].isel(evaluation=int(ds.attrs["best_evaluation"])).values
+    ax.axhspan(-1, 1, color="0.9", label="within tolerance")
+    ax.bar(x - 0.2, r0, 0.4, color=plots.LINE_COLOURS[0], label="reconstructed scene")
+    ax.bar(x + 0.2, r1, 0.4, color=plots.LINE_COLOURS[1], label="identified")
+    ax.set_xticks(x, names, rotation=30, ha="right", fontsize=8)
+    ax.set_ylabel(plots.axis_label("residual / tolerance", "1"))
+    lim = max(3.0, float(np.nanmax(np.abs(np.concatenate([r0, r1])))) * 1.1)
+    ax.set_ylim(-lim, lim)
+    ax.legend(fontsize=8, loc="upper right")
+    ax.set_title(plots.title("Residual per target", scene), fontsize=9)
+    for j, p in enumerate(params):
+        a = fig.add_subplot(gs[1 + j // ncols, j % ncols])
+        name = var_name(p)
+        xv = ds[f"{name}_profile"].values
+        ok = np.isfinite(xv)
+        a.semilogy(xv[ok], np.maximum(ds[f"{name}_profile_cost"].values[ok], 1e-3), "o-", ms=3,
+                   color=plots.LINE_COLOURS[2])
+        lo_i, hi_i = ds[f"{name}_interval"].values
+        if np.isfinite(lo_i):
+            a.axvspan(lo_i, hi_i, color="#d5f5d0", label="interval")
+        a.axvline(float(ds[f"{name}_best"]), color=plots.LINE_COLOURS[1], lw=1, label="identified")
+        a.axvline(float(ds[f"{name}_reconstructed"]), color=plots.LINE_COLOURS[0], lw=1, ls="--",
+                  label="reconstructed")
+        a.set_xlabel(plots.axis_label(p.name, ds[f"{name}_best"].attrs["units"]), fontsize=8)
+        a.set_ylabel(plots.axis_label("objective", "1"), fontsize=8)
+        if j == 0:
+            a.legend(fontsize=7)
+    return plots.save(fig, path)
+
+
+def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
+    """``identify.nc`` (module docstring); draws ``figures/identify.png`` under ``inputs.staging``.
+
+    Options (``inputs.options``): ``scheduler``, ``workers`` (the fan-out), ``force`` (forget the
+    evaluation store), ``task`` (the batch function, for tests).
+    """
+    out, opts = inputs.out, inputs.options
+    cfg = scene["identify"]
+    where = str(scene.path) if scene.path else "<scene>"
+    tlist = targets(scene)
+    if not tlist:
+        raise ValueError(f"{where}: identify.targets is empty: expected at least one target")
+    prots = target_protrusions(tlist)
+    params, base_inputs, store = setup(scene, out, "identify", bool(opts.get("force")))
+    x_base = np.array([scene_value(scene, p) for p in params])
+    if not np.all(np.isfinite(x_base)):
+        bad = [p.name for p, v in zip(params, x_base) if not np.isfinite(v)]
+        raise ValueError(f"{where}: identify.parameters {bad}: the scene sets no value for these keys")
+    workers = opts.get("workers")
+    with local_cluster(opts.get("scheduler"), workers) as address:
+        ev = Evaluator(scene, params, prots, base_inputs, store, cfg["batch_size"], address, workers,
+                       task=opts.get("task") or evaluate_batch)
+        ident = Identification(ev, tlist, cfg["missing_residual"])
+        result = identify(ident, params, x_base, cfg)
+    ds = dataset(ident, params, result, x_base)
+    ds.attrs["identified_scene"] = str(identified_scene_path(scene, out))
+    figure(ds, params, scene.name, inputs.staging / "figures" / "identify.png")
+    inputs.record(evaluations=int(ds.sizes["evaluation"]), evaluations_computed=ev.evaluated,
+                  batch_seconds=round(ev.batch_seconds, 3), kernel_seconds=round(ev.kernel_seconds, 3))
+    log.info("identify: %d evaluations (%d computed) in %.1f s of fan-out; kernel %.1f s; best objective %.4g; "
+             "within tolerance: %s", ds.sizes["evaluation"], ev.evaluated, ev.batch_seconds, ev.kernel_seconds,
+             float(ds["cost"][ds.attrs["best_evaluation"]]), "yes" if result["within"] else "no")
+    return ds
+
+
+def identified_scene_path(scene: Any, out: Path) -> Path:
+    """``<scene>-identified.toml`` next to the scene file (in ``out`` for a scene without a file)."""
+    folder = Path(scene.path).parent if scene.path else Path(out)
+    return folder / f"{scene.name}-identified.toml"
+
+
+def _finish(scene: Any, out: Path, options: dict[str, Any]) -> None:
+    """Write the identified scene from ``identify.nc`` (outside the results folder, so not a stage output);
+    rewritten only when its text changes (its date is that of ``identify.nc``)."""
+    ds = read_dataset(Path(out) / "identify.nc", stage="identify")
+    params = parse_parameters(scene["identify"]["parameters"], str(scene.path or "<scene>"), "identify.parameters")
+    path = identified_scene_path(scene, out)
+    write_identified_scene(scene, params, ds, path)
+    log.info("identified scene: %s", path)
+
+
+def _upstream(scene: Any) -> tuple[str, ...]:
+    up = []
+    if scene.effects & {"contact", "adhesion"}:
+        up.append("interface")
+    if scene.has("dmw"):
+        up.append("dmw")
+    return tuple(up)
+
+
+STAGE = Stage(
+    "identify", compute, outputs=("identify.nc", "figures/identify.png"),
+    reads=("*",), excludes=("sweep", "report", "sensitivity", "scene.name", "scene.description",
+                            "identify.batch_size"),
+    upstream=_upstream, finish=_finish, order=80,
+    doc="the free [recon] parameters fitted to the paper's targets, identify.nc and <scene>-identified.toml")
+
+
+def run(scene: Any, out: Path, scheduler: str | None = None, workers: int | None = None, force: bool = False,
+        **options: Any) -> Path:
+    """Stage entry point (``hdi identify``): makes ``identify.nc`` current (:func:`pipeline.runner.build`)."""
+    return build("identify", scene, out, force=force, scheduler=scheduler, workers=workers,
+                 **options)["identify"][0]

@@ -1,0 +1,241 @@
+"""Stage ``sensitivity``: which [recon] parameters the headline outputs depend on.
+
+``hdi sensitivity CONFIG`` samples the parameters of ``[sensitivity] parameters`` (scene keys with
+bounds, uniform within them) and evaluates every sample as a sweep over the protrusion grid
+(``[sensitivity] protrusion_nm``, default the ``[sweep]`` grid) on the dask fan-out, through the
+evaluation core of ``hdi identify`` (:mod:`pipeline.study`: same candidates, same store, resumable).
+The headline outputs (:data:`pipeline.study.HEADLINES`) are the touchdown protrusion, the flying FHM
+at 4-7 nm, the BV after touchdown, and the interference, contact force and mean pressure at 11 nm.
+
+Methods (SALib [HU17]_):
+
+* **Morris** elementary effects [Mor91]_ with the improved measure ``mu*`` [CCS07]_:
+  ``morris_trajectories`` trajectories of ``parameters + 1`` points on a ``morris_levels`` grid.
+  ``mu*`` [output units] is the mean absolute change of an output when the parameter moves by
+  ``levels / (2 (levels - 1))`` of its range (SALib's step), ``sigma`` the spread of the effects
+  (interaction or nonlinearity); ``mu*`` has a bootstrap confidence interval.
+* **Sobol** first-order ``S1`` and total ``ST`` indices [Sal02]_ [Sal10]_ from the Saltelli
+  extension of a Sobol' sequence, ``N (parameters + 2)`` evaluations (``sobol_samples = N``), with
+  bootstrap confidence intervals.
+
+A sample whose output does not exist (no touchdown on the grid, no contact at 11 nm, a failed run:
+e.g. two frequencies no real air bearing has) leaves that output undefined for the sample. Morris
+leaves out the trajectories with an undefined point (``trajectories_used`` on each index); the Sobol
+indices of an output with any undefined sample are NaN (the estimator needs every sample);
+``undefined_samples`` says how many (a parameter range that removes the contact is itself a
+finding). An output that does not vary at all has NaN Sobol indices (zero variance).
+
+Writes ``sensitivity.nc`` (indices with confidence intervals per output and parameter, the samples
+and their outputs) and ``figures/sensitivity.png``.
+
+References
+----------
+.. [HU17] J. Herman, W. Usher, "SALib: an open-source Python library for sensitivity analysis",
+   J. Open Source Softw. 2(9) (2017) 97.
+.. [Mor91] M. D. Morris, "Factorial sampling plans for preliminary computational experiments",
+   Technometrics 33(2) (1991) 161-174.
+.. [CCS07] F. Campolongo, J. Cariboni, A. Saltelli, "An effective screening design for sensitivity
+   analysis of large models", Environ. Model. Softw. 22 (2007) 1509-1518.
+.. [Sal02] A. Saltelli, "Making best use of model evaluations to compute sensitivity indices",
+   Comput. Phys. Commun. 145 (2002) 280-297.
+.. [Sal10] A. Saltelli et al., "Variance based sensitivity analysis of model output. Design and
+   estimator for the total sensitivity index", Comput. Phys. Commun. 181 (2010) 259-270.
+"""
+
+from __future__ import annotations
+
+import logging
+import warnings
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+import xarray as xr
+
+from .. import plots
+from ..fanout import local_cluster
+from ..io import var
+from ..runner import Inputs, Stage, build
+from ..study import HEADLINES, Evaluator, Parameter, evaluate_batch, headline, setup
+from .identify import _cf_units, _upstream, var_name
+from .sweep_grid import protrusion_grid, range_grid
+
+log = logging.getLogger(__name__)
+
+
+def grid(scene: Any) -> np.ndarray:
+    """Protrusions [nm] of each evaluation: ``[sensitivity] protrusion_nm``, else the ``[sweep]`` grid."""
+    g = scene["sensitivity"]["protrusion_nm"]
+    return protrusion_grid(scene) if g is None else range_grid(g)
+
+
+def problem(params: Sequence[Parameter]) -> dict[str, Any]:
+    """The SALib problem of the parameters."""
+    return {"num_vars": len(params), "names": [p.name for p in params], "bounds": [[p.low, p.high] for p in params]}
+
+
+def _outputs(ev: Evaluator, X: np.ndarray, scene: Any) -> dict[str, np.ndarray]:
+    recs = ev(X)
+    heads = [headline(r, scene) for r in recs]
+    return {name: np.array([h[name] for h in heads], float) for name in HEADLINES}
+
+
+def morris(ev: Evaluator, params: Sequence[Parameter], scene: Any) -> tuple[np.ndarray, dict, dict]:
+    """Morris samples, headline outputs and indices per output (``mu``, ``mu_star``, ``sigma``, ``mu_star_conf``)."""
+    from SALib.analyze import morris as analyze
+    from SALib.sample import morris as sample
+    c = scene["sensitivity"]
+    prob = problem(params)
+    X = sample.sample(prob, N=c["morris_trajectories"], num_levels=c["morris_levels"], seed=c["seed"])
+    Y = _outputs(ev, X, scene)
+    out = {}
+    step = len(params) + 1
+    for name, y in Y.items():
+        # a trajectory with an undefined point has no complete elementary effects: leave it out
+        whole = np.all(np.isfinite(y.reshape(-1, step)), axis=1)
+        if whole.sum() < 2:
+            out[name] = None
+            continue
+        rows = np.repeat(whole, step)
+        si = analyze.analyze(prob, X[rows], y[rows], num_resamples=c["bootstrap"], conf_level=c["confidence_level"],
+                             num_levels=c["morris_levels"], seed=c["seed"])
+        out[name] = {k: np.asarray(si[k], float) for k in ("mu", "mu_star", "sigma", "mu_star_conf")}
+        out[name]["trajectories_used"] = int(whole.sum())
+    return X, Y, out
+
+
+def sobol(ev: Evaluator, params: Sequence[Parameter], scene: Any) -> tuple[np.ndarray, dict, dict]:
+    """Sobol samples, headline outputs and indices per output (``S1``, ``S1_conf``, ``ST``, ``ST_conf``)."""
+    from SALib.analyze import sobol as analyze
+    from SALib.sample import sobol as sample
+    c = scene["sensitivity"]
+    prob = problem(params)
+    X = sample.sample(prob, c["sobol_samples"], calc_second_order=False, seed=c["seed"])
+    Y = _outputs(ev, X, scene)
+    out = {}
+    for name, y in Y.items():
+        if not np.all(np.isfinite(y)) or np.ptp(y) == 0:
+            out[name] = None
+            continue
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            si = analyze.analyze(prob, y, calc_second_order=False, num_resamples=c["bootstrap"],
+                                 conf_level=c["confidence_level"], seed=c["seed"])
+        out[name] = {k: np.asarray(si[k], float) for k in ("S1", "S1_conf", "ST", "ST_conf")}
+    return X, Y, out
+
+
+_INDEX_META = {
+    "mu_star": ("morris", "Morris mu*: mean absolute elementary effect", None),
+    "mu_star_conf": ("morris", "half-width of the bootstrap confidence interval of mu*", None),
+    "sigma": ("morris", "Morris sigma: standard deviation of the elementary effects", None),
+    "mu": ("morris", "Morris mu: mean elementary effect", None),
+    "S1": ("sobol", "first-order Sobol index", "1"),
+    "S1_conf": ("sobol", "half-width of the bootstrap confidence interval of S1", "1"),
+    "ST": ("sobol", "total Sobol index", "1"),
+    "ST_conf": ("sobol", "half-width of the bootstrap confidence interval of ST", "1"),
+}
+
+
+def dataset(params: Sequence[Parameter], results: dict[str, tuple], scene: Any) -> xr.Dataset:
+    """``sensitivity.nc``: indices per output (variables ``<index>_<output>`` over ``parameter``) and samples."""
+    names = [var_name(p) for p in params]
+    data: dict[str, Any] = {}
+    coords: dict[str, Any] = {"parameter": var(np.array(names, dtype=object), "parameter", "1", "parameter",
+                                               scene_keys=" ".join(p.name for p in params))}
+    level = scene["sensitivity"]["confidence_level"]
+    for method, (X, Y, idx) in results.items():
+        run_dim = f"{method}_sample"
+        coords[run_dim] = var(np.arange(len(X)), run_dim, "1", f"{method} sample index")
+        for j, p in enumerate(params):
+            data[f"{method}_{var_name(p)}"] = var(X[:, j], run_dim, _cf_units(p.units), f"{method} sample of {p.name}")
+        for out, (units, long_name) in HEADLINES.items():
+            y = Y[out]
+            data[f"{method}_{out}"] = var(y, run_dim, units, f"{long_name} ({method} samples)")
+            ind = idx[out]
+            for key, (m, text, u) in _INDEX_META.items():
+                if m != method:
+                    continue
+                values = ind[key] if ind is not None else np.full(len(params), np.nan)
+                extra = {"trajectories_used": ind["trajectories_used"]} if ind and "trajectories_used" in ind else {}
+                data[f"{key}_{out}"] = var(values, "parameter", u or units, f"{text} of the {long_name}",
+                                           confidence_level=level, undefined_samples=int(np.sum(~np.isfinite(y))),
+                                           **extra)
+    ds = xr.Dataset(data, coords=coords)
+    ds.attrs.update({"methods": " ".join(results), "outputs": " ".join(HEADLINES),
+                     "sampling": "uniform within [low, high] of each parameter (SALib)",
+                     "references": "Morris 1991; Campolongo, Cariboni & Saltelli 2007; Saltelli 2002, 2010; "
+                                   "SALib (Herman & Usher 2017)"})
+    return ds
+
+
+def figure(ds: xr.Dataset, params: Sequence[Parameter], scene: str, path: Path) -> Path:
+    """Morris mu* (error bars: its confidence interval) and Sobol ST per output and parameter."""
+    outs = list(HEADLINES)
+    methods = ds.attrs["methods"].split()
+    fig, axes = plots.new_figure(len(methods), len(outs), size=(3.0 * len(outs), 3.0 * len(methods)), squeeze=False)
+    y = np.arange(len(params))
+    labels = [p.name.split(".", 1)[1] for p in params]
+    for i, method in enumerate(methods):
+        for j, out in enumerate(outs):
+            ax = axes[i, j]
+            if method == "morris":
+                v, e = ds[f"mu_star_{out}"].values, ds[f"mu_star_conf_{out}"].values
+                ax.barh(y, v, xerr=e, color=plots.LINE_COLOURS[0])
+                ax.set_xlabel(plots.axis_label("mu*", ds[f"mu_star_{out}"].attrs["units"]), fontsize=8)
+            else:
+                ax.barh(y - 0.2, ds[f"S1_{out}"].values, 0.4, xerr=ds[f"S1_conf_{out}"].values,
+                        color=plots.LINE_COLOURS[2], label="S1")
+                ax.barh(y + 0.2, ds[f"ST_{out}"].values, 0.4, xerr=ds[f"ST_conf_{out}"].values,
+                        color=plots.LINE_COLOURS[1], label="ST")
+                ax.set_xlabel(plots.axis_label("Sobol index", "1"), fontsize=8)
+                if j == 0:
+                    ax.legend(fontsize=7)
+            if np.all(~np.isfinite(ds[f"{'mu_star' if method == 'morris' else 'ST'}_{out}"].values)):
+                plots.note(ax, "undefined\n(see sensitivity.nc)", loc="upper right")
+            ax.set_yticks(y, labels if j == 0 else [], fontsize=7)
+            ax.set_title(f"{HEADLINES[out][1][:40]}\n[{method}]", fontsize=7)
+    fig.suptitle(plots.title("Sensitivity of the headline outputs", scene), fontsize=9)
+    return plots.save(fig, path)
+
+
+def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
+    """``sensitivity.nc`` (module docstring); draws ``figures/sensitivity.png`` under ``inputs.staging``.
+
+    Options (``inputs.options``): ``scheduler``, ``workers``, ``force`` (forget the evaluation store),
+    ``task`` (the batch function, for tests).
+    """
+    out, opts = inputs.out, inputs.options
+    c = scene["sensitivity"]
+    prots = [float(x) for x in grid(scene)]
+    params, base_inputs, store = setup(scene, out, "sensitivity", bool(opts.get("force")))
+    results = {}
+    workers = opts.get("workers")
+    with local_cluster(opts.get("scheduler"), workers) as address:
+        ev = Evaluator(scene, params, prots, base_inputs, store, c["batch_size"], address, workers,
+                       task=opts.get("task") or evaluate_batch)
+        for method in c["methods"]:
+            results[method] = (morris if method == "morris" else sobol)(ev, params, scene)
+    ds = dataset(params, results, scene)
+    ds.attrs["protrusions_per_evaluation"] = len(prots)
+    inputs.record(evaluations_computed=ev.evaluated, batch_seconds=round(ev.batch_seconds, 3),
+                  kernel_seconds=round(ev.kernel_seconds, 3))
+    figure(ds, params, scene.name, inputs.staging / "figures" / "sensitivity.png")
+    log.info("sensitivity: %s, %d sweeps of %d protrusions computed in %.1f s of fan-out",
+             " + ".join(c["methods"]), ev.evaluated, len(prots), ev.batch_seconds)
+    return ds
+
+
+STAGE = Stage(
+    "sensitivity", compute, outputs=("sensitivity.nc", "figures/sensitivity.png"),
+    # (the [sweep] grid is the default protrusion grid of the evaluations: not excluded)
+    reads=("*",), excludes=("report", "identify", "scene.name", "scene.description", "sensitivity.batch_size"),
+    upstream=_upstream, order=85,
+    doc="Morris and Sobol indices of the headline outputs over the [sensitivity] parameters, sensitivity.nc")
+
+
+def run(scene: Any, out: Path, scheduler: str | None = None, workers: int | None = None, force: bool = False,
+        **options: Any) -> Path:
+    """Stage entry point (``hdi sensitivity``): makes ``sensitivity.nc`` current (:func:`pipeline.runner.build`)."""
+    return build("sensitivity", scene, out, force=force, scheduler=scheduler, workers=workers,
+                 **options)["sensitivity"][0]

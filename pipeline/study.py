@@ -1,0 +1,619 @@
+"""Parameter studies over scene keys: candidates, their evaluation on the fan-out, targets, residuals.
+
+Shared by ``hdi identify`` (:mod:`pipeline.stages.identify`) and ``hdi sensitivity``
+(:mod:`pipeline.stages.sensitivity`). Both vary numeric scene keys within bounds and evaluate every
+candidate as a small sweep over protrusions:
+
+* a **free parameter** (:class:`Parameter`) is any numeric scene key ``section.key`` or an element of
+  a list key ``section.key[i]`` (``air_bearing.frequencies_khz[0]``), with bounds; keys added to
+  :data:`pipeline.scene.SCHEMA` later need no change here;
+* a **candidate** is the base scene with the parameters set (validated again, so an impossible
+  combination such as ``f1 > f2`` is a recorded failure, not a crash). Its interface tables are
+  rebuilt only when a key they depend on changed (the runner's inputs key of ``interface``,
+  ~15-45 ms), its DMW record only when a ``[dmw]`` key changed (synthesis, ~0.1 ms); otherwise the
+  base scene's ``interface.nc``/``dmw.nc`` are read by path, once per worker process;
+* it runs at the protrusions the study needs (:func:`pipeline.slider.run_model`) and keeps the
+  steady-window outputs of :func:`pipeline.slider.summarize` in dataset units (:data:`pipeline.variables.SCALARS`);
+* the contact criterion k is ``contact.k`` when the scene (or the candidate) sets it, else the k whose
+  **two-sided** contact probability ``P(|z| > k sigma)`` is ``contact.fallback_probability``
+  (SPEC.md 7.1: the paper's 32.8 % is two-sided, k = 0.978). A calibration per candidate would make
+  the touchdown target trivially true; with k fixed, touchdown at 9.8 nm is a property of the
+  parameters, as in the paper.
+
+Candidates are fanned out in batches (:func:`evaluate_batch`, via :func:`pipeline.fanout.run_tasks`).
+Every finished evaluation is appended to a JSON-lines store (:class:`EvaluationStore`) keyed by the
+hash of the base scene, the parameter values and the protrusions, so an interrupted study resumes:
+what was evaluated is read back, not recomputed.
+
+Targets (:func:`targets`) are scene data in ``[identify]``; each gives a value from a candidate's
+outputs and a residual normalised by its tolerance (inequality targets are zero inside their
+admissible side); a target the candidate cannot produce (no contact where contact is needed, a
+failed run) gets the residual ``identify.missing_residual``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+import re
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable, Iterable, Sequence
+
+import numpy as np
+from scipy.stats import norm
+
+from . import slider as sl
+from .io import read_dataset
+from .runner import KEY_ATTR, Runner
+from .variables import SCALARS
+from .scene import SCHEMA, SceneError
+
+NM = 1e-9
+
+#: Scene sections that do not change what a candidate computes (left out of evaluation keys).
+STUDY_SECTIONS = ("identify", "sensitivity", "report")
+
+_KEY_RE = re.compile(r"([a-z_]+)\.([a-z0-9_]+)(?:\[(\d+)\])?")
+
+
+# ------------------------------------------------------------------------------------ parameters
+@dataclass(frozen=True)
+class Parameter:
+    """A free scene key with bounds.
+
+    Attributes
+    ----------
+    name : ``"section.key"`` or ``"section.key[i]"``
+    low, high : bounds, in the key's own unit (the unit is part of the key's name)
+    """
+
+    name: str
+    low: float
+    high: float
+
+    @property
+    def parts(self) -> tuple[str, str, int | None]:
+        m = _KEY_RE.fullmatch(self.name)
+        assert m is not None  # checked by parse_parameters
+        return m.group(1), m.group(2), None if m.group(3) is None else int(m.group(3))
+
+    @property
+    def doc(self) -> str:
+        section, key, _ = self.parts
+        return SCHEMA[section][key].doc
+
+    @property
+    def units(self) -> str:
+        """The unit from the key's name (``"1"`` for dimensionless keys)."""
+        doc = self.doc
+        m = re.search(r"\[([^\]]+)\]", doc)
+        return m.group(1) if m else "1"
+
+
+def parse_parameters(items: Any, where: str, field: str) -> list[Parameter]:
+    """Validate a list of ``{key = "section.key[i]", low = ..., high = ...}`` tables.
+
+    Raises
+    ------
+    SceneError
+        Naming ``where`` (the scene file) and ``field`` (``identify.parameters``) for a key that is not
+        a numeric scene key, an index outside the list, bounds that are not numbers with low < high,
+        or a repeated key.
+    """
+    if not isinstance(items, list) or not items:
+        raise SceneError(f"{where}: {field}: expected a non-empty list of tables "
+                         "{key = \"section.key\", low = ..., high = ...}")
+    out: list[Parameter] = []
+    for i, item in enumerate(items):
+        at = f"{where}: {field}[{i}]"
+        if not isinstance(item, dict) or set(item) != {"key", "low", "high"}:
+            raise SceneError(f"{at} = {item!r}: expected a table {{key = \"section.key\", low = ..., high = ...}}")
+        name = item["key"]
+        m = _KEY_RE.fullmatch(name) if isinstance(name, str) else None
+        if m is None:
+            raise SceneError(f"{at}.key = {name!r}: expected \"section.key\" or \"section.key[i]\"")
+        section, key, index = m.group(1), m.group(2), m.group(3)
+        spec = SCHEMA.get(section, {}).get(key)
+        if spec is None:
+            raise SceneError(f"{at}.key = {name!r}: not a scene key (no {section}.{key} in the schema)")
+        if index is None and spec.kind != "float":
+            raise SceneError(f"{at}.key = {name!r}: {section}.{key} is a {spec.kind!r} key; expected a number "
+                             "key (or an element of a list of numbers, section.key[i])")
+        if index is not None and (spec.kind != "floats" or (spec.length is not None and int(index) >= spec.length)):
+            raise SceneError(f"{at}.key = {name!r}: expected an index into a list of numbers "
+                             f"(length {spec.length})")
+        lo, hi = item["low"], item["high"]
+        if any(isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) for v in (lo, hi)) \
+                or not lo < hi:
+            raise SceneError(f"{at}: low = {lo!r}, high = {hi!r}: expected finite numbers with low < high")
+        if any(p.name == name for p in out):
+            raise SceneError(f"{at}.key = {name!r}: repeated")
+        out.append(Parameter(name, float(lo), float(hi)))
+    return out
+
+
+def scene_value(scene: Any, p: Parameter) -> float:
+    """The current value of parameter ``p`` in ``scene`` (NaN when the key is unset)."""
+    section, key, index = p.parts
+    v = scene[section][key]
+    if v is None:
+        return float("nan")
+    return float(v[index] if index is not None else v)
+
+
+def with_values(scene: Any, params: Sequence[Parameter], values: Sequence[float]) -> Any:
+    """A validated copy of ``scene`` with the parameters set to ``values``."""
+    changes: dict[str, dict[str, Any]] = {}
+    for p, v in zip(params, values):
+        section, key, index = p.parts
+        sec = changes.setdefault(section, {})
+        if index is None:
+            sec[key] = float(v)
+        else:
+            lst = list(sec.get(key, scene[section][key]))
+            lst[index] = float(v)
+            sec[key] = lst
+    return scene.replace(**changes)
+
+
+def criterion_k(scene: Any) -> float:
+    """Contact criterion k [1] of a candidate: ``contact.k``, else the two-sided fallback (module docstring)."""
+    c = scene["contact"]
+    if c["k"] is not None:
+        return float(c["k"])
+    if c["fallback_probability"] is None:
+        raise ValueError("a parameter study needs the contact criterion k: set contact.k or "
+                         "contact.fallback_probability (two-sided P(|z| > k sigma))")
+    return float(norm.isf(c["fallback_probability"] / 2.0))
+
+
+# ---------------------------------------------------------------------------------- evaluations
+def base_key(scene: Any) -> str:
+    """Hash of what an evaluation depends on besides its parameters: the scene minus study sections."""
+    cfg = json.loads(scene.to_toml_text())
+    for s in STUDY_SECTIONS:
+        cfg.pop(s, None)
+    cfg["scene"].pop("name", None)
+    cfg["scene"].pop("description", None)
+    return hashlib.sha256(json.dumps(cfg, sort_keys=True).encode()).hexdigest()
+
+
+def evaluation_key(base: str, params: Sequence[Parameter], values: Sequence[float],
+                   protrusions: Sequence[float]) -> str:
+    """Identity of one evaluation (values rounded to 12 significant digits)."""
+    blob = json.dumps({"base": base, "params": {p.name: float(f"{v:.12g}") for p, v in zip(params, values)},
+                       "protrusions": [round(float(x), 9) for x in protrusions]}, sort_keys=True)
+    return hashlib.sha256(blob.encode()).hexdigest()
+
+
+@dataclass(frozen=True)
+class Inputs:
+    """The base scene's inputs, by file path, and the stage keys they were made for."""
+
+    interface_path: str | None
+    interface_key: str | None
+    dmw_path: str | None
+    dmw_key: str | None
+
+
+_CACHE: dict[tuple[str, str], Any] = {}
+_CACHE_MAX = 8
+
+
+def _cached(kind: str, key: str, make: Callable[[], Any]) -> Any:
+    """Per-process cache of interface tables and DMW records (small, oldest dropped first)."""
+    if (kind, key) not in _CACHE:
+        if len(_CACHE) >= _CACHE_MAX:
+            _CACHE.pop(next(iter(_CACHE)))
+        _CACHE[(kind, key)] = make()
+    return _CACHE[(kind, key)]
+
+
+def stage_key(scene: Any, stage: str) -> str:
+    """The runner's inputs key of ``stage`` for ``scene`` (:meth:`pipeline.runner.Runner.key`; AFM files
+    hashed by content): equal keys mean equal datasets."""
+    return Runner(scene, ".").key(stage)
+
+
+def candidate_inputs(scene: Any, inputs: Inputs) -> tuple[Any, tuple[np.ndarray, float] | None]:
+    """Interface tables and DMW record of a candidate: the base files when unchanged, else rebuilt."""
+    from .stages import dmw as dmw_stage
+    from .stages.interface import build_tables, roughness_statistics
+    from .physics import dmw as dmw_phys
+    interface = None
+    if scene.effects & {"contact", "adhesion"}:
+        ikey = stage_key(scene, "interface")
+        if inputs.interface_path and ikey == inputs.interface_key:
+            interface = _cached("interface", ikey, lambda: read_dataset(inputs.interface_path, stage="interface"))
+        else:
+            interface = _cached("interface", ikey, lambda: build_tables(scene, roughness_statistics(scene)))
+    record = None
+    if scene.has("dmw"):
+        dkey = stage_key(scene, "dmw")
+        if inputs.dmw_path and dkey == inputs.dmw_key:
+            record = _cached("dmw", dkey, lambda: dmw_stage.load(inputs.dmw_path)[1:])
+        else:
+            s = dmw_stage.settings(scene)
+            if s["source"] != "synthetic":
+                raise ValueError("a [dmw] key of a measured record cannot be a free parameter (the record is "
+                                 "used as measured)")
+            record = _cached("dmw", dkey, lambda: (dmw_phys.synthesize(s["rms_nm"], s["band_hz"], s["exponent"],
+                                                                        s["duration_s"], s["sample_rate_hz"],
+                                                                        s["seed"]), s["sample_rate_hz"]))
+    return interface, record
+
+
+def evaluate(base: Any, params: Sequence[Parameter], values: Sequence[float], protrusions: Sequence[float],
+             inputs: Inputs) -> dict[str, Any]:
+    """Run one candidate at ``protrusions`` [nm]; returns its record (see :class:`EvaluationStore`).
+
+    Outputs are in dataset units (``fhm_bv`` [%], ``min_clearance`` [nm], ``contact_force`` [mN], ...),
+    one value per protrusion, NaN where the run failed or the quantity does not exist (no contact).
+    """
+    t0 = time.perf_counter()
+    kernel = 0.0
+    errors: list[str] = []
+    n = len(protrusions)
+    outputs: dict[str, list[float]] = {}
+    try:
+        scene = with_values(base, params, values)
+        interface, record = candidate_inputs(scene, inputs)
+        model = sl.build_model(scene, interface, record, criterion_k(scene) if scene.has("contact") else None)
+    except (SceneError, ValueError, sl.IntegrationError) as exc:
+        errors.append(str(exc))
+        model = None
+    if model is not None:
+        for i, delta in enumerate(protrusions):
+            try:
+                t1 = time.perf_counter()
+                run = sl.run_model(model, float(delta) * NM)
+                kernel += time.perf_counter() - t1
+                summary = sl.summarize(run)
+            except (sl.IntegrationError, ValueError, FloatingPointError) as exc:
+                errors.append(f"{delta:g} nm: {exc}")
+                continue
+            for name, v in summary.items():
+                outputs.setdefault(name, [float("nan")] * n)[i] = float(v) * SCALARS[name].si_factor
+    return {"params": [float(v) for v in values], "protrusions": [float(x) for x in protrusions],
+            "outputs": outputs, "seconds": time.perf_counter() - t0, "kernel_seconds": kernel,
+            "error": "; ".join(errors) if errors else None}
+
+
+def evaluate_batch(base: Any, params: Sequence[Parameter], rows: Sequence[tuple[str, Sequence[float]]],
+                   protrusions: Sequence[float], inputs: Inputs) -> list[tuple[str, dict[str, Any]]]:
+    """One fan-out task: evaluate the candidates ``rows = [(key, values), ...]`` (executed on a worker)."""
+    return [(key, evaluate(base, params, values, protrusions, inputs)) for key, values in rows]
+
+
+class EvaluationStore:
+    """Finished evaluations, appended as JSON lines to ``path`` as they arrive (the resume point).
+
+    Each line is ``{"key": ..., **record}``. A line cut short by a kill is ignored when reading, so
+    the store never blocks a resume; a record is written once, flushed and synced.
+    """
+
+    def __init__(self, path: str | Path):
+        self.path = Path(path)
+        self.records: dict[str, dict[str, Any]] = {}
+        self.order: list[str] = []
+        if self.path.is_file():
+            for line in self.path.read_text().splitlines():
+                try:
+                    rec = json.loads(line)
+                except json.JSONDecodeError:
+                    continue
+                if isinstance(rec, dict) and "key" in rec and rec["key"] not in self.records:
+                    self.records[rec["key"]] = rec
+                    self.order.append(rec["key"])
+
+    def __contains__(self, key: str) -> bool:
+        return key in self.records
+
+    def __getitem__(self, key: str) -> dict[str, Any]:
+        return self.records[key]
+
+    def put(self, items: Iterable[tuple[str, dict[str, Any]]]) -> None:
+        """Append ``(key, record)`` pairs not yet stored: one write, flushed and synced."""
+        new = [(k, {"key": k, **rec}) for k, rec in items if k not in self.records]
+        if not new:
+            return
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        cut = False
+        if self.path.is_file() and self.path.stat().st_size > 0:
+            with open(self.path, "rb") as fh:
+                fh.seek(-1, os.SEEK_END)
+                cut = fh.read(1) != b"\n"
+        with open(self.path, "a") as fh:
+            if cut:  # a line cut short by a kill: end it, so the new records start on their own lines
+                fh.write("\n")
+            fh.write("".join(json.dumps(rec, allow_nan=True) + "\n" for _, rec in new))
+            fh.flush()
+            os.fsync(fh.fileno())
+        for k, rec in new:
+            if k not in self.records:
+                self.records[k] = rec
+                self.order.append(k)
+
+
+@dataclass
+class Evaluator:
+    """Evaluates sets of candidates of one base scene on the fan-out, through the store.
+
+    ``scheduler``/``workers`` as in :func:`pipeline.fanout.run_tasks`; ``task`` is the batch function
+    (:func:`evaluate_batch`, or a stand-in with its signature for tests of the statistics).
+    """
+
+    base: Any
+    params: Sequence[Parameter]
+    protrusions: Sequence[float]
+    inputs: Inputs
+    store: EvaluationStore
+    batch_size: int = 8
+    scheduler: str | None = None
+    workers: int | None = None
+    task: Callable[..., list] = evaluate_batch
+    batch_seconds: float = 0.0
+    evaluated: int = 0
+    kernel_seconds: float = 0.0
+
+    def __post_init__(self) -> None:
+        self.base_hash = base_key(self.base)
+
+    def key(self, values: Sequence[float]) -> str:
+        return evaluation_key(self.base_hash, self.params, values, self.protrusions)
+
+    def __call__(self, points: Iterable[Sequence[float]]) -> list[dict[str, Any]]:
+        """Records of ``points`` (each a vector of parameter values), evaluating only what the store lacks."""
+        from .fanout import run_tasks
+        pts = [[float(v) for v in x] for x in points]
+        keys = [self.key(x) for x in pts]
+        todo: dict[str, list[float]] = {}
+        for k, x in zip(keys, pts):
+            if k not in self.store and k not in todo:
+                todo[k] = x
+        rows = list(todo.items())
+        tasks = [(self.base, list(self.params), rows[i:i + self.batch_size], list(self.protrusions), self.inputs)
+                 for i in range(0, len(rows), self.batch_size)]
+
+        if tasks:
+            self.batch_seconds += run_tasks(self.task, tasks, scheduler=self.scheduler, workers=self.workers,
+                                            on_done=self.store.put)
+            self.evaluated += len(rows)
+            self.kernel_seconds += sum(self.store[k]["kernel_seconds"] for k in todo)
+        return [self.store[k] for k in keys]
+
+
+def setup(scene: Any, out: Path, section: str, force: bool = False) -> tuple[list[Parameter], Inputs, EvaluationStore]:
+    """The free parameters of ``[section]``, the base inputs in ``out`` and the evaluation store
+    ``out/<section>.evals.jsonl`` (emptied first with ``force``)."""
+    where = str(scene.path) if scene.path else "<scene>"
+    params = parse_parameters(scene[section]["parameters"], where, f"{section}.parameters")
+    inputs = prepare_inputs(scene, out)
+    store_path = Path(out) / f"{section}.evals.jsonl"
+    if force:
+        store_path.unlink(missing_ok=True)
+    return params, inputs, EvaluationStore(store_path)
+
+
+def prepare_inputs(scene: Any, out: Path) -> Inputs:
+    """The base scene's ``interface.nc`` and ``dmw.nc`` in ``out`` (made current by the runner), by path,
+    with the inputs keys they carry."""
+    from .runner import ensure
+    ipath = dpath = None
+    ikey = dkey = None
+    if scene.effects & {"contact", "adhesion"}:
+        ipath = str(ensure("interface", scene, out))
+        ikey = read_dataset(ipath).attrs.get(KEY_ATTR)
+    if scene.has("dmw"):
+        dpath = str(ensure("dmw", scene, out))
+        dkey = read_dataset(dpath).attrs.get(KEY_ATTR)
+    return Inputs(ipath, ikey, dpath, dkey)
+
+
+# ------------------------------------------------------------------------------------------ targets
+class Table:
+    """A candidate's outputs versus protrusion, read from its record."""
+
+    def __init__(self, record: dict[str, Any]):
+        self.protrusions = np.asarray(record["protrusions"], float)
+        self.outputs = {k: np.asarray(v, float) for k, v in record["outputs"].items()}
+
+    def values(self, name: str, at: Iterable[float]) -> np.ndarray:
+        """``name`` at the protrusions ``at`` [nm] (NaN where not evaluated or absent)."""
+        col = self.outputs.get(name)
+        out = []
+        for x in at:
+            i = np.flatnonzero(np.abs(self.protrusions - x) < 1e-6)
+            out.append(float(col[i[0]]) if col is not None and i.size else float("nan"))
+        return np.asarray(out)
+
+    def value(self, name: str, at: float) -> float:
+        return float(self.values(name, [at])[0])
+
+    def touchdown(self) -> float:
+        """First evaluated protrusion [nm] with contact in the steady window (NaN if none)."""
+        # contact: the exact minimum of d below k sigma (as the calibration counts it), not only sampled contact
+        mc = self.outputs.get("min_clearance")
+        if mc is None:
+            return float("nan")
+        order = np.argsort(self.protrusions)
+        hit = [self.protrusions[i] for i in order if mc[i] < 0]
+        return float(hit[0]) if hit else float("nan")
+
+
+@dataclass(frozen=True)
+class Target:
+    """A published target: its value from a candidate and its normalised residual.
+
+    ``kind``: ``"equal"`` (residual (v - target)/tol), ``"above"`` (zero when v >= target, else
+    (target - v)/tol), ``"below"`` (zero when v <= target), ``"touchdown"`` (see :func:`targets`).
+    """
+
+    name: str
+    long_name: str
+    units: str
+    kind: str
+    target: float
+    tolerance: float
+    protrusions: tuple[float, ...]
+    value: Callable[[Table], float]
+    paper: str
+
+    def residual(self, table: Table, missing: float) -> float:
+        if self.kind == "touchdown":
+            onset, prev = self.protrusions[-1], self.protrusions[0]
+            lo_on, lo_prev = table.value("min_clearance", onset), table.value("min_clearance", prev)
+            if not (np.isfinite(lo_on) and np.isfinite(lo_prev)):
+                return missing
+            return (max(0.0, lo_on) + max(0.0, -lo_prev)) / self.tolerance
+        v = self.value(table)
+        if not np.isfinite(v):
+            return missing
+        if self.kind == "equal":
+            return (v - self.target) / self.tolerance
+        if self.kind == "above":
+            return max(0.0, self.target - v) / self.tolerance
+        return max(0.0, v - self.target) / self.tolerance
+
+
+def _grid(lo: float, hi: float, step: float, open_low: bool = False) -> tuple[float, ...]:
+    """Protrusions ``lo, lo + step, ... <= hi`` [nm] (without ``lo`` when ``open_low``)."""
+    from .stages.sweep_grid import range_grid
+    pts = tuple(float(x) for x in range_grid({"start": lo, "stop": hi, "step": step}))
+    return pts[1:] if open_low else pts
+
+
+#: Target names, in report order.
+TARGET_NAMES = ("touchdown", "fhm_flying", "fhm_touchdown", "bouncing", "sliding_bv", "interference",
+                "contact_force", "real_area", "mean_pressure", "friction_coefficient", "net_force")
+
+
+def targets(scene: Any) -> list[Target]:
+    """The targets of ``[identify]`` that ``identify.targets`` selects (SPEC.md section 7; the paper).
+
+    * ``touchdown``: contact at ``touchdown.onset_nm``, none at ``touchdown.previous_nm`` (exact
+      minimum clearance of the steady window, which is continuous in the parameters where the
+      contact flag is not): residual ``(max(0, c_min(onset)) + max(0, -c_min(previous))) / tol``;
+      its value is the first evaluated protrusion in contact.
+    * ``fhm_flying``: mean FHM of the flying points of ``fhm_flying_range_nm`` (every
+      ``flying_step_nm``); ``fhm_touchdown``: FHM at ``fhm_touchdown_at_nm``.
+    * ``bouncing``: the smallest BV in ``(lo, hi]`` of ``bouncing_range_nm`` (every ``band_step_nm``)
+      must exceed ``bouncing_min_percent``.
+    * at ``sliding_at_nm``: BV below ``sliding_bv_max_percent``; interference, contact force, real
+      area, mean pressure and friction coefficient equal to the paper's; net force attractive (< 0).
+    """
+    c = scene["identify"]
+    td = scene["touchdown"]
+    at = c["sliding_at_nm"]
+    fr = _grid(*c["fhm_flying_range_nm"], c["flying_step_nm"])
+    band = _grid(*c["bouncing_range_nm"], c["band_step_nm"], open_low=True)
+
+    def fhm_flying(t: Table) -> float:
+        v = t.values("fhm_bv", fr)
+        cf = t.values("contact_fraction", fr)
+        flying = v[np.isfinite(v) & ~(cf > 0)]
+        return float(np.mean(flying)) if flying.size else float("nan")
+
+    def band_min(t: Table) -> float:
+        v = t.values("fhm_bv", band)
+        return float(np.min(v)) if v.size and np.all(np.isfinite(v)) else float("nan")
+
+    def at_sliding(name: str) -> Callable[[Table], float]:
+        return lambda t: t.value(name, at)
+
+    def touchdown(t: Table) -> float:
+        return t.touchdown()
+
+    sl_ = f"at {at:g} nm"
+    all_targets = {
+        "touchdown": Target("touchdown", "touchdown protrusion", "nm", "touchdown", td["onset_nm"],
+                            c["touchdown_tolerance_nm"], (td["previous_nm"], td["onset_nm"]), touchdown,
+                            f"{td['onset_nm']:g} nm (none at {td['previous_nm']:g} nm)"),
+        "fhm_flying": Target("fhm_flying", f"flying FHM, mean over {fr[0]:g}-{fr[-1]:g} nm", "%", "equal",
+                             c["fhm_flying_percent"], c["fhm_flying_tolerance_percent"], fr, fhm_flying,
+                             f"about {c['fhm_flying_percent']:g} %"),
+        "fhm_touchdown": Target("fhm_touchdown", f"FHM at {c['fhm_touchdown_at_nm']:g} nm", "%", "equal",
+                                c["fhm_touchdown_percent"], c["fhm_touchdown_tolerance_percent"],
+                                (c["fhm_touchdown_at_nm"],), lambda t: t.value("fhm_bv", c["fhm_touchdown_at_nm"]),
+                                f"about {c['fhm_touchdown_percent']:g} %"),
+        "bouncing": Target("bouncing", f"smallest BV in ({band[0] - c['band_step_nm']:g}, {band[-1]:g}] nm", "%",
+                           "above", c["bouncing_min_percent"], c["bouncing_tolerance_percent"], band, band_min,
+                           f"> {c['bouncing_min_percent']:g} %"),
+        "sliding_bv": Target("sliding_bv", f"BV {sl_}", "%", "below", c["sliding_bv_max_percent"],
+                             c["sliding_bv_tolerance_percent"], (at,), at_sliding("fhm_bv"),
+                             f"< {c['sliding_bv_max_percent']:g} %"),
+        "net_force": Target("net_force", f"net interface force {sl_} (negative: attractive)", "mN", "below", 0.0,
+                            c["net_force_tolerance_mn"], (at,), at_sliding("net_force"), "attractive (< 0)"),
+    }
+    # the paper's light-contact numbers: name -> (long name, units, scene key of the value, of the tolerance)
+    for name, (long_name, units, key, tol) in {
+            "interference": ("interference", "nm", "interference_nm", "interference_tolerance_nm"),
+            "contact_force": ("contact force", "mN", "contact_force_mn", "contact_force_tolerance_mn"),
+            "real_area": ("real contact area", "um2", "real_area_um2", "real_area_tolerance_um2"),
+            "mean_pressure": ("mean contact pressure", "MPa", "mean_pressure_mpa", "mean_pressure_tolerance_mpa"),
+            "friction_coefficient": ("friction coefficient", "1", "friction_coefficient",
+                                     "friction_coefficient_tolerance")}.items():
+        all_targets[name] = Target(name, f"{long_name} {sl_}", units, "equal", c[key], c[tol], (at,), at_sliding(name),
+                                   f"{c[key]:g}" + ("" if units == "1" else f" {units}"))
+    return [all_targets[name] for name in TARGET_NAMES if name in c["targets"]]
+
+
+def target_protrusions(tlist: Sequence[Target]) -> list[float]:
+    """Sorted union of the protrusions [nm] the targets need."""
+    return sorted({round(float(x), 9) for t in tlist for x in t.protrusions})
+
+
+def residuals(record: dict[str, Any], tlist: Sequence[Target], missing: float) -> tuple[np.ndarray, np.ndarray]:
+    """Values and normalised residuals of the targets for one evaluation record."""
+    table = Table(record)
+    vals = np.array([t.value(table) for t in tlist], float)
+    res = np.array([t.residual(table, missing) for t in tlist], float)
+    return vals, res
+
+
+def cost(res: np.ndarray) -> float:
+    """The objective: sum of squared normalised residuals."""
+    return float(np.sum(np.square(res)))
+
+
+# ------------------------------------------------------------------------------- headline outputs
+#: Headline outputs of ``hdi sensitivity``: name -> (units, long_name).
+HEADLINES: dict[str, tuple[str, str]] = {
+    "touchdown": ("nm", "touchdown protrusion (first grid protrusion in contact)"),
+    "fhm_flying": ("%", "flying FHM, mean over the flying range"),
+    "bv_after_touchdown": ("%", "largest BV within the bouncing band after touchdown"),
+    "interference": ("nm", "mean interference at the sliding protrusion"),
+    "contact_force": ("mN", "contact force at the sliding protrusion"),
+    "mean_pressure": ("MPa", "mean contact pressure at the sliding protrusion"),
+}
+
+
+def headline(record: dict[str, Any], scene: Any) -> dict[str, float]:
+    """Headline outputs of one evaluation over a protrusion grid (definitions of ``[identify]``).
+
+    ``bv_after_touchdown``: the largest BV in ``(touchdown, touchdown + w]`` with ``w`` the width of
+    ``identify.bouncing_range_nm``; the sliding outputs at ``identify.sliding_at_nm``.
+    """
+    c = scene["identify"]
+    t = Table(record)
+    td = t.touchdown()
+    lo, hi = c["fhm_flying_range_nm"]
+    sel = (t.protrusions >= lo - 1e-9) & (t.protrusions <= hi + 1e-9)
+    fhm = t.outputs.get("fhm_bv", np.full(t.protrusions.shape, np.nan))[sel]
+    cf = t.outputs.get("contact_fraction", np.zeros(t.protrusions.shape))[sel]
+    fly = fhm[np.isfinite(fhm) & ~(cf > 0)]
+    width = c["bouncing_range_nm"][1] - c["bouncing_range_nm"][0]
+    if np.isfinite(td):
+        band = (t.protrusions > td + 1e-9) & (t.protrusions <= td + width + 1e-9)
+        bv = t.outputs["fhm_bv"][band]
+        bv_after = float(np.nanmax(bv)) if bv.size and np.any(np.isfinite(bv)) else float("nan")
+    else:
+        bv_after = float("nan")
+    at = c["sliding_at_nm"]
+    return {"touchdown": td, "fhm_flying": float(np.mean(fly)) if fly.size else float("nan"),
+            "bv_after_touchdown": bv_after, "interference": t.value("interference", at),
+            "contact_force": t.value("contact_force", at), "mean_pressure": t.value("mean_pressure", at)}
