@@ -134,7 +134,8 @@ def local_cluster(scheduler: str | None = None, workers: int | None = None) -> I
 
 def _warm_worker() -> None:
     """Import the model on a worker (and load its numba cache index) before timing starts."""
-    from . import slider  # noqa: F401 (imported for its side effect)
+    import importlib
+    importlib.import_module("pipeline.slider")  # (imported for its side effect: the kernels compiled or loaded)
 
 
 def _distributed(fn: Callable[..., Any], tasks: list[tuple], scheduler: str, workers: int | None,

@@ -12,7 +12,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import pytest
 import xarray as xr
 
 from pipeline.scene import load_scene

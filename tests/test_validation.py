@@ -15,7 +15,7 @@ import pytest
 from pipeline import cli
 from pipeline.scene import SceneError, load_scene
 from pipeline.stages import interface
-from pipeline.validation import (CONNECT_TIMEOUT_S, MAX_SCENES, OptionError, PhysicsWarning, check_grid,
+from pipeline.validation import (CONNECT_TIMEOUT_S, MAX_SCENES, PhysicsWarning, check_grid,
                                  check_materials, check_out, grid_size)
 
 ROOT = Path(__file__).resolve().parents[1]
