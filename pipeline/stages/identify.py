@@ -288,7 +288,8 @@ def write_identified_scene(scene: Any, params: Sequence[Parameter], ds: xr.Datas
     base = Path(scene.path) if scene.path else None
     rel = os.path.relpath(base, path.parent) if base else "<scene>"
     now = str(ds.attrs.get("history", "")).split(": hdi", 1)[0] or "?"  # when identify.nc was made
-    lines = [f"# Identified by `hdi identify {base.name if base else ''}` on {now} (git {git_revision()[:12]});",
+    rev = str(ds.attrs.get("git_revision", "")) or git_revision()
+    lines = [f"# Identified by `hdi identify {base.name if base else ''}` on {now} (git {rev[:12]});",
              "# every value below is [identified]: fitted to the paper's targets ([identify] of the base scene),",
              f"# with its interval ({ds.attrs['interval_criterion']}).",
              f"# Within tolerance on every target: {'yes' if ds.attrs['within_tolerance'] else 'no'} "
@@ -312,6 +313,15 @@ def write_identified_scene(scene: Any, params: Sequence[Parameter], ds: xr.Datas
             lst = lists.setdefault((section, key), list(scene[section][key]))
             lst[index] = best
             sections.setdefault(section, []).append(f"# {key}[{index}]: {note}")
+    # the scene's --set options (e.g. the stiffening law switched on) belong to the identified model too;
+    # study sections are not part of a simulation scene
+    identified = {p.parts[:2] for p in params}
+    for text in scene.overrides:
+        name, _, value = text.partition("=")
+        section, _, key = name.strip().partition(".")
+        if section in ("identify", "sensitivity") or (section, key) in identified:
+            continue
+        sections.setdefault(section, []).append(f"{key} = {value.strip()}  # --set of the identification")
     for (section, key), lst in lists.items():
         sections[section].append(f"{key} = [{', '.join(f'{v:.6g}' for v in lst)}]  # [identified]")
     for section, body in sections.items():
