@@ -3,7 +3,6 @@ working directory, and `hdi sweep --scheduler tcp://127.0.0.1:PORT` gives the da
 
 from __future__ import annotations
 
-import json
 import os
 import signal
 import socket
