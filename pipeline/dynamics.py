@@ -20,6 +20,8 @@ Equations of motion (SPEC.md section 4), states ``y = (z, theta, z', theta')`` i
   ``F_t = k_t [G(g_n) - G(g)]``, ``G(s) = g0^p s^(1-p) / (1-p) - s`` (``g0 ln s - s`` for ``p = 1``),
   whose stiffness is ``-dF_t/dg = k_t [(g0/g)^p - 1]`` (``tfc_stiff`` not ``None``;
   :func:`pipeline.physics.air_bearing.tfc_stiffening_force`).
+* the air-bearing laws (rear power and linear laws, the stiffening potential and stiffness) are
+  compiled from their one definition in :mod:`pipeline.physics.air_bearing`.
 
 Effects are selected by passing ``None`` for a disabled effect's data: numba compiles one
 specialised kernel per combination and prunes the dead branches at compile time (branch pruning of
@@ -55,6 +57,8 @@ from __future__ import annotations
 
 import numpy as np
 from numba import njit
+
+from .physics import air_bearing as ab
 
 # Layout of the parameter vector ``p`` (all SI).
 (P_M, P_I, P_LF, P_LR, P_LC, P_HCG, P_KF, P_KR, P_CF, P_CR, P_G0, P_N, P_FR0, P_FH0, P_DELTA, P_AN,
@@ -231,6 +235,14 @@ def _separation(p, y, wc, vc):
     return separation_at(p, y[0], y[1], wc), y[2] - p[P_LC] * y[3] - vc
 
 
+# the air-bearing laws, compiled from their one definition in pipeline.physics.air_bearing
+_JIT = dict(cache=True, nogil=True, inline="always", error_model="numpy")
+_rear_power = njit(**_JIT)(ab.rear_power_law)
+_rear_linear = njit(**_JIT)(ab.rear_linear_law)
+_stiffening_potential = njit(**_JIT)(ab.stiffening_potential)
+_stiffening_stiffness = njit(**_JIT)(ab.stiffening_stiffness)
+
+
 @njit(cache=True, nogil=True, inline="always", error_model="numpy")
 def _stiffening(p, g):
     """Force [N] (up positive) and stiffness [N/m] of the TFC stiffening spring at the gap ``g`` [m].
@@ -240,15 +252,10 @@ def _stiffening(p, g):
     """
     gm = p[P_TGMIN]
     gg = max(g, gm)
-    q = p[P_TP]
-    if q == 1.0:
-        G = p[P_TG0] * np.log(gg) - gg
-    else:
-        G = p[P_TG0] ** q * gg ** (1.0 - q) / (1.0 - q) - gg
-    f = p[P_TK] * (p[P_TF0] - G)
+    f = p[P_TK] * (p[P_TF0] - _stiffening_potential(gg, p[P_TG0], p[P_TP]))
     if g < gm:
         return f + p[P_TKMIN] * (gm - g), p[P_TKMIN]
-    return f, p[P_TK] * ((p[P_TG0] / gg) ** q - 1.0)
+    return f, _stiffening_stiffness(gg, p[P_TG0], p[P_TK], p[P_TP])
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -264,12 +271,10 @@ def rhs(t, y, p, dmw, cp, pa, ft, pitch, tfs, rlin, contact, out):
     F_f = -p[P_KF] * (z + lf * th - wf) - p[P_CF] * (vz + lf * vth - vf)
     g_r = p[P_G0] + z - lr * th - wr
     if rlin is not None:
-        F_r = p[P_KR] * (p[P_G0] - g_r)  # "linear" rear law
+        F_r = _rear_linear(g_r, p[P_G0], p[P_KR])
     else:
         g_r = max(g_r, 1e-3 * p[P_G0])  # the rear law is singular at zero gap; never reached in practice
-        ratio = p[P_G0] / g_r
-        law = ratio * ratio if p[P_N] == 2.0 else ratio ** p[P_N]  # pow() is the costliest call here
-        F_r = p[P_FR0] * (law - 1.0)
+        F_r = _rear_power(g_r, p[P_G0], p[P_N], p[P_FR0])
     F_r -= p[P_CR] * (vz - lr * vth - vr)
     F_i = 0.0
     Q = 0.0

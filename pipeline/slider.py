@@ -153,7 +153,7 @@ def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float]
         tfs = np.ones(1)
         p[dyn.P_TK], p[dyn.P_TP], p[dyn.P_TG0] = a["tfc_stiffness_n_m"], a["tfc_stiffening_exponent"], p[dyn.P_FH0]
         p[dyn.P_TGMIN] = ab.TFC_MIN_GAP * p[dyn.P_FH0]
-        p[dyn.P_TKMIN] = p[dyn.P_TK] * ((1.0 / ab.TFC_MIN_GAP) ** p[dyn.P_TP] - 1.0)
+        p[dyn.P_TKMIN] = ab.stiffening_stiffness(ab.TFC_MIN_GAP, 1.0, p[dyn.P_TK], p[dyn.P_TP])  # at g = gm
     rear_linear = np.ones(1) if ab.REAR_LAWS[a["rear_law"]].linear else None
     info.update({"rear_law": a["rear_law"], "tfc_stiffening": a["tfc_stiffening"],
                  "friction_law": scene["contact"]["friction_law"],
@@ -282,8 +282,7 @@ def run_model(model: Model, protrusion: float, y0: np.ndarray | None = None, max
 
 def _stiffening_potential(g: float, g0: float, q: float, g_min: float) -> float:
     """``G(max(g, g_min))`` [m] of the stiffening law (:func:`pipeline.physics.air_bearing.tfc_stiffening_force`)."""
-    g = max(g, g_min)
-    return g0 * np.log(g) - g if q == 1.0 else g0**q * g ** (1.0 - q) / (1.0 - q) - g
+    return ab.stiffening_potential(max(g, g_min), g0, q)
 
 
 def histories(run: Run) -> dict[str, np.ndarray]:

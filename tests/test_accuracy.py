@@ -1,4 +1,4 @@
-"""The accuracy stage on a tiny configuration: dataset layout, zero error of the reference itself,
+"""The accuracy stage on a tiny configuration: dataset layout, zero error of a re-run of the reference,
 errors shrinking as the tolerance tightens, the chosen defaults and the work-precision figure."""
 
 from __future__ import annotations
@@ -25,14 +25,24 @@ KNOBS = {"rtol": [1e-9, 1e-7, 1e-5], "max_step_ns": [25.0, 250.0], "stiffness_st
 def result(tmp_path_factory, paper_config):
     out = tmp_path_factory.mktemp("accuracy")
     scene = load_scene(paper_config, ["solver.duration_ms=0.6", "solver.transient_ms=0.2", "contact.k=0.445"])
-    path = accuracy.run(scene, out, reference=REFERENCE, knobs=KNOBS, repeat=1)
+    runs = []  # (configuration, Result) of every evaluation, to see which runs the rows come from
+    evaluate = accuracy._evaluate
+
+    def spy(scene, values, *args):
+        res = evaluate(scene, values, *args)
+        runs.append((dict(values), res))
+        return res
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(accuracy, "_evaluate", spy)
+        path = accuracy.run(scene, out, reference=REFERENCE, knobs=KNOBS, repeat=1)
     with xr.open_dataset(path, engine="netcdf4") as ds:
         ds = ds.load()
-    return out, path, ds
+    return out, path, ds, runs
 
 
 def test_dataset_layout(result):
-    out, path, ds = result
+    out, path, ds, _ = result
     assert path == out / "accuracy.nc"
     assert dict(ds.sizes) == {"point": 3, "knob": len(KNOBS), "level": 3, "output": len(accuracy.HEADLINE),
                               "configuration": 2}
@@ -52,14 +62,27 @@ def test_dataset_layout(result):
 
 
 def test_reference_setting_has_zero_error(result):
-    _, _, ds = result
+    _, _, ds, runs = result
     ref = ds["is_reference"].values.astype(bool)
     # every knob but the step-size controllers (whose rows move the other controllers) contains it
     names = list(ds["knob"].values)
     for name in set(names) - {"rtol", "max_step_ns", "stiffness_step"}:
         assert ref[names.index(name), 0], name
+    # the rows equal to the reference are a fresh run of it (not a copy): zero error is determinism.
+    # The reference configuration runs three times: untimed (compilation), timed, and for those rows.
+    full = {**accuracy.REFERENCE, **REFERENCE}
+    at_ref = [res for cfg, res in runs if cfg == full]
+    assert len(at_ref) == 3 and len({id(r) for r in at_ref}) == 3
+    for j, name in enumerate(accuracy.HEADLINE):
+        np.testing.assert_array_equal(ds[f"reference_{name}"].values, at_ref[1].values[:, j])
+        np.testing.assert_array_equal(ds[name].values[:, ref], np.repeat(at_ref[2].values[:, j, None], ref.sum(), 1))
     err = ds["error"].values[:, ref, :]
     assert np.all((err == 0) | np.isnan(err))
+    assert (ds["steps"].values[:, ref] > 0).all() and (ds["simulation_time"].values[:, ref] > 0).all()
+    # and the measure sees a change: every other setting errs at some point
+    other = ~ref & np.isfinite(ds["setting"].values)
+    worst = np.nanmax(ds["max_error"].values[:, other], axis=0)
+    assert np.all(worst > 0), dict(zip(np.array(names)[np.nonzero(other)[0]], worst))
     # outputs that do not apply while flying are NaN, not errors
     flying = ds["error"].sel(point="flying", knob="table_step_nm", level=1)
     assert np.isnan(flying.sel(output="interference")) and np.isnan(flying.sel(output="friction_coefficient"))
@@ -67,7 +90,7 @@ def test_reference_setting_has_zero_error(result):
 
 
 def test_error_decreases_as_rtol_tightens(result):
-    _, _, ds = result
+    _, _, ds, _ = result
     e = ds["max_error"].sel(knob="rtol").values[:, :3]  # (point, level): rtol 1e-9, 1e-7, 1e-5
     assert np.all(np.isfinite(e))
     # monotone within noise (a factor 2, or 1e-5 absolute where the error is at round-off level:
@@ -81,7 +104,7 @@ def test_error_decreases_as_rtol_tightens(result):
 
 
 def test_chosen_defaults_and_figure(result):
-    out, _, ds = result
+    out, _, ds, _ = result
     chosen = json.loads(ds.attrs["chosen_defaults"])
     assert set(chosen) == set(KNOBS)
     for name, value in chosen.items():
@@ -115,7 +138,7 @@ def test_accuracy_dataset_is_declared_and_cf_clean(result):
     from pipeline.io import read_dataset
     from pipeline.variables import declared
 
-    _, path, _ = result
+    _, path, _, _ = result
     ds = read_dataset(path)
     for name in list(ds.coords) + list(ds.data_vars):
         assert ds[name].attrs.get("units", "") == declared("accuracy", name).units, name

@@ -18,6 +18,7 @@ from pipeline.io import read_dataset
 from pipeline.scene import SceneError, load_scene
 from pipeline.stages import calibrate as calibrate_stage
 from pipeline.stages import sweep as sweep_stage
+from pipeline.stages.simulate import model_inputs
 from pipeline.stages.sweep_grid import roughness_sets
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -57,17 +58,30 @@ def _copy_inputs(src: Path, dst: Path) -> None:
             (dst / name).write_bytes((src / name).read_bytes())
 
 
-def test_calibration_interval_and_probabilities(calibrated):
+def test_calibration_interval_ends_are_where_full_runs_start_touching(calibrated):
+    """The ends of the admissible interval are contact thresholds of full runs with the contact law on.
+
+    The exact method finds k*(onset) = k_low and k*(previous) = k_high from flying runs (contact law
+    off); here :func:`calibrate.touches` runs the full model: at 9.8 nm it touches just above k_low and
+    not just below, at 9.6 nm likewise around k_high. (That the chosen k puts the sweep's first
+    contact at 9.8 nm is test_calibrated_k_puts_first_contact_at_touchdown.)
+    """
     scene, out = calibrated
     cal = read_dataset(out / "calibration.nc")
     k, lo, hi = float(cal.k_calibrated), float(cal.k_low), float(cal.k_high)
-    assert lo < k <= hi
-    assert k == pytest.approx(0.5 * (lo + hi))
-    # the bisection tolerance bounds the ends (touchdown.k_tolerance = 1e-3)
-    assert hi - lo > 1e-3
+    assert lo < k < hi
+    tol = float(cal.attrs["k_tolerance"])          # bisection resolves k* to within tol (exact: to 0)
+    assert hi - lo > 4 * tol                         # the probes below stay inside the interval
+    interface, record = model_inputs(scene, out)
+    model = sl.build_model(scene, interface, record, k=0.0)
+    td = scene["touchdown"]
+    for delta, k_star in ((td["onset_nm"], lo), (td["previous_nm"], hi)):
+        assert calibrate_stage.touches(model, delta, k_star + tol), (delta, k_star)
+        assert not calibrate_stage.touches(model, delta, k_star - tol), (delta, k_star)
+    # the probabilities against scipy's normal tail (the paper's convention is two-sided)
     from scipy.stats import norm
-    assert float(cal.contact_probability_one_sided) == pytest.approx(norm.sf(k))
-    assert float(cal.contact_probability_two_sided) == pytest.approx(2 * norm.sf(abs(k)))
+    assert float(cal.contact_probability_one_sided) == pytest.approx(norm.sf(k), rel=1e-12)
+    assert float(cal.contact_probability_two_sided) == pytest.approx(2 * norm.sf(abs(k)), rel=1e-12)
 
 
 def test_calibrated_k_puts_first_contact_at_touchdown(calibrated, tmp_path):

@@ -209,19 +209,37 @@ def damping_ratios(s: Slider) -> tuple[np.ndarray, np.ndarray]:
     return wn / (2 * np.pi), -np.real(lam) / wn
 
 
+# The laws below that take plain numbers (rear_power_law, rear_linear_law, stiffening_potential,
+# stiffening_stiffness) are the only definitions of these laws: the numba kernel
+# (pipeline.dynamics) compiles these same functions, Python code calls them on floats or arrays.
+
+def rear_power_law(g, g0: float, n: float, F0: float):
+    """Power rear bearing force ``F0 [(g0/g)^n - 1]`` [N] on gap ``g`` [m] (SPEC.md section 4, [recon]).
+
+    ``n = 2`` squares rather than calling ``pow()``, the costliest call of the kernel's right-hand side.
+    """
+    ratio = g0 / g
+    law = ratio * ratio if n == 2.0 else ratio**n
+    return F0 * (law - 1.0)
+
+
+def rear_linear_law(g, g0: float, k_r: float):
+    """Linear rear bearing force ``k_r (g0 - g)`` [N] on gap ``g`` [m], stiffness ``k_r`` [N/m] (SPEC.md 4)."""
+    return k_r * (g0 - g)
+
+
 def rear_force(g: np.ndarray, g0: float, n: float, F0: float) -> np.ndarray:
     """Nonlinear rear bearing force [N] (positive: pushes the slider up) on gap ``g`` [m].
 
-    ``F_r = F0 [(g0/g)^n - 1]`` (SPEC.md section 4, [recon]); zero at ``g = g0``, stiffness
-    ``n F0 / g0`` there.
+    ``F_r = F0 [(g0/g)^n - 1]`` (:func:`rear_power_law`); zero at ``g = g0``, stiffness ``n F0 / g0`` there.
     """
-    return F0 * ((g0 / np.asarray(g, dtype=float)) ** n - 1.0)
+    return rear_power_law(np.asarray(g, dtype=float), g0, n, F0)
 
 
 def rear_force_linear(g: np.ndarray, g0: float, n: float, F0: float) -> np.ndarray:
     """Linear rear bearing force [N] ``F_r = k_r (g0 - g)`` with ``k_r = n F0 / g0`` [N/m] on gap ``g`` [m]:
     the tangent of :func:`rear_force` at ``g0`` (same modal stiffness, no nonlinearity)."""
-    return n * F0 / g0 * (g0 - np.asarray(g, dtype=float))
+    return rear_linear_law(np.asarray(g, dtype=float), g0, n * F0 / g0)
 
 
 @dataclass(frozen=True)
@@ -243,6 +261,17 @@ REAR_LAWS = {
 #: Gap below which the stiffening law is continued linearly, as a fraction of ``g0`` [1]: the law is
 #: singular at zero gap (reached only in deep contact, where the contact force dominates).
 TFC_MIN_GAP = 0.02
+
+
+def stiffening_potential(s, g0: float, q: float):
+    """``G(s) = g0^q s^(1-q) / (1-q) - s`` (``g0 ln s - s`` for ``q = 1``) [m] of the TFC stiffening law,
+    gap ``s`` [m] (see :func:`tfc_stiffening_force`): ``-dG/ds`` is the stiffness over ``k_t``."""
+    return g0 * np.log(s) - s if q == 1.0 else g0**q * s ** (1.0 - q) / (1.0 - q) - s
+
+
+def stiffening_stiffness(g, g0: float, k_t: float, q: float):
+    """Added stiffness ``k_t [(g0/g)^q - 1]`` [N/m] of the TFC stiffening law at gap ``g`` [m] (SPEC.md 7.4)."""
+    return k_t * ((g0 / g) ** q - 1.0)
 
 
 def tfc_stiffening_force(g: np.ndarray, g_n: float, g0: float, k_t: float, p: float) -> tuple[np.ndarray, np.ndarray]:
@@ -267,12 +296,11 @@ def tfc_stiffening_force(g: np.ndarray, g_n: float, g0: float, k_t: float, p: fl
     gm = TFC_MIN_GAP * g0
 
     def G(s):
-        s = np.maximum(s, gm)
-        return g0 * np.log(s) - s if p == 1.0 else g0**p * s ** (1.0 - p) / (1.0 - p) - s
+        return stiffening_potential(np.maximum(s, gm), g0, p)
 
-    k_min = k_t * ((g0 / gm) ** p - 1.0)
+    k_min = stiffening_stiffness(gm, g0, k_t, p)
     F = k_t * (G(g_n) - G(g)) + np.where(g < gm, k_min * (gm - g), 0.0)
-    k = np.where(g < gm, k_min, k_t * ((g0 / np.maximum(g, gm)) ** p - 1.0))
+    k = np.where(g < gm, k_min, stiffening_stiffness(np.maximum(g, gm), g0, k_t, p))
     return F, k
 
 

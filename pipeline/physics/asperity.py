@@ -2,6 +2,8 @@
 
 A spherical summit of radius ``R`` pressed by an interference ``w`` against a rigid flat, composite
 modulus ``E'`` and hardness ``H`` of the softer body. All functions are vectorised and take SI units.
+This module is the one home of the single-summit laws: :mod:`pipeline.physics.isbl` sums the
+per-regime functions (:func:`hertz_load`, :func:`ke_fit`, :func:`plastic_load`, ...) over the summits.
 
 References
 ----------
@@ -20,6 +22,11 @@ from .statistics import ke_hardness_factor
 X_ELASTIC = 1.0
 X_MID = 6.0
 X_PLASTIC = 110.0
+
+#: Kogut-Etsion elastic-plastic fits [KE02] in ``x = w / w_c``, ``(c, e)`` of ``P = c P_c x^e`` (load)
+#: and ``A = c A_c x^e`` (area), for ``1 < x <= 6`` and ``6 < x <= 110`` in this order.
+KE_LOAD_FITS = ((1.03, 1.425), (1.40, 1.263))
+KE_AREA_FITS = ((0.93, 1.136), (0.94, 1.146))
 
 
 def critical_interference(R: float, E: float, H: float, nu: float) -> float:
@@ -42,6 +49,38 @@ def critical_load(R: float, E: float, H: float, nu: float) -> float:
     return 2.0 / 3.0 * np.pi * K * H * R * critical_interference(R, E, H, nu)
 
 
+def critical_area(R: float, E: float, H: float, nu: float) -> float:
+    """Contact area at the onset of yield ``A_c = pi R w_c`` [m^2] [KE02]."""
+    return np.pi * R * critical_interference(R, E, H, nu)
+
+
+def hertz_load(w: np.ndarray, R: float, E: float) -> np.ndarray:
+    """Hertz load ``(4/3) E' sqrt(R) w^1.5`` [N] of a sphere at interference ``w >= 0`` [m] [Johnson85 4.23]."""
+    return 4.0 / 3.0 * E * np.sqrt(R) * w**1.5
+
+
+def hertz_area(w: np.ndarray, R: float) -> np.ndarray:
+    """Hertz contact area ``pi R w`` [m^2] at interference ``w >= 0`` [m] [Johnson85 4.22]."""
+    return np.pi * R * w
+
+
+def ke_fit(x: np.ndarray, scale: float, fit: tuple[float, float]) -> np.ndarray:
+    """A Kogut-Etsion fit ``c scale x^e`` [KE02] (``fit = (c, e)`` from :data:`KE_LOAD_FITS` with
+    ``scale = P_c``, or :data:`KE_AREA_FITS` with ``scale = A_c``) at ``x = w / w_c >= 0``."""
+    c, e = fit
+    return c * scale * x**e
+
+
+def plastic_area(w: np.ndarray, R: float) -> np.ndarray:
+    """Fully plastic contact area ``2 pi R w`` [m^2] (Abbott-Firestone truncation) [KE02]."""
+    return 2.0 * np.pi * R * w
+
+
+def plastic_load(w: np.ndarray, R: float, H: float) -> np.ndarray:
+    """Fully plastic load ``H 2 pi R w`` [N]: the hardness times :func:`plastic_area` [KE02]."""
+    return H * plastic_area(w, R)
+
+
 def contact_load(w: np.ndarray, R: float, E: float, H: float, nu: float) -> np.ndarray:
     """Load on one summit [N] versus interference ``w`` [m] (0 for ``w <= 0``).
 
@@ -56,8 +95,8 @@ def contact_load(w: np.ndarray, R: float, E: float, H: float, nu: float) -> np.n
     x = wp / wc  # not w / wc: np.select evaluates every branch, and (negative x)**1.425 warns
     return np.select(
         [w <= 0, x <= X_ELASTIC, x <= X_MID, x <= X_PLASTIC],
-        [0.0, 4.0 / 3.0 * E * np.sqrt(R) * wp**1.5, 1.03 * Pc * x**1.425, 1.40 * Pc * x**1.263],
-        H * 2.0 * np.pi * R * wp,
+        [0.0, hertz_load(wp, R, E), ke_fit(x, Pc, KE_LOAD_FITS[0]), ke_fit(x, Pc, KE_LOAD_FITS[1])],
+        plastic_load(wp, R, H),
     )
 
 
@@ -69,11 +108,11 @@ def contact_area(w: np.ndarray, R: float, E: float, H: float, nu: float) -> np.n
     """
     w = np.asarray(w, dtype=float)
     wc = critical_interference(R, E, H, nu)
-    Ac = np.pi * R * wc
+    Ac = critical_area(R, E, H, nu)
     wp = np.maximum(w, 0.0)
     x = wp / wc  # not w / wc: np.select evaluates every branch, and (negative x)**1.425 warns
     return np.select(
         [w <= 0, x <= X_ELASTIC, x <= X_MID, x <= X_PLASTIC],
-        [0.0, np.pi * R * wp, 0.93 * Ac * x**1.136, 0.94 * Ac * x**1.146],
-        2.0 * np.pi * R * wp,
+        [0.0, hertz_area(wp, R), ke_fit(x, Ac, KE_AREA_FITS[0]), ke_fit(x, Ac, KE_AREA_FITS[1])],
+        plastic_area(wp, R),
     )

@@ -167,7 +167,7 @@ def isbl_tables(d: np.ndarray, p: Interface, *, quantities=QUANTITIES, nodes: in
     # Contacting ranges: elastic, elastic-plastic (two fits), fully plastic.
     if want & {"contact_pressure", "friction_stress", "real_area_fraction"}:
         Pc = asperity.critical_load(R, E, H, nu)
-        Ac = np.pi * R * wc
+        Ac = asperity.critical_area(R, E, H, nu)
         ranges = {
             "el": clip(d, d + wc),
             "ep1": clip(d + wc, d + asperity.X_MID * wc),
@@ -182,15 +182,15 @@ def isbl_tables(d: np.ndarray, p: Interface, *, quantities=QUANTITIES, nodes: in
             w = np.maximum(z - d[:, None], 0.0)
             wt = wt * _gauss(z, s)
             x = w / wc
+            # the single-summit laws of the range [KE02] (pipeline.physics.asperity)
             if name == "el":
-                P, A = 4.0 / 3.0 * E * np.sqrt(R) * w**1.5, np.pi * R * w
-            elif name == "ep1":
-                P, A = 1.03 * Pc * x**1.425, 0.93 * Ac * x**1.136
-            elif name == "ep2":
-                P, A = 1.40 * Pc * x**1.263, 0.94 * Ac * x**1.146
+                P, A = asperity.hertz_load(w, R, E), asperity.hertz_area(w, R)
+            elif name in ("ep1", "ep2"):
+                fit = int(name == "ep2")
+                P = asperity.ke_fit(x, Pc, asperity.KE_LOAD_FITS[fit])
+                A = asperity.ke_fit(x, Ac, asperity.KE_AREA_FITS[fit])
             else:
-                A = 2.0 * np.pi * R * w
-                P = H * A
+                P, A = asperity.plastic_load(w, R, H), asperity.plastic_area(w, R)
             load += (P * wt).sum(axis=1)
             Aint = (A * wt).sum(axis=1)
             area_all += Aint

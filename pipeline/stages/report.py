@@ -51,6 +51,7 @@ import csv
 import io as _io
 import logging
 import math
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -420,21 +421,39 @@ def _flying_runs_text(ds: xr.Dataset, limit: float) -> tuple[str, list[tuple[flo
     return ", ".join(f"{a:g}-{b:g} nm" if a != b else f"{a:g} nm" for a, b in spans), spans
 
 
-def comparison_markdown(combos: list, data: dict, scene: Any, name: str) -> str:
-    """The generated comparison with the paper (default combination); see the module docstring."""
-    labels, ds = combos[0]
-    sweep, cal, inter, dmw = data["sweep"], data["calibration"], data["interface"], data["dmw"]
-    x = ds["protrusion"].values
-    reg = np.asarray(ds["regime"].values).reshape(-1) if "regime" in ds else np.zeros(x.size, int)
-    fhm = np.asarray(ds["fhm_bv"].values, float).reshape(-1)
-    col = lambda n: np.asarray(ds[n].values, float).reshape(-1) if n in ds else np.full(x.size, np.nan)  # noqa: E731
-    fc = first_contact(ds)
-    k = _attr_float(sweep, "k")
-    k_source = str(sweep.attrs.get("k_source", "not recorded"))
-    rows: list[list[str]] = []
-    notes: list[str] = []
+@dataclass(frozen=True)
+class _Slice:
+    """The default combination's sweep slice as the comparison reads it (arrays over protrusion)."""
 
-    # 1. touchdown -------------------------------------------------------------------------------
+    ds: xr.Dataset
+    x: np.ndarray               # protrusion [nm]
+    reg: np.ndarray             # regime code
+    fhm: np.ndarray             # FHM/BV [%]
+    fc: float | None            # first contact [nm]
+    k: float                    # the sweep's contact criterion [1]
+    k_source: str
+
+    @classmethod
+    def of(cls, ds: xr.Dataset, sweep: xr.Dataset) -> "_Slice":
+        x = ds["protrusion"].values
+        reg = np.asarray(ds["regime"].values).reshape(-1) if "regime" in ds else np.zeros(x.size, int)
+        return cls(ds, x, reg, np.asarray(ds["fhm_bv"].values, float).reshape(-1), first_contact(ds),
+                   _attr_float(sweep, "k"), str(sweep.attrs.get("k_source", "not recorded")))
+
+    def col(self, name: str) -> np.ndarray:
+        """A variable as a flat float array (NaN when the sweep lacks it)."""
+        if name not in self.ds:
+            return np.full(self.x.size, np.nan)
+        return np.asarray(self.ds[name].values, float).reshape(-1)
+
+
+#: What each section of the comparison returns: table rows and numbered notes.
+_Section = tuple[list[list[str]], list[str]]
+
+
+def _touchdown_section(c: _Slice, sweep: xr.Dataset, cal: xr.Dataset | None) -> tuple[list[list[str]], list[str], bool]:
+    """1. Touchdown protrusion against the paper's; also whether the evidence shows an adhesive snap-in."""
+    x, reg, fc, k, k_source = c.x, c.reg, c.fc, c.k, c.k_source
     td = PAPER["touchdown_nm"]
     cal_text = "calibration.nc absent"
     k_cal = math.nan
@@ -443,13 +462,13 @@ def comparison_markdown(combos: list, data: dict, scene: Any, name: str) -> str:
         cal_text = str(cal.attrs.get("outcome", "")).strip()
     ours = f"first contact at {fc:g} nm" if fc is not None else "no contact on the grid"
     diff = _diff(fc - td, "nm") if fc is not None else "–"
-    rows.append(["touchdown protrusion", f"{td:g} nm (none at {PAPER['previous_nm']:g} nm)", ours, diff])
+    rows = [["touchdown protrusion", f"{td:g} nm (none at {PAPER['previous_nm']:g} nm)", ours, diff]]
     n = [f"**Touchdown.** Ours: {ours} (sweep, k = {_g(k)}). Calibration: {cal_text}."]
     snap = False
     if fc is not None:
         before = np.flatnonzero((x < fc) & (reg == 0))
         i_fc = int(np.flatnonzero(np.isclose(x, fc))[0])
-        clr, adh, con, net = col("clearance"), col("adhesion_force"), col("contact_force"), col("net_force")
+        clr, adh, con, net = c.col("clearance"), c.col("adhesion_force"), c.col("contact_force"), c.col("net_force")
         step = float(np.min(np.diff(np.sort(x)))) if x.size > 1 else 0.0
         curve_flat = False
         if cal is not None and "touchdown" in cal:
@@ -457,7 +476,7 @@ def comparison_markdown(combos: list, data: dict, scene: Any, name: str) -> str:
             fin = curve[np.isfinite(curve)]
             curve_flat = bool(fin.size == curve.size and fin.size > 1 and np.ptp(fin) == 0)
         j = int(before[-1]) if before.size else None
-        min_before = col("min_clearance")[j] if j is not None else math.nan
+        min_before = c.col("min_clearance")[j] if j is not None else math.nan
         # snap-in: the last flying point still keeps a margin of several protrusion steps, yet the next
         # one is in contact (or the touchdown does not depend on k at all)
         snap = curve_flat or (np.isfinite(min_before) and min_before > 3 * step)
@@ -492,69 +511,76 @@ def comparison_markdown(combos: list, data: dict, scene: Any, name: str) -> str:
         elif np.isfinite(k_cal):
             n.append("Agreement within one actuation step; note that k was calibrated to this touchdown, so it "
                      "is by construction, not a prediction.")
-    notes.append(" ".join(n))
+    return rows, [" ".join(n)], snap
 
-    # 2. k and its probability ------------------------------------------------------------------
+
+def _k_section(c: _Slice, snap: bool) -> _Section:
+    """2. The contact probability of the k used against the paper's 32.8 %."""
+    k, k_source = c.k, c.k_source
     p_paper = PAPER["contact_probability"]
-    if np.isfinite(k):
-        p2, p1 = contact_probabilities(k)
-        ours = f"k = {k:.4g}: P(|z| > k sigma) = {100 * p2:.1f} % (two-sided), one-sided {100 * p1:.1f} %"
-        rows.append(["contact probability of k (two-sided)", f"{100 * p_paper:g} %", ours,
-                     _diff(100 * (p2 - p_paper), "points")])
-        if "fallback" in k_source:
-            notes.append(f"**k.** The calibration found no admissible k, so the sweep used the documented fallback "
-                         f"k = {k:.4g} (recorded source: \"{k_source}\"). Its contact probability equals the "
-                         "paper's 32.8 % by construction: it is the paper's number, not a calibration of this model"
-                         + (", and with the snap-in above it only shifts the clearance by k sigma." if snap else "."))
-        else:
-            notes.append(f"**k.** k = {k:.4g}, source: {k_source}.")
-    else:
-        rows.append(["contact probability of k (two-sided)", f"{100 * p_paper:g} %", "no k (contact effect off)",
-                     "–"])
+    if not np.isfinite(k):
+        return [["contact probability of k (two-sided)", f"{100 * p_paper:g} %", "no k (contact effect off)",
+                 "–"]], []
+    p2, p1 = contact_probabilities(k)
+    ours = f"k = {k:.4g}: P(|z| > k sigma) = {100 * p2:.1f} % (two-sided), one-sided {100 * p1:.1f} %"
+    rows = [["contact probability of k (two-sided)", f"{100 * p_paper:g} %", ours,
+             _diff(100 * (p2 - p_paper), "points")]]
+    if "fallback" in k_source:
+        return rows, [f"**k.** The calibration found no admissible k, so the sweep used the documented fallback "
+                      f"k = {k:.4g} (recorded source: \"{k_source}\"). Its contact probability equals the "
+                      "paper's 32.8 % by construction: it is the paper's number, not a calibration of this model"
+                      + (", and with the snap-in above it only shifts the clearance by k sigma." if snap else ".")]
+    return rows, [f"**k.** k = {k:.4g}, source: {k_source}."]
 
-    # 3. FHM at 4-7 nm --------------------------------------------------------------------------
+
+def _fhm_section(c: _Slice, scene: Any, dmw: xr.Dataset | None) -> _Section:
+    """3. The flying FHM at 4-7 nm against the paper's ~12.5 %."""
+    x, reg, fhm, fc = c.x, c.reg, c.fhm, c.fc
     lo, hi = PAPER["fhm_range_nm"]
     in_rng = (x >= lo - TOL) & (x <= hi + TOL) & np.isfinite(fhm)
     flying_rng = in_rng & (reg == 0)
     label = f"FHM at {lo:g}-{hi:g} nm (flying)"
-    if flying_rng.any():
-        mean = float(np.mean(fhm[flying_rng]))
-        ours = (f"mean {mean:.3g} % (range {np.min(fhm[flying_rng]):.3g}-{np.max(fhm[flying_rng]):.3g} %, "
-                f"{int(flying_rng.sum())} points)")
-        rows.append([label, f"about {PAPER['fhm_percent']:g} %", ours,
-                     _diff(mean - PAPER['fhm_percent'], "points", 100 * (mean / PAPER['fhm_percent'] - 1))])
-        rms = _scalar(dmw, "rms") if dmw is not None else _get(scene, "dmw", "rms_nm", math.nan)
-        src = (dmw.attrs.get("dmw_source") if dmw is not None else _get(scene, "dmw", "source")) or "unknown"
-        n = [f"**FHM.** Mean over the {int(flying_rng.sum())} flying grid points in {lo:g}-{hi:g} nm"
-             + ("" if flying_rng.sum() == in_rng.sum() else
-                f" ({int(in_rng.sum() - flying_rng.sum())} points of the range are in contact and left out)")
-             + f". The DMW rms ({_g(rms)} nm) is [recon]; in the paper scene it is chosen so that this FHM is "
-               "about 12.5 % (configs/paper-2009.toml), so agreement there is a calibration of the DMW "
-               "amplitude, not a validation."]
-        if src == "synthetic":
-            seed = dmw.attrs.get("seed") if dmw is not None else _get(scene, "dmw", "seed")
-            n.append(f"The DMW record is synthetic (power law, seed {seed}); the paper's measured LDV record "
-                     "is not available, so its spectral shape is [recon] too.")
-        slope = np.polyfit(x[flying_rng], fhm[flying_rng], 1)[0] if flying_rng.sum() >= 2 else math.nan
-        if np.isfinite(slope) and abs(slope) > 0.05 and "adhesion_force" in ds:
-            n.append(f"Over the range the FHM {'rises' if slope > 0 else 'falls'} by about {abs(slope):.2g} "
-                     "points per nm of protrusion: while flying the only protrusion-dependent force is the "
-                     "adhesion, whose negative stiffness grows as the clearance closes and softens the air "
-                     "bearing.")
-        notes.append(" ".join(n))
-    else:
-        rows.append([label, f"about {PAPER['fhm_percent']:g} %", f"no flying point in {lo:g}-{hi:g} nm", "–"])
-        notes.append(f"**FHM.** No flying point in {lo:g}-{hi:g} nm"
-                     + (f" (first contact at {fc:g} nm)" if fc is not None else "")
-                     + ": the paper's flying FHM there has no counterpart in this run.")
+    if not flying_rng.any():
+        return ([[label, f"about {PAPER['fhm_percent']:g} %", f"no flying point in {lo:g}-{hi:g} nm", "–"]],
+                [f"**FHM.** No flying point in {lo:g}-{hi:g} nm"
+                 + (f" (first contact at {fc:g} nm)" if fc is not None else "")
+                 + ": the paper's flying FHM there has no counterpart in this run."])
+    mean = float(np.mean(fhm[flying_rng]))
+    ours = (f"mean {mean:.3g} % (range {np.min(fhm[flying_rng]):.3g}-{np.max(fhm[flying_rng]):.3g} %, "
+            f"{int(flying_rng.sum())} points)")
+    rows = [[label, f"about {PAPER['fhm_percent']:g} %", ours,
+             _diff(mean - PAPER['fhm_percent'], "points", 100 * (mean / PAPER['fhm_percent'] - 1))]]
+    rms = _scalar(dmw, "rms") if dmw is not None else _get(scene, "dmw", "rms_nm", math.nan)
+    src = (dmw.attrs.get("dmw_source") if dmw is not None else _get(scene, "dmw", "source")) or "unknown"
+    n = [f"**FHM.** Mean over the {int(flying_rng.sum())} flying grid points in {lo:g}-{hi:g} nm"
+         + ("" if flying_rng.sum() == in_rng.sum() else
+            f" ({int(in_rng.sum() - flying_rng.sum())} points of the range are in contact and left out)")
+         + f". The DMW rms ({_g(rms)} nm) is [recon]; in the paper scene it is chosen so that this FHM is "
+           "about 12.5 % (configs/paper-2009.toml), so agreement there is a calibration of the DMW "
+           "amplitude, not a validation."]
+    if src == "synthetic":
+        seed = dmw.attrs.get("seed") if dmw is not None else _get(scene, "dmw", "seed")
+        n.append(f"The DMW record is synthetic (power law, seed {seed}); the paper's measured LDV record "
+                 "is not available, so its spectral shape is [recon] too.")
+    slope = np.polyfit(x[flying_rng], fhm[flying_rng], 1)[0] if flying_rng.sum() >= 2 else math.nan
+    if np.isfinite(slope) and abs(slope) > 0.05 and "adhesion_force" in c.ds:
+        n.append(f"Over the range the FHM {'rises' if slope > 0 else 'falls'} by about {abs(slope):.2g} "
+                 "points per nm of protrusion: while flying the only protrusion-dependent force is the "
+                 "adhesion, whose negative stiffness grows as the clearance closes and softens the air "
+                 "bearing.")
+    return rows, [" ".join(n)]
 
-    # 4. stable-flying criterion -----------------------------------------------------------------
+
+def _stable_flying_section(c: _Slice) -> _Section:
+    """4. Where the flying points meet the paper's stable-flying criterion FHM < 10 %."""
+    reg, fhm = c.reg, c.fhm
+    lo, hi = PAPER["fhm_range_nm"]
     lim = PAPER["stable_fhm_percent"]
-    where, spans = _flying_runs_text(ds, lim)
+    where, spans = _flying_runs_text(c.ds, lim)
     fly = (reg == 0) & np.isfinite(fhm)
     fly_rng = f"{np.min(fhm[fly]):.3g}-{np.max(fhm[fly]):.3g} %" if fly.any() else "no flying point"
-    rows.append([f"stable flying (FHM < {lim:g} %)", "criterion", f"flying with FHM < {lim:g} %: {where}",
-                 "–" if spans else f"flying FHM {fly_rng}"])
+    rows = [[f"stable flying (FHM < {lim:g} %)", "criterion", f"flying with FHM < {lim:g} %: {where}",
+             "–" if spans else f"flying FHM {fly_rng}"]]
     contact = ((reg == 1) | (reg == 2)) & np.isfinite(fhm)
     n = [f"**Stable flying.** Flying points satisfy FHM < {lim:g} % {'at ' + where if spans else 'nowhere'}; "
          f"the flying FHM spans {fly_rng}."]
@@ -564,49 +590,56 @@ def comparison_markdown(combos: list, data: dict, scene: Any, name: str) -> str:
     if contact.any():
         n.append(f"In contact the BV is {np.min(fhm[contact]):.3g}-{np.max(fhm[contact]):.3g} %"
                  + (f", below {lim:g} % everywhere." if np.max(fhm[contact]) < lim else "."))
-    notes.append(" ".join(n))
+    return rows, [" ".join(n)]
 
-    # 5. plasticity index ------------------------------------------------------------------------
+
+def _plasticity_section(inter: xr.Dataset | None, scene: Any) -> _Section:
+    """5. The plasticity index (GW and CEB/KE forms) against the paper's 0.52."""
+    if inter is None:
+        return [["plasticity index psi", f"{PAPER['plasticity_index']:g}", "interface.nc absent", "–"]], []
     psi = _scalar(inter, "plasticity_index_gw")
     psi_ke = _scalar(inter, "plasticity_index_ke")
-    if inter is None:
-        rows.append(["plasticity index psi", f"{PAPER['plasticity_index']:g}", "interface.nc absent", "–"])
-    else:
-        rows.append(["plasticity index psi", f"{PAPER['plasticity_index']:g} (purely elastic)",
-                     f"GW {_g(psi, 3)}, CEB/KE {_g(psi_ke, 3)}", _diff(psi - PAPER['plasticity_index'], "(GW)")])
-        derived = not _get(scene, "materials", "hardness_gpa") and _get(scene, "materials", "plasticity_index")
-        n = [f"**Plasticity index.** GW form {_g(psi, 4)}, CEB/KE form {_g(psi_ke, 4)} (interface.nc)."]
-        if derived:
-            n.append(f"The hardness H = {_g(_scalar(inter, 'hardness'), 4)} GPa is derived from psi(GW) = "
-                     f"{_get(scene, 'materials', 'plasticity_index'):g} (materials.plasticity_index), so the GW "
-                     "agreement is by construction; the KE form differs only by its constant.")
-        notes.append(" ".join(n))
+    rows = [["plasticity index psi", f"{PAPER['plasticity_index']:g} (purely elastic)",
+             f"GW {_g(psi, 3)}, CEB/KE {_g(psi_ke, 3)}", _diff(psi - PAPER['plasticity_index'], "(GW)")]]
+    derived = not _get(scene, "materials", "hardness_gpa") and _get(scene, "materials", "plasticity_index")
+    n = [f"**Plasticity index.** GW form {_g(psi, 4)}, CEB/KE form {_g(psi_ke, 4)} (interface.nc)."]
+    if derived:
+        n.append(f"The hardness H = {_g(_scalar(inter, 'hardness'), 4)} GPa is derived from psi(GW) = "
+                 f"{_get(scene, 'materials', 'plasticity_index'):g} (materials.plasticity_index), so the GW "
+                 "agreement is by construction; the KE form differs only by its constant.")
+    return rows, [" ".join(n)]
 
-    # 6. nominal area at 11 nm --------------------------------------------------------------------
+
+def _nominal_area_section(c: _Slice, scene: Any, inter: xr.Dataset | None) -> _Section:
+    """6. The nominal contact area at 11 nm against the paper's 62 um^2."""
+    x = c.x
     at = PAPER["nominal_area_at_nm"]
-    an = col("nominal_area")
+    an = c.col("nominal_area")
     j = int(np.argmin(np.abs(x - at)))
-    if "nominal_area" in ds and abs(x[j] - at) < TOL:
-        rows.append([f"A_n at {at:g} nm", f"{PAPER['nominal_area_um2']:g} um^2", f"{an[j]:.4g} um^2",
-                     _diff(an[j] - PAPER['nominal_area_um2'], "um^2", 100 * (an[j] / PAPER['nominal_area_um2'] - 1))])
-        sd = _get(scene, "contact", "section_depth_sigma")
-        sig = _scalar(inter, "sigma")
-        n = "**Nominal area.** From the ellipsoid section (SPEC.md 3)"
-        if sd is not None and np.isfinite(sig):
-            n += f" at depth s_n = {sd:g} sigma = {sd * sig:.3g} nm"
-        n += ("; s_n = 3 sigma is [recon], chosen because it reproduces the paper's 62 um^2, so the agreement is "
-              "by construction.")
-        notes.append(n)
-    else:
-        rows.append([f"A_n at {at:g} nm", f"{PAPER['nominal_area_um2']:g} um^2", f"no {at:g} nm point on the grid", "–"])
+    if not ("nominal_area" in c.ds and abs(x[j] - at) < TOL):
+        return [[f"A_n at {at:g} nm", f"{PAPER['nominal_area_um2']:g} um^2", f"no {at:g} nm point on the grid",
+                 "–"]], []
+    rows = [[f"A_n at {at:g} nm", f"{PAPER['nominal_area_um2']:g} um^2", f"{an[j]:.4g} um^2",
+             _diff(an[j] - PAPER['nominal_area_um2'], "um^2", 100 * (an[j] / PAPER['nominal_area_um2'] - 1))]]
+    sd = _get(scene, "contact", "section_depth_sigma")
+    sig = _scalar(inter, "sigma")
+    n = "**Nominal area.** From the ellipsoid section (SPEC.md 3)"
+    if sd is not None and np.isfinite(sig):
+        n += f" at depth s_n = {sd:g} sigma = {sd * sig:.3g} nm"
+    n += ("; s_n = 3 sigma is [recon], chosen because it reproduces the paper's 62 um^2, so the agreement is "
+          "by construction.")
+    return rows, [n]
 
-    # 7-8. the optimum points ---------------------------------------------------------------------
-    pts = opt.optimum_points(ds)
+
+def _optimum_section(c: _Slice) -> _Section:
+    """7-8. The paper's two optimum operating points (its values are lost: ours only)."""
+    fc = c.fc
+    pts = opt.optimum_points(c.ds)
     a, b = pts["before_touchdown"], pts["steady_sliding"]
-    rows.append(["optimum (a): just before touchdown", "flying, FHM < 10 %, least clearance (values: tables lost)",
-                 a.summary(), "–"])
-    rows.append(["optimum (b): steady sliding", "surfing, small BV, least interference (values: tables lost)",
-                 b.summary(), "–"])
+    rows = [["optimum (a): just before touchdown", "flying, FHM < 10 %, least clearance (values: tables lost)",
+             a.summary(), "–"],
+            ["optimum (b): steady sliding", "surfing, small BV, least interference (values: tables lost)",
+             b.summary(), "–"]]
     n = ["**Optimum points.** The paper names these two operating points; its numbers for them were in tables that "
          "did not survive in our copy (SPEC.md), so only ours are given."]
     if not a.found:
@@ -616,11 +649,15 @@ def comparison_markdown(combos: list, data: dict, scene: Any, name: str) -> str:
         n.append(f"(b) is the first surfing point with BV < 2 %, {b.protrusion:g} nm, i.e. right at our (early) "
                  "touchdown." if fc is not None and abs(b.protrusion - fc) < TOL else
                  f"(b) is at {b.protrusion:g} nm.")
-    notes.append(" ".join(n))
+    return rows, [" ".join(n)]
 
-    # observations ------------------------------------------------------------------------------------
+
+def _observations(c: _Slice, inter: xr.Dataset | None) -> list[str]:
+    """Other observations on the default slice: regimes, shear stress, friction, forces, BV."""
+    x, reg, fhm, fc = c.x, c.reg, c.fhm, c.fc
+    col = c.col
     obs = []
-    if "regime" in ds and fc is not None and not (reg == 1).any():
+    if "regime" in c.ds and fc is not None and not (reg == 1).any():
         last_fly = x[(reg == 0) & (x < fc)]
         obs.append(f"No bouncing regime: the sweep goes straight from flying ({last_fly.max():g} nm) to surfing "
                    f"({fc:g} nm) at 0.2 nm resolution (snap-in, consistent with the touchdown note)."
@@ -676,26 +713,45 @@ def comparison_markdown(combos: list, data: dict, scene: Any, name: str) -> str:
         bv = fhm[cmask]
         if bv.size > 2 and np.all(np.diff(bv[np.isfinite(bv)]) >= -1e-9):
             obs.append(f"The BV grows monotonically with protrusion in contact ({bv[0]:.3g} to {bv[-1]:.3g} %).")
+    return obs
+
+
+def _other_combinations(combos: list) -> list[str]:
+    """The table of first contact and optima for every combination but the default."""
+    other = []
+    for lab, d in combos[1:]:
+        f = first_contact(d)
+        p = opt.optimum_points(d)
+        other.append([_combo_title(lab), f"{f:g} nm" if f is not None else "none",
+                      p["before_touchdown"].summary(),
+                      p["steady_sliding"].summary()])
+    return ["", "## Other roughness/damping combinations", "",
+            _md_table(["combination", "first contact", "optimum (a)", "optimum (b)"], other)]
+
+
+def comparison_markdown(combos: list, data: dict, scene: Any, name: str) -> str:
+    """The generated comparison with the paper (default combination); see the module docstring."""
+    labels, ds = combos[0]
+    sweep, cal, inter, dmw = data["sweep"], data["calibration"], data["interface"], data["dmw"]
+    c = _Slice.of(ds, sweep)
+    rows, notes, snap = _touchdown_section(c, sweep, cal)
+    for section in (_k_section(c, snap), _fhm_section(c, scene, dmw), _stable_flying_section(c),
+                    _plasticity_section(inter, scene), _nominal_area_section(c, scene, inter), _optimum_section(c)):
+        rows += section[0]
+        notes += section[1]
+    obs = _observations(c, inter)
 
     text = [f"# Comparison with the paper: scene `{name}`", "",
             "Vakis, Lee & Polycarpou, IEEE Trans. Magn. 45(11) 4966-4971 (2009). Generated by `hdi report` "
             f"from the datasets of this run ({_combo_title(labels)}); no parameter was adjusted to close a gap. "
             "[paper] = stated in the paper, [recon] = reconstructed default (SPEC.md).", "",
-            f"Contact criterion: k = {_g(k)}; source: {k_source}.", "",
+            f"Contact criterion: k = {_g(c.k)}; source: {c.k_source}.", "",
             _md_table(["quantity", "paper", "ours", "difference"], rows), "", "## Differences and likely causes", ""]
     text += [f"{i + 1}. {t}" for i, t in enumerate(notes)]
     if obs:
         text += ["", "## Other observations", ""] + [f"- {o}" for o in obs]
     if len(combos) > 1:
-        text += ["", "## Other roughness/damping combinations", ""]
-        other = []
-        for lab, d in combos[1:]:
-            f = first_contact(d)
-            p = opt.optimum_points(d)
-            other.append([_combo_title(lab), f"{f:g} nm" if f is not None else "none",
-                          p["before_touchdown"].summary(),
-                          p["steady_sliding"].summary()])
-        text.append(_md_table(["combination", "first contact", "optimum (a)", "optimum (b)"], other))
+        text += _other_combinations(combos)
     return "\n".join(text) + "\n"
 
 
