@@ -57,6 +57,9 @@ def test_twin_experiment_recovers_the_true_parameters_within_the_reported_interv
     nc = identify.run(scene, out, scheduler="synchronous")
     ds = xr.open_dataset(nc, engine="netcdf4")
     assert ds.attrs["within_tolerance"] == 1
+    from cf_check import cf_report  # identify.nc fits the ecosystem like the other datasets
+    failures, crashed = cf_report(nc)
+    assert crashed == [] and failures[3] == [] and failures[2] == [], failures
     for p in study.parse_parameters(scene["identify"]["parameters"], "", ""):
         name = identify.var_name(p)
         lo, hi = ds[f"{name}_interval"].values

@@ -300,3 +300,17 @@ def test_snap_in_is_named_when_the_evidence_shows_it(tmp_path, paper_scene):
 def test_sweep_is_required(tmp_path, paper_scene):
     with pytest.raises(DatasetError, match="sweep.nc"):
         render(paper_scene, tmp_path)
+
+
+def test_envelope_keeps_every_peak_of_a_long_trace():
+    """The thinned trace drawn for a history keeps its extremes (a one-sample spike, the global minimum),
+    ignores NaN, stays in time order and leaves short traces untouched."""
+    from pipeline.plots import envelope
+    t = np.linspace(0.0, 2.0, 200_001)
+    y = np.sin(2 * np.pi * 37 * t)
+    y[123_457], y[5] = 7.5, np.nan                 # a spike one sample wide; a gap
+    ts, ys = envelope(t, y, bins=1000)
+    assert ts.size == ys.size == 2000 and np.all(np.diff(ts) >= 0)
+    assert np.nanmax(ys) == 7.5 and np.nanmin(ys) == np.nanmin(y)
+    short_t, short_y = envelope(t[:1000], y[:1000], bins=1000)
+    assert np.array_equal(short_t, t[:1000]) and np.array_equal(short_y, y[:1000], equal_nan=True)

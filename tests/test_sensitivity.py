@@ -86,6 +86,9 @@ def test_indices_of_known_models_through_the_evaluation_path(write_scene, paper_
     np.testing.assert_allclose(ds["mu_star_touchdown"].values, 0.0)
     for v in ds.data_vars:
         assert "units" in ds[v].attrs and "long_name" in ds[v].attrs
+    from cf_check import cf_report  # sensitivity.nc fits the ecosystem like the other datasets
+    failures, crashed = cf_report(nc)
+    assert crashed == [] and failures[3] == [] and failures[2] == [], failures
 
 
 def stub_with_holes(base, params, rows, protrusions, inputs):
