@@ -44,10 +44,10 @@ from pathlib import Path
 from typing import Any, Callable, Iterable, Sequence
 
 import numpy as np
-from scipy.stats import norm
 
 from . import slider as sl
 from .io import read_dataset
+from .physics.statistics import k_from_probability
 from .runner import KEY_ATTR, Runner
 from .variables import SCALARS
 from .scene import SCHEMA, SceneError
@@ -168,7 +168,7 @@ def criterion_k(scene: Any) -> float:
     if c["fallback_probability"] is None:
         raise ValueError("a parameter study needs the contact criterion k: set contact.k or "
                          "contact.fallback_probability (two-sided P(|z| > k sigma))")
-    return float(norm.isf(c["fallback_probability"] / 2.0))
+    return k_from_probability(c["fallback_probability"])
 
 
 # ---------------------------------------------------------------------------------- evaluations

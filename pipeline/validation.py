@@ -70,8 +70,9 @@ def check_workers(workers: int | None) -> None:
 
 
 def check_scheduler(address: str | None, timeout: float = CONNECT_TIMEOUT_S) -> None:
-    """``--scheduler`` is absent, ``synchronous``, or a ``[tcp://]HOST:PORT`` that accepts a connection."""
-    if address is None or address == "synchronous":
+    """``--scheduler`` is absent, a local one (``synchronous``, ``threads``, ``processes``:
+    :mod:`pipeline.fanout`), or a ``[tcp://]HOST:PORT`` that accepts a connection."""
+    if address is None or address in ("synchronous", "threads", "processes"):
         return
     parts = urlsplit(address if "://" in address else f"tcp://{address}")
     if parts.scheme not in ("tcp", "tls"):

@@ -63,6 +63,16 @@ def test_unreachable_scheduler_fails_fast_with_one_line(capsys, folder):
     assert "tcp://HOST:PORT" in err
 
 
+def test_local_schedulers_are_not_addresses():
+    """`--scheduler threads|processes|synchronous` name the local fan-outs (pipeline.fanout): accepted
+    without a connection attempt (it would fail: no host); anything else must be tcp://HOST:PORT."""
+    from pipeline.validation import OptionError, check_scheduler
+    for name in ("threads", "processes", "synchronous", None):
+        check_scheduler(name, timeout=0.01)
+    with pytest.raises(OptionError, match="tcp://HOST:PORT"):
+        check_scheduler("thread", timeout=0.01)
+
+
 def test_out_is_a_file(capsys, folder):
     err = _fails(capsys, None, "dmw", str(PAPER), "--out", str(folder / "sweep.nc"))
     assert "is a file" in err

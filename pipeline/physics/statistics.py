@@ -13,6 +13,9 @@ References
 
 from __future__ import annotations
 
+import math
+from statistics import NormalDist
+
 import numpy as np
 
 #: Lower bound of the bandwidth parameter for which McCool's summit-height variance is positive.
@@ -146,8 +149,8 @@ def contact_probabilities(k: float) -> tuple[float, float]:
     first: it is the paper's convention (SPEC.md 7.1: its "3 sigma = 0.3 %" is ``2 Q(3) = 0.27 %``,
     so its 32.8 % means ``k = 0.978``).
     """
-    from scipy.stats import norm
-    return float(2.0 * norm.sf(abs(k))), float(norm.sf(k))
+    # Q(k) = erfc(k / sqrt 2) / 2 (= scipy.stats.norm.sf, without its ~1 s import on every run)
+    return float(math.erfc(abs(k) / math.sqrt(2.0))), float(0.5 * math.erfc(k / math.sqrt(2.0)))
 
 
 def k_from_probability(probability: float) -> float:
@@ -155,7 +158,7 @@ def k_from_probability(probability: float) -> float:
 
     The inverse of the first value of :func:`contact_probabilities` (SPEC.md 7.1); 0.328 gives 0.978.
     """
-    from scipy.stats import norm
     if not 0.0 < probability < 1.0:
         raise ValueError(f"contact probability {probability}: expected a number in (0, 1)")
-    return float(norm.isf(0.5 * probability))
+    # = scipy.stats.norm.isf(probability / 2) (Wichura's AS241 in the standard library, ~1e-16)
+    return float(-NormalDist().inv_cdf(0.5 * probability))

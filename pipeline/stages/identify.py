@@ -53,8 +53,6 @@ from typing import Any, Sequence
 
 import numpy as np
 import xarray as xr
-from matplotlib.figure import Figure
-from scipy.optimize import differential_evolution
 
 from .. import plots
 from ..fanout import local_cluster
@@ -135,6 +133,7 @@ def identify(ident: Identification, params: Sequence[Parameter], x_base: np.ndar
     def objective(X: np.ndarray) -> np.ndarray:  # vectorized: X has shape (parameters, S)
         return ident.costs(np.atleast_2d(X.T), 1)
 
+    from scipy.optimize import differential_evolution  # (here: its import is not paid by every hdi command)
     result = differential_evolution(objective, list(zip(lo, hi)), strategy="best1bin", maxiter=cfg["generations"],
                                     popsize=cfg["population"], tol=0.01, seed=cfg["seed"], polish=False,
                                     init="latinhypercube", x0=x_base if inside else None, vectorized=True,
@@ -341,6 +340,7 @@ def figure(ds: xr.Dataset, params: Sequence[Parameter], scene: str, path: Path) 
     n = len(params)
     ncols = min(3, n)
     nrows = 1 + (n + ncols - 1) // ncols
+    from matplotlib.figure import Figure
     fig = Figure(figsize=(4.0 * ncols, 3.0 * nrows), layout="constrained")
     gs = fig.add_gridspec(nrows, ncols)
     ax = fig.add_subplot(gs[0, :])
