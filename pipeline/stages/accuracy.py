@@ -106,7 +106,7 @@ from ..variables import ACCURACY as ACC
 from ..variables import SCALARS
 from ..physics.statistics import k_from_probability
 from .interface import build_tables, roughness_statistics
-from .simulate import resolve_k
+from .simulate import NOT_READ, resolve_k
 
 log = logging.getLogger(__name__)
 NM = 1e-9
@@ -597,7 +597,7 @@ def _upstream(scene: Any) -> tuple[str, ...]:
 
 STAGE = Stage(
     "accuracy", compute, outputs=("accuracy.nc", "figures/work_precision.png"),
-    reads=("*",), excludes=("sweep", "report", "identify", "sensitivity", "scene.name", "scene.description"),
+    reads=("*",), excludes=NOT_READ,
     upstream=_upstream,
     options=("points", "reference", "knobs", "only", "repeat", "tolerance", "combined_tolerance", "k"),
     order=55, doc="error and wall time of each accuracy knob, accuracy.nc and figures/work_precision.png")

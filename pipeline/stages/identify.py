@@ -429,12 +429,9 @@ def _finish(scene: Any, out: Path, options: dict[str, Any]) -> None:
 
 
 def _upstream(scene: Any) -> tuple[str, ...]:
-    up = []
-    if scene.effects & {"contact", "adhesion"}:
-        up.append("interface")
-    if scene.has("dmw"):
-        up.append("dmw")
-    return tuple(up)
+    """A single simulation's inputs without the calibration (a study fixes k, :func:`pipeline.study.criterion_k`)."""
+    from .simulate import upstream
+    return tuple(u for u in upstream(scene) if u != "calibrate")
 
 
 STAGE = Stage(

@@ -865,6 +865,7 @@ STAGE = Stage(
     outputs=tuple(f"figures/{f}" for f in FIGURES) + ("report/summary.csv", "report/summary.md",
                                                        "report/comparison.md"),
     reads=("*",), upstream=_upstream, optional=("identify.nc",), finish=_finish, order=60, main_job=True,
+    version=2,  # 2: long histories drawn as their envelope
     doc="the paper's figures, a summary table and the comparison with the paper")
 
 

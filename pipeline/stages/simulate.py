@@ -166,9 +166,12 @@ def upstream(scene: Any) -> tuple[str, ...]:
     return tuple(up)
 
 
+#: Scene keys a single simulation does not read (other stages' settings, names).
+NOT_READ = ("sweep", "report", "identify", "sensitivity", "scene.name", "scene.description")
+
 STAGE = Stage(
     "simulate", compute, outputs=("histories.nc", "summary.nc"),
-    reads=("*",), excludes=("sweep", "report", "identify", "sensitivity", "scene.name", "scene.description"),
+    reads=("*",), excludes=NOT_READ,
     upstream=upstream, order=45, doc="one protrusion in time, histories.nc and summary.nc")
 
 
