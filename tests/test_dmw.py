@@ -15,6 +15,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from pipeline.io import read_dataset
+from pipeline import dmw_records
 from pipeline.physics import dmw
 from pipeline.scene import scene_from_dict
 from pipeline.stages import dmw as stage
@@ -175,7 +176,7 @@ def good_record(tmp_path):
 
 def test_load_csv_with_units(good_record):
     path, x = good_record
-    rec = dmw.load_record(path, "velocity")
+    rec = dmw_records.load_record(path, "velocity")
     assert rec.sample_rate_hz == pytest.approx(FS, rel=1e-9)
     assert rec.units == "mm/s" and rec.column == "velocity [mm/s]"
     back = dmw.velocity_to_displacement(rec.values, rec.sample_rate_hz, *BAND)
@@ -186,7 +187,7 @@ def test_load_headerless_and_sample_rate(tmp_path):
     x = dmw.synthesize(0.5, BAND, -2.0, T, FS, seed=9)
     p1 = tmp_path / "one.csv"
     np.savetxt(p1, x)
-    rec = dmw.load_record(p1, sample_rate_hz=FS)
+    rec = dmw_records.load_record(p1, sample_rate_hz=FS)
     assert rec.sample_rate_hz == FS and np.allclose(rec.values, x)
     assert rec.units == "nm" and "assumed nm" in rec.notes[0]
     p2 = tmp_path / "two.txt"
@@ -194,8 +195,8 @@ def test_load_headerless_and_sample_rate(tmp_path):
     p2h = tmp_path / "two_ms.csv"
     np.savetxt(p2h, np.column_stack([np.arange(x.size) / FS * 1e3, x]), delimiter=";",
                header="time_ms;w_nm", comments="")
-    assert dmw.load_record(p2).sample_rate_hz == pytest.approx(FS * 1e-3, rel=1e-9)  # no unit: s
-    assert dmw.load_record(p2h).sample_rate_hz == pytest.approx(FS, rel=1e-9)
+    assert dmw_records.load_record(p2).sample_rate_hz == pytest.approx(FS * 1e-3, rel=1e-9)  # no unit: s
+    assert dmw_records.load_record(p2h).sample_rate_hz == pytest.approx(FS, rel=1e-9)
 
 
 def test_load_netcdf(tmp_path):
@@ -205,13 +206,13 @@ def test_load_netcdf(tmp_path):
                     coords={"time": ("time", np.arange(x.size) / FS * 1e6, {"units": "us"})})
     p = tmp_path / "rec.nc"
     ds.to_netcdf(p, engine="netcdf4")
-    rec = dmw.load_record(p)
+    rec = dmw_records.load_record(p)
     assert rec.sample_rate_hz == pytest.approx(FS, rel=1e-9)
     assert np.allclose(rec.values, x)
     with pytest.raises(dmw.DMWError, match=r"rec\.nc.*'velocity'.*not found"):
-        dmw.load_record(p, column="velocity")
+        dmw_records.load_record(p, column="velocity")
     with pytest.raises(dmw.DMWError, match=r"rec\.nc.*variable 'w'.*length units"):
-        dmw.load_record(p, quantity="velocity")
+        dmw_records.load_record(p, quantity="velocity")
 
 
 def _errors(tmp_path: Path) -> dict[str, tuple[Path, dict, str]]:
@@ -251,7 +252,7 @@ def _errors(tmp_path: Path) -> dict[str, tuple[Path, dict, str]]:
 def test_bad_records_rejected_with_clear_errors(tmp_path, case):
     path, kw, pattern = _errors(tmp_path)[case]
     with pytest.raises(dmw.DMWError, match=pattern) as exc:
-        dmw.load_record(path, **kw)
+        dmw_records.load_record(path, **kw)
     assert str(path) in str(exc.value)
     assert isinstance(exc.value, ValueError)
 
@@ -264,7 +265,7 @@ def test_nan_in_netcdf_rejected(tmp_path):
     xr.Dataset({"displacement": ("time", x, {"units": "nm"})},
                coords={"time": ("time", np.arange(10) / FS, {"units": "s"})}).to_netcdf(p, engine="netcdf4")
     with pytest.raises(dmw.DMWError, match=r"bad\.nc: variable 'displacement'.*NaN/infinite.*sample 3"):
-        dmw.load_record(p)
+        dmw_records.load_record(p)
 
 
 # ---------------------------------------------------------------------------------------- stage

@@ -1,0 +1,351 @@
+"""Reading measured DMW records (CSV or NetCDF) into validated arrays: the file side of the DMW.
+
+:func:`load_record` reads one column or variable of displacement [length] or velocity [length/s],
+finds or assumes its units and sampling rate, and checks every value; each problem is a
+:class:`pipeline.physics.dmw.DMWError` naming the file, the field and what was expected. The physics
+of the record (the paper's processing, synthesis, spectra) is :mod:`pipeline.physics.dmw`.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .physics.dmw import LENGTH_UNITS, TIME_JITTER_TOL, TIME_UNITS, VELOCITY_UNITS, DMWError
+
+
+@dataclass(frozen=True)
+class Record:
+    """A measured record, validated and converted to [nm] or [nm/s].
+
+    Attributes
+    ----------
+    values : displacement [nm] or velocity [nm/s]
+    sample_rate_hz : sampling rate [Hz]
+    quantity : ``"displacement"`` or ``"velocity"``
+    path : the file
+    column : the column / variable read (a CSV column without header: its index)
+    field : how the column is named in messages (``column 'velocity [mm/s]'``, ``variable 'w'``)
+    units : the record's own units (as found, or assumed)
+    notes : what was assumed (e.g. units not stated)
+    """
+
+    values: np.ndarray
+    sample_rate_hz: float
+    quantity: str
+    path: str
+    column: str
+    field: str
+    units: str
+    notes: tuple[str, ...] = field(default_factory=tuple)
+
+    @property
+    def duration_s(self) -> float:
+        """Record length ``n / fs`` [s]."""
+        return self.values.size / self.sample_rate_hz
+
+
+_BRACKET = re.compile(r"^\s*(.*?)\s*[\[\(]\s*([^\]\)]*?)\s*[\]\)]\s*$")
+_SUFFIXES = ("nm_s", "um_s", "mm_s", "m_s", "nm", "um", "mm", "m", "ms", "us", "ns", "s")
+
+
+def _norm_unit(u: str) -> str:
+    u = u.strip().lower().replace("µ", "u").replace("μ", "u")
+    u = re.sub(r"\s*(s\^?-1|s⁻¹)$", "/s", u)          # "m s-1" -> "m/s"
+    u = re.sub(r"\s*/\s*", "/", u)
+    u = re.sub(r"_s$", "/s", u) if u.count("_") == 1 else u   # "m_s" -> "m/s"
+    return {"micrometre": "um", "micrometer": "um", "nanometre": "nm", "nanometer": "nm",
+            "meter": "m", "metre": "m", "sec": "s"}.get(u, u)
+
+
+def _split_header(name: str) -> tuple[str, str | None]:
+    """``"velocity [mm/s]"`` -> ``("velocity", "mm/s")``; ``"time_s"`` -> ``("time", "s")``."""
+    m = _BRACKET.match(name)
+    if m:
+        return m.group(1).strip(), _norm_unit(m.group(2))
+    low = name.strip()
+    for suf in _SUFFIXES:
+        if low.lower().endswith("_" + suf) and len(low) > len(suf) + 1:
+            return low[: -len(suf) - 1], _norm_unit(suf)
+    return low, None
+
+
+def _value_factor(path: Path, field_name: str, unit: str | None,
+                  quantity: str) -> tuple[float, str, tuple[str, ...]]:
+    """Factor to [nm] / [nm/s] for a value column, and the unit used."""
+    if unit is None or unit == "":
+        assumed = "nm" if quantity == "displacement" else "nm/s"
+        return 1.0, assumed, (f"{field_name}: no unit stated, assumed {assumed}",)
+    if quantity == "displacement":
+        if unit in LENGTH_UNITS:
+            return LENGTH_UNITS[unit], unit, ()
+        if unit in VELOCITY_UNITS:
+            raise DMWError(f"{path}: {field_name}: has velocity units {unit!r} but the quantity is "
+                           f"'displacement': set dmw.quantity = \"velocity\"")
+        raise DMWError(f"{path}: {field_name}: unknown length unit {unit!r}; expected one of "
+                       + ", ".join(LENGTH_UNITS))
+    if unit in VELOCITY_UNITS:
+        return VELOCITY_UNITS[unit], unit, ()
+    if unit in LENGTH_UNITS:
+        raise DMWError(f"{path}: {field_name}: has length units {unit!r} but the quantity is "
+                       f"'velocity': set dmw.quantity = \"displacement\"")
+    raise DMWError(f"{path}: {field_name}: unknown velocity unit {unit!r}; expected one of "
+                   + ", ".join(VELOCITY_UNITS))
+
+
+def _time_factor(path: Path, field_name: str, unit: str | None) -> float:
+    if unit is None or unit == "":
+        return 1.0
+    unit = unit.split(" since ")[0].strip()
+    if unit not in TIME_UNITS:
+        raise DMWError(f"{path}: {field_name}: unknown time unit {unit!r}; expected one of "
+                       + ", ".join(TIME_UNITS))
+    return TIME_UNITS[unit]
+
+
+def _is_time_name(base: str) -> bool:
+    return base.strip().lower() in ("time", "t", "times")
+
+
+def _rate_from_time(path: Path, field_name: str, t: np.ndarray) -> float:
+    """Sampling rate [Hz] of a time axis [s]; rejects non-increasing or non-uniform axes."""
+    if t.size < 2:
+        raise DMWError(f"{path}: {field_name}: {t.size} sample(s); expected at least 2")
+    if not np.all(np.isfinite(t)):
+        bad = int(np.flatnonzero(~np.isfinite(t))[0])
+        raise DMWError(f"{path}: {field_name}: non-finite time at sample {bad}; expected finite times")
+    dt_all = np.diff(t)
+    if np.any(dt_all <= 0):
+        bad = int(np.flatnonzero(dt_all <= 0)[0])
+        raise DMWError(f"{path}: {field_name}: time does not increase at sample {bad + 1} "
+                       f"({t[bad]!r} -> {t[bad + 1]!r}); expected strictly increasing times")
+    dt = (t[-1] - t[0]) / (t.size - 1)
+    jitter = float(np.max(np.abs(t - (t[0] + dt * np.arange(t.size)))) / dt)
+    if jitter > TIME_JITTER_TOL:
+        raise DMWError(f"{path}: {field_name}: non-uniform time axis (largest deviation from a uniform "
+                       f"grid {jitter:.3g} sampling intervals); expected uniform sampling within "
+                       f"{TIME_JITTER_TOL:g} (write times with full precision, or drop the time column "
+                       f"and give dmw.sample_rate_hz)")
+    return 1.0 / dt
+
+
+def _check_values(path: Path, field_name: str, x: np.ndarray) -> None:
+    if x.size < 2:
+        raise DMWError(f"{path}: {field_name}: {x.size} sample(s); expected at least 2")
+    bad = np.flatnonzero(~np.isfinite(x))
+    if bad.size:
+        raise DMWError(f"{path}: {field_name}: {bad.size} NaN/infinite value(s), first at sample "
+                       f"{int(bad[0])}; expected finite numbers")
+
+
+def _sniff_delimiter(line: str) -> str | None:
+    for d in (",", ";", "\t"):
+        if d in line:
+            return d
+    return None  # whitespace
+
+
+def _read_csv(path: Path, quantity: str, column: str | None,
+              sample_rate_hz: float | None) -> tuple[np.ndarray, float, str, str, str, tuple[str, ...]]:
+    try:
+        text = path.read_text()
+    except UnicodeDecodeError:
+        raise DMWError(f"{path}: not a text (CSV) file; expected CSV or NetCDF (.nc)") from None
+    numbered = [(i + 1, ln) for i, ln in enumerate(text.splitlines())
+                if ln.strip() and not ln.lstrip().startswith("#")]
+    lines = [ln for _, ln in numbered]
+    line_nos = [i for i, _ in numbered]
+    if not lines:
+        raise DMWError(f"{path}: no data rows; expected a CSV record")
+    delim = _sniff_delimiter(lines[0])
+    if delim is None:
+        rows = [ln.split() for ln in lines]
+    else:
+        rows = [[c.strip() for c in r] for r in csv.reader(io.StringIO("\n".join(lines)), delimiter=delim)]
+
+    def numeric(s: str) -> bool:
+        try:
+            float(s)
+            return True
+        except ValueError:
+            return False
+
+    header = None
+    if not all(numeric(c) for c in rows[0] if c != ""):
+        header, rows, line_nos = rows[0], rows[1:], line_nos[1:]
+    ncol = len(header) if header is not None else len(rows[0]) if rows else 0
+    names = header if header is not None else [str(i) for i in range(ncol)]
+    labels = ([f"column {h!r}" for h in header] if header is not None
+              else [f"column {i}" for i in range(ncol)])  # how a column is named in messages
+    split = [_split_header(h) for h in names] if header is not None else [(n, None) for n in names]
+
+    # Which column is time, which holds the values.
+    time_idx = next((i for i, (b, _) in enumerate(split) if header is not None and _is_time_name(b)), None)
+    if time_idx is None and header is None and ncol == 2 and sample_rate_hz is None:
+        time_idx = 0  # headerless two-column file: time, value
+    if column is not None:
+        key = column.strip().lower()
+        matches = [i for i, (b, _) in enumerate(split) if key in (names[i].strip().lower(), b.lower())]
+        if not matches and key.isdigit() and int(key) < ncol:
+            matches = [int(key)]
+        if not matches:
+            raise DMWError(f"{path}: column {column!r} not found; expected one of {names} "
+                           f"(or a column index 0..{ncol - 1}) (dmw.column)")
+        val_idx = matches[0]
+    else:
+        candidates = [i for i in range(ncol) if i != time_idx]
+        named = [i for i in candidates if split[i][0].lower() == quantity]
+        if len(named) == 1:
+            val_idx = named[0]
+        elif len(candidates) == 1:
+            val_idx = candidates[0]
+        else:
+            raise DMWError(f"{path}: {len(candidates)} value columns {[names[i] for i in candidates]}; "
+                           f"expected one: set dmw.column")
+    if time_idx is None and sample_rate_hz is None:
+        raise DMWError(f"{path}: no time column (a header 'time', 'time [s]', 'time_s', ...) and no "
+                       f"sample rate; expected a time column or dmw.sample_rate_hz")
+
+    def col(i: int) -> np.ndarray:
+        out = np.empty(len(rows))
+        for r, row in enumerate(rows):
+            line_no = line_nos[r]
+            if i >= len(row) or row[i] == "":
+                raise DMWError(f"{path}: {labels[i]}: missing value on line {line_no}; "
+                               f"expected a number")
+            try:
+                out[r] = float(row[i])
+            except ValueError:
+                raise DMWError(f"{path}: {labels[i]}: non-numeric value {row[i]!r} on line {line_no}; "
+                               f"expected a number") from None
+        return out
+
+    field_name = labels[val_idx]
+    x = col(val_idx)
+    _check_values(path, field_name, x)
+    factor, unit, notes = _value_factor(path, field_name, split[val_idx][1], quantity)
+    if time_idx is not None:
+        t = col(time_idx) * _time_factor(path, labels[time_idx], split[time_idx][1])
+        rate = _rate_from_time(path, labels[time_idx], t)
+        if sample_rate_hz is not None and abs(rate / sample_rate_hz - 1) > 1e-6:
+            raise DMWError(f"{path}: {labels[time_idx]}: time axis gives {rate:.9g} Hz but "
+                           f"dmw.sample_rate_hz = {sample_rate_hz:g}; expected them to agree")
+    else:
+        rate = float(sample_rate_hz)  # type: ignore[arg-type]
+    return x * factor, rate, names[val_idx], field_name, unit, notes
+
+
+def _read_netcdf(path: Path, quantity: str, column: str | None,
+                 sample_rate_hz: float | None) -> tuple[np.ndarray, float, str, str, str, tuple[str, ...]]:
+    import xarray as xr
+    try:
+        with xr.open_dataset(path, engine="netcdf4", decode_times=False, decode_timedelta=False) as ds:
+            ds = ds.load()
+    except (OSError, ValueError) as exc:
+        raise DMWError(f"{path}: not a readable NetCDF file ({exc}); expected NetCDF with a variable "
+                       f"on a 'time' coordinate") from None
+    if column is not None:
+        if column not in ds.data_vars:
+            raise DMWError(f"{path}: variable {column!r} not found; expected one of "
+                           f"{sorted(map(str, ds.data_vars))} (dmw.column)")
+        name = column
+    else:
+        cands = [str(v) for v in ds.data_vars if ds[v].dims == ("time",)]
+        named = [v for v in cands if v == quantity]
+        if named:
+            name = named[0]
+        elif len(cands) == 1:
+            name = cands[0]
+        else:
+            raise DMWError(f"{path}: {len(cands)} variables on 'time' {cands}; expected one: set dmw.column")
+    da = ds[name]
+    field_name = f"variable {name!r}"
+    if da.dims != ("time",):
+        raise DMWError(f"{path}: {field_name}: dimensions {da.dims}; expected ('time',)")
+    try:
+        x = np.asarray(da.values, dtype=float)
+    except (TypeError, ValueError):
+        raise DMWError(f"{path}: {field_name}: non-numeric data ({da.dtype}); expected numbers") from None
+    _check_values(path, field_name, x)
+    unit = da.attrs.get("units")
+    factor, unit, notes = _value_factor(path, field_name, _norm_unit(unit) if unit else None, quantity)
+    if "time" in ds.coords or "time" in ds.variables:
+        tv = ds["time"]
+        try:
+            t = np.asarray(tv.values, dtype=float)
+        except (TypeError, ValueError):
+            raise DMWError(f"{path}: coordinate 'time': non-numeric ({tv.dtype}); expected seconds") from None
+        tu = tv.attrs.get("units")
+        t = t * _time_factor(path, "coordinate 'time'", _norm_unit(tu) if tu else None)
+        rate = _rate_from_time(path, "coordinate 'time'", t)
+        if sample_rate_hz is not None and abs(rate / sample_rate_hz - 1) > 1e-6:
+            raise DMWError(f"{path}: coordinate 'time' gives {rate:.9g} Hz but dmw.sample_rate_hz = "
+                           f"{sample_rate_hz:g}; expected them to agree")
+    elif sample_rate_hz is not None:
+        rate = float(sample_rate_hz)
+    else:
+        raise DMWError(f"{path}: no 'time' coordinate and no sample rate; expected a 'time' "
+                       f"coordinate [s] or dmw.sample_rate_hz")
+    return x * factor, rate, name, field_name, unit, notes
+
+
+def load_record(path: str | Path, quantity: str = "displacement", column: str | None = None,
+                sample_rate_hz: float | None = None, *, min_duration_s: float | None = None) -> Record:
+    """Read and validate a measured DMW record (CSV or NetCDF).
+
+    CSV (any other suffix than ``.nc``/``.nc4``/``.cdf``): comma, semicolon, tab or whitespace
+    separated; ``#`` comment lines skipped; an optional header row. The time column is the one named
+    ``time``/``t`` (unit in brackets or as a suffix: ``time [s]``, ``time (ms)``, ``time_us``; default
+    s); without a header, a two-column file is ``time, value`` unless ``sample_rate_hz`` is given. The
+    value column is ``column`` (header name, with or without its unit, or index), else the one named
+    like ``quantity``, else the only non-time column. Units of values: ``nm``, ``um``, ``mm``, ``m``
+    (displacement) or ``nm/s``, ``um/s``, ``mm/s``, ``m/s`` (velocity); unstated units are assumed
+    ``nm`` / ``nm/s`` and noted in :attr:`Record.notes`.
+
+    NetCDF: the variable ``column``, else the one named like ``quantity``, else the only variable on
+    ``time``; units from the ``units`` attributes; the ``time`` coordinate in s (or ``ms``, ``us``).
+
+    Parameters
+    ----------
+    path : the record file
+    quantity : ``"displacement"`` [nm] or ``"velocity"`` [nm/s]
+    column : column or variable name (``None``: see above)
+    sample_rate_hz : sampling rate [Hz] of a record without a time axis (checked against one if present)
+    min_duration_s : required length [s] (``None``: no check)
+
+    Returns
+    -------
+    Record
+        values in [nm] or [nm/s].
+
+    Raises
+    ------
+    DMWError
+        Missing or unreadable file, missing column, non-numeric or NaN/infinite values, fewer than 2
+        samples, a time axis that is not strictly increasing or not uniform (relative deviation
+        > :data:`TIME_JITTER_TOL`), units that contradict ``quantity``, or a record shorter than
+        ``min_duration_s``. The message names the file and the field.
+    """
+    path = Path(path)
+    if quantity not in ("displacement", "velocity"):
+        raise DMWError(f"{path}: quantity = {quantity!r}: expected 'displacement' or 'velocity' (dmw.quantity)")
+    if sample_rate_hz is not None and not (sample_rate_hz > 0 and math.isfinite(sample_rate_hz)):
+        raise DMWError(f"{path}: sample_rate_hz = {sample_rate_hz!r}: expected a positive number "
+                       f"(dmw.sample_rate_hz)")
+    if not path.is_file():
+        raise DMWError(f"{path}: record file does not exist (dmw.source)")
+    reader = _read_netcdf if path.suffix.lower() in (".nc", ".nc4", ".cdf", ".netcdf") else _read_csv
+    x, rate, name, field_name, unit, notes = reader(path, quantity, column, sample_rate_hz)
+    rec = Record(values=x, sample_rate_hz=float(rate), quantity=quantity, path=str(path), column=name,
+                 field=field_name, units=unit, notes=notes)
+    if min_duration_s is not None and rec.duration_s < min_duration_s * (1 - 1e-9):
+        raise DMWError(f"{path}: {field_name}: record is "
+                       f"{rec.duration_s * 1e3:.6g} ms long ({x.size} samples at {rate:.6g} Hz); expected "
+                       f"at least the requested duration {min_duration_s * 1e3:.6g} ms (dmw.duration_ms)")
+    return rec
