@@ -4,7 +4,7 @@ Every dataset is written through :func:`write_dataset` (by :mod:`pipeline.runner
 
 * refuses a variable or coordinate without ``units`` and ``long_name`` (CF conventions),
 * adds the global attributes of DESIGN.md (title, history, source, Conventions, package version,
-  git revision, config hash, seed, input-file hashes),
+  git revision, config hash, input-file hashes),
 * writes to a temporary file in the same folder and renames it into place, so an interrupted
   run never leaves a half-written file and never destroys the previous one.
 """
@@ -20,7 +20,7 @@ import tempfile
 import threading
 from functools import lru_cache
 from pathlib import Path
-from typing import Any, Iterable
+from typing import Any, Iterable, Mapping
 
 import xarray as xr
 
@@ -103,8 +103,8 @@ def cf_encoding(ds: xr.Dataset) -> tuple[xr.Dataset, dict[str, dict[str, Any]]]:
     return out, encoding
 
 
-def provenance(scene: Any = None, *, stage: str, inputs: Iterable[str | Path] = (),
-               seed: int | None = None) -> dict[str, str]:
+def provenance(scene: Any = None, *, stage: str,
+               inputs: Iterable[str | Path] | Mapping[str | Path, str] = ()) -> dict[str, str]:
     """Global attributes recording how a dataset was made.
 
     Parameters
@@ -114,9 +114,8 @@ def provenance(scene: Any = None, *, stage: str, inputs: Iterable[str | Path] = 
     stage
         The stage name (``"interface"``, ...).
     inputs
-        Files read by the stage; their SHA-256 is recorded.
-    seed
-        Random seed used, if any.
+        Files read by the stage; their SHA-256 is recorded (a mapping ``{file: SHA-256}`` gives hashes
+        already computed, as the runner's inputs key has them).
     """
     now = _dt.datetime.now(_dt.timezone.utc).replace(microsecond=0).isoformat()
     attrs = {
@@ -136,15 +135,14 @@ def provenance(scene: Any = None, *, stage: str, inputs: Iterable[str | Path] = 
         attrs["effects"] = " ".join(sorted(scene.effects))
         if scene.overrides:
             attrs["overrides"] = " ".join(scene.overrides)
-    if seed is not None:
-        attrs["seed"] = int(seed)
-    hashes = {str(p): file_hash(p) for p in inputs}
+    known = inputs if isinstance(inputs, Mapping) else {p: None for p in inputs}
+    hashes = {str(p): h or file_hash(p) for p, h in known.items()}
     attrs["input_hashes"] = json.dumps(hashes, sort_keys=True)
     return attrs
 
 
 def write_dataset(ds: xr.Dataset, path: str | Path, scene: Any = None, *, stage: str,
-                  inputs: Iterable[str | Path] = (), seed: int | None = None,
+                  inputs: Iterable[str | Path] | Mapping[str | Path, str] = (),
                   extra_attrs: dict[str, Any] | None = None) -> Path:
     """Write ``ds`` to ``path`` atomically with provenance.
 
@@ -154,7 +152,7 @@ def write_dataset(ds: xr.Dataset, path: str | Path, scene: Any = None, *, stage:
         The dataset; every variable and coordinate must carry ``units`` and ``long_name``.
     path
         Destination ``.nc`` file; its folder is created.
-    scene, stage, inputs, seed
+    scene, stage, inputs
         See :func:`provenance`.
     extra_attrs
         More global attributes (stage-specific).
@@ -169,7 +167,7 @@ def write_dataset(ds: xr.Dataset, path: str | Path, scene: Any = None, *, stage:
     path.parent.mkdir(parents=True, exist_ok=True)
     out, encoding = cf_encoding(ds)
     attrs = dict(ds.attrs)
-    attrs.update(provenance(scene, stage=stage, inputs=inputs, seed=seed))
+    attrs.update(provenance(scene, stage=stage, inputs=inputs))
     if extra_attrs:
         attrs.update(extra_attrs)
     out.attrs = {k: (json.dumps(v) if isinstance(v, (dict, list, tuple)) else v) for k, v in attrs.items()}

@@ -45,7 +45,7 @@ from typing import Any, Callable, Iterable, Iterator, Mapping
 
 import xarray as xr
 
-from .io import ENGINE, DatasetError, file_hash, read_dataset, write_dataset
+from .io import ENGINE, NETCDF_LOCK, DatasetError, file_hash, read_dataset, write_dataset
 
 log = logging.getLogger(__name__)
 
@@ -245,7 +245,7 @@ def _digest(payload: Any) -> str:
 def _dataset_key(path: Path) -> tuple[str | None, list[str] | None]:
     """The ``inputs_key`` and produced-outputs list of a dataset (``None`` when unreadable)."""
     try:
-        with xr.open_dataset(path, engine=ENGINE) as ds:
+        with NETCDF_LOCK, xr.open_dataset(path, engine=ENGINE) as ds:
             outputs = ds.attrs.get(OUTPUTS_ATTR)
             return ds.attrs.get(KEY_ATTR), (json.loads(outputs) if outputs else None)
     except (OSError, ValueError):
@@ -519,8 +519,8 @@ class Runner:
             if first:
                 extra[OUTPUTS_ATTR] = json.dumps(produced)
                 first = False
-            write_dataset(ds, self.out / o, self.scene, stage=st.name, inputs=inputs.files.values(),
-                          extra_attrs=extra)
+            write_dataset(ds, self.out / o, self.scene, stage=st.name,
+                          inputs={p: self._hash(p) for p in inputs.files.values()}, extra_attrs=extra)
         hashes = {}
         for o in others:
             target = self.out / o

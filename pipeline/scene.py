@@ -90,6 +90,10 @@ _FREE = [
     {"key": "contact.damping_n_s_m", "low": 0.0, "high": 0.05},
 ]
 
+#: The paper's targets ``hdi identify`` knows (:func:`pipeline.study.targets`); all fitted by default.
+TARGETS = ("touchdown", "fhm_flying", "fhm_touchdown", "bouncing", "sliding_bv", "interference", "contact_force",
+           "real_area", "mean_pressure", "friction_coefficient", "net_force")
+
 #: The schema: section -> key -> Key. Defaults are the paper scene (SPEC.md section 6).
 SCHEMA: dict[str, dict[str, Key]] = {
     "scene": {
@@ -253,10 +257,7 @@ SCHEMA: dict[str, dict[str, Key]] = {
     "identify": {
         "parameters": Key("tables", _FREE, doc="free parameters: [{key = \"section.key\" or \"section.key[i]\", low, high}] (bounds in the key's "
                "unit; SPEC.md 7) [recon]"),
-        "targets": Key("strs", ["touchdown", "fhm_flying", "fhm_touchdown", "bouncing", "sliding_bv", "interference",
-                                "contact_force", "real_area", "mean_pressure", "friction_coefficient", "net_force"],
-                       choices=("touchdown", "fhm_flying", "fhm_touchdown", "bouncing", "sliding_bv", "interference",
-                                "contact_force", "real_area", "mean_pressure", "friction_coefficient", "net_force"),
+        "targets": Key("strs", list(TARGETS), choices=TARGETS,
                        doc="targets the identification fits (touchdown uses [touchdown] onset_nm/previous_nm)"),
         "touchdown_tolerance_nm": Key("float", 0.1, _pos,
                                       doc="tolerance of the touchdown target on the minimum clearance [nm] (recon: "

@@ -13,7 +13,7 @@ tables and the optimum finder (:mod:`pipeline.optimum`) read names, units and fl
 ``tests/test_variables.py`` checks that every variable every stage writes is declared here with the
 units it is written in.
 
-How the datasets meet CF-1.8 (:func:`encoding`, applied by :func:`pipeline.io.write_dataset`):
+How the datasets meet CF-1.8 (:func:`pipeline.io.cf_encoding`, applied by :func:`pipeline.io.write_dataset`):
 
 * coordinates carry no ``_FillValue`` (CF 2.5.1);
 * ``time`` is an elapsed simulated time in seconds; CF 4.4 wants a reference date in its units,
@@ -39,7 +39,8 @@ import xarray as xr
 class Regime(IntEnum):
     """Regime of a steady window (the ``regime`` variable's ``flag_values``).
 
-    Rule (:mod:`pipeline.slider`): flying = no sample in contact; surfing = in contact in at least
+    Rule (:func:`pipeline.slider.summarize`): flying = no contact in the steady window (no sample in
+    contact and the integrator's exact minimum of d above k sigma); surfing = in contact in at least
     99 % of the samples (steady sliding); bouncing = otherwise.
     """
 
