@@ -15,23 +15,17 @@ from __future__ import annotations
 
 import os
 import shutil
-import subprocess
-import sys
 import tempfile
-import time
 from pathlib import Path
 
-from .common import record
+from .common import ROOT, hdi, record
 
-ROOT = Path(__file__).resolve().parents[1]
 WORKERS = 2
 
 
 def _hdi(*args: str) -> float:
-    t0 = time.perf_counter()
-    subprocess.run([sys.executable, "-m", "pipeline.cli", *args], cwd=ROOT, check=True,
-                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    return time.perf_counter() - t0
+    """Wall time [s] of one fresh ``hdi`` process."""
+    return hdi(*args)[0]
 
 
 def study_stats(path: Path, workers: int) -> dict:

@@ -14,15 +14,12 @@ from __future__ import annotations
 
 import shutil
 import statistics
-import subprocess
-import sys
 import tempfile
 import time
 from pathlib import Path
 
-from .common import record, run_process
+from .common import ROOT, hdi, record, startup_seconds
 
-ROOT = Path(__file__).resolve().parents[1]
 PAPER = str(ROOT / "configs" / "paper-2009.toml")
 GRID = str(ROOT / "configs" / "sweep-3x3.toml")
 INPUTS = ("roughness.nc", "dmw.nc", "interface.nc", "calibration.nc")
@@ -33,22 +30,10 @@ CPU: dict[str, list[float]] = {}  # CPU seconds [s] of the timed commands, by la
 
 def _hdi(*args: str, label: str | None = None) -> float:
     """Wall time [s] of one fresh `hdi` process (interpreter start included); its CPU time under ``label``."""
-    wall, cpu, _ = run_process([sys.executable, "-m", "pipeline.cli", *args], ROOT,
-                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    wall, cpu, _ = hdi(*args)
     if label:
         CPU.setdefault(label, []).append(cpu)
     return wall
-
-
-def interpreter_start(repeat: int = 5) -> list[float]:
-    """Wall times [s] of a fresh interpreter that imports what `hdi sweep` imports, and nothing more."""
-    code = "import pipeline.cli, pipeline.stages.sweep, pipeline.stages.calibrate"
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        subprocess.run([sys.executable, "-c", code], cwd=ROOT, check=True)
-        times.append(time.perf_counter() - t0)
-    return times
 
 
 def kernel_seconds(config: str, inputs: Path, repeat: int = 3) -> list[float]:
@@ -100,10 +85,10 @@ def run(results: list[dict]) -> None:
     with tempfile.TemporaryDirectory() as tmp:
         inputs = Path(tmp)
         _hdi("calibrate", PAPER, "--out", str(inputs))  # the sweep's inputs, made once, not timed
-        start = interpreter_start()
+        start = startup_seconds()
         kernel = kernel_seconds(PAPER, inputs)
         s0, k0 = statistics.median(start), statistics.median(kernel)
-        record(results, "interpreter start + imports of hdi sweep (fresh process)", start)
+        record(results, "interpreter start + hdi start-up (CLI and stage registry, fresh process)", start)
         record(results, "paper sweep, 76 scenes, sequential kernel time (run_model only)", kernel)
         budget = 2 * k0 + s0
         wall = sweep_wall(PAPER, inputs, label="paper")

@@ -7,8 +7,15 @@ measured in the same run, never a single timing.
 from __future__ import annotations
 
 import statistics
+import subprocess
+import sys
 import time
+from pathlib import Path
 from typing import Any, Callable
+
+ROOT = Path(__file__).resolve().parents[1]
+#: What every ``hdi`` command runs before its stage: the CLI and the stage registry (every stage module).
+STARTUP = "import pipeline.cli, pipeline.runner; pipeline.runner.registry()"
 
 
 def timeit(fn: Callable[[], Any], repeat: int = 7, warmup: int = 1) -> list[float]:
@@ -38,14 +45,13 @@ def record(results: list[dict], name: str, times: list[float], target_s: float |
     return row
 
 
-def run_process(cmd: list[str], cwd: Any, **kwargs: Any) -> tuple[float, float, Any]:
-    """Run ``cmd`` to completion: ``(wall [s], CPU of the child, user + system [s], CompletedProcess)``.
+def run_process(cmd: list[str], cwd: Any, **kwargs: Any) -> tuple[float, float, subprocess.CompletedProcess]:
+    """Run ``cmd`` to completion: ``(wall time [s], CPU time of the child, user + system [s], the process)``.
 
     On a shared machine the CPU time says what the command costs when the wall time is inflated
     by other load (CPU time above wall time: the command ran in parallel).
     """
     import resource
-    import subprocess
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
     done = subprocess.run(cmd, cwd=cwd, check=True, **kwargs)
@@ -53,3 +59,17 @@ def run_process(cmd: list[str], cwd: Any, **kwargs: Any) -> tuple[float, float, 
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
     return wall, cpu, done
+
+
+def hdi(*args: str, **kwargs: Any) -> tuple[float, float, subprocess.CompletedProcess]:
+    """One fresh ``hdi`` process (interpreter start included), output discarded unless ``kwargs`` say
+    otherwise: ``(wall [s], CPU [s], the process)`` (:func:`run_process`)."""
+    kwargs.setdefault("stdout", subprocess.DEVNULL)
+    kwargs.setdefault("stderr", subprocess.DEVNULL)
+    return run_process([sys.executable, "-m", "pipeline.cli", *args], ROOT, **kwargs)
+
+
+def startup_seconds(repeat: int = 5) -> list[float]:
+    """Wall times [s] of a fresh interpreter doing what every ``hdi`` command does first (:data:`STARTUP`):
+    the floor no stage can go below."""
+    return [run_process([sys.executable, "-c", STARTUP], ROOT)[0] for _ in range(repeat)]
