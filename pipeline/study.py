@@ -22,8 +22,8 @@ candidate as a small sweep over protrusions:
 
 Candidates are fanned out in batches (:func:`evaluate_batch`, via :func:`pipeline.fanout.run_tasks`).
 Every finished evaluation is appended to a JSON-lines store (:class:`EvaluationStore`) keyed by the
-hash of the base scene, the parameter values and the protrusions, so an interrupted study resumes:
-what was evaluated is read back, not recomputed.
+hash of the base scene and its inputs, the parameter values and the protrusions, so an interrupted
+study resumes: what was evaluated is read back, not recomputed.
 
 Targets (:func:`targets`) are scene data in ``[identify]``; each gives a value from a candidate's
 outputs and a residual normalised by its tolerance (inequality targets are zero inside their
@@ -53,9 +53,6 @@ from .variables import SCALARS
 from .scene import SCHEMA, SceneError
 
 NM = 1e-9
-
-#: Scene sections that do not change what a candidate computes (left out of evaluation keys).
-STUDY_SECTIONS = ("identify", "sensitivity", "report")
 
 _KEY_RE = re.compile(r"([a-z_]+)\.([a-z0-9_]+)(?:\[(\d+)\])?")
 
@@ -172,24 +169,6 @@ def criterion_k(scene: Any) -> float:
 
 
 # ---------------------------------------------------------------------------------- evaluations
-def base_key(scene: Any) -> str:
-    """Hash of what an evaluation depends on besides its parameters: the scene minus study sections."""
-    cfg = json.loads(scene.to_toml_text())
-    for s in STUDY_SECTIONS:
-        cfg.pop(s, None)
-    cfg["scene"].pop("name", None)
-    cfg["scene"].pop("description", None)
-    return hashlib.sha256(json.dumps(cfg, sort_keys=True).encode()).hexdigest()
-
-
-def evaluation_key(base: str, params: Sequence[Parameter], values: Sequence[float],
-                   protrusions: Sequence[float]) -> str:
-    """Identity of one evaluation (values rounded to 12 significant digits)."""
-    blob = json.dumps({"base": base, "params": {p.name: float(f"{v:.12g}") for p, v in zip(params, values)},
-                       "protrusions": [round(float(x), 9) for x in protrusions]}, sort_keys=True)
-    return hashlib.sha256(blob.encode()).hexdigest()
-
-
 @dataclass(frozen=True)
 class Inputs:
     """The base scene's inputs, by file path, and the stage keys they were made for."""
@@ -198,6 +177,27 @@ class Inputs:
     interface_key: str | None
     dmw_path: str | None
     dmw_key: str | None
+
+
+def base_key(scene: Any, inputs: Inputs) -> str:
+    """Hash of what an evaluation depends on besides its parameters and protrusions.
+
+    The scene keys a simulation reads (:data:`pipeline.stages.simulate.NOT_READ` left out) and the
+    runner's keys of the base inputs, which hash AFM scans and a measured DMW record by content: a
+    rescanned file under the same name is a new base, not a store to read back.
+    """
+    from .runner import scene_part
+    from .stages.simulate import NOT_READ
+    blob = {"scene": scene_part(scene, ("*",), NOT_READ), "interface": inputs.interface_key, "dmw": inputs.dmw_key}
+    return hashlib.sha256(json.dumps(blob, sort_keys=True).encode()).hexdigest()
+
+
+def evaluation_key(base: str, params: Sequence[Parameter], values: Sequence[float],
+                   protrusions: Sequence[float]) -> str:
+    """Identity of one evaluation (values rounded to 12 significant digits)."""
+    blob = json.dumps({"base": base, "params": {p.name: float(f"{v:.12g}") for p, v in zip(params, values)},
+                       "protrusions": [round(float(x), 9) for x in protrusions]}, sort_keys=True)
+    return hashlib.sha256(blob.encode()).hexdigest()
 
 
 _CACHE: dict[tuple[str, str], Any] = {}
@@ -361,7 +361,7 @@ class Evaluator:
     kernel_seconds: float = 0.0
 
     def __post_init__(self) -> None:
-        self.base_hash = base_key(self.base)
+        self.base_hash = base_key(self.base, self.inputs)
 
     def key(self, values: Sequence[float]) -> str:
         return evaluation_key(self.base_hash, self.params, values, self.protrusions)

@@ -144,3 +144,14 @@ def test_store_ignores_a_line_cut_short_by_a_kill(tmp_path):
     again.put([("c", {"params": [3.0], "outputs": {}})])  # the rerun computes it again and appends it
     assert study.EvaluationStore(path)["c"]["params"] == [3.0]
     assert path.read_text().count("\n\n") == 0  # no empty lines from whole appends
+
+
+def test_base_key_follows_what_an_evaluation_reads(paper_scene):
+    inputs = study.Inputs(None, "interface-key", None, "dmw-key")
+    key = study.base_key(paper_scene, inputs)
+    # settings of other stages and names do not change an evaluation
+    assert study.base_key(paper_scene.replace(sweep={"damping_ratio": [0.05]}, identify={"population": 5},
+                                              scene={"description": "x"}), inputs) == key
+    # a simulation key does; so does an input made from other data (e.g. a rescanned AFM file)
+    assert study.base_key(paper_scene.replace(solver={"duration_ms": 0.9}), inputs) != key
+    assert study.base_key(paper_scene, study.Inputs(None, "other", None, "dmw-key")) != key
