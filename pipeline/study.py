@@ -299,16 +299,16 @@ class EvaluationStore:
     def __init__(self, path: str | Path):
         self.path = Path(path)
         self.records: dict[str, dict[str, Any]] = {}
-        self.order: list[str] = []
-        if self.path.is_file():
-            for line in self.path.read_text().splitlines():
-                try:
-                    rec = json.loads(line)
-                except json.JSONDecodeError:
-                    continue
-                if isinstance(rec, dict) and "key" in rec and rec["key"] not in self.records:
-                    self.records[rec["key"]] = rec
-                    self.order.append(rec["key"])
+        text = self.path.read_text() if self.path.is_file() else ""
+        for line in text.splitlines():
+            try:
+                rec = json.loads(line)
+            except json.JSONDecodeError:
+                continue
+            if isinstance(rec, dict) and "key" in rec and rec["key"] not in self.records:
+                self.records[rec["key"]] = rec
+        # a last line cut short by a kill: the next write ends it first, so new records start on their own line
+        self._cut = bool(text) and not text.endswith("\n")
 
     def __contains__(self, key: str) -> bool:
         return key in self.records
@@ -318,25 +318,17 @@ class EvaluationStore:
 
     def put(self, items: Iterable[tuple[str, dict[str, Any]]]) -> None:
         """Append ``(key, record)`` pairs not yet stored: one write, flushed and synced."""
-        new = [(k, {"key": k, **rec}) for k, rec in items if k not in self.records]
+        new = {k: {"key": k, **rec} for k, rec in items if k not in self.records}
         if not new:
             return
         self.path.parent.mkdir(parents=True, exist_ok=True)
-        cut = False
-        if self.path.is_file() and self.path.stat().st_size > 0:
-            with open(self.path, "rb") as fh:
-                fh.seek(-1, os.SEEK_END)
-                cut = fh.read(1) != b"\n"
         with open(self.path, "a") as fh:
-            if cut:  # a line cut short by a kill: end it, so the new records start on their own lines
-                fh.write("\n")
-            fh.write("".join(json.dumps(rec, allow_nan=True) + "\n" for _, rec in new))
+            lines = "".join(json.dumps(rec, allow_nan=True) + "\n" for rec in new.values())
+            fh.write(("\n" if self._cut else "") + lines)
             fh.flush()
             os.fsync(fh.fileno())
-        for k, rec in new:
-            if k not in self.records:
-                self.records[k] = rec
-                self.order.append(k)
+        self._cut = False
+        self.records.update(new)
 
 
 @dataclass
