@@ -39,7 +39,8 @@ import math
 import os
 import re
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from functools import lru_cache
 from pathlib import Path
 from typing import Any, Callable, Iterable, Sequence
 
@@ -200,17 +201,20 @@ def evaluation_key(base: str, params: Sequence[Parameter], values: Sequence[floa
     return hashlib.sha256(blob.encode()).hexdigest()
 
 
-_CACHE: dict[tuple[str, str], Any] = {}
-_CACHE_MAX = 8
+@dataclass(frozen=True)
+class _Made:
+    """An input identified by its stage key alone (equal keys, equal data); ``make`` makes it."""
+
+    kind: str
+    key: str
+    make: Callable[[], Any] = field(compare=False)
 
 
-def _cached(kind: str, key: str, make: Callable[[], Any]) -> Any:
-    """Per-process cache of interface tables and DMW records (small, oldest dropped first)."""
-    if (kind, key) not in _CACHE:
-        if len(_CACHE) >= _CACHE_MAX:
-            _CACHE.pop(next(iter(_CACHE)))
-        _CACHE[(kind, key)] = make()
-    return _CACHE[(kind, key)]
+@lru_cache(maxsize=8)
+def _made(what: _Made) -> Any:
+    """Per-process cache of interface tables, DMW records and roughness statistics (thread-safe, least
+    recently used dropped: the base inputs every candidate shares stay while varied ones come and go)."""
+    return what.make()
 
 
 def stage_key(scene: Any, stage: str) -> str:
@@ -228,22 +232,26 @@ def candidate_inputs(scene: Any, inputs: Inputs) -> tuple[Any, tuple[np.ndarray,
     if scene.effects & {"contact", "adhesion"}:
         ikey = stage_key(scene, "interface")
         if inputs.interface_path and ikey == inputs.interface_key:
-            interface = _cached("interface", ikey, lambda: read_dataset(inputs.interface_path, stage="interface"))
+            interface = _made(_Made("interface", ikey,
+                                    lambda: read_dataset(inputs.interface_path, stage="interface")))
         else:
-            interface = _cached("interface", ikey, lambda: build_tables(scene, roughness_statistics(scene)))
+            # AFM statistics once per process, not an AFM analysis per candidate (roughness_statistics
+            # without a folder makes roughness.nc afresh in a temporary one)
+            stats = _made(_Made("roughness", stage_key(scene, "roughness"), lambda: roughness_statistics(scene)))
+            interface = _made(_Made("interface", ikey, lambda: build_tables(scene, stats)))
     record = None
     if scene.has("dmw"):
         dkey = stage_key(scene, "dmw")
         if inputs.dmw_path and dkey == inputs.dmw_key:
-            record = _cached("dmw", dkey, lambda: dmw_stage.load(inputs.dmw_path)[1:])
+            record = _made(_Made("dmw", dkey, lambda: dmw_stage.load(inputs.dmw_path)[1:]))
         else:
             s = dmw_stage.settings(scene)
             if s["source"] != "synthetic":
                 raise ValueError("a [dmw] key of a measured record cannot be a free parameter (the record is "
                                  "used as measured)")
-            record = _cached("dmw", dkey, lambda: (dmw_phys.synthesize(s["rms_nm"], s["band_hz"], s["exponent"],
-                                                                        s["duration_s"], s["sample_rate_hz"],
-                                                                        s["seed"]), s["sample_rate_hz"]))
+            record = _made(_Made("dmw", dkey, lambda: (dmw_phys.synthesize(s["rms_nm"], s["band_hz"], s["exponent"],
+                                                                           s["duration_s"], s["sample_rate_hz"],
+                                                                           s["seed"]), s["sample_rate_hz"])))
     return interface, record
 
 

@@ -155,3 +155,10 @@ def test_base_key_follows_what_an_evaluation_reads(paper_scene):
     # a simulation key does; so does an input made from other data (e.g. a rescanned AFM file)
     assert study.base_key(paper_scene.replace(solver={"duration_ms": 0.9}), inputs) != key
     assert study.base_key(paper_scene, study.Inputs(None, "other", None, "dmw-key")) != key
+
+
+def test_candidate_inputs_are_cached_by_stage_key_alone():
+    made = []
+    first = study._made(study._Made("test", "key-1", lambda: made.append(1) or "tables"))
+    again = study._made(study._Made("test", "key-1", lambda: made.append(2) or "other"))  # same key: not made again
+    assert first == again == "tables" and made == [1]
