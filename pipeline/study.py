@@ -86,10 +86,29 @@ class Parameter:
 
     @property
     def units(self) -> str:
-        """The unit from the key's name (``"1"`` for dimensionless keys)."""
-        doc = self.doc
-        m = re.search(r"\[([^\]]+)\]", doc)
-        return m.group(1) if m else "1"
+        """The CF (UDUNITS) unit of the key, from the ``[unit]`` of its doc (``"1"`` for dimensionless keys)."""
+        m = re.search(r"\[([^\]]+)\]", self.doc)
+        return cf_units(m.group(1)) if m else "1"
+
+    @property
+    def var_name(self) -> str:
+        """NetCDF-safe variable name: ``air_bearing.frequencies_khz[0]`` -> ``air_bearing__frequencies_khz_0``."""
+        return re.sub(r"\[(\d+)\]", r"_\1", self.name).replace(".", "__")
+
+
+#: Units of scene docs that are not UDUNITS: megasamples per second, multiples of a roughness.
+_UNITS_NOT_UDUNITS = {"MS/s": "MHz", "sigma": "1", "sigma_s": "1"}
+
+
+def cf_units(unit: str) -> str:
+    """The CF spelling of a scene doc's unit: ``"J/m^2"`` -> ``"J m-2"``, ``"um^-2"`` -> ``"um-2"``."""
+    unit = _UNITS_NOT_UDUNITS.get(unit, unit)
+    num, _, den = unit.partition("/")
+    out = num.replace("^", "")
+    if den:
+        base, _, power = den.partition("^")
+        out += f" {base}-{power or 1}"
+    return out
 
 
 def parse_parameters(items: Any, where: str, field: str) -> list[Parameter]:
@@ -167,6 +186,13 @@ def criterion_k(scene: Any) -> float:
         raise ValueError("a parameter study needs the contact criterion k: set contact.k or "
                          "contact.fallback_probability (two-sided P(|z| > k sigma))")
     return k_from_probability(c["fallback_probability"])
+
+
+def upstream(scene: Any) -> tuple[str, ...]:
+    """The stages a study reads: a single simulation's inputs without the calibration (a study fixes k,
+    :func:`criterion_k`)."""
+    from .stages.simulate import upstream as simulate_upstream
+    return tuple(u for u in simulate_upstream(scene) if u != "calibrate")
 
 
 # ---------------------------------------------------------------------------------- evaluations
