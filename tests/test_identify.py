@@ -76,6 +76,8 @@ def test_twin_experiment_recovers_the_true_parameters_within_the_reported_interv
     written = path.parent / "twin-identified.toml"
     text = written.read_text()
     assert text.count("# [identified] interval [") == 2  # one per identified value, with its interval
+    rev = ds.attrs["git_revision"]  # the revision identify.nc was made at, a dirty tree said so
+    assert f"(git {rev[:12]}{'-dirty' if rev.endswith('-dirty') else ''});" in text.splitlines()[0]
     ident = load_scene(written)
     assert ident["dmw"]["rms_nm"] == pytest.approx(float(ds["dmw__rms_nm_best"]), rel=1e-5)
     assert ident["solver"]["duration_ms"] == 0.8  # inherited

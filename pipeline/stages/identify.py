@@ -56,7 +56,7 @@ import xarray as xr
 
 from .. import plots
 from ..fanout import local_cluster
-from ..io import git_revision, read_dataset, var
+from ..io import read_dataset, var
 from ..runner import Inputs, Stage, build
 from ..study import (Evaluator, Parameter, Target, cost, evaluate_batch, parse_parameters, residuals, scene_value,
                      setup, target_protrusions, targets, upstream)
@@ -278,8 +278,9 @@ def write_identified_scene(scene: Any, params: Sequence[Parameter], ds: xr.Datas
     base = Path(scene.path) if scene.path else None
     rel = os.path.relpath(base, path.parent) if base else "<scene>"
     now = str(ds.attrs.get("history", "")).split(": hdi", 1)[0] or "?"  # when identify.nc was made
-    rev = str(ds.attrs.get("git_revision", "")) or git_revision()
-    lines = [f"# Identified by `hdi identify {base.name if base else ''}` on {now} (git {rev[:12]});",
+    rev = str(ds.attrs.get("git_revision", "unknown"))  # of identify.nc (provenance), "-dirty" kept
+    rev = rev[:12] + ("-dirty" if rev.endswith("-dirty") else "")
+    lines = [f"# Identified by `hdi identify {base.name if base else ''}` on {now} (git {rev});",
              "# every value below is [identified]: fitted to the paper's targets ([identify] of the base scene),",
              f"# with its interval ({ds.attrs['interval_criterion']}).",
              f"# Within tolerance on every target: {'yes' if ds.attrs['within_tolerance'] else 'no'} "
