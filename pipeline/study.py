@@ -22,8 +22,8 @@ candidate as a small sweep over protrusions:
 
 Candidates are fanned out in batches (:func:`evaluate_batch`, via :func:`pipeline.fanout.run_tasks`).
 Every finished evaluation is appended to a JSON-lines store (:class:`EvaluationStore`) keyed by the
-hash of the base scene, the parameter values and the protrusions, so an interrupted study resumes:
-what was evaluated is read back, not recomputed.
+hash of the base scene and its inputs, the parameter values and the protrusions, so an interrupted
+study resumes: what was evaluated is read back, not recomputed.
 
 Targets (:func:`targets`) are scene data in ``[identify]``; each gives a value from a candidate's
 outputs and a residual normalised by its tolerance (inequality targets are zero inside their
@@ -39,7 +39,8 @@ import math
 import os
 import re
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from functools import lru_cache
 from pathlib import Path
 from typing import Any, Callable, Iterable, Sequence
 
@@ -53,9 +54,6 @@ from .variables import SCALARS
 from .scene import SCHEMA, SceneError
 
 NM = 1e-9
-
-#: Scene sections that do not change what a candidate computes (left out of evaluation keys).
-STUDY_SECTIONS = ("identify", "sensitivity", "report")
 
 _KEY_RE = re.compile(r"([a-z_]+)\.([a-z0-9_]+)(?:\[(\d+)\])?")
 
@@ -88,10 +86,29 @@ class Parameter:
 
     @property
     def units(self) -> str:
-        """The unit from the key's name (``"1"`` for dimensionless keys)."""
-        doc = self.doc
-        m = re.search(r"\[([^\]]+)\]", doc)
-        return m.group(1) if m else "1"
+        """The CF (UDUNITS) unit of the key, from the ``[unit]`` of its doc (``"1"`` for dimensionless keys)."""
+        m = re.search(r"\[([^\]]+)\]", self.doc)
+        return cf_units(m.group(1)) if m else "1"
+
+    @property
+    def var_name(self) -> str:
+        """NetCDF-safe variable name: ``air_bearing.frequencies_khz[0]`` -> ``air_bearing__frequencies_khz_0``."""
+        return re.sub(r"\[(\d+)\]", r"_\1", self.name).replace(".", "__")
+
+
+#: Units of scene docs that are not UDUNITS: megasamples per second, multiples of a roughness.
+_UNITS_NOT_UDUNITS = {"MS/s": "MHz", "sigma": "1", "sigma_s": "1"}
+
+
+def cf_units(unit: str) -> str:
+    """The CF spelling of a scene doc's unit: ``"J/m^2"`` -> ``"J m-2"``, ``"um^-2"`` -> ``"um-2"``."""
+    unit = _UNITS_NOT_UDUNITS.get(unit, unit)
+    num, _, den = unit.partition("/")
+    out = num.replace("^", "")
+    if den:
+        base, _, power = den.partition("^")
+        out += f" {base}-{power or 1}"
+    return out
 
 
 def parse_parameters(items: Any, where: str, field: str) -> list[Parameter]:
@@ -171,15 +188,35 @@ def criterion_k(scene: Any) -> float:
     return k_from_probability(c["fallback_probability"])
 
 
+def upstream(scene: Any) -> tuple[str, ...]:
+    """The stages a study reads: a single simulation's inputs without the calibration (a study fixes k,
+    :func:`criterion_k`)."""
+    from .stages.simulate import upstream as simulate_upstream
+    return tuple(u for u in simulate_upstream(scene) if u != "calibrate")
+
+
 # ---------------------------------------------------------------------------------- evaluations
-def base_key(scene: Any) -> str:
-    """Hash of what an evaluation depends on besides its parameters: the scene minus study sections."""
-    cfg = json.loads(scene.to_toml_text())
-    for s in STUDY_SECTIONS:
-        cfg.pop(s, None)
-    cfg["scene"].pop("name", None)
-    cfg["scene"].pop("description", None)
-    return hashlib.sha256(json.dumps(cfg, sort_keys=True).encode()).hexdigest()
+@dataclass(frozen=True)
+class Inputs:
+    """The base scene's inputs, by file path, and the stage keys they were made for."""
+
+    interface_path: str | None
+    interface_key: str | None
+    dmw_path: str | None
+    dmw_key: str | None
+
+
+def base_key(scene: Any, inputs: Inputs) -> str:
+    """Hash of what an evaluation depends on besides its parameters and protrusions.
+
+    The scene keys a simulation reads (:data:`pipeline.stages.simulate.NOT_READ` left out) and the
+    runner's keys of the base inputs, which hash AFM scans and a measured DMW record by content: a
+    rescanned file under the same name is a new base, not a store to read back.
+    """
+    from .runner import scene_part
+    from .stages.simulate import NOT_READ
+    blob = {"scene": scene_part(scene, ("*",), NOT_READ), "interface": inputs.interface_key, "dmw": inputs.dmw_key}
+    return hashlib.sha256(json.dumps(blob, sort_keys=True).encode()).hexdigest()
 
 
 def evaluation_key(base: str, params: Sequence[Parameter], values: Sequence[float],
@@ -191,26 +228,19 @@ def evaluation_key(base: str, params: Sequence[Parameter], values: Sequence[floa
 
 
 @dataclass(frozen=True)
-class Inputs:
-    """The base scene's inputs, by file path, and the stage keys they were made for."""
+class _Made:
+    """An input identified by its stage key alone (equal keys, equal data); ``make`` makes it."""
 
-    interface_path: str | None
-    interface_key: str | None
-    dmw_path: str | None
-    dmw_key: str | None
-
-
-_CACHE: dict[tuple[str, str], Any] = {}
-_CACHE_MAX = 8
+    kind: str
+    key: str
+    make: Callable[[], Any] = field(compare=False)
 
 
-def _cached(kind: str, key: str, make: Callable[[], Any]) -> Any:
-    """Per-process cache of interface tables and DMW records (small, oldest dropped first)."""
-    if (kind, key) not in _CACHE:
-        if len(_CACHE) >= _CACHE_MAX:
-            _CACHE.pop(next(iter(_CACHE)))
-        _CACHE[(kind, key)] = make()
-    return _CACHE[(kind, key)]
+@lru_cache(maxsize=8)
+def _made(what: _Made) -> Any:
+    """Per-process cache of interface tables, DMW records and roughness statistics (thread-safe, least
+    recently used dropped: the base inputs every candidate shares stay while varied ones come and go)."""
+    return what.make()
 
 
 def stage_key(scene: Any, stage: str) -> str:
@@ -228,22 +258,26 @@ def candidate_inputs(scene: Any, inputs: Inputs) -> tuple[Any, tuple[np.ndarray,
     if scene.effects & {"contact", "adhesion"}:
         ikey = stage_key(scene, "interface")
         if inputs.interface_path and ikey == inputs.interface_key:
-            interface = _cached("interface", ikey, lambda: read_dataset(inputs.interface_path, stage="interface"))
+            interface = _made(_Made("interface", ikey,
+                                    lambda: read_dataset(inputs.interface_path, stage="interface")))
         else:
-            interface = _cached("interface", ikey, lambda: build_tables(scene, roughness_statistics(scene)))
+            # AFM statistics once per process, not an AFM analysis per candidate (roughness_statistics
+            # without a folder makes roughness.nc afresh in a temporary one)
+            stats = _made(_Made("roughness", stage_key(scene, "roughness"), lambda: roughness_statistics(scene)))
+            interface = _made(_Made("interface", ikey, lambda: build_tables(scene, stats)))
     record = None
     if scene.has("dmw"):
         dkey = stage_key(scene, "dmw")
         if inputs.dmw_path and dkey == inputs.dmw_key:
-            record = _cached("dmw", dkey, lambda: dmw_stage.load(inputs.dmw_path)[1:])
+            record = _made(_Made("dmw", dkey, lambda: dmw_stage.load(inputs.dmw_path)[1:]))
         else:
             s = dmw_stage.settings(scene)
             if s["source"] != "synthetic":
                 raise ValueError("a [dmw] key of a measured record cannot be a free parameter (the record is "
                                  "used as measured)")
-            record = _cached("dmw", dkey, lambda: (dmw_phys.synthesize(s["rms_nm"], s["band_hz"], s["exponent"],
-                                                                        s["duration_s"], s["sample_rate_hz"],
-                                                                        s["seed"]), s["sample_rate_hz"]))
+            record = _made(_Made("dmw", dkey, lambda: (dmw_phys.synthesize(s["rms_nm"], s["band_hz"], s["exponent"],
+                                                                           s["duration_s"], s["sample_rate_hz"],
+                                                                           s["seed"]), s["sample_rate_hz"])))
     return interface, record
 
 
@@ -299,16 +333,16 @@ class EvaluationStore:
     def __init__(self, path: str | Path):
         self.path = Path(path)
         self.records: dict[str, dict[str, Any]] = {}
-        self.order: list[str] = []
-        if self.path.is_file():
-            for line in self.path.read_text().splitlines():
-                try:
-                    rec = json.loads(line)
-                except json.JSONDecodeError:
-                    continue
-                if isinstance(rec, dict) and "key" in rec and rec["key"] not in self.records:
-                    self.records[rec["key"]] = rec
-                    self.order.append(rec["key"])
+        text = self.path.read_text() if self.path.is_file() else ""
+        for line in text.splitlines():
+            try:
+                rec = json.loads(line)
+            except json.JSONDecodeError:
+                continue
+            if isinstance(rec, dict) and "key" in rec and rec["key"] not in self.records:
+                self.records[rec["key"]] = rec
+        # a last line cut short by a kill: the next write ends it first, so new records start on their own line
+        self._cut = bool(text) and not text.endswith("\n")
 
     def __contains__(self, key: str) -> bool:
         return key in self.records
@@ -318,25 +352,17 @@ class EvaluationStore:
 
     def put(self, items: Iterable[tuple[str, dict[str, Any]]]) -> None:
         """Append ``(key, record)`` pairs not yet stored: one write, flushed and synced."""
-        new = [(k, {"key": k, **rec}) for k, rec in items if k not in self.records]
+        new = {k: {"key": k, **rec} for k, rec in items if k not in self.records}
         if not new:
             return
         self.path.parent.mkdir(parents=True, exist_ok=True)
-        cut = False
-        if self.path.is_file() and self.path.stat().st_size > 0:
-            with open(self.path, "rb") as fh:
-                fh.seek(-1, os.SEEK_END)
-                cut = fh.read(1) != b"\n"
         with open(self.path, "a") as fh:
-            if cut:  # a line cut short by a kill: end it, so the new records start on their own lines
-                fh.write("\n")
-            fh.write("".join(json.dumps(rec, allow_nan=True) + "\n" for _, rec in new))
+            lines = "".join(json.dumps(rec, allow_nan=True) + "\n" for rec in new.values())
+            fh.write(("\n" if self._cut else "") + lines)
             fh.flush()
             os.fsync(fh.fileno())
-        for k, rec in new:
-            if k not in self.records:
-                self.records[k] = rec
-                self.order.append(k)
+        self._cut = False
+        self.records.update(new)
 
 
 @dataclass
@@ -361,7 +387,7 @@ class Evaluator:
     kernel_seconds: float = 0.0
 
     def __post_init__(self) -> None:
-        self.base_hash = base_key(self.base)
+        self.base_hash = base_key(self.base, self.inputs)
 
     def key(self, values: Sequence[float]) -> str:
         return evaluation_key(self.base_hash, self.params, values, self.protrusions)

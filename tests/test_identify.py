@@ -61,7 +61,7 @@ def test_twin_experiment_recovers_the_true_parameters_within_the_reported_interv
     failures, crashed = cf_report(nc)
     assert crashed == [] and failures[3] == [] and failures[2] == [], failures
     for p in study.parse_parameters(scene["identify"]["parameters"], "", ""):
-        name = identify.var_name(p)
+        name = p.var_name
         lo, hi = ds[f"{name}_interval"].values
         assert lo <= TRUE[p.name] <= hi, (p.name, lo, hi, float(ds[f"{name}_best"]))
         # the interval is informative: well inside the bounds
@@ -76,6 +76,8 @@ def test_twin_experiment_recovers_the_true_parameters_within_the_reported_interv
     written = path.parent / "twin-identified.toml"
     text = written.read_text()
     assert text.count("# [identified] interval [") == 2  # one per identified value, with its interval
+    rev = ds.attrs["git_revision"]  # the revision identify.nc was made at, a dirty tree said so
+    assert f"(git {rev[:12]}{'-dirty' if rev.endswith('-dirty') else ''});" in text.splitlines()[0]
     ident = load_scene(written)
     assert ident["dmw"]["rms_nm"] == pytest.approx(float(ds["dmw__rms_nm_best"]), rel=1e-5)
     assert ident["solver"]["duration_ms"] == 0.8  # inherited
@@ -144,3 +146,38 @@ def test_store_ignores_a_line_cut_short_by_a_kill(tmp_path):
     again.put([("c", {"params": [3.0], "outputs": {}})])  # the rerun computes it again and appends it
     assert study.EvaluationStore(path)["c"]["params"] == [3.0]
     assert path.read_text().count("\n\n") == 0  # no empty lines from whole appends
+
+
+def test_base_key_follows_what_an_evaluation_reads(paper_scene):
+    inputs = study.Inputs(None, "interface-key", None, "dmw-key")
+    key = study.base_key(paper_scene, inputs)
+    # settings of other stages and names do not change an evaluation
+    assert study.base_key(paper_scene.replace(sweep={"damping_ratio": [0.05]}, identify={"population": 5},
+                                              scene={"description": "x"}), inputs) == key
+    # a simulation key does; so does an input made from other data (e.g. a rescanned AFM file)
+    assert study.base_key(paper_scene.replace(solver={"duration_ms": 0.9}), inputs) != key
+    assert study.base_key(paper_scene, study.Inputs(None, "other", None, "dmw-key")) != key
+
+
+def test_candidate_inputs_are_cached_by_stage_key_alone():
+    made = []
+    first = study._made(study._Made("test", "key-1", lambda: made.append(1) or "tables"))
+    again = study._made(study._Made("test", "key-1", lambda: made.append(2) or "other"))  # same key: not made again
+    assert first == again == "tables" and made == [1]
+
+
+def test_parameter_units_are_cf_for_every_numeric_scene_key():
+    cf_units = pytest.importorskip("cf_units")
+    from pipeline.scene import SCHEMA
+    for section, keys in SCHEMA.items():
+        for key, spec in keys.items():
+            if spec.kind in ("float", "floats"):
+                units = study.Parameter(f"{section}.{key}", 0.0, 1.0).units
+                cf_units.Unit(units)  # UDUNITS parses it
+    units = {name: study.Parameter(name, 0.0, 1.0).units for name in
+             ("lubricant.work_of_adhesion_j_m2", "contact.damping_n_s_m", "roughness.summit_density_per_um2",
+              "slider.density_kg_m3", "dmw.sample_rate_mhz", "contact.section_depth_sigma")}
+    assert units == {"lubricant.work_of_adhesion_j_m2": "J m-2", "contact.damping_n_s_m": "N s m-1",
+                     "roughness.summit_density_per_um2": "um-2", "slider.density_kg_m3": "kg m-3",
+                     "dmw.sample_rate_mhz": "MHz", "contact.section_depth_sigma": "1"}
+    assert study.Parameter("air_bearing.frequencies_khz[0]", 1.0, 2.0).var_name == "air_bearing__frequencies_khz_0"

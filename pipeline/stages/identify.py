@@ -4,8 +4,8 @@
 to the targets of ``[identify]`` (:func:`pipeline.study.targets`: touchdown at 9.8 nm and not 9.6,
 FHM 12.5 % at 4-7 nm and ~9 % at 9 nm, BV > 20 % after touchdown, and the light-contact numbers at
 11 nm), each candidate evaluated as a small sweep at the protrusions the targets need
-(:mod:`pipeline.study`) on the dask fan-out (:mod:`pipeline.fanout`; local process cluster by
-default, ``--scheduler`` for a cluster). The objective is the sum of squared residuals, each
+(:mod:`pipeline.study`) on the fan-out (:mod:`pipeline.fanout`; threads of this process by
+default, ``--scheduler processes`` or a dask.distributed address for more). The objective is the sum of squared residuals, each
 normalised by its tolerance (SPEC.md section 7).
 
 Method
@@ -56,25 +56,16 @@ import xarray as xr
 
 from .. import plots
 from ..fanout import local_cluster
-from ..io import git_revision, read_dataset, var
+from ..io import read_dataset, var
 from ..runner import Inputs, Stage, build
 from ..study import (Evaluator, Parameter, Target, cost, evaluate_batch, parse_parameters, residuals, scene_value,
-                     setup, target_protrusions, targets)
+                     setup, target_protrusions, targets, upstream)
 
 log = logging.getLogger(__name__)
 
 #: Role of an evaluation (``stage`` variable of identify.nc).
 ROLES = {0: "reconstructed", 1: "optimiser", 2: "profile", 3: "gauss-newton"}
 GN_STEP = 0.02
-
-
-def var_name(p: Parameter) -> str:
-    """NetCDF-safe variable name of a parameter: ``air_bearing.frequencies_khz[0]`` -> ``air_bearing__frequencies_khz_0``."""
-    return re.sub(r"\[(\d+)\]", r"_\1", p.name).replace(".", "__")
-
-
-def _cf_units(units: str) -> str:
-    return {"J/m^2": "J m-2", "N s/m": "N s m-1", "um^-2": "um-2", "um^2": "um2"}.get(units, units)
 
 
 class Identification:
@@ -223,8 +214,8 @@ def dataset(ident: Identification, params: Sequence[Parameter], out: dict[str, A
     i_best = int(np.nanargmin(costs))
     data: dict[str, Any] = {}
     for j, p in enumerate(params):
-        u = _cf_units(p.units)
-        name = var_name(p)
+        u = p.units
+        name = p.var_name
         data[name] = var(pts[:, j], "evaluation", u, f"{p.name}: {p.doc}", scene_key=p.name)
         data[f"{name}_best"] = var(out["best"][j], (), u, f"identified {p.name}", scene_key=p.name)
         data[f"{name}_reconstructed"] = var(x_base[j], (), u, f"reconstructed (scene) value of {p.name}")
@@ -256,7 +247,7 @@ def dataset(ident: Identification, params: Sequence[Parameter], out: dict[str, A
                        flag_meanings=" ".join(ROLES[k] for k in sorted(ROLES)))
     data["failed"] = var(np.array([r["error"] is not None for r in recs], np.int8), "evaluation", "1",
                          "1 when a run of the evaluation failed (its message in the evaluation store)")
-    names = [var_name(p) for p in params]
+    names = [p.var_name for p in params]
     data["correlation"] = var(out["correlation"], ("parameter", "parameter_b"), "1",
                               "correlation of the parameters, Gauss-Newton (J^T J)^+ at the optimum")
     coords = {
@@ -287,8 +278,9 @@ def write_identified_scene(scene: Any, params: Sequence[Parameter], ds: xr.Datas
     base = Path(scene.path) if scene.path else None
     rel = os.path.relpath(base, path.parent) if base else "<scene>"
     now = str(ds.attrs.get("history", "")).split(": hdi", 1)[0] or "?"  # when identify.nc was made
-    rev = str(ds.attrs.get("git_revision", "")) or git_revision()
-    lines = [f"# Identified by `hdi identify {base.name if base else ''}` on {now} (git {rev[:12]});",
+    rev = str(ds.attrs.get("git_revision", "unknown"))  # of identify.nc (provenance), "-dirty" kept
+    rev = rev[:12] + ("-dirty" if rev.endswith("-dirty") else "")
+    lines = [f"# Identified by `hdi identify {base.name if base else ''}` on {now} (git {rev});",
              "# every value below is [identified]: fitted to the paper's targets ([identify] of the base scene),",
              f"# with its interval ({ds.attrs['interval_criterion']}).",
              f"# Within tolerance on every target: {'yes' if ds.attrs['within_tolerance'] else 'no'} "
@@ -300,7 +292,7 @@ def write_identified_scene(scene: Any, params: Sequence[Parameter], ds: xr.Datas
     lists: dict[tuple[str, str], list] = {}
     for p in params:
         section, key, index = p.parts
-        name = var_name(p)
+        name = p.var_name
         best = float(ds[f"{name}_best"])
         lo_i, hi_i = (float(v) for v in ds[f"{name}_interval"].values)
         note = (f"[identified] interval [{lo_i:.4g}, {hi_i:.4g}]" if np.isfinite(lo_i)
@@ -359,7 +351,7 @@ def figure(ds: xr.Dataset, params: Sequence[Parameter], scene: str, path: Path) 
     ax.set_title(plots.title("Residual per target", scene), fontsize=9)
     for j, p in enumerate(params):
         a = fig.add_subplot(gs[1 + j // ncols, j % ncols])
-        name = var_name(p)
+        name = p.var_name
         xv = ds[f"{name}_profile"].values
         ok = np.isfinite(xv)
         a.semilogy(xv[ok], np.maximum(ds[f"{name}_profile_cost"].values[ok], 1e-3), "o-", ms=3,
@@ -428,17 +420,11 @@ def _finish(scene: Any, out: Path, options: dict[str, Any]) -> None:
     log.info("identified scene: %s", path)
 
 
-def _upstream(scene: Any) -> tuple[str, ...]:
-    """A single simulation's inputs without the calibration (a study fixes k, :func:`pipeline.study.criterion_k`)."""
-    from .simulate import upstream
-    return tuple(u for u in upstream(scene) if u != "calibrate")
-
-
 STAGE = Stage(
     "identify", compute, outputs=("identify.nc", "figures/identify.png"),
     reads=("*",), excludes=("sweep", "report", "sensitivity", "scene.name", "scene.description",
                             "identify.batch_size"),
-    upstream=_upstream, finish=_finish, order=80,
+    upstream=upstream, finish=_finish, order=80,
     doc="the free [recon] parameters fitted to the paper's targets, identify.nc and <scene>-identified.toml")
 
 

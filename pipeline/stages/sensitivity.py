@@ -56,8 +56,7 @@ from .. import plots
 from ..fanout import local_cluster
 from ..io import var
 from ..runner import Inputs, Stage, build
-from ..study import HEADLINES, Evaluator, Parameter, evaluate_batch, headline, setup
-from .identify import _cf_units, _upstream, var_name
+from ..study import HEADLINES, Evaluator, Parameter, evaluate_batch, headline, setup, upstream
 from .sweep_grid import protrusion_grid, range_grid
 
 log = logging.getLogger(__name__)
@@ -139,7 +138,7 @@ _INDEX_META = {
 
 def dataset(params: Sequence[Parameter], results: dict[str, tuple], scene: Any) -> xr.Dataset:
     """``sensitivity.nc``: indices per output (variables ``<index>_<output>`` over ``parameter``) and samples."""
-    names = [var_name(p) for p in params]
+    names = [p.var_name for p in params]
     data: dict[str, Any] = {}
     coords: dict[str, Any] = {"parameter": var(np.array(names, dtype=object), "parameter", "1", "parameter",
                                                scene_keys=" ".join(p.name for p in params))}
@@ -148,7 +147,7 @@ def dataset(params: Sequence[Parameter], results: dict[str, tuple], scene: Any) 
         run_dim = f"{method}_sample"
         coords[run_dim] = var(np.arange(len(X)), run_dim, "1", f"{method} sample index")
         for j, p in enumerate(params):
-            data[f"{method}_{var_name(p)}"] = var(X[:, j], run_dim, _cf_units(p.units), f"{method} sample of {p.name}")
+            data[f"{method}_{p.var_name}"] = var(X[:, j], run_dim, p.units, f"{method} sample of {p.name}")
         for out, (units, long_name) in HEADLINES.items():
             y = Y[out]
             data[f"{method}_{out}"] = var(y, run_dim, units, f"{long_name} ({method} samples)")
@@ -230,7 +229,7 @@ STAGE = Stage(
     "sensitivity", compute, outputs=("sensitivity.nc", "figures/sensitivity.png"),
     # (the [sweep] grid is the default protrusion grid of the evaluations: not excluded)
     reads=("*",), excludes=("report", "identify", "scene.name", "scene.description", "sensitivity.batch_size"),
-    upstream=_upstream, order=85,
+    upstream=upstream, order=85,
     doc="Morris and Sobol indices of the headline outputs over the [sensitivity] parameters, sensitivity.nc")
 
 
