@@ -214,13 +214,6 @@ def _status(k: float, k_range: tuple[float, float]) -> tuple[float, str]:
     return k, "found"
 
 
-def probabilities(k: float) -> tuple[float, float]:
-    """One-sided ``Q(k)`` and two-sided ``2 Q(|k|)`` contact probabilities of criterion ``k`` [1]
-    (:func:`pipeline.physics.statistics.contact_probabilities`, in this order)."""
-    two, one = contact_probabilities(k)
-    return one, two
-
-
 def calibrate(scene: Any, out: Path, scheduler: str | None = None, workers: int | None = None) -> xr.Dataset:
     """Run the calibration of a scene (no I/O of its own result); returns ``calibration.nc``'s dataset.
 
@@ -295,7 +288,7 @@ def calibrate(scene: Any, out: Path, scheduler: str | None = None, workers: int 
         outcome += (f". The touchdown protrusion is {finite[0]:g} nm for every k in the range: contact does not "
                     "depend on the criterion here, the slider is pulled into contact (adhesive snap-in) before "
                     "the separation reaches any k sigma of the range")
-    p1, p2 = probabilities(k_cal) if np.isfinite(k_cal) else (np.nan, np.nan)
+    p2, p1 = contact_probabilities(k_cal) if np.isfinite(k_cal) else (np.nan, np.nan)  # two-sided first
     data = {
         "touchdown": c["touchdown"].data(curve, ("k",)),
         "k_calibrated": c["k_calibrated"].data(k_cal, ()),
