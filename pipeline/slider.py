@@ -41,16 +41,15 @@ import numpy as np
 
 from . import dynamics as dyn
 from .physics import air_bearing as ab
-from .physics.fhm import fhm as fhm_percent
+from .physics.fhm import fhm
 from .physics.friction import friction_stress_table
 from .physics.geometry import effective_radius, nominal_area
-from .variables import Regime, regime_name
+from .variables import Regime
 
 NM, UM, MM = 1e-9, 1e-6, 1e-3
 
-#: Regime codes (``flag_values``/``flag_meanings`` of the ``regime`` variable).
+#: Regime codes (:class:`pipeline.variables.Regime`, the ``flag_values`` of the ``regime`` variable).
 FLYING, BOUNCING, SURFING = Regime.FLYING, Regime.BOUNCING, Regime.SURFING
-REGIMES = {r: regime_name(r) for r in Regime}
 SURFING_FRACTION = 0.99
 
 
@@ -336,12 +335,6 @@ def histories(run: Run) -> dict[str, np.ndarray]:
     if m.adhesion is not None or m.contact is not None:
         out["net_force"] = net
     return out
-
-
-def fhm(d: np.ndarray, fh0: float, measure: str = "peak-to-peak") -> float:
-    """Flying-height modulation / bouncing vibration [%] of separation samples ``d`` [m] (SPEC.md 4):
-    the named measure of :data:`pipeline.physics.fhm.FHM_MEASURES`."""
-    return fhm_percent(d, fh0, measure)
 
 
 def summarize(run: Run, hist: dict[str, np.ndarray] | None = None) -> dict[str, float]:
