@@ -118,18 +118,14 @@ def flying_minimum(model: sl.Model, delta_nm: float) -> tuple[float, float, str]
     """Minimum separation [m] of the run with the contact law off: ``(steady window, whole run, note)``.
 
     The steady-window minimum is the integrator's exact one; the whole-run minimum adds a run over
-    the transient alone (same trajectory: the integration starts from the same state) and the
-    initial separation. A collapse (the integration fails, or ``d`` falls below the start of the
+    the transient alone (same trajectory: the integration starts from the same state; its window is
+    the whole of it, ``t = 0`` included). A collapse (the integration fails, or ``d`` falls below the start of the
     interface tables: adhesive snap-in) returns ``(-inf, -inf, reason)``.
     """
     off = replace(model, contact=None, friction=None, area=None)
     try:
         run = sl.run_model(off, delta_nm * NM)
-        # the initial separation (at rest, y = 0): d(0) = FH0 - delta - w(0) - y_s (dynamics.separation_at)
-        w0 = dyn.disk_history(model.dmw, model.p, np.zeros(1))[0][0] if model.dmw is not None else 0.0
-        p0 = model.p.copy()
-        p0[dyn.P_DELTA] = delta_nm * NM
-        lo_all = min(run.d_extremes[0], float(dyn.separation_at(p0, 0.0, 0.0, w0)))
+        lo_all = run.d_extremes[0]  # t = 0 included when there is no transient
         if model.transient > 0:
             early = sl.run_model(replace(off, duration=off.transient, transient=0.0), delta_nm * NM)
             lo_all = min(lo_all, early.d_extremes[0])
