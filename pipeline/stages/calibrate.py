@@ -119,8 +119,8 @@ def flying_minimum(model: sl.Model, delta_nm: float) -> tuple[float, float, str]
 
     The steady-window minimum is the integrator's exact one; the whole-run minimum adds a run over
     the transient alone (same trajectory: the integration starts from the same state; its window is
-    the whole of it, ``t = 0`` included). A collapse (the integration fails, or ``d`` falls below the start of the
-    interface tables: adhesive snap-in) returns ``(-inf, -inf, reason)``.
+    the whole of it, ``t = 0`` included). A collapse (the integration fails, or ``d`` falls below the
+    start of the interface tables: adhesive snap-in) returns ``(-inf, -inf, reason)``.
     """
     off = replace(model, contact=None, friction=None, area=None)
     try:
