@@ -76,27 +76,25 @@ def _split_header(name: str) -> tuple[str, str | None]:
     return low, None
 
 
+#: quantity -> (kind of its unit, units -> factor to [nm] or [nm/s], the other quantity)
+_QUANTITY_UNITS = {"displacement": ("length", LENGTH_UNITS, "velocity"),
+                   "velocity": ("velocity", VELOCITY_UNITS, "displacement")}
+
+
 def _value_factor(path: Path, field_name: str, unit: str | None,
                   quantity: str) -> tuple[float, str, tuple[str, ...]]:
     """Factor to [nm] / [nm/s] for a value column, and the unit used."""
+    kind, units, other = _QUANTITY_UNITS[quantity]
     if unit is None or unit == "":
         assumed = "nm" if quantity == "displacement" else "nm/s"
         return 1.0, assumed, (f"{field_name}: no unit stated, assumed {assumed}",)
-    if quantity == "displacement":
-        if unit in LENGTH_UNITS:
-            return LENGTH_UNITS[unit], unit, ()
-        if unit in VELOCITY_UNITS:
-            raise DMWError(f"{path}: {field_name}: has velocity units {unit!r} but the quantity is "
-                           f"'displacement': set dmw.quantity = \"velocity\"")
-        raise DMWError(f"{path}: {field_name}: unknown length unit {unit!r}; expected one of "
-                       + ", ".join(LENGTH_UNITS))
-    if unit in VELOCITY_UNITS:
-        return VELOCITY_UNITS[unit], unit, ()
-    if unit in LENGTH_UNITS:
-        raise DMWError(f"{path}: {field_name}: has length units {unit!r} but the quantity is "
-                       f"'velocity': set dmw.quantity = \"displacement\"")
-    raise DMWError(f"{path}: {field_name}: unknown velocity unit {unit!r}; expected one of "
-                   + ", ".join(VELOCITY_UNITS))
+    if unit in units:
+        return units[unit], unit, ()
+    other_kind, other_units, _ = _QUANTITY_UNITS[other]
+    if unit in other_units:  # a unit of the other quantity: the scene names the wrong one
+        raise DMWError(f"{path}: {field_name}: has {other_kind} units {unit!r} but the quantity is "
+                       f"'{quantity}': set dmw.quantity = \"{other}\"")
+    raise DMWError(f"{path}: {field_name}: unknown {kind} unit {unit!r}; expected one of " + ", ".join(units))
 
 
 def _time_factor(path: Path, field_name: str, unit: str | None) -> float:

@@ -525,6 +525,9 @@ def integrate(y0, t_end, t_out, p, dmw, cp, pa, ft, pitch, tfs, rlin, rtol, atol
     rhs(t, y, p, dmw, cp, pa, ft, pitch, tfs, rlin, contact, k1)
     info[4] += 1
     d0, dd0 = separation(p, dmw, t, y)  # d and d' at the current step start (kept step to step)
+    if p[P_TWIN] <= 0.0:  # the window starts at t = 0: the initial d is one of its values (steps add their ends)
+        ext[0] = d0
+        ext[1] = d0
     h = min(h_max, 1e-8)
     t_hold = -1.0  # no switch may happen before t_hold (minimum dwell after a switch)
     h_stiff = h_max  # step cap from the local interface stiffness (see below)

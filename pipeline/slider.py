@@ -41,16 +41,15 @@ import numpy as np
 
 from . import dynamics as dyn
 from .physics import air_bearing as ab
-from .physics.fhm import fhm as fhm_percent
+from .physics.fhm import fhm
 from .physics.friction import friction_stress_table
 from .physics.geometry import effective_radius, nominal_area
-from .variables import Regime, regime_name
+from .variables import Regime
 
 NM, UM, MM = 1e-9, 1e-6, 1e-3
 
-#: Regime codes (``flag_values``/``flag_meanings`` of the ``regime`` variable).
+#: Regime codes (:class:`pipeline.variables.Regime`, the ``flag_values`` of the ``regime`` variable).
 FLYING, BOUNCING, SURFING = Regime.FLYING, Regime.BOUNCING, Regime.SURFING
-REGIMES = {r: regime_name(r) for r in Regime}
 SURFING_FRACTION = 0.99
 
 
@@ -240,10 +239,13 @@ class Run:
 
     ``d_extremes``: exact minimum and maximum of the separation [m] over the steady window, tracked by
     the integrator (step ends and interior extrema), free of aliasing by the output grid.
+    ``p``: the parameter vector the kernel ran with (the model's, with this protrusion, ``A_n``,
+    ``k sigma``, ...: layout ``pipeline.dynamics.P_*``).
     """
 
     model: Model
     protrusion: float
+    p: np.ndarray
     nominal_area: float
     time: np.ndarray
     state: np.ndarray
@@ -276,7 +278,7 @@ def run_model(model: Model, protrusion: float, y0: np.ndarray | None = None, max
     if info[0] != dyn.OK:
         raise IntegrationError(f"integration failed at protrusion {protrusion / NM:.3g} nm: "
                                f"{dyn.STATUS_TEXT[int(info[0])]} (steps {info[1]}, rejected {info[2]})")
-    return Run(model=model, protrusion=protrusion, nominal_area=An, time=t_out, state=Y, contact=C, info=info,
+    return Run(model=model, protrusion=protrusion, p=p, nominal_area=An, time=t_out, state=Y, contact=C, info=info,
                d_extremes=(float(ext[0]), float(ext[1])))
 
 
@@ -291,15 +293,13 @@ def histories(run: Run) -> dict[str, np.ndarray]:
     Only the quantities of the scene's effects are returned (no adhesion history without the
     adhesion effect, and so on).
     """
-    m, p = run.model, run.model.p
+    m, p = run.model, run.p
     Y, t = run.state, run.time
     w = np.zeros_like(t)
     wdot = np.zeros_like(t)
     if m.dmw is not None:
         w, wdot = dyn.disk_history(m.dmw, p, t)
-    pp = p.copy()
-    pp[dyn.P_DELTA] = run.protrusion
-    d = dyn.separation_at(pp, Y[:, 0], Y[:, 1], w)
+    d = dyn.separation_at(p, Y[:, 0], Y[:, 1], w)
     out: dict[str, np.ndarray] = {"separation": d, "disk_displacement": w, "z": Y[:, 0], "pitch": Y[:, 1]}
     out["clearance"] = d - m.k_sigma
     x0, h, An = p[dyn.P_TAB_X0], p[dyn.P_TAB_H], run.nominal_area
@@ -336,12 +336,6 @@ def histories(run: Run) -> dict[str, np.ndarray]:
     if m.adhesion is not None or m.contact is not None:
         out["net_force"] = net
     return out
-
-
-def fhm(d: np.ndarray, fh0: float, measure: str = "peak-to-peak") -> float:
-    """Flying-height modulation / bouncing vibration [%] of separation samples ``d`` [m] (SPEC.md 4):
-    the named measure of :data:`pipeline.physics.fhm.FHM_MEASURES`."""
-    return fhm_percent(d, fh0, measure)
 
 
 def summarize(run: Run, hist: dict[str, np.ndarray] | None = None) -> dict[str, float]:

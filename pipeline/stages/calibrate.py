@@ -118,18 +118,14 @@ def flying_minimum(model: sl.Model, delta_nm: float) -> tuple[float, float, str]
     """Minimum separation [m] of the run with the contact law off: ``(steady window, whole run, note)``.
 
     The steady-window minimum is the integrator's exact one; the whole-run minimum adds a run over
-    the transient alone (same trajectory: the integration starts from the same state) and the
-    initial separation. A collapse (the integration fails, or ``d`` falls below the start of the
-    interface tables: adhesive snap-in) returns ``(-inf, -inf, reason)``.
+    the transient alone (same trajectory: the integration starts from the same state; its window is
+    the whole of it, ``t = 0`` included). A collapse (the integration fails, or ``d`` falls below the
+    start of the interface tables: adhesive snap-in) returns ``(-inf, -inf, reason)``.
     """
     off = replace(model, contact=None, friction=None, area=None)
     try:
         run = sl.run_model(off, delta_nm * NM)
-        # the initial separation (at rest, y = 0): d(0) = FH0 - delta - w(0) - y_s (dynamics.separation_at)
-        w0 = dyn.disk_history(model.dmw, model.p, np.zeros(1))[0][0] if model.dmw is not None else 0.0
-        p0 = model.p.copy()
-        p0[dyn.P_DELTA] = delta_nm * NM
-        lo_all = min(run.d_extremes[0], float(dyn.separation_at(p0, 0.0, 0.0, w0)))
+        lo_all = run.d_extremes[0]  # t = 0 included when there is no transient
         if model.transient > 0:
             early = sl.run_model(replace(off, duration=off.transient, transient=0.0), delta_nm * NM)
             lo_all = min(lo_all, early.d_extremes[0])
@@ -214,13 +210,6 @@ def _status(k: float, k_range: tuple[float, float]) -> tuple[float, str]:
     return k, "found"
 
 
-def probabilities(k: float) -> tuple[float, float]:
-    """One-sided ``Q(k)`` and two-sided ``2 Q(|k|)`` contact probabilities of criterion ``k`` [1]
-    (:func:`pipeline.physics.statistics.contact_probabilities`, in this order)."""
-    two, one = contact_probabilities(k)
-    return one, two
-
-
 def calibrate(scene: Any, out: Path, scheduler: str | None = None, workers: int | None = None) -> xr.Dataset:
     """Run the calibration of a scene (no I/O of its own result); returns ``calibration.nc``'s dataset.
 
@@ -295,7 +284,7 @@ def calibrate(scene: Any, out: Path, scheduler: str | None = None, workers: int 
         outcome += (f". The touchdown protrusion is {finite[0]:g} nm for every k in the range: contact does not "
                     "depend on the criterion here, the slider is pulled into contact (adhesive snap-in) before "
                     "the separation reaches any k sigma of the range")
-    p1, p2 = probabilities(k_cal) if np.isfinite(k_cal) else (np.nan, np.nan)
+    p2, p1 = contact_probabilities(k_cal) if np.isfinite(k_cal) else (np.nan, np.nan)  # two-sided first
     data = {
         "touchdown": c["touchdown"].data(curve, ("k",)),
         "k_calibrated": c["k_calibrated"].data(k_cal, ()),
