@@ -1,10 +1,10 @@
-"""Stage ``sweep``: protrusion x roughness x damping, fanned out over dask.
+"""Stage ``sweep``: protrusion x roughness x damping, fanned out by :func:`pipeline.fanout.run_tasks`.
 
-Each dask task runs a *batch* of scenes (``[sweep] batch_size`` protrusions of one roughness set
+Each task runs a *batch* of scenes (``[sweep] batch_size`` protrusions of one roughness set
 and one damping ratio) and writes its own part file, atomically, into ``sweep.parts/``. The DMW
-record and the interface tables reach the workers by file path (``dmw.nc``,
-``sweep.parts/interface-<label>.nc``), not inside the task graph. When every batch is done the
-parts are assembled, one at a time, into ``sweep.nc`` (dims ``protrusion``, ``roughness``,
+record and the interface tables reach the workers by file path (``dmw.nc``, ``interface.nc`` or
+``sweep.parts/interface-<label>/interface.nc``), not inside the task graph. When every batch is done
+the parts are assembled, one at a time, into ``sweep.nc`` (dims ``protrusion``, ``roughness``,
 ``damping``) and ``sweep_histories.nc`` (time histories of the protrusions in ``histories_nm``).
 
 Resuming: a part is kept when it carries the sweep's inputs key (:mod:`pipeline.runner`: the scene,
@@ -13,8 +13,8 @@ index and its batch's coordinates (roughness label, damping ratio, protrusions),
 sweep (Ctrl-C, kill, a lost worker) picks up where it stopped and gives a dataset identical to an
 uninterrupted run (every batch is a deterministic function of its inputs; no timings or folder paths
 are stored in the datasets: the batch-phase wall time goes to the run log, ``.hdi/runs.jsonl``). A part
-copied to another batch's name, or made for other inputs, is recomputed. The interface tables in
-``sweep.parts`` carry the same key.
+copied to another batch's name, or made for other inputs, is recomputed. The interface tables of
+the other roughness sets are kept by the runner under their own inputs keys (:func:`prepare_inputs`).
 
 Execution: :func:`pipeline.fanout.run_tasks` (by default a pool of one thread per core in this
 process, the kernels releasing the GIL; ``scheduler="ADDRESS"`` attaches to a running
@@ -23,7 +23,6 @@ dask.distributed cluster; ``scheduler="synchronous"`` runs the batches one after
 
 from __future__ import annotations
 
-import contextlib
 import functools
 import json
 import logging
@@ -175,14 +174,15 @@ def _progress(total: int, initial: int):
     return tqdm(total=total, initial=initial, unit="batch", desc="sweep", file=sys.stderr)
 
 
-def prepare_inputs(scene: Any, out: Path, sets: dict[str, dict], key: str,
+def prepare_inputs(scene: Any, out: Path, sets: dict[str, dict],
                    force: bool = False) -> tuple[dict[str, str | None], str | None]:
     """Interface tables per roughness set and the DMW record, as files the workers read.
 
-    A table in ``sweep.parts`` is kept only when it carries the sweep's inputs ``key`` (which covers
-    every set's statistics and AFM bytes); an AFM set's ``roughness.nc`` is made current by the runner
-    in ``sweep.parts/roughness-<label>``. The scene's own set uses the interface stage's ``interface.nc``
-    (made once, not per sweep). The records of realisations beyond the first: :func:`realisation_inputs`.
+    The scene's own set uses the interface stage's ``interface.nc`` (upstream of the sweep: current).
+    Another set's tables are the interface stage of the scene with that ``[roughness]``, made current
+    by the runner in ``sweep.parts/interface-<label>/`` (with its ``roughness.nc`` for an AFM set), so
+    they are recomputed only when their own inputs change. The records of realisations beyond the
+    first: :func:`realisation_inputs`.
     """
     parts = out / PARTS
     parts.mkdir(parents=True, exist_ok=True)
@@ -190,20 +190,11 @@ def prepare_inputs(scene: Any, out: Path, sets: dict[str, dict], key: str,
     for label, table in sets.items():
         if not scene.effects & {"contact", "adhesion"}:
             interface_paths[label] = None
-            continue
-        if table == dict(scene["roughness"]):
-            # the scene's own roughness: its tables are the interface stage's (made once, not per sweep)
-            interface_paths[label] = str(ensure("interface", scene, out))
-            continue
-        sub = scene.replace(roughness={k: v for k, v in table.items()})
-        path = parts / f"interface-{label}.nc"
-        current = False
-        with contextlib.suppress(OSError, ValueError), xr.open_dataset(path, engine="netcdf4") as old:
-            current = old.attrs.get(KEY_ATTR) == key
-        if force or not current:
-            stats = roughness_statistics(sub, parts / f"roughness-{label}" if table.get("afm") else None)
-            write_dataset(build_tables(sub, stats), path, sub, stage="interface", extra_attrs={KEY_ATTR: key})
-        interface_paths[label] = str(path)
+        elif table == dict(scene["roughness"]):
+            interface_paths[label] = str(out / "interface.nc")
+        else:
+            sub = scene.replace(roughness=dict(table))
+            interface_paths[label] = str(ensure("interface", sub, parts / f"interface-{label}", force=force))
     dmw_path = str(out / "dmw.nc") if scene.has("dmw") else None
     return interface_paths, dmw_path
 
@@ -239,7 +230,7 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset | None]:
     out, key, opts = inputs.out, inputs.key, inputs.options
     prot, sets, damp, batches = plan(scene)
     k, k_source = resolve_k(scene, out)
-    interface_paths, dmw_path = prepare_inputs(scene, out, sets, key, bool(opts.get("force")))
+    interface_paths, dmw_path = prepare_inputs(scene, out, sets, bool(opts.get("force")))
     dmw_paths, seeds = realisation_inputs(scene, out, dmw_path, bool(opts.get("force")))
     parts = out / PARTS
     hist_nm = tuple(scene["sweep"]["histories_nm"] or scene["report"]["histories_nm"])
