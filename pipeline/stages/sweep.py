@@ -39,7 +39,7 @@ import xarray as xr
 from .. import slider as sl
 from ..fanout import run_tasks
 from ..io import read_dataset, write_dataset
-from ..runner import KEY_ATTR, Inputs, Stage, build, ensure
+from ..runner import KEY_ATTR, Inputs, Stage, ensure
 from ..variables import ENSEMBLE, ENSEMBLE_OF, HISTORIES, SCALARS, coordinate, history, scalar
 from .interface import build_tables, roughness_statistics
 from .simulate import model_attrs, resolve_k, upstream
@@ -276,8 +276,8 @@ def run_sweep(scene: Any, out: Path, scheduler: str | None = None, workers: int 
               force: bool = False, stop_after: int | None = None,
               on_batch: Callable[[str], None] | None = None) -> Path:
     """Make ``sweep.nc`` current in ``out`` (running, resuming or keeping the sweep); see :func:`compute`."""
-    return build("sweep", scene, out, force=force, scheduler=scheduler, workers=workers,
-                 stop_after=stop_after, on_batch=on_batch)["sweep"][0]
+    return ensure("sweep", scene, out, force=force, scheduler=scheduler, workers=workers,
+                  stop_after=stop_after, on_batch=on_batch)
 
 
 def assemble(scene: Any, out: Path, prot: np.ndarray, labels: list[str], damp: list[float], batches: list[Batch],
@@ -394,9 +394,5 @@ STAGE = Stage(
     excludes=("tfc.protrusion_nm", "report", "identify", "sensitivity", "scene.name", "scene.description",
               "sweep.batch_size"),
     files=_files, upstream=upstream, order=50, main_job=True,
-    doc="protrusion x roughness x damping on dask, sweep.nc and sweep_histories.nc")
+    doc="protrusion x roughness x damping, fanned out, sweep.nc and sweep_histories.nc")
 
-
-def run(scene: Any, out: Path, **options: Any) -> Path:
-    """Stage entry point (``hdi sweep``): :func:`run_sweep`."""
-    return build("sweep", scene, out, **options)["sweep"][0]
