@@ -40,7 +40,7 @@ from .. import slider as sl
 from ..fanout import run_tasks
 from ..io import read_dataset, write_dataset
 from ..runner import KEY_ATTR, Inputs, Stage, ensure
-from ..variables import ENSEMBLE, ENSEMBLE_OF, HISTORIES, SCALARS, coordinate, history, scalar
+from ..variables import ENSEMBLE, ENSEMBLE_OF, HISTORIES, REGIME_FILL, SCALARS, coordinate, history, scalar
 from .interface import build_tables, roughness_statistics
 from .simulate import model_attrs, resolve_k, upstream
 from .sweep_grid import damping_grid, protrusion_grid, roughness_sets
@@ -358,8 +358,9 @@ def ensemble_statistics(data: dict[str, xr.Variable]) -> dict[str, xr.Variable]:
 
     ``<name>_mean``/``<name>_std`` [units of name]: mean and sample standard deviation (ddof = 1) over
     the realisations with a value (``interference`` and the stresses are NaN while flying);
-    ``touchdown_probability`` [1]: fraction of realisations in contact at some time of the steady
-    window (regime not flying), versus protrusion, roughness and damping.
+    ``touchdown_probability`` [1]: fraction of the realisations with a regime that are in contact at
+    some time of the steady window (regime not flying), versus protrusion, roughness and damping; a
+    point not computed (regime = its fill value) counts in neither, as the NaNs of the means.
     """
     out: dict[str, xr.Variable] = {}
     for name in ENSEMBLE_OF:
@@ -376,7 +377,9 @@ def ensemble_statistics(data: dict[str, xr.Variable]) -> dict[str, xr.Variable]:
         out[name + "_std"] = ENSEMBLE[name + "_std"].data(std, dims)
     if "regime" in data:
         reg = np.asarray(data["regime"].values)
-        p = np.mean(reg != sl.FLYING, axis=-1)
+        computed = reg != REGIME_FILL
+        with np.errstate(invalid="ignore"):  # no realisation computed: NaN
+            p = np.sum(computed & (reg != sl.FLYING), axis=-1) / np.sum(computed, axis=-1)
         out["touchdown_probability"] = ENSEMBLE["touchdown_probability"].data(p, data["regime"].dims[:-1])
     return out
 
