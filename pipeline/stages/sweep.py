@@ -52,7 +52,11 @@ PARTS = "sweep.parts"
 
 @dataclass(frozen=True)
 class Batch:
-    """One task: protrusions ``indices`` of roughness set ``label`` at damping ``damping``."""
+    """One task: protrusions ``indices`` of roughness set ``label`` at damping ``damping``.
+
+    ``damping``: modal damping ratio [1]; ``indices``: positions on the protrusion grid;
+    ``protrusions``: their values [nm]; ``realisation``: index of the DMW record (0: the scene's).
+    """
 
     index: int
     label: str
@@ -63,7 +67,10 @@ class Batch:
 
 
 def plan(scene: Any) -> tuple[np.ndarray, dict[str, dict], list[float], list[Batch]]:
-    """The grid and its batches (realisation-major, then roughness, then damping, then protrusion)."""
+    """The grid and its batches (realisation-major, then roughness, then damping, then protrusion).
+
+    Returns ``(protrusions [nm], roughness sets by label, damping ratios [1], batches)``.
+    """
     prot = protrusion_grid(scene)
     sets = roughness_sets(scene)
     damp = damping_grid(scene)
@@ -138,7 +145,11 @@ def batch_inputs(interface_path: str | None, dmw_path: str | None) -> tuple[xr.D
 
 def run_batch(scene: Any, batch: Batch, interface_path: str | None, dmw_path: str | None, k: float | None,
               part_path: str, key: str, history_nm: tuple[float, ...]) -> str:
-    """Run one batch and write its part file (executed on a worker). Returns the part's path."""
+    """Run one batch and write its part file (executed on a worker). Returns the part's path.
+
+    ``k``: contact criterion constant [1] (``None`` without the contact effect); ``history_nm``:
+    protrusions [nm] whose time histories the part keeps.
+    """
     interface, record = batch_inputs(interface_path, dmw_path)
     model = sl.build_model(scene, interface, record, k, damping_ratio=batch.damping)
     rows, hist_rows = [], []
