@@ -81,8 +81,9 @@ def envelope(x: np.ndarray, y: np.ndarray, bins: int = 2000) -> tuple[np.ndarray
     start = np.linspace(0, y.size, bins + 1).astype(int)[:-1]
     with np.errstate(invalid="ignore"):
         lo, hi = np.fmin.reduceat(y, start), np.fmax.reduceat(y, start)
-    mid = np.append(start[1:], y.size)
-    xs = np.column_stack([x[start], x[(start + mid) // 2]]).ravel()
+    end = np.append(start[1:], y.size)
+    # each bin drawn as its minimum at its first sample, then its maximum at its centre
+    xs = np.column_stack([x[start], x[(start + end) // 2]]).ravel()
     return xs, np.column_stack([lo, hi]).ravel()
 
 

@@ -70,3 +70,17 @@ def test_measured_record_has_one_realisation(tmp_path):
     scene = load_scene(PAPER, SMALL + ["sweep.realisations=2"])
     with pytest.raises(ValueError, match="synthetic"):
         dmw_stage.realisation_record(scene.replace(dmw={"source": str(rec)}), tmp_path / "r", 1)
+
+
+def test_touchdown_probability_counts_computed_realisations_only():
+    """A realisation not computed (regime fill value, NaN scalars) counts neither as contact nor as flying."""
+    from pipeline.variables import SCALARS
+    dims = ("protrusion", "realisation")
+    regime = np.array([[0.0, 1.0, np.nan], [2.0, np.nan, np.nan], [np.nan, np.nan, np.nan]])
+    fhm = np.where(np.isnan(regime), np.nan, 10.0)
+    stats = sweep_stage.ensemble_statistics({"regime": SCALARS["regime"].data(regime, dims),
+                                             "fhm_bv": SCALARS["fhm_bv"].data(fhm, dims)})
+    p = stats["touchdown_probability"].values
+    np.testing.assert_array_equal(p[:2], [0.5, 1.0])   # 1 of 2 computed, 1 of 1
+    assert np.isnan(p[2])                              # none computed: no probability
+    np.testing.assert_array_equal(stats["fhm_bv_mean"].values[:2], [10.0, 10.0])

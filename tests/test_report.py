@@ -314,3 +314,21 @@ def test_envelope_keeps_every_peak_of_a_long_trace():
     assert np.nanmax(ys) == 7.5 and np.nanmin(ys) == np.nanmin(y)
     short_t, short_y = envelope(t[:1000], y[:1000], bins=1000)
     assert np.array_equal(short_t, t[:1000]) and np.array_equal(short_y, y[:1000], equal_nan=True)
+
+
+def test_every_file_the_report_draws_is_a_declared_output(full_out, paper_scene, tmp_path_factory):
+    """The runner moves only declared outputs out of the staging folder: an ensemble sweep's
+    ``figures/ensemble.png`` must be one of them, or it is drawn and thrown away."""
+    from pipeline.stages.sweep import ensemble_statistics
+    from pipeline.variables import ENSEMBLE
+    sweep = xr.open_dataset(full_out / "sweep.nc", engine="netcdf4").load()
+    ens = xr.concat([sweep, sweep], dim="realisation")
+    data = {n: ens[n].variable.transpose(*sweep[n].dims, "realisation") for n in sweep.data_vars}
+    ens = xr.Dataset({**data, **ensemble_statistics(data)}, coords=sweep.coords)
+    ens["realisation"] = ENSEMBLE["realisation"].data(np.arange(2), ("realisation",))
+    write_dataset(ens, full_out / "sweep.nc", stage="sweep", extra_attrs=dict(sweep.attrs))
+    staging = tmp_path_factory.mktemp("staging")
+    report.compute(paper_scene, Inputs(out=full_out, staging=staging))
+    drawn = {p.relative_to(staging).as_posix() for p in staging.rglob("*") if p.is_file()}
+    assert "figures/" + report.ENSEMBLE_FIGURE in drawn
+    assert drawn <= set(report.STAGE.output_names(paper_scene))

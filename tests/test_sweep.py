@@ -241,3 +241,21 @@ def test_roughness_sets_inherit_and_validate():
     bad = load_scene(PAPER, ['sweep.roughness=[{label="x", sigma_nm=-1.0}]'])
     with pytest.raises(SceneError, match="sigma_nm"):
         roughness_sets(bad)
+
+
+def test_tables_of_other_roughness_sets_follow_their_own_inputs(tmp_path):
+    """Another set's interface tables are the runner's (own inputs key): kept when only the sweep changes."""
+    base = ['scene.effects=["air_bearing","pitch","contact"]', "contact.k=0.5",
+            'sweep.roughness=[{label="rough", sigma_nm=0.8}, "scene"]']
+    scene = load_scene(PAPER, base)
+    paths, _ = sweep_stage.prepare_inputs(scene, tmp_path, roughness_sets(scene))
+    rough = Path(paths["rough"])
+    assert rough == tmp_path / sweep_stage.PARTS / "interface-rough" / "interface.nc"
+    assert paths["scene"] == str(tmp_path / "interface.nc")      # the interface stage's own, not a copy
+    assert float(read_dataset(rough).sigma) == pytest.approx(0.8)
+    stamp = rough.stat().st_mtime_ns
+    damped = load_scene(PAPER, base + ["sweep.damping_ratio=[0.02, 0.05]"])
+    sweep_stage.prepare_inputs(damped, tmp_path, roughness_sets(damped))
+    assert rough.stat().st_mtime_ns == stamp                     # the sweep's key changed, the tables' did not
+    sweep_stage.prepare_inputs(damped, tmp_path, roughness_sets(damped), force=True)
+    assert rough.stat().st_mtime_ns != stamp

@@ -253,7 +253,7 @@ def _timed(fn, repeat: int) -> tuple[Any, float]:
     return result, median(times)
 
 
-class _Inputs:
+class _RunCache:
     """Builds and caches interface tables and DMW records, with their build times."""
 
     def __init__(self, scene: Any, out: Path, repeat: int):
@@ -358,12 +358,12 @@ def _solver_config(scene: Any, values: dict[str, float]) -> Any:
     return scene.replace(**sections)
 
 
-def _evaluate(scene: Any, values: dict[str, float], inputs: _Inputs, k: float | None,
+def _evaluate(scene: Any, values: dict[str, float], cache: _RunCache, k: float | None,
               points: dict[str, float], repeat: int) -> Result:
     """Run one configuration at every point."""
     sc = _solver_config(scene, values)
-    tables, t_tab = inputs.table(sc)
-    record, t_rec = inputs.record(sc)
+    tables, t_tab = cache.table(sc)
+    record, t_rec = cache.record(sc)
     model, t_model = _timed(lambda: sl.build_model(sc, tables, record, k), 1)
     build = {"table": t_tab, "record": t_rec, "model": t_model}
     n_p = len(points)
@@ -458,13 +458,12 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
     if not knobs:
         raise ValueError("no accuracy knob applies to the scene's effects")
     t_start = time.perf_counter()
-    staging = inputs.staging
-    inputs = _Inputs(scene, out, repeat)  # (the stage's inputs are read above; from here, the run cache)
+    cache = _RunCache(scene, out, repeat)  # tables and records of the runs, built once per setting
 
     # the reference (its first run also compiles the kernels: run it once untimed)
     log.info("accuracy: reference %s", reference)
-    _evaluate(scene, reference, inputs, k, points, 1)
-    ref = _evaluate(scene, reference, inputs, k, points, repeat)
+    _evaluate(scene, reference, cache, k, points, 1)
+    ref = _evaluate(scene, reference, cache, k, points, repeat)
     if ref.failed.any():
         raise RuntimeError(f"the reference run failed: {ref.messages}")
 
@@ -488,10 +487,10 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
             same = all(cfg[key] == reference[key] for key in reference)
             if same:
                 # a new model build and integration, so their zero error checks determinism
-                rerun = rerun or _evaluate(scene, cfg, inputs, k, points, repeat)
+                rerun = rerun or _evaluate(scene, cfg, cache, k, points, repeat)
                 res = rerun
             else:
-                res = _evaluate(scene, cfg, inputs, k, points, repeat)
+                res = _evaluate(scene, cfg, cache, k, points, repeat)
             is_ref[ik, il] = same
             results[ik, il] = res
             e = _errors(res, ref)
@@ -518,12 +517,12 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
     for ik, kb in enumerate(knobs):
         chosen_level[kb.name] = _choose(kb, scene, passes[ik], wall[:, ik, :].sum(axis=0), max_err[:, ik, :])
     combined_tol = float(options.get("combined_tolerance") or COMBINED_MARGIN * tol)
-    chosen_level, combos, adjustments = _combine(scene, knobs, reference, chosen_level, inputs, k, points, repeat,
+    chosen_level, combos, adjustments = _combine(scene, knobs, reference, chosen_level, cache, k, points, repeat,
                                                  ref, combined_tol)
     chosen_cfg = _configuration(reference, knobs, chosen_level)
     scene_cfg = {key: (scene["dmw"]["sample_rate_mhz"] if key == "sample_rate_mhz" else scene["solver"][key])
                  for key in reference}
-    combos["scene"] = _evaluate(scene, scene_cfg, inputs, k, points, repeat)
+    combos["scene"] = _evaluate(scene, scene_cfg, cache, k, points, repeat)
     combo_cost = {c: float(np.nansum(r.sim_time) + r.setup_time("all")) for c, r in combos.items()}
     configs = {"chosen": chosen_cfg, "scene": scene_cfg}
 
@@ -538,7 +537,7 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
                                if lvl is not None else None)
     comb_err = {c: {p: float(_max_error(_errors(r, ref))[ip]) for ip, p in enumerate(points)}
                 for c, r in combos.items()}
-    rec_notes = {f"{r:g} MS/s": n for r, n in inputs.record_notes.items()}
+    rec_notes = {f"{r:g} MS/s": n for r, n in cache.record_notes.items()}
     attrs = {
         "reference_settings": {k_: _cast(k_, v) for k_, v in reference.items()},
         "reference_note": "tightest settings; max_step_ns = 25 binds (fixed 25 ns DP5 step); its own "
@@ -582,7 +581,7 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
         "stage_wall_time_s": time.perf_counter() - t_start,
     }
     ds.attrs.update(attrs)
-    fig = work_precision_figure(ds, staging / "figures" / "work_precision.png")
+    fig = work_precision_figure(ds, inputs.staging / "figures" / "work_precision.png")
     _log_summary(ds, chosen, chosen_err, comb_err, configs, combo_cost, fig)
     return ds
 
@@ -617,7 +616,7 @@ def _configuration(reference: dict[str, float], knobs: list[Knob], levels: dict[
     return cfg
 
 
-def _combine(scene, knobs, reference, levels, inputs, k, points, repeat, ref: Result, tol: float):
+def _combine(scene, knobs, reference, levels, cache, k, points, repeat, ref: Result, tol: float):
     """Check the chosen defaults together; step back until the combination passes ``tol``.
 
     Knobs interact (the quadrature error depends on nodes x panels; the step on both step-size
@@ -630,7 +629,7 @@ def _combine(scene, knobs, reference, levels, inputs, k, points, repeat, ref: Re
     levels = dict(levels)
     adjustments: list[str] = []
     by_name = {kb.name: kb for kb in knobs}
-    res = _evaluate(scene, _configuration(reference, knobs, levels), inputs, k, points, repeat)
+    res = _evaluate(scene, _configuration(reference, knobs, levels), cache, k, points, repeat)
     for _ in range(sum(len(kb.settings) for kb in knobs)):
         e = _errors(res, ref)
         if _passes(e, tol):
@@ -641,7 +640,7 @@ def _combine(scene, knobs, reference, levels, inputs, k, points, repeat, ref: Re
             if not lvl:
                 continue
             lv = {**levels, kb.name: lvl - 1}
-            r = _evaluate(scene, _configuration(reference, knobs, lv), inputs, k, points, 1)
+            r = _evaluate(scene, _configuration(reference, knobs, lv), cache, k, points, 1)
             er = _errors(r, ref)
             worst = float(np.nanmax(np.where(np.isnan(er), -1.0, er)))
             cost = float(np.nansum(r.sim_time) + r.setup_time("all"))
@@ -655,7 +654,7 @@ def _combine(scene, knobs, reference, levels, inputs, k, points, repeat, ref: Re
                            f"{np.nanmax(e):.3g}); {name} stepped back to {by_name[name].settings[levels[name]]:g} "
                            f"(max error then {worst:.3g})")
         log.warning(adjustments[-1])
-        res = _evaluate(scene, _configuration(reference, knobs, levels), inputs, k, points, repeat)
+        res = _evaluate(scene, _configuration(reference, knobs, levels), cache, k, points, repeat)
     return levels, {"chosen": res}, adjustments
 
 

@@ -1,10 +1,10 @@
-"""Stage ``sweep``: protrusion x roughness x damping, fanned out over dask.
+"""Stage ``sweep``: protrusion x roughness x damping, fanned out by :func:`pipeline.fanout.run_tasks`.
 
-Each dask task runs a *batch* of scenes (``[sweep] batch_size`` protrusions of one roughness set
+Each task runs a *batch* of scenes (``[sweep] batch_size`` protrusions of one roughness set
 and one damping ratio) and writes its own part file, atomically, into ``sweep.parts/``. The DMW
-record and the interface tables reach the workers by file path (``dmw.nc``,
-``sweep.parts/interface-<label>.nc``), not inside the task graph. When every batch is done the
-parts are assembled, one at a time, into ``sweep.nc`` (dims ``protrusion``, ``roughness``,
+record and the interface tables reach the workers by file path (``dmw.nc``, ``interface.nc`` or
+``sweep.parts/interface-<label>/interface.nc``), not inside the task graph. When every batch is done
+the parts are assembled, one at a time, into ``sweep.nc`` (dims ``protrusion``, ``roughness``,
 ``damping``) and ``sweep_histories.nc`` (time histories of the protrusions in ``histories_nm``).
 
 Resuming: a part is kept when it carries the sweep's inputs key (:mod:`pipeline.runner`: the scene,
@@ -13,8 +13,8 @@ index and its batch's coordinates (roughness label, damping ratio, protrusions),
 sweep (Ctrl-C, kill, a lost worker) picks up where it stopped and gives a dataset identical to an
 uninterrupted run (every batch is a deterministic function of its inputs; no timings or folder paths
 are stored in the datasets: the batch-phase wall time goes to the run log, ``.hdi/runs.jsonl``). A part
-copied to another batch's name, or made for other inputs, is recomputed. The interface tables in
-``sweep.parts`` carry the same key.
+copied to another batch's name, or made for other inputs, is recomputed. The interface tables of
+the other roughness sets are kept by the runner under their own inputs keys (:func:`prepare_inputs`).
 
 Execution: :func:`pipeline.fanout.run_tasks` (by default a pool of one thread per core in this
 process, the kernels releasing the GIL; ``scheduler="ADDRESS"`` attaches to a running
@@ -23,7 +23,6 @@ dask.distributed cluster; ``scheduler="synchronous"`` runs the batches one after
 
 from __future__ import annotations
 
-import contextlib
 import functools
 import json
 import logging
@@ -40,8 +39,8 @@ import xarray as xr
 from .. import slider as sl
 from ..fanout import run_tasks
 from ..io import read_dataset, write_dataset
-from ..runner import KEY_ATTR, Inputs, Stage, build, ensure
-from ..variables import ENSEMBLE, ENSEMBLE_OF, HISTORIES, SCALARS, coordinate, history, scalar
+from ..runner import KEY_ATTR, Inputs, Stage, ensure
+from ..variables import ENSEMBLE, ENSEMBLE_OF, HISTORIES, REGIME_FILL, SCALARS, coordinate, history, scalar
 from .interface import build_tables, roughness_statistics
 from .simulate import model_attrs, resolve_k, upstream
 from .sweep_grid import damping_grid, protrusion_grid, roughness_sets
@@ -53,7 +52,11 @@ PARTS = "sweep.parts"
 
 @dataclass(frozen=True)
 class Batch:
-    """One task: protrusions ``indices`` of roughness set ``label`` at damping ``damping``."""
+    """One task: protrusions ``indices`` of roughness set ``label`` at damping ``damping``.
+
+    ``damping``: modal damping ratio [1]; ``indices``: positions on the protrusion grid;
+    ``protrusions``: their values [nm]; ``realisation``: index of the DMW record (0: the scene's).
+    """
 
     index: int
     label: str
@@ -64,7 +67,10 @@ class Batch:
 
 
 def plan(scene: Any) -> tuple[np.ndarray, dict[str, dict], list[float], list[Batch]]:
-    """The grid and its batches (realisation-major, then roughness, then damping, then protrusion)."""
+    """The grid and its batches (realisation-major, then roughness, then damping, then protrusion).
+
+    Returns ``(protrusions [nm], roughness sets by label, damping ratios [1], batches)``.
+    """
     prot = protrusion_grid(scene)
     sets = roughness_sets(scene)
     damp = damping_grid(scene)
@@ -139,7 +145,11 @@ def batch_inputs(interface_path: str | None, dmw_path: str | None) -> tuple[xr.D
 
 def run_batch(scene: Any, batch: Batch, interface_path: str | None, dmw_path: str | None, k: float | None,
               part_path: str, key: str, history_nm: tuple[float, ...]) -> str:
-    """Run one batch and write its part file (executed on a worker). Returns the part's path."""
+    """Run one batch and write its part file (executed on a worker). Returns the part's path.
+
+    ``k``: contact criterion constant [1] (``None`` without the contact effect); ``history_nm``:
+    protrusions [nm] whose time histories the part keeps.
+    """
     interface, record = batch_inputs(interface_path, dmw_path)
     model = sl.build_model(scene, interface, record, k, damping_ratio=batch.damping)
     rows, hist_rows = [], []
@@ -175,14 +185,15 @@ def _progress(total: int, initial: int):
     return tqdm(total=total, initial=initial, unit="batch", desc="sweep", file=sys.stderr)
 
 
-def prepare_inputs(scene: Any, out: Path, sets: dict[str, dict], key: str,
+def prepare_inputs(scene: Any, out: Path, sets: dict[str, dict],
                    force: bool = False) -> tuple[dict[str, str | None], str | None]:
     """Interface tables per roughness set and the DMW record, as files the workers read.
 
-    A table in ``sweep.parts`` is kept only when it carries the sweep's inputs ``key`` (which covers
-    every set's statistics and AFM bytes); an AFM set's ``roughness.nc`` is made current by the runner
-    in ``sweep.parts/roughness-<label>``. The scene's own set uses the interface stage's ``interface.nc``
-    (made once, not per sweep). The records of realisations beyond the first: :func:`realisation_inputs`.
+    The scene's own set uses the interface stage's ``interface.nc`` (upstream of the sweep: current).
+    Another set's tables are the interface stage of the scene with that ``[roughness]``, made current
+    by the runner in ``sweep.parts/interface-<label>/`` (with its ``roughness.nc`` for an AFM set), so
+    they are recomputed only when their own inputs change. The records of realisations beyond the
+    first: :func:`realisation_inputs`.
     """
     parts = out / PARTS
     parts.mkdir(parents=True, exist_ok=True)
@@ -190,20 +201,11 @@ def prepare_inputs(scene: Any, out: Path, sets: dict[str, dict], key: str,
     for label, table in sets.items():
         if not scene.effects & {"contact", "adhesion"}:
             interface_paths[label] = None
-            continue
-        if table == dict(scene["roughness"]):
-            # the scene's own roughness: its tables are the interface stage's (made once, not per sweep)
-            interface_paths[label] = str(ensure("interface", scene, out))
-            continue
-        sub = scene.replace(roughness={k: v for k, v in table.items()})
-        path = parts / f"interface-{label}.nc"
-        current = False
-        with contextlib.suppress(OSError, ValueError), xr.open_dataset(path, engine="netcdf4") as old:
-            current = old.attrs.get(KEY_ATTR) == key
-        if force or not current:
-            stats = roughness_statistics(sub, parts / f"roughness-{label}" if table.get("afm") else None)
-            write_dataset(build_tables(sub, stats), path, sub, stage="interface", extra_attrs={KEY_ATTR: key})
-        interface_paths[label] = str(path)
+        elif table == dict(scene["roughness"]):
+            interface_paths[label] = str(out / "interface.nc")
+        else:
+            sub = scene.replace(roughness=dict(table))
+            interface_paths[label] = str(ensure("interface", sub, parts / f"interface-{label}", force=force))
     dmw_path = str(out / "dmw.nc") if scene.has("dmw") else None
     return interface_paths, dmw_path
 
@@ -239,7 +241,7 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset | None]:
     out, key, opts = inputs.out, inputs.key, inputs.options
     prot, sets, damp, batches = plan(scene)
     k, k_source = resolve_k(scene, out)
-    interface_paths, dmw_path = prepare_inputs(scene, out, sets, key, bool(opts.get("force")))
+    interface_paths, dmw_path = prepare_inputs(scene, out, sets, bool(opts.get("force")))
     dmw_paths, seeds = realisation_inputs(scene, out, dmw_path, bool(opts.get("force")))
     parts = out / PARTS
     hist_nm = tuple(scene["sweep"]["histories_nm"] or scene["report"]["histories_nm"])
@@ -285,8 +287,8 @@ def run_sweep(scene: Any, out: Path, scheduler: str | None = None, workers: int 
               force: bool = False, stop_after: int | None = None,
               on_batch: Callable[[str], None] | None = None) -> Path:
     """Make ``sweep.nc`` current in ``out`` (running, resuming or keeping the sweep); see :func:`compute`."""
-    return build("sweep", scene, out, force=force, scheduler=scheduler, workers=workers,
-                 stop_after=stop_after, on_batch=on_batch)["sweep"][0]
+    return ensure("sweep", scene, out, force=force, scheduler=scheduler, workers=workers,
+                  stop_after=stop_after, on_batch=on_batch)
 
 
 def assemble(scene: Any, out: Path, prot: np.ndarray, labels: list[str], damp: list[float], batches: list[Batch],
@@ -367,8 +369,9 @@ def ensemble_statistics(data: dict[str, xr.Variable]) -> dict[str, xr.Variable]:
 
     ``<name>_mean``/``<name>_std`` [units of name]: mean and sample standard deviation (ddof = 1) over
     the realisations with a value (``interference`` and the stresses are NaN while flying);
-    ``touchdown_probability`` [1]: fraction of realisations in contact at some time of the steady
-    window (regime not flying), versus protrusion, roughness and damping.
+    ``touchdown_probability`` [1]: fraction of the realisations with a regime that are in contact at
+    some time of the steady window (regime not flying), versus protrusion, roughness and damping; a
+    point not computed (regime = its fill value) counts in neither, as the NaNs of the means.
     """
     out: dict[str, xr.Variable] = {}
     for name in ENSEMBLE_OF:
@@ -385,7 +388,9 @@ def ensemble_statistics(data: dict[str, xr.Variable]) -> dict[str, xr.Variable]:
         out[name + "_std"] = ENSEMBLE[name + "_std"].data(std, dims)
     if "regime" in data:
         reg = np.asarray(data["regime"].values)
-        p = np.mean(reg != sl.FLYING, axis=-1)
+        computed = reg != REGIME_FILL
+        with np.errstate(invalid="ignore"):  # no realisation computed: NaN
+            p = np.sum(computed & (reg != sl.FLYING), axis=-1) / np.sum(computed, axis=-1)
         out["touchdown_probability"] = ENSEMBLE["touchdown_probability"].data(p, data["regime"].dims[:-1])
     return out
 
@@ -403,9 +408,5 @@ STAGE = Stage(
     excludes=("tfc.protrusion_nm", "report", "identify", "sensitivity", "scene.name", "scene.description",
               "sweep.batch_size"),
     files=_files, upstream=upstream, order=50, main_job=True,
-    doc="protrusion x roughness x damping on dask, sweep.nc and sweep_histories.nc")
+    doc="protrusion x roughness x damping, fanned out, sweep.nc and sweep_histories.nc")
 
-
-def run(scene: Any, out: Path, **options: Any) -> Path:
-    """Stage entry point (``hdi sweep``): :func:`run_sweep`."""
-    return build("sweep", scene, out, **options)["sweep"][0]
