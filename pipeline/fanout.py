@@ -125,7 +125,7 @@ def local_cluster(scheduler: str | None = None, workers: int | None = None) -> I
     if scheduler != "processes":
         yield scheduler
         return
-    cluster = _process_cluster(workers or os.cpu_count() or 1)
+    cluster = _process_cluster(local_workers(workers, os.cpu_count() or 1))
     try:
         yield cluster.scheduler_address
     finally:
@@ -142,20 +142,11 @@ def _distributed(fn: Callable[..., Any], tasks: list[tuple], scheduler: str, wor
                  done: Callable[[Any], None]) -> float:
     """A local process cluster (``scheduler="processes"``) or the cluster at a scheduler address."""
     from distributed import Client, as_completed
-    cluster = None
-    if scheduler == "processes":
-        cluster = _process_cluster(local_workers(workers, len(tasks)))
-        client = Client(cluster)
-    else:
-        client = Client(scheduler)
-    try:
+    n = local_workers(workers, len(tasks)) if scheduler == "processes" else None
+    with local_cluster(scheduler, n) as address, Client(address) as client:
         client.run(_warm_worker)
         t0 = time.perf_counter()
         futures = [client.submit(fn, *args, pure=False, retries=2) for args in tasks]
         for fut in as_completed(futures):
             done(fut.result())
         return time.perf_counter() - t0
-    finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()

@@ -51,7 +51,7 @@ from .io import read_dataset
 from .physics.statistics import k_from_probability
 from .runner import KEY_ATTR, Runner
 from .variables import SCALARS
-from .scene import SCHEMA, SceneError
+from .scene import SCHEMA, TARGETS, SceneError
 
 NM = 1e-9
 
@@ -513,13 +513,9 @@ def _grid(lo: float, hi: float, step: float, open_low: bool = False) -> tuple[fl
     return pts[1:] if open_low else pts
 
 
-#: Target names, in report order.
-TARGET_NAMES = ("touchdown", "fhm_flying", "fhm_touchdown", "bouncing", "sliding_bv", "interference",
-                "contact_force", "real_area", "mean_pressure", "friction_coefficient", "net_force")
-
-
 def targets(scene: Any) -> list[Target]:
-    """The targets of ``[identify]`` that ``identify.targets`` selects (SPEC.md section 7; the paper).
+    """The targets of ``[identify]`` that ``identify.targets`` selects, in the order of
+    :data:`pipeline.scene.TARGETS` (SPEC.md section 7; the paper).
 
     * ``touchdown``: contact at ``touchdown.onset_nm``, none at ``touchdown.previous_nm`` (exact
       minimum clearance of the steady window, which is continuous in the parameters where the
@@ -585,7 +581,7 @@ def targets(scene: Any) -> list[Target]:
                                      "friction_coefficient_tolerance")}.items():
         all_targets[name] = Target(name, f"{long_name} {sl_}", units, "equal", c[key], c[tol], (at,), at_sliding(name),
                                    f"{c[key]:g}" + ("" if units == "1" else f" {units}"))
-    return [all_targets[name] for name in TARGET_NAMES if name in c["targets"]]
+    return [all_targets[name] for name in TARGETS if name in c["targets"]]
 
 
 def target_protrusions(tlist: Sequence[Target]) -> list[float]:

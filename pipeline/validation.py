@@ -15,7 +15,6 @@ bounds: e.g. an AFM scan with the paper's fixed psi = 0.52 can imply H = 58.5 GP
 
 from __future__ import annotations
 
-import math
 import os
 import socket
 import tempfile
@@ -118,11 +117,10 @@ def check_out(out: str | Path | None) -> None:
 
 def grid_size(scene: Any) -> tuple[int, int, int]:
     """Number of protrusions, roughness sets and damping ratios of the sweep (no grid is built)."""
-    g = scene["sweep"]["protrusion_nm"]
-    n_prot = int(math.floor((g["stop"] - g["start"]) / g["step"] + 1e-9)) + 1
-    n_sets = len(scene["sweep"]["roughness"] or [None])
+    from .stages.sweep_grid import range_count
+    n_sets = len(scene["sweep"]["roughness"] or [None])   # (no set is validated here: the sweep does)
     n_damp = len(scene["sweep"]["damping_ratio"] or [None])
-    return n_prot, n_sets, n_damp
+    return range_count(scene["sweep"]["protrusion_nm"]), n_sets, n_damp
 
 
 def check_grid(scene: Any, yes: bool = False, limit: int = MAX_SCENES) -> None:

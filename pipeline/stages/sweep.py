@@ -41,7 +41,6 @@ from ..fanout import run_tasks
 from ..io import read_dataset, write_dataset
 from ..runner import KEY_ATTR, Inputs, Stage, ensure
 from ..variables import ENSEMBLE, ENSEMBLE_OF, HISTORIES, REGIME_FILL, SCALARS, coordinate, history, scalar
-from .interface import build_tables, roughness_statistics
 from .simulate import model_attrs, resolve_k, upstream
 from .sweep_grid import damping_grid, protrusion_grid, roughness_sets
 

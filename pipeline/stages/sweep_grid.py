@@ -21,10 +21,15 @@ def protrusion_grid(scene: Any) -> np.ndarray:
     return range_grid(scene["sweep"]["protrusion_nm"])
 
 
+def range_count(g: dict[str, float]) -> int:
+    """Number of points of a range table ``{start, stop, step}`` (``stop`` included when on the grid,
+    to 1e-9 of a step), without building them (a grid of millions is refused by its count)."""
+    return int(np.floor((g["stop"] - g["start"]) / g["step"] + 1e-9)) + 1
+
+
 def range_grid(g: dict[str, float]) -> np.ndarray:
-    """Points [nm] of a range table ``{start, stop, step}`` (``stop`` included when on the grid), rounded to 1e-9."""
-    n = int(np.floor((g["stop"] - g["start"]) / g["step"] + 1e-9)) + 1
-    return np.round(g["start"] + g["step"] * np.arange(n), 9)
+    """Points [nm] of a range table ``{start, stop, step}`` (:func:`range_count` of them), rounded to 1e-9."""
+    return np.round(g["start"] + g["step"] * np.arange(range_count(g)), 9)
 
 
 def damping_grid(scene: Any) -> list[float]:
