@@ -102,9 +102,15 @@ class Stage:
         Part of ``hdi run`` (when :attr:`applies` to the scene).
     applies
         ``applies(scene) -> bool``: whether ``hdi run`` includes the stage for this scene.
+    derived
+        ``derived(scene) -> {name: value}``: quantities computed from scene keys that the result depends on
+        instead of the keys themselves (e.g. the deepest protrusion of the interface tables, the larger
+        of two keys): a change of the keys that leaves them equal changes nothing.
     optional
-        Files of the results folder the stage reads when they exist (made by stages it does not depend
-        on, e.g. ``identify.nc`` for the report): hashed by content into the key, absent or not.
+        Stages whose primary dataset this one reads *when it is current* but does not make current
+        (e.g. ``identify`` for the report: a minutes-long study is never started by the report). The
+        key holds each one's inputs key when its dataset is current, else ``None``; ``compute`` sees
+        the same in :attr:`Inputs.optional` and must not read a dataset whose entry is ``None``.
     finish
         ``finish(scene, out, options)``: run after the stage was asked for and is current (computed or
         not), for side effects outside the results folder (``report --readme``).
@@ -125,6 +131,7 @@ class Stage:
     order: float = 100.0
     main_job: bool = False
     applies: Callable[[Scene], bool] = _constant(True)
+    derived: Callable[[Scene], Mapping[str, Any]] = _constant({})
     optional: tuple[str, ...] = ()
     finish: Callable[[Scene, Path, dict], None] | None = None
     version: int = 1
@@ -151,6 +158,9 @@ class Inputs:
         The declared input files, role -> path.
     upstream
         Keys of the upstream stages, name -> inputs key.
+    optional
+        The optional stages (:attr:`Stage.optional`), name -> inputs key when their dataset is current,
+        else ``None`` (not to be read).
     options
         Every option given to :func:`build` (the stage uses those it knows), and ``force``: whether
         the stage was forced (it then also remakes what it keeps between runs, like sweep parts).
@@ -162,6 +172,7 @@ class Inputs:
     key: str = ""
     files: dict[str, Path] = field(default_factory=dict)
     upstream: dict[str, str] = field(default_factory=dict)
+    optional: dict[str, str | None] = field(default_factory=dict)
     options: dict[str, Any] = field(default_factory=dict)
     staging: Path | None = None
     metrics: dict[str, Any] = field(default_factory=dict)
@@ -410,11 +421,16 @@ class Runner:
                 "files": {role: self._hash(p) for role, p in self.files(name).items()},
                 "upstream": {u: self.key(u) for u in st.upstream_names(self.scene)},
                 "options": {o: self.options.get(o) for o in st.options},
-                "optional": {o: self._hash(self.out / o) if (self.out / o).is_file() else None
-                             for o in st.optional},
+                "derived": dict(st.derived(self.scene)),
+                "optional": self.optional(name),
             }
             self._keys[name] = _digest(payload)
         return self._keys[name]
+
+    def optional(self, name: str) -> dict[str, str | None]:
+        """The optional stages of ``name`` (see :class:`Stage`): inputs key when current, else ``None``."""
+        return {o: None if o not in self.stages or self.stale_reason(o) else self.key(o)
+                for o in self.stage(name).optional}
 
     # ---- state of the outputs
     def _manifest(self, name: str) -> Path:
@@ -485,7 +501,8 @@ class Runner:
         try:
             inputs = Inputs(out=self.out, key=key, files=dict(self.files(name)),
                             upstream={u: self.key(u) for u in st.upstream_names(self.scene)},
-                            options={**self.options, "force": force}, staging=staging)
+                            optional=self.optional(name), options={**self.options, "force": force},
+                            staging=staging)
             result = st.compute(self.scene, inputs)
             written = self._write(st, key, inputs, result, staging)
         finally:

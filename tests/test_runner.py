@@ -242,6 +242,49 @@ def test_runner_recomputes_exactly_what_changed(tmp_path, paper_scene):
         runner.KEY_ATTR]}
 
 
+def test_optional_stage_is_read_only_when_current(tmp_path, paper_scene):
+    """A stage ``r`` that reads ``a`` when it is current (as the report reads identify.nc) never builds
+    it, sees it only while its inputs are those of this scene, and is redone when that changes."""
+    calls: list[str] = []
+    stages = _toy_stages(calls, tmp_path)
+    seen: list[dict] = []
+
+    def compute_r(scene, inputs):
+        calls.append("r")
+        seen.append(dict(inputs.optional))
+        return xr.Dataset({"z": var(1.0, (), "1", "toy")})
+
+    stages["r"] = runner.Stage("r", compute_r, outputs=("r.nc",), reads=(), optional=("a",))
+    (tmp_path / "input.txt").write_text("2.0\n")
+    out = tmp_path / "out"
+
+    def build(scene, targets):
+        calls.clear()
+        runner.Runner(scene, out, stages).build(targets)
+        return list(calls)
+
+    assert build(paper_scene, ["r"]) == ["r"] and seen[-1] == {"a": None}     # not built by r
+    assert build(paper_scene, ["a"]) == ["a"]
+    assert build(paper_scene, ["r"]) == ["r"] and seen[-1] == {"a": read_dataset(out / "a.nc").attrs[runner.KEY_ATTR]}
+    assert build(paper_scene, ["r"]) == []
+    other = paper_scene.replace(dmw={"rms_nm": 0.1})                             # a.nc is now another scene's
+    assert build(other, ["r"]) == ["r"] and seen[-1] == {"a": None}
+
+
+def test_derived_inputs_key_on_the_value_not_the_keys(paper_scene):
+    """The interface tables depend on the deepest protrusion, max(tfc, sweep stop) (interface.STAGE
+    derived): a protrusion moved within the paper sweep (0-15 nm) changes neither the interface nor the
+    sweep key (it is excluded there); one beyond the sweep's stop deepens the tables and changes both."""
+    def keys(delta):
+        r = runner.Runner(paper_scene.replace(tfc={"protrusion_nm": delta}), "unused")
+        return r.key("interface"), r.key("sweep")
+
+    assert paper_scene["sweep"]["protrusion_nm"]["stop"] == 15.0
+    assert keys(5.0) == keys(11.0)
+    deeper = keys(16.0)
+    assert deeper[0] != keys(11.0)[0] and deeper[1] != keys(11.0)[1]
+
+
 def test_failing_compute_writes_nothing_and_leaves_no_lock(tmp_path, paper_scene):
     def broken(scene, inputs):
         (inputs.staging / "half.txt").write_text("half")

@@ -116,9 +116,8 @@ def build_tables(scene: Any, stats: dict[str, float]) -> xr.Dataset:
         # surface) sigmas, and 1 nm below the deepest nominal interference FH0 - protrusion of the scene
         # and its sweep (below the table the kernel extrapolates linearly).
         fh0 = scene["air_bearing"]["flying_height_nm"]
-        deepest = max(scene["tfc"]["protrusion_nm"], scene["sweep"]["protrusion_nm"]["stop"])
         d_min = min(sol["table_min_sigma"] * p.sigma_s, sol["table_min_sigma"] * stats["sigma"],
-                    (fh0 - deepest - 1.0) * NM)
+                    (fh0 - deepest_protrusion_nm(scene) - 1.0) * NM)
         d = isbl.separation_grid(d_min, d_max, sol["table_step_nm"] * NM)
         tables = isbl.isbl_tables(d, p, quantities=wanted, nodes=sol["quadrature_nodes"],
                                   panels=sol["quadrature_panels"])
@@ -138,6 +137,15 @@ def build_tables(scene: Any, stats: dict[str, float]) -> xr.Dataset:
     return ds
 
 
+def deepest_protrusion_nm(scene: Any) -> float:
+    """The deepest protrusion [nm] the tables must reach: the scene's own or its sweep's last.
+
+    The tables depend on this value, not on ``tfc.protrusion_nm`` itself (:attr:`STAGE` ``derived``): a
+    protrusion changed within the sweep's range leaves them, and the sweep that reads them, current.
+    """
+    return max(scene["tfc"]["protrusion_nm"], scene["sweep"]["protrusion_nm"]["stop"])
+
+
 def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
     """The ``interface.nc`` dataset of the scene (see module docstring)."""
     return build_tables(scene, roughness_statistics(scene, inputs.out))
@@ -147,7 +155,8 @@ STAGE = Stage(
     "interface", compute, outputs=("interface.nc",),
     reads=("roughness", "materials", "lubricant", "solver.table_step_nm", "solver.table_min_sigma",
            "solver.table_max_nm", "solver.quadrature_nodes", "solver.quadrature_panels", "scene.effects",
-           "air_bearing.flying_height_nm", "tfc.protrusion_nm", "sweep.protrusion_nm"),
+           "air_bearing.flying_height_nm"),
+    derived=lambda scene: {"deepest_protrusion_nm": deepest_protrusion_nm(scene)},
     upstream=lambda scene: ("roughness",) if scene["roughness"]["afm"] else (),
     order=30, main_job=True, doc="ISBL tables versus separation, interface.nc")
 

@@ -836,7 +836,7 @@ def compute(scene: Any, inputs: Inputs) -> dict:
     write_csv(repdir / "summary.csv", header, rows)
     _write_text(repdir / "summary.md", summary_markdown(combos, data, name, made, skipped))
     comparison = comparison_markdown(combos, data, scene, name)
-    if (inputs.out / "identify.nc").is_file():  # hdi identify has run for this scene: the three-column comparison
+    if inputs.optional.get("identify"):  # identify.nc is current for this scene: the three-column comparison
         comparison += identification_markdown(read_dataset(inputs.out / "identify.nc", stage="identify"))
     _write_text(repdir / "comparison.md", comparison)
     for f, why in skipped.items():
@@ -864,7 +864,7 @@ STAGE = Stage(
     "report", compute,
     outputs=tuple(f"figures/{f}" for f in FIGURES + (ENSEMBLE_FIGURE,)) + ("report/summary.csv", "report/summary.md",
                                                                           "report/comparison.md"),
-    reads=("*",), upstream=_upstream, optional=("identify.nc",), finish=_finish, order=60, main_job=True,
+    reads=("*",), upstream=_upstream, optional=("identify",), finish=_finish, order=60, main_job=True,
     version=3,  # 2: long histories drawn as their envelope; 3: ensemble.png declared (was drawn, then dropped)
     doc="the paper's figures, a summary table and the comparison with the paper")
 
