@@ -44,6 +44,7 @@ from .physics import air_bearing as ab
 from .physics.fhm import fhm
 from .physics.friction import friction_stress_table
 from .physics.geometry import effective_radius, nominal_area
+from .physics.statistics import explicit_statistics
 from .variables import Regime
 
 NM, UM, MM = 1e-9, 1e-6, 1e-3
@@ -210,9 +211,12 @@ def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float]
     # heights to which FH0 is measured (SPEC.md 7.2)
     if interface is not None and "y_s" in interface:
         p[dyn.P_YS] = float(interface["y_s"]) * NM
-    else:
-        from .stages.interface import roughness_statistics
-        p[dyn.P_YS] = roughness_statistics(scene)["y_s"]
+    elif scene["roughness"]["afm"]:  # y_s is a statistic of the scans: interface.nc has it
+        raise ValueError("a scene with roughness.afm needs its interface.nc (y_s of the scans) even without "
+                         "contact or adhesion (pipeline.stages.simulate.needs_interface)")
+    else:  # McCool's y_s of the explicit statistics (SPEC.md 1), what the interface stage would write
+        r = scene["roughness"]
+        p[dyn.P_YS] = explicit_statistics(r["sigma_nm"], r["summit_radius_um"], r["summit_density_per_um2"])["y_s"]
     info["y_s"] = p[dyn.P_YS]
     if "contact" in eff:
         if k is None or not np.isfinite(k):

@@ -253,9 +253,10 @@ def candidate_inputs(scene: Any, inputs: Inputs) -> tuple[Any, tuple[np.ndarray,
     """Interface tables and DMW record of a candidate: the base files when unchanged, else rebuilt."""
     from .stages import dmw as dmw_stage
     from .stages.interface import build_tables, roughness_statistics
+    from .stages.simulate import needs_interface
     from .physics import dmw as dmw_phys
     interface = None
-    if scene.effects & {"contact", "adhesion"}:
+    if needs_interface(scene):
         ikey = stage_key(scene, "interface")
         if inputs.interface_path and ikey == inputs.interface_key:
             interface = _made(_Made("interface", ikey,
@@ -429,9 +430,10 @@ def prepare_inputs(scene: Any, out: Path) -> Inputs:
     """The base scene's ``interface.nc`` and ``dmw.nc`` in ``out`` (made current by the runner), by path,
     with the inputs keys they carry."""
     from .runner import ensure
+    from .stages.simulate import needs_interface
     ipath = dpath = None
     ikey = dkey = None
-    if scene.effects & {"contact", "adhesion"}:
+    if needs_interface(scene):
         ipath = str(ensure("interface", scene, out))
         ikey = read_dataset(ipath).attrs.get(KEY_ATTR)
     if scene.has("dmw"):

@@ -78,6 +78,24 @@ def test_paper_clearances_follow_from_the_summit_datum(paper, delta, paper_clear
     assert 0.0 < (s["clearance"] - with_adhesion["clearance"]) / NM < 0.15
 
 
+def test_flying_scene_datum_without_interface_tables(paper):
+    """A flying-only scene gets y_s from McCool's relation of its explicit statistics, the same value the
+    interface stage writes (0.691 nm, SPEC.md 7.2); one with AFM scans needs interface.nc for it (the
+    scans' y_s), and the simulation declares that input."""
+    from pathlib import Path
+
+    from pipeline.stages.simulate import upstream
+    flying = paper.replace(scene={"effects": ["air_bearing", "pitch"]})
+    model = sl.build_model(flying, None, None, None)
+    assert model.p[dyn.P_YS] == pytest.approx(0.691e-9, abs=1e-12)
+    assert model.p[dyn.P_YS] == roughness_statistics(paper)["y_s"]  # what interface.nc is made from
+    scan = Path(__file__).parent / "data" / "afm" / "di-3.di"
+    afm = flying.replace(roughness={"afm": [str(scan)]})
+    with pytest.raises(ValueError, match="interface.nc"):
+        sl.build_model(afm, None, None, None)
+    assert "interface" in upstream(afm) and "interface" not in upstream(flying)
+
+
 def test_separation_has_one_home(paper):
     # histories, the kernel's exact extremes and the datum function agree: d = gap - y_s
     model, interface = build(paper.replace(scene={"effects": NO_ADHESION}))

@@ -162,3 +162,12 @@ def k_from_probability(probability: float) -> float:
         raise ValueError(f"contact probability {probability}: expected a number in (0, 1)")
     # = scipy.stats.norm.isf(probability / 2) (Wichura's AS241 in the standard library, ~1e-16)
     return float(-NormalDist().inv_cdf(0.5 * probability))
+
+
+def explicit_statistics(sigma_nm: float, summit_radius_um: float, summit_density_per_um2: float) -> dict[str, float]:
+    """Summit statistics [SI] of a surface given by ``sigma`` [nm], ``R`` [um] and ``eta`` [um^-2] (the
+    scene's ``[roughness]`` keys): ``sigma``, ``sigma_s``, ``y_s``, ``R`` [m], ``eta`` [m^-2], ``alpha`` [1]
+    by McCool's relations (:func:`summit_sigma`, :func:`summit_offset`, :func:`bandwidth_alpha`; SPEC.md 1)."""
+    sigma, R, eta = sigma_nm * 1e-9, summit_radius_um * 1e-6, summit_density_per_um2 / 1e-6**2
+    return {"sigma": sigma, "sigma_s": summit_sigma(sigma, eta, R), "y_s": summit_offset(sigma, eta, R),
+            "R": R, "eta": eta, "alpha": bandwidth_alpha(sigma, eta, R)}

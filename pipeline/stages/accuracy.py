@@ -106,7 +106,7 @@ from ..variables import ACCURACY as ACC
 from ..variables import SCALARS
 from ..physics.statistics import k_from_probability
 from .interface import build_tables, roughness_statistics
-from .simulate import NOT_READ, resolve_k
+from .simulate import NOT_READ, needs_interface, resolve_k
 
 log = logging.getLogger(__name__)
 NM = 1e-9
@@ -260,7 +260,7 @@ class _RunCache:
         self.scene = scene
         self.out = out
         self.repeat = repeat
-        self.stats = roughness_statistics(scene, out) if scene.effects & {"contact", "adhesion"} else None
+        self.stats = roughness_statistics(scene, out) if needs_interface(scene) else None
         self.tables: dict[tuple, tuple[xr.Dataset | None, float]] = {}
         self.records: dict[float, tuple[tuple[np.ndarray, float] | None, float]] = {}
         self.record_notes: dict[float, str] = {}

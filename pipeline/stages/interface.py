@@ -21,8 +21,8 @@ from ..io import read_dataset
 from ..physics import isbl
 from ..physics.asperity import critical_interference
 from ..physics.friction import shear_strength
-from ..physics.statistics import (bandwidth_alpha, composite_modulus, hardness_from_plasticity_gw,
-                                  plasticity_index_gw, plasticity_index_ke, summit_offset, summit_sigma)
+from ..physics.statistics import (composite_modulus, explicit_statistics, hardness_from_plasticity_gw,
+                                  plasticity_index_gw, plasticity_index_ke)
 from ..validation import check_materials
 from ..variables import INTERFACE
 from ..runner import Inputs, Stage, build, ensure
@@ -55,9 +55,8 @@ def roughness_statistics(scene: Any, out: Path | None = None) -> dict[str, float
         return {"sigma": st["sigma_nm"] * NM, "sigma_s": st["sigma_s_nm"] * NM, "y_s": st["y_s_nm"] * NM,
                 "R": st["summit_radius_um"] * UM, "eta": st["summit_density_per_um2"] / UM**2,
                 "alpha": st["alpha"], "source": f"AFM ({r['route']} route): {', '.join(r['afm'])}"}
-    sigma, R, eta = r["sigma_nm"] * NM, r["summit_radius_um"] * UM, r["summit_density_per_um2"] / UM**2
-    return {"sigma": sigma, "sigma_s": summit_sigma(sigma, eta, R), "y_s": summit_offset(sigma, eta, R),
-            "R": R, "eta": eta, "alpha": bandwidth_alpha(sigma, eta, R), "source": "explicit statistics"}
+    return {**explicit_statistics(r["sigma_nm"], r["summit_radius_um"], r["summit_density_per_um2"]),
+            "source": "explicit statistics"}
 
 
 def interface_parameters(scene: Any, stats: dict[str, float]) -> isbl.Interface:

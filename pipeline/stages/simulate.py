@@ -29,16 +29,22 @@ log = logging.getLogger(__name__)
 NM = 1e-9
 
 
+def needs_interface(scene: Any) -> bool:
+    """Whether a simulation reads ``interface.nc``: for its tables (contact, adhesion) or, with AFM scans,
+    for the summit offset y_s of the separation datum (explicit statistics give y_s without it)."""
+    return bool(scene.effects & {"contact", "adhesion"} or scene["roughness"]["afm"])
+
+
 def model_inputs(scene: Any, out: Path) -> tuple[xr.Dataset | None, tuple | None]:
     """Interface tables and DMW record of a scene, from ``out`` (made current first, :func:`pipeline.runner.ensure`).
 
     Returns ``(interface dataset or None, (displacement [nm], sample rate [Hz]) or None)``; the
-    interface is ``None`` for a scene with neither contact nor adhesion (no tables are built), the
-    DMW ``None`` without the dmw effect.
+    interface is ``None`` when the scene does not need it (:func:`needs_interface`), the DMW ``None``
+    without the dmw effect.
     """
     from . import dmw as dmw_stage
     interface = None
-    if scene.effects & {"contact", "adhesion"}:
+    if needs_interface(scene):
         interface = read_dataset(ensure("interface", scene, out), stage="interface")
     record = None
     if scene.has("dmw"):
@@ -157,7 +163,7 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset]:
 def upstream(scene: Any) -> tuple[str, ...]:
     """The datasets a single simulation reads: interface tables, DMW record, calibration (for k)."""
     up = []
-    if scene.effects & {"contact", "adhesion"}:
+    if needs_interface(scene):
         up.append("interface")
     if scene.has("dmw"):
         up.append("dmw")

@@ -41,7 +41,7 @@ from ..fanout import run_tasks
 from ..io import read_dataset, write_dataset
 from ..runner import KEY_ATTR, Inputs, Stage, ensure
 from ..variables import ENSEMBLE, ENSEMBLE_OF, HISTORIES, REGIME_FILL, SCALARS, coordinate, history, scalar
-from .simulate import model_attrs, resolve_k, upstream
+from .simulate import model_attrs, needs_interface, resolve_k, upstream
 from .sweep_grid import damping_grid, protrusion_grid, roughness_sets
 
 log = logging.getLogger(__name__)
@@ -198,7 +198,7 @@ def prepare_inputs(scene: Any, out: Path, sets: dict[str, dict],
     parts.mkdir(parents=True, exist_ok=True)
     interface_paths: dict[str, str | None] = {}
     for label, table in sets.items():
-        if not scene.effects & {"contact", "adhesion"}:
+        if not needs_interface(scene.replace(roughness=dict(table))):
             interface_paths[label] = None
         elif table == dict(scene["roughness"]):
             interface_paths[label] = str(out / "interface.nc")
