@@ -30,14 +30,15 @@ from ..runner import Inputs, Stage, build, ensure
 NM, UM = 1e-9, 1e-6
 
 
-def roughness_statistics(scene: Any, out: Path | None = None) -> dict[str, float]:
+def roughness_statistics(scene: Any, out: Path | None = None,
+                         roughness_nc: Path | None = None) -> dict[str, float]:
     """Combined-surface statistics [SI] for the scene: from AFM scans or the explicit values.
 
-    With ``[roughness] afm``, the statistics of the ``combined`` surface of ``roughness.nc`` in ``out``
-    (route ``[roughness] route``) are used, made current first (:func:`pipeline.runner.ensure`; in a
-    temporary folder when ``out`` is ``None``). Otherwise ``sigma_nm``,
-    ``summit_radius_um`` and ``summit_density_per_um2`` give ``sigma_s`` and ``y_s`` by McCool's
-    relations (SPEC.md section 1).
+    With ``[roughness] afm``, the statistics of the ``combined`` surface of a ``roughness.nc`` (route
+    ``[roughness] route``): ``roughness_nc`` when the caller has it current (a stage's upstream),
+    else the one in ``out`` made current first (:func:`pipeline.runner.ensure`; in a temporary folder
+    when ``out`` is ``None``). Otherwise ``sigma_nm``, ``summit_radius_um`` and ``summit_density_per_um2``
+    give ``sigma_s`` and ``y_s`` by McCool's relations (SPEC.md section 1).
 
     Returns
     -------
@@ -46,7 +47,9 @@ def roughness_statistics(scene: Any, out: Path | None = None) -> dict[str, float
     r = scene["roughness"]
     if r["afm"]:
         from . import roughness as roughness_stage
-        if out is None:
+        if roughness_nc is not None:
+            st = roughness_stage.combined_statistics(roughness_nc, route=r["route"])
+        elif out is None:
             import tempfile
             with tempfile.TemporaryDirectory() as tmp:
                 st = roughness_stage.combined_statistics(ensure("roughness", scene, tmp), route=r["route"])
@@ -147,7 +150,11 @@ def deepest_protrusion_nm(scene: Any) -> float:
 
 def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
     """The ``interface.nc`` dataset of the scene (see module docstring)."""
-    return build_tables(scene, roughness_statistics(scene, inputs.out))
+    rough = None
+    if scene["roughness"]["afm"]:  # upstream: current for these inputs (checked by key), not rebuilt
+        inputs.dataset("roughness.nc", stage="roughness")
+        rough = inputs.path("roughness.nc")
+    return build_tables(scene, roughness_statistics(scene, inputs.out, roughness_nc=rough))
 
 
 STAGE = Stage(
