@@ -462,15 +462,25 @@ class Table:
     def value(self, name: str, at: float) -> float:
         return float(self.values(name, [at])[0])
 
+    def touching(self, at: Iterable[float]) -> np.ndarray:
+        """Contact in the steady window at the protrusions ``at`` [nm]: the exact minimum clearance below
+        zero, the rule of the calibration and of the regime (:func:`pipeline.slider.summarize`), which
+        also counts a contact shorter than the output step. False where not evaluated."""
+        with np.errstate(invalid="ignore"):
+            return self.values("min_clearance", at) < 0
+
     def touchdown(self) -> float:
         """First evaluated protrusion [nm] with contact in the steady window (NaN if none)."""
-        # contact: the exact minimum of d below k sigma (as the calibration counts it), not only sampled contact
-        mc = self.outputs.get("min_clearance")
-        if mc is None:
-            return float("nan")
-        order = np.argsort(self.protrusions)
-        hit = [self.protrusions[i] for i in order if mc[i] < 0]
-        return float(hit[0]) if hit else float("nan")
+        order = np.sort(self.protrusions)
+        hit = order[self.touching(order)]
+        return float(hit[0]) if hit.size else float("nan")
+
+    def flying_mean(self, name: str, at: Iterable[float]) -> float:
+        """Mean of ``name`` over the protrusions of ``at`` [nm] where the slider flies (NaN if none)."""
+        at = np.asarray(list(at), float)
+        v = self.values(name, at)
+        fly = v[np.isfinite(v) & ~self.touching(at)]
+        return float(np.mean(fly)) if fly.size else float("nan")
 
 
 @dataclass(frozen=True)
@@ -537,10 +547,7 @@ def targets(scene: Any) -> list[Target]:
     band = _grid(*c["bouncing_range_nm"], c["band_step_nm"], open_low=True)
 
     def fhm_flying(t: Table) -> float:
-        v = t.values("fhm_bv", fr)
-        cf = t.values("contact_fraction", fr)
-        flying = v[np.isfinite(v) & ~(cf > 0)]
-        return float(np.mean(flying)) if flying.size else float("nan")
+        return t.flying_mean("fhm_bv", fr)
 
     def band_min(t: Table) -> float:
         v = t.values("fhm_bv", band)
@@ -626,10 +633,7 @@ def headline(record: dict[str, Any], scene: Any) -> dict[str, float]:
     t = Table(record)
     td = t.touchdown()
     lo, hi = c["fhm_flying_range_nm"]
-    sel = (t.protrusions >= lo - 1e-9) & (t.protrusions <= hi + 1e-9)
-    fhm = t.outputs.get("fhm_bv", np.full(t.protrusions.shape, np.nan))[sel]
-    cf = t.outputs.get("contact_fraction", np.zeros(t.protrusions.shape))[sel]
-    fly = fhm[np.isfinite(fhm) & ~(cf > 0)]
+    flying_range = t.protrusions[(t.protrusions >= lo - 1e-9) & (t.protrusions <= hi + 1e-9)]
     width = c["bouncing_range_nm"][1] - c["bouncing_range_nm"][0]
     if np.isfinite(td):
         band = (t.protrusions > td + 1e-9) & (t.protrusions <= td + width + 1e-9)
@@ -638,6 +642,6 @@ def headline(record: dict[str, Any], scene: Any) -> dict[str, float]:
     else:
         bv_after = float("nan")
     at = c["sliding_at_nm"]
-    return {"touchdown": td, "fhm_flying": float(np.mean(fly)) if fly.size else float("nan"),
+    return {"touchdown": td, "fhm_flying": t.flying_mean("fhm_bv", flying_range),
             "bv_after_touchdown": bv_after, "interference": t.value("interference", at),
             "contact_force": t.value("contact_force", at), "mean_pressure": t.value("mean_pressure", at)}
