@@ -2,7 +2,8 @@
 
 Target: under 8 s (median of 3 fresh processes, after one untimed run that builds the inputs and the
 numba cache). Baseline of the same run: a fresh interpreter doing what every ``hdi`` command does
-first (the CLI and the stage registry), the floor no recomputation can go below. The per-stage seconds of the last run are kept.
+first (the CLI and the stage registry), the floor no recomputation can go below. The per-stage
+seconds of the last run are kept.
 """
 
 from __future__ import annotations

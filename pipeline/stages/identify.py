@@ -5,8 +5,8 @@ to the targets of ``[identify]`` (:func:`pipeline.study.targets`: touchdown at 9
 FHM 12.5 % at 4-7 nm and ~9 % at 9 nm, BV > 20 % after touchdown, and the light-contact numbers at
 11 nm), each candidate evaluated as a small sweep at the protrusions the targets need
 (:mod:`pipeline.study`) on the fan-out (:mod:`pipeline.fanout`; threads of this process by
-default, ``--scheduler processes`` or a dask.distributed address for more). The objective is the sum of squared residuals, each
-normalised by its tolerance (SPEC.md section 7).
+default, ``--scheduler processes`` or a dask.distributed address for more). The objective is the
+sum of squared residuals, each normalised by its tolerance (SPEC.md section 7).
 
 Method
 ------
