@@ -22,6 +22,7 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Any, Iterable, Mapping
 
+import numpy as np
 import xarray as xr
 
 from . import __version__
@@ -175,12 +176,47 @@ def write_dataset(ds: xr.Dataset, path: str | Path, scene: Any = None, *, stage:
     os.close(fd)
     try:
         with NETCDF_LOCK:
-            out.to_netcdf(tmp, engine=ENGINE, encoding=encoding)
+            _to_netcdf(out, tmp, encoding)
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
     return path
+
+
+def _to_netcdf(ds: xr.Dataset, path: str, encoding: dict[str, dict[str, Any]]) -> None:
+    """``ds.to_netcdf(path, engine="netcdf4", encoding=encoding)``, through the store of that engine.
+
+    Why not ``to_netcdf`` itself: for a file path it asks dask which scheduler is active, and that
+    imports ``dask.distributed`` (0.26 s of every process that writes a dataset, measured on the
+    2-core machine; most ``hdi`` commands use no cluster). Opening the store with an explicit lock
+    (:data:`NETCDF_LOCK`, held by the caller) skips that probe; the data are numpy arrays, written
+    when stored, so the file is the same.
+    """
+    store = xr.backends.NetCDF4DataStore.open(path, mode="w", format="NETCDF4", lock=NETCDF_LOCK)
+    try:
+        ds.dump_to_store(store, encoding=encoding)
+    finally:
+        store.close()
+
+
+def read_attrs(path: str | Path, variables: Iterable[str] = ()) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
+    """Global attributes of a NetCDF file, and the stored values of ``variables`` (those present).
+
+    Reads the header with netCDF4 alone, without decoding the dataset into xarray: the runner checks
+    the inputs key of every output and upstream dataset at every command, and the sweep every part
+    (5 ms a file instead of 22 ms).
+
+    Raises
+    ------
+    OSError
+        When the file is missing or not NetCDF (as :class:`netCDF4.Dataset` raises it).
+    """
+    import netCDF4
+    with NETCDF_LOCK, netCDF4.Dataset(path) as nc:
+        attrs = {k: nc.getncattr(k) for k in nc.ncattrs()}
+        values = {v: np.asarray(nc.variables[v][:]) for v in variables if v in nc.variables}
+    return attrs, values
 
 
 def read_dataset(path: str | Path, *, stage: str | None = None, variables: Iterable[str] = ()) -> xr.Dataset:

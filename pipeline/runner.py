@@ -45,7 +45,7 @@ from typing import Any, Callable, Iterable, Iterator, Mapping
 
 import xarray as xr
 
-from .io import ENGINE, NETCDF_LOCK, DatasetError, file_hash, read_dataset, write_dataset
+from .io import DatasetError, file_hash, read_attrs, read_dataset, write_dataset
 
 log = logging.getLogger(__name__)
 
@@ -256,11 +256,11 @@ def _digest(payload: Any) -> str:
 def _dataset_key(path: Path) -> tuple[str | None, list[str] | None]:
     """The ``inputs_key`` and produced-outputs list of a dataset (``None`` when unreadable)."""
     try:
-        with NETCDF_LOCK, xr.open_dataset(path, engine=ENGINE) as ds:
-            outputs = ds.attrs.get(OUTPUTS_ATTR)
-            return ds.attrs.get(KEY_ATTR), (json.loads(outputs) if outputs else None)
+        attrs, _ = read_attrs(path)
     except (OSError, ValueError):
         return None, None
+    outputs = attrs.get(OUTPUTS_ATTR)
+    return attrs.get(KEY_ATTR), (json.loads(outputs) if outputs else None)
 
 
 # ---------------------------------------------------------------------------------------- the lock

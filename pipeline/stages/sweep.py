@@ -38,7 +38,7 @@ import xarray as xr
 
 from .. import slider as sl
 from ..fanout import run_tasks
-from ..io import read_dataset, write_dataset
+from ..io import read_attrs, read_dataset, write_dataset
 from ..runner import KEY_ATTR, Inputs, Stage, ensure
 from ..variables import ENSEMBLE, ENSEMBLE_OF, HISTORIES, REGIME_FILL, SCALARS, coordinate, history, scalar
 from .simulate import model_attrs, needs_interface, resolve_k, upstream
@@ -97,11 +97,10 @@ def part_problem(path: Path, key: str, batch: Batch) -> str | None:
     if not path.is_file():
         return "missing"
     try:
-        with xr.open_dataset(path, engine="netcdf4") as ds:
-            attrs = ds.attrs
-            prot = np.asarray(ds["protrusion"].values, float) if "protrusion" in ds.coords else np.array([])
+        attrs, values = read_attrs(path, ("protrusion",))
     except (OSError, ValueError) as exc:
         return f"unreadable ({exc})"
+    prot = np.asarray(values.get("protrusion", []), float)
     if attrs.get(KEY_ATTR) != key:
         return "made from other inputs"
     if attrs.get("batch") != batch.index:
