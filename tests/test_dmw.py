@@ -402,3 +402,16 @@ def test_stage_reruns_when_record_changes(tmp_path):
     stage.run(scene, tmp_path / "out")
     assert path.stat().st_mtime != 1
     assert float(read_dataset(path).rms) == pytest.approx(2 * rms1, rel=1e-9)    # processing is linear
+
+
+@pytest.mark.parametrize("n", [4000, 4001, 2, 3])
+def test_periodogram_equals_scipy(n):
+    """The numpy periodogram of ``spectrum`` is scipy's boxcar periodogram (even and odd lengths:
+    the Nyquist bin exists, and is counted once, only for even ``N``), Parseval included."""
+    from scipy import signal
+    x = np.random.default_rng(n).standard_normal(n)
+    f, p = dmw.spectrum(x, FS)
+    f_ref, p_ref = signal.periodogram(x, fs=FS, window="boxcar", detrend=False, scaling="density")
+    np.testing.assert_allclose(f, f_ref, rtol=1e-15)
+    np.testing.assert_allclose(p, p_ref, rtol=1e-12, atol=0)
+    assert p.sum() * FS / n == pytest.approx(np.mean(x * x), rel=1e-12)  # Parseval, DC included
