@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import os
 import sys
 from pathlib import Path
 
@@ -122,5 +123,25 @@ def main(argv: list[str] | None = None) -> int:
         return 130
 
 
+def entry() -> None:  # pragma: no cover (the console script; tests call main)
+    """The ``hdi`` console script: :func:`main`, then a fast exit with its code.
+
+    Interpreter shutdown after a command costs ~0.3 s (numba's LLVM and the netCDF4/HDF5 teardown,
+    measured on the 2-core machine: 2.0 s against 1.7 s for import + first simulation) and does
+    nothing the command needs: every output is written and renamed into place, the folder lock and
+    any cluster are released by their context managers. So once stdout, stderr and the log handlers
+    are flushed the process ends with ``os._exit``. An exception still exits the normal way, with
+    its traceback.
+    """
+    code = main()
+    logging.shutdown()
+    try:
+        sys.stdout.flush()
+        sys.stderr.flush()
+    except (BrokenPipeError, ValueError):  # (a reader that went away, e.g. `hdi ... | head`)
+        pass
+    os._exit(code)
+
+
 if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    entry()
