@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import os
 
 import matplotlib.image as mpimg
 import numpy as np
@@ -332,3 +333,34 @@ def test_every_file_the_report_draws_is_a_declared_output(full_out, paper_scene,
     drawn = {p.relative_to(staging).as_posix() for p in staging.rglob("*") if p.is_file()}
     assert "figures/" + report.ENSEMBLE_FIGURE in drawn
     assert drawn <= set(report.STAGE.output_names(paper_scene))
+
+
+def _line_figure(path, slope):
+    from pipeline import plots
+    fig, ax = plots.new_figure()
+    ax.plot([0.0, 1.0], [0.0, slope])
+    plots.save(fig, path)
+    return path, os.getpid()
+
+
+def _broken_figure(path):
+    raise ValueError(f"{path}: this figure cannot be drawn")
+
+
+def test_figures_drawn_by_worker_processes_are_the_figures_drawn_in_process(tmp_path):
+    """``plots.draw_all`` gives the same PNG bytes, in the same order, whether the figures are drawn
+    in this process or by its forked workers, and a figure's error reaches the caller."""
+    import sys
+    import threading
+    from pipeline import plots
+    here = plots.draw_all([(_line_figure, (tmp_path / f"a{i}.png", i + 1.0), {}) for i in range(3)], workers=1)
+    there = plots.draw_all([(_line_figure, (tmp_path / f"b{i}.png", i + 1.0), {}) for i in range(3)], workers=2)
+    assert [p.name for p, _ in there] == ["b0.png", "b1.png", "b2.png"]
+    assert [p.read_bytes() for p, _ in there] == [p.read_bytes() for p, _ in here]
+    assert {pid for _, pid in here} == {os.getpid()}
+    # forked workers exactly where it is safe: Linux, no other thread alive (else drawn here)
+    forked = sys.platform.startswith("linux") and threading.active_count() == 1
+    assert (os.getpid() not in {pid for _, pid in there}) == forked
+    with pytest.raises(ValueError, match="cannot be drawn"):
+        plots.draw_all([(_line_figure, (tmp_path / "c.png", 1.0), {}), (_broken_figure, (tmp_path / "d.png",), {})],
+                       workers=2)

@@ -301,8 +301,11 @@ def history_protrusions(hist: xr.Dataset, scene: Any) -> list[float]:
 
 def make_figures(data: dict[str, xr.Dataset | None], combos: list, scene: Any, name: str,
                  figdir: Path) -> tuple[list[Path], dict[str, str]]:
-    """Draw every figure whose inputs exist; returns the written paths and the skipped figures' reasons."""
-    made: list[Path] = []
+    """Draw every figure whose inputs exist; returns the written paths and the skipped figures' reasons.
+
+    The figures are independent: :func:`pipeline.plots.draw_all` draws them in parallel processes.
+    """
+    jobs: list[tuple] = []  # (figure function, arguments, keywords), drawn by plots.draw_all
     skipped: dict[str, str] = {}
     labels0, ds0 = combos[0]
     transient = _get(scene, "solver", "transient_ms")
@@ -317,24 +320,24 @@ def make_figures(data: dict[str, xr.Dataset | None], combos: list, scene: Any, n
         prots = history_protrusions(hist, scene)
         low, high = prots[0], prots[-1]
         panels = [(p, _history_slice(hist, labels0, p), _regime_at(ds0, p)) for p in dict.fromkeys([low, high])]
-        made.append(plots.fig_clearance(panels, name, figdir / "fig3_clearance.png", transient))
+        jobs.append((plots.fig_clearance, (panels, name, figdir / "fig3_clearance.png", transient), {}))
         h_high = panels[-1][1]
         if any(v in h_high for v, _, _ in plots.FORCES):
-            made.append(plots.fig_forces(h_high, high, name, figdir / "fig4_forces.png", transient))
+            jobs.append((plots.fig_forces, (h_high, high, name, figdir / "fig4_forces.png", transient), {}))
         else:
             skipped["fig4_forces.png"] = "the histories hold no forces (contact/adhesion effects off)"
         if any(v in h_high for v, _ in plots.STRESSES):
-            made.append(plots.fig_stresses(h_high, high, name, figdir / "fig5_stresses.png", transient))
+            jobs.append((plots.fig_stresses, (h_high, high, name, figdir / "fig5_stresses.png", transient), {}))
         else:
             skipped["fig5_stresses.png"] = "the histories hold no stresses (contact effect off)"
 
     fc = first_contact(ds0)
-    made.append(plots.fig_fhm(combos, name, figdir / "fig6_fhm.png", touchdown_nm=onset, previous_nm=previous,
-                              limit=PAPER["stable_fhm_percent"], first_contact=fc))
+    jobs.append((plots.fig_fhm, (combos, name, figdir / "fig6_fhm.png"),
+                 dict(touchdown_nm=onset, previous_nm=previous, limit=PAPER["stable_fhm_percent"], first_contact=fc)))
     if "shear_stress" in ds0:
         tau_y = _scalar(data["interface"], "shear_strength")
-        made.append(plots.fig_shear(combos, name, figdir / "fig7_shear.png", touchdown_nm=onset,
-                                    shear_strength=tau_y if np.isfinite(tau_y) else None))
+        jobs.append((plots.fig_shear, (combos, name, figdir / "fig7_shear.png"),
+                     dict(touchdown_nm=onset, shear_strength=tau_y if np.isfinite(tau_y) else None)))
     else:
         skipped["fig7_shear.png"] = "sweep.nc has no shear_stress (friction/contact effects off)"
 
@@ -343,27 +346,30 @@ def make_figures(data: dict[str, xr.Dataset | None], combos: list, scene: Any, n
         skipped["calibration.png"] = "calibration.nc is absent (k fixed by the scene, or `hdi calibrate` not run)"
     else:
         k_used = _attr_float(data["sweep"], "k")
-        made.append(plots.fig_calibration(cal, name, figdir / "calibration.png",
-                                          onset_nm=float(cal.attrs.get("touchdown_onset_nm", onset)),
-                                          previous_nm=float(cal.attrs.get("touchdown_previous_nm", previous)),
-                                          k_used=k_used if np.isfinite(k_used) else None,
-                                          k_source=str(data["sweep"].attrs.get("k_source", ""))))
+        jobs.append((plots.fig_calibration, (cal, name, figdir / "calibration.png"),
+                     dict(onset_nm=float(cal.attrs.get("touchdown_onset_nm", onset)),
+                          previous_nm=float(cal.attrs.get("touchdown_previous_nm", previous)),
+                          k_used=k_used if np.isfinite(k_used) else None,
+                          k_source=str(data["sweep"].attrs.get("k_source", "")))))
     if data["roughness"] is None:
         skipped["roughness.png"] = "roughness.nc is absent (`hdi roughness` not run)"
     else:
-        made.append(plots.fig_roughness(data["roughness"], name, figdir / "roughness.png", data["interface"]))
+        jobs.append((plots.fig_roughness, (data["roughness"], name, figdir / "roughness.png", data["interface"]), {}))
     if data["dmw"] is None:
         skipped["dmw.png"] = "dmw.nc is absent (`hdi dmw` not run)"
     else:
-        made.append(plots.fig_dmw(data["dmw"], name, figdir / "dmw.png"))
+        jobs.append((plots.fig_dmw, (data["dmw"], name, figdir / "dmw.png"), {}))
     if data.get("ensemble") is not None:
-        made.append(plots.fig_ensemble(data["ensemble"], name, figdir / ENSEMBLE_FIGURE, touchdown_nm=onset,
-                                       previous_nm=previous))
+        jobs.append((plots.fig_ensemble, (data["ensemble"], name, figdir / ENSEMBLE_FIGURE),
+                     dict(touchdown_nm=onset, previous_nm=previous)))
     else:  # one realisation: no ensemble figure (and none left from an earlier run)
         (figdir / ENSEMBLE_FIGURE).unlink(missing_ok=True)
     for f in skipped:  # never leave a figure of an earlier run next to the new ones
         (figdir / f).unlink(missing_ok=True)
-    return made, skipped
+    # the slowest figure (the log-log spectrum: ~1 s) first, so the pool's workers finish together
+    order = sorted(range(len(jobs)), key=lambda i: jobs[i][0] is not plots.fig_dmw)
+    paths = plots.draw_all([jobs[i] for i in order])
+    return [p for _, p in sorted(zip(order, paths))], skipped
 
 
 # ------------------------------------------------------------------------------------------ summary.md
