@@ -227,6 +227,13 @@ def main_job(scene: Scene, stages: Mapping[str, Stage] | None = None) -> list[st
 
 
 # --------------------------------------------------------------------------------------------- keys
+#: Scene keys no stage reads: ``scene.extends`` says how the file was written (the base's absolute
+#: path), not what the scene is; its values are already in the resolved keys. Keyed, it made a scene
+#: that extends another recompute results identical to the base's, and every result stale when the
+#: project folder moved.
+NEVER_READ = ("scene.extends",)
+
+
 def scene_part(scene: Scene, reads: Iterable[str], excludes: Iterable[str] = ()) -> dict[str, Any]:
     """The scene keys named by ``reads``/``excludes`` (see :class:`Stage`), JSON-normalised."""
     cfg = json.loads(json.dumps(scene.config, default=str))
@@ -234,7 +241,7 @@ def scene_part(scene: Scene, reads: Iterable[str], excludes: Iterable[str] = ())
     reads = tuple(reads)
     if "*" in reads:
         picked = {s: dict(v) for s, v in cfg.items()}
-        for item in excludes:
+        for item in (*excludes, *NEVER_READ):
             section, _, key = item.partition(".")
             if key:
                 picked.get(section, {}).pop(key, None)

@@ -285,6 +285,22 @@ def test_derived_inputs_key_on_the_value_not_the_keys(paper_scene):
     assert deeper[0] != keys(11.0)[0] and deeper[1] != keys(11.0)[1]
 
 
+def test_a_scene_that_extends_another_keys_on_its_values_not_on_the_base_path(tmp_path):
+    """``scene.extends`` (an absolute path) is not an input: a scene that only extends the paper scene
+    keys like the paper scene, wherever the files are; the 3x3 grid, which changes the sweep's sets
+    and damping ratios only, shares the paper's calibration and differs in its sweep."""
+    (tmp_path / "base").mkdir()
+    shutil.copy(PAPER, tmp_path / "base" / "paper-2009.toml")
+    (tmp_path / "child.toml").write_text('[scene]\nname = "paper-2009"\nextends = "base/paper-2009.toml"\n')
+    paper, child = load_scene(PAPER), load_scene(tmp_path / "child.toml")
+    assert child["scene"]["extends"] != paper["scene"]["extends"]
+    for stage in ("roughness", "dmw", "interface", "calibrate", "sweep", "report"):
+        assert runner.Runner(child, "a").key(stage) == runner.Runner(paper, "b").key(stage), stage
+    grid = load_scene(PAPER.parent / "sweep-3x3.toml")
+    assert runner.Runner(grid, "a").key("calibrate") == runner.Runner(paper, "a").key("calibrate")
+    assert runner.Runner(grid, "a").key("sweep") != runner.Runner(paper, "a").key("sweep")
+
+
 def test_failing_compute_writes_nothing_and_leaves_no_lock(tmp_path, paper_scene):
     def broken(scene, inputs):
         (inputs.staging / "half.txt").write_text("half")
