@@ -28,6 +28,7 @@ import json
 import logging
 import os
 import sys
+import threading
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
@@ -141,15 +142,42 @@ def batch_inputs(interface_path: str | None, dmw_path: str | None) -> tuple[xr.D
     return _read_inputs(_file_id(interface_path), _file_id(dmw_path))
 
 
+_MODELS: dict[tuple, sl.Model] = {}
+_MODELS_LOCK = threading.Lock()
+
+
+def batch_model(scene: Any, interface_path: str | None, dmw_path: str | None, k: float | None,
+                damping: float) -> sl.Model:
+    """The model of a batch, built once per process for each scene, input files, k and damping ratio.
+
+    The batches of one roughness set and damping ratio share it (:func:`pipeline.slider.run_model`
+    only reads a model): building it costs ~28 ms (the DMW record's spline, the modal solution), paid
+    by every batch before. Keyed by the scene's content hash and the files' identity
+    (:func:`_file_id`), so a changed input builds a new one.
+    """
+    key = (scene.hash, _file_id(interface_path), _file_id(dmw_path), k, damping)
+    with _MODELS_LOCK:
+        model = _MODELS.get(key)
+    if model is None:
+        model = sl.build_model(scene, *batch_inputs(interface_path, dmw_path), k, damping_ratio=damping)
+        with _MODELS_LOCK:
+            if len(_MODELS) >= 64:  # (a long-lived worker of many studies: keep the memory bounded)
+                _MODELS.clear()
+            model = _MODELS.setdefault(key, model)
+    return model
+
+
 def run_batch(scene: Any, batch: Batch, interface_path: str | None, dmw_path: str | None, k: float | None,
-              part_path: str, key: str, history_nm: tuple[float, ...]) -> str:
-    """Run one batch and write its part file (executed on a worker). Returns the part's path.
+              part_path: str, key: str, history_nm: tuple[float, ...]) -> tuple[str, xr.Dataset]:
+    """Run one batch and write its part file (executed on a worker). Returns the part's path and dataset.
+
+    The dataset comes back with the path so that the sweep assembles what this run computed from
+    memory and reads back only the parts of an earlier, interrupted run.
 
     ``k``: contact criterion constant [1] (``None`` without the contact effect); ``history_nm``:
     protrusions [nm] whose time histories the part keeps.
     """
-    interface, record = batch_inputs(interface_path, dmw_path)
-    model = sl.build_model(scene, interface, record, k, damping_ratio=batch.damping)
+    model = batch_model(scene, interface_path, dmw_path, k, batch.damping)
     rows, hist_rows = [], []
     for delta in batch.protrusions:
         run = sl.run_model(model, delta * NM)
@@ -171,7 +199,7 @@ def run_batch(scene: Any, batch: Batch, interface_path: str | None, dmw_path: st
     ds.attrs.update({KEY_ATTR: key, "roughness_label": batch.label, "damping_ratio": batch.damping,
                      "batch": batch.index, "realisation": batch.realisation})
     write_dataset(ds, part_path, scene, stage="sweep-part")
-    return part_path
+    return part_path, ds
 
 
 def _progress(total: int, initial: int):
@@ -257,8 +285,11 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset | None]:
     bar = _progress(len(batches), len(batches) - len(todo))
     done = [0]
     stop_after, on_batch = opts.get("stop_after"), opts.get("on_batch")
+    computed: dict[str, xr.Dataset] = {}  # part path -> its dataset, for the parts run here
 
-    def on_done(path: str) -> None:
+    def on_done(result: tuple[str, xr.Dataset]) -> None:
+        path, part = result
+        computed[path] = part
         done[0] += 1
         if on_batch is not None:
             on_batch(path)
@@ -278,7 +309,7 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset | None]:
     first = interface_paths[next(iter(sets))]
     model = sl.build_model(scene, *batch_inputs(first, dmw_path), k)
     attrs = model_attrs(model, k_source)
-    return assemble(scene, out, prot, list(sets), damp, batches, key, k_source, attrs, seeds)
+    return assemble(scene, out, prot, list(sets), damp, batches, key, k_source, attrs, seeds, computed)
 
 
 def run_sweep(scene: Any, out: Path, scheduler: str | None = None, workers: int | None = None,
@@ -290,8 +321,12 @@ def run_sweep(scene: Any, out: Path, scheduler: str | None = None, workers: int 
 
 
 def assemble(scene: Any, out: Path, prot: np.ndarray, labels: list[str], damp: list[float], batches: list[Batch],
-             key: str, k_source: str, attrs: dict, seeds: list[int] | None = None) -> dict[str, xr.Dataset | None]:
+             key: str, k_source: str, attrs: dict, seeds: list[int] | None = None,
+             computed: dict[str, xr.Dataset] | None = None) -> dict[str, xr.Dataset | None]:
     """``sweep.nc`` (and ``sweep_histories.nc``) filled from the part files, one part at a time.
+
+    ``computed``: the parts run by this call (path -> dataset, as written), used as they are; every
+    other part is read from its file after :func:`part_problem` has accepted it.
 
     With more than one realisation the scalars gain a last dimension ``realisation`` and the
     ensemble statistics of :func:`ensemble_statistics` are added.
@@ -308,12 +343,15 @@ def assemble(scene: Any, out: Path, prot: np.ndarray, labels: list[str], damp: l
     hist: dict[str, np.ndarray] = {}
     hist_prot: np.ndarray | None = None
     time: np.ndarray | None = None
+    computed = computed or {}
     for b in batches:
         path = _part_path(parts, b)
-        why = part_problem(path, key, b)
-        if why is not None:
-            raise RuntimeError(f"{path}: batch {b.index}: part {why}; run the sweep again")
-        ds = read_dataset(path)
+        ds = computed.get(str(path))
+        if ds is None:
+            why = part_problem(path, key, b)
+            if why is not None:
+                raise RuntimeError(f"{path}: batch {b.index}: part {why}; run the sweep again")
+            ds = read_dataset(path)
         r, d = labels.index(b.label), damp.index(b.damping)
         for name in ds.data_vars:
             if name.startswith("h_"):
