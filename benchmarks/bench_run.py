@@ -4,16 +4,21 @@ Target: under 8 s (median of 3 fresh processes, after one untimed run that build
 numba cache). Baseline of the same run: a fresh interpreter doing what every ``hdi`` command does
 first (the CLI and the stage registry), the floor no recomputation can go below. The per-stage
 seconds of the last run are kept.
+
+Then the report's figures, in this process: drawn by the pool of forked workers
+(:func:`pipeline.plots.draw_all`, the default) against one after the other (``workers=1``).
 """
 
 from __future__ import annotations
 
+import functools
 import re
 import statistics
 import subprocess
 import tempfile
+from pathlib import Path
 
-from benchmarks.common import ROOT, hdi, record, startup_seconds
+from benchmarks.common import ROOT, hdi, record, startup_seconds, timeit
 
 PAPER = str(ROOT / "configs" / "paper-2009.toml")
 
@@ -35,3 +40,28 @@ def run(results: list[dict]) -> None:
         record(results, "hdi run paper-2009 --force (main job, everything recomputed)", times, target_s=8.0,
                stage_seconds_last_run=stages, cpu_median_s=statistics.median(cpus),
                ratio_to_startup=statistics.median(times) / statistics.median(floor))
+        report_figures(results, Path(tmp))
+
+
+def report_figures(results: list[dict], out: Path) -> None:
+    """The report stage in process on the datasets of ``out``: figures by forked workers, then in order."""
+    from pipeline import plots
+    from pipeline.runner import Inputs
+    from pipeline.scene import load_scene
+    from pipeline.stages import report
+    scene = load_scene(PAPER)
+    draw_all = plots.draw_all
+
+    def once(workers: int | None) -> None:
+        plots.draw_all = functools.partial(draw_all, workers=workers)
+        try:
+            with tempfile.TemporaryDirectory() as staging:
+                report.compute(scene, Inputs(out=out, staging=Path(staging)))
+        finally:
+            plots.draw_all = draw_all
+
+    pool = timeit(lambda: once(None), repeat=3)
+    alone = timeit(lambda: once(1), repeat=3)
+    record(results, "report stage, paper scene, 8 figures: one process", alone)
+    record(results, "report stage, paper scene, 8 figures: forked workers (default)", pool,
+           speedup_vs_one_process=statistics.median(alone) / statistics.median(pool))

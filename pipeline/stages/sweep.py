@@ -4,8 +4,10 @@ Each task runs a *batch* of scenes (``[sweep] batch_size`` protrusions of one ro
 and one damping ratio) and writes its own part file, atomically, into ``sweep.parts/``. The DMW
 record and the interface tables reach the workers by file path (``dmw.nc``, ``interface.nc`` or
 ``sweep.parts/interface-<label>/interface.nc``), not inside the task graph. When every batch is done
-the parts are assembled, one at a time, into ``sweep.nc`` (dims ``protrusion``, ``roughness``,
-``damping``) and ``sweep_histories.nc`` (time histories of the protrusions in ``histories_nm``).
+the parts are assembled into ``sweep.nc`` (dims ``protrusion``, ``roughness``, ``damping``) and
+``sweep_histories.nc`` (time histories of the protrusions in ``histories_nm``): the parts computed by
+this call from memory (each batch returns its dataset with its path), the parts of an earlier run
+from their files.
 
 Resuming: a part is kept when it carries the sweep's inputs key (:mod:`pipeline.runner`: the scene,
 the bytes of every AFM scan of every roughness set, the DMW and calibration datasets), its own batch
