@@ -12,6 +12,7 @@ is shown and for which scene (:func:`title`); regimes use :data:`REGIME_COLOURS`
 
 from __future__ import annotations
 
+import importlib
 import multiprocessing
 import os
 import signal
@@ -128,12 +129,12 @@ def draw_all(jobs: Sequence[tuple[Callable[..., Path], tuple, dict]], workers: i
     "report".
     """
     jobs = list(jobs)
-    n = min(len(jobs), workers or len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else 1)
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+    n = min(len(jobs), workers or cores)
     if n < 2 or not sys.platform.startswith("linux") or threading.active_count() > 1:
         return [fn(*args, **kwargs) for fn, args, kwargs in jobs]
-    # imported once, before the fork (~0.7 s that every worker would pay again)
-    import matplotlib.backends.backend_agg  # noqa: F401
-    import matplotlib.figure  # noqa: F401
+    for module in ("matplotlib.figure", "matplotlib.backends.backend_agg"):
+        importlib.import_module(module)  # once, before the fork (~0.7 s every worker would pay again)
     global _JOBS
     _JOBS = jobs
     try:
