@@ -13,7 +13,8 @@ declaring itself (no list to edit). A declaration says
 
 The runner gives each stage an *inputs key*: the SHA-256 of the scene keys it reads, the bytes of
 the files it reads, the keys of its upstream stages (so a change propagates downstream), the options
-that change its result and its ``version``. Every dataset it writes carries that key (attribute
+that change its result, its ``version`` and its code (the source of its module and of the ``pipeline``
+modules that module imports, :func:`pipeline.code_version.code_key`). Every dataset it writes carries that key (attribute
 ``inputs_key``); non-NetCDF outputs are listed with their hashes in ``.hdi/<stage>.json``. A stage
 whose outputs carry the key of its current inputs is not recomputed; otherwise it is, and everything
 downstream of it too. Datasets are written through :func:`pipeline.io.write_dataset` (temporary file
@@ -45,6 +46,7 @@ from typing import Any, Callable, Iterable, Iterator, Mapping
 
 import xarray as xr
 
+from .code_version import code_key
 from .io import DatasetError, file_hash, read_attrs, read_dataset, write_dataset
 
 log = logging.getLogger(__name__)
@@ -115,7 +117,8 @@ class Stage:
         ``finish(scene, out, options)``: run after the stage was asked for and is current (computed or
         not), for side effects outside the results folder (``report --readme``).
     version
-        Bump when the stage's code changes its results, so old outputs are recomputed.
+        Bump to recompute old outputs when something the code key cannot see changes the results
+        (the code of the stage and of the modules it imports is keyed already).
     doc
         One line for ``hdi --help``.
     """
@@ -423,7 +426,7 @@ class Runner:
         if name not in self._keys:
             st = self.stage(name)
             payload = {
-                "stage": name, "version": st.version,
+                "stage": name, "version": st.version, "code": code_key(st.compute.__module__),
                 "scene": scene_part(self.scene, st.reads, st.excludes),
                 "files": {role: self._hash(p) for role, p in self.files(name).items()},
                 "upstream": {u: self.key(u) for u in st.upstream_names(self.scene)},

@@ -209,13 +209,16 @@ class Inputs:
 def base_key(scene: Any, inputs: Inputs) -> str:
     """Hash of what an evaluation depends on besides its parameters and protrusions.
 
-    The scene keys a simulation reads (:data:`pipeline.stages.simulate.NOT_READ` left out) and the
-    runner's keys of the base inputs, which hash AFM scans and a measured DMW record by content: a
-    rescanned file under the same name is a new base, not a store to read back.
+    The scene keys a simulation reads (:data:`pipeline.stages.simulate.NOT_READ` left out), the
+    runner's keys of the base inputs, which hash AFM scans and a measured DMW record by content (a
+    rescanned file under the same name is a new base, not a store to read back), and the code of this
+    module and of what it imports (:func:`pipeline.code_version.code_key`).
     """
+    from .code_version import code_key
     from .runner import scene_part
     from .stages.simulate import NOT_READ
-    blob = {"scene": scene_part(scene, ("*",), NOT_READ), "interface": inputs.interface_key, "dmw": inputs.dmw_key}
+    blob = {"scene": scene_part(scene, ("*",), NOT_READ), "interface": inputs.interface_key, "dmw": inputs.dmw_key,
+            "code": code_key(__name__)}
     return hashlib.sha256(json.dumps(blob, sort_keys=True).encode()).hexdigest()
 
 

@@ -1,0 +1,106 @@
+"""The code a stage runs, as part of its inputs key: the bytes of the ``pipeline`` modules it imports.
+
+A result depends on the code that computed it as much as on the scene and the files. Keying a stage
+on a hand-bumped ``version`` alone let a corrected formula in :mod:`pipeline.physics` leave every old
+result "up to date". :func:`code_key` hashes the source of a module and of every ``pipeline`` module it
+imports, directly or not, at module level or inside a function (a lazy import is an import): editing
+the friction law recomputes the stages that simulate, not the roughness stage; editing a figure
+recomputes the report only.
+
+The imports are read from the source text (``from .x import a``, ``from .. import slider``,
+``from pipeline.x import ...``, ``import pipeline.x``), not by parsing it: the whole package parses in
+0.2 s, which every ``hdi`` command would pay, where reading the text takes milliseconds. The scan is
+conservative: an import written in a docstring counts too (a key that changes too often costs a
+recomputation; one that changes too rarely returns a wrong result).
+
+Left out: :data:`ORCHESTRATION`, the modules that decide when and where a stage runs, not what it
+computes (the runner itself, which every stage imports for :class:`~pipeline.runner.Stage`, the
+fan-out and the command line).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import importlib.util
+import re
+from functools import lru_cache
+from pathlib import Path
+
+PACKAGE = "pipeline"
+ROOT = Path(__file__).resolve().parent
+#: Modules whose code does not change a result (where and when a stage runs, not what it computes).
+ORCHESTRATION = frozenset({"pipeline.runner", "pipeline.fanout", "pipeline.cli"})
+
+
+@lru_cache(maxsize=None)
+def _patterns(package: str) -> tuple[re.Pattern, re.Pattern]:
+    """``from X import names`` (X relative or in ``package``; names possibly parenthesised over several
+    lines) and ``import package.x``, at any indentation."""
+    pkg = re.escape(package)
+    return (re.compile(rf"^[ \t]*from[ \t]+(\.+[\w.]*|{pkg}(?:\.[\w.]+)?)[ \t]+import[ \t]+(\([^)]*\)|[^\n#]*)", re.M),
+            re.compile(rf"^[ \t]*import[ \t]+({pkg}(?:\.\w+)*)", re.M))
+
+
+def module_file(name: str, root: Path = ROOT, package: str = PACKAGE) -> Path | None:
+    """The source file of module ``name`` of ``package`` (rooted at ``root``), or ``None``."""
+    if name != package and not name.startswith(package + "."):
+        return None
+    parts = name.split(".")[1:]
+    base = root.joinpath(*parts)
+    for path in (base.with_suffix(".py"), base / "__init__.py"):
+        if path.is_file():
+            return path
+    return None
+
+
+def imports(name: str, root: Path = ROOT, package: str = PACKAGE) -> set[str]:
+    """The modules of ``package`` that module ``name`` imports (its source text, see module docstring)."""
+    path = module_file(name, root, package)
+    if path is None:
+        return set()
+    text = path.read_text(encoding="utf-8")
+    here = name if path.name == "__init__.py" else name.rpartition(".")[0]
+    found: set[str] = set()
+    from_, import_ = _patterns(package)
+    for where, names in from_.findall(text):
+        base = importlib.util.resolve_name(where, here) if where.startswith(".") else where
+        found.add(base)
+        for item in names.strip("()").replace("\n", " ").split(","):
+            sub = item.split(" as ")[0].strip()
+            if sub and sub != "*" and module_file(f"{base}.{sub}", root, package) is not None:
+                found.add(f"{base}.{sub}")  # (``from .. import slider``: a module, not a name)
+    found.update(import_.findall(text))
+    return {m for m in found if module_file(m, root, package) is not None}
+
+
+def modules(name: str, root: Path = ROOT, package: str = PACKAGE) -> tuple[str, ...]:
+    """``name`` and every module of ``package`` it imports, transitively, sorted; the
+    :data:`ORCHESTRATION` modules (and what only they import) are left out."""
+    seen: set[str] = set()
+    todo = [name]
+    while todo:
+        mod = todo.pop()
+        if mod in seen or mod in ORCHESTRATION or module_file(mod, root, package) is None:
+            continue
+        seen.add(mod)
+        todo.extend(imports(mod, root, package) - seen)
+    return tuple(sorted(seen))
+
+
+def source_key(name: str, root: Path = ROOT, package: str = PACKAGE) -> str:
+    """SHA-256 of the source of module ``name`` and of every module :func:`modules` finds (names and
+    bytes); ``""`` for a module outside the package (e.g. a stage declared by a test)."""
+    found = modules(name, root, package)
+    if not found:
+        return ""
+    digest = hashlib.sha256()
+    for mod in found:
+        digest.update(mod.encode() + b"\0" + module_file(mod, root, package).read_bytes() + b"\0")
+    return digest.hexdigest()
+
+
+@lru_cache(maxsize=None)
+def code_key(name: str) -> str:
+    """:func:`source_key` of a ``pipeline`` module, once per process (the code a process runs is the
+    code it imported: a source edited while it runs is the next process's input)."""
+    return source_key(name)
