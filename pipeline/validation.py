@@ -8,9 +8,9 @@ traceback), ``--out`` must be a folder we can write in, the sweep grid must not 
 :data:`MAX_SCENES` unless ``--yes``, the report's history protrusions must lie on the sweep grid, and
 an option the stage does not use is an error naming the option and the stages that use it.
 
-:func:`check_materials` warns (:class:`PhysicsWarning`, with the numbers) when a hardness derived
-from the plasticity index, or a plasticity index derived from the hardness, lies outside physical
-bounds: e.g. an AFM scan with the paper's fixed psi = 0.52 can imply H = 58.5 GPa.
+:func:`one_line_warnings` prints the :class:`~pipeline.physics.material_bounds.PhysicsWarning` of
+derived material parameters as one line. The checks of this module decide what runs, not what a
+stage computes: :mod:`pipeline.code_version` leaves this module out of the stages' code keys.
 """
 
 from __future__ import annotations
@@ -23,15 +23,11 @@ from pathlib import Path
 from typing import Any
 from urllib.parse import urlsplit
 
-from .physics.statistics import plasticity_index_gw
+from .physics.material_bounds import PhysicsWarning
 
 
 class OptionError(ValueError):
     """A command-line option is invalid for this stage or scene (one line, names the option)."""
-
-
-class PhysicsWarning(UserWarning):
-    """A derived material parameter lies outside physical bounds; results may be meaningless."""
 
 
 #: Seconds to wait for a TCP connection to ``--scheduler`` before giving up.
@@ -39,13 +35,6 @@ CONNECT_TIMEOUT_S = 3.0
 #: Largest sweep grid (protrusions x roughness sets x damping ratios) run without ``--yes``:
 #: about 30 CPU-minutes at ~20 ms per 2 ms scene on one core (README, "Tests and benchmarks").
 MAX_SCENES = 100_000
-#: Hardness over composite modulus H/E' [1]: real solids lie within these bounds (soft metals
-#: ~1e-3; diamond and tetrahedral amorphous carbon ~0.1, Tabor's H ~ 3Y with the ideal strength
-#: Y ~ E/10 caps it near 0.3).
-HARDNESS_RATIO_BOUNDS = (1e-3, 0.3)
-#: GW plasticity index [1]: measured engineering surfaces lie within these bounds (Greenwood &
-#: Williamson 1966 report 0.1-100; HDI interfaces are near 0.5, the paper's 0.52).
-PLASTICITY_BOUNDS = (0.05, 100.0)
 
 #: Options and the stages that use them (``run`` uses those of all its stages; ``--force`` and
 #: ``--out`` apply to every stage). ``--channel``/``--detrend`` act only on AFM files given directly.
@@ -134,16 +123,20 @@ def check_grid(scene: Any, yes: bool = False, limit: int = MAX_SCENES) -> None:
                           f"ratios) exceed {limit:,}; pass --yes to run them anyway")
 
 
-def check_report_histories(scene: Any, tol: float = 1e-6) -> None:
-    """Every protrusion of ``report.histories_nm`` lies on the sweep's protrusion grid."""
+def check_report_histories(scene: Any) -> None:
+    """Every protrusion of ``report.histories_nm`` is a point of the sweep's protrusion grid, to the
+    1e-9 nm the sweep matches them with (:func:`pipeline.stages.sweep_grid.range_grid`, without
+    building the grid)."""
+    from .stages.sweep_grid import range_count
     g = scene["sweep"]["protrusion_nm"]
+    n = range_count(g)
     off = []
     for h in scene["report"]["histories_nm"] or []:
         j = round((h - g["start"]) / g["step"])
-        if not (g["start"] - tol <= h <= g["stop"] + tol) or abs(g["start"] + j * g["step"] - h) > tol:
+        if not 0 <= j < n or abs(round(g["start"] + j * g["step"], 9) - h) >= 1e-9:
             off.append(h)
     if off:
-        raise OptionError(f"report.histories_nm: {', '.join(f'{h:g}' for h in off)} nm not on the sweep grid "
+        raise OptionError(f"report.histories_nm: {', '.join(f'{h:.10g}' for h in off)} nm not on the sweep grid "
                           f"(sweep.protrusion_nm: {g['start']:g} to {g['stop']:g} nm in steps of {g['step']:g}); "
                           "choose protrusions of the grid")
 
@@ -179,30 +172,6 @@ def check_options(stage: str, scene: Any, *, out: str | Path | None = None, sche
         check_report_histories(scene)
     if stage in OPTION_STAGES["scheduler"]:
         check_scheduler(scheduler)
-
-
-def check_materials(E: float, H: float, sigma_s: float, R: float, *, derived: str) -> None:
-    """Warn when the hardness or the GW plasticity index of an interface is outside physical bounds.
-
-    Parameters
-    ----------
-    E, H, sigma_s, R : as :func:`pipeline.physics.statistics.plasticity_index_gw` [Pa, Pa, m, m]
-    derived : ``"hardness"`` (H from the scene's plasticity index) or ``"plasticity_index"`` (psi from the
-        scene's hardness): which one was computed, named in the warning
-    """
-    psi = float(plasticity_index_gw(E, H, sigma_s, R))
-    lo, hi = HARDNESS_RATIO_BOUNDS
-    if not lo <= H / E <= hi:
-        cause = (f"derived from materials.plasticity_index = {psi:.3g} with sigma_s = {sigma_s * 1e9:.3g} nm and "
-                 f"R = {R * 1e6:.3g} um" if derived == "hardness" else "materials.hardness_gpa")
-        warnings.warn(f"hardness H = {H / 1e9:.3g} GPa ({cause}) is {H / E:.3g} E' (E' = {E / 1e9:.3g} GPa), outside "
-                      f"the physical range {lo:g}-{hi:g} E'; set materials.hardness_gpa for these surfaces",
-                      PhysicsWarning, stacklevel=2)
-    plo, phi = PLASTICITY_BOUNDS
-    if not plo <= psi <= phi:
-        warnings.warn(f"GW plasticity index psi = {psi:.3g} (from H = {H / 1e9:.3g} GPa, E' = {E / 1e9:.3g} GPa, "
-                      f"sigma_s = {sigma_s * 1e9:.3g} nm, R = {R * 1e6:.3g} um) is outside {plo:g}-{phi:g}, the range "
-                      "of measured surfaces", PhysicsWarning, stacklevel=2)
 
 
 def one_line_warnings() -> None:

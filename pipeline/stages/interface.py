@@ -23,7 +23,7 @@ from ..physics.asperity import critical_interference
 from ..physics.friction import shear_strength
 from ..physics.statistics import (composite_modulus, explicit_statistics, hardness_from_plasticity_gw,
                                   plasticity_index_gw, plasticity_index_ke)
-from ..validation import check_materials
+from ..physics.material_bounds import check_materials
 from ..variables import INTERFACE
 from ..runner import Inputs, Stage, build, ensure
 
