@@ -259,3 +259,24 @@ def test_tables_of_other_roughness_sets_follow_their_own_inputs(tmp_path):
     assert rough.stat().st_mtime_ns == stamp                     # the sweep's key changed, the tables' did not
     sweep_stage.prepare_inputs(damped, tmp_path, roughness_sets(damped), force=True)
     assert rough.stat().st_mtime_ns != stamp
+
+
+def test_each_roughness_set_flies_on_its_own_summit_datum(tmp_path):
+    """Without contact or adhesion no set needs interface tables, and the trajectory does not depend
+    on the roughness: each set's clearance is the scene's shifted by the difference of McCool's y_s
+    (explicit statistics, SPEC.md 1), exactly. (Every set was given the scene's y_s before.)"""
+    from pipeline.physics.statistics import explicit_statistics
+    scene = load_scene(ROOT / "configs" / "sweep-3x3.toml",
+                       ['scene.effects=["air_bearing", "pitch", "dmw"]', "sweep.damping_ratio=[0.05]",
+                        "sweep.protrusion_nm={start=0.0, stop=2.0, step=1.0}", "report.histories_nm=[]"])
+    ds = read_dataset(sweep_stage.run_sweep(scene, tmp_path))
+    sets = roughness_sets(scene)
+    y_s = {label: explicit_statistics(t["sigma_nm"], t["summit_radius_um"], t["summit_density_per_um2"])["y_s"] / 1e-9
+           for label, t in sets.items()}
+    assert len(set(y_s.values())) == 3
+    ref = ds["min_clearance"].sel(roughness="paper", damping=0.05).values
+    for label in sets:
+        got = ds["min_clearance"].sel(roughness=label, damping=0.05).values
+        np.testing.assert_allclose(got - ref, -(y_s[label] - y_s["paper"]), rtol=0, atol=1e-9)
+        np.testing.assert_allclose(ds["fhm_bv"].sel(roughness=label).values, ds["fhm_bv"].sel(roughness="paper").values,
+                                   rtol=1e-12)

@@ -176,8 +176,9 @@ def run_batch(scene: Any, batch: Batch, interface_path: str | None, dmw_path: st
     The dataset comes back with the path so that the sweep assembles what this run computed from
     memory and reads back only the parts of an earlier, interrupted run.
 
-    ``k``: contact criterion constant [1] (``None`` without the contact effect); ``history_nm``:
-    protrusions [nm] whose time histories the part keeps.
+    ``scene``: the sweep's scene with the batch's roughness set; ``k``: contact criterion constant [1]
+    (``None`` without the contact effect); ``history_nm``: protrusions [nm] whose time histories the
+    part keeps.
     """
     model = batch_model(scene, interface_path, dmw_path, k, batch.damping)
     rows, hist_rows = [], []
@@ -281,9 +282,13 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset | None]:
                 log.info("sweep: batch %d: part %s: recomputed", b.index, why)
             todo.append(b)
     log.info("sweep: %d batches, %d to run", len(batches), len(todo))
+    # each batch runs the scene with its roughness set: the tables are the set's, and so must be the
+    # scene the model reads (y_s of explicit statistics when a set needs no tables)
+    set_scenes = {label: scene if table == dict(scene["roughness"]) else scene.replace(roughness=dict(table))
+                  for label, table in sets.items()}
     # time histories of the first realisation only (the scene's own record)
-    tasks = [(scene, b, interface_paths[b.label], dmw_paths[b.realisation], k, str(_part_path(parts, b)), key,
-              hist_nm if b.realisation == 0 else ()) for b in todo]
+    tasks = [(set_scenes[b.label], b, interface_paths[b.label], dmw_paths[b.realisation], k,
+              str(_part_path(parts, b)), key, hist_nm if b.realisation == 0 else ()) for b in todo]
     bar = _progress(len(batches), len(batches) - len(todo))
     done = [0]
     stop_after, on_batch = opts.get("stop_after"), opts.get("on_batch")
@@ -308,8 +313,9 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset | None]:
             bar.close()
     log.info("sweep: batch phase %.2f s for %d batches", batch_seconds, len(todo))
     inputs.record(compute_seconds=round(batch_seconds, 3), batches_run=len(todo), batches=len(batches))
-    first = interface_paths[next(iter(sets))]
-    model = sl.build_model(scene, *batch_inputs(first, dmw_path), k)
+    first = next(iter(sets))  # (its set's scene and the scene's damping ratio: models the batches built)
+    model = batch_model(set_scenes[first], interface_paths[first], dmw_path, k,
+                        float(scene["air_bearing"]["damping_ratio"]))
     attrs = model_attrs(model, k_source)
     return assemble(scene, out, prot, list(sets), damp, batches, key, k_source, attrs, seeds, computed)
 
@@ -325,7 +331,7 @@ def run_sweep(scene: Any, out: Path, scheduler: str | None = None, workers: int 
 def assemble(scene: Any, out: Path, prot: np.ndarray, labels: list[str], damp: list[float], batches: list[Batch],
              key: str, k_source: str, attrs: dict, seeds: list[int] | None = None,
              computed: dict[str, xr.Dataset] | None = None) -> dict[str, xr.Dataset | None]:
-    """``sweep.nc`` (and ``sweep_histories.nc``) filled from the part files, one part at a time.
+    """``sweep.nc`` (and ``sweep_histories.nc``) filled from the parts, in batch order.
 
     ``computed``: the parts run by this call (path -> dataset, as written), used as they are; every
     other part is read from its file after :func:`part_problem` has accepted it.
