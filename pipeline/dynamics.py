@@ -55,10 +55,24 @@ accuracy knob of the accuracy stage. Crossings further apart than the dwell are 
 
 from __future__ import annotations
 
+import os
+
+import numba
 import numpy as np
 from numba import njit
 
+from .code_version import code_key
 from .physics import air_bearing as ab
+
+# numba's on-disk cache of a jitted function checks the timestamp of the file that holds it, not of
+# the files whose functions it inlines (the air-bearing laws of pipeline.physics.air_bearing): with an
+# edited law the kernel would load its old machine code while the runner (which keys on the code)
+# recomputes the results. So the functions of this module are cached in a folder named by the code
+# key of this module and of what it imports; the folder is set while they are decorated (numba picks
+# a function's cache folder then) and numba's setting is restored at the end of the module.
+_NUMBA_CACHE_DIR = numba.config.CACHE_DIR
+numba.config.CACHE_DIR = os.path.join(_NUMBA_CACHE_DIR or os.path.join(os.path.dirname(__file__), "__pycache__"),
+                                      f"numba-{code_key(__name__)[:16]}")
 
 # Layout of the parameter vector ``p`` (all SI).
 (P_M, P_I, P_LF, P_LR, P_LC, P_HCG, P_KF, P_KR, P_CF, P_CR, P_G0, P_N, P_FR0, P_FH0, P_DELTA, P_AN,
@@ -668,3 +682,6 @@ def integrate(y0, t_end, t_out, p, dmw, cp, pa, ft, pitch, tfs, rlin, rtol, atol
         # step growth 0.9 e^(-1/5) in [0.2, 5]; e < (0.9/5)^5 gives the cap without calling pow()
         h = h * (5.0 if e < 1.889568e-4 else max(0.2, 0.9 * e ** -0.2))
     return Y, C, info, ext
+
+
+numba.config.CACHE_DIR = _NUMBA_CACHE_DIR  # (the kernels above have their folder: see the imports)

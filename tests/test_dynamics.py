@@ -8,6 +8,8 @@ configs/paper-2009.toml do not move these numbers.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -430,3 +432,16 @@ def test_effects_change_the_dynamics_only_through_their_forces():
     b = sl.run_model(build(make_scene([e for e in ALL if e != "friction"], dmw={"rms_nm": 0.163})), 5 * NM)
     assert not a.contact.any()
     np.testing.assert_array_equal(a.state, b.state)
+
+
+def test_kernel_cache_folder_is_keyed_by_the_code_the_kernel_inlines():
+    """numba checks only the timestamp of the file holding a jitted function; the kernel inlines the
+    air-bearing laws of another file, so its cache folder is named by the code key of dynamics and of
+    what it imports (air_bearing included): an edited law compiles anew instead of loading old code."""
+    import numba
+    from pipeline import code_version as cv
+    assert "pipeline.physics.air_bearing" in cv.modules("pipeline.dynamics")
+    folder = f"numba-{cv.code_key('pipeline.dynamics')[:16]}"
+    for fn in (dyn.integrate, dyn.rhs, dyn._rear_power, dyn._stiffening_potential):
+        assert folder in Path(fn._cache._cache_path).parts
+    assert folder not in str(numba.config.CACHE_DIR)  # numba's own setting is restored after the module
