@@ -18,6 +18,7 @@ import os
 import signal
 import sys
 import threading
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable, Sequence
 
@@ -125,7 +126,7 @@ def draw_all(jobs: Sequence[tuple[Callable[..., Path], tuple, dict]], workers: i
     (default: the cores this process may use) *forked* processes, which inherit matplotlib already
     imported and the datasets: only an index goes to a worker and a path comes back. Anywhere else
     (another OS, or threads that might hold a lock at the fork) they are drawn here, in order. A
-    figure's error is raised here either way. The paper scene's 8 figures: ``make bench``, row
+    figure's error is raised here either way (a worker that dies: ``BrokenProcessPool``). The paper scene's 8 figures: ``make bench``, row
     "report".
     """
     jobs = list(jobs)
@@ -137,10 +138,13 @@ def draw_all(jobs: Sequence[tuple[Callable[..., Path], tuple, dict]], workers: i
         importlib.import_module(module)  # once, before the fork (~0.7 s every worker would pay again)
     global _JOBS
     _JOBS = jobs
+    # (an executor, not multiprocessing.Pool: a worker that dies, e.g. killed for memory, raises
+    # BrokenProcessPool here where Pool.map would wait for its lost figure forever)
+    pool = ProcessPoolExecutor(n, mp_context=multiprocessing.get_context("fork"), initializer=_worker_init)
     try:
-        with multiprocessing.get_context("fork").Pool(n, initializer=_worker_init) as pool:
-            return pool.map(_draw, range(len(jobs)), chunksize=1)
+        return list(pool.map(_draw, range(len(jobs))))
     finally:
+        pool.shutdown(wait=True, cancel_futures=True)
         _JOBS = []
 
 

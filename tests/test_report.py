@@ -347,6 +347,10 @@ def _broken_figure(path):
     raise ValueError(f"{path}: this figure cannot be drawn")
 
 
+def _dying_figure(path):
+    os._exit(3)  # (a worker killed mid-figure, e.g. by the out-of-memory killer)
+
+
 def test_figures_drawn_by_worker_processes_are_the_figures_drawn_in_process(tmp_path):
     """``plots.draw_all`` gives the same PNG bytes, in the same order, whether the figures are drawn
     in this process or by its forked workers, and a figure's error reaches the caller."""
@@ -364,3 +368,8 @@ def test_figures_drawn_by_worker_processes_are_the_figures_drawn_in_process(tmp_
     with pytest.raises(ValueError, match="cannot be drawn"):
         plots.draw_all([(_line_figure, (tmp_path / "c.png", 1.0), {}), (_broken_figure, (tmp_path / "d.png",), {})],
                        workers=2)
+    if forked:  # a dead worker is an error, not a wait for its figure forever
+        from concurrent.futures.process import BrokenProcessPool
+        with pytest.raises(BrokenProcessPool):
+            plots.draw_all([(_line_figure, (tmp_path / "e.png", 1.0), {}), (_dying_figure, (tmp_path / "f.png",), {})],
+                           workers=2)
