@@ -13,8 +13,8 @@ declaring itself (no list to edit). A declaration says
 
 The runner gives each stage an *inputs key*: the SHA-256 of the scene keys it reads, the bytes of
 the files it reads, the keys of its upstream stages (so a change propagates downstream), the options
-that change its result, its ``version`` and its code (the source of its module and of the ``pipeline``
-modules that module imports, :func:`pipeline.code_version.code_key`). Every dataset it writes carries that key (attribute
+that change its result and its code (the source of its module and of the ``pipeline`` modules that
+module imports, :func:`pipeline.code_version.code_key`). Every dataset it writes carries that key (attribute
 ``inputs_key``); non-NetCDF outputs are listed with their hashes in ``.hdi/<stage>.json``. A stage
 whose outputs carry the key of its current inputs is not recomputed; otherwise it is, and everything
 downstream of it too. Datasets are written through :func:`pipeline.io.write_dataset` (temporary file
@@ -63,7 +63,6 @@ STAGING_PREFIX = ".hdi-staging-"
 _TMP_GLOBS = (".*.tmp", "*/.*.tmp", "*/*/.*.tmp")
 
 Scene = Any
-Result = "xr.Dataset | Mapping[str, xr.Dataset | None]"
 
 
 def _constant(value: Any) -> Callable[[Scene], Any]:
@@ -116,9 +115,6 @@ class Stage:
     finish
         ``finish(scene, out, options)``: run after the stage was asked for and is current (computed or
         not), for side effects outside the results folder (``report --readme``).
-    version
-        Bump to recompute old outputs when something the code key cannot see changes the results
-        (the code of the stage and of the modules it imports is keyed already).
     doc
         One line for ``hdi --help``.
     """
@@ -137,7 +133,6 @@ class Stage:
     derived: Callable[[Scene], Mapping[str, Any]] = _constant({})
     optional: tuple[str, ...] = ()
     finish: Callable[[Scene, Path, dict], None] | None = None
-    version: int = 1
     doc: str = ""
 
     def output_names(self, scene: Scene) -> tuple[str, ...]:
@@ -426,7 +421,7 @@ class Runner:
         if name not in self._keys:
             st = self.stage(name)
             payload = {
-                "stage": name, "version": st.version, "code": code_key(st.compute.__module__),
+                "stage": name, "code": code_key(st.compute.__module__),
                 "scene": scene_part(self.scene, st.reads, st.excludes),
                 "files": {role: self._hash(p) for role, p in self.files(name).items()},
                 "upstream": {u: self.key(u) for u in st.upstream_names(self.scene)},

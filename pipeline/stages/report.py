@@ -871,7 +871,6 @@ STAGE = Stage(
     outputs=tuple(f"figures/{f}" for f in FIGURES + (ENSEMBLE_FIGURE,)) + ("report/summary.csv", "report/summary.md",
                                                                           "report/comparison.md"),
     reads=("*",), upstream=_upstream, optional=("identify",), finish=_finish, order=60, main_job=True,
-    version=3,  # 2: long histories drawn as their envelope; 3: ensemble.png declared (was drawn, then dropped)
     doc="the paper's figures, a summary table and the comparison with the paper")
 
 
