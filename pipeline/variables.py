@@ -271,7 +271,7 @@ INTERFACE = _group(
 #: ``calibration.nc`` (:mod:`pipeline.stages.calibrate`).
 CALIBRATION = _group(
     V("k", "1", "contact criterion constant", dims=("k",)),
-    V("touchdown", "nm", "first protrusion of the sweep grid in contact", dims=("k",)),
+    V("touchdown", "nm", "first protrusion of the sweep grid in contact", NM, dims=("k",)),
     V("k_calibrated", "1", "calibrated contact criterion constant k (NaN: none admissible)"),
     V("k_low", "1", "lower (exclusive) end of the admissible k interval"),
     V("k_high", "1", "upper (inclusive) end of the admissible k interval"),
