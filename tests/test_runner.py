@@ -79,7 +79,7 @@ def test_dmw_record_edited_in_place_recomputes_everything_downstream(tmp_path):
     assert runner.Runner(with_contact, out).key("calibrate") != cal_key   # the change reaches calibrate
     path = sweep_stage.run_sweep(scene, out, scheduler="synchronous")
     assert float(read_dataset(out / "dmw.nc").rms) == pytest.approx(2 * rms1, rel=1e-9)
-    # flying, the FHM follows the DMW amplitude (within 3 %: the bearing's rear law is mildly nonlinear);
+    # flying, the FHM follows the DMW amplitude (within 5 %: the bearing's rear law is mildly nonlinear);
     # the stale result was the old FHM, off by a factor of 2
     np.testing.assert_allclose(read_dataset(path).fhm_bv.values, 2 * fhm1, rtol=0.05)
     fresh = sweep_stage.run_sweep(scene, tmp_path / "fresh", scheduler="synchronous")

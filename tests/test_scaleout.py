@@ -23,9 +23,8 @@ DASK = Path(sys.executable).with_name("dask")
 SMALL = ["solver.duration_ms=0.6", "solver.transient_ms=0.2", "contact.k=0.5",
          "sweep.protrusion_nm={start=9.5, stop=10.5, step=0.5}", "sweep.batch_size=2",
          "sweep.damping_ratio=[0.03, 0.05]", "sweep.histories_nm=[10.0]"]
-#: Global attributes that legitimately differ between two runs: when (history), how long the batch
-#: phase took (compute_seconds), and the input files' hashes, keyed by path (another --out folder) and
-#: taken over bytes that include the input's own ``history`` timestamp.
+#: Global attributes that legitimately differ between two runs: when they ran (history). Timings go to
+#: the run log, and the inputs are identified by the runner's keys, not by paths or file bytes.
 DIFFERING = ("history",)
 
 

@@ -236,8 +236,6 @@ def dataset(ident: Identification, params: Sequence[Parameter], out: dict[str, A
     data["cost"] = var(costs, "evaluation", "1", "objective: sum of squared normalised residuals")
     data["best_abs_residual"] = var(np.nanmin(np.abs(res), axis=0), "target", "1",
                                     "smallest |residual| of each target over all evaluations")
-    data["tolerance"] = var(np.array([t.tolerance for t in tl]), "target", "1",
-                            "tolerance of each target, in the target's units (see value_<target>)")
     data["seconds"] = var(np.array([r["seconds"] for r in recs]), "evaluation", "s", "wall time of the evaluation")
     data["kernel_seconds"] = var(np.array([r["kernel_seconds"] for r in recs]), "evaluation", "s",
                                  "time in the integrator (run_model) of the evaluation")

@@ -11,9 +11,11 @@ Methods (SALib [HU17]_):
 
 * **Morris** elementary effects [Mor91]_ with the improved measure ``mu*`` [CCS07]_:
   ``morris_trajectories`` trajectories of ``parameters + 1`` points on a ``morris_levels`` grid.
-  ``mu*`` [output units] is the mean absolute change of an output when the parameter moves by
-  ``levels / (2 (levels - 1))`` of its range (SALib's step), ``sigma`` the spread of the effects
-  (interaction or nonlinearity); ``mu*`` has a bootstrap confidence interval.
+  ``mu*`` [output units] is the mean of ``|Delta y| / Delta`` over the trajectories, with the step
+  ``Delta = levels / (2 (levels - 1))`` a fraction of the parameter's range (SALib's scaling): the
+  output change extrapolated to the whole range (``y = a x`` gives ``|a|`` times the range);
+  ``sigma`` is the spread of the effects (interaction or nonlinearity); ``mu*`` has a bootstrap
+  confidence interval.
 * **Sobol** first-order ``S1`` and total ``ST`` indices [Sal02]_ [Sal10]_ from the Saltelli
   extension of a Sobol' sequence, ``N (parameters + 2)`` evaluations (``sobol_samples = N``), with
   bootstrap confidence intervals.
@@ -125,7 +127,7 @@ def sobol(ev: Evaluator, params: Sequence[Parameter], scene: Any) -> tuple[np.nd
 
 
 _INDEX_META = {
-    "mu_star": ("morris", "Morris mu*: mean absolute elementary effect", None),
+    "mu_star": ("morris", "Morris mu*: mean absolute elementary effect, scaled to the parameter's whole range", None),
     "mu_star_conf": ("morris", "half-width of the bootstrap confidence interval of mu*", None),
     "sigma": ("morris", "Morris sigma: standard deviation of the elementary effects", None),
     "mu": ("morris", "Morris mu: mean elementary effect", None),
