@@ -12,6 +12,7 @@ import argparse
 import logging
 import os
 import sys
+import traceback
 from pathlib import Path
 
 from . import runner
@@ -116,6 +117,9 @@ def main(argv: list[str] | None = None) -> int:
             print(f"{stage:>10}: {paths[0] if paths[0].suffix == '.nc' else paths[0].parent}", flush=True)
         return 0
     except (SceneError, DatasetError, FileNotFoundError, ValueError) as exc:
+        # bad input is one line; a ValueError from numerics would be one line too, so -v shows where
+        if args.verbose:
+            traceback.print_exc()
         print(f"hdi {args.stage}: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

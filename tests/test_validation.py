@@ -184,3 +184,15 @@ def test_plasticity_index_derived_from_a_given_hardness_outside_bounds_warns():
     # a very smooth, very hard pair: psi = (94/20) sqrt(1e-12/1e-4) = 4.7e-4 < 0.05
     with pytest.warns(PhysicsWarning, match=r"psi = 0.00047 .* outside 0.05-100"):
         check_materials(E, 20e9, 1e-12, 1e-4, derived="plasticity_index")
+
+
+def test_verbose_shows_where_an_error_came_from(tmp_path, capsys):
+    """An error is one line; with -v its traceback comes first (a ValueError raised by numerics would
+    otherwise be indistinguishable from bad input)."""
+    argv = ["interface", str(PAPER), "--out", str(tmp_path), "--set", "lubricant.thickness_nm=-1"]
+    assert cli.main(argv) == 2
+    quiet = capsys.readouterr().err.strip().splitlines()
+    assert cli.main([*argv, "-v"]) == 2
+    loud = capsys.readouterr().err.strip().splitlines()
+    assert len(quiet) == 1 and "Traceback" not in quiet[0]
+    assert loud[0].startswith("Traceback") and loud[-1] == quiet[0]
