@@ -38,9 +38,15 @@ log = logging.getLogger(__name__)
 LOCAL = ("synchronous", "threads", "processes")
 
 
+def available_cores() -> int:
+    """The cores this process may run on (its CPU affinity: a ``taskset`` or a batch job's share),
+    not the machine's count."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+
+
 def local_workers(workers: int | None, n_tasks: int) -> int:
-    """Workers a local run uses: ``workers`` (default one per core), never more than the tasks."""
-    n = workers if workers else (os.cpu_count() or 1)
+    """Workers a local run uses: ``workers`` (default one per available core), never more than the tasks."""
+    n = workers if workers else available_cores()
     if n < 1:
         raise ValueError(f"workers = {n}: expected an integer >= 1")
     return max(1, min(n, n_tasks))
@@ -125,7 +131,7 @@ def local_cluster(scheduler: str | None = None, workers: int | None = None) -> I
     if scheduler != "processes":
         yield scheduler
         return
-    cluster = _process_cluster(local_workers(workers, os.cpu_count() or 1))
+    cluster = _process_cluster(local_workers(workers, available_cores()))
     try:
         yield cluster.scheduler_address
     finally:

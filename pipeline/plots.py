@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import importlib
 import multiprocessing
-import os
 import signal
 import sys
 import threading
@@ -130,8 +129,8 @@ def draw_all(jobs: Sequence[tuple[Callable[..., Path], tuple, dict]], workers: i
     "report".
     """
     jobs = list(jobs)
-    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
-    n = min(len(jobs), workers or cores)
+    from .fanout import available_cores
+    n = min(len(jobs), workers or available_cores())
     if n < 2 or not sys.platform.startswith("linux") or threading.active_count() > 1:
         return [fn(*args, **kwargs) for fn, args, kwargs in jobs]
     for module in ("matplotlib.figure", "matplotlib.backends.backend_agg"):
