@@ -303,6 +303,24 @@ def clean_orphans(out: Path) -> list[Path]:
 
 
 @contextlib.contextmanager
+def _deciding(out: Path) -> Iterator[None]:
+    """One process at a time decides who holds ``out``'s lock: an exclusive ``flock`` on the folder
+    itself, held while the lock file is read, judged stale, removed and written. Without it two
+    processes could both find a dead holder's lock, and the second remove the first's new one."""
+    try:
+        import fcntl
+    except ImportError:  # (not POSIX: the lock file alone)
+        yield
+        return
+    fd = os.open(out, os.O_RDONLY)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        yield
+    finally:
+        os.close(fd)  # (releases the flock)
+
+
+@contextlib.contextmanager
 def folder_lock(out: str | Path) -> Iterator[Path]:
     """Hold ``out/.hdi.lock`` (re-entrant within a process); refuse when another live process holds it.
 
@@ -323,32 +341,30 @@ def folder_lock(out: str | Path) -> Iterator[Path]:
         return
     me = {"pid": os.getpid(), "host": socket.gethostname(),
           "started": _dt.datetime.now(_dt.timezone.utc).replace(microsecond=0).isoformat()}
-    for _ in range(3):
-        try:
-            fd = os.open(path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
-        except FileExistsError:
+    with _deciding(out):
+        for _ in range(2):
             try:
-                other = json.loads(path.read_text() or "{}")
-            except (OSError, ValueError):
-                other = {}
-            pid, host = other.get("pid"), other.get("host")
-            if isinstance(pid, int) and host == me["host"] and not _alive(pid):
-                log.warning("%s: taking over the lock of hdi process %d, which is gone", out, pid)
-                path.unlink(missing_ok=True)
-                continue
-            if not other:  # being written this instant, or garbage: give the writer a moment
-                time.sleep(0.2)
-                if path.is_file() and not path.read_text():
+                fd = os.open(path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+            except FileExistsError:
+                try:
+                    other = json.loads(path.read_text() or "{}")
+                except (OSError, ValueError):
+                    other = {}
+                pid, host = other.get("pid"), other.get("host")
+                if not other or (isinstance(pid, int) and host == me["host"] and not _alive(pid)):
+                    # (an empty or unreadable file is garbage: a holder writes its file before it
+                    # lets the next process decide)
+                    log.warning("%s: taking over the lock of hdi process %s, which is gone", out, pid)
                     path.unlink(missing_ok=True)
-                continue
-            raise FolderBusy(f"{out}: in use by hdi process {pid} on {host} since {other.get('started')} "
-                             f"(lock file {path}); wait for it to finish, or delete the lock file if that "
-                             "process no longer exists") from None
-        with os.fdopen(fd, "w") as fh:
-            json.dump(me, fh)
-        break
-    else:
-        raise FolderBusy(f"{out}: could not take the lock file {path}")
+                    continue
+                raise FolderBusy(f"{out}: in use by hdi process {pid} on {host} since {other.get('started')} "
+                                 f"(lock file {path}); wait for it to finish, or delete the lock file if that "
+                                 "process no longer exists") from None
+            with os.fdopen(fd, "w") as fh:
+                json.dump(me, fh)
+            break
+        else:
+            raise FolderBusy(f"{out}: could not take the lock file {path}")
     _HELD[path] = 1
     try:
         clean_orphans(out)

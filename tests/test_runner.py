@@ -344,6 +344,34 @@ def test_second_process_on_a_folder_is_refused(tmp_path, paper_config, capsys):
     assert (tmp_path / "dmw.nc").is_file() and not (tmp_path / runner.LOCK_NAME).exists()
 
 
+_CONTENDER = """
+import sys, time
+from pipeline import runner
+alive = runner._alive
+runner._alive = lambda pid: (time.sleep(0.5), alive(pid))[1]   # widen the check-and-take window
+try:
+    with runner.folder_lock(sys.argv[1]):
+        print("HOLDS", flush=True)
+        time.sleep(1.5)
+except runner.FolderBusy:
+    print("REFUSED", flush=True)
+"""
+
+
+def test_two_processes_taking_over_a_stale_lock_do_not_both_hold_it(tmp_path):
+    """Two processes start on a folder whose lock a dead process left: exactly one takes it over and
+    the other is refused (before, both could find it stale, and the second removed the first's)."""
+    dead = subprocess.Popen([sys.executable, "-c", "pass"])
+    dead.wait()
+    (tmp_path / runner.LOCK_NAME).write_text(json.dumps({"pid": dead.pid, "host": os.uname().nodename,
+                                                         "started": "2026-01-01T00:00:00+00:00"}))
+    procs = [subprocess.Popen([sys.executable, "-c", _CONTENDER, str(tmp_path)], cwd=ROOT, stdout=subprocess.PIPE,
+                              text=True) for _ in range(2)]
+    said = sorted(p.communicate(timeout=60)[0].strip() for p in procs)
+    assert said == ["HOLDS", "REFUSED"]
+    assert not (tmp_path / runner.LOCK_NAME).exists()
+
+
 def test_orphaned_temporaries_are_cleaned(tmp_path, paper_config):
     (tmp_path / sweep_stage.PARTS).mkdir()
     orphans = [tmp_path / ".sweep.nc.k2j3h4.tmp", tmp_path / sweep_stage.PARTS / ".batch-00003.nc.x8y.tmp",
