@@ -351,10 +351,9 @@ def summarize(run: Run, hist: dict[str, np.ndarray] | None = None) -> dict[str, 
     c = hist["clearance"][win]
     lo, hi = run.d_extremes
     exact = np.isfinite(lo) and np.isfinite(hi)
-    if m.fhm_measure == "peak-to-peak" and exact:
-        fhm_bv = float(100.0 * (hi - lo) / m.p[dyn.P_FH0])
-    else:
-        fhm_bv = fhm(d, m.p[dyn.P_FH0], m.fhm_measure)
+    # peak-to-peak of the exact extremes (between samples too) when the kernel found them
+    exact_pp = m.fhm_measure == "peak-to-peak" and exact
+    fhm_bv = float(fhm(np.array([lo, hi]) if exact_pp else d, m.p[dyn.P_FH0], m.fhm_measure))
     out = {
         "fhm_bv": fhm_bv,
         "clearance": float(np.mean(c)),
