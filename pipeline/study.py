@@ -246,32 +246,27 @@ def _made(what: _Made) -> Any:
     return what.make()
 
 
-def stage_key(scene: Any, stage: str) -> str:
-    """The runner's inputs key of ``stage`` for ``scene`` (:meth:`pipeline.runner.Runner.key`; AFM files
-    hashed by content): equal keys mean equal datasets."""
-    return Runner(scene, ".").key(stage)
-
-
 def candidate_inputs(scene: Any, inputs: Inputs) -> tuple[Any, tuple[np.ndarray, float] | None]:
     """Interface tables and DMW record of a candidate: the base files when unchanged, else rebuilt."""
     from .stages import dmw as dmw_stage
     from .stages.interface import build_tables, roughness_statistics
     from .stages.simulate import needs_interface
     from .physics import dmw as dmw_phys
+    key = Runner(scene, ".").key  # (one runner: its file hashes and upstream keys computed once)
     interface = None
     if needs_interface(scene):
-        ikey = stage_key(scene, "interface")
+        ikey = key("interface")
         if inputs.interface_path and ikey == inputs.interface_key:
             interface = _made(_Made("interface", ikey,
                                     lambda: read_dataset(inputs.interface_path, stage="interface")))
         else:
             # AFM statistics once per process, not an AFM analysis per candidate (roughness_statistics
             # without a folder makes roughness.nc afresh in a temporary one)
-            stats = _made(_Made("roughness", stage_key(scene, "roughness"), lambda: roughness_statistics(scene)))
+            stats = _made(_Made("roughness", key("roughness"), lambda: roughness_statistics(scene)))
             interface = _made(_Made("interface", ikey, lambda: build_tables(scene, stats)))
     record = None
     if scene.has("dmw"):
-        dkey = stage_key(scene, "dmw")
+        dkey = key("dmw")
         if inputs.dmw_path and dkey == inputs.dmw_key:
             record = _made(_Made("dmw", dkey, lambda: dmw_stage.load(inputs.dmw_path)[1:]))
         else:
