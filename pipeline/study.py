@@ -251,7 +251,6 @@ def candidate_inputs(scene: Any, inputs: Inputs) -> tuple[Any, tuple[np.ndarray,
     from .stages import dmw as dmw_stage
     from .stages.interface import build_tables, roughness_statistics
     from .stages.simulate import needs_interface
-    from .physics import dmw as dmw_phys
     key = Runner(scene, ".").key  # (one runner: its file hashes and upstream keys computed once)
     interface = None
     if needs_interface(scene):
@@ -274,9 +273,7 @@ def candidate_inputs(scene: Any, inputs: Inputs) -> tuple[Any, tuple[np.ndarray,
             if s["source"] != "synthetic":
                 raise ValueError("a [dmw] key of a measured record cannot be a free parameter (the record is "
                                  "used as measured)")
-            record = _made(_Made("dmw", dkey, lambda: (dmw_phys.synthesize(s["rms_nm"], s["band_hz"], s["exponent"],
-                                                                           s["duration_s"], s["sample_rate_hz"],
-                                                                           s["seed"]), s["sample_rate_hz"])))
+            record = _made(_Made("dmw", dkey, lambda: (dmw_stage.synthetic_record(s), s["sample_rate_hz"])))
     return interface, record
 
 

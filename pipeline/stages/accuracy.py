@@ -281,12 +281,10 @@ class _RunCache:
         return self.tables[key]
 
     def _synth(self, sc: Any) -> np.ndarray:
-        from ..physics import dmw as phys
         from . import dmw as dmw_stage
         s = dmw_stage.settings(sc)
         if s["source"] == "synthetic":
-            return phys.synthesize(s["rms_nm"], s["band_hz"], s["exponent"], s["duration_s"],
-                                   s["sample_rate_hz"], s["seed"])
+            return dmw_stage.synthetic_record(s)
         import tempfile
         with tempfile.TemporaryDirectory() as tmp:
             _, w, _ = dmw_stage.load(dmw_stage.run(sc, Path(tmp), force=True))

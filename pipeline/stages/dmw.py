@@ -70,6 +70,14 @@ log = logging.getLogger(__name__)
 FILENAME = "dmw.nc"
 
 
+def synthetic_record(s: dict[str, Any]) -> np.ndarray:
+    """The synthetic displacement record [nm] of :func:`settings` ``s`` (``source = "synthetic"``):
+    :func:`pipeline.physics.dmw.synthesize` of its rms, band, exponent, duration, rate and seed."""
+    from ..physics import dmw as phys
+    return phys.synthesize(s["rms_nm"], tuple(s["band_hz"]), s["exponent"], s["duration_s"], s["sample_rate_hz"],
+                           s["seed"])
+
+
 def settings(scene: Any) -> dict[str, Any]:
     """The stage's settings in SI units, with defaults resolved.
 
@@ -197,7 +205,7 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
     pipeline.physics.dmw.DMWError
         For an unusable measured record (nothing is written then).
     """
-    # (imported here: scipy.signal costs about a second, and the sweep's workers only :func:`load`)
+    # (imported here: the sweep's workers only :func:`load`)
     from ..physics import dmw as phys
     s = settings(scene)
     fs, (lo, hi), dur = s["sample_rate_hz"], s["band_hz"], s["duration_s"]
@@ -212,7 +220,7 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
         source = "none"
     elif s["source"] == "synthetic":
         seed = s["seed"]
-        w = phys.synthesize(s["rms_nm"], (lo, hi), s["exponent"], dur, fs, seed)
+        w = synthetic_record(s)
         attrs = {"dmw_quantity": "displacement",
                  "processing": "spectral synthesis (pipeline.physics.dmw.synthesize): complex-normal "
                                "rfft coefficients, power-law amplitudes in the band, zero outside, "
