@@ -19,11 +19,11 @@ from pathlib import Path
 import numpy as np
 
 from benchmarks.common import record, timeit
-from pipeline import slider as sl
-from pipeline.scene import load_scene
+from pipeline.model import slider as sl
+from pipeline.config.scene import load_scene
 from pipeline.stages import calibrate as cal
 from pipeline.stages.simulate import model_inputs
-from pipeline.stages.sweep_grid import protrusion_grid
+from pipeline.config.grid import protrusion_grid
 
 ROOT = Path(__file__).resolve().parents[1]
 PAPER = ROOT / "configs" / "paper-2009.toml"

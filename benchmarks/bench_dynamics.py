@@ -1,4 +1,4 @@
-"""Benchmarks of the slider dynamics (pipeline.dynamics via pipeline.slider), against the naive baseline.
+"""Benchmarks of the slider dynamics (pipeline.model.dynamics via pipeline.model.slider), against the naive baseline.
 
 Rows (targets from the task brief):
 
@@ -34,10 +34,10 @@ import numpy as np
 
 from benchmarks.common import record, timeit
 from benchmarks.naive import simulate_naive
-from pipeline import slider as sl
-from pipeline.scene import load_scene
+from pipeline.model import slider as sl
+from pipeline.config.scene import load_scene
 from pipeline.stages.simulate import model_inputs
-from pipeline.stages.sweep_grid import protrusion_grid
+from pipeline.config.grid import protrusion_grid
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIG = ROOT / "configs" / "paper-2009.toml"
@@ -50,7 +50,7 @@ FRESH = textwrap.dedent("""
     import sys
     from pipeline import slider as sl
     from pipeline.io import read_dataset
-    from pipeline.scene import load_scene
+    from pipeline.config.scene import load_scene
     from pipeline.stages import dmw as dmw_stage
     t1 = time.perf_counter()
     out = sys.argv[1]

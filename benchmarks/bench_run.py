@@ -6,7 +6,7 @@ first (the CLI and the stage registry), the floor no recomputation can go below.
 seconds of the last run are kept.
 
 Then the report's figures, in this process: drawn by the pool of forked workers
-(:func:`pipeline.plots.draw_all`, the default) against one after the other (``workers=1``).
+(:func:`pipeline.analyses.plots.draw_all`, the default) against one after the other (``workers=1``).
 """
 
 from __future__ import annotations
@@ -45,9 +45,9 @@ def run(results: list[dict]) -> None:
 
 def report_figures(results: list[dict], out: Path) -> None:
     """The report stage in process on the datasets of ``out``: figures by forked workers, then in order."""
-    from pipeline import plots
+    from pipeline.analyses import plots
     from pipeline.runner import Inputs
-    from pipeline.scene import load_scene
+    from pipeline.config.scene import load_scene
     from pipeline.stages import report
     scene = load_scene(PAPER)
     draw_all = plots.draw_all

@@ -38,10 +38,10 @@ def _hdi(*args: str, label: str | None = None) -> float:
 
 def kernel_seconds(config: str, inputs: Path, repeat: int = 3) -> list[float]:
     """Sequential kernel time [s] of the paper sweep: ``run_model`` of every protrusion, in process."""
-    from pipeline import slider as sl
-    from pipeline.scene import load_scene
+    from pipeline.model import slider as sl
+    from pipeline.config.scene import load_scene
     from pipeline.stages.simulate import model_inputs, resolve_k
-    from pipeline.stages.sweep_grid import protrusion_grid
+    from pipeline.config.grid import protrusion_grid
     scene = load_scene(config)
     interface, record_ = model_inputs(scene, inputs)
     model = sl.build_model(scene, interface, record_, resolve_k(scene, inputs)[0])

@@ -1,13 +1,13 @@
 """The naive baseline: the slider model as a competent user would write it first.
 
-Same physics as :func:`pipeline.dynamics.rhs` (SPEC.md section 4): linear front pad, nonlinear rear
+Same physics as :func:`pipeline.model.dynamics.rhs` (SPEC.md section 4): linear front pad, nonlinear rear
 pad ``F_r0 [(g0/g)^n - 1]``, the disk under each point moving with the DMW record delayed by the
 travel time, adhesion ``-A_n p_a(d)`` always, contact ``A_n p_c(d) - c_c d'`` and friction
 ``A_n tau(d)`` (moment ``-h_cg Q``) while ``d < k sigma``. Written the plain way:
 
 * :func:`scipy.integrate.solve_ivp` with ``RK45`` (the same Dormand-Prince 5(4) pair as the project's
   kernel) at the scene's ``rtol``, per-component ``atol`` and ``max_step`` (the same values the
-  project uses, taken from :func:`pipeline.slider.build_model`);
+  project uses, taken from :func:`pipeline.model.slider.build_model`);
 * a Python right-hand side that interpolates the ``interface.nc`` tables with :func:`numpy.interp`;
 * the contact switch as a terminal ``solve_ivp`` event on ``g = d - k sigma`` (direction: leaving
   the current mode), integration restarted in the new mode from the event state; after a switch the
@@ -26,7 +26,7 @@ Nothing here is deliberately slow: the model constants are computed once, the ri
 plain scalar Python with no allocation beyond the returned list, and there is no per-step Python
 logic other than what ``solve_ivp`` does itself.
 
-:func:`simulate_naive` returns the same steady-window scalars as :func:`pipeline.slider.summarize`
+:func:`simulate_naive` returns the same steady-window scalars as :func:`pipeline.model.slider.summarize`
 (SI units, same definitions), computed here directly from the naive run: means over the output grid;
 the peak-to-peak (FHM/BV) and minimum of the separation, which the project takes from the exact
 extremes tracked by its integrator, from ``solve_ivp``'s dense output sampled 10x finer than the
@@ -42,11 +42,11 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.interpolate import CubicSpline
 
-from pipeline import dynamics as dyn
+from pipeline.model import dynamics as dyn
 
 #: Longest solve_ivp segment [s] with interface tables: the step cap is renewed at each segment start.
 SEGMENT = 20e-6
-from pipeline import slider as sl
+from pipeline.model import slider as sl
 from pipeline.physics.geometry import effective_radius, nominal_area
 
 NM, UM, MM = 1e-9, 1e-6, 1e-3
@@ -115,7 +115,7 @@ def simulate_naive(scene: Any, interface_ds: Any, dmw_tuple: tuple[np.ndarray, f
     Returns
     -------
     dict
-        The keys of :func:`pipeline.slider.summarize` (SI units) plus ``rhs_evaluations``,
+        The keys of :func:`pipeline.model.slider.summarize` (SI units) plus ``rhs_evaluations``,
         ``segments`` (``solve_ivp`` calls) and ``contact_switches``.
     """
     eff = scene.effects
@@ -130,7 +130,7 @@ def simulate_naive(scene: Any, interface_ds: Any, dmw_tuple: tuple[np.ndarray, f
     a = scene["air_bearing"]
     FH0 = a["flying_height_nm"] * NM
     delta = protrusion_nm * NM
-    # the separation datum from its one home (pipeline.dynamics.separation_at, SPEC.md 7.2):
+    # the separation datum from its one home (pipeline.model.dynamics.separation_at, SPEC.md 7.2):
     # d = d_nom + z - l_c theta - w with d_nom = FH0 - delta - y_s
     p_sep = model.p.copy()
     p_sep[dyn.P_DELTA] = delta
@@ -190,7 +190,7 @@ def simulate_naive(scene: Any, interface_ds: Any, dmw_tuple: tuple[np.ndarray, f
     def gap(t: float, y: np.ndarray) -> float:
         return d_nom + y[0] - lc * y[1] - disk(t + off_c)[0] - ksig
 
-    # output grid, as pipeline.slider.run_model, refined REFINE times for the peak-to-peak of d (the
+    # output grid, as pipeline.model.slider.run_model, refined REFINE times for the peak-to-peak of d (the
     # project tracks the exact extremes of d; sampling 10x finer than the output grid comes within
     # ~0.3 % of them for the content of these runs, while the output grid alone aliases by a few %)
     n_coarse = int(round(model.duration / model.output_step)) + 1
@@ -278,7 +278,7 @@ def simulate_naive(scene: Any, interface_ds: Any, dmw_tuple: tuple[np.ndarray, f
 
 def _summarize(scene, model, t_fine, Y_fine, C_fine, refine, disk, off_c, x, pa, pc, ar, ft, An, ksig, cc, FH0,
                p_sep, delta, s_n, has_contact) -> dict[str, float]:
-    """The steady-window scalars of :func:`pipeline.slider.summarize`, from the naive run.
+    """The steady-window scalars of :func:`pipeline.model.slider.summarize`, from the naive run.
 
     Means over the output grid (every ``refine``-th sample); the peak-to-peak and the minimum of ``d``
     over all samples of the window (``refine`` per output step).

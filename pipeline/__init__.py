@@ -1,6 +1,6 @@
 """HDI dynamics with friction for light-contact recording (Vakis, Lee & Polycarpou 2009).
 
-Stages (``pipeline.stages``) read a scene (``pipeline.scene``) and earlier datasets and write one
+Stages (``pipeline.stages``) read a scene (``pipeline.config.scene``) and earlier datasets and write one
 NetCDF dataset each (``pipeline.io``); the physics lives in pure functions (``pipeline.physics``).
 """
 

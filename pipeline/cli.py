@@ -17,7 +17,7 @@ from pathlib import Path
 
 from . import runner
 from .io import DatasetError, results_dir
-from .scene import SceneError, load_scene
+from .config.scene import SceneError, load_scene
 from .validation import MAX_SCENES, check_options, one_line_warnings
 
 log = logging.getLogger("pipeline")

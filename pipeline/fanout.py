@@ -6,7 +6,7 @@
 * ``scheduler=None`` (the local default): in this process, one after the other, when there is a
   single task or a single worker (``workers=1``, or a one-core machine); otherwise on a pool of
   ``workers`` threads (default: one per core) in this process. The numba kernels of
-  :mod:`pipeline.dynamics` release the GIL (``nogil=True``), so threads run them in parallel and the
+  :mod:`pipeline.model.dynamics` release the GIL (``nogil=True``), so threads run them in parallel and the
   job pays no start-up: no worker processes to spawn, no modules to import again, no numba cache
   to reload, no task graph to serialise. The Python around the kernels (histories, summaries,
   NetCDF I/O, which xarray serialises with its HDF5 lock) is the part that does not scale.
@@ -141,7 +141,7 @@ def local_cluster(scheduler: str | None = None, workers: int | None = None) -> I
 def _warm_worker() -> None:
     """Import the model on a worker (and load its numba cache index) before timing starts."""
     import importlib
-    importlib.import_module("pipeline.slider")  # (imported for its side effect: the kernels compiled or loaded)
+    importlib.import_module("pipeline.model.slider")  # (imported for its side effect: the kernels compiled or loaded)
 
 
 def _distributed(fn: Callable[..., Any], tasks: list[tuple], scheduler: str, workers: int | None,

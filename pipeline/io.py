@@ -111,7 +111,7 @@ def provenance(scene: Any = None, *, stage: str,
     Parameters
     ----------
     scene
-        The :class:`pipeline.scene.Scene` (or ``None``).
+        The :class:`pipeline.config.scene.Scene` (or ``None``).
     stage
         The stage name (``"interface"``, ...).
     inputs

@@ -8,8 +8,8 @@ tribology), the dimensions it carries beyond the grid of its dataset, the scene 
 produces it (absent without that effect), and for flag variables their values and missing value.
 
 Groups (:data:`GROUPS`) collect the variables of one kind; :data:`DATASETS` says which groups each
-dataset file may hold. Datasets (:mod:`pipeline.stages`), plots (:mod:`pipeline.plots`), the report's
-tables and the optimum finder (:mod:`pipeline.optimum`) read names, units and flags from here, and
+dataset file may hold. Datasets (:mod:`pipeline.stages`), plots (:mod:`pipeline.analyses.plots`), the report's
+tables and the optimum finder (:mod:`pipeline.analyses.optimum`) read names, units and flags from here, and
 ``tests/test_variables.py`` checks that every variable every stage writes is declared here with the
 units it is written in.
 
@@ -39,7 +39,7 @@ import xarray as xr
 class Regime(IntEnum):
     """Regime of a steady window (the ``regime`` variable's ``flag_values``).
 
-    Rule (:func:`pipeline.slider.summarize`): flying = no contact in the steady window (no sample in
+    Rule (:func:`pipeline.model.slider.summarize`): flying = no contact in the steady window (no sample in
     contact and the integrator's exact minimum of d above k sigma); surfing = in contact in at least
     99 % of the samples (steady sliding); bouncing = otherwise.
     """
@@ -152,7 +152,7 @@ COORDINATES = _group(
     V("hist_protrusion", "nm", "protrusion of the kept histories", NM, dims=("hist_protrusion",)),
 )
 
-#: Steady-window scalars of one scene (:func:`pipeline.slider.summarize`; ``summary.nc``, ``sweep.nc``).
+#: Steady-window scalars of one scene (:func:`pipeline.model.slider.summarize`; ``summary.nc``, ``sweep.nc``).
 SCALARS = _group(
     V("fhm_bv", "%", "flying-height modulation (flying) / bouncing vibration (contact), peak-to-peak over FH0"),
     V("clearance", "nm", "mean clearance d - k sigma over the steady window", NM),
@@ -176,7 +176,7 @@ SCALARS = _group(
                       "bouncing: otherwise"),)),
 )
 
-#: Time histories of one scene (:func:`pipeline.slider.histories`; ``histories.nc``,
+#: Time histories of one scene (:func:`pipeline.model.slider.histories`; ``histories.nc``,
 #: ``sweep_histories.nc``, and ``h_<name>`` in sweep part files).
 HISTORIES = _group(
     V("separation", "nm", "separation d of the TFC surface from the mean of summit heights", NM, dims=("time",)),

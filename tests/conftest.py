@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from pipeline.scene import load_scene
+from pipeline.config.scene import load_scene
 
 #: The repository root (this file is tests/conftest.py).
 REPO = Path(__file__).resolve().parent.parent

@@ -10,7 +10,7 @@ import pytest
 import xarray as xr
 
 from pipeline.io import check_cf
-from pipeline.scene import load_scene
+from pipeline.config.scene import load_scene
 from pipeline.stages import accuracy
 
 #: A light reference and two settings per knob (three for rtol, to see a trend).

@@ -9,9 +9,9 @@ import dataclasses
 import numpy as np
 import pytest
 
-from pipeline import slider as sl
+from pipeline.model import slider as sl
 from pipeline.physics import air_bearing as ab
-from pipeline.scene import scene_from_dict
+from pipeline.config.scene import scene_from_dict
 
 MM, NM = 1e-3, 1e-9
 # The paper's femto slider (SPEC.md section 6, [recon]): 0.85 x 0.70 x 0.23 mm, 4250 kg/m^3, arms 0.30/0.40 mm.

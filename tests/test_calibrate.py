@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from pipeline.io import read_dataset
-from pipeline.scene import load_scene
+from pipeline.config.scene import load_scene
 from pipeline.stages import calibrate as calibrate_stage
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -72,7 +72,7 @@ def test_threshold_is_where_touching_starts():
     scene = load_scene(PAPER, NO_ADHESION)
     import tempfile
     with tempfile.TemporaryDirectory() as tmp:
-        from pipeline import slider as sl
+        from pipeline.model import slider as sl
         from pipeline.stages.simulate import model_inputs
         interface, record = model_inputs(scene, Path(tmp))
         model = sl.build_model(scene, interface, record, k=0.0)

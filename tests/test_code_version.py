@@ -9,7 +9,7 @@ import pytest
 
 from pipeline import code_version as cv
 from pipeline import runner
-from pipeline.scene import load_scene
+from pipeline.config.scene import load_scene
 
 ROOT = Path(__file__).resolve().parents[1]
 PAPER = ROOT / "configs" / "paper-2009.toml"
@@ -56,10 +56,10 @@ def test_each_stage_is_keyed_on_the_code_it_runs():
     sweep = cv.modules("pipeline.stages.sweep")
     report = cv.modules("pipeline.stages.report")
     rough = cv.modules("pipeline.stages.roughness")
-    for mod in ("pipeline.dynamics", "pipeline.slider", "pipeline.physics.friction", "pipeline.physics.air_bearing"):
+    for mod in ("pipeline.model.dynamics", "pipeline.model.slider", "pipeline.physics.friction", "pipeline.physics.air_bearing"):
         assert mod in sweep and mod in cv.modules("pipeline.stages.calibrate") and mod not in rough
     assert "pipeline.physics.asperity" in cv.modules("pipeline.stages.interface")
-    assert "pipeline.plots" in report and "pipeline.plots" not in sweep and "pipeline.dynamics" not in report
+    assert "pipeline.analyses.plots" in report and "pipeline.analyses.plots" not in sweep and "pipeline.model.dynamics" not in report
     assert "pipeline.physics.surface" in rough
     # the stages import the orchestration (the runner for Stage, the fan-out) and the code key leaves it
     # out, with the command line's option checks; the material bounds the interface stage runs are in

@@ -15,9 +15,9 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from pipeline.io import read_dataset
-from pipeline import dmw_records
+from pipeline.model import dmw_records
 from pipeline.physics import dmw
-from pipeline.scene import scene_from_dict
+from pipeline.config.scene import scene_from_dict
 from pipeline.stages import dmw as stage
 
 FS = 4e6            # [Hz] the paper's sampling rate
@@ -368,7 +368,7 @@ def test_disk_speed_formula():
 
 
 def test_default_record_is_long_enough_for_the_dynamics(tmp_path):
-    from pipeline import slider
+    from pipeline.model import slider
     scene = scene_from_dict({"scene": {"effects": ["air_bearing", "pitch", "dmw"]}})
     _, w, fs = stage.load(stage.run(scene, tmp_path))
     model = slider.build_model(scene, None, (w, fs), None)   # raises if the record is too short

@@ -1,4 +1,4 @@
-"""The 2-DOF slider dynamics (SPEC.md section 4; pipeline.dynamics, pipeline.slider): modal free
+"""The 2-DOF slider dynamics (SPEC.md section 4; pipeline.model.dynamics, pipeline.model.slider): modal free
 vibration, static equilibrium, modal damping, the integrator's observed order, FHM limits, contact
 switch events, and effect selection.
 
@@ -13,11 +13,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pipeline import dynamics as dyn
-from pipeline import slider as sl
+from pipeline.model import dynamics as dyn
+from pipeline.model import slider as sl
 from pipeline.physics import air_bearing as ab
 from pipeline.physics import dmw as pdmw
-from pipeline.scene import scene_from_dict
+from pipeline.config.scene import scene_from_dict
 from pipeline.stages.interface import build_tables, roughness_statistics
 
 NM = 1e-9
@@ -127,7 +127,7 @@ def test_static_equilibrium_stays_put(effects):
     assert np.abs(run.state[:, 1]).max() < 1e-18 / run.model.slider.l_c
 
 
-# Regression test (fixed): pipeline/dynamics.py integrate(), lines 268-273 (`h = min(h, h_max, t_end
+# Regression test (fixed): pipeline/model/dynamics.py integrate(), lines 268-273 (`h = min(h, h_max, t_end
 # - t)` then the underflow test `h < 1e-12 * max(t, 1e-9)`): when the steps sit at h_max, t
 # accumulates rounding (t = 9.999999999999602e-05 after 3334 steps of 30 ns towards t_end = 1e-4 s),
 # the last step h = t_end - t = 4e-18 s is below 1e-12 * t and the run fails with 'step size
@@ -352,7 +352,7 @@ def test_contact_events_located_at_touchdown_with_adhesion():
     assert run.contact[-1] and not run.contact[0]
 
 
-# Regression test (fixed): pipeline/dynamics.py integrate(), lines 292-294 (`g1 = separation(p, dmw,
+# Regression test (fixed): pipeline/model/dynamics.py integrate(), lines 292-294 (`g1 = separation(p, dmw,
 # t + h, ynew)[0] - p[P_KSIG]; if (g1 < 0.0) != contact:`): a switch is looked for only as a sign
 # change of g = d - k sigma between the two ends of an accepted step, so an excursion across k sigma
 # that starts and ends inside one step is missed: the slider stays in the old mode while d < k sigma
@@ -440,8 +440,8 @@ def test_kernel_cache_folder_is_keyed_by_the_code_the_kernel_inlines():
     what it imports (air_bearing included): an edited law compiles anew instead of loading old code."""
     import numba
     from pipeline import code_version as cv
-    assert "pipeline.physics.air_bearing" in cv.modules("pipeline.dynamics")
-    folder = f"numba-{cv.code_key('pipeline.dynamics')[:16]}"
+    assert "pipeline.physics.air_bearing" in cv.modules("pipeline.model.dynamics")
+    folder = f"numba-{cv.code_key('pipeline.model.dynamics')[:16]}"
     for fn in (dyn.integrate, dyn.rhs, dyn._rear_power, dyn._stiffening_potential):
         assert folder in Path(fn._cache._cache_path).parts
     assert folder not in str(numba.config.CACHE_DIR)  # numba's own setting is restored after the module

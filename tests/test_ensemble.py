@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from pipeline.io import read_dataset
-from pipeline.scene import load_scene
+from pipeline.config.scene import load_scene
 from pipeline.stages import dmw as dmw_stage
 from pipeline.stages import sweep as sweep_stage
 

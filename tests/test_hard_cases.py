@@ -48,15 +48,15 @@ from hypothesis import strategies as hst
 from scipy import integrate
 
 from convergence import assert_converged, deltas
-from pipeline import dynamics as dyn
-from pipeline import slider as sl
+from pipeline.model import dynamics as dyn
+from pipeline.model import slider as sl
 from pipeline.physics import air_bearing as ab
 from pipeline.physics import asperity
 from pipeline.physics import dmw as pdmw
 from pipeline.physics import isbl
 from pipeline.physics.adhesion import lennard_jones_force, meniscus_force
 from pipeline.physics.statistics import ALPHA_MIN, bandwidth_alpha, summit_sigma
-from pipeline.scene import load_scene
+from pipeline.config.scene import load_scene
 from pipeline.stages import dmw as dmw_stage
 from pipeline.stages.interface import build_tables, interface_parameters, roughness_statistics
 
@@ -499,7 +499,7 @@ def test_nyquist_dmw_run_is_finite_physical_and_converged_in_rtol(nyquist, kind,
 # cubic through d and d' at the step's ends, but d contains the DMW spline with knots every 250 ns
 # while steps are up to 500 ns, so peaks between knots were missed (flying at 5 nm, band
 # [10, 2000] kHz + 0.05 nm sine at fs/2 - one bin: minimum missed by 0.0099 nm, rtol/atol halving
-# moved fhm_bv by 0.59 %). Fixed in pipeline/dynamics.py:_d_extrema: the step is split at the DMW
+# moved fhm_bv by 0.59 %). Fixed in pipeline/model/dynamics.py:_d_extrema: the step is split at the DMW
 # knots and each piece's extrema are taken in closed form (d is a cubic between two knots).
 @pytest.mark.parametrize("kind", ["sine", "band+sine"])
 def test_nyquist_dmw_exact_extremes_bound_the_samples_and_converge(nyquist, kind):
@@ -516,7 +516,7 @@ def test_nyquist_dmw_exact_extremes_bound_the_samples_and_converge(nyquist, kind
 
 
 # Regression test (fixed by splitting the event search at the DMW knots, dynamics._d_extrema):
-# pipeline/dynamics.py:_first_wrong_side: the contact criterion is checked at the step end,
+# pipeline/model/dynamics.py:_first_wrong_side: the contact criterion is checked at the step end,
 # at the extrema of the step's Hermite cubic of d and at 3 interior points, but the DMW term of d
 # varies between its 250-ns knots inside a 500-ns step: excursions of d below k sigma driven by DMW
 # content near the Nyquist frequency are missed. Repro: no adhesion, 11 nm, band [10, 2000] kHz
@@ -597,7 +597,7 @@ def test_undamped_free_vibration_conserves_energy_over_20ms(base):
 
 
 @pytest.mark.xfail(strict=True, reason=(
-    "BUG pipeline/scene.py SCHEMA solver.max_step_ns (default 500 ns) with pipeline/slider.py "
+    "BUG pipeline/config/scene.py SCHEMA solver.max_step_ns (default 500 ns) with pipeline/model/slider.py "
     "build_model (no cap for undamped scenes): undamped free vibration loses 76 % of its energy in "
     "20 ms at the default solver (exact and linearised energy alike; 13 % in the default 2 ms run): the "
     "steps sit at max_step, h omega = 0.94 for the 300 kHz mode, where DP5 damps numerically (an "
@@ -654,7 +654,7 @@ def strong_adhesion_scene(base, **solver):
 
 
 # Regression test (fixed): pipeline/physics/isbl.py:isbl_tables (real_area_fraction = eta int A phi
-# dz, not capped at 1) and pipeline/stages/interface.py:build_tables + pipeline/dynamics.py:_ppval
+# dz, not capped at 1) and pipeline/stages/interface.py:build_tables + pipeline/model/dynamics.py:_ppval
 # (linear extrapolation below the table's floor table_min_sigma*sigma_s): the real area of a run
 # exceeds the nominal area. (a) deep start: the paper surface scaled to sigma 0.25 nm (alpha, psi
 # kept) at 15 nm starts at d = FH0 - delta = -3.9 nm, below the floor -1.34 nm; the extrapolated

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from pipeline import study
-from pipeline.scene import SceneError, load_scene
+from pipeline.analyses import study
+from pipeline.config.scene import SceneError, load_scene
 from pipeline.stages import identify
 
 TRUE = {"dmw.rms_nm": 0.14, "lubricant.work_of_adhesion_j_m2": 0.07}
@@ -168,7 +168,7 @@ def test_candidate_inputs_are_cached_by_stage_key_alone():
 
 def test_parameter_units_are_cf_for_every_numeric_scene_key():
     cf_units = pytest.importorskip("cf_units")
-    from pipeline.scene import SCHEMA
+    from pipeline.config.scene import SCHEMA
     for section, keys in SCHEMA.items():
         for key, spec in keys.items():
             if spec.kind in ("float", "floats"):

@@ -9,7 +9,7 @@ import xarray as xr
 
 import pipeline
 from pipeline import cli, io
-from pipeline.scene import SCHEMA, load_scene
+from pipeline.config.scene import SCHEMA, load_scene
 from pipeline.stages import interface
 
 TABLES = ("contact_pressure", "adhesion_pressure", "friction_stress", "real_area_fraction", "contact_fraction")

@@ -9,8 +9,8 @@ import sys
 import numpy as np
 import pytest
 
-from pipeline import slider as sl
-from pipeline.scene import load_scene
+from pipeline.model import slider as sl
+from pipeline.config.scene import load_scene
 from pipeline.stages.simulate import model_inputs
 
 K = 0.445

@@ -1,4 +1,4 @@
-"""The optimum-point finder (pipeline.optimum) on constructed sweeps whose answer is known."""
+"""The optimum-point finder (pipeline.analyses.optimum) on constructed sweeps whose answer is known."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from pipeline import optimum as opt
+from pipeline.analyses import optimum as opt
 
 F, B, S = 0, 1, 2
 NAN = np.nan

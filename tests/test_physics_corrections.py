@@ -11,13 +11,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pipeline import dynamics as dyn
-from pipeline import slider as sl
+from pipeline.model import dynamics as dyn
+from pipeline.model import slider as sl
 from pipeline.physics import air_bearing as ab
 from pipeline.physics import dmw as pdmw
 from pipeline.physics import friction
 from pipeline.physics.fhm import FHM_MEASURES, fhm
-from pipeline.scene import SceneError, load_scene, scene_from_dict
+from pipeline.config.scene import SceneError, load_scene, scene_from_dict
 from pipeline.stages.interface import build_tables, roughness_statistics
 from pipeline.stages.simulate import model_attrs
 

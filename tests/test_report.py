@@ -306,7 +306,7 @@ def test_sweep_is_required(tmp_path, paper_scene):
 def test_envelope_keeps_every_peak_of_a_long_trace():
     """The thinned trace drawn for a history keeps its extremes (a one-sample spike, the global minimum),
     ignores NaN, stays in time order and leaves short traces untouched."""
-    from pipeline.plots import envelope
+    from pipeline.analyses.plots import envelope
     t = np.linspace(0.0, 2.0, 200_001)
     y = np.sin(2 * np.pi * 37 * t)
     y[123_457], y[5] = 7.5, np.nan                 # a spike one sample wide; a gap
@@ -336,7 +336,7 @@ def test_every_file_the_report_draws_is_a_declared_output(full_out, paper_scene,
 
 
 def _line_figure(path, slope):
-    from pipeline import plots
+    from pipeline.analyses import plots
     fig, ax = plots.new_figure()
     ax.plot([0.0, 1.0], [0.0, slope])
     plots.save(fig, path)
@@ -356,7 +356,7 @@ def test_figures_drawn_by_worker_processes_are_the_figures_drawn_in_process(tmp_
     in this process or by its forked workers, and a figure's error reaches the caller."""
     import sys
     import threading
-    from pipeline import plots
+    from pipeline.analyses import plots
     here = plots.draw_all([(_line_figure, (tmp_path / f"a{i}.png", i + 1.0), {}) for i in range(3)], workers=1)
     there = plots.draw_all([(_line_figure, (tmp_path / f"b{i}.png", i + 1.0), {}) for i in range(3)], workers=2)
     assert [p.name for p, _ in there] == ["b0.png", "b1.png", "b2.png"]

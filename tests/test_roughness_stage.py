@@ -15,7 +15,7 @@ from SurfaceTopography import Topography
 from pipeline.io import DatasetError, file_hash
 from pipeline.physics import statistics as st
 from pipeline.physics import surface as sf
-from pipeline.scene import scene_from_dict
+from pipeline.config.scene import scene_from_dict
 from pipeline.stages import roughness as rg
 
 AFM = Path(__file__).resolve().parent / "data" / "afm"  # real scans, kept in the repository

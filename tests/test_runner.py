@@ -24,7 +24,7 @@ from pipeline import cli, runner
 from pipeline.io import DatasetError, read_dataset, var
 from pipeline.physics import dmw as phys_dmw
 from pipeline.physics import surface as sf
-from pipeline.scene import load_scene
+from pipeline.config.scene import load_scene
 from pipeline.stages import sweep as sweep_stage
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -10,7 +10,7 @@ import re
 
 import pytest
 
-from pipeline.scene import EFFECTS, SceneError, load_scene, parse_override
+from pipeline.config.scene import EFFECTS, SceneError, load_scene, parse_override
 
 
 # --------------------------------------------------------------------------------------------

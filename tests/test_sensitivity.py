@@ -14,7 +14,7 @@ import math
 import numpy as np
 import xarray as xr
 
-from pipeline.scene import load_scene
+from pipeline.config.scene import load_scene
 from pipeline.stages import sensitivity
 
 A = np.array([2.0, -1.0, 0.5, 0.0])

@@ -1,6 +1,6 @@
 """Hard cases of the slider dynamics on the paper scene: they must stay finite, physical and converged.
 
-Every case starts from configs/paper-2009.toml (pipeline.scene.load_scene) with contact.k = 0.445 and a
+Every case starts from configs/paper-2009.toml (pipeline.config.scene.load_scene) with contact.k = 0.445 and a
 short run (duration 1.0 ms, transient 0.3 ms), and changes one thing:
 
 * deep interference: protrusion 15 nm (the top of the paper's range);
@@ -36,10 +36,10 @@ import numpy as np
 import pytest
 
 from convergence import assert_converged, deltas
-from pipeline import dynamics as dyn
-from pipeline import slider as sl
+from pipeline.model import dynamics as dyn
+from pipeline.model import slider as sl
 from pipeline.physics import dmw as pdmw
-from pipeline.scene import SCHEMA, load_scene
+from pipeline.config.scene import SCHEMA, load_scene
 from pipeline.stages import dmw as dmw_stage
 from pipeline.stages.interface import build_tables, roughness_statistics
 
@@ -274,7 +274,7 @@ def test_sliding_mode_outputs_versus_the_dwell(base, record, paper_hardness, nam
     assert clearance[-1] < 1e-3 * NM * 5                        # and is a few thousandths of a nm at most
 
 
-# Regression test (fixed): pipeline/slider.py build_model (solver defaults): with the default
+# Regression test (fixed): pipeline/model/slider.py build_model (solver defaults): with the default
 # max_step 250 ns the contact mode of the smooth surface (~1.4 MHz, A_n dp_c/dd = 1.2e7 N/m on the
 # TFC point's effective mass) is integrated at the DP5 stability boundary (h*omega ~ 2.3, 34 %
 # rejected steps); its ringing error accumulates to 0.002-0.003 nm (20-30 x atol), FHM is 0.190 %

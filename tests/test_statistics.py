@@ -109,7 +109,7 @@ def test_plasticity_index_paper_scene(paper_scene):
 
 
 def test_explicit_hardness_overrides_plasticity_index(paper_config):
-    from pipeline.scene import load_scene
+    from pipeline.config.scene import load_scene
     scene = load_scene(paper_config, ["materials.hardness_gpa=3.0", "materials.composite_modulus_gpa=120"])
     p = interface_parameters(scene, roughness_statistics(scene))
     assert p.H == 3.0e9 and p.E == 120e9

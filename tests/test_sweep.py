@@ -13,13 +13,13 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from pipeline import slider as sl
+from pipeline.model import slider as sl
 from pipeline.io import read_dataset
-from pipeline.scene import SceneError, load_scene
+from pipeline.config.scene import SceneError, load_scene
 from pipeline.stages import calibrate as calibrate_stage
 from pipeline.stages import sweep as sweep_stage
 from pipeline.stages.simulate import model_inputs
-from pipeline.stages.sweep_grid import roughness_sets
+from pipeline.config.grid import roughness_sets
 
 ROOT = Path(__file__).resolve().parents[1]
 PAPER = ROOT / "configs" / "paper-2009.toml"

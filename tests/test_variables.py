@@ -12,7 +12,7 @@ import xarray as xr
 from cf_check import cf_report
 from pipeline import variables as vs
 from pipeline.io import TIME_UNITS_ON_DISK, read_dataset, write_dataset
-from pipeline.scene import load_scene
+from pipeline.config.scene import load_scene
 from pipeline.stages import calibrate, dmw, interface, roughness, simulate, sweep
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -211,7 +211,7 @@ def damping_ratios(s: Slider) -> tuple[np.ndarray, np.ndarray]:
 
 # The laws below that take plain numbers (rear_power_law, rear_linear_law, stiffening_potential,
 # stiffening_stiffness) are the only definitions of these laws: the numba kernel
-# (pipeline.dynamics) compiles these same functions, Python code calls them on floats or arrays.
+# (pipeline.model.dynamics) compiles these same functions, Python code calls them on floats or arrays.
 
 def rear_power_law(g, g0: float, n: float, F0: float):
     """Power rear bearing force ``F0 [(g0/g)^n - 1]`` [N] on gap ``g`` [m] (SPEC.md section 4, [recon]).
@@ -245,7 +245,7 @@ def rear_force_linear(g: np.ndarray, g0: float, n: float, F0: float) -> np.ndarr
 @dataclass(frozen=True)
 class RearLaw:
     """A rear-bearing law: its force (Python, for outputs and tests) and the kernel's compile-time switch
-    (``linear``: :func:`pipeline.dynamics.rhs` gets an array for ``rlin``, else ``None``)."""
+    (``linear``: :func:`pipeline.model.dynamics.rhs` gets an array for ``rlin``, else ``None``)."""
 
     force: object
     linear: bool

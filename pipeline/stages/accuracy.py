@@ -60,7 +60,7 @@ integration), so their zero error is a check that the simulation is deterministi
 Wall time
 ---------
 ``simulation_time``: median of ``repeat`` (default 5) runs of integration plus steady-window
-statistics (:func:`pipeline.slider.run_model` and :func:`~pipeline.slider.summarize`), after
+statistics (:func:`pipeline.model.slider.run_model` and :func:`~pipeline.model.slider.summarize`), after
 compilation. ``setup_time``: building what the knob changes -- the interface tables
 (:func:`pipeline.stages.interface.build_tables`, timed once when a build takes more than 1 s) and
 the model (``build_model``: spline coefficients) for the table knobs, the DMW record and the model
@@ -100,7 +100,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from .. import slider as sl
+from ..model import slider as sl
 from ..runner import Inputs, Stage, build
 from ..variables import ACCURACY as ACC
 from ..variables import SCALARS

@@ -14,7 +14,7 @@ interval is empty within ``touchdown.k_range`` (default [-3, 3], contact probabi
 * ``"exact"`` (default): before its first contact the trajectory does not depend on k (the contact
   force is off while ``d >= k sigma``), so one run with the contact law switched off gives every
   ``k*`` at once: ``k* = min(d)/sigma`` over the steady window, with the integrator's exact minimum
-  (:attr:`pipeline.slider.Run.d_extremes`, not the output samples). Two cases need more care:
+  (:attr:`pipeline.model.slider.Run.d_extremes`, not the output samples). Two cases need more care:
   (a) when ``d`` over the transient dips below its steady-window minimum, a k in
   ``(min_all/sigma, min_steady/sigma]`` first touches in the transient and the trajectory after
   that depends on k: that interval (where it meets ``k_range``) is resolved by bisection with real
@@ -49,15 +49,15 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from .. import dynamics as dyn
-from .. import slider as sl
+from ..model import dynamics as dyn
+from ..model import slider as sl
 from ..fanout import local_workers, run_tasks
 from ..io import read_dataset
 from ..physics.statistics import contact_probabilities
 from ..runner import Inputs, Stage, build, ensure
 from ..variables import CALIBRATION
 from .simulate import model_inputs, upstream
-from .sweep_grid import protrusion_grid
+from ..config.grid import protrusion_grid
 
 log = logging.getLogger(__name__)
 NM = 1e-9

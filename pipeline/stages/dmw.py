@@ -32,7 +32,7 @@ up to whole periods of the band's lower edge: 2.1 ms (8400 samples) in the paper
 Synthetic: :func:`pipeline.physics.dmw.synthesize` with ``rms_nm``, ``band_khz``, ``exponent``,
 ``seed``, ``sample_rate_mhz`` and that duration.
 
-Measured (``source`` a path): :func:`~pipeline.dmw_records.load_record`, then the paper's processing
+Measured (``source`` a path): :func:`~pipeline.model.dmw_records.load_record`, then the paper's processing
 at the record's own rate (velocity integrated, :func:`~pipeline.physics.dmw.velocity_to_displacement`;
 displacement detrended, :func:`~pipeline.physics.dmw.process_displacement`; both band-passed to
 ``band_khz``), resampled to ``sample_rate_mhz`` (:func:`~pipeline.physics.dmw.resample`) and cut to
@@ -121,7 +121,7 @@ def default_duration(sim_duration_s: float, slider: dict[str, Any], disk_speed_m
     """Record length [s] when ``dmw.duration_ms`` is not given.
 
     The dynamics reads the record at ``t`` plus the disk's travel time from the front pad to the
-    TFC point (``pipeline.slider.build_model`` requires ``duration + (l_f + l_c)/V + 2/fs``). This
+    TFC point (``pipeline.model.slider.build_model`` requires ``duration + (l_f + l_c)/V + 2/fs``). This
     takes the simulated duration plus ``(front_arm + length)/V`` (an upper bound of that delay,
     since the TFC point is less than a slider length behind the centre of gravity) plus 4 samples,
     rounded up to a whole number of periods ``1/band_low`` so that the band's lower edge, where a
@@ -137,7 +137,7 @@ def default_duration(sim_duration_s: float, slider: dict[str, Any], disk_speed_m
 
 def _measured(s: dict[str, Any]) -> tuple[np.ndarray, dict[str, Any]]:
     """Load, process, resample and cut a measured record; raise before anything is written."""
-    from ..dmw_records import load_record
+    from ..model.dmw_records import load_record
     from ..physics import dmw as phys
     fs, (lo, hi), dur = s["sample_rate_hz"], s["band_hz"], s["duration_s"]
     rec = load_record(s["source"], s["quantity"], s["column"], s["record_rate_hz"], min_duration_s=dur)

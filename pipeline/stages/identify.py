@@ -1,10 +1,10 @@
 """Stage ``identify``: the unknown [recon] parameters from the paper's published targets.
 
 ``hdi identify CONFIG`` fits the free parameters of ``[identify] parameters`` (scene keys with bounds)
-to the targets of ``[identify]`` (:func:`pipeline.study.targets`: touchdown at 9.8 nm and not 9.6,
+to the targets of ``[identify]`` (:func:`pipeline.analyses.study.targets`: touchdown at 9.8 nm and not 9.6,
 FHM 12.5 % at 4-7 nm and ~9 % at 9 nm, BV > 20 % after touchdown, and the light-contact numbers at
 11 nm), each candidate evaluated as a small sweep at the protrusions the targets need
-(:mod:`pipeline.study`) on the fan-out (:mod:`pipeline.fanout`; threads of this process by
+(:mod:`pipeline.analyses.study`) on the fan-out (:mod:`pipeline.fanout`; threads of this process by
 default, ``--scheduler processes`` or a dask.distributed address for more). The objective is the
 sum of squared residuals, each normalised by its tolerance (SPEC.md section 7).
 
@@ -28,7 +28,7 @@ Method
 
 Resuming: the stage runs under :mod:`pipeline.runner` (skipped when its inputs did not change); every
 evaluation is appended to ``identify.evals.jsonl`` as it finishes
-(:class:`pipeline.study.EvaluationStore`); the optimiser is seeded and deterministic, so a rerun
+(:class:`pipeline.analyses.study.EvaluationStore`); the optimiser is seeded and deterministic, so a rerun
 after an interrupt replays the same candidates and reads the finished ones back. ``--force`` starts
 afresh.
 
@@ -53,11 +53,11 @@ from typing import Any, Sequence
 import numpy as np
 import xarray as xr
 
-from .. import plots
+from ..analyses import plots
 from ..fanout import local_cluster
 from ..io import read_dataset, var
 from ..runner import Inputs, Stage, build
-from ..study import (Evaluator, Parameter, Target, cost, evaluate_batch, parse_parameters, residuals, scene_value,
+from ..analyses.study import (Evaluator, Parameter, Target, cost, evaluate_batch, parse_parameters, residuals, scene_value,
                      setup, target_protrusions, targets, upstream)
 
 log = logging.getLogger(__name__)

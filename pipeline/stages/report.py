@@ -35,7 +35,7 @@ and ``out/report/``:
   ``air_bearing.damping_ratio`` when it is on the grid, else the first), then the others in grid
   order. Header cells carry the units, ``name [unit]``; missing values are empty cells.
 * ``summary.md``: the same table, one block per combination in that order, the two optimum points
-  (:mod:`pipeline.optimum`) of every combination, the figure list and the skipped figures.
+  (:mod:`pipeline.analyses.optimum`) of every combination, the figure list and the skipped figures.
 * ``comparison.md``: our numbers against what the paper states (touchdown, FHM at 4-7 nm, the
   stable-flying criterion, the plasticity index, A_n at 11 nm, the contact probability of k, the two
   optimum points), each with the difference and its likely cause, for the default combination.
@@ -58,8 +58,8 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from .. import optimum as opt
-from .. import plots
+from ..analyses import optimum as opt
+from ..analyses import plots
 from ..io import DatasetError, read_dataset
 from ..physics.statistics import contact_probabilities
 from ..runner import Inputs, Stage, build
@@ -303,7 +303,7 @@ def make_figures(data: dict[str, xr.Dataset | None], combos: list, scene: Any, n
                  figdir: Path) -> tuple[list[Path], dict[str, str]]:
     """Draw every figure whose inputs exist; returns the written paths and the skipped figures' reasons.
 
-    The figures are independent: :func:`pipeline.plots.draw_all` draws them in parallel processes.
+    The figures are independent: :func:`pipeline.analyses.plots.draw_all` draws them in parallel processes.
     """
     jobs: list[tuple] = []  # (figure function, arguments, keywords), drawn by plots.draw_all
     skipped: dict[str, str] = {}
@@ -393,7 +393,7 @@ def summary_markdown(combos: list, data: dict, name: str, made: list[Path], skip
            f"{sweep.attrs.get('fhm_measure', '?')} over FH0.", "",
            "Rows: every protrusion from 2 nm before the first contact to the end of the grid (the whole grid "
            "when nothing touches), in the paper's Table III spirit. Columns are steady-window values "
-           "(definitions in `pipeline/slider.py`); '–' = undefined (no contact). One block per roughness x "
+           "(definitions in `pipeline/model/slider.py`); '–' = undefined (no contact). One block per roughness x "
            "damping combination, the scene's default combination first; `summary.csv` holds the same rows.", ""]
     n_cols = len(header)
     for labels, ds in combos:
@@ -406,7 +406,7 @@ def summary_markdown(combos: list, data: dict, name: str, made: list[Path], skip
         out += [_md_table(header[2:], body), ""]
     out += ["## Optimum operating points", "",
             "(a) just before touchdown: flying, FHM < 10 %, least clearance; (b) steady sliding: surfing, "
-            "BV < 2 %, least interference (`pipeline/optimum.py`; ties go to the smaller protrusion).", ""]
+            "BV < 2 %, least interference (`pipeline/analyses/optimum.py`; ties go to the smaller protrusion).", ""]
     out += _optima_lines(combos) + [""]
     out += ["## Figures", ""]
     out += [f"- `figures/{p.name}`" for p in made]
@@ -765,7 +765,7 @@ def comparison_markdown(combos: list, data: dict, scene: Any, name: str) -> str:
 def identification_markdown(ident: xr.Dataset) -> str:
     """Three columns per target of ``identify.nc``: the paper, the reconstructed scene, the identified scene.
 
-    Both scenes are evaluated the same way (the target protrusions, k of :func:`pipeline.study.criterion_k`).
+    Both scenes are evaluated the same way (the target protrusions, k of :func:`pipeline.analyses.study.criterion_k`).
     A target that no evaluation brought within tolerance (smallest ``|residual|`` over all of them > 1)
     is listed with the closest value reached and the range of values over every evaluation (measured).
     """

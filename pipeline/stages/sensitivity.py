@@ -3,8 +3,8 @@
 ``hdi sensitivity CONFIG`` samples the parameters of ``[sensitivity] parameters`` (scene keys with
 bounds, uniform within them) and evaluates every sample as a sweep over the protrusion grid
 (``[sensitivity] protrusion_nm``, default the ``[sweep]`` grid) on the dask fan-out, through the
-evaluation core of ``hdi identify`` (:mod:`pipeline.study`: same candidates, same store, resumable).
-The headline outputs (:data:`pipeline.study.HEADLINES`) are the touchdown protrusion, the flying FHM
+evaluation core of ``hdi identify`` (:mod:`pipeline.analyses.study`: same candidates, same store, resumable).
+The headline outputs (:data:`pipeline.analyses.study.HEADLINES`) are the touchdown protrusion, the flying FHM
 at 4-7 nm, the BV after touchdown, and the interference, contact force and mean pressure at 11 nm.
 
 Methods (SALib [HU17]_):
@@ -54,12 +54,12 @@ from typing import Any, Sequence
 import numpy as np
 import xarray as xr
 
-from .. import plots
+from ..analyses import plots
 from ..fanout import local_cluster
 from ..io import var
 from ..runner import Inputs, Stage, build
-from ..study import HEADLINES, Evaluator, Parameter, evaluate_batch, headline, setup, upstream
-from .sweep_grid import protrusion_grid, range_grid
+from ..analyses.study import HEADLINES, Evaluator, Parameter, evaluate_batch, headline, setup, upstream
+from ..config.grid import protrusion_grid, range_grid
 
 log = logging.getLogger(__name__)
 

@@ -4,7 +4,7 @@
 protrusion and writes ``histories.nc``: time series (dims ``protrusion``, ``time``) of separation,
 clearance, forces, friction coefficient, mean pressure and shear stress; and ``summary.nc``: the
 steady-window scalars (dim ``protrusion``, the variables of ``sweep.nc``) defined in
-:mod:`pipeline.slider`. Only the scene's effects are simulated and written.
+:mod:`pipeline.model.slider`. Only the scene's effects are simulated and written.
 
 Inputs come from earlier stages' datasets in the same folder (``interface.nc``, ``dmw.nc``, and
 ``calibration.nc`` when the scene sets no ``contact.k``), made current first by :mod:`pipeline.runner`.
@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from .. import slider as sl
+from ..model import slider as sl
 from ..io import read_dataset
 from ..physics.statistics import contact_probabilities, k_from_probability
 from ..runner import Inputs, Stage, build, ensure

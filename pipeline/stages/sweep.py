@@ -39,13 +39,13 @@ from typing import Any, Callable
 import numpy as np
 import xarray as xr
 
-from .. import slider as sl
+from ..model import slider as sl
 from ..fanout import run_tasks
 from ..io import read_attrs, read_dataset, write_dataset
 from ..runner import KEY_ATTR, Inputs, Stage, ensure
 from ..variables import ENSEMBLE, ENSEMBLE_OF, HISTORIES, REGIME_FILL, SCALARS, coordinate, history, scalar
 from .simulate import model_attrs, needs_interface, resolve_k, upstream
-from .sweep_grid import damping_grid, protrusion_grid, roughness_sets
+from ..config.grid import damping_grid, protrusion_grid, roughness_sets
 
 log = logging.getLogger(__name__)
 NM = 1e-9
@@ -152,7 +152,7 @@ def batch_model(scene: Any, interface_path: str | None, dmw_path: str | None, k:
                 damping: float) -> sl.Model:
     """The model of a batch, built once per process for each scene, input files, k and damping ratio.
 
-    The batches of one roughness set and damping ratio share it (:func:`pipeline.slider.run_model`
+    The batches of one roughness set and damping ratio share it (:func:`pipeline.model.slider.run_model`
     only reads a model): building it costs ~28 ms (the DMW record's spline, the modal solution), paid
     by every batch before. Keyed by the scene's content hash and the files' identity
     (:func:`_file_id`), so a changed input builds a new one.

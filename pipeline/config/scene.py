@@ -21,9 +21,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Iterable
 
-from .physics.air_bearing import REAR_LAWS, STIFFNESS_ROOTS, TFC_STIFFENING
-from .physics.fhm import FHM_MEASURES
-from .physics.friction import FRICTION_LAWS
+from ..physics.air_bearing import REAR_LAWS, STIFFNESS_ROOTS, TFC_STIFFENING
+from ..physics.fhm import FHM_MEASURES
+from ..physics.friction import FRICTION_LAWS
 
 try:  # Python >= 3.11
     import tomllib
@@ -90,7 +90,7 @@ _FREE = [
     {"key": "contact.damping_n_s_m", "low": 0.0, "high": 0.05},
 ]
 
-#: The paper's targets ``hdi identify`` knows (:func:`pipeline.study.targets`); all fitted by default.
+#: The paper's targets ``hdi identify`` knows (:func:`pipeline.analyses.study.targets`); all fitted by default.
 TARGETS = ("touchdown", "fhm_flying", "fhm_touchdown", "bouncing", "sliding_bv", "interference", "contact_force",
            "real_area", "mean_pressure", "friction_coefficient", "net_force")
 

@@ -36,7 +36,7 @@ from typing import Any, Iterator
 import numpy as np
 import xarray as xr
 
-from .variables import SCALARS, Regime, regime_name
+from ..variables import SCALARS, Regime, regime_name
 
 FLYING, BOUNCING, SURFING = Regime.FLYING, Regime.BOUNCING, Regime.SURFING
 

@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from ..scene import SCHEMA, SceneError, _check_value
+from .scene import SCHEMA, SceneError, _check_value
 
 
 def protrusion_grid(scene: Any) -> np.ndarray:

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .physics.dmw import LENGTH_UNITS, TIME_JITTER_TOL, TIME_UNITS, VELOCITY_UNITS, DMWError
+from ..physics.dmw import LENGTH_UNITS, TIME_JITTER_TOL, TIME_UNITS, VELOCITY_UNITS, DMWError
 
 
 @dataclass(frozen=True)

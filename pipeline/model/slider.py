@@ -1,12 +1,12 @@
 """The 2-DOF slider model: assemble it from a scene, run it, and summarise a run.
 
 :func:`build_model` turns a scene, its interface tables (``interface.nc`` content) and its DMW
-record into the arrays the numba kernel of :mod:`pipeline.dynamics` takes; :func:`run_model`
+record into the arrays the numba kernel of :mod:`pipeline.model.dynamics` takes; :func:`run_model`
 integrates one protrusion; :func:`histories` and :func:`summarize` turn a run into the paper's
 time series (Figs 3-5) and the steady-window scalars of the sweep.
 
 The separation ``d`` is measured to the mean of summit heights, ``y_s`` above the mean of surface
-heights to which ``FH0`` is measured (SPEC.md 7.2; one home: :func:`pipeline.dynamics.separation_at`).
+heights to which ``FH0`` is measured (SPEC.md 7.2; one home: :func:`pipeline.model.dynamics.separation_at`).
 Named model variants (scene keys, one registry each): ``air_bearing.stiffness_root``
 (:data:`pipeline.physics.air_bearing.STIFFNESS_ROOTS`), ``air_bearing.rear_law`` (``REAR_LAWS``),
 ``air_bearing.tfc_stiffening`` (``TFC_STIFFENING``), ``contact.friction_law``
@@ -40,12 +40,12 @@ from typing import Any
 import numpy as np
 
 from . import dynamics as dyn
-from .physics import air_bearing as ab
-from .physics.fhm import fhm
-from .physics.friction import friction_stress_table
-from .physics.geometry import effective_radius, nominal_area
-from .physics.statistics import explicit_statistics
-from .variables import Regime
+from ..physics import air_bearing as ab
+from ..physics.fhm import fhm
+from ..physics.friction import friction_stress_table
+from ..physics.geometry import effective_radius, nominal_area
+from ..physics.statistics import explicit_statistics
+from ..variables import Regime
 
 NM, UM, MM = 1e-9, 1e-6, 1e-3
 
@@ -244,7 +244,7 @@ class Run:
     ``d_extremes``: exact minimum and maximum of the separation [m] over the steady window, tracked by
     the integrator (step ends and interior extrema), free of aliasing by the output grid.
     ``p``: the parameter vector the kernel ran with (the model's, with this protrusion, ``A_n``,
-    ``k sigma``, ...: layout ``pipeline.dynamics.P_*``).
+    ``k sigma``, ...: layout ``pipeline.model.dynamics.P_*``).
     """
 
     model: Model

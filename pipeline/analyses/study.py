@@ -6,14 +6,14 @@ candidate as a small sweep over protrusions:
 
 * a **free parameter** (:class:`Parameter`) is any numeric scene key ``section.key`` or an element of
   a list key ``section.key[i]`` (``air_bearing.frequencies_khz[0]``), with bounds; keys added to
-  :data:`pipeline.scene.SCHEMA` later need no change here;
+  :data:`pipeline.config.scene.SCHEMA` later need no change here;
 * a **candidate** is the base scene with the parameters set (validated again, so an impossible
   combination such as ``f1 > f2`` is a recorded failure, not a crash). Its interface tables are
   rebuilt only when a key they depend on changed (the runner's inputs key of ``interface``,
   ~15-45 ms), its DMW record only when a ``[dmw]`` key changed (synthesis, ~0.1 ms); otherwise the
   base scene's ``interface.nc``/``dmw.nc`` are read by path, once per worker process;
-* it runs at the protrusions the study needs (:func:`pipeline.slider.run_model`) and keeps the
-  steady-window outputs of :func:`pipeline.slider.summarize` in dataset units (:data:`pipeline.variables.SCALARS`);
+* it runs at the protrusions the study needs (:func:`pipeline.model.slider.run_model`) and keeps the
+  steady-window outputs of :func:`pipeline.model.slider.summarize` in dataset units (:data:`pipeline.variables.SCALARS`);
 * the contact criterion k is ``contact.k`` when the scene (or the candidate) sets it, else the k whose
   **two-sided** contact probability ``P(|z| > k sigma)`` is ``contact.fallback_probability``
   (SPEC.md 7.1: the paper's 32.8 % is two-sided, k = 0.978). A calibration per candidate would make
@@ -46,12 +46,12 @@ from typing import Any, Callable, Iterable, Sequence
 
 import numpy as np
 
-from . import slider as sl
-from .io import read_dataset
-from .physics.statistics import k_from_probability
-from .runner import KEY_ATTR, Runner
-from .variables import SCALARS
-from .scene import SCHEMA, TARGETS, SceneError
+from ..model import slider as sl
+from ..io import read_dataset
+from ..physics.statistics import k_from_probability
+from ..runner import KEY_ATTR, Runner
+from ..variables import SCALARS
+from ..config.scene import SCHEMA, TARGETS, SceneError
 
 NM = 1e-9
 
@@ -191,7 +191,7 @@ def criterion_k(scene: Any) -> float:
 def upstream(scene: Any) -> tuple[str, ...]:
     """The stages a study reads: a single simulation's inputs without the calibration (a study fixes k,
     :func:`criterion_k`)."""
-    from .stages.simulate import upstream as simulate_upstream
+    from ..stages.simulate import upstream as simulate_upstream
     return tuple(u for u in simulate_upstream(scene) if u != "calibrate")
 
 
@@ -214,9 +214,9 @@ def base_key(scene: Any, inputs: Inputs) -> str:
     rescanned file under the same name is a new base, not a store to read back), and the code of this
     module and of what it imports (:func:`pipeline.code_version.code_key`).
     """
-    from .code_version import code_key
-    from .runner import scene_part
-    from .stages.simulate import NOT_READ
+    from ..code_version import code_key
+    from ..runner import scene_part
+    from ..stages.simulate import NOT_READ
     blob = {"scene": scene_part(scene, ("*",), NOT_READ), "interface": inputs.interface_key, "dmw": inputs.dmw_key,
             "code": code_key(__name__)}
     return hashlib.sha256(json.dumps(blob, sort_keys=True).encode()).hexdigest()
@@ -248,9 +248,9 @@ def _made(what: _Made) -> Any:
 
 def candidate_inputs(scene: Any, inputs: Inputs) -> tuple[Any, tuple[np.ndarray, float] | None]:
     """Interface tables and DMW record of a candidate: the base files when unchanged, else rebuilt."""
-    from .stages import dmw as dmw_stage
-    from .stages.interface import build_tables, roughness_statistics
-    from .stages.simulate import needs_interface
+    from ..stages import dmw as dmw_stage
+    from ..stages.interface import build_tables, roughness_statistics
+    from ..stages.simulate import needs_interface
     key = Runner(scene, ".").key  # (one runner: its file hashes and upstream keys computed once)
     interface = None
     if needs_interface(scene):
@@ -390,7 +390,7 @@ class Evaluator:
 
     def __call__(self, points: Iterable[Sequence[float]]) -> list[dict[str, Any]]:
         """Records of ``points`` (each a vector of parameter values), evaluating only what the store lacks."""
-        from .fanout import run_tasks
+        from ..fanout import run_tasks
         pts = [[float(v) for v in x] for x in points]
         keys = [self.key(x) for x in pts]
         todo: dict[str, list[float]] = {}
@@ -424,8 +424,8 @@ def setup(scene: Any, out: Path, section: str, force: bool = False) -> tuple[lis
 def prepare_inputs(scene: Any, out: Path) -> Inputs:
     """The base scene's ``interface.nc`` and ``dmw.nc`` in ``out`` (made current by the runner), by path,
     with the inputs keys they carry."""
-    from .runner import ensure
-    from .stages.simulate import needs_interface
+    from ..runner import ensure
+    from ..stages.simulate import needs_interface
     ipath = dpath = None
     ikey = dkey = None
     if needs_interface(scene):
@@ -459,7 +459,7 @@ class Table:
 
     def touching(self, at: Iterable[float]) -> np.ndarray:
         """Contact in the steady window at the protrusions ``at`` [nm]: the exact minimum clearance below
-        zero, the rule of the calibration and of the regime (:func:`pipeline.slider.summarize`), which
+        zero, the rule of the calibration and of the regime (:func:`pipeline.model.slider.summarize`), which
         also counts a contact shorter than the output step. False where not evaluated."""
         with np.errstate(invalid="ignore"):
             return self.values("min_clearance", at) < 0
@@ -515,14 +515,14 @@ class Target:
 
 def _grid(lo: float, hi: float, step: float, open_low: bool = False) -> tuple[float, ...]:
     """Protrusions ``lo, lo + step, ... <= hi`` [nm] (without ``lo`` when ``open_low``)."""
-    from .stages.sweep_grid import range_grid
+    from ..config.grid import range_grid
     pts = tuple(float(x) for x in range_grid({"start": lo, "stop": hi, "step": step}))
     return pts[1:] if open_low else pts
 
 
 def targets(scene: Any) -> list[Target]:
     """The targets of ``[identify]`` that ``identify.targets`` selects, in the order of
-    :data:`pipeline.scene.TARGETS` (SPEC.md section 7; the paper).
+    :data:`pipeline.config.scene.TARGETS` (SPEC.md section 7; the paper).
 
     * ``touchdown``: contact at ``touchdown.onset_nm``, none at ``touchdown.previous_nm`` (exact
       minimum clearance of the steady window, which is continuous in the parameters where the

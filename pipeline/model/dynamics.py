@@ -61,8 +61,8 @@ import numba
 import numpy as np
 from numba import njit
 
-from .code_version import code_key
-from .physics import air_bearing as ab
+from ..code_version import code_key
+from ..physics import air_bearing as ab
 
 # numba's on-disk cache of a jitted function checks the timestamp of the file that holds it, not of
 # the files whose functions it inlines (the air-bearing laws of pipeline.physics.air_bearing): with an
