@@ -21,7 +21,7 @@ import numpy as np
 from benchmarks.common import record, timeit
 from pipeline.model import slider as sl
 from pipeline.config.scene import load_scene
-from pipeline.stages import calibrate as cal
+from pipeline.analyses import calibration as cal
 from pipeline.stages.simulate import model_inputs
 from pipeline.config.grid import protrusion_grid
 

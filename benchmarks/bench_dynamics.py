@@ -51,12 +51,12 @@ FRESH = textwrap.dedent("""
     from pipeline import slider as sl
     from pipeline.io import read_dataset
     from pipeline.config.scene import load_scene
-    from pipeline.stages import dmw as dmw_stage
+    from pipeline.model import dmw_record
     t1 = time.perf_counter()
     out = sys.argv[1]
     scene = load_scene(sys.argv[2], ["contact.k=%(k)s"])
     interface = read_dataset(out + "/interface.nc", stage="interface")
-    _, w, fs = dmw_stage.load(out + "/dmw.nc")
+    _, w, fs = dmw_record.load(out + "/dmw.nc")
     model = sl.build_model(scene, interface, (w, fs), %(k)s)
     s = sl.summarize(sl.run_model(model, 11e-9))
     t2 = time.perf_counter()

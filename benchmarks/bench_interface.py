@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from pipeline.config.scene import load_scene
-from pipeline.stages.interface import build_tables, roughness_statistics
+from pipeline.model.interface_tables import build_tables, roughness_statistics
 
 from .common import record, timeit
 

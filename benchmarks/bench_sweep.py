@@ -40,11 +40,13 @@ def kernel_seconds(config: str, inputs: Path, repeat: int = 3) -> list[float]:
     """Sequential kernel time [s] of the paper sweep: ``run_model`` of every protrusion, in process."""
     from pipeline.model import slider as sl
     from pipeline.config.scene import load_scene
-    from pipeline.stages.simulate import model_inputs, resolve_k
+    from pipeline.io import read_dataset
+    from pipeline.model.scene_inputs import contact_k
+    from pipeline.stages.simulate import model_inputs
     from pipeline.config.grid import protrusion_grid
     scene = load_scene(config)
     interface, record_ = model_inputs(scene, inputs)
-    model = sl.build_model(scene, interface, record_, resolve_k(scene, inputs)[0])
+    model = sl.build_model(scene, interface, record_, contact_k(scene, read_dataset(Path(inputs) / "calibration.nc"))[0])
     grid = protrusion_grid(scene)
     sl.run_model(model, grid[0] * 1e-9)  # compile / load the cache
     times = []

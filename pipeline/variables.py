@@ -34,6 +34,7 @@ from typing import Any, Iterable
 
 import numpy as np
 import xarray as xr
+from .units import GPA, MN, MPA, NM, PER_UM2, UM, UM2, URAD
 
 
 class Regime(IntEnum):
@@ -140,7 +141,6 @@ def _group(*items: Variable) -> dict[str, Variable]:
 
 V = Variable
 #: SI value of one dataset unit
-NM, UM, MN, MPA, GPA, UM2 = 1e-9, 1e-6, 1e-3, 1e6, 1e9, 1e-12
 
 #: Coordinates shared by the datasets.
 COORDINATES = _group(
@@ -196,7 +196,7 @@ HISTORIES = _group(
       effect="contact", dtype="int8", flag_values=(0, 1), flag_meanings="not_in_contact in_contact",
       fill_value=-1),
     V("z", "nm", "vertical displacement of the centre of gravity (up positive)", NM, dims=("time",)),
-    V("pitch", "urad", "pitch angle (leading edge up positive)", 1e-6, dims=("time",)),  # 0 when locked
+    V("pitch", "urad", "pitch angle (leading edge up positive)", URAD, dims=("time",)),  # 0 when locked
     V("steps", "1", "accepted integrator steps", dtype="int64"),
     V("rejected_steps", "1", "rejected integrator steps", dtype="int64"),
     V("contact_switches", "1", "contact on/off events located", dtype="int64"),
@@ -213,7 +213,7 @@ ROUGHNESS = _group(
     V("sigma_s", "nm", "standard deviation of summit heights", NM, dims=_SR),
     V("y_s", "nm", "mean of summit heights minus mean of surface heights", NM, dims=_SR),
     V("summit_radius", "um", "mean summit radius of curvature", UM, dims=_SR),
-    V("summit_density", "um-2", "summit density (summits per nominal area)", 1e12, dims=_SR),
+    V("summit_density", "um-2", "summit density (summits per nominal area)", PER_UM2, dims=_SR),
     V("bandwidth_alpha", "1", "Nayak bandwidth parameter", dims=_SR),
     V("plasticity_index", "1", "plasticity index, Greenwood-Williamson form", dims=_SR),
     V("plasticity_index_ke", "1", "plasticity index, CEB/Kogut-Etsion form", dims=_SR),
@@ -247,7 +247,7 @@ INTERFACE = _group(
     V("sigma_s", "nm", "standard deviation of summit heights", NM),
     V("y_s", "nm", "mean of summit heights above the mean of surface heights", NM),
     V("summit_radius", "um", "summit radius", UM),
-    V("summit_density", "um-2", "summit density", 1e12),
+    V("summit_density", "um-2", "summit density", PER_UM2),
     V("bandwidth_alpha", "1", "Nayak bandwidth parameter"),
     V("composite_modulus", "GPa", "composite modulus E'", GPA),
     V("hardness", "GPa", "hardness of the softer body", GPA),

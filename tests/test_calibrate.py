@@ -9,6 +9,7 @@ import pytest
 
 from pipeline.io import read_dataset
 from pipeline.config.scene import load_scene
+from pipeline.analyses import calibration
 from pipeline.stages import calibrate as calibrate_stage
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -76,11 +77,11 @@ def test_threshold_is_where_touching_starts():
         from pipeline.stages.simulate import model_inputs
         interface, record = model_inputs(scene, Path(tmp))
         model = sl.build_model(scene, interface, record, k=0.0)
-        lo, lo_all, note = calibrate_stage.flying_minimum(model, 9.8)
+        lo, lo_all, note = calibration.flying_minimum(model, 9.8)
         assert note == "" and lo_all <= lo
         tol = 1e-6
-        k, sims = calibrate_stage.k_star(model, 9.8, lo, lo_all, (-3.0, 3.0), tol)
+        k, sims = calibration.k_star(model, 9.8, lo, lo_all, (-3.0, 3.0), tol)
         if sims == 0:  # k* straight from the flying run: exact
             assert k == lo / model.sigma
-        assert calibrate_stage.touches(model, 9.8, k + tol)
-        assert not calibrate_stage.touches(model, 9.8, k - tol)
+        assert calibration.touches(model, 9.8, k + tol)
+        assert not calibration.touches(model, 9.8, k - tol)

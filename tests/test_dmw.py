@@ -15,9 +15,10 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from pipeline.io import read_dataset
-from pipeline.model import dmw_records
+from pipeline.model import measured_dmw
 from pipeline.physics import dmw
 from pipeline.config.scene import scene_from_dict
+from pipeline.model import dmw_record
 from pipeline.stages import dmw as stage
 
 FS = 4e6            # [Hz] the paper's sampling rate
@@ -176,7 +177,7 @@ def good_record(tmp_path):
 
 def test_load_csv_with_units(good_record):
     path, x = good_record
-    rec = dmw_records.load_record(path, "velocity")
+    rec = measured_dmw.load_record(path, "velocity")
     assert rec.sample_rate_hz == pytest.approx(FS, rel=1e-9)
     assert rec.units == "mm/s" and rec.column == "velocity [mm/s]"
     back = dmw.velocity_to_displacement(rec.values, rec.sample_rate_hz, *BAND)
@@ -187,7 +188,7 @@ def test_load_headerless_and_sample_rate(tmp_path):
     x = dmw.synthesize(0.5, BAND, -2.0, T, FS, seed=9)
     p1 = tmp_path / "one.csv"
     np.savetxt(p1, x)
-    rec = dmw_records.load_record(p1, sample_rate_hz=FS)
+    rec = measured_dmw.load_record(p1, sample_rate_hz=FS)
     assert rec.sample_rate_hz == FS and np.allclose(rec.values, x)
     assert rec.units == "nm" and "assumed nm" in rec.notes[0]
     p2 = tmp_path / "two.txt"
@@ -195,8 +196,8 @@ def test_load_headerless_and_sample_rate(tmp_path):
     p2h = tmp_path / "two_ms.csv"
     np.savetxt(p2h, np.column_stack([np.arange(x.size) / FS * 1e3, x]), delimiter=";",
                header="time_ms;w_nm", comments="")
-    assert dmw_records.load_record(p2).sample_rate_hz == pytest.approx(FS * 1e-3, rel=1e-9)  # no unit: s
-    assert dmw_records.load_record(p2h).sample_rate_hz == pytest.approx(FS, rel=1e-9)
+    assert measured_dmw.load_record(p2).sample_rate_hz == pytest.approx(FS * 1e-3, rel=1e-9)  # no unit: s
+    assert measured_dmw.load_record(p2h).sample_rate_hz == pytest.approx(FS, rel=1e-9)
 
 
 def test_load_netcdf(tmp_path):
@@ -206,13 +207,13 @@ def test_load_netcdf(tmp_path):
                     coords={"time": ("time", np.arange(x.size) / FS * 1e6, {"units": "us"})})
     p = tmp_path / "rec.nc"
     ds.to_netcdf(p, engine="netcdf4")
-    rec = dmw_records.load_record(p)
+    rec = measured_dmw.load_record(p)
     assert rec.sample_rate_hz == pytest.approx(FS, rel=1e-9)
     assert np.allclose(rec.values, x)
     with pytest.raises(dmw.DMWError, match=r"rec\.nc.*'velocity'.*not found"):
-        dmw_records.load_record(p, column="velocity")
+        measured_dmw.load_record(p, column="velocity")
     with pytest.raises(dmw.DMWError, match=r"rec\.nc.*variable 'w'.*length units"):
-        dmw_records.load_record(p, quantity="velocity")
+        measured_dmw.load_record(p, quantity="velocity")
 
 
 def _errors(tmp_path: Path) -> dict[str, tuple[Path, dict, str]]:
@@ -252,7 +253,7 @@ def _errors(tmp_path: Path) -> dict[str, tuple[Path, dict, str]]:
 def test_bad_records_rejected_with_clear_errors(tmp_path, case):
     path, kw, pattern = _errors(tmp_path)[case]
     with pytest.raises(dmw.DMWError, match=pattern) as exc:
-        dmw_records.load_record(path, **kw)
+        measured_dmw.load_record(path, **kw)
     assert str(path) in str(exc.value)
     assert isinstance(exc.value, ValueError)
 
@@ -265,7 +266,7 @@ def test_nan_in_netcdf_rejected(tmp_path):
     xr.Dataset({"displacement": ("time", x, {"units": "nm"})},
                coords={"time": ("time", np.arange(10) / FS, {"units": "s"})}).to_netcdf(p, engine="netcdf4")
     with pytest.raises(dmw.DMWError, match=r"bad\.nc: variable 'displacement'.*NaN/infinite.*sample 3"):
-        dmw_records.load_record(p)
+        measured_dmw.load_record(p)
 
 
 # ---------------------------------------------------------------------------------------- stage
@@ -288,7 +289,7 @@ def test_stage_writes_synthetic_dmw(tmp_path):
     assert float(ds.disk_speed) == pytest.approx(19.5, abs=0.05)   # SPEC: V = 19.5 m/s
     assert ds.attrs["seed"] == 20090601 and ds.attrs["dmw_source"] == "synthetic"
     assert ds.attrs["exponent"] == -2.0 and ds.attrs["dmw_enabled"] == 1
-    t, w, fs = stage.load(tmp_path)
+    t, w, fs = dmw_record.load(tmp_path)
     assert fs == 4e6 and np.array_equal(t, np.arange(8400) / 4e6)
     assert np.array_equal(w, dmw.synthesize(0.5, BAND, -2.0, 2.1e-3, FS, seed=20090601))
 
@@ -296,13 +297,13 @@ def test_stage_writes_synthetic_dmw(tmp_path):
 def test_stage_duration_default_and_override(tmp_path):
     # default: simulated duration + disk travel over the slider (59 us), up to whole 0.1 ms periods
     scene = scene_from_dict({})
-    V = stage.settings(scene)["disk_speed_m_s"]
+    V = dmw_record.settings(scene)["disk_speed_m_s"]
     need = 2e-3 + (0.30e-3 + 0.85e-3) / V                   # front arm + slider length [m] / V
-    assert need < stage.settings(scene)["duration_s"] == pytest.approx(2.1e-3, rel=1e-12)
+    assert need < dmw_record.settings(scene)["duration_s"] == pytest.approx(2.1e-3, rel=1e-12)
     s1 = scene_from_dict({"solver": {"duration_ms": 1.0, "transient_ms": 0.2}})
-    assert stage.load(stage.run(s1, tmp_path / "a"))[1].size == 4400
+    assert dmw_record.load(stage.run(s1, tmp_path / "a"))[1].size == 4400
     s2 = scene_from_dict({"dmw": {"duration_ms": 3.0, "sample_rate_mhz": 2.0}})
-    assert stage.load(stage.run(s2, tmp_path / "b"))[1].size == 6000
+    assert dmw_record.load(stage.run(s2, tmp_path / "b"))[1].size == 6000
 
 
 def test_stage_measured_velocity_record(tmp_path):
@@ -363,14 +364,14 @@ def test_effect_off_writes_zero_dmw_and_needs_no_record(tmp_path):
 
 
 def test_disk_speed_formula():
-    s = stage.settings(scene_from_dict({"dmw": {"rpm": 7200.0, "radius_mm": 20.0}}))
+    s = dmw_record.settings(scene_from_dict({"dmw": {"rpm": 7200.0, "radius_mm": 20.0}}))
     assert s["disk_speed_m_s"] == pytest.approx(2 * math.pi * 0.02 * 7200 / 60)
 
 
 def test_default_record_is_long_enough_for_the_dynamics(tmp_path):
     from pipeline.model import slider
     scene = scene_from_dict({"scene": {"effects": ["air_bearing", "pitch", "dmw"]}})
-    _, w, fs = stage.load(stage.run(scene, tmp_path))
+    _, w, fs = dmw_record.load(stage.run(scene, tmp_path))
     model = slider.build_model(scene, None, (w, fs), None)   # raises if the record is too short
     assert model.dmw is not None
 
@@ -382,7 +383,7 @@ def test_stage_skips_when_up_to_date(tmp_path):
     os.utime(path, (1, 1))
     assert stage.run(scene, tmp_path) == path and path.stat().st_mtime == 1          # not rewritten
     stage.run(scene.replace(slider={"length_mm": 3.0}), tmp_path)                    # longer default record
-    assert path.stat().st_mtime != 1 and stage.load(path)[1].size == 8800
+    assert path.stat().st_mtime != 1 and dmw_record.load(path)[1].size == 8800
     os.utime(path, (1, 1))
     stage.run(scene.replace(slider={"length_mm": 3.0}), tmp_path, force=True)
     assert path.stat().st_mtime != 1

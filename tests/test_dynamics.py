@@ -18,7 +18,7 @@ from pipeline.model import slider as sl
 from pipeline.physics import air_bearing as ab
 from pipeline.physics import dmw as pdmw
 from pipeline.config.scene import scene_from_dict
-from pipeline.stages.interface import build_tables, roughness_statistics
+from pipeline.model.interface_tables import build_tables, roughness_statistics
 
 NM = 1e-9
 K = 0.445  # contact criterion constant used throughout (the brief's paper value)

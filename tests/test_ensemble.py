@@ -9,6 +9,7 @@ import pytest
 
 from pipeline.io import read_dataset
 from pipeline.config.scene import load_scene
+from pipeline.model import dmw_record
 from pipeline.stages import dmw as dmw_stage
 from pipeline.stages import sweep as sweep_stage
 
@@ -20,7 +21,7 @@ SMALL = ["contact.k=0.978", "solver.duration_ms=0.6", "solver.transient_ms=0.2",
 
 
 def test_seeds_nest_and_start_with_the_scene_seed():
-    a, b = dmw_stage.realisation_seeds(20090601, 3), dmw_stage.realisation_seeds(20090601, 6)
+    a, b = dmw_record.realisation_seeds(20090601, 3), dmw_record.realisation_seeds(20090601, 6)
     assert a[0] == 20090601 and a == b[:3]
     assert len(set(b)) == 6
     seq = np.random.SeedSequence(20090601).spawn(5)
@@ -42,7 +43,7 @@ def test_one_realisation_is_the_first_of_an_ensemble_bit_for_bit(sweeps):
     first = three.isel(realisation=0)
     for name in one.data_vars:
         np.testing.assert_array_equal(one[name].values, first[name].values, err_msg=name)
-    assert list(three.dmw_seed.values) == dmw_stage.realisation_seeds(20090601, 3)
+    assert list(three.dmw_seed.values) == dmw_record.realisation_seeds(20090601, 3)
     # the other realisations are other records: they change the FHM of the flying points
     assert not np.array_equal(three.fhm_bv.isel(realisation=1).values, first.fhm_bv.values)
 

@@ -57,8 +57,8 @@ from pipeline.physics import isbl
 from pipeline.physics.adhesion import lennard_jones_force, meniscus_force
 from pipeline.physics.statistics import ALPHA_MIN, bandwidth_alpha, summit_sigma
 from pipeline.config.scene import load_scene
-from pipeline.stages import dmw as dmw_stage
-from pipeline.stages.interface import build_tables, interface_parameters, roughness_statistics
+from pipeline.model import dmw_record
+from pipeline.model.interface_tables import build_tables, interface_parameters, roughness_statistics
 
 NM = 1e-9
 K = 0.445
@@ -81,7 +81,7 @@ def base(paper_config):
 
 def scene_record(scene, duration_s=None):
     """The scene's synthetic DMW record (displacement [nm], sample rate [Hz]), as the dmw stage makes it."""
-    s = dmw_stage.settings(scene)
+    s = dmw_record.settings(scene)
     dur = s["duration_s"] if duration_s is None else duration_s
     return pdmw.synthesize(s["rms_nm"], s["band_hz"], s["exponent"], dur, s["sample_rate_hz"], s["seed"]), \
         s["sample_rate_hz"]

@@ -6,7 +6,9 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from pipeline import evaluations
 from pipeline.analyses import study
+from pipeline.model import scene_inputs
 from pipeline.config.scene import SceneError, load_scene
 from pipeline.stages import identify
 
@@ -42,8 +44,8 @@ def _twin_scene(write_scene, paper_config, tmp_path):
     scene = load_scene(path)
     params = study.parse_parameters(scene["identify"]["parameters"], str(path), "identify.parameters")
     tl = study.targets(scene)
-    inputs = study.prepare_inputs(scene, tmp_path / "out")
-    rec = study.evaluate(scene, params, [TRUE[p.name] for p in params], study.target_protrusions(tl), inputs)
+    inputs = evaluations.prepare_inputs(scene, tmp_path / "out")
+    rec = evaluations.evaluate(scene, params, [TRUE[p.name] for p in params], study.target_protrusions(tl), inputs)
     values, _ = study.residuals(rec, tl, 10.0)
     fhm, force = values
     assert np.isfinite(fhm) and np.isfinite(force)
@@ -69,7 +71,7 @@ def test_twin_experiment_recovers_the_true_parameters_within_the_reported_interv
     # every evaluation is in the dataset, with units
     for v in ds.data_vars:
         assert "units" in ds[v].attrs and "long_name" in ds[v].attrs
-    assert ds.sizes["evaluation"] == len(study.EvaluationStore(out / "identify.evals.jsonl").records)
+    assert ds.sizes["evaluation"] == len(evaluations.EvaluationStore(out / "identify.evals.jsonl").records)
     # the reconstructed point (evaluation 0) is worse than the identified one
     assert float(ds["cost"][0]) > float(ds["cost"][ds.attrs["best_evaluation"]])
     # the written scene extends the twin scene and loads with the identified values
@@ -123,8 +125,10 @@ def test_list_element_parameter_sets_only_that_element(paper_scene):
 
 
 def test_two_sided_fallback_k(paper_scene):
-    # SPEC.md 7.1: the paper's 32.8 % is two-sided: k = 0.978
-    assert study.criterion_k(paper_scene) == pytest.approx(0.978, abs=1e-3)
+    # docs/model.md, "Contact criterion": the paper's 32.8 % is two-sided: k = 0.978 (a study takes k without
+    # a calibration)
+    k, source = scene_inputs.contact_k(paper_scene)
+    assert k == pytest.approx(0.978, abs=1e-3) and "two-sided" in source
 
 
 def test_interval_interpolates_crossings():
@@ -137,32 +141,32 @@ def test_interval_interpolates_crossings():
 
 def test_store_ignores_a_line_cut_short_by_a_kill(tmp_path):
     path = tmp_path / "identify.evals.jsonl"
-    store = study.EvaluationStore(path)
+    store = evaluations.EvaluationStore(path)
     store.put([("a", {"params": [1.0], "outputs": {}}), ("b", {"params": [2.0], "outputs": {}})])
     with open(path, "a") as fh:
         fh.write('{"key": "c", "params": [3.')  # the process died mid-write
-    again = study.EvaluationStore(path)
+    again = evaluations.EvaluationStore(path)
     assert list(again.records) == ["a", "b"] and again["b"]["params"] == [2.0]
     again.put([("c", {"params": [3.0], "outputs": {}})])  # the rerun computes it again and appends it
-    assert study.EvaluationStore(path)["c"]["params"] == [3.0]
+    assert evaluations.EvaluationStore(path)["c"]["params"] == [3.0]
     assert path.read_text().count("\n\n") == 0  # no empty lines from whole appends
 
 
 def test_base_key_follows_what_an_evaluation_reads(paper_scene):
-    inputs = study.Inputs(None, "interface-key", None, "dmw-key")
-    key = study.base_key(paper_scene, inputs)
+    inputs = evaluations.Inputs(None, "interface-key", None, "dmw-key")
+    key = evaluations.base_key(paper_scene, inputs)
     # settings of other stages and names do not change an evaluation
-    assert study.base_key(paper_scene.replace(sweep={"damping_ratio": [0.05]}, identify={"population": 5},
+    assert evaluations.base_key(paper_scene.replace(sweep={"damping_ratio": [0.05]}, identify={"population": 5},
                                               scene={"description": "x"}), inputs) == key
     # a simulation key does; so does an input made from other data (e.g. a rescanned AFM file)
-    assert study.base_key(paper_scene.replace(solver={"duration_ms": 0.9}), inputs) != key
-    assert study.base_key(paper_scene, study.Inputs(None, "other", None, "dmw-key")) != key
+    assert evaluations.base_key(paper_scene.replace(solver={"duration_ms": 0.9}), inputs) != key
+    assert evaluations.base_key(paper_scene, evaluations.Inputs(None, "other", None, "dmw-key")) != key
 
 
 def test_candidate_inputs_are_cached_by_stage_key_alone():
     made = []
-    first = study._made(study._Made("test", "key-1", lambda: made.append(1) or "tables"))
-    again = study._made(study._Made("test", "key-1", lambda: made.append(2) or "other"))  # same key: not made again
+    first = evaluations._made(evaluations._Made("test", "key-1", lambda: made.append(1) or "tables"))
+    again = evaluations._made(evaluations._Made("test", "key-1", lambda: made.append(2) or "other"))  # same key: not made again
     assert first == again == "tables" and made == [1]
 
 

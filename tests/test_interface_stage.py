@@ -10,6 +10,7 @@ import xarray as xr
 import pipeline
 from pipeline import cli, io
 from pipeline.config.scene import SCHEMA, load_scene
+from pipeline.model import interface_tables
 from pipeline.stages import interface
 
 TABLES = ("contact_pressure", "adhesion_pressure", "friction_stress", "real_area_fraction", "contact_fraction")
@@ -73,7 +74,7 @@ def test_paper_scalars(paper_ds):
 def test_tables_match_the_physics_module(paper_ds, paper_scene):
     # the stage writes isbl_tables in MPa on its grid
     from pipeline.physics import isbl
-    p = interface.interface_parameters(paper_scene, interface.roughness_statistics(paper_scene))
+    p = interface_tables.interface_parameters(paper_scene, interface_tables.roughness_statistics(paper_scene))
     d = paper_ds["separation"].values[::97] * 1e-9
     ref = isbl.isbl_tables(d, p)
     np.testing.assert_allclose(paper_ds["contact_pressure"].values[::97], ref["contact_pressure"] / 1e6, rtol=1e-12)
@@ -186,8 +187,8 @@ def test_load_missing_interface_dataset(tmp_path):
 
 
 def test_needed_quantities():
-    assert interface.needed_quantities(frozenset({"air_bearing"})) == ()
-    assert set(interface.needed_quantities(frozenset({"contact", "friction", "adhesion"}))) == set(TABLES)
+    assert interface_tables.needed_quantities(frozenset({"air_bearing"})) == ()
+    assert set(interface_tables.needed_quantities(frozenset({"contact", "friction", "adhesion"}))) == set(TABLES)
 
 
 def test_write_dataset_writes_what_to_netcdf_writes_without_importing_distributed(tmp_path):

@@ -14,7 +14,7 @@ from scipy.special import erfc, gamma, pbdv
 
 from pipeline.physics import adhesion, asperity, friction, isbl
 from pipeline.physics import statistics as st
-from pipeline.stages.interface import interface_parameters, roughness_statistics
+from pipeline.model.interface_tables import interface_parameters, roughness_statistics
 
 NM = 1e-9
 HUGE_H = 1e6 * 1e9  # 1e6 GPa: w_c ~ 1e11 m, so every summit stays elastic (Hertz)

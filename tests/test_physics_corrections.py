@@ -18,7 +18,8 @@ from pipeline.physics import dmw as pdmw
 from pipeline.physics import friction
 from pipeline.physics.fhm import FHM_MEASURES, fhm
 from pipeline.config.scene import SceneError, load_scene, scene_from_dict
-from pipeline.stages.interface import build_tables, roughness_statistics
+from pipeline.model.interface_tables import build_tables, roughness_statistics
+from pipeline.model import scene_inputs
 from pipeline.stages.simulate import model_attrs
 
 NM = 1e-9
@@ -84,7 +85,6 @@ def test_flying_scene_datum_without_interface_tables(paper):
     scans' y_s), and the simulation declares that input."""
     from pathlib import Path
 
-    from pipeline.stages.simulate import upstream
     flying = paper.replace(scene={"effects": ["air_bearing", "pitch"]})
     model = sl.build_model(flying, None, None, None)
     assert model.p[dyn.P_YS] == pytest.approx(0.691e-9, abs=1e-12)
@@ -93,7 +93,7 @@ def test_flying_scene_datum_without_interface_tables(paper):
     afm = flying.replace(roughness={"afm": [str(scan)]})
     with pytest.raises(ValueError, match="interface.nc"):
         sl.build_model(afm, None, None, None)
-    assert "interface" in upstream(afm) and "interface" not in upstream(flying)
+    assert "interface" in scene_inputs.simulation_inputs(afm) and "interface" not in scene_inputs.simulation_inputs(flying)
 
 
 def test_separation_has_one_home(paper):

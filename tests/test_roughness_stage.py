@@ -16,6 +16,7 @@ from pipeline.io import DatasetError, file_hash
 from pipeline.physics import statistics as st
 from pipeline.physics import surface as sf
 from pipeline.config.scene import scene_from_dict
+from pipeline.model import roughness as rough_model
 from pipeline.stages import roughness as rg
 
 AFM = Path(__file__).resolve().parent / "data" / "afm"  # real scans, kept in the repository
@@ -93,16 +94,16 @@ def test_layout_units_and_combination(two_files: list[Path], tmp_path: Path) -> 
 
 def test_combined_statistics(two_files: list[Path], tmp_path: Path) -> None:
     path = _run(two_files, tmp_path)
-    stats = rg.combined_statistics(path)
+    stats = rough_model.combined_statistics(path)
     ds = _open(path)
     row = ds.sel(surface="combined", route="spectral")
     assert set(stats) == {"sigma_nm", "sigma_s_nm", "y_s_nm", "summit_radius_um", "summit_density_per_um2", "alpha"}
     assert stats["sigma_nm"] == float(row["sigma"]) and stats["summit_radius_um"] == float(row["summit_radius"])
     assert stats["alpha"] == pytest.approx(float(ds["m0"][-1] * ds["m4"][-1] / ds["m2"][-1] ** 2))
     with pytest.raises(DatasetError, match="summit route cannot combine"):
-        rg.combined_statistics(path, route="summits")
+        rough_model.combined_statistics(path, route="summits")
     with pytest.raises(DatasetError, match="does not exist"):
-        rg.combined_statistics(tmp_path / "nothing.nc")
+        rough_model.combined_statistics(tmp_path / "nothing.nc")
 
 
 def test_single_file_combined_is_the_file(two_files: list[Path], tmp_path: Path) -> None:
@@ -110,7 +111,7 @@ def test_single_file_combined_is_the_file(two_files: list[Path], tmp_path: Path)
     assert list(ds["surface"].values) == ["disk", "combined"]
     for name in ("sigma", "sigma_s", "summit_radius", "summit_density", "pixel_size", "summit_count"):
         np.testing.assert_array_equal(ds[name].sel(surface="disk").values, ds[name].sel(surface="combined").values)
-    stats = rg.combined_statistics(tmp_path / "roughness.nc", route="summits")
+    stats = rough_model.combined_statistics(tmp_path / "roughness.nc", route="summits")
     assert stats["summit_density_per_um2"] == float(ds["summit_density"].sel({"surface": "disk", "route": "summits"}))
 
 
@@ -173,7 +174,7 @@ def test_failing_input_leaves_existing_output_untouched(two_files: list[Path], t
 
 
 def test_unique_labels() -> None:
-    labels = rg._unique_labels([Path("a/x.di"), Path("b/x.di"), Path("c/combined.nc"), Path("x.mi")])
+    labels = rough_model._unique_labels([Path("a/x.di"), Path("b/x.di"), Path("c/combined.nc"), Path("x.mi")])
     assert labels == ["x", "x-2", "combined-file", "x-3"]
 
 

@@ -40,8 +40,9 @@ from pipeline.model import dynamics as dyn
 from pipeline.model import slider as sl
 from pipeline.physics import dmw as pdmw
 from pipeline.config.scene import SCHEMA, load_scene
+from pipeline.model import dmw_record
 from pipeline.stages import dmw as dmw_stage
-from pipeline.stages.interface import build_tables, roughness_statistics
+from pipeline.model.interface_tables import build_tables, roughness_statistics
 
 NM = 1e-9
 K = 0.445
@@ -57,12 +58,12 @@ def base(paper_config):
 @pytest.fixture(scope="module")
 def record(base, tmp_path_factory):
     """The scene's DMW record (displacement [nm], sample rate [Hz]), as the dmw stage makes it."""
-    s = dmw_stage.settings(base)
+    s = dmw_record.settings(base)
     if s["source"] == "synthetic":
         w = pdmw.synthesize(s["rms_nm"], s["band_hz"], s["exponent"], s["duration_s"], s["sample_rate_hz"],
                             s["seed"])
         return w, s["sample_rate_hz"]
-    _, w, fs = dmw_stage.load(dmw_stage.run(base, tmp_path_factory.mktemp("dmw")))
+    _, w, fs = dmw_record.load(dmw_stage.run(base, tmp_path_factory.mktemp("dmw")))
     return w, fs
 
 

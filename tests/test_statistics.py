@@ -7,7 +7,7 @@ import pytest
 
 from pipeline.physics import statistics as st
 from pipeline.physics.asperity import critical_interference
-from pipeline.stages.interface import interface_parameters, roughness_statistics
+from pipeline.model.interface_tables import interface_parameters, roughness_statistics
 
 NM = 1e-9
 

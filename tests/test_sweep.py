@@ -16,6 +16,7 @@ import xarray as xr
 from pipeline.model import slider as sl
 from pipeline.io import read_dataset
 from pipeline.config.scene import SceneError, load_scene
+from pipeline.analyses import calibration
 from pipeline.stages import calibrate as calibrate_stage
 from pipeline.stages import sweep as sweep_stage
 from pipeline.stages.simulate import model_inputs
@@ -76,8 +77,8 @@ def test_calibration_interval_ends_are_where_full_runs_start_touching(calibrated
     model = sl.build_model(scene, interface, record, k=0.0)
     td = scene["touchdown"]
     for delta, k_star in ((td["onset_nm"], lo), (td["previous_nm"], hi)):
-        assert calibrate_stage.touches(model, delta, k_star + tol), (delta, k_star)
-        assert not calibrate_stage.touches(model, delta, k_star - tol), (delta, k_star)
+        assert calibration.touches(model, delta, k_star + tol), (delta, k_star)
+        assert not calibration.touches(model, delta, k_star - tol), (delta, k_star)
     # the probabilities against scipy's normal tail (the paper's convention is two-sided)
     from scipy.stats import norm
     assert float(cal.contact_probability_one_sided) == pytest.approx(norm.sf(k), rel=1e-12)

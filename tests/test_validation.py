@@ -14,6 +14,7 @@ import pytest
 
 from pipeline import cli
 from pipeline.config.scene import SceneError, load_scene
+from pipeline.model import interface_tables
 from pipeline.stages import interface
 from pipeline.physics.material_bounds import PhysicsWarning, check_materials
 from pipeline.validation import CONNECT_TIMEOUT_S, MAX_SCENES, check_grid, check_out, grid_size
@@ -166,13 +167,13 @@ def test_hardness_derived_from_a_fixed_psi_outside_physical_bounds_warns():
     scene = load_scene(PAPER)
     stats = {"sigma": 1.6e-9, "sigma_s": 1.53e-9, "y_s": 0.5e-9, "R": 14.7e-9, "eta": 1e15, "alpha": 3.0}
     with pytest.warns(PhysicsWarning, match=r"H = 58\.\d GPa \(derived from materials.plasticity_index = 0.52"):
-        p = interface.interface_parameters(scene, stats)
+        p = interface_tables.interface_parameters(scene, stats)
     assert p.E / 1e9 == pytest.approx(94.19, rel=1e-3)     # E' of the paper's materials (tests/test_statistics.py)
     assert p.H == pytest.approx(p.E / 0.52 * math.sqrt(1.53 / 14.7), rel=1e-12)
     # the paper's own statistics give H = 1.68 GPa = 0.018 E': no warning
     with warnings.catch_warnings():
         warnings.simplefilter("error", PhysicsWarning)
-        interface.interface_parameters(scene, interface.roughness_statistics(scene))
+        interface_tables.interface_parameters(scene, interface_tables.roughness_statistics(scene))
 
 
 def test_plasticity_index_derived_from_a_given_hardness_outside_bounds_warns():

@@ -1,4 +1,4 @@
-"""Parameter studies over scene keys: candidates, their evaluation on the fan-out, targets, residuals.
+"""Parameter studies over scene keys: free parameters, candidates, targets, residuals (the analysis).
 
 Shared by ``hdi identify`` (:mod:`pipeline.stages.identify`) and ``hdi sensitivity``
 (:mod:`pipeline.stages.sensitivity`). Both vary numeric scene keys within bounds and evaluate every
@@ -7,23 +7,13 @@ candidate as a small sweep over protrusions:
 * a **free parameter** (:class:`Parameter`) is any numeric scene key ``section.key`` or an element of
   a list key ``section.key[i]`` (``air_bearing.frequencies_khz[0]``), with bounds; keys added to
   :data:`pipeline.config.scene.SCHEMA` later need no change here;
-* a **candidate** is the base scene with the parameters set (validated again, so an impossible
-  combination such as ``f1 > f2`` is a recorded failure, not a crash). Its interface tables are
-  rebuilt only when a key they depend on changed (the runner's inputs key of ``interface``,
-  ~15-45 ms), its DMW record only when a ``[dmw]`` key changed (synthesis, ~0.1 ms); otherwise the
-  base scene's ``interface.nc``/``dmw.nc`` are read by path, once per worker process;
-* it runs at the protrusions the study needs (:func:`pipeline.model.slider.run_model`) and keeps the
-  steady-window outputs of :func:`pipeline.model.slider.summarize` in dataset units (:data:`pipeline.variables.SCALARS`);
-* the contact criterion k is ``contact.k`` when the scene (or the candidate) sets it, else the k whose
-  **two-sided** contact probability ``P(|z| > k sigma)`` is ``contact.fallback_probability``
-  (SPEC.md 7.1: the paper's 32.8 % is two-sided, k = 0.978). A calibration per candidate would make
-  the touchdown target trivially true; with k fixed, touchdown at 9.8 nm is a property of the
-  parameters, as in the paper.
-
-Candidates are fanned out in batches (:func:`evaluate_batch`, via :func:`pipeline.fanout.run_tasks`).
-Every finished evaluation is appended to a JSON-lines store (:class:`EvaluationStore`) keyed by the
-hash of the base scene and its inputs, the parameter values and the protrusions, so an interrupted
-study resumes: what was evaluated is read back, not recomputed.
+* a **candidate** is the base scene with the parameters set (:func:`with_values`), evaluated as a
+  small sweep over the protrusions the targets need (:mod:`pipeline.evaluations`: its inputs, the
+  fan-out and the resumable store); the contact criterion k is ``contact.k`` when the scene (or the
+  candidate) sets it, else the k whose **two-sided** contact probability ``P(|z| > k sigma)`` is
+  ``contact.fallback_probability`` (docs/model.md, section "Contact criterion": the paper's 32.8 % is
+  two-sided, k = 0.978). A calibration per candidate would make the touchdown target trivially true;
+  with k fixed, touchdown at 9.8 nm is a property of the parameters, as in the paper.
 
 Targets (:func:`targets`) are scene data in ``[identify]``; each gives a value from a candidate's
 outputs and a residual normalised by its tolerance (inequality targets are zero inside their
@@ -33,27 +23,16 @@ failed run) gets the residual ``identify.missing_residual``.
 
 from __future__ import annotations
 
-import hashlib
-import json
 import math
-import os
 import re
-import time
-from dataclasses import dataclass, field
-from functools import lru_cache
-from pathlib import Path
+from dataclasses import dataclass
 from typing import Any, Callable, Iterable, Sequence
 
 import numpy as np
 
-from ..model import slider as sl
-from ..io import read_dataset
-from ..physics.statistics import k_from_probability
-from ..runner import KEY_ATTR, Runner
-from ..variables import SCALARS
+from ..config.grid import range_grid
 from ..config.scene import SCHEMA, TARGETS, SceneError
 
-NM = 1e-9
 
 _KEY_RE = re.compile(r"([a-z_]+)\.([a-z0-9_]+)(?:\[(\d+)\])?")
 
@@ -177,266 +156,6 @@ def with_values(scene: Any, params: Sequence[Parameter], values: Sequence[float]
     return scene.replace(**changes)
 
 
-def criterion_k(scene: Any) -> float:
-    """Contact criterion k [1] of a candidate: ``contact.k``, else the two-sided fallback (module docstring)."""
-    c = scene["contact"]
-    if c["k"] is not None:
-        return float(c["k"])
-    if c["fallback_probability"] is None:
-        raise ValueError("a parameter study needs the contact criterion k: set contact.k or "
-                         "contact.fallback_probability (two-sided P(|z| > k sigma))")
-    return k_from_probability(c["fallback_probability"])
-
-
-def upstream(scene: Any) -> tuple[str, ...]:
-    """The stages a study reads: a single simulation's inputs without the calibration (a study fixes k,
-    :func:`criterion_k`)."""
-    from ..stages.simulate import upstream as simulate_upstream
-    return tuple(u for u in simulate_upstream(scene) if u != "calibrate")
-
-
-# ---------------------------------------------------------------------------------- evaluations
-@dataclass(frozen=True)
-class Inputs:
-    """The base scene's inputs, by file path, and the stage keys they were made for."""
-
-    interface_path: str | None
-    interface_key: str | None
-    dmw_path: str | None
-    dmw_key: str | None
-
-
-def base_key(scene: Any, inputs: Inputs) -> str:
-    """Hash of what an evaluation depends on besides its parameters and protrusions.
-
-    The scene keys a simulation reads (:data:`pipeline.stages.simulate.NOT_READ` left out), the
-    runner's keys of the base inputs, which hash AFM scans and a measured DMW record by content (a
-    rescanned file under the same name is a new base, not a store to read back), and the code of this
-    module and of what it imports (:func:`pipeline.code_version.code_key`).
-    """
-    from ..code_version import code_key
-    from ..runner import scene_part
-    from ..stages.simulate import NOT_READ
-    blob = {"scene": scene_part(scene, ("*",), NOT_READ), "interface": inputs.interface_key, "dmw": inputs.dmw_key,
-            "code": code_key(__name__)}
-    return hashlib.sha256(json.dumps(blob, sort_keys=True).encode()).hexdigest()
-
-
-def evaluation_key(base: str, params: Sequence[Parameter], values: Sequence[float],
-                   protrusions: Sequence[float]) -> str:
-    """Identity of one evaluation (values rounded to 12 significant digits)."""
-    blob = json.dumps({"base": base, "params": {p.name: float(f"{v:.12g}") for p, v in zip(params, values)},
-                       "protrusions": [round(float(x), 9) for x in protrusions]}, sort_keys=True)
-    return hashlib.sha256(blob.encode()).hexdigest()
-
-
-@dataclass(frozen=True)
-class _Made:
-    """An input identified by its stage key alone (equal keys, equal data); ``make`` makes it."""
-
-    kind: str
-    key: str
-    make: Callable[[], Any] = field(compare=False)
-
-
-@lru_cache(maxsize=8)
-def _made(what: _Made) -> Any:
-    """Per-process cache of interface tables, DMW records and roughness statistics (thread-safe, least
-    recently used dropped: the base inputs every candidate shares stay while varied ones come and go)."""
-    return what.make()
-
-
-def candidate_inputs(scene: Any, inputs: Inputs) -> tuple[Any, tuple[np.ndarray, float] | None]:
-    """Interface tables and DMW record of a candidate: the base files when unchanged, else rebuilt."""
-    from ..stages import dmw as dmw_stage
-    from ..stages.interface import build_tables, roughness_statistics
-    from ..stages.simulate import needs_interface
-    key = Runner(scene, ".").key  # (one runner: its file hashes and upstream keys computed once)
-    interface = None
-    if needs_interface(scene):
-        ikey = key("interface")
-        if inputs.interface_path and ikey == inputs.interface_key:
-            interface = _made(_Made("interface", ikey,
-                                    lambda: read_dataset(inputs.interface_path, stage="interface")))
-        else:
-            # AFM statistics once per process, not an AFM analysis per candidate (roughness_statistics
-            # without a folder makes roughness.nc afresh in a temporary one)
-            stats = _made(_Made("roughness", key("roughness"), lambda: roughness_statistics(scene)))
-            interface = _made(_Made("interface", ikey, lambda: build_tables(scene, stats)))
-    record = None
-    if scene.has("dmw"):
-        dkey = key("dmw")
-        if inputs.dmw_path and dkey == inputs.dmw_key:
-            record = _made(_Made("dmw", dkey, lambda: dmw_stage.load(inputs.dmw_path)[1:]))
-        else:
-            s = dmw_stage.settings(scene)
-            if s["source"] != "synthetic":
-                raise ValueError("a [dmw] key of a measured record cannot be a free parameter (the record is "
-                                 "used as measured)")
-            record = _made(_Made("dmw", dkey, lambda: (dmw_stage.synthetic_record(s), s["sample_rate_hz"])))
-    return interface, record
-
-
-def evaluate(base: Any, params: Sequence[Parameter], values: Sequence[float], protrusions: Sequence[float],
-             inputs: Inputs) -> dict[str, Any]:
-    """Run one candidate at ``protrusions`` [nm]; returns its record (see :class:`EvaluationStore`).
-
-    Outputs are in dataset units (``fhm_bv`` [%], ``min_clearance`` [nm], ``contact_force`` [mN], ...),
-    one value per protrusion, NaN where the run failed or the quantity does not exist (no contact).
-    """
-    t0 = time.perf_counter()
-    kernel = 0.0
-    errors: list[str] = []
-    n = len(protrusions)
-    outputs: dict[str, list[float]] = {}
-    try:
-        scene = with_values(base, params, values)
-        interface, record = candidate_inputs(scene, inputs)
-        model = sl.build_model(scene, interface, record, criterion_k(scene) if scene.has("contact") else None)
-    except (SceneError, ValueError, sl.IntegrationError) as exc:
-        errors.append(str(exc))
-        model = None
-    if model is not None:
-        for i, delta in enumerate(protrusions):
-            try:
-                t1 = time.perf_counter()
-                run = sl.run_model(model, float(delta) * NM)
-                kernel += time.perf_counter() - t1
-                summary = sl.summarize(run)
-            except (sl.IntegrationError, ValueError, FloatingPointError) as exc:
-                errors.append(f"{delta:g} nm: {exc}")
-                continue
-            for name, v in summary.items():
-                outputs.setdefault(name, [float("nan")] * n)[i] = float(v) * SCALARS[name].si_factor
-    return {"params": [float(v) for v in values], "protrusions": [float(x) for x in protrusions],
-            "outputs": outputs, "seconds": time.perf_counter() - t0, "kernel_seconds": kernel,
-            "error": "; ".join(errors) if errors else None}
-
-
-def evaluate_batch(base: Any, params: Sequence[Parameter], rows: Sequence[tuple[str, Sequence[float]]],
-                   protrusions: Sequence[float], inputs: Inputs) -> list[tuple[str, dict[str, Any]]]:
-    """One fan-out task: evaluate the candidates ``rows = [(key, values), ...]`` (executed on a worker)."""
-    return [(key, evaluate(base, params, values, protrusions, inputs)) for key, values in rows]
-
-
-class EvaluationStore:
-    """Finished evaluations, appended as JSON lines to ``path`` as they arrive (the resume point).
-
-    Each line is ``{"key": ..., **record}``. A line cut short by a kill is ignored when reading, so
-    the store never blocks a resume; a record is written once, flushed and synced.
-    """
-
-    def __init__(self, path: str | Path):
-        self.path = Path(path)
-        self.records: dict[str, dict[str, Any]] = {}
-        text = self.path.read_text() if self.path.is_file() else ""
-        for line in text.splitlines():
-            try:
-                rec = json.loads(line)
-            except json.JSONDecodeError:
-                continue
-            if isinstance(rec, dict) and "key" in rec and rec["key"] not in self.records:
-                self.records[rec["key"]] = rec
-        # a last line cut short by a kill: the next write ends it first, so new records start on their own line
-        self._cut = bool(text) and not text.endswith("\n")
-
-    def __contains__(self, key: str) -> bool:
-        return key in self.records
-
-    def __getitem__(self, key: str) -> dict[str, Any]:
-        return self.records[key]
-
-    def put(self, items: Iterable[tuple[str, dict[str, Any]]]) -> None:
-        """Append ``(key, record)`` pairs not yet stored: one write, flushed and synced."""
-        new = {k: {"key": k, **rec} for k, rec in items if k not in self.records}
-        if not new:
-            return
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        with open(self.path, "a") as fh:
-            lines = "".join(json.dumps(rec, allow_nan=True) + "\n" for rec in new.values())
-            fh.write(("\n" if self._cut else "") + lines)
-            fh.flush()
-            os.fsync(fh.fileno())
-        self._cut = False
-        self.records.update(new)
-
-
-@dataclass
-class Evaluator:
-    """Evaluates sets of candidates of one base scene on the fan-out, through the store.
-
-    ``scheduler``/``workers`` as in :func:`pipeline.fanout.run_tasks`; ``task`` is the batch function
-    (:func:`evaluate_batch`, or a stand-in with its signature for tests of the statistics).
-    """
-
-    base: Any
-    params: Sequence[Parameter]
-    protrusions: Sequence[float]
-    inputs: Inputs
-    store: EvaluationStore
-    batch_size: int = 8
-    scheduler: str | None = None
-    workers: int | None = None
-    task: Callable[..., list] = evaluate_batch
-    batch_seconds: float = 0.0
-    evaluated: int = 0
-    kernel_seconds: float = 0.0
-
-    def __post_init__(self) -> None:
-        self.base_hash = base_key(self.base, self.inputs)
-
-    def key(self, values: Sequence[float]) -> str:
-        return evaluation_key(self.base_hash, self.params, values, self.protrusions)
-
-    def __call__(self, points: Iterable[Sequence[float]]) -> list[dict[str, Any]]:
-        """Records of ``points`` (each a vector of parameter values), evaluating only what the store lacks."""
-        from ..fanout import run_tasks
-        pts = [[float(v) for v in x] for x in points]
-        keys = [self.key(x) for x in pts]
-        todo: dict[str, list[float]] = {}
-        for k, x in zip(keys, pts):
-            if k not in self.store and k not in todo:
-                todo[k] = x
-        rows = list(todo.items())
-        tasks = [(self.base, list(self.params), rows[i:i + self.batch_size], list(self.protrusions), self.inputs)
-                 for i in range(0, len(rows), self.batch_size)]
-
-        if tasks:
-            self.batch_seconds += run_tasks(self.task, tasks, scheduler=self.scheduler, workers=self.workers,
-                                            on_done=self.store.put)
-            self.evaluated += len(rows)
-            self.kernel_seconds += sum(self.store[k]["kernel_seconds"] for k in todo)
-        return [self.store[k] for k in keys]
-
-
-def setup(scene: Any, out: Path, section: str, force: bool = False) -> tuple[list[Parameter], Inputs, EvaluationStore]:
-    """The free parameters of ``[section]``, the base inputs in ``out`` and the evaluation store
-    ``out/<section>.evals.jsonl`` (emptied first with ``force``)."""
-    where = str(scene.path) if scene.path else "<scene>"
-    params = parse_parameters(scene[section]["parameters"], where, f"{section}.parameters")
-    inputs = prepare_inputs(scene, out)
-    store_path = Path(out) / f"{section}.evals.jsonl"
-    if force:
-        store_path.unlink(missing_ok=True)
-    return params, inputs, EvaluationStore(store_path)
-
-
-def prepare_inputs(scene: Any, out: Path) -> Inputs:
-    """The base scene's ``interface.nc`` and ``dmw.nc`` in ``out`` (made current by the runner), by path,
-    with the inputs keys they carry."""
-    from ..runner import ensure
-    from ..stages.simulate import needs_interface
-    ipath = dpath = None
-    ikey = dkey = None
-    if needs_interface(scene):
-        ipath = str(ensure("interface", scene, out))
-        ikey = read_dataset(ipath).attrs.get(KEY_ATTR)
-    if scene.has("dmw"):
-        dpath = str(ensure("dmw", scene, out))
-        dkey = read_dataset(dpath).attrs.get(KEY_ATTR)
-    return Inputs(ipath, ikey, dpath, dkey)
-
-
 # ------------------------------------------------------------------------------------------ targets
 class Table:
     """A candidate's outputs versus protrusion, read from its record."""
@@ -515,7 +234,6 @@ class Target:
 
 def _grid(lo: float, hi: float, step: float, open_low: bool = False) -> tuple[float, ...]:
     """Protrusions ``lo, lo + step, ... <= hi`` [nm] (without ``lo`` when ``open_low``)."""
-    from ..config.grid import range_grid
     pts = tuple(float(x) for x in range_grid({"start": lo, "stop": hi, "step": step}))
     return pts[1:] if open_low else pts
 

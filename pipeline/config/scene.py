@@ -24,6 +24,7 @@ from typing import Any, Callable, Iterable
 from ..physics.air_bearing import REAR_LAWS, STIFFNESS_ROOTS, TFC_STIFFENING
 from ..physics.fhm import FHM_MEASURES
 from ..physics.friction import FRICTION_LAWS
+from ..units import MHZ_IN_KHZ, SUFFIX_FACTORS
 
 try:  # Python >= 3.11
     import tomllib
@@ -33,11 +34,8 @@ except ModuleNotFoundError:  # pragma: no cover - Python 3.10
 #: Effects a scene may ask for (DESIGN.md, "Scenes and effects").
 EFFECTS = ("air_bearing", "pitch", "dmw", "adhesion", "contact", "friction")
 
-#: Unit suffixes that may end a key name; used to tell "wrong unit" from "unknown key".
-UNIT_SUFFIXES = (
-    "nm", "um", "mm", "m", "gpa", "mpa", "pa", "khz", "hz", "mhz", "ms", "us", "ns", "s",
-    "j_m2", "n_s_m", "n_m", "kg_m3", "per_um2", "per_m2", "kg", "n", "mn", "rpm", "sigma",
-)
+#: Unit suffixes that may end a key name (the units table); used to tell "wrong unit" from "unknown key".
+UNIT_SUFFIXES = tuple(SUFFIX_FACTORS)
 
 
 class SceneError(ValueError):
@@ -564,7 +562,7 @@ def _cross_checks(config: dict[str, dict[str, Any]], where: str) -> None:
                                  f"expected \"synthetic\" or a record file")
             config["dmw"]["source"] = str(p.resolve())
     lo, hi = config["dmw"]["band_khz"]
-    nyq = config["dmw"]["sample_rate_mhz"] * 1e3 / 2
+    nyq = config["dmw"]["sample_rate_mhz"] * MHZ_IN_KHZ / 2
     if hi > nyq:
         raise SceneError(f"{where}: dmw.band_khz upper edge {hi} kHz is above the Nyquist frequency "
                          f"{nyq} kHz of dmw.sample_rate_mhz = {config['dmw']['sample_rate_mhz']}")

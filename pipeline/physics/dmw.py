@@ -1,5 +1,5 @@
 """Dynamic microwaviness (DMW): synthesis and LDV-style processing (reading measured records:
-:mod:`pipeline.model.dmw_records`).
+:mod:`pipeline.model.measured_dmw`).
 
 The DMW is the disk's vertical displacement under the slider versus time, ``w(t)`` [nm]. The paper
 measured it with a laser Doppler vibrometer (LDV) at mid-diameter, 5425 rpm, high-passed at 10 kHz,

@@ -12,6 +12,7 @@ from __future__ import annotations
 import warnings
 
 from .statistics import plasticity_index_gw
+from ..units import GPA, NM, UM
 
 
 class PhysicsWarning(UserWarning):
@@ -39,13 +40,13 @@ def check_materials(E: float, H: float, sigma_s: float, R: float, *, derived: st
     psi = float(plasticity_index_gw(E, H, sigma_s, R))
     lo, hi = HARDNESS_RATIO_BOUNDS
     if not lo <= H / E <= hi:
-        cause = (f"derived from materials.plasticity_index = {psi:.3g} with sigma_s = {sigma_s * 1e9:.3g} nm and "
-                 f"R = {R * 1e6:.3g} um" if derived == "hardness" else "materials.hardness_gpa")
-        warnings.warn(f"hardness H = {H / 1e9:.3g} GPa ({cause}) is {H / E:.3g} E' (E' = {E / 1e9:.3g} GPa), outside "
+        cause = (f"derived from materials.plasticity_index = {psi:.3g} with sigma_s = {sigma_s / NM:.3g} nm and "
+                 f"R = {R / UM:.3g} um" if derived == "hardness" else "materials.hardness_gpa")
+        warnings.warn(f"hardness H = {H / GPA:.3g} GPa ({cause}) is {H / E:.3g} E' (E' = {E / GPA:.3g} GPa), outside "
                       f"the physical range {lo:g}-{hi:g} E'; set materials.hardness_gpa for these surfaces",
                       PhysicsWarning, stacklevel=2)
     plo, phi = PLASTICITY_BOUNDS
     if not plo <= psi <= phi:
-        warnings.warn(f"GW plasticity index psi = {psi:.3g} (from H = {H / 1e9:.3g} GPa, E' = {E / 1e9:.3g} GPa, "
-                      f"sigma_s = {sigma_s * 1e9:.3g} nm, R = {R * 1e6:.3g} um) is outside {plo:g}-{phi:g}, the range "
+        warnings.warn(f"GW plasticity index psi = {psi:.3g} (from H = {H / GPA:.3g} GPa, E' = {E / GPA:.3g} GPa, "
+                      f"sigma_s = {sigma_s / NM:.3g} nm, R = {R / UM:.3g} um) is outside {plo:g}-{phi:g}, the range "
                       "of measured surfaces", PhysicsWarning, stacklevel=2)

@@ -17,6 +17,7 @@ import math
 from statistics import NormalDist
 
 import numpy as np
+from ..units import NM, UM, UM2
 
 #: Lower bound of the bandwidth parameter for which McCool's summit-height variance is positive.
 ALPHA_MIN = 0.8968
@@ -168,6 +169,6 @@ def explicit_statistics(sigma_nm: float, summit_radius_um: float, summit_density
     """Summit statistics [SI] of a surface given by ``sigma`` [nm], ``R`` [um] and ``eta`` [um^-2] (the
     scene's ``[roughness]`` keys): ``sigma``, ``sigma_s``, ``y_s``, ``R`` [m], ``eta`` [m^-2], ``alpha`` [1]
     by McCool's relations (:func:`summit_sigma`, :func:`summit_offset`, :func:`bandwidth_alpha`; SPEC.md 1)."""
-    sigma, R, eta = sigma_nm * 1e-9, summit_radius_um * 1e-6, summit_density_per_um2 / 1e-6**2
+    sigma, R, eta = sigma_nm * NM, summit_radius_um * UM, summit_density_per_um2 / UM2
     return {"sigma": sigma, "sigma_s": summit_sigma(sigma, eta, R), "y_s": summit_offset(sigma, eta, R),
             "R": R, "eta": eta, "alpha": bandwidth_alpha(sigma, eta, R)}

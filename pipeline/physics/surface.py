@@ -39,6 +39,7 @@ from typing import Any, Iterable, Sequence
 import numpy as np
 
 from . import statistics as st
+from ..units import NM_IN_UM, PER_NM2_IN_PER_UM2
 
 #: Detrend modes accepted here; ``"plane"`` is SurfaceTopography's ``"height"`` (the rms-minimising plane).
 DETREND_ALIASES = {"plane": "height"}
@@ -462,8 +463,8 @@ def compare_routes(spectral: RouteStatistics, summits: RouteStatistics, pixel_si
     label : surface name (quoted in the message)
     """
     msgs = []
-    for name, a, b, unit, fac in (("summit density eta", spectral.eta, summits.eta, "um^-2", 1e6),
-                                  ("summit radius R", spectral.R, summits.R, "um", 1e-3)):
+    for name, a, b, unit, fac in (("summit density eta", spectral.eta, summits.eta, "um^-2", PER_NM2_IN_PER_UM2),
+                                  ("summit radius R", spectral.R, summits.R, "um", NM_IN_UM)):
         if not (np.isfinite(a) and np.isfinite(b) and a > 0 and b > 0):
             continue
         ratio = max(a, b) / min(a, b)

@@ -92,6 +92,7 @@ from __future__ import annotations
 import logging
 import os
 import time
+import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from statistics import median
@@ -104,9 +105,10 @@ from ..model import slider as sl
 from ..runner import Inputs, Stage, build
 from ..variables import ACCURACY as ACC
 from ..variables import SCALARS
-from ..physics.statistics import k_from_probability
-from .interface import build_tables, roughness_statistics
-from .simulate import NOT_READ, needs_interface, resolve_k
+from ..io import read_dataset
+from ..model import dmw_record, scene_inputs
+from ..model.interface_tables import build_tables, roughness_statistics
+from .dmw import run as run_dmw
 
 log = logging.getLogger(__name__)
 NM = 1e-9
@@ -216,19 +218,12 @@ TABLE_KEYS = ("table_step_nm", "quadrature_nodes", "quadrature_panels")
 # helpers
 
 def _contact_k(scene: Any, out: Path, k: float | None) -> tuple[float | None, str]:
-    """``k`` from the option, else as every later stage takes it (:func:`simulate.resolve_k`); without
-    ``calibration.nc``, from ``contact.fallback_probability`` (the accuracy study needs some k)."""
-    if not scene.has("contact"):
-        return None, "no contact effect"
-    if k is not None:
-        return float(k), "option k"
-    try:
-        return resolve_k(scene, out)
-    except ValueError:
-        fb = scene["contact"]["fallback_probability"]
-        if fb is None:
-            raise
-        return k_from_probability(fb), f"contact.fallback_probability = {fb} (two-sided; no calibration.nc)"
+    """``k`` from the option, else by the one rule (:func:`pipeline.model.scene_inputs.contact_k`) with the
+    calibration when the scene fixes no k."""
+    calibration = None
+    if k is None and scene.has("contact") and scene["contact"]["k"] is None:
+        calibration = read_dataset(Path(out) / "calibration.nc", stage="calibrate")
+    return scene_inputs.contact_k(scene, calibration, override=k)
 
 
 def relative_error(x: np.ndarray, ref: np.ndarray, floor: float) -> np.ndarray:
@@ -260,7 +255,8 @@ class _RunCache:
         self.scene = scene
         self.out = out
         self.repeat = repeat
-        self.stats = roughness_statistics(scene, out) if needs_interface(scene) else None
+        self.stats = (roughness_statistics(scene, out / "roughness.nc" if scene["roughness"]["afm"] else None)
+                      if scene_inputs.needs_interface(scene) else None)
         self.tables: dict[tuple, tuple[xr.Dataset | None, float]] = {}
         self.records: dict[float, tuple[tuple[np.ndarray, float] | None, float]] = {}
         self.record_notes: dict[float, str] = {}
@@ -281,13 +277,11 @@ class _RunCache:
         return self.tables[key]
 
     def _synth(self, sc: Any) -> np.ndarray:
-        from . import dmw as dmw_stage
-        s = dmw_stage.settings(sc)
+        s = dmw_record.settings(sc)
         if s["source"] == "synthetic":
-            return dmw_stage.synthetic_record(s)
-        import tempfile
+            return dmw_record.synthetic_record(s)
         with tempfile.TemporaryDirectory() as tmp:
-            _, w, _ = dmw_stage.load(dmw_stage.run(sc, Path(tmp), force=True))
+            _, w, _ = dmw_record.load(run_dmw(sc, Path(tmp), force=True))
         return w
 
     def record(self, sc: Any) -> tuple[tuple[np.ndarray, float] | None, float]:
@@ -594,7 +588,7 @@ def _upstream(scene: Any) -> tuple[str, ...]:
 
 STAGE = Stage(
     "accuracy", compute, outputs=("accuracy.nc", "figures/work_precision.png"),
-    reads=("*",), excludes=NOT_READ,
+    reads=("*",), excludes=scene_inputs.SIMULATION_EXCLUDES,
     upstream=_upstream,
     options=("points", "reference", "knobs", "only", "repeat", "tolerance", "combined_tolerance", "k"),
     order=55, doc="error and wall time of each accuracy knob, accuracy.nc and figures/work_precision.png")

@@ -1,319 +1,33 @@
-"""Stage ``calibrate``: the contact-criterion constant k from the measured touchdown.
+"""Stage ``calibrate``: the contact-criterion constant k from the measured touchdown, ``calibration.nc``.
 
-The paper's procedure (SPEC.md section 4): contact (``d < k sigma`` at any time of the steady
-window) must happen at the measured touchdown protrusion (9.8 nm) and not at the previous
-actuation step (9.6 nm). For a protrusion ``delta`` let ``k*(delta)`` be the smallest k that gives
-contact (contact for every ``k > k*``); the admissible set is the interval
-``k*(onset) < k <= k*(previous)``. The chosen k is the middle of that interval: it keeps the largest
-margin to both conditions (the width is the uncertainty the 0.2 nm actuation step leaves). When the
-interval is empty within ``touchdown.k_range`` (default [-3, 3], contact probabilities 0.1 % to
-99.9 %), no k is written (``k_calibrated = NaN``) and the outcome says why.
-
-``touchdown.method`` chooses how ``k*`` is found:
-
-* ``"exact"`` (default): before its first contact the trajectory does not depend on k (the contact
-  force is off while ``d >= k sigma``), so one run with the contact law switched off gives every
-  ``k*`` at once: ``k* = min(d)/sigma`` over the steady window, with the integrator's exact minimum
-  (:attr:`pipeline.model.slider.Run.d_extremes`, not the output samples). Two cases need more care:
-  (a) when ``d`` over the transient dips below its steady-window minimum, a k in
-  ``(min_all/sigma, min_steady/sigma]`` first touches in the transient and the trajectory after
-  that depends on k: that interval (where it meets ``k_range``) is resolved by bisection with real
-  runs, and only there; (b) a flying run whose separation collapses (adhesive snap-in: ``d`` below
-  the start of the interface tables, or the integration fails) is contact for every k
-  (``k* = -inf``). One flying run (plus one over the transient alone) per protrusion of the
-  ``[sweep]`` grid, fanned out with :func:`pipeline.fanout.run_tasks`, gives the whole curve
-  ``k*(protrusion)``.
-* ``"bisection"``: bisection on k with full runs (to ``touchdown.k_tolerance``) at each protrusion
-  (the method before the exact one; kept as the reference it is tested against).
-
-The contact probabilities of a k are ``P(|z| > k sigma) = 2 Q(|k|)`` (two-sided, the paper's
-convention: SPEC.md 7.1) and ``P(z > k sigma) = Q(k)`` (one-sided) for Gaussian heights of rms
-``sigma`` (the sigma of the criterion); the paper's calibrated k corresponds to 32.8 % two-sided,
-k = 0.978.
-
-``calibration.nc`` also holds the touchdown-versus-k curve: for each of ``touchdown.curve_points``
-values of k in the range, the first protrusion of the ``[sweep]`` grid that touches, NaN when none
-does (exact: the first grid protrusion with ``k*(protrusion) < k``, no monotonicity assumed;
-bisection: bisection over the grid, which assumes touching is monotone in protrusion); with the
-exact method also ``k_threshold(protrusion)`` [1] and the flying run's ``min_separation(protrusion)`` [nm].
+The analysis (the paper's procedure, both methods, the touchdown-versus-k curve) is
+:mod:`pipeline.analyses.calibration`; this stage reads the scene's interface tables and DMW record
+through the runner and writes its result.
 """
 
 from __future__ import annotations
 
 import logging
-import math
-from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import xarray as xr
 
-from ..model import dynamics as dyn
-from ..model import slider as sl
-from ..fanout import local_workers, run_tasks
-from ..io import read_dataset
-from ..physics.statistics import contact_probabilities
-from ..runner import Inputs, Stage, build, ensure
-from ..variables import CALIBRATION
-from .simulate import model_inputs, upstream
-from ..config.grid import protrusion_grid
+from ..analyses.calibration import calibrate
+from ..model import dmw_record, scene_inputs
+from ..runner import Inputs, Stage, build
+from .simulate import read_inputs
 
 log = logging.getLogger(__name__)
-NM = 1e-9
-METHODS = ("exact", "bisection")
-
-
-def touches(model: sl.Model, delta_nm: float, k: float) -> bool:
-    """Whether the scene at protrusion ``delta_nm`` [nm] with criterion ``k`` is in contact in the window.
-
-    In contact at an output sample of the steady window, or ``d < k sigma`` at the exact minimum of
-    the window (a contact shorter than the output step falls between samples).
-    """
-    run = sl.run_model(replace(model, k=float(k)), delta_nm * NM)
-    win = run.time >= model.transient - 1e-15
-    return bool(run.contact[win].any() or run.d_extremes[0] < run.model.k_sigma)
-
-
-def k_threshold(model: sl.Model, delta_nm: float, k_range: tuple[float, float], tol: float) -> tuple[float, str, int]:
-    """Smallest k [1] giving contact at ``delta_nm``, by bisection within ``k_range``.
-
-    Returns ``(k*, status, simulations)`` with status ``"found"``, ``"below range"`` (contact even at
-    the lowest k: ``k*`` is below the range, returned as its lower end) or ``"above range"`` (no contact
-    even at the highest k: returned as the upper end).
-    """
-    lo, hi = k_range
-    n = 2
-    if touches(model, delta_nm, lo):
-        return lo, "below range", 1
-    if not touches(model, delta_nm, hi):
-        return hi, "above range", n
-    while hi - lo > tol:
-        mid = 0.5 * (lo + hi)
-        n += 1
-        if touches(model, delta_nm, mid):
-            hi = mid
-        else:
-            lo = mid
-    return hi, "found", n
-
-
-def touchdown_protrusion(model: sl.Model, k: float, grid_nm: np.ndarray) -> float:
-    """First protrusion of ``grid_nm`` [nm] that touches with criterion ``k`` (NaN if none), by bisection."""
-    if not touches(model, grid_nm[-1], k):
-        return np.nan
-    if touches(model, grid_nm[0], k):
-        return float(grid_nm[0])
-    lo, hi = 0, len(grid_nm) - 1  # lo never touches, hi touches
-    while hi - lo > 1:
-        mid = (lo + hi) // 2
-        if touches(model, grid_nm[mid], k):
-            hi = mid
-        else:
-            lo = mid
-    return float(grid_nm[hi])
-
-
-def flying_minimum(model: sl.Model, delta_nm: float) -> tuple[float, float, str]:
-    """Minimum separation [m] of the run with the contact law off: ``(steady window, whole run, note)``.
-
-    The steady-window minimum is the integrator's exact one; the whole-run minimum adds a run over
-    the transient alone (same trajectory: the integration starts from the same state; its window is
-    the whole of it, ``t = 0`` included). A collapse (the integration fails, or ``d`` falls below the
-    start of the interface tables: adhesive snap-in) returns ``(-inf, -inf, reason)``.
-    """
-    off = replace(model, contact=None, friction=None, area=None)
-    try:
-        run = sl.run_model(off, delta_nm * NM)
-        lo_all = run.d_extremes[0]  # t = 0 included when there is no transient
-        if model.transient > 0:
-            early = sl.run_model(replace(off, duration=off.transient, transient=0.0), delta_nm * NM)
-            lo_all = min(lo_all, early.d_extremes[0])
-    except sl.IntegrationError as exc:
-        return -math.inf, -math.inf, f"flying run failed ({exc})"
-    lo = run.d_extremes[0]
-    x0 = model.p[dyn.P_TAB_X0]
-    if lo_all < x0:
-        return -math.inf, -math.inf, (f"separation {lo_all / NM:.3g} nm below the interface tables "
-                                      f"({x0 / NM:.3g} nm): adhesive snap-in")
-    return lo, lo_all, ""
-
-
-def k_star(model: sl.Model, delta_nm: float, lo_steady: float, lo_all: float,
-           k_range: tuple[float, float], tol: float) -> tuple[float, int]:
-    """Smallest k [1] giving contact at ``delta_nm`` from the flying run's minima [m] (module docstring).
-
-    Returns ``(k*, real simulations run)``; ``k* = min_steady/sigma`` unless the transient dips lower
-    and the interval it leaves open meets ``k_range``, which is then resolved by bisection.
-    """
-    sigma = model.sigma
-    if not np.isfinite(lo_steady):
-        return -math.inf, 0
-    ks_steady, ks_all = lo_steady / sigma, lo_all / sigma
-    lo, hi = max(ks_all, k_range[0]), min(ks_steady, k_range[1])
-    if ks_all >= ks_steady or lo >= hi:
-        return ks_steady, 0
-    k, status, n = k_threshold(model, delta_nm, (lo, hi), tol)
-    if status == "below range":  # touches even at the lower end: k* below it (only possible at k_range[0])
-        return lo - tol, n
-    if status == "above range" and hi < k_range[1]:  # the transient contact kept the window clear
-        k, status, m = k_threshold(model, delta_nm, (hi, k_range[1]), tol)
-        n += m
-        if status == "above range":
-            return math.inf, n
-    return k, n
-
-
-def threshold_batch(scene: Any, interface_path: str, dmw_path: str | None, protrusions: tuple[float, ...],
-                    k_range: tuple[float, float], tol: float) -> list[tuple[float, float, float, str, int]]:
-    """``(protrusion [nm], k* [1], steady minimum of d [nm], note, simulations)`` for each protrusion (a task)."""
-    from .dmw import load as load_dmw
-    interface = read_dataset(interface_path, stage="interface")
-    record = None
-    if dmw_path:
-        _, w_nm, fs = load_dmw(dmw_path)
-        record = (w_nm, fs)
-    model = sl.build_model(scene, interface, record, k=0.0)
-    rows = []
-    for delta in protrusions:
-        lo, lo_all, note = flying_minimum(model, delta)
-        k, n = k_star(model, delta, lo, lo_all, k_range, tol)
-        rows.append((delta, k, lo / NM, note, n))
-    return rows
-
-
-def thresholds(scene: Any, out: Path, protrusions: np.ndarray, k_range: tuple[float, float], tol: float,
-               scheduler: str | None = None, workers: int | None = None) -> tuple[dict[float, tuple], float]:
-    """``k*`` of every protrusion [nm], fanned out: ``({protrusion: (k*, min d [nm], note, sims)}, seconds)``."""
-    interface_path = str(ensure("interface", scene, out))
-    dmw_path = str(ensure("dmw", scene, out)) if scene.has("dmw") else None
-    todo = [float(p) for p in protrusions]
-    n = local_workers(workers, len(todo)) if scheduler in (None, "threads", "processes") else 8
-    chunks = [tuple(todo[i::n]) for i in range(n)] if n > 1 else [tuple(todo)]
-    result: dict[float, tuple] = {}
-
-    def keep(rows: list[tuple]) -> None:
-        for delta, k, lo, note, sims in rows:
-            result[delta] = (k, lo, note, sims)
-
-    seconds = run_tasks(threshold_batch, [(scene, interface_path, dmw_path, c, k_range, tol) for c in chunks if c],
-                        scheduler=scheduler, workers=workers, on_done=keep)
-    return result, seconds
-
-
-def _status(k: float, k_range: tuple[float, float]) -> tuple[float, str]:
-    """``k*`` as the bisection reports it: the range end and a status when it lies outside the range."""
-    if k < k_range[0]:
-        return k_range[0], "below range"
-    if k >= k_range[1]:
-        return k_range[1], "above range"
-    return k, "found"
-
-
-def calibrate(scene: Any, out: Path, scheduler: str | None = None, workers: int | None = None) -> xr.Dataset:
-    """Run the calibration of a scene (no I/O of its own result); returns ``calibration.nc``'s dataset.
-
-    ``scheduler``, ``workers``: where the exact method's flying runs go (:func:`pipeline.fanout.run_tasks`).
-    """
-    if not scene.has("contact"):
-        raise ValueError("calibration needs the contact effect in scene.effects")
-    interface, record = model_inputs(scene, out)
-    td = scene["touchdown"]
-    method = td["method"]
-    model = sl.build_model(scene, interface, record, k=0.0)
-    k_range = tuple(td["k_range"])
-    tol = td["k_tolerance"]
-    grid = protrusion_grid(scene)
-    ks = np.linspace(k_range[0], k_range[1], td["curve_points"])
-    c = CALIBRATION
-    extra: dict[str, Any] = {}
-    collapsed: list[float] = []
-    if method == "exact":
-        todo = np.union1d(grid, np.round([td["onset_nm"], td["previous_nm"]], 9))
-        found, seconds = thresholds(scene, out, todo, k_range, tol, scheduler, workers)
-        k_on, st_on = _status(found[float(np.round(td["onset_nm"], 9))][0], k_range)
-        k_prev, st_prev = _status(found[float(np.round(td["previous_nm"], 9))][0], k_range)
-        n_on = n_prev = 0
-        kstar = np.array([found[float(p)][0] for p in grid])
-        # the first grid protrusion with k*(protrusion) < k (no monotonicity in protrusion assumed)
-        curve = np.array([grid[np.argmax(kstar < k)] if np.any(kstar < k) else np.nan for k in ks])
-        collapsed = [float(p) for p in grid if found[float(p)][2]]
-        extra = {
-            "k_threshold": c["k_threshold"].data(kstar, ("protrusion",)),
-            "min_separation": c["min_separation"].data(np.array([found[float(p)][1] for p in grid]),
-                                                       ("protrusion",)),
-        }
-        simulations = 2 * len(todo) + sum(v[3] for v in found.values())
-        how = ("exact: k* = minimum separation / sigma of one flying run (contact law off) per protrusion; "
-               "bisection only where the transient dips below the steady window")
-        if collapsed:
-            log.info("flying run collapsed at %g nm: %s", collapsed[0], found[collapsed[0]][2])
-    elif method == "bisection":
-        k_on, st_on, n_on = k_threshold(model, td["onset_nm"], k_range, tol)
-        k_prev, st_prev, n_prev = k_threshold(model, td["previous_nm"], k_range, tol)
-        curve = np.array([touchdown_protrusion(model, k, grid) for k in ks])
-        simulations = n_on + n_prev
-        seconds = float("nan")
-        how = "bisection on k for each protrusion; touchdown curve by bisection over the grid"
-    else:  # the scene schema admits only METHODS
-        raise ValueError(f"touchdown.method = {method!r}: expected one of {METHODS}")
-    log.info("k*(%.2f nm) = %.4f (%s), k*(%.2f nm) = %.4f (%s)", td["onset_nm"], k_on, st_on,
-             td["previous_nm"], k_prev, st_prev)
-    onset, prev = td["onset_nm"], td["previous_nm"]
-    if st_on == "found" and st_prev in ("found", "above range") and k_on < k_prev:
-        k_low, k_high = k_on, k_prev
-        k_cal = 0.5 * (k_low + k_high)
-        outcome = (f"admissible k in ({k_low:.4f}, {k_high:.4f}]; chosen the middle, {k_cal:.4f}, for the largest "
-                   f"margin to both conditions (contact at {onset} nm, none at {prev} nm)")
-    else:
-        k_low = k_high = k_cal = np.nan
-        reasons = []
-        if st_on == "below range":
-            reasons.append(f"at {onset} nm contact happens for every k >= {k_range[0]}")
-        if st_prev == "below range":
-            reasons.append(f"at {prev} nm contact already happens for every k >= {k_range[0]}, so no k in range "
-                           f"avoids contact at the previous step")
-        if st_on == "above range":
-            reasons.append(f"at {onset} nm no k <= {k_range[1]} gives contact")
-        if st_on == "found" and st_prev == "found" and k_on >= k_prev:
-            reasons.append(f"k*({onset}) = {k_on:.4f} >= k*({prev}) = {k_prev:.4f}: touching is not monotone "
-                           "in protrusion here")
-        outcome = "no admissible k in the range " + str(list(k_range)) + ": " + "; ".join(reasons)
-    finite = curve[np.isfinite(curve)]
-    if finite.size == curve.size and np.ptp(finite) == 0:
-        outcome += (f". The touchdown protrusion is {finite[0]:g} nm for every k in the range: contact does not "
-                    "depend on the criterion here, the slider is pulled into contact (adhesive snap-in) before "
-                    "the separation reaches any k sigma of the range")
-    p2, p1 = contact_probabilities(k_cal) if np.isfinite(k_cal) else (np.nan, np.nan)  # two-sided first
-    data = {
-        "touchdown": c["touchdown"].data(curve, ("k",)),
-        "k_calibrated": c["k_calibrated"].data(k_cal, ()),
-        "k_low": c["k_low"].data(k_low, ()),
-        "k_high": c["k_high"].data(k_high, ()),
-        "k_onset": c["k_onset"].data(k_on, (), long_name=f"{c['k_onset'].long_name} ({st_on})"),
-        "k_previous": c["k_previous"].data(k_prev, (), long_name=f"{c['k_previous'].long_name} ({st_prev})"),
-        "contact_probability_one_sided": c["contact_probability_one_sided"].data(p1, ()),
-        "contact_probability_two_sided": c["contact_probability_two_sided"].data(p2, ()),
-        "sigma": c["sigma"].from_si(model.sigma, ()),
-    }
-    data.update(extra)
-    coords = {"k": c["k"].data(ks, ("k",))}
-    if extra:
-        coords["protrusion"] = c["protrusion"].data(grid, ("protrusion",))
-    ds = xr.Dataset(data, coords=coords)
-    ds.attrs.update({"outcome": outcome, "touchdown_onset_nm": onset, "touchdown_previous_nm": prev,
-                     "k_range": str(list(k_range)), "k_tolerance": tol,
-                     "simulations": simulations, "touchdown_method": method, "method": how,
-                     "batch_seconds": round(seconds, 3) if np.isfinite(seconds) else "n/a",
-                     "collapsed_from_nm": collapsed[0] if method == "exact" and collapsed else "none",
-                     "paper": "the paper's calibrated k corresponds to a 32.8 % two-sided contact probability (k = 0.978)"})
-    return ds
 
 
 def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
     """The ``calibration.nc`` dataset (module docstring); logs the outcome."""
-    ds = calibrate(scene, inputs.out, scheduler=inputs.options.get("scheduler"),
-                   workers=inputs.options.get("workers"))
+    interface, record = read_inputs(scene, inputs)
+    dmw_path = str(inputs.path(dmw_record.FILENAME)) if record is not None else None
+    ds = calibrate(scene, interface, record, str(inputs.path("interface.nc")), dmw_path,
+                   scheduler=inputs.options.get("scheduler"), workers=inputs.options.get("workers"))
     # timings go to the run log (.hdi/runs.jsonl), not the dataset: equal inputs, equal dataset
     inputs.record(batch_seconds=ds.attrs.pop("batch_seconds"))
     log.info("calibration: %s", ds.attrs["outcome"])
@@ -329,9 +43,8 @@ STAGE = Stage(
     # everything but the single protrusion, the report and the sweep (except its protrusion grid,
     # on which the touchdown curve is evaluated)
     reads=("*", "sweep.protrusion_nm"),
-    excludes=("tfc.protrusion_nm", "sweep", "report", "identify", "sensitivity", "scene.name",
-              "scene.description"),
-    upstream=lambda scene: tuple(u for u in upstream(scene) if u != "calibrate"),
+    excludes=("tfc.protrusion_nm", *scene_inputs.SIMULATION_EXCLUDES),
+    upstream=lambda scene: scene_inputs.simulation_inputs(scene, calibration=False),
     order=40, main_job=True, applies=lambda scene: scene.has("contact"),
     doc="the contact-criterion constant k from the measured touchdown, calibration.nc")
 

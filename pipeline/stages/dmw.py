@@ -32,7 +32,7 @@ up to whole periods of the band's lower edge: 2.1 ms (8400 samples) in the paper
 Synthetic: :func:`pipeline.physics.dmw.synthesize` with ``rms_nm``, ``band_khz``, ``exponent``,
 ``seed``, ``sample_rate_mhz`` and that duration.
 
-Measured (``source`` a path): :func:`~pipeline.model.dmw_records.load_record`, then the paper's processing
+Measured (``source`` a path): :func:`~pipeline.model.measured_dmw.load_record`, then the paper's processing
 at the record's own rate (velocity integrated, :func:`~pipeline.physics.dmw.velocity_to_displacement`;
 displacement detrended, :func:`~pipeline.physics.dmw.process_displacement`; both band-passed to
 ``band_khz``), resampled to ``sample_rate_mhz`` (:func:`~pipeline.physics.dmw.resample`) and cut to
@@ -54,91 +54,24 @@ the slider's length and front arm (the default record length) and the bytes of a
 from __future__ import annotations
 
 import logging
-import math
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import xarray as xr
 
-from ..io import read_dataset
+from ..model.dmw_record import FILENAME, settings, synthetic_record
+from ..model.measured_dmw import load_record
+from ..physics import dmw as phys
 from ..runner import Inputs, Stage, build
+from ..units import MS
 from ..variables import DMW, coordinate
 
 log = logging.getLogger(__name__)
 
-FILENAME = "dmw.nc"
-
-
-def synthetic_record(s: dict[str, Any]) -> np.ndarray:
-    """The synthetic displacement record [nm] of :func:`settings` ``s`` (``source = "synthetic"``):
-    :func:`pipeline.physics.dmw.synthesize` of its rms, band, exponent, duration, rate and seed."""
-    from ..physics import dmw as phys
-    return phys.synthesize(s["rms_nm"], tuple(s["band_hz"]), s["exponent"], s["duration_s"], s["sample_rate_hz"],
-                           s["seed"])
-
-
-def settings(scene: Any) -> dict[str, Any]:
-    """The stage's settings in SI units, with defaults resolved.
-
-    Returns
-    -------
-    dict with ``source`` (``"synthetic"`` or an absolute path), ``quantity``, ``column``,
-    ``rms_nm`` [nm], ``band_hz`` (lo, hi) [Hz], ``exponent`` [1], ``seed``, ``sample_rate_hz`` [Hz],
-    ``duration_s`` [s], ``record_rate_hz`` [Hz] or ``None``, ``disk_speed_m_s`` [m/s].
-    """
-    d = scene["dmw"]
-    band_hz = (float(d["band_khz"][0]) * 1e3, float(d["band_khz"][1]) * 1e3)
-    speed = 2.0 * math.pi * float(d["radius_mm"]) * 1e-3 * float(d["rpm"]) / 60.0
-    if d["duration_ms"] is not None:
-        duration_s = float(d["duration_ms"]) * 1e-3
-    else:
-        duration_s = default_duration(scene["solver"]["duration_ms"] * 1e-3, scene["slider"], speed,
-                                      band_hz[0], float(d["sample_rate_mhz"]) * 1e6)
-    source = d["source"]
-    if source != "synthetic":
-        p = Path(source).expanduser()
-        if not p.is_absolute() and getattr(scene, "path", None) is not None:
-            p = Path(scene.path).parent / p
-        source = str(p)
-    return {
-        "source": source,
-        "quantity": d["quantity"],
-        "column": d["column"],
-        "rms_nm": float(d["rms_nm"]),
-        "band_hz": band_hz,
-        "exponent": float(d["exponent"]),
-        "seed": int(d["seed"]),
-        "sample_rate_hz": float(d["sample_rate_mhz"]) * 1e6,
-        "duration_s": duration_s,
-        "record_rate_hz": d["sample_rate_hz"],
-        "disk_speed_m_s": speed,
-    }
-
-
-def default_duration(sim_duration_s: float, slider: dict[str, Any], disk_speed_m_s: float,
-                     band_low_hz: float, sample_rate_hz: float) -> float:
-    """Record length [s] when ``dmw.duration_ms`` is not given.
-
-    The dynamics reads the record at ``t`` plus the disk's travel time from the front pad to the
-    TFC point (``pipeline.model.slider.build_model`` requires ``duration + (l_f + l_c)/V + 2/fs``). This
-    takes the simulated duration plus ``(front_arm + length)/V`` (an upper bound of that delay,
-    since the TFC point is less than a slider length behind the centre of gravity) plus 4 samples,
-    rounded up to a whole number of periods ``1/band_low`` so that the band's lower edge, where a
-    red spectrum has most of its energy, is a frequency bin of the record (2 ms -> 2.1 ms in the
-    paper scene: 8400 samples, resolution 476.2 Hz, edges 10 kHz = bin 21 and 500 kHz = bin 1050).
-    """
-    margin = (slider["front_arm_mm"] + slider["length_mm"]) * 1e-3 / disk_speed_m_s + 4.0 / sample_rate_hz
-    need = sim_duration_s + margin
-    if band_low_hz <= 0:
-        return math.ceil(need * sample_rate_hz) / sample_rate_hz
-    return math.ceil(need * band_low_hz * (1 - 1e-12)) / band_low_hz
-
 
 def _measured(s: dict[str, Any]) -> tuple[np.ndarray, dict[str, Any]]:
     """Load, process, resample and cut a measured record; raise before anything is written."""
-    from ..model.dmw_records import load_record
-    from ..physics import dmw as phys
     fs, (lo, hi), dur = s["sample_rate_hz"], s["band_hz"], s["duration_s"]
     rec = load_record(s["source"], s["quantity"], s["column"], s["record_rate_hz"], min_duration_s=dur)
     where = f"{rec.path}: {rec.field}"
@@ -161,7 +94,7 @@ def _measured(s: dict[str, Any]) -> tuple[np.ndarray, dict[str, Any]]:
     n = phys.n_samples(dur, fs)
     if x.size < n:  # resampling may lose the last sample or two of a record just long enough
         raise phys.DMWError(f"{where}: after resampling to {fs:g} Hz the record has {x.size} samples; "
-                            f"expected at least {n} for dmw.duration_ms = {dur * 1e3:g}")
+                            f"expected at least {n} for dmw.duration_ms = {dur / MS:g}")
     if x.size > n:
         steps.append(f"first {n} samples kept (of {x.size})")
     x = x[:n]
@@ -205,8 +138,6 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
     pipeline.physics.dmw.DMWError
         For an unusable measured record (nothing is written then).
     """
-    # (imported here: the sweep's workers only :func:`load`)
-    from ..physics import dmw as phys
     s = settings(scene)
     fs, (lo, hi), dur = s["sample_rate_hz"], s["band_hz"], s["duration_s"]
     n = phys.n_samples(dur, fs)
@@ -269,41 +200,6 @@ STAGE = Stage(
 def run(scene: Any, out: Path, **options: Any) -> Path:
     """``dmw.nc`` in ``out``, recomputed only when its inputs changed (:func:`pipeline.runner.build`)."""
     return build("dmw", scene, out, **options)["dmw"][0]
-
-
-def load(path: str | Path) -> tuple[np.ndarray, np.ndarray, float]:
-    """Read a ``dmw.nc`` back for the dynamics.
-
-    Parameters
-    ----------
-    path : ``dmw.nc`` or the folder holding it
-
-    Returns
-    -------
-    time_s : [s]
-    displacement_nm : [nm]
-    sample_rate_hz : [Hz]
-    """
-    path = Path(path)
-    if path.is_dir():
-        path = path / FILENAME
-    ds = read_dataset(path, stage="dmw", variables=("displacement", "time", "sample_rate"))
-    return (np.asarray(ds["time"].values, dtype=float), np.asarray(ds["displacement"].values, dtype=float),
-            float(ds["sample_rate"].values))
-
-
-def realisation_seeds(seed: int, n: int) -> list[int]:
-    """Seeds [1] of ``n`` DMW realisations (``[sweep] realisations``): the scene's own first.
-
-    Realisation 0 is the scene's record (``dmw.seed``), so one realisation is today's sweep; realisation
-    ``r >= 1`` is seeded from ``numpy.random.SeedSequence(seed).spawn(n - 1)[r - 1]`` (its first 32-bit
-    word), independent streams by construction. A child depends only on its index, so the first ``m``
-    realisations of ``n`` are those of ``m`` (ensembles nest).
-    """
-    if n < 1:
-        raise ValueError(f"realisations = {n}: expected an integer >= 1")
-    children = np.random.SeedSequence(seed).spawn(n - 1)
-    return [int(seed)] + [int(c.generate_state(1, np.uint32)[0]) for c in children]
 
 
 def realisation_record(scene: Any, folder: Path, seed: int, force: bool = False) -> Path:

@@ -57,8 +57,9 @@ from ..analyses import plots
 from ..fanout import local_cluster
 from ..io import read_dataset, var
 from ..runner import Inputs, Stage, build
-from ..analyses.study import (Evaluator, Parameter, Target, cost, evaluate_batch, parse_parameters, residuals, scene_value,
-                     setup, target_protrusions, targets, upstream)
+from ..analyses.study import (Parameter, Target, cost, parse_parameters, residuals, scene_value, target_protrusions,
+                              targets)
+from ..evaluations import Evaluator, evaluate_batch, setup, upstream
 
 log = logging.getLogger(__name__)
 
@@ -379,7 +380,7 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
     if not tlist:
         raise ValueError(f"{where}: identify.targets is empty: expected at least one target")
     prots = target_protrusions(tlist)
-    params, base_inputs, store = setup(scene, out, "identify", bool(opts.get("force")))
+    params, base_inputs, store = setup(scene, inputs, "identify", bool(opts.get("force")))
     x_base = np.array([scene_value(scene, p) for p in params])
     if not np.all(np.isfinite(x_base)):
         bad = [p.name for p, v in zip(params, x_base) if not np.isfinite(v)]

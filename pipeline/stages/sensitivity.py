@@ -58,7 +58,8 @@ from ..analyses import plots
 from ..fanout import local_cluster
 from ..io import var
 from ..runner import Inputs, Stage, build
-from ..analyses.study import HEADLINES, Evaluator, Parameter, evaluate_batch, headline, setup, upstream
+from ..analyses.study import HEADLINES, Parameter, headline
+from ..evaluations import Evaluator, evaluate_batch, setup, upstream
 from ..config.grid import protrusion_grid, range_grid
 
 log = logging.getLogger(__name__)
@@ -206,10 +207,10 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
     Options (``inputs.options``): ``scheduler``, ``workers``, ``force`` (forget the evaluation store),
     ``task`` (the batch function, for tests).
     """
-    out, opts = inputs.out, inputs.options
+    opts = inputs.options
     c = scene["sensitivity"]
     prots = [float(x) for x in grid(scene)]
-    params, base_inputs, store = setup(scene, out, "sensitivity", bool(opts.get("force")))
+    params, base_inputs, store = setup(scene, inputs, "sensitivity", bool(opts.get("force")))
     results = {}
     workers = opts.get("workers")
     with local_cluster(opts.get("scheduler"), workers) as address:

@@ -20,80 +20,46 @@ import numpy as np
 import xarray as xr
 
 from ..model import slider as sl
-from ..io import read_dataset
-from ..physics.statistics import contact_probabilities, k_from_probability
-from ..runner import Inputs, Stage, build, ensure
+from ..model import dmw_record, scene_inputs
+from ..runner import Inputs, Stage, build
 from ..variables import HISTORIES, coordinate, history, scalar
+from ..units import MS, NM
 
 log = logging.getLogger(__name__)
-NM = 1e-9
 
 
-def needs_interface(scene: Any) -> bool:
-    """Whether a simulation reads ``interface.nc``: for its tables (contact, adhesion) or, with AFM scans,
-    for the summit offset y_s of the separation datum (explicit statistics give y_s without it)."""
-    return bool(scene.effects & {"contact", "adhesion"} or scene["roughness"]["afm"])
+def read_inputs(scene: Any, inputs: Inputs) -> tuple[xr.Dataset | None, tuple | None]:
+    """Interface tables and DMW record of one simulation of the scene, from a stage's current upstream
+    datasets (:class:`pipeline.runner.Inputs`, keys checked; which ones: the rule
+    :func:`pipeline.model.scene_inputs.simulation_inputs`).
 
-
-def model_inputs(scene: Any, out: Path) -> tuple[xr.Dataset | None, tuple | None]:
-    """Interface tables and DMW record of a scene, from ``out`` (made current first, :func:`pipeline.runner.ensure`).
-
-    Returns ``(interface dataset or None, (displacement [nm], sample rate [Hz]) or None)``; the
-    interface is ``None`` when the scene does not need it (:func:`needs_interface`), the DMW ``None``
-    without the dmw effect.
+    Returns ``(interface dataset or None, (displacement [nm], sample rate [Hz]) or None)``.
     """
-    from . import dmw as dmw_stage
-    interface = None
-    if needs_interface(scene):
-        interface = read_dataset(ensure("interface", scene, out), stage="interface")
+    wanted = scene_inputs.simulation_inputs(scene)
+    interface = inputs.dataset("interface.nc", stage="interface") if "interface" in wanted else None
     record = None
-    if scene.has("dmw"):
-        _, w_nm, fs = dmw_stage.load(ensure("dmw", scene, out))
+    if "dmw" in wanted:
+        _, w_nm, fs = dmw_record.from_dataset(inputs.dataset(dmw_record.FILENAME, stage="dmw",
+                                                             variables=dmw_record.VARIABLES))
         record = (w_nm, fs)
     return interface, record
 
 
-def resolve_k(scene: Any, out: Path) -> tuple[float | None, str]:
-    """The contact criterion constant and where it came from.
-
-    ``contact.k`` when the scene fixes it; else ``k_calibrated`` of ``calibration.nc``; when the
-    calibration found no admissible k and the scene gives ``contact.fallback_probability``, the k
-    whose two-sided contact probability ``P(|z| > k sigma) = 2 Q(k)`` equals it (the paper's convention,
-    SPEC.md 7.1; said in every output). The source names the file, not its folder, so datasets of one
-    scene in two folders are identical.
-    """
-    if not scene.has("contact"):
-        return None, "no contact effect"
-    c = scene["contact"]
-    if c["k"] is not None:
-        return float(c["k"]), "scene (contact.k)"
-    path = Path(out) / "calibration.nc"
-    if not path.is_file():
-        raise ValueError(f"no contact criterion k: the scene sets no contact.k and {path} does not exist; "
-                         "run `hdi calibrate` first or pass --set contact.k=VALUE")
-    cal = read_dataset(path, stage="calibrate")
-    k = float(cal["k_calibrated"])
-    if np.isfinite(k):
-        return k, f"calibration ({path.name})"
-    fb = c.get("fallback_probability")
-    if fb is None:
-        raise ValueError(f"{path}: the calibration found no admissible k ({cal.attrs.get('outcome', '')}); "
-                         "set contact.k or contact.fallback_probability")
-    k = k_from_probability(fb)
-    return k, (f"fallback: no admissible k in {path.name}; k = {k:.4f} from contact.fallback_probability = {fb} "
-               f"(two-sided; one-sided {contact_probabilities(k)[1]:.3f})")
+def read_k(scene: Any, inputs: Inputs) -> tuple[float | None, str]:
+    """The contact criterion k [1] and its source, by the one rule :func:`pipeline.model.scene_inputs.contact_k`
+    (with ``calibration.nc`` when the scene fixes no k)."""
+    wanted = scene_inputs.simulation_inputs(scene)
+    calibration = inputs.dataset("calibration.nc", stage="calibrate") if "calibrate" in wanted else None
+    return scene_inputs.contact_k(scene, calibration)
 
 
-def run_scene(scene: Any, out: Path, protrusion_nm: float | None = None,
-              damping_ratio: float | None = None) -> tuple[sl.Run, dict, dict, str]:
-    """Build and integrate one scene; returns the run, its histories, its scalars and the k source."""
-    interface, record = model_inputs(scene, out)
-    k, k_source = resolve_k(scene, out)
-    model = sl.build_model(scene, interface, record, k, damping_ratio)
-    delta = scene["tfc"]["protrusion_nm"] if protrusion_nm is None else protrusion_nm
-    run = sl.run_model(model, delta * NM)
-    hist = sl.histories(run)
-    return run, hist, sl.summarize(run, hist), k_source
+def model_inputs(scene: Any, out: Path) -> tuple[xr.Dataset | None, tuple | None]:
+    """:func:`read_inputs` of a scene, its upstream made current in ``out`` first (scripts, benchmarks,
+    tests; a stage reads through its own :class:`~pipeline.runner.Inputs` instead)."""
+    wanted = scene_inputs.simulation_inputs(scene, calibration=False)
+    if wanted:
+        build(wanted, scene, out)
+    return read_inputs(scene, Inputs.folder(out))
 
 
 def histories_dataset(runs: list[tuple[float, sl.Run, dict, dict]]) -> xr.Dataset:
@@ -141,14 +107,19 @@ def model_attrs(model: sl.Model, k_source: str) -> dict[str, Any]:
         "summit_offset_y_s_nm": info["y_s"] / NM,
         "separation_datum": "d = FH0 - delta + z - l_c theta - w - y_s: to the mean of summit heights (SPEC.md 7.2)",
         "damping_ratio": info["damping_ratio"],
-        "steady_window": f"{model.transient * 1e3:g} ms to {model.duration * 1e3:g} ms",
+        "steady_window": f"{model.transient / MS:g} ms to {model.duration / MS:g} ms",
         "fhm_measure": model.fhm_measure,
     }
 
 
 def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset]:
     """``histories.nc`` and ``summary.nc`` for the scene's protrusion (module docstring)."""
-    run_, hist, scalars, k_source = run_scene(scene, inputs.out)
+    interface, record = read_inputs(scene, inputs)
+    k, k_source = read_k(scene, inputs)
+    model = sl.build_model(scene, interface, record, k)
+    run_ = sl.run_model(model, scene["tfc"]["protrusion_nm"] * NM)
+    hist = sl.histories(run_)
+    scalars = sl.summarize(run_, hist)
     runs = [(scene["tfc"]["protrusion_nm"], run_, hist, scalars)]
     attrs = model_attrs(run_.model, k_source)
     histories, summary = histories_dataset(runs), summary_dataset(runs)
@@ -160,25 +131,10 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset]:
     return {"histories.nc": histories, "summary.nc": summary}
 
 
-def upstream(scene: Any) -> tuple[str, ...]:
-    """The datasets a single simulation reads: interface tables, DMW record, calibration (for k)."""
-    up = []
-    if needs_interface(scene):
-        up.append("interface")
-    if scene.has("dmw"):
-        up.append("dmw")
-    if scene.has("contact") and scene["contact"]["k"] is None:
-        up.append("calibrate")
-    return tuple(up)
-
-
-#: Scene keys a single simulation does not read (other stages' settings, names).
-NOT_READ = ("sweep", "report", "identify", "sensitivity", "scene.name", "scene.description")
-
 STAGE = Stage(
     "simulate", compute, outputs=("histories.nc", "summary.nc"),
-    reads=("*",), excludes=NOT_READ,
-    upstream=upstream, order=45, doc="one protrusion in time, histories.nc and summary.nc")
+    reads=("*",), excludes=scene_inputs.SIMULATION_EXCLUDES,
+    upstream=scene_inputs.simulation_inputs, order=45, doc="one protrusion in time, histories.nc and summary.nc")
 
 
 def run(scene: Any, out: Path, **options: Any) -> Path:

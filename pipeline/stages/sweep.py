@@ -44,11 +44,13 @@ from ..fanout import run_tasks
 from ..io import read_attrs, read_dataset, write_dataset
 from ..runner import KEY_ATTR, Inputs, Stage, ensure
 from ..variables import ENSEMBLE, ENSEMBLE_OF, HISTORIES, REGIME_FILL, SCALARS, coordinate, history, scalar
-from .simulate import model_attrs, needs_interface, resolve_k, upstream
+from ..model import dmw_record, scene_inputs
+from .dmw import realisation_record
+from .simulate import model_attrs, read_k
 from ..config.grid import damping_grid, protrusion_grid, roughness_sets
+from ..units import NM
 
 log = logging.getLogger(__name__)
-NM = 1e-9
 PARTS = "sweep.parts"
 
 
@@ -125,11 +127,10 @@ def _file_id(path: str | None) -> tuple | None:
 
 @functools.lru_cache(maxsize=8)
 def _read_inputs(interface_id: tuple | None, dmw_id: tuple | None) -> tuple[xr.Dataset | None, tuple | None]:
-    from .dmw import load as load_dmw
     interface = read_dataset(interface_id[0], stage="interface") if interface_id else None
     record = None
     if dmw_id:
-        _, w_nm, fs = load_dmw(dmw_id[0])
+        _, w_nm, fs = dmw_record.load(dmw_id[0])
         w_nm.setflags(write=False)  # shared by the batches of this process: read-only
         record = (w_nm, fs)
     return interface, record
@@ -228,7 +229,7 @@ def prepare_inputs(scene: Any, out: Path, sets: dict[str, dict],
     parts.mkdir(parents=True, exist_ok=True)
     interface_paths: dict[str, str | None] = {}
     for label, table in sets.items():
-        if not needs_interface(scene.replace(roughness=dict(table))):
+        if not scene_inputs.needs_interface(scene.replace(roughness=dict(table))):
             interface_paths[label] = None
         elif table == dict(scene["roughness"]):
             interface_paths[label] = str(out / "interface.nc")
@@ -243,9 +244,8 @@ def realisation_inputs(scene: Any, out: Path, dmw_path: str | None, force: bool 
     """DMW record paths and seeds of the ``[sweep] realisations`` (realisation 0: the scene's ``dmw.nc``).
 
     Records of realisations ``r >= 1`` are written once into ``sweep.parts/dmw-<r>/dmw.nc``
-    (:func:`pipeline.stages.dmw.realisation_seeds`); workers read them by path.
+    (:func:`pipeline.model.dmw_record.realisation_seeds`); workers read them by path.
     """
-    from .dmw import realisation_record, realisation_seeds
     n = scene["sweep"]["realisations"]
     if n == 1:
         return [dmw_path], [scene["dmw"]["seed"]]
@@ -253,7 +253,7 @@ def realisation_inputs(scene: Any, out: Path, dmw_path: str | None, force: bool 
         where = str(scene.path) if scene.path else "<scene>"
         raise ValueError(f"{where}: sweep.realisations = {n} needs the dmw effect in scene.effects "
                          "(the realisations are DMW records)")
-    seeds = realisation_seeds(scene["dmw"]["seed"], n)
+    seeds = dmw_record.realisation_seeds(scene["dmw"]["seed"], n)
     paths: list[str | None] = [dmw_path]
     for r in range(1, n):
         paths.append(str(realisation_record(scene, out / PARTS / f"dmw-{r:05d}", seeds[r], force)))
@@ -269,7 +269,7 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset | None]:
     """
     out, key, opts = inputs.out, inputs.key, inputs.options
     prot, sets, damp, batches = plan(scene)
-    k, k_source = resolve_k(scene, out)
+    k, k_source = read_k(scene, inputs)
     interface_paths, dmw_path = prepare_inputs(scene, out, sets, bool(opts.get("force")))
     dmw_paths, seeds = realisation_inputs(scene, out, dmw_path, bool(opts.get("force")))
     parts = out / PARTS
@@ -449,8 +449,7 @@ STAGE = Stage(
     "sweep", compute, outputs=("sweep.nc", "sweep_histories.nc"),
     reads=("*", "report.histories_nm"),
     # (the batch size changes how the work is cut, not the result: parts of another cut are rejected)
-    excludes=("tfc.protrusion_nm", "report", "identify", "sensitivity", "scene.name", "scene.description",
-              "sweep.batch_size"),
-    files=_files, upstream=upstream, order=50, main_job=True,
+    excludes=("tfc.protrusion_nm", *(e for e in scene_inputs.SIMULATION_EXCLUDES if e != "sweep"), "sweep.batch_size"),
+    files=_files, upstream=scene_inputs.simulation_inputs, order=50, main_job=True,
     doc="protrusion x roughness x damping, fanned out, sweep.nc and sweep_histories.nc")
 

@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from ..physics.dmw import LENGTH_UNITS, TIME_JITTER_TOL, TIME_UNITS, VELOCITY_UNITS, DMWError
+from ..units import MS
 
 
 @dataclass(frozen=True)
@@ -344,6 +345,6 @@ def load_record(path: str | Path, quantity: str = "displacement", column: str | 
                  field=field_name, units=unit, notes=notes)
     if min_duration_s is not None and rec.duration_s < min_duration_s * (1 - 1e-9):
         raise DMWError(f"{path}: {field_name}: record is "
-                       f"{rec.duration_s * 1e3:.6g} ms long ({x.size} samples at {rate:.6g} Hz); expected "
-                       f"at least the requested duration {min_duration_s * 1e3:.6g} ms (dmw.duration_ms)")
+                       f"{rec.duration_s / MS:.6g} ms long ({x.size} samples at {rate:.6g} Hz); expected "
+                       f"at least the requested duration {min_duration_s / MS:.6g} ms (dmw.duration_ms)")
     return rec

@@ -1,0 +1,134 @@
+"""The disk's dynamic microwaviness (DMW) record of a scene, in memory: settings, synthesis, reading.
+
+:func:`settings` is the ``[dmw]`` section in SI units with its defaults resolved; :func:`synthetic_record`
+the seeded synthetic record it describes (docs/model.md, section "DMW"); :func:`load` reads a ``dmw.nc``
+back for the dynamics. The dmw stage writes the record; the sweep's ensembles, the parameter studies
+and the accuracy stage make candidates' records with the same functions.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..io import read_dataset
+from ..physics import dmw as phys
+from ..units import KHZ, MHZ, MM, MS
+
+FILENAME = "dmw.nc"
+
+
+def synthetic_record(s: dict[str, Any]) -> np.ndarray:
+    """The synthetic displacement record [nm] of :func:`settings` ``s`` (``source = "synthetic"``):
+    :func:`pipeline.physics.dmw.synthesize` of its rms, band, exponent, duration, rate and seed."""
+    return phys.synthesize(s["rms_nm"], tuple(s["band_hz"]), s["exponent"], s["duration_s"], s["sample_rate_hz"],
+                           s["seed"])
+
+
+def disk_speed_m_s(dmw: dict[str, Any]) -> float:
+    """Disk speed [m/s] under the slider, ``V = 2 pi r rpm / 60``, from ``[dmw] radius_mm`` and ``rpm``
+    (docs/model.md, section "DMW": 19.49 m/s in the paper scene). The one home of this rule."""
+    return 2.0 * math.pi * float(dmw["radius_mm"]) * MM * float(dmw["rpm"]) / 60.0
+
+
+def settings(scene: Any) -> dict[str, Any]:
+    """The stage's settings in SI units, with defaults resolved.
+
+    Returns
+    -------
+    dict with ``source`` (``"synthetic"`` or an absolute path), ``quantity``, ``column``,
+    ``rms_nm`` [nm], ``band_hz`` (lo, hi) [Hz], ``exponent`` [1], ``seed``, ``sample_rate_hz`` [Hz],
+    ``duration_s`` [s], ``record_rate_hz`` [Hz] or ``None``, ``disk_speed_m_s`` [m/s].
+    """
+    d = scene["dmw"]
+    band_hz = (float(d["band_khz"][0]) * KHZ, float(d["band_khz"][1]) * KHZ)
+    speed = disk_speed_m_s(d)
+    if d["duration_ms"] is not None:
+        duration_s = float(d["duration_ms"]) * MS
+    else:
+        duration_s = default_duration(scene["solver"]["duration_ms"] * MS, scene["slider"], speed,
+                                      band_hz[0], float(d["sample_rate_mhz"]) * MHZ)
+    source = d["source"]
+    if source != "synthetic":
+        p = Path(source).expanduser()
+        if not p.is_absolute() and getattr(scene, "path", None) is not None:
+            p = Path(scene.path).parent / p
+        source = str(p)
+    return {
+        "source": source,
+        "quantity": d["quantity"],
+        "column": d["column"],
+        "rms_nm": float(d["rms_nm"]),
+        "band_hz": band_hz,
+        "exponent": float(d["exponent"]),
+        "seed": int(d["seed"]),
+        "sample_rate_hz": float(d["sample_rate_mhz"]) * MHZ,
+        "duration_s": duration_s,
+        "record_rate_hz": d["sample_rate_hz"],
+        "disk_speed_m_s": speed,
+    }
+
+
+def default_duration(sim_duration_s: float, slider: dict[str, Any], disk_speed_m_s: float,
+                     band_low_hz: float, sample_rate_hz: float) -> float:
+    """Record length [s] when ``dmw.duration_ms`` is not given.
+
+    The dynamics reads the record at ``t`` plus the disk's travel time from the front pad to the
+    TFC point (``pipeline.model.slider.build_model`` requires ``duration + (l_f + l_c)/V + 2/fs``). This
+    takes the simulated duration plus ``(front_arm + length)/V`` (an upper bound of that delay,
+    since the TFC point is less than a slider length behind the centre of gravity) plus 4 samples,
+    rounded up to a whole number of periods ``1/band_low`` so that the band's lower edge, where a
+    red spectrum has most of its energy, is a frequency bin of the record (2 ms -> 2.1 ms in the
+    paper scene: 8400 samples, resolution 476.2 Hz, edges 10 kHz = bin 21 and 500 kHz = bin 1050).
+    """
+    margin = (slider["front_arm_mm"] + slider["length_mm"]) * MM / disk_speed_m_s + 4.0 / sample_rate_hz
+    need = sim_duration_s + margin
+    if band_low_hz <= 0:
+        return math.ceil(need * sample_rate_hz) / sample_rate_hz
+    return math.ceil(need * band_low_hz * (1 - 1e-12)) / band_low_hz
+
+
+def load(path: str | Path) -> tuple[np.ndarray, np.ndarray, float]:
+    """Read a ``dmw.nc`` back for the dynamics.
+
+    Parameters
+    ----------
+    path : ``dmw.nc`` or the folder holding it
+
+    Returns
+    -------
+    time_s : [s]
+    displacement_nm : [nm]
+    sample_rate_hz : [Hz]
+    """
+    path = Path(path)
+    if path.is_dir():
+        path = path / FILENAME
+    return from_dataset(read_dataset(path, stage="dmw", variables=VARIABLES))
+
+
+#: The variables of ``dmw.nc`` the dynamics reads.
+VARIABLES = ("displacement", "time", "sample_rate")
+
+
+def from_dataset(ds: Any) -> tuple[np.ndarray, np.ndarray, float]:
+    """``(time [s], displacement [nm], sample rate [Hz])`` of a ``dmw.nc`` dataset in memory."""
+    return (np.asarray(ds["time"].values, dtype=float), np.asarray(ds["displacement"].values, dtype=float),
+            float(ds["sample_rate"].values))
+
+
+def realisation_seeds(seed: int, n: int) -> list[int]:
+    """Seeds [1] of ``n`` DMW realisations (``[sweep] realisations``): the scene's own first.
+
+    Realisation 0 is the scene's record (``dmw.seed``), so one realisation is today's sweep; realisation
+    ``r >= 1`` is seeded from ``numpy.random.SeedSequence(seed).spawn(n - 1)[r - 1]`` (its first 32-bit
+    word), independent streams by construction. A child depends only on its index, so the first ``m``
+    realisations of ``n`` are those of ``m`` (ensembles nest).
+    """
+    if n < 1:
+        raise ValueError(f"realisations = {n}: expected an integer >= 1")
+    children = np.random.SeedSequence(seed).spawn(n - 1)
+    return [int(seed)] + [int(c.generate_state(1, np.uint32)[0]) for c in children]

@@ -1,0 +1,92 @@
+"""Scene to model: which inputs a simulation reads, the contact criterion k, and the model itself.
+
+The one home of three rules every caller (the simulate, calibrate, sweep and accuracy stages, the
+parameter studies, the benchmarks and the tests) shares:
+
+* :func:`needs_interface` and :func:`simulation_inputs`: the inputs a simulation of a scene reads
+  (interface tables, DMW record, the calibration for k);
+* :func:`contact_k`: the contact criterion constant k and where it came from (docs/model.md, section
+  "Contact criterion").
+
+The model itself is :func:`pipeline.model.slider.build_model` of the scene and these inputs in memory.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from ..physics.statistics import contact_probabilities, k_from_probability
+
+#: Scene keys no simulation reads (other stages' settings, names): left out of the inputs keys of the
+#: stages that simulate and of the parameter studies' evaluation store.
+SIMULATION_EXCLUDES = ("sweep", "report", "identify", "sensitivity", "scene.name", "scene.description")
+
+
+def needs_interface(scene: Any) -> bool:
+    """Whether a simulation reads interface tables: for contact or adhesion, or, with AFM scans, for the
+    summit offset y_s of the separation datum (explicit statistics give y_s without tables)."""
+    return bool(scene.effects & {"contact", "adhesion"} or scene["roughness"]["afm"])
+
+
+def simulation_inputs(scene: Any, calibration: bool = True) -> tuple[str, ...]:
+    """The inputs (named as the stages that make them) one simulation of the scene reads.
+
+    ``interface`` (:func:`needs_interface`), ``dmw`` with the dmw effect, and ``calibrate`` when the
+    contact effect is on and the scene fixes no ``contact.k`` (``calibration=False``: a parameter
+    study, which takes k by :func:`contact_k` without a calibration).
+    """
+    up = []
+    if needs_interface(scene):
+        up.append("interface")
+    if scene.has("dmw"):
+        up.append("dmw")
+    if calibration and scene.has("contact") and scene["contact"]["k"] is None:
+        up.append("calibrate")
+    return tuple(up)
+
+
+def contact_k(scene: Any, calibration: xr.Dataset | None = None, override: float | None = None,
+              calibration_name: str = "calibration.nc") -> tuple[float | None, str]:
+    """The contact criterion constant k [1] and where it came from, in this order:
+
+    1. ``override`` (an explicit value, e.g. the accuracy stage's ``--k``);
+    2. ``contact.k`` when the scene fixes it;
+    3. ``k_calibrated`` of the calibration dataset, when one is given;
+    4. when there is no admissible calibrated k (or no calibration), ``contact.fallback_probability``:
+       the k whose two-sided contact probability ``P(|z| > k sigma) = 2 Q(k)`` equals it (the paper's
+       convention, docs/model.md, section "Contact criterion"; said in the source).
+
+    Returns ``(None, "no contact effect")`` without the contact effect. The source names the file, not
+    its folder, so datasets of one scene in two folders are identical.
+
+    Raises
+    ------
+    ValueError
+        When none of these gives a k (the message says what to set).
+    """
+    if not scene.has("contact"):
+        return None, "no contact effect"
+    if override is not None:
+        return float(override), "option k"
+    c = scene["contact"]
+    if c["k"] is not None:
+        return float(c["k"]), "scene (contact.k)"
+    fb = c.get("fallback_probability")
+    if calibration is not None:
+        k = float(calibration["k_calibrated"])
+        if np.isfinite(k):
+            return k, f"calibration ({calibration_name})"
+        if fb is None:
+            raise ValueError(f"{calibration_name}: the calibration found no admissible k "
+                             f"({calibration.attrs.get('outcome', '')}); set contact.k or contact.fallback_probability")
+        k = k_from_probability(fb)
+        return k, (f"fallback: no admissible k in {calibration_name}; k = {k:.4f} from contact.fallback_probability "
+                   f"= {fb} (two-sided; one-sided {contact_probabilities(k)[1]:.3f})")
+    if fb is None:
+        raise ValueError("no contact criterion k: set contact.k or contact.fallback_probability (two-sided "
+                         "P(|z| > k sigma)), or calibrate the scene (`hdi calibrate`)")
+    return k_from_probability(fb), "contact.fallback_probability (two-sided)"
+

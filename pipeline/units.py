@@ -1,0 +1,73 @@
+"""The units table: the SI value of every unit a scene key, a dataset or a message uses.
+
+The one place where a unit becomes a number. Scene keys carry their unit in their name
+(``flying_height_nm``); :func:`si_factor` maps such a suffix to the factor that turns the key's value
+into SI (:func:`pipeline.config.si.to_si` applies it to a whole scene), and datasets divide SI values
+by the same constants (:mod:`pipeline.variables`). Physics works in SI only (docs/model.md, section
+"Units"); anything else converts at its edge with these names.
+
+This module imports nothing from the package: every layer may use it.
+"""
+
+from __future__ import annotations
+
+import math
+
+# lengths [m]
+NM = 1e-9
+UM = 1e-6
+MM = 1e-3
+# areas [m^2]
+UM2 = UM * UM
+# pressures and moduli [Pa]
+MPA = 1e6
+GPA = 1e9
+# forces [N]
+MN = 1e-3
+# times [s]
+NS = 1e-9
+US = 1e-6
+MS = 1e-3
+# frequencies [Hz]
+KHZ = 1e3
+MHZ = 1e6
+# angles [rad]
+URAD = 1e-6
+# rotation rate: one revolution per minute [rad/s]
+RPM = 2.0 * math.pi / 60.0
+# densities: one per square micrometre [m^-2]
+PER_UM2 = 1.0 / UM2
+
+# Ratios between two non-SI units, written as exact literals: the quotient of two constants above
+# rounds differently (1e-6 / 1e-9 != 1e3 in binary floating point), and results must not change
+# with the way a conversion is spelled.
+NM_IN_UM = 1e-3             # one nm in um
+UM_IN_NM = 1e3              # one um in nm
+PER_NM2_IN_PER_UM2 = 1e6    # one nm^-2 in um^-2
+PER_UM2_IN_PER_NM2 = 1e-6   # one um^-2 in nm^-2
+MHZ_IN_KHZ = 1e3            # one MHz in kHz
+
+#: SI factor of each unit suffix a scene key may end with (``_nm``, ``_khz``, ...). Dimensionless
+#: suffixes (``sigma``: a multiple of the roughness) map to 1.
+SUFFIX_FACTORS: dict[str, float] = {
+    "nm": NM, "um": UM, "mm": MM, "m": 1.0,
+    "gpa": GPA, "mpa": MPA, "pa": 1.0,
+    "khz": KHZ, "hz": 1.0, "mhz": MHZ,
+    "ms": MS, "us": US, "ns": NS, "s": 1.0,
+    "j_m2": 1.0, "n_s_m": 1.0, "n_m": 1.0, "kg_m3": 1.0, "kg": 1.0, "n": 1.0, "mn": MN,
+    "per_um2": PER_UM2, "per_m2": 1.0, "rpm": RPM, "sigma": 1.0,
+}
+
+
+def si_factor(suffix: str) -> float:
+    """SI factor of a scene-key unit suffix (``"nm"`` -> 1e-9).
+
+    Raises
+    ------
+    KeyError
+        For a suffix the table does not know (the message lists the known ones).
+    """
+    try:
+        return SUFFIX_FACTORS[suffix]
+    except KeyError:
+        raise KeyError(f"unit suffix {suffix!r} unknown; expected one of {sorted(SUFFIX_FACTORS)}") from None
