@@ -18,6 +18,7 @@ from pathlib import Path
 from . import runner
 from .io import DatasetError, results_dir
 from .config.scene import SceneError, load_scene
+from .stages import roughness
 from .validation import MAX_SCENES, check_options, one_line_warnings
 
 log = logging.getLogger("pipeline")
@@ -96,7 +97,6 @@ def main(argv: list[str] | None = None) -> int:
     _logging(args.verbose)
     try:
         if args.stage == "roughness" and not (len(args.inputs) == 1 and args.inputs[0].endswith(".toml")):
-            from .stages import roughness
             if args.out is None:
                 raise SceneError("hdi roughness FILE...: --out DIR is required when AFM files are given")
             check_options("roughness", None, **_given(args))

@@ -59,6 +59,18 @@ SUFFIX_FACTORS: dict[str, float] = {
 }
 
 
+#: The CF (UDUNITS) spelling of each unit suffix, for dataset attributes of scene keys (``"j_m2"`` ->
+#: ``"J m-2"``); a multiple of the roughness (``sigma``) is dimensionless.
+SUFFIX_UNITS: dict[str, str] = {
+    "nm": "nm", "um": "um", "mm": "mm", "m": "m",
+    "gpa": "GPa", "mpa": "MPa", "pa": "Pa",
+    "khz": "kHz", "hz": "Hz", "mhz": "MHz",
+    "ms": "ms", "us": "us", "ns": "ns", "s": "s",
+    "j_m2": "J m-2", "n_s_m": "N s m-1", "n_m": "N m-1", "kg_m3": "kg m-3", "kg": "kg", "n": "N", "mn": "mN",
+    "per_um2": "um-2", "per_m2": "m-2", "rpm": "min-1", "sigma": "1",
+}
+
+
 def si_factor(suffix: str) -> float:
     """SI factor of a scene-key unit suffix (``"nm"`` -> 1e-9).
 
@@ -71,3 +83,8 @@ def si_factor(suffix: str) -> float:
         return SUFFIX_FACTORS[suffix]
     except KeyError:
         raise KeyError(f"unit suffix {suffix!r} unknown; expected one of {sorted(SUFFIX_FACTORS)}") from None
+
+
+def cf_unit(suffix: str | None) -> str:
+    """The CF unit of a scene key with this unit suffix (``None``: a key without a unit, ``"1"``)."""
+    return "1" if suffix is None else SUFFIX_UNITS[suffix]

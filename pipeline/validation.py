@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any
 from urllib.parse import urlsplit
 
+from .config.grid import range_count
 from .physics.material_bounds import PhysicsWarning
 
 
@@ -106,7 +107,6 @@ def check_out(out: str | Path | None) -> None:
 
 def grid_size(scene: Any) -> tuple[int, int, int]:
     """Number of protrusions, roughness sets and damping ratios of the sweep (no grid is built)."""
-    from .config.grid import range_count
     n_sets = len(scene["sweep"]["roughness"] or [None])   # (no set is validated here: the sweep does)
     n_damp = len(scene["sweep"]["damping_ratio"] or [None])
     return range_count(scene["sweep"]["protrusion_nm"]), n_sets, n_damp
@@ -127,7 +127,6 @@ def check_report_histories(scene: Any) -> None:
     """Every protrusion of ``report.histories_nm`` is a point of the sweep's protrusion grid, to the
     1e-9 nm the sweep matches them with (:func:`pipeline.config.grid.range_grid`, without
     building the grid)."""
-    from .config.grid import range_count
     g = scene["sweep"]["protrusion_nm"]
     n = range_count(g)
     off = []

@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING, Any, Callable, Sequence
 import numpy as np
 import xarray as xr
 
+from ..fanout import available_cores
 from ..variables import GROUPS, Regime, regime_name
 
 if TYPE_CHECKING:
@@ -129,7 +130,6 @@ def draw_all(jobs: Sequence[tuple[Callable[..., Path], tuple, dict]], workers: i
     "report".
     """
     jobs = list(jobs)
-    from ..fanout import available_cores
     n = min(len(jobs), workers or available_cores())
     if n < 2 or not sys.platform.startswith("linux") or threading.active_count() > 1:
         return [fn(*args, **kwargs) for fn, args, kwargs in jobs]

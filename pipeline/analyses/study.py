@@ -31,7 +31,8 @@ from typing import Any, Callable, Iterable, Sequence
 import numpy as np
 
 from ..config.grid import range_grid
-from ..config.scene import SCHEMA, TARGETS, SceneError
+from ..config.scene import SCHEMA, TARGETS, SceneError, unit_suffix
+from ..units import cf_unit
 
 
 _KEY_RE = re.compile(r"([a-z_]+)\.([a-z0-9_]+)(?:\[(\d+)\])?")
@@ -65,29 +66,13 @@ class Parameter:
 
     @property
     def units(self) -> str:
-        """The CF (UDUNITS) unit of the key, from the ``[unit]`` of its doc (``"1"`` for dimensionless keys)."""
-        m = re.search(r"\[([^\]]+)\]", self.doc)
-        return cf_units(m.group(1)) if m else "1"
+        """The CF (UDUNITS) unit of the key, from its unit suffix by the units table (``"1"`` without one)."""
+        return cf_unit(unit_suffix(self.parts[1]))
 
     @property
     def var_name(self) -> str:
         """NetCDF-safe variable name: ``air_bearing.frequencies_khz[0]`` -> ``air_bearing__frequencies_khz_0``."""
         return re.sub(r"\[(\d+)\]", r"_\1", self.name).replace(".", "__")
-
-
-#: Units of scene docs that are not UDUNITS: megasamples per second, multiples of a roughness.
-_UNITS_NOT_UDUNITS = {"MS/s": "MHz", "sigma": "1", "sigma_s": "1"}
-
-
-def cf_units(unit: str) -> str:
-    """The CF spelling of a scene doc's unit: ``"J/m^2"`` -> ``"J m-2"``, ``"um^-2"`` -> ``"um-2"``."""
-    unit = _UNITS_NOT_UDUNITS.get(unit, unit)
-    num, _, den = unit.partition("/")
-    out = num.replace("^", "")
-    if den:
-        base, _, power = den.partition("^")
-        out += f" {base}-{power or 1}"
-    return out
 
 
 def parse_parameters(items: Any, where: str, field: str) -> list[Parameter]:

@@ -326,6 +326,11 @@ SCHEMA: dict[str, dict[str, Key]] = {
 }
 
 
+def unit_suffix(key: str) -> str | None:
+    """The unit suffix of a key name (``"flying_height_nm"`` -> ``"nm"``; ``None`` without one)."""
+    return _strip_unit(key)[1]
+
+
 def _strip_unit(key: str) -> tuple[str, str | None]:
     for suffix in sorted(UNIT_SUFFIXES, key=len, reverse=True):
         if key.endswith("_" + suffix):

@@ -1,0 +1,150 @@
+"""Every stage's ``compute`` reads only the scene keys its declaration puts in its inputs key.
+
+A key a stage reads but does not declare is a silently stale result: change it, and the stage's
+outputs still carry a current key. Here every stage of the main job (and ``simulate``) computes on
+a scene that records each key it is asked for while ``compute`` runs, and each recorded key must
+be in the part of the scene the runner hashes for that stage (:func:`pipeline.runner.scene_part` of
+its ``reads``/``excludes``), or be one of its ``derived`` quantities' sources.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+import pytest
+
+from pipeline import runner
+from pipeline.config.scene import Scene, load_scene
+
+
+class _Section(dict):
+    """A scene section that records the keys read from it."""
+
+    def __init__(self, data: dict, name: str, log: set):
+        super().__init__(data)
+        self._name, self._log = name, log
+
+    def __getitem__(self, key):
+        self._log.add(f"{self._name}.{key}")
+        return super().__getitem__(key)
+
+    def get(self, key, default=None):
+        self._log.add(f"{self._name}.{key}")
+        return super().get(key, default)
+
+    def __iter__(self):
+        self._log.add(f"{self._name}.*")
+        return super().__iter__()
+
+    def items(self):
+        self._log.add(f"{self._name}.*")
+        return super().items()
+
+    def values(self):
+        self._log.add(f"{self._name}.*")
+        return super().values()
+
+    def __eq__(self, other):
+        self._log.add(f"{self._name}.*")
+        return dict(self) == other
+
+    __hash__ = None
+
+
+@dataclasses.dataclass
+class RecordingScene(Scene):
+    """A :class:`Scene` whose section reads (and ``effects``) are recorded while ``log`` is set."""
+
+    log: set | None = None
+
+    @property
+    def effects(self) -> frozenset[str]:
+        if self.log is not None:
+            self.log.add("scene.effects")
+        return frozenset(self.config["scene"]["effects"])
+
+    def __getitem__(self, section: str) -> dict[str, Any]:
+        if self.log is None:
+            return self.config[section]
+        return _Section(self.config[section], section, self.log)
+
+    def replace(self, **sections: dict[str, Any]) -> "RecordingScene":
+        # a stage's variant of the scene (a roughness set, a seed) still reads through the log
+        new = super().replace(**sections)
+        for item in (f"{s}.{k}" for s, keys in sections.items() for k in keys):
+            if self.log is not None:
+                self.log.discard(item)
+        return RecordingScene(new.path, new.config, new.overrides, log=self.log)
+
+
+def recording(scene: Scene) -> RecordingScene:
+    return RecordingScene(scene.path, scene.config, scene.overrides)
+
+
+def declared(stage: runner.Stage, scene: Scene) -> set[str]:
+    """The ``section.key`` items the runner hashes for a stage (``section.*``: the whole section)."""
+    part = runner.scene_part(scene, stage.reads, stage.excludes)
+    items: set[str] = set()
+    for name, value in part.items():
+        if name == "*":
+            items |= {f"{s}.{k}" for s, keys in value.items() for k in keys}
+            items |= {f"{s}.*" for s, keys in value.items()
+                      if all(f"{s}.{k}" not in stage.excludes for k in scene.config[s])}
+        elif "." in name:
+            items.add(name)
+        else:
+            items |= {f"{name}.{k}" for k in value} | {f"{name}.*"}
+    return items
+
+
+#: Keys a stage reads that its key covers another way: its ``derived`` values, or how the work is
+#: cut rather than what it computes (each sweep part is checked against its batch, so parts of another
+#: batch size are recomputed, not mixed).
+DERIVED = {
+    "interface": {"tfc.protrusion_nm", "sweep.protrusion_nm"},  # deepest_protrusion_nm
+    "sweep": {"sweep.batch_size"},
+}
+
+
+@pytest.fixture(scope="module")
+def recorded(paper_config, tmp_path_factory):
+    """``{stage: keys read by its compute}`` for the main job and simulate of a light paper scene."""
+    scene = load_scene(paper_config, ["sweep.protrusion_nm={start = 9.0, stop = 11.0, step = 0.2}",
+                                      "solver.duration_ms=0.8", "solver.transient_ms=0.3"])
+    rec = recording(scene)
+    stages = runner.registry()
+    logs: dict[str, set] = {}
+
+    def wrap(name: str, compute):
+        def recorded_compute(sc, inputs):
+            logs[name] = set()
+            sc.log = logs[name]
+            try:
+                return compute(sc, inputs)
+            finally:
+                sc.log = None
+        return recorded_compute
+
+    wrapped = {n: dataclasses.replace(st, compute=wrap(n, st.compute)) for n, st in stages.items()}
+    wanted = [*runner.main_job(scene, stages), "simulate"]
+    runner.Runner(rec, tmp_path_factory.mktemp("reads"), stages=wrapped).build(wanted)
+    return scene, stages, logs
+
+
+def test_each_stage_reads_only_what_it_declares(recorded):
+    scene, stages, logs = recorded
+    assert {"roughness", "dmw", "interface", "calibrate", "sweep", "report", "simulate"} <= set(logs)
+    problems = {}
+    for name, keys in logs.items():
+        missing = keys - declared(stages[name], scene) - DERIVED.get(name, set())
+        if missing:
+            problems[name] = sorted(missing)
+    assert not problems, f"keys read by compute but not in the stage's inputs key: {problems}"
+
+
+def test_the_recorder_catches_an_undeclared_read(recorded):
+    """The check can fail: the interface stage reading a [dmw] key it does not declare is reported."""
+    scene, stages, logs = recorded
+    assert "dmw.rms_nm" not in declared(stages["interface"], scene)
+    assert "lubricant.work_of_adhesion_j_m2" in logs["interface"]  # (a read that is recorded)
