@@ -34,6 +34,7 @@ import numpy as np
 
 from .analyses.study import Parameter, parse_parameters, with_values
 from .code_version import code_key
+from .config.grid import label
 from .config.scene import SceneError
 from .fanout import run_tasks
 from .io import read_dataset
@@ -79,7 +80,7 @@ def evaluation_key(base: str, params: Sequence[Parameter], values: Sequence[floa
                    protrusions: Sequence[float]) -> str:
     """Identity of one evaluation (values rounded to 12 significant digits)."""
     blob = json.dumps({"base": base, "params": {p.name: float(f"{v:.12g}") for p, v in zip(params, values)},
-                       "protrusions": [round(float(x), 9) for x in protrusions]}, sort_keys=True)
+                       "protrusions": [float(label(float(x))) for x in protrusions]}, sort_keys=True)
     return hashlib.sha256(blob.encode()).hexdigest()
 
 

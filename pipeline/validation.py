@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import Any
 from urllib.parse import urlsplit
 
-from .config.grid import range_count
+from .config.grid import label, range_count, same_point
 from .physics.material_bounds import PhysicsWarning
 
 
@@ -132,7 +132,7 @@ def check_report_histories(scene: Any) -> None:
     off = []
     for h in scene["report"]["histories_nm"] or []:
         j = round((h - g["start"]) / g["step"])
-        if not 0 <= j < n or abs(round(g["start"] + j * g["step"], 9) - h) >= 1e-9:
+        if not 0 <= j < n or not same_point(label(g["start"] + j * g["step"]), h):
             off.append(h)
     if off:
         raise OptionError(f"report.histories_nm: {', '.join(f'{h:.10g}' for h in off)} nm not on the sweep grid "

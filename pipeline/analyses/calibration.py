@@ -48,7 +48,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from ..config.grid import protrusion_grid
+from ..config.grid import label, protrusion_grid
 from ..fanout import local_workers, run_tasks
 from ..io import read_dataset
 from ..model import dmw_record
@@ -228,10 +228,10 @@ def calibrate(scene: Any, interface: xr.Dataset, record: tuple[np.ndarray, float
     extra: dict[str, Any] = {}
     collapsed: list[float] = []
     if method == "exact":
-        todo = np.union1d(grid, np.round([td["onset_nm"], td["previous_nm"]], 9))
+        todo = np.union1d(grid, label([td["onset_nm"], td["previous_nm"]]))
         found, seconds = thresholds(scene, interface_path, dmw_path, todo, k_range, tol, scheduler, workers)
-        k_on, st_on = _status(found[float(np.round(td["onset_nm"], 9))][0], k_range)
-        k_prev, st_prev = _status(found[float(np.round(td["previous_nm"], 9))][0], k_range)
+        k_on, st_on = _status(found[float(label(td["onset_nm"]))][0], k_range)
+        k_prev, st_prev = _status(found[float(label(td["previous_nm"]))][0], k_range)
         n_on = n_prev = 0
         kstar = np.array([found[float(p)][0] for p in grid])
         # the first grid protrusion with k*(protrusion) < k (no monotonicity in protrusion assumed)

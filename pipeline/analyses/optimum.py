@@ -36,6 +36,7 @@ from typing import Any, Iterator
 import numpy as np
 import xarray as xr
 
+from ..config.grid import TOL_NM
 from ..variables import SCALARS, Regime, regime_name
 
 FLYING, BOUNCING, SURFING = Regime.FLYING, Regime.BOUNCING, Regime.SURFING
@@ -183,7 +184,7 @@ def _find(ds: xr.Dataset, *, kind: str, regime: int, limit: float, minimise: str
     return Optimum(kind, criterion, float(prot[i]), vals, units, candidates=int(ok.sum()))
 
 
-def flying_optimum(ds: xr.Dataset, fhm_limit: float = FHM_LIMIT, atol: float = 1e-9) -> Optimum:
+def flying_optimum(ds: xr.Dataset, fhm_limit: float = FHM_LIMIT, atol: float = TOL_NM) -> Optimum:
     """Optimum (a), just before touchdown: flying, FHM < ``fhm_limit`` [%], least ``clearance`` [nm].
 
     Parameters
@@ -196,7 +197,7 @@ def flying_optimum(ds: xr.Dataset, fhm_limit: float = FHM_LIMIT, atol: float = 1
                  limit_name="FHM", atol=atol)
 
 
-def sliding_optimum(ds: xr.Dataset, bv_limit: float = BV_LIMIT, atol: float = 1e-9) -> Optimum:
+def sliding_optimum(ds: xr.Dataset, bv_limit: float = BV_LIMIT, atol: float = TOL_NM) -> Optimum:
     """Optimum (b), steady sliding: surfing, BV < ``bv_limit`` [%], least ``interference`` [nm].
 
     Parameters

@@ -30,7 +30,7 @@ from typing import Any, Callable, Iterable, Sequence
 
 import numpy as np
 
-from ..config.grid import range_grid
+from ..config.grid import TOL_NM, label, range_grid
 from ..config.scene import SCHEMA, TARGETS, SceneError, unit_suffix
 from ..units import cf_unit
 
@@ -293,7 +293,7 @@ def targets(scene: Any) -> list[Target]:
 
 def target_protrusions(tlist: Sequence[Target]) -> list[float]:
     """Sorted union of the protrusions [nm] the targets need."""
-    return sorted({round(float(x), 9) for t in tlist for x in t.protrusions})
+    return sorted({float(label(float(x))) for t in tlist for x in t.protrusions})
 
 
 def residuals(record: dict[str, Any], tlist: Sequence[Target], missing: float) -> tuple[np.ndarray, np.ndarray]:
@@ -331,10 +331,10 @@ def headline(record: dict[str, Any], scene: Any) -> dict[str, float]:
     t = Table(record)
     td = t.touchdown()
     lo, hi = c["fhm_flying_range_nm"]
-    flying_range = t.protrusions[(t.protrusions >= lo - 1e-9) & (t.protrusions <= hi + 1e-9)]
+    flying_range = t.protrusions[(t.protrusions >= lo - TOL_NM) & (t.protrusions <= hi + TOL_NM)]
     width = c["bouncing_range_nm"][1] - c["bouncing_range_nm"][0]
     if np.isfinite(td):
-        band = (t.protrusions > td + 1e-9) & (t.protrusions <= td + width + 1e-9)
+        band = (t.protrusions > td + TOL_NM) & (t.protrusions <= td + width + TOL_NM)
         bv = t.outputs["fhm_bv"][band]
         bv_after = float(np.nanmax(bv)) if bv.size and np.any(np.isfinite(bv)) else float("nan")
     else:

@@ -47,7 +47,7 @@ from ..variables import ENSEMBLE, ENSEMBLE_OF, HISTORIES, REGIME_FILL, SCALARS, 
 from ..model import dmw_record, scene_inputs
 from .dmw import realisation_record
 from .simulate import model_attrs, read_k
-from ..config.grid import damping_grid, protrusion_grid, roughness_sets
+from ..config.grid import damping_grid, protrusion_grid, roughness_sets, same_point
 from ..units import NM
 
 log = logging.getLogger(__name__)
@@ -187,7 +187,7 @@ def run_batch(scene: Any, batch: Batch, interface_path: str | None, dmw_path: st
         run = sl.run_model(model, delta * NM)
         hist = sl.histories(run)
         rows.append(sl.summarize(run, hist))
-        if any(abs(delta - h) < 1e-9 for h in history_nm):
+        if any(same_point(delta, h) for h in history_nm):
             hist_rows.append((delta, run.time, hist))
     data = {name: scalar(name, np.array([r[name] for r in rows]), ("protrusion",)) for name in rows[0]}
     coords = {"protrusion": coordinate("protrusion", np.array(batch.protrusions))}
@@ -373,7 +373,7 @@ def assemble(scene: Any, out: Path, prot: np.ndarray, labels: list[str], damp: l
         if "hist_protrusion" in ds.coords:
             if hist_prot is None:
                 hist_prot = np.array([h for h in scene["sweep"]["histories_nm"] or scene["report"]["histories_nm"]
-                                      if np.any(np.abs(prot - h) < 1e-9)])
+                                      if np.any(same_point(prot, h))])
                 time = ds["time"].values
             for name in ds.data_vars:
                 if name.startswith("h_"):
