@@ -19,7 +19,8 @@ from ..physics.friction import shear_strength
 from ..physics.material_bounds import check_materials
 from ..physics.statistics import (composite_modulus, explicit_statistics, hardness_from_plasticity_gw,
                                   plasticity_index_gw, plasticity_index_ke)
-from ..units import GPA, NM, UM
+from ..config.si import to_si
+from ..units import NM, UM
 from ..variables import INTERFACE
 from . import roughness as rough
 
@@ -58,17 +59,14 @@ def interface_parameters(scene: Any, stats: dict[str, float]) -> isbl.Interface:
     ``E'`` from the two moduli (or ``composite_modulus_gpa``); ``H`` from ``hardness_gpa`` or, when
     absent, from the GW plasticity index (SPEC.md section 6: ``H`` is set so that psi(GW) = 0.52).
     """
-    m, lub = scene["materials"], scene["lubricant"]
-    nu = m["poisson_ratio"]
-    E = (m["composite_modulus_gpa"] * GPA if m["composite_modulus_gpa"]
-         else composite_modulus(m["disk_modulus_gpa"] * GPA, m["tfc_modulus_gpa"] * GPA, nu))
-    H = (m["hardness_gpa"] * GPA if m["hardness_gpa"]
-         else hardness_from_plasticity_gw(m["plasticity_index"], E, stats["sigma_s"], stats["R"]))
-    check_materials(E, H, stats["sigma_s"], stats["R"],
-                    derived="plasticity_index" if m["hardness_gpa"] else "hardness")
+    si = to_si(scene)
+    m, lub = si.materials, si.lubricant
+    nu = m.poisson_ratio
+    E = m.composite_modulus if m.composite_modulus else composite_modulus(m.disk_modulus, m.tfc_modulus, nu)
+    H = m.hardness if m.hardness else hardness_from_plasticity_gw(m.plasticity_index, E, stats["sigma_s"], stats["R"])
+    check_materials(E, H, stats["sigma_s"], stats["R"], derived="plasticity_index" if m.hardness else "hardness")
     return isbl.Interface(sigma_s=stats["sigma_s"], eta=stats["eta"], R=stats["R"], E=E, H=H, nu=nu,
-                          t=lub["thickness_nm"] * NM, dgamma=lub["work_of_adhesion_j_m2"],
-                          eps=lub["intermolecular_distance_nm"] * NM)
+                          t=lub.thickness, dgamma=lub.work_of_adhesion, eps=lub.intermolecular_distance)
 
 
 def needed_quantities(effects: frozenset[str]) -> tuple[str, ...]:

@@ -1,0 +1,106 @@
+"""The scene in SI units: frozen, named parameter groups, one per section (``to_si``).
+
+A scene key carries its unit in its name (``flying_height_nm``, ``frequencies_khz``); :func:`to_si`
+returns each section as a frozen group whose fields drop the suffix and hold SI values
+(``to_si(scene).air_bearing.flying_height`` [m], ``.frequencies`` [Hz]), by the one units table
+(:data:`pipeline.units.SUFFIX_FACTORS`). Keys without a unit keep their name and value; lists of
+numbers convert elementwise; tables and strings are kept as they are. ``rpm`` becomes rad/s.
+
+Two keys of one section that differ only by their unit suffix get distinct SI names from
+:data:`SI_NAMES` (``dmw.sample_rate_mhz``, the synthesis rate, and ``dmw.sample_rate_hz``, a measured
+record's own rate); any other collision is a schema error and raises rather than overwrite.
+"""
+
+from __future__ import annotations
+
+from types import MappingProxyType
+from typing import Any, Mapping
+
+from ..units import si_factor
+from .scene import _strip_unit
+
+
+#: SI names of keys that would collide with another key of their section once the suffix is dropped.
+SI_NAMES = {("dmw", "sample_rate_hz"): "record_sample_rate"}
+
+
+class Group(Mapping):
+    """One section in SI units: read-only, by attribute (``group.flying_height``) or item."""
+
+    __slots__ = ("_section", "_values")
+
+    def __init__(self, section: str, values: Mapping[str, Any]):
+        object.__setattr__(self, "_section", section)
+        object.__setattr__(self, "_values", MappingProxyType(dict(values)))
+
+    def __getattr__(self, name: str) -> Any:
+        try:
+            return self._values[name]
+        except KeyError:
+            raise AttributeError(f"[{self._section}] has no key {name!r} in SI form; "
+                                 f"it has {sorted(self._values)}") from None
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        raise AttributeError(f"[{self._section}] in SI form is read-only")
+
+    def __getitem__(self, name: str) -> Any:
+        return self._values[name]
+
+    def __iter__(self):
+        return iter(self._values)
+
+    def __len__(self) -> int:
+        return len(self._values)
+
+    def __repr__(self) -> str:
+        return f"Group({self._section!r}, {dict(self._values)!r})"
+
+
+def _convert(value: Any, factor: float) -> Any:
+    if isinstance(value, bool) or value is None:
+        return value
+    if isinstance(value, (int, float)):
+        return value * factor
+    if isinstance(value, list) and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value):
+        return tuple(v * factor for v in value)
+    return value
+
+
+def section_si(section: str, values: Mapping[str, Any]) -> Group:
+    """One scene section in SI units (see the module docstring)."""
+    out: dict[str, Any] = {}
+    for key, value in values.items():
+        name, suffix = _strip_unit(key)
+        name = SI_NAMES.get((section, key), name)
+        factor = 1.0 if suffix is None else si_factor(suffix)
+        if name in out:
+            raise ValueError(f"[{section}] {key}: its SI name {name!r} collides with another key of the section")
+        out[name] = _convert(value, factor) if suffix is not None else value
+    return Group(section, out)
+
+
+class SIScene(Mapping):
+    """Every section of a scene in SI units, by attribute (``si.tfc.protrusion``) or item."""
+
+    def __init__(self, config: Mapping[str, Mapping[str, Any]]):
+        self._groups = {s: section_si(s, keys) for s, keys in config.items()}
+
+    def __getattr__(self, name: str) -> Group:
+        try:
+            return self.__dict__["_groups"][name]
+        except KeyError:
+            raise AttributeError(f"the scene has no section [{name}]") from None
+
+    def __getitem__(self, name: str) -> Group:
+        return self._groups[name]
+
+    def __iter__(self):
+        return iter(self._groups)
+
+    def __len__(self) -> int:
+        return len(self._groups)
+
+
+def to_si(scene: Any) -> SIScene:
+    """The scene's sections as frozen groups in SI units (module docstring)."""
+    return SIScene(scene.config)
