@@ -273,7 +273,7 @@ class FolderBusy(DatasetError):
     """Another ``hdi`` process is working in the results folder."""
 
 
-_HELD: dict[Path, int] = {}
+_HELD: set[Path] = set()
 
 
 def _alive(pid: int) -> bool:
@@ -322,23 +322,25 @@ def _deciding(out: Path) -> Iterator[None]:
 
 @contextlib.contextmanager
 def folder_lock(out: str | Path) -> Iterator[Path]:
-    """Hold ``out/.hdi.lock`` (re-entrant within a process); refuse when another live process holds it.
+    """Hold ``out/.hdi.lock``; refuse when another live process holds it.
+
+    Not re-entrant: a stage's ``compute`` reads its inputs through :class:`Inputs` (made current by
+    the runner before it runs) and never builds in its own folder, so a second hold of the same folder
+    in one process is a programming error, reported as such.
 
     Raises
     ------
     FolderBusy
         Naming the other process and the lock file.
+    RuntimeError
+        When this process already holds the folder.
     """
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     path = (out / LOCK_NAME).resolve()
-    if _HELD.get(path):
-        _HELD[path] += 1
-        try:
-            yield path
-        finally:
-            _HELD[path] -= 1
-        return
+    if path in _HELD:
+        raise RuntimeError(f"{out}: this process already holds the folder; a stage's compute reads its "
+                           "inputs through runner.Inputs and does not build in its own folder")
     me = {"pid": os.getpid(), "host": socket.gethostname(),
           "started": _dt.datetime.now(_dt.timezone.utc).replace(microsecond=0).isoformat()}
     with _deciding(out):
@@ -365,12 +367,12 @@ def folder_lock(out: str | Path) -> Iterator[Path]:
             break
         else:
             raise FolderBusy(f"{out}: could not take the lock file {path}")
-    _HELD[path] = 1
+    _HELD.add(path)
     try:
         clean_orphans(out)
         yield path
     finally:
-        _HELD.pop(path, None)
+        _HELD.discard(path)
         path.unlink(missing_ok=True)
 
 
@@ -388,7 +390,6 @@ class Runner:
         self._files: dict[str, dict[str, Path]] = {}
         self._hashes: dict[Path, str] = {}
         self._done: set[str] = set()
-        self._level = logging.INFO
 
     # ---- planning
     def stage(self, name: str) -> Stage:
@@ -496,8 +497,6 @@ class Runner:
         ``force`` recomputes the targets themselves even when current (not their upstream stages).
         """
         targets = list(targets)
-        # a build inside a stage's compute (a helper making sure of an input) checks quietly
-        self._level = logging.DEBUG if _HELD.get((self.out / LOCK_NAME).resolve()) else logging.INFO
         with folder_lock(self.out):
             for name in self.plan(targets):
                 self._make(name, force and name in targets)
@@ -512,7 +511,7 @@ class Runner:
         reason = "forced" if force else self.stale_reason(name)
         key = self.key(name)
         if reason is None:
-            log.log(self._level, "%s: up to date (inputs %s)", name, key[:12])
+            log.info("%s: up to date (inputs %s)", name, key[:12])
             self._done.add(name)
             return
         st = self.stage(name)

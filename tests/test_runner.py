@@ -312,6 +312,22 @@ def test_failing_compute_writes_nothing_and_leaves_no_lock(tmp_path, paper_scene
     assert list(tmp_path.iterdir()) == []
 
 
+def test_a_compute_that_builds_in_its_own_folder_is_refused(tmp_path, paper_scene):
+    """Stages read their inputs through Inputs; building in one's own folder (the re-entrant runner
+    this replaced) is an error that says so, and leaves no lock behind."""
+    stages = {"a": runner.Stage("a", lambda scene, inputs: xr.Dataset({"v": var(1.0, (), "1", "v")}), outputs=("a.nc",))}
+
+    def nested(scene, inputs):
+        runner.Runner(scene, inputs.out, stages).build(["a"])
+        return xr.Dataset()
+
+    stages["x"] = runner.Stage("x", nested, outputs=("x.nc",))
+    with pytest.raises(RuntimeError, match="already holds the folder"):
+        runner.Runner(paper_scene, tmp_path, stages).build(["x"])
+    assert not (tmp_path / runner.LOCK_NAME).exists()
+    runner.Runner(paper_scene, tmp_path, stages).build(["a"])  # the folder is free again
+
+
 def test_undeclared_output_is_an_error(tmp_path, paper_scene):
     stages = {"x": runner.Stage("x", lambda scene, inputs: {"y.nc": xr.Dataset()}, outputs=("x.nc",))}
     with pytest.raises(RuntimeError, match="undeclared outputs"):
