@@ -1,6 +1,6 @@
 """The naive baseline: the slider model as a competent user would write it first.
 
-Same physics as :func:`pipeline.model.dynamics.rhs` (SPEC.md section 4): linear front pad, nonlinear rear
+Same physics as :func:`pipeline.model.dynamics.rhs` (docs/model.md, section "Slider dynamics"): linear front pad, nonlinear rear
 pad ``F_r0 [(g0/g)^n - 1]``, the disk under each point moving with the DMW record delayed by the
 travel time, adhesion ``-A_n p_a(d)`` always, contact ``A_n p_c(d) - c_c d'`` and friction
 ``A_n tau(d)`` (moment ``-h_cg Q``) while ``d < k sigma``. Written the plain way:
@@ -130,7 +130,7 @@ def simulate_naive(scene: Any, interface_ds: Any, dmw_tuple: tuple[np.ndarray, f
     a = scene["air_bearing"]
     FH0 = a["flying_height_nm"] * NM
     delta = protrusion_nm * NM
-    # the separation datum from its one home (pipeline.model.dynamics.separation_at, SPEC.md 7.2):
+    # the separation datum from its one home (pipeline.model.dynamics.separation_at, docs/model.md, section "Separation datum"):
     # d = d_nom + z - l_c theta - w with d_nom = FH0 - delta - y_s
     p_sep = model.p.copy()
     p_sep[dyn.P_DELTA] = delta

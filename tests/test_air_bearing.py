@@ -1,4 +1,4 @@
-"""The slider's rigid body and air bearing (SPEC.md sections 4 and 6): mass properties, modal
+"""The slider's rigid body and air bearing (docs/model.md, sections "Slider dynamics" and "Parameters"): mass properties, modal
 inversion of the pad stiffnesses from two natural frequencies, the choice of root, pad damping,
 and the nonlinear rear law."""
 
@@ -14,7 +14,7 @@ from pipeline.physics import air_bearing as ab
 from pipeline.config.scene import scene_from_dict
 
 MM, NM = 1e-3, 1e-9
-# The paper's femto slider (SPEC.md section 6, [recon]): 0.85 x 0.70 x 0.23 mm, 4250 kg/m^3, arms 0.30/0.40 mm.
+# The paper's femto slider (docs/model.md, section "Parameters", [recon]): 0.85 x 0.70 x 0.23 mm, 4250 kg/m^3, arms 0.30/0.40 mm.
 L, W, T, RHO = 0.85 * MM, 0.70 * MM, 0.23 * MM, 4250.0
 L_F, L_R = 0.30 * MM, 0.40 * MM
 F1, F2 = 120e3, 300e3
@@ -26,7 +26,7 @@ def mass():
 
 
 def test_paper_slider_mass_and_inertia(mass):
-    # SPEC.md section 6 states m = 0.58 mg and I = 3.75e-14 kg m^2 for the femto block
+    # docs/model.md, section "Parameters" states m = 0.58 mg and I = 3.75e-14 kg m^2 for the femto block
     # (m = rho L W T = 0.5816 mg, I = m (L^2 + T^2)/12 = 3.758e-14 kg m^2): within 1 %.
     m, I = mass
     assert m == pytest.approx(0.58e-6, rel=0.01)
@@ -38,7 +38,7 @@ def test_paper_slider_mass_and_inertia(mass):
 
 @pytest.mark.parametrize("f1, f2", [(F1, F2), (100e3, 400e3), (30 * F1, 30 * F2), (120e3, 1000e3)])
 def test_both_stiffness_roots_reproduce_the_frequencies(mass, f1, f2):
-    # Each (k_f, k_r) root of SPEC.md section 4's two equations must give back exactly the two
+    # Each (k_f, k_r) root of docs/model.md, section "Slider dynamics"'s two equations must give back exactly the two
     # natural frequencies as the generalised eigenvalues of (K, M): within 1e-9 relative.
     m, I = mass
     roots = ab.stiffness_roots(f1, f2, m, I, L_F, L_R)
@@ -60,7 +60,7 @@ def test_both_stiffness_roots_reproduce_the_frequencies(mass, f1, f2):
 
 
 def test_default_root_is_the_stiff_rear_one_with_the_documented_numbers(mass):
-    # SPEC.md 7.3: of the two roots the one with k_r > k_f: k_f 1.54e5, k_r 5.83e5 N/m at 120/300 kHz
+    # docs/model.md, section "Air bearing": of the two roots the one with k_r > k_f: k_f 1.54e5, k_r 5.83e5 N/m at 120/300 kHz
     m, I = mass
     k_f, k_r, info = ab.choose_stiffness(F1, F2, m, I, L_F, L_R, L)
     assert info["chosen"] == "stiff-rear"
@@ -73,7 +73,7 @@ def test_default_root_is_the_stiff_rear_one_with_the_documented_numbers(mass):
     assert info["roots"][0]["node_mode2"] == pytest.approx(0.141e-3, abs=1e-6)
     assert not info["roots"][0]["mode1_pitch_like"]
     # stiffness at the TFC point (8 um before the trailing edge): the static compliance of the
-    # bearing there, 1 / (e^T K^-1 e) with e = (1, -l_c): 5.5e5 N/m (SPEC.md 7.3)
+    # bearing there, 1 / (e^T K^-1 e) with e = (1, -l_c): 5.5e5 N/m (docs/model.md, section "Air bearing")
     l_c = L / 2 - 8e-6
     e = np.array([1.0, -l_c])
     k_tfc = 1.0 / (e @ np.linalg.solve(ab.pad_matrix(k_f, k_r, L_F, L_R), e))
@@ -112,7 +112,7 @@ def test_scene_slider_uses_the_chosen_root_and_frequencies():
     # TFC point 8 um before the trailing edge, CG at mid-length; friction arm T/2
     assert s.l_c == pytest.approx(L / 2 - 8e-6, rel=1e-12)
     assert s.h_cg == pytest.approx(T / 2, rel=1e-12)
-    # rear preload F_r0 = k_r g0 / n, with g0 = FH0 = 11 nm and n = 2 (SPEC.md 4)
+    # rear preload F_r0 = k_r g0 / n, with g0 = FH0 = 11 nm and n = 2 (docs/model.md, section "Slider dynamics")
     assert s.rear_preload == pytest.approx(s.k_r * 11 * NM / 2, rel=1e-12)
 
 
@@ -143,7 +143,7 @@ def test_scene_damping_ratio_reaches_the_slider():
 
 @pytest.mark.parametrize("n", [1.0, 2.0, 3.5])
 def test_rear_force_is_zero_with_stiffness_k_r_at_g0(n):
-    # SPEC.md 4: F_r = F_r0 [(g0/g)^n - 1], F_r0 = k_r g0 / n, so F_r(g0) = 0 and -dF_r/dg(g0) = k_r.
+    # docs/model.md, section "Slider dynamics": F_r = F_r0 [(g0/g)^n - 1], F_r0 = k_r g0 / n, so F_r(g0) = 0 and -dF_r/dg(g0) = k_r.
     k_r, g0 = 1.06e5, 11 * NM
     F0 = k_r * g0 / n
     assert ab.rear_force(g0, g0, n, F0) == 0.0

@@ -1,5 +1,5 @@
 """Single-summit laws: Hertz / Kogut-Etsion contact (KE02), Lennard-Jones / meniscus adhesion,
-shear-strength friction (SPEC.md section 2)."""
+shear-strength friction (docs/model.md, section "Single asperity")."""
 
 from __future__ import annotations
 
@@ -40,7 +40,7 @@ def test_regimes_hand_values():
     x = np.array([0.5, 3.0, 50.0, 200.0])
     P = asperity.contact_load(x * wc, R, E, H, NU)
     A = asperity.contact_area(x * wc, R, E, H, NU)
-    # KE02 fits as written in SPEC.md section 2
+    # KE02 fits as written in docs/model.md, section "Single asperity"
     np.testing.assert_allclose(P, [4 / 3 * E * np.sqrt(R) * (0.5 * wc) ** 1.5, 1.03 * Pc * 3**1.425,
                                    1.40 * Pc * 50**1.263, H * 2 * np.pi * R * 200 * wc], rtol=1e-13)
     np.testing.assert_allclose(A, [np.pi * R * 0.5 * wc, 0.93 * Ac * 3**1.136, 0.94 * Ac * 50**1.146,
@@ -107,7 +107,7 @@ def test_meniscus_force_hand_value():
 
 
 def test_lennard_jones_joins_meniscus_at_eps():
-    # (8/3) pi dgamma R (1 - 1/4) = 2 pi R dgamma at s = eps (SPEC.md 2: "joins continuously")
+    # (8/3) pi dgamma R (1 - 1/4) = 2 pi R dgamma at s = eps (docs/model.md, section "Single asperity": "joins continuously")
     assert adhesion.lennard_jones_force(EPS, R, DG, EPS) == pytest.approx(
         adhesion.meniscus_force(R, DG), rel=1e-14)
 
@@ -128,7 +128,7 @@ def test_lennard_jones_hand_value_and_bound():
 # --- friction -------------------------------------------------------------------------------
 
 def test_shear_strength_and_friction_force():
-    # tau_y = H / (2.8 sqrt 3) = 2e9 / 4.849742 = 4.123930e8 Pa (SPEC.md 2)
+    # tau_y = H / (2.8 sqrt 3) = 2e9 / 4.849742 = 4.123930e8 Pa (docs/model.md, section "Single asperity")
     assert friction.shear_strength(H) == pytest.approx(4.123930e8, rel=1e-6)
     A = np.array([0.0, 1e-15])
     np.testing.assert_allclose(friction.friction_force(A, H), [0.0, 4.123930e8 * 1e-15], rtol=1e-6)

@@ -286,7 +286,7 @@ def test_stage_writes_synthetic_dmw(tmp_path):
     assert float(ds.band_low) == 1e4 and float(ds.band_high) == 5e5
     assert ds.band_low.attrs["realised"] == 1e4 and ds.band_high.attrs["realised"] == 5e5
     assert float(ds.sample_rate) == 4e6
-    assert float(ds.disk_speed) == pytest.approx(19.5, abs=0.05)   # SPEC: V = 19.5 m/s
+    assert float(ds.disk_speed) == pytest.approx(19.5, abs=0.05)   # docs/model.md, section "DMW": V = 19.5 m/s
     assert ds.attrs["seed"] == 20090601 and ds.attrs["dmw_source"] == "synthetic"
     assert ds.attrs["exponent"] == -2.0 and ds.attrs["dmw_enabled"] == 1
     t, w, fs = dmw_record.load(tmp_path)

@@ -1,4 +1,4 @@
-"""The 2-DOF slider dynamics (SPEC.md section 4; pipeline.model.dynamics, pipeline.model.slider): modal free
+"""The 2-DOF slider dynamics (docs/model.md, section "Slider dynamics"; pipeline.model.dynamics, pipeline.model.slider): modal free
 vibration, static equilibrium, modal damping, the integrator's observed order, FHM limits, contact
 switch events, and effect selection.
 
@@ -24,7 +24,7 @@ NM = 1e-9
 K = 0.445  # contact criterion constant used throughout (the brief's paper value)
 FLYING = ["air_bearing", "pitch"]
 ALL = ["air_bearing", "pitch", "dmw", "adhesion", "contact", "friction"]
-# An explicit synthetic DMW (SPEC.md 5): band 10-500 kHz, PSD ~ f^-2, 4 MS/s, fixed seed.
+# An explicit synthetic DMW (docs/model.md, section "DMW"): band 10-500 kHz, PSD ~ f^-2, 4 MS/s, fixed seed.
 DMW = {"band_khz": [10.0, 500.0], "exponent": -2.0, "seed": 20090601, "sample_rate_mhz": 4.0,
        "rpm": 5425.0, "radius_mm": 34.3}
 
@@ -252,7 +252,7 @@ def test_dense_output_order(smooth_reference):
 @pytest.mark.parametrize("effects", [FLYING, ["air_bearing"]])
 def test_fhm_is_zero_without_dmw_and_contact(effects):
     # No DMW and no interface forces: the slider stays at its nominal attitude, d = FH0 - delta - y_s
-    # (SPEC.md 7.2: d to the mean of summit heights, y_s = 0.691 nm for the default roughness).
+    # (docs/model.md, section "Separation datum": d to the mean of summit heights, y_s = 0.691 nm for the default roughness).
     run = sl.run_model(build(make_scene(effects)), 5 * NM)
     s = sl.summarize(run)
     assert s["fhm_bv"] < 1e-9
@@ -344,7 +344,7 @@ def test_contact_flag_matches_the_criterion_while_bouncing():
 
 def test_contact_events_located_at_touchdown_with_adhesion():
     # With adhesion, the 7.8 nm protrusion snaps from flying into contact during the transient
-    # (measured with the summit datum and the stiff-rear bearing of SPEC.md 7: 23 located switches,
+    # (measured with the summit datum and the stiff-rear bearing of docs/model.md, section "Corrections": 23 located switches,
     # in contact in 97.5 % of the samples afterwards; 7.6 nm stays flying).
     sc = make_scene(ALL, dmw={"rms_nm": 0.163})
     run = sl.run_model(build(sc), 7.8 * NM)

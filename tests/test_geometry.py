@@ -1,4 +1,4 @@
-"""TFC bulge geometry (SPEC.md section 3): nominal area, effective radius, pitched lowest point."""
+"""TFC bulge geometry (docs/model.md, section "Nominal area"): nominal area, effective radius, pitched lowest point."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ A, B = 3 * UM, 25 * UM          # [paper] semi-axes a (sliding), b (across)
 
 
 def test_paper_nominal_area():
-    # SPEC.md 3 [paper]: A_n = 62 um^2 at delta = 11 nm; s_n = 1.56 nm (3 sigma, sigma = 0.52 nm).
+    # docs/model.md, section "Nominal area" [paper]: A_n = 62 um^2 at delta = 11 nm; s_n = 1.56 nm (3 sigma, sigma = 0.52 nm).
     # Hand computation: u = 1.56/11 = 0.1418182, 2u - u^2 = 0.2635240, pi * 3 * 25 * 0.2635240 = 62.0914 um^2
     An = g.nominal_area(11 * NM, A, B, 1.56 * NM) / UM**2
     assert An == pytest.approx(62.0914, rel=1e-5)
@@ -21,7 +21,7 @@ def test_paper_nominal_area():
 
 
 def test_paper_scene_section_depth(paper_scene):
-    # s_n = section_depth_sigma * sigma = 3 * 0.52 nm = 1.56 nm (SPEC.md 6)
+    # s_n = section_depth_sigma * sigma = 3 * 0.52 nm = 1.56 nm (docs/model.md, section "Parameters")
     s_n = paper_scene["contact"]["section_depth_sigma"] * paper_scene["roughness"]["sigma_nm"] * NM
     t = paper_scene["tfc"]
     An = g.nominal_area(t["protrusion_nm"] * NM, t["half_length_um"] * UM, t["half_width_um"] * UM, s_n)
@@ -116,7 +116,7 @@ def test_lowest_point_offset_exact(theta):
 
 
 def test_lowest_point_offset_small_angle_limit():
-    # SPEC.md 3: negligible at sub-milliradian pitch; small-angle limit dz = -a^2 theta^2 / (2 delta),
+    # docs/model.md, section "Nominal area": negligible at sub-milliradian pitch; small-angle limit dz = -a^2 theta^2 / (2 delta),
     # x = a^2 theta / delta, with relative corrections O(phi^2), phi = a theta / delta
     delta = 11 * NM
     for theta in (1e-6, 1e-5, 1e-4):

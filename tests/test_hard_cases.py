@@ -218,7 +218,7 @@ def test_very_large_damping_is_finite_physical_and_converged(base, record, zeta,
 def test_flying_fhm_falls_monotonically_with_damping(base, record):
     # More pad damping ties the slider to the disk under its pads (the damper transmits the disk's
     # velocity), so the flying FHM falls towards the rigid-following floor. Measured at 5 nm with the
-    # stiff-rear bearing (SPEC.md 7.3): FHM 10.52 (0.02), 7.32 (0.05), 3.65 (0.2), 3.168 (0.9),
+    # stiff-rear bearing (docs/model.md, section "Air bearing"): FHM 10.52 (0.02), 7.32 (0.05), 3.65 (0.2), 3.168 (0.9),
     # 3.201 % (0.99). Near critical damping the floor is flat and may rise slightly: the pad dampers
     # transmit the disk's velocity, and above sqrt(2) times a natural frequency a base-excited
     # oscillator transmits more with more damping (1.0 % more at 0.99; the pitch-first bearing fell 1.7 %).
@@ -300,7 +300,7 @@ def test_mccool_edge_statistics_tables_and_run(base, record, alpha):
         v = interface[name].values
         assert np.all(np.isfinite(v)) and np.all(v >= 0), name
         if name == "friction_stress":
-            # friction is carried by elastic and elastic-plastic summits only (SPEC.md 2): deep in
+            # friction is carried by elastic and elastic-plastic summits only (docs/model.md, section "ISBL interface"): deep in
             # the fully plastic range it falls again; it never exceeds the shear strength
             assert np.all(v <= float(interface["shear_strength"]) * (1 + 1e-12)), name
         elif name != "adhesion_pressure":

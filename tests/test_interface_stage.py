@@ -1,4 +1,4 @@
-"""Stage ``interface`` end to end through ``hdi interface`` (DESIGN.md: interface.nc, provenance,
+"""Stage ``interface`` end to end through ``hdi interface`` (the README: interface.nc, provenance,
 effects, atomic writes)."""
 
 from __future__ import annotations
@@ -36,7 +36,7 @@ def test_every_variable_has_units_and_long_name(paper_ds):
     for name in list(paper_ds.data_vars) + list(paper_ds.coords):
         assert paper_ds[name].attrs.get("units"), name
         assert paper_ds[name].attrs.get("long_name"), name
-    # DESIGN.md units of interface.nc
+    # the README units of interface.nc
     for name, units in [("separation", "nm"), ("contact_pressure", "MPa"), ("adhesion_pressure", "MPa"),
                         ("friction_stress", "MPa"), ("real_area_fraction", "1"), ("contact_fraction", "1")]:
         assert paper_ds[name].attrs["units"] == units
@@ -49,14 +49,14 @@ def test_paper_tables_present_and_grid(paper_ds):
         assert np.all(np.isfinite(paper_ds[name].values))
     d = paper_ds["separation"].values
     sigma_s = float(paper_ds["sigma_s"])
-    # SPEC.md 2 / the brief: tables span at least -5 sigma_s .. 30 nm, uniform at solver.table_step_nm
+    # docs/model.md, section "ISBL interface" / the brief: tables span at least -5 sigma_s .. 30 nm, uniform at solver.table_step_nm
     assert d[0] <= -5 * sigma_s
     assert d[-1] >= 30.0
     np.testing.assert_allclose(np.diff(d), SCHEMA["solver"]["table_step_nm"].default, rtol=1e-9)
 
 
 def test_paper_scalars(paper_ds):
-    # Hand values (tests/test_statistics.py) for eta = 13.3 um^-2 (SPEC.md 7.2): sigma_s = 0.431680 nm,
+    # Hand values (tests/test_statistics.py) for eta = 13.3 um^-2 (docs/model.md, section "Separation datum"): sigma_s = 0.431680 nm,
     # y_s = 0.690889 nm, E' = 94.1915 GPa, H = 1.68308 GPa, psi_GW = 0.52 [paper], psi_KE = 0.573730
     assert float(paper_ds["sigma"]) == pytest.approx(0.52)
     assert float(paper_ds["sigma_s"]) == pytest.approx(0.431680, rel=1e-6)

@@ -1,4 +1,4 @@
-"""The ISBL rough-surface interface (SPEC.md section 2): external check against the CML tables,
+"""The ISBL rough-surface interface (docs/model.md, section "ISBL interface"): external check against the CML tables,
 closed forms of the GW integrals, brute-force quadrature, convergence, and physical properties."""
 
 from __future__ import annotations
@@ -78,7 +78,7 @@ def test_zero_work_of_adhesion_gives_exactly_zero_adhesion():
 
 
 # --------------------------------------------------------------------------------------------
-# External check: the Berkeley CML flying-touchdown SBL tables (SPEC.md section 2)
+# External check: the Berkeley CML flying-touchdown SBL tables (docs/model.md, section "ISBL interface")
 # --------------------------------------------------------------------------------------------
 
 CML_D_NM = [0.0, 0.5, 1.0, 2.0]
@@ -88,7 +88,7 @@ CML_CONTACT_MPA = [596.8, 88.11, 5.691, 0.001282]
 
 @pytest.fixture(scope="module")
 def cml_tables():
-    # sigma = 0.5 nm, eta = 5e15 m^-2, R = 20 nm -> McCool sigma_s = 0.461335 nm (SPEC.md 1);
+    # sigma = 0.5 nm, eta = 5e15 m^-2, R = 20 nm -> McCool sigma_s = 0.461335 nm (docs/model.md, section "Asperity statistics");
     # dgamma = 0.106 J/m^2, t = 1.0 nm, eps = 0.3 nm; elastic only (huge H); E' = 148.6 GPa passed
     # as our E': the CML Hertz law used (4/3)*148.6 GPa where ours is (4/3) E' sqrt(R) w^1.5.
     sigma, eta, R = 0.5e-9, 5e15, 20e-9
@@ -107,13 +107,13 @@ def cml_tables():
 # quadrature error.
 @pytest.mark.parametrize("i", range(4))
 def test_cml_adhesion_pressure(cml_tables, i):
-    # Source: SPEC.md section 2, CML SBL tables: 67.33, 62.64, 46.76, 8.238 MPa at d = 0, 0.5, 1, 2 nm
+    # Source: docs/model.md, section "ISBL interface", CML SBL tables: 67.33, 62.64, 46.76, 8.238 MPa at d = 0, 0.5, 1, 2 nm
     assert cml_tables["adhesion_pressure"][i] / 1e6 == pytest.approx(CML_ADHESION_MPA[i], rel=0.02)
 
 
 @pytest.mark.parametrize("i", range(4))
 def test_cml_contact_pressure(cml_tables, i):
-    # Source: SPEC.md section 2, CML SBL tables: 596.8, 88.11, 5.691, 0.001282 MPa at d = 0, 0.5, 1, 2 nm
+    # Source: docs/model.md, section "ISBL interface", CML SBL tables: 596.8, 88.11, 5.691, 0.001282 MPa at d = 0, 0.5, 1, 2 nm
     assert cml_tables["contact_pressure"][i] / 1e6 == pytest.approx(CML_CONTACT_MPA[i], rel=0.02)
 
 

@@ -54,7 +54,7 @@ def test_linear_record_interpolation_variant(setup):
     scene, interface, record, model = setup
     project = sl.summarize(sl.run_model(model, 11e-9))
     linear = simulate_naive(scene, interface, record, K, 11.0, dmw_interpolation="linear")
-    # BV 0.34 % at 11 nm with the corrected paper scene (SPEC.md 7): linear interpolation of the record
+    # BV 0.34 % at 11 nm with the corrected paper scene (docs/model.md, section "Corrections"): linear interpolation of the record
     # moves it by a measured 3.4 % (0.0013 nm of peak-to-peak)
     assert linear["fhm_bv"] == pytest.approx(project["fhm_bv"], rel=0.05)
     assert linear["clearance"] == pytest.approx(project["clearance"], rel=0.01)

@@ -1,4 +1,4 @@
-"""The corrections of SPEC.md section 7 and the named model variants (issue 10, part A).
+"""The corrections of docs/model.md, section "Corrections" and the named model variants (issue 10, part A).
 
 * 7.2 the separation datum: d to the mean of summit heights, y_s below the mean of surface heights
   to which FH0 is measured; the paper's clearances 5.8 and 2.8 nm at 4 and 7 nm protrusion.
@@ -23,7 +23,7 @@ from pipeline.model import scene_inputs
 from pipeline.stages.simulate import model_attrs
 
 NM = 1e-9
-K = 0.978  # SPEC.md 7.1: the paper's 32.8 % two-sided
+K = 0.978  # docs/model.md, section "Contact criterion": the paper's 32.8 % two-sided
 NO_ADHESION = ["air_bearing", "pitch", "dmw", "contact", "friction"]
 
 
@@ -50,7 +50,7 @@ def paper(paper_config):
 
 def test_paper_summit_offset_and_hardness(paper):
     # sigma 0.52 nm, R 5 um, eta 13.3 um^-2: alpha = 2412.74 (sigma eta R)^2 = 2.885,
-    # y_s = 4 sigma / sqrt(pi alpha) = 0.691 nm (SPEC.md 7.2); H derived from psi = 0.52, not set
+    # y_s = 4 sigma / sqrt(pi alpha) = 0.691 nm (docs/model.md, section "Separation datum"); H derived from psi = 0.52, not set
     assert paper["materials"]["hardness_gpa"] is None
     interface = build_tables(paper, roughness_statistics(paper))
     assert float(interface["y_s"]) == pytest.approx(0.691, abs=1e-3)
@@ -61,7 +61,7 @@ def test_paper_summit_offset_and_hardness(paper):
 
 @pytest.mark.parametrize("delta, paper_clearance", [(4.0, 5.8), (7.0, 2.8)])
 def test_paper_clearances_follow_from_the_summit_datum(paper, delta, paper_clearance):
-    # SPEC.md 7.2: clearance = 11 - delta - (y_s + k sigma), y_s + k sigma = 0.691 + 0.509 = 1.200 nm.
+    # docs/model.md, section "Separation datum": clearance = 11 - delta - (y_s + k sigma), y_s + k sigma = 0.691 + 0.509 = 1.200 nm.
     # Without adhesion the slider flies at its nominal attitude (the DMW has zero mean; the rear law's
     # rectification of the 0.266 nm rms DMW lifts it by 0.006 nm): the mean clearance is the paper's
     # to its 0.1 nm rounding (0.05 nm; measured 5.8065 and 2.8065 nm). Adhesion pulls the TFC point down by a measured 0.04 and 0.13 nm
@@ -81,7 +81,7 @@ def test_paper_clearances_follow_from_the_summit_datum(paper, delta, paper_clear
 
 def test_flying_scene_datum_without_interface_tables(paper):
     """A flying-only scene gets y_s from McCool's relation of its explicit statistics, the same value the
-    interface stage writes (0.691 nm, SPEC.md 7.2); one with AFM scans needs interface.nc for it (the
+    interface stage writes (0.691 nm, docs/model.md, section "Separation datum"); one with AFM scans needs interface.nc for it (the
     scans' y_s), and the simulation declares that input."""
     from pathlib import Path
 

@@ -116,12 +116,12 @@ def test_single_file_combined_is_the_file(two_files: list[Path], tmp_path: Path)
 
 
 def test_explicit_statistics_use_mccool(tmp_path: Path) -> None:
-    # H = 1.683 GPa: the hardness psi = 0.52 gives with the corrected statistics (SPEC.md 7.2)
+    # H = 1.683 GPa: the hardness psi = 0.52 gives with the corrected statistics (docs/model.md, section "Separation datum")
     scene = scene_from_dict({"scene": {"name": "paper"}, "materials": {"hardness_gpa": 1.683}})
     ds = _open(rg.run(scene, tmp_path))
     assert list(ds["surface"].values) == ["explicit", "combined"]
     sp = ds.sel({"surface": "combined", "route": "spectral"})
-    sigma, eta, R = 0.52, 13.3e-6, 5000.0  # nm, nm^-2, nm (the paper scene's defaults, SPEC.md 7.2)
+    sigma, eta, R = 0.52, 13.3e-6, 5000.0  # nm, nm^-2, nm (the paper scene's defaults, docs/model.md, section "Separation datum")
     assert float(sp["sigma"]) == pytest.approx(sigma)
     assert float(sp["summit_radius"]) == pytest.approx(5.0)
     assert float(sp["summit_density"]) == pytest.approx(13.3)

@@ -1,7 +1,7 @@
 """Scene files: the paper scene, --set overrides, and one test per class of validation error.
 
 Every error must be a SceneError whose message names the file, the key and what was expected
-(DESIGN.md, "Scenes and effects": "validated on load with a clear error for every bad field").
+(the README, "Scenes and effects": "validated on load with a clear error for every bad field").
 """
 
 from __future__ import annotations
@@ -22,13 +22,13 @@ def test_paper_scene_loads(paper_scene, paper_config):
     assert s.path == paper_config
     assert s.name == "paper-2009"
     assert s.effects == frozenset(EFFECTS)
-    # Values of SPEC.md section 6 / configs/paper-2009.toml
+    # Values of docs/model.md, section "Parameters" / configs/paper-2009.toml
     assert s["air_bearing"]["flying_height_nm"] == 11.0
     assert s["tfc"]["half_length_um"] == 3.0 and s["tfc"]["half_width_um"] == 25.0
     assert s["roughness"]["sigma_nm"] == 0.52
     assert s["lubricant"]["thickness_nm"] == 0.75
     assert s["materials"]["plasticity_index"] == 0.52
-    assert s["materials"]["hardness_gpa"] is None          # derived from psi (SPEC.md 6)
+    assert s["materials"]["hardness_gpa"] is None          # derived from psi (docs/model.md, section "Parameters")
     assert s["contact"]["k"] is None                       # calibrated, not given
     assert s["sweep"]["protrusion_nm"] == {"start": 0.0, "stop": 15.0, "step": 0.2}
     # every schema key is filled in (defaults)
@@ -163,7 +163,7 @@ def test_missing_dmw_record(write_scene, tmp_path):
 
 
 def test_dmw_record_not_required_without_dmw_effect(write_scene):
-    # DESIGN.md: a disabled effect's inputs are not required
+    # the README: a disabled effect's inputs are not required
     path = write_scene('[scene]\neffects = ["air_bearing"]\n[dmw]\nsource = "missing.csv"\n')
     assert load_scene(path).effects == {"air_bearing"}
 

@@ -80,9 +80,9 @@ def case_scene(base, name, paper_hardness):
                                         "summit_density_per_um2": r["summit_density_per_um2"] / 1e4},
                              solver={"table_step_nm": 1.0, "table_max_nm": 300.0})
         # y_s scales with sigma (69 nm here): FH0 is raised by it so that the nominal attitude at 11 nm
-        # protrusion keeps d = 0 (SPEC.md 7.2). The sliding mode about d = k sigma this case is about
+        # protrusion keeps d = 0 (docs/model.md, section "Separation datum"). The sliding mode about d = k sigma this case is about
         # needs a contact force at k sigma above the bearing's pull: with the stiff-rear bearing
-        # (SPEC.md 7.3) this surface sits in steady contact 10 nm below k sigma (2 switches), so the
+        # (docs/model.md, section "Air bearing") this surface sits in steady contact 10 nm below k sigma (2 switches), so the
         # case keeps the softer pitch-first root (measured: 27027 switches at the 20 ns dwell).
         fh0 = base["air_bearing"]["flying_height_nm"] + roughness_statistics(rough)["y_s"] / NM
         return rough.replace(air_bearing={"flying_height_nm": fh0, "stiffness_root": "pitch-first"})

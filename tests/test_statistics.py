@@ -1,4 +1,4 @@
-"""Asperity statistics (McCool / Nayak, SPEC.md section 1) and the plasticity index."""
+"""Asperity statistics (McCool / Nayak, docs/model.md, section "Asperity statistics") and the plasticity index."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ NM = 1e-9
 
 def test_alpha_constant_follows_from_the_moment_relations():
     # alpha = m0 m4 / m2^2 with eta = m4/(6 pi sqrt3 m2), R = 0.375 sqrt(pi/m4)
-    # => alpha = (sigma eta R)^2 * 108 pi / 0.375^2 = 2412.743 (sigma eta R)^2 (SPEC.md 1)
+    # => alpha = (sigma eta R)^2 * 108 pi / 0.375^2 = 2412.743 (sigma eta R)^2 (docs/model.md, section "Asperity statistics")
     assert 108 * np.pi / 0.375**2 == pytest.approx(2412.74, rel=2e-6)
     assert st.bandwidth_alpha(1.0, 1.0, 1.0) == 2412.74
 
@@ -31,7 +31,7 @@ def test_moments_round_trip():
 
 
 def test_cml_summit_statistics():
-    # SPEC.md section 2 surface: sigma = 0.5 nm, eta = 5e15 m^-2, R = 20 nm. Hand computation:
+    # docs/model.md, section "ISBL interface" surface: sigma = 0.5 nm, eta = 5e15 m^-2, R = 20 nm. Hand computation:
     # sigma eta R = 0.05, alpha = 2412.74 * 0.0025 = 6.03185;
     # sigma_s^2 = 0.25 nm^2 - 3.717e-4 / (1e8 m^-1)^2 = 0.25 - 0.03717 = 0.21283 nm^2 -> 0.461335 nm;
     # y_s = 4 * 0.5 / sqrt(pi * 6.03185) = 0.459441 nm.
@@ -42,7 +42,7 @@ def test_cml_summit_statistics():
 
 
 def test_paper_summit_statistics():
-    # SPEC.md section 6: sigma = 0.52 nm, R = 5 um, eta = 10 um^-2. Hand computation:
+    # docs/model.md, section "Parameters": sigma = 0.52 nm, R = 5 um, eta = 10 um^-2. Hand computation:
     # sigma eta R = 0.026, alpha = 2412.74 * 0.026^2 = 1.631012;
     # sigma_s^2 = 0.2704 - 3.717e-4/(5e7)^2 [m^2] = 0.2704 - 0.14868 nm^2 = 0.12172 nm^2 -> 0.348884 nm;
     # y_s = 4 * 0.52 / sqrt(pi * 1.631012) = 0.918882 nm.
@@ -54,7 +54,7 @@ def test_paper_summit_statistics():
 
 @pytest.mark.parametrize("alpha", [1.0, 1.631, 6.0, 50.0])
 def test_summit_sigma_equals_mccool_alpha_form(alpha):
-    # McCool 1986: sigma_s^2 = (1 - 0.8968/alpha) sigma^2; the SPEC's 3.717e-4 is 0.8968/2412.74
+    # McCool 1986: sigma_s^2 = (1 - 0.8968/alpha) sigma^2; the 3.717e-4 of docs/model.md, section "Asperity statistics" is 0.8968/2412.74
     # rounded to 4 digits (3.71693e-4), so the two forms agree to ~1e-4 of the subtracted term.
     sigma, R = 0.5e-9, 1e-6
     eta = np.sqrt(alpha / 2412.74) / (sigma * R)
@@ -70,7 +70,7 @@ def test_summit_sigma_rejects_small_bandwidth():
 
 
 def test_composite_modulus():
-    # 1/E' = 0.91/150 + 0.91/200 GPa^-1 -> E' = 94.1915 GPa (SPEC.md 6: "E' = 94 GPa")
+    # 1/E' = 0.91/150 + 0.91/200 GPa^-1 -> E' = 94.1915 GPa (docs/model.md, section "Parameters": "E' = 94 GPa")
     assert st.composite_modulus(150e9, 200e9, 0.3) / 1e9 == pytest.approx(94.1915, rel=1e-6)
     # equal bodies: E' = E / (2 (1 - nu^2))
     assert st.composite_modulus(100.0, 100.0, 0.25) == pytest.approx(100 / (2 * (1 - 0.0625)), rel=1e-15)
@@ -79,7 +79,7 @@ def test_composite_modulus():
 
 
 def test_ke_hardness_factor():
-    # K = 0.454 + 0.41 nu (SPEC.md 1)
+    # K = 0.454 + 0.41 nu (docs/model.md, section "Asperity statistics")
     assert st.ke_hardness_factor(0.3) == pytest.approx(0.577, rel=1e-15)
 
 
@@ -95,10 +95,10 @@ def test_plasticity_index_forms_hand_values():
 def test_plasticity_index_paper_scene(paper_scene):
     stats = roughness_statistics(paper_scene)
     p = interface_parameters(paper_scene, stats)
-    # SPEC.md section 1: the paper reports psi = 0.52 [paper]; H is set from it (SPEC.md 6)
+    # docs/model.md, section "Asperity statistics": the paper reports psi = 0.52 [paper]; H is set from it (docs/model.md, section "Parameters")
     assert st.plasticity_index_gw(p.E, p.H, p.sigma_s, p.R) == pytest.approx(0.52, rel=1e-12)
-    # SPEC.md 7.2 (eta 13.3 um^-2): hand computation 94.1915/0.52 * sqrt(0.431680 nm / 5 um) = 1.68308 GPa
-    # (the first reconstruction's eta 10 um^-2 gave SPEC.md 6's "about 1.5 GPa", 1.51309)
+    # docs/model.md, section "Separation datum" (eta 13.3 um^-2): hand computation 94.1915/0.52 * sqrt(0.431680 nm / 5 um) = 1.68308 GPa
+    # (the first reconstruction's eta 10 um^-2 gave docs/model.md, section "Parameters"'s "about 1.5 GPa", 1.51309)
     assert p.H / 1e9 == pytest.approx(1.68308, rel=1e-5)
     # The CEB/KE form for the same surface: 0.52 * 2/(pi K), K = 0.577 -> 0.573730
     psi_ke = st.plasticity_index_ke(p.E, p.H, p.sigma_s, p.R, p.nu)
@@ -116,7 +116,7 @@ def test_explicit_hardness_overrides_plasticity_index(paper_config):
 
 
 def test_contact_probabilities_are_two_sided_first():
-    # SPEC.md 7.1: the paper's "3 sigma = 0.3 %" is 2 Q(3) = 0.27 %; its 32.8 % is k = 0.978
+    # docs/model.md, section "Contact criterion": the paper's "3 sigma = 0.3 %" is 2 Q(3) = 0.27 %; its 32.8 % is k = 0.978
     two, one = st.contact_probabilities(3.0)
     assert two == pytest.approx(0.0026998, rel=1e-4) and one == pytest.approx(0.0013499, rel=1e-4)
     assert st.k_from_probability(0.328) == pytest.approx(0.978, abs=5e-4)

@@ -1,6 +1,6 @@
 """Calibration of the contact-criterion constant k against the measured touchdown (the calibrate stage's analysis).
 
-The paper's procedure (SPEC.md section 4): contact (``d < k sigma`` at any time of the steady
+The paper's procedure (docs/model.md, section "Slider dynamics"): contact (``d < k sigma`` at any time of the steady
 window) must happen at the measured touchdown protrusion (9.8 nm) and not at the previous
 actuation step (9.6 nm). For a protrusion ``delta`` let ``k*(delta)`` be the smallest k that gives
 contact (contact for every ``k > k*``); the admissible set is the interval
@@ -27,7 +27,7 @@ interval is empty within ``touchdown.k_range`` (default [-3, 3], contact probabi
   (the method before the exact one; kept as the reference it is tested against).
 
 The contact probabilities of a k are ``P(|z| > k sigma) = 2 Q(|k|)`` (two-sided, the paper's
-convention: SPEC.md 7.1) and ``P(z > k sigma) = Q(k)`` (one-sided) for Gaussian heights of rms
+convention: docs/model.md, section "Contact criterion") and ``P(z > k sigma) = Q(k)`` (one-sided) for Gaussian heights of rms
 ``sigma`` (the sigma of the criterion); the paper's calibrated k corresponds to 32.8 % two-sided,
 k = 0.978.
 

@@ -225,7 +225,7 @@ def _grid(lo: float, hi: float, step: float, open_low: bool = False) -> tuple[fl
 
 def targets(scene: Any) -> list[Target]:
     """The targets of ``[identify]`` that ``identify.targets`` selects, in the order of
-    :data:`pipeline.config.scene.TARGETS` (SPEC.md section 7; the paper).
+    :data:`pipeline.config.scene.TARGETS` (docs/model.md, section "Corrections"; the paper).
 
     * ``touchdown``: contact at ``touchdown.onset_nm``, none at ``touchdown.previous_nm`` (exact
       minimum clearance of the steady window, which is continuous in the parameters where the

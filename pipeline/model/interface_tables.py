@@ -57,7 +57,7 @@ def interface_parameters(scene: Any, stats: dict[str, float]) -> isbl.Interface:
     """The :class:`~pipeline.physics.isbl.Interface` of a scene and its roughness statistics.
 
     ``E'`` from the two moduli (or ``composite_modulus_gpa``); ``H`` from ``hardness_gpa`` or, when
-    absent, from the GW plasticity index (SPEC.md section 6: ``H`` is set so that psi(GW) = 0.52).
+    absent, from the GW plasticity index (docs/model.md, section "Parameters": ``H`` is set so that psi(GW) = 0.52).
     """
     si = to_si(scene)
     m, lub = si.materials, si.lubricant

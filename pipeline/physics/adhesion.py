@@ -7,7 +7,7 @@ References
 .. [Stanley90] H. M. Stanley, I. Etsion, D. B. Bogy, "Adhesion of contacting rough surfaces in the
    presence of sub-boundary lubrication", J. Tribol. 112 (1990) 98-104 (the SBL model).
 .. [CML] UC Berkeley Computer Mechanics Laboratory, flying-touchdown (ISBL) code documentation: the
-   sub-boundary-lubrication adhesion tables used as the external check of SPEC.md section 2.
+   sub-boundary-lubrication adhesion tables used as the external check of docs/model.md, section "Adhesion".
 """
 
 from __future__ import annotations

@@ -85,7 +85,7 @@ def contact_load(w: np.ndarray, R: float, E: float, H: float, nu: float) -> np.n
     """Load on one summit [N] versus interference ``w`` [m] (0 for ``w <= 0``).
 
     Hertz ``(4/3) E' sqrt(R) w^1.5`` for ``x = w/w_c <= 1``; ``1.03 P_c x^1.425`` for ``1 < x <= 6``;
-    ``1.40 P_c x^1.263`` for ``6 < x <= 110``; fully plastic ``H 2 pi R w`` beyond [KE02, SPEC.md 2].
+    ``1.40 P_c x^1.263`` for ``6 < x <= 110``; fully plastic ``H 2 pi R w`` beyond [KE02, docs/model.md, section "Single asperity"].
     The fits jump by a few per cent at ``x = 1`` and ``x = 110`` (as published).
     """
     w = np.asarray(w, dtype=float)

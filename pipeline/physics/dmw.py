@@ -4,7 +4,7 @@
 The DMW is the disk's vertical displacement under the slider versus time, ``w(t)`` [nm]. The paper
 measured it with a laser Doppler vibrometer (LDV) at mid-diameter, 5425 rpm, high-passed at 10 kHz,
 content up to 500 kHz, 4 MS/s, averaged over 100 revolutions, velocity integrated to displacement
-[VLP09]_ (SPEC.md section 5).
+[VLP09]_ (docs/model.md, section "DMW").
 
 Conventions
 -----------

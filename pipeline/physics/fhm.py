@@ -1,4 +1,4 @@
-"""Flying-height modulation (FHM) and bouncing vibration (BV) measures (SPEC.md section 4).
+"""Flying-height modulation (FHM) and bouncing vibration (BV) measures (docs/model.md, section "Slider dynamics").
 
 FHM (flying) / BV (in contact) is the spread of the separation ``d`` over the steady window divided by
 the nominal flying height ``FH0``, in %. The paper uses the peak-to-peak spread; 3 x the standard

@@ -1,12 +1,12 @@
 """The single-asperity friction law.
 
 The paper computes friction from the asperity stresses, with no assumed coefficient of friction.
-Our documented default (SPEC.md section 2) is sliding at the shear strength of the softer body:
+Our documented default (docs/model.md, section "Friction") is sliding at the shear strength of the softer body:
 ``Q = tau_y A`` on every elastic and elastic-plastic summit, with the von Mises shear yield stress
 ``tau_y = Y / sqrt(3)`` and ``H = 2.8 Y`` (Tabor), i.e. ``tau_y = H / (2.8 sqrt(3))``.
-Fully plastic summits carry no friction in the ISBL population table (SPEC.md section 2).
+Fully plastic summits carry no friction in the ISBL population table (docs/model.md, section "Friction").
 
-SPEC.md 7.6: the paper's mu ~ 1.2 at ~400 MPa implies ~480 MPa of shear stress, more than the
+docs/model.md, section "Friction": the paper's mu ~ 1.2 at ~400 MPa implies ~480 MPa of shear stress, more than the
 ``tau_y`` of a 1.7 GPa hardness, so the law is a named choice (:data:`FRICTION_LAWS`,
 ``contact.friction_law``): ``"shear-strength"`` as above, or ``"coefficient"``, a constant
 coefficient ``Q = mu P`` (Amontons) with ``contact.friction_coefficient``. Both act through the
@@ -64,8 +64,8 @@ def _coefficient_table(contact_pressure: np.ndarray, shear_strength_stress: np.n
 #: table [Pa], the shear-strength friction-stress table of the ISBL integrals [Pa] and ``mu`` [1],
 #: returning the friction stress per nominal area [Pa] versus separation.
 FRICTION_LAWS = {
-    "shear-strength": _shear_strength_table,   # tau = eta int tau_y A phi dz (SPEC.md 2)
-    "coefficient": _coefficient_table,         # tau = mu p_c (SPEC.md 7.6)
+    "shear-strength": _shear_strength_table,   # tau = eta int tau_y A phi dz (docs/model.md, section "Friction")
+    "coefficient": _coefficient_table,         # tau = mu p_c (docs/model.md, section "Friction")
 }
 
 

@@ -1,7 +1,7 @@
 """Geometry of the TFC protrusion: an ellipsoidal bulge and its nominal contact area.
 
 The bulge is half an ellipsoid with semi-axes ``a`` (sliding direction), ``b`` (across the track)
-and height ``delta`` (the protrusion) (SPEC.md section 3, [paper]). The nominal contact area is its
+and height ``delta`` (the protrusion) (docs/model.md, section "Nominal area", [paper]). The nominal contact area is its
 section by a plane a depth ``s_n`` above the lowest point.
 """
 
@@ -21,7 +21,7 @@ def nominal_area(delta: np.ndarray, a: float, b: float, s_n: float) -> np.ndarra
     """Nominal contact area ``A_n = pi a b (2u - u^2)``, ``u = min(s_n/delta, 1)`` [m^2].
 
     Section of the ellipsoid ``(x/a)^2 + (y/b)^2 + ((h - delta)/delta)^2 = 1`` at height ``s_n``
-    above its apex (SPEC.md section 3). The paper's 62 um^2 at ``delta = 11 nm`` follows for
+    above its apex (docs/model.md, section "Nominal area"). The paper's 62 um^2 at ``delta = 11 nm`` follows for
     ``s_n = 1.56 nm``. For ``u -> 0`` it tends to the paraboloid value ``2 pi a b s_n / delta``.
 
     Parameters
@@ -39,7 +39,7 @@ def effective_radius(delta: np.ndarray, a: float, s_n: float) -> np.ndarray:
 
     The half-chord in the sliding direction is ``c = a sqrt(2u - u^2)`` at height
     ``h = min(s_n, delta)``; the arc through ``(0, 0)`` and ``(+-c, h)`` has radius
-    ``(c^2 + h^2) / (2h)`` (SPEC.md section 3). As ``u -> 0`` it tends to the apex radius of
+    ``(c^2 + h^2) / (2h)`` (docs/model.md, section "Nominal area"). As ``u -> 0`` it tends to the apex radius of
     curvature of the ellipse, ``a^2 / delta``. Infinite for ``delta = 0`` (a flat slider).
 
     Parameters
@@ -62,7 +62,7 @@ def lowest_point_offset(delta: float, a: float, theta: float) -> tuple[float, fl
     Pitching the slider by ``theta`` (trailing edge down positive) moves the lowest point of the
     ellipse ``x = a sin(phi)``, ``h = delta (1 - cos(phi))`` to where its slope equals ``theta``:
     ``tan(phi) = a theta / delta``. Exact for the ellipse; for sub-milliradian pitch the height
-    change is ``~ -a^2 theta^2 / (2 delta)``, picometres for the paper's bulge (SPEC.md section 3).
+    change is ``~ -a^2 theta^2 / (2 delta)``, picometres for the paper's bulge (docs/model.md, section "Nominal area").
 
     Parameters
     ----------

@@ -1,7 +1,7 @@
 """The ISBL rough-surface interface: forces per nominal area versus separation.
 
 Greenwood-Williamson summation of the single-summit laws over a Gaussian distribution of summit
-heights, with the populations of SPEC.md section 2 (improved sub-boundary lubrication, ISBL):
+heights, with the populations of docs/model.md, section "ISBL interface" (improved sub-boundary lubrication, ISBL):
 
 ====================  ======================  ============  ====================  ========
 population            summit height z         contact       adhesion              friction
@@ -127,7 +127,7 @@ def _gauss(z: np.ndarray, s: float) -> np.ndarray:
 
 def isbl_tables(d: np.ndarray, p: Interface, *, quantities=QUANTITIES, nodes: int = 24,
                 panels: int = 4) -> dict[str, np.ndarray]:
-    """ISBL pressures and fractions versus separation ``d`` [SPEC.md 2; GW66; KE02; Stanley90].
+    """ISBL pressures and fractions versus separation ``d`` [docs/model.md, section "ISBL interface"; GW66; KE02; Stanley90].
 
     Parameters
     ----------

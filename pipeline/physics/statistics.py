@@ -106,7 +106,7 @@ def summit_offset(sigma: float, eta: float, R: float) -> float:
 def composite_modulus(E1: float, E2: float, nu1: float, nu2: float | None = None) -> float:
     """Composite (Hertz) modulus ``1/E' = (1-nu1^2)/E1 + (1-nu2^2)/E2`` [any pressure unit].
 
-    SPEC.md section 1 (Johnson, Contact Mechanics, 1985, eq. 4.22).
+    docs/model.md, section "Asperity statistics" (Johnson, Contact Mechanics, 1985, eq. 4.22).
     """
     nu2 = nu1 if nu2 is None else nu2
     return 1.0 / ((1 - nu1**2) / E1 + (1 - nu2**2) / E2)
@@ -147,7 +147,7 @@ def contact_probabilities(k: float) -> tuple[float, float]:
     """Two-sided ``P(|z| > k sigma) = 2 Q(|k|)`` and one-sided ``P(z > k sigma) = Q(k)`` [1].
 
     ``z`` Gaussian with rms ``sigma``, ``Q`` the standard normal tail. The two-sided value comes
-    first: it is the paper's convention (SPEC.md 7.1: its "3 sigma = 0.3 %" is ``2 Q(3) = 0.27 %``,
+    first: it is the paper's convention (docs/model.md, section "Contact criterion": its "3 sigma = 0.3 %" is ``2 Q(3) = 0.27 %``,
     so its 32.8 % means ``k = 0.978``).
     """
     # Q(k) = erfc(k / sqrt 2) / 2 (= scipy.stats.norm.sf, without its ~1 s import on every run)
@@ -157,7 +157,7 @@ def contact_probabilities(k: float) -> tuple[float, float]:
 def k_from_probability(probability: float) -> float:
     """Criterion constant ``k >= 0`` [1] whose two-sided contact probability ``2 Q(k)`` is ``probability``.
 
-    The inverse of the first value of :func:`contact_probabilities` (SPEC.md 7.1); 0.328 gives 0.978.
+    The inverse of the first value of :func:`contact_probabilities` (docs/model.md, section "Contact criterion"); 0.328 gives 0.978.
     """
     if not 0.0 < probability < 1.0:
         raise ValueError(f"contact probability {probability}: expected a number in (0, 1)")
@@ -168,7 +168,7 @@ def k_from_probability(probability: float) -> float:
 def explicit_statistics(sigma_nm: float, summit_radius_um: float, summit_density_per_um2: float) -> dict[str, float]:
     """Summit statistics [SI] of a surface given by ``sigma`` [nm], ``R`` [um] and ``eta`` [um^-2] (the
     scene's ``[roughness]`` keys): ``sigma``, ``sigma_s``, ``y_s``, ``R`` [m], ``eta`` [m^-2], ``alpha`` [1]
-    by McCool's relations (:func:`summit_sigma`, :func:`summit_offset`, :func:`bandwidth_alpha`; SPEC.md 1)."""
+    by McCool's relations (:func:`summit_sigma`, :func:`summit_offset`, :func:`bandwidth_alpha`; docs/model.md, section "Asperity statistics")."""
     sigma, R, eta = sigma_nm * NM, summit_radius_um * UM, summit_density_per_um2 / UM2
     return {"sigma": sigma, "sigma_s": summit_sigma(sigma, eta, R), "y_s": summit_offset(sigma, eta, R),
             "R": R, "eta": eta, "alpha": bandwidth_alpha(sigma, eta, R)}

@@ -1,4 +1,4 @@
-"""Asperity statistics of measured height maps: AFM reading, detrending, and the two routes of SPEC.md 1.
+"""Asperity statistics of measured height maps: AFM reading, detrending, and the two routes of docs/model.md, section "Asperity statistics".
 
 Everything here works in nanometres: heights and lateral sizes [nm], slopes [1], curvatures [nm^-1],
 summit densities [nm^-2]. The stage (``pipeline.stages.roughness``) converts to the dataset's units.
@@ -15,7 +15,7 @@ The two agree only for a Gaussian, finely sampled, noise-free surface: the summi
 sampling interval and on noise, the spectral route on the high-frequency cut-off of ``m2`` and ``m4``.
 Both results are reported, with the pixel size.
 
-Surfaces combine (disk + TFC against a smooth flat, SPEC.md 1) by adding spectral moments, hence
+Surfaces combine (disk + TFC against a smooth flat, docs/model.md, section "Asperity statistics") by adding spectral moments, hence
 ``sigma^2 = sigma_1^2 + sigma_2^2``; :func:`combine` does that.
 
 References
@@ -542,7 +542,7 @@ def from_statistics(sigma: float, eta: float, R: float, label: str = "explicit")
 
 
 def combine_moments(moments: Iterable[tuple[float, float, float]]) -> tuple[float, float, float]:
-    """Moments of the sum of independent surfaces: each moment adds (SPEC.md 1) [McCool86].
+    """Moments of the sum of independent surfaces: each moment adds (docs/model.md, section "Asperity statistics") [McCool86].
 
     Parameters
     ----------
@@ -553,7 +553,7 @@ def combine_moments(moments: Iterable[tuple[float, float, float]]) -> tuple[floa
 
 
 def combine(summaries: Sequence[SurfaceSummary], label: str = "combined") -> SurfaceSummary:
-    """The combined rough surface of several surfaces against a smooth flat (SPEC.md 1).
+    """The combined rough surface of several surfaces against a smooth flat (docs/model.md, section "Asperity statistics").
 
     Spectral route: statistics of the summed moments (so ``sigma^2 = sum sigma_i^2``). Summit route: the
     surfaces live on different grids, so no combined height map exists; a single surface is copied,

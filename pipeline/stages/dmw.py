@@ -1,6 +1,6 @@
 """Stage ``dmw``: the disk's dynamic microwaviness ``w(t)`` [nm], synthesised or measured.
 
-Reads ``[dmw]`` of the scene (SPEC.md section 5) and writes ``dmw.nc``:
+Reads ``[dmw]`` of the scene (docs/model.md, section "DMW") and writes ``dmw.nc``:
 
 =================  ===============  =========  ====================================================
 name               dims             units      meaning

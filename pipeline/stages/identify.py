@@ -6,7 +6,7 @@ FHM 12.5 % at 4-7 nm and ~9 % at 9 nm, BV > 20 % after touchdown, and the light-
 11 nm), each candidate evaluated as a small sweep at the protrusions the targets need
 (:mod:`pipeline.analyses.study`) on the fan-out (:mod:`pipeline.fanout`; threads of this process by
 default, ``--scheduler processes`` or a dask.distributed address for more). The objective is the
-sum of squared residuals, each normalised by its tolerance (SPEC.md section 7).
+sum of squared residuals, each normalised by its tolerance (docs/model.md, section "Corrections").
 
 Method
 ------

@@ -8,7 +8,7 @@ Output layout (``out/roughness.nc``)
 ------------------------------------
 coordinates
     ``surface`` : one label per input file (its stem, made unique), then always ``"combined"``, the
-    surface the interface stage uses (SPEC.md 1: moments add). For explicit statistics the labels are
+    surface the interface stage uses (docs/model.md, section "Asperity statistics": moments add). For explicit statistics the labels are
     ``"explicit"`` and ``"combined"`` (identical rows).
     ``route`` : ``"spectral"`` (McCool/Nayak from profile moments), ``"summits"`` (direct count); the
     scene key ``roughness.route`` picks one of them for the interface model. (Formerly ``method``, which
