@@ -25,7 +25,8 @@ SI_NAMES = {("dmw", "sample_rate_hz"): "record_sample_rate"}
 
 
 class Group(Mapping):
-    """One section in SI units: read-only, by attribute (``group.flying_height``) or item."""
+    """One section in SI units (or, with an empty name, the scene as a group of sections): read-only,
+    by attribute (``group.flying_height``) or item."""
 
     __slots__ = ("_section", "_values")
 
@@ -37,11 +38,13 @@ class Group(Mapping):
         try:
             return self._values[name]
         except KeyError:
+            if not self._section:  # the scene itself: a group of sections
+                raise AttributeError(f"the scene has no section [{name}]") from None
             raise AttributeError(f"[{self._section}] has no key {name!r} in SI form; "
                                  f"it has {sorted(self._values)}") from None
 
     def __setattr__(self, name: str, value: Any) -> None:
-        raise AttributeError(f"[{self._section}] in SI form is read-only")
+        raise AttributeError(f"[{self._section or 'scene'}] in SI form is read-only")
 
     def __getitem__(self, name: str) -> Any:
         return self._values[name]
@@ -79,28 +82,6 @@ def section_si(section: str, values: Mapping[str, Any]) -> Group:
     return Group(section, out)
 
 
-class SIScene(Mapping):
-    """Every section of a scene in SI units, by attribute (``si.tfc.protrusion``) or item."""
-
-    def __init__(self, config: Mapping[str, Mapping[str, Any]]):
-        self._groups = {s: section_si(s, keys) for s, keys in config.items()}
-
-    def __getattr__(self, name: str) -> Group:
-        try:
-            return self.__dict__["_groups"][name]
-        except KeyError:
-            raise AttributeError(f"the scene has no section [{name}]") from None
-
-    def __getitem__(self, name: str) -> Group:
-        return self._groups[name]
-
-    def __iter__(self):
-        return iter(self._groups)
-
-    def __len__(self) -> int:
-        return len(self._groups)
-
-
-def to_si(scene: Any) -> SIScene:
-    """The scene's sections as frozen groups in SI units (module docstring)."""
-    return SIScene(scene.config)
+def to_si(scene: Any) -> Group:
+    """The scene's sections as frozen groups in SI units (module docstring): ``to_si(scene).tfc.protrusion``."""
+    return Group("", {s: section_si(s, keys) for s, keys in scene.config.items()})
