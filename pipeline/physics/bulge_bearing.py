@@ -172,15 +172,16 @@ class ReynoldsGrid:
     ----------
     cells_per_a : cells per footprint semi-axis ``a`` along the sliding direction
     cells_per_b : cells per semi-axis ``b`` across it (half domain: the problem is symmetric in y)
-    margin : width of the pad ring around the footprint in the domain, as a fraction of the semi-axes
-        (the pressure is ``p_pad`` on the outer boundary)
+    margin_a, margin_b : width of the pad ring around the footprint in the domain along and across the
+        sliding direction, as fractions of ``a`` and ``b`` (the pressure is ``p_pad`` on the outer boundary)
     tol : Newton stops when the largest pressure update is below ``tol`` (in units of ``p_pad``)
     max_iter : Newton iterations before giving up
     """
 
     cells_per_a: int = 32
     cells_per_b: int = 16
-    margin: float = 0.25
+    margin_a: float = 1.0
+    margin_b: float = 0.25
     tol: float = 1e-10
     max_iter: int = 40
 
@@ -242,17 +243,18 @@ def _face_flux(PL, PR, H, Lam, Kn0, kappa, dx, slip):
 
 
 class _Mesh:
-    """Cell-centred grid on ``[-Lx, Lx] x [0, Ly]`` (scaled by ``a``, ``b``), ``Lx = Ly = 1 + margin``;
+    """Cell-centred grid on ``[-Lx, Lx] x [0, Ly]`` (scaled by ``a``, ``b``), ``Lx = 1 + margin_a``,
+    ``Ly = 1 + margin_b``;
     ``P = 1`` on ``X = +-Lx`` and ``Y = Ly``, symmetry at ``Y = 0``."""
 
     def __init__(self, grid: ReynoldsGrid):
-        L = 1.0 + grid.margin
-        self.nx = 2 * int(np.ceil(L * grid.cells_per_a))
-        self.ny = int(np.ceil(L * grid.cells_per_b))
-        self.dX, self.dY = 2 * L / self.nx, L / self.ny
-        self.Xc = -L + (np.arange(self.nx) + 0.5) * self.dX
+        Lx, Ly = 1.0 + grid.margin_a, 1.0 + grid.margin_b
+        self.nx = 2 * int(np.ceil(Lx * grid.cells_per_a))
+        self.ny = int(np.ceil(Ly * grid.cells_per_b))
+        self.dX, self.dY = 2 * Lx / self.nx, Ly / self.ny
+        self.Xc = -Lx + (np.arange(self.nx) + 0.5) * self.dX
         self.Yc = (np.arange(self.ny) + 0.5) * self.dY
-        self.Xf = -L + np.arange(self.nx + 1) * self.dX
+        self.Xf = -Lx + np.arange(self.nx + 1) * self.dX
         self.Yf = np.arange(self.ny + 1) * self.dY
         # u = X^2 + Y^2 at the X faces (nx+1, ny), the Y faces (nx, ny+1) and the cell centres (nx, ny)
         self.u_x = self.Xf[:, None] ** 2 + self.Yc[None, :] ** 2
@@ -285,10 +287,12 @@ def reynolds_solve(g, delta, *, p_pad: float, a: float, b: float, speed: float, 
     Returns
     -------
     dict with ``lift`` [N] (shape of the broadcast inputs), ``bearing_number`` and ``knudsen_pad`` [1]
-    (``Lambda``, ``Kn0`` of each case), ``iterations``, ``inflow``, ``outflow``, ``side_flow``,
-    ``net_flow`` (scaled mass flows through the upstream, downstream and lateral boundaries of the full
-    domain, in units of ``p_pad h_pad U b / 2``... scaled: the pad's Couette flow over the width is
-    ``Lambda * 2 Ly``), and with ``fields`` ``P``, ``X``, ``Y``.
+    (``Lambda``, ``Kn0`` of each case), ``iterations`` (Newton), and the mass flows through the upstream,
+    downstream and lateral boundaries of the full domain ``inflow``, ``outflow``, ``side_flow`` and
+    ``outflow + side_flow - inflow`` as ``net_flow`` (scaled [1]: the flux ``Lambda P H - C grad P``
+    integrated over ``Y`` or ``X``; the pad's Couette inflow over the width ``2 (1 + margin_b)`` is
+    ``Lambda 2 (1 + margin_b)``; one unit is ``p_pad h_pad^3 p_pad b / (12 mu a)`` in ``p`` times volume
+    per time, i.e. a mass flow after division by ``R T``); with ``fields`` also ``P``, ``X``, ``Y``.
     """
     if slip not in SLIP_MODELS:
         raise ValueError(f"slip model {slip!r} unknown; expected one of {list(SLIP_MODELS)}")
