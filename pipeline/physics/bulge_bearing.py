@@ -174,15 +174,16 @@ class ReynoldsGrid:
     cells_per_b : cells per semi-axis ``b`` across it (half domain: the problem is symmetric in y)
     margin_a, margin_b : width of the pad ring around the footprint in the domain along and across the
         sliding direction, as fractions of ``a`` and ``b`` (the pressure is ``p_pad`` on the outer boundary)
-    tol : Newton stops when the largest pressure update is below ``tol`` (in units of ``p_pad``)
+    tol : Newton stops when the largest pressure update is below ``tol`` (in units of ``p_pad``; the
+        convergence is quadratic, so the pressure is then exact to ~tol^2)
     max_iter : Newton iterations before giving up
     """
 
     cells_per_a: int = 32
-    cells_per_b: int = 16
+    cells_per_b: int = 12
     margin_a: float = 1.0
     margin_b: float = 0.25
-    tol: float = 1e-10
+    tol: float = 1e-7
     max_iter: int = 40
 
 
