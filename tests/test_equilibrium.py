@@ -58,7 +58,8 @@ def test_past_the_fold_there_is_no_flying_equilibrium_and_the_contact_branch_is_
     # the flying branch must stay above the contact criterion d >= d_c; the contact start is half way into
     # the contact spring (the test's adhesion law is singular at d = -eps, unlike the ISBL's)
     st = eq.static_equilibrium(with_contact, mu, scale=[1 * NM], mu_tol=1e-4 * NM,
-                               accept=lambda y: D - mu + y[0] >= DC, contact_start=np.array([DC / 2 - (D - mu)]))
+                               accept=lambda y: D - mu + y[0] >= DC, contact_start=np.array([DC / 2 - (D - mu)]),
+                               contact_max_step=[0.02 * NM])
     assert st.kind == "contact"
     d = brentq(lambda d: -K * (d - (D - mu)) - A / (d + EPS) ** 2 + KC * (DC - d), DC / 2, DC, xtol=1e-24,
                rtol=1e-14)

@@ -212,14 +212,17 @@ class StaticState:
 
 def static_equilibrium(forces: Forces, mu: float, *, mu_start: float = 0.0, y_start=None, scale=None,
                        accept: Callable[[np.ndarray], bool] | None = None, contact_start=None,
-                       steps: int = 20, mu_tol: float | None = None) -> StaticState:
+                       contact_max_step=None, steps: int = 20, mu_tol: float | None = None) -> StaticState:
     """The static state at ``mu``: the flying equilibrium, else the contact-branch equilibrium.
 
     The flying state is continued from ``y_start`` (default the nominal attitude, zeros) at ``mu_start``
     (default 0: zero protrusion) in ``steps`` equal steps (:func:`flying_branch`). If the branch ends at
     a fold before ``mu``, there is no flying equilibrium; then Newton from ``contact_start`` (a state in
     contact, e.g. the TFC point at zero separation) gives the contact-branch equilibrium, if it converges
-    to a stable state.
+    to a stable state. ``contact_max_step`` bounds its updates (default ``scale``): the interface laws
+    are piecewise (the contact law switches on at the criterion), and a full Newton step from deep contact
+    can leave the contact region, where the adhesion alone has no root; small steps approach the contact
+    equilibrium from inside.
     """
     mus = np.linspace(mu_start, mu, steps + 1) if mu > mu_start else np.array([mu])
     br = flying_branch(forces, mus, y_start, scale=scale, accept=accept, mu_tol=mu_tol)
@@ -228,7 +231,7 @@ def static_equilibrium(forces: Forces, mu: float, *, mu_start: float = 0.0, y_st
     msg = f"no flying equilibrium at {mu:.6g} (the flying branch ends at a fold at {br.fold:.6g})"
     if contact_start is None:
         return StaticState("none", None, br.fold, msg + "; no contact start given")
-    e = newton(lambda y: forces(y, mu), contact_start, scale=scale)
+    e = newton(lambda y: forces(y, mu), contact_start, scale=scale, max_step=contact_max_step, max_iter=200)
     if e.converged and e.stable:
         return StaticState("contact", e, br.fold, msg + "; contact-branch equilibrium found")
     return StaticState("none", None, br.fold, msg + "; Newton found no stable contact state either")
