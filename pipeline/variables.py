@@ -350,11 +350,26 @@ ENSEMBLE = _group(
       effect="contact"),
 )
 
+#: ``bulge.nc`` (:mod:`pipeline.bulge_table`): the bulge's air-bearing lift on protrusion x apex gap.
+_DG = ("protrusion", "apex_gap")
+BULGE = _group(
+    V("protrusion", "nm", "TFC protrusion", NM, dims=("protrusion",)),
+    V("apex_gap", "nm", "gap between the bulge apex and the mean of the disk surface heights", NM,
+      dims=("apex_gap",)),
+    V("bulge_lift", "mN", "extra air-bearing lift of the TFC bulge at the TFC point (up positive)", MN, dims=_DG),
+    V("bulge_stiffness", "N m-1", "stiffness of the bulge lift, minus its derivative with respect to the apex gap",
+      dims=_DG),
+    V("bulge_lift_ph_limit", "mN", "bulge lift in the high-bearing-number limit p h = const", MN, dims=_DG),
+    V("bearing_number", "1", "bearing number 6 mu U a / (p_pad h_pad^2) of the pad gap h_pad = apex gap + "
+                             "protrusion", dims=_DG),
+    V("pad_pressure", "MPa", "air pressure under the trailing pad around the bulge", MPA),
+)
+
 #: Groups by name.
 GROUPS: dict[str, dict[str, Variable]] = {
     "coordinates": COORDINATES, "scalars": SCALARS, "histories": HISTORIES, "roughness": ROUGHNESS,
     "dmw": DMW, "interface": INTERFACE, "calibration": CALIBRATION, "accuracy": ACCURACY,
-    "ensemble": ENSEMBLE,
+    "ensemble": ENSEMBLE, "bulge": BULGE,
 }
 
 #: The groups each dataset file (by stem) may hold, first match wins.
@@ -369,6 +384,7 @@ DATASETS: dict[str, tuple[str, ...]] = {
     "sweep_histories": ("coordinates", "histories"),
     "sweep-part": ("coordinates", "scalars", "histories"),
     "accuracy": ("accuracy",),
+    "bulge": ("bulge",),
 }
 
 

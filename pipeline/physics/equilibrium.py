@@ -1,0 +1,269 @@
+"""Static equilibria of the slider: the flying state, its fold (touchdown by adhesion), the contact branch.
+
+The slider's static state ``y`` (``(z, theta)``: CG displacement [m], up positive, and pitch [rad],
+leading edge up positive; or ``(z,)`` with the pitch locked) balances the generalised forces
+``R(y) = (sum of vertical forces [N], pitch moment about the CG [N m])`` of the air bearing, the
+interface at the TFC point (adhesion, contact, friction) and the bulge's lift
+(docs/model.md, section "Start state"). As the protrusion grows the flying equilibrium approaches the
+surface; where the adhesion's negative stiffness cancels the bearing's, the stable flying branch
+meets the unstable one and both disappear (a saddle-node fold): beyond it there is no flying
+equilibrium and the slider snaps into contact (touchdown by adhesion; Vakis, Lee & Polycarpou, IEEE
+Trans. Magn. 45 (2009) 4966 discuss the instability; the fold as touchdown is the project's reading).
+
+Functions (all pure; ``forces(y, mu)`` is the caller's callable, ``mu`` the continuation parameter,
+e.g. the protrusion):
+
+* :func:`newton`: one equilibrium from a start, with its stiffness and stability;
+* :func:`flying_branch`: natural-parameter continuation of the stable branch from a known state
+  (the nominal attitude ``y = 0`` at zero protrusion), step halving near the fold, which it brackets;
+* :func:`static_equilibrium`: the start state of a run at one protrusion: the flying equilibrium if the
+  branch reaches it, else (``"no flying equilibrium"``) the contact-branch equilibrium from a start in
+  contact;
+* :func:`slider_forces`: the generalised forces of the 2-DOF slider (front linear, rear power law) with
+  a caller's interface force at the TFC point, the same equations as the dynamics' right-hand side.
+
+A state is *stable* when the stiffness ``K = -dR/dy`` has eigenvalues with positive real parts
+(no static divergence; ``K`` is not symmetric with the friction moment).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+Forces = Callable[[np.ndarray, float], np.ndarray]
+
+
+@dataclass(frozen=True)
+class Equilibrium:
+    """One static state.
+
+    Attributes
+    ----------
+    y : state (``z`` [m], ``theta`` [rad]) or (``z``,)
+    stiffness : ``K = -dR/dy`` at ``y`` ([N/m, N], [N m/m, N m/rad])
+    converged : Newton met its tolerance; stable : eigenvalues of ``K`` with positive real parts
+    iterations : Newton iterations; residual : ``|R(y)|`` scaled by the force scale [1]
+    """
+
+    y: np.ndarray
+    stiffness: np.ndarray
+    converged: bool
+    stable: bool
+    iterations: int
+    residual: float
+
+
+def jacobian(forces: Callable[[np.ndarray], np.ndarray], y: np.ndarray, scale: np.ndarray) -> np.ndarray:
+    """``dR/dy`` by central differences with steps ``1e-6 scale`` (``scale``: typical size of each state)."""
+    y = np.asarray(y, dtype=float)
+    J = np.empty((y.size, y.size))
+    for j in range(y.size):
+        h = 1e-6 * scale[j]
+        e = np.zeros(y.size)
+        e[j] = h
+        J[:, j] = (forces(y + e) - forces(y - e)) / (2 * h)
+    return J
+
+
+def _is_stable(K: np.ndarray) -> bool:
+    return bool(np.all(np.real(np.linalg.eigvals(K)) > 0))
+
+
+def newton(forces: Callable[[np.ndarray], np.ndarray], y0, *, scale=None, jac=None, tol: float = 1e-10,
+           max_iter: int = 50, max_step=None) -> Equilibrium:
+    """Equilibrium ``R(y) = 0`` by Newton's method from ``y0``.
+
+    Parameters
+    ----------
+    forces : ``R(y)`` [N, N m]
+    y0 : start state; scale : typical size of each state component (default 1e-9 m and 1e-6 rad), sets
+        the finite-difference steps and the convergence test ``|dy_j| < tol scale_j``
+    jac : ``dR/dy`` callable (default: central differences)
+    max_step : largest update of each component (default ``scale``): a trust bound that keeps Newton on
+        the branch it starts from near a fold
+    """
+    y = np.array(y0, dtype=float)
+    scale = np.asarray(scale if scale is not None else [1e-9, 1e-6][: y.size], dtype=float)
+    max_step = scale if max_step is None else np.asarray(max_step, dtype=float)
+    jac = jac or (lambda v: jacobian(forces, v, scale))
+    converged = False
+    it = 0
+    for it in range(1, max_iter + 1):
+        J = jac(y)
+        try:
+            dy = np.linalg.solve(J, -forces(y))
+        except np.linalg.LinAlgError:
+            break
+        if not np.all(np.isfinite(dy)):
+            break
+        shrink = np.max(np.abs(dy) / max_step)
+        if shrink > 1:
+            dy = dy / shrink
+        y = y + dy
+        if shrink <= 1 and np.all(np.abs(dy) < tol * scale):
+            converged = True
+            break
+    K = -jac(y)
+    R = forces(y)
+    fscale = np.max(np.abs(K) @ scale) if np.all(np.isfinite(K)) else 1.0
+    return Equilibrium(y, K, converged and bool(np.all(np.isfinite(R))), _is_stable(K) if np.all(np.isfinite(K))
+                       else False, it, float(np.max(np.abs(R)) / fscale) if fscale > 0 else np.inf)
+
+
+@dataclass
+class Branch:
+    """A continued stable branch.
+
+    Attributes
+    ----------
+    mu : parameter values reached, in order; states : their states (rows)
+    fold : parameter where the branch ends, bracketed to ``mu_tol`` (NaN: it reaches the end)
+    last : the last equilibrium on the branch
+    """
+
+    mu: list = field(default_factory=list)
+    states: list = field(default_factory=list)
+    fold: float = np.nan
+    last: Equilibrium | None = None
+
+    def state_at(self, mu: float) -> np.ndarray | None:
+        """The state at ``mu`` (a value the branch reached), or ``None``."""
+        for m, s in zip(self.mu, self.states):
+            if np.isclose(m, mu, rtol=0, atol=1e-12 * max(1.0, abs(mu))):
+                return s
+        return None
+
+
+def flying_branch(forces: Forces, mu_values, y0=None, *, scale=None, accept: Callable[[np.ndarray], bool] | None = None,
+                  mu_tol: float | None = None, tol: float = 1e-10, max_iter: int = 50) -> Branch:
+    """Continue the stable equilibrium branch through increasing ``mu_values`` from ``y0`` at ``mu_values[0]``.
+
+    Each step starts Newton from the secant predictor; a step is accepted when Newton converges to a
+    *stable* state that ``accept`` admits (e.g. "the TFC point is above the contact criterion"), else
+    the step is halved; when it falls below ``mu_tol`` the branch has ended: ``fold`` is the first value
+    where no admissible stable state continues it (the saddle-node fold, bracketed to ``mu_tol``).
+
+    Parameters
+    ----------
+    forces : ``R(y, mu)``; mu_values : increasing parameters to report (e.g. protrusions [m])
+    y0 : state at ``mu_values[0]`` (default zeros: the nominal attitude) or a start for Newton there
+    scale : as :func:`newton`; mu_tol : fold bracket (default ``1e-6`` of the range)
+    """
+    mus = np.asarray(mu_values, dtype=float)
+    if mus.ndim != 1 or mus.size < 1 or np.any(np.diff(mus) <= 0):
+        raise ValueError("flying_branch: mu_values must be increasing")
+    span = float(mus[-1] - mus[0]) if mus.size > 1 else 1.0
+    mu_tol = 1e-6 * span if mu_tol is None else mu_tol
+    y0 = np.zeros(2 if scale is None else len(scale)) if y0 is None else np.asarray(y0, dtype=float)
+    ok = accept or (lambda y: True)
+
+    def solve(mu, start):
+        return newton(lambda y: forces(y, mu), start, scale=scale, tol=tol, max_iter=max_iter)
+
+    br = Branch()
+    e = solve(mus[0], y0)
+    if not (e.converged and e.stable and ok(e.y)):
+        br.fold = float(mus[0])
+        return br
+    br.mu.append(float(mus[0]))
+    br.states.append(e.y)
+    br.last = e
+    mu, y, y_prev, mu_prev = float(mus[0]), e.y, None, None
+    for target in mus[1:]:
+        step = target - mu
+        while mu < target:
+            step = min(step, target - mu)
+            trial = mu + step
+            pred = y if y_prev is None else y + (y - y_prev) * (trial - mu) / (mu - mu_prev)
+            e = solve(trial, pred)
+            if e.converged and e.stable and ok(e.y):
+                y_prev, mu_prev, y, mu = y, mu, e.y, trial
+                br.last = e
+                step *= 2.0
+            else:
+                step /= 2.0
+                if step < mu_tol:
+                    br.fold = mu + step * 2.0  # the smallest failed trial
+                    return br
+        br.mu.append(float(target))
+        br.states.append(y)
+    return br
+
+
+@dataclass(frozen=True)
+class StaticState:
+    """The start state of a run at one parameter value.
+
+    Attributes
+    ----------
+    kind : ``"flying"``, ``"contact"`` or ``"none"`` (neither branch found)
+    equilibrium : the state (``None`` for ``"none"``); fold : where the flying branch ended (NaN: not reached)
+    message : what was found, in words (``"no flying equilibrium ..."`` past the fold)
+    """
+
+    kind: str
+    equilibrium: Equilibrium | None
+    fold: float
+    message: str
+
+
+def static_equilibrium(forces: Forces, mu: float, *, mu_start: float = 0.0, y_start=None, scale=None,
+                       accept: Callable[[np.ndarray], bool] | None = None, contact_start=None,
+                       contact_max_step=None, steps: int = 20, mu_tol: float | None = None) -> StaticState:
+    """The static state at ``mu``: the flying equilibrium, else the contact-branch equilibrium.
+
+    The flying state is continued from ``y_start`` (default the nominal attitude, zeros) at ``mu_start``
+    (default 0: zero protrusion) in ``steps`` equal steps (:func:`flying_branch`). If the branch ends at
+    a fold before ``mu``, there is no flying equilibrium; then Newton from ``contact_start`` (a state in
+    contact, e.g. the TFC point at zero separation) gives the contact-branch equilibrium, if it converges
+    to a stable state. ``contact_max_step`` bounds its updates (default ``scale``): the interface laws
+    are piecewise (the contact law switches on at the criterion), and a full Newton step from deep contact
+    can leave the contact region, where the adhesion alone has no root; small steps approach the contact
+    equilibrium from inside.
+    """
+    mus = np.linspace(mu_start, mu, steps + 1) if mu > mu_start else np.array([mu])
+    br = flying_branch(forces, mus, y_start, scale=scale, accept=accept, mu_tol=mu_tol)
+    if np.isnan(br.fold):
+        return StaticState("flying", br.last, np.nan, f"flying equilibrium at {mu:.6g}")
+    msg = f"no flying equilibrium at {mu:.6g} (the flying branch ends at a fold at {br.fold:.6g})"
+    if contact_start is None:
+        return StaticState("none", None, br.fold, msg + "; no contact start given")
+    e = newton(lambda y: forces(y, mu), contact_start, scale=scale, max_step=contact_max_step, max_iter=200)
+    if e.converged and e.stable:
+        return StaticState("contact", e, br.fold, msg + "; contact-branch equilibrium found")
+    return StaticState("none", None, br.fold, msg + "; Newton found no stable contact state either")
+
+
+def slider_forces(*, l_f: float, l_r: float, l_c: float, h_cg: float, k_f: float, g0: float,
+                  rear: Callable[[float], float], nominal_gap: Callable[[float], float],
+                  interface: Callable[[float, float], tuple[float, float]], pitch: bool = True) -> Forces:
+    """Generalised static forces ``R(y, mu)`` of the 2-DOF slider, as in the dynamics' right-hand side.
+
+    ``F_f = -k_f (z + l_f theta)`` (front, linear), ``F_r = rear(g_r)`` on the rear gap ``g_r = g0 + z - l_r theta``
+    (e.g. :func:`pipeline.physics.air_bearing.rear_power_law`), the interface force ``F_i`` (up) and friction
+    ``Q`` (along the disk's motion, at the air-bearing surface, ``h_cg`` below the CG) at the TFC point
+    ``l_c`` behind the CG, whose gap is ``g = nominal_gap(mu) + z - l_c theta`` (e.g. ``FH0 - delta``):
+    ``R = (F_f + F_r + F_i, l_f F_f - l_r F_r - l_c F_i - h_cg Q)`` (:mod:`pipeline.physics.air_bearing`;
+    docs/model.md, section "Slider"). With ``pitch=False`` the state is ``(z,)``.
+
+    Parameters
+    ----------
+    l_f, l_r, l_c, h_cg [m]; k_f [N/m]; g0 : rear reference gap [m]; rear : ``g_r -> F_r`` [N]
+    nominal_gap : ``mu -> `` TFC gap at the nominal attitude [m]
+    interface : ``(g, mu) -> (F_i [N], Q [N])``: everything acting at the TFC point (bulge lift, adhesion,
+        contact, friction) at gap ``g`` [m]
+    """
+    def R(y: np.ndarray, mu: float) -> np.ndarray:
+        z = y[0]
+        th = y[1] if pitch else 0.0
+        F_f = -k_f * (z + l_f * th)
+        F_r = rear(g0 + z - l_r * th)
+        F_i, Q = interface(nominal_gap(mu) + z - l_c * th, mu)
+        if not pitch:
+            return np.array([F_f + F_r + F_i])
+        return np.array([F_f + F_r + F_i, l_f * F_f - l_r * F_r - l_c * F_i - h_cg * Q])
+
+    return R
