@@ -16,7 +16,7 @@ import numpy as np
 from benchmarks.common import record, timeit
 from pipeline.model import bulge_table as bt
 from pipeline.physics import bulge_bearing as bb
-from pipeline.scene import load_scene
+from pipeline.config.scene import load_scene
 
 ROOT = Path(__file__).resolve().parents[1]
 

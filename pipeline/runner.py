@@ -189,13 +189,15 @@ class Inputs:
         return self.out / name
 
     def dataset(self, name: str, stage: str | None = None, variables: Iterable[str] = ()) -> xr.Dataset:
-        """Read an upstream dataset, refusing one made from other inputs than the runner expects."""
+        """Read an upstream (or current optional) dataset, refusing one made from other inputs than the
+        runner expects."""
         ds = read_dataset(self.out / name, stage=stage, variables=variables)
-        if stage is not None and stage in self.upstream:
+        want = None if stage is None else self.upstream.get(stage) or self.optional.get(stage)
+        if want is not None:
             have = ds.attrs.get(KEY_ATTR)
-            if have != self.upstream[stage]:
+            if have != want:
                 raise DatasetError(f"{self.out / name}: made from other inputs (inputs_key {str(have)[:12]}) than "
-                                   f"this run's {stage} stage (inputs_key {self.upstream[stage][:12]})")
+                                   f"this run's {stage} stage (inputs_key {want[:12]})")
         return ds
 
     def record(self, **metrics: Any) -> None:

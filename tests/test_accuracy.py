@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from pipeline.analyses import accuracy as knob_study
 from pipeline.io import check_cf
 from pipeline.config.scene import load_scene
 from pipeline.stages import accuracy
@@ -44,9 +45,9 @@ def result(tmp_path_factory, paper_config):
 def test_dataset_layout(result):
     out, path, ds, _ = result
     assert path == out / "accuracy.nc"
-    assert dict(ds.sizes) == {"point": 3, "knob": len(KNOBS), "level": 3, "output": len(accuracy.HEADLINE),
+    assert dict(ds.sizes) == {"point": 3, "knob": len(KNOBS), "level": 3, "output": len(knob_study.HEADLINE),
                               "configuration": 2}
-    assert list(ds["knob"].values) == [kb.name for kb in accuracy.KNOBS]
+    assert list(ds["knob"].values) == [kb.name for kb in knob_study.KNOBS]
     assert list(ds["point"].values) == ["flying", "touchdown", "sliding"]
     np.testing.assert_allclose(ds["protrusion"].values, [5.0, 7.6, 11.0])
     assert ds["error"].dims == ("point", "knob", "level", "output")
@@ -70,10 +71,10 @@ def test_reference_setting_has_zero_error(result):
         assert ref[names.index(name), 0], name
     # the rows equal to the reference are a fresh run of it (not a copy): zero error is determinism.
     # The reference configuration runs three times: untimed (compilation), timed, and for those rows.
-    full = {**accuracy.REFERENCE, **REFERENCE}
+    full = {**knob_study.REFERENCE, **REFERENCE}
     at_ref = [res for cfg, res in runs if cfg == full]
     assert len(at_ref) == 3 and len({id(r) for r in at_ref}) == 3
-    for j, name in enumerate(accuracy.HEADLINE):
+    for j, name in enumerate(knob_study.HEADLINE):
         np.testing.assert_array_equal(ds[f"reference_{name}"].values, at_ref[1].values[:, j])
         np.testing.assert_array_equal(ds[name].values[:, ref], np.repeat(at_ref[2].values[:, j, None], ref.sum(), 1))
     err = ds["error"].values[:, ref, :]
@@ -125,7 +126,7 @@ def test_chosen_defaults_and_figure(result):
 
 def test_relative_error_definition():
     nan, inf = np.nan, np.inf
-    err = accuracy.relative_error(np.array([1.1, 0.002, nan, nan, 1.0]), np.array([1.0, 0.0, nan, 2.0, nan]), 0.01)
+    err = knob_study.relative_error(np.array([1.1, 0.002, nan, nan, 1.0]), np.array([1.0, 0.0, nan, 2.0, nan]), 0.01)
     np.testing.assert_allclose(err[:2], [0.1, 0.2])
     assert np.isnan(err[2]) and err[3] == inf and err[4] == inf
 

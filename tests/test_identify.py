@@ -84,7 +84,7 @@ def test_twin_experiment_recovers_the_true_parameters_within_the_reported_interv
     assert ident["dmw"]["rms_nm"] == pytest.approx(float(ds["dmw__rms_nm_best"]), rel=1e-5)
     assert ident["solver"]["duration_ms"] == 0.8  # inherited
     # the report's three columns: paper, reconstructed, identified; nothing unreached in a twin experiment
-    from pipeline.stages.report import identification_markdown
+    from pipeline.analyses.paper_comparison import identification_markdown
     md = identification_markdown(ds.load())
     assert "| target | paper | reconstructed | identified |" in md
     assert "Every target is reached within tolerance" in md

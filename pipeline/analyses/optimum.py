@@ -37,14 +37,16 @@ import numpy as np
 import xarray as xr
 
 from ..config.grid import TOL_NM
+from ..physics import paper
 from ..variables import SCALARS, Regime, regime_name
 
 FLYING, BOUNCING, SURFING = Regime.FLYING, Regime.BOUNCING, Regime.SURFING
 
-#: Stable-flying criterion on the FHM [%] (the paper).
-FHM_LIMIT = 10.0
-#: Small-bouncing criterion on the BV [%] for the steady-sliding optimum.
-BV_LIMIT = 2.0
+#: Stable-flying criterion on the FHM [%] (the paper: :data:`pipeline.physics.paper.STABLE_FHM_PERCENT`).
+FHM_LIMIT = paper.STABLE_FHM_PERCENT
+#: Small-bouncing criterion on the BV [%] for the steady-sliding optimum (the paper's light-contact BV,
+#: :data:`pipeline.physics.paper.SLIDING_BV_MAX_PERCENT`).
+BV_LIMIT = paper.SLIDING_BV_MAX_PERCENT
 #: Quantities copied into :attr:`Optimum.values` when the sweep has them: every steady-window scalar
 #: of the variable schema but the bulge geometry.
 REPORTED = tuple(n for n in SCALARS if n != "protrusion_radius")

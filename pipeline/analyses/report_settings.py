@@ -1,0 +1,65 @@
+"""The scene keys the report's analyses read, as one frozen record (taken from the scene once, by the stage)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+from ..physics import paper
+
+
+def _get(scene: Any, section: str, key: str, default: Any = None) -> Any:
+    """``scene[section][key]``, ``default`` when the scene, the section or the key is absent or ``None``."""
+    if scene is None:
+        return default
+    try:
+        v = scene[section][key]
+    except (KeyError, TypeError):
+        return default
+    return default if v is None else v
+
+
+@dataclass(frozen=True)
+class ReportSettings:
+    """What the report uses of the scene (``None``: not set).
+
+    Attributes
+    ----------
+    damping_ratio : the scene's modal damping ratio [1] (picks the default sweep combination)
+    transient_ms : discarded start-up transient [ms] (shaded in the history figures)
+    onset_nm, previous_nm : the measured touchdown and the previous actuation step [nm]
+    histories_nm : protrusions [nm] of the history figures (``[report] histories_nm``)
+    dmw_rms_nm, dmw_source, dmw_seed : the DMW settings, used when ``dmw.nc`` is absent [nm]
+    hardness_gpa : the scene's hardness [GPa]; plasticity_index : the scene's psi [1] (H derived from it)
+    section_depth_sigma : nominal-area section depth [sigma]
+    """
+
+    damping_ratio: float | None = None
+    transient_ms: float | None = None
+    onset_nm: float = paper.TOUCHDOWN_NM
+    previous_nm: float = paper.PREVIOUS_STEP_NM
+    histories_nm: list[float] = field(default_factory=list)
+    dmw_rms_nm: float = math.nan
+    dmw_source: str | None = None
+    dmw_seed: Any = None
+    hardness_gpa: float | None = None
+    plasticity_index: float | None = None
+    section_depth_sigma: float | None = None
+
+    @classmethod
+    def from_scene(cls, scene: Any) -> "ReportSettings":
+        """The settings of ``scene`` (a scene without a key or section gets the defaults above)."""
+        return cls(
+            damping_ratio=_get(scene, "air_bearing", "damping_ratio"),
+            transient_ms=_get(scene, "solver", "transient_ms"),
+            onset_nm=float(_get(scene, "touchdown", "onset_nm", paper.TOUCHDOWN_NM)),
+            previous_nm=float(_get(scene, "touchdown", "previous_nm", paper.PREVIOUS_STEP_NM)),
+            histories_nm=list(_get(scene, "report", "histories_nm") or []),
+            dmw_rms_nm=_get(scene, "dmw", "rms_nm", math.nan),
+            dmw_source=_get(scene, "dmw", "source"),
+            dmw_seed=_get(scene, "dmw", "seed"),
+            hardness_gpa=_get(scene, "materials", "hardness_gpa"),
+            plasticity_index=_get(scene, "materials", "plasticity_index"),
+            section_depth_sigma=_get(scene, "contact", "section_depth_sigma"),
+        )
