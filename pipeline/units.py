@@ -46,6 +46,8 @@ UM_IN_NM = 1e3              # one um in nm
 PER_NM2_IN_PER_UM2 = 1e6    # one nm^-2 in um^-2
 PER_UM2_IN_PER_NM2 = 1e-6   # one um^-2 in nm^-2
 MHZ_IN_KHZ = 1e3            # one MHz in kHz
+S_IN_MS = 1e3               # one s in ms
+HZ_IN_KHZ = 1e-3            # one Hz in kHz
 
 #: SI factor of each unit suffix a scene key may end with (``_nm``, ``_khz``, ...). Dimensionless
 #: suffixes (``sigma``: a multiple of the roughness) map to 1.

@@ -25,6 +25,7 @@ import numpy as np
 import xarray as xr
 
 from ..fanout import available_cores
+from ..units import KHZ, S_IN_MS
 from ..variables import GROUPS, Regime, regime_name
 
 if TYPE_CHECKING:
@@ -215,7 +216,7 @@ def fig_clearance(hist: Sequence[tuple[float, xr.Dataset, int | None]], scene: s
     """
     fig, axes = new_figure(len(hist), 1, size=(7.5, 2.6 * len(hist) + 0.8), sharex=True, squeeze=False)
     for ax, (delta, h, code) in zip(axes[:, 0], hist):
-        t = h["time"].values * 1e3
+        t = h["time"].values * S_IN_MS
         name = "clearance" if "clearance" in h else "separation"
         y = h[name]
         _shade_transient(ax, transient_ms)
@@ -248,7 +249,7 @@ FORCES = (("contact_force", "contact", LINE_COLOURS[0]), ("friction_force", "fri
 def fig_forces(h: xr.Dataset, delta: float, scene: str, path: Path, transient_ms: float | None = None) -> Path:
     """Contact, friction, adhesion and net force histories at one protrusion (paper Fig. 4)."""
     fig, ax = new_figure(size=(7.5, 4.6))
-    t = h["time"].values * 1e3
+    t = h["time"].values * S_IN_MS
     _shade_transient(ax, transient_ms)
     units = None
     for name, label, colour in FORCES:
@@ -274,7 +275,7 @@ def fig_stresses(h: xr.Dataset, delta: float, scene: str, path: Path, transient_
     names = [(n, q) for n, q in STRESSES if n in h]
     fig, axes = new_figure(max(len(names), 1), 1, size=(7.5, 2.2 * max(len(names), 1) + 0.8), sharex=True,
                            squeeze=False)
-    t = h["time"].values * 1e3
+    t = h["time"].values * S_IN_MS
     for i, (ax, (name, q)) in enumerate(zip(axes[:, 0], names)):
         _shade_transient(ax, transient_ms)
         y = h[name].values
@@ -578,7 +579,7 @@ def _roughness_table(rough: xr.Dataset, scene: str, path: Path, interface: xr.Da
 def fig_dmw(dmw: xr.Dataset, scene: str, path: Path) -> Path:
     """The DMW record (top) and its one-sided PSD, log-log, with the band edges (bottom)."""
     fig, (ax, ax2) = new_figure(2, 1, size=(7.5, 6.4))
-    t = dmw["time"].values * 1e3
+    t = dmw["time"].values * S_IN_MS
     w = dmw["displacement"]
     ax.plot(*envelope(t, w.values), lw=0.5, color=LINE_COLOURS[0])
     rms = float(dmw["rms"]) if "rms" in dmw else float(np.sqrt(np.mean(w.values ** 2)))
@@ -592,10 +593,10 @@ def fig_dmw(dmw: xr.Dataset, scene: str, path: Path) -> Path:
         f = dmw["frequency"].values
         p = dmw["psd"].values
         ok = (f > 0) & np.isfinite(p) & (p > 0)
-        ax2.loglog(f[ok] / 1e3, p[ok], lw=0.6, color=LINE_COLOURS[0], label="periodogram")
+        ax2.loglog(f[ok] / KHZ, p[ok], lw=0.6, color=LINE_COLOURS[0], label="periodogram")
         for name, ls in (("band_low", "--"), ("band_high", "--")):
             if name in dmw:
-                edge = float(dmw[name]) / 1e3
+                edge = float(dmw[name]) / KHZ
                 ax2.axvline(edge, color="#d62728", ls=ls, lw=1.0,
                             label=f"band {'lower' if name == 'band_low' else 'upper'} edge {edge:g} kHz")
         if ok.any():
@@ -605,7 +606,7 @@ def fig_dmw(dmw: xr.Dataset, scene: str, path: Path) -> Path:
             pos = inband if inband.size else p[ok]
             ax2.set_ylim(np.percentile(pos, 0.5) / 10, pos.max() * 10)
             fmax = f[ok].max() if not np.isfinite(hi_e) else min(hi_e * 4, f.max())
-            ax2.set_xlim((lo_e / 4 if lo_e > 0 else f[ok].min()) / 1e3, fmax / 1e3)
+            ax2.set_xlim((lo_e / 4 if lo_e > 0 else f[ok].min()) / KHZ, fmax / KHZ)
         ax2.set_xlabel(axis_label("frequency", "kHz"))
         ax2.set_ylabel(var_label(dmw["psd"], "PSD of w"))
         ax2.legend(fontsize=7.5, loc="lower left", framealpha=0.9)
