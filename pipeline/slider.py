@@ -311,16 +311,12 @@ class IntegrationError(RuntimeError):
 
 def run_model(model: Model, protrusion: float, y0: np.ndarray | None = None, max_steps: int = 5_000_000) -> Run:
     """Integrate the model at protrusion ``protrusion`` [m] from the nominal attitude (or ``y0``)."""
-    p = model.p.copy()
-    p.delta = protrusion
     An = float(nominal_area(protrusion, model.half_length, model.half_width, model.section_depth)) \
         if np.isfinite(model.section_depth) else 0.0
-    p.A_n = An
-    p.k_sigma = model.k_sigma
+    p = dyn.with_values(model.p, delta=protrusion, A_n=An, k_sigma=model.k_sigma, t_win=model.transient)
     n_out = int(round(model.duration / model.output_step)) + 1
     t_out = np.minimum(np.arange(n_out) * model.output_step, model.duration)
     y0 = np.zeros(4) if y0 is None else np.asarray(y0, float)
-    p.t_win = model.transient
     tables, variants = kernel_slots(model, p)
     Y, C, info, ext = dyn.integrate(y0, dyn.Grid(model.duration, t_out), p, tables, variants,
                                     dyn.Solver(model.rtol, model.atol, model.max_step, max_steps))
@@ -335,12 +331,13 @@ def kernel_slots(model: Model, p: np.record) -> tuple[dyn.Tables, dyn.Variants]:
     """The kernel's tables and variants for the model at the protrusion ``p.delta`` [m]; sets the
     tabulated TFC-point law's grid in ``p`` (``None`` slots: effects off)."""
     gap_power = None
+    delta = p["delta"]
     if model.tfc_stiffening is not None:  # the stiffening force is zero at this protrusion's nominal gap
-        gap_power = model.tfc_stiffening.copy()
-        gap_power.f0 = _stiffening_potential(p.FH0 - p.delta, gap_power.g0, gap_power.q, gap_power.g_min)
-    tfc = tfc_table(model, p.delta)
+        gp = model.tfc_stiffening
+        gap_power = dyn.with_values(gp, f0=_stiffening_potential(p["FH0"] - delta, gp["g0"], gp["q"], gp["g_min"]))
+    tfc = tfc_table(model, delta)
     if tfc is not None:
-        tfc, p.tfc_x0, p.tfc_h = tfc
+        tfc, p["tfc_x0"], p["tfc_h"] = tfc
     tables = dyn.Tables(dmw=model.dmw, contact=model.contact, adhesion=model.adhesion, friction=model.friction,
                         tfc=tfc)
     variants = dyn.Variants(pitch=True if model.pitch is not None else None, rear_linear=model.rear_linear,
