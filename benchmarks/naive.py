@@ -133,7 +133,7 @@ def simulate_naive(scene: Any, interface_ds: Any, dmw_tuple: tuple[np.ndarray, f
     # the separation datum from its one home (pipeline.model.dynamics.separation_at, docs/model.md, section "Separation datum"):
     # d = d_nom + z - l_c theta - w with d_nom = FH0 - delta - y_s
     p_sep = model.p.copy()
-    p_sep[dyn.P_DELTA] = delta
+    p_sep.delta = delta
     d_nom = float(dyn.separation_at(p_sep, 0.0, 0.0, 0.0))
     cc = scene["contact"]["damping_n_s_m"]
     sol_cfg = scene["solver"]
@@ -240,7 +240,7 @@ def simulate_naive(scene: Any, interface_ds: Any, dmw_tuple: tuple[np.ndarray, f
             if pc is not None and contact:
                 kk = abs(kk - An * np.interp(d_here, x, dpc))
             if kk > 0:
-                opts["max_step"] = min(model.max_step, model.p[dyn.P_HSTIFF] / np.sqrt(kk * m_eff_inv))
+                opts["max_step"] = min(model.max_step, model.p.h_stiff / np.sqrt(kk * m_eff_inv))
             else:
                 opts["max_step"] = model.max_step
         sol = solve_ivp(rhs, (t, t_stop), y, t_eval=t_eval, events=events, args=(contact,), **opts)

@@ -256,7 +256,7 @@ def test_fhm_is_zero_without_dmw_and_contact(effects):
     run = sl.run_model(build(make_scene(effects)), 5 * NM)
     s = sl.summarize(run)
     assert s["fhm_bv"] < 1e-9
-    y_s = run.model.p[dyn.P_YS]
+    y_s = run.model.p.y_s
     assert y_s == pytest.approx(0.691 * NM, abs=1e-3 * NM)
     assert sl.histories(run)["separation"] == pytest.approx(6 * NM - y_s, abs=1e-18)
 
@@ -272,12 +272,12 @@ def rigid_following_separation(run):
     s = m.slider
 
     def disk(off):
-        return dyn.ppval(m.dmw, p[dyn.P_DMW_T0], p[dyn.P_DMW_DT], t + p[off])
+        return dyn.ppval(m.dmw, p.dmw_t0, p.dmw_dt, t + off)
 
-    w_f, w_r, w_c = disk(dyn.P_OFF_F), disk(dyn.P_OFF_R), disk(dyn.P_OFF_C)
+    w_f, w_r, w_c = disk(p.off_f), disk(p.off_r), disk(p.off_c)
     theta = (w_f - w_r) / (s.l_f + s.l_r)
     z = w_r + s.l_r * theta
-    return p[dyn.P_FH0] - run.protrusion + z - s.l_c * theta - w_c - p[dyn.P_YS]
+    return p.FH0 - run.protrusion + z - s.l_c * theta - w_c - p.y_s
 
 
 def test_fhm_falls_to_the_rigid_following_limit_as_the_bearing_stiffens():

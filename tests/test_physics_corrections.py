@@ -87,8 +87,8 @@ def test_flying_scene_datum_without_interface_tables(paper):
 
     flying = paper.replace(scene={"effects": ["air_bearing", "pitch"]})
     model = sl.build_model(flying, None, None, None)
-    assert model.p[dyn.P_YS] == pytest.approx(0.691e-9, abs=1e-12)
-    assert model.p[dyn.P_YS] == roughness_statistics(paper)["y_s"]  # what interface.nc is made from
+    assert model.p.y_s == pytest.approx(0.691e-9, abs=1e-12)
+    assert model.p.y_s == roughness_statistics(paper)["y_s"]  # what interface.nc is made from
     scan = Path(__file__).parent / "data" / "afm" / "di-3.di"
     afm = flying.replace(roughness={"afm": [str(scan)]})
     with pytest.raises(ValueError, match="interface.nc"):
@@ -102,7 +102,7 @@ def test_separation_has_one_home(paper):
     run = sl.run_model(model, 5 * NM)
     hist = sl.histories(run)
     p = model.p.copy()
-    p[dyn.P_DELTA] = 5 * NM
+    p.delta = 5 * NM
     w = hist["disk_displacement"]
     gap = dyn.gap_at(p, run.state[:, 0], run.state[:, 1], w)
     np.testing.assert_array_equal(hist["separation"], dyn.separation_at(p, run.state[:, 0], run.state[:, 1], w))
@@ -150,12 +150,11 @@ def stiffening_scene(paper, k_t=3e5, p_exp=1.5, effects=NO_ADHESION, **extra):
 def kernel_rhs(model, delta, y, tfs=True):
     """dy/dt of the kernel at t = 0 for state ``y`` (flying mode), with the scene's stiffening or none."""
     p = model.p.copy()
-    p[dyn.P_DELTA] = delta
-    if model.tfc_stiffening is not None:
-        p[dyn.P_TF0] = sl._stiffening_potential(p[dyn.P_FH0] - delta, p[dyn.P_TG0], p[dyn.P_TP], p[dyn.P_TGMIN])
+    p.delta = delta
+    _, variants = sl.kernel_slots(model, p)
     out = np.empty(4)
-    dyn.rhs(0.0, np.asarray(y, float), p, None, None, None, None, model.pitch,
-            model.tfc_stiffening if tfs else None, model.rear_linear, False, out)
+    dyn.rhs(0.0, np.asarray(y, float), p, dyn.Tables(), variants if tfs else variants._replace(gap_power=None),
+            False, out)
     return out
 
 

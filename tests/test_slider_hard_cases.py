@@ -36,7 +36,7 @@ import numpy as np
 import pytest
 
 from convergence import assert_converged, deltas
-from pipeline.model import dynamics as dyn
+
 from pipeline.model import slider as sl
 from pipeline.physics import dmw as pdmw
 from pipeline.config.scene import SCHEMA, load_scene
@@ -262,7 +262,7 @@ def test_sliding_mode_outputs_versus_the_dwell(base, record, paper_hardness, nam
     out = []
     for dwell in (20e-9, 10e-9, 5e-9):
         p = model.p.copy()
-        p[dyn.P_DWELL] = dwell
+        p.dwell = dwell
         run = sl.run_model(dataclasses.replace(model, p=p), 11 * NM)
         out.append((sl.summarize(run), run.info[3]))
     forces = np.array([s["contact_force"] for s, _ in out])

@@ -52,7 +52,6 @@ from ..config.grid import label, protrusion_grid
 from ..fanout import local_workers, run_tasks
 from ..io import read_dataset
 from ..model import dmw_record
-from ..model import dynamics as dyn
 from ..model import slider as sl
 from ..physics.statistics import contact_probabilities
 from ..units import NM
@@ -68,9 +67,7 @@ def touches(model: sl.Model, delta_nm: float, k: float) -> bool:
     In contact at an output sample of the steady window, or ``d < k sigma`` at the exact minimum of
     the window (a contact shorter than the output step falls between samples).
     """
-    run = sl.run_model(replace(model, k=float(k)), delta_nm * NM)
-    win = run.time >= model.transient - 1e-15
-    return bool(run.contact[win].any() or run.d_extremes[0] < run.model.k_sigma)
+    return sl.touched(sl.run_model(replace(model, k=float(k)), delta_nm * NM))
 
 
 def k_threshold(model: sl.Model, delta_nm: float, k_range: tuple[float, float], tol: float) -> tuple[float, str, int]:
@@ -130,7 +127,7 @@ def flying_minimum(model: sl.Model, delta_nm: float) -> tuple[float, float, str]
     except sl.IntegrationError as exc:
         return -math.inf, -math.inf, f"flying run failed ({exc})"
     lo = run.d_extremes[0]
-    x0 = model.p[dyn.P_TAB_X0]
+    x0 = model.p.tab_x0
     if lo_all < x0:
         return -math.inf, -math.inf, (f"separation {lo_all / NM:.3g} nm below the interface tables "
                                       f"({x0 / NM:.3g} nm): adhesive snap-in")

@@ -128,7 +128,7 @@ SCHEMA: dict[str, dict[str, Key]] = {
                                   "'pitch-first' (first reconstruction), 'bounce-first'"),
         "rear_law": Key("str", "power", choices=tuple(REAR_LAWS),
                         doc="rear bearing law: 'power' F_r0[(g0/g)^n - 1] (recon), 'linear' k_r (g0 - g)"),
-        "tfc_stiffening": Key("str", "none", choices=tuple(TFC_STIFFENING),
+        "tfc_stiffening": Key("str", "none", choices=TFC_STIFFENING.keys(),  # (live: a registered law is a choice)
                               doc="air-bearing stiffening under the TFC bulge (SPEC.md 7.4): 'none' or "
                                   "'gap-power', added stiffness k_t[(FH0/g)^p - 1] at the TFC gap g"),
         "tfc_stiffness_n_m": Key("float", 1.0e5, _nonneg,

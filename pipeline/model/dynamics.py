@@ -1,6 +1,7 @@
 """Numba kernels of the 2-DOF slider: equations of motion and the adaptive integrator.
 
-Equations of motion (SPEC.md section 4), states ``y = (z, theta, z', theta')`` in SI units::
+Equations of motion (docs/model.md, section "Slider dynamics"), states ``y = (z, theta, z', theta')``
+in SI units::
 
     m z''     = F_f + F_r + F_i
     I theta'' = l_f F_f - l_r F_r - l_c F_i - h_cg Q
@@ -9,24 +10,68 @@ Equations of motion (SPEC.md section 4), states ``y = (z, theta, z', theta')`` i
 * rear pad (``l_r`` behind), nonlinear [recon]:  ``F_r = F_r0 [(g0/g_r)^n - 1] - c_r g_r'``,
   ``g_r = g0 + z - l_r theta - w_r``
 * interface at the TFC point (``l_c`` behind), gap ``g = FH0 - delta + z - l_c theta - w_c`` to the mean
-  of surface heights and ISBL separation ``d = g - y_s`` to the mean of summit heights (SPEC.md 7.2):
-  ``F_i = -A_n p_a(d)`` always (adhesion effect), plus ``A_n p_c(d) - c_c d'`` while in contact
-  (``d < k sigma``, the paper's criterion)
+  of surface heights and ISBL separation ``d = g - y_s`` to the mean of summit heights (docs/model.md,
+  section "Separation datum"): ``F_i = -A_n p_a(d)`` always (adhesion effect), plus
+  ``A_n p_c(d) - c_c d'`` while in contact (``d < k sigma``, the paper's criterion)
 * friction ``Q = A_n tau(d)`` in contact, along the disk's motion (leading to trailing edge) at the
   air-bearing surface; its moment about the CG is ``-h_cg Q`` (it pitches the leading edge down).
 * the disk under each point moves with the DMW ``w(t)`` delayed by the disk's travel time.
-* optional, named model variants (SPEC.md 7.4, 4): the rear law ``F_r = k_r (g0 - g_r)`` (``rear_linear``
-  not ``None``) instead of the power law; a stiffening spring at the TFC point, force
-  ``F_t = k_t [G(g_n) - G(g)]``, ``G(s) = g0^p s^(1-p) / (1-p) - s`` (``g0 ln s - s`` for ``p = 1``),
-  whose stiffness is ``-dF_t/dg = k_t [(g0/g)^p - 1]`` (``tfc_stiff`` not ``None``;
-  :func:`pipeline.physics.air_bearing.tfc_stiffening_force`).
-* the air-bearing laws (rear power and linear laws, the stiffening potential and stiffness) are
-  compiled from their one definition in :mod:`pipeline.physics.air_bearing`.
+* named model variants (docs/model.md, section "Model variants"): the rear law ``F_r = k_r (g0 - g_r)``
+  (``Variants.rear_linear``) instead of the power law; an air-bearing force at the TFC point, either
+  the closed-form stiffening spring ``F_t = k_t [G(g_n) - G(g)]``, ``G(s) = g0^p s^(1-p) / (1-p) - s``
+  (``g0 ln s - s`` for ``p = 1``), stiffness ``-dF_t/dg = k_t [(g0/g)^p - 1]``
+  (``Variants.gap_power``, :func:`pipeline.physics.air_bearing.tfc_stiffening_force`), or any law
+  tabulated versus the gap ``g`` (``Tables.tfc``, see "Adding a variant" below), or both.
+* the closed-form air-bearing laws (rear power and linear laws, the stiffening potential and
+  stiffness) are compiled from their one definition in :mod:`pipeline.physics.air_bearing`.
 
-Effects are selected by passing ``None`` for a disabled effect's data: numba compiles one
-specialised kernel per combination and prunes the dead branches at compile time (branch pruning of
-``arg is None``), so a disabled effect is never evaluated, with no run-time test in the hot loop.
-All kernels are cached on disk (``cache=True``).
+Interface
+---------
+:func:`integrate` ``(y0, grid, p, tables, variants, solver)``:
+
+* ``grid`` (:class:`Grid`): the end time and the output times;
+* ``p``: the named parameters, one record of the structured dtype :data:`PARAMS` (numba types it as
+  a ``Record``; fields are read as ``p.m``, ``p.k_sigma``...; :func:`params` makes one);
+* ``tables`` (:class:`Tables`): the piecewise cubics of the DMW, of the interface laws versus the
+  separation and of the tabulated TFC-point law versus the gap, each ``None`` when off;
+* ``variants`` (:class:`Variants`): pitch on/off, the linear rear law, the gap-power parameters;
+* ``solver`` (:class:`Solver`): tolerances, largest step, step budget.
+
+Disabled effects cost nothing: an effect is off when its slot holds ``None``, and numba compiles one
+specialised kernel per combination of slot types and prunes the dead branches at compile time
+(branch pruning of ``arg is None``). That pruning sees only a function's own arguments (not tuple
+members, not through ``inline="always"``), so each slot is unpacked from its bundle into the
+argument of a small jitted function that branches on it (:func:`_disk3`, :func:`_tfc_air_force`,
+:func:`_interface_force`, ...); LLVM inlines those calls, so the bundles cost no call either (make
+bench: same timings as the former flat argument list). All kernels are cached on disk
+(``cache=True``).
+
+Adding a variant
+----------------
+A new force law at the TFC point (the bulge's air bearing of the physics issue, a "reynolds" table
+F(g, delta), ...) is tabulated, not compiled: its law is a plain Python function of the gap array
+and the protrusion in its physics module, registered with ONE line in its registry
+(:data:`pipeline.physics.air_bearing.TFC_STIFFENING`: ``"name": TfcLaw(force)``). The model assembly
+(:func:`pipeline.slider.tfc_table`) samples it per protrusion on a gap grid into a piecewise cubic
+(as the interface tables), which the kernel's one generic slot ``Tables.tfc`` evaluates: force and
+stiffness ``-dF/dg`` (the step-size cap) from the same cubic, so the kernel, its argument list and
+its compiled cache are untouched. Measured alternatives: numba first-class functions (the ``@njit``
+law passed as an argument) specialise the kernel on the law's dispatcher object, whose type does not
+survive a process: the on-disk cache misses in every new process (every ``hdi`` command would
+recompile the kernel, ~10 s), and a law defined outside the package would write an index entry that
+other processes cannot unpickle. A tabulated law costs one cubic evaluation, like an interface table,
+and is exact to the table's interpolation error (:func:`pipeline.slider.tfc_table`; the gap-power law
+tabulated: force within 3e-8 of its range, stiffness 5e-8 relative above 1 nm, a 1-ms run's separation
+within 1e-10 nm of the closed form's, tests/test_model_variants.py). The closed-form gap-power law keeps its compiled branch
+(bit-identical results).
+
+Internal state (prepared, not built): issue 17's meniscus formation (adhesion of the
+lubricant-contacting summits relaxing towards its ISBL value with a time constant) is a fifth state
+component ``a`` with ``a' = (a_ISBL(d) - a) / tau``. It plugs in as a slot ``Variants.meniscus``
+(``None``: off) whose helper multiplies the adhesion term of :func:`_interface_force` by ``a`` and
+writes ``a'``; the state length becomes ``4 + (meniscus is not None)``, a compile-time constant, so
+the four-component arithmetic (error norm over 4 components) and its results stay unchanged when it
+is off.
 
 Integrator: Dormand-Prince 5(4) with PI-free classical step control (Hairer, Norsett & Wanner,
 *Solving ODEs I*, II.4 and II.5), local extrapolation, error norm the RMS of the embedded error
@@ -47,7 +92,7 @@ between).
 Chattering. Where the contact force at the threshold exceeds the pull into contact (a large
 ``p_c(k sigma)``, e.g. a negative k), the exact solution slides along ``d = k sigma`` (a Filippov
 sliding mode) and an exact event method would switch infinitely often. A mode is therefore held
-for at least ``P_DWELL`` seconds after a switch (``solver.min_dwell_ns``); if the criterion says
+for at least ``p.dwell`` seconds after a switch (``solver.min_dwell_ns``); if the criterion says
 otherwise when the dwell ends, the mode switches there. The resulting fast switching averages the
 contact force to the sliding-mode value with an error of the order of the dwell; the dwell is an
 accuracy knob of the accuracy stage. Crossings further apart than the dwell are located exactly.
@@ -56,12 +101,14 @@ accuracy knob of the accuracy stage. Crossings further apart than the dwell are 
 from __future__ import annotations
 
 import os
+from typing import NamedTuple
 
 import numba
 import numpy as np
 from numba import njit
 
 from ..code_version import code_key
+from ..units import NS
 from ..physics import air_bearing as ab
 
 # numba's on-disk cache of a jitted function checks the timestamp of the file that holds it, not of
@@ -74,11 +121,95 @@ _NUMBA_CACHE_DIR = numba.config.CACHE_DIR
 numba.config.CACHE_DIR = os.path.join(_NUMBA_CACHE_DIR or os.path.join(os.path.dirname(__file__), "__pycache__"),
                                       f"numba-{code_key(__name__)[:16]}")
 
-# Layout of the parameter vector ``p`` (all SI).
-(P_M, P_I, P_LF, P_LR, P_LC, P_HCG, P_KF, P_KR, P_CF, P_CR, P_G0, P_N, P_FR0, P_FH0, P_DELTA, P_AN,
- P_KSIG, P_CC, P_OFF_F, P_OFF_R, P_OFF_C, P_DMW_T0, P_DMW_DT, P_TAB_X0, P_TAB_H, P_DWELL,
- P_TWIN, P_HSTIFF, P_TAB_N, P_YS, P_TK, P_TP, P_TG0, P_TF0, P_TGMIN, P_TKMIN) = range(36)
-N_PARAMS = 36
+#: The kernel's named parameters (all SI), one record (``np.record``; numba: ``Record``).
+PARAMS = np.dtype((np.record, [
+    ("m", "f8"), ("I", "f8"),                        # mass [kg], pitch inertia [kg m^2]
+    ("l_f", "f8"), ("l_r", "f8"), ("l_c", "f8"),     # arms of the front pad, rear pad, TFC point [m]
+    ("h_cg", "f8"),                                  # CG height over the air-bearing surface [m]
+    ("k_f", "f8"), ("k_r", "f8"), ("c_f", "f8"), ("c_r", "f8"),  # pad stiffness [N/m], dampers [N s/m]
+    ("g0", "f8"), ("n", "f8"), ("F_r0", "f8"),       # rear law: reference gap [m], exponent [1], preload [N]
+    ("FH0", "f8"), ("delta", "f8"),                  # flying height [m], protrusion [m]
+    ("A_n", "f8"), ("k_sigma", "f8"), ("c_c", "f8"),  # nominal area [m^2], criterion [m], contact damper [N s/m]
+    ("off_f", "f8"), ("off_r", "f8"), ("off_c", "f8"),  # disk travel time to the front pad, rear pad, TFC [s]
+    ("dmw_t0", "f8"), ("dmw_dt", "f8"),              # DMW spline grid: start, step [s]
+    ("tab_x0", "f8"), ("tab_h", "f8"), ("tab_n", "i8"),  # interface-table grid: start [m], step [m], pieces
+    ("tfc_x0", "f8"), ("tfc_h", "f8"),               # tabulated TFC-point law grid: start, step [m]
+    ("dwell", "f8"),                                 # minimum dwell in a contact mode [s]
+    ("t_win", "f8"),                                 # start of the steady window [s]
+    ("h_stiff", "f8"),                               # step cap over 1/omega of the interface spring [1]
+    ("y_s", "f8"),                                   # summit mean height over the surface mean [m]
+]))
+
+#: Parameters of the closed-form gap-power stiffening law at the TFC point (``Variants.gap_power``):
+#: stiffness scale ``k_t`` [N/m], exponent ``q`` [1], reference gap ``g0`` [m], potential at the
+#: nominal gap ``f0 = G(g_n)`` [m] (per protrusion), linear-continuation gap ``g_min`` [m] and stiffness
+#: ``k_min`` [N/m] below it.
+GAP_POWER = np.dtype((np.record, [("k_t", "f8"), ("q", "f8"), ("g0", "f8"), ("f0", "f8"), ("g_min", "f8"),
+                                  ("k_min", "f8")]))
+
+
+def params(dtype: np.dtype = PARAMS, **values: float) -> np.record:
+    """A record of ``dtype`` (default :data:`PARAMS`) with the given fields set, the others zero."""
+    return with_values(np.zeros((), dtype)[()], **values)
+
+
+def with_values(p: np.record, **values: float) -> np.record:
+    """A copy of the record ``p`` with the given fields set (``np.array(p)[()]`` copies in 0.4 us where
+    ``p.copy()`` takes 26 us, and item assignment is 3x faster than attribute assignment: run_model
+    makes one per protrusion)."""
+    q = np.array(p)[()]
+    for name, value in values.items():
+        q[name] = value
+    return q
+
+
+class Grid(NamedTuple):
+    """Time grid: integrate over ``[0, t_end]`` [s], sample the state at ``t_out`` [s] (ascending)."""
+
+    t_end: float
+    t_out: np.ndarray
+
+
+class Tables(NamedTuple):
+    """Piecewise-cubic coefficients (:func:`piecewise_coefficients`, rows of 4), ``None`` when off.
+
+    dmw : the disk under the TFC point, the front and the rear pad [m] (:func:`disk_coefficients`),
+        grid ``p.dmw_t0``, ``p.dmw_dt``
+    contact, adhesion, friction : contact pressure, adhesion pressure, friction stress [Pa] versus the
+        separation [m], grid ``p.tab_x0``, ``p.tab_h``, ``p.tab_n``
+    tfc : tabulated air-bearing force at the TFC point [N] versus the gap [m], grid ``p.tfc_x0``,
+        ``p.tfc_h`` (linear continuation below, constant above)
+    """
+
+    dmw: np.ndarray | None = None
+    contact: np.ndarray | None = None
+    adhesion: np.ndarray | None = None
+    friction: np.ndarray | None = None
+    tfc: np.ndarray | None = None
+
+
+class Variants(NamedTuple):
+    """Compiled model variants, each ``None`` when off.
+
+    pitch : ``True`` for the pitch degree of freedom (``None`` locks it)
+    rear_linear : ``True`` for the linear rear law (``None``: the power law)
+    gap_power : the closed-form TFC stiffening law's parameters (a :data:`GAP_POWER` record)
+    """
+
+    pitch: bool | None = None
+    rear_linear: bool | None = None
+    gap_power: np.record | None = None
+
+
+class Solver(NamedTuple):
+    """Step control: relative tolerance ``rtol`` [1], per-component absolute tolerances ``atol`` (SI),
+    largest step ``h_max`` [s], guard ``max_steps`` against a stalled integration."""
+
+    rtol: float
+    atol: np.ndarray
+    h_max: float
+    max_steps: int
+
 
 # Status codes returned by :func:`integrate`.
 OK, MAX_STEPS, STEP_UNDERFLOW, NOT_FINITE = 0, 1, 2, 3
@@ -194,24 +325,24 @@ def disk_history(dmw, p, t):
     return w, v
 
 
-@njit(cache=True, nogil=True, inline="always", error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy")
 def _disk(p, dmw, t):
     """Disk displacement [m] and velocity [m/s] under the TFC point at time ``t``."""
     if dmw is None:
         return 0.0, 0.0
-    return _ppval(dmw, p[P_DMW_T0], p[P_DMW_DT], t)
+    return _ppval(dmw, p.dmw_t0, p.dmw_dt, t)
 
 
-@njit(cache=True, nogil=True, inline="always", error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy")
 def _disk3(p, dmw, t):
     """Disk displacement and velocity under the TFC point, the front and the rear pad at ``t``."""
     if dmw is None:
         return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-    h = p[P_DMW_DT]
+    h = p.dmw_dt
     n = dmw.shape[0]
-    i = int((t - p[P_DMW_T0]) / h)
+    i = int((t - p.dmw_t0) / h)
     i = min(max(i, 0), n - 1)
-    s = t - (p[P_DMW_T0] + i * h)
+    s = t - (p.dmw_t0 + i * h)
     r = dmw[i]
     return (((r[0] * s + r[1]) * s + r[2]) * s + r[3], (3.0 * r[0] * s + 2.0 * r[1]) * s + r[2],
             ((r[4] * s + r[5]) * s + r[6]) * s + r[7], (3.0 * r[4] * s + 2.0 * r[5]) * s + r[6],
@@ -222,31 +353,33 @@ def _disk3(p, dmw, t):
 def gap_at(p, z, theta, w):
     """Gap [m] at the TFC point to the mean of the disk's surface heights, ``FH0 - delta + z - l_c theta - w``.
 
-    ``FH0`` is measured to the mean of surface heights (SPEC.md 7.2); scalars or arrays of ``z`` [m],
-    ``theta`` [rad], ``w`` [m] alike (the one home of the datum, for the kernel and post-processing).
+    ``FH0`` is measured to the mean of surface heights (docs/model.md, section "Separation datum");
+    scalars or arrays of ``z`` [m], ``theta`` [rad], ``w`` [m] alike (the one home of the datum, for
+    the kernel and post-processing).
     """
-    return p[P_FH0] - p[P_DELTA] + z - p[P_LC] * theta - w
+    return p.FH0 - p.delta + z - p.l_c * theta - w
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def separation_at(p, z, theta, w):
-    """ISBL separation ``d`` [m] to the mean of summit heights: :func:`gap_at` minus ``y_s = p[P_YS]``.
+    """ISBL separation ``d`` [m] to the mean of summit heights: :func:`gap_at` minus ``y_s = p.y_s``.
 
-    ``d = FH0 - delta + z - l_c theta - w - y_s`` (SPEC.md 7.2; the ISBL tables are functions of this d).
+    ``d = FH0 - delta + z - l_c theta - w - y_s`` (docs/model.md, section "Separation datum"; the ISBL
+    tables are functions of this d).
     """
-    return gap_at(p, z, theta, w) - p[P_YS]
+    return gap_at(p, z, theta, w) - p.y_s
 
 
 @njit(cache=True, nogil=True, inline="always", error_model="numpy")
-def separation(p, dmw, t, y):
-    """TFC separation ``d`` [m] and its rate [m/s] (SPEC.md 4, 7.2)."""
-    wc, vc = _disk(p, dmw, t)
+def separation(p, tab, t, y):
+    """TFC separation ``d`` [m] and its rate [m/s] (docs/model.md, section "Separation datum")."""
+    wc, vc = _disk(p, tab.dmw, t)
     return _separation(p, y, wc, vc)
 
 
 @njit(cache=True, nogil=True, inline="always", error_model="numpy")
 def _separation(p, y, wc, vc):
-    return separation_at(p, y[0], y[1], wc), y[2] - p[P_LC] * y[3] - vc
+    return separation_at(p, y[0], y[1], wc), y[2] - p.l_c * y[3] - vc
 
 
 # the air-bearing laws, compiled from their one definition in pipeline.physics.air_bearing
@@ -258,61 +391,107 @@ _stiffening_stiffness = njit(**_JIT)(ab.stiffening_stiffness)
 
 
 @njit(cache=True, nogil=True, inline="always", error_model="numpy")
-def _stiffening(p, g):
-    """Force [N] (up positive) and stiffness [N/m] of the TFC stiffening spring at the gap ``g`` [m].
+def _stiffening(q, g):
+    """Force [N] (up positive) and stiffness [N/m] of the gap-power stiffening spring at the gap ``g`` [m].
 
-    ``k(g) = k_t [(g0/g)^p - 1]``, force its integral from the nominal gap (constant ``P_TF0`` =
-    ``G(g_n)``), continued linearly below ``P_TGMIN`` where the law is singular.
+    ``k(g) = k_t [(g0/g)^q - 1]``, force its integral from the nominal gap (constant ``q.f0`` =
+    ``G(g_n)``), continued linearly below ``q.g_min`` where the law is singular (``q``: a
+    :data:`GAP_POWER` record).
     """
-    gm = p[P_TGMIN]
+    gm = q.g_min
     gg = max(g, gm)
-    f = p[P_TK] * (p[P_TF0] - _stiffening_potential(gg, p[P_TG0], p[P_TP]))
+    f = q.k_t * (q.f0 - _stiffening_potential(gg, q.g0, q.q))
     if g < gm:
-        return f + p[P_TKMIN] * (gm - g), p[P_TKMIN]
-    return f, _stiffening_stiffness(gg, p[P_TG0], p[P_TK], p[P_TP])
+        return f + q.k_min * (gm - g), q.k_min
+    return f, _stiffening_stiffness(gg, q.g0, q.k_t, q.q)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def rhs(t, y, p, dmw, cp, pa, ft, pitch, tfs, rlin, contact, out):
-    """Write ``dy/dt`` into ``out`` (see the module docstring for the equations).
-
-    ``tfs``: any array to enable the TFC stiffening spring, ``None`` to disable it; ``rlin``: any array
-    for the linear rear law, ``None`` for the power law (compile-time choices, see the module docstring).
-    """
-    z, th, vz, vth = y[0], y[1], y[2], y[3]
-    wc, vc, wf, vf, wr, vr = _disk3(p, dmw, t)
-    lf, lr = p[P_LF], p[P_LR]
-    F_f = -p[P_KF] * (z + lf * th - wf) - p[P_CF] * (vz + lf * vth - vf)
-    g_r = p[P_G0] + z - lr * th - wr
-    if rlin is not None:
-        F_r = _rear_linear(g_r, p[P_G0], p[P_KR])
+def _rear_force(p, rear_linear, y, wr, vr):
+    """Rear-pad force [N] (up positive): the power law, or the linear one, plus its damper."""
+    g_r = p.g0 + y[0] - p.l_r * y[1] - wr
+    if rear_linear is not None:
+        F_r = _rear_linear(g_r, p.g0, p.k_r)
     else:
-        g_r = max(g_r, 1e-3 * p[P_G0])  # the rear law is singular at zero gap; never reached in practice
-        F_r = _rear_power(g_r, p[P_G0], p[P_N], p[P_FR0])
-    F_r -= p[P_CR] * (vz - lr * vth - vr)
-    F_i = 0.0
+        g_r = max(g_r, 1e-3 * p.g0)  # the rear law is singular at zero gap; never reached in practice
+        F_r = _rear_power(g_r, p.g0, p.n, p.F_r0)
+    F_r -= p.c_r * (y[2] - p.l_r * y[3] - vr)
+    return F_r
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _tfc_air_force(p, gap_power, tfc, g):
+    """Air-bearing force [N] (up positive) and stiffness ``-dF/dg`` [N/m] at the TFC point, gap ``g`` [m]:
+    the closed-form gap-power law plus the tabulated law (each ``None`` when off; zero without both)."""
+    F = 0.0
+    k = 0.0
+    if gap_power is not None:
+        f, kg = _stiffening(gap_power, g)
+        F += f
+        k += kg
+    if tfc is not None:
+        f, slope = _ppval(tfc, p.tfc_x0, p.tfc_h, g)
+        F += f
+        k -= slope
+    return F, k
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _interface_force(p, cp, pa, ft, F_i, d, dd, contact):
+    """Add the interface forces at the separation ``d`` [m] (rate ``dd`` [m/s]) to ``F_i`` [N]: adhesion
+    always, contact pressure and damper in contact; returns it and the friction force ``Q`` [N]."""
     Q = 0.0
-    if tfs is not None:
-        F_i += _stiffening(p, gap_at(p, z, th, wc))[0]
     if pa is not None or cp is not None:
-        d, dd = _separation(p, y, wc, vc)
         # one index for every table (they share the separation grid)
-        i, s = _ppindex(int(p[P_TAB_N]), p[P_TAB_X0], p[P_TAB_H], d)
+        i, s = _ppindex(p.tab_n, p.tab_x0, p.tab_h, d)
         if pa is not None:
-            F_i -= p[P_AN] * _ppat(pa, i, s)
+            F_i -= p.A_n * _ppat(pa, i, s)
         if cp is not None:
             if contact:
-                F_i += p[P_AN] * max(_ppat(cp, i, s), 0.0) - p[P_CC] * dd
+                F_i += p.A_n * max(_ppat(cp, i, s), 0.0) - p.c_c * dd
                 if ft is not None:
-                    Q = p[P_AN] * max(_ppat(ft, i, s), 0.0)
-    out[0] = vz
-    out[2] = (F_f + F_r + F_i) / p[P_M]
+                    Q = p.A_n * max(_ppat(ft, i, s), 0.0)
+    return F_i, Q
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _interface_stiffness(p, cp, pa, contact, kk, d):
+    """Add the interface tables' stiffness ``-A_n dp/dd`` [N/m] at ``d`` [m] to ``kk`` (contact in contact)."""
+    if cp is not None and contact:
+        kk -= p.A_n * _ppval(cp, p.tab_x0, p.tab_h, d)[1]
+    if pa is not None:
+        kk += p.A_n * _ppval(pa, p.tab_x0, p.tab_h, d)[1]
+    return kk
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _accelerations(p, pitch, y, F_f, F_r, F_i, Q, out):
+    """Write ``dy/dt`` from the forces [N]; the pitch rows are zero when the pitch is locked."""
+    out[0] = y[2]
+    out[2] = (F_f + F_r + F_i) / p.m
     if pitch is None:
         out[1] = 0.0
         out[3] = 0.0
     else:
-        out[1] = vth
-        out[3] = (lf * F_f - lr * F_r - p[P_LC] * F_i - p[P_HCG] * Q) / p[P_I]
+        out[1] = y[3]
+        out[3] = (p.l_f * F_f - p.l_r * F_r - p.l_c * F_i - p.h_cg * Q) / p.I
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def rhs(t, y, p, tab, var, contact, out):
+    """Write ``dy/dt`` into ``out`` (see the module docstring for the equations).
+
+    ``tab``: :class:`Tables`; ``var``: :class:`Variants`; ``contact``: the contact mode.
+    """
+    z, th, vz, vth = y[0], y[1], y[2], y[3]
+    wc, vc, wf, vf, wr, vr = _disk3(p, tab.dmw, t)
+    lf = p.l_f
+    F_f = -p.k_f * (z + lf * th - wf) - p.c_f * (vz + lf * vth - vf)
+    F_r = _rear_force(p, var.rear_linear, y, wr, vr)
+    F_i = _tfc_air_force(p, var.gap_power, tab.tfc, gap_at(p, z, th, wc))[0]
+    d, dd = _separation(p, y, wc, vc)
+    F_i, Q = _interface_force(p, tab.contact, tab.adhesion, tab.friction, F_i, d, dd, contact)
+    _accelerations(p, var.pitch, y, F_f, F_r, F_i, Q, out)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -326,27 +505,30 @@ B1, B3, B4, B5, B6 = 35 / 384, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84
 E1, E3, E4, E5, E6, E7 = (71 / 57600, -71 / 16695, 71 / 1920, -17253 / 339200, 22 / 525, -1 / 40)
 
 
+
 @njit(cache=True, nogil=True, error_model="numpy")
-def _step(t, y, k1, h, p, dmw, cp, pa, ft, pitch, tfs, rlin, contact, ynew, k7, err, tmp, k2, k3, k4, k5, k6):
-    """One Dormand-Prince step: ``ynew``, its derivative ``k7`` and the error estimate ``err``."""
+def _step(t, y, k1, h, p, tab, var, contact, ynew, k7, err, wk):
+    """One Dormand-Prince step: ``ynew``, its derivative ``k7`` and the error estimate ``err``
+    (``wk``: work rows, the stage state and the stages ``k2``...``k6``)."""
+    tmp, k2, k3, k4, k5, k6 = wk[0], wk[1], wk[2], wk[3], wk[4], wk[5]
     for i in range(4):
         tmp[i] = y[i] + h * A21 * k1[i]
-    rhs(t + h / 5, tmp, p, dmw, cp, pa, ft, pitch, tfs, rlin, contact, k2)
+    rhs(t + h / 5, tmp, p, tab, var, contact, k2)
     for i in range(4):
         tmp[i] = y[i] + h * (A31 * k1[i] + A32 * k2[i])
-    rhs(t + 3 * h / 10, tmp, p, dmw, cp, pa, ft, pitch, tfs, rlin, contact, k3)
+    rhs(t + 3 * h / 10, tmp, p, tab, var, contact, k3)
     for i in range(4):
         tmp[i] = y[i] + h * (A41 * k1[i] + A42 * k2[i] + A43 * k3[i])
-    rhs(t + 4 * h / 5, tmp, p, dmw, cp, pa, ft, pitch, tfs, rlin, contact, k4)
+    rhs(t + 4 * h / 5, tmp, p, tab, var, contact, k4)
     for i in range(4):
         tmp[i] = y[i] + h * (A51 * k1[i] + A52 * k2[i] + A53 * k3[i] + A54 * k4[i])
-    rhs(t + 8 * h / 9, tmp, p, dmw, cp, pa, ft, pitch, tfs, rlin, contact, k5)
+    rhs(t + 8 * h / 9, tmp, p, tab, var, contact, k5)
     for i in range(4):
         tmp[i] = y[i] + h * (A61 * k1[i] + A62 * k2[i] + A63 * k3[i] + A64 * k4[i] + A65 * k5[i])
-    rhs(t + h, tmp, p, dmw, cp, pa, ft, pitch, tfs, rlin, contact, k6)
+    rhs(t + h, tmp, p, tab, var, contact, k6)
     for i in range(4):
         ynew[i] = y[i] + h * (B1 * k1[i] + B3 * k3[i] + B4 * k4[i] + B5 * k5[i] + B6 * k6[i])
-    rhs(t + h, ynew, p, dmw, cp, pa, ft, pitch, tfs, rlin, contact, k7)
+    rhs(t + h, ynew, p, tab, var, contact, k7)
     for i in range(4):
         err[i] = h * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i] + E7 * k7[i])
 
@@ -402,7 +584,7 @@ def _extrema(a, b, c):
     return n, x1, x2
 
 
-@njit(cache=True, nogil=True, inline="always", error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy")
 def _d_extrema(p, dmw, t, h, y, k1, ynew, k7, d0, dd0, d1, dd1, buf):
     """Interior extrema of ``d`` in the step ``[t, t + h]``: their ``theta`` in (0, 1) go into ``buf``;
     returns how many.
@@ -414,11 +596,11 @@ def _d_extrema(p, dmw, t, h, y, k1, ynew, k7, d0, dd0, d1, dd1, buf):
     """
     n_b = 0
     if dmw is not None:
-        t0, hd = p[P_DMW_T0], p[P_DMW_DT]
+        t0, hd = p.dmw_t0, p.dmw_dt
         i_a = int((t - t0) / hd)
         first_knot = t0 + (i_a + 1) * hd
         if first_knot < t + h:
-            lc = p[P_LC]
+            lc = p.l_c
             # s(theta) = A theta^3 + B theta^2 + C theta + E over the whole step
             A, B, C, E = _dcubic(y[0] - lc * y[1], k1[0] - lc * k1[1], ynew[0] - lc * ynew[1],
                                  k7[0] - lc * k7[1], h)
@@ -464,18 +646,18 @@ def _interp_state(y0, f0, y1, f1, h, theta, out):
 
 
 @njit(cache=True, nogil=True, inline="always", error_model="numpy")
-def _first_wrong_side(p, dmw, cp, contact, t, y, k1, ynew, k7, h, d0, dd0, d1, dd1, ys, buf):
+def _first_wrong_side(p, tab, contact, t, y, k1, ynew, k7, h, d0, dd0, d1, dd1, ys, buf):
     """Smallest ``theta`` in (0, 1] of the step where the criterion disagrees with the mode, or -1.
 
     Checks the step's end, the interior extrema of ``d`` (closed form, :func:`_d_extrema`) and, when
     ``d`` passes near the threshold, a few interior points; values are taken on the state
     interpolant, the one outputs and the bisection use.
     """
-    ks = p[P_KSIG]
+    ks = p.k_sigma
     best = 2.0
     if (d1 - ks < 0.0) != contact:
         best = 1.0
-    n_ex = _d_extrema(p, dmw, t, h, y, k1, ynew, k7, d0, dd0, d1, dd1, buf)
+    n_ex = _d_extrema(p, tab.dmw, t, h, y, k1, ynew, k7, d0, dd0, d1, dd1, buf)
     near = min(abs(d0 - ks), abs(d1 - ks)) < 0.5 * h * max(abs(dd0), abs(dd1))
     n_try = n_ex + (3 if near else 0)
     for i_ex in range(n_try):
@@ -486,66 +668,179 @@ def _first_wrong_side(p, dmw, cp, contact, t, y, k1, ynew, k7, h, d0, dd0, d1, d
         if th >= best:
             continue
         _interp_state(y, k1, ynew, k7, h, th, ys)
-        if (separation(p, dmw, t + th * h, ys)[0] - ks < 0.0) != contact:
+        if (separation(p, tab, t + th * h, ys)[0] - ks < 0.0) != contact:
             best = th
     return best if best <= 1.0 else -1.0
 
 
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
+def _locate_switch(t, y, k1, h, p, tab, var, contact, ynew, k7, err, wk, d0, dd0, d1, dd1, ys, buf, ev_y, ev_f,
+                   info):
+    """Find a contact switch in the accepted step ``[t, t + h]`` and shorten the step to it.
+
+    A redone (shorter) step is more accurate than the long step's interpolant and may show the
+    crossing earlier, so the search repeats on the redone step. Returns ``(switched, h_acc, d1, dd1)``:
+    whether the mode switches at the end of the (possibly shortened) step ``h_acc``, whose end state
+    and derivative are then in ``ynew``, ``k7`` and separation and rate ``d1``, ``dd1``.
+    """
+    h_acc = h
+    switched = False
+    for _ in range(8):
+        hi = _first_wrong_side(p, tab, contact, t, y, k1, ynew, k7, h_acc, d0, dd0, d1, dd1, ys, buf)
+        if hi < 0.0:
+            break
+        lo = 0.0
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            _interp_state(y, k1, ynew, k7, h_acc, mid, ys)
+            g = separation(p, tab, t + mid * h_acc, ys)[0] - p.k_sigma
+            if (g < 0.0) != contact:
+                hi = mid
+            else:
+                lo = mid
+            if (hi - lo) * h_acc < 1e-16:
+                break
+        if not switched:
+            info[3] += 1
+        switched = True
+        if hi >= 1.0:
+            break  # the switch is at the end of the step
+        # redo the step exactly up to the switch (in the old mode)
+        h_acc = hi * h_acc
+        _step(t, y, k1, h_acc, p, tab, var, contact, ev_y, ev_f, err, wk)
+        info[4] += 6
+        for i in range(4):
+            ynew[i] = ev_y[i]
+            k7[i] = ev_f[i]
+        d1, dd1 = separation(p, tab, t + h_acc, ynew)
+    return switched, h_acc, d1, dd1
+
+
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
+def _track_extremes(p, tab, t, h, y, k1, ynew, k7, d0, dd0, d1, dd1, ys, buf, ext):
+    """Exact extremes of ``d`` over the steady window into ``ext``: at the step's end and at the interior
+    extrema of ``d`` on the step's cubic (peak-to-peak free of aliasing by the output grid)."""
+    ext[0] = min(ext[0], d1)
+    ext[1] = max(ext[1], d1)
+    n_ex = _d_extrema(p, tab.dmw, t, h, y, k1, ynew, k7, d0, dd0, d1, dd1, buf)
+    for i_ex in range(n_ex):
+        th = buf[i_ex]
+        if t + th * h >= p.t_win:
+            _interp_state(y, k1, ynew, k7, h, th, ys)
+            de = separation(p, tab, t + th * h, ys)[0]
+            ext[0] = min(ext[0], de)
+            ext[1] = max(ext[1], de)
+
+
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
+def _sample_outputs(t, h, y, k1, ynew, k7, contact, t_out, j, Y, C, ys):
+    """Sample the step ``[t, t + h]`` at the output times from ``t_out[j]`` on; returns the next ``j``."""
+    n_out = t_out.shape[0]
+    while j < n_out and t_out[j] <= t + h:
+        theta = (t_out[j] - t) / h
+        _interp_state(y, k1, ynew, k7, h, theta, ys)
+        for i in range(4):
+            Y[j, i] = ys[i]
+        C[j] = contact
+        j += 1
+    return j
+
+
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
+def _error_norm(y, ynew, err, atol, rtol):
+    """RMS of the embedded error scaled by ``atol + rtol max(|y|, |ynew|)``."""
+    e = 0.0
+    for i in range(4):
+        sc = atol[i] + rtol * max(abs(y[i]), abs(ynew[i]))
+        e += (err[i] / sc) ** 2
+    return np.sqrt(e / 4.0)
+
+
 @njit(cache=True, nogil=True, error_model="numpy")
-def integrate(y0, t_end, t_out, p, dmw, cp, pa, ft, pitch, tfs, rlin, rtol, atol, h_max, max_steps):
-    """Integrate from ``t = 0`` to ``t_end`` [s]; sample the state at ``t_out`` (ascending).
+def _given(x):
+    """Whether a slot is on (compile-time constant: one specialisation per slot type)."""
+    return x is not None
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _extrema_slots(p, dmw, h_max):
+    """Size of the buffer of interior extrema of ``d``: at most 2 per DMW spline piece a step spans."""
+    if dmw is not None:
+        return 2 * (int(h_max / p.dmw_dt) + 3)
+    return 2
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _inverse_mass_at_tfc(p, pitch):
+    """``1/m + l_c^2/I`` [1/kg] (``1/m`` with the pitch locked): the mass the interface spring moves."""
+    return 1.0 / p.m + (p.l_c ** 2 / p.I if pitch is not None else 0.0)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _stiffness_cap(p, cp, pa, gap_power, tfc, contact, d, h_max, m_eff_inv):
+    """Largest step [s] after a step ending at separation ``d`` [m]: ``p.h_stiff`` over the angular
+    frequency of the local interface spring (``h_max`` without one).
+
+    A stiff contact would otherwise run the explicit method at its stability limit, where the step
+    controller is erratic (Hairer & Wanner, Solving ODEs II, IV.2).
+    """
+    if pa is None and cp is None and gap_power is None and tfc is None:
+        return h_max
+    kk = _tfc_air_force(p, gap_power, tfc, d + p.y_s)[1]
+    kk = abs(_interface_stiffness(p, cp, pa, contact, kk, d))
+    return p.h_stiff / np.sqrt(kk * m_eff_inv) if kk > 0.0 else h_max
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def integrate(y0, grid, p, tab, var, solver):
+    """Integrate from ``t = 0`` to ``grid.t_end`` [s]; sample the state at ``grid.t_out`` (ascending).
 
     Parameters
     ----------
     y0 : initial state ``(z [m], theta [rad], z' [m/s], theta' [rad/s])``
-    p : parameter vector (layout ``P_*``)
-    dmw, cp, pa, ft : piecewise-cubic coefficients of the disk under the TFC point and the pads
-        (:func:`disk_coefficients`) [m], and of the contact pressure,
-        adhesion pressure and friction stress [Pa] versus separation [m]; ``None`` disables
-    pitch : any array to enable the pitch degree of freedom, ``None`` to lock it
-    tfs : any array to enable the TFC stiffening spring (parameters ``P_TK``...), ``None`` to disable
-    rlin : any array for the linear rear law, ``None`` for the power law
-    rtol, atol : relative tolerance [1] and per-component absolute tolerances (SI)
-    h_max : largest step [s]; max_steps : guard against a stalled integration
+    grid : :class:`Grid`; p : named parameters (a :data:`PARAMS` record)
+    tab : :class:`Tables` (``None`` slots disable their effect); var : :class:`Variants`
+    solver : :class:`Solver`
 
     Returns
     -------
     Y : states at ``t_out`` (n_out, 4); C : contact flag at ``t_out``;
     info : ``[status, accepted steps, rejected steps, contact switches, rhs evaluations]``;
-    ext : exact minimum and maximum of the separation ``d`` [m] over ``t >= p[P_TWIN]``
+    ext : exact minimum and maximum of the separation ``d`` [m] over ``t >= p.t_win``
     """
+    t_end, t_out = grid.t_end, grid.t_out
+    rtol, atol, h_max, max_steps = solver.rtol, solver.atol, solver.h_max, solver.max_steps
+    has_contact = _given(tab.contact)
     n_out = t_out.shape[0]
     Y = np.full((n_out, 4), np.nan)
     C = np.zeros(n_out, dtype=np.bool_)
     info = np.zeros(5, dtype=np.int64)
-    ext = np.array([np.inf, -np.inf])  # min and max of d over t >= P_TWIN
+    ext = np.array([np.inf, -np.inf])  # min and max of d over t >= p.t_win
     y = y0.copy()
     k1 = np.empty(4)
     k7 = np.empty(4)
     ynew = np.empty(4)
     err = np.empty(4)
-    tmp = np.empty(4)
-    k2, k3, k4, k5, k6 = np.empty(4), np.empty(4), np.empty(4), np.empty(4), np.empty(4)
+    wk = np.empty((6, 4))
     ys = np.empty(4)
-    # interior extrema of d: at most 2 per DMW spline piece a step spans
-    buf = np.empty(2 * (int(h_max / p[P_DMW_DT]) + 3) if dmw is not None else 2)
+    buf = np.empty(_extrema_slots(p, tab.dmw, h_max))
     ev_y = np.empty(4)
     ev_f = np.empty(4)
     t = 0.0
     # The initial mode follows the criterion at t = 0.
     contact = False
-    if cp is not None:
-        contact = separation(p, dmw, t, y)[0] < p[P_KSIG]
-    rhs(t, y, p, dmw, cp, pa, ft, pitch, tfs, rlin, contact, k1)
+    if has_contact:
+        contact = separation(p, tab, t, y)[0] < p.k_sigma
+    rhs(t, y, p, tab, var, contact, k1)
     info[4] += 1
-    d0, dd0 = separation(p, dmw, t, y)  # d and d' at the current step start (kept step to step)
-    if p[P_TWIN] <= 0.0:  # the window starts at t = 0: the initial d is one of its values (steps add their ends)
+    d0, dd0 = separation(p, tab, t, y)  # d and d' at the current step start (kept step to step)
+    if p.t_win <= 0.0:  # the window starts at t = 0: the initial d is one of its values (steps add their ends)
         ext[0] = d0
         ext[1] = d0
     h = min(h_max, 1e-8)
     t_hold = -1.0  # no switch may happen before t_hold (minimum dwell after a switch)
-    h_stiff = h_max  # step cap from the local interface stiffness (see below)
-    m_eff_inv = 1.0 / p[P_M] + (p[P_LC] ** 2 / p[P_I] if pitch is not None else 0.0)
+    h_stiff = h_max  # step cap from the local interface stiffness (_stiffness_cap)
+    m_eff_inv = _inverse_mass_at_tfc(p, var.pitch)
     j = 0
     while j < n_out and t_out[j] <= t:
         Y[j, :] = y
@@ -557,30 +852,26 @@ def integrate(y0, t_end, t_out, p, dmw, cp, pa, ft, pitch, tfs, rlin, rtol, atol
             info[0] = MAX_STEPS
             return Y, C, info, ext
         steps += 1
-        if cp is not None and t_hold > 0.0 and t >= t_hold:
+        if has_contact and t_hold > 0.0 and t >= t_hold:
             # the dwell has ended: switch now if the criterion disagrees with the mode
             t_hold = -1.0
-            if (d0 - p[P_KSIG] < 0.0) != contact:
+            if (d0 - p.k_sigma < 0.0) != contact:
                 contact = not contact
                 info[3] += 1
-                t_hold = t + p[P_DWELL]
-                rhs(t, y, p, dmw, cp, pa, ft, pitch, tfs, rlin, contact, k1)
+                t_hold = t + p.dwell
+                rhs(t, y, p, tab, var, contact, k1)
                 info[4] += 1
         h = min(h, h_max, h_stiff)
         if t + 1.01 * h >= t_end:  # land on t_end exactly, never leave a sliver (Hairer's DOPRI5 rule)
             h = t_end - t
         if t_hold > t and t + 1.01 * h >= t_hold:  # land on the end of the dwell, no sliver
             h = t_hold - t
-        if h < 1e-12 * max(t, 1e-9) or h < 1e-18:  # (h = t_end - t is never a sliver, see above)
+        if h < 1e-12 * max(t, NS) or h < 1e-18:  # (h = t_end - t is never a sliver, see above)
             info[0] = STEP_UNDERFLOW
             return Y, C, info, ext
-        _step(t, y, k1, h, p, dmw, cp, pa, ft, pitch, tfs, rlin, contact, ynew, k7, err, tmp, k2, k3, k4, k5, k6)
+        _step(t, y, k1, h, p, tab, var, contact, ynew, k7, err, wk)
         info[4] += 6
-        e = 0.0
-        for i in range(4):
-            sc = atol[i] + rtol * max(abs(y[i]), abs(ynew[i]))
-            e += (err[i] / sc) ** 2
-        e = np.sqrt(e / 4.0)
+        e = _error_norm(y, ynew, err, atol, rtol)
         if not np.isfinite(e):
             h *= 0.1
             info[2] += 1
@@ -592,61 +883,14 @@ def integrate(y0, t_end, t_out, p, dmw, cp, pa, ft, pitch, tfs, rlin, rtol, atol
         # accepted step [t, t + h]
         h_acc = h
         switched = False
-        d1, dd1 = separation(p, dmw, t + h, ynew)
-        if cp is not None and t_hold < 0.0:
-            # Locate a contact switch in the step; a redone (shorter) step is more accurate than the
-            # long step's interpolant and may show the crossing earlier, so repeat on the redone step.
-            for _ in range(8):
-                hi = _first_wrong_side(p, dmw, cp, contact, t, y, k1, ynew, k7, h_acc, d0, dd0, d1, dd1, ys,
-                                       buf)
-                if hi < 0.0:
-                    break
-                lo = 0.0
-                for _ in range(60):
-                    mid = 0.5 * (lo + hi)
-                    _interp_state(y, k1, ynew, k7, h_acc, mid, ys)
-                    g = separation(p, dmw, t + mid * h_acc, ys)[0] - p[P_KSIG]
-                    if (g < 0.0) != contact:
-                        hi = mid
-                    else:
-                        lo = mid
-                    if (hi - lo) * h_acc < 1e-16:
-                        break
-                if not switched:
-                    info[3] += 1
-                switched = True
-                if hi >= 1.0:
-                    break  # the switch is at the end of the step
-                # redo the step exactly up to the switch (in the old mode)
-                h_acc = hi * h_acc
-                _step(t, y, k1, h_acc, p, dmw, cp, pa, ft, pitch, tfs, rlin, contact, ev_y, ev_f, err, tmp,
-                      k2, k3, k4, k5, k6)
-                info[4] += 6
-                for i in range(4):
-                    ynew[i] = ev_y[i]
-                    k7[i] = ev_f[i]
-                d1, dd1 = separation(p, dmw, t + h_acc, ynew)
+        d1, dd1 = separation(p, tab, t + h, ynew)
+        if has_contact and t_hold < 0.0:
+            switched, h_acc, d1, dd1 = _locate_switch(t, y, k1, h, p, tab, var, contact, ynew, k7, err, wk,
+                                                      d0, dd0, d1, dd1, ys, buf, ev_y, ev_f, info)
         t_new = t + h_acc
-        if t_new >= p[P_TWIN]:
-            # exact extremes of d over the steady window: at the step's end and at the interior
-            # extrema of d on the step's cubic (peak-to-peak free of aliasing by the output grid)
-            ext[0] = min(ext[0], d1)
-            ext[1] = max(ext[1], d1)
-            n_ex = _d_extrema(p, dmw, t, h_acc, y, k1, ynew, k7, d0, dd0, d1, dd1, buf)
-            for i_ex in range(n_ex):
-                th = buf[i_ex]
-                if t + th * h_acc >= p[P_TWIN]:
-                    _interp_state(y, k1, ynew, k7, h_acc, th, ys)
-                    de = separation(p, dmw, t + th * h_acc, ys)[0]
-                    ext[0] = min(ext[0], de)
-                    ext[1] = max(ext[1], de)
-        while j < n_out and t_out[j] <= t_new:
-            theta = (t_out[j] - t) / h_acc
-            _interp_state(y, k1, ynew, k7, h_acc, theta, ys)
-            for i in range(4):
-                Y[j, i] = ys[i]
-            C[j] = contact
-            j += 1
+        if t_new >= p.t_win:
+            _track_extremes(p, tab, t, h_acc, y, k1, ynew, k7, d0, dd0, d1, dd1, ys, buf, ext)
+        j = _sample_outputs(t, h_acc, y, k1, ynew, k7, contact, t_out, j, Y, C, ys)
         for i in range(4):
             y[i] = ynew[i]
             if not np.isfinite(y[i]):
@@ -655,26 +899,14 @@ def integrate(y0, t_end, t_out, p, dmw, cp, pa, ft, pitch, tfs, rlin, rtol, atol
         t = t_new
         d0, dd0 = d1, dd1
         info[1] += 1
-        if pa is not None or cp is not None or tfs is not None:
-            # Cap the next step at 1/omega of the local interface spring: a stiff contact would
-            # otherwise run the explicit method at its stability limit, where the step controller
-            # is erratic (Hairer & Wanner, Solving ODEs II, IV.2).
-            d_now = d0
-            kk = 0.0
-            if tfs is not None:
-                kk += _stiffening(p, d_now + p[P_YS])[1]
-            if cp is not None and contact:
-                kk -= p[P_AN] * _ppval(cp, p[P_TAB_X0], p[P_TAB_H], d_now)[1]
-            if pa is not None:
-                kk += p[P_AN] * _ppval(pa, p[P_TAB_X0], p[P_TAB_H], d_now)[1]
-            kk = abs(kk)
-            h_stiff = p[P_HSTIFF] / np.sqrt(kk * m_eff_inv) if kk > 0.0 else h_max
+        h_stiff = _stiffness_cap(p, tab.contact, tab.adhesion, var.gap_power, tab.tfc, contact, d0, h_max,
+                                 m_eff_inv)
         if t_hold > 0.0 and abs(t - t_hold) <= 1e-12 * t_hold:
             t = t_hold  # land exactly on the end of the dwell (checked at the top of the loop)
         if switched:
             contact = not contact
-            t_hold = t + p[P_DWELL] if p[P_DWELL] > 0.0 else -1.0
-            rhs(t, y, p, dmw, cp, pa, ft, pitch, tfs, rlin, contact, k1)
+            t_hold = t + p.dwell if p.dwell > 0.0 else -1.0
+            rhs(t, y, p, tab, var, contact, k1)
             info[4] += 1
         else:
             for i in range(4):

@@ -13,6 +13,12 @@ Named model variants (scene keys, one registry each): ``air_bearing.stiffness_ro
 (:data:`pipeline.physics.friction.FRICTION_LAWS`) and ``solver.fhm_measure``
 (:data:`pipeline.physics.fhm.FHM_MEASURES`).
 
+Adding a variant. A friction law, an FHM measure, a stiffness root or an air-bearing force law at the
+TFC point is its function in its physics module plus one line in its registry; nothing here or in
+the kernel changes (a TFC-point law without a compiled closed form is tabulated per protrusion by
+:func:`tfc_table` into the kernel's generic slot, :mod:`pipeline.dynamics`). A new scene key whose
+laws act at the TFC point (e.g. ``air_bearing.bulge``) adds its registry to :data:`TFC_POINT_LAWS`.
+
 Steady-window definitions (over ``transient_ms <= t <= duration_ms``, sampled every
 ``output_step_ns``):
 
@@ -27,31 +33,35 @@ Steady-window definitions (over ``transient_ms <= t <= duration_ms``, sampled ev
 * ``mean_pressure``, ``shear_stress`` [MPa]: total contact / friction force over total real area,
   over the samples in contact; ``real_area`` [um2]: mean real area while in contact.
 * ``contact_fraction`` [1]: fraction of the window's samples in contact.
-* ``regime``: 0 flying (no contact in the steady window: no sample in contact and the exact minimum
-  of d above k sigma), 2 surfing (steady sliding: in contact in at least 99 % of the samples),
-  1 bouncing (otherwise, including contacts shorter than the output step).
+* ``regime``: 0 flying (no contact in the steady window, :func:`touched`), 2 surfing (steady
+  sliding: in contact in at least 99 % of the samples), 1 bouncing (otherwise, including contacts
+  shorter than the output step).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
-from typing import Any
+from typing import Any, Mapping
 
 import numpy as np
 
 from . import dynamics as dyn
+from ..units import KHZ, MM, MS, NM, NS, UM
 from ..physics import air_bearing as ab
 from ..physics.fhm import fhm
 from ..physics.friction import friction_stress_table
 from ..physics.geometry import effective_radius, nominal_area
 from ..physics.statistics import explicit_statistics
-from ..variables import Regime
-
-NM, UM, MM = 1e-9, 1e-6, 1e-3
+from ..variables import INTERFACE, Regime
+from .dmw_record import disk_speed_m_s
 
 #: Regime codes (:class:`pipeline.variables.Regime`, the ``flag_values`` of the ``regime`` variable).
 FLYING, BOUNCING, SURFING = Regime.FLYING, Regime.BOUNCING, Regime.SURFING
 SURFING_FRACTION = 0.99
+
+#: Scene keys of ``[air_bearing]`` whose named laws (:class:`pipeline.physics.air_bearing.TfcLaw`) act at
+#: the TFC point, each with its registry: the selected laws are summed in the kernel's TFC-point force.
+TFC_POINT_LAWS: Mapping[str, Mapping[str, ab.TfcLaw | None]] = {"tfc_stiffening": ab.TFC_STIFFENING}
 
 
 @dataclass
@@ -61,17 +71,21 @@ class Model:
     Attributes
     ----------
     slider : the rigid body and air bearing
-    p : kernel parameter vector (protrusion-dependent entries are set by :func:`run_model`)
+    p : the kernel's named parameters (a :data:`pipeline.dynamics.PARAMS` record; the
+        protrusion-dependent fields are set by :func:`run_model`)
     dmw : DMW coefficients [m] or ``None``; contact, adhesion, friction, area : interface-table
         coefficients [Pa] / [1] versus separation [m], or ``None`` when the effect is off
     pitch : ``None`` when the pitch DOF is locked
-    tfc_stiffening : ``None`` without the TFC stiffening spring (``air_bearing.tfc_stiffening = "none"``)
-    rear_linear : ``None`` for the power rear law, an array for the linear one (``air_bearing.rear_law``)
+    tfc_stiffening : parameters of the compiled gap-power law at the TFC point (a
+        :data:`pipeline.dynamics.GAP_POWER` record, ``f0`` set per protrusion), ``None`` without it
+    rear_linear : ``None`` for the power rear law, ``True`` for the linear one (``air_bearing.rear_law``)
+    tfc_tabulated : the selected TFC-point laws without a compiled form, tabulated per protrusion
+        (:func:`tfc_table`); scene : the scene they read
     k_sigma : contact criterion threshold ``k sigma`` [m] (``nan`` without contact)
     """
 
     slider: ab.Slider
-    p: np.ndarray
+    p: np.record
     dmw: np.ndarray | None
     contact: np.ndarray | None
     adhesion: np.ndarray | None
@@ -92,8 +106,10 @@ class Model:
     fhm_measure: str
     effects: frozenset
     info: dict = field(default_factory=dict)
-    tfc_stiffening: np.ndarray | None = None
-    rear_linear: np.ndarray | None = None
+    tfc_stiffening: np.record | None = None
+    rear_linear: bool | None = None
+    tfc_tabulated: tuple[ab.TfcLaw, ...] = ()
+    scene: Any = None
 
     @property
     def k_sigma(self) -> float:
@@ -112,7 +128,7 @@ def slider_from_scene(scene: Any, damping_ratio: float | None = None) -> tuple[a
     m, I = ab.mass_properties(L, W, T, s["density_kg_m3"])
     l_f, l_r = s["front_arm_mm"] * MM, s["rear_arm_mm"] * MM
     l_c = L / 2 - s["tfc_from_trailing_edge_um"] * UM
-    f1, f2 = (f * 1e3 for f in a["frequencies_khz"])
+    f1, f2 = (f * KHZ for f in a["frequencies_khz"])
     k_f, k_r, info = ab.choose_stiffness(f1, f2, m, I, l_f, l_r, L, a["stiffness_root"])
     zeta = a["damping_ratio"] if damping_ratio is None else damping_ratio
     c_f, c_r = ab.pad_damping(k_f, k_r, m, I, l_f, l_r, zeta) if zeta > 0 else (0.0, 0.0)
@@ -141,59 +157,51 @@ def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float]
         raise ValueError("scene.effects must include 'air_bearing': nothing else holds the slider up")
     slider, info = slider_from_scene(scene, damping_ratio)
     a, sol, dm = scene["air_bearing"], scene["solver"], scene["dmw"]
-    p = np.zeros(dyn.N_PARAMS)
-    p[dyn.P_M], p[dyn.P_I] = slider.m, slider.I
-    p[dyn.P_LF], p[dyn.P_LR], p[dyn.P_LC], p[dyn.P_HCG] = slider.l_f, slider.l_r, slider.l_c, slider.h_cg
-    p[dyn.P_KF], p[dyn.P_KR], p[dyn.P_CF], p[dyn.P_CR] = slider.k_f, slider.k_r, slider.c_f, slider.c_r
-    p[dyn.P_G0], p[dyn.P_N], p[dyn.P_FR0] = slider.g0, slider.n, slider.rear_preload
-    p[dyn.P_FH0] = a["flying_height_nm"] * NM
-    # TFC stiffening spring (SPEC.md 7.4): compiled in only when selected (None prunes it)
-    tfs = None
-    if a["tfc_stiffening"] != "none":
-        tfs = np.ones(1)
-        p[dyn.P_TK], p[dyn.P_TP], p[dyn.P_TG0] = a["tfc_stiffness_n_m"], a["tfc_stiffening_exponent"], p[dyn.P_FH0]
-        p[dyn.P_TGMIN] = ab.TFC_MIN_GAP * p[dyn.P_FH0]
-        p[dyn.P_TKMIN] = ab.stiffening_stiffness(ab.TFC_MIN_GAP, 1.0, p[dyn.P_TK], p[dyn.P_TP])  # at g = gm
-    rear_linear = np.ones(1) if ab.REAR_LAWS[a["rear_law"]].linear else None
+    p = dyn.params(m=slider.m, I=slider.I, l_f=slider.l_f, l_r=slider.l_r, l_c=slider.l_c, h_cg=slider.h_cg,
+                   k_f=slider.k_f, k_r=slider.k_r, c_f=slider.c_f, c_r=slider.c_r,
+                   g0=slider.g0, n=slider.n, F_r0=slider.rear_preload, FH0=a["flying_height_nm"] * NM)
+    gap_power, tabulated = tfc_point_laws(scene, p.FH0)
+    rear_linear = True if ab.REAR_LAWS[a["rear_law"]].linear else None
     info.update({"rear_law": a["rear_law"], "tfc_stiffening": a["tfc_stiffening"],
                  "friction_law": scene["contact"]["friction_law"],
                  "friction_coefficient": scene["contact"]["friction_coefficient"]})
-    p[dyn.P_CC] = scene["contact"]["damping_n_s_m"]
-    p[dyn.P_DWELL] = sol["min_dwell_ns"] * 1e-9
-    p[dyn.P_HSTIFF] = sol["stiffness_step"]
+    p.c_c = scene["contact"]["damping_n_s_m"]
+    p.dwell = sol["min_dwell_ns"] * NS
+    p.h_stiff = sol["stiffness_step"]
     # The record gives the disk under the TFC point at time t; the front and rear pads see the same
     # disk point earlier, by the travel time from pad to TFC (the disk moves leading -> trailing edge).
-    V = 2 * np.pi * dm["radius_mm"] * MM * dm["rpm"] / 60.0
-    p[dyn.P_OFF_F] = (slider.l_f + slider.l_c) / V
-    p[dyn.P_OFF_R] = (slider.l_c - slider.l_r) / V
-    p[dyn.P_OFF_C] = 0.0
+    V = disk_speed_m_s(dm)
+    p.off_f = (slider.l_f + slider.l_c) / V
+    p.off_r = (slider.l_c - slider.l_r) / V
+    p.off_c = 0.0
     order = sol["interpolation_order"]
-    duration = sol["duration_ms"] * 1e-3
+    duration = sol["duration_ms"] * MS
 
     dmw_c = None
     if "dmw" in eff:
         if dmw is None:
             raise ValueError("the dmw effect needs a DMW record")
         w_nm, fs = dmw
-        need = duration + max(p[dyn.P_OFF_F], 0.0) + 2.0 / fs
+        need = duration + max(p.off_f, 0.0) + 2.0 / fs
         have = (w_nm.size - 1) / fs
         if have < need:
-            raise ValueError(f"DMW record of {have * 1e3:.4g} ms is shorter than the {need * 1e3:.4g} ms the "
+            raise ValueError(f"DMW record of {have / MS:.4g} ms is shorter than the {need / MS:.4g} ms the "
                              f"simulation needs (duration plus the pad-to-TFC travel time); set "
                              f"dmw.duration_ms >= {np.ceil(need * 1e5) / 1e2:g}")
         dmw_c = dyn.disk_coefficients(np.asarray(w_nm, float) * NM, 1.0 / fs, order,
-                                      (p[dyn.P_OFF_C], p[dyn.P_OFF_F], p[dyn.P_OFF_R]))
-        p[dyn.P_DMW_T0], p[dyn.P_DMW_DT] = 0.0, 1.0 / fs
+                                      (p.off_c, p.off_f, p.off_r))
+        p.dmw_t0, p.dmw_dt = 0.0, 1.0 / fs
         info["disk_speed_m_s"] = V
 
     tabs = {"contact": None, "adhesion": None, "friction": None, "area": None}
     if interface is not None and "separation" in interface.coords:
         x = interface["separation"].values * NM
         h = float(x[1] - x[0])
-        p[dyn.P_TAB_X0], p[dyn.P_TAB_H], p[dyn.P_TAB_N] = x[0], h, x.size - 1
-        names = {"contact": ("contact_pressure", 1e6, "contact"), "adhesion": ("adhesion_pressure", 1e6, "adhesion"),
-                 "friction": ("friction_stress", 1e6, "friction"), "area": ("real_area_fraction", 1.0, "contact")}
-        for key, (var, scale, effect) in names.items():
+        p.tab_x0, p.tab_h, p.tab_n = x[0], h, x.size - 1
+        names = {"contact": ("contact_pressure", "contact"), "adhesion": ("adhesion_pressure", "adhesion"),
+                 "friction": ("friction_stress", "friction"), "area": ("real_area_fraction", "contact")}
+        for key, (var, effect) in names.items():
+            scale = INTERFACE[var].si_unit  # dataset unit -> SI, declared once (pipeline/variables.py)
             if effect in eff:
                 if var not in interface:
                     raise ValueError(f"interface tables lack {var!r}, needed by the {effect} effect; "
@@ -201,7 +209,8 @@ def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float]
                 values = interface[var].values * scale
                 if key == "friction":  # the named friction law (SPEC.md 7.6) acts through the table
                     c = scene["contact"]
-                    values = friction_stress_table(c["friction_law"], interface["contact_pressure"].values * 1e6,
+                    values = friction_stress_table(c["friction_law"],
+                                                   interface["contact_pressure"].values * INTERFACE["contact_pressure"].si_unit,
                                                    values, c["friction_coefficient"])
                 tabs[key] = dyn.piecewise_coefficients(values, h, order)
     elif eff & {"contact", "adhesion"}:
@@ -210,20 +219,20 @@ def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float]
     # separation datum: d is measured to the mean of summit heights, y_s above the mean of surface
     # heights to which FH0 is measured (SPEC.md 7.2)
     if interface is not None and "y_s" in interface:
-        p[dyn.P_YS] = float(interface["y_s"]) * NM
+        p.y_s = float(interface["y_s"]) * NM
     elif scene["roughness"]["afm"]:  # y_s is a statistic of the scans: interface.nc has it
         raise ValueError("a scene with roughness.afm needs its interface.nc (y_s of the scans) even without "
                          "contact or adhesion (pipeline.stages.simulate.needs_interface)")
     else:  # McCool's y_s of the explicit statistics (SPEC.md 1), what the interface stage would write
         r = scene["roughness"]
-        p[dyn.P_YS] = explicit_statistics(r["sigma_nm"], r["summit_radius_um"], r["summit_density_per_um2"])["y_s"]
-    info["y_s"] = p[dyn.P_YS]
+        p.y_s = explicit_statistics(r["sigma_nm"], r["summit_radius_um"], r["summit_density_per_um2"])["y_s"]
+    info["y_s"] = p.y_s
     if "contact" in eff:
         if k is None or not np.isfinite(k):
             raise ValueError("the contact effect needs the criterion k: set contact.k or run `hdi calibrate`")
     k = float(k) if k is not None else np.nan
     atol_len = sol["atol_nm"] * NM
-    w2 = 2 * np.pi * a["frequencies_khz"][1] * 1e3
+    w2 = 2 * np.pi * a["frequencies_khz"][1] * KHZ
     atol = np.array([atol_len, atol_len / slider.l_c, atol_len * w2, atol_len / slider.l_c * w2])
     info.update({"k_f": slider.k_f, "k_r": slider.k_r, "c_f": slider.c_f, "c_r": slider.c_r})
     return Model(slider=slider, p=p, dmw=dmw_c, contact=tabs["contact"], adhesion=tabs["adhesion"],
@@ -231,10 +240,51 @@ def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float]
                  pitch=np.ones(1) if "pitch" in eff else None, sigma=sigma, k=k,
                  section_depth=scene["contact"]["section_depth_sigma"] * sigma,
                  half_length=scene["tfc"]["half_length_um"] * UM, half_width=scene["tfc"]["half_width_um"] * UM,
-                 duration=duration, transient=sol["transient_ms"] * 1e-3,
-                 output_step=sol["output_step_ns"] * 1e-9, rtol=sol["rtol"], atol=atol,
-                 max_step=sol["max_step_ns"] * 1e-9, fhm_measure=sol["fhm_measure"], effects=eff, info=info,
-                 tfc_stiffening=tfs, rear_linear=rear_linear)
+                 duration=duration, transient=sol["transient_ms"] * MS,
+                 output_step=sol["output_step_ns"] * NS, rtol=sol["rtol"], atol=atol,
+                 max_step=sol["max_step_ns"] * NS, fhm_measure=sol["fhm_measure"], effects=eff, info=info,
+                 tfc_stiffening=gap_power, rear_linear=rear_linear, tfc_tabulated=tabulated, scene=scene)
+
+
+def tfc_point_laws(scene: Any, fh0: float) -> tuple[np.record | None, tuple[ab.TfcLaw, ...]]:
+    """The scene's air-bearing laws at the TFC point (:data:`TFC_POINT_LAWS`): the parameters of the
+    compiled gap-power law (a :data:`pipeline.dynamics.GAP_POWER` record, or ``None``) and the laws
+    to tabulate (:func:`tfc_table`). ``fh0``: the flying height [m]."""
+    a = scene["air_bearing"]
+    gap_power, tabulated = None, []
+    for key, registry in TFC_POINT_LAWS.items():
+        law = registry[a[key]]
+        if law is None:
+            continue
+        if law.closed_form == "gap-power":  # docs/model.md, section "Model variants"
+            k_t, q = a["tfc_stiffness_n_m"], a["tfc_stiffening_exponent"]
+            gap_power = dyn.params(dyn.GAP_POWER, k_t=k_t, q=q, g0=fh0, g_min=ab.TFC_MIN_GAP * fh0,
+                                   k_min=ab.stiffening_stiffness(ab.TFC_MIN_GAP, 1.0, k_t, q))  # at g = g_min
+        elif law.closed_form is None:
+            tabulated.append(law)
+        else:
+            raise ValueError(f"air_bearing.{key} = {a[key]!r}: no compiled form {law.closed_form!r} in the kernel")
+    return gap_power, tuple(tabulated)
+
+
+def tfc_table(model: Model, protrusion: float) -> tuple[np.ndarray, float, float] | None:
+    """The tabulated TFC-point force of the model at a protrusion [m]: piecewise-cubic coefficients
+    (:func:`pipeline.dynamics.piecewise_coefficients`, not-a-knot spline) of the sum of the laws of
+    ``model.tfc_tabulated`` [N] on a uniform gap grid, its first gap [m] and step [m]; ``None`` without.
+
+    The kernel takes the force and its stiffness ``-dF/dg`` from the same cubic (linear continuation
+    below the grid, constant above). The grid spans the laws' ``gap_range`` times ``FH0`` with their
+    largest ``points``.
+    """
+    laws = model.tfc_tabulated
+    if not laws:
+        return None
+    fh0 = model.p.FH0
+    g = np.linspace(min(law.gap_range[0] for law in laws) * fh0, max(law.gap_range[1] for law in laws) * fh0,
+                    max(law.points for law in laws))
+    force = sum(np.asarray(law.force(g, protrusion, model.scene), dtype=float) for law in laws)
+    h = float(g[1] - g[0])
+    return dyn.piecewise_coefficients(force, h, 3), float(g[0]), h
 
 
 @dataclass
@@ -243,13 +293,13 @@ class Run:
 
     ``d_extremes``: exact minimum and maximum of the separation [m] over the steady window, tracked by
     the integrator (step ends and interior extrema), free of aliasing by the output grid.
-    ``p``: the parameter vector the kernel ran with (the model's, with this protrusion, ``A_n``,
-    ``k sigma``, ...: layout ``pipeline.model.dynamics.P_*``).
+    ``p``: the parameters the kernel ran with (the model's record with this protrusion, ``A_n``,
+    ``k sigma``, ...: :data:`pipeline.model.dynamics.PARAMS`).
     """
 
     model: Model
     protrusion: float
-    p: np.ndarray
+    p: np.record
     nominal_area: float
     time: np.ndarray
     state: np.ndarray
@@ -264,26 +314,38 @@ class IntegrationError(RuntimeError):
 
 def run_model(model: Model, protrusion: float, y0: np.ndarray | None = None, max_steps: int = 5_000_000) -> Run:
     """Integrate the model at protrusion ``protrusion`` [m] from the nominal attitude (or ``y0``)."""
-    p = model.p.copy()
-    p[dyn.P_DELTA] = protrusion
     An = float(nominal_area(protrusion, model.half_length, model.half_width, model.section_depth)) \
         if np.isfinite(model.section_depth) else 0.0
-    p[dyn.P_AN] = An
-    p[dyn.P_KSIG] = model.k_sigma
+    p = dyn.with_values(model.p, delta=protrusion, A_n=An, k_sigma=model.k_sigma, t_win=model.transient)
     n_out = int(round(model.duration / model.output_step)) + 1
     t_out = np.minimum(np.arange(n_out) * model.output_step, model.duration)
     y0 = np.zeros(4) if y0 is None else np.asarray(y0, float)
-    p[dyn.P_TWIN] = model.transient
-    if model.tfc_stiffening is not None:  # the stiffening force is zero at this protrusion's nominal gap
-        p[dyn.P_TF0] = _stiffening_potential(p[dyn.P_FH0] - protrusion, p[dyn.P_TG0], p[dyn.P_TP], p[dyn.P_TGMIN])
-    Y, C, info, ext = dyn.integrate(y0, model.duration, t_out, p, model.dmw, model.contact, model.adhesion,
-                                    model.friction, model.pitch, model.tfc_stiffening, model.rear_linear,
-                                    model.rtol, model.atol, model.max_step, max_steps)
+    tables, variants = kernel_slots(model, p)
+    Y, C, info, ext = dyn.integrate(y0, dyn.Grid(model.duration, t_out), p, tables, variants,
+                                    dyn.Solver(model.rtol, model.atol, model.max_step, max_steps))
     if info[0] != dyn.OK:
         raise IntegrationError(f"integration failed at protrusion {protrusion / NM:.3g} nm: "
                                f"{dyn.STATUS_TEXT[int(info[0])]} (steps {info[1]}, rejected {info[2]})")
     return Run(model=model, protrusion=protrusion, p=p, nominal_area=An, time=t_out, state=Y, contact=C, info=info,
                d_extremes=(float(ext[0]), float(ext[1])))
+
+
+def kernel_slots(model: Model, p: np.record) -> tuple[dyn.Tables, dyn.Variants]:
+    """The kernel's tables and variants for the model at the protrusion ``p.delta`` [m]; sets the
+    tabulated TFC-point law's grid in ``p`` (``None`` slots: effects off)."""
+    gap_power = None
+    delta = p["delta"]
+    if model.tfc_stiffening is not None:  # the stiffening force is zero at this protrusion's nominal gap
+        gp = model.tfc_stiffening
+        gap_power = dyn.with_values(gp, f0=_stiffening_potential(p["FH0"] - delta, gp["g0"], gp["q"], gp["g_min"]))
+    tfc = tfc_table(model, delta)
+    if tfc is not None:
+        tfc, p["tfc_x0"], p["tfc_h"] = tfc
+    tables = dyn.Tables(dmw=model.dmw, contact=model.contact, adhesion=model.adhesion, friction=model.friction,
+                        tfc=tfc)
+    variants = dyn.Variants(pitch=True if model.pitch is not None else None, rear_linear=model.rear_linear,
+                            gap_power=gap_power)
+    return tables, variants
 
 
 def _stiffening_potential(g: float, g0: float, q: float, g_min: float) -> float:
@@ -306,7 +368,7 @@ def histories(run: Run) -> dict[str, np.ndarray]:
     d = dyn.separation_at(p, Y[:, 0], Y[:, 1], w)
     out: dict[str, np.ndarray] = {"separation": d, "disk_displacement": w, "z": Y[:, 0], "pitch": Y[:, 1]}
     out["clearance"] = d - m.k_sigma
-    x0, h, An = p[dyn.P_TAB_X0], p[dyn.P_TAB_H], run.nominal_area
+    x0, h, An = p.tab_x0, p.tab_h, run.nominal_area
     net = np.zeros_like(t)
     if m.adhesion is not None:
         out["adhesion_force"] = An * dyn.ppval(m.adhesion, x0, h, d)
@@ -325,7 +387,7 @@ def histories(run: Run) -> dict[str, np.ndarray]:
         fc = on_contact(m.contact)
         ddot = Y[:, 2] - m.slider.l_c * Y[:, 3] - wdot
         out["contact_force"] = fc
-        out["contact_damping_force"] = np.where(c, -p[dyn.P_CC] * ddot, 0.0)
+        out["contact_damping_force"] = np.where(c, -p.c_c * ddot, 0.0)
         net += fc + out["contact_damping_force"]
         # (clipped to [0, A_n]: the spline through the capped table may overshoot by ~1e-6 at the cap)
         area = on_contact(m.area, 1.0)
@@ -353,7 +415,7 @@ def summarize(run: Run, hist: dict[str, np.ndarray] | None = None) -> dict[str, 
     exact = np.isfinite(lo) and np.isfinite(hi)
     # peak-to-peak of the exact extremes (between samples too) when the kernel found them
     exact_pp = m.fhm_measure == "peak-to-peak" and exact
-    fhm_bv = float(fhm(np.array([lo, hi]) if exact_pp else d, m.p[dyn.P_FH0], m.fhm_measure))
+    fhm_bv = float(fhm(np.array([lo, hi]) if exact_pp else d, m.p.FH0, m.fhm_measure))
     out = {
         "fhm_bv": fhm_bv,
         "clearance": float(np.mean(c)),
@@ -370,10 +432,7 @@ def summarize(run: Run, hist: dict[str, np.ndarray] | None = None) -> dict[str, 
         inc = hist["in_contact"][win]
         frac = float(np.mean(inc))
         out["contact_fraction"] = frac
-        # a contact shorter than the output step is between samples (frac = 0) but seen by the exact
-        # minimum of d: the run touched, as the calibration's criterion (calibrate.touches) counts it
-        touched = frac > 0 or (exact and lo < m.k_sigma)
-        out["regime"] = FLYING if not touched else (SURFING if frac >= SURFING_FRACTION else BOUNCING)
+        out["regime"] = FLYING if not touched(run) else (SURFING if frac >= SURFING_FRACTION else BOUNCING)
         fc = hist["contact_force"][win]
         area = hist["real_area"][win]
         out["contact_force"] = float(np.mean(fc))
@@ -386,6 +445,16 @@ def summarize(run: Run, hist: dict[str, np.ndarray] | None = None) -> dict[str, 
             out["friction_coefficient"] = float(ff.sum() / fc.sum()) if fc.sum() > 0 else np.nan
             out["shear_stress"] = float(ff.sum() / area.sum()) if area.sum() > 0 else np.nan
     return out
+
+
+def touched(run: Run) -> bool:
+    """Whether a run touched in the steady window: in contact at an output sample of the window, or
+    the exact minimum of the separation below ``k sigma`` (a contact shorter than the output step
+    falls between samples but not past the integrator's exact extremes). The one rule of the regime
+    (:func:`summarize`) and of the calibration; from a summary, ``min_clearance < 0`` says the same
+    whenever the kernel tracked the extremes."""
+    win = run.time >= run.model.transient - 1e-15
+    return bool(run.contact[win].any() or run.d_extremes[0] < run.model.k_sigma)
 
 
 def with_solver(model: Model, **changes: Any) -> Model:

@@ -14,9 +14,13 @@ References
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+
+from ..units import NM
 
 
 @dataclass(frozen=True)
@@ -245,7 +249,7 @@ def rear_force_linear(g: np.ndarray, g0: float, n: float, F0: float) -> np.ndarr
 @dataclass(frozen=True)
 class RearLaw:
     """A rear-bearing law: its force (Python, for outputs and tests) and the kernel's compile-time switch
-    (``linear``: :func:`pipeline.model.dynamics.rhs` gets an array for ``rlin``, else ``None``)."""
+    (``linear``: :class:`pipeline.model.dynamics.Variants` gets ``rear_linear=True``, else ``None``)."""
 
     force: object
     linear: bool
@@ -304,5 +308,44 @@ def tfc_stiffening_force(g: np.ndarray, g_n: float, g0: float, k_t: float, p: fl
     return F, k
 
 
-#: TFC stiffening laws (``air_bearing.tfc_stiffening``): ``"none"`` = the model without it.
-TFC_STIFFENING = {"none": None, "gap-power": tfc_stiffening_force}
+def gap_power_force(g: np.ndarray, delta: float, scene) -> np.ndarray:
+    """Force [N] of the ``"gap-power"`` stiffening law at the gaps ``g`` [m] for the protrusion ``delta`` [m],
+    the scene's ``air_bearing.tfc_stiffness_n_m`` and ``tfc_stiffening_exponent``
+    (:func:`tfc_stiffening_force` with ``g0 = FH0``, nominal gap ``FH0 - delta``)."""
+    a = scene["air_bearing"]
+    g0 = a["flying_height_nm"] * NM
+    return tfc_stiffening_force(g, g0 - delta, g0, a["tfc_stiffness_n_m"], a["tfc_stiffening_exponent"])[0]
+
+
+@dataclass(frozen=True)
+class TfcLaw:
+    """An air-bearing force law at the TFC point: its force and how the kernel evaluates it.
+
+    Attributes
+    ----------
+    force : ``force(g, delta, scene) -> F``: force [N] (up positive, the lift of the air on the slider)
+        at the gaps ``g`` [m] (an array, gap at the TFC point to the mean of surface heights) for the
+        protrusion ``delta`` [m] and the validated scene (the law reads its own keys)
+    closed_form : name of the kernel's compiled closed form of the same law (``"gap-power"``:
+        :func:`pipeline.dynamics._stiffening`), or ``None``: the model assembly tabulates ``force``
+        per protrusion and the kernel evaluates the table (:func:`pipeline.slider.tfc_table`)
+    gap_range : lowest and highest gap of the table as fractions of ``FH0`` [1]: linear continuation
+        below (the law's slope at the lowest gap), constant above
+    points : knots of the table (uniform in the gap)
+    doc : one line for the documentation
+    """
+
+    force: Callable[[np.ndarray, float, Any], np.ndarray]
+    closed_form: str | None = None
+    gap_range: tuple[float, float] = (TFC_MIN_GAP, 3.0)
+    points: int = 4001
+    doc: str = ""
+
+
+#: Air-bearing force laws at the TFC point (``air_bearing.tfc_stiffening``): ``"none"`` = the model
+#: without one. A new law: its ``force`` function in a physics module and one line here (``TfcLaw(force)``).
+TFC_STIFFENING: dict[str, TfcLaw | None] = {
+    "none": None,
+    "gap-power": TfcLaw(gap_power_force, closed_form="gap-power",
+                        doc="k(g) = k_t [(g0/g)^p - 1], force zero at the nominal gap"),
+}

@@ -88,7 +88,7 @@ def model_attrs(model: sl.Model, k_source: str) -> dict[str, Any]:
     info = model.info
     extra: dict[str, Any] = {}
     if model.tfc_stiffening is not None:
-        extra = {"tfc_stiffness_n_m": float(model.p[sl.dyn.P_TK]), "tfc_stiffening_exponent": float(model.p[sl.dyn.P_TP])}
+        extra = {"tfc_stiffness_n_m": float(model.tfc_stiffening.k_t), "tfc_stiffening_exponent": float(model.tfc_stiffening.q)}
     if info["friction_law"] == "coefficient":
         extra["friction_coefficient"] = float(info["friction_coefficient"])
     return extra | {

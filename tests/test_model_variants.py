@@ -1,0 +1,130 @@
+"""Model variants are open: a new air-bearing law at the TFC point is its function plus one registry
+line (pipeline.physics.air_bearing.TFC_STIFFENING), tabulated per protrusion into the kernel's generic
+TFC-point slot (pipeline.slider.tfc_table, pipeline.dynamics.Tables.tfc) with no kernel change.
+
+The laws registered here live in test-local entries (monkeypatch: the module's registry is restored
+after each test). Scenes are built in code with explicit values for what a test depends on.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from scipy.optimize import fsolve
+
+from pipeline import dynamics as dyn
+from pipeline import slider as sl
+from pipeline.physics import air_bearing as ab
+from pipeline.physics import dmw as pdmw
+from pipeline.scene import scene_from_dict
+
+NM = 1e-9
+LIFT = 1.0e-4  # [N] the dummy law's constant force
+DMW = {"band_khz": [10.0, 500.0], "exponent": -2.0, "seed": 20090601, "sample_rate_mhz": 4.0,
+       "rpm": 5425.0, "radius_mm": 34.3, "rms_nm": 0.5}
+
+
+def make_scene(effects, **air_bearing):
+    return scene_from_dict({
+        "scene": {"effects": list(effects)},
+        "air_bearing": {"flying_height_nm": 11.0, "frequencies_khz": [120.0, 300.0], "rear_exponent": 2.0,
+                        "damping_ratio": 0.05, **air_bearing},
+        "solver": {"duration_ms": 1.0, "transient_ms": 0.3},
+        "dmw": DMW,
+    })
+
+
+def record(scene, duration_s=1.2e-3):
+    d = scene["dmw"]
+    fs = d["sample_rate_mhz"] * 1e6
+    return pdmw.synthesize(d["rms_nm"], tuple(b * 1e3 for b in d["band_khz"]), d["exponent"], duration_s, fs,
+                           d["seed"]), fs
+
+
+def constant_lift(g: np.ndarray, delta: float, scene) -> np.ndarray:
+    """A dummy law: ``LIFT`` [N] up at every gap [m] and protrusion."""
+    return np.full_like(g, LIFT)
+
+
+def test_a_new_tfc_law_is_its_function_and_one_registry_line(monkeypatch):
+    # the whole change a new variant needs: its law (above) and one line in its registry
+    monkeypatch.setitem(ab.TFC_STIFFENING, "constant-lift", ab.TfcLaw(constant_lift))
+    scene = make_scene(["air_bearing", "pitch"], tfc_stiffening="constant-lift")
+    model = sl.build_model(scene, None, None, None)
+    assert model.tfc_stiffening is None and model.tfc_tabulated == (ab.TFC_STIFFENING["constant-lift"],)
+    run = sl.run_model(model, 5 * NM)
+    # static equilibrium under the lift at the TFC point (l_c behind the CG), linear front pad and
+    # power-law rear pad: F_f + F_r + L = 0, l_f F_f - l_r F_r - l_c L = 0; the damped transient
+    # (zeta 0.05 at 120 kHz: 27 us) is gone after 1 ms
+    s = model.slider
+
+    def residual(x):  # x = (z [nm], theta [urad]), residuals over the lift
+        z, theta = x[0] * NM, x[1] * 1e-6
+        F_f = -s.k_f * (z + s.l_f * theta)
+        F_r = float(ab.rear_force(s.g0 + z - s.l_r * theta, s.g0, s.n, s.rear_preload))
+        return [(F_f + F_r + LIFT) / LIFT, (s.l_f * F_f - s.l_r * F_r - s.l_c * LIFT) / (s.l_c * LIFT)]
+
+    z_lin, theta_lin = np.linalg.solve(s.stiffness_matrix, [LIFT, -s.l_c * LIFT])
+    x, _, ok, msg = fsolve(residual, [z_lin / NM, theta_lin * 1e6], full_output=True)
+    assert ok == 1, msg
+    z, theta = x[0] * NM, x[1] * 1e-6
+    assert z > 0 and theta < 0  # lifted, trailing edge up
+    assert abs(z / z_lin - 1) > 1e-3  # (the rear law's nonlinearity is resolved, not the tangent)
+    assert run.state[-1, 0] == pytest.approx(z, rel=1e-6)
+    assert run.state[-1, 1] == pytest.approx(theta, rel=1e-6)
+    # the separation at the TFC point opens by z - l_c theta from its nominal value
+    nominal = sl.run_model(sl.build_model(make_scene(["air_bearing", "pitch"]), None, None, None), 5 * NM)
+    d, d_nominal = sl.histories(run)["separation"], sl.histories(nominal)["separation"]
+    assert d[-1] - d_nominal[-1] == pytest.approx(z - s.l_c * theta, rel=1e-6)
+
+
+def test_tabulated_law_reproduces_the_compiled_gap_power_law(monkeypatch):
+    # The gap-power law registered a second time without its compiled form goes through the table:
+    # force and stiffness at the TFC point and the whole run agree with the closed form.
+    monkeypatch.setitem(ab.TFC_STIFFENING, "gap-power-tabulated", ab.TfcLaw(ab.gap_power_force))
+    law = {"tfc_stiffness_n_m": 3.0e5, "tfc_stiffening_exponent": 1.5}
+    effects = ["air_bearing", "pitch", "dmw"]
+    compiled = make_scene(effects, tfc_stiffening="gap-power", **law)
+    tabulated = make_scene(effects, tfc_stiffening="gap-power-tabulated", **law)
+    rec = record(compiled)
+    m_c, m_t = sl.build_model(compiled, None, rec, None), sl.build_model(tabulated, None, rec, None)
+    assert m_t.tfc_stiffening is None and m_c.tfc_tabulated == ()
+    delta = 5 * NM
+    c, x0, h = sl.tfc_table(m_t, delta)
+    p = dyn.with_values(m_t.p, delta=delta, tfc_x0=x0, tfc_h=h)
+    # measured: force within 3e-8 of its largest value over 0.25-30 nm, stiffness within 5e-8
+    # relative above 1 nm (the spline's error grows towards the law's singular end at g_min = 0.22 nm)
+    g = np.linspace(1.0, 20.0, 40) * NM
+    F, k = ab.tfc_stiffening_force(g, 11 * NM - delta, 11 * NM, 3.0e5, 1.5)
+    kernel = np.array([dyn._tfc_air_force(p, None, c, gi) for gi in g])
+    np.testing.assert_allclose(kernel[:, 0], F, rtol=0, atol=1e-7 * np.abs(F).max())
+    np.testing.assert_allclose(kernel[:, 1], k, rtol=1e-6)
+    # the runs: separation within 2.5e-12 nm, FHM within 1.4e-12 relative (measured)
+    run_c, run_t = sl.run_model(m_c, delta), sl.run_model(m_t, delta)
+    d_c, d_t = sl.histories(run_c)["separation"], sl.histories(run_t)["separation"]
+    assert np.abs(d_t - d_c).max() < 1e-9 * NM
+    s_c, s_t = sl.summarize(run_c), sl.summarize(run_t)
+    assert s_t["fhm_bv"] == pytest.approx(s_c["fhm_bv"], rel=1e-9)
+    # and the law matters: without it the FHM differs by far more than the table's error
+    s_none = sl.summarize(sl.run_model(sl.build_model(make_scene(effects), None, rec, None), delta))
+    assert abs(s_none["fhm_bv"] - s_c["fhm_bv"]) > 100 * abs(s_t["fhm_bv"] - s_c["fhm_bv"])
+
+
+def test_an_unknown_compiled_form_is_refused(monkeypatch):
+    monkeypatch.setitem(ab.TFC_STIFFENING, "bogus", ab.TfcLaw(constant_lift, closed_form="bogus"))
+    with pytest.raises(ValueError, match="air_bearing.tfc_stiffening = 'bogus': no compiled form 'bogus'"):
+        sl.build_model(make_scene(["air_bearing"], tfc_stiffening="bogus"), None, None, None)
+
+
+def test_touched_is_the_regime_and_calibration_rule():
+    # A flying run does not touch; the same run with k sigma above its exact minimum separation does,
+    # although no output sample is in contact (there is no contact effect): the rule reads the exact minimum.
+    scene = make_scene(["air_bearing", "pitch", "dmw"])
+    model = sl.build_model(scene, None, record(scene), None)
+    run = sl.run_model(model, 5 * NM)
+    lo = run.d_extremes[0]
+    assert not sl.touched(run) and not run.contact.any()
+    above = replace(run, model=replace(model, k=1.0, sigma=lo + 1e-3 * NM))
+    assert above.model.k_sigma > lo and sl.touched(above)
