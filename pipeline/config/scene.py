@@ -23,6 +23,8 @@ from typing import Any, Callable, Iterable
 
 from ..physics import paper
 from ..physics.air_bearing import REAR_LAWS, STIFFNESS_ROOTS, TFC_STIFFENING
+from ..physics.bulge_bearing import BULGE_LAWS
+from ..physics.equilibrium import STARTS
 from ..physics.fhm import FHM_MEASURES
 from ..physics.friction import FRICTION_LAWS
 from ..units import MHZ_IN_KHZ, SUFFIX_FACTORS
@@ -131,6 +133,14 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "tfc_stiffening": Key("str", "none", choices=TFC_STIFFENING.keys(),  # (live: a registered law is a choice)
                               doc="air-bearing stiffening under the TFC bulge (SPEC.md 7.4): 'none' or "
                                   "'gap-power', added stiffness k_t[(FH0/g)^p - 1] at the TFC gap g"),
+        "bulge": Key("str", "none", choices=BULGE_LAWS.keys(),
+                     doc="the air bearing of the TFC bulge itself: 'none' or 'ph-limit' (p h = const under the bulge, "
+                         "docs/model.md, section 'Bulge air bearing')"),
+        "pad_pressure_mpa": Key("float", 1.0, (lambda v: 0.1 <= v <= 10.0, "a pressure in [0.1, 10] MPa"),
+                                doc="air pressure p_pad under the trailing pad around the bulge [MPa] (recon; "
+                                    "about 0.3-3 MPa for a femto trailing pad)"),
+        "bulge_profile": Key("str", "ellipsoid", choices=("ellipsoid", "paraboloid"),
+                             doc="profile of the bulge under the bearing: 'ellipsoid' (the TFC geometry) or 'paraboloid'"),
         "tfc_stiffness_n_m": Key("float", 1.0e5, _nonneg,
                                  doc="stiffness scale k_t of the TFC stiffening spring [N/m] (recon, to be identified)"),
         "tfc_stiffening_exponent": Key("float", 1.5, (lambda v: 0 <= v <= 4, "a number in [0, 4]"),
@@ -232,6 +242,9 @@ SCHEMA: dict[str, dict[str, Key]] = {
                                 doc="Gauss-Legendre nodes per panel of the ISBL integrals"),
         "quadrature_panels": Key("int", 4, (lambda v: 1 <= v <= 64, "an integer in [1, 64]"),
                                  doc="panels per population range of the ISBL integrals"),
+        "start": Key("str", "static", choices=STARTS,
+                     doc="start state of each run: 'static' (the model's static equilibrium; past the adhesion fold "
+                         "the contact branch) or 'nominal' (the nominal attitude); docs/model.md, section 'Start state'"),
         "fhm_measure": Key("str", "peak-to-peak", choices=tuple(FHM_MEASURES),
                            doc="FHM/BV measure (SPEC.md section 4)"),
     },

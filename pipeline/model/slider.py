@@ -48,12 +48,14 @@ import numpy as np
 from . import dynamics as dyn
 from ..units import KHZ, MM, MS, NM, NS, UM
 from ..physics import air_bearing as ab
+from ..physics import bulge_bearing as bb
 from ..physics.fhm import fhm
 from ..physics.friction import friction_stress_table
 from ..physics.geometry import effective_radius, nominal_area
 from ..physics.statistics import explicit_statistics
 from ..variables import INTERFACE, Regime
 from .dmw_record import disk_speed_m_s
+from .start import start_state
 
 #: Regime codes (:class:`pipeline.variables.Regime`, the ``flag_values`` of the ``regime`` variable).
 FLYING, BOUNCING, SURFING = Regime.FLYING, Regime.BOUNCING, Regime.SURFING
@@ -61,7 +63,8 @@ SURFING_FRACTION = 0.99
 
 #: Scene keys of ``[air_bearing]`` whose named laws (:class:`pipeline.physics.air_bearing.TfcLaw`) act at
 #: the TFC point, each with its registry: the selected laws are summed in the kernel's TFC-point force.
-TFC_POINT_LAWS: Mapping[str, Mapping[str, ab.TfcLaw | None]] = {"tfc_stiffening": ab.TFC_STIFFENING}
+TFC_POINT_LAWS: Mapping[str, Mapping[str, ab.TfcLaw | None]] = {"tfc_stiffening": ab.TFC_STIFFENING,
+                                                               "bulge": bb.BULGE_LAWS}
 
 
 @dataclass
@@ -110,6 +113,7 @@ class Model:
     rear_linear: bool | None = None
     tfc_tabulated: tuple[ab.TfcLaw, ...] = ()
     scene: Any = None
+    start: str = "nominal"
 
     @property
     def k_sigma(self) -> float:
@@ -243,7 +247,8 @@ def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float]
                  duration=duration, transient=sol["transient_ms"] * MS,
                  output_step=sol["output_step_ns"] * NS, rtol=sol["rtol"], atol=atol,
                  max_step=sol["max_step_ns"] * NS, fhm_measure=sol["fhm_measure"], effects=eff, info=info,
-                 tfc_stiffening=gap_power, rear_linear=rear_linear, tfc_tabulated=tabulated, scene=scene)
+                 tfc_stiffening=gap_power, rear_linear=rear_linear, tfc_tabulated=tabulated, scene=scene,
+                 start=sol["start"])
 
 
 def tfc_point_laws(scene: Any, fh0: float) -> tuple[np.record | None, tuple[ab.TfcLaw, ...]]:
@@ -306,28 +311,48 @@ class Run:
     contact: np.ndarray
     info: np.ndarray
     d_extremes: tuple[float, float] = (np.nan, np.nan)
+    start: str = "given"
 
 
 class IntegrationError(RuntimeError):
     """The integrator failed (too many steps, step underflow, or a non-finite state)."""
 
 
-def run_model(model: Model, protrusion: float, y0: np.ndarray | None = None, max_steps: int = 5_000_000) -> Run:
-    """Integrate the model at protrusion ``protrusion`` [m] from the nominal attitude (or ``y0``)."""
+def run_parameters(model: Model, protrusion: float) -> tuple[np.record, dyn.Tables, dyn.Variants]:
+    """The kernel's parameters, tables and variants for the model at ``protrusion`` [m]."""
     An = float(nominal_area(protrusion, model.half_length, model.half_width, model.section_depth)) \
         if np.isfinite(model.section_depth) else 0.0
     p = dyn.with_values(model.p, delta=protrusion, A_n=An, k_sigma=model.k_sigma, t_win=model.transient)
+    tables, variants = kernel_slots(model, p)
+    return p, tables, variants
+
+
+def start(model: Model, protrusion: float) -> tuple[np.ndarray, str]:
+    """The start state of a run at ``protrusion`` [m] by the model's ``solver.start`` rule, and its note
+    (:func:`pipeline.model.start.start_state`)."""
+    y_s = model.p["y_s"]
+    return start_state(lambda mu: run_parameters(model, mu), protrusion, model.start,
+                       contact_start_z=protrusion + y_s - model.p["FH0"])
+
+
+def run_model(model: Model, protrusion: float, y0: np.ndarray | None = None, max_steps: int = 5_000_000) -> Run:
+    """Integrate the model at protrusion ``protrusion`` [m] from its start state (``solver.start``:
+    :func:`start`), or from ``y0`` when given (the previous heater step, a test)."""
+    p, tables, variants = run_parameters(model, protrusion)
+    An = p["A_n"]
     n_out = int(round(model.duration / model.output_step)) + 1
     t_out = np.minimum(np.arange(n_out) * model.output_step, model.duration)
-    y0 = np.zeros(4) if y0 is None else np.asarray(y0, float)
-    tables, variants = kernel_slots(model, p)
+    start_note = "given"
+    if y0 is None:
+        y0, start_note = start(model, protrusion)
+    y0 = np.asarray(y0, float)
     Y, C, info, ext = dyn.integrate(y0, dyn.Grid(model.duration, t_out), p, tables, variants,
                                     dyn.Solver(model.rtol, model.atol, model.max_step, max_steps))
     if info[0] != dyn.OK:
         raise IntegrationError(f"integration failed at protrusion {protrusion / NM:.3g} nm: "
                                f"{dyn.STATUS_TEXT[int(info[0])]} (steps {info[1]}, rejected {info[2]})")
     return Run(model=model, protrusion=protrusion, p=p, nominal_area=An, time=t_out, state=Y, contact=C, info=info,
-               d_extremes=(float(ext[0]), float(ext[1])))
+               d_extremes=(float(ext[0]), float(ext[1])), start=start_note)
 
 
 def kernel_slots(model: Model, p: np.record) -> tuple[dyn.Tables, dyn.Variants]:

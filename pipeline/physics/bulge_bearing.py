@@ -60,9 +60,13 @@ an upper bound here; the Reynolds lift falls below it only at bearing numbers a 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numba import njit
+
+from ..units import MPA, UM
+from .air_bearing import TfcLaw
 
 #: Profile codes of the compiled laws (floats, so a kernel can carry them in its parameter vector).
 PARABOLOID, ELLIPSOID = 0.0, 1.0
@@ -145,6 +149,25 @@ def ph_lift(g, delta, p_pad: float, a: float, b: float, profile: str = "ellipsoi
     _ph_loop(np.ascontiguousarray(gb).ravel(), np.ascontiguousarray(db).ravel(), float(p_pad), float(a),
              float(b), PROFILES[profile], float(g_min), F, k)
     return F.reshape(gb.shape), k.reshape(gb.shape)
+
+
+def ph_limit_force(g: np.ndarray, delta: float, scene: Any) -> np.ndarray:
+    """Lift [N] of the bulge's air bearing in the p h = const limit at the TFC gaps ``g`` [m] for the
+    protrusion ``delta`` [m] (:func:`ph_lift`), from the scene's ``air_bearing.pad_pressure_mpa``,
+    ``air_bearing.bulge_profile`` and the bulge's semi-axes ``tfc.half_length_um``, ``tfc.half_width_um``
+    (docs/model.md, section "Bulge air bearing"). Zero at zero protrusion."""
+    a, t = scene["air_bearing"], scene["tfc"]
+    return ph_lift(g, delta, a["pad_pressure_mpa"] * MPA, t["half_length_um"] * UM, t["half_width_um"] * UM,
+                   a["bulge_profile"])[0]
+
+
+#: The bulge's air bearing at the TFC point (``air_bearing.bulge``), laws summed with the other TFC-point
+#: laws by the model (:data:`pipeline.model.slider.TFC_POINT_LAWS`); ``"none"``: the model without it.
+#: The ``"reynolds"`` table (:func:`reynolds_table`) is not wired into the dynamics yet.
+BULGE_LAWS: dict[str, TfcLaw | None] = {
+    "none": None,
+    "ph-limit": TfcLaw(ph_limit_force, doc="p h = const under the bulge: F = p_pad pi a b [h_pad I(g, delta) - 1]"),
+}
 
 
 # --------------------------------------------------------------------------------------------------

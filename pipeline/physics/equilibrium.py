@@ -35,6 +35,10 @@ import numpy as np
 
 Forces = Callable[[np.ndarray, float], np.ndarray]
 
+#: Start rules of a run (``solver.start``, :mod:`pipeline.model.start`): its static equilibrium, or the
+#: nominal attitude.
+STARTS = ("static", "nominal")
+
 
 @dataclass(frozen=True)
 class Equilibrium:
