@@ -15,6 +15,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import xarray as xr
 
 from ..io import read_dataset
@@ -26,6 +27,7 @@ from ..physics.statistics import (composite_modulus, explicit_statistics, hardne
 from ..physics.material_bounds import check_materials
 from ..variables import INTERFACE
 from ..runner import Inputs, Stage, build, ensure
+from .interface_deterministic import MODELS, deterministic_tables
 
 NM, UM = 1e-9, 1e-6
 
@@ -126,6 +128,9 @@ def build_tables(scene: Any, stats: dict[str, float]) -> xr.Dataset:
         coords["separation"] = INTERFACE["separation"].from_si(d, ("separation",))
         for name, values in tables.items():
             data[name] = INTERFACE[name].from_si(values, ("separation",))
+        if scene["interface"]["model"] == "deterministic":  # both models side by side on `model`
+            data.update(deterministic_variables(scene, stats, p, d, tables, wanted))
+            coords["model"] = INTERFACE["model"].data(list(MODELS), ("model",))
     ds = xr.Dataset(data, coords=coords)
     ds.attrs.update({
         "roughness_source": stats.get("source", ""),
@@ -137,6 +142,31 @@ def build_tables(scene: Any, stats: dict[str, float]) -> xr.Dataset:
                       "Vakis, Lee & Polycarpou 2009",
     })
     return ds
+
+
+def deterministic_variables(scene: Any, stats: dict[str, float], p: isbl.Interface, d: np.ndarray,
+                            tables: dict[str, np.ndarray], wanted: tuple[str, ...]) -> dict[str, xr.Variable]:
+    """The tables of both models on ``(model, separation)`` and the deterministic solved series.
+
+    The statistical values are ``tables`` (SI); the deterministic ones come from
+    :func:`pipeline.stages.interface_deterministic.deterministic_tables` on the same grid ``d`` [m].
+    """
+    det, solved = deterministic_tables(scene, stats["y_s"], p.E, p.H, d, wanted)
+    out = {name: INTERFACE[name].from_si(np.stack([tables[name], det[name]]), ("model", "separation"),
+                                         **{"model_note": "deterministic: FFT boundary elements on the measured "
+                                                          "surface (ContactMechanics); datum d = u - y_s"})
+           for name in det}
+    s = ("solved",)
+    out.update({
+        "solved_separation": INTERFACE["solved_separation"].from_si(solved["separation"], s),
+        "solved_contact_pressure": INTERFACE["solved_contact_pressure"].from_si(solved["contact_pressure"], s),
+        "solved_real_area_fraction": INTERFACE["solved_real_area_fraction"].from_si(solved["real_area_fraction"], s),
+        "solved_iterations": INTERFACE["solved_iterations"].from_si(solved["iterations"], s),
+        "contact_grid_points": INTERFACE["contact_grid_points"].from_si(solved["grid_points"], ()),
+        "contact_pixel_size": INTERFACE["contact_pixel_size"].from_si(solved["pixel_size"], ()),
+        "contact_rms_slope": INTERFACE["contact_rms_slope"].from_si(solved["rms_slope"], ()),
+    })
+    return out
 
 
 def deepest_protrusion_nm(scene: Any) -> float:
@@ -161,7 +191,7 @@ STAGE = Stage(
     "interface", compute, outputs=("interface.nc",),
     reads=("roughness", "materials", "lubricant", "solver.table_step_nm", "solver.table_min_sigma",
            "solver.table_max_nm", "solver.quadrature_nodes", "solver.quadrature_panels", "scene.effects",
-           "air_bearing.flying_height_nm"),
+           "air_bearing.flying_height_nm", "interface.model", "solver.contact_grid_points"),
     derived=lambda scene: {"deepest_protrusion_nm": deepest_protrusion_nm(scene)},
     upstream=lambda scene: ("roughness",) if scene["roughness"]["afm"] else (),
     order=30, main_job=True, doc="ISBL tables versus separation, interface.nc")
