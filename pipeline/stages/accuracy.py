@@ -41,6 +41,10 @@ controllers, which the reference would mask:
   keeps ``max_step_ns`` at the scene's value (500 ns by default).
 * The ``rtol`` row also lifts the stiffness cap (``stiffness_step = 1e3``), which would otherwise
   set the step in contact at every tolerance.
+* ``contact_grid_points`` (scenes with ``interface.model = "deterministic"`` only): the largest
+  number of grid points per side of the measured surface the FFT boundary-element solver solves
+  (the reference, 512, is every bundled scan at its own resolution); it changes the deterministic
+  contact tables the dynamics runs on.
 
 The integrator's step is the smallest of the controllers' steps, so defaults chosen for each alone
 are at least as accurate together; the stage checks this by running all chosen defaults at once
@@ -133,7 +137,7 @@ ERROR_FLOORS: dict[str, float] = {
 REFERENCE: dict[str, float] = {
     "rtol": 1e-10, "atol_nm": 1e-8, "max_step_ns": 25.0, "stiffness_step": 0.25, "min_dwell_ns": 1.0,
     "table_step_nm": 0.001, "interpolation_order": 3, "quadrature_nodes": 64, "quadrature_panels": 8,
-    "sample_rate_mhz": 16.0,
+    "sample_rate_mhz": 16.0, "contact_grid_points": 512,
 }
 
 #: ``atol_nm`` follows ``rtol`` along the rtol knob: ``atol_nm = ATOL_PER_RTOL_NM * rtol``.
@@ -181,7 +185,8 @@ class Knob:
 
 
 def _cast(key: str, value: float) -> float | int:
-    return int(value) if key in ("interpolation_order", "quadrature_nodes", "quadrature_panels") else float(value)
+    return int(value) if key in ("interpolation_order", "quadrature_nodes", "quadrature_panels",
+                                 "contact_grid_points") else float(value)
 
 
 #: The knobs, in the order of the dataset's ``knob`` dimension.
@@ -203,13 +208,16 @@ KNOBS: tuple[Knob, ...] = (
          "Gauss-Legendre nodes per panel", "table"),
     Knob("quadrature_panels", ("solver", "quadrature_panels"), (8, 4, 2, 1), "1",
          "panels per population range", "table"),
+    Knob("contact_grid_points", ("solver", "contact_grid_points"), (512, 256, 128, 64), "1",
+         "grid points per side of the measured surface solved by the deterministic interface "
+         "(interface.model = 'deterministic' only)", "table"),
     Knob("sample_rate_mhz", ("dmw", "sample_rate_mhz"), (16.0, 8.0, 4.0, 2.0), "MHz",
          "DMW record sample rate [MS/s]", "dmw"),
     Knob("min_dwell_ns", ("solver", "min_dwell_ns"), (1.0, 5.0, 20.0, 50.0, 100.0, 200.0, 500.0), "ns",
          "shortest contact-mode dwell after a switch", "solver"),
 )
 
-TABLE_KEYS = ("table_step_nm", "quadrature_nodes", "quadrature_panels")
+TABLE_KEYS = ("table_step_nm", "quadrature_nodes", "quadrature_panels", "contact_grid_points")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -446,6 +454,8 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
             continue
         if kb.name == "min_dwell_ns" and "contact" not in eff:
             continue
+        if kb.name == "contact_grid_points" and scene["interface"]["model"] != "deterministic":
+            continue  # only the deterministic interface solves a height map
         if kb.name == "interpolation_order" and not eff & {"contact", "adhesion", "dmw"}:
             continue
         if kb.key[1] not in present:

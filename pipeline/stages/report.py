@@ -93,6 +93,8 @@ FIGURES = ("fig3_clearance.png", "fig4_forces.png", "fig5_stresses.png", "fig6_f
            "calibration.png", "roughness.png", "dmw.png")
 #: Drawn only for a sweep with several DMW realisations (``[sweep] realisations > 1``).
 ENSEMBLE_FIGURE = "ensemble.png"
+#: Drawn only when interface.nc holds both interface models (``interface.model = "deterministic"``).
+INTERFACE_FIGURE = "interface_models.png"
 
 
 # ----------------------------------------------------------------------------------------- inputs
@@ -359,6 +361,11 @@ def make_figures(data: dict[str, xr.Dataset | None], combos: list, scene: Any, n
         skipped["dmw.png"] = "dmw.nc is absent (`hdi dmw` not run)"
     else:
         jobs.append((plots.fig_dmw, (data["dmw"], name, figdir / "dmw.png"), {}))
+    interface_figure = figdir / INTERFACE_FIGURE
+    if data["interface"] is not None and "model" in data["interface"].dims:  # interface.model = "deterministic"
+        jobs.append((plots.fig_interface_models, (data["interface"], name, interface_figure), {}))
+    else:  # statistical only: nothing to compare (and no figure left from an earlier run)
+        interface_figure.unlink(missing_ok=True)
     if data.get("ensemble") is not None:
         jobs.append((plots.fig_ensemble, (data["ensemble"], name, figdir / ENSEMBLE_FIGURE),
                      dict(touchdown_nm=onset, previous_nm=previous)))

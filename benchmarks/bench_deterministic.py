@@ -1,0 +1,58 @@
+"""Deterministic interface tables (FFT boundary elements, ``interface.model = "deterministic"``) for each
+bundled AFM scan at its own resolution: wall time and peak memory.
+
+Each scan runs in a fresh process (its peak RSS, ``ru_maxrss``, is then the scan's own, not the largest
+so far), which builds the interface dataset twice: with the statistical model (the baseline, timed in
+the same process) and with both models (``solver.contact_grid_points`` = the scan's grid, so nothing
+is resampled). Rows: the deterministic build's wall time (one run: a 512 x 512 scan takes minutes),
+its ratio to the statistical build, the peak RSS of the process and its growth over the RSS after
+the statistical build (what the solver adds), the grid and the conjugate-gradient iterations.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+from .common import record
+
+ROOT = Path(__file__).resolve().parents[1]
+SCANS = sorted((ROOT / "tests" / "data" / "afm").glob("*.*"))
+
+CHILD = r"""
+import json, resource, sys, time, warnings
+warnings.simplefilter("ignore")
+from pipeline.scene import load_scene
+from pipeline.stages.interface import build_tables, roughness_statistics
+from pipeline.physics import surface as sf
+scan = sys.argv[1]
+n = max(sf.read_topography(scan).nb_grid_pts)
+base = ["roughness.afm=['%s']" % scan, "solver.contact_grid_points=%d" % n]
+stat = load_scene(sys.argv[2], base)
+det = load_scene(sys.argv[2], base + ["interface.model='deterministic'"])
+stats = roughness_statistics(stat)
+t0 = time.perf_counter(); build_tables(stat, stats); t_stat = time.perf_counter() - t0
+rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+t0 = time.perf_counter(); ds = build_tables(det, stats); t_det = time.perf_counter() - t0
+rss1 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+print(json.dumps({"grid": n, "t_stat": t_stat, "t_det": t_det, "rss_mib": rss1 / 1024,
+                  "rss_growth_mib": (rss1 - rss0) / 1024, "solves": int(ds.sizes["solved"]),
+                  "iterations": int(ds["solved_iterations"].sum()),
+                  "pixel_nm": float(ds["contact_pixel_size"])}))
+"""
+
+
+def run(results: list[dict]) -> None:
+    for scan in SCANS:
+        out = subprocess.run([sys.executable, "-c", CHILD, str(scan), str(ROOT / "configs" / "paper-2009.toml")],
+                             cwd=ROOT, check=True, capture_output=True, text=True)
+        r = json.loads(out.stdout.strip().splitlines()[-1])
+        record(results, f"deterministic interface tables, {scan.name} ({r['grid']}^2)", [r["t_det"]],
+               grid=r["grid"], pixel_nm=r["pixel_nm"], solves=r["solves"], cg_iterations=r["iterations"],
+               statistical_s=r["t_stat"], ratio_to_statistical=r["t_det"] / r["t_stat"],
+               peak_rss_mib=r["rss_mib"], rss_growth_mib=r["rss_growth_mib"])
+        print(f"    peak RSS {r['rss_mib']:.0f} MiB (+{r['rss_growth_mib']:.0f} MiB over the statistical build), "
+              f"{r['solves']} solves, {r['iterations']} CG iterations, x{r['t_det'] / r['t_stat']:.0f} the "
+              f"statistical tables", flush=True)
