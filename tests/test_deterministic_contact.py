@@ -28,6 +28,9 @@ import xarray as xr
 
 from pipeline.physics import deterministic_contact as dc
 from pipeline.scene import SceneError, load_scene
+from pipeline.variables import declared
+
+from cf_check import cf_report
 
 AFM = Path(__file__).parent / "data" / "afm"
 #: zeta(1/2) and Dirichlet beta(1/2) (Glasser & Zucker 1980): the square-lattice sum of 1/r.
@@ -199,3 +202,8 @@ def test_deterministic_interface_nc_round_trip(tmp_path, paper_config):
         cp = ds["contact_pressure"].sel(model="deterministic")
         assert cp.dims == ("separation",) and cp.attrs["units"] == "MPa"
         assert float(ds["solved_contact_pressure"].max()) > 0
+        for name in list(ds.data_vars) + list(ds.coords):  # declared once, written in its units
+            decl = declared("interface", name)
+            assert ds[name].attrs.get("units", "") == decl.units, name
+    failures, crashed = cf_report(tmp_path / "interface.nc")
+    assert crashed == [] and failures[3] == [] and failures[2] + failures[1] == []

@@ -4,8 +4,8 @@ The statistical interface (:mod:`pipeline.physics.isbl`) sums single-summit laws
 distribution of summit heights and ignores the elastic interaction of neighbouring contacts. Here the
 same height map is pressed against a flat and the elastic half-space problem is solved on every pixel:
 contact pressure and real-area fraction versus the mean separation, with no summit identification,
-no spectral moments and with the long-range elastic interaction included (docs/model.md, section
-"Deterministic interface").
+no spectral moments and with the long-range elastic interaction included
+(docs/deterministic_interface.md).
 
 Method
 ------
@@ -16,7 +16,7 @@ eq. 4.22). The half-space is periodic (the map is repeated, Stanley & Kato 1997 
 constrained conjugate gradients of Polonsky & Keer (1999) under a prescribed mean pressure. Both come
 from ContactMechanics (``PeriodicFFTElasticHalfSpace``, ``constrained_conjugate_gradients``; Pastewka &
 Robbins 2016), the contact-mechanics library of the SurfaceTopography family the roughness stage
-already uses (why this library: docs/model.md, section "Deterministic interface").
+already uses (why this library: docs/deterministic_interface.md).
 
 The q = 0 stiffness of the half-space is set to zero (``stiffness_q0 = 0``): the mean displacement of
 the elastic surface stays zero, so the rigid surface's offset gives the **mean interfacial separation**

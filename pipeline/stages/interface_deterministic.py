@@ -6,8 +6,8 @@ boundary-element solver of :mod:`pipeline.physics.deterministic_contact` at a se
 solved contact pressure and real-area fraction are interpolated onto the statistical tables'
 ``separation`` grid. Datum: the solver gives the mean interfacial separation ``u`` from the mean plane
 of the surface; the tables' ``d`` is measured from the mean of summit heights, ``y_s`` above the mean
-plane (the ``y_s`` of the interface's roughness route), so ``d = u - y_s`` (docs/model.md, section
-"Deterministic interface"). Friction follows the same shear-strength law as the statistical model on
+plane (the ``y_s`` of the interface's roughness route), so ``d = u - y_s`` (docs/deterministic_interface.md).
+Friction follows the same shear-strength law as the statistical model on
 the computed real area: every solved contact is elastic, so all of it slides at ``tau_y``.
 Adhesion is not solved deterministically (ContactMechanics' hard-wall solver is non-adhesive): the
 adhesion table stays the statistical one for both models.
