@@ -193,6 +193,7 @@ def test_dynamics_read_the_scene_s_model(both_models):
     assert m_det.contact.shape == m_stat.contact.shape and not np.array_equal(m_det.contact, m_stat.contact)
 
 
+@pytest.mark.slow  # the stage through the CLI, the roughness stage and the CF checker (~15 s)
 def test_deterministic_interface_nc_round_trip(tmp_path, paper_config):
     from pipeline import cli
     argv = ["interface", str(paper_config), "--out", str(tmp_path), "--set", f"roughness.afm=['{AFM / 'mi-1.mi'}']",
@@ -207,3 +208,10 @@ def test_deterministic_interface_nc_round_trip(tmp_path, paper_config):
             assert ds[name].attrs.get("units", "") == decl.units, name
     failures, crashed = cf_report(tmp_path / "interface.nc")
     assert crashed == [] and failures[3] == [] and failures[2] + failures[1] == []
+
+
+def test_interface_figure_of_both_models(both_models, tmp_path):
+    from pipeline import plots
+    _, _, _, ds = both_models
+    path = plots.fig_interface_models(ds, "afm", tmp_path / "interface_models.png")
+    assert path.is_file() and path.stat().st_size > 10_000

@@ -8,10 +8,17 @@ summit sigmas to ``table_max_nm``), plus the interface parameters as scalar vari
 Only what the scene's effects need is computed: no ``adhesion`` effect, no adhesion column;
 no ``friction``, no friction column; a scene with neither ``contact`` nor ``adhesion`` (flying only)
 gets no tables at all.
+
+With ``interface.model = "deterministic"`` the contact tables (``contact_pressure``,
+``real_area_fraction``, ``friction_stress``) get a leading ``model`` dimension holding the statistical
+and the deterministic tables (FFT boundary elements on the measured surface,
+:mod:`pipeline.stages.interface_deterministic`), plus the solved points (``solved_*``); the default,
+``"statistical"``, writes exactly the dataset above.
 """
 
 from __future__ import annotations
 
+import logging
 from pathlib import Path
 from typing import Any
 
@@ -30,6 +37,7 @@ from ..runner import Inputs, Stage, build, ensure
 from .interface_deterministic import MODELS, deterministic_tables
 
 NM, UM = 1e-9, 1e-6
+log = logging.getLogger(__name__)
 
 
 def roughness_statistics(scene: Any, out: Path | None = None,
@@ -157,6 +165,10 @@ def deterministic_variables(scene: Any, stats: dict[str, float], p: isbl.Interfa
                                                           "surface (ContactMechanics); datum d = u - y_s"})
            for name in det}
     s = ("solved",)
+    if solved["first_contact"] > d[-1]:  # beyond the grid the kernel holds the last value
+        log.warning("interface: the deterministic first contact, %.3g nm, lies beyond the tables' end, %.3g nm "
+                    "(solver.table_max_nm): raise it to tabulate the first contacts", solved["first_contact"] / NM,
+                    d[-1] / NM)
     out.update({
         "solved_separation": INTERFACE["solved_separation"].from_si(solved["separation"], s),
         "solved_contact_pressure": INTERFACE["solved_contact_pressure"].from_si(solved["contact_pressure"], s),

@@ -74,7 +74,8 @@ def deterministic_tables(scene: Any, y_s: float, E: float, H: float, d: np.ndarr
     ``(tables, solved)``: tables ``contact_pressure`` [Pa], ``real_area_fraction`` [1],
     ``friction_stress`` [Pa] versus ``d`` (those in ``wanted``); ``solved``: the solved series
     (``separation`` [m], ``contact_pressure`` [Pa], ``real_area_fraction`` [1], ``iterations``) and
-    the map's ``grid_points``, ``pixel_size`` [m], ``rms_slope`` [1].
+    the map's ``grid_points``, ``pixel_size`` [m], ``rms_slope`` [1] and ``first_contact``, the
+    separation of first contact [m] (highest point of the map minus ``y_s``).
     """
     h, sizes = combined_topography(scene, scene["solver"]["contact_grid_points"])
     series = dc.contact_series(h, sizes, points=SERIES_POINTS)
@@ -85,5 +86,6 @@ def deterministic_tables(scene: Any, y_s: float, E: float, H: float, d: np.ndarr
     solved = {"separation": (series.mean_gap - y_s / NM) * NM, "contact_pressure": series.pressure * E,
               "real_area_fraction": series.area_fraction, "iterations": series.iterations,
               "grid_points": float(h.shape[0] * h.shape[1]), "pixel_size": series.pixel_size * NM,
-              "rms_slope": dc.rms_slope(h, sizes), "grid": h.shape}
+              "rms_slope": dc.rms_slope(h, sizes), "grid": h.shape,
+              "first_contact": (series.onset_gap - y_s / NM) * NM}
     return tables, solved
