@@ -215,3 +215,20 @@ def test_interface_figure_of_both_models(both_models, tmp_path):
     _, _, _, ds = both_models
     path = plots.fig_interface_models(ds, "afm", tmp_path / "interface_models.png")
     assert path.is_file() and path.stat().st_size > 10_000
+
+
+def test_a_load_that_does_not_converge_is_left_out(monkeypatch):
+    h = _random_surface(6, n=32)
+    solve = dc._solve
+    calls = []
+
+    def flaky(*args, **kwargs):
+        calls.append(1)
+        if len(calls) == 3:
+            raise dc.ConvergenceError("stalled")
+        return solve(*args, **kwargs)
+
+    monkeypatch.setattr(dc, "_solve", flaky)
+    s = dc.contact_series(h, (1000.0, 1000.0), points=6)
+    assert len(s.skipped) == 1 and s.mean_gap.size == 5
+    assert np.all(np.diff(s.pressure) > 0) and np.all(np.diff(s.mean_gap) < 0)

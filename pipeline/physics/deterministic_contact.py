@@ -68,6 +68,7 @@ class ContactSeries:
     onset_gap : separation at first contact, highest height above the mean plane [nm]
     grid : the grid points ``(nx, ny)`` of the map solved
     pixel_size : lateral pixel size [nm] (geometric mean of x and y)
+    skipped : the loads [units of E'] whose solve did not converge within ``MAXITER`` (left out)
     """
 
     mean_gap: np.ndarray
@@ -77,6 +78,7 @@ class ContactSeries:
     onset_gap: float
     grid: tuple[int, int]
     pixel_size: float
+    skipped: tuple[float, ...] = ()
 
 
 def rms_slope(heights: np.ndarray, physical_sizes: tuple[float, float]) -> float:
@@ -151,8 +153,17 @@ def _substrate(shape: tuple[int, int], sizes: tuple[float, float], periodic: boo
     return FreeFFTElasticHalfSpace(shape, 1.0, sizes)
 
 
+#: Largest number of conjugate-gradient iterations of one solve [1]. Converging solves of the bundled
+#: scans take 20-330 at 256^2; a scan with a sudden plateau contact (spot_1-1000nm.ibw) can stall.
+MAXITER = 2000
+
+
+class ConvergenceError(RuntimeError):
+    """The constrained conjugate gradients did not converge within the iteration limit."""
+
+
 def _solve(substrate, heights: np.ndarray, sizes: tuple[float, float], *, pressure: float | None = None,
-           offset: float | None = None, initial: np.ndarray | None = None, maxiter: int = 20000):
+           offset: float | None = None, initial: np.ndarray | None = None, maxiter: int = MAXITER):
     """One constrained-CG solve [PK99] (E' = 1); returns the ContactMechanics result."""
     from ContactMechanics.Optimization import constrained_conjugate_gradients
     from SurfaceTopography import Topography
@@ -166,7 +177,7 @@ def _solve(substrate, heights: np.ndarray, sizes: tuple[float, float], *, pressu
         kw.update(offset=offset)
     res = constrained_conjugate_gradients(substrate, topo, **kw)
     if not res.success:
-        raise RuntimeError(f"deterministic contact: the constrained conjugate gradients did not converge "
+        raise ConvergenceError(f"deterministic contact: the constrained conjugate gradients did not converge "
                            f"({res.message}; {res.nit} iterations)")
     return res
 
@@ -205,7 +216,9 @@ def contact_series(heights: np.ndarray, physical_sizes: tuple[float, float], *, 
 
     The loads are log-spaced so that the expected real-area fractions ``KAPPA p / h'_rms`` [Hyun04]
     span ``area_range`` (the actual fractions are what the solver finds); the lowest is raised to at
-    least a few pixels in contact. Each solve starts from the previous displacements.
+    least a few pixels in contact. Each solve starts from the previous displacements. A load whose
+    solve does not converge within :data:`MAXITER` iterations is left out (``skipped``): the tables
+    then interpolate across it.
 
     Parameters
     ----------
@@ -221,17 +234,26 @@ def contact_series(heights: np.ndarray, physical_sizes: tuple[float, float], *, 
     lo = max(area_range[0], 4.0 / h.size)
     targets = np.geomspace(lo, area_range[1], points)
     sub = _substrate(h.shape, physical_sizes, True)
-    gap, p, a, it = [], [], [], []
+    gap, p, a, it, skipped = [], [], [], [], []
     disp = None
     for target in targets:
-        res = _solve(sub, h, physical_sizes, pressure=target * slope / KAPPA, initial=disp)
+        load = target * slope / KAPPA
+        try:
+            res = _solve(sub, h, physical_sizes, pressure=load, initial=disp)
+        except ConvergenceError:  # leave the load out; the tables interpolate across it
+            skipped.append(float(load))
+            disp = None
+            continue
         disp = np.asarray(res.x).copy()
         s = _state(res, h, physical_sizes)
         gap.append(s["mean_gap"]), p.append(s["pressure"]), a.append(s["area_fraction"]), it.append(s["iterations"])
+    if len(gap) < 2:
+        raise ConvergenceError(f"deterministic contact: only {len(gap)} of {points} loads converged within "
+                               f"{MAXITER} iterations; no table can be made from them")
     dx, dy = (s_ / n for s_, n in zip(physical_sizes, h.shape))
     return ContactSeries(mean_gap=np.array(gap), pressure=np.array(p), area_fraction=np.array(a),
                          iterations=np.array(it), onset_gap=float(h.max() - h.mean()), grid=h.shape,
-                         pixel_size=float(np.sqrt(dx * dy)))
+                         pixel_size=float(np.sqrt(dx * dy)), skipped=tuple(skipped))
 
 
 def tabulate(series: ContactSeries, gap: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

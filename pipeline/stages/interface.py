@@ -165,6 +165,9 @@ def deterministic_variables(scene: Any, stats: dict[str, float], p: isbl.Interfa
                                                           "surface (ContactMechanics); datum d = u - y_s"})
            for name in det}
     s = ("solved",)
+    if solved["skipped"]:
+        log.warning("interface: %d of the deterministic loads did not converge and are left out: %s MPa",
+                    len(solved["skipped"]), ", ".join(f"{x / 1e6:.4g}" for x in solved["skipped"]))
     if solved["first_contact"] > d[-1]:  # beyond the grid the kernel holds the last value
         log.warning("interface: the deterministic first contact, %.3g nm, lies beyond the tables' end, %.3g nm "
                     "(solver.table_max_nm): raise it to tabulate the first contacts", solved["first_contact"] / NM,

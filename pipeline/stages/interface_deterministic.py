@@ -75,7 +75,8 @@ def deterministic_tables(scene: Any, y_s: float, E: float, H: float, d: np.ndarr
     ``friction_stress`` [Pa] versus ``d`` (those in ``wanted``); ``solved``: the solved series
     (``separation`` [m], ``contact_pressure`` [Pa], ``real_area_fraction`` [1], ``iterations``) and
     the map's ``grid_points``, ``pixel_size`` [m], ``rms_slope`` [1] and ``first_contact``, the
-    separation of first contact [m] (highest point of the map minus ``y_s``).
+    separation of first contact [m] (highest point of the map minus ``y_s``), ``skipped``: the loads
+    [Pa] whose solve did not converge (left out of the tables).
     """
     h, sizes = combined_topography(scene, scene["solver"]["contact_grid_points"])
     series = dc.contact_series(h, sizes, points=SERIES_POINTS)
@@ -87,5 +88,6 @@ def deterministic_tables(scene: Any, y_s: float, E: float, H: float, d: np.ndarr
               "real_area_fraction": series.area_fraction, "iterations": series.iterations,
               "grid_points": float(h.shape[0] * h.shape[1]), "pixel_size": series.pixel_size * NM,
               "rms_slope": dc.rms_slope(h, sizes), "grid": h.shape,
-              "first_contact": (series.onset_gap - y_s / NM) * NM}
+              "first_contact": (series.onset_gap - y_s / NM) * NM,
+              "skipped": [x * E for x in series.skipped]}
     return tables, solved
