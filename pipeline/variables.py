@@ -266,6 +266,21 @@ INTERFACE = _group(
     V("adhesion_pressure", "MPa", "adhesion pressure per nominal area (positive: attractive)", MPA, dims=_S,
       effect="adhesion"),
     V("contact_fraction", "1", "fraction of summits in contact", dims=_S, effect="contact"),
+    # interface.model = "deterministic": contact_pressure, real_area_fraction and friction_stress carry the
+    # leading dimension `model` (statistical, deterministic), plus the solved series of the FFT
+    # boundary-element solution (pipeline.model.deterministic_tables)
+    V("model", "", "interface model of the tables", dims=("model",), dtype="str"),
+    V("solved_separation", "nm", "separation from the mean of summit heights of a deterministic solve "
+                                 "(mean interfacial separation minus y_s)", NM, dims=("solved",), effect="contact"),
+    V("solved_contact_pressure", "MPa", "contact pressure per nominal area of a deterministic solve", MPA,
+      dims=("solved",), effect="contact"),
+    V("solved_real_area_fraction", "1", "real contact area per nominal area of a deterministic solve",
+      dims=("solved",), effect="contact"),
+    V("solved_iterations", "1", "constrained conjugate-gradient iterations of a deterministic solve",
+      dims=("solved",), effect="contact", dtype="int32"),
+    V("contact_grid_points", "1", "grid points of the height map solved deterministically", effect="contact"),
+    V("contact_pixel_size", "nm", "pixel size of the height map solved deterministically", NM, effect="contact"),
+    V("contact_rms_slope", "1", "rms gradient of the height map solved deterministically", effect="contact"),
 )
 
 #: ``calibration.nc`` (:mod:`pipeline.stages.calibrate`).

@@ -45,7 +45,7 @@ ERROR_FLOORS: dict[str, float] = {
 REFERENCE: dict[str, float] = {
     "rtol": 1e-10, "atol_nm": 1e-8, "max_step_ns": 25.0, "stiffness_step": 0.25, "min_dwell_ns": 1.0,
     "table_step_nm": 0.001, "interpolation_order": 3, "quadrature_nodes": 64, "quadrature_panels": 8,
-    "sample_rate_mhz": 16.0,
+    "sample_rate_mhz": 16.0, "contact_grid_points": 512,
 }
 
 #: ``atol_nm`` follows ``rtol`` along the rtol knob: ``atol_nm = ATOL_PER_RTOL_NM * rtol``.
@@ -93,7 +93,8 @@ class Knob:
 
 
 def cast(key: str, value: float) -> float | int:
-    return int(value) if key in ("interpolation_order", "quadrature_nodes", "quadrature_panels") else float(value)
+    return int(value) if key in ("interpolation_order", "quadrature_nodes", "quadrature_panels",
+                                 "contact_grid_points") else float(value)
 
 
 #: The knobs, in the order of the dataset's ``knob`` dimension.
@@ -115,6 +116,9 @@ KNOBS: tuple[Knob, ...] = (
          "Gauss-Legendre nodes per panel", "table"),
     Knob("quadrature_panels", ("solver", "quadrature_panels"), (8, 4, 2, 1), "1",
          "panels per population range", "table"),
+    Knob("contact_grid_points", ("solver", "contact_grid_points"), (512, 256, 128, 64), "1",
+         "grid points per side of the measured surface solved by the deterministic interface "
+         "(interface.model = 'deterministic' only)", "table"),
     Knob("sample_rate_mhz", ("dmw", "sample_rate_mhz"), (16.0, 8.0, 4.0, 2.0), "MHz",
          "DMW record sample rate [MS/s]", "dmw"),
     Knob("min_dwell_ns", ("solver", "min_dwell_ns"), (1.0, 5.0, 20.0, 50.0, 100.0, 200.0, 500.0), "ns",
@@ -122,7 +126,7 @@ KNOBS: tuple[Knob, ...] = (
 )
 
 #: The ``[solver]`` keys of the interface tables (a change rebuilds them).
-TABLE_KEYS = ("table_step_nm", "quadrature_nodes", "quadrature_panels")
+TABLE_KEYS = ("table_step_nm", "quadrature_nodes", "quadrature_panels", "contact_grid_points")
 
 
 def relative_error(x: np.ndarray, ref: np.ndarray, floor: float) -> np.ndarray:
@@ -326,7 +330,7 @@ def log_summary(ds: xr.Dataset, summary: "Summary", figure: str) -> None:
 
 
 def select_knobs(effects: set[str], current: Mapping[str, Any], custom: Mapping[str, Any] | None = None,
-                 only: Any = None) -> list[Knob]:
+                 only: Any = None, interface_model: str = "statistical") -> list[Knob]:
     """The knobs of :data:`KNOBS` that apply to the scene's ``effects``, with their row base resolved
     (``"scene"``: the scene's value in ``current``) and settings replaced by ``custom[name]``.
 
@@ -345,6 +349,8 @@ def select_knobs(effects: set[str], current: Mapping[str, Any], custom: Mapping[
             continue
         if kb.name == "min_dwell_ns" and "contact" not in effects:
             continue
+        if kb.name == "contact_grid_points" and interface_model != "deterministic":
+            continue  # only the deterministic interface solves a height map
         if kb.name == "interpolation_order" and not effects & {"contact", "adhesion", "dmw"}:
             continue
         if kb.key[1] not in current:

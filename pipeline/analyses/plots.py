@@ -658,3 +658,64 @@ def fig_work_precision(ds: xr.Dataset, path: Path) -> Path:
                  f"dashed: {tol:g} tolerance; star: chosen default; x: failed or regime changed; "
                  f"errors < {lo:g} drawn at {lo:g}", fontsize=9)
     return save(fig, path, dpi=120)
+
+#: Real-area fractions of the light-contact band where the interface figure compares the two models [1].
+LIGHT_CONTACT_AREA = (0.005, 0.1)
+
+
+def fig_interface_models(interface: xr.Dataset, scene: str, path: Path) -> Path:
+    """The statistical and the deterministic interface tables versus separation, and their relative
+    difference where contact is light (statistical real area in :data:`LIGHT_CONTACT_AREA`).
+
+    ``interface`` holds both on its ``model`` coordinate (``interface.model = "deterministic"``);
+    the deterministic solves themselves are marked on the curves.
+    """
+    fig, axes = new_figure(3, 1, size=(7.5, 8.6))
+    d = interface["separation"].values
+    colours = dict(zip(("statistical", "deterministic"), LINE_COLOURS))
+    # from well inside full contact to where the deterministic tables end (first contact) or 1e-4 of
+    # real area, below which a statistical Gaussian tail only fills the axis
+    a_det = interface["real_area_fraction"].sel(model="deterministic").values
+    reach = d[(a_det > 0) | (interface["real_area_fraction"].sel(model="statistical").values > 1e-4)]
+    solved = interface["solved_separation"].values if "solved_separation" in interface else reach
+    x_lim = (max(d[0], float(np.min(solved)) - 2.0), float(reach.max()) + 1.0) if reach.size else (d[0], d[-1])
+    for ax, name, quantity, solved_name, floor in (
+            (axes[0], "contact_pressure", "contact pressure", "solved_contact_pressure", 1e-4),
+            (axes[1], "real_area_fraction", "real-area fraction", "solved_real_area_fraction", 1e-5)):
+        top = 0.0
+        for model in interface["model"].values:
+            y = interface[name].sel(model=model).values
+            ok = (y > 0) & (d >= x_lim[0]) & (d <= x_lim[1])
+            ax.semilogy(d[ok], y[ok], lw=1.3, color=colours.get(str(model)), label=str(model))
+            top = max(top, float(y[ok].max()) if ok.any() else 0.0)
+        if solved_name in interface:
+            ax.semilogy(interface["solved_separation"].values, interface[solved_name].values, "o", ms=3.5,
+                        mfc="none", color=colours["deterministic"], label="deterministic solves")
+        if top > 0:
+            ax.set_ylim(top * floor, top * 3)
+        ax.set_xlim(*x_lim)
+        ax.set_ylabel(var_label(interface[name], quantity))
+        ax.grid(alpha=0.3, which="both")
+        ax.legend(fontsize=8, loc="upper right")
+    lo, hi = LIGHT_CONTACT_AREA
+    a_stat = interface["real_area_fraction"].sel(model="statistical").values
+    band = (a_stat >= lo) & (a_stat <= hi)
+    ax = axes[2]
+    for name, quantity, ls in (("contact_pressure", "contact pressure", "-"), ("real_area_fraction", "real area", "--")):
+        s = interface[name].sel(model="statistical").values
+        t = interface[name].sel(model="deterministic").values
+        with np.errstate(invalid="ignore", divide="ignore"):
+            rel = np.where(band & (s > 0), (t - s) / s, np.nan)
+        ax.plot(d, 100 * rel, ls=ls, color=LINE_COLOURS[2], label=quantity)
+    ax.axhline(0.0, color="0.4", lw=0.8)
+    ax.set_ylabel(axis_label("relative difference", "%"))
+    ax.set_title("(deterministic - statistical) / statistical", fontsize=10)
+    ax.set_xlabel(var_label(interface["separation"], "separation d from the mean of summit heights"))
+    ax.grid(alpha=0.3)
+    if band.any():
+        ax.set_xlim(d[band].min() - 1.0, d[band].max() + 1.0)
+        ax.legend(fontsize=8, loc="best")
+    note(ax, f"where the statistical real area is {lo * 100:g}-{hi * 100:g} %", loc="lower left")
+    fig.suptitle(title("Interface tables: statistical (GW/Kogut-Etsion) and deterministic (FFT BEM)", scene),
+                 fontsize=11)
+    return save(fig, path)

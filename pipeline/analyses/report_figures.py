@@ -22,6 +22,8 @@ FIGURES = ("fig3_clearance.png", "fig4_forces.png", "fig5_stresses.png", "fig6_f
            "calibration.png", "roughness.png", "dmw.png")
 #: Drawn only for a sweep with several DMW realisations (``[sweep] realisations > 1``).
 ENSEMBLE_FIGURE = "ensemble.png"
+#: Drawn only when interface.nc holds both interface models (``interface.model = "deterministic"``).
+INTERFACE_FIGURE = "interface_models.png"
 
 #: One drawing job: figure function, positional arguments, keyword arguments.
 Job = tuple[Callable[..., Any], tuple, dict]
@@ -114,6 +116,8 @@ def figure_jobs(data: dict[str, xr.Dataset | None], combos: list, settings: Repo
     if data.get("ensemble") is not None:
         jobs.append((plots.fig_ensemble, (data["ensemble"], name, figdir / ENSEMBLE_FIGURE),
                      dict(touchdown_nm=onset, previous_nm=previous)))
+    if data["interface"] is not None and "model" in data["interface"].dims:  # interface.model = "deterministic"
+        jobs.append((plots.fig_interface_models, (data["interface"], name, figdir / INTERFACE_FIGURE), {}))
     return jobs, skipped
 
 

@@ -179,6 +179,12 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "work_of_adhesion_j_m2": Key("float", 0.106, _nonneg, doc="work of adhesion dgamma [J/m^2] (recon, CML)"),
         "intermolecular_distance_nm": Key("float", 0.3, _pos, doc="intermolecular distance eps [nm] (recon, CML)"),
     },
+    "interface": {
+        "model": Key("str", "statistical", choices=("statistical", "deterministic"),
+                     doc="interface tables the dynamics runs on: 'statistical' (GW/Kogut-Etsion summit "
+                         "statistics) or 'deterministic' (FFT boundary elements on the measured roughness.afm "
+                         "surface; both are then written to interface.nc)"),
+    },
     "contact": {
         "k": Key("float", None, doc="contact criterion d < k sigma [1]; absent: from calibration"),
         "section_depth_sigma": Key("float", 3.0, _pos, doc="nominal-area section depth s_n [sigma] (recon)"),
@@ -236,6 +242,9 @@ SCHEMA: dict[str, dict[str, Key]] = {
                                                                    "interference)"),
                                doc="interface table starts at this separation [sigma_s]"),
         "table_max_nm": Key("float", 30.0, _pos, doc="interface table ends at this separation [nm]"),
+        "contact_grid_points": Key("int", 256, (lambda v: 16 <= v <= 4096, "an integer in [16, 4096]"),
+                                   doc="deterministic interface: at most this many grid points per side of the "
+                                       "solved height map (larger scans are Fourier-resampled)"),
         "interpolation_order": Key("int", 3, (lambda v: v in (1, 3), "1 (linear) or 3 (cubic Hermite)"),
                                    doc="interpolation of interface tables in the dynamics"),
         "quadrature_nodes": Key("int", 24, (lambda v: 4 <= v <= 200, "an integer in [4, 200]"),
@@ -566,6 +575,13 @@ def _cross_checks(config: dict[str, dict[str, Any]], where: str) -> None:
     if c["friction_law"] == "coefficient" and c["friction_coefficient"] is None:
         raise SceneError(f"{where}: contact.friction_law = 'coefficient' needs contact.friction_coefficient "
                          "(a number >= 0, the paper's mu is ~1.2)")
+    if config["interface"]["model"] == "deterministic":
+        if not config["roughness"]["afm"]:
+            raise SceneError(f"{where}: interface.model = 'deterministic' needs a measured surface: set "
+                             "roughness.afm (AFM scans); the explicit statistics have no height map to solve")
+        if "contact" not in eff:
+            raise SceneError(f"{where}: interface.model = 'deterministic' needs the 'contact' effect "
+                             "(it replaces the contact tables)")
     if "friction" in eff and "contact" not in eff:
         raise SceneError(f"{where}: scene.effects: 'friction' needs 'contact' (friction acts only in contact)")
     if "pitch" in eff and "air_bearing" not in eff:

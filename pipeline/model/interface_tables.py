@@ -4,13 +4,21 @@
 real-area and contact fractions versus separation, docs/model.md, section "ISBL interface"); the
 interface stage writes it, and the parameter studies and the accuracy stage build candidates' tables
 with the same function. Only what the scene's effects need is computed.
+
+With ``interface.model = "deterministic"`` the contact tables (``contact_pressure``,
+``real_area_fraction``, ``friction_stress``) get a leading ``model`` dimension holding the statistical
+and the deterministic tables (FFT boundary elements on the measured surface,
+:mod:`pipeline.model.deterministic_tables`), plus the solved points (``solved_*``); the default,
+``"statistical"``, gives exactly the statistical dataset.
 """
 
 from __future__ import annotations
 
+import logging
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import xarray as xr
 
 from ..physics import isbl
@@ -20,9 +28,12 @@ from ..physics.material_bounds import check_materials
 from ..physics.statistics import (composite_modulus, explicit_statistics, hardness_from_plasticity_gw,
                                   plasticity_index_gw, plasticity_index_ke)
 from ..config.si import to_si
-from ..units import NM, UM
+from ..units import MPA, NM, UM
 from ..variables import INTERFACE
 from . import roughness as rough
+from .deterministic_tables import MODELS, deterministic_tables
+
+log = logging.getLogger(__name__)
 
 
 def roughness_statistics(scene: Any, roughness: str | Path | xr.Dataset | None = None) -> dict[str, float]:
@@ -114,6 +125,9 @@ def build_tables(scene: Any, stats: dict[str, float]) -> xr.Dataset:
         coords["separation"] = INTERFACE["separation"].from_si(d, ("separation",))
         for name, values in tables.items():
             data[name] = INTERFACE[name].from_si(values, ("separation",))
+        if scene["interface"]["model"] == "deterministic":  # both models side by side on `model`
+            data.update(deterministic_variables(scene, stats, p, d, tables, wanted))
+            coords["model"] = INTERFACE["model"].data(list(MODELS), ("model",))
     ds = xr.Dataset(data, coords=coords)
     ds.attrs.update({
         "roughness_source": stats.get("source", ""),
@@ -125,6 +139,38 @@ def build_tables(scene: Any, stats: dict[str, float]) -> xr.Dataset:
                       "Vakis, Lee & Polycarpou 2009",
     })
     return ds
+
+
+def deterministic_variables(scene: Any, stats: dict[str, float], p: isbl.Interface, d: np.ndarray,
+                            tables: dict[str, np.ndarray], wanted: tuple[str, ...]) -> dict[str, xr.Variable]:
+    """The tables of both models on ``(model, separation)`` and the deterministic solved series.
+
+    The statistical values are ``tables`` (SI); the deterministic ones come from
+    :func:`pipeline.model.deterministic_tables.deterministic_tables` on the same grid ``d`` [m].
+    """
+    det, solved = deterministic_tables(scene, stats["y_s"], p.E, p.H, d, wanted)
+    out = {name: INTERFACE[name].from_si(np.stack([tables[name], det[name]]), ("model", "separation"),
+                                         **{"model_note": "deterministic: FFT boundary elements on the measured "
+                                                          "surface (ContactMechanics); datum d = u - y_s"})
+           for name in det}
+    s = ("solved",)
+    if solved["skipped"]:
+        log.warning("interface: %d of the deterministic loads did not converge and are left out: %s MPa",
+                    len(solved["skipped"]), ", ".join(f"{x / MPA:.4g}" for x in solved["skipped"]))
+    if solved["first_contact"] > d[-1]:  # beyond the grid the kernel holds the last value
+        log.warning("interface: the deterministic first contact, %.3g nm, lies beyond the tables' end, %.3g nm "
+                    "(solver.table_max_nm): raise it to tabulate the first contacts", solved["first_contact"] / NM,
+                    d[-1] / NM)
+    out.update({
+        "solved_separation": INTERFACE["solved_separation"].from_si(solved["separation"], s),
+        "solved_contact_pressure": INTERFACE["solved_contact_pressure"].from_si(solved["contact_pressure"], s),
+        "solved_real_area_fraction": INTERFACE["solved_real_area_fraction"].from_si(solved["real_area_fraction"], s),
+        "solved_iterations": INTERFACE["solved_iterations"].from_si(solved["iterations"], s),
+        "contact_grid_points": INTERFACE["contact_grid_points"].from_si(solved["grid_points"], ()),
+        "contact_pixel_size": INTERFACE["contact_pixel_size"].from_si(solved["pixel_size"], ()),
+        "contact_rms_slope": INTERFACE["contact_rms_slope"].from_si(solved["rms_slope"], ()),
+    })
+    return out
 
 
 def deepest_protrusion_nm(scene: Any) -> float:

@@ -198,6 +198,8 @@ def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float]
         info["disk_speed_m_s"] = V
 
     tabs = {"contact": None, "adhesion": None, "friction": None, "area": None}
+    if interface is not None and "model" in interface.dims:  # both models' tables: the scene's (interface.model)
+        interface = interface.sel(model=scene["interface"]["model"])
     if interface is not None and "separation" in interface.coords:
         x = interface["separation"].values * NM
         h = float(x[1] - x[0])

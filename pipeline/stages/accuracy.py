@@ -280,7 +280,8 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
     repeat = int(options.get("repeat") or 5)
     tol = float(options.get("tolerance") or TOLERANCE)
     k, k_source = _contact_k(scene, inputs, options.get("k"))
-    knobs = knob_study.select_knobs(scene.effects, current, options.get("knobs"), options.get("only"))
+    knobs = knob_study.select_knobs(scene.effects, current, options.get("knobs"), options.get("only"),
+                                    scene["interface"]["model"])
     t_start = time.perf_counter()
     cache = _RunCache(scene, out, repeat)  # tables and records of the runs, built once per setting
 

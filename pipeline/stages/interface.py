@@ -35,7 +35,7 @@ STAGE = Stage(
     "interface", compute, outputs=("interface.nc",),
     reads=("roughness", "materials", "lubricant", "solver.table_step_nm", "solver.table_min_sigma",
            "solver.table_max_nm", "solver.quadrature_nodes", "solver.quadrature_panels", "scene.effects",
-           "air_bearing.flying_height_nm"),
+           "air_bearing.flying_height_nm", "interface.model", "solver.contact_grid_points"),
     derived=lambda scene: {"deepest_protrusion_nm": deepest_protrusion_nm(scene)},
     upstream=lambda scene: ("roughness",) if scene["roughness"]["afm"] else (),
     order=30, main_job=True, doc="ISBL tables versus separation, interface.nc")
