@@ -3,8 +3,8 @@
 Each :class:`Variable` states its name, its dataset units (the paper's units, a UDUNITS string),
 the SI value of one dataset unit (``si_unit``; dataset value = SI value / ``si_unit``, i.e. the SI
 factor ``si_factor = 1/si_unit``), its ``long_name``, its CF
-``standard_name`` where the CF table has one (only ``time`` here: CF has no standard names for
-tribology), the dimensions it carries beyond the grid of its dataset, the scene effect that
+``standard_name`` where the CF table has one (none here: CF has no standard names for tribology,
+and ``time`` is a duration, not CF's calendar time), the dimensions it carries beyond the grid of its dataset, the scene effect that
 produces it (absent without that effect), and for flag variables their values and missing value.
 
 Groups (:data:`GROUPS`) collect the variables of one kind; :data:`DATASETS` says which groups each
@@ -16,10 +16,11 @@ units it is written in.
 How the datasets meet CF-1.8 (:func:`pipeline.io.cf_encoding`, applied by :func:`pipeline.io.write_dataset`):
 
 * coordinates carry no ``_FillValue`` (CF 2.5.1);
-* ``time`` is an elapsed simulated time in seconds; CF 4.4 wants a reference date in its units,
-  so on disk it reads ``s since 1970-01-01 00:00:00`` with ``standard_name = "time"`` and
-  ``axis = "T"``; :func:`pipeline.io.read_dataset` gives back plain seconds (``units = "s"``).
-  Readers using xarray directly get datetimes from 1970-01-01 unless they pass ``decode_times=False``;
+* ``time`` is an elapsed simulated time in seconds, not a date: on disk it is the coordinate
+  ``elapsed_time`` in plain ``s`` (:data:`pipeline.io.TIME_ON_DISK`), which CF and xarray read as a
+  number (a coordinate named ``time``, or units ``s since <date>``, is a calendar time to both, and
+  xarray's default decoding rounded it to microseconds); :func:`pipeline.io.read_dataset` renames it
+  back to ``time``;
 * labels (string coordinates such as ``roughness`` or ``route``) have no units and are stored as
   character arrays (CF 2.2), which xarray decodes back to strings;
 * ``regime`` is a flag variable (:class:`Regime`) whose missing value (-1, a point not computed)
@@ -147,8 +148,7 @@ COORDINATES = _group(
     V("protrusion", "nm", "TFC protrusion", NM, dims=("protrusion",)),
     V("roughness", "", "roughness set label", dims=("roughness",), dtype="str"),
     V("damping", "1", "modal damping ratio of the air bearing", dims=("damping",)),
-    V("time", "s", "time", standard_name="time", dims=("time",),
-      extra=(("axis", "T"),)),
+    V("time", "s", "elapsed simulated time", dims=("time",)),  # (on disk: elapsed_time, pipeline.io)
     V("hist_protrusion", "nm", "protrusion of the kept histories", NM, dims=("hist_protrusion",)),
 )
 
@@ -341,7 +341,7 @@ ENSEMBLE_OF = ("fhm_bv", "clearance", "min_clearance", "interference", "contact_
 ENSEMBLE = _group(
     V("realisation", "1", "DMW realisation (0: the scene's own record)", dims=("realisation",), dtype="int32"),
     V("dmw_seed", "1", "seed of the synthetic DMW record of the realisation", dims=("realisation",),
-      dtype="int64"),
+      dtype="uint32"),  # (seeds are 32-bit, pipeline.stages.dmw.realisation_seeds; CF-1.8 has no int64)
     *(V(n + "_mean", SCALARS[n].units, "ensemble mean of " + SCALARS[n].long_name, SCALARS[n].si_unit,
         effect=SCALARS[n].effect) for n in ENSEMBLE_OF),
     *(V(n + "_std", SCALARS[n].units, "ensemble standard deviation (ddof 1) of " + SCALARS[n].long_name,
