@@ -605,6 +605,10 @@ def load_scene(path: str | Path, overrides: Iterable[str] = ()) -> Scene:
     blame: dict[tuple[str, str], str] = {}
     for text in overrides:
         section, key, value = parse_override(text)
+        if (section, key) == ("scene", "extends"):  # (it was applied while reading: a --set came too late)
+            raise SceneError(f"--set {text}: scene.extends cannot be set on the command line; write "
+                             f"`extends = {json.dumps(str(value))}` in the [scene] section of a scene file "
+                             f"(or give the base scene itself with --set for the keys that differ)")
         raw.setdefault(section, {})
         if not isinstance(raw[section], dict):
             raise SceneError(f"{path}: --set {text!r}: [{section}] is not a table")
@@ -615,11 +619,15 @@ def load_scene(path: str | Path, overrides: Iterable[str] = ()) -> Scene:
 
 def _read_raw(path: Path, seen: tuple[Path, ...] = ()) -> dict[str, Any]:
     """Parse a scene file, merging in the base scene it ``extends`` (keys of this file win)."""
+    if path.is_dir():
+        raise SceneError(f"{path}: is a folder; expected a scene file (TOML), e.g. configs/paper-2009.toml")
     if not path.is_file():
         raise SceneError(f"{path}: scene file does not exist")
-    try:
-        raw = tomllib.loads(path.read_text())
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+    try:  # (utf-8-sig: a byte-order mark, as some Windows editors write, is not part of the TOML)
+        raw = tomllib.loads(path.read_text(encoding="utf-8-sig"))
+    except UnicodeDecodeError as exc:
+        raise SceneError(f"{path}: not UTF-8 text (byte {exc.start}); expected a TOML file in UTF-8") from None
+    except tomllib.TOMLDecodeError as exc:
         raise SceneError(f"{path}: not valid TOML: {exc}") from None
     base_name = raw.get("scene", {}).get("extends") if isinstance(raw.get("scene"), dict) else None
     if base_name is None:

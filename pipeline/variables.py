@@ -62,6 +62,16 @@ def regime_name(code: Any) -> str:
         return "missing"
 
 
+def flag_meaning(attrs: dict[str, Any], code: Any) -> str:
+    """The meaning of ``code`` in a flag variable's ``flag_values``/``flag_meanings`` (``"missing"``
+    for NaN or a code it does not list)."""
+    try:
+        values = [int(v) for v in np.atleast_1d(attrs["flag_values"])]
+        return attrs["flag_meanings"].split()[values.index(int(code))]
+    except (KeyError, TypeError, ValueError, IndexError):
+        return "missing"
+
+
 @dataclass(frozen=True)
 class Variable:
     """Declaration of one output variable.

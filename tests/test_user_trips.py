@@ -166,3 +166,90 @@ def test_interface_separation_labels_are_exact_for_sel(tmp_path):
         assert float(ds["separation"].sel(separation=label)) == label
     assert d[0] <= min(scene["solver"]["table_min_sigma"] * float(ds["sigma_s"]), 11.0 - 15.0 - 1.0)
     assert d[-1] >= scene["solver"]["table_max_nm"]
+
+
+# ------------------------------------------------------------------------------ 9. smaller items
+def test_set_scene_extends_is_refused_in_one_line(tmp_path):
+    from pipeline.scene import SceneError
+    with pytest.raises(SceneError, match=r"^--set scene\.extends=base\.toml: scene\.extends cannot be set on the "
+                                         r"command line; write `extends = \"base\.toml\"`"):
+        load_scene(PAPER, ["scene.extends=base.toml"])
+
+
+def test_a_scene_with_a_utf8_byte_order_mark_loads_like_without(tmp_path):
+    text = PAPER.read_text()
+    bom = tmp_path / "paper-2009.toml"
+    bom.write_bytes(b"\xef\xbb\xbf" + text.encode())
+    assert load_scene(bom).config == load_scene(PAPER).config
+
+
+def test_a_folder_given_as_config_is_called_a_folder(tmp_path, capsys):
+    assert cli.main(["simulate", str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == f"hdi simulate: error: {tmp_path}: is a folder; expected a scene file (TOML), e.g. " \
+                  "configs/paper-2009.toml"
+
+
+def test_simulate_prints_the_regime_by_name(tmp_path, capsys):
+    args = ["simulate", str(PAPER), "--out", str(tmp_path)]
+    for s in FLY[1:3] + ["tfc.protrusion_nm=2.0", "contact.k=0.978"]:
+        args += ["--set", s]
+    assert cli.main(args) == 0
+    lines = [line.split() for line in capsys.readouterr().err.splitlines() if line.strip().startswith("regime")]
+    assert lines == [["regime", "flying"]]
+
+
+def test_flying_point_has_no_nominal_area_to_compare(tmp_path):
+    """A_n = 0 at a flying 11 nm point read "0 um^2 (-100 %)"."""
+    import xarray as xr
+    from pipeline.stages import report
+    ds = xr.Dataset({"regime": ("protrusion", [0, 0]), "fhm_bv": ("protrusion", [12.0, 12.5]),
+                     "nominal_area": ("protrusion", [0.0, 0.0])}, coords={"protrusion": [10.8, 11.0]})
+    rows, notes = report._nominal_area_section(report._Slice.of(ds, xr.Dataset()), None, None)
+    assert rows == [["A_n at 11 nm", "62 um^2", "n/a: not in contact at 11 nm (flying)", "–"]] and notes == []
+    ds["nominal_area"][:] = 61.0
+    ds["regime"][:] = 2
+    rows, _ = report._nominal_area_section(report._Slice.of(ds, xr.Dataset()), None, None)
+    assert rows[0][2:] == ["61 um^2", "-1 um^2 (-1.6 %)"]
+
+
+def test_negative_k_probabilities_say_why_they_differ():
+    from pipeline.stages.report import probability_text
+    text = probability_text(-2.08)
+    assert "two-sided 2 Q(|k|) = 3.8 %" in text and "98.1 % of the summits lie above it" in text
+    assert "below the mean summit height" in text
+    assert probability_text(0.978) == "k = 0.978: P(|z| > k sigma) = 32.8 % (two-sided), one-sided 16.4 %"
+
+
+def test_readme_keeps_its_identification_section_when_the_report_has_none(tmp_path):
+    from pipeline.stages import report
+    readme = tmp_path / "README.md"
+    ident = (f"{report.IDENTIFICATION_HEADING}\n\nFrom `identify.nc` (1337 evaluations).\n\n| a | b |\n|---|---|\n"
+             "| 1 | 2 |")
+    readme.write_text(f"intro\n{report.README_BEGIN}\n## Comparison\n\nold table\n\n{ident}\n{report.README_END}\nend\n")
+    report.update_readme(readme, "# Comparison\n\nnew table\n", tmp_path)  # (what `make run` then `make readme` gives)
+    text = readme.read_text()
+    assert "new table" in text and "old table" not in text
+    assert ident in text and text.index(ident) < text.index(report.README_END)
+    assert text.startswith("intro\n") and text.endswith(f"{report.README_END}\nend\n")
+    # a report with its own identification section replaces the old one
+    report.update_readme(readme, f"# Comparison\n\nnewer\n\n## Paper, reconstructed scene, identified scene\n\nfresh\n",
+                         tmp_path)
+    text = readme.read_text()
+    assert "fresh" in text and "1337" not in text and text.count(report.IDENTIFICATION_HEADING) == 1
+
+
+def test_with_a_measured_record_the_synthesis_keys_change_no_inputs_key(tmp_path):
+    """``--set dmw.rms_nm`` (documented as ignored for a measured record) recomputed the whole chain."""
+    from pipeline.physics import dmw as phys_dmw
+    rec = tmp_path / "record.csv"
+    np.savetxt(rec, phys_dmw.synthesize(0.16, (1e4, 5e5), -2.0, 3e-3, 4e6, seed=5))
+    base = [f"dmw.source={str(rec)!r}".replace("'", '"')]
+    keys = {}
+    for extra in ([], ["dmw.rms_nm=0.3"], ["dmw.seed=7"], ["dmw.exponent=-1.5"]):
+        r = runner.Runner(load_scene(PAPER, base + extra), tmp_path / "out")
+        keys[tuple(extra)] = (r.key("dmw"), r.key("sweep"), r.key("simulate"))
+    assert len(set(keys.values())) == 1
+    # with the synthetic record they are inputs
+    syn = [runner.Runner(load_scene(PAPER, extra), tmp_path / "out").key("dmw") for extra in ([], ["dmw.rms_nm=0.3"])]
+    assert syn[0] != syn[1]

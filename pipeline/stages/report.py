@@ -520,6 +520,22 @@ def _touchdown_section(c: _Slice, sweep: xr.Dataset, cal: xr.Dataset | None) -> 
     return rows, [" ".join(n)], snap
 
 
+def probability_text(k: float) -> str:
+    """The contact probabilities of ``k`` [1] in words that do not read as a contradiction.
+
+    The two-sided value ``2 Q(|k|)`` (the paper's convention, SPEC.md 7.1) depends on ``|k|`` only;
+    the one-sided ``P(z > k sigma) = Q(k)`` is the fraction of summits above the threshold. For
+    ``k >= 0`` both are small; for ``k < 0`` the threshold lies below the mean summit height, so most
+    summits are above it (one-sided near 100 %) while the two-sided value is small: say why.
+    """
+    p2, p1 = contact_probabilities(k)
+    if k >= 0:
+        return f"k = {k:.4g}: P(|z| > k sigma) = {100 * p2:.1f} % (two-sided), one-sided {100 * p1:.1f} %"
+    return (f"k = {k:.4g}: two-sided 2 Q(|k|) = {100 * p2:.1f} % (the paper's convention, which sees only |k|); "
+            f"k < 0 puts the threshold {abs(k):.3g} sigma below the mean summit height, so "
+            f"{100 * p1:.1f} % of the summits lie above it (one-sided P(z > k sigma))")
+
+
 def _k_section(c: _Slice, snap: bool) -> _Section:
     """2. The contact probability of the k used against the paper's 32.8 %."""
     k, k_source = c.k, c.k_source
@@ -527,8 +543,8 @@ def _k_section(c: _Slice, snap: bool) -> _Section:
     if not np.isfinite(k):
         return [["contact probability of k (two-sided)", f"{100 * p_paper:g} %", "no k (contact effect off)",
                  "–"]], []
-    p2, p1 = contact_probabilities(k)
-    ours = f"k = {k:.4g}: P(|z| > k sigma) = {100 * p2:.1f} % (two-sided), one-sided {100 * p1:.1f} %"
+    ours = probability_text(k)
+    p2 = contact_probabilities(k)[0]
     rows = [["contact probability of k (two-sided)", f"{100 * p_paper:g} %", ours,
              _diff(100 * (p2 - p_paper), "points")]]
     if "fallback" in k_source:
@@ -625,6 +641,9 @@ def _nominal_area_section(c: _Slice, scene: Any, inter: xr.Dataset | None) -> _S
     if not ("nominal_area" in c.ds and abs(x[j] - at) < TOL):
         return [[f"A_n at {at:g} nm", f"{PAPER['nominal_area_um2']:g} um^2", f"no {at:g} nm point on the grid",
                  "–"]], []
+    if not an[j] > 0:  # (a flying point has no contact section: 0 is no area to compare, not -100 %)
+        return [[f"A_n at {at:g} nm", f"{PAPER['nominal_area_um2']:g} um^2",
+                 f"n/a: not in contact at {at:g} nm ({regime_name(c.reg[j])})", "–"]], []
     rows = [[f"A_n at {at:g} nm", f"{PAPER['nominal_area_um2']:g} um^2", f"{an[j]:.4g} um^2",
              _diff(an[j] - PAPER['nominal_area_um2'], "um^2", 100 * (an[j] / PAPER['nominal_area_um2'] - 1))]]
     sd = _get(scene, "contact", "section_depth_sigma")
@@ -885,6 +904,20 @@ README_END = "<!-- END generated -->"
 README_FIGURES = ("fig6_fhm.png", "fig3_clearance.png", "fig5_stresses.png")
 
 
+#: Heading of the identification table in the README (comparison.md's, demoted one level).
+IDENTIFICATION_HEADING = "### Paper, reconstructed scene, identified scene"
+
+
+def _identification_subsection(section: str) -> str:
+    """The identification subsection of a generated README section, to the next heading of its level."""
+    if IDENTIFICATION_HEADING not in section:
+        return ""
+    sub = IDENTIFICATION_HEADING + section.split(IDENTIFICATION_HEADING, 1)[1]
+    lines = sub.strip().splitlines()
+    end = next((i for i, line in enumerate(lines[1:], 1) if line.startswith(("## ", "### "))), len(lines))
+    return "\n".join(lines[:end]).strip()
+
+
 def update_readme(readme: Path, comparison: str, figdir: Path) -> None:
     """Replace the generated section of ``readme`` (between the markers) with ``comparison``.
 
@@ -897,7 +930,14 @@ def update_readme(readme: Path, comparison: str, figdir: Path) -> None:
         return
     body = "\n".join(("#" + line) if line.startswith("#") else line for line in comparison.strip().splitlines())
     head, rest = text.split(README_BEGIN, 1)
-    _, tail = rest.split(README_END, 1)
+    old, tail = rest.split(README_END, 1)
+    kept = _identification_subsection(old)
+    if kept and IDENTIFICATION_HEADING not in body:
+        # `make run` does not identify (minutes of optimisation), so its report has no identification
+        # table; the README keeps the one of the last `make identify` instead of losing it
+        body += "\n\n" + kept
+        log.info("report: no current identify.nc; kept the README's identification section (from the last "
+                 "`hdi identify`)")
     _write_text(readme, head + README_BEGIN + "\n" + body + "\n" + README_END + tail)
     docs = readme.parent / "docs" / "figures"
     docs.mkdir(parents=True, exist_ok=True)

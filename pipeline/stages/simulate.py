@@ -23,7 +23,7 @@ from .. import slider as sl
 from ..io import read_dataset
 from ..physics.statistics import contact_probabilities, k_from_probability
 from ..runner import Inputs, Stage, build, ensure
-from ..variables import HISTORIES, coordinate, history, scalar
+from ..variables import HISTORIES, coordinate, flag_meaning, history, scalar
 
 log = logging.getLogger(__name__)
 NM = 1e-9
@@ -156,7 +156,10 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset]:
     summary.attrs.update(attrs)
     for name in summary.data_vars:
         v = summary[name]
-        log.info("  %-22s %12.5g %s", name, float(v[0]), v.attrs["units"])
+        if "flag_meanings" in v.attrs:  # (a code: its name, not "regime 2 1")
+            log.info("  %-22s %12s", name, flag_meaning(v.attrs, float(v[0])))
+        else:
+            log.info("  %-22s %12.5g %s", name, float(v[0]), v.attrs["units"])
     return {"histories.nc": histories, "summary.nc": summary}
 
 
