@@ -55,7 +55,8 @@ def _parser(stages: dict[str, runner.Stage]) -> argparse.ArgumentParser:
     p.add_argument("--readme", type=Path, default=None,
                    help="report: also rewrite the generated comparison section of this README")
     p.add_argument("--yes", action="store_true",
-                   help=f"sweep: run a grid of more than {MAX_SCENES:,} scenes")
+                   help=f"run a big job: a sweep of more than {MAX_SCENES:,} scenes, or tables, histories, "
+                        "records or studies beyond the limits of pipeline/limits.py")
     p.add_argument("-v", "--verbose", action="store_true")
     return p
 

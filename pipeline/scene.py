@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Iterable
 
+from .limits import LimitError, check_physical
 from .physics.air_bearing import REAR_LAWS, STIFFNESS_ROOTS, TFC_STIFFENING
 from .physics.fhm import FHM_MEASURES
 from .physics.friction import FRICTION_LAWS
@@ -530,6 +531,10 @@ def validate(raw: dict[str, Any], path: Path | None = None, *, overrides: Iterab
             raise SceneError(f"{where}: scene.name is missing: expected a name")
         config["scene"]["name"] = path.stem
     _cross_checks(config, where)
+    try:  # (a protrusion far beyond the flying height: no --yes makes it physical)
+        check_physical(Scene(path, config), where)
+    except LimitError as exc:
+        raise SceneError(str(exc)) from None
     return Scene(path=path, config=config, overrides=list(overrides))
 
 

@@ -24,6 +24,7 @@ from pathlib import Path
 from typing import Any
 from urllib.parse import urlsplit
 
+from . import limits
 from .physics.material_bounds import PhysicsWarning
 
 
@@ -38,15 +39,17 @@ WORKER_WAIT_S = 30.0
 #: Largest handshake [bytes] a dask server sends (it is ~100 bytes; a banner read as a length is huge).
 _HANDSHAKE_MAX = 1 << 20
 #: Largest sweep grid (protrusions x roughness sets x damping ratios) run without ``--yes``:
-#: about 30 CPU-minutes at ~20 ms per 2 ms scene on one core (README, "Tests and benchmarks").
-MAX_SCENES = 100_000
+#: about 30 CPU-minutes at ~20 ms per 2 ms scene on one core (README, "Tests and benchmarks");
+#: the other sizes are bounded in :mod:`pipeline.limits`.
+MAX_SCENES = limits.MAX_SCENES
 
 #: Options and the stages that use them (``run`` uses those of all its stages; ``--force`` and
 #: ``--out`` apply to every stage). ``--channel``/``--detrend`` act only on AFM files given directly.
 OPTION_STAGES: dict[str, tuple[str, ...]] = {
     "scheduler": ("sweep", "run", "calibrate", "identify", "sensitivity"),
     "workers": ("sweep", "run", "calibrate", "identify", "sensitivity"),
-    "yes": ("sweep", "run"),
+    "yes": ("sweep", "run", "dmw", "interface", "calibrate", "simulate", "accuracy", "report", "identify",
+            "sensitivity"),
     "readme": ("report", "run"),
     "channel": ("roughness FILE...",),
     "detrend": ("roughness FILE...",),
@@ -235,6 +238,11 @@ def check_options(stage: str, scene: Any, *, out: str | Path | None = None, sche
     check_out(out)
     if scene is not None and stage in ("sweep", "run"):
         check_grid(scene, yes)
+    if scene is not None:
+        try:
+            limits.check_sizes(scene, stage, yes, where=str(scene.path or "scene"))
+        except limits.LimitError as exc:
+            raise OptionError(str(exc)) from None
     if scene is not None and stage in ("report", "run"):
         check_report_histories(scene)
     if stage in OPTION_STAGES["scheduler"]:

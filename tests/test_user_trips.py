@@ -253,3 +253,54 @@ def test_with_a_measured_record_the_synthesis_keys_change_no_inputs_key(tmp_path
     # with the synthetic record they are inputs
     syn = [runner.Runner(load_scene(PAPER, extra), tmp_path / "out").key("dmw") for extra in ([], ["dmw.rms_nm=0.3"])]
     assert syn[0] != syn[1]
+
+
+# ------------------------------------------------------------------------------ 3. upper bounds
+def test_limits_count_the_paper_scene_exactly(tmp_path):
+    from pipeline import limits
+    from pipeline.stages import interface
+    scene = load_scene(PAPER)
+    sizes = {what.split(" (")[0]: n for what, n, _ in limits.sizes(scene, "run")}
+    rows = read_dataset(interface.run(scene, tmp_path)).sizes["separation"]
+    assert sizes == {"interface table rows": rows, "history samples per run": 8001, "DMW record samples": 8400,
+                     "sweep scenes": 76}
+    assert rows == 701
+
+
+@pytest.mark.parametrize("override, what", [
+    ("solver.table_step_nm=1e-5", "interface table rows"),
+    ("solver.output_step_ns=1e-3", "history samples per run"),
+    ("dmw.sample_rate_mhz=1e5", "DMW record samples"),
+    ("sweep.realisations=10000", "sweep scenes"),
+])
+def test_a_size_beyond_its_limit_is_one_line_before_anything_runs_and_yes_lifts_it(tmp_path, capsys, override, what):
+    from pipeline import limits
+    if override.startswith("dmw."):
+        override = [override, "dmw.band_khz=[10.0, 500.0]"]
+    else:
+        override = [override]
+    args = ["sweep", str(PAPER), "--out", str(tmp_path / "out")]
+    for s in override:
+        args += ["--set", s]
+    t0 = time.perf_counter()
+    assert cli.main(args) == 2
+    assert time.perf_counter() - t0 < 10
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f" {what} (" in err[0] and err[0].endswith("; pass --yes to run them anyway")
+    assert not (tmp_path / "out").exists()
+    limits.check_sizes(load_scene(PAPER, override), "sweep", yes=True)  # allowed with --yes
+
+
+def test_a_protrusion_far_beyond_the_flying_height_is_refused_even_with_yes(tmp_path, capsys):
+    """``--set tfc.protrusion_nm=1e6`` allocated a 20-million-row table and was OOM-killed."""
+    assert cli.main(["interface", str(PAPER), "--out", str(tmp_path / "out"), "--yes",
+                     "--set", "tfc.protrusion_nm=1e6"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"hdi interface: error: {PAPER}: tfc.protrusion_nm = 1e+06 nm: expected at most the flying height "
+                   "air_bearing.flying_height_nm = 11 nm + 100 nm; an interference of 999989 nm is outside the "
+                   "rough-surface contact model"]
+    from pipeline.scene import SceneError
+    with pytest.raises(SceneError, match="sweep.protrusion_nm stop = 200 nm"):
+        load_scene(PAPER, ["sweep.protrusion_nm={start=0.0, stop=200.0, step=0.2}"])
+    load_scene(PAPER, ["tfc.protrusion_nm=111.0"])  # the limit itself is allowed
+
