@@ -385,7 +385,21 @@ def summarize(run: Run, hist: dict[str, np.ndarray] | None = None) -> dict[str, 
             out["friction_force"] = float(np.mean(ff))
             out["friction_coefficient"] = float(ff.sum() / fc.sum()) if fc.sum() > 0 else np.nan
             out["shear_stress"] = float(ff.sum() / area.sum()) if area.sum() > 0 else np.nan
+    out["validity"] = int(_validity(run, hist, win))
     return out
+
+
+def _validity(run: Run, hist: dict[str, np.ndarray], win: np.ndarray) -> int:
+    """The :class:`pipeline.validity.Validity` bits of a run's steady window."""
+    from .validity import check_run
+    m, s = run.model, run.model.slider
+    fh0 = float(m.p[dyn.P_FH0])
+    lo = run.d_extremes[0] if np.isfinite(run.d_extremes[0]) else float(np.min(hist["separation"][win]))
+    tables = m.contact is not None or m.adhesion is not None
+    forces = [np.max(np.abs(hist[n][win])) for n in ("contact_force", "adhesion_force") if n in hist]
+    return check_run(fh0=fh0, arms=(s.l_f, s.l_r), z=hist["z"][win], pitch=hist["pitch"][win], d_min=lo,
+                     table_floor=float(m.p[dyn.P_TAB_X0]) if tables else None,
+                     force=float(max(forces)) if forces else 0.0, load=(s.k_f + s.k_r) * fh0)
 
 
 def with_solver(model: Model, **changes: Any) -> Model:

@@ -36,6 +36,8 @@ from typing import Any, Iterable
 import numpy as np
 import xarray as xr
 
+from .validity import Validity
+
 
 class Regime(IntEnum):
     """Regime of a steady window (the ``regime`` variable's ``flag_values``).
@@ -66,8 +68,12 @@ def flag_meaning(attrs: dict[str, Any], code: Any) -> str:
     """The meaning of ``code`` in a flag variable's ``flag_values``/``flag_meanings`` (``"missing"``
     for NaN or a code it does not list)."""
     try:
+        meanings = attrs["flag_meanings"].split()
+        if "flag_masks" in attrs:  # bits: the meanings of those set, "none" for 0
+            set_ = [m for bit, m in zip(np.atleast_1d(attrs["flag_masks"]), meanings) if int(code) & int(bit)]
+            return "+".join(set_) or "none"
         values = [int(v) for v in np.atleast_1d(attrs["flag_values"])]
-        return attrs["flag_meanings"].split()[values.index(int(code))]
+        return meanings[values.index(int(code))]
     except (KeyError, TypeError, ValueError, IndexError):
         return "missing"
 
@@ -87,7 +93,7 @@ class Variable:
     dims : dimensions beyond the grid of the dataset (e.g. ``("time",)`` for histories)
     effect : scene effect producing the variable (``None``: always present)
     dtype : numpy dtype on disk
-    flag_values, flag_meanings : for flag variables
+    flag_values, flag_meanings, flag_masks : for flag variables (values: one code; masks: bits)
     fill_value : declared missing value (``_FillValue``), for integer variables
     extra : further attributes (``rule``, ``formula``, ``axis``, ...)
     """
@@ -102,6 +108,7 @@ class Variable:
     dtype: str = "float64"
     flag_values: tuple[int, ...] | None = None
     flag_meanings: str | None = None
+    flag_masks: tuple[int, ...] | None = None
     fill_value: int | None = None
     extra: tuple[tuple[str, str], ...] = ()
 
@@ -119,6 +126,9 @@ class Variable:
             a["standard_name"] = self.standard_name
         if self.flag_values is not None:
             a["flag_values"] = np.array(self.flag_values, dtype=self.dtype)
+            a["flag_meanings"] = self.flag_meanings
+        if self.flag_masks is not None:
+            a["flag_masks"] = np.array(self.flag_masks, dtype=self.dtype)
             a["flag_meanings"] = self.flag_meanings
         a.update(dict(self.extra))
         return a
@@ -184,6 +194,12 @@ SCALARS = _group(
       fill_value=REGIME_FILL,
       extra=(("rule", "flying: no contact in the steady window; surfing: in contact >= 99 % of it; "
                       "bouncing: otherwise"),)),
+    V("validity", "1", "steady window outside the model's validity (bits; 0: valid)", dtype="int8",
+      flag_masks=tuple(int(v) for v in Validity), flag_meanings=" ".join(v.name.lower() for v in Validity),
+      fill_value=REGIME_FILL,
+      extra=(("rule", "bearing_range: a pad moved by more than FH0; below_tables: separation below the "
+                      "interface tables; force_beyond_load: contact or adhesion force above 100 (k_f + k_r) FH0 "
+                      "(pipeline/validity.py)"),)),
 )
 
 #: Time histories of one scene (:func:`pipeline.slider.histories`; ``histories.nc``,

@@ -304,3 +304,46 @@ def test_a_protrusion_far_beyond_the_flying_height_is_refused_even_with_yes(tmp_
         load_scene(PAPER, ["sweep.protrusion_nm={start=0.0, stop=200.0, step=0.2}"])
     load_scene(PAPER, ["tfc.protrusion_nm=111.0"])  # the limit itself is allowed
 
+
+
+# ------------------------------------------------------------------------------ 4. plausibility
+def test_validity_bits_of_a_run():
+    from pipeline.validity import Validity, check_run, describe
+    nm = 1e-9
+    ok = dict(fh0=11 * nm, arms=(3e-4, 4e-4), z=np.array([1.0, -2.0]) * nm, pitch=np.array([5e-6, -5e-6]),
+              d_min=-1 * nm, table_floor=-5 * nm, force=3e-3, load=7.9e-3)
+    assert check_run(**ok) == 0
+    # the rear pad: z - l_r theta = -2 nm - 4e-4 * 2.5e-5 = -12 nm, beyond FH0 = 11 nm
+    assert check_run(**{**ok, "pitch": np.array([0.0, 2.5e-5])}) == Validity.BEARING_RANGE
+    assert check_run(**{**ok, "pitch": np.array([0.0, 2.2e-5])}) == 0  # -10.8 nm
+    assert check_run(**{**ok, "d_min": -5.01 * nm}) == Validity.BELOW_TABLES
+    assert check_run(**{**ok, "d_min": -50 * nm, "table_floor": None}) == 0
+    assert check_run(**{**ok, "force": 0.8}) == Validity.FORCE_BEYOND_LOAD  # > 100 x 7.9 mN
+    assert check_run(**{**ok, "force": np.nan, "z": np.array([np.nan])}) == Validity.FORCE_BEYOND_LOAD | Validity.BEARING_RANGE
+    assert describe(np.array([0, np.nan, 0]), ["a", "b", "c"]) is None
+    line = describe(np.array([0, 1, 5, 1, 1]), ["a", "b", "c", "d", "e"], most=2)
+    assert line.startswith("4 of 5 scenes outside the model's validity b, c and 2 more: ")
+    assert "pitch" not in line and "interface forces beyond 100 x" in line and "flying height" in line
+
+
+def test_a_slider_shaken_beyond_its_flying_height_is_flagged_and_the_report_refuses_it(tmp_path, capsys):
+    """A DMW of 5 nm rms under an 11 nm bearing: FHM 180 %, reported as results before."""
+    args = ["report", str(PAPER), "--out", str(tmp_path)]
+    for s in FLY + ["dmw.rms_nm=5.0", "report.histories_nm=[2.0]"]:
+        args += ["--set", s]
+    assert cli.main(args) == 2
+    err = [line for line in capsys.readouterr().err.strip().splitlines() if "error" in line]  # (no progress)
+    assert len(err) == 1, err
+    assert err[0].startswith(f"hdi report: error: {tmp_path / 'sweep.nc'}: 3 of 3 scenes outside the model's validity "
+                             "[protrusion 2, roughness scene, damping 0.05], [protrusion 2.2, ")
+    assert err[0].endswith("the slider moved by more than the flying height (outside the air bearing's range); "
+                           "no report drawn from them (see its variable validity)")
+    sw = read_dataset(tmp_path / "sweep.nc")
+    assert (sw["validity"].values == 1).all() and (sw["fhm_bv"].values > 100).all()
+    assert not (tmp_path / "report").exists() and not (tmp_path / "figures").exists()
+    # the paper's DMW amplitude: valid, reported
+    ok = ["report", str(PAPER), "--out", str(tmp_path / "ok")]
+    for s in FLY + ["report.histories_nm=[2.0]"]:
+        ok += ["--set", s]
+    assert cli.main(ok) == 0
+    assert (read_dataset(tmp_path / "ok" / "sweep.nc")["validity"].values == 0).all()

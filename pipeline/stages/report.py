@@ -63,6 +63,7 @@ from .. import plots
 from ..io import DatasetError, read_dataset
 from ..physics.statistics import contact_probabilities
 from ..runner import Inputs, Stage, build
+from ..validity import OutsideValidity, describe
 from ..variables import SCALARS, regime_name
 
 log = logging.getLogger(__name__)
@@ -850,6 +851,7 @@ def compute(scene: Any, inputs: Inputs) -> dict:
     from the datasets in ``inputs.out``; the runner moves them into place."""
     data = load_inputs(inputs.out)
     sweep = data["sweep"]
+    refuse_invalid(sweep, inputs.out / "sweep.nc")
     name = getattr(scene, "name", None) or str(sweep.attrs.get("scene_name", inputs.out.name))
     combos = combinations(sweep, scene)
     figdir = inputs.staging / "figures"
@@ -868,6 +870,21 @@ def compute(scene: Any, inputs: Inputs) -> dict:
         log.info("report: skipped %s: %s", f, why)
     log.info("report: %d figures, 3 tables", len(made))
     return {}
+
+
+def refuse_invalid(sweep: xr.Dataset, path: Path) -> None:
+    """Raise :class:`pipeline.validity.OutsideValidity` (one line: which scenes, why) when a scene of
+    the sweep is flagged in ``validity``: its numbers are not results of the model."""
+    if "validity" not in sweep:
+        return
+    v = sweep["validity"]
+    labels = []
+    for idx in np.ndindex(v.shape):
+        labels.append(", ".join(f"{dim} {sweep[dim].values[i]:g}" if sweep[dim].dtype.kind in "fiu"
+                                else f"{dim} {sweep[dim].values[i]}" for dim, i in zip(v.dims, idx)))
+    why = describe(v.values.reshape(-1), [f"[{s}]" for s in labels])
+    if why is not None:
+        raise OutsideValidity(f"{path}: {why}; no report drawn from them (see its variable validity)")
 
 
 def _upstream(scene: Any) -> tuple[str, ...]:
