@@ -367,7 +367,7 @@ ENSEMBLE_OF = ("fhm_bv", "clearance", "min_clearance", "interference", "contact_
 ENSEMBLE = _group(
     V("realisation", "1", "DMW realisation (0: the scene's own record)", dims=("realisation",), dtype="int32"),
     V("dmw_seed", "1", "seed of the synthetic DMW record of the realisation", dims=("realisation",),
-      dtype="uint32"),  # (seeds are 32-bit, pipeline.stages.dmw.realisation_seeds; CF-1.8 has no int64)
+      dtype="float64"),  # (32-bit seeds, exact in a double; CF-1.8 allows no int64 or unsigned int)
     *(V(n + "_mean", SCALARS[n].units, "ensemble mean of " + SCALARS[n].long_name, SCALARS[n].si_unit,
         effect=SCALARS[n].effect) for n in ENSEMBLE_OF),
     *(V(n + "_std", SCALARS[n].units, "ensemble standard deviation (ddof 1) of " + SCALARS[n].long_name,

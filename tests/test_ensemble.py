@@ -88,14 +88,14 @@ def test_touchdown_probability_counts_computed_realisations_only():
 
 def test_ensemble_sweep_passes_cf_1_8(sweeps):
     """``dmw_seed`` was written int64, which CF-1.8 does not allow (the README says every dataset
-    passes): it is a 32-bit unsigned seed now."""
+    passes; nor unsigned int): the 32-bit seeds are stored exactly as doubles."""
     import netCDF4
     from cf_check import cf_report
     _, three, out = sweeps
     failures, crashed = cf_report(out / "sweep.nc")
     assert crashed == [] and failures[3] == [] and failures[2] + failures[1] == []
     with netCDF4.Dataset(out / "sweep.nc") as nc:
-        assert nc.variables["dmw_seed"].dtype == np.uint32
+        assert nc.variables["dmw_seed"].dtype == np.float64
     assert list(three.dmw_seed.values) == dmw_stage.realisation_seeds(20090601, 3)
 
 
