@@ -8,8 +8,9 @@ SCENE  ?= configs/paper-2009.toml
 ARGS   ?=
 
 # The installer: uv at the version below, installed from PyPI by pip into .bootstrap/ (nothing needs
-# to be preinstalled but Python); it installs exactly the versions of uv.lock. `make UV=uv ...` uses
-# another uv. Without uv (pip cannot install it) the targets fall back to pip, unlocked.
+# to be preinstalled but Python); it installs exactly the versions of uv.lock (--locked: a uv.lock
+# behind pyproject.toml is an error; run `uv lock`). `make UV=uv ...` uses another uv. Without uv
+# (pip cannot install it) the targets fall back to pip, unlocked.
 UV_VERSION := 0.13.9
 BOOT   := .bootstrap
 UV     ?= $(BOOT)/bin/uv
@@ -31,7 +32,7 @@ setup: $(RUN_STAMP)
 define install
 	@if [ -x "$(UV)" ] || $(PYTHON) -m pip install --quiet --disable-pip-version-check --target $(BOOT) \
 	        "uv==$(UV_VERSION)"; then \
-	    "$(UV)" sync --frozen --inexact --python $(PYTHON) $(1); \
+	    "$(UV)" sync --locked --inexact --python $(PYTHON) $(1); \
 	else \
 	    echo "make: could not install uv; installing with pip instead (versions not locked)"; \
 	    test -x $(BIN)/python || $(PYTHON) -m venv $(VENV); \
