@@ -1,57 +1,83 @@
 # The two commands: `make run` (the paper scene, end to end) and `make test`.
-# Every target builds its own virtual environment in .venv from pyproject.toml when needed.
+# Every target builds its own virtual environment in .venv from uv.lock (pyproject.toml) when needed.
 
 PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
-STAMP  := $(VENV)/.installed
 SCENE  ?= configs/paper-2009.toml
 ARGS   ?=
 
+# The installer: uv at the version below, installed from PyPI by pip into .bootstrap/ (nothing needs
+# to be preinstalled but Python); it installs exactly the versions of uv.lock (--locked: a uv.lock
+# behind pyproject.toml is an error; run `uv lock`). `make UV=uv ...` uses another uv. Without uv
+# (pip cannot install it) the targets fall back to pip, unlocked.
+UV_VERSION := 0.13.9
+BOOT   := .bootstrap
+UV     ?= $(BOOT)/bin/uv
+# `make run` gets the pipeline's dependencies; `make test` adds the `test` extra (pytest, hypothesis,
+# compliance-checker, cf_units). --inexact: one does not uninstall what the other added.
+RUN_STAMP  := $(VENV)/.installed-run
+TEST_STAMP := $(VENV)/.installed-test
+
 export MPLBACKEND := Agg
 export PYTHONHASHSEED := 0
+export UV_PYTHON_DOWNLOADS := never
 
 .PHONY: setup run test test-fast test-slow bench sweep readme clean \
         roughness dmw interface calibrate simulate accuracy report identify sensitivity
 
-setup: $(STAMP)
+setup: $(RUN_STAMP)
 
-$(STAMP): pyproject.toml
-	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
-	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e .
-	touch $(STAMP)
+# $(1): uv sync options, $(2): the pip extra of the fallback
+define install
+	@if [ -x "$(UV)" ] || $(PYTHON) -m pip install --quiet --disable-pip-version-check --target $(BOOT) \
+	        "uv==$(UV_VERSION)"; then \
+	    "$(UV)" sync --locked --inexact --python $(PYTHON) $(1); \
+	else \
+	    echo "make: could not install uv; installing with pip instead (versions not locked)"; \
+	    test -x $(BIN)/python || $(PYTHON) -m venv $(VENV); \
+	    $(BIN)/python -m pip install --quiet -e ".$(2)"; \
+	fi
+endef
+
+$(RUN_STAMP): pyproject.toml uv.lock
+	$(call install,)
+	touch $@
+
+$(TEST_STAMP): pyproject.toml uv.lock
+	$(call install,--extra test,[test])
+	touch $@ $(RUN_STAMP)
 
 ## the main job: the paper scene through every stage, on a local dask cluster
-run: $(STAMP)
+run: $(RUN_STAMP)
 	$(BIN)/hdi run $(SCENE) $(ARGS)
 
 ## the tests: one pytest session over the whole suite, slow tests included (CI runs this).
 ## Its closing line ("N passed ...") counts what ran; exit code 5 (no test collected) fails.
-test: $(STAMP)
+test: $(TEST_STAMP)
 	$(BIN)/python -m pytest -q tests
 
 ## the quick suite for development: everything but the tests marked slow
-test-fast: $(STAMP)
+test-fast: $(TEST_STAMP)
 	$(BIN)/python -m pytest -q -m "not slow" tests
 
-test-slow: $(STAMP)
+test-slow: $(TEST_STAMP)
 	$(BIN)/python -m pytest -q -m slow tests
 
 ## speed and memory: medians and ratios against baselines measured in the same run
-bench: $(STAMP)
+bench: $(RUN_STAMP)
 	$(BIN)/python -m benchmarks.run --out benchmarks/results/bench.json
 
 ## a larger default grid: paper protrusions x 3 roughness sets x 3 damping ratios
-sweep: $(STAMP)
+sweep: $(RUN_STAMP)
 	$(BIN)/hdi sweep configs/sweep-3x3.toml $(ARGS)
 
 ## rewrite the README's generated comparison section and figures from the last `make run`
-readme: $(STAMP)
+readme: $(RUN_STAMP)
 	$(BIN)/hdi report $(SCENE) --readme README.md
 
 ## parameter studies: identify the free [recon] parameters from the paper's targets; their sensitivity
-roughness dmw interface calibrate simulate accuracy report identify sensitivity: $(STAMP)
+roughness dmw interface calibrate simulate accuracy report identify sensitivity: $(RUN_STAMP)
 	$(BIN)/hdi $@ $(SCENE) $(ARGS)
 
 clean:

@@ -1,4 +1,4 @@
-"""Benchmark of the bulge's air-bearing table (pipeline.bulge_table) for the paper scene.
+"""Benchmark of the bulge's air-bearing table (pipeline.model.bulge_table) for the paper scene.
 
 Target (issue 17): the Reynolds table of the paper scene under 30 s. The table is 31 protrusions
 (0-15 nm at 0.5 nm) x 25 apex gaps (0.05-20 nm, log-spaced), the default Reynolds grid (32 x 12 cells

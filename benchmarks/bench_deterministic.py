@@ -26,7 +26,7 @@ CHILD = r"""
 import json, resource, sys, time, warnings
 warnings.simplefilter("ignore")
 import numpy as np
-from pipeline.scene import load_scene
+from pipeline.config.scene import load_scene
 from pipeline.stages.interface import build_tables, interface_parameters, needed_quantities, roughness_statistics
 from pipeline.model.deterministic_tables import deterministic_tables
 from pipeline.physics import isbl, surface as sf

@@ -48,7 +48,7 @@ FRESH = textwrap.dedent("""
     import time
     t0 = time.perf_counter()
     import sys
-    from pipeline import slider as sl
+    from pipeline.model import slider as sl
     from pipeline.io import read_dataset
     from pipeline.config.scene import load_scene
     from pipeline.model import dmw_record

@@ -11,7 +11,9 @@ from __future__ import annotations
 import argparse
 import logging
 import os
+import signal
 import sys
+import threading
 import traceback
 from pathlib import Path
 
@@ -54,7 +56,8 @@ def _parser(stages: dict[str, runner.Stage]) -> argparse.ArgumentParser:
     p.add_argument("--readme", type=Path, default=None,
                    help="report: also rewrite the generated comparison section of this README")
     p.add_argument("--yes", action="store_true",
-                   help=f"sweep: run a grid of more than {MAX_SCENES:,} scenes")
+                   help=f"run a big job: a sweep of more than {MAX_SCENES:,} scenes, or tables, histories, "
+                        "records or studies beyond the limits of pipeline/config/limits.py")
     p.add_argument("-v", "--verbose", action="store_true")
     return p
 
@@ -91,7 +94,27 @@ def _logging(verbose: bool) -> None:
             logging.getLogger(name).setLevel(logging.CRITICAL)  # (shutdown races log CommClosedError)
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM (``timeout``, ``kill``, SLURM's ``scancel`` and requeue) arrived: unwound like Ctrl-C, so
+    the folder lock and the staging folder are removed and finished work is kept."""
+
+
+def _terminate(signum: int, frame: object) -> None:
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)  # (a second SIGTERM must not cut the clean-up short)
+    raise Terminated()
+
+
 def main(argv: list[str] | None = None) -> int:
+    if threading.current_thread() is threading.main_thread():
+        previous = signal.signal(signal.SIGTERM, _terminate)
+        try:
+            return _main(argv)
+        finally:
+            signal.signal(signal.SIGTERM, previous)
+    return _main(argv)
+
+
+def _main(argv: list[str] | None = None) -> int:
     stages = runner.registry()
     args = _parser(stages).parse_args(argv)
     _logging(args.verbose)
@@ -122,9 +145,10 @@ def main(argv: list[str] | None = None) -> int:
             traceback.print_exc()
         print(f"hdi {args.stage}: error: {exc}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print(f"hdi {args.stage}: interrupted; finished work is kept, run again to resume", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as exc:
+        how = "terminated (SIGTERM)" if isinstance(exc, Terminated) else "interrupted"
+        print(f"hdi {args.stage}: {how}; finished work is kept, run again to resume", file=sys.stderr)
+        return 143 if isinstance(exc, Terminated) else 130
 
 
 def entry() -> None:  # pragma: no cover (the console script; tests call main)

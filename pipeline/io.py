@@ -72,20 +72,29 @@ def check_cf(ds: xr.Dataset, where: str = "dataset") -> None:
         raise DatasetError(f"{where}: variables without units/long_name: {missing}")
 
 
-#: On disk, ``time`` (elapsed simulated time [s]) carries the reference date CF 4.4 asks for;
-#: :func:`read_dataset` turns it back into plain seconds.
-TIME_UNITS_ON_DISK = "s since 1970-01-01 00:00:00"
+#: On disk, ``time`` (elapsed simulated time [s], not a date) is the coordinate ``elapsed_time`` in
+#: plain seconds: a coordinate named ``time`` is a calendar time to CF readers (the compliance checker
+#: then asks for units ``s since <date>``), and ``since`` in its units makes xarray's default
+#: ``open_dataset`` decode it to datetimes at microsecond resolution, merging 250 ns samples.
+#: :func:`read_dataset` renames it back to ``time``.
+TIME_ON_DISK = "elapsed_time"
+#: Units of ``time`` written before ``elapsed_time`` (still read back as seconds).
+OLD_TIME_UNITS = "s since 1970-01-01 00:00:00"
 
 
 def cf_encoding(ds: xr.Dataset) -> tuple[xr.Dataset, dict[str, dict[str, Any]]]:
     """A copy of ``ds`` and its NetCDF encoding, arranged for CF-1.8 (see :mod:`pipeline.variables`).
 
     Coordinates get no ``_FillValue``; labels (strings) lose ``units`` and are stored as character
-    arrays; 64-bit integers are stored as 32-bit (CF 2.2) when their values fit; ``time`` gets
-    ``standard_name``, ``axis`` and units with a reference date. Declared missing values already in a
-    variable's encoding (``regime``) are kept.
+    arrays; 64-bit integers are stored as 32-bit (CF 2.2) when their values fit; ``time`` becomes
+    :data:`TIME_ON_DISK` in plain seconds. Declared missing values already in a variable's encoding
+    (``regime``) are kept.
     """
     out = ds.copy()
+    if "time" in out.variables or "time" in out.dims:
+        out = out.rename({"time": TIME_ON_DISK})
+        for key in ("standard_name", "axis"):  # (a duration, not CF's calendar time)
+            out[TIME_ON_DISK].attrs.pop(key, None)
     encoding: dict[str, dict[str, Any]] = {}
     for name in list(out.variables):
         v = out[name]
@@ -98,8 +107,6 @@ def cf_encoding(ds: xr.Dataset) -> tuple[xr.Dataset, dict[str, dict[str, Any]]]:
             enc.pop("_FillValue", None)
         elif v.dtype == "int64" and (v.size == 0 or (abs(v.values).max() < 2**31)):
             enc["dtype"] = "int32"
-        if name == "time" and v.attrs.get("units") == "s":
-            out[name].attrs.update(units=TIME_UNITS_ON_DISK, standard_name="time", axis="T")
         encoding[name] = enc
     return out, encoding
 
@@ -174,6 +181,7 @@ def write_dataset(ds: xr.Dataset, path: str | Path, scene: Any = None, *, stage:
     out.attrs = {k: (json.dumps(v) if isinstance(v, (dict, list, tuple)) else v) for k, v in attrs.items()}
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     os.close(fd)
+    os.chmod(tmp, 0o666 & ~current_umask())  # (mkstemp makes 0600; a dataset is shared like any file)
     try:
         with NETCDF_LOCK:
             _to_netcdf(out, tmp, encoding)
@@ -182,6 +190,21 @@ def write_dataset(ds: xr.Dataset, path: str | Path, scene: Any = None, *, stage:
         Path(tmp).unlink(missing_ok=True)
         raise
     return path
+
+
+def current_umask() -> int:
+    """The process's file-mode creation mask (from ``/proc`` on Linux, without changing it; else by
+    setting and restoring it)."""
+    try:
+        with open("/proc/self/status") as fh:
+            for line in fh:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except (OSError, ValueError):
+        pass
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
 
 
 def _to_netcdf(ds: xr.Dataset, path: str, encoding: dict[str, dict[str, Any]]) -> None:
@@ -236,7 +259,9 @@ def read_dataset(path: str | Path, *, stage: str | None = None, variables: Itera
             ds = ds.load()
     except (OSError, ValueError) as exc:
         raise DatasetError(f"{path}: not a readable NetCDF dataset: {exc}") from None
-    if "time" in ds.variables and ds["time"].attrs.get("units") == TIME_UNITS_ON_DISK:
+    if TIME_ON_DISK in ds.variables and "time" not in ds.variables:
+        ds = ds.rename({TIME_ON_DISK: "time"})
+    elif "time" in ds.variables and ds["time"].attrs.get("units") == OLD_TIME_UNITS:
         ds["time"].attrs["units"] = "s"
     missing = [v for v in variables if v not in ds.variables]
     if missing:

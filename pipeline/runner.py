@@ -234,9 +234,24 @@ def main_job(scene: Scene, stages: Mapping[str, Stage] | None = None) -> list[st
 NEVER_READ = ("scene.extends",)
 
 
+#: Keys of the synthetic DMW record, which a measured record (``dmw.source`` a file) leaves unused:
+#: keyed, ``--set dmw.rms_nm`` recomputed the whole chain to identical results.
+SYNTHESIS_ONLY = ("dmw.rms_nm", "dmw.exponent", "dmw.seed")
+
+
+def unused_keys(scene: Scene) -> tuple[str, ...]:
+    """Scene keys this scene states but nothing reads (beyond :data:`NEVER_READ`)."""
+    dmw = scene.config.get("dmw", {})
+    return SYNTHESIS_ONLY if dmw.get("source", "synthetic") != "synthetic" else ()
+
+
 def scene_part(scene: Scene, reads: Iterable[str], excludes: Iterable[str] = ()) -> dict[str, Any]:
-    """The scene keys named by ``reads``/``excludes`` (see :class:`Stage`), JSON-normalised."""
+    """The scene keys named by ``reads``/``excludes`` (see :class:`Stage`), JSON-normalised, without
+    the :func:`unused_keys` of the scene."""
     cfg = json.loads(json.dumps(scene.config, default=str))
+    for item in unused_keys(scene):
+        section, _, key = item.partition(".")
+        cfg.get(section, {}).pop(key, None)
     picked: dict[str, Any] = {}
     reads = tuple(reads)
     if "*" in reads:

@@ -3,8 +3,8 @@
 :func:`check_options` validates the options of ``hdi STAGE`` against the stage and the scene, so a
 mistake ends in one line naming the option (exit 2, :class:`OptionError`) before any stage starts
 and before anything is written: ``--workers`` must be a positive integer, ``--scheduler`` must
-answer (a TCP connect with a short timeout, :data:`CONNECT_TIMEOUT_S`, instead of dask's 30 s and a
-traceback), ``--out`` must be a folder we can write in, the sweep grid must not exceed
+answer as a dask scheduler with workers (its handshake within :data:`CONNECT_TIMEOUT_S`, instead of
+dask's 30 s, a hang on an HTTP port or a traceback), ``--out`` must be a folder we can write in, the sweep grid must not exceed
 :data:`MAX_SCENES` unless ``--yes``, the report's history protrusions must lie on the sweep grid, and
 an option the stage does not use is an error naming the option and the stages that use it.
 
@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import os
 import socket
+import struct
 import tempfile
 import warnings
 from pathlib import Path
@@ -24,6 +25,8 @@ from typing import Any
 from urllib.parse import urlsplit
 
 from .config.grid import label, range_count, same_point
+from . import sizing
+from .config import limits
 from .physics.material_bounds import PhysicsWarning
 
 
@@ -33,16 +36,22 @@ class OptionError(ValueError):
 
 #: Seconds to wait for a TCP connection to ``--scheduler`` before giving up.
 CONNECT_TIMEOUT_S = 3.0
+#: Seconds a scheduler without workers is given to get one (batch jobs starting) before giving up.
+WORKER_WAIT_S = 30.0
+#: Largest handshake [bytes] a dask server sends (it is ~100 bytes; a banner read as a length is huge).
+_HANDSHAKE_MAX = 1 << 20
 #: Largest sweep grid (protrusions x roughness sets x damping ratios) run without ``--yes``:
-#: about 30 CPU-minutes at ~20 ms per 2 ms scene on one core (README, "Tests and benchmarks").
-MAX_SCENES = 100_000
+#: about 30 CPU-minutes at ~20 ms per 2 ms scene on one core (README, "Tests and benchmarks");
+#: the other sizes are bounded in :mod:`pipeline.config.limits`.
+MAX_SCENES = limits.MAX_SCENES
 
 #: Options and the stages that use them (``run`` uses those of all its stages; ``--force`` and
 #: ``--out`` apply to every stage). ``--channel``/``--detrend`` act only on AFM files given directly.
 OPTION_STAGES: dict[str, tuple[str, ...]] = {
     "scheduler": ("sweep", "run", "calibrate", "identify", "sensitivity"),
     "workers": ("sweep", "run", "calibrate", "identify", "sensitivity"),
-    "yes": ("sweep", "run"),
+    "yes": ("sweep", "run", "dmw", "interface", "calibrate", "simulate", "accuracy", "report", "identify",
+            "sensitivity"),
     "readme": ("report", "run"),
     "channel": ("roughness FILE...",),
     "detrend": ("roughness FILE...",),
@@ -58,9 +67,12 @@ def check_workers(workers: int | None) -> None:
         raise OptionError(f"--workers {workers}: expected a positive number of local workers (1 or more)")
 
 
-def check_scheduler(address: str | None, timeout: float = CONNECT_TIMEOUT_S) -> None:
+def check_scheduler(address: str | None, timeout: float = CONNECT_TIMEOUT_S,
+                    worker_wait: float = WORKER_WAIT_S) -> None:
     """``--scheduler`` is absent, a local one (``synchronous``, ``threads``, ``processes``:
-    :mod:`pipeline.fanout`), or a ``[tcp://]HOST:PORT`` that accepts a connection."""
+    :mod:`pipeline.fanout`), or a ``[tcp://]HOST:PORT`` where a dask scheduler answers the handshake
+    within ``timeout`` [s] and has a worker within ``worker_wait`` [s] (``tls://``: the connection
+    alone is checked, the handshake is encrypted)."""
     if address is None or address in ("synchronous", "threads", "processes"):
         return
     parts = urlsplit(address if "://" in address else f"tcp://{address}")
@@ -74,13 +86,72 @@ def check_scheduler(address: str | None, timeout: float = CONNECT_TIMEOUT_S) -> 
     if not host or port is None:
         raise OptionError(f"--scheduler {address}: expected tcp://HOST:PORT")
     try:
-        with socket.create_connection((host, port), timeout=timeout):
-            pass
+        with socket.create_connection((host, port), timeout=timeout) as sock:
+            what = _dask_handshake(sock, timeout) if parts.scheme == "tcp" else None
     except OSError as exc:
         reason = "timed out" if isinstance(exc, socket.timeout) else (exc.strerror or str(exc))
         raise OptionError(f"--scheduler {address}: no scheduler answers at {host}:{port} ({reason}, "
                           f"{timeout:g} s connect timeout); start one (`dask scheduler`) or leave "
                           "--scheduler out to use a local cluster") from None
+    if what is not None:
+        raise OptionError(f"--scheduler {address}: {host}:{port} answers but is not a dask scheduler ({what}); "
+                          "give the scheduler's address (tcp://HOST:8786 by default, not the dashboard's "
+                          "8787) or leave --scheduler out to use a local cluster")
+    check_workers_attached(address, timeout, worker_wait)
+
+
+def _dask_handshake(sock: socket.socket, timeout: float) -> str | None:
+    """Why the service on ``sock`` is not a dask.distributed server (``None``: it is one).
+
+    A dask server speaks first: on accepting a connection it sends its handshake (the comm protocol
+    of ``distributed.comm.tcp``: an 8-byte little-endian length, then msgpack frames naming
+    ``pickle-protocol`` and ``compression``). An HTTP server (a dashboard, a web service) waits for a
+    request instead, and other services send a banner: both are told apart here without sending a
+    byte, where ``distributed.Client`` would hang or read the banner as a length of exabytes.
+    """
+    sock.settimeout(timeout)
+    head = b""
+    try:
+        while len(head) < 8:
+            chunk = sock.recv(8 - len(head))
+            if not chunk:
+                return "it closed the connection without a handshake"
+            head += chunk
+        (size,) = struct.unpack("<Q", head)
+        if not 0 < size <= _HANDSHAKE_MAX:
+            return f"it sent {head[:8]!r} instead of a dask handshake"
+        body = b""
+        while len(body) < size:
+            chunk = sock.recv(min(65536, size - len(body)))
+            if not chunk:
+                break
+            body += chunk
+    except socket.timeout:
+        return f"no dask handshake within {timeout:g} s" + (", as an HTTP server or dashboard does" if not head else "")
+    return None if b"pickle-protocol" in body and b"compression" in body else "its first message is no dask handshake"
+
+
+def check_workers_attached(address: str, timeout: float = CONNECT_TIMEOUT_S,
+                           worker_wait: float = WORKER_WAIT_S) -> None:
+    """The dask scheduler at ``address`` has at least one worker, or gets one within ``worker_wait`` [s]
+    (workers submitted as batch jobs may still be starting)."""
+    import logging
+    from distributed import Client
+    try:
+        with Client(address, timeout=timeout) as client:
+            if client.scheduler_info().get("workers"):
+                return
+            logging.getLogger("pipeline").info("scheduler %s has no workers; waiting up to %g s for one",
+                                               address, worker_wait)
+            try:
+                client.wait_for_workers(1, timeout=worker_wait)
+                return
+            except (TimeoutError, OSError):
+                pass
+    except (OSError, TimeoutError) as exc:
+        raise OptionError(f"--scheduler {address}: the dask scheduler did not answer ({exc})") from None
+    raise OptionError(f"--scheduler {address}: the dask scheduler has no workers ({worker_wait:g} s waited); "
+                      "start some (`dask worker " + address + "`) or leave --scheduler out")
 
 
 def check_out(out: str | Path | None) -> None:
@@ -167,6 +238,11 @@ def check_options(stage: str, scene: Any, *, out: str | Path | None = None, sche
     check_out(out)
     if scene is not None and stage in ("sweep", "run"):
         check_grid(scene, yes)
+    if scene is not None:
+        try:
+            sizing.check_sizes(scene, stage, yes, where=str(scene.path or "scene"))
+        except limits.LimitError as exc:
+            raise OptionError(str(exc)) from None
     if scene is not None and stage in ("report", "run"):
         check_report_histories(scene)
     if stage in OPTION_STAGES["scheduler"]:

@@ -3,8 +3,8 @@
 Each :class:`Variable` states its name, its dataset units (the paper's units, a UDUNITS string),
 the SI value of one dataset unit (``si_unit``; dataset value = SI value / ``si_unit``, i.e. the SI
 factor ``si_factor = 1/si_unit``), its ``long_name``, its CF
-``standard_name`` where the CF table has one (only ``time`` here: CF has no standard names for
-tribology), the dimensions it carries beyond the grid of its dataset, the scene effect that
+``standard_name`` where the CF table has one (none here: CF has no standard names for tribology,
+and ``time`` is a duration, not CF's calendar time), the dimensions it carries beyond the grid of its dataset, the scene effect that
 produces it (absent without that effect), and for flag variables their values and missing value.
 
 Groups (:data:`GROUPS`) collect the variables of one kind; :data:`DATASETS` says which groups each
@@ -16,10 +16,11 @@ units it is written in.
 How the datasets meet CF-1.8 (:func:`pipeline.io.cf_encoding`, applied by :func:`pipeline.io.write_dataset`):
 
 * coordinates carry no ``_FillValue`` (CF 2.5.1);
-* ``time`` is an elapsed simulated time in seconds; CF 4.4 wants a reference date in its units,
-  so on disk it reads ``s since 1970-01-01 00:00:00`` with ``standard_name = "time"`` and
-  ``axis = "T"``; :func:`pipeline.io.read_dataset` gives back plain seconds (``units = "s"``).
-  Readers using xarray directly get datetimes from 1970-01-01 unless they pass ``decode_times=False``;
+* ``time`` is an elapsed simulated time in seconds, not a date: on disk it is the coordinate
+  ``elapsed_time`` in plain ``s`` (:data:`pipeline.io.TIME_ON_DISK`), which CF and xarray read as a
+  number (a coordinate named ``time``, or units ``s since <date>``, is a calendar time to both, and
+  xarray's default decoding rounded it to microseconds); :func:`pipeline.io.read_dataset` renames it
+  back to ``time``;
 * labels (string coordinates such as ``roughness`` or ``route``) have no units and are stored as
   character arrays (CF 2.2), which xarray decodes back to strings;
 * ``regime`` is a flag variable (:class:`Regime`) whose missing value (-1, a point not computed)
@@ -35,6 +36,8 @@ from typing import Any, Iterable
 import numpy as np
 import xarray as xr
 from .units import GPA, MN, MPA, NM, PER_UM2, UM, UM2, URAD
+
+from .validity import Validity
 
 
 class Regime(IntEnum):
@@ -62,6 +65,20 @@ def regime_name(code: Any) -> str:
         return "missing"
 
 
+def flag_meaning(attrs: dict[str, Any], code: Any) -> str:
+    """The meaning of ``code`` in a flag variable's ``flag_values``/``flag_meanings`` (``"missing"``
+    for NaN or a code it does not list)."""
+    try:
+        meanings = attrs["flag_meanings"].split()
+        if "flag_masks" in attrs:  # bits: the meanings of those set, "none" for 0
+            set_ = [m for bit, m in zip(np.atleast_1d(attrs["flag_masks"]), meanings) if int(code) & int(bit)]
+            return "+".join(set_) or "none"
+        values = [int(v) for v in np.atleast_1d(attrs["flag_values"])]
+        return meanings[values.index(int(code))]
+    except (KeyError, TypeError, ValueError, IndexError):
+        return "missing"
+
+
 @dataclass(frozen=True)
 class Variable:
     """Declaration of one output variable.
@@ -77,7 +94,7 @@ class Variable:
     dims : dimensions beyond the grid of the dataset (e.g. ``("time",)`` for histories)
     effect : scene effect producing the variable (``None``: always present)
     dtype : numpy dtype on disk
-    flag_values, flag_meanings : for flag variables
+    flag_values, flag_meanings, flag_masks : for flag variables (values: one code; masks: bits)
     fill_value : declared missing value (``_FillValue``), for integer variables
     extra : further attributes (``rule``, ``formula``, ``axis``, ...)
     """
@@ -92,6 +109,7 @@ class Variable:
     dtype: str = "float64"
     flag_values: tuple[int, ...] | None = None
     flag_meanings: str | None = None
+    flag_masks: tuple[int, ...] | None = None
     fill_value: int | None = None
     extra: tuple[tuple[str, str], ...] = ()
 
@@ -109,6 +127,9 @@ class Variable:
             a["standard_name"] = self.standard_name
         if self.flag_values is not None:
             a["flag_values"] = np.array(self.flag_values, dtype=self.dtype)
+            a["flag_meanings"] = self.flag_meanings
+        if self.flag_masks is not None:
+            a["flag_masks"] = np.array(self.flag_masks, dtype=self.dtype)
             a["flag_meanings"] = self.flag_meanings
         a.update(dict(self.extra))
         return a
@@ -147,8 +168,7 @@ COORDINATES = _group(
     V("protrusion", "nm", "TFC protrusion", NM, dims=("protrusion",)),
     V("roughness", "", "roughness set label", dims=("roughness",), dtype="str"),
     V("damping", "1", "modal damping ratio of the air bearing", dims=("damping",)),
-    V("time", "s", "time", standard_name="time", dims=("time",),
-      extra=(("axis", "T"),)),
+    V("time", "s", "elapsed simulated time", dims=("time",)),  # (on disk: elapsed_time, pipeline.io)
     V("hist_protrusion", "nm", "protrusion of the kept histories", NM, dims=("hist_protrusion",)),
 )
 
@@ -174,6 +194,12 @@ SCALARS = _group(
       fill_value=REGIME_FILL,
       extra=(("rule", "flying: no contact in the steady window; surfing: in contact >= 99 % of it; "
                       "bouncing: otherwise"),)),
+    V("validity", "1", "steady window outside the model's validity (bits; 0: valid)", dtype="int8",
+      flag_masks=tuple(int(v) for v in Validity), flag_meanings=" ".join(v.name.lower() for v in Validity),
+      fill_value=REGIME_FILL,
+      extra=(("rule", "bearing_range: a pad moved by more than FH0; below_tables: separation below the "
+                      "interface tables; force_beyond_load: contact or adhesion force above 100 (k_f + k_r) FH0 "
+                      "(pipeline/validity.py)"),)),
 )
 
 #: Time histories of one scene (:func:`pipeline.model.slider.histories`; ``histories.nc``,
@@ -356,7 +382,7 @@ ENSEMBLE_OF = ("fhm_bv", "clearance", "min_clearance", "interference", "contact_
 ENSEMBLE = _group(
     V("realisation", "1", "DMW realisation (0: the scene's own record)", dims=("realisation",), dtype="int32"),
     V("dmw_seed", "1", "seed of the synthetic DMW record of the realisation", dims=("realisation",),
-      dtype="int64"),
+      dtype="float64"),  # (32-bit seeds, exact in a double; CF-1.8 allows no int64 or unsigned int)
     *(V(n + "_mean", SCALARS[n].units, "ensemble mean of " + SCALARS[n].long_name, SCALARS[n].si_unit,
         effect=SCALARS[n].effect) for n in ENSEMBLE_OF),
     *(V(n + "_std", SCALARS[n].units, "ensemble standard deviation (ddof 1) of " + SCALARS[n].long_name,
@@ -365,7 +391,7 @@ ENSEMBLE = _group(
       effect="contact"),
 )
 
-#: ``bulge.nc`` (:mod:`pipeline.bulge_table`): the bulge's air-bearing lift on protrusion x apex gap.
+#: ``bulge.nc`` (:mod:`pipeline.model.bulge_table`): the bulge's air-bearing lift on protrusion x apex gap.
 _DG = ("protrusion", "apex_gap")
 BULGE = _group(
     V("protrusion", "nm", "TFC protrusion", NM, dims=("protrusion",)),

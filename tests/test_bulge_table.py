@@ -1,4 +1,4 @@
-"""The bulge lift table (pipeline.bulge_table): declared variables, the closed-form table, the Reynolds
+"""The bulge lift table (pipeline.model.bulge_table): declared variables, the closed-form table, the Reynolds
 table read back at an off-grid protrusion and gap against direct solves, and the file round trip."""
 
 from __future__ import annotations
@@ -43,7 +43,7 @@ def test_ph_limit_table_is_the_closed_form():
 
 def test_reynolds_table_read_back_off_grid_matches_direct_solves(reynolds_ds):
     """At a protrusion between rows and gaps between nodes, lift and stiffness interpolated from the table
-    (ratio to the closed form, :func:`pipeline.bulge_table.lift_at`) match direct solves: lift to 1e-3,
+    (ratio to the closed form, :func:`pipeline.model.bulge_table.lift_at`) match direct solves: lift to 1e-3,
     stiffness (against central differences of solves) to 1e-2."""
     dl, g = 9.7 * NM, np.array([0.8, 1.3, 1.7, 4.2]) * NM
     F, k = bt.lift_at(reynolds_ds, g, dl)

@@ -85,3 +85,22 @@ def test_touchdown_probability_counts_computed_realisations_only():
     np.testing.assert_array_equal(p[:2], [0.5, 1.0])   # 1 of 2 computed, 1 of 1
     assert np.isnan(p[2])                              # none computed: no probability
     np.testing.assert_array_equal(stats["fhm_bv_mean"].values[:2], [10.0, 10.0])
+
+
+def test_ensemble_sweep_passes_cf_1_8(sweeps):
+    """``dmw_seed`` was written int64, which CF-1.8 does not allow (the README says every dataset
+    passes; nor unsigned int): the 32-bit seeds are stored exactly as doubles."""
+    import netCDF4
+    from cf_check import cf_report
+    _, three, out = sweeps
+    failures, crashed = cf_report(out / "sweep.nc")
+    assert crashed == [] and failures[3] == [] and failures[2] + failures[1] == []
+    with netCDF4.Dataset(out / "sweep.nc") as nc:
+        assert nc.variables["dmw_seed"].dtype == np.float64
+    assert list(three.dmw_seed.values) == dmw_stage.realisation_seeds(20090601, 3)
+
+
+def test_dmw_seed_beyond_32_bits_is_refused_in_one_line():
+    from pipeline.config.scene import SceneError
+    with pytest.raises(SceneError, match=r"dmw\.seed = 4294967296: expected an integer in \[0, 2\*\*32 - 1\]"):
+        load_scene(PAPER, ["dmw.seed=4294967296"])

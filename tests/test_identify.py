@@ -171,7 +171,7 @@ def test_candidate_inputs_are_cached_by_stage_key_alone():
 
 
 def test_parameter_units_are_cf_for_every_numeric_scene_key():
-    cf_units = pytest.importorskip("cf_units")
+    import cf_units  # (a declared test dependency: pyproject.toml's `test` extra)
     from pipeline.config.scene import SCHEMA
     for section, keys in SCHEMA.items():
         for key, spec in keys.items():

@@ -20,13 +20,13 @@ ROOT = Path(__file__).resolve().parents[1] / "pipeline"
 #: Rank of each module or package prefix (longest prefix wins).
 LAYERS = {
     "pipeline": 0, "pipeline.units": 0, "pipeline.code_version": 0, "pipeline.io": 0,
-    "pipeline.variables": 0, "pipeline.fanout": 0,
+    "pipeline.variables": 0, "pipeline.fanout": 0, "pipeline.validity": 0,
     "pipeline.physics": 1,
     "pipeline.config": 2,
     "pipeline.model": 3,
     "pipeline.analyses": 4,
     "pipeline.stages": 5, "pipeline.runner": 5, "pipeline.evaluations": 5,
-    "pipeline.validation": 6, "pipeline.cli": 6,
+    "pipeline.validation": 6, "pipeline.cli": 6, "pipeline.sizing": 6,
 }
 NAMES = {0: "base", 1: "physics", 2: "config", 3: "model", 4: "analyses", 5: "stages", 6: "cli"}
 

@@ -1,6 +1,6 @@
 """Model variants are open: a new air-bearing law at the TFC point is its function plus one registry
 line (pipeline.physics.air_bearing.TFC_STIFFENING), tabulated per protrusion into the kernel's generic
-TFC-point slot (pipeline.slider.tfc_table, pipeline.dynamics.Tables.tfc) with no kernel change.
+TFC-point slot (pipeline.model.slider.tfc_table, pipeline.model.dynamics.Tables.tfc) with no kernel change.
 
 The laws registered here live in test-local entries (monkeypatch: the module's registry is restored
 after each test). Scenes are built in code with explicit values for what a test depends on.
@@ -14,11 +14,11 @@ import numpy as np
 import pytest
 from scipy.optimize import fsolve
 
-from pipeline import dynamics as dyn
-from pipeline import slider as sl
+from pipeline.model import dynamics as dyn
+from pipeline.model import slider as sl
 from pipeline.physics import air_bearing as ab
 from pipeline.physics import dmw as pdmw
-from pipeline.scene import scene_from_dict
+from pipeline.config.scene import scene_from_dict
 
 NM = 1e-9
 LIFT = 1.0e-4  # [N] the dummy law's constant force

@@ -169,15 +169,20 @@ def test_killed_process_resumes(calibrated, tmp_path):
                             start_new_session=True)
     parts = run_dir / sweep_stage.PARTS
     deadline = time.time() + 120
-    while time.time() < deadline and len(list(parts.glob("batch-*.nc"))) < 2:
-        time.sleep(0.05)
-    os.killpg(proc.pid, signal.SIGKILL)
+    while time.time() < deadline and not list(parts.glob("batch-*.nc")):
+        time.sleep(0.01)
+    os.killpg(proc.pid, signal.SIGKILL)  # as soon as one batch is done: the kill lands mid-sweep
     proc.wait()
-    n_before = len(list(parts.glob("batch-*.nc")))
-    assert 2 <= n_before
-    assert not (run_dir / "sweep.nc").exists() or n_before == 8
+    before = {p.name: (p.stat().st_ino, p.stat().st_mtime_ns) for p in parts.glob("batch-*.nc")}
+    total = len(sweep_stage.plan(scene)[3])
+    assert total == 8 and 1 <= len(before) < total, f"{len(before)} of {total} parts: the kill missed the sweep"
+    assert not (run_dir / "sweep.nc").exists()
     done = subprocess.run(cmd_slow, cwd=ROOT, capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
+    # the rerun resumed: it ran only the missing batches and reused the parts of the killed run as they were
+    assert f"sweep: {total} batches, {total - len(before)} to run" in done.stderr
+    assert {name: (parts / name).stat() for name in before} and \
+        {name: ((parts / name).stat().st_ino, (parts / name).stat().st_mtime_ns) for name in before} == before
     xr.testing.assert_identical(_values(reference), _values(run_dir / "sweep.nc"))
 
 

@@ -114,11 +114,11 @@ def test_stop_inf_in_the_scene_file(capsys, folder, write_scene):
 
 
 def test_a_grid_of_millions_is_refused_unless_yes(capsys, folder):
-    err = _fails(capsys, folder, "sweep", str(PAPER), "--set", "sweep.protrusion_nm={start=0, stop=2e4, step=0.01}",
+    err = _fails(capsys, folder, "sweep", str(PAPER), "--set", "sweep.protrusion_nm={start=0, stop=100, step=5e-5}",
                  "--set", "sweep.damping_ratio=[0.03, 0.05]")
     assert "4,000,002 scenes (2,000,001 protrusions x 1 roughness sets x 2 damping ratios)" in err
     assert "--yes" in err
-    scene = load_scene(PAPER, ["sweep.protrusion_nm={start=0, stop=2e4, step=0.01}"])
+    scene = load_scene(PAPER, ["sweep.protrusion_nm={start=0, stop=100, step=5e-5}"])
     assert grid_size(scene) == (2_000_001, 1, 1)
     check_grid(scene, yes=True)  # allowed with --yes
     check_grid(load_scene(PAPER))  # the paper grid: 76 scenes

@@ -11,7 +11,7 @@ import xarray as xr
 
 from cf_check import cf_report
 from pipeline import variables as vs
-from pipeline.io import TIME_UNITS_ON_DISK, read_dataset, write_dataset
+from pipeline.io import TIME_ON_DISK, read_dataset, write_dataset
 from pipeline.config.scene import load_scene
 from pipeline.stages import calibrate, dmw, interface, roughness, simulate, sweep
 
@@ -86,15 +86,34 @@ def test_cf_checker_finds_no_error(datasets, dataset):
     assert failures[2] + failures[1] == []
 
 
-def test_time_is_cf_time_on_disk_and_seconds_when_read(datasets):
+def test_time_is_plain_seconds_under_xarrays_default_decoding(datasets):
+    """``time`` was stored as ``s since 1970-01-01``: the default ``xr.open_dataset`` decoded it to
+    datetimes at 1 us, merging the 250 ns samples (8001 -> 2001) so that ``.sel`` hit several rows."""
     path = datasets["sweep_histories"]
-    with xr.open_dataset(path, engine="netcdf4", decode_times=False) as raw:
-        t = raw["time"]
-        assert (t.attrs["units"], t.attrs["standard_name"], t.attrs["axis"]) == (TIME_UNITS_ON_DISK, "time", "T")
+    n = read_dataset(path).sizes["time"]
+    with xr.open_dataset(path, engine="netcdf4") as raw:  # xarray's defaults, as a user opens it
+        t = raw[TIME_ON_DISK]
+        assert t.dtype == np.float64 and t.attrs["units"] == "s"
+        assert "since" not in t.attrs["units"] and "standard_name" not in t.attrs
+        assert np.unique(t.values).size == n == t.size
+        # the output step of the scene (solver.output_step_ns = 250) in seconds
+        np.testing.assert_allclose(np.diff(t.values), 250e-9, rtol=1e-9)
+        row = raw["separation"].sel({TIME_ON_DISK: float(t[7])})
+        assert TIME_ON_DISK not in row.dims  # one sample, not several
     ds = read_dataset(path)
     assert ds["time"].attrs["units"] == "s"
-    # the output step of the scene (solver.output_step_ns = 250) in seconds
-    np.testing.assert_allclose(np.diff(ds["time"].values), 250e-9, rtol=1e-9)
+    np.testing.assert_allclose(ds["time"].values, t.values, rtol=0, atol=0)
+
+
+def test_dmw_time_is_plain_seconds_and_a_dmw_dataset_reads_back_as_a_record(datasets):
+    from pipeline.model.measured_dmw import load_record
+    with xr.open_dataset(datasets["dmw"], engine="netcdf4") as raw:
+        t = raw[TIME_ON_DISK].values
+        assert t.dtype == np.float64 and np.unique(t).size == t.size
+        rate = 1 / float(np.median(np.diff(t)))
+    assert rate == pytest.approx(4e6, rel=1e-9)  # dmw.sample_rate_mhz = 4
+    rec = load_record(datasets["dmw"], column="displacement")
+    assert rec.sample_rate_hz == pytest.approx(4e6, rel=1e-9)
 
 
 def test_coordinates_have_no_fill_value(datasets):

@@ -85,12 +85,33 @@ def observations(c: SweepSlice, inter: xr.Dataset | None) -> list[str]:
 
 
 
+#: Heading of the identification table in the README (comparison.md's, demoted one level).
+IDENTIFICATION_HEADING = "### Paper, reconstructed scene, identified scene"
+
+
+def identification_subsection(section: str) -> str:
+    """The identification subsection of a generated README section, to the next heading of its level."""
+    if IDENTIFICATION_HEADING not in section:
+        return ""
+    sub = IDENTIFICATION_HEADING + section.split(IDENTIFICATION_HEADING, 1)[1]
+    lines = sub.strip().splitlines()
+    end = next((i for i, line in enumerate(lines[1:], 1) if line.startswith(("## ", "### "))), len(lines))
+    return "\n".join(lines[:end]).strip()
+
+
 def readme_with_comparison(readme: str, comparison: str) -> str | None:
     """``readme`` with its generated section (between :data:`README_BEGIN` and :data:`README_END`)
-    replaced by ``comparison``, headings demoted one level; ``None`` when the markers are missing."""
+    replaced by ``comparison``, headings demoted one level; ``None`` when the markers are missing.
+
+    ``make run`` does not identify (minutes of optimisation), so its report has no identification
+    table: the README keeps the one of the last ``make identify`` instead of losing it.
+    """
     if README_BEGIN not in readme or README_END not in readme:
         return None
     body = "\n".join(("#" + line) if line.startswith("#") else line for line in comparison.strip().splitlines())
     head, rest = readme.split(README_BEGIN, 1)
-    _, tail = rest.split(README_END, 1)
+    old, tail = rest.split(README_END, 1)
+    kept = identification_subsection(old)
+    if kept and IDENTIFICATION_HEADING not in body:
+        body += "\n\n" + kept
     return head + README_BEGIN + "\n" + body + "\n" + README_END + tail

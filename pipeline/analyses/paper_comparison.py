@@ -105,6 +105,22 @@ def _touchdown_section(c: SweepSlice, sweep: xr.Dataset, cal: xr.Dataset | None)
     return rows, [" ".join(n)], snap
 
 
+def probability_text(k: float) -> str:
+    """The contact probabilities of ``k`` [1] in words that do not read as a contradiction.
+
+    The two-sided value ``2 Q(|k|)`` (the paper's convention, docs/model.md, section "Contact criterion")
+    depends on ``|k|`` only; the one-sided ``P(z > k sigma) = Q(k)`` is the fraction of summits above the
+    threshold. For ``k >= 0`` both are small; for ``k < 0`` the threshold lies below the mean summit
+    height, so most summits are above it (one-sided near 100 %) while the two-sided value is small: say why.
+    """
+    p2, p1 = contact_probabilities(k)
+    if k >= 0:
+        return f"k = {k:.4g}: P(|z| > k sigma) = {100 * p2:.1f} % (two-sided), one-sided {100 * p1:.1f} %"
+    return (f"k = {k:.4g}: two-sided 2 Q(|k|) = {100 * p2:.1f} % (the paper's convention, which sees only |k|); "
+            f"k < 0 puts the threshold {abs(k):.3g} sigma below the mean summit height, so "
+            f"{100 * p1:.1f} % of the summits lie above it (one-sided P(z > k sigma))")
+
+
 def _k_section(c: SweepSlice, snap: bool) -> _Section:
     """2. The contact probability of the k used against the paper's 32.8 %."""
     k, k_source = c.k, c.k_source
@@ -112,8 +128,8 @@ def _k_section(c: SweepSlice, snap: bool) -> _Section:
     if not np.isfinite(k):
         return [["contact probability of k (two-sided)", f"{100 * p_paper:g} %", "no k (contact effect off)",
                  "–"]], []
-    p2, p1 = contact_probabilities(k)
-    ours = f"k = {k:.4g}: P(|z| > k sigma) = {100 * p2:.1f} % (two-sided), one-sided {100 * p1:.1f} %"
+    ours = probability_text(k)
+    p2 = contact_probabilities(k)[0]
     rows = [["contact probability of k (two-sided)", f"{100 * p_paper:g} %", ours,
              difference(100 * (p2 - p_paper), "points")]]
     if "fallback" in k_source:
@@ -210,6 +226,9 @@ def _nominal_area_section(c: SweepSlice, settings: ReportSettings, inter: xr.Dat
     if not ("nominal_area" in c.ds and abs(x[j] - at) < TOL):
         return [[f"A_n at {at:g} nm", f"{paper.NOMINAL_AREA_UM2:g} um^2", f"no {at:g} nm point on the grid",
                  "–"]], []
+    if not an[j] > 0:  # (a flying point has no contact section: 0 is no area to compare, not -100 %)
+        return [[f"A_n at {at:g} nm", f"{paper.NOMINAL_AREA_UM2:g} um^2",
+                 f"n/a: not in contact at {at:g} nm ({regime_name(c.reg[j])})", "–"]], []
     rows = [[f"A_n at {at:g} nm", f"{paper.NOMINAL_AREA_UM2:g} um^2", f"{an[j]:.4g} um^2",
              difference(an[j] - paper.NOMINAL_AREA_UM2, "um^2", 100 * (an[j] / paper.NOMINAL_AREA_UM2 - 1))]]
     sd = settings.section_depth_sigma

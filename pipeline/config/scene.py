@@ -28,6 +28,7 @@ from ..physics.equilibrium import STARTS
 from ..physics.fhm import FHM_MEASURES
 from ..physics.friction import FRICTION_LAWS
 from ..units import MHZ_IN_KHZ, SUFFIX_FACTORS
+from .limits import LimitError, check_physical
 
 try:  # Python >= 3.11
     import tomllib
@@ -209,7 +210,8 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "exponent": Key("float", -2.0, doc="power-law exponent of the displacement PSD [1] (recon)"),
         "rpm": Key("float", paper.DISK_RPM, _pos, doc="disk speed [rpm] (paper)"),
         "radius_mm": Key("float", paper.TRACK_RADIUS_MM, _pos, doc="track radius [mm] (paper)"),
-        "seed": Key("int", 20090601, _nonneg, doc="seed of the synthetic record (numpy SeedSequence)"),
+        "seed": Key("int", 20090601, (lambda v: 0 <= v < 2**32, "an integer in [0, 2**32 - 1]"),
+                    doc="seed of the synthetic record (numpy SeedSequence; 32-bit like the realisations' seeds)"),
         "sample_rate_mhz": Key("float", paper.DMW_SAMPLE_RATE_MHZ, _pos, doc="sampling rate [MS/s] (paper)"),
         "duration_ms": Key("float", None, _pos, doc="record length [ms] (default: the simulated duration)"),
         "sample_rate_hz": Key("float", None, _pos, doc="sampling rate of a measured record [Hz] if it has no time axis"),
@@ -555,6 +557,10 @@ def validate(raw: dict[str, Any], path: Path | None = None, *, overrides: Iterab
             raise SceneError(f"{where}: scene.name is missing: expected a name")
         config["scene"]["name"] = path.stem
     _cross_checks(config, where)
+    try:  # (a protrusion far beyond the flying height: no --yes makes it physical)
+        check_physical(Scene(path, config), where)
+    except LimitError as exc:
+        raise SceneError(str(exc)) from None
     return Scene(path=path, config=config, overrides=list(overrides))
 
 
@@ -637,6 +643,10 @@ def load_scene(path: str | Path, overrides: Iterable[str] = ()) -> Scene:
     blame: dict[tuple[str, str], str] = {}
     for text in overrides:
         section, key, value = parse_override(text)
+        if (section, key) == ("scene", "extends"):  # (it was applied while reading: a --set came too late)
+            raise SceneError(f"--set {text}: scene.extends cannot be set on the command line; write "
+                             f"`extends = {json.dumps(str(value))}` in the [scene] section of a scene file "
+                             f"(or give the base scene itself with --set for the keys that differ)")
         raw.setdefault(section, {})
         if not isinstance(raw[section], dict):
             raise SceneError(f"{path}: --set {text!r}: [{section}] is not a table")
@@ -647,11 +657,15 @@ def load_scene(path: str | Path, overrides: Iterable[str] = ()) -> Scene:
 
 def _read_raw(path: Path, seen: tuple[Path, ...] = ()) -> dict[str, Any]:
     """Parse a scene file, merging in the base scene it ``extends`` (keys of this file win)."""
+    if path.is_dir():
+        raise SceneError(f"{path}: is a folder; expected a scene file (TOML), e.g. configs/paper-2009.toml")
     if not path.is_file():
         raise SceneError(f"{path}: scene file does not exist")
-    try:
-        raw = tomllib.loads(path.read_text())
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+    try:  # (utf-8-sig: a byte-order mark, as some Windows editors write, is not part of the TOML)
+        raw = tomllib.loads(path.read_text(encoding="utf-8-sig"))
+    except UnicodeDecodeError as exc:
+        raise SceneError(f"{path}: not UTF-8 text (byte {exc.start}); expected a TOML file in UTF-8") from None
+    except tomllib.TOMLDecodeError as exc:
         raise SceneError(f"{path}: not valid TOML: {exc}") from None
     base_name = raw.get("scene", {}).get("extends") if isinstance(raw.get("scene"), dict) else None
     if base_name is None:

@@ -52,7 +52,7 @@ A new force law at the TFC point (the bulge's air bearing of the physics issue, 
 F(g, delta), ...) is tabulated, not compiled: its law is a plain Python function of the gap array
 and the protrusion in its physics module, registered with ONE line in its registry
 (:data:`pipeline.physics.air_bearing.TFC_STIFFENING`: ``"name": TfcLaw(force)``). The model assembly
-(:func:`pipeline.slider.tfc_table`) samples it per protrusion on a gap grid into a piecewise cubic
+(:func:`pipeline.model.slider.tfc_table`) samples it per protrusion on a gap grid into a piecewise cubic
 (as the interface tables), which the kernel's one generic slot ``Tables.tfc`` evaluates: force and
 stiffness ``-dF/dg`` (the step-size cap) from the same cubic, so the kernel, its argument list and
 its compiled cache are untouched. Measured alternatives: numba first-class functions (the ``@njit``
@@ -60,7 +60,7 @@ law passed as an argument) specialise the kernel on the law's dispatcher object,
 survive a process: the on-disk cache misses in every new process (every ``hdi`` command would
 recompile the kernel, ~10 s), and a law defined outside the package would write an index entry that
 other processes cannot unpickle. A tabulated law costs one cubic evaluation, like an interface table,
-and is exact to the table's interpolation error (:func:`pipeline.slider.tfc_table`; the gap-power law
+and is exact to the table's interpolation error (:func:`pipeline.model.slider.tfc_table`; the gap-power law
 tabulated: force within 3e-8 of its range, stiffness 5e-8 relative above 1 nm, a 1-ms run's separation
 within 1e-10 nm of the closed form's, tests/test_model_variants.py). The closed-form gap-power law keeps its compiled branch
 (bit-identical results).

@@ -15,6 +15,7 @@ and the deterministic tables (FFT boundary elements on the measured surface,
 from __future__ import annotations
 
 import logging
+import math
 from pathlib import Path
 from typing import Any
 
@@ -27,6 +28,7 @@ from ..physics.friction import shear_strength
 from ..physics.material_bounds import check_materials
 from ..physics.statistics import (composite_modulus, explicit_statistics, hardness_from_plasticity_gw,
                                   plasticity_index_gw, plasticity_index_ke)
+from ..config.grid import TOL_NM, label
 from ..config.si import to_si
 from ..units import MPA, NM, UM
 from ..variables import INTERFACE
@@ -92,6 +94,15 @@ def needed_quantities(effects: frozenset[str]) -> tuple[str, ...]:
     return tuple(q)
 
 
+def separation_labels(lo_nm: float, hi_nm: float, step_nm: float) -> np.ndarray:
+    """The tables' uniform separation grid [nm]: whole multiples of ``step_nm`` from at or below
+    ``lo_nm`` to at least ``hi_nm``, rounded like the protrusion grid (:func:`pipeline.config.grid.label`),
+    so ``interface.sel(separation=0.0)`` hits a label (``lo + step * i`` gave -4.8999999999999995)."""
+    first = math.floor(lo_nm / step_nm + TOL_NM)
+    n = math.ceil((hi_nm - first * step_nm) / step_nm - TOL_NM) + 1
+    return label(step_nm * (first + np.arange(n)))
+
+
 def build_tables(scene: Any, stats: dict[str, float]) -> xr.Dataset:
     """Compute the interface dataset of a scene for given roughness statistics (no I/O)."""
     p = interface_parameters(scene, stats)
@@ -119,10 +130,11 @@ def build_tables(scene: Any, stats: dict[str, float]) -> xr.Dataset:
         fh0 = scene["air_bearing"]["flying_height_nm"]
         d_min = min(sol["table_min_sigma"] * p.sigma_s, sol["table_min_sigma"] * stats["sigma"],
                     (fh0 - deepest_protrusion_nm(scene) - 1.0) * NM)
-        d = isbl.separation_grid(d_min, d_max, sol["table_step_nm"] * NM)
+        d_nm = separation_labels(d_min / NM, d_max / NM, sol["table_step_nm"])
+        d = d_nm * NM
         tables = isbl.isbl_tables(d, p, quantities=wanted, nodes=sol["quadrature_nodes"],
                                   panels=sol["quadrature_panels"])
-        coords["separation"] = INTERFACE["separation"].from_si(d, ("separation",))
+        coords["separation"] = INTERFACE["separation"].data(d_nm, ("separation",))
         for name, values in tables.items():
             data[name] = INTERFACE[name].from_si(values, ("separation",))
         if scene["interface"]["model"] == "deterministic":  # both models side by side on `model`

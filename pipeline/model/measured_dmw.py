@@ -249,6 +249,8 @@ def _read_netcdf(path: Path, quantity: str, column: str | None,
     except (OSError, ValueError) as exc:
         raise DMWError(f"{path}: not a readable NetCDF file ({exc}); expected NetCDF with a variable "
                        f"on a 'time' coordinate") from None
+    if "elapsed_time" in ds.variables and "time" not in ds.variables:  # a dmw.nc of this pipeline (io.TIME_ON_DISK)
+        ds = ds.rename({"elapsed_time": "time"})
     if column is not None:
         if column not in ds.data_vars:
             raise DMWError(f"{path}: variable {column!r} not found; expected one of "

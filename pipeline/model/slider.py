@@ -16,7 +16,7 @@ Named model variants (scene keys, one registry each): ``air_bearing.stiffness_ro
 Adding a variant. A friction law, an FHM measure, a stiffness root or an air-bearing force law at the
 TFC point is its function in its physics module plus one line in its registry; nothing here or in
 the kernel changes (a TFC-point law without a compiled closed form is tabulated per protrusion by
-:func:`tfc_table` into the kernel's generic slot, :mod:`pipeline.dynamics`). A new scene key whose
+:func:`tfc_table` into the kernel's generic slot, :mod:`pipeline.model.dynamics`). A new scene key whose
 laws act at the TFC point (e.g. ``air_bearing.bulge``) adds its registry to :data:`TFC_POINT_LAWS`.
 
 Steady-window definitions (over ``transient_ms <= t <= duration_ms``, sampled every
@@ -55,6 +55,7 @@ from ..physics.geometry import effective_radius, nominal_area
 from ..physics.statistics import explicit_statistics
 from ..variables import INTERFACE, Regime
 from .dmw_record import disk_speed_m_s
+from ..validity import check_run
 from .start import start_state
 
 #: Regime codes (:class:`pipeline.variables.Regime`, the ``flag_values`` of the ``regime`` variable).
@@ -74,13 +75,13 @@ class Model:
     Attributes
     ----------
     slider : the rigid body and air bearing
-    p : the kernel's named parameters (a :data:`pipeline.dynamics.PARAMS` record; the
+    p : the kernel's named parameters (a :data:`pipeline.model.dynamics.PARAMS` record; the
         protrusion-dependent fields are set by :func:`run_model`)
     dmw : DMW coefficients [m] or ``None``; contact, adhesion, friction, area : interface-table
         coefficients [Pa] / [1] versus separation [m], or ``None`` when the effect is off
     pitch : ``None`` when the pitch DOF is locked
     tfc_stiffening : parameters of the compiled gap-power law at the TFC point (a
-        :data:`pipeline.dynamics.GAP_POWER` record, ``f0`` set per protrusion), ``None`` without it
+        :data:`pipeline.model.dynamics.GAP_POWER` record, ``f0`` set per protrusion), ``None`` without it
     rear_linear : ``None`` for the power rear law, ``True`` for the linear one (``air_bearing.rear_law``)
     tfc_tabulated : the selected TFC-point laws without a compiled form, tabulated per protrusion
         (:func:`tfc_table`); scene : the scene they read
@@ -255,7 +256,7 @@ def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float]
 
 def tfc_point_laws(scene: Any, fh0: float) -> tuple[np.record | None, tuple[ab.TfcLaw, ...]]:
     """The scene's air-bearing laws at the TFC point (:data:`TFC_POINT_LAWS`): the parameters of the
-    compiled gap-power law (a :data:`pipeline.dynamics.GAP_POWER` record, or ``None``) and the laws
+    compiled gap-power law (a :data:`pipeline.model.dynamics.GAP_POWER` record, or ``None``) and the laws
     to tabulate (:func:`tfc_table`). ``fh0``: the flying height [m]."""
     a = scene["air_bearing"]
     gap_power, tabulated = None, []
@@ -276,7 +277,7 @@ def tfc_point_laws(scene: Any, fh0: float) -> tuple[np.record | None, tuple[ab.T
 
 def tfc_table(model: Model, protrusion: float) -> tuple[np.ndarray, float, float] | None:
     """The tabulated TFC-point force of the model at a protrusion [m]: piecewise-cubic coefficients
-    (:func:`pipeline.dynamics.piecewise_coefficients`, not-a-knot spline) of the sum of the laws of
+    (:func:`pipeline.model.dynamics.piecewise_coefficients`, not-a-knot spline) of the sum of the laws of
     ``model.tfc_tabulated`` [N] on a uniform gap grid, its first gap [m] and step [m]; ``None`` without.
 
     The kernel takes the force and its stiffness ``-dF/dg`` from the same cubic (linear continuation
@@ -471,6 +472,7 @@ def summarize(run: Run, hist: dict[str, np.ndarray] | None = None) -> dict[str, 
             out["friction_force"] = float(np.mean(ff))
             out["friction_coefficient"] = float(ff.sum() / fc.sum()) if fc.sum() > 0 else np.nan
             out["shear_stress"] = float(ff.sum() / area.sum()) if area.sum() > 0 else np.nan
+    out["validity"] = int(_validity(run, hist, win))
     return out
 
 
@@ -482,6 +484,18 @@ def touched(run: Run) -> bool:
     whenever the kernel tracked the extremes."""
     win = run.time >= run.model.transient - 1e-15
     return bool(run.contact[win].any() or run.d_extremes[0] < run.model.k_sigma)
+
+
+def _validity(run: Run, hist: dict[str, np.ndarray], win: np.ndarray) -> int:
+    """The :class:`pipeline.validity.Validity` bits of a run's steady window."""
+    m, s = run.model, run.model.slider
+    fh0 = float(m.p["FH0"])
+    lo = run.d_extremes[0] if np.isfinite(run.d_extremes[0]) else float(np.min(hist["separation"][win]))
+    tables = m.contact is not None or m.adhesion is not None
+    forces = [np.max(np.abs(hist[n][win])) for n in ("contact_force", "adhesion_force") if n in hist]
+    return check_run(fh0=fh0, arms=(s.l_f, s.l_r), z=hist["z"][win], pitch=hist["pitch"][win], d_min=lo,
+                     table_floor=float(m.p["tab_x0"]) if tables else None,
+                     force=float(max(forces)) if forces else 0.0, load=(s.k_f + s.k_r) * fh0)
 
 
 def with_solver(model: Model, **changes: Any) -> Model:

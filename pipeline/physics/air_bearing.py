@@ -327,8 +327,8 @@ class TfcLaw:
         at the gaps ``g`` [m] (an array, gap at the TFC point to the mean of surface heights) for the
         protrusion ``delta`` [m] and the validated scene (the law reads its own keys)
     closed_form : name of the kernel's compiled closed form of the same law (``"gap-power"``:
-        :func:`pipeline.dynamics._stiffening`), or ``None``: the model assembly tabulates ``force``
-        per protrusion and the kernel evaluates the table (:func:`pipeline.slider.tfc_table`)
+        :func:`pipeline.model.dynamics._stiffening`), or ``None``: the model assembly tabulates ``force``
+        per protrusion and the kernel evaluates the table (:func:`pipeline.model.slider.tfc_table`)
     gap_range : lowest and highest gap of the table as fractions of ``FH0`` [1]: linear continuation
         below (the law's slope at the lowest gap), constant above
     points : knots of the table (uniform in the gap)

@@ -57,6 +57,7 @@ import logging
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import xarray as xr
 
 from ..analyses import narrative, report_figures, report_tables
@@ -65,6 +66,7 @@ from ..analyses.report_figures import ENSEMBLE_FIGURE, FIGURES, INTERFACE_FIGURE
 from ..analyses.report_settings import ReportSettings
 from ..analyses.sweep_slices import combinations, split_ensemble
 from ..io import DatasetError
+from ..validity import OutsideValidity, describe
 from ..runner import Inputs, Stage, build
 
 log = logging.getLogger(__name__)
@@ -109,6 +111,7 @@ def compute(scene: Any, inputs: Inputs) -> dict:
     from the datasets in ``inputs.out``; the runner moves them into place."""
     data = load(inputs)
     sweep = data["sweep"]
+    refuse_invalid(sweep, inputs.path("sweep.nc"))
     settings = ReportSettings.from_scene(scene)
     name = getattr(scene, "name", None) or str(sweep.attrs.get("scene_name", inputs.out.name))
     combos = combinations(sweep, settings.damping_ratio)
@@ -164,6 +167,21 @@ def run(scene: Any, out: Path, **options: Any) -> Path:
     """Make the report current in ``out``; returns the figures folder."""
     build("report", scene, out, **options)
     return Path(out) / "figures"
+
+
+def refuse_invalid(sweep: xr.Dataset, path: Path) -> None:
+    """Raise :class:`pipeline.model.validity.OutsideValidity` (one line: which scenes, why) when a scene of
+    the sweep is flagged in ``validity``: its numbers are not results of the model."""
+    if "validity" not in sweep:
+        return
+    v = sweep["validity"]
+    labels = []
+    for idx in np.ndindex(v.shape):
+        labels.append(", ".join(f"{dim} {sweep[dim].values[i]:g}" if sweep[dim].dtype.kind in "fiu"
+                                else f"{dim} {sweep[dim].values[i]}" for dim, i in zip(v.dims, idx)))
+    why = describe(v.values.reshape(-1), [f"[{s}]" for s in labels])
+    if why is not None:
+        raise OutsideValidity(f"{path}: {why}; no report drawn from them (see its variable validity)")
 
 
 def update_readme(readme: Path, comparison: str, figdir: Path) -> None:

@@ -22,7 +22,7 @@ import xarray as xr
 from ..model import slider as sl
 from ..model import dmw_record, scene_inputs
 from ..runner import Inputs, Stage, build
-from ..variables import HISTORIES, coordinate, history, scalar
+from ..variables import HISTORIES, coordinate, flag_meaning, history, scalar
 from ..units import MS, NM
 
 log = logging.getLogger(__name__)
@@ -127,7 +127,10 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset]:
     summary.attrs.update(attrs)
     for name in summary.data_vars:
         v = summary[name]
-        log.info("  %-22s %12.5g %s", name, float(v[0]), v.attrs["units"])
+        if "flag_meanings" in v.attrs:  # (a code: its name, not "regime 2 1")
+            log.info("  %-22s %12s", name, flag_meaning(v.attrs, float(v[0])))
+        else:
+            log.info("  %-22s %12.5g %s", name, float(v[0]), v.attrs["units"])
     return {"histories.nc": histories, "summary.nc": summary}
 
 

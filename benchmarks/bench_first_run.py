@@ -1,0 +1,57 @@
+"""The first run of a fresh clone (issue 18): ``make run`` with empty package and numba caches, split
+into install, compile and run. Target: the paper's figures in under a minute on a new machine.
+
+1. ``git clone`` of this repository (its committed HEAD) into a temporary folder: no ``.venv``, no
+   ``.bootstrap``, no numba cache (the kernels' cache lives in the clone's ``pipeline/__pycache__``;
+   ``NUMBA_CACHE_DIR`` is removed from the environment).
+2. install: ``make setup`` (uv from PyPI into ``.bootstrap/`` by pip, then ``uv sync`` of ``uv.lock``).
+   uv's download cache is the user's, reused (packages downloaded before are not fetched again; the
+   row says so), unless ``BENCH_FIRST_RUN_COLD=1``, which gives uv an empty cache (everything from PyPI).
+3. first run: ``make run`` (nothing compiled yet).
+4. warm run: ``hdi run --force`` in the same clone (everything recomputed, kernels from the cache).
+5. compile = first run - warm run: numba's compilation of the kernels (and the interpreter's first
+   compilation of the libraries' bytecode, which uv does not do at install).
+
+One measurement each (a fresh clone is the point; about 2 minutes). ``BENCH_FIRST_RUN=0`` skips it.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import tempfile
+import time
+from pathlib import Path
+
+from benchmarks.common import ROOT, record
+
+
+def _timed(cmd: list[str], cwd: Path, env: dict[str, str]) -> float:
+    t0 = time.perf_counter()
+    subprocess.run(cmd, cwd=cwd, env=env, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    return time.perf_counter() - t0
+
+
+def run(results: list[dict]) -> None:
+    if os.environ.get("BENCH_FIRST_RUN", "1") == "0":
+        print("bench_first_run: skipped (BENCH_FIRST_RUN=0)")
+        return
+    cold = os.environ.get("BENCH_FIRST_RUN_COLD") == "1"
+    with tempfile.TemporaryDirectory(prefix="hdi-first-run-") as tmp:
+        clone = Path(tmp) / "hdi"
+        subprocess.run(["git", "clone", "--quiet", str(ROOT), str(clone)], check=True)
+        env = {k: v for k, v in os.environ.items() if k not in ("NUMBA_CACHE_DIR", "VIRTUAL_ENV", "UV")}
+        if cold:
+            env["UV_CACHE_DIR"] = str(Path(tmp) / "uv-cache")
+        install = _timed(["make", "setup"], clone, env)
+        first = _timed(["make", "run"], clone, env)
+        warm = _timed([str(clone / ".venv" / "bin" / "hdi"), "run", "configs/paper-2009.toml", "--force"], clone, env)
+        shutil.rmtree(clone / "results", ignore_errors=True)
+    cache = "empty uv cache (all packages from PyPI)" if cold else "the local uv cache reused (no download)"
+    total = install + first
+    record(results, f"fresh clone: make setup + make run, {cache}", [total], target_s=60.0,
+           install_s=round(install, 1), compile_s=round(first - warm, 1), run_s=round(warm, 1),
+           first_run_s=round(first, 1), uv_cache="empty" if cold else "reused")
+    print(f"  install {install:.1f} s, first make run {first:.1f} s = compile {first - warm:.1f} s + run "
+          f"{warm:.1f} s ({cache})", flush=True)

@@ -1,0 +1,51 @@
+"""Upper bounds on what a scene asks to compute: the sizes of its arrays and grids, before any is made.
+
+Every key that sizes an array or a grid is bounded here, by the size it makes (a table's rows, a
+history's samples, a record's samples, a grid's scenes, a study's evaluations): a size beyond its
+limit ends in one line naming the keys, the size, the limit and ``--yes``, before anything is
+allocated (``--set tfc.protrusion_nm=1e6`` allocated a 20-million-row table and was OOM-killed).
+``--yes`` runs a big job that is legitimate. A value that makes no physical sense is refused even
+with ``--yes``: :func:`check_physical` (a protrusion beyond the flying height by more than
+:data:`MAX_INTERFERENCE_NM`, where the rough-surface contact model of nm asperities has long lost
+its meaning; docs/model.md, section "ISBL interface").
+
+The limits are about 100 to 1000 times the paper scene's sizes (701 table rows, 8000 history samples,
+8000 record samples, 76 scenes), far above any study here and below what exhausts a 24 GiB machine.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+#: Deepest interference [nm] a scene may ask for (protrusion - flying height): 100 nm, against the
+#: paper's 4 nm and the 0.5 nm roughness; beyond it the asperity model (nm summits on a nominal area)
+#: describes nothing physical.
+MAX_INTERFERENCE_NM = 100.0
+#: Rows of the interface tables (paper scene: 701), ~1 MB per million rows per quantity.
+MAX_TABLE_ROWS = 200_000
+#: Output samples of one run, duration / output step (paper: 8000); ~20 histories of 8 bytes each.
+MAX_HISTORY_SAMPLES = 2_000_000
+#: Samples of the DMW record, duration x sampling rate (paper: 8000).
+MAX_RECORD_SAMPLES = 20_000_000
+#: Scenes of a sweep, protrusions x roughness sets x damping ratios x realisations (paper: 76).
+MAX_SCENES = 100_000
+#: Evaluations (small sweeps) of a parameter study (identify's default: 1337).
+MAX_EVALUATIONS = 50_000
+
+
+class LimitError(ValueError):
+    """A scene asks for more than a limit of this module (one line; ``--yes`` may lift it)."""
+
+
+def check_physical(scene: Any, where: str = "scene") -> None:
+    """Refuse a protrusion beyond the flying height by more than :data:`MAX_INTERFERENCE_NM` [nm]."""
+    fh0 = scene["air_bearing"]["flying_height_nm"]
+    for key, value in (("tfc.protrusion_nm", scene["tfc"]["protrusion_nm"]),
+                       ("sweep.protrusion_nm stop", scene["sweep"]["protrusion_nm"]["stop"]),
+                       ("sensitivity.protrusion_nm stop", (scene["sensitivity"]["protrusion_nm"] or {}).get("stop"))):
+        if value is not None and value - fh0 > MAX_INTERFERENCE_NM:
+            raise LimitError(f"{where}: {key} = {value:g} nm: expected at most the flying height "
+                             f"air_bearing.flying_height_nm = {fh0:g} nm + {MAX_INTERFERENCE_NM:g} nm; an interference "
+                             f"of {value - fh0:g} nm is outside the rough-surface contact model")
+
+

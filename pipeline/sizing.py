@@ -1,0 +1,84 @@
+"""How big the work a scene asks for is, against the limits of :mod:`pipeline.config.limits`.
+
+The command line checks a stage's sizes before anything runs (one line per limit, ``--yes`` lifts
+them): interface-table rows, history and DMW record samples, sweep scenes and study evaluations.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from .config.grid import TOL_NM, range_count
+from .config.limits import (check_physical, MAX_EVALUATIONS, MAX_HISTORY_SAMPLES, MAX_RECORD_SAMPLES, MAX_SCENES, MAX_TABLE_ROWS,
+                            LimitError)
+from .model.dmw_record import settings as dmw_settings
+from .units import MS, NS
+
+
+def deepest_protrusion_nm(scene: Any) -> float:
+    """The deepest protrusion [nm] the scene or its sweep or studies ask for."""
+    deepest = max(scene["tfc"]["protrusion_nm"], scene["sweep"]["protrusion_nm"]["stop"])
+    grid = scene["sensitivity"]["protrusion_nm"]
+    return max(deepest, grid["stop"]) if grid else deepest
+
+
+def table_rows(scene: Any) -> int:
+    """Rows of the interface tables (:func:`pipeline.model.interface_tables.separation_labels`), estimated
+    from the scene's roughness sigma (an AFM surface's may differ a little)."""
+    sol = scene["solver"]
+    fh0 = scene["air_bearing"]["flying_height_nm"]
+    lo = min(sol["table_min_sigma"] * scene["roughness"]["sigma_nm"], fh0 - deepest_protrusion_nm(scene) - 1.0)
+    step = sol["table_step_nm"]
+    first = math.floor(lo / step + TOL_NM)
+    return math.ceil((sol["table_max_nm"] - first * step) / step - TOL_NM) + 1
+
+
+def sizes(scene: Any, stage: str) -> list[tuple[str, int, int]]:
+    """``(what, size, limit)`` of every size the stage makes for the scene."""
+    sol, dmw = scene["solver"], scene["dmw"]
+    out = []
+    if {"contact", "adhesion"} & set(scene["scene"]["effects"]) and stage != "roughness":
+        out.append((f"interface table rows (solver.table_step_nm = {sol['table_step_nm']:g}, table_min_sigma, "
+                    f"table_max_nm = {sol['table_max_nm']:g}, the deepest protrusion)", table_rows(scene),
+                    MAX_TABLE_ROWS))
+    if stage not in ("roughness", "interface", "dmw"):
+        out.append((f"history samples per run (solver.duration_ms = {sol['duration_ms']:g} / output_step_ns = "
+                    f"{sol['output_step_ns']:g})",
+                    int(sol["duration_ms"] * MS / NS / sol["output_step_ns"]) + 1, MAX_HISTORY_SAMPLES))
+    if stage != "roughness" and "dmw" in scene["scene"]["effects"]:
+        # (the record's default length: the run's plus the pads' delay)
+        dur_ms = dmw_settings(scene)["duration_s"] / MS
+        out.append((f"DMW record samples (dmw.duration_ms = {dur_ms:g} x sample_rate_mhz = "
+                    f"{dmw['sample_rate_mhz']:g})", int(dur_ms * 1e3 * dmw["sample_rate_mhz"]), MAX_RECORD_SAMPLES))
+    if stage in ("sweep", "run"):
+        g = scene["sweep"]["protrusion_nm"]
+        n = (range_count(g) * len(scene["sweep"]["roughness"] or [None])
+             * len(scene["sweep"]["damping_ratio"] or [None]) * scene["sweep"]["realisations"])
+        out.append((f"sweep scenes (sweep.protrusion_nm = {{start={g['start']:g}, stop={g['stop']:g}, "
+                    f"step={g['step']:g}}} x roughness sets x damping ratios x realisations)", n, MAX_SCENES))
+    if stage == "identify":
+        i = scene["identify"]
+        n_par = len(i["parameters"])
+        n = i["population"] * n_par * (i["generations"] + 1) + i["profile_points"] * n_par
+        out.append(("identify evaluations (population x parameters x (generations + 1) + profile_points x "
+                    "parameters)", n, MAX_EVALUATIONS))
+    if stage == "sensitivity":
+        s = scene["sensitivity"]
+        n_par = len(s["parameters"])
+        n = (s["morris_trajectories"] * (n_par + 1) if "morris" in s["methods"] else 0) \
+            + (s["sobol_samples"] * (n_par + 2) if "sobol" in s["methods"] else 0)
+        g = s["protrusion_nm"] or scene["sweep"]["protrusion_nm"]
+        out.append(("sensitivity scenes (evaluations x protrusions of sensitivity.protrusion_nm)",
+                    n * range_count(g), MAX_SCENES * 10))
+    return out
+
+
+def check_sizes(scene: Any, stage: str, yes: bool = False, where: str = "scene") -> None:
+    """Refuse the first size beyond its limit, unless ``yes`` (and, always, :func:`check_physical`)."""
+    check_physical(scene, where)
+    if yes:
+        return
+    for what, size, limit in sizes(scene, stage):
+        if size > limit:
+            raise LimitError(f"{where}: {size:,} {what} exceed {limit:,}; pass --yes to run them anyway")
