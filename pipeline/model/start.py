@@ -5,13 +5,15 @@ at the TFC point (the bulge's air bearing) or a strong adhesion, the nominal att
 is not where the slider sits: starting there puts it in a transient, and near touchdown inside the
 adhesion basin. ``solver.start`` (:data:`STARTS`):
 
-* ``"static"`` (default): the static equilibrium of the same forces the kernel integrates (the kernel's
+* ``"static"``: the static equilibrium of the same forces the kernel integrates (the kernel's
   own right-hand side at zero velocity on the mean disk, ``w = 0``, so the laws have one home),
   continued in the protrusion from the nominal attitude at zero protrusion
   (:func:`pipeline.physics.equilibrium.static_equilibrium`); past the adhesion fold, where no flying
   equilibrium exists, the contact-branch equilibrium (from the TFC point at zero separation), and the
   run says so in its ``start`` note; if neither exists, the nominal attitude, said likewise;
-* ``"nominal"``: the nominal attitude (the model before the start state was part of it).
+* ``"nominal"`` (default for now, bit-identical to the model before the start state was part of it):
+  the nominal attitude. Scenes with the bulge's air bearing set ``"static"``
+  (``configs/paper-2009-bulge.toml``).
 
 The contact law in the static balance follows the paper's criterion: on where ``d < k sigma``.
 """
