@@ -26,7 +26,7 @@ ROOT = Path(__file__).resolve().parents[1]
 PAPER = ROOT / "configs" / "paper-2009.toml"
 
 # A scene where the criterion decides touchdown: without adhesion there is no snap-in, so a k
-# exists that puts contact at 9.8 nm and not at 9.6 nm (the paper's procedure, SPEC.md section 4).
+# exists that puts contact at 9.8 nm and not at 9.6 nm (the paper's procedure, docs/model.md, section "Slider dynamics").
 FAST = [
     'scene.effects=["air_bearing","pitch","dmw","contact","friction"]',
     "solver.duration_ms=1.0",
@@ -270,7 +270,7 @@ def test_tables_of_other_roughness_sets_follow_their_own_inputs(tmp_path):
 def test_each_roughness_set_flies_on_its_own_summit_datum(tmp_path):
     """Without contact or adhesion no set needs interface tables, and the trajectory does not depend
     on the roughness: each set's clearance is the scene's shifted by the difference of McCool's y_s
-    (explicit statistics, SPEC.md 1), exactly. (Every set was given the scene's y_s before.)"""
+    (explicit statistics, docs/model.md, section "Asperity statistics"), exactly. (Every set was given the scene's y_s before.)"""
     from pipeline.physics.statistics import explicit_statistics
     scene = load_scene(ROOT / "configs" / "sweep-3x3.toml",
                        ['scene.effects=["air_bearing", "pitch", "dmw"]', "sweep.damping_ratio=[0.05]",

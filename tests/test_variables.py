@@ -152,7 +152,7 @@ def test_roughness_route_dimension_works_with_sel(datasets):
     assert list(ds["route"].values) == ["spectral", "summits"]
     assert list(ds["surface"].values) == ["di-3", "mi-1", "combined"]
     row = ds.sel(surface="combined", route="spectral")
-    # combined sigma: quadrature sum of the two scans' (SPEC.md 1)
+    # combined sigma: quadrature sum of the two scans' (docs/model.md, section "Asperity statistics")
     s = ds["sigma"].sel(route="spectral").values
     assert float(row["sigma"]) == pytest.approx(float(np.hypot(s[0], s[1])), rel=1e-9)
     assert "method" not in ds.dims  # sel's own method= keyword is free again

@@ -1,6 +1,6 @@
 """Figures of the report stage (matplotlib object API: no pyplot, no global state).
 
-Every function takes datasets as written by the stages (dataset units, see DESIGN.md), draws one
+Every function takes datasets as written by the stages (dataset units, see the README), draws one
 figure, writes it as PNG with :func:`save` and returns the path. Figures are
 :class:`matplotlib.figure.Figure` objects that are never registered with pyplot, so nothing leaks
 between calls and nothing needs a display (``MPLBACKEND=Agg`` or not).

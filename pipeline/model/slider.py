@@ -6,7 +6,7 @@ integrates one protrusion; :func:`histories` and :func:`summarize` turn a run in
 time series (Figs 3-5) and the steady-window scalars of the sweep.
 
 The separation ``d`` is measured to the mean of summit heights, ``y_s`` above the mean of surface
-heights to which ``FH0`` is measured (SPEC.md 7.2; one home: :func:`pipeline.model.dynamics.separation_at`).
+heights to which ``FH0`` is measured (docs/model.md, section "Separation datum"; one home: :func:`pipeline.model.dynamics.separation_at`).
 Named model variants (scene keys, one registry each): ``air_bearing.stiffness_root``
 (:data:`pipeline.physics.air_bearing.STIFFNESS_ROOTS`), ``air_bearing.rear_law`` (``REAR_LAWS``),
 ``air_bearing.tfc_stiffening`` (``TFC_STIFFENING``), ``contact.friction_law``
@@ -122,10 +122,10 @@ class Model:
 
 
 def slider_from_scene(scene: Any, damping_ratio: float | None = None) -> tuple[ab.Slider, dict]:
-    """The rigid slider and its air bearing from ``[slider]`` and ``[air_bearing]`` (SPEC.md 4).
+    """The rigid slider and its air bearing from ``[slider]`` and ``[air_bearing]`` (docs/model.md, section "Slider dynamics").
 
     Stiffnesses by modal inversion of the two natural frequencies (root chosen by the named rule
-    ``air_bearing.stiffness_root``, default ``"stiff-rear"``: SPEC.md 7.3), pad dampers for the modal
+    ``air_bearing.stiffness_root``, default ``"stiff-rear"``: docs/model.md, section "Air bearing"), pad dampers for the modal
     damping ratio.
     """
     s, a = scene["slider"], scene["air_bearing"]
@@ -214,7 +214,7 @@ def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float]
                     raise ValueError(f"interface tables lack {var!r}, needed by the {effect} effect; "
                                      "re-run `hdi interface`")
                 values = interface[var].values * scale
-                if key == "friction":  # the named friction law (SPEC.md 7.6) acts through the table
+                if key == "friction":  # the named friction law (docs/model.md, section "Friction") acts through the table
                     c = scene["contact"]
                     values = friction_stress_table(c["friction_law"],
                                                    interface["contact_pressure"].values * INTERFACE["contact_pressure"].si_unit,
@@ -224,13 +224,13 @@ def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float]
         raise ValueError("the contact/adhesion effects need interface tables (run `hdi interface`)")
     sigma = float(interface["sigma"]) * NM if interface is not None else np.nan
     # separation datum: d is measured to the mean of summit heights, y_s above the mean of surface
-    # heights to which FH0 is measured (SPEC.md 7.2)
+    # heights to which FH0 is measured (docs/model.md, section "Separation datum")
     if interface is not None and "y_s" in interface:
         p.y_s = float(interface["y_s"]) * NM
     elif scene["roughness"]["afm"]:  # y_s is a statistic of the scans: interface.nc has it
         raise ValueError("a scene with roughness.afm needs its interface.nc (y_s of the scans) even without "
                          "contact or adhesion (pipeline.stages.simulate.needs_interface)")
-    else:  # McCool's y_s of the explicit statistics (SPEC.md 1), what the interface stage would write
+    else:  # McCool's y_s of the explicit statistics (docs/model.md, section "Asperity statistics"), what the interface stage would write
         r = scene["roughness"]
         p.y_s = explicit_statistics(r["sigma_nm"], r["summit_radius_um"], r["summit_density_per_um2"])["y_s"]
     info["y_s"] = p.y_s

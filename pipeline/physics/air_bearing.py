@@ -3,7 +3,7 @@
 Two degrees of freedom: vertical displacement ``z`` of the centre of gravity (CG, up positive) and
 pitch ``theta`` (positive: leading edge up, trailing edge down, so a point at ``x`` ahead of the CG
 moves by ``z + x theta``). The front air bearing acts ``l_f`` ahead of the CG, the rear one ``l_r``
-behind it (SPEC.md section 4).
+behind it (docs/model.md, section "Slider dynamics").
 
 References
 ----------
@@ -56,7 +56,7 @@ class Slider:
 
     @property
     def stiffness_matrix(self) -> np.ndarray:
-        """Linearised stiffness ``K`` in coordinates ``(z, theta)`` (SPEC.md section 4)."""
+        """Linearised stiffness ``K`` in coordinates ``(z, theta)`` (docs/model.md, section "Slider dynamics")."""
         return pad_matrix(self.k_f, self.k_r, self.l_f, self.l_r)
 
     @property
@@ -66,7 +66,7 @@ class Slider:
 
     @property
     def rear_preload(self) -> float:
-        """``F_r0 = k_r g0 / n`` [N]: the rear law's stiffness at ``g0`` equals ``k_r`` (SPEC.md 4)."""
+        """``F_r0 = k_r g0 / n`` [N]: the rear law's stiffness at ``g0`` equals ``k_r`` (docs/model.md, section "Slider dynamics")."""
         return self.k_r * self.g0 / self.n
 
 
@@ -80,7 +80,7 @@ def mass_properties(length: float, width: float, thickness: float, density: floa
     """Mass [kg] and pitch inertia about the CG [kg m^2] of a uniform block.
 
     ``m = rho L W T``, ``I = m (L^2 + T^2) / 12`` (pitch about the width axis). The paper's femto
-    slider (0.85 x 0.70 x 0.23 mm, 4250 kg/m^3) gives 0.58 mg and 3.75e-14 kg m^2 (SPEC.md 6).
+    slider (0.85 x 0.70 x 0.23 mm, 4250 kg/m^3) gives 0.58 mg and 3.75e-14 kg m^2 (docs/model.md, section "Parameters").
     """
     m = density * length * width * thickness
     return m, m * (length**2 + thickness**2) / 12.0
@@ -90,7 +90,7 @@ def stiffness_roots(f1: float, f2: float, m: float, I: float, l_f: float, l_r: f
     """Both ``(k_f, k_r)`` pairs [N/m] giving the natural frequencies ``f1 < f2`` [Hz].
 
     From ``w1^2 w2^2 = k_f k_r (l_f + l_r)^2 / (m I)`` and
-    ``w1^2 + w2^2 = k_f (1/m + l_f^2/I) + k_r (1/m + l_r^2/I)`` (SPEC.md section 4):
+    ``w1^2 + w2^2 = k_f (1/m + l_f^2/I) + k_r (1/m + l_r^2/I)`` (docs/model.md, section "Slider dynamics"):
     ``b k_r^2 - S k_r + a P = 0``, with ``P = k_f k_r``. Returns the root with the larger rear
     stiffness first.
 
@@ -139,11 +139,11 @@ def choose_stiffness(f1: float, f2: float, m: float, I: float, l_f: float, l_r: 
                      root: str = "stiff-rear") -> tuple[float, float, dict]:
     """Pick one ``(k_f, k_r)`` root of the modal inversion by a named rule (:data:`STIFFNESS_ROOTS`).
 
-    ``"stiff-rear"`` (default, SPEC.md 7.3) takes the root with ``k_r > k_f``: the trailing pad of a
+    ``"stiff-rear"`` (default, docs/model.md, section "Air bearing") takes the root with ``k_r > k_f``: the trailing pad of a
     femto slider is the stiffest part of its bearing (order ``n F / h ~ 0.01 N / 10 nm = 1e6 N/m``).
     A mode is *pitch-like* when its node (the point that does not move) lies on the slider,
     ``|x_node| < L/2``, and *bounce-like* otherwise; ``"pitch-first"`` (the first reconstruction,
-    SPEC.md 4) takes the root whose lower mode is pitch-like, ``"bounce-first"`` the other.
+    docs/model.md, section "Slider dynamics") takes the root whose lower mode is pitch-like, ``"bounce-first"`` the other.
 
     For the paper slider (m = 0.58 mg, I = 3.75e-14 kg m^2, l_f = 0.30 mm, l_r = 0.40 mm) at
     120/300 kHz the two roots and their mode shapes (node positions ahead of the CG) are:
@@ -218,7 +218,7 @@ def damping_ratios(s: Slider) -> tuple[np.ndarray, np.ndarray]:
 # (pipeline.model.dynamics) compiles these same functions, Python code calls them on floats or arrays.
 
 def rear_power_law(g, g0: float, n: float, F0: float):
-    """Power rear bearing force ``F0 [(g0/g)^n - 1]`` [N] on gap ``g`` [m] (SPEC.md section 4, [recon]).
+    """Power rear bearing force ``F0 [(g0/g)^n - 1]`` [N] on gap ``g`` [m] (docs/model.md, section "Slider dynamics", [recon]).
 
     ``n = 2`` squares rather than calling ``pow()``, the costliest call of the kernel's right-hand side.
     """
@@ -228,7 +228,7 @@ def rear_power_law(g, g0: float, n: float, F0: float):
 
 
 def rear_linear_law(g, g0: float, k_r: float):
-    """Linear rear bearing force ``k_r (g0 - g)`` [N] on gap ``g`` [m], stiffness ``k_r`` [N/m] (SPEC.md 4)."""
+    """Linear rear bearing force ``k_r (g0 - g)`` [N] on gap ``g`` [m], stiffness ``k_r`` [N/m] (docs/model.md, section "Slider dynamics")."""
     return k_r * (g0 - g)
 
 
@@ -256,7 +256,7 @@ class RearLaw:
     doc: str
 
 
-#: Rear bearing laws (``air_bearing.rear_law``), SPEC.md 4.
+#: Rear bearing laws (``air_bearing.rear_law``), docs/model.md, section "Slider dynamics".
 REAR_LAWS = {
     "power": RearLaw(rear_force, False, "F_r = F_r0 [(g0/g)^n - 1], F_r0 = k_r g0 / n [recon]"),
     "linear": RearLaw(rear_force_linear, True, "F_r = k_r (g0 - g)"),
@@ -274,14 +274,14 @@ def stiffening_potential(s, g0: float, q: float):
 
 
 def stiffening_stiffness(g, g0: float, k_t: float, q: float):
-    """Added stiffness ``k_t [(g0/g)^q - 1]`` [N/m] of the TFC stiffening law at gap ``g`` [m] (SPEC.md 7.4)."""
+    """Added stiffness ``k_t [(g0/g)^q - 1]`` [N/m] of the TFC stiffening law at gap ``g`` [m] (docs/model.md, section "Gap-power stiffening")."""
     return k_t * ((g0 / g) ** q - 1.0)
 
 
 def tfc_stiffening_force(g: np.ndarray, g_n: float, g0: float, k_t: float, p: float) -> tuple[np.ndarray, np.ndarray]:
     """Force [N] (up positive) and stiffness [N/m] of the TFC stiffening spring at the TFC gap ``g`` [m].
 
-    SPEC.md 7.4 (named option ``"gap-power"``, our form): as the TFC clearance closes the air
+    docs/model.md, section "Gap-power stiffening" (named option ``"gap-power"``, our form): as the TFC clearance closes the air
     pressure under the bulge rises and the local bearing stiffens (Vakis, Hadjicostis & Polycarpou,
     J. Phys. D 45 135402 (2012)). Added stiffness ``k(g) = k_t [(g0/g)^p - 1]`` with ``g0 = FH0``: zero at
     the nominal flying gap, so the modal stiffness of the bearing is unchanged there. The force is its
