@@ -41,7 +41,7 @@ def observations(c: SweepSlice, inter: xr.Dataset | None) -> list[str]:
         s = f"The shear stress is the same, {fin[0]:.4g} MPa, at every contact point"
         if np.isfinite(tau_y) and abs(fin[0] - tau_y) < 1e-3 * tau_y:
             s += (f": it equals the shear strength tau_y = H/(2.8 sqrt 3) = {tau_y:.4g} MPa, because the friction "
-                  "law is Q = tau_y A on every elastic and elastic-plastic summit (docs/model.md, section "ISBL interface", our documented "
+                  "law is Q = tau_y A on every elastic and elastic-plastic summit (docs/model.md, section 'ISBL interface', our documented "
                   "choice) and fully plastic summits (which carry no friction) are negligible. Fig. 7 is flat by construction and the friction "
                   "coefficient is simply tau_y / mean pressure")
         obs.append(s + ".")

@@ -233,7 +233,7 @@ def _nominal_area_section(c: SweepSlice, settings: ReportSettings, inter: xr.Dat
              difference(an[j] - paper.NOMINAL_AREA_UM2, "um^2", 100 * (an[j] / paper.NOMINAL_AREA_UM2 - 1))]]
     sd = settings.section_depth_sigma
     sig = scalar(inter, "sigma")
-    n = "**Nominal area.** From the ellipsoid section (docs/model.md, section "Nominal area")"
+    n = "**Nominal area.** From the ellipsoid section (docs/model.md, section 'Nominal area')"
     if sd is not None and np.isfinite(sig):
         n += f" at depth s_n = {sd:g} sigma = {sd * sig:.3g} nm"
     n += ("; s_n = 3 sigma is [recon], chosen because it reproduces the paper's 62 um^2, so the agreement is "
@@ -341,7 +341,7 @@ def identification_markdown(ident: xr.Dataset) -> str:
             unreached.append(f"Why the bouncing band is out of reach (measured): the smallest BV after touchdown is at "
                              f"most {number(float(np.nanmax(ratio)))} x the flying FHM over all {int(ok.sum())} "
                              "evaluations with both, so BV > 20 % with a flying FHM of about 12.5 % needs a "
-                             "mechanism the free parameters do not provide (docs/model.md, sections "Gap-power stiffening" and "Bouncing band").")
+                             "mechanism the free parameters do not provide (docs/model.md, sections 'Gap-power stiffening' and 'Bouncing band').")
     params = [str(p) for p in ident["parameter"].values]
     prow = []
     for p in params:

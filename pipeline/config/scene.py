@@ -127,12 +127,12 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "rear_reference_gap_nm": Key("float", None, _pos,
                                      doc="rear bearing reference gap g0 [nm] (recon; default FH0)"),
         "stiffness_root": Key("str", "stiff-rear", choices=tuple(STIFFNESS_ROOTS),
-                              doc="root of the modal inversion: 'stiff-rear' k_r > k_f (docs/model.md, section "Air bearing", recon), "
+                              doc="root of the modal inversion: 'stiff-rear' k_r > k_f (docs/model.md, section 'Air bearing', recon), "
                                   "'pitch-first' (first reconstruction), 'bounce-first'"),
         "rear_law": Key("str", "power", choices=tuple(REAR_LAWS),
                         doc="rear bearing law: 'power' F_r0[(g0/g)^n - 1] (recon), 'linear' k_r (g0 - g)"),
         "tfc_stiffening": Key("str", "none", choices=TFC_STIFFENING.keys(),  # (live: a registered law is a choice)
-                              doc="air-bearing stiffening under the TFC bulge (docs/model.md, section "Gap-power stiffening"): 'none' or "
+                              doc="air-bearing stiffening under the TFC bulge (docs/model.md, section 'Gap-power stiffening'): 'none' or "
                                   "'gap-power', added stiffness k_t[(FH0/g)^p - 1] at the TFC gap g"),
         "bulge": Key("str", "none", choices=BULGE_LAWS.keys(),
                      doc="the air bearing of the TFC bulge itself: 'none' or 'ph-limit' (p h = const under the bulge, "
@@ -145,7 +145,7 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "tfc_stiffness_n_m": Key("float", 1.0e5, _nonneg,
                                  doc="stiffness scale k_t of the TFC stiffening spring [N/m] (recon, to be identified)"),
         "tfc_stiffening_exponent": Key("float", 1.5, (lambda v: 0 <= v <= 4, "a number in [0, 4]"),
-                                       doc="exponent p of the TFC stiffening law [1] (recon, docs/model.md, section "Gap-power stiffening": ~1.5-1.75)"),
+                                       doc="exponent p of the TFC stiffening law [1] (recon, docs/model.md, section 'Gap-power stiffening': ~1.5-1.75)"),
     },
     "tfc": {
         "half_length_um": Key("float", paper.TFC_HALF_LENGTH_UM, _pos, doc="ellipsoid semi-axis along sliding a [um] (paper)"),
@@ -156,7 +156,7 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "sigma_nm": Key("float", 0.52, _pos, doc="combined rms roughness sigma [nm] (recon)"),
         "summit_radius_um": Key("float", 5.0, _pos, doc="summit radius R [um] (recon)"),
         "summit_density_per_um2": Key("float", 13.3, _pos,
-                                      doc="summit density eta [um^-2] (inferred: y_s = 0.69 nm, docs/model.md, section "Separation datum")"),
+                                      doc="summit density eta [um^-2] (inferred: y_s = 0.69 nm, docs/model.md, section 'Separation datum')"),
         "afm": Key("strs", None, path=True, doc="AFM scans (any SurfaceTopography format); overrides the statistics"),
         "route": Key("str", "spectral", choices=("spectral", "summits"),
                      doc="which AFM route feeds the interface model"),
@@ -192,10 +192,10 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "damping_n_s_m": Key("float", 0.0, _nonneg, doc="contact damping c_c [N s/m] (recon)"),
         "fallback_probability": Key("float", None, (lambda v: 0 < v < 1, "a probability in (0, 1)"),
                                     doc="when calibration finds no admissible k: use the k of this two-sided "
-                                        "contact probability P(|z| > k sigma) = 2 Q(k) [1] (docs/model.md, section "Contact criterion")"),
+                                        "contact probability P(|z| > k sigma) = 2 Q(k) [1] (docs/model.md, section 'Contact criterion')"),
         "friction_law": Key("str", "shear-strength", choices=tuple(FRICTION_LAWS),
-                            doc="friction law: 'shear-strength' tau_y = H/(2.8 sqrt 3) (docs/model.md, section "ISBL interface") or "
-                                "'coefficient' Q = mu P (docs/model.md, section "Friction")"),
+                            doc="friction law: 'shear-strength' tau_y = H/(2.8 sqrt 3) (docs/model.md, section 'ISBL interface') or "
+                                "'coefficient' Q = mu P (docs/model.md, section 'Friction')"),
         "friction_coefficient": Key("float", None, _nonneg,
                                     doc="friction coefficient mu of the 'coefficient' law [1] (paper: ~1.2)"),
     },
@@ -259,7 +259,7 @@ SCHEMA: dict[str, dict[str, Key]] = {
                          "the default until the paper scene moves to the bulge model); docs/model.md, "
                          "section 'Start state'"),
         "fhm_measure": Key("str", "peak-to-peak", choices=tuple(FHM_MEASURES),
-                           doc="FHM/BV measure (docs/model.md, section "Slider dynamics")"),
+                           doc="FHM/BV measure (docs/model.md, section 'Slider dynamics')"),
     },
     "sweep": {
         "protrusion_nm": Key("range", dict(zip(("start", "stop", "step"), paper.PROTRUSION_GRID_NM)),
@@ -281,7 +281,7 @@ SCHEMA: dict[str, dict[str, Key]] = {
     # hdi identify: free parameters with bounds, the paper's targets with tolerances, the optimiser budget
     "identify": {
         "parameters": Key("tables", _FREE, doc="free parameters: [{key = \"section.key\" or \"section.key[i]\", low, high}] (bounds in the key's "
-               "unit; docs/model.md, section "Corrections") [recon]"),
+               "unit; docs/model.md, section 'Corrections') [recon]"),
         "targets": Key("strs", list(TARGETS), choices=TARGETS,
                        doc="targets the identification fits (touchdown uses [touchdown] onset_nm/previous_nm)"),
         "touchdown_tolerance_nm": Key("float", 0.1, _pos,
