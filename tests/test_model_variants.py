@@ -128,3 +128,15 @@ def test_touched_is_the_regime_and_calibration_rule():
     assert not sl.touched(run) and not run.contact.any()
     above = replace(run, model=replace(model, k=1.0, sigma=lo + 1e-3 * NM))
     assert above.model.k_sigma > lo and sl.touched(above)
+
+
+def test_with_values_copies_the_record():
+XX
+    different protrusions of one model get exactly the serial results (they shared the record before)."""
+    import threading
+
+    base = dyn.params(delta=1e-9, A_n=2e-12)
+    q = dyn.with_values(base, delta=5e-9)
+    assert base["delta"] == 1e-9 and q["delta"] == 5e-9
+    r = dyn.with_values(base, delta=7e-9)
+    assert q["delta"] == 5e-9 and r["delta"] == 7e-9
