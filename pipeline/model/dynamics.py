@@ -138,14 +138,14 @@ PARAMS = np.dtype((np.record, [
     ("t_win", "f8"),                                 # start of the steady window [s]
     ("h_stiff", "f8"),                               # step cap over 1/omega of the interface spring [1]
     ("y_s", "f8"),                                   # summit mean height over the surface mean [m]
-]))
+]), align=True)
 
 #: Parameters of the closed-form gap-power stiffening law at the TFC point (``Variants.gap_power``):
 #: stiffness scale ``k_t`` [N/m], exponent ``q`` [1], reference gap ``g0`` [m], potential at the
 #: nominal gap ``f0 = G(g_n)`` [m] (per protrusion), linear-continuation gap ``g_min`` [m] and stiffness
 #: ``k_min`` [N/m] below it.
 GAP_POWER = np.dtype((np.record, [("k_t", "f8"), ("q", "f8"), ("g0", "f8"), ("f0", "f8"), ("g_min", "f8"),
-                                  ("k_min", "f8")]))
+                                  ("k_min", "f8")]), align=True)
 
 
 def params(dtype: np.dtype = PARAMS, **values: float) -> np.record:
@@ -332,7 +332,7 @@ def disk_history(dmw, p, t):
     return w, v
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
 def _disk(p, dmw, t):
     """Disk displacement [m] and velocity [m/s] under the TFC point at time ``t``."""
     if dmw is None:
@@ -340,7 +340,7 @@ def _disk(p, dmw, t):
     return _ppval(dmw, p.dmw_t0, p.dmw_dt, t)
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
 def _disk3(p, dmw, t):
     """Disk displacement and velocity under the TFC point, the front and the rear pad at ``t``."""
     if dmw is None:
@@ -378,9 +378,9 @@ def separation_at(p, z, theta, w):
 
 
 @njit(cache=True, nogil=True, inline="always", error_model="numpy")
-def separation(p, tab, t, y):
+def separation(p, dmw, t, y):
     """TFC separation ``d`` [m] and its rate [m/s] (docs/model.md, section "Separation datum")."""
-    wc, vc = _disk(p, tab.dmw, t)
+    wc, vc = _disk(p, dmw, t)
     return _separation(p, y, wc, vc)
 
 
@@ -413,7 +413,7 @@ def _stiffening(q, g):
     return f, _stiffening_stiffness(gg, q.g0, q.k_t, q.q)
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
 def _rear_force(p, rear_linear, y, wr, vr):
     """Rear-pad force [N] (up positive): the power law, or the linear one, plus its damper."""
     g_r = p.g0 + y[0] - p.l_r * y[1] - wr
@@ -426,7 +426,7 @@ def _rear_force(p, rear_linear, y, wr, vr):
     return F_r
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
 def _tfc_air_force(p, gap_power, tfc, g):
     """Air-bearing force [N] (up positive) and stiffness ``-dF/dg`` [N/m] at the TFC point, gap ``g`` [m]:
     the closed-form gap-power law plus the tabulated law (each ``None`` when off; zero without both)."""
@@ -443,12 +443,14 @@ def _tfc_air_force(p, gap_power, tfc, g):
     return F, k
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
-def _interface_force(p, cp, pa, ft, F_i, d, dd, contact):
-    """Add the interface forces at the separation ``d`` [m] (rate ``dd`` [m/s]) to ``F_i`` [N]: adhesion
-    always, contact pressure and damper in contact; returns it and the friction force ``Q`` [N]."""
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
+def _interface_force(p, cp, pa, ft, F_i, y, wc, vc, contact):
+    """Add the interface forces at the state ``y`` (disk under the TFC point at ``wc`` [m], ``vc`` [m/s])
+    to ``F_i`` [N]: adhesion always, contact pressure and damper in contact; returns it and the
+    friction force ``Q`` [N]."""
     Q = 0.0
     if pa is not None or cp is not None:
+        d, dd = _separation(p, y, wc, vc)
         # one index for every table (they share the separation grid)
         i, s = _ppindex(p.tab_n, p.tab_x0, p.tab_h, d)
         if pa is not None:
@@ -461,7 +463,7 @@ def _interface_force(p, cp, pa, ft, F_i, d, dd, contact):
     return F_i, Q
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
 def _interface_stiffness(p, cp, pa, contact, kk, d):
     """Add the interface tables' stiffness ``-A_n dp/dd`` [N/m] at ``d`` [m] to ``kk`` (contact in contact)."""
     if cp is not None and contact:
@@ -471,7 +473,7 @@ def _interface_stiffness(p, cp, pa, contact, kk, d):
     return kk
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
 def _accelerations(p, pitch, y, F_f, F_r, F_i, Q, out):
     """Write ``dy/dt`` from the forces [N]; the pitch rows are zero when the pitch is locked."""
     out[0] = y[2]
@@ -490,15 +492,23 @@ def rhs(t, y, p, tab, var, contact, out):
 
     ``tab``: :class:`Tables`; ``var``: :class:`Variants`; ``contact``: the contact mode.
     """
+    _rhs(t, y, p, tab.dmw, tab.contact, tab.adhesion, tab.friction, tab.tfc, var.pitch, var.gap_power,
+         var.rear_linear, contact, out)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _rhs(t, y, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, contact, out):
+    """:func:`rhs` with the slots as arguments: what the integrator calls (see :func:`_integrate`)."""
     z, th, vz, vth = y[0], y[1], y[2], y[3]
-    wc, vc, wf, vf, wr, vr = _disk3(p, tab.dmw, t)
+    wc, vc, wf, vf, wr, vr = _disk3(p, dmw, t)
     lf = p.l_f
     F_f = -p.k_f * (z + lf * th - wf) - p.c_f * (vz + lf * vth - vf)
-    F_r = _rear_force(p, var.rear_linear, y, wr, vr)
-    F_i = _tfc_air_force(p, var.gap_power, tab.tfc, gap_at(p, z, th, wc))[0]
-    d, dd = _separation(p, y, wc, vc)
-    F_i, Q = _interface_force(p, tab.contact, tab.adhesion, tab.friction, F_i, d, dd, contact)
-    _accelerations(p, var.pitch, y, F_f, F_r, F_i, Q, out)
+    F_r = _rear_force(p, rlin, y, wr, vr)
+    F_i = 0.0
+    if gap_power is not None or tfc is not None:
+        F_i = _tfc_air_force(p, gap_power, tfc, gap_at(p, z, th, wc))[0]
+    F_i, Q = _interface_force(p, cp, pa, ft, F_i, y, wc, vc, contact)
+    _accelerations(p, pitch, y, F_f, F_r, F_i, Q, out)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -514,28 +524,27 @@ E1, E3, E4, E5, E6, E7 = (71 / 57600, -71 / 16695, 71 / 1920, -17253 / 339200, 2
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _step(t, y, k1, h, p, tab, var, contact, ynew, k7, err, wk):
+def _step(t, y, k1, h, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, contact, ynew, k7, err, tmp, k2, k3, k4, k5, k6):
     """One Dormand-Prince step: ``ynew``, its derivative ``k7`` and the error estimate ``err``
-    (``wk``: work rows, the stage state and the stages ``k2``...``k6``)."""
-    tmp, k2, k3, k4, k5, k6 = wk[0], wk[1], wk[2], wk[3], wk[4], wk[5]
+    (``tmp``, ``k2``...``k6``: work arrays, passed one by one: see :func:`_rhs`)."""
     for i in range(4):
         tmp[i] = y[i] + h * A21 * k1[i]
-    rhs(t + h / 5, tmp, p, tab, var, contact, k2)
+    _rhs(t + h / 5, tmp, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, contact, k2)
     for i in range(4):
         tmp[i] = y[i] + h * (A31 * k1[i] + A32 * k2[i])
-    rhs(t + 3 * h / 10, tmp, p, tab, var, contact, k3)
+    _rhs(t + 3 * h / 10, tmp, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, contact, k3)
     for i in range(4):
         tmp[i] = y[i] + h * (A41 * k1[i] + A42 * k2[i] + A43 * k3[i])
-    rhs(t + 4 * h / 5, tmp, p, tab, var, contact, k4)
+    _rhs(t + 4 * h / 5, tmp, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, contact, k4)
     for i in range(4):
         tmp[i] = y[i] + h * (A51 * k1[i] + A52 * k2[i] + A53 * k3[i] + A54 * k4[i])
-    rhs(t + 8 * h / 9, tmp, p, tab, var, contact, k5)
+    _rhs(t + 8 * h / 9, tmp, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, contact, k5)
     for i in range(4):
         tmp[i] = y[i] + h * (A61 * k1[i] + A62 * k2[i] + A63 * k3[i] + A64 * k4[i] + A65 * k5[i])
-    rhs(t + h, tmp, p, tab, var, contact, k6)
+    _rhs(t + h, tmp, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, contact, k6)
     for i in range(4):
         ynew[i] = y[i] + h * (B1 * k1[i] + B3 * k3[i] + B4 * k4[i] + B5 * k5[i] + B6 * k6[i])
-    rhs(t + h, ynew, p, tab, var, contact, k7)
+    _rhs(t + h, ynew, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, contact, k7)
     for i in range(4):
         err[i] = h * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i] + E7 * k7[i])
 
@@ -591,7 +600,7 @@ def _extrema(a, b, c):
     return n, x1, x2
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
 def _d_extrema(p, dmw, t, h, y, k1, ynew, k7, d0, dd0, d1, dd1, buf):
     """Interior extrema of ``d`` in the step ``[t, t + h]``: their ``theta`` in (0, 1) go into ``buf``;
     returns how many.
@@ -653,7 +662,7 @@ def _interp_state(y0, f0, y1, f1, h, theta, out):
 
 
 @njit(cache=True, nogil=True, inline="always", error_model="numpy")
-def _first_wrong_side(p, tab, contact, t, y, k1, ynew, k7, h, d0, dd0, d1, dd1, ys, buf):
+def _first_wrong_side(p, dmw, contact, t, y, k1, ynew, k7, h, d0, dd0, d1, dd1, ys, buf):
     """Smallest ``theta`` in (0, 1] of the step where the criterion disagrees with the mode, or -1.
 
     Checks the step's end, the interior extrema of ``d`` (closed form, :func:`_d_extrema`) and, when
@@ -664,7 +673,7 @@ def _first_wrong_side(p, tab, contact, t, y, k1, ynew, k7, h, d0, dd0, d1, dd1, 
     best = 2.0
     if (d1 - ks < 0.0) != contact:
         best = 1.0
-    n_ex = _d_extrema(p, tab.dmw, t, h, y, k1, ynew, k7, d0, dd0, d1, dd1, buf)
+    n_ex = _d_extrema(p, dmw, t, h, y, k1, ynew, k7, d0, dd0, d1, dd1, buf)
     near = min(abs(d0 - ks), abs(d1 - ks)) < 0.5 * h * max(abs(dd0), abs(dd1))
     n_try = n_ex + (3 if near else 0)
     for i_ex in range(n_try):
@@ -675,14 +684,14 @@ def _first_wrong_side(p, tab, contact, t, y, k1, ynew, k7, h, d0, dd0, d1, dd1, 
         if th >= best:
             continue
         _interp_state(y, k1, ynew, k7, h, th, ys)
-        if (separation(p, tab, t + th * h, ys)[0] - ks < 0.0) != contact:
+        if (separation(p, dmw, t + th * h, ys)[0] - ks < 0.0) != contact:
             best = th
     return best if best <= 1.0 else -1.0
 
 
 @njit(cache=True, nogil=True, inline="always", error_model="numpy")
-def _locate_switch(t, y, k1, h, p, tab, var, contact, ynew, k7, err, wk, d0, dd0, d1, dd1, ys, buf, ev_y, ev_f,
-                   info):
+def _locate_switch(t, y, k1, h, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, contact, ynew, k7, err, wk,
+                   d0, dd0, d1, dd1, ys, buf, info):
     """Find a contact switch in the accepted step ``[t, t + h]`` and shorten the step to it.
 
     A redone (shorter) step is more accurate than the long step's interpolant and may show the
@@ -690,17 +699,18 @@ def _locate_switch(t, y, k1, h, p, tab, var, contact, ynew, k7, err, wk, d0, dd0
     whether the mode switches at the end of the (possibly shortened) step ``h_acc``, whose end state
     and derivative are then in ``ynew``, ``k7`` and separation and rate ``d1``, ``dd1``.
     """
+    tmp, k2, k3, k4, k5, k6, ev_y, ev_f = wk  # (only a redone step uses them)
     h_acc = h
     switched = False
     for _ in range(8):
-        hi = _first_wrong_side(p, tab, contact, t, y, k1, ynew, k7, h_acc, d0, dd0, d1, dd1, ys, buf)
+        hi = _first_wrong_side(p, dmw, contact, t, y, k1, ynew, k7, h_acc, d0, dd0, d1, dd1, ys, buf)
         if hi < 0.0:
             break
         lo = 0.0
         for _ in range(60):
             mid = 0.5 * (lo + hi)
             _interp_state(y, k1, ynew, k7, h_acc, mid, ys)
-            g = separation(p, tab, t + mid * h_acc, ys)[0] - p.k_sigma
+            g = separation(p, dmw, t + mid * h_acc, ys)[0] - p.k_sigma
             if (g < 0.0) != contact:
                 hi = mid
             else:
@@ -714,27 +724,27 @@ def _locate_switch(t, y, k1, h, p, tab, var, contact, ynew, k7, err, wk, d0, dd0
             break  # the switch is at the end of the step
         # redo the step exactly up to the switch (in the old mode)
         h_acc = hi * h_acc
-        _step(t, y, k1, h_acc, p, tab, var, contact, ev_y, ev_f, err, wk)
+        _step(t, y, k1, h_acc, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, contact, ev_y, ev_f, err, tmp, k2, k3, k4, k5, k6)
         info[4] += 6
         for i in range(4):
             ynew[i] = ev_y[i]
             k7[i] = ev_f[i]
-        d1, dd1 = separation(p, tab, t + h_acc, ynew)
+        d1, dd1 = separation(p, dmw, t + h_acc, ynew)
     return switched, h_acc, d1, dd1
 
 
 @njit(cache=True, nogil=True, inline="always", error_model="numpy")
-def _track_extremes(p, tab, t, h, y, k1, ynew, k7, d0, dd0, d1, dd1, ys, buf, ext):
+def _track_extremes(p, dmw, t, h, y, k1, ynew, k7, d0, dd0, d1, dd1, ys, buf, ext):
     """Exact extremes of ``d`` over the steady window into ``ext``: at the step's end and at the interior
     extrema of ``d`` on the step's cubic (peak-to-peak free of aliasing by the output grid)."""
     ext[0] = min(ext[0], d1)
     ext[1] = max(ext[1], d1)
-    n_ex = _d_extrema(p, tab.dmw, t, h, y, k1, ynew, k7, d0, dd0, d1, dd1, buf)
+    n_ex = _d_extrema(p, dmw, t, h, y, k1, ynew, k7, d0, dd0, d1, dd1, buf)
     for i_ex in range(n_ex):
         th = buf[i_ex]
         if t + th * h >= p.t_win:
             _interp_state(y, k1, ynew, k7, h, th, ys)
-            de = separation(p, tab, t + th * h, ys)[0]
+            de = separation(p, dmw, t + th * h, ys)[0]
             ext[0] = min(ext[0], de)
             ext[1] = max(ext[1], de)
 
@@ -763,13 +773,7 @@ def _error_norm(y, ynew, err, atol, rtol):
     return np.sqrt(e / 4.0)
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
-def _given(x):
-    """Whether a slot is on (compile-time constant: one specialisation per slot type)."""
-    return x is not None
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
 def _extrema_slots(p, dmw, h_max):
     """Size of the buffer of interior extrema of ``d``: at most 2 per DMW spline piece a step spans."""
     if dmw is not None:
@@ -777,13 +781,13 @@ def _extrema_slots(p, dmw, h_max):
     return 2
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
 def _inverse_mass_at_tfc(p, pitch):
     """``1/m + l_c^2/I`` [1/kg] (``1/m`` with the pitch locked): the mass the interface spring moves."""
     return 1.0 / p.m + (p.l_c ** 2 / p.I if pitch is not None else 0.0)
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
 def _stiffness_cap(p, cp, pa, gap_power, tfc, contact, d, h_max, m_eff_inv):
     """Largest step [s] after a step ending at separation ``d`` [m]: ``p.h_stiff`` over the angular
     frequency of the local interface spring (``h_max`` without one).
@@ -815,9 +819,23 @@ def integrate(y0, grid, p, tab, var, solver):
     info : ``[status, accepted steps, rejected steps, contact switches, rhs evaluations]``;
     ext : exact minimum and maximum of the separation ``d`` [m] over ``t >= p.t_win``
     """
-    t_end, t_out = grid.t_end, grid.t_out
-    rtol, atol, h_max, max_steps = solver.rtol, solver.atol, solver.h_max, solver.max_steps
-    has_contact = _given(tab.contact)
+    return _integrate(y0, grid.t_end, grid.t_out, p, tab.dmw, tab.contact, tab.adhesion, tab.friction, tab.tfc,
+                      var.pitch, var.gap_power, var.rear_linear, solver.rtol, solver.atol, solver.h_max,
+                      solver.max_steps)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _integrate(y0, t_end, t_out, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, rtol, atol, h_max, max_steps):
+    """:func:`integrate` with its bundles unpacked into the slots.
+
+    Why the inner functions take the slots one by one: numba prunes a disabled effect's branch
+    (``if x is None``) only where ``x`` is the compiled function's own argument (the functions inlined
+    into it included), not a tuple's member; and an array taken out of a tuple costs two
+    reference-count updates per use. Passing the bundles down cost 10-30 % of the kernel's time
+    (measured in one process against the flat kernel); unpacked here, :func:`_step`, :func:`_rhs` and
+    their inlined helpers compile to the flat kernel's code.
+    """
+    has_contact = cp is not None
     n_out = t_out.shape[0]
     Y = np.full((n_out, 4), np.nan)
     C = np.zeros(n_out, dtype=np.bool_)
@@ -828,26 +846,27 @@ def integrate(y0, grid, p, tab, var, solver):
     k7 = np.empty(4)
     ynew = np.empty(4)
     err = np.empty(4)
-    wk = np.empty((6, 4))
+    tmp, k2, k3, k4, k5, k6 = np.empty(4), np.empty(4), np.empty(4), np.empty(4), np.empty(4), np.empty(4)
     ys = np.empty(4)
-    buf = np.empty(_extrema_slots(p, tab.dmw, h_max))
+    buf = np.empty(_extrema_slots(p, dmw, h_max))
     ev_y = np.empty(4)
     ev_f = np.empty(4)
+    wk = (tmp, k2, k3, k4, k5, k6, ev_y, ev_f)  # work arrays of a step redone up to a contact switch
     t = 0.0
     # The initial mode follows the criterion at t = 0.
     contact = False
     if has_contact:
-        contact = separation(p, tab, t, y)[0] < p.k_sigma
-    rhs(t, y, p, tab, var, contact, k1)
+        contact = separation(p, dmw, t, y)[0] < p.k_sigma
+    _rhs(t, y, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, contact, k1)
     info[4] += 1
-    d0, dd0 = separation(p, tab, t, y)  # d and d' at the current step start (kept step to step)
+    d0, dd0 = separation(p, dmw, t, y)  # d and d' at the current step start (kept step to step)
     if p.t_win <= 0.0:  # the window starts at t = 0: the initial d is one of its values (steps add their ends)
         ext[0] = d0
         ext[1] = d0
     h = min(h_max, 1e-8)
     t_hold = -1.0  # no switch may happen before t_hold (minimum dwell after a switch)
     h_stiff = h_max  # step cap from the local interface stiffness (_stiffness_cap)
-    m_eff_inv = _inverse_mass_at_tfc(p, var.pitch)
+    m_eff_inv = _inverse_mass_at_tfc(p, pitch)
     j = 0
     while j < n_out and t_out[j] <= t:
         Y[j, :] = y
@@ -866,7 +885,7 @@ def integrate(y0, grid, p, tab, var, solver):
                 contact = not contact
                 info[3] += 1
                 t_hold = t + p.dwell
-                rhs(t, y, p, tab, var, contact, k1)
+                _rhs(t, y, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, contact, k1)
                 info[4] += 1
         h = min(h, h_max, h_stiff)
         if t + 1.01 * h >= t_end:  # land on t_end exactly, never leave a sliver (Hairer's DOPRI5 rule)
@@ -876,7 +895,7 @@ def integrate(y0, grid, p, tab, var, solver):
         if h < 1e-12 * max(t, NS) or h < 1e-18:  # (h = t_end - t is never a sliver, see above)
             info[0] = STEP_UNDERFLOW
             return Y, C, info, ext
-        _step(t, y, k1, h, p, tab, var, contact, ynew, k7, err, wk)
+        _step(t, y, k1, h, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, contact, ynew, k7, err, tmp, k2, k3, k4, k5, k6)
         info[4] += 6
         e = _error_norm(y, ynew, err, atol, rtol)
         if not np.isfinite(e):
@@ -890,13 +909,13 @@ def integrate(y0, grid, p, tab, var, solver):
         # accepted step [t, t + h]
         h_acc = h
         switched = False
-        d1, dd1 = separation(p, tab, t + h, ynew)
+        d1, dd1 = separation(p, dmw, t + h, ynew)
         if has_contact and t_hold < 0.0:
-            switched, h_acc, d1, dd1 = _locate_switch(t, y, k1, h, p, tab, var, contact, ynew, k7, err, wk,
-                                                      d0, dd0, d1, dd1, ys, buf, ev_y, ev_f, info)
+            switched, h_acc, d1, dd1 = _locate_switch(t, y, k1, h, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin,
+                                                      contact, ynew, k7, err, wk, d0, dd0, d1, dd1, ys, buf, info)
         t_new = t + h_acc
         if t_new >= p.t_win:
-            _track_extremes(p, tab, t, h_acc, y, k1, ynew, k7, d0, dd0, d1, dd1, ys, buf, ext)
+            _track_extremes(p, dmw, t, h_acc, y, k1, ynew, k7, d0, dd0, d1, dd1, ys, buf, ext)
         j = _sample_outputs(t, h_acc, y, k1, ynew, k7, contact, t_out, j, Y, C, ys)
         for i in range(4):
             y[i] = ynew[i]
@@ -906,14 +925,13 @@ def integrate(y0, grid, p, tab, var, solver):
         t = t_new
         d0, dd0 = d1, dd1
         info[1] += 1
-        h_stiff = _stiffness_cap(p, tab.contact, tab.adhesion, var.gap_power, tab.tfc, contact, d0, h_max,
-                                 m_eff_inv)
+        h_stiff = _stiffness_cap(p, cp, pa, gap_power, tfc, contact, d0, h_max, m_eff_inv)
         if t_hold > 0.0 and abs(t - t_hold) <= 1e-12 * t_hold:
             t = t_hold  # land exactly on the end of the dwell (checked at the top of the loop)
         if switched:
             contact = not contact
             t_hold = t + p.dwell if p.dwell > 0.0 else -1.0
-            rhs(t, y, p, tab, var, contact, k1)
+            _rhs(t, y, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, contact, k1)
             info[4] += 1
         else:
             for i in range(4):
