@@ -32,6 +32,7 @@ import numpy as np
 
 from ..config.grid import TOL_NM, label, range_grid
 from ..config.scene import SCHEMA, TARGETS, SceneError, unit_suffix
+from ..model.slider import touched_in_summary
 from ..units import cf_unit
 
 
@@ -165,8 +166,7 @@ class Table:
         """Contact in the steady window at the protrusions ``at`` [nm]: the exact minimum clearance below
         zero, the rule of the calibration and of the regime (:func:`pipeline.model.slider.summarize`), which
         also counts a contact shorter than the output step. False where not evaluated."""
-        with np.errstate(invalid="ignore"):
-            return self.values("min_clearance", at) < 0
+        return touched_in_summary(self.values("min_clearance", at))
 
     def touchdown(self) -> float:
         """First evaluated protrusion [nm] with contact in the steady window (NaN if none)."""

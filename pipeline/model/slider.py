@@ -486,6 +486,13 @@ def touched(run: Run) -> bool:
     return bool(run.contact[win].any() or run.d_extremes[0] < run.model.k_sigma)
 
 
+def touched_in_summary(min_clearance: Any) -> Any:
+    """:func:`touched` read from the steady-window summary: the exact minimum clearance ``d - k sigma``
+    (``min_clearance``, any unit) below zero; ``False`` where it is NaN (not evaluated)."""
+    with np.errstate(invalid="ignore"):
+        return np.asarray(min_clearance) < 0
+
+
 def _validity(run: Run, hist: dict[str, np.ndarray], win: np.ndarray) -> int:
     """The :class:`pipeline.validity.Validity` bits of a run's steady window."""
     m, s = run.model, run.model.slider
