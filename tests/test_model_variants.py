@@ -131,10 +131,8 @@ def test_touched_is_the_regime_and_calibration_rule():
 
 
 def test_with_values_copies_the_record():
-XX
-    different protrusions of one model get exactly the serial results (they shared the record before)."""
-    import threading
-
+    """with_values copies: the model's record is unchanged by a run's protrusion (it shared the record
+    before, so runs of one model in concurrent threads read each other's protrusion)."""
     base = dyn.params(delta=1e-9, A_n=2e-12)
     q = dyn.with_values(base, delta=5e-9)
     assert base["delta"] == 1e-9 and q["delta"] == 5e-9
