@@ -13,7 +13,7 @@ from .config.grid import TOL_NM, range_count
 from .config.limits import (check_physical, MAX_EVALUATIONS, MAX_HISTORY_SAMPLES, MAX_RECORD_SAMPLES, MAX_SCENES, MAX_TABLE_ROWS,
                             LimitError)
 from .model.dmw_record import settings as dmw_settings
-from .units import MS, NS
+from .units import MS, NS, S_IN_MS
 
 
 def deepest_protrusion_nm(scene: Any) -> float:
@@ -48,7 +48,7 @@ def sizes(scene: Any, stage: str) -> list[tuple[str, int, int]]:
                     int(sol["duration_ms"] * MS / NS / sol["output_step_ns"]) + 1, MAX_HISTORY_SAMPLES))
     if stage != "roughness" and "dmw" in scene["scene"]["effects"]:
         # (the record's default length: the run's plus the pads' delay)
-        dur_ms = dmw_settings(scene)["duration_s"] / MS
+        dur_ms = dmw_settings(scene)["duration_s"] * S_IN_MS
         out.append((f"DMW record samples (dmw.duration_ms = {dur_ms:g} x sample_rate_mhz = "
                     f"{dmw['sample_rate_mhz']:g})", int(dur_ms * 1e3 * dmw["sample_rate_mhz"]), MAX_RECORD_SAMPLES))
     if stage in ("sweep", "run"):

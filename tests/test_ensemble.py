@@ -97,7 +97,7 @@ def test_ensemble_sweep_passes_cf_1_8(sweeps):
     assert crashed == [] and failures[3] == [] and failures[2] + failures[1] == []
     with netCDF4.Dataset(out / "sweep.nc") as nc:
         assert nc.variables["dmw_seed"].dtype == np.float64
-    assert list(three.dmw_seed.values) == dmw_stage.realisation_seeds(20090601, 3)
+    assert list(three.dmw_seed.values) == dmw_record.realisation_seeds(20090601, 3)
 
 
 def test_dmw_seed_beyond_32_bits_is_refused_in_one_line():

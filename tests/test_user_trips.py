@@ -203,14 +203,15 @@ def test_flying_point_has_no_nominal_area_to_compare(tmp_path):
     """A_n = 0 at a flying 11 nm point read "0 um^2 (-100 %)"."""
     import xarray as xr
     from pipeline.analyses import paper_comparison as report
+    from pipeline.analyses.report_settings import ReportSettings
     from pipeline.analyses.sweep_slices import SweepSlice
     ds = xr.Dataset({"regime": ("protrusion", [0, 0]), "fhm_bv": ("protrusion", [12.0, 12.5]),
                      "nominal_area": ("protrusion", [0.0, 0.0])}, coords={"protrusion": [10.8, 11.0]})
-    rows, notes = report._nominal_area_section(SweepSlice.of(ds, xr.Dataset()), None, None)
+    rows, notes = report._nominal_area_section(SweepSlice.of(ds, xr.Dataset()), ReportSettings.from_scene(None), None)
     assert rows == [["A_n at 11 nm", "62 um^2", "n/a: not in contact at 11 nm (flying)", "–"]] and notes == []
     ds["nominal_area"][:] = 61.0
     ds["regime"][:] = 2
-    rows, _ = report._nominal_area_section(SweepSlice.of(ds, xr.Dataset()), None, None)
+    rows, _ = report._nominal_area_section(SweepSlice.of(ds, xr.Dataset()), ReportSettings.from_scene(None), None)
     assert rows[0][2:] == ["61 um^2", "-1 um^2 (-1.6 %)"]
 
 

@@ -13,7 +13,6 @@ record's own rate); any other collision is a schema error and raises rather than
 
 from __future__ import annotations
 
-from types import MappingProxyType
 from typing import Any, Mapping
 
 from ..units import si_factor
@@ -26,17 +25,19 @@ SI_NAMES = {("dmw", "sample_rate_hz"): "record_sample_rate"}
 
 class Group(Mapping):
     """One section in SI units (or, with an empty name, the scene as a group of sections): read-only,
-    by attribute (``group.flying_height``) or item."""
+    by attribute (``group.flying_height``) or item. Values are converted when read, from the scene's own
+    mapping, so a reader is seen reading exactly the keys it uses (tests/test_stage_reads.py)."""
 
-    __slots__ = ("_section", "_values")
+    __slots__ = ("_section", "_values", "_convert")
 
-    def __init__(self, section: str, values: Mapping[str, Any]):
+    def __init__(self, section: str, values: Mapping[str, Any], convert=None):
         object.__setattr__(self, "_section", section)
-        object.__setattr__(self, "_values", MappingProxyType(dict(values)))
+        object.__setattr__(self, "_values", values)
+        object.__setattr__(self, "_convert", convert)
 
     def __getattr__(self, name: str) -> Any:
         try:
-            return self._values[name]
+            return self[name]
         except KeyError:
             if not self._section:  # the scene itself: a group of sections
                 raise AttributeError(f"the scene has no section [{name}]") from None
@@ -47,7 +48,7 @@ class Group(Mapping):
         raise AttributeError(f"[{self._section or 'scene'}] in SI form is read-only")
 
     def __getitem__(self, name: str) -> Any:
-        return self._values[name]
+        return self._values[name] if self._convert is None else self._convert(name)
 
     def __iter__(self):
         return iter(self._values)
@@ -56,7 +57,7 @@ class Group(Mapping):
         return len(self._values)
 
     def __repr__(self) -> str:
-        return f"Group({self._section!r}, {dict(self._values)!r})"
+        return f"Group({self._section!r}, {sorted(self._values)!r})"
 
 
 def _convert(value: Any, factor: float) -> Any:
@@ -70,18 +71,23 @@ def _convert(value: Any, factor: float) -> Any:
 
 
 def section_si(section: str, values: Mapping[str, Any]) -> Group:
-    """One scene section in SI units (see the module docstring)."""
-    out: dict[str, Any] = {}
-    for key, value in values.items():
+    """One scene section in SI units (see the module docstring); each key is read from ``values`` when
+    its SI name is read."""
+    keys: dict[str, tuple[str, float | None]] = {}
+    for key in values.keys():
         name, suffix = _strip_unit(key)
         name = SI_NAMES.get((section, key), name)
-        factor = 1.0 if suffix is None else si_factor(suffix)
-        if name in out:
+        if name in keys:
             raise ValueError(f"[{section}] {key}: its SI name {name!r} collides with another key of the section")
-        out[name] = _convert(value, factor) if suffix is not None else value
-    return Group(section, out)
+        keys[name] = (key, None if suffix is None else si_factor(suffix))
+
+    def convert(name: str) -> Any:
+        key, factor = keys[name]
+        return values[key] if factor is None else _convert(values[key], factor)
+
+    return Group(section, keys, convert)
 
 
 def to_si(scene: Any) -> Group:
     """The scene's sections as frozen groups in SI units (module docstring): ``to_si(scene).tfc.protrusion``."""
-    return Group("", {s: section_si(s, keys) for s, keys in scene.config.items()})
+    return Group("", {s: None for s in scene.config}, lambda s: section_si(s, scene[s]))
