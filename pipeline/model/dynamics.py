@@ -39,12 +39,12 @@ Interface
 
 Disabled effects cost nothing: an effect is off when its slot holds ``None``, and numba compiles one
 specialised kernel per combination of slot types and prunes the dead branches at compile time
-(branch pruning of ``arg is None``). That pruning sees only a function's own arguments (not tuple
-members, not through ``inline="always"``), so each slot is unpacked from its bundle into the
-argument of a small jitted function that branches on it (:func:`_disk3`, :func:`_tfc_air_force`,
-:func:`_interface_force`, ...); LLVM inlines those calls, so the bundles cost no call either (make
-bench: same timings as the former flat argument list). All kernels are cached on disk
-(``cache=True``).
+(branch pruning of ``arg is None``). That pruning sees only a compiled function's own arguments
+(and the ``inline="always"`` functions inlined into it), not a tuple's members, and an array taken
+out of a tuple costs two reference-count updates per use; so :func:`integrate` unpacks the bundles
+once into :func:`_integrate`, and the inner functions (:func:`_step`, :func:`_rhs` and their inlined
+helpers) take the slots one by one and compile to the code of a flat kernel. All kernels are cached
+on disk (``cache=True``).
 
 Adding a variant
 ----------------
@@ -55,14 +55,15 @@ and the protrusion in its physics module, registered with ONE line in its regist
 (:func:`pipeline.model.slider.tfc_table`) samples it per protrusion on a gap grid into a piecewise cubic
 (as the interface tables), which the kernel's one generic slot ``Tables.tfc`` evaluates: force and
 stiffness ``-dF/dg`` (the step-size cap) from the same cubic, so the kernel, its argument list and
-its compiled cache are untouched. Measured alternatives: numba first-class functions (the ``@njit``
-law passed as an argument) specialise the kernel on the law's dispatcher object, whose type does not
-survive a process: the on-disk cache misses in every new process (every ``hdi`` command would
-recompile the kernel, ~10 s), and a law defined outside the package would write an index entry that
-other processes cannot unpickle. A tabulated law costs one cubic evaluation, like an interface table,
-and is exact to the table's interpolation error (:func:`pipeline.model.slider.tfc_table`; the gap-power law
-tabulated: force within 3e-8 of its range, stiffness 5e-8 relative above 1 nm, a 1-ms run's separation
-within 1e-10 nm of the closed form's, tests/test_model_variants.py). The closed-form gap-power law keeps its compiled branch
+its compiled cache are untouched. The alternative, numba first-class functions (the ``@njit`` law
+passed as an argument), specialises the kernel on the law's dispatcher object, whose type is not the
+same in the next process: measured (numba 0.68, a kernel taking a law and ``cache=True``), the
+on-disk cache missed in every new process, so every ``hdi`` command would compile the kernel again
+(20-27 s of CPU for the paper scene's specialisation, measured cold). A tabulated law costs one cubic
+evaluation, like an interface table, and is exact to the table's interpolation error
+(:func:`pipeline.model.slider.tfc_table`; the gap-power law tabulated: force within 3e-8 of its range,
+stiffness 5e-8 relative above 1 nm, a 1-ms run's separation within 1e-10 nm of the closed form's,
+tests/test_model_variants.py). The closed-form gap-power law keeps its compiled branch
 (bit-identical results).
 
 Internal state (prepared, not built): issue 17's meniscus formation (adhesion of the
@@ -524,7 +525,8 @@ E1, E3, E4, E5, E6, E7 = (71 / 57600, -71 / 16695, 71 / 1920, -17253 / 339200, 2
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _step(t, y, k1, h, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, contact, ynew, k7, err, tmp, k2, k3, k4, k5, k6):
+def _step(t, y, k1, h, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, contact, ynew, k7, err,
+          tmp, k2, k3, k4, k5, k6):
     """One Dormand-Prince step: ``ynew``, its derivative ``k7`` and the error estimate ``err``
     (``tmp``, ``k2``...``k6``: work arrays, passed one by one: see :func:`_rhs`)."""
     for i in range(4):
@@ -724,7 +726,8 @@ def _locate_switch(t, y, k1, h, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin,
             break  # the switch is at the end of the step
         # redo the step exactly up to the switch (in the old mode)
         h_acc = hi * h_acc
-        _step(t, y, k1, h_acc, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, contact, ev_y, ev_f, err, tmp, k2, k3, k4, k5, k6)
+        _step(t, y, k1, h_acc, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, contact, ev_y, ev_f, err,
+              tmp, k2, k3, k4, k5, k6)
         info[4] += 6
         for i in range(4):
             ynew[i] = ev_y[i]
@@ -895,7 +898,8 @@ def _integrate(y0, t_end, t_out, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin
         if h < 1e-12 * max(t, NS) or h < 1e-18:  # (h = t_end - t is never a sliver, see above)
             info[0] = STEP_UNDERFLOW
             return Y, C, info, ext
-        _step(t, y, k1, h, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, contact, ynew, k7, err, tmp, k2, k3, k4, k5, k6)
+        _step(t, y, k1, h, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, contact, ynew, k7, err,
+              tmp, k2, k3, k4, k5, k6)
         info[4] += 6
         e = _error_norm(y, ynew, err, atol, rtol)
         if not np.isfinite(e):
