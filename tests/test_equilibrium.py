@@ -4,12 +4,47 @@ case at its TFC point; Newton on a linear slider."""
 
 from __future__ import annotations
 
+from typing import Callable
+
 import numpy as np
 import pytest
 from scipy.optimize import brentq
 
 from pipeline.physics import air_bearing as ab
 from pipeline.physics import equilibrium as eq
+
+
+def slider_forces(*, l_f: float, l_r: float, l_c: float, h_cg: float, k_f: float, g0: float,
+                  rear: Callable[[float], float], nominal_gap: Callable[[float], float],
+                  interface: Callable[[float, float], tuple[float, float]], pitch: bool = True) -> eq.Forces:
+    """Generalised static forces ``R(y, mu)`` of a 2-DOF slider with a given interface law: a fixture of
+    these tests of the solver (the pipeline's static start evaluates the kernel's own right-hand side).
+
+    ``F_f = -k_f (z + l_f theta)`` (front, linear), ``F_r = rear(g_r)`` on the rear gap ``g_r = g0 + z - l_r theta``
+    (e.g. :func:`pipeline.physics.air_bearing.rear_power_law`), the interface force ``F_i`` (up) and friction
+    ``Q`` (along the disk's motion, at the air-bearing surface, ``h_cg`` below the CG) at the TFC point
+    ``l_c`` behind the CG, whose gap is ``g = nominal_gap(mu) + z - l_c theta`` (e.g. ``FH0 - delta``):
+    ``R = (F_f + F_r + F_i, l_f F_f - l_r F_r - l_c F_i - h_cg Q)`` (:mod:`pipeline.physics.air_bearing`;
+    docs/model.md, section "Slider"). With ``pitch=False`` the state is ``(z,)``.
+
+    Parameters
+    ----------
+    l_f, l_r, l_c, h_cg [m]; k_f [N/m]; g0 : rear reference gap [m]; rear : ``g_r -> F_r`` [N]
+    nominal_gap : ``mu -> `` TFC gap at the nominal attitude [m]
+    interface : ``(g, mu) -> (F_i [N], Q [N])``: everything acting at the TFC point (bulge lift, adhesion,
+        contact, friction) at gap ``g`` [m]
+    """
+    def R(y: np.ndarray, mu: float) -> np.ndarray:
+        z = y[0]
+        th = y[1] if pitch else 0.0
+        F_f = -k_f * (z + l_f * th)
+        F_r = rear(g0 + z - l_r * th)
+        F_i, Q = interface(nominal_gap(mu) + z - l_c * th, mu)
+        if not pitch:
+            return np.array([F_f + F_r + F_i])
+        return np.array([F_f + F_r + F_i, l_f * F_f - l_r * F_r - l_c * F_i - h_cg * Q])
+
+    return R
 
 NM = 1e-9
 # 1-DOF: a bearing spring k holds the TFC point at d0 = D - mu above the disk (mu: the protrusion); the
@@ -86,14 +121,14 @@ def test_linear_slider_under_a_tfc_force_is_the_compliance_solution():
     """With linear pads and a constant force at the TFC point Newton gives ``K^-1 F``, ``K`` the pad matrix."""
     p, k_r = paper_slider()
     F = 1e-4
-    R = eq.slider_forces(**p, nominal_gap=lambda mu: 11 * NM - mu, interface=lambda g, mu: (F, 0.0))
+    R = slider_forces(**p, nominal_gap=lambda mu: 11 * NM - mu, interface=lambda g, mu: (F, 0.0))
     e = eq.newton(lambda y: R(y, 0.0), np.zeros(2))
     Kmat = ab.pad_matrix(p["k_f"], k_r, p["l_f"], p["l_r"])
     assert e.converged and e.stable
     assert e.y == pytest.approx(np.linalg.solve(Kmat, [F, -p["l_c"] * F]), rel=1e-8)
     assert e.stiffness == pytest.approx(Kmat, rel=1e-6)
     # the friction moment -h_cg Q pitches the nose down (theta < 0), as in the dynamics
-    R = eq.slider_forces(**p, nominal_gap=lambda mu: 11 * NM - mu, interface=lambda g, mu: (0.0, F))
+    R = slider_forces(**p, nominal_gap=lambda mu: 11 * NM - mu, interface=lambda g, mu: (0.0, F))
     e = eq.newton(lambda y: R(y, 0.0), np.zeros(2))
     assert e.y == pytest.approx(np.linalg.solve(Kmat, [0.0, -p["h_cg"] * F]), rel=1e-8) and e.y[1] < 0
 
@@ -107,7 +142,7 @@ def test_two_dof_fold_is_the_one_dof_fold_of_the_tfc_point_compliance():
     k_t = 1.0 / (c @ np.linalg.solve(Kmat, c))
     s_fold = (2 * A / k_t) ** (1 / 3)
     mu_fold = D - (1.5 * s_fold - EPS)
-    R = eq.slider_forces(**p, nominal_gap=lambda mu: D - mu, interface=lambda g, mu: (-A / (g + EPS) ** 2, 0.0))
+    R = slider_forces(**p, nominal_gap=lambda mu: D - mu, interface=lambda g, mu: (-A / (g + EPS) ** 2, 0.0))
     br = eq.flying_branch(R, np.linspace(0, 10, 6) * NM, np.zeros(2), mu_tol=1e-5 * NM)
     assert br.fold == pytest.approx(mu_fold, abs=2e-5 * NM)
 
@@ -119,6 +154,6 @@ def test_nonlinear_rear_law_moves_the_fold_later():
     pw, _ = paper_slider("power")
     folds = []
     for p in (lin, pw):
-        R = eq.slider_forces(**p, nominal_gap=lambda mu: D - mu, interface=lambda g, mu: (-A / (g + EPS) ** 2, 0.0))
+        R = slider_forces(**p, nominal_gap=lambda mu: D - mu, interface=lambda g, mu: (-A / (g + EPS) ** 2, 0.0))
         folds.append(eq.flying_branch(R, np.linspace(0, 10, 6) * NM, np.zeros(2), mu_tol=1e-5 * NM).fold)
     assert folds[1] > folds[0]

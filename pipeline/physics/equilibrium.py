@@ -18,9 +18,10 @@ e.g. the protrusion):
   (the nominal attitude ``y = 0`` at zero protrusion), step halving near the fold, which it brackets;
 * :func:`static_equilibrium`: the start state of a run at one protrusion: the flying equilibrium if the
   branch reaches it, else (``"no flying equilibrium"``) the contact-branch equilibrium from a start in
-  contact;
-* :func:`slider_forces`: the generalised forces of the 2-DOF slider (front linear, rear power law) with
-  a caller's interface force at the TFC point, the same equations as the dynamics' right-hand side.
+  contact.
+
+The forces are the caller's: the model's static start (:mod:`pipeline.model.start`) passes the kernel's
+own right-hand side at zero velocity, so the slider's equations have one home.
 
 A state is *stable* when the stiffness ``K = -dR/dy`` has eigenvalues with positive real parts
 (no static divergence; ``K`` is not symmetric with the friction moment).
@@ -239,35 +240,3 @@ def static_equilibrium(forces: Forces, mu: float, *, mu_start: float = 0.0, y_st
     if e.converged and e.stable:
         return StaticState("contact", e, br.fold, msg + "; contact-branch equilibrium found")
     return StaticState("none", None, br.fold, msg + "; Newton found no stable contact state either")
-
-
-def slider_forces(*, l_f: float, l_r: float, l_c: float, h_cg: float, k_f: float, g0: float,
-                  rear: Callable[[float], float], nominal_gap: Callable[[float], float],
-                  interface: Callable[[float, float], tuple[float, float]], pitch: bool = True) -> Forces:
-    """Generalised static forces ``R(y, mu)`` of the 2-DOF slider, as in the dynamics' right-hand side.
-
-    ``F_f = -k_f (z + l_f theta)`` (front, linear), ``F_r = rear(g_r)`` on the rear gap ``g_r = g0 + z - l_r theta``
-    (e.g. :func:`pipeline.physics.air_bearing.rear_power_law`), the interface force ``F_i`` (up) and friction
-    ``Q`` (along the disk's motion, at the air-bearing surface, ``h_cg`` below the CG) at the TFC point
-    ``l_c`` behind the CG, whose gap is ``g = nominal_gap(mu) + z - l_c theta`` (e.g. ``FH0 - delta``):
-    ``R = (F_f + F_r + F_i, l_f F_f - l_r F_r - l_c F_i - h_cg Q)`` (:mod:`pipeline.physics.air_bearing`;
-    docs/model.md, section "Slider"). With ``pitch=False`` the state is ``(z,)``.
-
-    Parameters
-    ----------
-    l_f, l_r, l_c, h_cg [m]; k_f [N/m]; g0 : rear reference gap [m]; rear : ``g_r -> F_r`` [N]
-    nominal_gap : ``mu -> `` TFC gap at the nominal attitude [m]
-    interface : ``(g, mu) -> (F_i [N], Q [N])``: everything acting at the TFC point (bulge lift, adhesion,
-        contact, friction) at gap ``g`` [m]
-    """
-    def R(y: np.ndarray, mu: float) -> np.ndarray:
-        z = y[0]
-        th = y[1] if pitch else 0.0
-        F_f = -k_f * (z + l_f * th)
-        F_r = rear(g0 + z - l_r * th)
-        F_i, Q = interface(nominal_gap(mu) + z - l_c * th, mu)
-        if not pitch:
-            return np.array([F_f + F_r + F_i])
-        return np.array([F_f + F_r + F_i, l_f * F_f - l_r * F_r - l_c * F_i - h_cg * Q])
-
-    return R
