@@ -12,13 +12,15 @@ from typing import Any
 from .config.grid import TOL_NM, range_count
 from .config.limits import (check_physical, MAX_EVALUATIONS, MAX_HISTORY_SAMPLES, MAX_RECORD_SAMPLES, MAX_SCENES, MAX_TABLE_ROWS,
                             LimitError)
+from .model import interface_tables
 from .model.dmw_record import settings as dmw_settings
 from .units import MS, NS, S_IN_MS
 
 
 def deepest_protrusion_nm(scene: Any) -> float:
-    """The deepest protrusion [nm] the scene or its sweep or studies ask for."""
-    deepest = max(scene["tfc"]["protrusion_nm"], scene["sweep"]["protrusion_nm"]["stop"])
+    """The deepest protrusion [nm] the scene, its sweep (:func:`pipeline.model.interface_tables.deepest_protrusion_nm`,
+    the tables' own rule) or its sensitivity study ask for."""
+    deepest = interface_tables.deepest_protrusion_nm(scene)
     grid = scene["sensitivity"]["protrusion_nm"]
     return max(deepest, grid["stop"]) if grid else deepest
 
