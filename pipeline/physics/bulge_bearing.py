@@ -8,8 +8,10 @@ pushes the slider up at the TFC point with the extra lift ``F_b = int (p - p_pad
 models (docs/model.md, section "Bulge air bearing"):
 
 * ``"ph-limit"``: the closed form of the high-bearing-number limit (:func:`ph_force_stiffness`);
-* ``"reynolds"``: the steady compressible Reynolds equation with first-order molecular slip on the
-  footprint, solved by finite volumes and Newton's method (:func:`reynolds_lift`, :func:`reynolds_table`).
+* ``"reynolds"``: the steady compressible Reynolds equation with molecular slip (first-order by default,
+  :data:`SLIP_MODELS`) on the footprint, solved by finite volumes and Newton's method
+  (:func:`reynolds_solve`, :func:`reynolds_table`) once per scene by the ``bulge`` stage, and read back by
+  the dynamics from that table (:class:`LiftTable`, :func:`table_lift`, :func:`reynolds_force`).
 
 Gap profiles under the footprint, with ``u = (x/a)^2 + (y/b)^2 <= 1`` (``h = h_pad`` outside):
 
@@ -554,10 +556,11 @@ def table_lift(table: LiftTable, g, delta: float, g_min: float | None = None) ->
 
 
 def reynolds_force(g: np.ndarray, delta: float, scene: Any, table: LiftTable) -> np.ndarray:
-    """Lift [N] of the bulge's air bearing from the Reynolds equation with first-order slip (the scene's
-    table, ``bulge.nc``: :func:`reynolds_table` solved once per scene) at the TFC gaps ``g`` [m] for the
-    protrusion ``delta`` [m] (:func:`table_lift`; docs/model.md, section "Slip-corrected Reynolds
-    equation"). Zero at zero protrusion."""
+    """Lift [N] of the bulge's air bearing from the Reynolds equation with molecular slip (the scene's
+    table, ``bulge.nc``: :func:`reynolds_table` solved once per scene with the slip model
+    ``air_bearing.bulge_slip``) at the TFC gaps ``g`` [m] for the protrusion ``delta`` [m]
+    (:func:`table_lift`; docs/model.md, section "Slip-corrected Reynolds equation"). Zero at zero
+    protrusion. ``scene`` is not read: the table holds everything (the runner keeps it current)."""
     return table_lift(table, g, delta)[0]
 
 
@@ -568,5 +571,5 @@ BULGE_LAWS: dict[str, TfcLaw | None] = {
     "none": None,
     "ph-limit": TfcLaw(ph_limit_force, doc="p h = const under the bulge: F = p_pad pi a b [h_pad I(g, delta) - 1]"),
     "reynolds": TfcLaw(reynolds_force, table="bulge",
-                       doc="steady compressible Reynolds equation with first-order slip on the footprint, tabulated"),
+                       doc="steady compressible Reynolds equation with molecular slip on the footprint, tabulated"),
 }
