@@ -18,6 +18,7 @@ from benchmarks.common import record, timeit
 from pipeline.config.scene import load_scene
 from pipeline.model import bulge_table as bt
 from pipeline.physics import bulge_bearing as bb
+from pipeline.units import MPA, NM, UM
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -27,9 +28,9 @@ def run(results: list[dict]) -> None:
     scene = load_scene(ROOT / "configs" / "paper-2009-bulge.toml", ['air_bearing.bulge="reynolds"'])
     ph = scene.replace(air_bearing={"bulge": "ph-limit"})
     ds = bt.scene_table(ph)  # the grid of the stage's table
-    gaps, dls = ds["apex_gap"].values * 1e-9, ds["protrusion"].values * 1e-9
+    gaps, dls = ds["apex_gap"].values * NM, ds["protrusion"].values * NM
     a, t, sol = scene["air_bearing"], scene["tfc"], scene["solver"]
-    kw = dict(p_pad=a["pad_pressure_mpa"] * 1e6, a=t["half_length_um"] * 1e-6, b=t["half_width_um"] * 1e-6,
+    kw = dict(p_pad=a["pad_pressure_mpa"] * MPA, a=t["half_length_um"] * UM, b=t["half_width_um"] * UM,
               speed=ds.attrs["disk_speed_m_s"], viscosity=bt.AIR_VISCOSITY, mean_free_path=bt.AIR_MEAN_FREE_PATH,
               ambient_pressure=bt.AMBIENT_PRESSURE,
               grid=bb.ReynoldsGrid(cells_per_a=sol["bulge_cells_per_a"], cells_per_b=sol["bulge_cells_per_b"]))
