@@ -173,3 +173,19 @@ def test_an_edited_bulge_key_recomputes_the_stage_and_the_run(write_scene, repo_
     assert (key3, mtime3) == (key2, mtime2)
     hist = read_dataset(out / "summary.nc")
     assert hist.attrs.get(runner.KEY_ATTR) and "bulge" in hist.attrs["upstream_keys"]
+
+
+def test_the_accuracy_stage_runs_the_reynolds_scene(bulge_scene, tmp_path):
+    """The accuracy stage reads the bulge table too (its runs are the scene's model): one knob, one
+    point, every run integrated and within 1 % of the reference."""
+    from pipeline.stages import accuracy
+    scene = bulge_scene.replace(solver={"duration_ms": 0.4, "transient_ms": 0.1, "bulge_cells_per_a": 8,
+                                        "bulge_cells_per_b": 4})
+    assert "bulge" in runner.Runner(scene, tmp_path).plan(["accuracy"])
+    path = accuracy.run(scene, tmp_path, points={"flying": 9.0}, knobs={"rtol": [1e-8, 1e-6]}, only=["rtol"],
+                        repeat=1)
+    ds = read_dataset(path)
+    assert "bulge" in ds.attrs["upstream_keys"]
+    assert not ds["failed"].values.any()
+    err = ds["max_error"].values
+    assert np.isfinite(err).any() and np.nanmax(err) < 1e-2
