@@ -40,6 +40,7 @@ from .fanout import run_tasks
 from .io import read_dataset
 from .model import dmw_record, scene_inputs
 from .model import slider as sl
+from .model.bulge_table import scene_table
 from .model.interface_tables import build_tables, roughness_statistics
 from .runner import KEY_ATTR, Runner, build, scene_part
 from .units import NM
@@ -61,6 +62,8 @@ class Inputs:
     interface_key: str | None
     dmw_path: str | None
     dmw_key: str | None
+    bulge_path: str | None = None
+    bulge_key: str | None = None
 
 
 def base_key(scene: Any, inputs: Inputs) -> str:
@@ -73,6 +76,8 @@ def base_key(scene: Any, inputs: Inputs) -> str:
     """
     blob = {"scene": scene_part(scene, ("*",), scene_inputs.SIMULATION_EXCLUDES), "interface": inputs.interface_key, "dmw": inputs.dmw_key,
             "code": code_key(__name__)}
+    if inputs.bulge_key is not None:  # (only with the tabulated bulge bearing: other stores keep their keys)
+        blob["bulge"] = inputs.bulge_key
     return hashlib.sha256(json.dumps(blob, sort_keys=True).encode()).hexdigest()
 
 
@@ -127,6 +132,18 @@ def candidate_inputs(scene: Any, inputs: Inputs) -> tuple[Any, tuple[np.ndarray,
     return interface, record
 
 
+def candidate_bulge(scene: Any, inputs: Inputs) -> Any:
+    """The bulge table of a candidate with the tabulated bulge bearing (``None`` without): the base
+    ``bulge.nc`` when its key is unchanged, else solved again (:func:`pipeline.model.bulge_table.scene_table`,
+    ~20 s on one core for the paper scene: a study that varies a bulge key pays it per new value)."""
+    if "bulge" not in scene_inputs.table_stages(scene):
+        return None
+    bkey = Runner(scene, ".").key("bulge")
+    if inputs.bulge_path and bkey == inputs.bulge_key:
+        return _made(_Made("bulge", bkey, lambda: read_dataset(inputs.bulge_path, stage="bulge")))
+    return _made(_Made("bulge", bkey, lambda: scene_table(scene)))
+
+
 def evaluate(base: Any, params: Sequence[Parameter], values: Sequence[float], protrusions: Sequence[float],
              inputs: Inputs) -> dict[str, Any]:
     """Run one candidate at ``protrusions`` [nm]; returns its record (see :class:`EvaluationStore`).
@@ -142,7 +159,8 @@ def evaluate(base: Any, params: Sequence[Parameter], values: Sequence[float], pr
     try:
         scene = with_values(base, params, values)
         interface, record = candidate_inputs(scene, inputs)
-        model = sl.build_model(scene, interface, record, scene_inputs.contact_k(scene)[0])
+        model = sl.build_model(scene, interface, record, scene_inputs.contact_k(scene)[0],
+                               bulge=candidate_bulge(scene, inputs))
     except (SceneError, ValueError, sl.IntegrationError) as exc:
         errors.append(str(exc))
         model = None
@@ -267,8 +285,10 @@ def setup(scene: Any, stage_inputs: Any, section: str, force: bool = False) -> t
     wanted = upstream(scene)
     ipath = str(stage_inputs.path("interface.nc")) if "interface" in wanted else None
     dpath = str(stage_inputs.path(dmw_record.FILENAME)) if "dmw" in wanted else None
+    bpath = str(stage_inputs.path("bulge.nc")) if "bulge" in wanted else None
     inputs = Inputs(ipath, stage_inputs.upstream.get("interface") if ipath else None,
-                    dpath, stage_inputs.upstream.get("dmw") if dpath else None)
+                    dpath, stage_inputs.upstream.get("dmw") if dpath else None,
+                    bpath, stage_inputs.upstream.get("bulge") if bpath else None)
     store_path = Path(stage_inputs.out) / f"{section}.evals.jsonl"
     if force:
         store_path.unlink(missing_ok=True)
@@ -282,6 +302,8 @@ def prepare_inputs(scene: Any, out: Path) -> Inputs:
     paths = build(wanted, scene, out) if wanted else {}
     ipath = str(paths["interface"][0]) if "interface" in paths else None
     dpath = str(paths["dmw"][0]) if "dmw" in paths else None
+    bpath = str(paths["bulge"][0]) if "bulge" in paths else None
     ikey = read_dataset(ipath).attrs.get(KEY_ATTR) if ipath else None
     dkey = read_dataset(dpath).attrs.get(KEY_ATTR) if dpath else None
-    return Inputs(ipath, ikey, dpath, dkey)
+    bkey = read_dataset(bpath).attrs.get(KEY_ATTR) if bpath else None
+    return Inputs(ipath, ikey, dpath, dkey, bpath, bkey)

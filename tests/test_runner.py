@@ -405,8 +405,8 @@ def test_orphaned_temporaries_are_cleaned(tmp_path, paper_config):
 # ------------------------------------------------------------------------------------------ registry
 def test_registry_holds_every_stage_and_the_main_job(paper_scene):
     stages = runner.registry()
-    assert list(stages)[:8] == ["roughness", "dmw", "interface", "calibrate", "simulate", "sweep", "accuracy",
-                                "report"]
+    assert list(stages)[:9] == ["roughness", "dmw", "interface", "bulge", "calibrate", "simulate", "sweep",
+                                "accuracy", "report"]
     assert runner.main_job(paper_scene) == ["roughness", "dmw", "interface", "calibrate", "sweep", "report"]
     flying = paper_scene.replace(scene={"effects": ["air_bearing", "pitch", "dmw"]})
     assert runner.main_job(flying) == ["roughness", "dmw", "interface", "sweep", "report"]

@@ -168,15 +168,17 @@ def k_star(model: sl.Model, delta_nm: float, lo_steady: float, lo_all: float,
 
 
 def threshold_batch(scene: Any, interface_path: str, dmw_path: str | None, protrusions: tuple[float, ...],
-                    k_range: tuple[float, float], tol: float) -> list[tuple[float, float, float, str, int]]:
+                    k_range: tuple[float, float], tol: float,
+                    bulge_path: str | None = None) -> list[tuple[float, float, float, str, int]]:
     """``(protrusion [nm], k* [1], steady minimum of d [nm], note, simulations)`` for each protrusion (a task;
-    its inputs travel by file path)."""
+    its inputs travel by file path; ``bulge_path``: the bulge table, with the tabulated bulge bearing)."""
     interface = read_dataset(interface_path, stage="interface")
     record = None
     if dmw_path:
         _, w_nm, fs = dmw_record.load(dmw_path)
         record = (w_nm, fs)
-    model = sl.build_model(scene, interface, record, k=0.0)
+    bulge = read_dataset(bulge_path, stage="bulge") if bulge_path else None
+    model = sl.build_model(scene, interface, record, k=0.0, bulge=bulge)
     rows = []
     for delta in protrusions:
         lo, lo_all, note = flying_minimum(model, delta)
@@ -187,7 +189,7 @@ def threshold_batch(scene: Any, interface_path: str, dmw_path: str | None, protr
 
 def thresholds(scene: Any, interface_path: str, dmw_path: str | None, protrusions: np.ndarray,
                k_range: tuple[float, float], tol: float, scheduler: str | None = None,
-               workers: int | None = None) -> tuple[dict[float, tuple], float]:
+               workers: int | None = None, bulge_path: str | None = None) -> tuple[dict[float, tuple], float]:
     """``k*`` of every protrusion [nm], fanned out: ``({protrusion: (k*, min d [nm], note, sims)}, seconds)``."""
     todo = [float(p) for p in protrusions]
     n = local_workers(workers, len(todo)) if scheduler in (None, "threads", "processes") else 8
@@ -198,7 +200,8 @@ def thresholds(scene: Any, interface_path: str, dmw_path: str | None, protrusion
         for delta, k, lo, note, sims in rows:
             result[delta] = (k, lo, note, sims)
 
-    seconds = run_tasks(threshold_batch, [(scene, interface_path, dmw_path, c, k_range, tol) for c in chunks if c],
+    seconds = run_tasks(threshold_batch, [(scene, interface_path, dmw_path, c, k_range, tol, bulge_path)
+                                          for c in chunks if c],
                         scheduler=scheduler, workers=workers, on_done=keep)
     return result, seconds
 
@@ -213,18 +216,20 @@ def _status(k: float, k_range: tuple[float, float]) -> tuple[float, str]:
 
 
 def calibrate(scene: Any, interface: xr.Dataset, record: tuple[np.ndarray, float] | None, interface_path: str,
-              dmw_path: str | None, scheduler: str | None = None, workers: int | None = None) -> xr.Dataset:
+              dmw_path: str | None, scheduler: str | None = None, workers: int | None = None,
+              bulge: xr.Dataset | None = None, bulge_path: str | None = None) -> xr.Dataset:
     """Run the calibration of a scene; returns ``calibration.nc``'s dataset.
 
-    ``interface``, ``record``: its interface tables and DMW record in memory; ``interface_path``,
-    ``dmw_path``: the same as files, for the fanned-out flying runs of the exact method (tasks take file
-    paths); ``scheduler``, ``workers``: where those runs go (:func:`pipeline.fanout.run_tasks`).
+    ``interface``, ``record`` (and ``bulge``, the bulge table with the tabulated bulge bearing): its
+    interface tables and DMW record in memory; ``interface_path``, ``dmw_path`` (``bulge_path``): the
+    same as files, for the fanned-out flying runs of the exact method (tasks take file paths);
+    ``scheduler``, ``workers``: where those runs go (:func:`pipeline.fanout.run_tasks`).
     """
     if not scene.has("contact"):
         raise ValueError("calibration needs the contact effect in scene.effects")
     td = scene["touchdown"]
     method = td["method"]
-    model = sl.build_model(scene, interface, record, k=0.0)
+    model = sl.build_model(scene, interface, record, k=0.0, bulge=bulge)
     k_range = tuple(td["k_range"])
     tol = td["k_tolerance"]
     grid = protrusion_grid(scene)
@@ -234,7 +239,8 @@ def calibrate(scene: Any, interface: xr.Dataset, record: tuple[np.ndarray, float
     collapsed: list[float] = []
     if method == "exact":
         todo = np.union1d(grid, label([td["onset_nm"], td["previous_nm"]]))
-        found, seconds = thresholds(scene, interface_path, dmw_path, todo, k_range, tol, scheduler, workers)
+        found, seconds = thresholds(scene, interface_path, dmw_path, todo, k_range, tol, scheduler, workers,
+                                    bulge_path)
         k_on, st_on = _status(found[float(label(td["onset_nm"]))][0], k_range)
         k_prev, st_prev = _status(found[float(label(td["previous_nm"]))][0], k_range)
         n_on = n_prev = 0

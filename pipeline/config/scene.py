@@ -23,7 +23,7 @@ from typing import Any, Callable, Iterable
 
 from ..physics import paper
 from ..physics.air_bearing import REAR_LAWS, STIFFNESS_ROOTS, TFC_STIFFENING
-from ..physics.bulge_bearing import BULGE_LAWS
+from ..physics.bulge_bearing import BULGE_LAWS, SLIP_MODELS
 from ..physics.equilibrium import STARTS
 from ..physics.fhm import FHM_MEASURES
 from ..physics.friction import FRICTION_LAWS
@@ -135,13 +135,18 @@ SCHEMA: dict[str, dict[str, Key]] = {
                               doc="air-bearing stiffening under the TFC bulge (docs/model.md, section 'Gap-power stiffening'): 'none' or "
                                   "'gap-power', added stiffness k_t[(FH0/g)^p - 1] at the TFC gap g"),
         "bulge": Key("str", "none", choices=BULGE_LAWS.keys(),
-                     doc="the air bearing of the TFC bulge itself: 'none' or 'ph-limit' (p h = const under the bulge, "
-                         "docs/model.md, section 'Bulge air bearing')"),
+                     doc="the air bearing of the TFC bulge itself: 'none', 'ph-limit' (p h = const under the bulge) or "
+                         "'reynolds' (slip-corrected Reynolds equation, tabulated by the bulge stage); docs/model.md, "
+                         "section 'Bulge air bearing'"),
         "pad_pressure_mpa": Key("float", 1.0, (lambda v: 0.1 <= v <= 10.0, "a pressure in [0.1, 10] MPa"),
                                 doc="air pressure p_pad under the trailing pad around the bulge [MPa] (recon; "
                                     "about 0.3-3 MPa for a femto trailing pad)"),
         "bulge_profile": Key("str", "ellipsoid", choices=("ellipsoid", "paraboloid"),
                              doc="profile of the bulge under the bearing: 'ellipsoid' (the TFC geometry) or 'paraboloid'"),
+        "bulge_slip": Key("str", "first-order", choices=tuple(SLIP_MODELS),
+                          doc="rarefaction of the 'reynolds' bulge bearing: 'first-order' slip (Burgdorfer 1959), "
+                              "'second-order' (Hsia & Domoto 1983) or 'none'; docs/model.md, section "
+                              "'Slip-corrected Reynolds equation'"),
         "tfc_stiffness_n_m": Key("float", 1.0e5, _nonneg,
                                  doc="stiffness scale k_t of the TFC stiffening spring [N/m] (recon, to be identified)"),
         "tfc_stiffening_exponent": Key("float", 1.5, (lambda v: 0 <= v <= 4, "a number in [0, 4]"),
@@ -253,6 +258,11 @@ SCHEMA: dict[str, dict[str, Key]] = {
                                 doc="Gauss-Legendre nodes per panel of the ISBL integrals"),
         "quadrature_panels": Key("int", 4, (lambda v: 1 <= v <= 64, "an integer in [1, 64]"),
                                  doc="panels per population range of the ISBL integrals"),
+        "bulge_cells_per_a": Key("int", 32, (lambda v: 4 <= v <= 512, "an integer in [4, 512]"),
+                                 doc="Reynolds grid of the 'reynolds' bulge table: cells per footprint semi-axis along "
+                                     "sliding [1] (docs/model.md, section 'Slip-corrected Reynolds equation')"),
+        "bulge_cells_per_b": Key("int", 12, (lambda v: 2 <= v <= 512, "an integer in [2, 512]"),
+                                 doc="Reynolds grid of the 'reynolds' bulge table: cells per semi-axis across sliding [1]"),
         "start": Key("str", "nominal", choices=STARTS,
                      doc="start state of each run: 'static' (the model's static equilibrium; past the adhesion fold "
                          "the contact branch; needed with air_bearing.bulge) or 'nominal' (the nominal attitude, "

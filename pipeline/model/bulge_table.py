@@ -1,20 +1,25 @@
 """The bulge's air-bearing table: lift and stiffness versus protrusion and apex gap (``bulge.nc``).
 
-Stage-ready (not yet registered with the runner): :func:`bulge_table` builds the dataset of one scene
-once, from the model ``air_bearing.bulge`` (``"ph-limit"`` or ``"reynolds"``, docs/model.md, section
-"Bulge air bearing"; physics in :mod:`pipeline.physics.bulge_bearing`); :func:`ratio_slice` and
-:func:`lift_at` are how the dynamics reads it back: the table's lift divided by the closed form is
-smooth in ``ln g`` (the closed form carries the logarithm of the gap), so a run at one protrusion takes
-that ratio at its protrusion and multiplies the exact closed form by it.
+:func:`bulge_table` builds the dataset of one scene once, from the model ``air_bearing.bulge``
+(``"ph-limit"`` or ``"reynolds"``, docs/model.md, section "Bulge air bearing"; physics in
+:mod:`pipeline.physics.bulge_bearing`); :func:`scene_table` is that of a scene's keys (the ``bulge``
+stage, ``bulge.nc``, :mod:`pipeline.stages.bulge`). :func:`from_dataset` is how the dynamics reads it
+back (in SI): the table's lift divided by the closed form is smooth in ``ln g`` (the closed form carries
+the logarithm of the gap), so a run at one protrusion takes that ratio at its protrusion and multiplies
+the exact closed form by it (:func:`pipeline.physics.bulge_bearing.table_lift`).
 """
 
 from __future__ import annotations
+
+from typing import Any
 
 import numpy as np
 import xarray as xr
 
 from ..physics import bulge_bearing as bb
 from ..config.grid import TOL_NM
+from .dmw_record import disk_speed_m_s
+from .interface_tables import deepest_protrusion_nm
 from ..units import MPA, NM, UM
 from ..variables import BULGE
 
@@ -104,48 +109,49 @@ def bulge_table(*, model: str, p_pad: float, a: float, b: float, speed: float, g
     return ds
 
 
-def ratio_slice(ds: xr.Dataset, protrusion: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """What a run at one protrusion needs from the table: the lift's ratio to the closed form on the gaps.
-
-    The ratio ``r = bulge_lift / bulge_lift_ph_limit`` is interpolated linearly in the protrusion between
-    table rows (rows at zero protrusion have no ratio: below the first positive row its ratio is used).
-
-    Returns
-    -------
-    ln_gaps : ``ln(g / 1 m)`` of the table's gaps [1]; ratio [1]; dratio : ``dr/d ln g`` [1] (cubic spline)
-    """
-    from scipy.interpolate import CubicSpline
-
-    d = ds["protrusion"].values * NM
-    keep = d > 0
-    r = ds["bulge_lift"].values[keep] / ds["bulge_lift_ph_limit"].values[keep]
-    d = d[keep]
-    j = int(np.clip(np.searchsorted(d, protrusion) - 1, 0, d.size - 2))
-    w = float(np.clip((protrusion - d[j]) / (d[j + 1] - d[j]), 0.0, 1.0))
-    row = (1 - w) * r[j] + w * r[j + 1]
-    ln_g = np.log(ds["apex_gap"].values * NM)
-    return ln_g, row, CubicSpline(ln_g, row)(ln_g, 1)
+def from_dataset(ds: xr.Dataset) -> bb.LiftTable:
+    """The table of a ``bulge.nc`` dataset in SI, as the dynamics reads it (:class:`pipeline.physics.bulge_bearing.LiftTable`:
+    the lift's ratio to the closed form and its slope in ``ln g``)."""
+    a, b = (float(v) * UM for v in ds.attrs["footprint_semi_axes_um"])
+    return bb.lift_table(ds["apex_gap"].values * BULGE["apex_gap"].si_unit,
+                         ds["protrusion"].values * BULGE["protrusion"].si_unit,
+                         ds["bulge_lift"].values * BULGE["bulge_lift"].si_unit,
+                         p_pad=float(ds["pad_pressure"].values) * BULGE["pad_pressure"].si_unit, a=a, b=b,
+                         profile=ds.attrs["bulge_profile"])
 
 
 def lift_at(ds: xr.Dataset, g, protrusion: float, g_min: float | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Lift [N] and stiffness ``-dF/dg`` [N/m] at apex gaps ``g`` [m] and one protrusion [m] from the table.
+    """Lift [N] and stiffness ``-dF/dg`` [N/m] at apex gaps ``g`` [m] and one protrusion [m] from a ``bulge.nc``
+    dataset (:func:`pipeline.physics.bulge_bearing.table_lift` of :func:`from_dataset`); ``g_min`` [m]
+    (default: the table's smallest gap) is the floor below which the force is held."""
+    return bb.table_lift(from_dataset(ds), g, protrusion, g_min)
 
-    ``F = r(ln g) F_ph(g)``, ``k = r k_ph - F_ph (dr/d ln g) / g`` with ``r`` a cubic Hermite interpolant of
-    :func:`ratio_slice` (held constant outside the table's gaps) and ``F_ph``, ``k_ph`` the closed form
-    (:func:`pipeline.physics.bulge_bearing.ph_lift`) at the table's pad pressure, footprint and profile;
-    ``g_min`` [m] (default: the table's smallest gap) is the floor below which the force is held.
-    """
-    from scipy.interpolate import CubicHermiteSpline
 
-    ln_g, r, dr = ratio_slice(ds, protrusion)
-    g = np.asarray(g, dtype=float)
-    g_min = float(ds["apex_gap"].values[0] * NM) if g_min is None else g_min
-    a, b = (float(v) * 1e-6 for v in ds.attrs["footprint_semi_axes_um"])
-    p_pad = float(ds["pad_pressure"].values) * MPA
-    F_ph, k_ph = bb.ph_lift(g, protrusion, p_pad, a, b, ds.attrs["bulge_profile"], g_min)
-    x = np.clip(np.log(np.maximum(g, g_min)), ln_g[0], ln_g[-1])
-    spline = CubicHermiteSpline(ln_g, r, dr)
-    rr = spline(x)
-    inside = (np.log(np.maximum(g, g_min)) > ln_g[0]) & (np.log(np.maximum(g, g_min)) < ln_g[-1])
-    drr = np.where(inside, spline(x, 1), 0.0)
-    return rr * F_ph, rr * k_ph - F_ph * drr / np.maximum(g, g_min) * (g >= g_min)
+#: The table's protrusion step [nm] and the protrusion it reaches at least [nm] (the ratio to the closed
+#: form is smooth in the protrusion: linear interpolation between rows 0.5 nm apart errs by < 1e-3,
+#: tests/test_bulge_stage.py).
+PROTRUSION_STEP_NM = 0.5
+PROTRUSION_STOP_NM = 15.0
+
+
+def table_stop_nm(scene: Any) -> float:
+    """The deepest protrusion [nm] of a scene's table: :data:`PROTRUSION_STOP_NM`, or the scene's deepest
+    protrusion (:func:`pipeline.model.interface_tables.deepest_protrusion_nm`) rounded up to the step when
+    deeper. The ``bulge`` stage depends on this value, not on the protrusion keys themselves."""
+    deepest = deepest_protrusion_nm(scene)
+    return max(PROTRUSION_STOP_NM, float(np.ceil(deepest / PROTRUSION_STEP_NM - TOL_NM)) * PROTRUSION_STEP_NM)
+
+
+def scene_table(scene: Any) -> xr.Dataset:
+    """The ``bulge.nc`` dataset of a scene (:func:`bulge_table` of its keys): model ``air_bearing.bulge``,
+    pad pressure ``air_bearing.pad_pressure_mpa``, profile ``air_bearing.bulge_profile``, slip model
+    ``air_bearing.bulge_slip``, footprint semi-axes ``tfc.half_length_um``, ``tfc.half_width_um``, the disk
+    speed of ``[dmw] radius_mm, rpm`` (:func:`pipeline.model.dmw_record.disk_speed_m_s`), the Reynolds grid
+    ``solver.bulge_cells_per_a``, ``solver.bulge_cells_per_b``; gaps :func:`table_gaps`, protrusions
+    :func:`table_protrusions` up to :func:`table_stop_nm`."""
+    a, t, sol = scene["air_bearing"], scene["tfc"], scene["solver"]
+    grid = bb.ReynoldsGrid(cells_per_a=sol["bulge_cells_per_a"], cells_per_b=sol["bulge_cells_per_b"])
+    return bulge_table(model=a["bulge"], p_pad=a["pad_pressure_mpa"] * MPA, a=t["half_length_um"] * UM,
+                       b=t["half_width_um"] * UM, speed=disk_speed_m_s(scene["dmw"]), gaps=table_gaps(),
+                       protrusions=table_protrusions(table_stop_nm(scene), PROTRUSION_STEP_NM),
+                       profile=a["bulge_profile"], slip=a["bulge_slip"], grid=grid)

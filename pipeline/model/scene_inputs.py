@@ -19,6 +19,7 @@ import numpy as np
 import xarray as xr
 
 from ..physics.statistics import contact_probabilities, k_from_probability
+from .slider import TFC_POINT_LAWS
 
 #: Scene keys no simulation reads (other stages' settings, names): left out of the inputs keys of the
 #: stages that simulate and of the parameter studies' evaluation store.
@@ -31,16 +32,27 @@ def needs_interface(scene: Any) -> bool:
     return bool(scene.effects & {"contact", "adhesion"} or scene["roughness"]["afm"])
 
 
+def table_stages(scene: Any) -> tuple[str, ...]:
+    """The stages whose datasets the scene's air-bearing laws at the TFC point read
+    (:data:`pipeline.model.slider.TFC_POINT_LAWS`, :attr:`pipeline.physics.air_bearing.TfcLaw.table`:
+    ``bulge`` for ``air_bearing.bulge = "reynolds"``)."""
+    a = scene["air_bearing"]
+    laws = (registry[a[key]] for key, registry in TFC_POINT_LAWS.items())
+    return tuple(dict.fromkeys(law.table for law in laws if law is not None and law.table))
+
+
 def simulation_inputs(scene: Any, calibration: bool = True) -> tuple[str, ...]:
     """The inputs (named as the stages that make them) one simulation of the scene reads.
 
-    ``interface`` (:func:`needs_interface`), ``dmw`` with the dmw effect, and ``calibrate`` when the
-    contact effect is on and the scene fixes no ``contact.k`` (``calibration=False``: a parameter
-    study, which takes k by :func:`contact_k` without a calibration).
+    ``interface`` (:func:`needs_interface`), ``dmw`` with the dmw effect, ``bulge`` with the tabulated
+    bulge bearing (:func:`table_stages`), and ``calibrate`` when the contact effect is on and the scene
+    fixes no ``contact.k`` (``calibration=False``: a parameter study, which takes k by :func:`contact_k`
+    without a calibration).
     """
     up = []
     if needs_interface(scene):
         up.append("interface")
+    up.extend(table_stages(scene))
     if scene.has("dmw"):
         up.append("dmw")
     if calibration and scene.has("contact") and scene["contact"]["k"] is None:

@@ -41,7 +41,8 @@ Steady-window definitions (over ``transient_ms <= t <= duration_ms``, sampled ev
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
-from typing import Any, Mapping
+from functools import partial
+from typing import Any, Callable, Mapping
 
 import numpy as np
 
@@ -54,6 +55,7 @@ from ..physics.friction import friction_stress_table
 from ..physics.geometry import effective_radius, nominal_area
 from ..physics.statistics import explicit_statistics
 from ..variables import INTERFACE, Regime
+from .bulge_table import from_dataset
 from .dmw_record import disk_speed_m_s
 from ..validity import check_run
 from .start import start_state
@@ -66,6 +68,11 @@ SURFING_FRACTION = 0.99
 #: the TFC point, each with its registry: the selected laws are summed in the kernel's TFC-point force.
 TFC_POINT_LAWS: Mapping[str, Mapping[str, ab.TfcLaw | None]] = {"tfc_stiffening": ab.TFC_STIFFENING,
                                                                "bulge": bb.BULGE_LAWS}
+
+
+#: How a TFC-point law's table (:attr:`pipeline.physics.air_bearing.TfcLaw.table`) is read from its stage's
+#: dataset into the SI object its ``force`` takes.
+TABLE_READERS: Mapping[str, Callable[[Any], Any]] = {"bulge": from_dataset}
 
 
 @dataclass
@@ -145,7 +152,7 @@ def slider_from_scene(scene: Any, damping_ratio: float | None = None) -> tuple[a
 
 
 def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float] | None, k: float | None,
-                damping_ratio: float | None = None) -> Model:
+                damping_ratio: float | None = None, bulge: Any | None = None) -> Model:
     """Assemble the model of a scene.
 
     Parameters
@@ -156,6 +163,8 @@ def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float]
     dmw : ``(displacement [nm] sampled uniformly from t = 0, sample rate [Hz])`` or ``None``
     k : contact criterion constant [1] (required with the contact effect)
     damping_ratio : overrides ``air_bearing.damping_ratio`` (sweeps)
+    bulge : the bulge table (``xarray.Dataset`` as written by the bulge stage, ``bulge.nc``), needed by
+        ``air_bearing.bulge = "reynolds"`` (:func:`tfc_point_laws`), else ignored
     """
     eff = scene.effects
     if "air_bearing" not in eff:
@@ -165,7 +174,7 @@ def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float]
     p = dyn.params(m=slider.m, I=slider.I, l_f=slider.l_f, l_r=slider.l_r, l_c=slider.l_c, h_cg=slider.h_cg,
                    k_f=slider.k_f, k_r=slider.k_r, c_f=slider.c_f, c_r=slider.c_r,
                    g0=slider.g0, n=slider.n, F_r0=slider.rear_preload, FH0=a["flying_height_nm"] * NM)
-    gap_power, tabulated = tfc_point_laws(scene, p.FH0)
+    gap_power, tabulated = tfc_point_laws(scene, p.FH0, {"bulge": bulge})
     rear_linear = True if ab.REAR_LAWS[a["rear_law"]].linear else None
     info.update({"rear_law": a["rear_law"], "tfc_stiffening": a["tfc_stiffening"],
                  "friction_law": scene["contact"]["friction_law"],
@@ -254,11 +263,15 @@ def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float]
                  start=sol["start"])
 
 
-def tfc_point_laws(scene: Any, fh0: float) -> tuple[np.record | None, tuple[ab.TfcLaw, ...]]:
+def tfc_point_laws(scene: Any, fh0: float, tables: Mapping[str, Any] | None = None
+                   ) -> tuple[np.record | None, tuple[ab.TfcLaw, ...]]:
     """The scene's air-bearing laws at the TFC point (:data:`TFC_POINT_LAWS`): the parameters of the
     compiled gap-power law (a :data:`pipeline.model.dynamics.GAP_POWER` record, or ``None``) and the laws
-    to tabulate (:func:`tfc_table`). ``fh0``: the flying height [m]."""
+    to tabulate (:func:`tfc_table`). ``fh0``: the flying height [m]; ``tables``: the datasets of the stages
+    the laws read, by stage name (:attr:`pipeline.physics.air_bearing.TfcLaw.table`); a law that reads one
+    gets it bound, in SI (:func:`pipeline.model.bulge_table.from_dataset`)."""
     a = scene["air_bearing"]
+    tables = tables or {}
     gap_power, tabulated = None, []
     for key, registry in TFC_POINT_LAWS.items():
         law = registry[a[key]]
@@ -269,6 +282,12 @@ def tfc_point_laws(scene: Any, fh0: float) -> tuple[np.record | None, tuple[ab.T
             gap_power = dyn.params(dyn.GAP_POWER, k_t=k_t, q=q, g0=fh0, g_min=ab.TFC_MIN_GAP * fh0,
                                    k_min=ab.stiffening_stiffness(ab.TFC_MIN_GAP, 1.0, k_t, q))  # at g = g_min
         elif law.closed_form is None:
+            if law.table is not None:
+                ds = tables.get(law.table)
+                if ds is None:
+                    raise ValueError(f"air_bearing.{key} = {a[key]!r} needs the {law.table} table "
+                                     f"({law.table}.nc: run `hdi {law.table}`)")
+                law = replace(law, force=partial(law.force, table=TABLE_READERS[law.table](ds)))
             tabulated.append(law)
         else:
             raise ValueError(f"air_bearing.{key} = {a[key]!r}: no compiled form {law.closed_form!r} in the kernel")

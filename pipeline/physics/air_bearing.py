@@ -333,13 +333,17 @@ class TfcLaw:
         below (the law's slope at the lowest gap), constant above
     points : knots of the table (uniform in the gap)
     doc : one line for the documentation
+    table : name of the stage whose dataset the law reads (e.g. ``"bulge"``: a force solved once per
+        scene and tabulated), or ``None``; such a law's ``force`` takes the table as the keyword
+        ``table`` (the model assembly binds it, :func:`pipeline.model.slider.build_model`)
     """
 
-    force: Callable[[np.ndarray, float, Any], np.ndarray]
+    force: Callable[..., np.ndarray]
     closed_form: str | None = None
     gap_range: tuple[float, float] = (TFC_MIN_GAP, 3.0)
     points: int = 4001
     doc: str = ""
+    table: str | None = None
 
 
 #: Air-bearing force laws at the TFC point (``air_bearing.tfc_stiffening``): ``"none"`` = the model

@@ -8,8 +8,10 @@ pushes the slider up at the TFC point with the extra lift ``F_b = int (p - p_pad
 models (docs/model.md, section "Bulge air bearing"):
 
 * ``"ph-limit"``: the closed form of the high-bearing-number limit (:func:`ph_force_stiffness`);
-* ``"reynolds"``: the steady compressible Reynolds equation with first-order molecular slip on the
-  footprint, solved by finite volumes and Newton's method (:func:`reynolds_lift`, :func:`reynolds_table`).
+* ``"reynolds"``: the steady compressible Reynolds equation with molecular slip (first-order by default,
+  :data:`SLIP_MODELS`) on the footprint, solved by finite volumes and Newton's method
+  (:func:`reynolds_solve`, :func:`reynolds_table`) once per scene by the ``bulge`` stage, and read back by
+  the dynamics from that table (:class:`LiftTable`, :func:`table_lift`, :func:`reynolds_force`).
 
 Gap profiles under the footprint, with ``u = (x/a)^2 + (y/b)^2 <= 1`` (``h = h_pad`` outside):
 
@@ -59,7 +61,7 @@ an upper bound here; the Reynolds lift falls below it only at bearing numbers a 
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -159,15 +161,6 @@ def ph_limit_force(g: np.ndarray, delta: float, scene: Any) -> np.ndarray:
     a, t = scene["air_bearing"], scene["tfc"]
     return ph_lift(g, delta, a["pad_pressure_mpa"] * MPA, t["half_length_um"] * UM, t["half_width_um"] * UM,
                    a["bulge_profile"])[0]
-
-
-#: The bulge's air bearing at the TFC point (``air_bearing.bulge``), laws summed with the other TFC-point
-#: laws by the model (:data:`pipeline.model.slider.TFC_POINT_LAWS`); ``"none"``: the model without it.
-#: The ``"reynolds"`` table (:func:`reynolds_table`) is not wired into the dynamics yet.
-BULGE_LAWS: dict[str, TfcLaw | None] = {
-    "none": None,
-    "ph-limit": TfcLaw(ph_limit_force, doc="p h = const under the bulge: F = p_pad pi a b [h_pad I(g, delta) - 1]"),
-}
 
 
 # --------------------------------------------------------------------------------------------------
@@ -481,3 +474,102 @@ def reynolds_table(gaps, protrusions, *, p_pad: float, a: float, b: float, speed
         stiffness[pos] = ratio[pos] * k_ph[pos] - F_ph[pos] * dr / gaps
     return {"lift": lift, "stiffness": stiffness, "lift_ph": F_ph, "stiffness_ph": k_ph, "ratio": ratio,
             "bearing_number": lam, "iterations": its}
+
+
+# --------------------------------------------------------------------------------------------------
+# The tabulated Reynolds lift, read back at any gap and protrusion
+# --------------------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class LiftTable:
+    """The bulge lift of one scene tabulated on protrusion x apex gap, in SI, as the dynamics reads it.
+
+    The lift is stored as its ratio ``r = F / F_ph`` to the closed form (:func:`ph_lift`): ``F`` carries
+    the logarithm of the gap (``F_ph ~ ln(1/g)``) and vanishes at zero protrusion, ``r`` is smooth and
+    near 1 in both (:func:`table_lift`).
+
+    Attributes
+    ----------
+    ln_gaps : ``ln(g / 1 m)`` of the tabulated apex gaps (``n_g``, increasing) [1]
+    protrusions : the positive tabulated protrusions [m] (``n_d``, increasing, at least 2)
+    ratio : ``r = F / F_ph`` (``n_d x n_g``) [1]; dratio : ``dr/d ln g`` (cubic spline in ``ln g``) [1]
+    p_pad : pad pressure [Pa]; a, b : footprint semi-axes [m]; profile : ``"ellipsoid"`` or ``"paraboloid"``
+    """
+
+    ln_gaps: np.ndarray = field(repr=False)
+    protrusions: np.ndarray = field(repr=False)
+    ratio: np.ndarray = field(repr=False)
+    dratio: np.ndarray = field(repr=False)
+    p_pad: float
+    a: float
+    b: float
+    profile: str
+
+
+def lift_table(gaps, protrusions, lift, *, p_pad: float, a: float, b: float, profile: str = "ellipsoid") -> LiftTable:
+    """A :class:`LiftTable` from a tabulated lift [N] (``n_protrusion x n_gap``) on ``gaps`` [m] (increasing,
+    > 0) and ``protrusions`` [m] (>= 0; rows at zero protrusion, where the lift is zero, are dropped)."""
+    from scipy.interpolate import CubicSpline
+
+    gaps, protrusions = np.asarray(gaps, dtype=float), np.asarray(protrusions, dtype=float)
+    lift = np.asarray(lift, dtype=float)
+    keep = protrusions > 0
+    if keep.sum() < 2 or gaps.size < 4 or lift.shape != (protrusions.size, gaps.size):
+        raise ValueError(f"bulge lift table: expected >= 2 positive protrusions, >= 4 gaps and a lift of shape "
+                         f"(protrusions, gaps); got {int(keep.sum())}, {gaps.size}, {lift.shape}")
+    F_ph = ph_lift(gaps[None, :], protrusions[keep, None], p_pad, a, b, profile)[0]
+    ratio = lift[keep] / F_ph
+    ln_g = np.log(gaps)
+    return LiftTable(ln_g, protrusions[keep], ratio, CubicSpline(ln_g, ratio, axis=1)(ln_g, 1), float(p_pad),
+                     float(a), float(b), profile)
+
+
+def table_lift(table: LiftTable, g, delta: float, g_min: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Lift [N] and stiffness ``-dF/dg`` [N/m] at apex gaps ``g`` [m] and one protrusion ``delta`` [m] from a table.
+
+    ``F = r F_ph``, ``k = r k_ph - F_ph (dr/d ln g) / g`` (``F_ph``, ``k_ph``: :func:`ph_lift`, exact). In the
+    protrusion ``r`` and ``dr/d ln g`` are interpolated linearly between the two neighbouring rows (held at
+    the first and last rows outside them: below the first row ``F_ph -> 0`` carries the lift to zero at zero
+    protrusion); in the gap, a cubic Hermite interpolant of the row in ``ln g`` (held constant outside
+    the table's gaps). Below ``g_min`` [m] (default: the table's smallest gap) the force is held and the
+    stiffness is zero. The error of the protrusion interpolation is measured in
+    tests/test_bulge_stage.py (docs/model.md, section "Slip-corrected Reynolds equation").
+    """
+    from scipy.interpolate import CubicHermiteSpline
+
+    g = np.asarray(g, dtype=float)
+    d = table.protrusions
+    j = int(np.clip(np.searchsorted(d, delta) - 1, 0, d.size - 2))
+    w = float(np.clip((delta - d[j]) / (d[j + 1] - d[j]), 0.0, 1.0))
+    r = (1 - w) * table.ratio[j] + w * table.ratio[j + 1]
+    dr = (1 - w) * table.dratio[j] + w * table.dratio[j + 1]
+    ln_g = table.ln_gaps
+    g_min = float(np.exp(ln_g[0])) if g_min is None else g_min
+    gg = np.maximum(g, g_min)
+    F_ph, k_ph = ph_lift(g, delta, table.p_pad, table.a, table.b, table.profile, g_min)
+    x = np.clip(np.log(gg), ln_g[0], ln_g[-1])
+    spline = CubicHermiteSpline(ln_g, r, dr)
+    inside = (np.log(gg) > ln_g[0]) & (np.log(gg) < ln_g[-1])
+    drr = np.where(inside, spline(x, 1), 0.0)
+    rr = spline(x)
+    return rr * F_ph, rr * k_ph - F_ph * drr / gg * (g >= g_min)
+
+
+def reynolds_force(g: np.ndarray, delta: float, scene: Any, table: LiftTable) -> np.ndarray:
+    """Lift [N] of the bulge's air bearing from the Reynolds equation with molecular slip (the scene's
+    table, ``bulge.nc``: :func:`reynolds_table` solved once per scene with the slip model
+    ``air_bearing.bulge_slip``) at the TFC gaps ``g`` [m] for the protrusion ``delta`` [m]
+    (:func:`table_lift`; docs/model.md, section "Slip-corrected Reynolds equation"). Zero at zero
+    protrusion. ``scene`` is not read: the table holds everything (the runner keeps it current)."""
+    return table_lift(table, g, delta)[0]
+
+
+#: The bulge's air bearing at the TFC point (``air_bearing.bulge``), laws summed with the other TFC-point
+#: laws by the model (:data:`pipeline.model.slider.TFC_POINT_LAWS`); ``"none"``: the model without it.
+#: ``"reynolds"`` reads its table from the ``bulge`` stage's dataset (``table="bulge"``).
+BULGE_LAWS: dict[str, TfcLaw | None] = {
+    "none": None,
+    "ph-limit": TfcLaw(ph_limit_force, doc="p h = const under the bulge: F = p_pad pi a b [h_pad I(g, delta) - 1]"),
+    "reynolds": TfcLaw(reynolds_force, table="bulge",
+                       doc="steady compressible Reynolds equation with molecular slip on the footprint, tabulated"),
+}

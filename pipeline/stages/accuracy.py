@@ -153,6 +153,7 @@ class _RunCache:
         self.records: dict[float, tuple[tuple[np.ndarray, float] | None, float]] = {}
         self.record_notes: dict[float, str] = {}
         self.reference_rate: float | None = None
+        self.bulge: xr.Dataset | None = None  # the bulge table (bulge.nc) with the tabulated bulge bearing
 
     def table(self, sc: Any) -> tuple[xr.Dataset | None, float]:
         if self.stats is None:
@@ -229,7 +230,7 @@ def _evaluate(scene: Any, values: dict[str, float], cache: _RunCache, k: float |
     sc = _solver_config(scene, values)
     tables, t_tab = cache.table(sc)
     record, t_rec = cache.record(sc)
-    model, t_model = _timed(lambda: sl.build_model(sc, tables, record, k), 1)
+    model, t_model = _timed(lambda: sl.build_model(sc, tables, record, k, bulge=cache.bulge), 1)
     build = {"table": t_tab, "record": t_rec, "model": t_model}
     n_p = len(points)
     vals = np.full((n_p, len(HEADLINE)), np.nan)
@@ -284,6 +285,8 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
                                     scene["interface"]["model"])
     t_start = time.perf_counter()
     cache = _RunCache(scene, out, repeat)  # tables and records of the runs, built once per setting
+    if "bulge" in scene_inputs.table_stages(scene):  # (the bulge table is no accuracy knob: the scene's, as is)
+        cache.bulge = inputs.dataset("bulge.nc", stage="bulge")
 
     def evaluate(values: dict[str, float], n: int) -> Result:
         return _evaluate(scene, values, cache, k, points, n)
@@ -298,8 +301,10 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
 
 
 def _upstream(scene: Any) -> tuple[str, ...]:
-    """Roughness scans (statistics) and, when the scene fixes no k, the calibration (:func:`_contact_k`)."""
+    """Roughness scans (statistics), the bulge table with the tabulated bulge bearing, and, when the scene
+    fixes no k, the calibration (:func:`_contact_k`)."""
     up = ["roughness"] if scene["roughness"]["afm"] else []
+    up.extend(scene_inputs.table_stages(scene))
     if scene.has("contact") and scene["contact"]["k"] is None:
         up.append("calibrate")
     return tuple(up)

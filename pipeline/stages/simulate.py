@@ -6,8 +6,9 @@ clearance, forces, friction coefficient, mean pressure and shear stress; and ``s
 steady-window scalars (dim ``protrusion``, the variables of ``sweep.nc``) defined in
 :mod:`pipeline.model.slider`. Only the scene's effects are simulated and written.
 
-Inputs come from earlier stages' datasets in the same folder (``interface.nc``, ``dmw.nc``, and
-``calibration.nc`` when the scene sets no ``contact.k``), made current first by :mod:`pipeline.runner`.
+Inputs come from earlier stages' datasets in the same folder (``interface.nc``, ``dmw.nc``, ``bulge.nc``
+with the tabulated bulge bearing, and ``calibration.nc`` when the scene sets no ``contact.k``), made
+current first by :mod:`pipeline.runner`.
 """
 
 from __future__ import annotations
@@ -43,6 +44,14 @@ def read_inputs(scene: Any, inputs: Inputs) -> tuple[xr.Dataset | None, tuple | 
                                                              variables=dmw_record.VARIABLES))
         record = (w_nm, fs)
     return interface, record
+
+
+def read_bulge(scene: Any, inputs: Inputs) -> xr.Dataset | None:
+    """The bulge table (``bulge.nc``) of one simulation of the scene, when its bulge law reads one
+    (:func:`pipeline.model.scene_inputs.simulation_inputs`), else ``None``."""
+    if "bulge" not in scene_inputs.simulation_inputs(scene, calibration=False):
+        return None
+    return inputs.dataset("bulge.nc", stage="bulge")
 
 
 def read_k(scene: Any, inputs: Inputs) -> tuple[float | None, str]:
@@ -116,7 +125,7 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset]:
     """``histories.nc`` and ``summary.nc`` for the scene's protrusion (module docstring)."""
     interface, record = read_inputs(scene, inputs)
     k, k_source = read_k(scene, inputs)
-    model = sl.build_model(scene, interface, record, k)
+    model = sl.build_model(scene, interface, record, k, bulge=read_bulge(scene, inputs))
     run_ = sl.run_model(model, scene["tfc"]["protrusion_nm"] * NM)
     hist = sl.histories(run_)
     scalars = sl.summarize(run_, hist)

@@ -3,7 +3,8 @@
 Each task runs a *batch* of scenes (``[sweep] batch_size`` protrusions of one roughness set
 and one damping ratio) and writes its own part file, atomically, into ``sweep.parts/``. The DMW
 record and the interface tables reach the workers by file path (``dmw.nc``, ``interface.nc`` or
-``sweep.parts/interface-<label>/interface.nc``), not inside the task graph. When every batch is done
+``sweep.parts/interface-<label>/interface.nc``, and ``bulge.nc`` with the tabulated bulge bearing), not
+inside the task graph. When every batch is done
 the parts are assembled into ``sweep.nc`` (dims ``protrusion``, ``roughness``, ``damping``) and
 ``sweep_histories.nc`` (time histories of the protrusions in ``histories_nm``): the parts computed by
 this call from memory (each batch returns its dataset with its path), the parts of an earlier run
@@ -136,6 +137,12 @@ def _read_inputs(interface_id: tuple | None, dmw_id: tuple | None) -> tuple[xr.D
     return interface, record
 
 
+@functools.lru_cache(maxsize=8)
+def _read_bulge(bulge_id: tuple) -> xr.Dataset:
+    """The bulge table of a sweep, read once per process (and file version)."""
+    return read_dataset(bulge_id[0], stage="bulge")
+
+
 def batch_inputs(interface_path: str | None, dmw_path: str | None) -> tuple[xr.Dataset | None, tuple | None]:
     """Interface tables and DMW record of a batch, read once per process (and file version).
 
@@ -150,19 +157,21 @@ _MODELS_LOCK = threading.Lock()
 
 
 def batch_model(scene: Any, interface_path: str | None, dmw_path: str | None, k: float | None,
-                damping: float) -> sl.Model:
+                damping: float, bulge_path: str | None = None) -> sl.Model:
     """The model of a batch, built once per process for each scene, input files, k and damping ratio.
 
     The batches of one roughness set and damping ratio share it (:func:`pipeline.model.slider.run_model`
     only reads a model): building it costs ~28 ms (the DMW record's spline, the modal solution), paid
     by every batch before. Keyed by the scene's content hash and the files' identity
-    (:func:`_file_id`), so a changed input builds a new one.
+    (:func:`_file_id`), so a changed input builds a new one. ``bulge_path``: the bulge table
+    (``bulge.nc``) with the tabulated bulge bearing, else ``None``.
     """
-    key = (scene.hash, _file_id(interface_path), _file_id(dmw_path), k, damping)
+    key = (scene.hash, _file_id(interface_path), _file_id(dmw_path), k, damping, _file_id(bulge_path))
     with _MODELS_LOCK:
         model = _MODELS.get(key)
     if model is None:
-        model = sl.build_model(scene, *batch_inputs(interface_path, dmw_path), k, damping_ratio=damping)
+        bulge = _read_bulge(_file_id(bulge_path)) if bulge_path else None
+        model = sl.build_model(scene, *batch_inputs(interface_path, dmw_path), k, damping_ratio=damping, bulge=bulge)
         with _MODELS_LOCK:
             if len(_MODELS) >= 64:  # (a long-lived worker of many studies: keep the memory bounded)
                 _MODELS.clear()
@@ -171,7 +180,8 @@ def batch_model(scene: Any, interface_path: str | None, dmw_path: str | None, k:
 
 
 def run_batch(scene: Any, batch: Batch, interface_path: str | None, dmw_path: str | None, k: float | None,
-              part_path: str, key: str, history_nm: tuple[float, ...]) -> tuple[str, xr.Dataset]:
+              part_path: str, key: str, history_nm: tuple[float, ...],
+              bulge_path: str | None = None) -> tuple[str, xr.Dataset]:
     """Run one batch and write its part file (executed on a worker). Returns the part's path and dataset.
 
     The dataset comes back with the path so that the sweep assembles what this run computed from
@@ -179,9 +189,9 @@ def run_batch(scene: Any, batch: Batch, interface_path: str | None, dmw_path: st
 
     ``scene``: the sweep's scene with the batch's roughness set; ``k``: contact criterion constant [1]
     (``None`` without the contact effect); ``history_nm``: protrusions [nm] whose time histories the
-    part keeps.
+    part keeps; ``bulge_path``: the bulge table (:func:`batch_model`).
     """
-    model = batch_model(scene, interface_path, dmw_path, k, batch.damping)
+    model = batch_model(scene, interface_path, dmw_path, k, batch.damping, bulge_path)
     rows, hist_rows = [], []
     for delta in batch.protrusions:
         run = sl.run_model(model, delta * NM)
@@ -287,8 +297,9 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset | None]:
     set_scenes = {label: scene if table == dict(scene["roughness"]) else scene.replace(roughness=dict(table))
                   for label, table in sets.items()}
     # time histories of the first realisation only (the scene's own record)
+    bulge_path = str(out / "bulge.nc") if "bulge" in scene_inputs.simulation_inputs(scene) else None
     tasks = [(set_scenes[b.label], b, interface_paths[b.label], dmw_paths[b.realisation], k,
-              str(_part_path(parts, b)), key, hist_nm if b.realisation == 0 else ()) for b in todo]
+              str(_part_path(parts, b)), key, hist_nm if b.realisation == 0 else (), bulge_path) for b in todo]
     bar = _progress(len(batches), len(batches) - len(todo))
     done = [0]
     stop_after, on_batch = opts.get("stop_after"), opts.get("on_batch")
@@ -315,7 +326,7 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset | None]:
     inputs.record(compute_seconds=round(batch_seconds, 3), batches_run=len(todo), batches=len(batches))
     first = next(iter(sets))  # (its set's scene and the scene's damping ratio: models the batches built)
     model = batch_model(set_scenes[first], interface_paths[first], dmw_path, k,
-                        float(scene["air_bearing"]["damping_ratio"]))
+                        float(scene["air_bearing"]["damping_ratio"]), bulge_path)
     attrs = model_attrs(model, k_source)
     return assemble(scene, out, prot, list(sets), damp, batches, key, k_source, attrs, seeds, computed)
 
