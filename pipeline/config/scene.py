@@ -30,6 +30,10 @@ from ..physics.friction import FRICTION_LAWS
 from ..units import MHZ_IN_KHZ, SUFFIX_FACTORS
 from .limits import LimitError, check_physical
 
+#: The sweep's protocols (``sweep.protocol``; :func:`pipeline.model.simulation.simulate`, docs/model.md,
+#: section "Heater stepping").
+PROTOCOLS = ("independent", "stepping")
+
 try:  # Python >= 3.11
     import tomllib
 except ModuleNotFoundError:  # pragma: no cover - Python 3.10
@@ -274,6 +278,11 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "histories_nm": Key("floats", None, doc="protrusions whose time histories are kept [nm]"),
         "realisations": Key("int", 1, (lambda v: 1 <= v <= 100000, "an integer in [1, 100000]"),
                             doc="DMW realisations (seeds) per grid point; > 1 adds the realisation dimension"),
+        "protocol": Key("str", "independent", choices=PROTOCOLS,
+                        doc="'independent' (each protrusion from its start state) or 'stepping' (the grid run "
+                            "up then down as one chain per roughness x damping x realisation, each step from the "
+                            "end state of the previous one; batch_size is then ignored); docs/model.md, "
+                            "section 'Heater stepping'"),
     },
     "report": {
         "histories_nm": Key("floats", [5.0, 11.0], doc="protrusions shown in the history figures [nm]"),
