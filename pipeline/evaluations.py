@@ -154,8 +154,8 @@ def evaluate(base: Any, params: Sequence[Parameter], values: Sequence[float], pr
             errors.append(ds.attrs["errors"])
         for name, v in ds.data_vars.items():
             fill = SCALARS[name].fill_value  # (a failed protrusion's regime: its fill value, NaN here)
-            values = v.values.astype(float)
-            outputs[name] = [float("nan") if fill is not None and x == fill else float(x) for x in values]
+            outputs[name] = [float("nan") if fill is not None and x == fill else float(x)
+                             for x in v.values.astype(float)]
     return {"params": [float(v) for v in values], "protrusions": [float(x) for x in protrusions],
             "outputs": outputs, "seconds": time.perf_counter() - t0, "kernel_seconds": kernel,
             "error": "; ".join(errors) if errors else None}
