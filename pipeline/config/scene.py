@@ -257,11 +257,10 @@ SCHEMA: dict[str, dict[str, Key]] = {
                                 doc="Gauss-Legendre nodes per panel of the ISBL integrals"),
         "quadrature_panels": Key("int", 4, (lambda v: 1 <= v <= 64, "an integer in [1, 64]"),
                                  doc="panels per population range of the ISBL integrals"),
-        "start": Key("str", "nominal", choices=STARTS,
+        "start": Key("str", "static", choices=STARTS,
                      doc="start state of each run: 'static' (the model's static equilibrium; past the adhesion fold "
-                         "the contact branch; needed with air_bearing.bulge) or 'nominal' (the nominal attitude, "
-                         "the default until the paper scene moves to the bulge model); docs/model.md, "
-                         "section 'Start state'"),
+                         "the contact branch) or 'nominal' (the nominal attitude, the model before the start state "
+                         "was part of it); docs/model.md, section 'Start state'"),
         "fhm_measure": Key("str", "peak-to-peak", choices=tuple(FHM_MEASURES),
                            doc="FHM/BV measure (docs/model.md, section 'Slider dynamics')"),
     },
