@@ -9,7 +9,7 @@ targets and residuals, is :mod:`pipeline.analyses.study`):
   ~15-45 ms), its DMW record only when a ``[dmw]`` key changed (synthesis, ~0.1 ms); otherwise the
   base scene's ``interface.nc``/``dmw.nc`` are read by path, once per worker process
   (:func:`candidate_inputs`);
-* it runs at the protrusions the study needs (:func:`pipeline.model.slider.run_model`) and keeps the
+* it runs at the protrusions the study needs (:func:`pipeline.model.simulation.simulate`) and keeps the
   steady-window outputs of :func:`pipeline.model.slider.summarize` in dataset units
   (:data:`pipeline.variables.SCALARS`), with k by the one rule
   :func:`pipeline.model.scene_inputs.contact_k` without a calibration (:func:`evaluate`);
@@ -42,8 +42,8 @@ from .model import dmw_record, scene_inputs
 from .model import slider as sl
 from .model.bulge_table import scene_table
 from .model.interface_tables import build_tables, roughness_statistics
+from .model.simulation import simulate
 from .runner import KEY_ATTR, Runner, build, scene_part
-from .units import NM
 from .variables import SCALARS
 
 
@@ -154,7 +154,6 @@ def evaluate(base: Any, params: Sequence[Parameter], values: Sequence[float], pr
     t0 = time.perf_counter()
     kernel = 0.0
     errors: list[str] = []
-    n = len(protrusions)
     outputs: dict[str, list[float]] = {}
     try:
         scene = with_values(base, params, values)
@@ -165,17 +164,15 @@ def evaluate(base: Any, params: Sequence[Parameter], values: Sequence[float], pr
         errors.append(str(exc))
         model = None
     if model is not None:
-        for i, delta in enumerate(protrusions):
-            try:
-                t1 = time.perf_counter()
-                run = sl.run_model(model, float(delta) * NM)
-                kernel += time.perf_counter() - t1
-                summary = sl.summarize(run)
-            except (sl.IntegrationError, ValueError, FloatingPointError) as exc:
-                errors.append(f"{delta:g} nm: {exc}")
-                continue
-            for name, v in summary.items():
-                outputs.setdefault(name, [float("nan")] * n)[i] = float(v) * SCALARS[name].si_factor
+        timings = {"kernel_seconds": 0.0}
+        ds = simulate(model, protrusions, on_error="nan", timings=timings)
+        kernel = timings["kernel_seconds"]
+        if "errors" in ds.attrs:
+            errors.append(ds.attrs["errors"])
+        for name, v in ds.data_vars.items():
+            fill = SCALARS[name].fill_value  # (a failed protrusion's regime: its fill value, NaN here)
+            outputs[name] = [float("nan") if fill is not None and x == fill else float(x)
+                             for x in v.values.astype(float)]
     return {"params": [float(v) for v in values], "protrusions": [float(x) for x in protrusions],
             "outputs": outputs, "seconds": time.perf_counter() - t0, "kernel_seconds": kernel,
             "error": "; ".join(errors) if errors else None}

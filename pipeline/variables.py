@@ -170,6 +170,8 @@ COORDINATES = _group(
     V("damping", "1", "modal damping ratio of the air bearing", dims=("damping",)),
     V("time", "s", "elapsed simulated time", dims=("time",)),  # (on disk: elapsed_time, pipeline.io)
     V("hist_protrusion", "nm", "protrusion of the kept histories", NM, dims=("hist_protrusion",)),
+    V("direction", "", "pass of a heater-stepping chain (up: increasing protrusion, down: decreasing)",
+      dims=("direction",), dtype="str"),
 )
 
 #: Steady-window scalars of one scene (:func:`pipeline.model.slider.summarize`; ``summary.nc``, ``sweep.nc``).
@@ -406,11 +408,21 @@ BULGE = _group(
     V("pad_pressure", "MPa", "air pressure under the trailing pad around the bulge", MPA),
 )
 
+#: Outputs of a heater-stepping chain (``sweep.protocol = "stepping"``, :mod:`pipeline.model.simulation`;
+#: docs/model.md, section "Heater stepping"), one value per chain.
+STEPPING = _group(
+    V("touchdown_protrusion", "nm", "first protrusion of the upward pass whose steady window touches", NM,
+      effect="contact"),
+    V("takeoff_protrusion", "nm", "first protrusion of the downward pass whose steady window no longer touches",
+      NM, effect="contact"),
+    V("hysteresis", "nm", "touchdown minus take-off protrusion of the heater-stepping chain", NM, effect="contact"),
+)
+
 #: Groups by name.
 GROUPS: dict[str, dict[str, Variable]] = {
     "coordinates": COORDINATES, "scalars": SCALARS, "histories": HISTORIES, "roughness": ROUGHNESS,
     "dmw": DMW, "interface": INTERFACE, "calibration": CALIBRATION, "accuracy": ACCURACY,
-    "ensemble": ENSEMBLE, "bulge": BULGE,
+    "ensemble": ENSEMBLE, "bulge": BULGE, "stepping": STEPPING,
 }
 
 #: The groups each dataset file (by stem) may hold, first match wins.
@@ -421,9 +433,9 @@ DATASETS: dict[str, tuple[str, ...]] = {
     "calibration": ("calibration",),
     "summary": ("coordinates", "scalars"),
     "histories": ("coordinates", "histories"),
-    "sweep": ("coordinates", "scalars", "ensemble"),
+    "sweep": ("coordinates", "scalars", "ensemble", "stepping"),
     "sweep_histories": ("coordinates", "histories"),
-    "sweep-part": ("coordinates", "scalars", "histories"),
+    "sweep-part": ("coordinates", "scalars", "histories", "stepping"),
     "accuracy": ("accuracy",),
     "bulge": ("bulge",),
 }

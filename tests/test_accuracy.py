@@ -100,9 +100,13 @@ def test_error_decreases_as_rtol_tightens(result):
     for p in range(e.shape[0]):
         assert e[p, 1] >= 0.5 * e[p, 0] - 1e-5 and e[p, 2] >= 0.5 * e[p, 1] - 1e-5, e[p]
     assert e[:, 0].max() < 1e-4
-    # flying, the tolerance alone sets the step: a clear trend over four decades
-    fly = list(ds["point"].values).index("flying")
-    assert e[fly, 2] > e[fly, 1] > e[fly, 0] and e[fly, 2] > 30 * e[fly, 0], e[fly]
+    # flying, the tolerance alone sets the step: a clear trend over four decades in the global error,
+    # seen in the time-mean clearance (every step's error adds to it). Not in the maximum over the
+    # outputs, which is FHM's: a peak-to-peak is the error at two instants, a random-signed local error
+    # that does not fall monotonically with rtol (flying at 5 nm from the static start, vs rtol 1e-10:
+    # 1.7e-4 at rtol 1e-7, 1.4e-3 at 1e-6, 7.5e-4 at 1e-5; the mean clearance 8.8e-7, 7.0e-6, 6.6e-5 nm)
+    c = ds["error"].sel(knob="rtol", point="flying", output="clearance").values[:3]
+    assert c[2] > c[1] > c[0] and c[2] > 30 * c[0], c
 
 
 def test_chosen_defaults_and_figure(result):

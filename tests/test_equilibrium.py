@@ -106,6 +106,38 @@ def test_past_the_fold_there_is_no_flying_equilibrium_and_the_contact_branch_is_
     assert st.kind == "flying" and st.equilibrium.y[0] < 0
 
 
+def test_a_known_fold_gives_the_same_states_without_the_continuation():
+    """:func:`branch_fold` finds the closed-form fold once; :func:`static_equilibrium` given it returns, at
+    every protrusion, the state the continuation from zero gives (the same path before the fold, the same
+    contact Newton past it)."""
+    def with_contact(y, m):
+        return forces_1dof(y, m, contact=True)
+
+    def accept(mu):
+        return lambda y: D - mu + y[0] >= DC
+
+    fold = eq.branch_fold(forces_1dof, 20 * NM, scale=[1 * NM], step=1 * NM, mu_tol=1e-4 * NM)
+    assert fold == pytest.approx(MU_FOLD, abs=2e-4 * NM)
+    calls = [0]
+
+    def counted(y, m):
+        calls[0] += 1
+        return with_contact(y, m)
+
+    for mu in np.array([2.0, 7.0, 8.2, 8.4, 9.0, 10.0]) * NM:
+        kw = dict(scale=[1 * NM], mu_tol=1e-4 * NM, accept=accept(mu), contact_start=np.array([DC / 2 - (D - mu)]),
+                  contact_max_step=[0.02 * NM])
+        calls[0] = 0
+        plain = eq.static_equilibrium(counted, mu, **kw)
+        n_plain = calls[0]
+        calls[0] = 0
+        known = eq.static_equilibrium(counted, mu, fold=fold, **kw)
+        assert known.kind == plain.kind == ("flying" if mu < MU_FOLD else "contact")
+        np.testing.assert_array_equal(known.equilibrium.y, plain.equilibrium.y)
+        if mu > fold:  # past the fold the bracketing of the fold is skipped: fewer force evaluations
+            assert calls[0] < n_plain
+
+
 def paper_slider(rear: str = "linear"):
     """The paper's femto slider with the stiff-rear bearing (k_f 1.54e5, k_r 5.83e5 N/m); ``rear``: the
     linear law or the power law F_r0 [(g0/g)^2 - 1] with the same stiffness at g0 = 11 nm."""

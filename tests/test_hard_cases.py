@@ -672,7 +672,10 @@ def test_real_area_stays_below_the_nominal_area(base, record, case):
         model, interface = build(scene, record)
         delta = 15 * NM
     else:
-        scene = strong_adhesion_scene(base, table_min_sigma=-40.0)
+        # the report's touchdown transient is the snap-in from the nominal attitude: started from its
+        # static contact equilibrium (the default start) the run sits in contact at half the cap
+        # (max real area 1.56e-11 m^2 = 0.51 A_n, measured) and never tests it
+        scene = strong_adhesion_scene(base, table_min_sigma=-40.0, start="nominal")
         model, interface = build(scene)
         delta = 9.0 * NM  # (in contact, the area at the cap A_n, inside the table: measured)
     run, hist, s = simulate(model, delta)

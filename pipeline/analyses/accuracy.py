@@ -508,7 +508,7 @@ def study(evaluate: Evaluate, knobs: list[Knob], reference: dict[str, float], po
         "combined_max_errors": comb_err,
         "combined_total_wall_time_s": combo_cost,
         "chosen_adjustments": adjustments or "none",
-        "timing": f"simulation: median of {repeat} runs of run_model + summarize after compilation; table builds "
+        "timing": f"simulation: median of {repeat} runs of simulate (run, summary, dataset) after compilation; table builds "
                   "longer than 1 s timed once; sequential, one process",
         "cpus": os.cpu_count() or 0,
         "k": float(k) if k is not None else "none",

@@ -30,6 +30,10 @@ from ..physics.friction import FRICTION_LAWS
 from ..units import MHZ_IN_KHZ, SUFFIX_FACTORS
 from .limits import LimitError, check_physical
 
+#: The sweep's protocols (``sweep.protocol``; :func:`pipeline.model.simulation.simulate`, docs/model.md,
+#: section "Heater stepping").
+PROTOCOLS = ("independent", "stepping")
+
 try:  # Python >= 3.11
     import tomllib
 except ModuleNotFoundError:  # pragma: no cover - Python 3.10
@@ -263,11 +267,10 @@ SCHEMA: dict[str, dict[str, Key]] = {
                                      "sliding [1] (docs/model.md, section 'Slip-corrected Reynolds equation')"),
         "bulge_cells_per_b": Key("int", 12, (lambda v: 2 <= v <= 512, "an integer in [2, 512]"),
                                  doc="Reynolds grid of the 'reynolds' bulge table: cells per semi-axis across sliding [1]"),
-        "start": Key("str", "nominal", choices=STARTS,
+        "start": Key("str", "static", choices=STARTS,
                      doc="start state of each run: 'static' (the model's static equilibrium; past the adhesion fold "
-                         "the contact branch; needed with air_bearing.bulge) or 'nominal' (the nominal attitude, "
-                         "the default until the paper scene moves to the bulge model); docs/model.md, "
-                         "section 'Start state'"),
+                         "the contact branch) or 'nominal' (the nominal attitude, the model before the start state "
+                         "was part of it); docs/model.md, section 'Start state'"),
         "fhm_measure": Key("str", "peak-to-peak", choices=tuple(FHM_MEASURES),
                            doc="FHM/BV measure (docs/model.md, section 'Slider dynamics')"),
     },
@@ -284,6 +287,11 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "histories_nm": Key("floats", None, doc="protrusions whose time histories are kept [nm]"),
         "realisations": Key("int", 1, (lambda v: 1 <= v <= 100000, "an integer in [1, 100000]"),
                             doc="DMW realisations (seeds) per grid point; > 1 adds the realisation dimension"),
+        "protocol": Key("str", "independent", choices=PROTOCOLS,
+                        doc="'independent' (each protrusion from its start state) or 'stepping' (the grid run "
+                            "up then down as one chain per roughness x damping x realisation, each step from the "
+                            "end state of the previous one; batch_size is then ignored); docs/model.md, "
+                            "section 'Heater stepping'"),
     },
     "report": {
         "histories_nm": Key("floats", [5.0, 11.0], doc="protrusions shown in the history figures [nm]"),

@@ -122,6 +122,9 @@ class Model:
     tfc_tabulated: tuple[ab.TfcLaw, ...] = ()
     scene: Any = None
     start: str = "nominal"
+    #: the static start's fold of this model (:func:`pipeline.model.start.start_state`); not an init
+    #: field, so that a copy with other settings (``dataclasses.replace``) finds its own
+    fold_cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @property
     def k_sigma(self) -> float:
@@ -352,9 +355,10 @@ def run_parameters(model: Model, protrusion: float) -> tuple[np.record, dyn.Tabl
 def start(model: Model, protrusion: float) -> tuple[np.ndarray, str]:
     """The start state of a run at ``protrusion`` [m] by the model's ``solver.start`` rule, and its note
     (:func:`pipeline.model.start.start_state`)."""
-    y_s = model.p["y_s"]
+    y_s, fh0 = model.p["y_s"], model.p["FH0"]
+    # (the fold is searched up to twice the flying height: past FH0 the TFC point is at the disk anyway)
     return start_state(lambda mu: run_parameters(model, mu), protrusion, model.start,
-                       contact_start_z=protrusion + y_s - model.p["FH0"])
+                       contact_start_z=protrusion + y_s - fh0, fold_cache=model.fold_cache, fold_max=2 * fh0)
 
 
 def run_model(model: Model, protrusion: float, y0: np.ndarray | None = None, max_steps: int = 5_000_000) -> Run:

@@ -5,15 +5,20 @@ at the TFC point (the bulge's air bearing) or a strong adhesion, the nominal att
 is not where the slider sits: starting there puts it in a transient, and near touchdown inside the
 adhesion basin. ``solver.start`` (:data:`STARTS`):
 
-* ``"static"``: the static equilibrium of the same forces the kernel integrates (the kernel's
-  own right-hand side at zero velocity on the mean disk, ``w = 0``, so the laws have one home),
-  continued in the protrusion from the nominal attitude at zero protrusion
+* ``"static"`` (the default): the static equilibrium of the same forces the kernel integrates (the
+  kernel's own right-hand side at zero velocity on the mean disk, ``w = 0``, so the laws have one
+  home), continued in the protrusion from the nominal attitude at zero protrusion
   (:func:`pipeline.physics.equilibrium.static_equilibrium`); past the adhesion fold, where no flying
   equilibrium exists, the contact-branch equilibrium (from the TFC point at zero separation), and the
-  run says so in its ``start`` note; if neither exists, the nominal attitude, said likewise;
-* ``"nominal"`` (default for now, bit-identical to the model before the start state was part of it):
-  the nominal attitude. Scenes with the bulge's air bearing set ``"static"``
-  (``configs/paper-2009-bulge.toml``).
+  run says so in its ``start`` note; if neither exists, the nominal attitude, said likewise. The fold
+  is found once per model (:func:`pipeline.physics.equilibrium.branch_fold`, kept in the model's
+  ``fold_cache``), so a start past it costs one Newton solve on the contact branch, not a new
+  bracketing of the fold;
+* ``"nominal"``: the nominal attitude (the model before the start state was part of it).
+
+Where one steady state exists the start decides the transient only (tests/test_start.py: static,
+nominal and previous-heater-step starts agree to 1e-6 nm at 5 and 11 nm); between the take-off and
+the fold of the adhesion hysteresis it decides which state a run reaches.
 
 The contact law in the static balance follows the paper's criterion: on where ``d < k sigma``.
 """
@@ -22,7 +27,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..physics.equilibrium import STARTS, static_equilibrium
+from ..physics.equilibrium import STARTS, branch_fold, static_equilibrium
 from ..units import NM, URAD
 from . import dynamics as dyn
 
@@ -34,6 +39,10 @@ STEPS = 6
 
 #: How closely the fold is bracketed [m]: past it the contact branch is taken; finer is never used.
 FOLD_TOL = 1e-3 * NM
+
+#: Largest continuation step [m] of the search for the fold (once per model), about the steps the
+#: continuation of one protrusion takes (:data:`STEPS` over the paper's protrusions).
+FOLD_STEP = 1.0 * NM
 
 
 def static_forces(run_parameters):
@@ -72,20 +81,32 @@ def static_forces(run_parameters):
     return R, flying
 
 
-def start_state(run_parameters, protrusion: float, rule: str, contact_start_z: float) -> tuple[np.ndarray, str]:
+def start_state(run_parameters, protrusion: float, rule: str, contact_start_z: float,
+                fold_cache: dict | None = None, fold_max: float | None = None) -> tuple[np.ndarray, str]:
     """The start state ``(z, theta, z', theta')`` of a run at ``protrusion`` [m] by the rule ``rule``
     (:data:`STARTS`), and a note saying which state it is.
 
     ``contact_start_z`` [m]: the z of the contact-branch start (the TFC point at zero separation).
+    ``fold_cache``: a dict owned by the model (one per model: the fold depends on every force and on
+    ``k sigma``), where the fold of the flying branch up to ``fold_max`` [m] is kept once found
+    (:func:`pipeline.physics.equilibrium.branch_fold`, steps of :data:`FOLD_STEP`): past it, a start
+    goes to the contact branch without continuing the flying one again. The fold is a function of the
+    model alone, not of which protrusion asked first, so the starts do not depend on the order of the runs.
     """
     if rule == "nominal":
         return np.zeros(4), "nominal attitude"
     if rule != "static":
         raise ValueError(f"solver.start = {rule!r}: expected one of {STARTS}")
     R, flying = static_forces(run_parameters)
+    fold = None
+    if fold_cache is not None and fold_max is not None:
+        if "fold" not in fold_cache:
+            fold_cache["fold"] = branch_fold(R, fold_max, y_start=np.zeros(2), scale=SCALE, accept=flying,
+                                             step=FOLD_STEP, mu_tol=FOLD_TOL)
+        fold = fold_cache["fold"]
     st = static_equilibrium(R, protrusion, mu_start=0.0, y_start=np.zeros(2), scale=SCALE, accept=flying,
                             contact_start=np.array([contact_start_z, 0.0]), contact_max_step=0.05 * SCALE,
-                            steps=STEPS, mu_tol=FOLD_TOL)
+                            steps=STEPS, mu_tol=FOLD_TOL, fold=fold)
     if st.equilibrium is None:
         return np.zeros(4), f"nominal attitude ({st.message})"
     z, theta = st.equilibrium.y

@@ -16,6 +16,7 @@ e.g. the protrusion):
 * :func:`newton`: one equilibrium from a start, with its stiffness and stability;
 * :func:`flying_branch`: natural-parameter continuation of the stable branch from a known state
   (the nominal attitude ``y = 0`` at zero protrusion), step halving near the fold, which it brackets;
+* :func:`branch_fold`: where that branch ends, once for all protrusions;
 * :func:`static_equilibrium`: the start state of a run at one protrusion: the flying equilibrium if the
   branch reaches it, else (``"no flying equilibrium"``) the contact-branch equilibrium from a start in
   contact.
@@ -217,7 +218,8 @@ class StaticState:
 
 def static_equilibrium(forces: Forces, mu: float, *, mu_start: float = 0.0, y_start=None, scale=None,
                        accept: Callable[[np.ndarray], bool] | None = None, contact_start=None,
-                       contact_max_step=None, steps: int = 20, mu_tol: float | None = None) -> StaticState:
+                       contact_max_step=None, steps: int = 20, mu_tol: float | None = None,
+                       fold: float | None = None) -> StaticState:
     """The static state at ``mu``: the flying equilibrium, else the contact-branch equilibrium.
 
     The flying state is continued from ``y_start`` (default the nominal attitude, zeros) at ``mu_start``
@@ -228,9 +230,16 @@ def static_equilibrium(forces: Forces, mu: float, *, mu_start: float = 0.0, y_st
     are piecewise (the contact law switches on at the criterion), and a full Newton step from deep contact
     can leave the contact region, where the adhesion alone has no root; small steps approach the contact
     equilibrium from inside.
+
+    ``fold``: where the flying branch of the same forces, continued from the same start, is known to end
+    (:func:`branch_fold`); at or past it the continuation, whose step halving to ``mu_tol`` at the fold
+    is most of the cost, is not repeated.
     """
-    mus = np.linspace(mu_start, mu, steps + 1) if mu > mu_start else np.array([mu])
-    br = flying_branch(forces, mus, y_start, scale=scale, accept=accept, mu_tol=mu_tol)
+    if fold is not None and np.isfinite(fold) and mu >= fold:
+        br = Branch(fold=float(fold))
+    else:
+        mus = np.linspace(mu_start, mu, steps + 1) if mu > mu_start else np.array([mu])
+        br = flying_branch(forces, mus, y_start, scale=scale, accept=accept, mu_tol=mu_tol)
     if np.isnan(br.fold):
         return StaticState("flying", br.last, np.nan, f"flying equilibrium at {mu:.6g}")
     msg = f"no flying equilibrium at {mu:.6g} (the flying branch ends at a fold at {br.fold:.6g})"
@@ -240,3 +249,13 @@ def static_equilibrium(forces: Forces, mu: float, *, mu_start: float = 0.0, y_st
     if e.converged and e.stable:
         return StaticState("contact", e, br.fold, msg + "; contact-branch equilibrium found")
     return StaticState("none", None, br.fold, msg + "; Newton found no stable contact state either")
+
+
+def branch_fold(forces: Forces, mu_max: float, *, mu_start: float = 0.0, y_start=None, scale=None,
+                accept: Callable[[np.ndarray], bool] | None = None, step: float, mu_tol: float | None = None) -> float:
+    """Where the stable flying branch continued from ``y_start`` at ``mu_start`` ends (NaN: not before
+    ``mu_max``), with continuation steps of at most ``step`` (:func:`flying_branch`, the fold bracketed to
+    ``mu_tol``). One continuation answers :func:`static_equilibrium` at every ``mu`` past the fold."""
+    n = max(1, int(np.ceil((mu_max - mu_start) / step)))
+    return flying_branch(forces, np.linspace(mu_start, mu_max, n + 1), y_start, scale=scale, accept=accept,
+                         mu_tol=mu_tol).fold

@@ -60,7 +60,8 @@ integration), so their zero error is a check that the simulation is deterministi
 Wall time
 ---------
 ``simulation_time``: median of ``repeat`` (default 5) runs of integration plus steady-window
-statistics (:func:`pipeline.model.slider.run_model` and :func:`~pipeline.model.slider.summarize`), after
+statistics (:func:`pipeline.model.simulation.simulate` of the one protrusion: the run, its summary and
+its dataset), after
 compilation. ``setup_time``: building what the knob changes -- the interface tables
 (:func:`pipeline.stages.interface.build_tables`, timed once when a build takes more than 1 s) and
 the model (``build_model``: spline coefficients) for the table knobs, the DMW record and the model
@@ -109,9 +110,9 @@ from ..analyses import accuracy as knob_study
 from ..analyses.accuracy import HEADLINE, POINTS, REFERENCE, TABLE_KEYS, TOLERANCE, Result, cast
 from ..model import dmw_record, scene_inputs
 from ..model.interface_tables import build_tables, roughness_statistics
+from ..model.simulation import COUNTERS, simulate
 from ..runner import Inputs, Stage, build
-from ..units import MHZ, NM
-from ..variables import SCALARS
+from ..units import MHZ
 from .dmw import run as run_dmw
 
 log = logging.getLogger(__name__)
@@ -239,21 +240,18 @@ def _evaluate(scene: Any, values: dict[str, float], cache: _RunCache, k: float |
     failed = np.zeros(n_p, dtype=bool)
     msgs = []
     for i, prot in enumerate(points.values()):
-        def once() -> tuple[sl.Run, dict]:
-            r = sl.run_model(model, prot * NM)
-            return r, sl.summarize(r)
         t0 = time.perf_counter()
         try:
-            (r, s), sim[i] = _timed(once, repeat)
+            ds, sim[i] = _timed(lambda: simulate(model, [prot], counters=True), repeat)
         except sl.IntegrationError as exc:
             sim[i] = time.perf_counter() - t0
             failed[i] = True
             msgs.append(str(exc))
             continue
-        info[i] = r.info[1:4]
+        info[i] = [int(ds[name][0]) for name in COUNTERS]
         for j, name in enumerate(HEADLINE):
-            if name in s:
-                vals[i, j] = s[name] / SCALARS[name].si_unit
+            if name in ds:
+                vals[i, j] = ds[name].values[0]
     return Result(vals, sim, build, info, failed, msgs)
 
 

@@ -84,6 +84,8 @@ def load(inputs: Inputs) -> dict[str, xr.Dataset | None]:
     ``"ensemble"`` (``None`` for a single realisation).
     """
     sweep = inputs.dataset("sweep.nc", stage="sweep", variables=("fhm_bv", "protrusion"))
+    if "direction" in sweep.dims:  # heater stepping: the upward pass, the experiment's approach to touchdown
+        sweep = sweep.sel(direction="up", drop=True)
     data: dict[str, xr.Dataset | None] = dict(zip(("sweep", "ensemble"), split_ensemble(sweep)))
     for name, stage in OPTIONAL:
         data[name] = None

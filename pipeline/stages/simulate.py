@@ -22,8 +22,9 @@ import xarray as xr
 
 from ..model import slider as sl
 from ..model import dmw_record, scene_inputs
+from ..model.simulation import histories_of, simulate, summary_of
 from ..runner import Inputs, Stage, build
-from ..variables import HISTORIES, coordinate, flag_meaning, history, scalar
+from ..variables import flag_meaning
 from ..units import MS, NM
 
 log = logging.getLogger(__name__)
@@ -71,27 +72,6 @@ def model_inputs(scene: Any, out: Path) -> tuple[xr.Dataset | None, tuple | None
     return read_inputs(scene, Inputs.folder(out))
 
 
-def histories_dataset(runs: list[tuple[float, sl.Run, dict, dict]]) -> xr.Dataset:
-    """Dataset of time histories for runs ``(protrusion [nm], run, histories, scalars)``."""
-    prot = np.array([r[0] for r in runs])
-    time = runs[0][1].time
-    data = {}
-    for name in runs[0][2]:
-        data[name] = history(name, np.stack([r[2][name] for r in runs]), ("protrusion", "time"))
-    info = np.stack([r[1].info for r in runs])
-    for j, name in enumerate(("steps", "rejected_steps", "contact_switches"), start=1):
-        data[name] = HISTORIES[name].data(info[:, j], ("protrusion",))
-    coords = {"protrusion": coordinate("protrusion", prot), "time": coordinate("time", time)}
-    return xr.Dataset(data, coords=coords)
-
-
-def summary_dataset(runs: list[tuple[float, sl.Run, dict, dict]]) -> xr.Dataset:
-    """Dataset of the steady-window scalars (dim ``protrusion``) of runs."""
-    prot = np.array([r[0] for r in runs])
-    data = {name: scalar(name, np.array([r[3][name] for r in runs]), ("protrusion",)) for name in runs[0][3]}
-    return xr.Dataset(data, coords={"protrusion": coordinate("protrusion", prot)})
-
-
 def model_attrs(model: sl.Model, k_source: str) -> dict[str, Any]:
     """Global attributes describing the assembled model (stiffness roots, damping, k)."""
     info = model.info
@@ -126,12 +106,10 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset]:
     interface, record = read_inputs(scene, inputs)
     k, k_source = read_k(scene, inputs)
     model = sl.build_model(scene, interface, record, k, bulge=read_bulge(scene, inputs))
-    run_ = sl.run_model(model, scene["tfc"]["protrusion_nm"] * NM)
-    hist = sl.histories(run_)
-    scalars = sl.summarize(run_, hist)
-    runs = [(scene["tfc"]["protrusion_nm"], run_, hist, scalars)]
-    attrs = model_attrs(run_.model, k_source)
-    histories, summary = histories_dataset(runs), summary_dataset(runs)
+    delta = scene["tfc"]["protrusion_nm"]
+    ds = simulate(model, [delta], histories=[delta], counters=True)
+    attrs = model_attrs(model, k_source)
+    histories, summary = histories_of(ds), summary_of(ds)
     histories.attrs.update(attrs)
     summary.attrs.update(attrs)
     for name in summary.data_vars:

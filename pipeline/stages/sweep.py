@@ -44,12 +44,12 @@ from ..model import slider as sl
 from ..fanout import run_tasks
 from ..io import read_attrs, read_dataset, write_dataset
 from ..runner import KEY_ATTR, Inputs, Stage, ensure
-from ..variables import ENSEMBLE, ENSEMBLE_OF, HISTORIES, REGIME_FILL, SCALARS, coordinate, history, scalar
+from ..variables import ENSEMBLE, ENSEMBLE_OF, HISTORIES, REGIME_FILL, SCALARS, STEPPING, coordinate
 from ..model import dmw_record, scene_inputs
+from ..model.simulation import DIRECTIONS, simulate
 from .dmw import realisation_record
 from .simulate import model_attrs, read_k
 from ..config.grid import damping_grid, protrusion_grid, roughness_sets, same_point
-from ..units import NM
 
 log = logging.getLogger(__name__)
 PARTS = "sweep.parts"
@@ -74,12 +74,16 @@ class Batch:
 def plan(scene: Any) -> tuple[np.ndarray, dict[str, dict], list[float], list[Batch]]:
     """The grid and its batches (realisation-major, then roughness, then damping, then protrusion).
 
+    With ``sweep.protocol = "stepping"`` a batch is a whole chain (every protrusion of one roughness
+    set, damping ratio and realisation) and ``batch_size`` is ignored.
+
     Returns ``(protrusions [nm], roughness sets by label, damping ratios [1], batches)``.
     """
     prot = protrusion_grid(scene)
     sets = roughness_sets(scene)
     damp = damping_grid(scene)
-    size = scene["sweep"]["batch_size"]
+    # a heater-stepping chain runs the whole grid in order: one chain, one batch
+    size = len(prot) if scene["sweep"]["protocol"] == "stepping" else scene["sweep"]["batch_size"]
     batches = []
     for r in range(scene["sweep"]["realisations"]):
         for label in sets:
@@ -192,24 +196,7 @@ def run_batch(scene: Any, batch: Batch, interface_path: str | None, dmw_path: st
     part keeps; ``bulge_path``: the bulge table (:func:`batch_model`).
     """
     model = batch_model(scene, interface_path, dmw_path, k, batch.damping, bulge_path)
-    rows, hist_rows = [], []
-    for delta in batch.protrusions:
-        run = sl.run_model(model, delta * NM)
-        hist = sl.histories(run)
-        rows.append(sl.summarize(run, hist))
-        if any(same_point(delta, h) for h in history_nm):
-            hist_rows.append((delta, run.time, hist))
-    data = {name: scalar(name, np.array([r[name] for r in rows]), ("protrusion",)) for name in rows[0]}
-    coords = {"protrusion": coordinate("protrusion", np.array(batch.protrusions))}
-    ds = xr.Dataset(data, coords=coords)
-    if hist_rows:
-        coords_h = {"hist_protrusion": coordinate("hist_protrusion", np.array([h[0] for h in hist_rows])),
-                    "time": coordinate("time", hist_rows[0][1])}
-        for name in hist_rows[0][2]:
-            if name in HISTORIES:
-                ds["h_" + name] = history(name, np.stack([h[2][name] for h in hist_rows]),
-                                          ("hist_protrusion", "time"))
-        ds = ds.assign_coords(coords_h)
+    ds = simulate(model, batch.protrusions, histories=history_nm, protocol=scene["sweep"]["protocol"])
     ds.attrs.update({KEY_ATTR: key, "roughness_label": batch.label, "damping_ratio": batch.damping,
                      "batch": batch.index, "realisation": batch.realisation})
     write_dataset(ds, part_path, scene, stage="sweep-part")
@@ -357,8 +344,13 @@ def assemble(scene: Any, out: Path, prot: np.ndarray, labels: list[str], damp: l
     """
     parts = out / PARTS
     n_real = len(seeds) if seeds else 1
-    shape = (len(prot), len(labels), len(damp)) + ((n_real,) if n_real > 1 else ())
+    stepping = scene["sweep"]["protocol"] == "stepping"
+    # (stepping: the scalars per pass, before the realisation, whose statistics reduce the last axis)
+    shape = (len(prot), len(labels), len(damp)) + ((len(DIRECTIONS),) if stepping else ()) \
+        + ((n_real,) if n_real > 1 else ())
+    chain_shape = (len(labels), len(damp)) + ((n_real,) if n_real > 1 else ())
     arrays: dict[str, np.ndarray] = {}
+    chains: dict[str, np.ndarray] = {}
     hist: dict[str, np.ndarray] = {}
     hist_prot: np.ndarray | None = None
     time: np.ndarray | None = None
@@ -375,12 +367,15 @@ def assemble(scene: Any, out: Path, prot: np.ndarray, labels: list[str], damp: l
         for name in ds.data_vars:
             if name.startswith("h_"):
                 continue
+            if name in STEPPING:  # one value per chain
+                chains.setdefault(name, np.full(chain_shape, np.nan))[(r, d) + ((b.realisation,) if n_real > 1 else ())] \
+                    = ds[name].values
+                continue
             if name not in arrays:  # NaN: not computed (regime: its declared _FillValue on disk)
                 arrays[name] = np.full(shape, np.nan)
-            if n_real > 1:
-                arrays[name][list(b.indices), r, d, b.realisation] = ds[name].values
-            else:
-                arrays[name][list(b.indices), r, d] = ds[name].values
+            at = (list(b.indices), r, d) + ((slice(None),) if stepping else ()) \
+                + ((b.realisation,) if n_real > 1 else ())
+            arrays[name][at] = ds[name].values
         if "hist_protrusion" in ds.coords:
             if hist_prot is None:
                 hist_prot = np.array([h for h in scene["sweep"]["histories_nm"] or scene["report"]["histories_nm"]
@@ -396,8 +391,12 @@ def assemble(scene: Any, out: Path, prot: np.ndarray, labels: list[str], damp: l
                         hist[base][j, r, d] = ds[name].values[i]
     coords = {"protrusion": coordinate("protrusion", prot), "roughness": coordinate("roughness", labels),
               "damping": coordinate("damping", damp)}
-    dims = ("protrusion", "roughness", "damping") + (("realisation",) if n_real > 1 else ())
+    real = ("realisation",) if n_real > 1 else ()
+    dims = ("protrusion", "roughness", "damping") + (("direction",) if stepping else ()) + real
+    if stepping:
+        coords["direction"] = coordinate("direction", np.array(DIRECTIONS))
     data = {name: SCALARS[name].data(a, dims) for name, a in arrays.items()}
+    data.update({name: STEPPING[name].data(a, ("roughness", "damping") + real) for name, a in chains.items()})
     if n_real > 1:
         coords["realisation"] = ENSEMBLE["realisation"].data(np.arange(n_real), ("realisation",))
         data["dmw_seed"] = ENSEMBLE["dmw_seed"].data(np.array(seeds), ("realisation",))

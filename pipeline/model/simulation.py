@@ -1,0 +1,233 @@
+"""One in-memory API from a model to results: :func:`simulate` runs protrusions and returns a dataset.
+
+Every caller that turns runs into data (the ``simulate`` stage, the sweep's batches, the parameter
+studies' evaluations, the accuracy stage) calls :func:`simulate` instead of looping over
+:func:`pipeline.model.slider.run_model`, :func:`~pipeline.model.slider.histories` and
+:func:`~pipeline.model.slider.summarize` and building its own dataset. The variables are those of
+:mod:`pipeline.variables` (steady-window scalars :data:`~pipeline.variables.SCALARS`, time histories
+:data:`~pipeline.variables.HISTORIES`, the heater-stepping outputs :data:`~pipeline.variables.STEPPING`),
+in dataset units.
+
+Protocols (scene key ``sweep.protocol``, docs/model.md, section "Heater stepping"):
+
+* ``"independent"``: each protrusion from its own start state (``solver.start``,
+  :func:`pipeline.model.slider.start`);
+* ``"stepping"``: the protrusions form one *chain*, run in increasing order and then back down, each
+  step from the end state (positions and velocities at the end of the run) of the step before, as the
+  heater is stepped in the experiment; the first step starts by ``solver.start``. The top protrusion is
+  run once and closes both passes. Each step replays the DMW record from its start, as an independent
+  run does (the kernel's record is not periodic in time; only the slider's state carries over).
+  Outputs per chain: the touchdown protrusion (first protrusion of the upward pass whose steady window
+  touches, :func:`pipeline.model.slider.touched`), the take-off protrusion (first protrusion of the
+  downward pass whose steady window no longer touches) and their difference, the hysteresis.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Sequence
+
+import numpy as np
+import xarray as xr
+
+from ..config.grid import same_point
+from ..config.scene import PROTOCOLS
+from ..units import NM
+from ..variables import HISTORIES, STEPPING, coordinate, history, scalar
+from . import slider as sl
+
+#: The passes of a stepping chain (values of the ``direction`` coordinate).
+DIRECTIONS = ("up", "down")
+
+#: The integrator's counters of a run (``Run.info[1:4]``), kept with ``counters=True``.
+COUNTERS = ("steps", "rejected_steps", "contact_switches")
+
+#: The failures :func:`simulate` records as NaN with ``on_error="nan"`` (a failed integration, a
+#: model that cannot run at a protrusion, a floating-point trap).
+RUN_ERRORS = (sl.IntegrationError, ValueError, FloatingPointError)
+
+
+def simulate(model: sl.Model, protrusions: Sequence[float], *, histories: Sequence[float] = (),
+             protocol: str = "independent", counters: bool = False, on_error: str = "raise",
+             timings: dict[str, float] | None = None) -> xr.Dataset:
+    """Run the model at ``protrusions`` [nm] and return their steady-window scalars (and histories).
+
+    Parameters
+    ----------
+    model : the assembled model (:func:`pipeline.model.slider.build_model`)
+    protrusions : TFC protrusions [nm]; with ``protocol="stepping"`` in increasing order
+    histories : protrusions [nm] whose time histories are kept (those of ``protrusions`` that equal one
+        of them to the grid tolerance, :func:`pipeline.config.grid.same_point`), as variables
+        ``h_<name>`` on dims ``(hist_protrusion, time)`` (the sweep part files' layout; :func:`histories_of`
+        gives them the ``histories.nc`` layout); with stepping, those of the upward pass
+    protocol : ``"independent"`` or ``"stepping"`` (module docstring)
+    counters : keep the integrator's counters (:data:`COUNTERS`, dim ``protrusion``)
+    on_error : ``"raise"`` (the first failed run raises) or ``"nan"`` (independent only: a failed
+        protrusion's scalars are NaN, the regime its fill value; ``attrs["errors"]`` lists the
+        failures as ``"<protrusion> nm: <message>"``, ``"; "``-separated)
+    timings : when given, ``timings["kernel_seconds"]`` is increased by the wall time spent in
+        :func:`pipeline.model.slider.run_model` (kept out of the dataset: equal inputs, equal dataset)
+
+    Returns
+    -------
+    xarray.Dataset
+        Variables of :data:`pipeline.variables.SCALARS` on dim ``protrusion`` (and ``direction`` with
+        stepping, plus :data:`pipeline.variables.STEPPING`'s chain outputs), in dataset units.
+    """
+    if protocol not in PROTOCOLS:
+        raise ValueError(f"protocol {protocol!r}: expected one of {PROTOCOLS}")
+    if on_error not in ("raise", "nan"):
+        raise ValueError(f"on_error {on_error!r}: expected 'raise' or 'nan'")
+    prot = np.asarray(protrusions, dtype=float)
+    if protocol == "stepping":
+        if on_error != "raise":
+            raise ValueError("on_error = 'nan' is for independent runs (a chain needs every step's end state)")
+        return _stepping(model, prot, histories, counters, timings)
+    rows: list[dict[str, float] | None] = []
+    kept: list[tuple[float, sl.Run, dict]] = []
+    info: list[np.ndarray] = []
+    errors: list[str] = []
+    for delta in prot:
+        try:
+            run, hist, row = _run(model, float(delta), None, timings)
+        except RUN_ERRORS as exc:
+            if on_error == "raise":
+                raise
+            errors.append(f"{delta:g} nm: {exc}")
+            rows.append(None)
+            info.append(np.full(3, -1))
+            continue
+        rows.append(row)
+        info.append(run.info[1:4])
+        if _kept(delta, histories):
+            kept.append((float(delta), run, hist))
+    ds = xr.Dataset(_scalars(rows, ("protrusion",)), coords={"protrusion": coordinate("protrusion", prot)})
+    if counters:
+        for name, values in zip(COUNTERS, np.stack(info).T):
+            ds[name] = HISTORIES[name].data(values, ("protrusion",))
+    if kept:
+        ds = ds.assign(_histories(kept)).assign_coords(_history_coords(kept))
+    if errors:
+        ds.attrs["errors"] = "; ".join(errors)
+    return ds
+
+
+def histories_of(ds: xr.Dataset) -> xr.Dataset:
+    """The time histories of a :func:`simulate` result as ``histories.nc`` holds them: variables named
+    as :data:`pipeline.variables.HISTORIES` on dims ``(protrusion, time)``, with the integrator's
+    counters when kept (the histories must be those of every protrusion)."""
+    names = [n for n in ds.data_vars if n.startswith("h_")]
+    hp = ds["hist_protrusion"].values
+    data = {n[2:]: xr.Variable(("protrusion", "time"), ds[n].values, ds[n].attrs, ds[n].encoding)
+            for n in names}
+    for name in COUNTERS:
+        if name in ds:
+            data[name] = ds[name].variable
+    return xr.Dataset(data, coords={"protrusion": coordinate("protrusion", hp), "time": ds["time"].variable})
+
+
+def summary_of(ds: xr.Dataset) -> xr.Dataset:
+    """The steady-window scalars of a :func:`simulate` result (``summary.nc``, a sweep's part)."""
+    drop = [n for n in ds.data_vars if n.startswith("h_") or n in COUNTERS]
+    return ds.drop_vars(drop).drop_dims([d for d in ("hist_protrusion", "time") if d in ds.dims])
+
+
+def _run(model: sl.Model, delta_nm: float, y0: np.ndarray | None,
+         timings: dict[str, float] | None) -> tuple[sl.Run, dict, dict]:
+    """One protrusion [nm]: its run, histories and steady-window scalars (SI)."""
+    t0 = time.perf_counter()
+    run = sl.run_model(model, delta_nm * NM, y0=y0)
+    if timings is not None:
+        timings["kernel_seconds"] = timings.get("kernel_seconds", 0.0) + time.perf_counter() - t0
+    hist = sl.histories(run)
+    return run, hist, sl.summarize(run, hist)
+
+
+def _kept(delta: float, histories: Sequence[float]) -> bool:
+    """Whether the histories of the protrusion ``delta`` [nm] are kept (the grid's point rule)."""
+    return any(same_point(delta, h) for h in histories)
+
+
+def _scalars(rows: list[dict[str, float] | None], dims: tuple[str, ...],
+             shape: tuple[int, ...] | None = None) -> dict[str, xr.Variable]:
+    """Scalar variables from per-protrusion summaries (SI; ``None``: a failed run, NaN)."""
+    names: list[str] = []
+    for r in rows:
+        for name in r or ():
+            if name not in names:
+                names.append(name)
+    out = {}
+    for name in names:
+        values = np.array([r[name] if r is not None and name in r else np.nan for r in rows])
+        out[name] = scalar(name, values if shape is None else values.reshape(shape), dims)
+    return out
+
+
+def _histories(kept: list[tuple[float, sl.Run, dict]]) -> dict[str, xr.Variable]:
+    return {"h_" + name: history(name, np.stack([k[2][name] for k in kept]), ("hist_protrusion", "time"))
+            for name in kept[0][2] if name in HISTORIES}
+
+
+def _history_coords(kept: list[tuple[float, sl.Run, dict]]) -> dict[str, xr.Variable]:
+    return {"hist_protrusion": coordinate("hist_protrusion", np.array([k[0] for k in kept])),
+            "time": coordinate("time", kept[0][1].time)}
+
+
+def _stepping(model: sl.Model, prot: np.ndarray, histories: Sequence[float], counters: bool,
+              timings: dict[str, float] | None) -> xr.Dataset:
+    """One heater-stepping chain over ``prot`` [nm] (module docstring; docs/model.md, section
+    "Heater stepping")."""
+    if prot.size == 0 or np.any(np.diff(prot) <= 0):
+        raise ValueError(f"a stepping chain needs protrusions in increasing order, got {prot.tolist()}")
+    n = prot.size
+    rows: dict[str, list] = {d: [None] * n for d in DIRECTIONS}
+    info = np.zeros((n, len(DIRECTIONS), len(COUNTERS)), dtype=np.int64)
+    touch = np.zeros((n, len(DIRECTIONS)), dtype=bool)
+    kept: list[tuple[float, sl.Run, dict]] = []
+    y0 = None  # the first step starts by solver.start
+    order = [(i, 0) for i in range(n)] + [(i, 1) for i in range(n - 2, -1, -1)]
+    for i, j in order:
+        run, hist, rows[DIRECTIONS[j]][i] = _run(model, float(prot[i]), y0, timings)
+        y0 = run.state[-1].copy()  # the end state: where the next heater step starts
+        info[i, j] = run.info[1:4]
+        touch[i, j] = sl.touched(run)
+        if j == 0 and _kept(prot[i], histories):
+            kept.append((float(prot[i]), run, hist))
+    # the top of the chain closes both passes: its one run is the downward pass's first step
+    rows["down"][n - 1], info[n - 1, 1], touch[n - 1, 1] = rows["up"][n - 1], info[n - 1, 0], touch[n - 1, 0]
+    flat = [rows[d][i] for i in range(n) for d in DIRECTIONS]
+    dims = ("protrusion", "direction")
+    ds = xr.Dataset(_scalars(flat, dims, (n, len(DIRECTIONS))),
+                    coords={"protrusion": coordinate("protrusion", prot),
+                            "direction": coordinate("direction", np.array(DIRECTIONS))})
+    if counters:
+        for k, name in enumerate(COUNTERS):
+            ds[name] = HISTORIES[name].data(info[:, :, k], dims)
+    if "contact" in model.effects:
+        td, to = chain_protrusions(prot, touch[:, 0], touch[:, 1])
+        ds["touchdown_protrusion"] = STEPPING["touchdown_protrusion"].data(td, ())
+        ds["takeoff_protrusion"] = STEPPING["takeoff_protrusion"].data(to, ())
+        ds["hysteresis"] = STEPPING["hysteresis"].data(td - to, ())
+    if kept:
+        ds = ds.assign(_histories(kept)).assign_coords(_history_coords(kept))
+    return ds
+
+
+def chain_protrusions(protrusions: np.ndarray, touched_up: np.ndarray,
+                      touched_down: np.ndarray) -> tuple[float, float]:
+    """Touchdown and take-off protrusions [nm] of a stepping chain (docs/model.md, section "Heater stepping").
+
+    ``protrusions`` [nm] increasing; ``touched_up``/``touched_down``: whether each protrusion's steady
+    window touched (:func:`pipeline.model.slider.touched`) on the upward / downward pass. Touchdown: the
+    first protrusion of the upward pass that touches (NaN if none); take-off: the first protrusion of
+    the downward pass, from the top, that no longer touches (NaN when the top does not touch, or when
+    the chain stays in contact down to its lowest protrusion).
+    """
+    up = np.flatnonzero(touched_up)
+    td = float(protrusions[up[0]]) if up.size else np.nan
+    to = np.nan
+    if touched_down[-1]:
+        free = np.flatnonzero(~np.asarray(touched_down)[::-1])
+        if free.size:
+            to = float(protrusions[len(protrusions) - 1 - free[0]])
+    return td, to
