@@ -179,6 +179,17 @@ def run_protrusions(model: sl.Model, protrusions: Sequence[float]) -> tuple[dict
     return outputs, kernel, errors
 
 
+def evaluate_realisation(scene: Any, protrusions: Sequence[float], inputs: Inputs, k: float | None,
+                         realisation: int, seed: int) -> tuple[int, dict[str, list[float]], float, list[str]]:
+    """One fan-out task of an ensemble of ``scene`` itself (the report's, :mod:`pipeline.stages.ensemble`):
+    realisation ``realisation`` (0: the scene's own record; else :func:`seeded_record` of ``seed``) at
+    ``protrusions`` [nm] with contact criterion ``k`` [1]. Returns ``(realisation, *run_protrusions(...))``."""
+    interface, record = candidate_inputs(scene, inputs)
+    if realisation > 0:
+        record = seeded_record(scene, seed)
+    return (realisation, *run_protrusions(sl.build_model(scene, interface, record, k), protrusions))
+
+
 def evaluate(base: Any, params: Sequence[Parameter], values: Sequence[float], protrusions: Sequence[float],
              inputs: Inputs, realisations: int = 1, k: float | None = None) -> dict[str, Any]:
     """Run one candidate at ``protrusions`` [nm]; returns its record (see :class:`EvaluationStore`).
