@@ -183,10 +183,19 @@ def evaluate_realisation(scene: Any, protrusions: Sequence[float], inputs: Input
                          realisation: int, seed: int) -> tuple[int, dict[str, list[float]], float, list[str]]:
     """One fan-out task of an ensemble of ``scene`` itself (the report's, :mod:`pipeline.stages.ensemble`):
     realisation ``realisation`` (0: the scene's own record; else :func:`seeded_record` of ``seed``) at
-    ``protrusions`` [nm] with contact criterion ``k`` [1]. Returns ``(realisation, *run_protrusions(...))``."""
-    interface, record = candidate_inputs(scene, inputs)
+    ``protrusions`` [nm] with contact criterion ``k`` [1]. Returns ``(realisation, *run_protrusions(...))``.
+
+    ``inputs`` are the scene's own (current upstream datasets of the calling stage), read by path once
+    per process under their stage keys (no candidate's keys to compare).
+    """
+    interface = None
+    if inputs.interface_path:
+        interface = _made(_Made("interface", str(inputs.interface_key),
+                                lambda: read_dataset(inputs.interface_path, stage="interface")))
     if realisation > 0:
         record = seeded_record(scene, seed)
+    else:
+        record = _made(_Made("dmw", str(inputs.dmw_key), lambda: dmw_record.load(inputs.dmw_path)[1:]))
     return (realisation, *run_protrusions(sl.build_model(scene, interface, record, k), protrusions))
 
 
