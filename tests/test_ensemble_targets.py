@@ -57,6 +57,9 @@ def test_ensemble_stage_runs_each_seed_as_a_single_record_run(run3, tmp_path):
     rec = evaluations.evaluate(sub, [], [], list(x), inputs)
     np.testing.assert_array_equal(ens["fhm_bv"].values[:, 2], rec["outputs"]["fhm_bv"])
     np.testing.assert_array_equal(ens["min_clearance"].values[:, 2], rec["outputs"]["min_clearance"])
+    from cf_check import cf_report  # ensemble.nc passes the CF-1.8 checks like the other datasets
+    failures, crashed = cf_report(out / "ensemble.nc")
+    assert crashed == [] and failures[3] == [] and failures[2] == [], failures
     # the sweep's ensemble summaries: the probability is the fraction of seeds in contact
     np.testing.assert_allclose(ens["touchdown_probability"].values,
                                np.mean(ens["min_clearance"].values < 0, axis=1))

@@ -130,5 +130,5 @@ STAGE = Stage(
     excludes=("tfc.protrusion_nm", "sweep", "sensitivity", "scene.name", "scene.description", "report.histories_nm",
               "identify.parameters", "identify.population", "identify.generations", "identify.seed",
               "identify.batch_size", "identify.profile_points", "identify.realisations"),
-    upstream=_upstream, applies=applies, order=55, main_job=True,
+    upstream=_upstream, applies=applies, order=57, main_job=True,
     doc="the paper's checks over report.realisations DMW realisations (ensemble.nc, for the report)")
