@@ -1,7 +1,7 @@
 """Statistics over DMW realisations: the one home of the rules that judge a paper target on an ensemble.
 
 A synthetic DMW record is one realisation of a random process, and one seed moves the touchdown by a
-0.2-nm actuation step (docs/model.md, section "DMW"), so the paper's targets are judged over ``N``
+0.2-nm actuation step (docs/model.md, section "Ensembles"), so the paper's targets are judged over ``N``
 realisations (``identify.realisations``, ``report.realisations``). Every function here is pure and
 works on xarray data with a ``realisation`` dimension (and, where it says so, ``protrusion`` [nm]):
 
