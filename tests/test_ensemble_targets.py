@@ -124,3 +124,57 @@ def test_realisations_key_is_validated():
         load_scene(PAPER, ["identify.realisations=0"])
     with pytest.raises(SceneError, match=r"report\.realisations"):
         load_scene(PAPER, ["report.realisations=2.5"])
+
+
+def test_identify_stage_over_two_realisations_writes_each_targets_spread(write_scene, paper_config, tmp_path):
+    import xarray as xr
+
+    from pipeline.analyses.paper_comparison import identification_markdown
+    from pipeline.stages import identify
+
+    path = write_scene(f"""
+[scene]
+name = "ens-identify"
+extends = "{paper_config}"
+
+[solver]
+duration_ms = 0.6
+transient_ms = 0.2
+
+[contact]
+k = 0.978
+
+[identify]
+parameters = [{{key = "dmw.rms_nm", low = 0.1, high = 0.3}}]
+targets = ["fhm_touchdown", "contact_force"]
+population = 4
+generations = 1
+profile_points = 3
+realisations = 2
+""")
+    scene = load_scene(path)
+    nc = identify.run(scene, tmp_path / "out", scheduler="synchronous")
+    ds = xr.open_dataset(nc, engine="netcdf4").load()
+    assert ds.attrs["realisations"] == 2
+    store = evaluations.EvaluationStore(tmp_path / "out" / "identify.evals.jsonl")
+    recs = list(store.records.values())
+    assert all(r["realisations"] == 2 and len(r["seeds"]) == 2 for r in recs)
+    # the stored value and spread are the ensemble statistics of each record: median and 10-90 % of
+    # the two FHM values at 9 nm, mean +- std of the two contact forces at 11 nm
+    i = int(ds.attrs["best_evaluation"])
+    x = float(ds["dmw__rms_nm"][i])  # (the best evaluation's record, found by its parameter value)
+    rec = next(r for r in recs if abs(r["params"][0] - x) < 1e-12)
+    prots = rec["protrusions"]
+    fhm = np.array(rec["outputs"]["fhm_bv"])[prots.index(9.0)]
+    assert float(ds["value_fhm_touchdown"][i]) == pytest.approx(np.median(fhm), rel=1e-12)
+    np.testing.assert_allclose(ds["spread_fhm_touchdown"][i].values, np.quantile(fhm, [0.1, 0.9]), rtol=1e-12)
+    f = np.array(rec["outputs"]["contact_force"])[prots.index(11.0)]
+    np.testing.assert_allclose(ds["spread_contact_force"][i].values,
+                               np.mean(f) + np.array([-1, 1]) * np.std(f, ddof=1), rtol=1e-12)
+    from cf_check import cf_report
+    failures, crashed = cf_report(nc)
+    assert crashed == [] and failures[3] == [] and failures[2] == [], failures
+    md = identification_markdown(ds)
+    assert "Over 2 DMW realisations per evaluation" in md
+    lo, hi = ds["spread_contact_force"][i].values
+    assert f"[{lo:.4g}, {hi:.4g}]" in md
