@@ -178,3 +178,12 @@ realisations = 2
     assert "Over 2 DMW realisations per evaluation" in md
     lo, hi = ds["spread_contact_force"][i].values
     assert f"[{lo:.4g}, {hi:.4g}]" in md
+
+
+def test_identify_ensemble_of_a_scene_without_dmw_is_refused_in_one_line(tmp_path):
+    from pipeline.stages import identify
+
+    scene = load_scene(PAPER, SHORT + ['scene.effects=["air_bearing", "pitch", "adhesion", "contact", "friction"]'])
+    with pytest.raises(ValueError, match=r"identify\.realisations = 8 needs a synthetic DMW record.*set "
+                                         r"identify\.realisations = 1"):
+        identify.run(scene, tmp_path, scheduler="synchronous")

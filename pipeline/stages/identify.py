@@ -397,6 +397,10 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
     if not tlist:
         raise ValueError(f"{where}: identify.targets is empty: expected at least one target")
     prots = target_protrusions(tlist)
+    if cfg["realisations"] > 1 and not (scene.has("dmw") and scene["dmw"]["source"] == "synthetic"):
+        raise ValueError(f"{where}: identify.realisations = {cfg['realisations']} needs a synthetic DMW record (the dmw "
+                         "effect with dmw.source = \"synthetic\"; a measured record is one realisation): set "
+                         "identify.realisations = 1")
     params, base_inputs, store = setup(scene, inputs, "identify", bool(opts.get("force")))
     x_base = np.array([scene_value(scene, p) for p in params])
     if not np.all(np.isfinite(x_base)):
