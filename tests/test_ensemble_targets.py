@@ -73,7 +73,8 @@ def test_report_shows_each_target_over_the_realisations_with_its_spread(run3):
     assert "## Paper targets over 3 DMW realisations" in text
     td, lo, hi = en.touchdown_protrusion(ens["min_clearance"])
     assert np.isfinite(td) and lo <= td <= hi
-    assert f"crosses 0.5 at {td:.4g} nm (10-90 %: {lo:.4g}-{hi:.4g} nm)" in text
+    assert f"the touchdown protrusion over the realisations: {td:.4g} nm (10-90 %: {lo:.4g}-{hi:.4g})" in text
+    assert f"| touchdown protrusion | 9.8 nm (none at 9.6 nm) | {td:.4g} nm (10-90 %: {lo:.4g}-{hi:.4g}) |" in text
     # the median FHM at 9 nm with its 10-90 % range, and the 11-nm interference as mean +- std
     med, q10, q90 = (float(v) for v in en.median_spread(ens["fhm_bv"].sel(protrusion=9.0)))
     assert f"{med:.4g} % (10-90 %: {q10:.4g}-{q90:.4g})" in text

@@ -32,6 +32,7 @@ import numpy as np
 import xarray as xr
 
 from . import ensemble as en
+from .ensemble_comparison import SPREAD_STD
 from ..config.grid import TOL_NM, label, range_grid
 from ..config.scene import SCHEMA, TARGETS, SceneError, unit_suffix
 from ..model.slider import touched_in_summary
@@ -216,7 +217,6 @@ def at_protrusions(ds: xr.Dataset, name: str, at: Iterable[float]) -> xr.DataArr
 #: How a target's ensemble spread is given: the 10-90 % range of the realisations (medians, the
 #: touchdown protrusion) or mean +- one sample standard deviation (the light-contact state).
 SPREAD_QUANTILES = f"{100 * en.SPREAD[0]:g}-{100 * en.SPREAD[1]:g} % of the realisations"
-SPREAD_STD = "mean +- 1 standard deviation"
 
 
 @dataclass(frozen=True)
@@ -412,6 +412,17 @@ def spreads(record: dict[str, Any], tlist: Sequence[Target]) -> np.ndarray:
             if t.ensemble:
                 out[j] = t.ensemble(ds)[1:]
     return out
+
+
+def ensemble_summary(ds: xr.Dataset, tlist: Sequence[Target]) -> dict[str, tuple[float, float, float, float]]:
+    """Per target name: ``(value, low, high, single)`` over the realisations of ``ds`` (dims ``(protrusion,
+    realisation)``, dataset units: :func:`record_dataset` or ``ensemble.nc``): :attr:`Target.ensemble`
+    and, as ``single``, :attr:`Target.value` of realisation 0 (the scene's own record) alone."""
+    outputs = {name: np.asarray(ds[name].values, float)[:, 0] for name in ds.data_vars
+               if ds[name].dims == ("protrusion", en.DIM)}
+    single = Table({"protrusions": ds["protrusion"].values, "outputs": outputs})
+    return {t.name: ((t.ensemble(ds) if t.ensemble else (np.nan, np.nan, np.nan)) + (t.value(single),))
+            for t in tlist}
 
 
 def cost(res: np.ndarray) -> float:

@@ -29,11 +29,14 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from ..analyses.study import target_protrusions, targets
+from ..analyses import ensemble as en
+from ..analyses.report_settings import wants_ensemble
+from ..analyses.study import ensemble_summary, target_protrusions, targets
 from ..analyses.sweep_slices import combinations, first_contact, split_ensemble
 from ..config.grid import label
 from ..evaluations import Inputs as EvalInputs, evaluate_realisation
 from ..fanout import run_tasks
+from ..io import var
 from ..model import dmw_record, scene_inputs
 from ..runner import Inputs, Stage
 from ..variables import ENSEMBLE, SCALARS, coordinate
@@ -50,8 +53,7 @@ WINDOW_NM = 1.0
 
 def applies(scene: Any) -> bool:
     """Whether the report asks for an ensemble the scene can make (a synthetic DMW record)."""
-    return (scene["report"]["realisations"] > 1 and scene.has("dmw")
-            and scene["dmw"]["source"] == "synthetic")
+    return wants_ensemble(scene)
 
 
 def protrusions(scene: Any, sweep: xr.Dataset) -> list[float]:
@@ -94,11 +96,44 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
         log.warning("ensemble: %s", e)
     inputs.record(compute_seconds=round(seconds, 3), runs=n * len(prot),
                   kernel_seconds=round(sum(results[r][1] for r in range(n)), 3))
-    return dataset(prot, seeds, [results[r][0] for r in range(n)],
-                   {"k": k if k is not None else "none", "k_source": k_source, "realisations": n,
-                    "window_nm": WINDOW_NM, "errors": "; ".join(errors) or "none",
-                    "protrusions_note": "the paper targets' protrusions ([identify]) and the sweep's grid within "
-                                        f"{WINDOW_NM:g} nm of its first contact"})
+    ds = dataset(prot, seeds, [results[r][0] for r in range(n)],
+                 {"k": k if k is not None else "none", "k_source": k_source, "realisations": n,
+                  "window_nm": WINDOW_NM, "errors": "; ".join(errors) or "none",
+                  "protrusions_note": "the paper targets' protrusions ([identify]) and the sweep's grid within "
+                                      f"{WINDOW_NM:g} nm of its first contact"})
+    return ds.assign(judged(ds, scene))
+
+
+def judged(ds: xr.Dataset, scene: Any) -> dict[str, xr.Variable]:
+    """The paper's targets judged over the realisations of ``ds``, for the report (which only formats them).
+
+    Per target ``t`` of :func:`pipeline.analyses.study.targets`: ``value_t``, ``spread_t`` (low, high; what
+    they are in its ``spread`` attribute) and ``single_t`` (the scene's record alone), by
+    :func:`pipeline.analyses.study.ensemble_summary`; ``bv_exceedance_probability`` [1], P(BV >
+    ``identify.bouncing_min_percent``) versus protrusion; ``nominal_area_mean``/``_std`` [um2] versus
+    protrusion (:mod:`pipeline.analyses.ensemble`).
+    """
+    tlist = targets(scene)
+    out: dict[str, xr.Variable] = {}
+    for name, (v, lo, hi, single) in ensemble_summary(ds, tlist).items():
+        t = next(t for t in tlist if t.name == name)
+        out[f"value_{name}"] = var(v, (), t.units, f"{t.long_name} over the DMW realisations", paper=t.paper,
+                                   spread=t.spread, protrusions_nm=np.asarray(t.protrusions, float))
+        out[f"spread_{name}"] = var(np.array([lo, hi]), ("bound",), t.units,
+                                    f"spread of the {t.long_name} over the DMW realisations ({t.spread})")
+        out[f"single_{name}"] = var(single, (), t.units, f"{t.long_name}, the scene's own record alone")
+    out["bound"] = var(np.array(["low", "high"], dtype=object), ("bound",), "", "lower/upper end of a spread")
+    threshold = float(scene["identify"]["bouncing_min_percent"])
+    out["bv_exceedance_probability"] = var(en.exceedance_probability(ds["fhm_bv"], threshold).values, ("protrusion",),
+                                           "1", f"fraction of the DMW realisations with FHM/BV above {threshold:g} %",
+                                           threshold_percent=threshold)
+    if "nominal_area" in ds:
+        mean, std = en.mean_std(ds["nominal_area"])
+        unit = SCALARS["nominal_area"].units
+        out["nominal_area_mean"] = var(mean.values, ("protrusion",), unit, "ensemble mean of the nominal contact area")
+        out["nominal_area_std"] = var(std.values, ("protrusion",), unit,
+                                      "ensemble standard deviation (ddof 1) of the nominal contact area")
+    return out
 
 
 def dataset(prot: list[float], seeds: list[int], outputs: list[dict[str, list[float]]], attrs: dict) -> xr.Dataset:

@@ -65,13 +65,11 @@ import xarray as xr
 from ..analyses import narrative, report_figures, report_tables
 from ..analyses.paper_comparison import comparison_markdown, identification_markdown
 from ..analyses.report_figures import ENSEMBLE_FIGURE, FIGURES, INTERFACE_FIGURE
-from ..analyses.report_settings import ReportSettings
-from ..analyses.study import targets
+from ..analyses.report_settings import ReportSettings, wants_ensemble
 from ..analyses.sweep_slices import combinations, split_ensemble
 from ..io import DatasetError
 from ..validity import OutsideValidity, describe
 from ..runner import Inputs, Stage, build
-from . import ensemble as ensemble_stage
 
 log = logging.getLogger(__name__)
 
@@ -137,8 +135,7 @@ def compute(scene: Any, inputs: Inputs) -> dict:
     _write_text(repdir / "summary.csv", report_tables.csv_text(header, rows))
     _write_text(repdir / "summary.md",
                 report_tables.summary_markdown(combos, sweep, name, [p.name for p in made], skipped))
-    comparison = comparison_markdown(combos, data, settings, name,
-                                     targets(scene) if data["checks"] is not None and scene is not None else ())
+    comparison = comparison_markdown(combos, data, settings, name)
     if data["identify"] is not None:
         comparison += identification_markdown(data["identify"])
     _write_text(repdir / "comparison.md", comparison)
@@ -154,7 +151,7 @@ def _upstream(scene: Any) -> tuple[str, ...]:
         up.append("dmw")
     if scene.has("contact") and scene["contact"]["k"] is None:
         up.append("calibrate")
-    if ensemble_stage.applies(scene):
+    if wants_ensemble(scene):
         up.append("ensemble")
     return tuple(up)
 
