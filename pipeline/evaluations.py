@@ -200,14 +200,14 @@ def evaluate_realisation(scene: Any, protrusions: Sequence[float], inputs: Input
 
 
 def evaluate(base: Any, params: Sequence[Parameter], values: Sequence[float], protrusions: Sequence[float],
-             inputs: Inputs, realisations: int = 1, k: float | None = None) -> dict[str, Any]:
+             inputs: Inputs, realisations: int = 1) -> dict[str, Any]:
     """Run one candidate at ``protrusions`` [nm]; returns its record (see :class:`EvaluationStore`).
 
     Outputs: :func:`run_protrusions`, one value per protrusion. With ``realisations`` > 1 the candidate
     runs on that many DMW records (:func:`pipeline.model.dmw_record.realisation_seeds`: its own record
     first, then :func:`seeded_record`); each output is then a list over protrusions of lists over the
-    realisations, and the record holds ``realisations`` and ``seeds``. ``k``: the contact criterion
-    constant [1] (default: :func:`pipeline.model.scene_inputs.contact_k` of the candidate, no calibration).
+    realisations, and the record holds ``realisations`` and ``seeds``. The contact criterion k is
+    :func:`pipeline.model.scene_inputs.contact_k` of the candidate (no calibration).
     """
     t0 = time.perf_counter()
     kernel = 0.0
@@ -217,7 +217,7 @@ def evaluate(base: Any, params: Sequence[Parameter], values: Sequence[float], pr
     try:
         scene = with_values(base, params, values)
         interface, record = candidate_inputs(scene, inputs)
-        k = scene_inputs.contact_k(scene)[0] if k is None else k
+        k = scene_inputs.contact_k(scene)[0]
         records = [record]
         if realisations > 1:
             seeds = dmw_record.realisation_seeds(scene["dmw"]["seed"], realisations)
