@@ -24,7 +24,7 @@ export PYTHONHASHSEED := 0
 export UV_PYTHON_DOWNLOADS := never
 
 .PHONY: setup run test test-fast test-slow bench sweep readme clean \
-        roughness dmw interface calibrate simulate accuracy report identify sensitivity
+        roughness dmw interface calibrate simulate accuracy ensemble report identify sensitivity
 
 setup: $(RUN_STAMP)
 
@@ -77,7 +77,7 @@ readme: $(RUN_STAMP)
 	$(BIN)/hdi report $(SCENE) --readme README.md
 
 ## parameter studies: identify the free [recon] parameters from the paper's targets; their sensitivity
-roughness dmw interface calibrate simulate accuracy report identify sensitivity: $(RUN_STAMP)
+roughness dmw interface calibrate simulate accuracy ensemble report identify sensitivity: $(RUN_STAMP)
 	$(BIN)/hdi $@ $(SCENE) $(ARGS)
 
 clean:

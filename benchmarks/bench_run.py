@@ -1,7 +1,8 @@
 """The main job (issue 12): `hdi run` on the paper scene after set-up, everything recomputed (--force).
 
-Target: under 8 s (median of 3 fresh processes, after one untimed run that builds the inputs and the
-numba cache). Baseline of the same run: a fresh interpreter doing what every ``hdi`` command does
+Target: under 15 s (median of 3 fresh processes, after one untimed run that builds the inputs and the
+numba cache), with the report's checks over 8 DMW realisations (the ``ensemble`` stage, issue 17; it was
+8 s before them). Baseline of the same run: a fresh interpreter doing what every ``hdi`` command does
 first (the CLI and the stage registry), the floor no recomputation can go below. The per-stage
 seconds of the last run are kept.
 
@@ -37,7 +38,8 @@ def run(results: list[dict]) -> None:
                       for m in re.finditer(r"^(\w+): wrote .*\((\d+\.\d+) s\)$", done.stderr, re.M)}
         floor = startup_seconds(3)
         record(results, "interpreter start + hdi start-up (CLI and stage registry, fresh process)", floor)
-        record(results, "hdi run paper-2009 --force (main job, everything recomputed)", times, target_s=8.0,
+        record(results, "hdi run paper-2009 --force (main job with the report's ensemble of 8, everything recomputed)",
+               times, target_s=15.0,
                stage_seconds_last_run=stages, cpu_median_s=statistics.median(cpus),
                ratio_to_startup=statistics.median(times) / statistics.median(floor))
         report_figures(results, Path(tmp))

@@ -82,10 +82,18 @@ def base_key(scene: Any, inputs: Inputs) -> str:
 
 
 def evaluation_key(base: str, params: Sequence[Parameter], values: Sequence[float],
-                   protrusions: Sequence[float]) -> str:
-    """Identity of one evaluation (values rounded to 12 significant digits)."""
-    blob = json.dumps({"base": base, "params": {p.name: float(f"{v:.12g}") for p, v in zip(params, values)},
-                       "protrusions": [float(label(float(x))) for x in protrusions]}, sort_keys=True)
+                   protrusions: Sequence[float], realisations: int = 1) -> str:
+    """Identity of one evaluation (values rounded to 12 significant digits).
+
+    ``realisations`` > 1 is part of the identity (the seeds follow from it and ``dmw.seed``, which the
+    base or the values hold); one realisation keeps the key of the single-record evaluation, so a
+    store written before ensembles existed is still read back.
+    """
+    what = {"base": base, "params": {p.name: float(f"{v:.12g}") for p, v in zip(params, values)},
+            "protrusions": [float(label(float(x))) for x in protrusions]}
+    if realisations > 1:
+        what["realisations"] = int(realisations)
+    blob = json.dumps(what, sort_keys=True)
     return hashlib.sha256(blob.encode()).hexdigest()
 
 
@@ -98,10 +106,11 @@ class _Made:
     make: Callable[[], Any] = field(compare=False)
 
 
-@lru_cache(maxsize=8)
+@lru_cache(maxsize=32)
 def _made(what: _Made) -> Any:
     """Per-process cache of interface tables, DMW records and roughness statistics (thread-safe, least
-    recently used dropped: the base inputs every candidate shares stay while varied ones come and go)."""
+    recently used dropped: the base inputs every candidate shares stay while varied ones come and go;
+    32 holds an ensemble's records, 8 by default, of the base and of a candidate besides the tables)."""
     return what.make()
 
 
@@ -144,44 +153,118 @@ def candidate_bulge(scene: Any, inputs: Inputs) -> Any:
     return _made(_Made("bulge", bkey, lambda: scene_table(scene)))
 
 
+def seeded_record(scene: Any, seed: int) -> tuple[np.ndarray, float]:
+    """The scene's synthetic DMW record with ``dmw.seed = seed`` (a realisation of an ensemble), made
+    once per process: ``(displacement [nm], sample rate [Hz])``.
+
+    Raises
+    ------
+    ValueError
+        For a measured record (it is one realisation) or a scene without the dmw effect.
+    """
+    where = str(scene.path) if getattr(scene, "path", None) else "<scene>"
+    if not scene.has("dmw"):
+        raise ValueError(f"{where}: DMW realisations need the dmw effect in scene.effects")
+    if scene["dmw"]["source"] != "synthetic":
+        raise ValueError(f"{where}: DMW realisations need dmw.source = \"synthetic\" (a measured record has one "
+                         f"realisation); got dmw.source = {scene['dmw']['source']!r}")
+    sub = scene.replace(dmw={"seed": int(seed)})
+    s = dmw_record.settings(sub)
+    return _made(_Made("dmw", Runner(sub, ".").key("dmw"), lambda: (dmw_record.synthetic_record(s),
+                                                                      s["sample_rate_hz"])))
+
+
+def run_protrusions(model: sl.Model, protrusions: Sequence[float]) -> tuple[dict[str, list[float]], float, list[str]]:
+    """Steady-window summaries of ``model`` at ``protrusions`` [nm], in dataset units (``fhm_bv`` [%],
+    ``min_clearance`` [nm], ``contact_force`` [mN], ...), one value per protrusion, NaN where the run
+    failed or the quantity does not exist (no contact), by :func:`pipeline.model.simulation.simulate`.
+    Returns ``(outputs, kernel seconds [s], errors)``."""
+    timings = {"kernel_seconds": 0.0}
+    ds = simulate(model, protrusions, on_error="nan", timings=timings)
+    errors = [ds.attrs["errors"]] if "errors" in ds.attrs else []
+    outputs: dict[str, list[float]] = {}
+    for name, v in ds.data_vars.items():
+        fill = SCALARS[name].fill_value  # (a failed protrusion's regime: its fill value, NaN here)
+        outputs[name] = [float("nan") if fill is not None and x == fill else float(x)
+                         for x in v.values.astype(float)]
+    return outputs, timings["kernel_seconds"], errors
+
+
+def evaluate_realisation(scene: Any, protrusions: Sequence[float], inputs: Inputs, k: float | None,
+                         realisation: int, seed: int) -> tuple[int, dict[str, list[float]], float, list[str]]:
+    """One fan-out task of an ensemble of ``scene`` itself (the report's, :mod:`pipeline.stages.ensemble`):
+    realisation ``realisation`` (0: the scene's own record; else :func:`seeded_record` of ``seed``) at
+    ``protrusions`` [nm] with contact criterion ``k`` [1]. Returns ``(realisation, *run_protrusions(...))``.
+
+    ``inputs`` are the scene's own (current upstream datasets of the calling stage), read by path once
+    per process under their stage keys (no candidate's keys to compare).
+    """
+    interface = None
+    if inputs.interface_path:
+        interface = _made(_Made("interface", str(inputs.interface_key),
+                                lambda: read_dataset(inputs.interface_path, stage="interface")))
+    if realisation > 0:
+        record = seeded_record(scene, seed)
+    else:
+        record = _made(_Made("dmw", str(inputs.dmw_key), lambda: dmw_record.load(inputs.dmw_path)[1:]))
+    bulge = None
+    if inputs.bulge_path:
+        bulge = _made(_Made("bulge", str(inputs.bulge_key), lambda: read_dataset(inputs.bulge_path, stage="bulge")))
+    return (realisation, *run_protrusions(sl.build_model(scene, interface, record, k, bulge=bulge), protrusions))
+
+
 def evaluate(base: Any, params: Sequence[Parameter], values: Sequence[float], protrusions: Sequence[float],
-             inputs: Inputs) -> dict[str, Any]:
+             inputs: Inputs, realisations: int = 1) -> dict[str, Any]:
     """Run one candidate at ``protrusions`` [nm]; returns its record (see :class:`EvaluationStore`).
 
-    Outputs are in dataset units (``fhm_bv`` [%], ``min_clearance`` [nm], ``contact_force`` [mN], ...),
-    one value per protrusion, NaN where the run failed or the quantity does not exist (no contact).
+    Outputs: :func:`run_protrusions`, one value per protrusion. With ``realisations`` > 1 the candidate
+    runs on that many DMW records (:func:`pipeline.model.dmw_record.realisation_seeds`: its own record
+    first, then :func:`seeded_record`); each output is then a list over protrusions of lists over the
+    realisations, and the record holds ``realisations`` and ``seeds``. The contact criterion k is
+    :func:`pipeline.model.scene_inputs.contact_k` of the candidate (no calibration).
     """
     t0 = time.perf_counter()
     kernel = 0.0
     errors: list[str] = []
-    outputs: dict[str, list[float]] = {}
+    seeds: list[int] = []
+    per_seed: list[dict[str, list[float]]] = []
     try:
         scene = with_values(base, params, values)
         interface, record = candidate_inputs(scene, inputs)
-        model = sl.build_model(scene, interface, record, scene_inputs.contact_k(scene)[0],
-                               bulge=candidate_bulge(scene, inputs))
+        k = scene_inputs.contact_k(scene)[0]
+        records = [record]
+        if realisations > 1:
+            seeds = dmw_record.realisation_seeds(scene["dmw"]["seed"], realisations)
+            records += [seeded_record(scene, seed) for seed in seeds[1:]]
+        bulge = candidate_bulge(scene, inputs)
+        models = [sl.build_model(scene, interface, rec, k, bulge=bulge) for rec in records]
     except (SceneError, ValueError, sl.IntegrationError) as exc:
         errors.append(str(exc))
-        model = None
-    if model is not None:
-        timings = {"kernel_seconds": 0.0}
-        ds = simulate(model, protrusions, on_error="nan", timings=timings)
-        kernel = timings["kernel_seconds"]
-        if "errors" in ds.attrs:
-            errors.append(ds.attrs["errors"])
-        for name, v in ds.data_vars.items():
-            fill = SCALARS[name].fill_value  # (a failed protrusion's regime: its fill value, NaN here)
-            outputs[name] = [float("nan") if fill is not None and x == fill else float(x)
-                             for x in v.values.astype(float)]
-    return {"params": [float(v) for v in values], "protrusions": [float(x) for x in protrusions],
-            "outputs": outputs, "seconds": time.perf_counter() - t0, "kernel_seconds": kernel,
-            "error": "; ".join(errors) if errors else None}
+        models = []
+    for r, model in enumerate(models):
+        outputs, seconds, errs = run_protrusions(model, protrusions)
+        kernel += seconds
+        errors += [f"realisation {r}: {e}" for e in errs] if realisations > 1 else errs
+        per_seed.append(outputs)
+    if realisations == 1:
+        outputs = per_seed[0] if per_seed else {}
+    else:
+        names = sorted({n for o in per_seed for n in o}, key=lambda n: list(SCALARS).index(n))
+        nan = [float("nan")] * len(protrusions)
+        outputs = {n: [list(v) for v in zip(*(o.get(n, nan) for o in per_seed))] for n in names} \
+            if len(per_seed) == realisations else {}
+    rec = {"params": [float(v) for v in values], "protrusions": [float(x) for x in protrusions],
+           "outputs": outputs, "seconds": time.perf_counter() - t0, "kernel_seconds": kernel,
+           "error": "; ".join(errors) if errors else None}
+    if realisations > 1:
+        rec.update(realisations=int(realisations), seeds=seeds)
+    return rec
 
 
 def evaluate_batch(base: Any, params: Sequence[Parameter], rows: Sequence[tuple[str, Sequence[float]]],
-                   protrusions: Sequence[float], inputs: Inputs) -> list[tuple[str, dict[str, Any]]]:
+                   protrusions: Sequence[float], inputs: Inputs, realisations: int = 1) -> list[tuple[str, dict[str, Any]]]:
     """One fan-out task: evaluate the candidates ``rows = [(key, values), ...]`` (executed on a worker)."""
-    return [(key, evaluate(base, params, values, protrusions, inputs)) for key, values in rows]
+    return [(key, evaluate(base, params, values, protrusions, inputs, realisations)) for key, values in rows]
 
 
 class EvaluationStore:
@@ -243,6 +326,7 @@ class Evaluator:
     scheduler: str | None = None
     workers: int | None = None
     task: Callable[..., list] = evaluate_batch
+    realisations: int = 1
     batch_seconds: float = 0.0
     evaluated: int = 0
     kernel_seconds: float = 0.0
@@ -251,7 +335,7 @@ class Evaluator:
         self.base_hash = base_key(self.base, self.inputs)
 
     def key(self, values: Sequence[float]) -> str:
-        return evaluation_key(self.base_hash, self.params, values, self.protrusions)
+        return evaluation_key(self.base_hash, self.params, values, self.protrusions, self.realisations)
 
     def __call__(self, points: Iterable[Sequence[float]]) -> list[dict[str, Any]]:
         """Records of ``points`` (each a vector of parameter values), evaluating only what the store lacks."""
@@ -262,8 +346,10 @@ class Evaluator:
             if k not in self.store and k not in todo:
                 todo[k] = x
         rows = list(todo.items())
+        # (the realisations only when > 1: a single-record task keeps the signature of the tests' stand-ins)
+        extra = (self.realisations,) if self.realisations > 1 else ()
         tasks = [(self.base, list(self.params), rows[i:i + self.batch_size], list(self.protrusions), self.inputs)
-                 for i in range(0, len(rows), self.batch_size)]
+                 + extra for i in range(0, len(rows), self.batch_size)]
 
         if tasks:
             self.batch_seconds += run_tasks(self.task, tasks, scheduler=self.scheduler, workers=self.workers,

@@ -62,9 +62,9 @@ def sizes(scene: Any, stage: str) -> list[tuple[str, int, int]]:
     if stage == "identify":
         i = scene["identify"]
         n_par = len(i["parameters"])
-        n = i["population"] * n_par * (i["generations"] + 1) + i["profile_points"] * n_par
+        n = (i["population"] * n_par * (i["generations"] + 1) + i["profile_points"] * n_par) * i["realisations"]
         out.append(("identify evaluations (population x parameters x (generations + 1) + profile_points x "
-                    "parameters)", n, MAX_EVALUATIONS))
+                    "parameters, x realisations)", n, MAX_EVALUATIONS))
     if stage == "sensitivity":
         s = scene["sensitivity"]
         n_par = len(s["parameters"])

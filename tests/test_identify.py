@@ -36,6 +36,7 @@ population = 6
 generations = 8
 profile_points = 9
 batch_size = 4
+realisations = 1
 """
 
 

@@ -11,6 +11,9 @@ returns.
 * :mod:`.report_figures`: which report figures to draw from which data (drawing: :mod:`pipeline.analyses.plots`);
 * :mod:`.paper_comparison`: ``comparison.md``, our numbers against :mod:`pipeline.physics.paper`;
 * :mod:`.narrative`: the generated observations and the README's generated section;
+* :mod:`.ensemble`: the statistics that judge a paper target over DMW realisations (touchdown
+  probability and its 0.5 crossing, medians and 10-90 % ranges, mean ± std, exceedance probability);
+* :mod:`.ensemble_comparison`: the comparison's column and section over the realisations (formatting);
 * :mod:`.markdown`: numbers and tables as Markdown text;
 * :mod:`.accuracy`: the accuracy-knob study (error and cost of each knob, chosen defaults).
 """

@@ -63,3 +63,10 @@ class ReportSettings:
             plasticity_index=_get(scene, "materials", "plasticity_index"),
             section_depth_sigma=_get(scene, "contact", "section_depth_sigma"),
         )
+
+
+def wants_ensemble(scene: Any) -> bool:
+    """Whether the report judges the paper's targets over DMW realisations (``report.realisations`` > 1)
+    and the scene can make them (a synthetic DMW record): the ``ensemble`` stage is then upstream."""
+    return bool(_get(scene, "report", "realisations", 1) > 1 and "dmw" in _get(scene, "scene", "effects", [])
+                and _get(scene, "dmw", "source") == "synthetic")

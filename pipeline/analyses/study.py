@@ -29,11 +29,15 @@ from dataclasses import dataclass
 from typing import Any, Callable, Iterable, Sequence
 
 import numpy as np
+import xarray as xr
 
+from . import ensemble as en
+from .ensemble_comparison import SPREAD_STD
 from ..config.grid import TOL_NM, label, range_grid
 from ..config.scene import SCHEMA, TARGETS, SceneError, unit_suffix
 from ..model.slider import touched_in_summary
 from ..units import cf_unit
+from ..variables import SCALARS
 
 
 _KEY_RE = re.compile(r"([a-z_]+)\.([a-z0-9_]+)(?:\[(\d+)\])?")
@@ -182,12 +186,48 @@ class Table:
         return float(np.mean(fly)) if fly.size else float("nan")
 
 
+def record_dataset(record: dict[str, Any]) -> xr.Dataset:
+    """The outputs of an ensemble record (:func:`pipeline.evaluations.evaluate` with realisations > 1) as a
+    dataset of dims ``(protrusion, realisation)`` in dataset units (``units`` attribute of each variable)."""
+    prot = np.asarray(record["protrusions"], float)
+    n = int(record.get("realisations", 1))
+    data = {}
+    for name, v in record["outputs"].items():
+        a = np.asarray(v, float).reshape(len(prot), n)
+        data[name] = xr.DataArray(a, dims=("protrusion", en.DIM),
+                                  attrs={"units": SCALARS[name].units} if name in SCALARS else {})
+    return xr.Dataset(data, coords={"protrusion": prot, en.DIM: np.arange(n)})
+
+
+def at_protrusions(ds: xr.Dataset, name: str, at: Iterable[float]) -> xr.DataArray:
+    """``ds[name]`` at the protrusions ``at`` [nm] (dims ``(protrusion, realisation)``; NaN where not
+    evaluated or absent)."""
+    at = np.asarray(list(at), float)
+    n = ds.sizes.get(en.DIM, 1)
+    out = np.full((at.size, n), np.nan)
+    if name in ds:
+        x = ds["protrusion"].values
+        for i, p in enumerate(at):
+            j = np.flatnonzero(np.abs(x - p) < 1e-6)
+            if j.size:
+                out[i] = ds[name].values[j[0]]
+    return xr.DataArray(out, dims=("protrusion", en.DIM), coords={"protrusion": at})
+
+
+#: How a target's ensemble spread is given: the 10-90 % range of the realisations (medians, the
+#: touchdown protrusion) or mean +- one sample standard deviation (the light-contact state).
+SPREAD_QUANTILES = f"{100 * en.SPREAD[0]:g}-{100 * en.SPREAD[1]:g} % of the realisations"
+
+
 @dataclass(frozen=True)
 class Target:
     """A published target: its value from a candidate and its normalised residual.
 
     ``kind``: ``"equal"`` (residual (v - target)/tol), ``"above"`` (zero when v >= target, else
     (target - v)/tol), ``"below"`` (zero when v <= target), ``"touchdown"`` (see :func:`targets`).
+    ``ensemble``: the value over DMW realisations and its spread, ``(value, low, high)`` of a
+    :func:`record_dataset`; ``spread``: what ``low``/``high`` are (:data:`SPREAD_QUANTILES`,
+    :data:`SPREAD_STD`).
     """
 
     name: str
@@ -199,15 +239,35 @@ class Target:
     protrusions: tuple[float, ...]
     value: Callable[[Table], float]
     paper: str
+    ensemble: Callable[[xr.Dataset], tuple[float, float, float]] | None = None
+    spread: str = SPREAD_QUANTILES
 
     def residual(self, table: Table, missing: float) -> float:
         if self.kind == "touchdown":
             onset, prev = self.protrusions[-1], self.protrusions[0]
             lo_on, lo_prev = table.value("min_clearance", onset), table.value("min_clearance", prev)
-            if not (np.isfinite(lo_on) and np.isfinite(lo_prev)):
-                return missing
-            return (max(0.0, lo_on) + max(0.0, -lo_prev)) / self.tolerance
-        v = self.value(table)
+            return self._touchdown_residual(lo_on, lo_prev, missing)
+        return self._residual_of(self.value(table), missing)
+
+    def ensemble_residual(self, ds: xr.Dataset, missing: float) -> float:
+        """The residual judged over the realisations of ``ds`` (:func:`record_dataset`).
+
+        Touchdown: the residual of :meth:`residual` on the *median* minimum clearance over the
+        realisations, which is below zero exactly when more than half of them touch (touchdown
+        probability > 0.5), and continuous in the parameters; the others: on the ensemble value.
+        """
+        if self.kind == "touchdown":
+            onset, prev = self.protrusions[-1], self.protrusions[0]
+            med = en.median_spread(at_protrusions(ds, "min_clearance", (onset, prev)))[0].values
+            return self._touchdown_residual(float(med[0]), float(med[1]), missing)
+        return self._residual_of(self.ensemble(ds)[0] if self.ensemble else float("nan"), missing)
+
+    def _touchdown_residual(self, lo_on: float, lo_prev: float, missing: float) -> float:
+        if not (np.isfinite(lo_on) and np.isfinite(lo_prev)):
+            return missing
+        return (max(0.0, lo_on) + max(0.0, -lo_prev)) / self.tolerance
+
+    def _residual_of(self, v: float, missing: float) -> float:
         if not np.isfinite(v):
             return missing
         if self.kind == "equal":
@@ -257,26 +317,53 @@ def targets(scene: Any) -> list[Target]:
     def touchdown(t: Table) -> float:
         return t.touchdown()
 
+    def med(values: xr.DataArray) -> tuple[float, float, float]:
+        m, lo, hi = en.median_spread(values)
+        return float(m), float(lo), float(hi)
+
+    def e_touchdown(ds: xr.Dataset) -> tuple[float, float, float]:
+        return en.touchdown_protrusion(at_protrusions(ds, "min_clearance", np.sort(ds["protrusion"].values)))
+
+    def e_flying(ds: xr.Dataset) -> tuple[float, float, float]:
+        return med(en.flying_mean(at_protrusions(ds, "fhm_bv", fr), at_protrusions(ds, "min_clearance", fr)))
+
+    def e_band(ds: xr.Dataset) -> tuple[float, float, float]:
+        m, lo, hi = (v.values for v in en.median_spread(at_protrusions(ds, "fhm_bv", band)))
+        if not (m.size and np.all(np.isfinite(m))):
+            return float("nan"), float("nan"), float("nan")
+        j = int(np.argmin(m))
+        return float(m[j]), float(lo[j]), float(hi[j])
+
+    def e_median_at(name: str, x: float) -> Callable[[xr.Dataset], tuple[float, float, float]]:
+        return lambda ds: med(at_protrusions(ds, name, (x,)).isel(protrusion=0))
+
+    def e_mean_at(name: str) -> Callable[[xr.Dataset], tuple[float, float, float]]:
+        def stat(ds: xr.Dataset) -> tuple[float, float, float]:
+            m, sd = (float(v) for v in en.mean_std(at_protrusions(ds, name, (at,)).isel(protrusion=0)))
+            return m, m - sd, m + sd
+        return stat
+
     sl_ = f"at {at:g} nm"
     all_targets = {
         "touchdown": Target("touchdown", "touchdown protrusion", "nm", "touchdown", td["onset_nm"],
                             c["touchdown_tolerance_nm"], (td["previous_nm"], td["onset_nm"]), touchdown,
-                            f"{td['onset_nm']:g} nm (none at {td['previous_nm']:g} nm)"),
+                            f"{td['onset_nm']:g} nm (none at {td['previous_nm']:g} nm)", e_touchdown),
         "fhm_flying": Target("fhm_flying", f"flying FHM, mean over {fr[0]:g}-{fr[-1]:g} nm", "%", "equal",
                              c["fhm_flying_percent"], c["fhm_flying_tolerance_percent"], fr, fhm_flying,
-                             f"about {c['fhm_flying_percent']:g} %"),
+                             f"about {c['fhm_flying_percent']:g} %", e_flying),
         "fhm_touchdown": Target("fhm_touchdown", f"FHM at {c['fhm_touchdown_at_nm']:g} nm", "%", "equal",
                                 c["fhm_touchdown_percent"], c["fhm_touchdown_tolerance_percent"],
                                 (c["fhm_touchdown_at_nm"],), lambda t: t.value("fhm_bv", c["fhm_touchdown_at_nm"]),
-                                f"about {c['fhm_touchdown_percent']:g} %"),
+                                f"about {c['fhm_touchdown_percent']:g} %", e_median_at("fhm_bv", c["fhm_touchdown_at_nm"])),
         "bouncing": Target("bouncing", f"smallest BV in ({band[0] - c['band_step_nm']:g}, {band[-1]:g}] nm", "%",
                            "above", c["bouncing_min_percent"], c["bouncing_tolerance_percent"], band, band_min,
-                           f"> {c['bouncing_min_percent']:g} %"),
+                           f"> {c['bouncing_min_percent']:g} %", e_band),
         "sliding_bv": Target("sliding_bv", f"BV {sl_}", "%", "below", c["sliding_bv_max_percent"],
                              c["sliding_bv_tolerance_percent"], (at,), at_sliding("fhm_bv"),
-                             f"< {c['sliding_bv_max_percent']:g} %"),
+                             f"< {c['sliding_bv_max_percent']:g} %", e_median_at("fhm_bv", at)),
         "net_force": Target("net_force", f"net interface force {sl_} (negative: attractive)", "mN", "below", 0.0,
-                            c["net_force_tolerance_mn"], (at,), at_sliding("net_force"), "attractive (< 0)"),
+                            c["net_force_tolerance_mn"], (at,), at_sliding("net_force"), "attractive (< 0)",
+                            e_mean_at("net_force"), SPREAD_STD),
     }
     # the paper's light-contact numbers: name -> (long name, units, scene key of the value, of the tolerance)
     for name, (long_name, units, key, tol) in {
@@ -287,7 +374,7 @@ def targets(scene: Any) -> list[Target]:
             "friction_coefficient": ("friction coefficient", "1", "friction_coefficient",
                                      "friction_coefficient_tolerance")}.items():
         all_targets[name] = Target(name, f"{long_name} {sl_}", units, "equal", c[key], c[tol], (at,), at_sliding(name),
-                                   f"{c[key]:g}" + ("" if units == "1" else f" {units}"))
+                                   f"{c[key]:g}" + ("" if units == "1" else f" {units}"), e_mean_at(name), SPREAD_STD)
     return [all_targets[name] for name in TARGETS if name in c["targets"]]
 
 
@@ -296,12 +383,46 @@ def target_protrusions(tlist: Sequence[Target]) -> list[float]:
     return sorted({float(label(float(x))) for t in tlist for x in t.protrusions})
 
 
+def realisations_of(record: dict[str, Any]) -> int:
+    """The DMW realisations of an evaluation record (1: the scene's record alone)."""
+    return int(record.get("realisations", 1))
+
+
 def residuals(record: dict[str, Any], tlist: Sequence[Target], missing: float) -> tuple[np.ndarray, np.ndarray]:
-    """Values and normalised residuals of the targets for one evaluation record."""
+    """Values and normalised residuals of the targets for one evaluation record (over its realisations
+    for an ensemble record: :attr:`Target.ensemble`, :meth:`Target.ensemble_residual`)."""
+    if realisations_of(record) > 1:
+        ds = record_dataset(record)
+        vals = np.array([t.ensemble(ds)[0] if t.ensemble else np.nan for t in tlist], float)
+        res = np.array([t.ensemble_residual(ds, missing) for t in tlist], float)
+        return vals, res
     table = Table(record)
     vals = np.array([t.value(table) for t in tlist], float)
     res = np.array([t.residual(table, missing) for t in tlist], float)
     return vals, res
+
+
+def spreads(record: dict[str, Any], tlist: Sequence[Target]) -> np.ndarray:
+    """``(low, high)`` of each target's ensemble value (:attr:`Target.spread` says which), shape
+    ``(targets, 2)``; NaN for a single-record evaluation."""
+    out = np.full((len(tlist), 2), np.nan)
+    if realisations_of(record) > 1:
+        ds = record_dataset(record)
+        for j, t in enumerate(tlist):
+            if t.ensemble:
+                out[j] = t.ensemble(ds)[1:]
+    return out
+
+
+def ensemble_summary(ds: xr.Dataset, tlist: Sequence[Target]) -> dict[str, tuple[float, float, float, float]]:
+    """Per target name: ``(value, low, high, single)`` over the realisations of ``ds`` (dims ``(protrusion,
+    realisation)``, dataset units: :func:`record_dataset` or ``ensemble.nc``): :attr:`Target.ensemble`
+    and, as ``single``, :attr:`Target.value` of realisation 0 (the scene's own record) alone."""
+    outputs = {name: np.asarray(ds[name].values, float)[:, 0] for name in ds.data_vars
+               if ds[name].dims == ("protrusion", en.DIM)}
+    single = Table({"protrusions": ds["protrusion"].values, "outputs": outputs})
+    return {t.name: ((t.ensemble(ds) if t.ensemble else (np.nan, np.nan, np.nan)) + (t.value(single),))
+            for t in tlist}
 
 
 def cost(res: np.ndarray) -> float:

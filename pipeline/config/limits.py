@@ -29,7 +29,7 @@ MAX_HISTORY_SAMPLES = 2_000_000
 MAX_RECORD_SAMPLES = 20_000_000
 #: Scenes of a sweep, protrusions x roughness sets x damping ratios x realisations (paper: 76).
 MAX_SCENES = 100_000
-#: Evaluations (small sweeps) of a parameter study (identify's default: 1337).
+#: Evaluations (small sweeps) of a parameter study, times their DMW realisations (identify's default: 1337 x 8).
 MAX_EVALUATIONS = 50_000
 
 

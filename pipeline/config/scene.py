@@ -295,6 +295,9 @@ SCHEMA: dict[str, dict[str, Key]] = {
     },
     "report": {
         "histories_nm": Key("floats", [5.0, 11.0], doc="protrusions shown in the history figures [nm]"),
+        "realisations": Key("int", 8, (lambda v: 1 <= v <= 1000, "an integer in [1, 1000]"),
+                            doc="DMW realisations (seeds) over which the comparison judges the paper's targets "
+                                "(the ensemble stage); 1: the single-seed comparison of the sweep only"),
     },
     # hdi identify: free parameters with bounds, the paper's targets with tolerances, the optimiser budget
     "identify": {
@@ -302,6 +305,9 @@ SCHEMA: dict[str, dict[str, Key]] = {
                "unit; docs/model.md, section 'Corrections') [recon]"),
         "targets": Key("strs", list(TARGETS), choices=TARGETS,
                        doc="targets the identification fits (touchdown uses [touchdown] onset_nm/previous_nm)"),
+        "realisations": Key("int", 8, (lambda v: 1 <= v <= 1000, "an integer in [1, 1000]"),
+                            doc="DMW realisations (seeds) each candidate runs; the targets are judged on their "
+                                "ensemble statistics (pipeline/analyses/ensemble.py); 1: the scene's record only"),
         "touchdown_tolerance_nm": Key("float", 0.1, _pos,
                                       doc="tolerance of the touchdown target on the minimum clearance [nm] (recon: "
                                           "half the 0.2 nm actuation step)"),

@@ -8,6 +8,13 @@ FHM 12.5 % at 4-7 nm and ~9 % at 9 nm, BV > 20 % after touchdown, and the light-
 default, ``--scheduler processes`` or a dask.distributed address for more). The objective is the
 sum of squared residuals, each normalised by its tolerance (docs/model.md, section "Corrections").
 
+Ensembles: each candidate runs on ``identify.realisations`` DMW records (default 8; the seeds of
+:func:`pipeline.model.dmw_record.realisation_seeds`, part of the evaluation's key), and every target
+is judged on its ensemble statistic (:attr:`pipeline.analyses.study.Target.ensemble`, the rules of
+:mod:`pipeline.analyses.ensemble`): one DMW seed moves the touchdown by a 0.2-nm step, so a fit to
+one record fits that record's noise. ``identify.nc`` then also holds each target's spread over the
+realisations (``spread_<target>``). One realisation is the single-record identification.
+
 Method
 ------
 1. **Global search**: :func:`scipy.optimize.differential_evolution` [SP97]_ (``best1bin``, Latin
@@ -57,8 +64,8 @@ from ..analyses import plots
 from ..fanout import local_cluster
 from ..io import read_dataset, var
 from ..runner import Inputs, Stage, build
-from ..analyses.study import (Parameter, Target, cost, parse_parameters, residuals, scene_value, target_protrusions,
-                              targets)
+from ..analyses.study import (Parameter, Target, cost, parse_parameters, residuals, scene_value, spreads,
+                              target_protrusions, targets)
 from ..evaluations import Evaluator, evaluate_batch, setup, upstream
 
 log = logging.getLogger(__name__)
@@ -229,9 +236,15 @@ def dataset(ident: Identification, params: Sequence[Parameter], out: dict[str, A
                                            f"objective along the profile of {p.name}")
         data[f"{name}_profile_max_residual"] = var(out["profile_max"][j], "profile_point", "1",
                                                    f"largest |residual| along the profile of {p.name}")
+    n_real = ident.ev.realisations
+    spr = np.array([spreads(r, tl) for r in recs]) if n_real > 1 else None
     for j, t in enumerate(tl):
         data[f"value_{t.name}"] = var(vals[:, j], "evaluation", t.units, t.long_name, paper=t.paper,
                                       target=t.target, tolerance=t.tolerance, kind=t.kind)
+        if spr is not None:  # (ensembles only: a single-record identify.nc is unchanged)
+            data[f"spread_{t.name}"] = var(spr[:, j], ("evaluation", "bound"), t.units,
+                                           f"spread of the {t.long_name} over the DMW realisations ({t.spread})",
+                                           spread=t.spread)
     data["residual"] = var(res, ("evaluation", "target"), "1", "residual of each target normalised by its tolerance "
                            "(inequality targets: zero on the admissible side)")
     data["cost"] = var(costs, "evaluation", "1", "objective: sum of squared normalised residuals")
@@ -266,6 +279,10 @@ def dataset(ident: Identification, params: Sequence[Parameter], out: dict[str, A
         "optimiser_evaluations": out["de_evaluations"],
         "correlation_method": f"Gauss-Newton (J^T J)^+ at the optimum, central differences of {GN_STEP:g} x range",
         "protrusions_nm": ident.ev.protrusions,
+        **({"realisations": n_real,
+            "ensemble_rules": "targets judged over the DMW realisations (pipeline/analyses/ensemble.py): touchdown "
+                              "where the touchdown probability crosses 0.5 (residual on the median minimum clearance), "
+                              "FHM/BV medians, the light-contact state as means"} if n_real > 1 else {}),
         # (this run's counts and fan-out time go to the run log, .hdi/runs.jsonl, not the dataset)
     })
     return ds
@@ -380,6 +397,10 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
     if not tlist:
         raise ValueError(f"{where}: identify.targets is empty: expected at least one target")
     prots = target_protrusions(tlist)
+    if cfg["realisations"] > 1 and not (scene.has("dmw") and scene["dmw"]["source"] == "synthetic"):
+        raise ValueError(f"{where}: identify.realisations = {cfg['realisations']} needs a synthetic DMW record (the dmw "
+                         "effect with dmw.source = \"synthetic\"; a measured record is one realisation): set "
+                         "identify.realisations = 1")
     params, base_inputs, store = setup(scene, inputs, "identify", bool(opts.get("force")))
     x_base = np.array([scene_value(scene, p) for p in params])
     if not np.all(np.isfinite(x_base)):
@@ -388,7 +409,7 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
     workers = opts.get("workers")
     with local_cluster(opts.get("scheduler"), workers) as address:
         ev = Evaluator(scene, params, prots, base_inputs, store, cfg["batch_size"], address, workers,
-                       task=opts.get("task") or evaluate_batch)
+                       task=opts.get("task") or evaluate_batch, realisations=cfg["realisations"])
         ident = Identification(ev, tlist, cfg["missing_residual"])
         result = identify(ident, params, x_base, cfg)
     ds = dataset(ident, params, result, x_base)

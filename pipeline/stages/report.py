@@ -11,6 +11,8 @@ file                       needed    used for
 ``roughness.nc``           optional  ``roughness.png``
 ``dmw.nc``                 optional  ``dmw.png``, the DMW rms in the comparison
 ``interface.nc``           optional  plasticity index, shear strength line of Fig. 7
+``ensemble.nc``            optional  the paper's targets over ``report.realisations`` DMW records
+                                     (upstream when ``report.realisations`` > 1), with spreads
 =========================  ========  ==========================================================
 
 A missing optional input skips its figures (a stale PNG of an earlier run is removed) and the
@@ -63,7 +65,7 @@ import xarray as xr
 from ..analyses import narrative, report_figures, report_tables
 from ..analyses.paper_comparison import comparison_markdown, identification_markdown
 from ..analyses.report_figures import ENSEMBLE_FIGURE, FIGURES, INTERFACE_FIGURE
-from ..analyses.report_settings import ReportSettings
+from ..analyses.report_settings import ReportSettings, wants_ensemble
 from ..analyses.sweep_slices import combinations, split_ensemble
 from ..io import DatasetError
 from ..validity import OutsideValidity, describe
@@ -96,6 +98,10 @@ def load(inputs: Inputs) -> dict[str, xr.Dataset | None]:
             data[name] = inputs.dataset(f"{name}.nc", stage=stage)
         except DatasetError as exc:
             log.warning("report: %s", exc)
+    # the paper's checks over DMW realisations (report.realisations > 1: the ensemble stage is upstream)
+    data["checks"] = None
+    if inputs.path("ensemble.nc").is_file() and (not inputs.upstream or "ensemble" in inputs.upstream):
+        data["checks"] = inputs.dataset("ensemble.nc", stage="ensemble")
     data["identify"] = (inputs.dataset("identify.nc", stage="identify") if inputs.optional.get("identify")
                         else None)  # current for this scene: the three-column comparison
     return data
@@ -147,6 +153,8 @@ def _upstream(scene: Any) -> tuple[str, ...]:
         up.append("dmw")
     if scene.has("contact") and scene["contact"]["k"] is None:
         up.append("calibrate")
+    if wants_ensemble(scene):
+        up.append("ensemble")
     return tuple(up)
 
 

@@ -32,7 +32,6 @@ import logging
 import os
 import sys
 import threading
-import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable
@@ -47,6 +46,7 @@ from ..runner import KEY_ATTR, Inputs, Stage, ensure
 from ..variables import ENSEMBLE, ENSEMBLE_OF, HISTORIES, REGIME_FILL, SCALARS, STEPPING, coordinate
 from ..model import dmw_record, scene_inputs
 from ..model.simulation import DIRECTIONS, simulate
+from ..analyses import ensemble
 from .dmw import realisation_record
 from .simulate import model_attrs, read_k
 from ..config.grid import damping_grid, protrusion_grid, roughness_sets, same_point
@@ -432,11 +432,8 @@ def ensemble_statistics(data: dict[str, xr.Variable]) -> dict[str, xr.Variable]:
         if name not in data:
             continue
         v = data[name]
-        a = np.asarray(v.values, dtype=float)
-        with warnings.catch_warnings():  # all-NaN slices (never in contact) give NaN, as documented
-            warnings.simplefilter("ignore", RuntimeWarning)
-            mean = np.nanmean(a, axis=-1)
-            std = np.nanstd(a, axis=-1, ddof=1)
+        # (the one home of the ensemble rules; all-NaN slices, never in contact, give NaN, as documented)
+        mean, std = (x.values for x in ensemble.mean_std(xr.DataArray(v).astype(float), dim=v.dims[-1]))
         dims = v.dims[:-1]
         out[name + "_mean"] = ENSEMBLE[name + "_mean"].data(mean, dims)
         out[name + "_std"] = ENSEMBLE[name + "_std"].data(std, dims)
