@@ -487,14 +487,20 @@ def _accelerations(p, pitch, y, F_f, F_r, F_i, Q, out):
         out[3] = (p.l_f * F_f - p.l_r * F_r - p.l_c * F_i - p.h_cg * Q) / p.I
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
-def rhs(t, y, p, tab, var, contact, out):
+def rhs(t: float, y: np.ndarray, p: np.record, tab: Tables, var: Variants, contact: bool, out: np.ndarray) -> None:
     """Write ``dy/dt`` into ``out`` (see the module docstring for the equations).
 
-    ``tab``: :class:`Tables`; ``var``: :class:`Variants`; ``contact``: the contact mode.
+    ``tab``: :class:`Tables`; ``var``: :class:`Variants`; ``contact``: the contact mode. Flat
+    arguments for the compiled function, as :func:`integrate`.
     """
-    _rhs(t, y, p, tab.dmw, tab.contact, tab.adhesion, tab.friction, tab.tfc, var.pitch, var.gap_power,
-         var.rear_linear, contact, out)
+    _rhs_flat(t, y, _packed(p), tab.dmw, tab.contact, tab.adhesion, tab.friction, tab.tfc, var.pitch,
+              _packed(var.gap_power), var.rear_linear, contact, out)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _rhs_flat(t, y, params, dmw, cp, pa, ft, tfc, pitch, gap_power_, rlin, contact, out):
+    """:func:`_rhs` called from Python (:func:`rhs`): the records as one-element arrays."""
+    _rhs(t, y, params[0], dmw, cp, pa, ft, tfc, pitch, _unpacked(gap_power_), rlin, contact, out)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -805,8 +811,8 @@ def _stiffness_cap(p, cp, pa, gap_power, tfc, contact, d, h_max, m_eff_inv):
     return p.h_stiff / np.sqrt(kk * m_eff_inv) if kk > 0.0 else h_max
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
-def integrate(y0, grid, p, tab, var, solver):
+def integrate(y0: np.ndarray, grid: Grid, p: np.record, tab: Tables, var: Variants, solver: Solver
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Integrate from ``t = 0`` to ``grid.t_end`` [s]; sample the state at ``grid.t_out`` (ascending).
 
     Parameters
@@ -821,15 +827,44 @@ def integrate(y0, grid, p, tab, var, solver):
     Y : states at ``t_out`` (n_out, 4); C : contact flag at ``t_out``;
     info : ``[status, accepted steps, rejected steps, contact switches, rhs evaluations]``;
     ext : exact minimum and maximum of the separation ``d`` [m] over ``t >= p.t_win``
+
+    Notes
+    -----
+    A plain Python function that hands the compiled :func:`_integrate` flat arguments, the records as
+    one-element arrays (:func:`_packed`): numba's dispatcher types arrays, floats and ``None`` in C,
+    but a record scalar and each named tuple through its Python ``typeof`` (measured: 6.5 us for a
+    :data:`PARAMS` record, 2-2.6 us per named tuple; an empty integration 40 us against 12 us for
+    flat arguments), a fixed cost per call that made the short runs up to 16 % slower than the
+    positional-vector kernel of commit e6348f9 (issue 16; benchmarks/kernel_ab.py).
     """
-    return _integrate(y0, grid.t_end, grid.t_out, p, tab.dmw, tab.contact, tab.adhesion, tab.friction, tab.tfc,
-                      var.pitch, var.gap_power, var.rear_linear, solver.rtol, solver.atol, solver.h_max,
-                      solver.max_steps)
+    return _integrate(y0, grid.t_end, grid.t_out, _packed(p), tab.dmw, tab.contact, tab.adhesion, tab.friction,
+                      tab.tfc, var.pitch, _packed(var.gap_power), var.rear_linear, solver.rtol, solver.atol,
+                      solver.h_max, solver.max_steps)
+
+
+def _packed(record: np.record | None) -> np.ndarray | None:
+    """``record`` as a one-element array of its dtype (a copy; ``None`` stays ``None``): what the
+    compiled functions take, typed by numba's dispatcher in C (:func:`integrate`)."""
+    if record is None:
+        return None
+    a = np.empty(1, record.dtype)
+    a[0] = record
+    return a
+
+
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
+def _unpacked(a):
+    """The record of a one-element array (:func:`_packed`), ``None`` for ``None`` (pruned at compile time)."""
+    if a is None:
+        return None
+    return a[0]
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _integrate(y0, t_end, t_out, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, rtol, atol, h_max, max_steps):
-    """:func:`integrate` with its bundles unpacked into the slots.
+def _integrate(y0, t_end, t_out, params, dmw, cp, pa, ft, tfc, pitch, gap_power_, rlin, rtol, atol, h_max,
+               max_steps):
+    """:func:`integrate` with its bundles unpacked into the slots (``params``, ``gap_power_``: the
+    records as one-element arrays, :func:`_packed`).
 
     Why the inner functions take the slots one by one: numba prunes a disabled effect's branch
     (``if x is None``) only where ``x`` is the compiled function's own argument (the functions inlined
@@ -838,6 +873,8 @@ def _integrate(y0, t_end, t_out, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin
     (measured in one process against the flat kernel); unpacked here, :func:`_step`, :func:`_rhs` and
     their inlined helpers compile to the flat kernel's code.
     """
+    p = params[0]
+    gap_power = _unpacked(gap_power_)
     has_contact = cp is not None
     n_out = t_out.shape[0]
     Y = np.full((n_out, 4), np.nan)
