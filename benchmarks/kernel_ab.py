@@ -9,12 +9,13 @@ flying 5 nm, sliding 11 nm)::
 
     PYTHONPATH=CHECKOUT python benchmarks/kernel_ab.py capture OUT.pkl
 
-``call``: load the pickle, call ``integrate`` once (compilation or cache load), then ``N`` more times
-inside libc's ``lfind`` (as its comparison callback), so that callgrind counts only those: the
-instructions of one integration are the total over ``N``, whatever the machine's load::
+``call``: load the pickle, call ``integrate`` once (compilation or cache load), then switch callgrind's
+instrumentation on, zero its counters, make ``N`` calls and dump (``callgrind_control`` from the
+process itself): the dump's total over ``N`` is the instructions of one integration, whatever the
+machine's load (the polling of ``callgrind_control`` adds ~0.05 M instructions, measured)::
 
-    PYTHONPATH=CHECKOUT valgrind --tool=callgrind --collect-atstart=no --toggle-collect=lfind \
-        --callgrind-out-file=OUT python benchmarks/kernel_ab.py call OUT.pkl CASE N
+    PYTHONPATH=CHECKOUT valgrind --tool=callgrind --instr-atstart=no --callgrind-out-file=OUT.%p \
+        python benchmarks/kernel_ab.py call OUT.pkl CASE N         (then: grep summary OUT.*.1)
 
 (CHECKOUT on ``PYTHONPATH``, the script run by its path: the checkout's ``pipeline`` wins over an
 editable install of another one.) ``time``: the median over ``R`` rounds of ``N`` calls of one case;
@@ -81,24 +82,26 @@ def _load(path: Path, case: str):
     return dyn.integrate, pickle.loads(path.read_bytes())[case]
 
 
+def _callgrind(option: str) -> None:
+    """``callgrind_control OPTION`` on this process; the interpreter keeps running meanwhile (valgrind
+    reads the command while the process executes code, not while it blocks in a system call)."""
+    import os
+    import subprocess
+    proc = subprocess.Popen(["callgrind_control", option, str(os.getpid())], stdout=subprocess.DEVNULL)
+    while proc.poll() is None:
+        sum(range(1000))
+
+
 def call(path: Path, case: str, n: int) -> None:
-    """One call, then ``n`` calls inside libc's ``lfind`` (its comparison callback, called once): under
-    ``valgrind --tool=callgrind --collect-atstart=no --toggle-collect=lfind`` only those are counted
-    (not ``qsort``: LLVM sorts with it while it loads the kernel)."""
-    import ctypes
+    """One call (compilation or cache load), then, under callgrind, instrumentation on, counters zeroed,
+    ``n`` calls, and a dump: the dump's total over ``n`` is the instructions of one call."""
     integrate, args = _load(path, case)
     integrate(*args)
-    libc = ctypes.CDLL(None)
-    cmp_t = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p)
-
-    def calls(a, b):
-        for _ in range(n):
-            integrate(*args)
-        return 0
-
-    one = (ctypes.c_int * 1)(1)
-    count = ctypes.c_size_t(1)
-    libc.lfind(one, one, ctypes.byref(count), ctypes.sizeof(ctypes.c_int), cmp_t(calls))
+    _callgrind("--instr=on")
+    _callgrind("-z")
+    for _ in range(n):
+        integrate(*args)
+    _callgrind("-d")
 
 
 def timing(path: Path, case: str, n: int, rounds: int) -> None:

@@ -859,9 +859,15 @@ def integrate(y0: np.ndarray, grid: Grid, p: np.record, tab: Tables, var: Varian
     A plain Python function that hands the compiled :func:`_integrate` flat arguments, the records as
     one-element arrays (:func:`_packed`): numba's dispatcher types arrays, floats and ``None`` in C,
     but a record scalar and each named tuple through its Python ``typeof`` (measured: 6.5 us for a
-    :data:`PARAMS` record, 2-2.6 us per named tuple; an empty integration 40 us against 12 us for
-    flat arguments), a fixed cost per call that made the short runs up to 16 % slower than the
-    positional-vector kernel of commit e6348f9 (issue 16; benchmarks/kernel_ab.py).
+    :data:`PARAMS` record, 2-2.6 us per named tuple; an empty integration 40 us against 10 us now and
+    12 us for the positional-vector kernel of commit e6348f9). That fixed cost is part of issue 16's
+    regression, not all of it: by callgrind (benchmarks/kernel_ab.py, air-bearing-only scene at 11 nm,
+    per call) e6348f9 runs 4.32 M instructions, this kernel 4.64 M (4.65 M before this change): the
+    step's machine code +0.09 M, and two out-of-line helpers of ~5 instructions each, called once per
+    right-hand-side evaluation here (24,000 per run) and 3,000 times per run in e6348f9, +0.19 M
+    (not identified). ``inline="never"`` on the kernel's functions halves the compile time (25 -> 15 s
+    of CPU, sliding scene, cold cache) with bit-identical results but runs 5.35 M instructions (+15 %),
+    so the helpers stay inlined.
     """
     return _integrate(y0, grid.t_end, grid.t_out, _packed(p), tab.dmw, tab.contact, tab.adhesion, tab.friction,
                       tab.tfc, var.pitch, _packed(var.gap_power), var.rear_linear, var.meniscus, solver.rtol,
