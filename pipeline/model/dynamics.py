@@ -419,15 +419,17 @@ def _stiffening(q, g):
 
 
 @njit(cache=True, nogil=True, inline="always", error_model="numpy")
-def _rear_force(p, rear_linear, y, wr, vr):
-    """Rear-pad force [N] (up positive): the power law, or the linear one, plus its damper."""
-    g_r = p.g0 + y[0] - p.l_r * y[1] - wr
+def _rear_force(p, rear_linear, z, th, vz, vth, wr, vr):
+    """Rear-pad force [N] (up positive): the power law, or the linear one, plus its damper (the state's
+    components as scalars: an array handed to an inlined helper costs a reference-count update pair
+    per right-hand side, see :func:`_rhs`)."""
+    g_r = p.g0 + z - p.l_r * th - wr
     if rear_linear is not None:
         F_r = _rear_linear(g_r, p.g0, p.k_r)
     else:
         g_r = max(g_r, 1e-3 * p.g0)  # the rear law is singular at zero gap; never reached in practice
         F_r = _rear_power(g_r, p.g0, p.n, p.F_r0)
-    F_r -= p.c_r * (y[2] - p.l_r * y[3] - vr)
+    F_r -= p.c_r * (vz - p.l_r * vth - vr)
     return F_r
 
 
@@ -449,25 +451,25 @@ def _tfc_air_force(p, gap_power, tfc, g):
 
 
 @njit(cache=True, nogil=True, inline="always", error_model="numpy")
-def _interface_force(p, cp, pa, ft, men, F_i, y, wc, vc, contact):
+def _interface_force(p, cp, pa, ft, men, F_i, z, th, vz, vth, q, wc, vc, contact):
     """Add the interface forces at the state ``y`` (disk under the TFC point at ``wc`` [m], ``vc`` [m/s])
     to ``F_i`` [N]: adhesion always, contact pressure and damper in contact; returns it, the
     friction force ``Q`` [N] and the rate ``dq/dt`` [Pa/s] of the meniscus state (0 without one).
 
-    With a meniscus formation time ``men`` [s] the adhesion pressure is the state ``q = y[4]`` [Pa],
+    With a meniscus formation time ``men`` [s] the adhesion pressure is the state ``q`` [Pa],
     relaxing towards the table's ``p_a(d)``: ``dq/dt = (p_a(d) - q) / men`` (docs/model.md, section
     "Meniscus formation").
     """
     Q = 0.0
     dq = 0.0
     if pa is not None or cp is not None:
-        d, dd = _separation(p, y, wc, vc)
+        d, dd = separation_at(p, z, th, wc), vz - p.l_c * vth - vc  # (:func:`_separation`)
         # one index for every table (they share the separation grid)
         i, s = _ppindex(p.tab_n, p.tab_x0, p.tab_h, d)
         if pa is not None:
             if men is not None:
-                F_i -= p.A_n * y[4]
-                dq = (_ppat(pa, i, s) - y[4]) / men
+                F_i -= p.A_n * q
+                dq = (_ppat(pa, i, s) - q) / men
             else:
                 F_i -= p.A_n * _ppat(pa, i, s)
         if cp is not None:
@@ -490,16 +492,11 @@ def _interface_stiffness(p, cp, pa, men, contact, kk, d):
 
 
 @njit(cache=True, nogil=True, inline="always", error_model="numpy")
-def _accelerations(p, pitch, y, F_f, F_r, F_i, Q, out):
-    """Write ``dy/dt`` from the forces [N]; the pitch rows are zero when the pitch is locked."""
-    out[0] = y[2]
-    out[2] = (F_f + F_r + F_i) / p.m
+def _accelerations(p, pitch, vz, vth, F_f, F_r, F_i, Q):
+    """``dy/dt`` (4 components) from the forces [N]; the pitch rows are zero when the pitch is locked."""
     if pitch is None:
-        out[1] = 0.0
-        out[3] = 0.0
-    else:
-        out[1] = y[3]
-        out[3] = (p.l_f * F_f - p.l_r * F_r - p.l_c * F_i - p.h_cg * Q) / p.I
+        return vz, 0.0, (F_f + F_r + F_i) / p.m, 0.0
+    return vz, vth, (F_f + F_r + F_i) / p.m, (p.l_f * F_f - p.l_r * F_r - p.l_c * F_i - p.h_cg * Q) / p.I
 
 
 def rhs(t: float, y: np.ndarray, p: np.record, tab: Tables, var: Variants, contact: bool, out: np.ndarray) -> None:
@@ -520,17 +517,27 @@ def _rhs_flat(t, y, params, dmw, cp, pa, ft, tfc, pitch, gap_power_, rlin, men, 
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def _rhs(t, y, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, men, contact, out):
-    """:func:`rhs` with the slots as arguments: what the integrator calls (see :func:`_integrate`)."""
+    """:func:`rhs` with the slots as arguments: what the integrator calls (see :func:`_integrate`).
+
+    The inlined helpers take the state's components as scalars, not ``y`` or ``out`` (the step's
+    machine code 1.98 -> 1.92 M instructions per air-bearing-only run by callgrind, results
+    bit-identical; benchmarks/kernel_ab.py). It was tested as the source of the out-of-line
+    reference-count pair the step makes per right-hand side (24,000 per run, 0.19 M instructions,
+    3,000 per run in commit e6348f9): it is not, that pair is still there (source not found).
+    """
     z, th, vz, vth = y[0], y[1], y[2], y[3]
     wc, vc, wf, vf, wr, vr = _disk3(p, dmw, t)
     lf = p.l_f
     F_f = -p.k_f * (z + lf * th - wf) - p.c_f * (vz + lf * vth - vf)
-    F_r = _rear_force(p, rlin, y, wr, vr)
+    F_r = _rear_force(p, rlin, z, th, vz, vth, wr, vr)
     F_i = 0.0
     if gap_power is not None or tfc is not None:
         F_i = _tfc_air_force(p, gap_power, tfc, gap_at(p, z, th, wc))[0]
-    F_i, Q, dq = _interface_force(p, cp, pa, ft, men, F_i, y, wc, vc, contact)
-    _accelerations(p, pitch, y, F_f, F_r, F_i, Q, out)
+    q = 0.0
+    if men is not None:
+        q = y[4]
+    F_i, Q, dq = _interface_force(p, cp, pa, ft, men, F_i, z, th, vz, vth, q, wc, vc, contact)
+    out[0], out[1], out[2], out[3] = _accelerations(p, pitch, vz, vth, F_f, F_r, F_i, Q)
     if men is not None:
         out[4] = dq
 
@@ -862,10 +869,11 @@ def integrate(y0: np.ndarray, grid: Grid, p: np.record, tab: Tables, var: Varian
     :data:`PARAMS` record, 2-2.6 us per named tuple; an empty integration 40 us against 10 us now and
     12 us for the positional-vector kernel of commit e6348f9). That fixed cost is part of issue 16's
     regression, not all of it: by callgrind (benchmarks/kernel_ab.py, air-bearing-only scene at 11 nm,
-    per call) e6348f9 runs 4.32 M instructions, this kernel 4.64 M (4.65 M before this change): the
-    step's machine code +0.09 M, and two out-of-line helpers of ~5 instructions each, called once per
-    right-hand-side evaluation here (24,000 per run) and 3,000 times per run in e6348f9, +0.19 M
-    (not identified). ``inline="never"`` on the kernel's functions halves the compile time (25 -> 15 s
+    per call) e6348f9 runs 4.32 M instructions, this kernel 4.58 M (4.65 M before the flat arguments,
+    4.64 M with them, 4.58 M with the scalar helpers of :func:`_rhs`): the step's machine code
+    +0.03 M, and two out-of-line JIT helpers of ~5 instructions each (numba's reference-count
+    increment and decrement, by their size and pairing) called once per right-hand-side evaluation
+    here (24,000 per run) and 3,000 times per run in e6348f9, +0.19 M (their source not found). ``inline="never"`` on the kernel's functions halves the compile time (25 -> 15 s
     of CPU, sliding scene, cold cache) with bit-identical results but runs 5.35 M instructions (+15 %),
     so the helpers stay inlined.
     """
