@@ -442,6 +442,6 @@ def test_kernel_cache_folder_is_keyed_by_the_code_the_kernel_inlines():
     from pipeline import code_version as cv
     assert "pipeline.physics.air_bearing" in cv.modules("pipeline.model.dynamics")
     folder = f"numba-{cv.code_key('pipeline.model.dynamics')[:16]}"
-    for fn in (dyn.integrate, dyn.rhs, dyn._rear_power, dyn._stiffening_potential):
+    for fn in (dyn._integrate, dyn._rhs_flat, dyn._rear_power, dyn._stiffening_potential):
         assert folder in Path(fn._cache._cache_path).parts
     assert folder not in str(numba.config.CACHE_DIR)  # numba's own setting is restored after the module

@@ -188,6 +188,10 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "thickness_nm": Key("float", paper.LUBRICANT_THICKNESS_NM, _nonneg, doc="bonded lubricant thickness t [nm] (paper)"),
         "work_of_adhesion_j_m2": Key("float", 0.106, _nonneg, doc="work of adhesion dgamma [J/m^2] (recon, CML)"),
         "intermolecular_distance_nm": Key("float", 0.3, _pos, doc="intermolecular distance eps [nm] (recon, CML)"),
+        "meniscus_time_us": Key("float", 0.0, _nonneg,
+                                doc="meniscus formation time tau_m [us]: the adhesion pressure relaxes towards its "
+                                    "ISBL value with this time constant (docs/model.md, section 'Meniscus "
+                                    "formation'); 0: at once (the ISBL value)"),
     },
     "interface": {
         "model": Key("str", "statistical", choices=("statistical", "deterministic"),

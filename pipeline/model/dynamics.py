@@ -66,13 +66,13 @@ stiffness 5e-8 relative above 1 nm, a 1-ms run's separation within 1e-10 nm of t
 tests/test_model_variants.py). The closed-form gap-power law keeps its compiled branch
 (bit-identical results).
 
-Internal state (prepared, not built): issue 17's meniscus formation (adhesion of the
-lubricant-contacting summits relaxing towards its ISBL value with a time constant) is a fifth state
-component ``a`` with ``a' = (a_ISBL(d) - a) / tau``. It plugs in as a slot ``Variants.meniscus``
-(``None``: off) whose helper multiplies the adhesion term of :func:`_interface_force` by ``a`` and
-writes ``a'``; the state length becomes ``4 + (meniscus is not None)``, a compile-time constant, so
-the four-component arithmetic (error norm over 4 components) and its results stay unchanged when it
-is off.
+Internal state: the meniscus formation of issue 17 (docs/model.md, section "Meniscus formation") is a
+fifth state component, the adhesion pressure ``q`` [Pa] relaxing towards the table's value,
+``q' = (p_a(d) - q) / tau_m``, with the adhesion force ``-A_n q``. It is the slot ``Variants.meniscus``
+(``tau_m`` [s], ``None``: off); the state length is ``4 + (meniscus is not None)``
+(:func:`_state_size`), a compile-time constant, so the four-component arithmetic (error norm over
+4 components) and its results are unchanged when it is off. The contact-switch events and the
+extremes of ``d`` read only the first four components.
 
 Integrator: Dormand-Prince 5(4) with PI-free classical step control (Hairer, Norsett & Wanner,
 *Solving ODEs I*, II.4 and II.5), local extrapolation, error norm the RMS of the embedded error
@@ -202,11 +202,15 @@ class Variants(NamedTuple):
     pitch : ``True`` for the pitch degree of freedom (``None`` locks it)
     rear_linear : ``True`` for the linear rear law (``None``: the power law)
     gap_power : the closed-form TFC stiffening law's parameters (a :data:`GAP_POWER` record)
+    meniscus : the meniscus formation time ``tau_m`` [s] (> 0): the adhesion pressure becomes the fifth
+        state component ``q`` [Pa], ``dq/dt = (p_a(d) - q) / tau_m`` (docs/model.md, section "Meniscus
+        formation"); the state, ``y0``, the outputs and ``Solver.atol`` then have 5 components
     """
 
     pitch: bool | None = None
     rear_linear: bool | None = None
     gap_power: np.record | None = None
+    meniscus: float | None = None
 
 
 class Solver(NamedTuple):
@@ -415,15 +419,17 @@ def _stiffening(q, g):
 
 
 @njit(cache=True, nogil=True, inline="always", error_model="numpy")
-def _rear_force(p, rear_linear, y, wr, vr):
-    """Rear-pad force [N] (up positive): the power law, or the linear one, plus its damper."""
-    g_r = p.g0 + y[0] - p.l_r * y[1] - wr
+def _rear_force(p, rear_linear, z, th, vz, vth, wr, vr):
+    """Rear-pad force [N] (up positive): the power law, or the linear one, plus its damper (the state's
+    components as scalars: an array handed to an inlined helper costs a reference-count update pair
+    per right-hand side, see :func:`_rhs`)."""
+    g_r = p.g0 + z - p.l_r * th - wr
     if rear_linear is not None:
         F_r = _rear_linear(g_r, p.g0, p.k_r)
     else:
         g_r = max(g_r, 1e-3 * p.g0)  # the rear law is singular at zero gap; never reached in practice
         F_r = _rear_power(g_r, p.g0, p.n, p.F_r0)
-    F_r -= p.c_r * (y[2] - p.l_r * y[3] - vr)
+    F_r -= p.c_r * (vz - p.l_r * vth - vr)
     return F_r
 
 
@@ -445,71 +451,95 @@ def _tfc_air_force(p, gap_power, tfc, g):
 
 
 @njit(cache=True, nogil=True, inline="always", error_model="numpy")
-def _interface_force(p, cp, pa, ft, F_i, y, wc, vc, contact):
+def _interface_force(p, cp, pa, ft, men, F_i, z, th, vz, vth, q, wc, vc, contact):
     """Add the interface forces at the state ``y`` (disk under the TFC point at ``wc`` [m], ``vc`` [m/s])
-    to ``F_i`` [N]: adhesion always, contact pressure and damper in contact; returns it and the
-    friction force ``Q`` [N]."""
+    to ``F_i`` [N]: adhesion always, contact pressure and damper in contact; returns it, the
+    friction force ``Q`` [N] and the rate ``dq/dt`` [Pa/s] of the meniscus state (0 without one).
+
+    With a meniscus formation time ``men`` [s] the adhesion pressure is the state ``q`` [Pa],
+    relaxing towards the table's ``p_a(d)``: ``dq/dt = (p_a(d) - q) / men`` (docs/model.md, section
+    "Meniscus formation").
+    """
     Q = 0.0
+    dq = 0.0
     if pa is not None or cp is not None:
-        d, dd = _separation(p, y, wc, vc)
+        d, dd = separation_at(p, z, th, wc), vz - p.l_c * vth - vc  # (:func:`_separation`)
         # one index for every table (they share the separation grid)
         i, s = _ppindex(p.tab_n, p.tab_x0, p.tab_h, d)
         if pa is not None:
-            F_i -= p.A_n * _ppat(pa, i, s)
+            if men is not None:
+                F_i -= p.A_n * q
+                dq = (_ppat(pa, i, s) - q) / men
+            else:
+                F_i -= p.A_n * _ppat(pa, i, s)
         if cp is not None:
             if contact:
                 F_i += p.A_n * max(_ppat(cp, i, s), 0.0) - p.c_c * dd
                 if ft is not None:
                     Q = p.A_n * max(_ppat(ft, i, s), 0.0)
-    return F_i, Q
+    return F_i, Q, dq
 
 
 @njit(cache=True, nogil=True, inline="always", error_model="numpy")
-def _interface_stiffness(p, cp, pa, contact, kk, d):
-    """Add the interface tables' stiffness ``-A_n dp/dd`` [N/m] at ``d`` [m] to ``kk`` (contact in contact)."""
+def _interface_stiffness(p, cp, pa, men, contact, kk, d):
+    """Add the interface tables' stiffness ``-A_n dp/dd`` [N/m] at ``d`` [m] to ``kk`` (contact in contact;
+    adhesion unless it is the meniscus state, whose force does not depend on ``d`` at once)."""
     if cp is not None and contact:
         kk -= p.A_n * _ppval(cp, p.tab_x0, p.tab_h, d)[1]
-    if pa is not None:
+    if pa is not None and men is None:
         kk += p.A_n * _ppval(pa, p.tab_x0, p.tab_h, d)[1]
     return kk
 
 
 @njit(cache=True, nogil=True, inline="always", error_model="numpy")
-def _accelerations(p, pitch, y, F_f, F_r, F_i, Q, out):
-    """Write ``dy/dt`` from the forces [N]; the pitch rows are zero when the pitch is locked."""
-    out[0] = y[2]
-    out[2] = (F_f + F_r + F_i) / p.m
+def _accelerations(p, pitch, vz, vth, F_f, F_r, F_i, Q):
+    """``dy/dt`` (4 components) from the forces [N]; the pitch rows are zero when the pitch is locked."""
     if pitch is None:
-        out[1] = 0.0
-        out[3] = 0.0
-    else:
-        out[1] = y[3]
-        out[3] = (p.l_f * F_f - p.l_r * F_r - p.l_c * F_i - p.h_cg * Q) / p.I
+        return vz, 0.0, (F_f + F_r + F_i) / p.m, 0.0
+    return vz, vth, (F_f + F_r + F_i) / p.m, (p.l_f * F_f - p.l_r * F_r - p.l_c * F_i - p.h_cg * Q) / p.I
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
-def rhs(t, y, p, tab, var, contact, out):
+def rhs(t: float, y: np.ndarray, p: np.record, tab: Tables, var: Variants, contact: bool, out: np.ndarray) -> None:
     """Write ``dy/dt`` into ``out`` (see the module docstring for the equations).
 
-    ``tab``: :class:`Tables`; ``var``: :class:`Variants`; ``contact``: the contact mode.
+    ``tab``: :class:`Tables`; ``var``: :class:`Variants`; ``contact``: the contact mode. Flat
+    arguments for the compiled function, as :func:`integrate`.
     """
-    _rhs(t, y, p, tab.dmw, tab.contact, tab.adhesion, tab.friction, tab.tfc, var.pitch, var.gap_power,
-         var.rear_linear, contact, out)
+    _rhs_flat(t, y, _packed(p), tab.dmw, tab.contact, tab.adhesion, tab.friction, tab.tfc, var.pitch,
+              _packed(var.gap_power), var.rear_linear, var.meniscus, contact, out)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _rhs(t, y, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, contact, out):
-    """:func:`rhs` with the slots as arguments: what the integrator calls (see :func:`_integrate`)."""
+def _rhs_flat(t, y, params, dmw, cp, pa, ft, tfc, pitch, gap_power_, rlin, men, contact, out):
+    """:func:`_rhs` called from Python (:func:`rhs`): the records as one-element arrays."""
+    _rhs(t, y, params[0], dmw, cp, pa, ft, tfc, pitch, _unpacked(gap_power_), rlin, men, contact, out)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _rhs(t, y, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, men, contact, out):
+    """:func:`rhs` with the slots as arguments: what the integrator calls (see :func:`_integrate`).
+
+    The inlined helpers take the state's components as scalars, not ``y`` or ``out`` (the step's
+    machine code 1.98 -> 1.92 M instructions per air-bearing-only run by callgrind, results
+    bit-identical; benchmarks/kernel_ab.py). It was tested as the source of the out-of-line
+    reference-count pair the step makes per right-hand side (24,000 per run, 0.19 M instructions,
+    3,000 per run in commit e6348f9): it is not, that pair is still there (source not found).
+    """
     z, th, vz, vth = y[0], y[1], y[2], y[3]
     wc, vc, wf, vf, wr, vr = _disk3(p, dmw, t)
     lf = p.l_f
     F_f = -p.k_f * (z + lf * th - wf) - p.c_f * (vz + lf * vth - vf)
-    F_r = _rear_force(p, rlin, y, wr, vr)
+    F_r = _rear_force(p, rlin, z, th, vz, vth, wr, vr)
     F_i = 0.0
     if gap_power is not None or tfc is not None:
         F_i = _tfc_air_force(p, gap_power, tfc, gap_at(p, z, th, wc))[0]
-    F_i, Q = _interface_force(p, cp, pa, ft, F_i, y, wc, vc, contact)
-    _accelerations(p, pitch, y, F_f, F_r, F_i, Q, out)
+    q = 0.0
+    if men is not None:
+        q = y[4]
+    F_i, Q, dq = _interface_force(p, cp, pa, ft, men, F_i, z, th, vz, vth, q, wc, vc, contact)
+    out[0], out[1], out[2], out[3] = _accelerations(p, pitch, vz, vth, F_f, F_r, F_i, Q)
+    if men is not None:
+        out[4] = dq
 
 
 # ---------------------------------------------------------------------------------------------
@@ -524,30 +554,40 @@ E1, E3, E4, E5, E6, E7 = (71 / 57600, -71 / 16695, 71 / 1920, -17253 / 339200, 2
 
 
 
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
+def _state_size(men):
+    """Length of the state: ``(z, theta, z', theta')`` and, with a meniscus formation time, ``q`` [Pa]
+    (a compile-time constant: the four-component code is unchanged without the meniscus)."""
+    if men is not None:
+        return 5
+    return 4
+
+
 @njit(cache=True, nogil=True, error_model="numpy")
-def _step(t, y, k1, h, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, contact, ynew, k7, err,
+def _step(t, y, k1, h, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, men, contact, ynew, k7, err,
           tmp, k2, k3, k4, k5, k6):
     """One Dormand-Prince step: ``ynew``, its derivative ``k7`` and the error estimate ``err``
     (``tmp``, ``k2``...``k6``: work arrays, passed one by one: see :func:`_rhs`)."""
-    for i in range(4):
+    ns = _state_size(men)
+    for i in range(ns):
         tmp[i] = y[i] + h * A21 * k1[i]
-    _rhs(t + h / 5, tmp, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, contact, k2)
-    for i in range(4):
+    _rhs(t + h / 5, tmp, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, men, contact, k2)
+    for i in range(ns):
         tmp[i] = y[i] + h * (A31 * k1[i] + A32 * k2[i])
-    _rhs(t + 3 * h / 10, tmp, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, contact, k3)
-    for i in range(4):
+    _rhs(t + 3 * h / 10, tmp, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, men, contact, k3)
+    for i in range(ns):
         tmp[i] = y[i] + h * (A41 * k1[i] + A42 * k2[i] + A43 * k3[i])
-    _rhs(t + 4 * h / 5, tmp, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, contact, k4)
-    for i in range(4):
+    _rhs(t + 4 * h / 5, tmp, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, men, contact, k4)
+    for i in range(ns):
         tmp[i] = y[i] + h * (A51 * k1[i] + A52 * k2[i] + A53 * k3[i] + A54 * k4[i])
-    _rhs(t + 8 * h / 9, tmp, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, contact, k5)
-    for i in range(4):
+    _rhs(t + 8 * h / 9, tmp, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, men, contact, k5)
+    for i in range(ns):
         tmp[i] = y[i] + h * (A61 * k1[i] + A62 * k2[i] + A63 * k3[i] + A64 * k4[i] + A65 * k5[i])
-    _rhs(t + h, tmp, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, contact, k6)
-    for i in range(4):
+    _rhs(t + h, tmp, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, men, contact, k6)
+    for i in range(ns):
         ynew[i] = y[i] + h * (B1 * k1[i] + B3 * k3[i] + B4 * k4[i] + B5 * k5[i] + B6 * k6[i])
-    _rhs(t + h, ynew, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, contact, k7)
-    for i in range(4):
+    _rhs(t + h, ynew, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, men, contact, k7)
+    for i in range(ns):
         err[i] = h * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i] + E7 * k7[i])
 
 
@@ -692,7 +732,7 @@ def _first_wrong_side(p, dmw, contact, t, y, k1, ynew, k7, h, d0, dd0, d1, dd1, 
 
 
 @njit(cache=True, nogil=True, inline="always", error_model="numpy")
-def _locate_switch(t, y, k1, h, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, contact, ynew, k7, err, wk,
+def _locate_switch(t, y, k1, h, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, men, contact, ynew, k7, err, wk,
                    d0, dd0, d1, dd1, ys, buf, info):
     """Find a contact switch in the accepted step ``[t, t + h]`` and shorten the step to it.
 
@@ -726,10 +766,10 @@ def _locate_switch(t, y, k1, h, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin,
             break  # the switch is at the end of the step
         # redo the step exactly up to the switch (in the old mode)
         h_acc = hi * h_acc
-        _step(t, y, k1, h_acc, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, contact, ev_y, ev_f, err,
+        _step(t, y, k1, h_acc, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, men, contact, ev_y, ev_f, err,
               tmp, k2, k3, k4, k5, k6)
         info[4] += 6
-        for i in range(4):
+        for i in range(_state_size(men)):
             ynew[i] = ev_y[i]
             k7[i] = ev_f[i]
         d1, dd1 = separation(p, dmw, t + h_acc, ynew)
@@ -753,27 +793,26 @@ def _track_extremes(p, dmw, t, h, y, k1, ynew, k7, d0, dd0, d1, dd1, ys, buf, ex
 
 
 @njit(cache=True, nogil=True, inline="always", error_model="numpy")
-def _sample_outputs(t, h, y, k1, ynew, k7, contact, t_out, j, Y, C, ys):
+def _sample_outputs(t, h, y, k1, ynew, k7, contact, t_out, j, Y, C, ns):
     """Sample the step ``[t, t + h]`` at the output times from ``t_out[j]`` on; returns the next ``j``."""
     n_out = t_out.shape[0]
     while j < n_out and t_out[j] <= t + h:
         theta = (t_out[j] - t) / h
-        _interp_state(y, k1, ynew, k7, h, theta, ys)
-        for i in range(4):
-            Y[j, i] = ys[i]
+        for i in range(ns):
+            Y[j, i] = _hermite(y, k1, ynew, k7, h, theta, i)
         C[j] = contact
         j += 1
     return j
 
 
 @njit(cache=True, nogil=True, inline="always", error_model="numpy")
-def _error_norm(y, ynew, err, atol, rtol):
-    """RMS of the embedded error scaled by ``atol + rtol max(|y|, |ynew|)``."""
+def _error_norm(y, ynew, err, atol, rtol, ns):
+    """RMS of the embedded error scaled by ``atol + rtol max(|y|, |ynew|)`` over the ``ns`` state components."""
     e = 0.0
-    for i in range(4):
+    for i in range(ns):
         sc = atol[i] + rtol * max(abs(y[i]), abs(ynew[i]))
         e += (err[i] / sc) ** 2
-    return np.sqrt(e / 4.0)
+    return np.sqrt(e / float(ns))
 
 
 @njit(cache=True, nogil=True, inline="always", error_model="numpy")
@@ -791,7 +830,7 @@ def _inverse_mass_at_tfc(p, pitch):
 
 
 @njit(cache=True, nogil=True, inline="always", error_model="numpy")
-def _stiffness_cap(p, cp, pa, gap_power, tfc, contact, d, h_max, m_eff_inv):
+def _stiffness_cap(p, cp, pa, men, gap_power, tfc, contact, d, h_max, m_eff_inv):
     """Largest step [s] after a step ending at separation ``d`` [m]: ``p.h_stiff`` over the angular
     frequency of the local interface spring (``h_max`` without one).
 
@@ -801,12 +840,12 @@ def _stiffness_cap(p, cp, pa, gap_power, tfc, contact, d, h_max, m_eff_inv):
     if pa is None and cp is None and gap_power is None and tfc is None:
         return h_max
     kk = _tfc_air_force(p, gap_power, tfc, d + p.y_s)[1]
-    kk = abs(_interface_stiffness(p, cp, pa, contact, kk, d))
+    kk = abs(_interface_stiffness(p, cp, pa, men, contact, kk, d))
     return p.h_stiff / np.sqrt(kk * m_eff_inv) if kk > 0.0 else h_max
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
-def integrate(y0, grid, p, tab, var, solver):
+def integrate(y0: np.ndarray, grid: Grid, p: np.record, tab: Tables, var: Variants, solver: Solver
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Integrate from ``t = 0`` to ``grid.t_end`` [s]; sample the state at ``grid.t_out`` (ascending).
 
     Parameters
@@ -818,18 +857,54 @@ def integrate(y0, grid, p, tab, var, solver):
 
     Returns
     -------
-    Y : states at ``t_out`` (n_out, 4); C : contact flag at ``t_out``;
+    Y : states at ``t_out`` (n_out, 4), (n_out, 5) with the meniscus state; C : contact flag at ``t_out``;
     info : ``[status, accepted steps, rejected steps, contact switches, rhs evaluations]``;
     ext : exact minimum and maximum of the separation ``d`` [m] over ``t >= p.t_win``
+
+    Notes
+    -----
+    A plain Python function that hands the compiled :func:`_integrate` flat arguments, the records as
+    one-element arrays (:func:`_packed`): numba's dispatcher types arrays, floats and ``None`` in C,
+    but a record scalar and each named tuple through its Python ``typeof`` (measured: 6.5 us for a
+    :data:`PARAMS` record, 2-2.6 us per named tuple; an empty integration 40 us against 10 us now and
+    12 us for the positional-vector kernel of commit e6348f9). That fixed cost is part of issue 16's
+    regression, not all of it: by callgrind (benchmarks/kernel_ab.py, air-bearing-only scene at 11 nm,
+    per call) e6348f9 runs 4.32 M instructions, this kernel 4.58 M (4.65 M before the flat arguments,
+    4.64 M with them, 4.58 M with the scalar helpers of :func:`_rhs`): the step's machine code
+    +0.03 M, and two out-of-line JIT helpers of ~5 instructions each (numba's reference-count
+    increment and decrement, by their size and pairing) called once per right-hand-side evaluation
+    here (24,000 per run) and 3,000 times per run in e6348f9, +0.19 M (their source not found). ``inline="never"`` on the kernel's functions halves the compile time (25 -> 15 s
+    of CPU, sliding scene, cold cache) with bit-identical results but runs 5.35 M instructions (+15 %),
+    so the helpers stay inlined.
     """
-    return _integrate(y0, grid.t_end, grid.t_out, p, tab.dmw, tab.contact, tab.adhesion, tab.friction, tab.tfc,
-                      var.pitch, var.gap_power, var.rear_linear, solver.rtol, solver.atol, solver.h_max,
-                      solver.max_steps)
+    return _integrate(y0, grid.t_end, grid.t_out, _packed(p), tab.dmw, tab.contact, tab.adhesion, tab.friction,
+                      tab.tfc, var.pitch, _packed(var.gap_power), var.rear_linear, var.meniscus, solver.rtol,
+                      solver.atol, solver.h_max, solver.max_steps)
+
+
+def _packed(record: np.record | None) -> np.ndarray | None:
+    """``record`` as a one-element array of its dtype (a copy; ``None`` stays ``None``): what the
+    compiled functions take, typed by numba's dispatcher in C (:func:`integrate`)."""
+    if record is None:
+        return None
+    a = np.empty(1, record.dtype)
+    a[0] = record
+    return a
+
+
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
+def _unpacked(a):
+    """The record of a one-element array (:func:`_packed`), ``None`` for ``None`` (pruned at compile time)."""
+    if a is None:
+        return None
+    return a[0]
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _integrate(y0, t_end, t_out, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, rtol, atol, h_max, max_steps):
-    """:func:`integrate` with its bundles unpacked into the slots.
+def _integrate(y0, t_end, t_out, params, dmw, cp, pa, ft, tfc, pitch, gap_power_, rlin, men, rtol, atol,
+               h_max, max_steps):
+    """:func:`integrate` with its bundles unpacked into the slots (``params``, ``gap_power_``: the
+    records as one-element arrays, :func:`_packed`).
 
     Why the inner functions take the slots one by one: numba prunes a disabled effect's branch
     (``if x is None``) only where ``x`` is the compiled function's own argument (the functions inlined
@@ -838,29 +913,32 @@ def _integrate(y0, t_end, t_out, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin
     (measured in one process against the flat kernel); unpacked here, :func:`_step`, :func:`_rhs` and
     their inlined helpers compile to the flat kernel's code.
     """
+    p = params[0]
+    gap_power = _unpacked(gap_power_)
+    ns = _state_size(men)
     has_contact = cp is not None
     n_out = t_out.shape[0]
-    Y = np.full((n_out, 4), np.nan)
+    Y = np.full((n_out, ns), np.nan)
     C = np.zeros(n_out, dtype=np.bool_)
     info = np.zeros(5, dtype=np.int64)
     ext = np.array([np.inf, -np.inf])  # min and max of d over t >= p.t_win
     y = y0.copy()
-    k1 = np.empty(4)
-    k7 = np.empty(4)
-    ynew = np.empty(4)
-    err = np.empty(4)
-    tmp, k2, k3, k4, k5, k6 = np.empty(4), np.empty(4), np.empty(4), np.empty(4), np.empty(4), np.empty(4)
-    ys = np.empty(4)
+    k1 = np.empty(ns)
+    k7 = np.empty(ns)
+    ynew = np.empty(ns)
+    err = np.empty(ns)
+    tmp, k2, k3, k4, k5, k6 = np.empty(ns), np.empty(ns), np.empty(ns), np.empty(ns), np.empty(ns), np.empty(ns)
+    ys = np.empty(ns)
     buf = np.empty(_extrema_slots(p, dmw, h_max))
-    ev_y = np.empty(4)
-    ev_f = np.empty(4)
+    ev_y = np.empty(ns)
+    ev_f = np.empty(ns)
     wk = (tmp, k2, k3, k4, k5, k6, ev_y, ev_f)  # work arrays of a step redone up to a contact switch
     t = 0.0
     # The initial mode follows the criterion at t = 0.
     contact = False
     if has_contact:
         contact = separation(p, dmw, t, y)[0] < p.k_sigma
-    _rhs(t, y, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, contact, k1)
+    _rhs(t, y, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, men, contact, k1)
     info[4] += 1
     d0, dd0 = separation(p, dmw, t, y)  # d and d' at the current step start (kept step to step)
     if p.t_win <= 0.0:  # the window starts at t = 0: the initial d is one of its values (steps add their ends)
@@ -888,7 +966,7 @@ def _integrate(y0, t_end, t_out, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin
                 contact = not contact
                 info[3] += 1
                 t_hold = t + p.dwell
-                _rhs(t, y, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, contact, k1)
+                _rhs(t, y, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, men, contact, k1)
                 info[4] += 1
         h = min(h, h_max, h_stiff)
         if t + 1.01 * h >= t_end:  # land on t_end exactly, never leave a sliver (Hairer's DOPRI5 rule)
@@ -898,10 +976,10 @@ def _integrate(y0, t_end, t_out, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin
         if h < 1e-12 * max(t, NS) or h < 1e-18:  # (h = t_end - t is never a sliver, see above)
             info[0] = STEP_UNDERFLOW
             return Y, C, info, ext
-        _step(t, y, k1, h, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, contact, ynew, k7, err,
+        _step(t, y, k1, h, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, men, contact, ynew, k7, err,
               tmp, k2, k3, k4, k5, k6)
         info[4] += 6
-        e = _error_norm(y, ynew, err, atol, rtol)
+        e = _error_norm(y, ynew, err, atol, rtol, ns)
         if not np.isfinite(e):
             h *= 0.1
             info[2] += 1
@@ -916,12 +994,12 @@ def _integrate(y0, t_end, t_out, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin
         d1, dd1 = separation(p, dmw, t + h, ynew)
         if has_contact and t_hold < 0.0:
             switched, h_acc, d1, dd1 = _locate_switch(t, y, k1, h, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin,
-                                                      contact, ynew, k7, err, wk, d0, dd0, d1, dd1, ys, buf, info)
+                                                      men, contact, ynew, k7, err, wk, d0, dd0, d1, dd1, ys, buf, info)
         t_new = t + h_acc
         if t_new >= p.t_win:
             _track_extremes(p, dmw, t, h_acc, y, k1, ynew, k7, d0, dd0, d1, dd1, ys, buf, ext)
-        j = _sample_outputs(t, h_acc, y, k1, ynew, k7, contact, t_out, j, Y, C, ys)
-        for i in range(4):
+        j = _sample_outputs(t, h_acc, y, k1, ynew, k7, contact, t_out, j, Y, C, ns)
+        for i in range(ns):
             y[i] = ynew[i]
             if not np.isfinite(y[i]):
                 info[0] = NOT_FINITE
@@ -929,16 +1007,16 @@ def _integrate(y0, t_end, t_out, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin
         t = t_new
         d0, dd0 = d1, dd1
         info[1] += 1
-        h_stiff = _stiffness_cap(p, cp, pa, gap_power, tfc, contact, d0, h_max, m_eff_inv)
+        h_stiff = _stiffness_cap(p, cp, pa, men, gap_power, tfc, contact, d0, h_max, m_eff_inv)
         if t_hold > 0.0 and abs(t - t_hold) <= 1e-12 * t_hold:
             t = t_hold  # land exactly on the end of the dwell (checked at the top of the loop)
         if switched:
             contact = not contact
             t_hold = t + p.dwell if p.dwell > 0.0 else -1.0
-            _rhs(t, y, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, contact, k1)
+            _rhs(t, y, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, men, contact, k1)
             info[4] += 1
         else:
-            for i in range(4):
+            for i in range(ns):
                 k1[i] = k7[i]
         # step growth 0.9 e^(-1/5) in [0.2, 5]; e < (0.9/5)^5 gives the cap without calling pow()
         h = h * (5.0 if e < 1.889568e-4 else max(0.2, 0.9 * e ** -0.2))

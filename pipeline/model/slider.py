@@ -47,7 +47,7 @@ from typing import Any, Callable, Mapping
 import numpy as np
 
 from . import dynamics as dyn
-from ..units import KHZ, MM, MS, NM, NS, UM
+from ..units import KHZ, MM, MS, NM, NS, UM, US
 from ..physics import air_bearing as ab
 from ..physics import bulge_bearing as bb
 from ..physics.fhm import fhm
@@ -63,6 +63,9 @@ from .start import start_state
 #: Regime codes (:class:`pipeline.variables.Regime`, the ``flag_values`` of the ``regime`` variable).
 FLYING, BOUNCING, SURFING = Regime.FLYING, Regime.BOUNCING, Regime.SURFING
 SURFING_FRACTION = 0.99
+
+#: Absolute tolerance of the meniscus state q, relative to the largest adhesion pressure of the table [1].
+MENISCUS_ATOL = 1e-6
 
 #: Scene keys of ``[air_bearing]`` whose named laws (:class:`pipeline.physics.air_bearing.TfcLaw`) act at
 #: the TFC point, each with its registry: the selected laws are summed in the kernel's TFC-point force.
@@ -122,6 +125,7 @@ class Model:
     tfc_tabulated: tuple[ab.TfcLaw, ...] = ()
     scene: Any = None
     start: str = "nominal"
+    meniscus: float | None = None
     #: the static start's fold of this model (:func:`pipeline.model.start.start_state`); not an init
     #: field, so that a copy with other settings (``dataclasses.replace``) finds its own
     fold_cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
@@ -253,6 +257,15 @@ def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float]
     atol_len = sol["atol_nm"] * NM
     w2 = 2 * np.pi * a["frequencies_khz"][1] * KHZ
     atol = np.array([atol_len, atol_len / slider.l_c, atol_len * w2, atol_len / slider.l_c * w2])
+    meniscus = scene["lubricant"]["meniscus_time_us"] * US
+    if meniscus > 0.0:
+        if tabs["adhesion"] is None:
+            raise ValueError("lubricant.meniscus_time_us > 0 relaxes the adhesion pressure: it needs the adhesion "
+                             "effect in scene.effects")
+        # the meniscus state q [Pa]: absolute tolerance a millionth of the table's largest adhesion pressure
+        atol = np.append(atol, MENISCUS_ATOL * np.max(np.abs(tabs["adhesion"][:, 3])))
+    else:
+        meniscus = None
     info.update({"k_f": slider.k_f, "k_r": slider.k_r, "c_f": slider.c_f, "c_r": slider.c_r})
     return Model(slider=slider, p=p, dmw=dmw_c, contact=tabs["contact"], adhesion=tabs["adhesion"],
                  friction=tabs["friction"], area=tabs["area"],
@@ -263,7 +276,7 @@ def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float]
                  output_step=sol["output_step_ns"] * NS, rtol=sol["rtol"], atol=atol,
                  max_step=sol["max_step_ns"] * NS, fhm_measure=sol["fhm_measure"], effects=eff, info=info,
                  tfc_stiffening=gap_power, rear_linear=rear_linear, tfc_tabulated=tabulated, scene=scene,
-                 start=sol["start"])
+                 start=sol["start"], meniscus=meniscus)
 
 
 def tfc_point_laws(scene: Any, fh0: float, tables: Mapping[str, Any] | None = None
@@ -372,6 +385,8 @@ def run_model(model: Model, protrusion: float, y0: np.ndarray | None = None, max
     if y0 is None:
         y0, start_note = start(model, protrusion)
     y0 = np.asarray(y0, float)
+    if model.meniscus is not None and y0.size == 4:  # the meniscus state starts at its equilibrium
+        y0 = np.append(y0, meniscus_equilibrium(model, p, y0))
     Y, C, info, ext = dyn.integrate(y0, dyn.Grid(model.duration, t_out), p, tables, variants,
                                     dyn.Solver(model.rtol, model.atol, model.max_step, max_steps))
     if info[0] != dyn.OK:
@@ -379,6 +394,15 @@ def run_model(model: Model, protrusion: float, y0: np.ndarray | None = None, max
                                f"{dyn.STATUS_TEXT[int(info[0])]} (steps {info[1]}, rejected {info[2]})")
     return Run(model=model, protrusion=protrusion, p=p, nominal_area=An, time=t_out, state=Y, contact=C, info=info,
                d_extremes=(float(ext[0]), float(ext[1])), start=start_note)
+
+
+def meniscus_equilibrium(model: Model, p: np.record, y: np.ndarray) -> float:
+    """The meniscus state's equilibrium ``q = p_a(d)`` [Pa] at the state ``y`` (z [m], theta [rad], ...)
+    at ``t = 0``, the disk under the TFC point where the DMW record puts it (docs/model.md, section
+    "Meniscus formation"): the start value of ``q``."""
+    w = dyn.disk_history(model.dmw, p, np.zeros(1))[0][0] if model.dmw is not None else 0.0
+    d = dyn.separation_at(p, float(y[0]), float(y[1]), w)
+    return float(dyn.ppval(model.adhesion, p.tab_x0, p.tab_h, np.array([d]))[0])
 
 
 def kernel_slots(model: Model, p: np.record) -> tuple[dyn.Tables, dyn.Variants]:
@@ -395,7 +419,7 @@ def kernel_slots(model: Model, p: np.record) -> tuple[dyn.Tables, dyn.Variants]:
     tables = dyn.Tables(dmw=model.dmw, contact=model.contact, adhesion=model.adhesion, friction=model.friction,
                         tfc=tfc)
     variants = dyn.Variants(pitch=True if model.pitch is not None else None, rear_linear=model.rear_linear,
-                            gap_power=gap_power)
+                            gap_power=gap_power, meniscus=model.meniscus)
     return tables, variants
 
 
@@ -421,8 +445,8 @@ def histories(run: Run) -> dict[str, np.ndarray]:
     out["clearance"] = d - m.k_sigma
     x0, h, An = p.tab_x0, p.tab_h, run.nominal_area
     net = np.zeros_like(t)
-    if m.adhesion is not None:
-        out["adhesion_force"] = An * dyn.ppval(m.adhesion, x0, h, d)
+    if m.adhesion is not None:  # (the meniscus state q is the adhesion pressure when it is on)
+        out["adhesion_force"] = An * (Y[:, 4] if m.meniscus is not None else dyn.ppval(m.adhesion, x0, h, d))
         net -= out["adhesion_force"]
     if m.contact is not None:
         c = run.contact

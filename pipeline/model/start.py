@@ -63,7 +63,9 @@ def static_forces(run_parameters):
         if mu not in cache:
             p, tables, variants = run_parameters(mu)
             cache.clear()  # (continuation: one protrusion at a time)
-            cache[mu] = (p, tables._replace(dmw=None), variants)
+            # the meniscus state at rest is at its equilibrium q = p_a(d): the static forces are those
+            # without it (docs/model.md, section "Meniscus formation"); the run appends q
+            cache[mu] = (p, tables._replace(dmw=None), variants._replace(meniscus=None))
         return cache[mu]
 
     def R(y: np.ndarray, mu: float) -> np.ndarray:

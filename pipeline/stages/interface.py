@@ -36,6 +36,7 @@ STAGE = Stage(
     reads=("roughness", "materials", "lubricant", "solver.table_step_nm", "solver.table_min_sigma",
            "solver.table_max_nm", "solver.quadrature_nodes", "solver.quadrature_panels", "scene.effects",
            "air_bearing.flying_height_nm", "interface.model", "solver.contact_grid_points"),
+    excludes=("lubricant.meniscus_time_us",),  # a property of the dynamics, not of the tables
     derived=lambda scene: {"deepest_protrusion_nm": deepest_protrusion_nm(scene)},
     upstream=lambda scene: ("roughness",) if scene["roughness"]["afm"] else (),
     order=30, main_job=True, doc="ISBL tables versus separation, interface.nc")
