@@ -79,6 +79,12 @@ def test_twin_experiment_recovers_the_true_parameters_within_the_reported_interv
     written = path.parent / "twin-identified.toml"
     text = written.read_text()
     assert text.count("# [identified] interval [") == 2  # one per identified value, with its interval
+    # the header names the budget the values came from
+    cfg = scene["identify"]
+    assert (f"# Budget: differential evolution population {cfg['population']} x 2 parameters, at most "
+            f"{cfg['generations']} generations ({ds.attrs['generations']} run), {cfg['profile_points']} profile "
+            f"points") in text
+    assert f"; {ds.sizes['evaluation']} evaluations." in text
     rev = ds.attrs["git_revision"]  # the revision identify.nc was made at, a dirty tree said so
     assert f"(git {rev[:12]}{'-dirty' if rev.endswith('-dirty') else ''});" in text.splitlines()[0]
     ident = load_scene(written)

@@ -295,9 +295,14 @@ def write_identified_scene(scene: Any, params: Sequence[Parameter], ds: xr.Datas
     now = str(ds.attrs.get("history", "")).split(": hdi", 1)[0] or "?"  # when identify.nc was made
     rev = str(ds.attrs.get("git_revision", "unknown"))  # of identify.nc (provenance), "-dirty" kept
     rev = rev[:12] + ("-dirty" if rev.endswith("-dirty") else "")
+    cfg = scene["identify"]
     lines = [f"# Identified by `hdi identify {base.name if base else ''}` on {now} (git {rev});",
              "# every value below is [identified]: fitted to the paper's targets ([identify] of the base scene),",
              f"# with its interval ({ds.attrs['interval_criterion']}).",
+             f"# Budget: differential evolution population {cfg['population']} x {len(params)} parameters, at most "
+             f"{cfg['generations']} generations ({ds.attrs.get('generations', '?')} run), {cfg['profile_points']} "
+             f"profile points, {ds.attrs.get('realisations', 1)} DMW realisation(s) per candidate; "
+             f"{ds.sizes['evaluation']} evaluations.",
              f"# Within tolerance on every target: {'yes' if ds.attrs['within_tolerance'] else 'no'} "
              f"(see identify.nc and the report's comparison).", "",
              "[scene]", f'extends = "{rel}"', f'name = "{scene.name}-identified"',
