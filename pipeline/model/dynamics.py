@@ -522,8 +522,12 @@ def _rhs(t, y, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, men, contact, ou
     The inlined helpers take the state's components as scalars, not ``y`` or ``out`` (the step's
     machine code 1.98 -> 1.92 M instructions per air-bearing-only run by callgrind, results
     bit-identical; benchmarks/kernel_ab.py). It was tested as the source of the out-of-line
-    reference-count pair the step makes per right-hand side (24,000 per run, 0.19 M instructions,
-    3,000 per run in commit e6348f9): it is not, that pair is still there (source not found).
+    reference-count pair (24,000 per air-bearing-only run, 0.19 M instructions; 3,000 per run in commit
+    e6348f9): it is not. callgrind's caller tree (``callgrind_annotate --tree=caller`` on a
+    kernel_ab dump) puts the pair's ~6 calls per step in :func:`_integrate`'s own loop, not in
+    :func:`_step` (with this function inlined into it by LLVM, called once per step); reading the
+    DMW row element by element in :func:`_disk3` instead of through the view ``dmw[i]`` did not remove
+    it either (4.66 -> 4.67 M instructions). Which inlined helper of the loop holds it is not found.
     """
     z, th, vz, vth = y[0], y[1], y[2], y[3]
     wc, vc, wf, vf, wr, vr = _disk3(p, dmw, t)
