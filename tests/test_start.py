@@ -52,3 +52,22 @@ def test_the_start_does_not_decide_the_steady_state(delta):
         assert float(ds["contact_force"]) == pytest.approx(float(ref["contact_force"]), rel=1e-4, abs=1e-9), how
         assert int(ds["regime"]) == int(ref["regime"]), how
     assert int(ref["regime"]) == (sl.FLYING if delta == 5.0 else sl.SURFING)
+
+
+def test_a_solver_copy_shares_the_fold_and_reaches_the_same_start():
+    # with_solver changes how the dynamics are integrated, not the statics: its copy reuses the model's
+    # fold (no new search) and starts where a fresh model starts; a change of force is refused
+    model = build(make_scene(("air_bearing", "pitch", "adhesion", "contact"), solver=SOLVER))
+    fresh = replace(model)  # (dataclasses.replace: its own, empty fold cache)
+    delta = 11 * NM  # past the fold: the start needs it
+    y_model, note_model = sl.start(model, delta)
+    assert "fold" in model.fold_cache
+    copy = sl.with_solver(model, duration=0.1e-3, transient=0.0, rtol=1e-7)
+    assert copy.fold_cache is model.fold_cache and copy.duration == 0.1e-3
+    assert fresh.fold_cache is not model.fold_cache and not fresh.fold_cache
+    y_copy, note_copy = sl.start(copy, delta)
+    y_fresh, _ = sl.start(fresh, delta)
+    assert note_copy == note_model and "contact" in note_model
+    assert (y_copy == y_model).all() and (y_fresh == y_model).all()
+    with pytest.raises(ValueError, match="solver settings only"):
+        sl.with_solver(model, k=0.5)

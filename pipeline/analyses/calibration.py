@@ -120,17 +120,20 @@ CONTACT_OFF_K = -1e300
 def flying_minimum(model: sl.Model, delta_nm: float) -> tuple[float, float, str]:
     """Minimum separation [m] of the run with the contact law off: ``(steady window, whole run, note)``.
 
+    ``model``: the scene's model, or its copy with the contact law off already (``k = CONTACT_OFF_K``:
+    used as it is, so that the runs of a batch share one static-start fold search).
+
     The steady-window minimum is the integrator's exact one; the whole-run minimum adds a run over
     the transient alone (same trajectory: the integration starts from the same state; its window is
     the whole of it, ``t = 0`` included). A collapse (the integration fails, or ``d`` falls below the
     start of the interface tables: adhesive snap-in) returns ``(-inf, -inf, reason)``.
     """
-    off = replace(model, k=CONTACT_OFF_K)
+    off = model if model.k == CONTACT_OFF_K else replace(model, k=CONTACT_OFF_K)
     try:
         run = sl.run_model(off, delta_nm * NM)
         lo_all = run.d_extremes[0]  # t = 0 included when there is no transient
         if model.transient > 0:
-            early = sl.run_model(replace(off, duration=off.transient, transient=0.0), delta_nm * NM)
+            early = sl.run_model(sl.with_solver(off, duration=off.transient, transient=0.0), delta_nm * NM)
             lo_all = min(lo_all, early.d_extremes[0])
     except sl.IntegrationError as exc:
         return -math.inf, -math.inf, f"flying run failed ({exc})"
@@ -179,9 +182,10 @@ def threshold_batch(scene: Any, interface_path: str, dmw_path: str | None, protr
         record = (w_nm, fs)
     bulge = read_dataset(bulge_path, stage="bulge") if bulge_path else None
     model = sl.build_model(scene, interface, record, k=0.0, bulge=bulge)
+    off = replace(model, k=CONTACT_OFF_K)  # (one model for the batch's flying runs: one fold search)
     rows = []
     for delta in protrusions:
-        lo, lo_all, note = flying_minimum(model, delta)
+        lo, lo_all, note = flying_minimum(off, delta)
         k, n = k_star(model, delta, lo, lo_all, k_range, tol)
         rows.append((delta, k, lo / NM, note, n))
     return rows

@@ -552,6 +552,24 @@ def _validity(run: Run, hist: dict[str, np.ndarray], win: np.ndarray) -> int:
                      force=float(max(forces)) if forces else 0.0, load=(s.k_f + s.k_r) * fh0)
 
 
+#: The model's fields that only the integration reads: a copy that changes no others has the same
+#: static equilibria, so it shares the static start's fold (:func:`with_solver`).
+SOLVER_FIELDS = frozenset({"duration", "transient", "output_step", "rtol", "atol", "max_step"})
+
+
 def with_solver(model: Model, **changes: Any) -> Model:
-    """A copy of the model with solver settings changed (``rtol``, ``atol``, ``max_step``, ...)."""
-    return replace(model, **changes)
+    """A copy of the model with solver settings changed (:data:`SOLVER_FIELDS`: ``rtol``, ``atol``,
+    ``max_step``, ``duration``, ...). The copy shares the model's fold cache (the static equilibria do
+    not depend on how the dynamics are integrated), so its static starts cost no new fold search.
+
+    Raises
+    ------
+    ValueError
+        For a field outside :data:`SOLVER_FIELDS` (a copy with other forces: ``dataclasses.replace``).
+    """
+    other = set(changes) - SOLVER_FIELDS
+    if other:
+        raise ValueError(f"with_solver changes solver settings only ({sorted(SOLVER_FIELDS)}), not {sorted(other)}")
+    copy = replace(model, **changes)
+    copy.fold_cache = model.fold_cache
+    return copy
