@@ -172,10 +172,15 @@ def _fhm_section(c: SweepSlice, settings: ReportSettings, dmw: xr.Dataset | None
                  "is not available, so its spectral shape is [recon] too.")
     slope = np.polyfit(x[flying_rng], fhm[flying_rng], 1)[0] if flying_rng.sum() >= 2 else math.nan
     if np.isfinite(slope) and abs(slope) > 0.05 and "adhesion_force" in c.ds:
+        why = ("while flying the only protrusion-dependent force is the adhesion, whose negative stiffness "
+               "grows as the clearance closes and softens the air bearing.")
+        if settings.bulge != "none":  # (docs/model.md, section "Bulge air bearing")
+            why = ("while flying two forces depend on the protrusion: the adhesion, whose negative stiffness "
+                   "grows as the clearance closes and softens the air bearing, and the lift of the air under "
+                   f"the bulge (air_bearing.bulge = {settings.bulge!r}), whose positive stiffness grows "
+                   "with the protrusion and stiffens it.")
         n.append(f"Over the range the FHM {'rises' if slope > 0 else 'falls'} by about {abs(slope):.2g} "
-                 "points per nm of protrusion: while flying the only protrusion-dependent force is the "
-                 "adhesion, whose negative stiffness grows as the clearance closes and softens the air "
-                 "bearing.")
+                 "points per nm of protrusion: " + why)
     return rows, [" ".join(n)]
 
 

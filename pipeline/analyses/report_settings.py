@@ -33,6 +33,7 @@ class ReportSettings:
     dmw_rms_nm, dmw_source, dmw_seed : the DMW settings, used when ``dmw.nc`` is absent [nm]
     hardness_gpa : the scene's hardness [GPa]; plasticity_index : the scene's psi [1] (H derived from it)
     section_depth_sigma : nominal-area section depth [sigma]
+    bulge : the bulge's air-bearing law (``air_bearing.bulge``; ``"none"`` without it)
     """
 
     damping_ratio: float | None = None
@@ -46,6 +47,7 @@ class ReportSettings:
     hardness_gpa: float | None = None
     plasticity_index: float | None = None
     section_depth_sigma: float | None = None
+    bulge: str = "none"
 
     @classmethod
     def from_scene(cls, scene: Any) -> "ReportSettings":
@@ -62,6 +64,7 @@ class ReportSettings:
             hardness_gpa=_get(scene, "materials", "hardness_gpa"),
             plasticity_index=_get(scene, "materials", "plasticity_index"),
             section_depth_sigma=_get(scene, "contact", "section_depth_sigma"),
+            bulge=_get(scene, "air_bearing", "bulge", "none"),
         )
 
 
