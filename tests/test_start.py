@@ -71,3 +71,31 @@ def test_a_solver_copy_shares_the_fold_and_reaches_the_same_start():
     assert (y_copy == y_model).all() and (y_fresh == y_model).all()
     with pytest.raises(ValueError, match="solver settings only"):
         sl.with_solver(model, k=0.5)
+
+
+def test_a_criterion_copy_starts_where_a_fresh_model_does_without_its_own_fold_search():
+    # with_criterion(model, k): the contact-off fold bounds every k's fold (contact is off on the flying
+    # branch under either criterion); the copy's starts, below the bound (continued to the protrusion)
+    # and past it (the contact branch), equal a fresh model's with k, which searches its own fold
+    model = build(make_scene(("air_bearing", "pitch", "adhesion", "contact"), solver=SOLVER))
+    off = replace(model, k=-1e300)
+    sl.start(off, 0.0)
+    bound = off.fold_cache["fold"]
+    assert 5 * NM < bound < 11 * NM  # the adhesion fold of this scene
+    # k sigma 0.5 nm ends the flying branch before the adhesion fold: a bound, not the fold itself
+    for k in (-1.0, 0.0, 1.0, 3.0):
+        copy = sl.with_criterion(off, k)
+        fresh = replace(model, k=k)
+        for delta in (5 * NM, bound - 0.3 * NM, bound, 11 * NM):
+            y_copy, note_copy = sl.start(copy, delta)
+            y_fresh, note_fresh = sl.start(fresh, delta)
+            assert (y_copy == y_fresh).all(), (k, delta / NM, note_copy, note_fresh)
+            assert note_copy.split(":")[0] == note_fresh.split(":")[0]  # same kind of state and values
+            assert ("contact" in note_copy) == (delta >= fresh.fold_cache["fold"]), (k, delta / NM)
+        assert "fold" not in copy.fold_cache and copy.fold_cache["bound"] == bound
+        assert fresh.fold_cache["fold"] <= bound, k
+    # a model's own fold bounds a higher criterion's, not a lower one's (whose fold may lie past it)
+    one = replace(model, k=1.0)
+    sl.start(one, 0.0)
+    assert sl.with_criterion(one, 2.0).fold_cache["bound"] == one.fold_cache["fold"]
+    assert "bound" not in sl.with_criterion(one, 0.5).fold_cache

@@ -64,10 +64,13 @@ METHODS = ("exact", "bisection")
 def touches(model: sl.Model, delta_nm: float, k: float) -> bool:
     """Whether the scene at protrusion ``delta_nm`` [nm] with criterion ``k`` is in contact in the window.
 
+    ``model``: the scene's model with any criterion (a copy with ``k`` is run: :func:`pipeline.model.slider.with_criterion`;
+    from the contact-off model, whose static-start fold bounds every k's, starts past it need no fold search).
+
     In contact at an output sample of the steady window, or ``d < k sigma`` at the exact minimum of
     the window (a contact shorter than the output step falls between samples).
     """
-    return sl.touched(sl.run_model(replace(model, k=float(k)), delta_nm * NM))
+    return sl.touched(sl.run_model(sl.with_criterion(model, k), delta_nm * NM))
 
 
 def k_threshold(model: sl.Model, delta_nm: float, k_range: tuple[float, float], tol: float) -> tuple[float, str, int]:
@@ -186,7 +189,8 @@ def threshold_batch(scene: Any, interface_path: str, dmw_path: str | None, protr
     rows = []
     for delta in protrusions:
         lo, lo_all, note = flying_minimum(off, delta)
-        k, n = k_star(model, delta, lo, lo_all, k_range, tol)
+        # (the bisection's models are copies of `off`, whose fold bounds theirs: sl.with_criterion)
+        k, n = k_star(off, delta, lo, lo_all, k_range, tol)
         rows.append((delta, k, lo / NM, note, n))
     return rows
 

@@ -552,6 +552,25 @@ def _validity(run: Run, hist: dict[str, np.ndarray], win: np.ndarray) -> int:
                      force=float(max(forces)) if forces else 0.0, load=(s.k_f + s.k_r) * fh0)
 
 
+def with_criterion(model: Model, k: float) -> Model:
+    """A copy of the model with the contact criterion ``k`` [1] (``d < k sigma``), for a search over k.
+
+    When ``k`` is at or above the model's own and the model's static-start fold is known, the copy
+    starts with that fold as an upper bound of its own (:func:`pipeline.model.start.start_state`): on
+    the flying branch the contact law is off under either criterion, so the forces agree and a higher
+    criterion can only end the branch earlier (where ``d`` reaches ``k sigma``). Starts past the bound
+    then go to the contact branch, and starts below it continue the flying branch to their protrusion,
+    without a fold search of the copy's own (~0.2 s each): a bisection on k past the touchdown
+    (:func:`pipeline.analyses.calibration.k_threshold`) runs many such copies. The start states are
+    those of a fresh model with ``k`` (tests/test_start.py).
+    """
+    copy = replace(model, k=float(k))
+    fold = model.fold_cache.get("fold")
+    if fold is not None and copy.k_sigma >= model.k_sigma:
+        copy.fold_cache["bound"] = fold
+    return copy
+
+
 #: The model's fields that only the integration reads: a copy that changes no others has the same
 #: static equilibria, so it shares the static start's fold (:func:`with_solver`).
 SOLVER_FIELDS = frozenset({"duration", "transient", "output_step", "rtol", "atol", "max_step"})

@@ -94,6 +94,12 @@ def start_state(run_parameters, protrusion: float, rule: str, contact_start_z: f
     (:func:`pipeline.physics.equilibrium.branch_fold`, steps of :data:`FOLD_STEP`): past it, a start
     goes to the contact branch without continuing the flying one again. The fold is a function of the
     model alone, not of which protrusion asked first, so the starts do not depend on the order of the runs.
+    ``fold_cache["bound"]``, when set (:func:`pipeline.model.slider.with_criterion`): an upper bound of the
+    fold, that of the same forces under a lower criterion; this model's own fold is then not searched.
+    A protrusion at or past the bound starts on the contact branch; one below it continues the flying
+    branch to the protrusion, which ends on the way exactly when the fold lies before it. Either way
+    the state is the one the model's own fold gives (the contact-branch Newton does not depend on
+    where the fold is); only the note's fold differs (the bound, or the continuation's own bracket).
     """
     if rule == "nominal":
         return np.zeros(4), "nominal attitude"
@@ -101,7 +107,13 @@ def start_state(run_parameters, protrusion: float, rule: str, contact_start_z: f
         raise ValueError(f"solver.start = {rule!r}: expected one of {STARTS}")
     R, flying = static_forces(run_parameters)
     fold = None
-    if fold_cache is not None and fold_max is not None:
+    bound = fold_cache.get("bound") if fold_cache is not None and "fold" not in fold_cache else None
+    past_bound = bound is not None and bool(protrusion >= bound)
+    if bound is not None:
+        # past an upper bound of this model's fold: past the fold. Below it: the continuation to the
+        # protrusion finds where this model's branch ends, if it does before
+        fold = bound if past_bound else None
+    elif fold_cache is not None and fold_max is not None:
         if "fold" not in fold_cache:
             fold_cache["fold"] = branch_fold(R, fold_max, y_start=np.zeros(2), scale=SCALE, accept=flying,
                                              step=FOLD_STEP, mu_tol=FOLD_TOL)
@@ -114,5 +126,7 @@ def start_state(run_parameters, protrusion: float, rule: str, contact_start_z: f
     z, theta = st.equilibrium.y
     note = f"static {st.kind} equilibrium (z = {z / NM:.4g} nm, theta = {theta / URAD:.4g} urad)"
     if st.kind == "contact":
-        note += f": {st.message}"
+        note += (f": no flying equilibrium at {protrusion:.6g} (past {bound:.6g}, where the flying branch "
+                 "without the contact criterion ends, at or beyond this one's fold)" if past_bound
+                 else f": {st.message}")
     return np.array([z, theta, 0.0, 0.0]), note
