@@ -238,6 +238,7 @@ def evaluate(base: Any, params: Sequence[Parameter], values: Sequence[float], pr
             records += [seeded_record(scene, seed) for seed in seeds[1:]]
         bulge = candidate_bulge(scene, inputs)
         models = [sl.build_model(scene, interface, rec, k, bulge=bulge) for rec in records]
+        sl.share_statics(models)  # (the static starts are on the mean disk: found once for all records)
     except (SceneError, ValueError, sl.IntegrationError) as exc:
         errors.append(str(exc))
         models = []

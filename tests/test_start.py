@@ -12,12 +12,14 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+import numpy as np
 import pytest
+from numpy.testing import assert_array_equal
 
 from pipeline.model import slider as sl
 from pipeline.model.simulation import simulate
 from pipeline.units import NM
-from test_dynamics import build, make_scene
+from test_dynamics import build, make_scene, synthetic_record
 
 #: modal damping 0.05: the slower mode (120 kHz) decays as exp(-zeta omega t), 1/(zeta omega) = 26.5 us,
 #: so a 0.3 ms transient leaves exp(-11.3) ~ 1e-5 of the start's offset (< 1 nm) in the window
@@ -61,10 +63,10 @@ def test_a_solver_copy_shares_the_fold_and_reaches_the_same_start():
     fresh = replace(model)  # (dataclasses.replace: its own, empty fold cache)
     delta = 11 * NM  # past the fold: the start needs it
     y_model, note_model = sl.start(model, delta)
-    assert "fold" in model.fold_cache
+    assert "fold" in model.statics
     copy = sl.with_solver(model, duration=0.1e-3, transient=0.0, rtol=1e-7)
-    assert copy.fold_cache is model.fold_cache and copy.duration == 0.1e-3
-    assert fresh.fold_cache is not model.fold_cache and not fresh.fold_cache
+    assert copy.statics is model.statics and copy.duration == 0.1e-3
+    assert fresh.statics is not model.statics and not fresh.statics
     y_copy, note_copy = sl.start(copy, delta)
     y_fresh, _ = sl.start(fresh, delta)
     assert note_copy == note_model and "contact" in note_model
@@ -80,7 +82,7 @@ def test_a_criterion_copy_starts_where_a_fresh_model_does_without_its_own_fold_s
     model = build(make_scene(("air_bearing", "pitch", "adhesion", "contact"), solver=SOLVER))
     off = replace(model, k=-1e300)
     sl.start(off, 0.0)
-    bound = off.fold_cache["fold"]
+    bound = off.statics["fold"]
     assert 5 * NM < bound < 11 * NM  # the adhesion fold of this scene
     # k sigma 0.5 nm ends the flying branch before the adhesion fold: a bound, not the fold itself
     for k in (-1.0, 0.0, 1.0, 3.0):
@@ -91,11 +93,35 @@ def test_a_criterion_copy_starts_where_a_fresh_model_does_without_its_own_fold_s
             y_fresh, note_fresh = sl.start(fresh, delta)
             assert (y_copy == y_fresh).all(), (k, delta / NM, note_copy, note_fresh)
             assert note_copy.split(":")[0] == note_fresh.split(":")[0]  # same kind of state and values
-            assert ("contact" in note_copy) == (delta >= fresh.fold_cache["fold"]), (k, delta / NM)
-        assert "fold" not in copy.fold_cache and copy.fold_cache["bound"] == bound
-        assert fresh.fold_cache["fold"] <= bound, k
+            assert ("contact" in note_copy) == (delta >= fresh.statics["fold"]), (k, delta / NM)
+        assert "fold" not in copy.statics and copy.statics["bound"] == bound
+        assert fresh.statics["fold"] <= bound, k
     # a model's own fold bounds a higher criterion's, not a lower one's (whose fold may lie past it)
     one = replace(model, k=1.0)
     sl.start(one, 0.0)
-    assert sl.with_criterion(one, 2.0).fold_cache["bound"] == one.fold_cache["fold"]
-    assert "bound" not in sl.with_criterion(one, 0.5).fold_cache
+    assert sl.with_criterion(one, 2.0).statics["bound"] == one.statics["fold"]
+    assert "bound" not in sl.with_criterion(one, 0.5).statics
+
+
+def test_the_realisations_of_an_ensemble_share_their_static_starts():
+    # the static equilibria are on the mean disk: models of one scene on other DMW records start from the
+    # same states, found once for all (share_statics), and run exactly as each does alone
+    scene = make_scene(("air_bearing", "pitch", "adhesion", "contact", "dmw"),
+                       solver={"duration_ms": 0.6, "transient_ms": 0.3})
+    records = [synthetic_record(scene)] + [synthetic_record(make_scene(
+        ("air_bearing", "pitch", "adhesion", "contact", "dmw"), solver={"duration_ms": 0.6, "transient_ms": 0.3},
+        dmw={"seed": seed})) for seed in (7, 8)]
+    assert not np.array_equal(records[0][0], records[1][0])
+    alone = [build(scene, rec) for rec in records]
+    shared = [build(scene, rec) for rec in records]
+    sl.share_statics(shared)
+    deltas = [5.0, 11.0]  # flying; past the fold (contact branch)
+    for a, s in zip(alone, shared):
+        ra, rs = simulate(a, deltas), simulate(s, deltas)
+        for name in ra.data_vars:
+            assert_array_equal(ra[name].values, rs[name].values, err_msg=name)
+    assert all(s.statics is shared[0].statics for s in shared)
+    assert sorted(mu for _, mu in shared[0].statics["starts"]) == [5 * NM, 11 * NM]  # one dict: found once for the three
+    assert not np.array_equal(simulate(shared[0], [5.0])["fhm_bv"], simulate(shared[1], [5.0])["fhm_bv"])
+    with pytest.raises(ValueError, match="one scene and criterion"):
+        sl.share_statics([alone[0], replace(alone[1], k=0.5)])

@@ -42,7 +42,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 from functools import partial
-from typing import Any, Callable, Mapping
+from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 
@@ -126,9 +126,11 @@ class Model:
     scene: Any = None
     start: str = "nominal"
     meniscus: float | None = None
-    #: the static start's fold of this model (:func:`pipeline.model.start.start_state`); not an init
-    #: field, so that a copy with other settings (``dataclasses.replace``) finds its own
-    fold_cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
+    #: the static starts of this model, kept once found: the fold of its flying branch
+    #: (:func:`pipeline.model.start.start_state`) and the start state per protrusion (:func:`start`).
+    #: Not an init field, so that a copy with other forces (``dataclasses.replace``) finds its own;
+    #: copies whose statics are the same share it (:func:`with_solver`, :func:`share_statics`)
+    statics: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @property
     def k_sigma(self) -> float:
@@ -367,11 +369,35 @@ def run_parameters(model: Model, protrusion: float) -> tuple[np.record, dyn.Tabl
 
 def start(model: Model, protrusion: float) -> tuple[np.ndarray, str]:
     """The start state of a run at ``protrusion`` [m] by the model's ``solver.start`` rule, and its note
-    (:func:`pipeline.model.start.start_state`)."""
-    y_s, fh0 = model.p["y_s"], model.p["FH0"]
-    # (the fold is searched up to twice the flying height: past FH0 the TFC point is at the disk anyway)
-    return start_state(lambda mu: run_parameters(model, mu), protrusion, model.start,
-                       contact_start_z=protrusion + y_s - fh0, fold_cache=model.fold_cache, fold_max=2 * fh0)
+    (:func:`pipeline.model.start.start_state`), kept in the model's ``statics`` once found (a copy is
+    returned): the flying runs of a calibration and the realisations of an ensemble ask again."""
+    starts = model.statics.setdefault("starts", {})
+    key = (model.start, float(protrusion))
+    if key not in starts:
+        y_s, fh0 = model.p["y_s"], model.p["FH0"]
+        # (the fold is searched up to twice the flying height: past FH0 the TFC point is at the disk anyway)
+        starts[key] = start_state(lambda mu: run_parameters(model, mu), protrusion, model.start,
+                                  contact_start_z=protrusion + y_s - fh0, statics=model.statics, fold_max=2 * fh0)
+    y, note = starts[key]
+    return y.copy(), note
+
+
+def share_statics(models: Sequence[Model]) -> None:
+    """Give the models of one scene on different DMW records (the realisations of an ensemble) one
+    ``statics``: the static equilibria are those of the mean disk (``w = 0``: docs/model.md, section
+    "Start state"), so the fold and the start states of one hold for all, found once.
+
+    Raises
+    ------
+    ValueError
+        When the models are not of one scene and criterion (other forces, other statics).
+    """
+    first = models[0]
+    for m in models[1:]:
+        if m.scene is not first.scene or m.k != first.k or m.start != first.start:
+            raise ValueError("share_statics: the models must be of one scene and criterion k "
+                             "(they may differ in their DMW record only)")
+        m.statics = first.statics
 
 
 def run_model(model: Model, protrusion: float, y0: np.ndarray | None = None, max_steps: int = 5_000_000) -> Run:
@@ -565,9 +591,9 @@ def with_criterion(model: Model, k: float) -> Model:
     those of a fresh model with ``k`` (tests/test_start.py).
     """
     copy = replace(model, k=float(k))
-    fold = model.fold_cache.get("fold")
+    fold = model.statics.get("fold")
     if fold is not None and copy.k_sigma >= model.k_sigma:
-        copy.fold_cache["bound"] = fold
+        copy.statics["bound"] = fold
     return copy
 
 
@@ -590,5 +616,5 @@ def with_solver(model: Model, **changes: Any) -> Model:
     if other:
         raise ValueError(f"with_solver changes solver settings only ({sorted(SOLVER_FIELDS)}), not {sorted(other)}")
     copy = replace(model, **changes)
-    copy.fold_cache = model.fold_cache
+    copy.statics = model.statics
     return copy

@@ -12,7 +12,7 @@ adhesion basin. ``solver.start`` (:data:`STARTS`):
   equilibrium exists, the contact-branch equilibrium (from the TFC point at zero separation), and the
   run says so in its ``start`` note; if neither exists, the nominal attitude, said likewise. The fold
   is found once per model (:func:`pipeline.physics.equilibrium.branch_fold`, kept in the model's
-  ``fold_cache``), so a start past it costs one Newton solve on the contact branch, not a new
+  ``statics``), so a start past it costs one Newton solve on the contact branch, not a new
   bracketing of the fold;
 * ``"nominal"``: the nominal attitude (the model before the start state was part of it).
 
@@ -84,17 +84,17 @@ def static_forces(run_parameters):
 
 
 def start_state(run_parameters, protrusion: float, rule: str, contact_start_z: float,
-                fold_cache: dict | None = None, fold_max: float | None = None) -> tuple[np.ndarray, str]:
+                statics: dict | None = None, fold_max: float | None = None) -> tuple[np.ndarray, str]:
     """The start state ``(z, theta, z', theta')`` of a run at ``protrusion`` [m] by the rule ``rule``
     (:data:`STARTS`), and a note saying which state it is.
 
     ``contact_start_z`` [m]: the z of the contact-branch start (the TFC point at zero separation).
-    ``fold_cache``: a dict owned by the model (one per model: the fold depends on every force and on
+    ``statics``: a dict owned by the model (one per model: the fold depends on every force and on
     ``k sigma``), where the fold of the flying branch up to ``fold_max`` [m] is kept once found
     (:func:`pipeline.physics.equilibrium.branch_fold`, steps of :data:`FOLD_STEP`): past it, a start
     goes to the contact branch without continuing the flying one again. The fold is a function of the
     model alone, not of which protrusion asked first, so the starts do not depend on the order of the runs.
-    ``fold_cache["bound"]``, when set (:func:`pipeline.model.slider.with_criterion`): an upper bound of the
+    ``statics["bound"]``, when set (:func:`pipeline.model.slider.with_criterion`): an upper bound of the
     fold, that of the same forces under a lower criterion; this model's own fold is then not searched.
     A protrusion at or past the bound starts on the contact branch; one below it continues the flying
     branch to the protrusion, which ends on the way exactly when the fold lies before it. Either way
@@ -107,17 +107,17 @@ def start_state(run_parameters, protrusion: float, rule: str, contact_start_z: f
         raise ValueError(f"solver.start = {rule!r}: expected one of {STARTS}")
     R, flying = static_forces(run_parameters)
     fold = None
-    bound = fold_cache.get("bound") if fold_cache is not None and "fold" not in fold_cache else None
+    bound = statics.get("bound") if statics is not None and "fold" not in statics else None
     past_bound = bound is not None and bool(protrusion >= bound)
     if bound is not None:
         # past an upper bound of this model's fold: past the fold. Below it: the continuation to the
         # protrusion finds where this model's branch ends, if it does before
         fold = bound if past_bound else None
-    elif fold_cache is not None and fold_max is not None:
-        if "fold" not in fold_cache:
-            fold_cache["fold"] = branch_fold(R, fold_max, y_start=np.zeros(2), scale=SCALE, accept=flying,
+    elif statics is not None and fold_max is not None:
+        if "fold" not in statics:
+            statics["fold"] = branch_fold(R, fold_max, y_start=np.zeros(2), scale=SCALE, accept=flying,
                                              step=FOLD_STEP, mu_tol=FOLD_TOL)
-        fold = fold_cache["fold"]
+        fold = statics["fold"]
     st = static_equilibrium(R, protrusion, mu_start=0.0, y_start=np.zeros(2), scale=SCALE, accept=flying,
                             contact_start=np.array([contact_start_z, 0.0]), contact_max_step=0.05 * SCALE,
                             steps=STEPS, mu_tol=FOLD_TOL, fold=fold)
