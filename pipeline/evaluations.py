@@ -190,11 +190,13 @@ def run_protrusions(model: sl.Model, protrusions: Sequence[float]) -> tuple[dict
     return outputs, timings["kernel_seconds"], errors
 
 
-def evaluate_realisation(scene: Any, protrusions: Sequence[float], inputs: Inputs, k: float | None,
-                         realisation: int, seed: int) -> tuple[int, dict[str, list[float]], float, list[str]]:
+def evaluate_realisations(scene: Any, protrusions: Sequence[float], inputs: Inputs, k: float | None,
+                          realisations: Sequence[int], seeds: Sequence[int]) -> list[tuple[int, dict[str, list[float]], float, list[str]]]:
     """One fan-out task of an ensemble of ``scene`` itself (the report's, :mod:`pipeline.stages.ensemble`):
-    realisation ``realisation`` (0: the scene's own record; else :func:`seeded_record` of ``seed``) at
-    ``protrusions`` [nm] with contact criterion ``k`` [1]. Returns ``(realisation, *run_protrusions(...))``.
+    the realisations ``realisations`` (0: the scene's own record; else :func:`seeded_record` of the
+    matching ``seeds``) at ``protrusions`` [nm] with contact criterion ``k`` [1]. Returns, per
+    realisation, ``(realisation, *run_protrusions(...))``; the task's models share their static starts
+    (:func:`pipeline.model.slider.share_statics`).
 
     ``inputs`` are the scene's own (current upstream datasets of the calling stage), read by path once
     per process under their stage keys (no candidate's keys to compare).
@@ -203,14 +205,16 @@ def evaluate_realisation(scene: Any, protrusions: Sequence[float], inputs: Input
     if inputs.interface_path:
         interface = _made(_Made("interface", str(inputs.interface_key),
                                 lambda: read_dataset(inputs.interface_path, stage="interface")))
-    if realisation > 0:
-        record = seeded_record(scene, seed)
-    else:
-        record = _made(_Made("dmw", str(inputs.dmw_key), lambda: dmw_record.load(inputs.dmw_path)[1:]))
     bulge = None
     if inputs.bulge_path:
         bulge = _made(_Made("bulge", str(inputs.bulge_key), lambda: read_dataset(inputs.bulge_path, stage="bulge")))
-    return (realisation, *run_protrusions(sl.build_model(scene, interface, record, k, bulge=bulge), protrusions))
+    models = []
+    for realisation, seed in zip(realisations, seeds):
+        record = seeded_record(scene, seed) if realisation > 0 else \
+            _made(_Made("dmw", str(inputs.dmw_key), lambda: dmw_record.load(inputs.dmw_path)[1:]))
+        models.append(sl.build_model(scene, interface, record, k, bulge=bulge))
+    sl.share_statics(models)
+    return [(r, *run_protrusions(model, protrusions)) for r, model in zip(realisations, models)]
 
 
 def evaluate(base: Any, params: Sequence[Parameter], values: Sequence[float], protrusions: Sequence[float],

@@ -31,7 +31,7 @@ import signal
 import threading
 import time
 from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
-from typing import Any, Callable, Iterable, Iterator
+from typing import Any, Callable, Iterable, Iterator, Sequence
 
 log = logging.getLogger(__name__)
 
@@ -50,6 +50,18 @@ def local_workers(workers: int | None, n_tasks: int) -> int:
     if n < 1:
         raise ValueError(f"workers = {n}: expected an integer >= 1")
     return max(1, min(n, n_tasks))
+
+
+#: Tasks :func:`split` makes for a dask.distributed scheduler (its workers are not known here).
+CLUSTER_TASKS = 8
+
+
+def split(items: Sequence[Any], scheduler: str | None = None, workers: int | None = None) -> list[tuple]:
+    """``items`` dealt round-robin into as many tasks as local workers (:func:`local_workers`), or
+    :data:`CLUSTER_TASKS` for a cluster, none empty: for work whose items share a set-up in a task (a
+    model and its static starts)."""
+    n = local_workers(workers, len(items)) if scheduler is None or scheduler in LOCAL else CLUSTER_TASKS
+    return [c for c in (tuple(items[i::n]) for i in range(n)) if c]
 
 
 def run_tasks(fn: Callable[..., Any], tasks: Iterable[tuple], *, scheduler: str | None = None,

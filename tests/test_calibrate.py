@@ -85,3 +85,37 @@ def test_threshold_is_where_touching_starts():
             assert k == lo / model.sigma
         assert calibration.touches(model, 9.8, k + tol)
         assert not calibration.touches(model, 9.8, k - tol)
+
+
+def _plain_bisection(touching, lo, hi, tol):
+    """The bisection k_threshold ran before its end probes (the reference)."""
+    while hi - lo > tol:
+        mid = 0.5 * (lo + hi)
+        if touching(mid):
+            hi = mid
+        else:
+            lo = mid
+    return hi
+
+
+@pytest.mark.parametrize("k0", [-2.9996, -1.2345, 0.0, 0.7, 2.9995])
+def test_the_end_probes_give_the_bisections_answer_where_touching_is_monotone(monkeypatch, k0):
+    # touching for every k > k0: the answer is the plain bisection's, bit for bit; next to an end of the
+    # range (where k* lies past the touchdown) one probe besides the range's ends settles it
+    monkeypatch.setattr(calibration, "touches", lambda model, delta, k: k > k0)
+    lo, hi, tol = -3.0, 3.0, 1e-3
+    k, status, n = calibration.k_threshold(None, 10.0, (lo, hi), tol)
+    assert status == "found" and k == _plain_bisection(lambda k: k > k0, lo, hi, tol)
+    assert k - tol <= k0 < k
+    plain_runs = 2 + int(np.ceil(np.log2((hi - lo) / tol)))
+    assert n == (3 if k0 > hi - tol else 4 if k0 < lo + tol else plain_runs + 2), n
+
+
+def test_where_touching_is_not_monotone_the_threshold_is_the_one_next_to_the_upper_end(monkeypatch):
+    # a pocket of contact at -0.79 (a transient contact moving the window) below a window minimum at
+    # -0.7806: the bisection met the pocket; k* is where contact holds for every k above it
+    pocket, top = (-0.7893, -0.7880), -0.7806
+    monkeypatch.setattr(calibration, "touches", lambda model, delta, k: pocket[0] < k < pocket[1] or k >= top)
+    k, status, n = calibration.k_threshold(None, 13.2, (-0.85, top), 1e-3)
+    assert (k, status, n) == (top, "found", 3)
+    assert pocket[0] < _plain_bisection(lambda k: pocket[0] < k < pocket[1] or k >= top, -0.85, top, 1e-3) < pocket[1]

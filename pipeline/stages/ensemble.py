@@ -34,8 +34,8 @@ from ..analyses.report_settings import wants_ensemble
 from ..analyses.study import ensemble_summary, target_protrusions, targets
 from ..analyses.sweep_slices import combinations, first_contact, split_ensemble
 from ..config.grid import label
-from ..evaluations import Inputs as EvalInputs, evaluate_realisation
-from ..fanout import run_tasks
+from ..evaluations import Inputs as EvalInputs, evaluate_realisations
+from ..fanout import run_tasks, split
 from ..io import var
 from ..model import dmw_record, scene_inputs
 from ..runner import Inputs, Stage
@@ -87,12 +87,14 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
     seeds = dmw_record.realisation_seeds(scene["dmw"]["seed"], n)
     results: dict[int, tuple[dict[str, list[float]], float, list[str]]] = {}
 
-    def done(res: tuple) -> None:
-        results[res[0]] = res[1:]
+    def done(rows: list[tuple]) -> None:
+        for res in rows:
+            results[res[0]] = res[1:]
 
-    tasks = [(scene, prot, ev_inputs, k, r, seeds[r]) for r in range(n)]
-    seconds = run_tasks(evaluate_realisation, tasks, scheduler=inputs.options.get("scheduler"),
-                        workers=inputs.options.get("workers"), on_done=done)
+    scheduler, workers = inputs.options.get("scheduler"), inputs.options.get("workers")
+    # (a task's realisations share their static starts)
+    tasks = [(scene, prot, ev_inputs, k, c, tuple(seeds[r] for r in c)) for c in split(range(n), scheduler, workers)]
+    seconds = run_tasks(evaluate_realisations, tasks, scheduler=scheduler, workers=workers, on_done=done)
     errors = [f"realisation {r}: {e}" for r in range(n) for e in results[r][2]]
     for e in errors:
         log.warning("ensemble: %s", e)
