@@ -1,15 +1,13 @@
 """Parameter-study benchmarks (one run each: they take minutes).
 
-* ``hdi identify`` of the paper scene with every default free parameter (``[identify]``) and
-  8-realisation DMW ensembles (``identify.realisations = 8``, the default: 13 protrusions x 8 records =
-  104 runs per evaluation): wall and CPU time of the whole command (target 15 min on 2 cores),
-  evaluations per second of the fan-out, and the share of the fan-out's worker time spent in the
-  integrator (``kernel_seconds`` of identify.nc over workers x batch wall time). The default budget
-  (20 generations, at most 1345 evaluations) does not fit: 104 runs of ~13.5 ms of CPU each per
-  evaluation (measured: 78 evaluations, 8112 runs, 110 s of CPU) is ~16 min on two quiet cores before
-  any overhead. The row runs
-  :data:`GENERATIONS` generations instead (at most 865 evaluations; every other setting the default)
-  and records the projection of the default budget from the measured seconds per evaluation.
+* ``hdi identify`` as ``make identify`` runs it (the Makefile's ``IDENTIFY_SCENE``,
+  ``configs/paper-2009-bulge.toml``: 5 free parameters, 8-realisation DMW ensembles, 13 protrusions x 8
+  records = 104 runs per evaluation, the budget of the scene's ``[identify]``: population 4 x 5,
+  8 generations, 5 profile points): wall and CPU time of the whole command (target 15 min on 2 cores),
+  evaluations per second of the fan-out, the share of the workers' time in the integrator
+  (``kernel_seconds`` over workers x batch wall time), and the projection of the schema's default
+  budget (population 10 x parameters, 20 generations, 11 profile points) from the measured seconds per
+  evaluation.
 * ``hdi sensitivity`` Morris screening, 10 trajectories over the 8 default parameters = 90 sweeps of
   the 76-protrusion paper grid (target 5 min on 2 cores).
 
@@ -24,23 +22,21 @@ import shutil
 import tempfile
 from pathlib import Path
 
-from .common import ROOT, hdi, record
+from .common import ROOT, hdi, makefile_scene, record
 
 WORKERS = 2
-#: DMW realisations per evaluation (the default of ``identify.realisations``).
-REALISATIONS = 8
-#: Differential-evolution generations of the bench row (default 20: does not fit 15 min with
-#: 8-realisation ensembles, see the module docstring).
-GENERATIONS = 12
+#: The schema's default budget of ``[identify]`` (pipeline/config/scene.py), for the projection.
+DEFAULT_BUDGET = {"population": 10, "generations": 20, "profile_points": 11}
 
 
-def evaluation_budget(scene_path: str, generations: int) -> int:
-    """Largest number of evaluations of identify (differential evolution may stop earlier): the
+def evaluation_budget(scene_path: str, **budget: int) -> int:
+    """Largest number of evaluations of identify (differential evolution may stop earlier) with the
+    scene's ``[identify]`` budget, or ``budget`` (population, generations, profile_points) instead: the
     reconstructed point, population x parameters x (generations + 1), the profiles and Gauss-Newton."""
     from pipeline.config.scene import load_scene
-    i = load_scene(scene_path)["identify"]
+    i = {**load_scene(scene_path)["identify"], **budget}
     n = len(i["parameters"])
-    return 1 + i["population"] * n * (generations + 1) + (i["profile_points"] + 1) * n + 2 * n
+    return 1 + i["population"] * n * (i["generations"] + 1) + (i["profile_points"] + 1) * n + 2 * n
 
 
 def _hdi(*args: str) -> float:
@@ -64,27 +60,29 @@ def run(results: list[dict]) -> None:
         print("bench_study skipped (BENCH_STUDY=0)")
         return
     paper = str(ROOT / "configs" / "paper-2009.toml")
+    ident = makefile_scene("IDENTIFY_SCENE")
     with tempfile.TemporaryDirectory() as tmp:
+        # identify writes <scene>-identified.toml beside the scene: run it on a copy (with what it extends)
+        scene_dir = Path(tmp) / "configs"
+        scene_dir.mkdir()
+        for name in {Path(paper).name, Path(ident).name}:
+            shutil.copy(ROOT / "configs" / name, scene_dir / name)
+        scene = str(scene_dir / Path(ident).name)
+        out = Path(tmp) / "identify"
+        _hdi("interface", scene, "--out", str(out))
+        _hdi("dmw", scene, "--out", str(out))
+        wall, cpu, _ = hdi("identify", scene, "--out", str(out), "--workers", str(WORKERS))
+        stats = study_stats(out / "identify.nc", WORKERS)
+        per_eval = stats["batch_seconds"] / stats["evaluations"] if stats["evaluations"] else None
+        default_n = evaluation_budget(scene, **DEFAULT_BUDGET)
+        record(results, f"identify as make identify ({Path(ident).name}: its [identify] budget, "
+               "8-realisation ensembles) (wall)", [wall], target_s=900.0, cpu_s=cpu, **stats,
+               seconds_per_evaluation=per_eval, scene_budget_evaluations=evaluation_budget(scene),
+               default_budget_evaluations=default_n,
+               projected_default_budget_s=per_eval * default_n if per_eval else None)
         inputs = Path(tmp) / "inputs"
         _hdi("interface", paper, "--out", str(inputs))
         _hdi("dmw", paper, "--out", str(inputs))
-        scene_dir = Path(tmp) / "configs"
-        scene_dir.mkdir()
-        # identify writes <scene>-identified.toml beside the scene: run it on a copy
-        shutil.copy(paper, scene_dir / "paper-2009.toml")
-        out = Path(tmp) / "identify"
-        shutil.copytree(inputs, out)
-        scene = str(scene_dir / "paper-2009.toml")
-        wall, cpu, _ = hdi("identify", scene, "--out", str(out), "--workers", str(WORKERS),
-                           "--set", f"identify.realisations={REALISATIONS}",
-                           "--set", f"identify.generations={GENERATIONS}")
-        stats = study_stats(out / "identify.nc", WORKERS)
-        per_eval = stats["batch_seconds"] / stats["evaluations"] if stats["evaluations"] else None
-        default_n = evaluation_budget(scene, 20)
-        record(results, f"identify, paper scene, 6 free parameters, {REALISATIONS}-realisation ensembles, "
-               f"{GENERATIONS} generations (wall)", [wall], target_s=900.0, cpu_s=cpu, **stats,
-               seconds_per_evaluation=per_eval, default_budget_evaluations=default_n,
-               projected_default_budget_s=per_eval * default_n if per_eval else None)
         out = Path(tmp) / "sensitivity"
         shutil.copytree(inputs, out)
         wall = _hdi("sensitivity", paper, "--out", str(out), "--workers", str(WORKERS),

@@ -6,6 +6,7 @@ measured in the same run, never a single timing.
 
 from __future__ import annotations
 
+import re
 import statistics
 import subprocess
 import sys
@@ -73,3 +74,11 @@ def startup_seconds(repeat: int = 5) -> list[float]:
     """Wall times [s] of a fresh interpreter doing what every ``hdi`` command does first (:data:`STARTUP`):
     the floor no stage can go below."""
     return [run_process([sys.executable, "-c", STARTUP], ROOT)[0] for _ in range(repeat)]
+
+
+def makefile_scene(variable: str) -> str:
+    """The scene a Makefile variable names (``SCENE ?= ...``: the one ``make run`` runs)."""
+    m = re.search(rf"^{variable} *\?= *(\S+)", (ROOT / "Makefile").read_text(), re.M)
+    if m is None:
+        raise ValueError(f"Makefile: no '{variable} ?= <scene>' line")
+    return str(ROOT / m.group(1))
