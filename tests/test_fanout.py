@@ -7,7 +7,8 @@ import time
 
 import pytest
 
-from pipeline.fanout import local_workers, run_tasks
+from pipeline import fanout
+from pipeline.fanout import local_workers, run_tasks, split
 
 
 def square(x: int) -> tuple[int, int, str]:
@@ -43,6 +44,17 @@ def test_one_worker_or_one_task_runs_in_process():
     assert local_workers(None, 1) == 1 and local_workers(8, 3) == 3
     with pytest.raises(ValueError, match="workers"):
         local_workers(-1, 3)
+
+
+def test_split_deals_every_item_once_into_one_task_per_worker():
+    items = list(range(11))
+    for scheduler, workers, n in ((None, 3, 3), ("threads", 2, 2), ("synchronous", 20, 11),
+                                  ("tcp://scheduler:8786", None, fanout.CLUSTER_TASKS)):
+        chunks = split(items, scheduler, workers)
+        assert len(chunks) == n and all(chunks)
+        assert sorted(x for c in chunks for x in c) == items  # each once
+        assert chunks[0] == tuple(items[::n])  # round-robin: each task spans the range
+    assert split([5], "tcp://scheduler:8786") == [(5,)]  # no empty task
 
 
 def test_an_error_in_on_done_cancels_what_has_not_started():
