@@ -49,6 +49,12 @@ MHZ_IN_KHZ = 1e3            # one MHz in kHz
 S_IN_MS = 1e3               # one s in ms
 HZ_IN_KHZ = 1e-3            # one Hz in kHz
 
+#: Unit names of a measured DMW file's columns (pipeline/model/measured_dmw.py) and their factors to
+#: [nm] (displacement), [nm/s] (velocity) and [s] (time), exact literals as above.
+LENGTH_UNITS = {"nm": 1.0, "um": 1e3, "micron": 1e3, "mm": 1e6, "m": 1e9, "a": 0.1, "angstrom": 0.1}
+TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9, "second": 1.0, "seconds": 1.0}
+VELOCITY_UNITS = {f"{k}/s": v for k, v in LENGTH_UNITS.items() if k in ("nm", "um", "mm", "m")}
+
 #: SI factor of each unit suffix a scene key may end with (``_nm``, ``_khz``, ...). Dimensionless
 #: suffixes (``sigma``: a multiple of the roughness) map to 1.
 SUFFIX_FACTORS: dict[str, float] = {

@@ -17,7 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..physics.dmw import LENGTH_UNITS, TIME_JITTER_TOL, TIME_UNITS, VELOCITY_UNITS, DMWError
+from ..physics.dmw import TIME_JITTER_TOL, DMWError
+from ..units import LENGTH_UNITS, TIME_UNITS, VELOCITY_UNITS
 from ..units import MS
 
 

@@ -48,10 +48,6 @@ TIME_JITTER_TOL = 1e-6
 #: Relative tolerance used to decide whether a DFT bin lies on a band edge (floating-point round-off).
 EDGE_TOL = 1e-9
 
-#: Unit conversion factors to [nm] (displacement), [nm/s] (velocity) and [s] (time).
-LENGTH_UNITS = {"nm": 1.0, "um": 1e3, "micron": 1e3, "mm": 1e6, "m": 1e9, "a": 0.1, "angstrom": 0.1}
-TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9, "second": 1.0, "seconds": 1.0}
-VELOCITY_UNITS = {f"{k}/s": v for k, v in LENGTH_UNITS.items() if k in ("nm", "um", "mm", "m")}
 
 
 class DMWError(ValueError):

@@ -35,6 +35,8 @@ from typing import Callable
 
 import numpy as np
 
+from ..units import NM, URAD
+
 Forces = Callable[[np.ndarray, float], np.ndarray]
 
 #: Start rules of a run (``solver.start``, :mod:`pipeline.model.start`): its static equilibrium, or the
@@ -92,7 +94,7 @@ def newton(forces: Callable[[np.ndarray], np.ndarray], y0, *, scale=None, jac=No
         the branch it starts from near a fold
     """
     y = np.array(y0, dtype=float)
-    scale = np.asarray(scale if scale is not None else [1e-9, 1e-6][: y.size], dtype=float)
+    scale = np.asarray(scale if scale is not None else [NM, URAD][: y.size], dtype=float)
     max_step = scale if max_step is None else np.asarray(max_step, dtype=float)
     jac = jac or (lambda v: jacobian(forces, v, scale))
     converged = False
