@@ -192,3 +192,30 @@ def test_parameter_units_are_cf_for_every_numeric_scene_key():
                      "roughness.summit_density_per_um2": "um-2", "slider.density_kg_m3": "kg m-3",
                      "dmw.sample_rate_mhz": "MHz", "contact.section_depth_sigma": "1"}
     assert study.Parameter("air_bearing.frequencies_khz[0]", 1.0, 2.0).var_name == "air_bearing__frequencies_khz_0"
+
+
+def test_a_profile_point_better_than_the_optimum_becomes_the_optimum(write_scene, paper_config, tmp_path):
+    # one generation of a small population stops short of the twin's truth; the profiles find better
+    # points, and the written optimum moves to them (the profiles made again around it) until none is
+    # better by more than PROFILE_GAIN or the rounds run out
+    scene, path = _twin_scene(write_scene, paper_config, tmp_path)
+    scene = load_scene(path, ["identify.generations=1", "identify.population=4", "identify.profile_points=5",
+                              "identify.seed=1",
+                              *[f"identify.{k}={scene['identify'][k]!r}" for k in ("fhm_flying_percent",
+                                                                                      "contact_force_mn")]])
+    ds = xr.open_dataset(identify.run(scene, tmp_path / "out", scheduler="synchronous"), engine="netcdf4")
+    rounds = int(ds.attrs["profile_rounds"])
+    assert 2 <= rounds <= identify.PROFILE_ROUNDS  # (here the global search stops short: it moved)
+    names = [p.var_name for p in study.parse_parameters(scene["identify"]["parameters"], "", "")]
+    best = np.array([float(ds[f"{n}_best"]) for n in names])
+    points = np.stack([ds[n].values for n in names], axis=1)
+    at_best = np.flatnonzero(np.all(points == best, axis=1))
+    assert at_best.size >= 1  # the written optimum is an evaluated point
+    role, cost = ds["role"].values, ds["cost"].values
+    c_best = float(cost[at_best[0]])
+    assert c_best <= float(np.nanmin(cost[role <= 1]))  # at least as good as the global search's best
+    if rounds < identify.PROFILE_ROUNDS:  # no profile point beats it by more than the gain
+        assert c_best - float(np.nanmin(cost[role == 2])) <= identify.PROFILE_GAIN
+    # the profiles of the last round pass through the optimum
+    for n, b in zip(names, best):
+        assert b in ds[f"{n}_profile"].values
