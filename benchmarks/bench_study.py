@@ -1,9 +1,9 @@
 """Parameter-study benchmarks (one run each: they take minutes).
 
 * ``hdi identify`` as ``make identify`` runs it (the Makefile's ``IDENTIFY_SCENE``,
-  ``configs/paper-2009-bulge.toml``: 5 free parameters, 8-realisation DMW ensembles, 13 protrusions x 8
-  records = 104 runs per evaluation, the budget of the scene's ``[identify]``: population 4 x 5,
-  8 generations, 5 profile points): wall and CPU time of the whole command (target 15 min on 2 cores),
+  ``configs/paper-2009-bulge.toml``: 6 free parameters, 8-realisation DMW ensembles, 13 protrusions x 8
+  records = 104 runs per evaluation, the budget of the scene's ``[identify]``: population 4 x 6,
+  12 generations, 5 profile points): wall and CPU time of the whole command (target 15 min on 2 cores),
   evaluations per second of the fan-out, the share of the workers' time in the integrator
   (``kernel_seconds`` over workers x batch wall time), and the projection of the schema's default
   budget (population 10 x parameters, 20 generations, 11 profile points) from the measured seconds per
