@@ -125,3 +125,9 @@ def test_the_realisations_of_an_ensemble_share_their_static_starts():
     assert not np.array_equal(simulate(shared[0], [5.0])["fhm_bv"], simulate(shared[1], [5.0])["fhm_bv"])
     with pytest.raises(ValueError, match="one scene and criterion"):
         sl.share_statics([alone[0], replace(alone[1], k=0.5)])
+    # without the contact law k is NaN on every model: one criterion all the same
+    flying = make_scene(("air_bearing", "pitch", "dmw"), solver={"duration_ms": 0.6, "transient_ms": 0.3})
+    pair = [build(flying, rec) for rec in records[:2]]
+    assert np.isnan(pair[0].k)
+    sl.share_statics(pair)
+    assert pair[1].statics is pair[0].statics

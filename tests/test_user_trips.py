@@ -236,7 +236,7 @@ def test_readme_keeps_its_identification_section_when_the_report_has_none(tmp_pa
     assert ident in text and text.index(ident) < text.index(narrative.README_END)
     assert text.startswith("intro\n") and text.endswith(f"{narrative.README_END}\nend\n")
     # a report with its own identification section replaces the old one
-    report.update_readme(readme, f"# Comparison\n\nnewer\n\n## Paper, reconstructed scene, identified scene\n\nfresh\n",
+    report.update_readme(readme, "# Comparison\n\nnewer\n\n## Paper, reconstructed scene, identified scene\n\nfresh\n",
                          tmp_path)
     text = readme.read_text()
     assert "fresh" in text and "1337" not in text and text.count(narrative.IDENTIFICATION_HEADING) == 1

@@ -15,7 +15,6 @@ import pytest
 from pipeline import cli
 from pipeline.config.scene import SceneError, load_scene
 from pipeline.model import interface_tables
-from pipeline.stages import interface
 from pipeline.physics.material_bounds import PhysicsWarning, check_materials
 from pipeline.validation import CONNECT_TIMEOUT_S, MAX_SCENES, check_grid, check_out, grid_size
 

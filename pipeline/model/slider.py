@@ -394,7 +394,8 @@ def share_statics(models: Sequence[Model]) -> None:
     """
     first = models[0]
     for m in models[1:]:
-        if m.scene is not first.scene or m.k != first.k or m.start != first.start:
+        same_k = m.k == first.k or (np.isnan(m.k) and np.isnan(first.k))  # (NaN: no contact law)
+        if m.scene is not first.scene or not same_k or m.start != first.start:
             raise ValueError("share_statics: the models must be of one scene and criterion k "
                              "(they may differ in their DMW record only)")
         m.statics = first.statics
