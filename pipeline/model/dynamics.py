@@ -385,13 +385,9 @@ def separation_at(p, z, theta, w):
 @njit(cache=True, nogil=True, inline="always", error_model="numpy")
 def separation(p, dmw, t, y):
     """TFC separation ``d`` [m] and its rate [m/s] (docs/model.md, section "Separation datum")."""
+    z, th, vz, vth = y[0], y[1], y[2], y[3]
     wc, vc = _disk(p, dmw, t)
-    return _separation(p, y, wc, vc)
-
-
-@njit(cache=True, nogil=True, inline="always", error_model="numpy")
-def _separation(p, y, wc, vc):
-    return separation_at(p, y[0], y[1], wc), y[2] - p.l_c * y[3] - vc
+    return separation_at(p, z, th, wc), vz - p.l_c * vth - vc
 
 
 # the air-bearing laws, compiled from their one definition in pipeline.physics.air_bearing
@@ -463,7 +459,7 @@ def _interface_force(p, cp, pa, ft, men, F_i, z, th, vz, vth, q, wc, vc, contact
     Q = 0.0
     dq = 0.0
     if pa is not None or cp is not None:
-        d, dd = separation_at(p, z, th, wc), vz - p.l_c * vth - vc  # (:func:`_separation`)
+        d, dd = separation_at(p, z, th, wc), vz - p.l_c * vth - vc  # (:func:`separation`)
         # one index for every table (they share the separation grid)
         i, s = _ppindex(p.tab_n, p.tab_x0, p.tab_h, d)
         if pa is not None:
@@ -658,14 +654,14 @@ def _d_extrema(p, dmw, t, h, y, k1, ynew, k7, d0, dd0, d1, dd1, buf):
     """
     n_b = 0
     if dmw is not None:
+        z0, th0, vz0, vth0, z1, th1, vz1, vth1 = y[0], y[1], k1[0], k1[1], ynew[0], ynew[1], k7[0], k7[1]
         t0, hd = p.dmw_t0, p.dmw_dt
         i_a = int((t - t0) / hd)
         first_knot = t0 + (i_a + 1) * hd
         if first_knot < t + h:
             lc = p.l_c
             # s(theta) = A theta^3 + B theta^2 + C theta + E over the whole step
-            A, B, C, E = _dcubic(y[0] - lc * y[1], k1[0] - lc * k1[1], ynew[0] - lc * ynew[1],
-                                 k7[0] - lc * k7[1], h)
+            A, B, C, E = _dcubic(z0 - lc * th0, vz0 - lc * vth0, z1 - lc * th1, vz1 - lc * vth1, h)
             n_pieces = dmw.shape[0]
             ta = t
             i = i_a
@@ -693,11 +689,7 @@ def _d_extrema(p, dmw, t, h, y, k1, ynew, k7, d0, dd0, d1, dd1, buf):
                 i += 1
             return n_b
     ca, cb, cc, ce = _dcubic(d0, dd0, d1, dd1, h)
-    n_ex, th1, th2 = _extrema(ca, cb, cc)
-    if n_ex > 0:
-        buf[0] = th1
-    if n_ex > 1:
-        buf[1] = th2
+    n_ex, buf[0], buf[1] = _extrema(ca, cb, cc)
     return n_ex
 
 
@@ -736,48 +728,29 @@ def _first_wrong_side(p, dmw, contact, t, y, k1, ynew, k7, h, d0, dd0, d1, dd1, 
 
 
 @njit(cache=True, nogil=True, inline="always", error_model="numpy")
-def _locate_switch(t, y, k1, h, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, men, contact, ynew, k7, err, wk,
-                   d0, dd0, d1, dd1, ys, buf, info):
-    """Find a contact switch in the accepted step ``[t, t + h]`` and shorten the step to it.
+def _switch_point(p, dmw, contact, t, y, k1, ynew, k7, h, d0, dd0, d1, dd1, ys, buf):
+    """The contact switch in the step ``[t, t + h]``: its ``theta`` in (0, 1], or -1 if the criterion
+    agrees with the mode over the whole step.
 
-    A redone (shorter) step is more accurate than the long step's interpolant and may show the
-    crossing earlier, so the search repeats on the redone step. Returns ``(switched, h_acc, d1, dd1)``:
-    whether the mode switches at the end of the (possibly shortened) step ``h_acc``, whose end state
-    and derivative are then in ``ynew``, ``k7`` and separation and rate ``d1``, ``dd1``.
+    The first point where the criterion disagrees (:func:`_first_wrong_side`) is bisected on the
+    step's interpolant to 1e-16 s (``(theta_hi - theta_lo) h``); the returned ``theta`` is on the
+    side where the criterion disagrees. :func:`_integrate` redoes the step up to it.
     """
-    tmp, k2, k3, k4, k5, k6, ev_y, ev_f = wk  # (only a redone step uses them)
-    h_acc = h
-    switched = False
-    for _ in range(8):
-        hi = _first_wrong_side(p, dmw, contact, t, y, k1, ynew, k7, h_acc, d0, dd0, d1, dd1, ys, buf)
-        if hi < 0.0:
-            break
-        lo = 0.0
-        for _ in range(60):
-            mid = 0.5 * (lo + hi)
-            _interp_state(y, k1, ynew, k7, h_acc, mid, ys)
-            g = separation(p, dmw, t + mid * h_acc, ys)[0] - p.k_sigma
-            if (g < 0.0) != contact:
-                hi = mid
-            else:
-                lo = mid
-            if (hi - lo) * h_acc < 1e-16:
-                break
-        if not switched:
-            info[3] += 1
-        switched = True
-        if hi >= 1.0:
-            break  # the switch is at the end of the step
-        # redo the step exactly up to the switch (in the old mode)
-        h_acc = hi * h_acc
-        _step(t, y, k1, h_acc, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, men, contact, ev_y, ev_f, err,
-              tmp, k2, k3, k4, k5, k6)
-        info[4] += 6
-        for i in range(_state_size(men)):
-            ynew[i] = ev_y[i]
-            k7[i] = ev_f[i]
-        d1, dd1 = separation(p, dmw, t + h_acc, ynew)
-    return switched, h_acc, d1, dd1
+    hi = _first_wrong_side(p, dmw, contact, t, y, k1, ynew, k7, h, d0, dd0, d1, dd1, ys, buf)
+    lo = 0.0
+    n = 60 if hi >= 0.0 else 0
+    while n > 0:  # (one exit, see the docstring)
+        n -= 1
+        mid = 0.5 * (lo + hi)
+        _interp_state(y, k1, ynew, k7, h, mid, ys)
+        g = separation(p, dmw, t + mid * h, ys)[0] - p.k_sigma
+        if (g < 0.0) != contact:
+            hi = mid
+        else:
+            lo = mid
+        if (hi - lo) * h < 1e-16:
+            n = 0
+    return hi
 
 
 @njit(cache=True, nogil=True, inline="always", error_model="numpy")
@@ -936,7 +909,6 @@ def _integrate(y0, t_end, t_out, params, dmw, cp, pa, ft, tfc, pitch, gap_power_
     buf = np.empty(_extrema_slots(p, dmw, h_max))
     ev_y = np.empty(ns)
     ev_f = np.empty(ns)
-    wk = (tmp, k2, k3, k4, k5, k6, ev_y, ev_f)  # work arrays of a step redone up to a contact switch
     t = 0.0
     # The initial mode follows the criterion at t = 0.
     contact = False
@@ -997,8 +969,26 @@ def _integrate(y0, t_end, t_out, params, dmw, cp, pa, ft, tfc, pitch, gap_power_
         switched = False
         d1, dd1 = separation(p, dmw, t + h, ynew)
         if has_contact and t_hold < 0.0:
-            switched, h_acc, d1, dd1 = _locate_switch(t, y, k1, h, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin,
-                                                      men, contact, ynew, k7, err, wk, d0, dd0, d1, dd1, ys, buf, info)
+            # a contact switch in the step: redo the step exactly up to it (in the old mode); a redone
+            # (shorter) step is more accurate than the long step's interpolant and may show the
+            # crossing earlier, so the search repeats on the redone step
+            for _ in range(8):
+                hi = _switch_point(p, dmw, contact, t, y, k1, ynew, k7, h_acc, d0, dd0, d1, dd1, ys, buf)
+                if hi < 0.0:
+                    break
+                if not switched:
+                    info[3] += 1
+                switched = True
+                if hi >= 1.0:
+                    break  # the switch is at the end of the step
+                h_acc = hi * h_acc
+                _step(t, y, k1, h_acc, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, men, contact, ev_y, ev_f, err,
+                      tmp, k2, k3, k4, k5, k6)
+                info[4] += 6
+                for i in range(ns):
+                    ynew[i] = ev_y[i]
+                    k7[i] = ev_f[i]
+                d1, dd1 = separation(p, dmw, t + h_acc, ynew)
         t_new = t + h_acc
         if t_new >= p.t_win:
             _track_extremes(p, dmw, t, h_acc, y, k1, ynew, k7, d0, dd0, d1, dd1, ys, buf, ext)
