@@ -868,6 +868,12 @@ def integrate(y0: np.ndarray, grid: Grid, p: np.record, tab: Tables, var: Varian
     (benchmarks/kernel_ab.py, instructions per integration, one session): air-bearing-only scene at
     11 nm, flying 5 nm, sliding 11 nm: e6348f9 4.40, 21.56, 63.43 M; this kernel before 4.68, 22.12,
     65.24 M; now 4.26, 18.95, 56.02 M (-3 %, -12 %, -12 % against e6348f9), results bit-identical.
+    Those totals include the interpreter's share (the Python wrapper, libm, and kernel_ab's polling of
+    ``callgrind_control``, which grows with the machine's load: a rerun of the same code under load
+    gave 4.31 M); the compiled code alone (callgrind's functions without a symbol): e6348f9 4.27,
+    20.90, 61.73 M; before 4.49, 21.44, 63.48 M; now 4.12, 18.24, 54.25 M (identical in both runs).
+    Timing (kernel_ab ``time``, medians of 7 x 100 calls, interleaved): air-bearing-only 0.64 ms now,
+    0.73-0.75 before, 0.65 e6348f9; sliding 11 nm 10.3-10.9 ms, 13.0-13.1, 12.5-12.6.
     (Earlier air-bearing-only counts: e6348f9 4.32 M, 4.65 M before the flat arguments, 4.64 M with
     them, 4.58 M with the scalar helpers of :func:`_rhs`.) ``inline="never"`` on the kernel's
     functions halves the compile time (25 -> 15 s of CPU, sliding scene, cold cache) with
