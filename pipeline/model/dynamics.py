@@ -384,14 +384,14 @@ def separation_at(p, z, theta, w):
 
 @njit(cache=True, nogil=True, inline="always", error_model="numpy")
 def separation(p, dmw, t, y):
-    """TFC separation ``d`` [m] and its rate [m/s] (docs/model.md, section "Separation datum")."""
+    """TFC separation ``d`` [m] and its rate [m/s] (docs/model.md, section "Separation datum").
+
+    The state is read before the DMW lookup's branches: ``y``'s last use is then unconditional, so
+    numba prunes the reference-count pair of the inlined argument (see :func:`_integrate`).
+    """
+    z, th, vz, vth = y[0], y[1], y[2], y[3]
     wc, vc = _disk(p, dmw, t)
-    return _separation(p, y, wc, vc)
-
-
-@njit(cache=True, nogil=True, inline="always", error_model="numpy")
-def _separation(p, y, wc, vc):
-    return separation_at(p, y[0], y[1], wc), y[2] - p.l_c * y[3] - vc
+    return separation_at(p, z, th, wc), vz - p.l_c * vth - vc
 
 
 # the air-bearing laws, compiled from their one definition in pipeline.physics.air_bearing
@@ -463,7 +463,7 @@ def _interface_force(p, cp, pa, ft, men, F_i, z, th, vz, vth, q, wc, vc, contact
     Q = 0.0
     dq = 0.0
     if pa is not None or cp is not None:
-        d, dd = separation_at(p, z, th, wc), vz - p.l_c * vth - vc  # (:func:`_separation`)
+        d, dd = separation_at(p, z, th, wc), vz - p.l_c * vth - vc  # (:func:`separation`)
         # one index for every table (they share the separation grid)
         i, s = _ppindex(p.tab_n, p.tab_x0, p.tab_h, d)
         if pa is not None:
@@ -527,7 +527,18 @@ def _rhs(t, y, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, men, contact, ou
     kernel_ab dump) puts the pair's ~6 calls per step in :func:`_integrate`'s own loop, not in
     :func:`_step` (with this function inlined into it by LLVM, called once per step); reading the
     DMW row element by element in :func:`_disk3` instead of through the view ``dmw[i]`` did not remove
-    it either (4.66 -> 4.67 M instructions). Which inlined helper of the loop holds it is not found.
+    it either (4.66 -> 4.67 M instructions). It was the array arguments of the integrator loop's
+    inlined helpers, 8 pairs per step (see :func:`_integrate`, which says how it was removed).
+
+    What is left (kernel_ab's flying 5 nm and sliding 11 nm, the model with interface tables, per
+    step; none in the air-bearing-only model): there LLVM keeps this function out of line, called 6
+    times by :func:`_step`; numba keeps 4 reference-count pairs per call here (``cp``, ``pa``,
+    ``ft``, ``out``: the contact and friction tables are read only in contact, a conditional last
+    use, and reading them unconditionally did not remove them) and 15 in :func:`_step` (its array
+    arguments, past the calls' exception exits), plus 2 in :func:`_stiffness_cap`: 41 increments per
+    step (and as many or more decrements), 1.5 M of flying 5 nm's 18.9 M instructions and 5.1 M of
+    sliding 11 nm's 56.0 M (e6348f9 had more: 2.8 M, 8.9 M). Not tried: ``inline="always"`` on this
+    function (no calls left in :func:`_step`, at a compile-time cost).
     """
     z, th, vz, vth = y[0], y[1], y[2], y[3]
     wc, vc, wf, vf, wr, vr = _disk3(p, dmw, t)
@@ -658,14 +669,15 @@ def _d_extrema(p, dmw, t, h, y, k1, ynew, k7, d0, dd0, d1, dd1, buf):
     """
     n_b = 0
     if dmw is not None:
+        # the arrays read before the branch (their last use unconditional: see :func:`_integrate`)
+        z0, th0, vz0, vth0, z1, th1, vz1, vth1 = y[0], y[1], k1[0], k1[1], ynew[0], ynew[1], k7[0], k7[1]
         t0, hd = p.dmw_t0, p.dmw_dt
         i_a = int((t - t0) / hd)
         first_knot = t0 + (i_a + 1) * hd
         if first_knot < t + h:
             lc = p.l_c
             # s(theta) = A theta^3 + B theta^2 + C theta + E over the whole step
-            A, B, C, E = _dcubic(y[0] - lc * y[1], k1[0] - lc * k1[1], ynew[0] - lc * ynew[1],
-                                 k7[0] - lc * k7[1], h)
+            A, B, C, E = _dcubic(z0 - lc * th0, vz0 - lc * vth0, z1 - lc * th1, vz1 - lc * vth1, h)
             n_pieces = dmw.shape[0]
             ta = t
             i = i_a
@@ -693,11 +705,7 @@ def _d_extrema(p, dmw, t, h, y, k1, ynew, k7, d0, dd0, d1, dd1, buf):
                 i += 1
             return n_b
     ca, cb, cc, ce = _dcubic(d0, dd0, d1, dd1, h)
-    n_ex, th1, th2 = _extrema(ca, cb, cc)
-    if n_ex > 0:
-        buf[0] = th1
-    if n_ex > 1:
-        buf[1] = th2
+    n_ex, buf[0], buf[1] = _extrema(ca, cb, cc)  # both slots always (unused ones ignored): no branch on buf
     return n_ex
 
 
@@ -736,48 +744,32 @@ def _first_wrong_side(p, dmw, contact, t, y, k1, ynew, k7, h, d0, dd0, d1, dd1, 
 
 
 @njit(cache=True, nogil=True, inline="always", error_model="numpy")
-def _locate_switch(t, y, k1, h, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, men, contact, ynew, k7, err, wk,
-                   d0, dd0, d1, dd1, ys, buf, info):
-    """Find a contact switch in the accepted step ``[t, t + h]`` and shorten the step to it.
+def _switch_point(p, dmw, contact, t, y, k1, ynew, k7, h, d0, dd0, d1, dd1, ys, buf):
+    """The contact switch in the step ``[t, t + h]``: its ``theta`` in (0, 1], or -1 if the criterion
+    agrees with the mode over the whole step.
 
-    A redone (shorter) step is more accurate than the long step's interpolant and may show the
-    crossing earlier, so the search repeats on the redone step. Returns ``(switched, h_acc, d1, dd1)``:
-    whether the mode switches at the end of the (possibly shortened) step ``h_acc``, whose end state
-    and derivative are then in ``ynew``, ``k7`` and separation and rate ``d1``, ``dd1``.
+    The first point where the criterion disagrees (:func:`_first_wrong_side`) is bisected on the
+    step's interpolant to 1e-16 s (``(theta_hi - theta_lo) h``); the returned ``theta`` is on the
+    side where the criterion disagrees. :func:`_integrate` redoes the step up to it (the call of
+    :func:`_step` stays there: a call has an exception exit, past which numba cannot prune the
+    reference counts of an inlined helper's arrays). The bisection loop has one exit (a counter, no
+    ``break``) for the same reason (see :func:`_integrate`).
     """
-    tmp, k2, k3, k4, k5, k6, ev_y, ev_f = wk  # (only a redone step uses them)
-    h_acc = h
-    switched = False
-    for _ in range(8):
-        hi = _first_wrong_side(p, dmw, contact, t, y, k1, ynew, k7, h_acc, d0, dd0, d1, dd1, ys, buf)
-        if hi < 0.0:
-            break
-        lo = 0.0
-        for _ in range(60):
-            mid = 0.5 * (lo + hi)
-            _interp_state(y, k1, ynew, k7, h_acc, mid, ys)
-            g = separation(p, dmw, t + mid * h_acc, ys)[0] - p.k_sigma
-            if (g < 0.0) != contact:
-                hi = mid
-            else:
-                lo = mid
-            if (hi - lo) * h_acc < 1e-16:
-                break
-        if not switched:
-            info[3] += 1
-        switched = True
-        if hi >= 1.0:
-            break  # the switch is at the end of the step
-        # redo the step exactly up to the switch (in the old mode)
-        h_acc = hi * h_acc
-        _step(t, y, k1, h_acc, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, men, contact, ev_y, ev_f, err,
-              tmp, k2, k3, k4, k5, k6)
-        info[4] += 6
-        for i in range(_state_size(men)):
-            ynew[i] = ev_y[i]
-            k7[i] = ev_f[i]
-        d1, dd1 = separation(p, dmw, t + h_acc, ynew)
-    return switched, h_acc, d1, dd1
+    hi = _first_wrong_side(p, dmw, contact, t, y, k1, ynew, k7, h, d0, dd0, d1, dd1, ys, buf)
+    lo = 0.0
+    n = 60 if hi >= 0.0 else 0
+    while n > 0:  # (one exit: see the docstring)
+        n -= 1
+        mid = 0.5 * (lo + hi)
+        _interp_state(y, k1, ynew, k7, h, mid, ys)
+        g = separation(p, dmw, t + mid * h, ys)[0] - p.k_sigma
+        if (g < 0.0) != contact:
+            hi = mid
+        else:
+            lo = mid
+        if (hi - lo) * h < 1e-16:
+            n = 0
+    return hi
 
 
 @njit(cache=True, nogil=True, inline="always", error_model="numpy")
@@ -871,15 +863,21 @@ def integrate(y0: np.ndarray, grid: Grid, p: np.record, tab: Tables, var: Varian
     one-element arrays (:func:`_packed`): numba's dispatcher types arrays, floats and ``None`` in C,
     but a record scalar and each named tuple through its Python ``typeof`` (measured: 6.5 us for a
     :data:`PARAMS` record, 2-2.6 us per named tuple; an empty integration 40 us against 10 us now and
-    12 us for the positional-vector kernel of commit e6348f9). That fixed cost is part of issue 16's
-    regression, not all of it: by callgrind (benchmarks/kernel_ab.py, air-bearing-only scene at 11 nm,
-    per call) e6348f9 runs 4.32 M instructions, this kernel 4.58 M (4.65 M before the flat arguments,
-    4.64 M with them, 4.58 M with the scalar helpers of :func:`_rhs`): the step's machine code
-    +0.03 M, and two out-of-line JIT helpers of ~5 instructions each (numba's reference-count
-    increment and decrement, by their size and pairing) called once per right-hand-side evaluation
-    here (24,000 per run) and 3,000 times per run in e6348f9, +0.19 M (their source not found). ``inline="never"`` on the kernel's functions halves the compile time (25 -> 15 s
-    of CPU, sliding scene, cold cache) with bit-identical results but runs 5.35 M instructions (+15 %),
-    so the helpers stay inlined.
+    12 us for the positional-vector kernel of commit e6348f9). The rest of issue 16's regression was
+    numba's reference counting in the integrator loop (:func:`_integrate`), now removed. By callgrind
+    (benchmarks/kernel_ab.py, instructions per integration, one session): air-bearing-only scene at
+    11 nm, flying 5 nm, sliding 11 nm: e6348f9 4.40, 21.56, 63.43 M; this kernel before 4.68, 22.12,
+    65.24 M; now 4.26, 18.95, 56.02 M (-3 %, -12 %, -12 % against e6348f9), results bit-identical.
+    Those totals include the interpreter's share (the Python wrapper, libm, and kernel_ab's polling of
+    ``callgrind_control``, which grows with the machine's load: a rerun of the same code under load
+    gave 4.31 M); the compiled code alone (callgrind's functions without a symbol): e6348f9 4.27,
+    20.90, 61.73 M; before 4.49, 21.44, 63.48 M; now 4.12, 18.24, 54.25 M (identical in both runs).
+    Timing (kernel_ab ``time``, medians of 7 x 100 calls, interleaved): air-bearing-only 0.64 ms now,
+    0.73-0.75 before, 0.65 e6348f9; sliding 11 nm 10.3-10.9 ms, 13.0-13.1, 12.5-12.6.
+    (Earlier air-bearing-only counts: e6348f9 4.32 M, 4.65 M before the flat arguments, 4.64 M with
+    them, 4.58 M with the scalar helpers of :func:`_rhs`.) ``inline="never"`` on the kernel's
+    functions halves the compile time (25 -> 15 s of CPU, sliding scene, cold cache) with
+    bit-identical results but runs 5.35 M instructions (+15 %), so the helpers stay inlined.
     """
     return _integrate(y0, grid.t_end, grid.t_out, _packed(p), tab.dmw, tab.contact, tab.adhesion, tab.friction,
                       tab.tfc, var.pitch, _packed(var.gap_power), var.rear_linear, var.meniscus, solver.rtol,
@@ -916,6 +914,23 @@ def _integrate(y0, t_end, t_out, params, dmw, cp, pa, ft, tfc, pitch, gap_power_
     reference-count updates per use. Passing the bundles down cost 10-30 % of the kernel's time
     (measured in one process against the flat kernel); unpacked here, :func:`_step`, :func:`_rhs` and
     their inlined helpers compile to the flat kernel's code.
+
+    Reference counts of the inlined helpers. An ``inline="always"`` helper's array argument becomes a
+    new variable: numba increments its reference count on entry and decrements it after its last use,
+    and removes the pair only where its pruning pass (llvmlite's ``RefPrunePass``) proves it safe: both
+    in one block, or the decrement after every path from the increment (or on every branch, at most 15
+    blocks deep) with no other decrement and no call in between (a call's exception exit is a path
+    around the decrement). Otherwise the pair stays, two out-of-line calls (~5 instructions each) per
+    use, and one unpruned pair inside a helper blocks the pairs of every helper around it. So the
+    helpers of this loop end an array's use unconditionally (no ``if cond: a[i] = x`` as its last use,
+    no ``break`` out of a loop that reads it, state read before a branch) and call no compiled function
+    (:func:`_step` is called here, not in :func:`_switch_point`). Measured (callgrind,
+    benchmarks/kernel_ab.py, calls per integration): the air-bearing-only scene's loop made 48,000
+    reference-count calls (8 pairs per step in :func:`_track_extremes` and :func:`_d_extrema`), now none
+    (6,000 in commit e6348f9); flying 5 nm and sliding 11 nm 0.79 M and 2.51 M, now 0.34 M and 1.18 M
+    (e6348f9: 0.63 M, 2.02 M), the rest in the step (:func:`_rhs`). Check a change with the kernel's
+    LLVM (``_integrate.inspect_llvm()``: the ``@NRT_incref`` calls in the loop; 2 are left, in
+    :func:`_stiffness_cap` with the interface tables).
     """
     p = params[0]
     gap_power = _unpacked(gap_power_)
@@ -936,7 +951,6 @@ def _integrate(y0, t_end, t_out, params, dmw, cp, pa, ft, tfc, pitch, gap_power_
     buf = np.empty(_extrema_slots(p, dmw, h_max))
     ev_y = np.empty(ns)
     ev_f = np.empty(ns)
-    wk = (tmp, k2, k3, k4, k5, k6, ev_y, ev_f)  # work arrays of a step redone up to a contact switch
     t = 0.0
     # The initial mode follows the criterion at t = 0.
     contact = False
@@ -997,8 +1011,26 @@ def _integrate(y0, t_end, t_out, params, dmw, cp, pa, ft, tfc, pitch, gap_power_
         switched = False
         d1, dd1 = separation(p, dmw, t + h, ynew)
         if has_contact and t_hold < 0.0:
-            switched, h_acc, d1, dd1 = _locate_switch(t, y, k1, h, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin,
-                                                      men, contact, ynew, k7, err, wk, d0, dd0, d1, dd1, ys, buf, info)
+            # a contact switch in the step: redo the step exactly up to it (in the old mode); a redone
+            # (shorter) step is more accurate than the long step's interpolant and may show the
+            # crossing earlier, so the search repeats on the redone step
+            for _ in range(8):
+                hi = _switch_point(p, dmw, contact, t, y, k1, ynew, k7, h_acc, d0, dd0, d1, dd1, ys, buf)
+                if hi < 0.0:
+                    break
+                if not switched:
+                    info[3] += 1
+                switched = True
+                if hi >= 1.0:
+                    break  # the switch is at the end of the step
+                h_acc = hi * h_acc
+                _step(t, y, k1, h_acc, p, dmw, cp, pa, ft, tfc, pitch, gap_power, rlin, men, contact, ev_y, ev_f, err,
+                      tmp, k2, k3, k4, k5, k6)
+                info[4] += 6
+                for i in range(ns):
+                    ynew[i] = ev_y[i]
+                    k7[i] = ev_f[i]
+                d1, dd1 = separation(p, dmw, t + h_acc, ynew)
         t_new = t + h_acc
         if t_new >= p.t_win:
             _track_extremes(p, dmw, t, h_acc, y, k1, ynew, k7, d0, dd0, d1, dd1, ys, buf, ext)
