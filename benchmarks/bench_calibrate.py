@@ -14,6 +14,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -40,9 +41,13 @@ def run(results: list[dict]) -> None:
         todo = np.union1d(protrusion_grid(scene), [td["onset_nm"], td["previous_nm"]])
 
         def exact() -> None:
+            # as a batch of the stage does (calibration.threshold_batch): one contact-off model, whose
+            # static-start fold (searched once per repetition) the flying runs share and bounds the
+            # bisection's models'
+            off = replace(model, k=cal.CONTACT_OFF_K)
             for p in todo:
-                lo, lo_all, _ = cal.flying_minimum(model, float(p))
-                cal.k_star(model, float(p), lo, lo_all, k_range, tol)
+                lo, lo_all, _ = cal.flying_minimum(off, float(p))
+                cal.k_star(off, float(p), lo, lo_all, k_range, tol)
 
         def bisection() -> None:
             for p in (td["onset_nm"], td["previous_nm"]):
