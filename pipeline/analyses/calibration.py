@@ -101,7 +101,7 @@ def k_threshold(model: sl.Model, delta_nm: float, k_range: tuple[float, float], 
     Where touching is monotone in k (what the bisection assumes) the answer is the bisection's. Where
     it is not, the answer is the threshold nearest the upper end, the one the definition asks for
     (contact for every k above k*), where the bisection returned whichever threshold its probes met:
-    on the main scene (``configs/paper-2009-reynolds.toml``) at 13.2 and 14.8 nm a k 0.009 and 0.005
+    on the Reynolds scene (``configs/paper-2009-reynolds.toml``) at 13.2 and 14.8 nm a k 0.009 and 0.005
     below the window's minimum touches (a transient contact moves the window) while the k just below
     the minimum does not; k* is now the minimum there. ``memo``: answers already known,
     ``{k: touches}`` (updated; the simulations returned count the runs not found in it).
