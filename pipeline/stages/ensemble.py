@@ -14,7 +14,8 @@ main job's time by ``N``; this stage runs only the protrusions the checks read:
 Every realisation runs the scene with the sweep's k (``calibration.nc`` or the scene's rule,
 :func:`pipeline.stages.simulate.read_k`) on its own DMW record (realisation 0: the scene's ``dmw.nc``;
 ``r >= 1``: :func:`pipeline.model.dmw_record.realisation_seeds`, the seeds of ``[sweep] realisations``),
-one fan-out task per realisation. Writes ``ensemble.nc``: the steady-window scalars on
+one fan-out task per local worker (:func:`pipeline.fanout.split`), whose realisations share their
+static starts (:func:`pipeline.evaluations.evaluate_realisations`). Writes ``ensemble.nc``: the steady-window scalars on
 ``(protrusion, realisation)`` in dataset units, ``dmw_seed``, and the sweep's ensemble summaries
 (``<name>_mean``/``_std``, ``touchdown_probability``; :func:`pipeline.stages.sweep.ensemble_statistics`).
 
@@ -46,8 +47,8 @@ from .sweep import ensemble_statistics
 log = logging.getLogger(__name__)
 
 #: Half-width [nm] of the protrusion window around the sweep's first contact: five 0.2-nm actuation
-#: steps, several times the touchdown's spread over DMW seeds (one step, ../lab experiments; the
-#: report states the spread it finds).
+#: steps, several times the touchdown's spread over DMW seeds (about one step: docs/model.md, section
+#: "Ensembles"; the report states the spread it finds).
 WINDOW_NM = 1.0
 
 
