@@ -364,19 +364,24 @@ class Evaluator:
         return [self.store[k] for k in keys]
 
 
+def stage_inputs_of(scene: Any, stage_inputs: Any) -> Inputs:
+    """The scene's own inputs of an evaluation, from a stage's :class:`pipeline.runner.Inputs` (the upstream
+    datasets the runner made current): the paths of what one simulation reads (:func:`upstream`) and
+    their stage keys."""
+    wanted = upstream(scene)
+    files = {"interface": "interface.nc", "dmw": dmw_record.FILENAME, "bulge": "bulge.nc"}
+    paths = {st: str(stage_inputs.path(f)) if st in wanted else None for st, f in files.items()}
+    keys = {st: stage_inputs.upstream.get(st) if paths[st] else None for st in files}
+    return Inputs(paths["interface"], keys["interface"], paths["dmw"], keys["dmw"], paths["bulge"], keys["bulge"])
+
+
 def setup(scene: Any, stage_inputs: Any, section: str, force: bool = False) -> tuple[list[Parameter], Inputs, EvaluationStore]:
     """The free parameters of ``[section]``, the base inputs of the study stage (``stage_inputs``, its
     :class:`pipeline.runner.Inputs`: the upstream datasets the runner made current) and the evaluation
     store ``<results>/<section>.evals.jsonl`` (emptied first with ``force``)."""
     where = str(scene.path) if scene.path else "<scene>"
     params = parse_parameters(scene[section]["parameters"], where, f"{section}.parameters")
-    wanted = upstream(scene)
-    ipath = str(stage_inputs.path("interface.nc")) if "interface" in wanted else None
-    dpath = str(stage_inputs.path(dmw_record.FILENAME)) if "dmw" in wanted else None
-    bpath = str(stage_inputs.path("bulge.nc")) if "bulge" in wanted else None
-    inputs = Inputs(ipath, stage_inputs.upstream.get("interface") if ipath else None,
-                    dpath, stage_inputs.upstream.get("dmw") if dpath else None,
-                    bpath, stage_inputs.upstream.get("bulge") if bpath else None)
+    inputs = stage_inputs_of(scene, stage_inputs)
     store_path = Path(stage_inputs.out) / f"{section}.evals.jsonl"
     if force:
         store_path.unlink(missing_ok=True)

@@ -35,7 +35,7 @@ from ..analyses.report_settings import wants_ensemble
 from ..analyses.study import ensemble_summary, target_protrusions, targets
 from ..analyses.sweep_slices import combinations, first_contact, split_ensemble
 from ..config.grid import label
-from ..evaluations import Inputs as EvalInputs, evaluate_realisations
+from ..evaluations import evaluate_realisations, stage_inputs_of
 from ..fanout import run_tasks, split
 from ..io import var
 from ..model import dmw_record, scene_inputs
@@ -79,12 +79,7 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
     sweep = inputs.dataset("sweep.nc", stage="sweep")
     prot = protrusions(scene, sweep)
     k, k_source = read_k(scene, inputs)
-    wanted = scene_inputs.simulation_inputs(scene, calibration=False)
-    ipath = str(inputs.path("interface.nc")) if "interface" in wanted else None
-    dpath = str(inputs.path(dmw_record.FILENAME))
-    bpath = str(inputs.path("bulge.nc")) if "bulge" in wanted else None
-    ev_inputs = EvalInputs(ipath, inputs.upstream.get("interface") if ipath else None, dpath, inputs.upstream["dmw"],
-                           bpath, inputs.upstream.get("bulge") if bpath else None)
+    ev_inputs = stage_inputs_of(scene, inputs)
     seeds = dmw_record.realisation_seeds(scene["dmw"]["seed"], n)
     results: dict[int, tuple[dict[str, list[float]], float, list[str]]] = {}
 
