@@ -284,7 +284,8 @@ INTERFACE = _group(
     V("plasticity_index_gw", "1", "plasticity index, Greenwood-Williamson form"),
     V("plasticity_index_ke", "1", "plasticity index, CEB/Kogut-Etsion form"),
     V("lubricant_thickness", "nm", "lubricant thickness", NM),
-    V("work_of_adhesion", "J m-2", "work of adhesion"),
+    V("work_of_adhesion", "J m-2", "work of adhesion (of the menisci around contacts with two populations)"),
+    V("bridge_work_of_adhesion", "J m-2", "work of adhesion of the bridges before solid contact"),
     V("intermolecular_distance", "nm", "intermolecular distance", NM),
     V("contact_pressure", "MPa", "contact pressure per nominal area", MPA, dims=_S, effect="contact"),
     V("elastic_fraction", "1", "fraction of summits in elastic contact", dims=_S, effect="contact"),
@@ -293,6 +294,12 @@ INTERFACE = _group(
     V("real_area_fraction", "1", "real contact area per nominal area", dims=_S, effect="contact"),
     V("adhesion_pressure", "MPa", "adhesion pressure per nominal area (positive: attractive)", MPA, dims=_S,
       effect="adhesion"),
+    V("adhesion_pressure_bridges", "MPa", "adhesion pressure of the bridges before solid contact per nominal area "
+      "(Lennard-Jones and menisci of non-touching summits; positive: attractive)", MPA, dims=_S, effect="adhesion"),
+    V("adhesion_pressure_menisci", "MPa", "adhesion pressure of the menisci around solid contacts per nominal area "
+      "(positive: attractive)", MPA, dims=_S, effect="adhesion"),
+    V("wetted_area_fraction", "1", "summit surface inside the lubricant film and outside solid contact per "
+      "nominal area", dims=_S, effect="friction"),
     V("contact_fraction", "1", "fraction of summits in contact", dims=_S, effect="contact"),
     # interface.model = "deterministic": contact_pressure, real_area_fraction and friction_stress carry the
     # leading dimension `model` (statistical, deterministic), plus the solved series of the FFT

@@ -188,7 +188,7 @@ def test_load_missing_interface_dataset(tmp_path):
 
 def test_needed_quantities():
     assert interface_tables.needed_quantities(frozenset({"air_bearing"})) == ()
-    assert set(interface_tables.needed_quantities(frozenset({"contact", "friction", "adhesion"}))) == set(TABLES)
+    assert set(interface_tables.needed_quantities(frozenset({"contact", "friction", "adhesion"}))) == set(TABLES) | {"wetted_area_fraction"}
 
 
 def test_write_dataset_writes_what_to_netcdf_writes_without_importing_distributed(tmp_path):

@@ -332,7 +332,7 @@ def test_tables_smooth_across_population_boundaries(case):
 def test_only_requested_quantities_are_computed():
     p = _ep_interface()
     out = isbl.isbl_tables(np.array([0.0]), p, quantities=["adhesion_pressure"])
-    assert set(out) == {"adhesion_pressure"}
+    assert set(out) == {"adhesion_pressure", "adhesion_pressure_bridges", "adhesion_pressure_menisci"}
     with pytest.raises(ValueError, match="unknown ISBL quantities"):
         isbl.isbl_tables(np.array([0.0]), p, quantities=["pressure"])
 

@@ -191,13 +191,30 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "meniscus_time_us": Key("float", 0.0, _nonneg,
                                 doc="meniscus formation time tau_m [us]: the adhesion pressure relaxes towards its "
                                     "ISBL value with this time constant (docs/model.md, section 'Meniscus "
-                                    "formation'); 0: at once (the ISBL value)"),
+                                    "formation'); 0: at once (the ISBL value). With interface.adhesion = "
+                                    "'two-population' it acts on the menisci around solid contacts only"),
+        "bridge_work_of_adhesion_j_m2": Key("float", None, _nonneg,
+                                            doc="work of adhesion of the bridges before solid contact [J/m^2] "
+                                                "(interface.adhesion = 'two-population': Lennard-Jones of the "
+                                                "non-wetted summits and menisci of the wetted non-touching ones; "
+                                                "recon, bounds 0.002-0.03: van der Waals across the bonded film, "
+                                                "A/(12 pi t^2) = 0.0047 for A = 1e-19 J, t = 0.75 nm; docs/model.md, "
+                                                "section 'Two adhesion populations')"),
+        "shear_stress_mpa": Key("float", 0.0, (lambda v: 0.0 <= v <= 1000.0, "a number in [0, 1000]"),
+                                doc="shear stress of the lubricant on wetted summits [MPa]: the 'lubricant shear' "
+                                    "friction term beside the solid shear-strength law (recon, bounds 0-50; "
+                                    "docs/model.md, section 'Lubricant friction'); 0: off"),
     },
     "interface": {
         "model": Key("str", "statistical", choices=("statistical", "deterministic"),
                      doc="interface tables the dynamics runs on: 'statistical' (GW/Kogut-Etsion summit "
                          "statistics) or 'deterministic' (FFT boundary elements on the measured roughness.afm "
                          "surface; both are then written to interface.nc)"),
+        "adhesion": Key("str", "isbl", choices=("isbl", "two-population"),
+                        doc="adhesion model: 'isbl' (the paper's: one work of adhesion for every summit) or "
+                            "'two-population' (bridges before contact with lubricant.bridge_work_of_adhesion_j_m2, "
+                            "menisci around contacts with lubricant.work_of_adhesion_j_m2; docs/model.md, section "
+                            "'Two adhesion populations')"),
     },
     "contact": {
         "k": Key("float", None, doc="contact criterion d < k sigma [1]; absent: from calibration"),
@@ -611,6 +628,15 @@ def _cross_checks(config: dict[str, dict[str, Any]], where: str) -> None:
     if c["friction_law"] == "coefficient" and c["friction_coefficient"] is None:
         raise SceneError(f"{where}: contact.friction_law = 'coefficient' needs contact.friction_coefficient "
                          "(a number >= 0, the paper's mu is ~1.2)")
+    lub, two = config["lubricant"], config["interface"]["adhesion"] == "two-population"
+    if two and lub["bridge_work_of_adhesion_j_m2"] is None:
+        raise SceneError(f"{where}: interface.adhesion = 'two-population' needs lubricant.bridge_work_of_adhesion_j_m2 "
+                         "(a number >= 0 [J/m^2]; about 0.005 for van der Waals across the bonded film)")
+    if not two and lub["bridge_work_of_adhesion_j_m2"] is not None:
+        raise SceneError(f"{where}: lubricant.bridge_work_of_adhesion_j_m2 acts only with interface.adhesion = "
+                         "'two-population' (it is 'isbl': one work of adhesion for every summit)")
+    if lub["shear_stress_mpa"] > 0 and "friction" not in eff:
+        raise SceneError(f"{where}: lubricant.shear_stress_mpa > 0 is a friction term: it needs the 'friction' effect")
     if config["interface"]["model"] == "deterministic":
         if not config["roughness"]["afm"]:
             raise SceneError(f"{where}: interface.model = 'deterministic' needs a measured surface: set "

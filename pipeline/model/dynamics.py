@@ -184,7 +184,11 @@ class Tables(NamedTuple):
     dmw : the disk under the TFC point, the front and the rear pad [m] (:func:`disk_coefficients`),
         grid ``p.dmw_t0``, ``p.dmw_dt``
     contact, adhesion, friction : contact pressure, adhesion pressure, friction stress [Pa] versus the
-        separation [m], grid ``p.tab_x0``, ``p.tab_h``, ``p.tab_n``
+        separation [m], grid ``p.tab_x0``, ``p.tab_h``, ``p.tab_n``. With the meniscus state
+        (``Variants.meniscus``) ``adhesion`` may hold two tables side by side (8 columns): the part the
+        state relaxes towards (columns 0-3: the menisci around contacts) and the part that acts at once
+        (4-7: the bridges of the two-population model, docs/model.md, section "Two adhesion populations");
+        :func:`static_table` sums them where no state is integrated
     tfc : tabulated air-bearing force at the TFC point [N] versus the gap [m], grid ``p.tfc_x0``,
         ``p.tfc_h`` (linear continuation below, constant above)
     """
@@ -290,6 +294,40 @@ def _ppat(c, i, s):
         j = c.shape[0] - 1
         return ((c[j, 0] * s + c[j, 1]) * s + c[j, 2]) * s + c[j, 3]
     return ((c[i, 0] * s + c[i, 1]) * s + c[i, 2]) * s + c[i, 3]
+
+
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
+def _ppat_at(c, i, s, col):
+    """:func:`_ppat` of the piecewise cubic in columns ``col..col+3`` of ``c`` (two tables in one array)."""
+    if i < 0:
+        return c[0, col + 3] + c[0, col + 2] * s
+    if i >= c.shape[0]:
+        j = c.shape[0] - 1
+        return ((c[j, col] * s + c[j, col + 1]) * s + c[j, col + 2]) * s + c[j, col + 3]
+    return ((c[i, col] * s + c[i, col + 1]) * s + c[i, col + 2]) * s + c[i, col + 3]
+
+
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
+def _ppslope_at(c, x0, h, x, col):
+    """Slope of the piecewise cubic in columns ``col..col+3`` of ``c`` at ``x`` (as :func:`_ppval`)."""
+    n = c.shape[0]
+    u = (x - x0) / h
+    if u < 0.0:
+        return c[0, col + 2]
+    i = int(u)
+    if i >= n:
+        return 0.0
+    s = x - (x0 + i * h)
+    return (3.0 * c[i, col] * s + 2.0 * c[i, col + 1]) * s + c[i, col + 2]
+
+
+def static_table(c: np.ndarray | None) -> np.ndarray | None:
+    """The one piecewise cubic of an adhesion slot: ``c`` itself, or, for the two tables of the meniscus
+    state (columns 0-3 relaxing, 4-7 at once: :class:`Tables`), their sum (a cubic spline is linear in
+    its data, so the sum of the coefficients is the spline of the summed table)."""
+    if c is None or c.shape[1] == 4:
+        return c
+    return np.ascontiguousarray(c[:, :4] + c[:, 4:])
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -470,6 +508,8 @@ def _interface_force(p, cp, pa, ft, men, F_i, z, th, vz, vth, q, wc, vc, contact
             if men is not None:
                 F_i -= p.A_n * q
                 dq = (_ppat(pa, i, s) - q) / men
+                if pa.shape[1] == 8:  # the part that acts at once (two populations: the bridges)
+                    F_i -= p.A_n * _ppat_at(pa, i, s, 4)
             else:
                 F_i -= p.A_n * _ppat(pa, i, s)
         if cp is not None:
@@ -488,6 +528,8 @@ def _interface_stiffness(p, cp, pa, men, contact, kk, d):
         kk -= p.A_n * _ppval(cp, p.tab_x0, p.tab_h, d)[1]
     if pa is not None and men is None:
         kk += p.A_n * _ppval(pa, p.tab_x0, p.tab_h, d)[1]
+    if pa is not None and men is not None and pa.shape[1] == 8:  # the part that acts at once
+        kk += p.A_n * _ppslope_at(pa, p.tab_x0, p.tab_h, d, 4)
     return kk
 
 

@@ -79,7 +79,8 @@ def interface_parameters(scene: Any, stats: dict[str, float]) -> isbl.Interface:
     H = m.hardness if m.hardness else hardness_from_plasticity_gw(m.plasticity_index, E, stats["sigma_s"], stats["R"])
     check_materials(E, H, stats["sigma_s"], stats["R"], derived="plasticity_index" if m.hardness else "hardness")
     return isbl.Interface(sigma_s=stats["sigma_s"], eta=stats["eta"], R=stats["R"], E=E, H=H, nu=nu,
-                          t=lub.thickness, dgamma=lub.work_of_adhesion, eps=lub.intermolecular_distance)
+                          t=lub.thickness, dgamma=lub.work_of_adhesion, eps=lub.intermolecular_distance,
+                          dgamma_bridge=lub.bridge_work_of_adhesion)
 
 
 def needed_quantities(effects: frozenset[str]) -> tuple[str, ...]:
@@ -88,7 +89,7 @@ def needed_quantities(effects: frozenset[str]) -> tuple[str, ...]:
     if "contact" in effects:
         q += ["contact_pressure", "real_area_fraction", "contact_fraction"]
     if "friction" in effects:
-        q += ["friction_stress"]
+        q += ["friction_stress", "wetted_area_fraction"]
     if "adhesion" in effects:
         q += ["adhesion_pressure"]
     return tuple(q)
@@ -118,6 +119,8 @@ def build_tables(scene: Any, stats: dict[str, float]) -> xr.Dataset:
         "plasticity_index_ke": plasticity_index_ke(p.E, p.H, p.sigma_s, p.R, p.nu),
         "lubricant_thickness": p.t, "work_of_adhesion": p.dgamma, "intermolecular_distance": p.eps,
     }
+    if p.dgamma_bridge is not None:
+        scalars["bridge_work_of_adhesion"] = p.dgamma_bridge
     data = {k: INTERFACE[k].from_si(v, ()) for k, v in scalars.items()}
     coords = {}
     if wanted:
@@ -144,6 +147,7 @@ def build_tables(scene: Any, stats: dict[str, float]) -> xr.Dataset:
     ds.attrs.update({
         "roughness_source": stats.get("source", ""),
         "plasticity_index_form": "both: plasticity_index_gw (GW 1966) and plasticity_index_ke (CEB/KE)",
+        "adhesion_model": scene["interface"]["adhesion"],
         "quadrature": f"composite Gauss-Legendre, {sol['quadrature_panels']} panels x "
                       f"{sol['quadrature_nodes']} nodes per population range, |z| <= {isbl.TAIL} sigma_s",
         "quantities": " ".join(wanted) if wanted else "none (flying-only scene: no interface tables)",

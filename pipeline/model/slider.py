@@ -47,11 +47,11 @@ from typing import Any, Callable, Mapping, Sequence
 import numpy as np
 
 from . import dynamics as dyn
-from ..units import KHZ, MM, MS, NM, NS, UM, US
+from ..units import KHZ, MM, MPA, MS, NM, NS, UM, US
 from ..physics import air_bearing as ab
 from ..physics import bulge_bearing as bb
 from ..physics.fhm import fhm
-from ..physics.friction import friction_stress_table
+from ..physics.friction import friction_stress_table, lubricant_shear_stress
 from ..physics.geometry import effective_radius, nominal_area
 from ..physics.statistics import explicit_statistics
 from ..variables import INTERFACE, Regime
@@ -237,6 +237,12 @@ def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float]
                     values = friction_stress_table(c["friction_law"],
                                                    interface["contact_pressure"].values * INTERFACE["contact_pressure"].si_unit,
                                                    values, c["friction_coefficient"])
+                    tau_lub = scene["lubricant"]["shear_stress_mpa"] * MPA
+                    if tau_lub > 0.0:  # the lubricant-shear term beside the solid one (docs/model.md, "Lubricant friction")
+                        if "wetted_area_fraction" not in interface:
+                            raise ValueError("interface tables lack 'wetted_area_fraction', needed by "
+                                             "lubricant.shear_stress_mpa > 0; re-run `hdi interface`")
+                        values = values + lubricant_shear_stress(interface["wetted_area_fraction"].values, tau_lub)
                 tabs[key] = dyn.piecewise_coefficients(values, h, order)
     elif eff & {"contact", "adhesion"}:
         raise ValueError("the contact/adhesion effects need interface tables (run `hdi interface`)")
@@ -264,7 +270,14 @@ def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float]
         if tabs["adhesion"] is None:
             raise ValueError("lubricant.meniscus_time_us > 0 relaxes the adhesion pressure: it needs the adhesion "
                              "effect in scene.effects")
-        # the meniscus state q [Pa]: absolute tolerance a millionth of the table's largest adhesion pressure
+        if scene["interface"]["adhesion"] == "two-population":
+            # the state relaxes towards the menisci around contacts; the bridges act at once (docs/model.md,
+            # section "Two adhesion populations"): two tables side by side (pipeline.model.dynamics.Tables)
+            parts = [interface[v].values * INTERFACE[v].si_unit
+                     for v in ("adhesion_pressure_menisci", "adhesion_pressure_bridges")]
+            tabs["adhesion"] = np.ascontiguousarray(np.hstack([dyn.piecewise_coefficients(v, p.tab_h, order)
+                                                               for v in parts]))
+        # the meniscus state q [Pa]: absolute tolerance a millionth of the largest pressure it relaxes towards
         atol = np.append(atol, MENISCUS_ATOL * np.max(np.abs(tabs["adhesion"][:, 3])))
     else:
         meniscus = None
@@ -474,6 +487,8 @@ def histories(run: Run) -> dict[str, np.ndarray]:
     net = np.zeros_like(t)
     if m.adhesion is not None:  # (the meniscus state q is the adhesion pressure when it is on)
         out["adhesion_force"] = An * (Y[:, 4] if m.meniscus is not None else dyn.ppval(m.adhesion, x0, h, d))
+        if m.meniscus is not None and m.adhesion.shape[1] == 8:  # the part acting at once (dynamics.Tables)
+            out["adhesion_force"] += An * dyn.ppval(np.ascontiguousarray(m.adhesion[:, 4:]), x0, h, d)
         net -= out["adhesion_force"]
     if m.contact is not None:
         c = run.contact

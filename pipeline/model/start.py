@@ -65,7 +65,8 @@ def static_forces(run_parameters):
             cache.clear()  # (continuation: one protrusion at a time)
             # the meniscus state at rest is at its equilibrium q = p_a(d): the static forces are those
             # without it (docs/model.md, section "Meniscus formation"); the run appends q
-            cache[mu] = (p, tables._replace(dmw=None), variants._replace(meniscus=None))
+            cache[mu] = (p, tables._replace(dmw=None, adhesion=dyn.static_table(tables.adhesion)),
+                         variants._replace(meniscus=None))
         return cache[mu]
 
     def R(y: np.ndarray, mu: float) -> np.ndarray:

@@ -18,12 +18,22 @@ References
 .. [Tabor51] D. Tabor, The Hardness of Metals, Oxford (1951): ``H ~ 2.8 Y``.
 .. [Bowden50] F. P. Bowden, D. Tabor, The Friction and Lubrication of Solids (1950): adhesive
    friction as shear strength times real area.
+.. [VEP11] A. I. Vakis, M. Eriten, A. A. Polycarpou, "Modeling bearing and shear forces in
+   molecularly thin lubricants", Tribol. Lett. 41 (2011) 573-586.
+.. [VP11] A. I. Vakis, A. A. Polycarpou, "Modeling sliding contact of rough surfaces with molecularly
+   thin lubricants", Tribol. Lett. 45 (2012) 37-48 (online 2011): friction from the solid contacts and
+   from the lubricant sheared on the wetted asperities.
+
+A third law, Kogut & Etsion's (2004) static friction of a summit at the inception of sliding, is not
+offered: it gives the largest tangential load a pre-loaded stationary contact sustains, with its
+coefficient defined against the external normal load, while the slider here slides continuously and
+the external load at the interface is negative (attractive) in light contact, so that coefficient is
+undefined there (docs/model.md, section "Lubricant friction").
 """
 
 from __future__ import annotations
 
 import numpy as np
-
 
 
 def shear_strength(H: float) -> float:
@@ -67,6 +77,26 @@ FRICTION_LAWS = {
     "shear-strength": _shear_strength_table,   # tau = eta int tau_y A phi dz (docs/model.md, section "Friction")
     "coefficient": _coefficient_table,         # tau = mu p_c (docs/model.md, section "Friction")
 }
+
+
+def lubricant_shear_stress(wetted_area_fraction: np.ndarray, tau_lub: float) -> np.ndarray:
+    """Friction stress per nominal area of the lubricant sheared on the wetted summits [Pa]:
+    ``tau_lub a_w(d)`` [VP11] (docs/model.md, section "Lubricant friction").
+
+    The "lubricant shear" friction term, added to the solid term of the scene's friction law: the
+    molecularly thin lubricant in the menisci of the summits (outside their solid contacts) is sheared
+    at the disk speed, at a limiting shear stress ``tau_lub`` far below the solid's ``tau_y`` (a confined
+    PFPE film at shear rates of 1e10 1/s is shear-thinned to its limiting stress; [VEP11], [VP11]).
+
+    Parameters
+    ----------
+    wetted_area_fraction : summit surface inside the film and outside solid contact per nominal area
+        ``a_w(d)`` [1] (:func:`pipeline.physics.isbl.isbl_tables`)
+    tau_lub : limiting shear stress of the lubricant [Pa] (``lubricant.shear_stress_mpa``, recon)
+    """
+    if not (np.isfinite(tau_lub) and tau_lub >= 0.0):
+        raise ValueError(f"lubricant shear stress {tau_lub!r} Pa: expected a finite number >= 0")
+    return tau_lub * np.asarray(wetted_area_fraction, dtype=float)
 
 
 def friction_stress_table(law: str, contact_pressure: np.ndarray, shear_strength_stress: np.ndarray,

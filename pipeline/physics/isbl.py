@@ -16,19 +16,29 @@ fully plastic         w > 110 w_c             H 2 pi R w    0                   
 with ``w = z - d``, ``d`` the separation of the flat from the mean of summit heights and ``z``
 measured from that mean, Gaussian with standard deviation ``sigma_s``.
 
-Quadrature
-----------
-Each population's range is clipped to ``|z| <= tail sigma_s`` (``tail = 12``: the Gaussian weight
-beyond is below 1e-31 of its peak) and integrated by composite Gauss-Legendre with ``panels`` panels
-of ``nodes`` nodes, split at every break of the single-summit laws (``w = 0, w_c, 6 w_c, 110 w_c``
-and ``z = d - t``), so each panel integrates a smooth function. In the elastic range the
-substitution ``w = (b - a) u^2`` removes the ``w^1.5`` branch point at ``w = 0``. The
-Lennard-Jones range, whose law has a pole just ``eps`` beyond its upper end, is split into
-sub-ranges graded geometrically towards that end. The integrands are then analytic on every
-panel, well away from their singularities, and Gauss-Legendre converges exponentially;
-``tests/test_isbl.py`` checks the default against adaptive ``scipy.integrate.quad`` and the closed
-forms, and that doubling the nodes changes nothing at the 1e-8 level. Integrals of a constant law against the
-Gaussian (meniscus adhesion, summit fractions) use the closed form (``scipy.special.ndtr``).
+Two adhesion populations
+------------------------
+The adhesion is written as two parts (docs/model.md, section "Two adhesion populations"): the
+**bridges** before solid contact (Lennard-Jones of the non-wetted summits and the menisci of the
+summits that reach the lubricant surface but do not touch) and the **menisci around contacts** (the
+elastic and elastic-plastic summits). The paper's ISBL (``dgamma_bridge = None``) gives both the one
+work of adhesion ``dgamma``. With ``dgamma_bridge`` set, the bridges have their own, smaller work of
+adhesion: the bonded layer forms no meniscus, so a summit that reaches the lubricant without touching
+is held by the van der Waals attraction across the film and the bridges of the thin mobile fraction
+[Ono24], while the lubricant displaced by a solid contact rings it with a full meniscus
+``2 pi R dgamma``. The Lennard-Jones law of the non-wetted summits takes ``dgamma_bridge`` too, so
+it still joins the bridge value continuously at the lubricant surface.
+
+Wetted area
+-----------
+``wetted_area_fraction`` is the summit surface inside the lubricant film and outside the solid contact,
+per nominal area, where the lubricant-shear friction term acts (:mod:`pipeline.physics.friction`): the
+annulus of a summit's undeformed sphere between the lubricant surface (a height ``t`` above the disk)
+and the disk, ``2 pi R (z - d + t)`` for a summit that reaches the film without touching and
+``2 pi R t`` for a touching one (the annulus between the sphere's sections at the disk and at the film
+surface; the Hertz contact takes the inner part of the section at the disk). In closed form,
+``a_w = eta 2 pi R sigma_s [G((d - t)/sigma_s) - G(d/sigma_s)]`` with ``G(u) = phi(u) - u Q(u)``
+(``int_a^inf (z - a) phi dz = sigma_s G(a/sigma_s)``).
 
 References
 ----------
@@ -36,6 +46,9 @@ References
 .. [KE02] L. Kogut, I. Etsion, J. Appl. Mech. 69 (2002) 657-662.
 .. [Stanley90] H. M. Stanley, I. Etsion, D. B. Bogy, J. Tribol. 112 (1990) 98-104.
 .. [Vakis09] A. I. Vakis, S.-C. Lee, A. A. Polycarpou, IEEE Trans. Magn. 45 (2009) 4966-4971.
+.. [Ono24] K. Ono, "Physics of the sub-monolayer lubricant in the head-disk interface", Lubricants 12
+   (2024) 117: the meniscus of the rarefied mobile film is the interaction force at the HDI; the
+   bonded layer does not flow.
 """
 
 from __future__ import annotations
@@ -54,7 +67,7 @@ TAIL = 12.0
 
 #: Quantities the tables can hold (the keys of :func:`isbl_tables`' result).
 QUANTITIES = ("contact_pressure", "adhesion_pressure", "friction_stress", "real_area_fraction",
-              "contact_fraction")
+              "contact_fraction", "wetted_area_fraction")
 
 
 @dataclass(frozen=True)
@@ -70,8 +83,12 @@ class Interface:
     H : hardness of the softer body [Pa]
     nu : Poisson ratio [1] (Kogut-Etsion K factor)
     t : lubricant thickness [m]
-    dgamma : work of adhesion [J/m^2]
+    dgamma : work of adhesion [J/m^2] (of every summit in the paper's ISBL; of the menisci around
+        solid contacts with two populations)
     eps : intermolecular distance [m]
+    dgamma_bridge : work of adhesion of the bridges before solid contact [J/m^2] (Lennard-Jones of the
+        non-wetted summits, menisci of the wetted non-touching ones); ``None``: ``dgamma`` (the
+        paper's ISBL, one population)
     """
 
     sigma_s: float
@@ -83,6 +100,7 @@ class Interface:
     t: float
     dgamma: float
     eps: float
+    dgamma_bridge: float | None = None
 
     @property
     def w_c(self) -> float:
@@ -94,8 +112,10 @@ class Interface:
             v = getattr(self, name)
             if not (np.isfinite(v) and v > 0):
                 raise ValueError(f"Interface.{name} = {v!r}: expected a positive finite number")
-        for name in ("t", "dgamma"):
+        for name in ("t", "dgamma", "dgamma_bridge"):
             v = getattr(self, name)
+            if v is None and name == "dgamma_bridge":
+                continue
             if not (np.isfinite(v) and v >= 0):
                 raise ValueError(f"Interface.{name} = {v!r}: expected a finite number >= 0")
 
@@ -142,8 +162,12 @@ def isbl_tables(d: np.ndarray, p: Interface, *, quantities=QUANTITIES, nodes: in
         ``contact_pressure`` [Pa]: ``eta int P phi dz``; ``adhesion_pressure`` [Pa] (positive =
         attractive); ``friction_stress`` [Pa]: ``eta int tau_y A phi dz`` over elastic and
         elastic-plastic summits; ``real_area_fraction`` [1]: ``eta int A phi dz``;
-        ``contact_fraction`` [1]: fraction of summits in contact ``P(z > d)``; and, when contact is
-        computed, ``elastic_fraction``/``plastic_fraction`` [1] of summits in those regimes.
+        ``contact_fraction`` [1]: fraction of summits in contact ``P(z > d)``;
+        ``wetted_area_fraction`` [1]: summit surface inside the lubricant film and outside the solid
+        contacts per nominal area (module docstring); when contact is computed,
+        ``elastic_fraction``/``plastic_fraction`` [1] of summits in those regimes; with the adhesion,
+        its two parts ``adhesion_pressure_bridges`` and ``adhesion_pressure_menisci`` [Pa] (module
+        docstring, "Two adhesion populations"), whose sum is ``adhesion_pressure``.
     """
     unknown = set(quantities) - set(QUANTITIES)
     if unknown:
@@ -228,8 +252,22 @@ def isbl_tables(d: np.ndarray, p: Interface, *, quantities=QUANTITIES, nodes: in
         z = np.concatenate([zz for zz, _ in parts], axis=1)
         wt = np.concatenate([ww for _, ww in parts], axis=1)
         gap = d[:, None] - p.t - z + p.eps
-        lj = (lennard_jones_force(gap, R, p.dgamma, p.eps) * wt * _gauss(z, s)).sum(axis=1)
-        out["adhesion_pressure"] = eta * (fm * wetted + lj)
+        dgb = p.dgamma if p.dgamma_bridge is None else p.dgamma_bridge
+        lj = (lennard_jones_force(gap, R, dgb, p.eps) * wt * _gauss(z, s)).sum(axis=1)
+        # the two populations (module docstring): upper-tail differences above the summit mean, where
+        # the CDF's differences would round away
+        touching = np.where(d > 0, Q(d) - Q(d + asperity.X_PLASTIC * wc), F(d + asperity.X_PLASTIC * wc) - F(d))
+        reaching = np.where(d - p.t > 0, Q(d - p.t) - Q(d), F(d) - F(d - p.t))
+        out["adhesion_pressure_menisci"] = eta * fm * touching
+        out["adhesion_pressure_bridges"] = eta * (meniscus_force(R, dgb) * reaching + lj)
+        if p.dgamma_bridge is None:  # the paper's ISBL, summed as it always was
+            out["adhesion_pressure"] = eta * (fm * wetted + lj)
+        else:
+            out["adhesion_pressure"] = out["adhesion_pressure_menisci"] + out["adhesion_pressure_bridges"]
+
+    if "wetted_area_fraction" in want:  # closed form (module docstring, "Wetted area")
+        G = lambda u: np.exp(-0.5 * u * u) / np.sqrt(2.0 * np.pi) - u * ndtr(-u)  # noqa: E731
+        out["wetted_area_fraction"] = eta * 2.0 * np.pi * R * s * np.maximum(G((d - p.t) / s) - G(d / s), 0.0)
 
     if "contact_fraction" in want:
         out["contact_fraction"] = Q(d)

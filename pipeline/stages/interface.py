@@ -35,8 +35,9 @@ STAGE = Stage(
     "interface", compute, outputs=("interface.nc",),
     reads=("roughness", "materials", "lubricant", "solver.table_step_nm", "solver.table_min_sigma",
            "solver.table_max_nm", "solver.quadrature_nodes", "solver.quadrature_panels", "scene.effects",
-           "air_bearing.flying_height_nm", "interface.model", "solver.contact_grid_points"),
-    excludes=("lubricant.meniscus_time_us",),  # a property of the dynamics, not of the tables
+           "air_bearing.flying_height_nm", "interface.model", "interface.adhesion", "solver.contact_grid_points"),
+    # properties of the dynamics, not of the tables (the lubricant shear stress scales wetted_area_fraction)
+    excludes=("lubricant.meniscus_time_us", "lubricant.shear_stress_mpa"),
     derived=lambda scene: {"deepest_protrusion_nm": deepest_protrusion_nm(scene)},
     upstream=lambda scene: ("roughness",) if scene["roughness"]["afm"] else (),
     order=30, main_job=True, doc="ISBL tables versus separation, interface.nc")
