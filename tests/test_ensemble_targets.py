@@ -71,6 +71,11 @@ def test_report_shows_each_target_over_the_realisations_with_its_spread(run3):
     text = (out / "report" / "comparison.md").read_text()
     assert "| quantity | paper | ours | difference | over 3 DMW realisations (spread) |" in text
     assert "## Paper targets over 3 DMW realisations" in text
+    # the bouncing band over the realisations: the steps above 0.5 counted, and its figure drawn
+    probs = ens["bv_exceedance_probability"].sel(protrusion=[10.0, 10.2]).values
+    assert f"; {int(np.sum(probs > 0.5))} of the 2 steps above 0.5 (figure `band.png`)." in text
+    from test_report import check_png
+    check_png(out / "figures" / "band.png")
     td, lo, hi = en.touchdown_protrusion(ens["min_clearance"])
     assert np.isfinite(td) and lo <= td <= hi
     assert f"the touchdown protrusion over the realisations: {td:.4g} nm (10-90 %: {lo:.4g}-{hi:.4g})" in text

@@ -126,8 +126,11 @@ def ensemble_markdown(ens: xr.Dataset) -> str:
     if "bouncing" in names and "bv_exceedance_probability" in ens:
         band = np.atleast_1d(ens["value_bouncing"].attrs["protrusions_nm"])
         thr = ens["bv_exceedance_probability"].attrs["threshold_percent"]
-        text.append(f"- P(BV > {thr:g} %) over the bouncing band: "
-                    + ", ".join(f"{b:g} nm: {number(_at(ens, 'bv_exceedance_probability', b), 3)}" for b in band) + ".")
+        probs = [_at(ens, "bv_exceedance_probability", b) for b in band]
+        steps = sum(1 for v in probs if np.isfinite(v) and v > 0.5)
+        text.append(f"- P(bouncing BV > {thr:g} %) over the bouncing band (in contact in the steady window): "
+                    + ", ".join(f"{b:g} nm: {number(v, 3)}" for b, v in zip(band, probs))
+                    + f"; {steps} of the {len(band)} steps above 0.5 (figure `band.png`).")
     if "sliding_bv" in names and "touchdown_probability" in ens:
         at = float(np.atleast_1d(ens["value_sliding_bv"].attrs["protrusions_nm"])[0])
         frac = _at(ens, "touchdown_probability", at)

@@ -393,6 +393,54 @@ def fig_ensemble(sweep: xr.Dataset, scene: str, path: Path, *, touchdown_nm: flo
     return save(fig, path)
 
 
+def fig_band(ens: xr.Dataset, scene: str, path: Path, *, band_nm: Sequence[float] = (), threshold: float = 20.0,
+             touchdown_nm: float | None = None, previous_nm: float | None = None) -> Path:
+    """The bouncing band over DMW realisations (``ensemble.nc``): the bouncing BV (BV where the run touched,
+    0 where it flew) of every realisation with its median and 10-90 % range and the threshold (top); the
+    fraction of the realisations bouncing above it, the touchdown probability and the median contact
+    fraction with its 10-90 % range (bottom), versus protrusion [nm]; the paper's band shaded."""
+    from .ensemble import median_spread, touchdown_probability
+    from .study import bouncing_bv
+    x = ens["protrusion"].values
+    n = ens.sizes["realisation"]
+    bv = bouncing_bv(ens["fhm_bv"], ens["min_clearance"])
+    med, lo, hi = (np.asarray(v.values, float) for v in median_spread(bv))
+    fig, (ax, ax2) = new_figure(2, 1, size=(8.5, 6.6), sharex=True)
+    for a in (ax, ax2):
+        if len(band_nm):
+            a.axvspan(min(band_nm) - 0.1, max(band_nm) + 0.1, color="#ffbf00", alpha=0.15, lw=0,
+                      label="the paper's band" if a is ax else None)
+    ax.plot(x, np.asarray(bv.values), ".", color="0.55", ms=3, alpha=0.6)
+    ax.fill_between(x, lo, hi, color=LINE_COLOURS[0], alpha=0.2, lw=0, label="10-90 % of the realisations")
+    ax.plot(x, med, color=LINE_COLOURS[0], lw=1.4, marker="o", ms=3, label=f"median over {n} DMW realisations")
+    ax.axhline(threshold, color="k", lw=0.8, ls="--", label=f"paper: BV > {threshold:g} %")
+    ax.set_ylabel(axis_label("bouncing BV (0 where flying)", ens["fhm_bv"].attrs.get("units", "%")))
+    above = (np.asarray(bv.values) > threshold).astype(float)
+    above[~np.isfinite(np.asarray(bv.values))] = np.nan
+    ax2.plot(x, np.nanmean(above, axis=1), color=LINE_COLOURS[3], lw=1.4, marker="s", ms=3,
+             label=f"P(bouncing BV > {threshold:g} %)")
+    ax2.plot(x, touchdown_probability(ens["min_clearance"]).values, color="#d62728", lw=1.0, ls="--",
+             label="touchdown probability")
+    if "contact_fraction" in ens:
+        cm, clo, chi = (np.asarray(v.values, float) for v in median_spread(ens["contact_fraction"].fillna(0.0)))
+        ax2.fill_between(x, clo, chi, color=LINE_COLOURS[2], alpha=0.2, lw=0)
+        ax2.plot(x, cm, color=LINE_COLOURS[2], lw=1.2, label="contact fraction of the window (median, 10-90 %)")
+    ax2.axhline(0.5, color="k", lw=0.6, ls=":")
+    ax2.set_ylim(-0.03, 1.03)
+    ax2.set_ylabel(axis_label("probability / fraction", "1"))
+    ax2.set_xlabel(axis_label("TFC protrusion δ", "nm"))
+    for a in (ax, ax2):
+        if touchdown_nm is not None:
+            a.axvline(touchdown_nm, color="#d62728", lw=1.0, label=f"measured touchdown {touchdown_nm:g} nm"
+                      if a is ax else None)
+        if previous_nm is not None:
+            a.axvline(previous_nm, color="#d62728", lw=0.8, ls=":")
+        a.grid(alpha=0.3)
+        a.legend(fontsize=7.5, loc="upper left", framealpha=0.9)
+    fig.suptitle(title("The bouncing band over DMW realisations", scene), fontsize=11)
+    return save(fig, path)
+
+
 # --------------------------------------------------------------------------------------------- Fig. 7
 def fig_shear(combos: Sequence[tuple[dict[str, Any], xr.Dataset]], scene: str, path: Path, *,
               touchdown_nm: float | None = None, shear_strength: float | None = None) -> Path:

@@ -22,6 +22,8 @@ FIGURES = ("fig3_clearance.png", "fig4_forces.png", "fig5_stresses.png", "fig6_f
            "calibration.png", "roughness.png", "dmw.png")
 #: Drawn only for a sweep with several DMW realisations (``[sweep] realisations > 1``).
 ENSEMBLE_FIGURE = "ensemble.png"
+#: Drawn only with the paper's checks over DMW realisations (``ensemble.nc``, ``report.realisations > 1``).
+BAND_FIGURE = "band.png"
 #: Drawn only when interface.nc holds both interface models (``interface.model = "deterministic"``).
 INTERFACE_FIGURE = "interface_models.png"
 
@@ -73,7 +75,10 @@ def figure_jobs(data: dict[str, xr.Dataset | None], combos: list, settings: Repo
     else:
         prots = history_protrusions(hist, settings.histories_nm)
         low, high = prots[0], prots[-1]
-        panels = [(p, history_slice(hist, labels0, p), regime_at(ds0, p)) for p in dict.fromkeys([low, high])]
+        # every kept protrusion (the paper's Fig. 3: flying and light contact, and a step of the band when
+        # report.histories_nm names one), at most four panels: the lowest, the highest and two between
+        shown = prots if len(prots) <= 4 else [prots[0], *prots[1:-1][:2], prots[-1]]
+        panels = [(p, history_slice(hist, labels0, p), regime_at(ds0, p)) for p in dict.fromkeys(shown)]
         jobs.append((plots.fig_clearance, (panels, name, figdir / "fig3_clearance.png", transient), {}))
         h_high = panels[-1][1]
         if any(v in h_high for v, _, _ in plots.FORCES):
@@ -116,6 +121,12 @@ def figure_jobs(data: dict[str, xr.Dataset | None], combos: list, settings: Repo
     if data.get("ensemble") is not None:
         jobs.append((plots.fig_ensemble, (data["ensemble"], name, figdir / ENSEMBLE_FIGURE),
                      dict(touchdown_nm=onset, previous_nm=previous)))
+    checks = data.get("checks")
+    if checks is not None and "value_bouncing" in checks and "min_clearance" in checks:
+        jobs.append((plots.fig_band, (checks, name, figdir / BAND_FIGURE),
+                     dict(band_nm=tuple(np.atleast_1d(checks["value_bouncing"].attrs["protrusions_nm"])),
+                          threshold=float(checks["bv_exceedance_probability"].attrs["threshold_percent"]),
+                          touchdown_nm=onset, previous_nm=previous)))
     if data["interface"] is not None and "model" in data["interface"].dims:  # interface.model = "deterministic"
         jobs.append((plots.fig_interface_models, (data["interface"], name, figdir / INTERFACE_FIGURE), {}))
     return jobs, skipped

@@ -293,8 +293,12 @@ def targets(scene: Any) -> list[Target]:
       its value is the first evaluated protrusion in contact.
     * ``fhm_flying``: mean FHM of the flying points of ``fhm_flying_range_nm`` (every
       ``flying_step_nm``); ``fhm_touchdown``: FHM at ``fhm_touchdown_at_nm``.
-    * ``bouncing``: the smallest BV in ``(lo, hi]`` of ``bouncing_range_nm`` (every ``band_step_nm``)
-      must exceed ``bouncing_min_percent``.
+    * ``bouncing`` (graded): over the steps of ``(lo, hi]`` of ``bouncing_range_nm`` (every
+      ``band_step_nm``), the mean of the bouncing BV capped at ``bouncing_min_percent``: a run's BV where
+      it touched in the steady window, 0 where it flew (a flying FHM is no bounce). On an ensemble,
+      each step's median over the realisations is capped. It reaches the threshold exactly when every
+      step bounces above it, and it grows with each step's BV below it, so an optimiser feels a partial
+      band (the paper's "smallest BV above 20 %" is flat wherever one step is missing).
     * at ``sliding_at_nm``: BV below ``sliding_bv_max_percent``; interference, contact force, real
       area, mean pressure and friction coefficient equal to the paper's; net force attractive (< 0).
     """
@@ -307,9 +311,11 @@ def targets(scene: Any) -> list[Target]:
     def fhm_flying(t: Table) -> float:
         return t.flying_mean("fhm_bv", fr)
 
-    def band_min(t: Table) -> float:
-        v = t.values("fhm_bv", band)
-        return float(np.min(v)) if v.size and np.all(np.isfinite(v)) else float("nan")
+    cap = c["bouncing_min_percent"]
+
+    def band_graded(t: Table) -> float:
+        v = bouncing_bv(t.values("fhm_bv", band), t.values("min_clearance", band))
+        return float(np.mean(np.minimum(v, cap))) if v.size and np.all(np.isfinite(v)) else float("nan")
 
     def at_sliding(name: str) -> Callable[[Table], float]:
         return lambda t: t.value(name, at)
@@ -328,11 +334,11 @@ def targets(scene: Any) -> list[Target]:
         return med(en.flying_mean(at_protrusions(ds, "fhm_bv", fr), at_protrusions(ds, "min_clearance", fr)))
 
     def e_band(ds: xr.Dataset) -> tuple[float, float, float]:
-        m, lo, hi = (v.values for v in en.median_spread(at_protrusions(ds, "fhm_bv", band)))
+        bv = bouncing_bv(at_protrusions(ds, "fhm_bv", band), at_protrusions(ds, "min_clearance", band))
+        m, lo, hi = (v.values for v in en.median_spread(bv))
         if not (m.size and np.all(np.isfinite(m))):
             return float("nan"), float("nan"), float("nan")
-        j = int(np.argmin(m))
-        return float(m[j]), float(lo[j]), float(hi[j])
+        return tuple(float(np.mean(np.minimum(v, cap))) for v in (m, lo, hi))
 
     def e_median_at(name: str, x: float) -> Callable[[xr.Dataset], tuple[float, float, float]]:
         return lambda ds: med(at_protrusions(ds, name, (x,)).isel(protrusion=0))
@@ -355,9 +361,10 @@ def targets(scene: Any) -> list[Target]:
                                 c["fhm_touchdown_percent"], c["fhm_touchdown_tolerance_percent"],
                                 (c["fhm_touchdown_at_nm"],), lambda t: t.value("fhm_bv", c["fhm_touchdown_at_nm"]),
                                 f"about {c['fhm_touchdown_percent']:g} %", e_median_at("fhm_bv", c["fhm_touchdown_at_nm"])),
-        "bouncing": Target("bouncing", f"smallest BV in ({band[0] - c['band_step_nm']:g}, {band[-1]:g}] nm", "%",
-                           "above", c["bouncing_min_percent"], c["bouncing_tolerance_percent"], band, band_min,
-                           f"> {c['bouncing_min_percent']:g} %", e_band),
+        "bouncing": Target("bouncing", f"bouncing BV over ({band[0] - c['band_step_nm']:g}, {band[-1]:g}] nm, "
+                                       f"mean over the steps, each capped at {cap:g} %", "%",
+                           "above", cap, c["bouncing_tolerance_percent"], band, band_graded,
+                           f"> {cap:g} % at every step ({cap:g} %)", e_band),
         "sliding_bv": Target("sliding_bv", f"BV {sl_}", "%", "below", c["sliding_bv_max_percent"],
                              c["sliding_bv_tolerance_percent"], (at,), at_sliding("fhm_bv"),
                              f"< {c['sliding_bv_max_percent']:g} %", e_median_at("fhm_bv", at)),
@@ -376,6 +383,15 @@ def targets(scene: Any) -> list[Target]:
         all_targets[name] = Target(name, f"{long_name} {sl_}", units, "equal", c[key], c[tol], (at,), at_sliding(name),
                                    f"{c[key]:g}" + ("" if units == "1" else f" {units}"), e_mean_at(name), SPREAD_STD)
     return [all_targets[name] for name in TARGETS if name in c["targets"]]
+
+
+def bouncing_bv(fhm_bv: Any, min_clearance: Any) -> Any:
+    """The BV of a bounce [%]: ``fhm_bv`` where the run touched in the steady window (the rule of
+    :func:`pipeline.model.slider.touched_in_summary`), 0 where it flew, NaN where not evaluated; numpy
+    arrays or xarray data of one shape."""
+    ok = np.isfinite(np.asarray(min_clearance, float))
+    values = np.where(ok, np.where(touched_in_summary(min_clearance), np.asarray(fhm_bv, float), 0.0), np.nan)
+    return fhm_bv.copy(data=values) if isinstance(fhm_bv, xr.DataArray) else values
 
 
 def target_protrusions(tlist: Sequence[Target]) -> list[float]:

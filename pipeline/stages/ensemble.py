@@ -32,7 +32,7 @@ import xarray as xr
 
 from ..analyses import ensemble as en
 from ..analyses.report_settings import wants_ensemble
-from ..analyses.study import ensemble_summary, target_protrusions, targets
+from ..analyses.study import bouncing_bv, ensemble_summary, target_protrusions, targets
 from ..analyses.sweep_slices import combinations, first_contact, split_ensemble
 from ..config.grid import label
 from ..evaluations import evaluate_realisations, stage_inputs_of
@@ -109,8 +109,8 @@ def judged(ds: xr.Dataset, scene: Any) -> dict[str, xr.Variable]:
 
     Per target ``t`` of :func:`pipeline.analyses.study.targets`: ``value_t``, ``spread_t`` (low, high; what
     they are in its ``spread`` attribute) and ``single_t`` (the scene's record alone), by
-    :func:`pipeline.analyses.study.ensemble_summary`; ``bv_exceedance_probability`` [1], P(BV >
-    ``identify.bouncing_min_percent``) versus protrusion; ``nominal_area_mean``/``_std`` [um2] versus
+    :func:`pipeline.analyses.study.ensemble_summary`; ``bv_exceedance_probability`` [1], P(bouncing BV >
+    ``identify.bouncing_min_percent``) (:func:`pipeline.analyses.study.bouncing_bv`: 0 where the run flew) versus protrusion; ``nominal_area_mean``/``_std`` [um2] versus
     protrusion (:mod:`pipeline.analyses.ensemble`).
     """
     tlist = targets(scene)
@@ -124,9 +124,10 @@ def judged(ds: xr.Dataset, scene: Any) -> dict[str, xr.Variable]:
         out[f"single_{name}"] = var(single, (), t.units, f"{t.long_name}, the scene's own record alone")
     out["bound"] = var(np.array(["low", "high"], dtype=object), ("bound",), "", "lower/upper end of a spread")
     threshold = float(scene["identify"]["bouncing_min_percent"])
-    out["bv_exceedance_probability"] = var(en.exceedance_probability(ds["fhm_bv"], threshold).values, ("protrusion",),
-                                           "1", f"fraction of the DMW realisations with FHM/BV above {threshold:g} %",
-                                           threshold_percent=threshold)
+    bouncing = bouncing_bv(ds["fhm_bv"], ds["min_clearance"])  # (a flying FHM above it is no bounce)
+    out["bv_exceedance_probability"] = var(en.exceedance_probability(bouncing, threshold).values, ("protrusion",),
+                                           "1", f"fraction of the DMW realisations in contact with BV above "
+                                                f"{threshold:g} %", threshold_percent=threshold)
     if "nominal_area" in ds:
         mean, std = en.mean_std(ds["nominal_area"])
         unit = SCALARS["nominal_area"].units

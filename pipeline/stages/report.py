@@ -24,13 +24,15 @@ fixes k) is not read (with :meth:`pipeline.runner.Inputs.folder`, every dataset 
 
 Writes ``out/figures/`` (returned):
 
-* ``fig3_clearance.png``: clearance histories while flying (lowest history protrusion) and in light
-  contact (highest), the paper's Fig. 3;
+* ``fig3_clearance.png``: clearance histories while flying (lowest history protrusion), in light
+  contact (highest) and at up to two history protrusions between (a step of the band), the paper's Fig. 3;
 * ``fig4_forces.png``: contact, friction, adhesion and net force histories in light contact (Fig. 4);
 * ``fig5_stresses.png``: friction coefficient, mean pressure and shear stress histories (Fig. 5);
 * ``fig6_fhm.png``: FHM/BV versus protrusion, regimes shaded, the 10 % line, measured touchdown (Fig. 6);
 * ``fig7_shear.png``: shear stress and mean contact pressure versus protrusion past touchdown (Fig. 7);
 * ``calibration.png``, ``roughness.png``, ``dmw.png``;
+* ``band.png`` (with ``ensemble.nc``): the bouncing BV, the fraction bouncing above 20 %, the touchdown
+  probability and the contact fraction over the DMW realisations versus protrusion;
 
 and ``out/report/``:
 
