@@ -119,3 +119,17 @@ def test_where_touching_is_not_monotone_the_threshold_is_the_one_next_to_the_upp
     k, status, n = calibration.k_threshold(None, 13.2, (-0.85, top), 1e-3)
     assert (k, status, n) == (top, "found", 3)
     assert pocket[0] < _plain_bisection(lambda k: pocket[0] < k < pocket[1] or k >= top, -0.85, top, 1e-3) < pocket[1]
+
+
+def test_k_choice_middle_and_paper():
+    """touchdown.k_choice: the middle of the admissible interval, or the paper's k (32.8 % two-sided,
+    k = 0.978) when admissible, else the admissible end nearest to it."""
+    from pipeline.analyses.calibration import choose_k
+    assert choose_k(-2.0, 1.0, "middle", None)[0] == -0.5
+    k, why = choose_k(-2.48, 1.455, "paper", 0.328)
+    assert k == pytest.approx(0.978, abs=5e-4) and "admissible" in why
+    assert choose_k(-2.0, 0.5, "paper", 0.328)[0] == 0.5          # the upper end is admissible
+    k_low = choose_k(1.2, 2.0, "paper", 0.328)[0]                  # the lower end is not: just above it
+    assert 1.2 < k_low < 1.2 + 1e-2
+    with pytest.raises(ValueError, match="fallback_probability"):
+        choose_k(-2.0, 1.0, "paper", None)

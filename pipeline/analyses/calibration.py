@@ -5,7 +5,8 @@ window) must happen at the measured touchdown protrusion (9.8 nm) and not at the
 actuation step (9.6 nm). For a protrusion ``delta`` let ``k*(delta)`` be the smallest k that gives
 contact (contact for every ``k > k*``); the admissible set is the interval
 ``k*(onset) < k <= k*(previous)``. The chosen k is the middle of that interval: it keeps the largest
-margin to both conditions (the width is the uncertainty the 0.2 nm actuation step leaves). When the
+margin to both conditions (the width is the uncertainty the 0.2 nm actuation step leaves); with
+``touchdown.k_choice = "paper"``, the paper's own k when it is admissible (:func:`choose_k`). When the
 interval is empty within ``touchdown.k_range`` (default [-3, 3], contact probabilities 0.1 % to
 99.9 %), no k is written (``k_calibrated = NaN``) and the outcome says why.
 
@@ -53,7 +54,7 @@ from ..fanout import run_tasks, split
 from ..io import read_dataset
 from ..model import dmw_record
 from ..model import slider as sl
-from ..physics.statistics import contact_probabilities
+from ..physics.statistics import contact_probabilities, k_from_probability
 from ..units import NM
 from ..variables import CALIBRATION
 
@@ -262,6 +263,37 @@ def _status(k: float, k_range: tuple[float, float]) -> tuple[float, str]:
     return k, "found"
 
 
+#: How the calibrated k is chosen from the admissible interval (``touchdown.k_choice``).
+K_CHOICES = ("middle", "paper")
+
+
+def choose_k(k_low: float, k_high: float, rule: str, probability: float | None) -> tuple[float, str]:
+    """The calibrated k [1] in the admissible interval ``(k_low, k_high]`` and the words that say why.
+
+    ``"middle"``: the middle, the largest margin to both touchdown conditions. ``"paper"``: the k whose
+    two-sided contact probability is ``probability`` (``contact.fallback_probability``: the paper's own
+    calibrated 32.8 %, k = 0.978) when it is admissible, else the admissible end nearest to it: for an
+    interval many sigma wide, where the fold rather than the criterion decides the touchdown, the
+    calibration then checks the paper's k instead of replacing it by an arbitrary middle (docs/model.md,
+    section "Contact criterion").
+    """
+    if rule == "middle":
+        k = 0.5 * (k_low + k_high)
+        return k, f"the middle, {k:.4f}, for the largest margin to both conditions"
+    if rule != "paper":
+        raise ValueError(f"touchdown.k_choice = {rule!r}: expected one of {K_CHOICES}")
+    if probability is None:
+        raise ValueError("touchdown.k_choice = 'paper' needs contact.fallback_probability (the paper's two-sided "
+                         "32.8 %: 0.328)")
+    k_paper = k_from_probability(probability)
+    if k_low < k_paper <= k_high:
+        return k_paper, (f"the paper's k, {k_paper:.4f} ({100 * probability:g} % two-sided), which is admissible "
+                         f"(touchdown.k_choice = 'paper')")
+    k = k_high if k_paper > k_high else k_low + 1e-3 * (k_high - k_low)
+    return k, (f"{k:.4f}, the admissible end nearest the paper's k {k_paper:.4f}, which is not admissible "
+               f"(touchdown.k_choice = 'paper')")
+
+
 def calibrate(scene: Any, interface: xr.Dataset, record: tuple[np.ndarray, float] | None, interface_path: str,
               dmw_path: str | None, scheduler: str | None = None, workers: int | None = None,
               bulge: xr.Dataset | None = None, bulge_path: str | None = None) -> xr.Dataset:
@@ -319,9 +351,8 @@ def calibrate(scene: Any, interface: xr.Dataset, record: tuple[np.ndarray, float
     onset, prev = td["onset_nm"], td["previous_nm"]
     if st_on == "found" and st_prev in ("found", "above range") and k_on < k_prev:
         k_low, k_high = k_on, k_prev
-        k_cal = 0.5 * (k_low + k_high)
-        outcome = (f"admissible k in ({k_low:.4f}, {k_high:.4f}]; chosen the middle, {k_cal:.4f}, for the largest "
-                   f"margin to both conditions (contact at {onset} nm, none at {prev} nm)")
+        k_cal, why = choose_k(k_low, k_high, td["k_choice"], scene["contact"].get("fallback_probability"))
+        outcome = f"admissible k in ({k_low:.4f}, {k_high:.4f}]; chosen {why} (contact at {onset} nm, none at {prev} nm)"
     else:
         k_low = k_high = k_cal = np.nan
         reasons = []

@@ -253,6 +253,10 @@ SCHEMA: dict[str, dict[str, Key]] = {
                        doc="physically meaningful k searched by the calibration [1] (contact probability "
                            "0.1 % to 99.9 %)"),
         "k_tolerance": Key("float", 1e-3, _pos, doc="bisection tolerance on k [1]"),
+        "k_choice": Key("str", "middle", choices=("middle", "paper"),
+                        doc="which admissible k the calibration takes: 'middle' (the largest margin to both touchdown "
+                            "conditions) or 'paper' (the k of contact.fallback_probability, the paper's 32.8 %, when "
+                            "admissible; else the nearest end); docs/model.md, section 'Contact criterion'"),
         "method": Key("str", "exact", choices=("exact", "bisection"),
                       doc="k* from one flying run per protrusion (exact) or by bisection on k"),
         "curve_points": Key("int", 25, (lambda v: 2 <= v <= 1000, "an integer in [2, 1000]"),

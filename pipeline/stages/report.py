@@ -66,7 +66,7 @@ import xarray as xr
 
 from ..analyses import narrative, report_figures, report_tables
 from ..analyses.paper_comparison import comparison_markdown, identification_markdown
-from ..analyses.report_figures import ENSEMBLE_FIGURE, FIGURES, INTERFACE_FIGURE
+from ..analyses.report_figures import BAND_FIGURE, ENSEMBLE_FIGURE, FIGURES, INTERFACE_FIGURE
 from ..analyses.report_settings import ReportSettings, wants_ensemble
 from ..analyses.sweep_slices import combinations, split_ensemble
 from ..io import DatasetError
@@ -131,7 +131,7 @@ def compute(scene: Any, inputs: Inputs) -> dict:
     repdir.mkdir(parents=True, exist_ok=True)
     jobs, skipped = report_figures.figure_jobs(data, combos, settings, name, figdir)
     drawn = {a.name for _, args, _ in jobs for a in args if isinstance(a, Path)}
-    stale = list(skipped) + [f for f in (ENSEMBLE_FIGURE, INTERFACE_FIGURE) if f not in drawn]
+    stale = list(skipped) + [f for f in (ENSEMBLE_FIGURE, BAND_FIGURE, INTERFACE_FIGURE) if f not in drawn]
     for f in stale:  # never leave a figure of an earlier run next to the new ones
         (figdir / f).unlink(missing_ok=True)
     made = report_figures.draw(jobs)
@@ -169,7 +169,7 @@ def _finish(scene: Any, out: Path, options: dict[str, Any]) -> None:
 
 STAGE = Stage(
     "report", compute,
-    outputs=tuple(f"figures/{f}" for f in FIGURES + (ENSEMBLE_FIGURE, INTERFACE_FIGURE)) + ("report/summary.csv", "report/summary.md",
+    outputs=tuple(f"figures/{f}" for f in FIGURES + (ENSEMBLE_FIGURE, BAND_FIGURE, INTERFACE_FIGURE)) + ("report/summary.csv", "report/summary.md",
                                                                           "report/comparison.md"),
     reads=("*",), upstream=_upstream, optional=("identify",), finish=_finish, order=60, main_job=True,
     doc="the paper's figures, a summary table and the comparison with the paper")
