@@ -104,9 +104,10 @@ class Model:
     rear_linear : ``None`` for the power rear law, ``True`` for the linear one (``air_bearing.rear_law``)
     tfc_tabulated : the selected TFC-point laws without a compiled form, tabulated per protrusion
         (:func:`tfc_table`); scene : the scene they read
-    area_model : ``contact.area_model`` (:data:`pipeline.physics.geometry.AREA_MODELS`); with
-        ``"integrated"`` the interface tables the kernel and the histories read are per protrusion
-        (:func:`interface_tables`), ``contact`` ... ``area`` above being the stresses at the apex
+    area_model : ``contact.area_model`` (:data:`pipeline.physics.geometry.AREA_MODELS`). The fields
+        ``contact``, ``adhesion``, ``friction`` and ``area`` always hold the stresses at the apex separation
+        (the flat-section tables); the kernel and the histories read :func:`interface_tables`, which with
+        ``"integrated"`` sums them over the bulge per protrusion
     k_sigma : contact criterion threshold ``k sigma`` [m] (``nan`` without contact)
     """
 
@@ -284,6 +285,7 @@ def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float]
             raise ValueError("lubricant.meniscus_time_us > 0 relaxes the adhesion pressure: it needs the adhesion "
                              "effect in scene.effects")
         # the meniscus state q [Pa]: absolute tolerance a millionth of the table's largest adhesion pressure
+        # (the flat-section table's also with contact.area_model = "integrated": a tolerance, of the same order)
         atol = np.append(atol, MENISCUS_ATOL * np.max(np.abs(tabs["adhesion"][:, 3])))
     else:
         meniscus = None
