@@ -27,6 +27,7 @@ from ..physics.bulge_bearing import BULGE_LAWS, SLIP_MODELS
 from ..physics.equilibrium import STARTS
 from ..physics.fhm import FHM_MEASURES
 from ..physics.friction import FRICTION_LAWS
+from ..physics.geometry import AREA_MODELS, FRICTION_ARMS
 from ..units import MHZ_IN_KHZ, SUFFIX_FACTORS
 from .limits import LimitError, check_physical
 
@@ -120,6 +121,10 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "rear_arm_mm": Key("float", 0.40, _pos, doc="rear air-bearing centre behind the CG [mm] (recon)"),
         "tfc_from_trailing_edge_um": Key("float", paper.TFC_FROM_TRAILING_EDGE_UM, _nonneg,
                                          doc="TFC bulge centre from the trailing edge [um] (paper)"),
+        "friction_arm": Key("str", "cg", choices=tuple(FRICTION_ARMS),
+                            doc="moment arm of the friction force about the CG: 'cg' T/2, drag reacted through "
+                                "the CG (default, as the paper's 2-DOF model) or 'gimbal' T, reacted at the gimbal "
+                                "on the slider's back [paper-deviation] (docs/model.md, section 'Deviations')"),
     },
     "air_bearing": {
         "flying_height_nm": Key("float", paper.FLYING_HEIGHT_NM, _pos, doc="nominal flying height FH0 [nm] (paper)"),
@@ -228,6 +233,10 @@ SCHEMA: dict[str, dict[str, Key]] = {
                                 "'coefficient' Q = mu P (docs/model.md, section 'Friction')"),
         "friction_coefficient": Key("float", None, _nonneg,
                                     doc="friction coefficient mu of the 'coefficient' law [1] (paper: ~1.2)"),
+        "area_model": Key("str", "flat-section", choices=tuple(AREA_MODELS),
+                          doc="interface forces: 'flat-section' stresses at the apex separation times A_n (paper, "
+                              "default) or 'integrated' the same stresses summed over the bulge's gap field "
+                              "[paper-deviation] (docs/model.md, section 'Deviations')"),
     },
     "dmw": {
         "source": Key("str", "synthetic", doc='"synthetic" or a measured record (CSV or NetCDF)'),

@@ -10,8 +10,11 @@ heights to which ``FH0`` is measured (docs/model.md, section "Separation datum";
 Named model variants (scene keys, one registry each): ``air_bearing.stiffness_root``
 (:data:`pipeline.physics.air_bearing.STIFFNESS_ROOTS`), ``air_bearing.rear_law`` (``REAR_LAWS``),
 ``air_bearing.tfc_stiffening`` (``TFC_STIFFENING``), ``contact.friction_law``
-(:data:`pipeline.physics.friction.FRICTION_LAWS`) and ``solver.fhm_measure``
-(:data:`pipeline.physics.fhm.FHM_MEASURES`).
+(:data:`pipeline.physics.friction.FRICTION_LAWS`), ``solver.fhm_measure``
+(:data:`pipeline.physics.fhm.FHM_MEASURES`), and two deviations from the paper (docs/model.md, section
+"Deviations", items 18-19): ``contact.area_model`` (:data:`pipeline.physics.geometry.AREA_MODELS`: the
+interface stresses summed over the bulge's gap field, per-protrusion tables of :func:`interface_tables`) and
+``slider.friction_arm`` (:data:`pipeline.physics.geometry.FRICTION_ARMS`: the friction moment's arm).
 
 Adding a variant. A friction law, an FHM measure, a stiffness root or an air-bearing force law at the
 TFC point is its function in its physics module plus one line in its registry; nothing here or in
@@ -42,9 +45,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 from functools import partial
-from typing import Any, Callable, Mapping, Sequence
+from typing import Any, Callable, Mapping, NamedTuple, Sequence
 
 import numpy as np
+from scipy.interpolate import CubicSpline
 
 from . import dynamics as dyn
 from ..units import KHZ, MM, MPA, MS, NM, NS, UM, US
@@ -52,7 +56,7 @@ from ..physics import air_bearing as ab
 from ..physics import bulge_bearing as bb
 from ..physics.fhm import fhm
 from ..physics.friction import friction_stress_table, lubricant_shear_stress
-from ..physics.geometry import effective_radius, nominal_area
+from ..physics.geometry import effective_radius, ellipsoid_table_integral, friction_arm, nominal_area
 from ..physics.statistics import explicit_statistics
 from ..variables import INTERFACE, Regime
 from .bulge_table import from_dataset
@@ -66,6 +70,11 @@ SURFING_FRACTION = 0.99
 
 #: Absolute tolerance of the meniscus state q, relative to the largest adhesion pressure of the table [1].
 MENISCUS_ATOL = 1e-6
+
+#: How many protrusions' integrated interface tables a model keeps (:func:`interface_tables`): a run asks
+#: for its own protrusion several times (the kernel, the histories, the meniscus start), the static
+#: start's continuation for many once each.
+INTEGRATED_CACHE = 8
 
 #: Scene keys of ``[air_bearing]`` whose named laws (:class:`pipeline.physics.air_bearing.TfcLaw`) act at
 #: the TFC point, each with its registry: the selected laws are summed in the kernel's TFC-point force.
@@ -95,6 +104,10 @@ class Model:
     rear_linear : ``None`` for the power rear law, ``True`` for the linear one (``air_bearing.rear_law``)
     tfc_tabulated : the selected TFC-point laws without a compiled form, tabulated per protrusion
         (:func:`tfc_table`); scene : the scene they read
+    area_model : ``contact.area_model`` (:data:`pipeline.physics.geometry.AREA_MODELS`). The fields
+        ``contact``, ``adhesion``, ``friction`` and ``area`` always hold the stresses at the apex separation
+        (the flat-section tables); the kernel and the histories read :func:`interface_tables`, which with
+        ``"integrated"`` sums them over the bulge per protrusion
     k_sigma : contact criterion threshold ``k sigma`` [m] (``nan`` without contact)
     """
 
@@ -126,11 +139,15 @@ class Model:
     scene: Any = None
     start: str = "nominal"
     meniscus: float | None = None
+    area_model: str = "flat-section"
     #: the static starts of this model, kept once found: the fold of its flying branch
     #: (:func:`pipeline.model.start.start_state`) and the start state per protrusion (:func:`start`).
     #: Not an init field, so that a copy with other forces (``dataclasses.replace``) finds its own;
     #: copies whose statics are the same share it (:func:`with_solver`, :func:`share_statics`)
     statics: dict = field(default_factory=dict, init=False, repr=False, compare=False)
+    #: the integrated interface tables of the last protrusions asked for, by (protrusion, A_n), and the real-area
+    #: table capped at 1 they sum ("capped_area"; :func:`interface_tables`)
+    integrated: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @property
     def k_sigma(self) -> float:
@@ -142,7 +159,9 @@ def slider_from_scene(scene: Any, damping_ratio: float | None = None) -> tuple[a
 
     Stiffnesses by modal inversion of the two natural frequencies (root chosen by the named rule
     ``air_bearing.stiffness_root``, default ``"stiff-rear"``: docs/model.md, section "Air bearing"), pad dampers for the modal
-    damping ratio.
+    damping ratio. ``h_cg``, the friction force's moment arm about the CG, by the named rule
+    ``slider.friction_arm`` (:func:`pipeline.physics.geometry.friction_arm`): ``T/2`` (``"cg"``, the CG
+    height over the air-bearing surface) or ``T`` (``"gimbal"``; docs/model.md, section "Deviations", item 19).
     """
     s, a = scene["slider"], scene["air_bearing"]
     L, W, T = s["length_mm"] * MM, s["width_mm"] * MM, s["thickness_mm"] * MM
@@ -154,9 +173,10 @@ def slider_from_scene(scene: Any, damping_ratio: float | None = None) -> tuple[a
     zeta = a["damping_ratio"] if damping_ratio is None else damping_ratio
     c_f, c_r = ab.pad_damping(k_f, k_r, m, I, l_f, l_r, zeta) if zeta > 0 else (0.0, 0.0)
     g0 = (a["rear_reference_gap_nm"] or a["flying_height_nm"]) * NM
-    slider = ab.Slider(m=m, I=I, l_f=l_f, l_r=l_r, l_c=l_c, h_cg=T / 2, k_f=k_f, k_r=k_r,
-                       c_f=c_f, c_r=c_r, g0=g0, n=a["rear_exponent"])
+    slider = ab.Slider(m=m, I=I, l_f=l_f, l_r=l_r, l_c=l_c, h_cg=friction_arm(T, s["friction_arm"]), k_f=k_f,
+                       k_r=k_r, c_f=c_f, c_r=c_r, g0=g0, n=a["rear_exponent"])
     info["damping_ratio"] = zeta
+    info["friction_arm"] = s["friction_arm"]
     return slider, info
 
 
@@ -278,6 +298,7 @@ def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float]
             tabs["adhesion"] = np.ascontiguousarray(np.hstack([dyn.piecewise_coefficients(v, p.tab_h, order)
                                                                for v in parts]))
         # the meniscus state q [Pa]: absolute tolerance a millionth of the largest pressure it relaxes towards
+        # (the flat-section table's also with contact.area_model = "integrated": a tolerance, of the same order)
         atol = np.append(atol, MENISCUS_ATOL * np.max(np.abs(tabs["adhesion"][:, 3])))
     else:
         meniscus = None
@@ -291,7 +312,7 @@ def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float]
                  output_step=sol["output_step_ns"] * NS, rtol=sol["rtol"], atol=atol,
                  max_step=sol["max_step_ns"] * NS, fhm_measure=sol["fhm_measure"], effects=eff, info=info,
                  tfc_stiffening=gap_power, rear_linear=rear_linear, tfc_tabulated=tabulated, scene=scene,
-                 start=sol["start"], meniscus=meniscus)
+                 start=sol["start"], meniscus=meniscus, area_model=scene["contact"]["area_model"])
 
 
 def tfc_point_laws(scene: Any, fh0: float, tables: Mapping[str, Any] | None = None
@@ -442,7 +463,95 @@ def meniscus_equilibrium(model: Model, p: np.record, y: np.ndarray) -> float:
     "Meniscus formation"): the start value of ``q``."""
     w = dyn.disk_history(model.dmw, p, np.zeros(1))[0][0] if model.dmw is not None else 0.0
     d = dyn.separation_at(p, float(y[0]), float(y[1]), w)
-    return float(dyn.ppval(model.adhesion, p.tab_x0, p.tab_h, np.array([d]))[0])
+    adhesion = interface_tables(model, p["delta"], p["A_n"]).adhesion
+    return float(dyn.ppval(adhesion, p.tab_x0, p.tab_h, np.array([d]))[0])
+
+
+class InterfaceTables(NamedTuple):
+    """The interface tables of a model at one protrusion: piecewise cubics versus the separation on the
+    grid ``p.tab_x0``, ``p.tab_h`` (``None``: effect off), each to be multiplied by ``A_n``: contact
+    pressure, adhesion pressure, friction stress [Pa], real-area fraction [1]; ``area_cap``: the largest
+    real area over ``A_n`` [1] (the histories clip the real area to it)."""
+
+    contact: np.ndarray | None
+    adhesion: np.ndarray | None
+    friction: np.ndarray | None
+    area: np.ndarray | None
+    area_cap: float = 1.0
+
+
+def interface_tables(model: Model, protrusion: float, nominal: float) -> InterfaceTables:
+    """The interface tables the kernel and the histories use at ``protrusion`` [m], nominal area
+    ``nominal`` [m^2] (the ``A_n`` they are multiplied by), by the model's ``contact.area_model``.
+
+    ``"flat-section"`` (the paper's): the model's own tables, the stresses at the apex separation
+    ``d`` (``A_n p(d)``), real area capped at ``A_n``. ``"integrated"``: per protrusion, the same stresses
+    summed over the bulge's gap field, ``F(d) = 2 pi a b int_0^1 p(d + delta u) (1 - u) du``, tabulated
+    at the table's nodes as ``F / A_n`` (exact integral of the tables' cubics,
+    :func:`pipeline.physics.geometry.ellipsoid_table_integral`; nothing is taken beyond the table's top,
+    :func:`pipeline.physics.geometry.table_truncation`) and splined as the tables are, so the kernel is
+    unchanged; the local real-area fraction is capped at 1 before it is summed, so the real area is
+    capped at the footprint ``pi a b`` (docs/model.md, section "Deviations", item 18). The last
+    :data:`INTEGRATED_CACHE` protrusions' tables are kept on the model.
+    """
+    flat = InterfaceTables(model.contact, model.adhesion, model.friction, model.area)
+    if model.area_model == "flat-section":
+        return flat
+    if model.area_model != "integrated":
+        raise ValueError(f"contact.area_model = {model.area_model!r}: expected 'flat-section' or 'integrated'")
+    key = (float(protrusion), float(nominal))
+    cache = model.integrated
+    found = cache.get(key)
+    if found is None:
+        found = _integrated_tables(model, flat, *key)
+        while len(cache) > INTEGRATED_CACHE:
+            try:  # (oldest first, not the capped area table; another thread may have removed it already)
+                cache.pop(next(k for k in cache if k != "capped_area"), None)
+            except (StopIteration, RuntimeError):
+                break
+        cache[key] = found
+    return found
+
+
+def _integrated_tables(model: Model, flat: InterfaceTables, protrusion: float, nominal: float) -> InterfaceTables:
+    """The ``"integrated"`` tables of :func:`interface_tables` at ``protrusion`` [m], over ``A_n = nominal`` [m^2]."""
+    if not nominal > 0:
+        raise ValueError(f"contact.area_model = 'integrated' needs a nominal area > 0 (got {nominal} m^2)")
+    h = float(model.p["tab_h"])
+    order = model.scene["solver"]["interpolation_order"]
+    scale = 2.0 * np.pi * model.half_length * model.half_width / nominal  # F / A_n = scale * I
+    names = [n for n in InterfaceTables._fields[:4] if getattr(flat, n) is not None]
+    if "area" in names and "capped_area" not in model.integrated:
+        # a patch of the footprint has at most its own area in contact: the local fraction capped at 1
+        c = flat.area
+        nodes = np.append(c[:, 3], dyn.ppval(c, 0.0, h, np.array([c.shape[0] * h])))
+        model.integrated["capped_area"] = c if not np.any(nodes > 1.0) else \
+            dyn.piecewise_coefficients(np.minimum(nodes, 1.0), h, order)
+    tables = [model.integrated["capped_area"] if n == "area" else getattr(flat, n) for n in names]
+    # (the two adhesion tables of the meniscus state side by side, dynamics.Tables: each integrated on its own)
+    split = "adhesion" in names and flat.adhesion.shape[1] == 8
+    if split:
+        j = names.index("adhesion")
+        tables[j:j + 1] = [flat.adhesion[:, :4], flat.adhesion[:, 4:]]
+    # the tables at once (one grid): the integral, then the spline through its node values
+    integral = scale * ellipsoid_table_integral(np.stack(tables, axis=-1), h, protrusion)
+    splines = _splines(integral, h, order)
+    if split:
+        splines[j:j + 2] = [np.ascontiguousarray(np.hstack(splines[j:j + 2]))]
+    tabs = dict.fromkeys(InterfaceTables._fields[:4])
+    tabs.update(zip(names, splines))
+    # the whole footprint in contact: 2 pi a b int_0^1 (1 - u) du = pi a b
+    return InterfaceTables(**tabs, area_cap=scale / 2.0)
+
+
+def _splines(values: np.ndarray, h: float, order: int) -> list[np.ndarray]:
+    """The piecewise-cubic coefficients of each column of ``values`` (nodes x tables) on a grid of step ``h``,
+    as :func:`pipeline.model.dynamics.piecewise_coefficients` makes them (the not-a-knot spline of all the
+    columns in one solve for ``order`` 3: a third of the cost of one solve per column)."""
+    if order != 3:
+        return [dyn.piecewise_coefficients(values[:, j], h, order) for j in range(values.shape[1])]
+    c = CubicSpline(h * np.arange(values.shape[0]), values, axis=0).c  # (4, pieces, columns)
+    return [np.ascontiguousarray(c[:, :, j].T) for j in range(values.shape[1])]
 
 
 def kernel_slots(model: Model, p: np.record) -> tuple[dyn.Tables, dyn.Variants]:
@@ -456,8 +565,8 @@ def kernel_slots(model: Model, p: np.record) -> tuple[dyn.Tables, dyn.Variants]:
     tfc = tfc_table(model, delta)
     if tfc is not None:
         tfc, p["tfc_x0"], p["tfc_h"] = tfc
-    tables = dyn.Tables(dmw=model.dmw, contact=model.contact, adhesion=model.adhesion, friction=model.friction,
-                        tfc=tfc)
+    it = interface_tables(model, delta, p["A_n"])
+    tables = dyn.Tables(dmw=model.dmw, contact=it.contact, adhesion=it.adhesion, friction=it.friction, tfc=tfc)
     variants = dyn.Variants(pitch=True if model.pitch is not None else None, rear_linear=model.rear_linear,
                             gap_power=gap_power, meniscus=model.meniscus)
     return tables, variants
@@ -484,11 +593,12 @@ def histories(run: Run) -> dict[str, np.ndarray]:
     out: dict[str, np.ndarray] = {"separation": d, "disk_displacement": w, "z": Y[:, 0], "pitch": Y[:, 1]}
     out["clearance"] = d - m.k_sigma
     x0, h, An = p.tab_x0, p.tab_h, run.nominal_area
+    tabs = interface_tables(m, run.protrusion, An)  # (those the kernel ran with: contact.area_model)
     net = np.zeros_like(t)
-    if m.adhesion is not None:  # (the meniscus state q is the adhesion pressure when it is on)
-        out["adhesion_force"] = An * (Y[:, 4] if m.meniscus is not None else dyn.ppval(m.adhesion, x0, h, d))
-        if m.meniscus is not None and m.adhesion.shape[1] == 8:  # the part acting at once (dynamics.Tables)
-            out["adhesion_force"] += An * dyn.ppval(np.ascontiguousarray(m.adhesion[:, 4:]), x0, h, d)
+    if tabs.adhesion is not None:  # (the meniscus state q is the adhesion pressure when it is on)
+        out["adhesion_force"] = An * (Y[:, 4] if m.meniscus is not None else dyn.ppval(tabs.adhesion, x0, h, d))
+        if m.meniscus is not None and tabs.adhesion.shape[1] == 8:  # the part acting at once (dynamics.Tables)
+            out["adhesion_force"] += An * dyn.ppval(np.ascontiguousarray(tabs.adhesion[:, 4:]), x0, h, d)
         net -= out["adhesion_force"]
     if m.contact is not None:
         c = run.contact
@@ -501,18 +611,19 @@ def histories(run: Run) -> dict[str, np.ndarray]:
             return v
 
         out["in_contact"] = c
-        fc = on_contact(m.contact)
+        fc = on_contact(tabs.contact)
         ddot = Y[:, 2] - m.slider.l_c * Y[:, 3] - wdot
         out["contact_force"] = fc
         out["contact_damping_force"] = np.where(c, -p.c_c * ddot, 0.0)
         net += fc + out["contact_damping_force"]
-        # (clipped to [0, A_n]: the spline through the capped table may overshoot by ~1e-6 at the cap)
-        area = on_contact(m.area, 1.0)
+        # (clipped to [0, A_n] (flat section; the footprint when integrated): the spline through the
+        # capped table may overshoot by ~1e-6 at the cap)
+        area = on_contact(tabs.area, tabs.area_cap)
         out["real_area"] = area
         with np.errstate(invalid="ignore", divide="ignore"):
             out["mean_pressure"] = np.where(c & (area > 0), fc / np.where(area > 0, area, 1.0), np.nan)
-            if m.friction is not None:
-                ff = on_contact(m.friction)
+            if tabs.friction is not None:
+                ff = on_contact(tabs.friction)
                 out["friction_force"] = ff
                 out["friction_coefficient"] = np.where(c & (fc > 0), ff / np.where(fc > 0, fc, 1.0), np.nan)
                 out["shear_stress"] = np.where(c & (area > 0), ff / np.where(area > 0, area, 1.0), np.nan)

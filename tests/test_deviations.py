@@ -1,0 +1,277 @@
+"""Two named deviations from the paper (docs/model.md, section "Deviations", items 18-19).
+
+(a) ``contact.area_model``: the interface stresses summed over the bulge's gap field,
+``F(d) = 2 pi a b int_0^1 p(d + delta u) (1 - u) du`` (:func:`pipeline.physics.geometry.ellipsoid_force`,
+:func:`~pipeline.physics.geometry.ellipsoid_table_integral`), checked against the two-dimensional
+footprint integral, closed forms (a cubic, an exponential, a step law: the flat section) and the limit
+``delta -> 0``; the model's per-protrusion tables feed the kernel and the histories alike.
+(b) ``slider.friction_arm``: the friction moment's arm ``T/2`` or ``T``.
+
+The interface is a synthetic one (exponential laws) written as the interface stage writes it; scenes
+are built in code.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import xarray as xr
+from scipy.integrate import dblquad
+
+from pipeline.config.scene import SceneError, scene_from_dict
+from pipeline.model import dynamics as dyn
+from pipeline.model import slider as sl
+from pipeline.physics import geometry as g
+
+NM, UM, MPA = 1e-9, 1e-6, 1e6
+A, B = 3 * UM, 25 * UM  # [paper] semi-axes of the bulge
+H = 0.05 * NM            # table step [m]
+L_C, L_A = 0.4 * NM, 1.0 * NM  # decay lengths of the synthetic contact and adhesion laws [m]
+
+
+def closed_exponential(d: np.ndarray, delta: float, length: float) -> np.ndarray:
+    """``int_0^1 exp(-(d + delta u)/length) (1 - u) du`` in closed form: with ``k = delta/length``,
+    ``exp(-d/length) (k - 1 + exp(-k)) / k^2`` (written with expm1 so small k keeps its digits)."""
+    k = delta / length
+    return np.exp(-np.asarray(d) / length) * (k - (-np.expm1(-k))) / k**2
+
+
+def table(values: np.ndarray, order: int = 3) -> np.ndarray:
+    return dyn.piecewise_coefficients(values, H, order)
+
+
+GRID = np.arange(-3.0, 25.0 + 1e-9, 0.05) * NM
+
+
+# ------------------------------------------------------------------------------------------------
+# (a) the integral
+
+
+def test_one_dimensional_form_is_the_footprint_integral():
+    # the change of variables of ellipsoid_force's docstring against the plain double integral over the
+    # elliptical footprint of p(d + h(x, y)), h = delta (1 - sqrt(1 - (x/a)^2 - (y/b)^2))
+    delta, d = 7.0 * NM, 0.3 * NM
+
+    def law(gap):
+        return 50 * MPA * np.exp(-gap / L_C) + 3 * MPA / (1 + (gap / NM) ** 2)
+
+    def integrand(Y, X):  # on the unit disk, X = x/a, Y = y/b
+        return law(d + delta * (1 - np.sqrt(max(0.0, 1 - X * X - Y * Y))))
+
+    plain, err = dblquad(integrand, -1, 1, lambda X: -np.sqrt(1 - X * X), lambda X: np.sqrt(1 - X * X),
+                         epsabs=0, epsrel=1e-11)
+    plain *= A * B
+    assert g.ellipsoid_force(law, d, delta, A, B) == pytest.approx(plain, rel=1e-9)
+
+
+def test_table_integral_is_exact_for_a_cubic():
+    # a cubic law is its own not-a-knot spline: the integral of the table is the closed form
+    # sum_k c_k(d) / ((k + 1)(k + 2)), c_k(d) the coefficients of p(d + delta u) in u
+    coef = np.array([3.0, 2.0, -0.5, 0.1])  # p(x) = sum coef[j] (x/nm)^j [Pa]
+    delta = 7.3 * NM
+    I = g.ellipsoid_table_integral(table(np.polynomial.polynomial.polyval(GRID / NM, coef)), H, delta)
+    inside = GRID + delta <= GRID[-1]
+    for i in np.nonzero(inside)[0][::37]:
+        shifted = np.polynomial.Polynomial([GRID[i] / NM, delta / NM])  # x/nm as a polynomial in u
+        in_u = np.polynomial.Polynomial(coef)(shifted).coef
+        exact = sum(c / ((k + 1) * (k + 2)) for k, c in enumerate(in_u))
+        assert I[i] == pytest.approx(exact, rel=1e-12, abs=1e-12)
+
+
+@pytest.mark.parametrize("delta_nm", [0.03, 1.0, 11.0, 11.0000001])
+def test_exponential_law_converges_to_its_closed_form(delta_nm):
+    # p = P exp(-x/L): the integral of its spline table converges to the closed form as the spline does
+    # (halving the step divides the error by 5-25 over the separations the dynamics visits); partial
+    # pieces (delta not a multiple of the step) included
+    delta = delta_nm * NM
+    errors = []
+    for h in (0.1 * NM, 0.05 * NM, 0.025 * NM):
+        x = np.arange(-3.0 * NM, 20.0 * NM + h / 2, h)
+        I = g.ellipsoid_table_integral(dyn.piecewise_coefficients(np.exp(-x / L_C), h, 3), h, delta)
+        inside = x + delta <= x[-1]
+        rel = np.abs(I[inside] / closed_exponential(x[inside], delta, L_C) - 1)
+        assert np.max(rel) < 5e-5  # (the largest at the ends of the table: the not-a-knot spline)
+        errors.append(np.max(rel[(x[inside] >= -2 * NM) & (x[inside] <= 5 * NM)]))  # away from the ends
+    assert errors[1] < 5e-7
+    assert errors[0] / errors[1] > 4 and errors[1] / errors[2] > 4
+
+
+def test_flat_bulge_limit():
+    # delta -> 0: the whole footprint at the apex gap, F = pi a b p(d) (I = p/2), approached linearly
+    p = 50 * MPA * np.exp(-GRID / L_C)
+    c = table(p)
+    assert g.ellipsoid_table_integral(c, H, 0.0) == pytest.approx(p / 2, rel=1e-12)
+    for delta in (1e-3 * H, 1e-5 * H):
+        I = g.ellipsoid_table_integral(c, H, delta)
+        # first order: I = p/2 + delta p'/6 + ... with p' = -p/L
+        assert np.allclose(I[:-1] / (p[:-1] / 2) - 1, -delta / (3 * L_C), rtol=1e-3, atol=1e-12)
+    assert g.ellipsoid_force(lambda x: 50 * MPA * np.exp(-x / L_C), 0.2 * NM, 0.0, A, B) == pytest.approx(
+        np.pi * A * B * 50 * MPA * np.exp(-0.2 * NM / L_C), rel=1e-14)
+
+
+def test_step_law_gives_the_flat_section():
+    # p = P0 below d0, 0 above: F = P0 x (section of the ellipsoid at depth d0 - d) = P0 A_n(s_n = d0 - d).
+    # Tabulated with linear interpolation the step is a ramp over one piece [d0, d0 + h]: F lies between
+    # the sections at depths d0 - d and d0 + h - d
+    P0, d0, delta = 100 * MPA, 2.0 * NM, 11.0 * NM
+    c = table(np.where(GRID <= d0 + 1e-15, P0, 0.0), order=1)
+    F = 2 * np.pi * A * B * g.ellipsoid_table_integral(c, H, delta)
+    below = (GRID < d0 - 1e-15) & (GRID > d0 - 15 * NM)
+    lo = P0 * g.nominal_area(delta, A, B, d0 - GRID[below])
+    hi = P0 * g.nominal_area(delta, A, B, d0 + H - GRID[below])
+    assert np.all(lo <= F[below] * (1 + 1e-12)) and np.all(F[below] <= hi * (1 + 1e-12))
+    # ... and the ramp's integral is the mean of the two to second order in h
+    assert F[below] == pytest.approx((lo + hi) / 2, rel=2e-3)
+    # the step itself, integrated by the one-dimensional form in closed form: int_0^u* (1 - u) du
+    for d in (1.0 * NM, -5.0 * NM, -10 * NM):
+        u = min((d0 - d) / delta, 1.0)
+        assert 2 * np.pi * A * B * P0 * (u - u * u / 2) == pytest.approx(
+            P0 * g.nominal_area(delta, A, B, d0 - d), rel=1e-14)
+
+
+def test_nothing_is_taken_beyond_the_table():
+    # a constant table: held beyond its top it would give p/2 at every node; the integral stops at the
+    # top, and what it leaves out is table_truncation's p (1 - u_top)^2 / 2
+    P, delta = 7 * MPA, 4.0 * NM
+    I = g.ellipsoid_table_integral(table(np.full(GRID.size, P)), H, delta)
+    cut = g.table_truncation(P, GRID, delta)
+    assert np.allclose(I + cut, P / 2, rtol=1e-12)
+    assert np.all(cut[GRID + delta <= GRID[-1]] == 0) and cut[-1] == P / 2
+
+
+# ------------------------------------------------------------------------------------------------
+# (a) in the model
+
+
+def synthetic_interface() -> xr.Dataset:
+    """Contact 50 MPa exp(-d/0.4 nm), real-area fraction 0.1 exp(-d/0.4 nm) (above 1 below -0.9 nm: the
+    cap), friction 300 MPa x that fraction, adhesion 40 MPa exp(-d/1 nm), as the interface stage writes them."""
+    d = GRID / NM
+    area = 0.1 * np.exp(-GRID / L_C)
+    return xr.Dataset({"contact_pressure": ("separation", 50 * np.exp(-GRID / L_C)),
+                       "real_area_fraction": ("separation", area),
+                       "friction_stress": ("separation", 300 * area),
+                       "adhesion_pressure": ("separation", 40 * np.exp(-GRID / L_A)),
+                       "sigma": 0.52, "y_s": 0.69}, coords={"separation": d})
+
+
+EFFECTS = ["air_bearing", "pitch", "adhesion", "contact", "friction"]
+
+
+def model(contact=None, slider=None, effects=EFFECTS, k=1.0):
+    scene = scene_from_dict({
+        "scene": {"effects": list(effects)},
+        "air_bearing": {"flying_height_nm": 11.0, "frequencies_khz": [120.0, 300.0], "rear_exponent": 2.0,
+                        "damping_ratio": 0.05},
+        "solver": {"duration_ms": 0.2, "transient_ms": 0.1},
+        "contact": {"k": k, **(contact or {})},
+        "slider": slider or {},
+    })
+    return sl.build_model(scene, synthetic_interface(), None, k)
+
+
+def test_flat_section_is_the_default_and_today():
+    base, named = model(), model(contact={"area_model": "flat-section"})
+    assert base.area_model == "flat-section"
+    p, tables, _ = sl.run_parameters(named, 11 * NM)
+    assert tables.contact is named.contact and tables.adhesion is named.adhesion
+    assert tables.friction is named.friction
+    a, b = sl.run_model(base, 11 * NM), sl.run_model(named, 11 * NM)
+    np.testing.assert_array_equal(a.state, b.state)
+    ha, hb = sl.histories(a), sl.histories(b)
+    for name in ha:
+        np.testing.assert_array_equal(ha[name], hb[name])
+
+
+def test_integrated_tables_feed_the_kernel_and_the_histories():
+    delta = 11 * NM
+    m = model(contact={"area_model": "integrated"})
+    p, tables, _ = sl.run_parameters(m, delta)
+    An = p["A_n"]
+    assert An == pytest.approx(float(g.nominal_area(delta, A, B, 3 * 0.52 * NM)), rel=1e-14)
+    # at the nodes, A_n times the kernel's tables is the integrated force of the same stresses
+    nodes = GRID[GRID + delta <= GRID[-1]]
+    scale = 2 * np.pi * A * B
+    contact = An * dyn.ppval(tables.contact, p.tab_x0, p.tab_h, nodes)
+    exact = scale * 50 * MPA * closed_exponential(nodes, delta, L_C)
+    assert contact == pytest.approx(exact, rel=2e-6)
+    adhesion = An * dyn.ppval(tables.adhesion, p.tab_x0, p.tab_h, nodes)
+    assert adhesion == pytest.approx(scale * 40 * MPA * closed_exponential(nodes, delta, L_A), rel=2e-6)
+    # ... far less than the flat section's at the apex gap (the rim of A_n is delta u higher)
+    flat = An * dyn.ppval(m.contact, p.tab_x0, p.tab_h, nodes)
+    assert np.all(contact < 0.5 * flat)
+    # the run and its histories read the same tables: contact force, real area (the local fraction
+    # capped at 1 before summing) and friction at the samples in contact
+    run = sl.run_model(m, delta)
+    hist = sl.histories(run)
+    c = hist["in_contact"]
+    assert c.any()
+    d = hist["separation"][c]
+    assert hist["contact_force"][c] == pytest.approx(scale * 50 * MPA * closed_exponential(d, delta, L_C),
+                                                     rel=1e-5)
+    it = sl.interface_tables(m, delta, An)
+    assert np.array_equal(it.contact, tables.contact)  # (the same tables, kept or computed again)
+    capped = dyn.piecewise_coefficients(np.minimum(0.1 * np.exp(-GRID / L_C), 1.0), H, 3)
+    area = scale * dyn.ppval(dyn.piecewise_coefficients(g.ellipsoid_table_integral(capped, H, delta), H, 3),
+                             p.tab_x0, p.tab_h, d)
+    assert hist["real_area"][c] == pytest.approx(area, rel=1e-12)
+    assert np.all(hist["real_area"] <= np.pi * A * B)
+    assert hist["mean_pressure"][c] == pytest.approx(hist["contact_force"][c] / hist["real_area"][c], rel=1e-12)
+    s = sl.summarize(run, hist)
+    assert s["nominal_area"] == An  # A_n stays the flat section's: the report's "A_n at 11 nm"
+
+
+def test_unknown_options_are_one_line_errors():
+    for section, key in (("contact", "area_model"), ("slider", "friction_arm")):
+        with pytest.raises(SceneError) as err:
+            scene_from_dict({section: {key: "elsewhere"}})
+        text = str(err.value)
+        assert "\n" not in text and f"{section}.{key} = 'elsewhere'" in text and "expected one of" in text
+
+
+# ------------------------------------------------------------------------------------------------
+# (b) the friction arm
+
+
+def test_gimbal_arm_doubles_the_friction_moment():
+    cg, gimbal = model(), model(slider={"friction_arm": "gimbal"})
+    T = 0.23e-3
+    assert cg.p["h_cg"] == T / 2 and gimbal.p["h_cg"] == T
+    assert gimbal.info["friction_arm"] == "gimbal"
+    # the kernel's pitch acceleration at a state in contact, with and without the friction table: the
+    # friction's share is -arm Q / I, twice as large with the gimbal's arm
+    delta = 11 * NM
+    share = []
+    for m in (cg, gimbal):
+        p, tables, variants = sl.run_parameters(m, delta)
+        y = np.array([-0.2 * NM, -1e-6, 0.0, 0.0])
+        assert dyn.separation_at(p, y[0], y[1], 0.0) < p["k_sigma"]
+        with_q, without = np.empty(4), np.empty(4)
+        dyn.rhs(0.0, y, p, tables, variants, True, with_q)
+        dyn.rhs(0.0, y, p, tables._replace(friction=None), variants, True, without)
+        d = dyn.separation_at(p, y[0], y[1], 0.0)
+        Q = p["A_n"] * float(dyn.ppval(tables.friction, p.tab_x0, p.tab_h, np.array([d]))[0])
+        assert (with_q[3] - without[3]) * p["I"] == pytest.approx(-p["h_cg"] * Q, rel=1e-9)
+        share.append(with_q[3] - without[3])
+        assert with_q[2] == without[2]  # (no vertical force)
+    assert share[1] / share[0] == pytest.approx(2.0, rel=1e-12)
+
+
+def test_gimbal_arm_about_doubles_the_static_gap_opening():
+    # the static contact equilibrium at 11 nm without friction, with the arm T/2 and with T: the friction
+    # moment pitches the leading edge down and opens the TFC gap; with twice the arm nearly twice as much
+    # (a little less: the opening lowers the contact force and with it the friction)
+    delta = 11 * NM
+    opening = {}
+    base = model(effects=EFFECTS[:-1])
+    p, _, _ = sl.run_parameters(base, delta)
+    y0, note = sl.start(base, delta)
+    assert "contact" in note
+    d0 = dyn.separation_at(p, y0[0], y0[1], 0.0)
+    for arm in ("cg", "gimbal"):
+        m = model(slider={"friction_arm": arm})
+        y, note = sl.start(m, delta)
+        assert "contact" in note
+        opening[arm] = dyn.separation_at(p, y[0], y[1], 0.0) - d0
+    assert opening["cg"] > 0
+    assert 1.5 < opening["gimbal"] / opening["cg"] < 2.0
