@@ -220,3 +220,19 @@ def test_meniscus_state_starts_at_the_menisci_equilibrium():
     dd = dyn.separation_at(p, 0.0, 0.0, 0.0)
     assert q0 == pytest.approx(dyn.ppval(np.ascontiguousarray(m.adhesion[:, :4]), p.tab_x0, p.tab_h,
                                          np.array([dd]))[0], rel=1e-12)
+
+
+def test_integrated_area_model_integrates_both_adhesion_parts():
+    """contact.area_model = 'integrated' with the meniscus state: the two adhesion tables are integrated
+    over the bulge each on its own, and (the integral being linear) their sum is the integral of the
+    summed table of the meniscus-free model."""
+    sc, m = _meniscus_model(TWO + ["lubricant.meniscus_time_us=46", "contact.area_model=integrated"])
+    sc0, m0 = _meniscus_model(TWO + ["lubricant.meniscus_time_us=0", "contact.area_model=integrated"])
+    delta, An = 11.0 * NM, 62e-12
+    two = slider.interface_tables(m, delta, An).adhesion
+    one = slider.interface_tables(m0, delta, An).adhesion
+    assert two.shape[1] == 8 and one.shape[1] == 4
+    x0, h = m.p.tab_x0, m.p.tab_h
+    d = np.linspace(-1.0, 3.0, 41) * NM
+    np.testing.assert_allclose(dyn.ppval(dyn.static_table(two), x0, h, d), dyn.ppval(one, x0, h, d),
+                               rtol=1e-9, atol=1e-9 * np.max(np.abs(one)))
