@@ -109,7 +109,7 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "effects": Key("strs", list(EFFECTS), choices=EFFECTS,
                        doc="effects to simulate; others are not evaluated at all"),
         "description": Key("str", "", doc="free text"),
-        "extends": Key("str", None, doc="a base scene file (relative to this one) whose keys this one overrides"),
+        "extends": Key("str", None, doc="a base scene file (relative to this one) whose keys this one overrides; the base's relative file paths stay relative to the base"),
     },
     "slider": {
         "length_mm": Key("float", 0.85, _pos, doc="slider length [mm] (femto, recon)"),
@@ -685,8 +685,18 @@ def load_scene(path: str | Path, overrides: Iterable[str] = ()) -> Scene:
     return validate(raw, path, overrides=overrides, blame=blame)
 
 
+#: Deepest chain of ``scene.extends`` a scene may build on (a scene, its base, the base's base, ...):
+#: far beyond any real chain (the identified scene extends the paper scene: 2), and far below Python's
+#: recursion limit, which a chain of 1,200 files reached with a traceback.
+MAX_EXTENDS_DEPTH = 32
+
+
 def _read_raw(path: Path, seen: tuple[Path, ...] = ()) -> dict[str, Any]:
-    """Parse a scene file, merging in the base scene it ``extends`` (keys of this file win)."""
+    """Parse a scene file, merging in the base scene it ``extends`` (keys of this file win).
+
+    The base's relative file paths are made absolute from the base's own folder (:func:`_anchor_paths`)
+    before the merge: a path means what it meant in the file that wrote it, not beside the derived scene.
+    """
     if path.is_dir():
         raise SceneError(f"{path}: is a folder; expected a scene file (TOML), e.g. configs/paper-2009.toml")
     if not path.is_file():
@@ -697,7 +707,12 @@ def _read_raw(path: Path, seen: tuple[Path, ...] = ()) -> dict[str, Any]:
         raise SceneError(f"{path}: not UTF-8 text (byte {exc.start}); expected a TOML file in UTF-8") from None
     except tomllib.TOMLDecodeError as exc:
         raise SceneError(f"{path}: not valid TOML: {exc}") from None
-    base_name = raw.get("scene", {}).get("extends") if isinstance(raw.get("scene"), dict) else None
+    except OSError as exc:
+        raise SceneError(f"{path}: cannot read the scene file: {exc.strerror or exc}") from None
+    for section, table in raw.items():  # (here, where the file is known: a base's error names the base)
+        if section in SCHEMA and not isinstance(table, dict):
+            raise SceneError(f"{path}: {section} must be a table [{section}]")
+    base_name = raw.get("scene", {}).get("extends")
     if base_name is None:
         return raw
     if not isinstance(base_name, str):
@@ -705,9 +720,13 @@ def _read_raw(path: Path, seen: tuple[Path, ...] = ()) -> dict[str, Any]:
     base_path = (path.parent / base_name).resolve()
     if base_path in seen or base_path == path.resolve():
         raise SceneError(f"{path}: scene.extends = {base_name!r}: circular extension")
+    if len(seen) + 1 >= MAX_EXTENDS_DEPTH:
+        raise SceneError(f"{path}: scene.extends = {base_name!r}: a chain of more than {MAX_EXTENDS_DEPTH} "
+                         f"scenes extending one another; expected at most {MAX_EXTENDS_DEPTH} (write the keys "
+                         "into fewer files)")
     if not base_path.is_file():
         raise SceneError(f"{path}: scene.extends: file {base_name!r} does not exist (looked for {base_path})")
-    base = _read_raw(base_path, seen + (path.resolve(),))
+    base = _anchor_paths(_read_raw(base_path, seen + (path.resolve(),)), base_path.parent)
     base.get("scene", {}).pop("name", None)
     for section, table in raw.items():
         if isinstance(table, dict) and isinstance(base.get(section), dict):
@@ -716,6 +735,37 @@ def _read_raw(path: Path, seen: tuple[Path, ...] = ()) -> dict[str, Any]:
             base[section] = table
     base["scene"]["extends"] = str(base_path)
     return base
+
+
+def _anchor(value: Any, folder: Path) -> Any:
+    """A relative file path (a string) made absolute from ``folder``; anything else unchanged."""
+    if not isinstance(value, str):
+        return value
+    p = Path(value).expanduser()
+    return value if p.is_absolute() else str((folder / p).resolve())
+
+
+def _anchor_paths(raw: dict[str, Any], folder: Path) -> dict[str, Any]:
+    """``raw`` with the relative file paths it names made absolute from ``folder`` (the folder of the
+    file that wrote them): the keys with ``path=True`` in :data:`SCHEMA`, a measured ``dmw.source``
+    and the AFM scans of ``sweep.roughness`` sets. Values of the wrong type are left to
+    :func:`validate` to report."""
+    for section, keys in SCHEMA.items():
+        table = raw.get(section)
+        if not isinstance(table, dict):
+            continue
+        for key, spec in keys.items():
+            if spec.path and key in table:
+                v = table[key]
+                table[key] = [_anchor(x, folder) for x in v] if isinstance(v, list) else _anchor(v, folder)
+    dmw = raw.get("dmw")
+    if isinstance(dmw, dict) and dmw.get("source", "synthetic") != "synthetic":
+        dmw["source"] = _anchor(dmw["source"], folder)
+    sets = raw["sweep"].get("roughness") if isinstance(raw.get("sweep"), dict) else None
+    for item in sets if isinstance(sets, list) else []:
+        if isinstance(item, dict) and isinstance(item.get("afm"), list):
+            item["afm"] = [_anchor(x, folder) for x in item["afm"]]
+    return raw
 
 
 def scene_from_dict(raw: dict[str, Any], base: Path | None = None) -> Scene:
