@@ -109,7 +109,8 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "effects": Key("strs", list(EFFECTS), choices=EFFECTS,
                        doc="effects to simulate; others are not evaluated at all"),
         "description": Key("str", "", doc="free text"),
-        "extends": Key("str", None, doc="a base scene file (relative to this one) whose keys this one overrides; the base's relative file paths stay relative to the base"),
+        "extends": Key("str", None, doc="a base scene file (relative to this one) whose keys this one overrides "
+                                        "(the base's relative file paths stay relative to the base)"),
     },
     "slider": {
         "length_mm": Key("float", 0.85, _pos, doc="slider length [mm] (femto, recon)"),
