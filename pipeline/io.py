@@ -7,6 +7,10 @@ Every dataset is written through :func:`write_dataset` (by :mod:`pipeline.runner
   git revision, config hash, input-file hashes),
 * writes to a temporary file in the same folder and renames it into place, so an interrupted
   run never leaves a half-written file and never destroys the previous one.
+
+Every temporary file hdi writes is named by :func:`temporary_path` (or :func:`temporary_prefix`):
+``.NAME.hdi-RUNID[.XXXXXXXX].tmp``, with this process's :data:`RUN_ID`. :func:`is_temporary` tells
+those names apart from a user's (``.notes.tmp``), so the runner's cleaner removes only files hdi made.
 """
 
 from __future__ import annotations
@@ -15,6 +19,8 @@ import datetime as _dt
 import hashlib
 import json
 import os
+import re
+import secrets
 import subprocess
 import tempfile
 import threading
@@ -31,6 +37,30 @@ ENGINE = "netcdf4"
 #: Serialises NetCDF I/O between threads of one process (pipeline.fanout runs tasks on threads):
 #: the HDF5 library under netCDF4 is not thread-safe, and xarray does not lock file creation.
 NETCDF_LOCK = threading.RLock()
+
+
+#: This process's run id, part of the name of every temporary file it writes (:func:`temporary_path`).
+RUN_ID = secrets.token_hex(6)
+#: Names of hdi's temporary files: ``.NAME.hdi-<12 hex digits>.tmp``, or with mkstemp's random part
+#: (``.NAME.hdi-<12 hex digits>.<random>.tmp``).
+_TEMPORARY = re.compile(r"\..+\.hdi-[0-9a-f]{12}(\.[A-Za-z0-9_]+)?\.tmp")
+
+
+def temporary_prefix(path: str | Path) -> str:
+    """The name prefix of a temporary file for ``path`` (for :func:`tempfile.mkstemp`, with the suffix
+    ``".tmp"``), marked as hdi's by :data:`RUN_ID`."""
+    return f".{Path(path).name}.hdi-{RUN_ID}."
+
+
+def temporary_path(path: str | Path) -> Path:
+    """The temporary file beside ``path`` that is written, then renamed onto ``path``."""
+    path = Path(path)
+    return path.with_name(f".{path.name}.hdi-{RUN_ID}.tmp")
+
+
+def is_temporary(name: str) -> bool:
+    """Whether a file name is one of hdi's temporary files (:func:`temporary_path`), of any run."""
+    return _TEMPORARY.fullmatch(name) is not None
 
 
 class DatasetError(ValueError):
@@ -179,7 +209,7 @@ def write_dataset(ds: xr.Dataset, path: str | Path, scene: Any = None, *, stage:
     if extra_attrs:
         attrs.update(extra_attrs)
     out.attrs = {k: (json.dumps(v) if isinstance(v, (dict, list, tuple)) else v) for k, v in attrs.items()}
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    fd, tmp = tempfile.mkstemp(prefix=temporary_prefix(path), suffix=".tmp", dir=path.parent)
     os.close(fd)
     os.chmod(tmp, 0o666 & ~current_umask())  # (mkstemp makes 0600; a dataset is shared like any file)
     try:

@@ -23,7 +23,9 @@ and rename), other outputs are renamed into place from the staging folder.
 A results folder is used by one ``hdi`` process at a time: :func:`folder_lock` holds
 ``.hdi.lock`` (pid, host, start time) and refuses a second process, naming the first; a lock whose
 process is gone (same host) is taken over. Temporary files an interrupted run left behind
-(``.NAME.*.tmp``, ``.hdi-staging-*``) are removed when the lock is taken.
+(hdi's own names, ``.NAME.hdi-RUNID*.tmp`` of :func:`pipeline.io.temporary_path`, and ``.hdi-staging-*``)
+are removed when the lock is taken; a user's files and another results folder holding its lock (a
+run in a sub-folder) are left alone.
 """
 
 from __future__ import annotations
@@ -47,7 +49,8 @@ from typing import Any, Callable, Iterable, Iterator, Mapping
 import xarray as xr
 
 from .code_version import code_key
-from .io import DatasetError, file_hash, read_attrs, read_dataset, write_dataset
+from .io import (DatasetError, RUN_ID, file_hash, is_temporary, read_attrs, read_dataset, temporary_path,
+                 write_dataset)
 
 log = logging.getLogger(__name__)
 
@@ -59,8 +62,8 @@ OUTPUTS_ATTR = "stage_outputs"
 STATE_DIR = ".hdi"
 LOCK_NAME = ".hdi.lock"
 STAGING_PREFIX = ".hdi-staging-"
-#: Sub-folders of a results folder searched for orphaned temporary files.
-_TMP_GLOBS = (".*.tmp", "*/.*.tmp", "*/*/.*.tmp")
+#: How deep below a results folder the cleaner looks for orphaned temporary files (``sweep.parts/interface-x/``).
+_TMP_DEPTH = 2
 
 Scene = Any
 
@@ -304,16 +307,25 @@ def _alive(pid: int) -> bool:
 
 
 def clean_orphans(out: Path) -> list[Path]:
-    """Remove the temporary files and staging folders an interrupted run left in ``out``."""
+    """Remove the temporary files and staging folders an interrupted run left in ``out``.
+
+    Only hdi's own temporary files (:func:`pipeline.io.is_temporary`) are removed, up to
+    :data:`_TMP_DEPTH` folders deep, and never below a sub-folder that holds a :data:`LOCK_NAME`:
+    that is another results folder, maybe in use by another run (``--out`` its parent).
+    """
     removed = []
-    for pattern in _TMP_GLOBS:
-        for p in out.glob(pattern):
-            if p.is_file():
+    for folder, dirs, names in os.walk(out):
+        depth = len(Path(folder).relative_to(out).parts)
+        dirs[:] = [] if depth >= _TMP_DEPTH else [d for d in dirs if not (Path(folder, d) / LOCK_NAME).exists()]
+        for name in names:
+            p = Path(folder, name)
+            if is_temporary(name) and p.is_file():
                 p.unlink(missing_ok=True)
                 removed.append(p)
     for p in out.glob(STAGING_PREFIX + "*"):
-        shutil.rmtree(p, ignore_errors=True)
-        removed.append(p)
+        if p.is_dir():
+            shutil.rmtree(p, ignore_errors=True)
+            removed.append(p)
     if removed:
         log.info("%s: removed %d temporary file(s) of an interrupted run", out, len(removed))
     return removed
@@ -358,7 +370,7 @@ def folder_lock(out: str | Path) -> Iterator[Path]:
     if path in _HELD:
         raise RuntimeError(f"{out}: this process already holds the folder; a stage's compute reads its "
                            "inputs through runner.Inputs and does not build in its own folder")
-    me = {"pid": os.getpid(), "host": socket.gethostname(),
+    me = {"pid": os.getpid(), "host": socket.gethostname(), "run": RUN_ID,
           "started": _dt.datetime.now(_dt.timezone.utc).replace(microsecond=0).isoformat()}
     with _deciding(out):
         for _ in range(2):
@@ -588,7 +600,7 @@ class Runner:
         if others:
             manifest = self._manifest(st.name)
             manifest.parent.mkdir(parents=True, exist_ok=True)
-            tmp = manifest.with_name(f".{manifest.name}.{os.getpid()}.tmp")
+            tmp = temporary_path(manifest)
             tmp.write_text(json.dumps({"key": key, "outputs": produced, "hashes": hashes}, indent=1))
             os.replace(tmp, manifest)
         return produced

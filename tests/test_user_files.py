@@ -6,13 +6,18 @@ Relative paths inherited through ``scene.extends``, the leftover cleaner and a u
 
 from __future__ import annotations
 
+import json
+import os
+import socket
+import tempfile
 from pathlib import Path
 
 import pytest
 
-from pipeline import cli
+from pipeline import cli, runner
 from pipeline.config.grid import roughness_sets
 from pipeline.config.scene import MAX_EXTENDS_DEPTH, SceneError, load_scene
+from pipeline.io import is_temporary, temporary_path, temporary_prefix
 
 ROOT = Path(__file__).resolve().parents[1]
 PAPER = ROOT / "configs" / "paper-2009.toml"
@@ -99,3 +104,35 @@ def test_a_cycle_of_extends_is_one_line(tmp_path):
     (tmp_path / "c.toml").write_text('[scene]\nextends = "a.toml"\n')
     with pytest.raises(SceneError, match="circular extension"):
         load_scene(tmp_path / "a.toml")
+
+
+# ------------------------------------------------------------- 5. the cleaner and files hdi did not make
+def test_the_cleaner_leaves_a_users_tmp_files_alone(tmp_path):
+    mine = [tmp_path / ".notes.tmp", tmp_path / "figures" / ".draft.png.tmp", tmp_path / ".sweep.nc.k2j3h4.tmp"]
+    for p in mine:
+        p.parent.mkdir(parents=True, exist_ok=True)
+        p.write_text("mine")
+    ours = tmp_path / "figures" / f".fig6_fhm.png.hdi-{'0' * 12}.tmp"   # (hdi's name, of a killed run)
+    ours.write_bytes(b"half written")
+    runner.build("dmw", load_scene(PAPER), tmp_path)
+    assert all(p.read_text() == "mine" for p in mine)
+    assert not ours.exists()
+
+
+def test_the_cleaner_does_not_reach_into_another_runs_locked_folder(tmp_path):
+    other = tmp_path / "paper"                                   # another run works in results/paper ...
+    (other / "sweep.parts").mkdir(parents=True)
+    (other / runner.LOCK_NAME).write_text(json.dumps({"pid": os.getpid(), "host": socket.gethostname()}))
+    its = [other / f".dmw.nc.hdi-{'a' * 12}.x1y2.tmp", other / "sweep.parts" / f".batch-00001.nc.hdi-{'a' * 12}.z.tmp"]
+    for p in its:
+        p.write_bytes(b"being written")
+    runner.build("dmw", load_scene(PAPER), tmp_path)             # ... while this one has --out results/
+    assert all(p.read_bytes() == b"being written" for p in its)
+
+
+def test_every_temporary_name_hdi_writes_is_recognised_as_its_own(tmp_path):
+    assert is_temporary(temporary_path(tmp_path / "sweep.nc").name)
+    fd, name = tempfile.mkstemp(prefix=temporary_prefix(tmp_path / "sweep.nc"), suffix=".tmp", dir=tmp_path)
+    os.close(fd)
+    assert is_temporary(Path(name).name)
+    assert not any(is_temporary(n) for n in (".notes.tmp", ".sweep.nc.k2j3h4.tmp", "sweep.nc.hdi-0123456789ab.tmp"))

@@ -67,7 +67,7 @@ from ..analyses.paper_comparison import comparison_markdown, identification_mark
 from ..analyses.report_figures import ENSEMBLE_FIGURE, FIGURES, INTERFACE_FIGURE
 from ..analyses.report_settings import ReportSettings, wants_ensemble
 from ..analyses.sweep_slices import combinations, split_ensemble
-from ..io import DatasetError
+from ..io import DatasetError, temporary_path
 from ..validity import OutsideValidity, describe
 from ..runner import Inputs, Stage, build
 
@@ -109,7 +109,7 @@ def load(inputs: Inputs) -> dict[str, xr.Dataset | None]:
 
 def _write_text(path: Path, text: str) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp")
+    tmp = temporary_path(path)
     tmp.write_text(text, encoding="utf-8")
     tmp.replace(path)
 
