@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import contextlib
 import datetime as _dt
+import errno
 import hashlib
 import importlib
 import json
@@ -296,6 +297,11 @@ class FolderBusy(DatasetError):
 _HELD: set[Path] = set()
 
 
+def _is_pid(value: Any) -> bool:
+    """Whether a lock file's ``pid`` is a process id (a positive 32-bit integer, as ``os.kill`` takes)."""
+    return isinstance(value, int) and not isinstance(value, bool) and 0 < value < 2**31
+
+
 def _alive(pid: int) -> bool:
     try:
         os.kill(pid, 0)
@@ -381,11 +387,16 @@ def folder_lock(out: str | Path) -> Iterator[Path]:
                     other = json.loads(path.read_text() or "{}")
                 except (OSError, ValueError):
                     other = {}
+                if not isinstance(other, dict) or not _is_pid(other.get("pid")):  # (`[1, 2]`: JSON, but
+                    other = {}                                                 # not what a holder writes)
                 pid, host = other.get("pid"), other.get("host")
-                if not other or (isinstance(pid, int) and host == me["host"] and not _alive(pid)):
+                if not other or (host == me["host"] and not _alive(pid)):
                     # (an empty or unreadable file is garbage: a holder writes its file before it
                     # lets the next process decide)
-                    log.warning("%s: taking over the lock of hdi process %s, which is gone", out, pid)
+                    if other:
+                        log.warning("%s: taking over the lock of hdi process %s, which is gone", out, pid)
+                    else:
+                        log.warning("%s: taking over the lock file %s, which names no hdi process", out, path)
                     path.unlink(missing_ok=True)
                     continue
                 raise FolderBusy(f"{out}: in use by hdi process {pid} on {host} since {other.get('started')} "
@@ -544,6 +555,7 @@ class Runner:
             self._done.add(name)
             return
         st = self.stage(name)
+        self._check_outputs(st)
         log.info("%s: computing (%s)", name, reason)
         t0 = time.perf_counter()
         staging = Path(tempfile.mkdtemp(prefix=STAGING_PREFIX, dir=self.out))
@@ -560,6 +572,17 @@ class Runner:
         log.info("%s: wrote %s (%.1f s)", name, ", ".join(written) or "nothing", seconds)
         self._log_run(name, key, written, seconds, inputs.metrics)
         self._done.add(name)
+
+    def _check_outputs(self, st: Stage) -> None:
+        """Refuse, before the stage computes, an output path that is a folder or lies below a file
+        (``sweep.nc`` a folder, ``figures`` a file): the write would fail only after the computation."""
+        for o in st.output_names(self.scene):
+            target = self.out / o
+            if target.is_dir():
+                raise IsADirectoryError(errno.EISDIR, os.strerror(errno.EISDIR), str(target))
+            for parent in list(Path(o).parents)[:-1]:
+                if (self.out / parent).exists() and not (self.out / parent).is_dir():
+                    raise FileExistsError(errno.EEXIST, "is a file, not a folder", str(self.out / parent))
 
     def _write(self, st: Stage, key: str, inputs: Inputs, result: Any, staging: Path) -> list[str]:
         outputs = st.output_names(self.scene)

@@ -25,6 +25,7 @@ from typing import Any
 from urllib.parse import urlsplit
 
 from .config.grid import label, range_count, same_point
+from .io import is_read_only
 from . import sizing
 from .config import limits
 from .physics.material_bounds import PhysicsWarning
@@ -160,13 +161,14 @@ def check_out(out: str | Path | None) -> None:
         return
     path = Path(out)
     probe = path
-    while not probe.exists():  # the nearest existing ancestor decides whether the folder can be made
+    while not _exists(probe):  # the nearest existing ancestor decides whether the folder can be made
         if probe.parent == probe:
             break
         probe = probe.parent
     if probe.exists() and not probe.is_dir():
         what = "is a file" if probe == path else f"cannot be created: {probe} is a file"
         raise OptionError(f"--out {out}: {what}; expected a folder")
+    check_name_lengths(path, probe, "--out")
     try:  # os.access alone misses read-only mounts and says yes to root everywhere
         fd, tmp = tempfile.mkstemp(prefix=".hdi-write-test.", dir=probe)
         os.close(fd)
@@ -174,6 +176,47 @@ def check_out(out: str | Path | None) -> None:
     except OSError as exc:
         where = "" if probe == path else f" (cannot create it in {probe})"
         raise OptionError(f"--out {out}: not writable{where}: {exc.strerror or exc}") from None
+
+
+def _exists(path: Path) -> bool:
+    """``path.exists()``, false for a path the file system cannot even look up (a name too long: Python
+    3.11's ``exists`` raises)."""
+    try:
+        return path.exists()
+    except OSError:
+        return False
+
+
+def check_name_lengths(path: Path, existing: Path, option: str) -> None:
+    """Every name of ``path`` below its existing ancestor ``existing`` fits the file system's limit on
+    a name (``NAME_MAX``, 255 bytes on most), so making it does not fail with "File name too long"."""
+    try:
+        limit = os.pathconf(existing if existing.is_dir() else existing.parent, "PC_NAME_MAX")
+    except (OSError, ValueError, AttributeError):  # (no pathconf: not POSIX)
+        return
+    for part in path.parts[len(existing.parts):] if path != existing else ():
+        size = len(os.fsencode(part))
+        if limit and size > limit:
+            raise OptionError(f"{option} {path}: the name {part[:20]}... is {size} bytes, longer than the "
+                              f"{limit} bytes its file system allows; choose a shorter name")
+
+
+def check_readme(readme: str | Path | None) -> None:
+    """``--readme`` is an existing README file (a symbolic link to one: the report writes through it)
+    that is not read-only: checked before the run, which would otherwise fail, or overwrite a file
+    the user protected, only at its end."""
+    if readme is None:
+        return
+    path = Path(readme)
+    if path.is_dir():
+        raise OptionError(f"--readme {readme}: is a folder; expected the README file whose generated "
+                          "section the report rewrites (e.g. README.md)")
+    if not path.is_file():
+        raise OptionError(f"--readme {readme}: file does not exist; expected the README file whose generated "
+                          "section the report rewrites (e.g. README.md)")
+    if is_read_only(path):
+        raise OptionError(f"--readme {readme}: is read-only; make it writable (chmod u+w) for the report to "
+                          "update it, or leave --readme out")
 
 
 def grid_size(scene: Any) -> tuple[int, int, int]:
@@ -236,6 +279,7 @@ def check_options(stage: str, scene: Any, *, out: str | Path | None = None, sche
                         afm_files=scene is None)
     check_workers(workers)
     check_out(out)
+    check_readme(given.get("readme"))
     if scene is not None and stage in ("sweep", "run"):
         check_grid(scene, yes)
     if scene is not None:

@@ -6,15 +6,19 @@ Relative paths inherited through ``scene.extends``, the leftover cleaner and a u
 
 from __future__ import annotations
 
+import errno
 import json
 import os
+import shutil
 import socket
+import subprocess
+import sys
 import tempfile
 from pathlib import Path
 
 import pytest
 
-from pipeline import cli, runner
+from pipeline import cli, io, runner
 from pipeline.config.grid import roughness_sets
 from pipeline.config.scene import MAX_EXTENDS_DEPTH, SceneError, load_scene
 from pipeline.io import is_temporary, temporary_path, temporary_prefix
@@ -24,10 +28,12 @@ PAPER = ROOT / "configs" / "paper-2009.toml"
 
 
 def _one_line_error(capsys, stage: str = "dmw") -> str:
-    """The command's stderr, asserted to be exactly one error line of ``hdi STAGE``."""
+    """The error line of ``hdi STAGE`` on stderr, asserted to be its only error and its last line, after
+    progress lines only (no traceback)."""
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and err[0].startswith(f"hdi {stage}: error: "), err
-    return err[0]
+    errors = [ln for ln in err if "error" in ln.lower() or "Traceback" in ln or ln.startswith(" ")]
+    assert len(errors) == 1 and err[-1] == errors[0] and errors[0].startswith(f"hdi {stage}: error: "), err
+    return errors[0]
 
 
 def _record(path: Path, n: int = 50, rate_hz: float = 4e6) -> Path:
@@ -136,3 +142,122 @@ def test_every_temporary_name_hdi_writes_is_recognised_as_its_own(tmp_path):
     os.close(fd)
     assert is_temporary(Path(name).name)
     assert not any(is_temporary(n) for n in (".notes.tmp", ".sweep.nc.k2j3h4.tmp", "sweep.nc.hdi-0123456789ab.tmp"))
+
+
+# ------------------------------------------------------------------- 6. OSError and others as one line
+def _tree(folder: Path) -> dict[str, bytes]:
+    return {str(p.relative_to(folder)): p.read_bytes() for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+@pytest.fixture
+def dmw_out(tmp_path):
+    """A results folder holding the paper scene's ``dmw.nc``, and the argv of a run that must rewrite it."""
+    out = tmp_path / "out"
+    assert cli.main(["dmw", str(PAPER), "--out", str(out)]) == 0
+    return out, ["dmw", str(PAPER), "--out", str(out), "--set", "dmw.seed=7"]
+
+
+def _half_write_then(exc_of):
+    """A stand-in for the NetCDF writer that writes some bytes to the temporary file, then fails."""
+    def write(ds, path, encoding):
+        Path(path).write_bytes(b"\x89HDF half written")
+        raise exc_of(path)
+    return write
+
+
+def test_a_full_disk_is_one_line_naming_the_dataset_and_nothing_is_half_written(dmw_out, monkeypatch, capsys):
+    out, argv = dmw_out
+    before = _tree(out)
+    capsys.readouterr()
+    monkeypatch.setattr(io, "_to_netcdf", _half_write_then(
+        lambda tmp: OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), tmp)))
+    assert cli.main(argv) == 2
+    line = _one_line_error(capsys)
+    assert line == (f"hdi dmw: error: {out / 'dmw.nc'}: {os.strerror(errno.ENOSPC)}; free some space or choose "
+                    "another --out")
+    assert _tree(out) == before                   # the previous dataset kept, no temporary left
+
+
+def test_the_hdf_error_of_a_full_disk_is_put_down_to_the_free_space(dmw_out, monkeypatch, capsys):
+    """netCDF4 reports a full disk as RuntimeError("NetCDF: HDF error"), without an errno."""
+    out, argv = dmw_out
+    before = _tree(out)
+    capsys.readouterr()
+    monkeypatch.setattr(io, "_to_netcdf", _half_write_then(lambda tmp: RuntimeError("NetCDF: HDF error")))
+    monkeypatch.setattr(io.shutil, "disk_usage", lambda path: shutil._ntuple_diskusage(4_000_000, 4_000_000, 5_000))
+    assert cli.main(argv) == 2
+    line = _one_line_error(capsys)
+    assert line.startswith(f"hdi dmw: error: {out / 'dmw.nc'}: {os.strerror(errno.ENOSPC)} (0.005 MB free, the "
+                           "dataset needs about ")
+    assert _tree(out) == before
+
+
+_SMALL_FILES = """
+import resource, signal, sys
+signal.signal(signal.SIGXFSZ, signal.SIG_IGN)      # (then a write beyond the limit fails with EFBIG)
+resource.setrlimit(resource.RLIMIT_FSIZE, (20_000, 20_000))
+from pipeline import cli
+sys.exit(cli.main(sys.argv[1:]))
+"""
+
+
+def test_a_write_the_file_system_refuses_inside_hdf5_is_one_line(tmp_path):
+    """No fault injected: HDF5 itself fails to write (the file size limit, ``ulimit -f``, stands in for
+    a small file system, which a test cannot mount)."""
+    out = tmp_path / "out"
+    done = subprocess.run([sys.executable, "-c", _SMALL_FILES, "dmw", str(PAPER), "--out", str(out)], cwd=ROOT,
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 2, done.stderr
+    err = [ln for ln in done.stderr.splitlines() if "error" in ln.lower() or "Traceback" in ln]
+    assert len(err) == 1 and err[0].startswith(f"hdi dmw: error: {out / 'dmw.nc'}: {os.strerror(errno.EFBIG)} "
+                                               "(the file size limit is 0.02 MB, the dataset needs about ")
+    assert err[0].endswith(" MB); the file size limit (ulimit -f) is too small: raise it")
+    assert sorted(p.name for p in out.iterdir()) == []
+
+
+def test_a_number_that_overflows_is_refused_at_load(tmp_path, capsys):
+    for value in ("1e308", "1e-320"):
+        assert cli.main(["simulate", str(PAPER), "--set", f"solver.duration_ms={value}", "--out", str(tmp_path)]) == 2
+        assert "expected a number of magnitude at most 1e+100" in _one_line_error(capsys, "simulate")
+    with pytest.raises(SceneError, match=r"dmw\.seed = 9223372036854775808: expected an integer of magnitude"):
+        load_scene(PAPER, ["dmw.seed=9223372036854775808"])
+
+
+@pytest.mark.parametrize("garbage", ["[1,2]", '{"pid": 1000000000000000000000000000000}', '"x"', '{"pid": true}'])
+def test_a_lock_file_no_hdi_process_wrote_is_taken_over(tmp_path, garbage):
+    (tmp_path / runner.LOCK_NAME).write_text(garbage)
+    with runner.folder_lock(tmp_path) as path:
+        assert json.loads(path.read_text())["pid"] == os.getpid()
+
+
+def test_a_dataset_path_that_is_a_folder_is_one_line_before_computing(tmp_path, capsys):
+    (tmp_path / "dmw.nc").mkdir()
+    assert cli.main(["dmw", str(PAPER), "--out", str(tmp_path)]) == 2
+    assert _one_line_error(capsys) == (f"hdi dmw: error: {tmp_path / 'dmw.nc'}: {os.strerror(errno.EISDIR)}; it is "
+                                       "a folder where hdi writes a file: remove or rename it")
+    assert not any(p.name.startswith(".") and p.name != runner.LOCK_NAME for p in tmp_path.iterdir())
+
+
+def test_an_output_folder_that_is_a_file_is_one_line_before_computing(tmp_path, capsys):
+    (tmp_path / "figures").write_text("mine")
+    computed = []
+    stage = runner.Stage("figs", lambda scene, inputs: computed.append(1), outputs=("figures/a.png",))
+    with pytest.raises(FileExistsError) as info:
+        runner.Runner(load_scene(PAPER), tmp_path, {"figs": stage}).build(["figs"])
+    assert io.os_error_line(info.value) == (f"{tmp_path / 'figures'}: is a file, not a folder; it is a file where "
+                                            "hdi needs a folder: remove or rename it")
+    assert computed == [] and (tmp_path / "figures").read_text() == "mine"
+
+
+def test_readme_a_folder_is_one_line_before_anything_runs(tmp_path, capsys):
+    (tmp_path / "README.md").mkdir()
+    out = tmp_path / "out"
+    assert cli.main(["report", str(PAPER), "--readme", str(tmp_path / "README.md"), "--out", str(out)]) == 2
+    assert "README.md: is a folder; expected the README file" in _one_line_error(capsys, "report")
+    assert not out.exists()
+
+
+def test_an_out_name_beyond_the_file_systems_limit_is_one_line(tmp_path, capsys):
+    out = tmp_path / ("r" * 300) / "x"
+    assert cli.main(["dmw", str(PAPER), "--out", str(out)]) == 2
+    assert "is 300 bytes, longer than the 255 bytes its file system allows" in _one_line_error(capsys)

@@ -28,7 +28,7 @@ from ..physics.equilibrium import STARTS
 from ..physics.fhm import FHM_MEASURES
 from ..physics.friction import FRICTION_LAWS
 from ..units import MHZ_IN_KHZ, SUFFIX_FACTORS
-from .limits import LimitError, check_physical
+from .limits import MAX_INTEGER, MAX_MAGNITUDE, LimitError, check_physical
 
 #: The sweep's protocols (``sweep.protocol``; :func:`pipeline.model.simulation.simulate`, docs/model.md,
 #: section "Heater stepping").
@@ -450,6 +450,16 @@ def _where(path: Path | None) -> str:
     return str(path) if path is not None else "<scene>"
 
 
+#: The expectation of a number too large or too small (:data:`pipeline.config.limits.MAX_MAGNITUDE`).
+_MAGNITUDE = (f"a number of magnitude at most {MAX_MAGNITUDE:g} and, unless 0, at least {1 / MAX_MAGNITUDE:g} "
+              "(others overflow when converted to SI units or divided by)")
+
+
+def _representable(value: float) -> bool:
+    """Whether a finite number is 0 or of a magnitude within ``1/MAX_MAGNITUDE .. MAX_MAGNITUDE``."""
+    return value == 0 or 1 / MAX_MAGNITUDE <= abs(value) <= MAX_MAGNITUDE
+
+
 def _check_value(section: str, key: str, spec: Key, value: Any, where: str, base: Path | None) -> Any:
     name = f"{section}.{key}"
     doc = f" ({spec.doc})" if spec.doc else ""
@@ -464,9 +474,13 @@ def _check_value(section: str, key: str, spec: Key, value: Any, where: str, base
         value = float(value)
         if value != value or value in (float("inf"), float("-inf")):
             raise fail("a finite number")
+        if not _representable(value):
+            raise fail(_MAGNITUDE)
     elif kind == "int":
         if isinstance(value, bool) or not isinstance(value, int):
             raise fail("an integer")
+        if abs(value) > MAX_INTEGER:
+            raise fail("an integer of magnitude at most 2**63 - 1")
     elif kind == "str":
         if not isinstance(value, str):
             raise fail("a string")
@@ -481,6 +495,8 @@ def _check_value(section: str, key: str, spec: Key, value: Any, where: str, base
         value = [float(v) for v in value]
         if not all(math.isfinite(v) for v in value):
             raise fail("a list of finite numbers (no nan or inf)")
+        if not all(map(_representable, value)):
+            raise fail("a list of " + _MAGNITUDE.replace("a number", "numbers"))
         if spec.length is not None and len(value) != spec.length:
             raise fail(f"a list of {spec.length} numbers")
     elif kind == "strs":
@@ -501,6 +517,8 @@ def _check_value(section: str, key: str, spec: Key, value: Any, where: str, base
         value = {k: float(v) for k, v in value.items()}
         if not all(math.isfinite(v) for v in value.values()):
             raise fail("finite numbers for start, stop and step (no nan or inf)")
+        if not all(map(_representable, value.values())):
+            raise fail(_MAGNITUDE.replace("a number", "numbers") + " for start, stop and step")
         if value["step"] <= 0:
             raise fail("step > 0")
         if value["stop"] < value["start"]:
