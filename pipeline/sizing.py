@@ -14,6 +14,7 @@ from .config.limits import (check_physical, MAX_EVALUATIONS, MAX_HISTORY_SAMPLES
                             LimitError)
 from .model import interface_tables
 from .model.dmw_record import settings as dmw_settings
+from .model.measured_dmw import record_samples
 from .units import MS, NS, S_IN_MS
 
 
@@ -53,6 +54,9 @@ def sizes(scene: Any, stage: str) -> list[tuple[str, int, int]]:
         dur_ms = dmw_settings(scene)["duration_s"] * S_IN_MS
         out.append((f"DMW record samples (dmw.duration_ms = {dur_ms:g} x sample_rate_mhz = "
                     f"{dmw['sample_rate_mhz']:g})", int(dur_ms * 1e3 * dmw["sample_rate_mhz"]), MAX_RECORD_SAMPLES))
+        if dmw["source"] != "synthetic":  # (a measured record is read whole, whatever the duration used)
+            out.append((f"samples of the measured DMW record (lines of dmw.source = {dmw['source']})",
+                        record_samples(dmw["source"]), MAX_RECORD_SAMPLES))
     if stage in ("sweep", "run"):
         g = scene["sweep"]["protrusion_nm"]
         n = (range_count(g) * len(scene["sweep"]["roughness"] or [None])

@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Any
 from urllib.parse import urlsplit
 
-from .config.grid import label, range_count, same_point
+from .config.grid import label, range_count, roughness_sets, same_point
 from .io import is_read_only
 from . import sizing
 from .config import limits
@@ -237,6 +237,23 @@ def check_grid(scene: Any, yes: bool = False, limit: int = MAX_SCENES) -> None:
                           f"ratios) exceed {limit:,}; pass --yes to run them anyway")
 
 
+def check_sweep_histories(scene: Any) -> None:
+    """Every protrusion of ``sweep.histories_nm`` is a point of the sweep's grid: one off the grid was
+    kept by no batch, silently. The message names the nearest grid points. (Without the key the sweep
+    keeps those of ``report.histories_nm`` on its grid; the report checks its own.)"""
+    g = scene["sweep"]["protrusion_nm"]
+    n = range_count(g)
+    for h in scene["sweep"]["histories_nm"] or []:
+        j = min(max(round((h - g["start"]) / g["step"]), 0), n - 1)
+        if same_point(label(g["start"] + j * g["step"]), h):
+            continue
+        near = sorted({label(g["start"] + i * g["step"]) for i in (j - 1, j, j + 1) if 0 <= i < n},
+                      key=lambda x: abs(x - h))[:2]
+        raise OptionError(f"sweep.histories_nm: {h:.10g} nm is not on the sweep grid (sweep.protrusion_nm: {g['start']:g} to "
+                          f"{g['stop']:g} nm in steps of {g['step']:g}); the nearest grid points are "
+                          + " and ".join(f"{x:.10g}" for x in sorted(near)) + " nm")
+
+
 def check_report_histories(scene: Any) -> None:
     """Every protrusion of ``report.histories_nm`` is a point of the sweep's protrusion grid, to the
     1e-9 nm the sweep matches them with (:func:`pipeline.config.grid.range_grid`, without
@@ -289,6 +306,10 @@ def check_options(stage: str, scene: Any, *, out: str | Path | None = None, sche
             raise OptionError(str(exc)) from None
     if scene is not None and stage in ("report", "run"):
         check_report_histories(scene)
+    if scene is not None:  # (the sweep's inputs, checked before calibrate runs for minutes ahead of it)
+        if stage in ("sweep", "run", "report"):
+            check_sweep_histories(scene)
+        roughness_sets(scene)
     if stage in OPTION_STAGES["scheduler"]:
         check_scheduler(scheduler)
 

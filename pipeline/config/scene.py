@@ -27,7 +27,7 @@ from ..physics.bulge_bearing import BULGE_LAWS, SLIP_MODELS
 from ..physics.equilibrium import STARTS
 from ..physics.fhm import FHM_MEASURES
 from ..physics.friction import FRICTION_LAWS
-from ..units import MHZ_IN_KHZ, SUFFIX_FACTORS
+from ..units import MHZ_IN_KHZ, MS, NS, SUFFIX_FACTORS
 from .limits import MAX_INTEGER, MAX_MAGNITUDE, LimitError, check_physical
 
 #: The sweep's protocols (``sweep.protocol``; :func:`pipeline.model.simulation.simulate`, docs/model.md,
@@ -41,6 +41,10 @@ except ModuleNotFoundError:  # pragma: no cover - Python 3.10
 
 #: Effects a scene may ask for (README, \"Scenes and effects\").
 EFFECTS = ("air_bearing", "pitch", "dmw", "adhesion", "contact", "friction")
+
+#: Fewest output samples of a run's steady window (after ``solver.transient_ms``) a scene may ask for:
+#: a regime and an FHM judged on fewer say nothing (the paper scene has 6000).
+MIN_STEADY_SAMPLES = 10
 
 #: Unit suffixes that may end a key name (the units table); used to tell "wrong unit" from "unknown key".
 UNIT_SUFFIXES = tuple(SUFFIX_FACTORS)
@@ -622,6 +626,17 @@ def _cross_checks(config: dict[str, dict[str, Any]], where: str) -> None:
     if sol["transient_ms"] >= sol["duration_ms"]:
         raise SceneError(f"{where}: solver.transient_ms = {sol['transient_ms']} must be shorter than "
                          f"solver.duration_ms = {sol['duration_ms']}")
+    steady = (sol["duration_ms"] - sol["transient_ms"]) * MS / (sol["output_step_ns"] * NS)
+    if steady < MIN_STEADY_SAMPLES:  # (1e-6 ms: one sample judged "surfing")
+        raise SceneError(f"{where}: solver.duration_ms = {sol['duration_ms']:g} - transient_ms = "
+                         f"{sol['transient_ms']:g} leaves a steady window of {steady:.3g} samples of "
+                         f"output_step_ns = {sol['output_step_ns']:g}; expected at least {MIN_STEADY_SAMPLES} "
+                         "samples to judge a regime and an FHM on")
+    damping = config["sweep"]["damping_ratio"] or []
+    twice = sorted({d for d in damping if damping.count(d) > 1})
+    if twice:
+        raise SceneError(f"{where}: sweep.damping_ratio = {damping}: {twice[0]:g} appears more than once; "
+                         "expected distinct ratios (each is a coordinate value of sweep.nc)")
     eff = set(config["scene"]["effects"])
     if "air_bearing" not in eff:
         raise SceneError(f"{where}: scene.effects = {sorted(eff)}: expected 'air_bearing' among them "
