@@ -9,16 +9,25 @@ from __future__ import annotations
 import errno
 import json
 import os
+import re
 import shutil
 import socket
 import subprocess
 import sys
 import tempfile
+import tracemalloc
 from pathlib import Path
 
+import matplotlib.pyplot as plt
+import numpy as np
 import pytest
 
-from pipeline import cli, io, runner
+from pipeline import cli, io, runner, sizing
+from pipeline.analyses import narrative
+from pipeline.model import measured_dmw
+from pipeline.physics.dmw import DMWError
+from pipeline.stages import report
+from pipeline.validation import OptionError, check_readme
 from pipeline.config.grid import roughness_sets
 from pipeline.config.scene import MAX_EXTENDS_DEPTH, SceneError, load_scene
 from pipeline.io import is_temporary, temporary_path, temporary_prefix
@@ -261,3 +270,124 @@ def test_an_out_name_beyond_the_file_systems_limit_is_one_line(tmp_path, capsys)
     out = tmp_path / ("r" * 300) / "x"
     assert cli.main(["dmw", str(PAPER), "--out", str(out)]) == 2
     assert "is 300 bytes, longer than the 255 bytes its file system allows" in _one_line_error(capsys)
+
+
+# ------------------------------------------------------------------------- 7. silent or unbounded
+FLY = ['scene.effects=["air_bearing","pitch","dmw"]', "solver.duration_ms=0.6", "solver.transient_ms=0.2",
+       "sweep.protrusion_nm={start=2.0, stop=2.4, step=0.2}", "sweep.batch_size=3"]
+
+
+def _sets(overrides: list[str]) -> list[str]:
+    return [a for s in overrides for a in ("--set", s)]
+
+
+def test_a_record_longer_than_the_limit_is_one_line_before_it_is_read_and_yes_lifts_it(tmp_path, monkeypatch, capsys):
+    rec = _record(tmp_path / "rec.csv", n=12_000, rate_hz=4e6)
+    monkeypatch.setattr(sizing, "MAX_RECORD_SAMPLES", 10_000)   # (10 million rows are not written in a test)
+    argv = ["dmw", str(PAPER), "--set", f"dmw.source={json.dumps(str(rec))}", "--out", str(tmp_path / "out")]
+    assert cli.main(argv) == 2
+    line = _one_line_error(capsys)
+    assert f"12,001 samples of the measured DMW record (lines of dmw.source = {rec}) exceed 10,000; pass --yes" in line
+    assert not (tmp_path / "out" / "dmw.nc").exists()
+    assert cli.main(argv + ["--yes"]) == 0 and (tmp_path / "out" / "dmw.nc").is_file()
+
+
+def test_a_long_record_is_read_without_a_python_object_per_cell(tmp_path):
+    """The reader keeps two float arrays, not the rows of strings (600 bytes a sample: 6 GB for 10 million)."""
+    rec = _record(tmp_path / "rec.csv", n=200_000)
+    tracemalloc.start()
+    try:
+        r = measured_dmw.load_record(rec)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert r.values.size == 200_000
+    assert peak < 100 * r.values.size, f"{peak / r.values.size:.0f} bytes a sample"
+
+
+def test_a_csv_row_with_an_extra_column_is_refused_naming_file_line_and_columns(tmp_path):
+    rec = _record(tmp_path / "rec.csv", n=10)
+    lines = rec.read_text().splitlines()
+    lines[5] += ",7.5"
+    rec.write_text("\n".join(lines) + "\n")
+    with pytest.raises(DMWError, match=rf"^{re.escape(str(rec))}: line 6: 3 columns; expected 2 \(time \[s\], "
+                                       r"displacement \[nm\]\) as in the first row$"):
+        measured_dmw.load_record(rec)
+
+
+def test_a_byte_order_mark_before_the_header_does_not_hide_the_time_column(tmp_path):
+    rec = _record(tmp_path / "rec.csv", n=20)
+    bom = tmp_path / "bom.csv"
+    bom.write_bytes(b"\xef\xbb\xbf" + rec.read_bytes())
+    a, b = measured_dmw.load_record(rec), measured_dmw.load_record(bom)
+    assert b.sample_rate_hz == a.sample_rate_hz == 4e6 and np.array_equal(a.values, b.values)
+
+
+def test_a_run_too_short_for_a_steady_window_is_refused(tmp_path, capsys):
+    assert cli.main(["simulate", str(PAPER), "--set", "solver.duration_ms=1e-6", "--set", "solver.transient_ms=0",
+                     "--out", str(tmp_path)]) == 2
+    assert "leaves a steady window of 0.004 samples" in _one_line_error(capsys, "simulate")
+
+
+def test_a_repeated_damping_ratio_is_refused_at_load():
+    with pytest.raises(SceneError, match=r"sweep\.damping_ratio = \[0\.05, 0\.02, 0\.05\]: 0\.05 appears more than once"):
+        load_scene(PAPER, ["sweep.damping_ratio=[0.05, 0.02, 0.05]"])
+
+
+def test_histories_off_the_grid_are_refused_naming_the_nearest_grid_points(tmp_path, capsys):
+    assert cli.main(["sweep", str(PAPER), "--set", "sweep.histories_nm=[5.0, 7.05]", "--out", str(tmp_path)]) == 2
+    assert _one_line_error(capsys, "sweep").endswith(
+        "sweep.histories_nm: 7.05 nm is not on the sweep grid (sweep.protrusion_nm: 0 to 15 nm in steps of 0.2); "
+        "the nearest grid points are 7 and 7.2 nm")
+
+
+def test_a_bad_roughness_set_is_refused_before_any_stage_runs(tmp_path, capsys):
+    assert cli.main(["sweep", str(PAPER), "--set", 'sweep.roughness=[{label="a", sigma_nm=-1}]',
+                     "--out", str(tmp_path)]) == 2
+    assert "sweep.roughness.sigma_nm (set 'a') = -1: expected a positive number" in _one_line_error(capsys, "sweep")
+    assert not (tmp_path / "dmw.nc").exists()
+
+
+@pytest.fixture
+def readme_report(tmp_path):
+    """A results folder with a report, and a README holding the generated-section markers."""
+    out = tmp_path / "out"
+    (out / "report").mkdir(parents=True)
+    (out / "report" / "comparison.md").write_text("the comparison\n")
+    (out / "figures").mkdir()
+    readme = tmp_path / "docs-repo" / "README.md"
+    readme.parent.mkdir()
+    readme.write_text(f"# README\n{narrative.README_BEGIN}\nold\n{narrative.README_END}\nend\n")
+    return out, readme
+
+
+def test_readme_a_symlink_is_written_through_and_stays_a_link(tmp_path, readme_report):
+    out, readme = readme_report
+    link = tmp_path / "README.md"
+    link.symlink_to(readme)
+    report._finish(load_scene(PAPER), out, {"readme": link})
+    assert link.is_symlink() and link.resolve() == readme
+    assert "the comparison" in readme.read_text()
+
+
+def test_a_read_only_readme_is_refused_and_left_untouched(tmp_path, readme_report, capsys):
+    out, readme = readme_report
+    readme.chmod(0o444)
+    before = readme.read_bytes()
+    with pytest.raises(OptionError, match=r"README\.md: is read-only; make it writable"):
+        check_readme(readme)
+    with pytest.raises(PermissionError):
+        report._finish(load_scene(PAPER), out, {"readme": readme})
+    assert readme.read_bytes() == before and readme.stat().st_mode & 0o777 == 0o444
+
+
+def test_the_readmes_xarray_example_runs_on_what_make_run_writes(tmp_path, monkeypatch):
+    scene_file = re.search(r"^SCENE\s*\?=\s*(\S+)", (ROOT / "Makefile").read_text(), re.M).group(1)
+    name = load_scene(ROOT / scene_file).name                          # the folder `make run` writes
+    block = re.search(r"Post-analysis is plain xarray:\n\n```python\n(.*?)```", (ROOT / "README.md").read_text(),
+                      re.S).group(1)
+    assert f'"results/{name}/sweep.nc"' in block
+    assert cli.main(["sweep", str(PAPER), "--out", str(tmp_path / "results" / name), *_sets(FLY)]) == 0
+    monkeypatch.chdir(tmp_path)
+    exec(compile(block, "README.md", "exec"), {})
+    plt.close("all")
