@@ -249,8 +249,8 @@ def check_sweep_histories(scene: Any) -> None:
             continue
         near = sorted({label(g["start"] + i * g["step"]) for i in (j - 1, j, j + 1) if 0 <= i < n},
                       key=lambda x: abs(x - h))[:2]
-        raise OptionError(f"sweep.histories_nm: {h:.10g} nm is not on the sweep grid (sweep.protrusion_nm: {g['start']:g} to "
-                          f"{g['stop']:g} nm in steps of {g['step']:g}); the nearest grid points are "
+        raise OptionError(f"sweep.histories_nm: {h:.10g} nm is not on the sweep grid (sweep.protrusion_nm: "
+                          f"{g['start']:g} to {g['stop']:g} nm in steps of {g['step']:g}); the nearest grid points are "
                           + " and ".join(f"{x:.10g}" for x in sorted(near)) + " nm")
 
 

@@ -330,7 +330,8 @@ def test_a_run_too_short_for_a_steady_window_is_refused(tmp_path, capsys):
 
 
 def test_a_repeated_damping_ratio_is_refused_at_load():
-    with pytest.raises(SceneError, match=r"sweep\.damping_ratio = \[0\.05, 0\.02, 0\.05\]: 0\.05 appears more than once"):
+    with pytest.raises(SceneError, match=r"sweep\.damping_ratio = \[0\.05, 0\.02, 0\.05\]: 0\.05 appears more "
+                                         r"than once"):
         load_scene(PAPER, ["sweep.damping_ratio=[0.05, 0.02, 0.05]"])
 
 
