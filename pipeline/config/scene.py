@@ -454,14 +454,13 @@ def _where(path: Path | None) -> str:
     return str(path) if path is not None else "<scene>"
 
 
-#: The expectation of a number too large or too small (:data:`pipeline.config.limits.MAX_MAGNITUDE`).
-_MAGNITUDE = (f"a number of magnitude at most {MAX_MAGNITUDE:g} and, unless 0, at least {1 / MAX_MAGNITUDE:g} "
-              "(others overflow when converted to SI units or divided by)")
+#: The expectation of a number too large (:data:`pipeline.config.limits.MAX_MAGNITUDE`).
+_MAGNITUDE = f"a number of magnitude at most {MAX_MAGNITUDE:g} (larger ones overflow when converted to SI units)"
 
 
 def _representable(value: float) -> bool:
-    """Whether a finite number is 0 or of a magnitude within ``1/MAX_MAGNITUDE .. MAX_MAGNITUDE``."""
-    return value == 0 or 1 / MAX_MAGNITUDE <= abs(value) <= MAX_MAGNITUDE
+    """Whether a finite number's magnitude is at most :data:`~pipeline.config.limits.MAX_MAGNITUDE`."""
+    return abs(value) <= MAX_MAGNITUDE
 
 
 def _check_value(section: str, key: str, spec: Key, value: Any, where: str, base: Path | None) -> Any:
@@ -626,7 +625,7 @@ def _cross_checks(config: dict[str, dict[str, Any]], where: str) -> None:
     if sol["transient_ms"] >= sol["duration_ms"]:
         raise SceneError(f"{where}: solver.transient_ms = {sol['transient_ms']} must be shorter than "
                          f"solver.duration_ms = {sol['duration_ms']}")
-    steady = (sol["duration_ms"] - sol["transient_ms"]) * MS / (sol["output_step_ns"] * NS)
+    steady = (sol["duration_ms"] - sol["transient_ms"]) * (MS / NS) / sol["output_step_ns"]
     if steady < MIN_STEADY_SAMPLES:  # (1e-6 ms: one sample judged "surfing")
         raise SceneError(f"{where}: solver.duration_ms = {sol['duration_ms']:g} - transient_ms = "
                          f"{sol['transient_ms']:g} leaves a steady window of {steady:.3g} samples of "
