@@ -18,7 +18,7 @@ import traceback
 from pathlib import Path
 
 from . import runner
-from .io import DatasetError, results_dir
+from .io import DatasetError, os_error_line, results_dir
 from .config.scene import SceneError, load_scene
 from .stages import roughness
 from .validation import MAX_SCENES, check_options, one_line_warnings
@@ -144,6 +144,11 @@ def _main(argv: list[str] | None = None) -> int:
         if args.verbose:
             traceback.print_exc()
         print(f"hdi {args.stage}: error: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:  # the file system: a full disk, permissions, a name too long, a folder for a file
+        if args.verbose:
+            traceback.print_exc()
+        print(f"hdi {args.stage}: error: {os_error_line(exc)}", file=sys.stderr)
         return 2
     except KeyboardInterrupt as exc:
         how = "terminated (SIGTERM)" if isinstance(exc, Terminated) else "interrupted"

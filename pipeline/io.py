@@ -7,14 +7,23 @@ Every dataset is written through :func:`write_dataset` (by :mod:`pipeline.runner
   git revision, config hash, input-file hashes),
 * writes to a temporary file in the same folder and renames it into place, so an interrupted
   run never leaves a half-written file and never destroys the previous one.
+
+Every temporary file hdi writes is named by :func:`temporary_path` (or :func:`temporary_prefix`):
+``.NAME.hdi-RUNID[.XXXXXXXX].tmp``, with this process's :data:`RUN_ID`. :func:`is_temporary` tells
+those names apart from a user's (``.notes.tmp``), so the runner's cleaner removes only files hdi made.
 """
 
 from __future__ import annotations
 
 import datetime as _dt
+import errno
 import hashlib
 import json
 import os
+import re
+import secrets
+import shutil
+import stat
 import subprocess
 import tempfile
 import threading
@@ -27,10 +36,39 @@ import xarray as xr
 
 from . import __version__
 
+try:  # (POSIX: the file size limit, ulimit -f)
+    import resource
+except ImportError:  # pragma: no cover
+    resource = None  # type: ignore[assignment]
+
 ENGINE = "netcdf4"
 #: Serialises NetCDF I/O between threads of one process (pipeline.fanout runs tasks on threads):
 #: the HDF5 library under netCDF4 is not thread-safe, and xarray does not lock file creation.
 NETCDF_LOCK = threading.RLock()
+
+
+#: This process's run id, part of the name of every temporary file it writes (:func:`temporary_path`).
+RUN_ID = secrets.token_hex(6)
+#: Names of hdi's temporary files: ``.NAME.hdi-<12 hex digits>.tmp``, or with mkstemp's random part
+#: (``.NAME.hdi-<12 hex digits>.<random>.tmp``).
+_TEMPORARY = re.compile(r"\..+\.hdi-[0-9a-f]{12}(\.[A-Za-z0-9_]+)?\.tmp")
+
+
+def temporary_prefix(path: str | Path) -> str:
+    """The name prefix of a temporary file for ``path`` (for :func:`tempfile.mkstemp`, with the suffix
+    ``".tmp"``), marked as hdi's by :data:`RUN_ID`."""
+    return f".{Path(path).name}.hdi-{RUN_ID}."
+
+
+def temporary_path(path: str | Path) -> Path:
+    """The temporary file beside ``path`` that is written, then renamed onto ``path``."""
+    path = Path(path)
+    return path.with_name(f".{path.name}.hdi-{RUN_ID}.tmp")
+
+
+def is_temporary(name: str) -> bool:
+    """Whether a file name is one of hdi's temporary files (:func:`temporary_path`), of any run."""
+    return _TEMPORARY.fullmatch(name) is not None
 
 
 class DatasetError(ValueError):
@@ -179,17 +217,89 @@ def write_dataset(ds: xr.Dataset, path: str | Path, scene: Any = None, *, stage:
     if extra_attrs:
         attrs.update(extra_attrs)
     out.attrs = {k: (json.dumps(v) if isinstance(v, (dict, list, tuple)) else v) for k, v in attrs.items()}
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    fd, tmp = tempfile.mkstemp(prefix=temporary_prefix(path), suffix=".tmp", dir=path.parent)
     os.close(fd)
     os.chmod(tmp, 0o666 & ~current_umask())  # (mkstemp makes 0600; a dataset is shared like any file)
     try:
+        if path.is_dir():  # (before a byte is written: os.replace would fail after the whole write)
+            raise IsADirectoryError(errno.EISDIR, os.strerror(errno.EISDIR), str(path))
         with NETCDF_LOCK:
             _to_netcdf(out, tmp, encoding)
         os.replace(tmp, path)
+    except (OSError, RuntimeError) as exc:  # (netCDF4 says RuntimeError "NetCDF: HDF error" for a full disk)
+        Path(tmp).unlink(missing_ok=True)
+        raise write_failure(path, exc, int(out.nbytes)) from None
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
     return path
+
+
+def is_read_only(path: str | Path) -> bool:
+    """Whether a file is read-only: no write permission bit at all (what ``chmod a-w`` leaves, which
+    root could still write over), or not writable by this process."""
+    mode = os.stat(path).st_mode
+    return not mode & (stat.S_IWUSR | stat.S_IWGRP | stat.S_IWOTH) or not os.access(path, os.W_OK)
+
+
+#: Spare bytes [B] a write needs beyond a dataset's arrays (HDF5 headers and attributes): with less free
+#: space than the arrays and this, a failed write is put down to a full disk.
+_WRITE_SLACK = 1 << 20
+
+
+def write_failure(path: Path, exc: BaseException, size: int) -> OSError:
+    """The :class:`OSError` naming ``path`` (never its temporary file) for a failed write of ``size``
+    bytes [B]; the HDF5 library's ``NetCDF: HDF error`` says no errno, so the free space of the file
+    system decides whether the disk was full."""
+    if isinstance(exc, OSError) and exc.errno is not None:
+        return OSError(exc.errno, exc.strerror, str(path))
+    try:
+        free = shutil.disk_usage(path.parent).free
+    except OSError:
+        free = None
+    need = size * 1.1 + _WRITE_SLACK
+    if free is not None and free < need:
+        return OSError(errno.ENOSPC, f"{os.strerror(errno.ENOSPC)} ({free / 1e6:.3g} MB free, the dataset needs "
+                                     f"about {size / 1e6:.3g} MB)", str(path))
+    limit = _file_size_limit()
+    if limit is not None and limit < need:
+        return OSError(errno.EFBIG, f"{os.strerror(errno.EFBIG)} (the file size limit is {limit / 1e6:.3g} MB, "
+                                    f"the dataset needs about {size / 1e6:.3g} MB)", str(path))
+    return OSError(errno.EIO, f"the dataset could not be written ({exc}; {free / 1e6 if free else 0:.0f} MB free)",
+                   str(path))
+
+
+def _file_size_limit() -> int | None:
+    """The largest file [B] this process may write (``ulimit -f``; ``None``: no limit, or not POSIX)."""
+    if resource is None:  # pragma: no cover (not POSIX)
+        return None
+    soft = resource.getrlimit(resource.RLIMIT_FSIZE)[0]
+    return None if soft == resource.RLIM_INFINITY else soft
+
+
+#: What to do about an OSError, by errno (:func:`os_error_line`).
+_ADVICE = {
+    errno.ENOSPC: "free some space or choose another --out",
+    errno.EDQUOT: "free some space or choose another --out",
+    errno.EACCES: "make it writable, or choose another --out",
+    errno.EPERM: "make it writable, or choose another --out",
+    errno.EROFS: "choose another --out",
+    errno.ENAMETOOLONG: "choose a shorter --out or scene name",
+    errno.EISDIR: "it is a folder where hdi writes a file: remove or rename it",
+    errno.ENOTDIR: "a part of it is a file where hdi needs a folder: remove or rename that file",
+    errno.EEXIST: "it is a file where hdi needs a folder: remove or rename it",
+    errno.EFBIG: "the file size limit (ulimit -f) is too small: raise it",
+    errno.EIO: "check the file system (free space, a network mount) and run again",
+}
+
+
+def os_error_line(exc: OSError) -> str:
+    """One line for an :class:`OSError` of the file system: the path, what happened, what to do
+    (``sweep.nc: Is a directory; it is a folder where hdi writes a file: remove or rename it``)."""
+    what = exc.strerror or str(exc) or type(exc).__name__
+    where = exc.filename2 if exc.errno == errno.EISDIR and exc.filename2 else exc.filename
+    advice = None if ";" in what else _ADVICE.get(exc.errno)  # (a message of hdi's own says what to do)
+    return (f"{where}: " if where else "") + what + (f"; {advice}" if advice else "")
 
 
 def current_umask() -> int:

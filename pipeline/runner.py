@@ -23,13 +23,16 @@ and rename), other outputs are renamed into place from the staging folder.
 A results folder is used by one ``hdi`` process at a time: :func:`folder_lock` holds
 ``.hdi.lock`` (pid, host, start time) and refuses a second process, naming the first; a lock whose
 process is gone (same host) is taken over. Temporary files an interrupted run left behind
-(``.NAME.*.tmp``, ``.hdi-staging-*``) are removed when the lock is taken.
+(hdi's own names, ``.NAME.hdi-RUNID*.tmp`` of :func:`pipeline.io.temporary_path`, and ``.hdi-staging-*``)
+are removed when the lock is taken; a user's files and another results folder holding its lock (a
+run in a sub-folder) are left alone.
 """
 
 from __future__ import annotations
 
 import contextlib
 import datetime as _dt
+import errno
 import hashlib
 import importlib
 import json
@@ -47,7 +50,8 @@ from typing import Any, Callable, Iterable, Iterator, Mapping
 import xarray as xr
 
 from .code_version import code_key
-from .io import DatasetError, file_hash, read_attrs, read_dataset, write_dataset
+from .io import (DatasetError, RUN_ID, file_hash, is_temporary, read_attrs, read_dataset, temporary_path,
+                 write_dataset)
 
 log = logging.getLogger(__name__)
 
@@ -59,8 +63,8 @@ OUTPUTS_ATTR = "stage_outputs"
 STATE_DIR = ".hdi"
 LOCK_NAME = ".hdi.lock"
 STAGING_PREFIX = ".hdi-staging-"
-#: Sub-folders of a results folder searched for orphaned temporary files.
-_TMP_GLOBS = (".*.tmp", "*/.*.tmp", "*/*/.*.tmp")
+#: How deep below a results folder the cleaner looks for orphaned temporary files (``sweep.parts/interface-x/``).
+_TMP_DEPTH = 2
 
 Scene = Any
 
@@ -293,6 +297,11 @@ class FolderBusy(DatasetError):
 _HELD: set[Path] = set()
 
 
+def _is_pid(value: Any) -> bool:
+    """Whether a lock file's ``pid`` is a process id (a positive 32-bit integer, as ``os.kill`` takes)."""
+    return isinstance(value, int) and not isinstance(value, bool) and 0 < value < 2**31
+
+
 def _alive(pid: int) -> bool:
     try:
         os.kill(pid, 0)
@@ -304,16 +313,25 @@ def _alive(pid: int) -> bool:
 
 
 def clean_orphans(out: Path) -> list[Path]:
-    """Remove the temporary files and staging folders an interrupted run left in ``out``."""
+    """Remove the temporary files and staging folders an interrupted run left in ``out``.
+
+    Only hdi's own temporary files (:func:`pipeline.io.is_temporary`) are removed, up to
+    :data:`_TMP_DEPTH` folders deep, and never below a sub-folder that holds a :data:`LOCK_NAME`:
+    that is another results folder, maybe in use by another run (``--out`` its parent).
+    """
     removed = []
-    for pattern in _TMP_GLOBS:
-        for p in out.glob(pattern):
-            if p.is_file():
+    for folder, dirs, names in os.walk(out):
+        depth = len(Path(folder).relative_to(out).parts)
+        dirs[:] = [] if depth >= _TMP_DEPTH else [d for d in dirs if not (Path(folder, d) / LOCK_NAME).exists()]
+        for name in names:
+            p = Path(folder, name)
+            if is_temporary(name) and p.is_file():
                 p.unlink(missing_ok=True)
                 removed.append(p)
     for p in out.glob(STAGING_PREFIX + "*"):
-        shutil.rmtree(p, ignore_errors=True)
-        removed.append(p)
+        if p.is_dir():
+            shutil.rmtree(p, ignore_errors=True)
+            removed.append(p)
     if removed:
         log.info("%s: removed %d temporary file(s) of an interrupted run", out, len(removed))
     return removed
@@ -358,7 +376,7 @@ def folder_lock(out: str | Path) -> Iterator[Path]:
     if path in _HELD:
         raise RuntimeError(f"{out}: this process already holds the folder; a stage's compute reads its "
                            "inputs through runner.Inputs and does not build in its own folder")
-    me = {"pid": os.getpid(), "host": socket.gethostname(),
+    me = {"pid": os.getpid(), "host": socket.gethostname(), "run": RUN_ID,
           "started": _dt.datetime.now(_dt.timezone.utc).replace(microsecond=0).isoformat()}
     with _deciding(out):
         for _ in range(2):
@@ -369,11 +387,16 @@ def folder_lock(out: str | Path) -> Iterator[Path]:
                     other = json.loads(path.read_text() or "{}")
                 except (OSError, ValueError):
                     other = {}
+                if not isinstance(other, dict) or not _is_pid(other.get("pid")):  # (`[1, 2]`: JSON, but
+                    other = {}                                                 # not what a holder writes)
                 pid, host = other.get("pid"), other.get("host")
-                if not other or (isinstance(pid, int) and host == me["host"] and not _alive(pid)):
+                if not other or (host == me["host"] and not _alive(pid)):
                     # (an empty or unreadable file is garbage: a holder writes its file before it
                     # lets the next process decide)
-                    log.warning("%s: taking over the lock of hdi process %s, which is gone", out, pid)
+                    if other:
+                        log.warning("%s: taking over the lock of hdi process %s, which is gone", out, pid)
+                    else:
+                        log.warning("%s: taking over the lock file %s, which names no hdi process", out, path)
                     path.unlink(missing_ok=True)
                     continue
                 raise FolderBusy(f"{out}: in use by hdi process {pid} on {host} since {other.get('started')} "
@@ -532,6 +555,7 @@ class Runner:
             self._done.add(name)
             return
         st = self.stage(name)
+        self._check_outputs(st)
         log.info("%s: computing (%s)", name, reason)
         t0 = time.perf_counter()
         staging = Path(tempfile.mkdtemp(prefix=STAGING_PREFIX, dir=self.out))
@@ -548,6 +572,17 @@ class Runner:
         log.info("%s: wrote %s (%.1f s)", name, ", ".join(written) or "nothing", seconds)
         self._log_run(name, key, written, seconds, inputs.metrics)
         self._done.add(name)
+
+    def _check_outputs(self, st: Stage) -> None:
+        """Refuse, before the stage computes, an output path that is a folder or lies below a file
+        (``sweep.nc`` a folder, ``figures`` a file): the write would fail only after the computation."""
+        for o in st.output_names(self.scene):
+            target = self.out / o
+            if target.is_dir():
+                raise IsADirectoryError(errno.EISDIR, os.strerror(errno.EISDIR), str(target))
+            for parent in list(Path(o).parents)[:-1]:
+                if (self.out / parent).exists() and not (self.out / parent).is_dir():
+                    raise FileExistsError(errno.EEXIST, "is a file, not a folder", str(self.out / parent))
 
     def _write(self, st: Stage, key: str, inputs: Inputs, result: Any, staging: Path) -> list[str]:
         outputs = st.output_names(self.scene)
@@ -588,7 +623,7 @@ class Runner:
         if others:
             manifest = self._manifest(st.name)
             manifest.parent.mkdir(parents=True, exist_ok=True)
-            tmp = manifest.with_name(f".{manifest.name}.{os.getpid()}.tmp")
+            tmp = temporary_path(manifest)
             tmp.write_text(json.dumps({"key": key, "outputs": produced, "hashes": hashes}, indent=1))
             os.replace(tmp, manifest)
         return produced

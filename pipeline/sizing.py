@@ -14,6 +14,7 @@ from .config.limits import (check_physical, MAX_EVALUATIONS, MAX_HISTORY_SAMPLES
                             LimitError)
 from .model import interface_tables
 from .model.dmw_record import settings as dmw_settings
+from .model.measured_dmw import record_samples
 from .units import MS, NS, S_IN_MS
 
 
@@ -36,6 +37,11 @@ def table_rows(scene: Any) -> int:
     return math.ceil((sol["table_max_nm"] - first * step) / step - TOL_NM) + 1
 
 
+def _count(x: float) -> int:
+    """A size computed in floats as an integer; an overflow (a divisor of 1e-320) as a size beyond any limit."""
+    return int(x) if math.isfinite(x) else 10**30
+
+
 def sizes(scene: Any, stage: str) -> list[tuple[str, int, int]]:
     """``(what, size, limit)`` of every size the stage makes for the scene."""
     sol, dmw = scene["solver"], scene["dmw"]
@@ -47,12 +53,15 @@ def sizes(scene: Any, stage: str) -> list[tuple[str, int, int]]:
     if stage not in ("roughness", "interface", "dmw"):
         out.append((f"history samples per run (solver.duration_ms = {sol['duration_ms']:g} / output_step_ns = "
                     f"{sol['output_step_ns']:g})",
-                    int(sol["duration_ms"] * MS / NS / sol["output_step_ns"]) + 1, MAX_HISTORY_SAMPLES))
+                    _count(sol["duration_ms"] * MS / NS / sol["output_step_ns"]) + 1, MAX_HISTORY_SAMPLES))
     if stage != "roughness" and "dmw" in scene["scene"]["effects"]:
         # (the record's default length: the run's plus the pads' delay)
         dur_ms = dmw_settings(scene)["duration_s"] * S_IN_MS
         out.append((f"DMW record samples (dmw.duration_ms = {dur_ms:g} x sample_rate_mhz = "
-                    f"{dmw['sample_rate_mhz']:g})", int(dur_ms * 1e3 * dmw["sample_rate_mhz"]), MAX_RECORD_SAMPLES))
+                    f"{dmw['sample_rate_mhz']:g})", _count(dur_ms * 1e3 * dmw["sample_rate_mhz"]), MAX_RECORD_SAMPLES))
+        if dmw["source"] != "synthetic":  # (a measured record is read whole, whatever the duration used)
+            out.append((f"samples of the measured DMW record (lines of dmw.source = {dmw['source']})",
+                        record_samples(dmw["source"]), MAX_RECORD_SAMPLES))
     if stage in ("sweep", "run"):
         g = scene["sweep"]["protrusion_nm"]
         n = (range_count(g) * len(scene["sweep"]["roughness"] or [None])

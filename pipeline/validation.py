@@ -24,7 +24,8 @@ from pathlib import Path
 from typing import Any
 from urllib.parse import urlsplit
 
-from .config.grid import label, range_count, same_point
+from .config.grid import label, range_count, roughness_sets, same_point
+from .io import is_read_only
 from . import sizing
 from .config import limits
 from .physics.material_bounds import PhysicsWarning
@@ -160,13 +161,14 @@ def check_out(out: str | Path | None) -> None:
         return
     path = Path(out)
     probe = path
-    while not probe.exists():  # the nearest existing ancestor decides whether the folder can be made
+    while not _exists(probe):  # the nearest existing ancestor decides whether the folder can be made
         if probe.parent == probe:
             break
         probe = probe.parent
     if probe.exists() and not probe.is_dir():
         what = "is a file" if probe == path else f"cannot be created: {probe} is a file"
         raise OptionError(f"--out {out}: {what}; expected a folder")
+    check_name_lengths(path, probe, "--out")
     try:  # os.access alone misses read-only mounts and says yes to root everywhere
         fd, tmp = tempfile.mkstemp(prefix=".hdi-write-test.", dir=probe)
         os.close(fd)
@@ -174,6 +176,47 @@ def check_out(out: str | Path | None) -> None:
     except OSError as exc:
         where = "" if probe == path else f" (cannot create it in {probe})"
         raise OptionError(f"--out {out}: not writable{where}: {exc.strerror or exc}") from None
+
+
+def _exists(path: Path) -> bool:
+    """``path.exists()``, false for a path the file system cannot even look up (a name too long: Python
+    3.11's ``exists`` raises)."""
+    try:
+        return path.exists()
+    except OSError:
+        return False
+
+
+def check_name_lengths(path: Path, existing: Path, option: str) -> None:
+    """Every name of ``path`` below its existing ancestor ``existing`` fits the file system's limit on
+    a name (``NAME_MAX``, 255 bytes on most), so making it does not fail with "File name too long"."""
+    try:
+        limit = os.pathconf(existing if existing.is_dir() else existing.parent, "PC_NAME_MAX")
+    except (OSError, ValueError, AttributeError):  # (no pathconf: not POSIX)
+        return
+    for part in path.parts[len(existing.parts):] if path != existing else ():
+        size = len(os.fsencode(part))
+        if limit and size > limit:
+            raise OptionError(f"{option} {path}: the name {part[:20]}... is {size} bytes, longer than the "
+                              f"{limit} bytes its file system allows; choose a shorter name")
+
+
+def check_readme(readme: str | Path | None) -> None:
+    """``--readme`` is an existing README file (a symbolic link to one: the report writes through it)
+    that is not read-only: checked before the run, which would otherwise fail, or overwrite a file
+    the user protected, only at its end."""
+    if readme is None:
+        return
+    path = Path(readme)
+    if path.is_dir():
+        raise OptionError(f"--readme {readme}: is a folder; expected the README file whose generated "
+                          "section the report rewrites (e.g. README.md)")
+    if not path.is_file():
+        raise OptionError(f"--readme {readme}: file does not exist; expected the README file whose generated "
+                          "section the report rewrites (e.g. README.md)")
+    if is_read_only(path):
+        raise OptionError(f"--readme {readme}: is read-only; make it writable (chmod u+w) for the report to "
+                          "update it, or leave --readme out")
 
 
 def grid_size(scene: Any) -> tuple[int, int, int]:
@@ -192,6 +235,23 @@ def check_grid(scene: Any, yes: bool = False, limit: int = MAX_SCENES) -> None:
         raise OptionError(f"sweep.protrusion_nm = {{start={g['start']:g}, stop={g['stop']:g}, step={g['step']:g}}}: "
                           f"{total:,} scenes ({n_prot:,} protrusions x {n_sets} roughness sets x {n_damp} damping "
                           f"ratios) exceed {limit:,}; pass --yes to run them anyway")
+
+
+def check_sweep_histories(scene: Any) -> None:
+    """Every protrusion of ``sweep.histories_nm`` is a point of the sweep's grid: one off the grid was
+    kept by no batch, silently. The message names the nearest grid points. (Without the key the sweep
+    keeps those of ``report.histories_nm`` on its grid; the report checks its own.)"""
+    g = scene["sweep"]["protrusion_nm"]
+    n = range_count(g)
+    for h in scene["sweep"]["histories_nm"] or []:
+        j = min(max(round((h - g["start"]) / g["step"]), 0), n - 1)
+        if same_point(label(g["start"] + j * g["step"]), h):
+            continue
+        near = sorted({label(g["start"] + i * g["step"]) for i in (j - 1, j, j + 1) if 0 <= i < n},
+                      key=lambda x: abs(x - h))[:2]
+        raise OptionError(f"sweep.histories_nm: {h:.10g} nm is not on the sweep grid (sweep.protrusion_nm: "
+                          f"{g['start']:g} to {g['stop']:g} nm in steps of {g['step']:g}); the nearest grid points are "
+                          + " and ".join(f"{x:.10g}" for x in sorted(near)) + " nm")
 
 
 def check_report_histories(scene: Any) -> None:
@@ -236,6 +296,7 @@ def check_options(stage: str, scene: Any, *, out: str | Path | None = None, sche
                         afm_files=scene is None)
     check_workers(workers)
     check_out(out)
+    check_readme(given.get("readme"))
     if scene is not None and stage in ("sweep", "run"):
         check_grid(scene, yes)
     if scene is not None:
@@ -245,6 +306,10 @@ def check_options(stage: str, scene: Any, *, out: str | Path | None = None, sche
             raise OptionError(str(exc)) from None
     if scene is not None and stage in ("report", "run"):
         check_report_histories(scene)
+    if scene is not None:  # (the sweep's inputs, checked before calibrate runs for minutes ahead of it)
+        if stage in ("sweep", "run", "report"):
+            check_sweep_histories(scene)
+        roughness_sets(scene)
     if stage in OPTION_STAGES["scheduler"]:
         check_scheduler(scheduler)
 

@@ -390,7 +390,8 @@ def test_two_processes_taking_over_a_stale_lock_do_not_both_hold_it(tmp_path):
 
 def test_orphaned_temporaries_are_cleaned(tmp_path, paper_config):
     (tmp_path / sweep_stage.PARTS).mkdir()
-    orphans = [tmp_path / ".sweep.nc.k2j3h4.tmp", tmp_path / sweep_stage.PARTS / ".batch-00003.nc.x8y.tmp",
+    orphans = [tmp_path / ".sweep.nc.hdi-0123456789ab.k2j3h4.tmp",      # (hdi's names, of another run)
+               tmp_path / sweep_stage.PARTS / ".batch-00003.nc.hdi-0123456789ab.x8y.tmp",
                tmp_path / ".hdi-staging-abc" / "figures" / "fig6_fhm.png"]
     for p in orphans:
         p.parent.mkdir(parents=True, exist_ok=True)

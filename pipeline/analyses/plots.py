@@ -25,6 +25,7 @@ import numpy as np
 import xarray as xr
 
 from ..fanout import available_cores
+from ..io import temporary_path
 from ..units import KHZ, S_IN_MS
 from ..variables import GROUPS, Regime, regime_name
 
@@ -99,7 +100,7 @@ def save(fig: Figure, path: str | Path, dpi: int = DPI) -> Path:
     """Write ``fig`` as PNG to ``path`` (folder created) and release its artists."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp")
+    tmp = temporary_path(path)
     fig.savefig(tmp, dpi=dpi, format="png")
     tmp.replace(path)
     fig.clear()

@@ -21,6 +21,12 @@ from typing import Any
 #: paper's 4 nm and the 0.5 nm roughness; beyond it the asperity model (nm summits on a nominal area)
 #: describes nothing physical.
 MAX_INTERFERENCE_NM = 100.0
+#: Largest magnitude of a number in a scene: far beyond any physical value in the scene's units (the
+#: largest default is 1e5 N/m) and far below the float range, so no conversion to SI units or size
+#: computed from it overflows (``solver.duration_ms = 1e308`` ended in an OverflowError).
+MAX_MAGNITUDE = 1e100
+#: Largest magnitude of an integer in a scene (a 64-bit integer, as numpy holds it).
+MAX_INTEGER = 2**63 - 1
 #: Rows of the interface tables (paper scene: 701), ~1 MB per million rows per quantity.
 MAX_TABLE_ROWS = 200_000
 #: Output samples of one run, duration / output step (paper: 8000); ~20 histories of 8 bytes each.

@@ -28,8 +28,8 @@ from ..physics.equilibrium import STARTS
 from ..physics.fhm import FHM_MEASURES
 from ..physics.friction import FRICTION_LAWS
 from ..physics.geometry import AREA_MODELS, FRICTION_ARMS
-from ..units import MHZ_IN_KHZ, SUFFIX_FACTORS
-from .limits import LimitError, check_physical
+from ..units import MHZ_IN_KHZ, MS, NS, SUFFIX_FACTORS
+from .limits import MAX_INTEGER, MAX_MAGNITUDE, LimitError, check_physical
 
 #: The sweep's protocols (``sweep.protocol``; :func:`pipeline.model.simulation.simulate`, docs/model.md,
 #: section "Heater stepping").
@@ -42,6 +42,10 @@ except ModuleNotFoundError:  # pragma: no cover - Python 3.10
 
 #: Effects a scene may ask for (README, \"Scenes and effects\").
 EFFECTS = ("air_bearing", "pitch", "dmw", "adhesion", "contact", "friction")
+
+#: Fewest output samples of a run's steady window (after ``solver.transient_ms``) a scene may ask for:
+#: a regime and an FHM judged on fewer say nothing (the paper scene has 6000).
+MIN_STEADY_SAMPLES = 10
 
 #: Unit suffixes that may end a key name (the units table); used to tell "wrong unit" from "unknown key".
 UNIT_SUFFIXES = tuple(SUFFIX_FACTORS)
@@ -110,7 +114,8 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "effects": Key("strs", list(EFFECTS), choices=EFFECTS,
                        doc="effects to simulate; others are not evaluated at all"),
         "description": Key("str", "", doc="free text"),
-        "extends": Key("str", None, doc="a base scene file (relative to this one) whose keys this one overrides"),
+        "extends": Key("str", None, doc="a base scene file (relative to this one) whose keys this one overrides "
+                                        "(the base's relative file paths stay relative to the base)"),
     },
     "slider": {
         "length_mm": Key("float", 0.85, _pos, doc="slider length [mm] (femto, recon)"),
@@ -479,6 +484,15 @@ def _where(path: Path | None) -> str:
     return str(path) if path is not None else "<scene>"
 
 
+#: The expectation of a number too large (:data:`pipeline.config.limits.MAX_MAGNITUDE`).
+_MAGNITUDE = f"a number of magnitude at most {MAX_MAGNITUDE:g} (larger ones overflow when converted to SI units)"
+
+
+def _representable(value: float) -> bool:
+    """Whether a finite number's magnitude is at most :data:`~pipeline.config.limits.MAX_MAGNITUDE`."""
+    return abs(value) <= MAX_MAGNITUDE
+
+
 def _check_value(section: str, key: str, spec: Key, value: Any, where: str, base: Path | None) -> Any:
     name = f"{section}.{key}"
     doc = f" ({spec.doc})" if spec.doc else ""
@@ -493,9 +507,13 @@ def _check_value(section: str, key: str, spec: Key, value: Any, where: str, base
         value = float(value)
         if value != value or value in (float("inf"), float("-inf")):
             raise fail("a finite number")
+        if not _representable(value):
+            raise fail(_MAGNITUDE)
     elif kind == "int":
         if isinstance(value, bool) or not isinstance(value, int):
             raise fail("an integer")
+        if abs(value) > MAX_INTEGER:
+            raise fail("an integer of magnitude at most 2**63 - 1")
     elif kind == "str":
         if not isinstance(value, str):
             raise fail("a string")
@@ -510,6 +528,8 @@ def _check_value(section: str, key: str, spec: Key, value: Any, where: str, base
         value = [float(v) for v in value]
         if not all(math.isfinite(v) for v in value):
             raise fail("a list of finite numbers (no nan or inf)")
+        if not all(map(_representable, value)):
+            raise fail("a list of " + _MAGNITUDE.replace("a number", "numbers"))
         if spec.length is not None and len(value) != spec.length:
             raise fail(f"a list of {spec.length} numbers")
     elif kind == "strs":
@@ -530,6 +550,8 @@ def _check_value(section: str, key: str, spec: Key, value: Any, where: str, base
         value = {k: float(v) for k, v in value.items()}
         if not all(math.isfinite(v) for v in value.values()):
             raise fail("finite numbers for start, stop and step (no nan or inf)")
+        if not all(map(_representable, value.values())):
+            raise fail(_MAGNITUDE.replace("a number", "numbers") + " for start, stop and step")
         if value["step"] <= 0:
             raise fail("step > 0")
         if value["stop"] < value["start"]:
@@ -633,6 +655,17 @@ def _cross_checks(config: dict[str, dict[str, Any]], where: str) -> None:
     if sol["transient_ms"] >= sol["duration_ms"]:
         raise SceneError(f"{where}: solver.transient_ms = {sol['transient_ms']} must be shorter than "
                          f"solver.duration_ms = {sol['duration_ms']}")
+    steady = (sol["duration_ms"] - sol["transient_ms"]) * (MS / NS) / sol["output_step_ns"]
+    if steady < MIN_STEADY_SAMPLES:  # (1e-6 ms: one sample judged "surfing")
+        raise SceneError(f"{where}: solver.duration_ms = {sol['duration_ms']:g} - transient_ms = "
+                         f"{sol['transient_ms']:g} leaves a steady window of {steady:.3g} samples of "
+                         f"output_step_ns = {sol['output_step_ns']:g}; expected at least {MIN_STEADY_SAMPLES} "
+                         "samples to judge a regime and an FHM on")
+    damping = config["sweep"]["damping_ratio"] or []
+    twice = sorted({d for d in damping if damping.count(d) > 1})
+    if twice:
+        raise SceneError(f"{where}: sweep.damping_ratio = {damping}: {twice[0]:g} appears more than once; "
+                         "expected distinct ratios (each is a coordinate value of sweep.nc)")
     eff = set(config["scene"]["effects"])
     if "air_bearing" not in eff:
         raise SceneError(f"{where}: scene.effects = {sorted(eff)}: expected 'air_bearing' among them "
@@ -724,8 +757,18 @@ def load_scene(path: str | Path, overrides: Iterable[str] = ()) -> Scene:
     return validate(raw, path, overrides=overrides, blame=blame)
 
 
+#: Deepest chain of ``scene.extends`` a scene may build on (a scene, its base, the base's base, ...):
+#: far beyond any real chain (the identified scene extends the paper scene: 2), and far below Python's
+#: recursion limit, which a chain of 1,200 files reached with a traceback.
+MAX_EXTENDS_DEPTH = 32
+
+
 def _read_raw(path: Path, seen: tuple[Path, ...] = ()) -> dict[str, Any]:
-    """Parse a scene file, merging in the base scene it ``extends`` (keys of this file win)."""
+    """Parse a scene file, merging in the base scene it ``extends`` (keys of this file win).
+
+    The base's relative file paths are made absolute from the base's own folder (:func:`_anchor_paths`)
+    before the merge: a path means what it meant in the file that wrote it, not beside the derived scene.
+    """
     if path.is_dir():
         raise SceneError(f"{path}: is a folder; expected a scene file (TOML), e.g. configs/paper-2009.toml")
     if not path.is_file():
@@ -736,7 +779,12 @@ def _read_raw(path: Path, seen: tuple[Path, ...] = ()) -> dict[str, Any]:
         raise SceneError(f"{path}: not UTF-8 text (byte {exc.start}); expected a TOML file in UTF-8") from None
     except tomllib.TOMLDecodeError as exc:
         raise SceneError(f"{path}: not valid TOML: {exc}") from None
-    base_name = raw.get("scene", {}).get("extends") if isinstance(raw.get("scene"), dict) else None
+    except OSError as exc:
+        raise SceneError(f"{path}: cannot read the scene file: {exc.strerror or exc}") from None
+    for section, table in raw.items():  # (here, where the file is known: a base's error names the base)
+        if section in SCHEMA and not isinstance(table, dict):
+            raise SceneError(f"{path}: {section} must be a table [{section}]")
+    base_name = raw.get("scene", {}).get("extends")
     if base_name is None:
         return raw
     if not isinstance(base_name, str):
@@ -744,9 +792,13 @@ def _read_raw(path: Path, seen: tuple[Path, ...] = ()) -> dict[str, Any]:
     base_path = (path.parent / base_name).resolve()
     if base_path in seen or base_path == path.resolve():
         raise SceneError(f"{path}: scene.extends = {base_name!r}: circular extension")
+    if len(seen) + 1 >= MAX_EXTENDS_DEPTH:
+        raise SceneError(f"{path}: scene.extends = {base_name!r}: a chain of more than {MAX_EXTENDS_DEPTH} "
+                         f"scenes extending one another; expected at most {MAX_EXTENDS_DEPTH} (write the keys "
+                         "into fewer files)")
     if not base_path.is_file():
         raise SceneError(f"{path}: scene.extends: file {base_name!r} does not exist (looked for {base_path})")
-    base = _read_raw(base_path, seen + (path.resolve(),))
+    base = _anchor_paths(_read_raw(base_path, seen + (path.resolve(),)), base_path.parent)
     base.get("scene", {}).pop("name", None)
     for section, table in raw.items():
         if isinstance(table, dict) and isinstance(base.get(section), dict):
@@ -755,6 +807,37 @@ def _read_raw(path: Path, seen: tuple[Path, ...] = ()) -> dict[str, Any]:
             base[section] = table
     base["scene"]["extends"] = str(base_path)
     return base
+
+
+def _anchor(value: Any, folder: Path) -> Any:
+    """A relative file path (a string) made absolute from ``folder``; anything else unchanged."""
+    if not isinstance(value, str):
+        return value
+    p = Path(value).expanduser()
+    return value if p.is_absolute() else str((folder / p).resolve())
+
+
+def _anchor_paths(raw: dict[str, Any], folder: Path) -> dict[str, Any]:
+    """``raw`` with the relative file paths it names made absolute from ``folder`` (the folder of the
+    file that wrote them): the keys with ``path=True`` in :data:`SCHEMA`, a measured ``dmw.source``
+    and the AFM scans of ``sweep.roughness`` sets. Values of the wrong type are left to
+    :func:`validate` to report."""
+    for section, keys in SCHEMA.items():
+        table = raw.get(section)
+        if not isinstance(table, dict):
+            continue
+        for key, spec in keys.items():
+            if spec.path and key in table:
+                v = table[key]
+                table[key] = [_anchor(x, folder) for x in v] if isinstance(v, list) else _anchor(v, folder)
+    dmw = raw.get("dmw")
+    if isinstance(dmw, dict) and dmw.get("source", "synthetic") != "synthetic":
+        dmw["source"] = _anchor(dmw["source"], folder)
+    sets = raw["sweep"].get("roughness") if isinstance(raw.get("sweep"), dict) else None
+    for item in sets if isinstance(sets, list) else []:
+        if isinstance(item, dict) and isinstance(item.get("afm"), list):
+            item["afm"] = [_anchor(x, folder) for x in item["afm"]]
+    return raw
 
 
 def scene_from_dict(raw: dict[str, Any], base: Path | None = None) -> Scene:

@@ -9,17 +9,22 @@ of the record (the paper's processing, synthesis, spectra) is :mod:`pipeline.phy
 from __future__ import annotations
 
 import csv
-import io
+import itertools
+import logging
 import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Iterable, Iterator
 
 import numpy as np
 
+from ..io import NETCDF_LOCK
 from ..physics.dmw import TIME_JITTER_TOL, DMWError
 from ..units import LENGTH_UNITS, TIME_UNITS, VELOCITY_UNITS
 from ..units import MS
+
+log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -151,43 +156,129 @@ def _sniff_delimiter(line: str) -> str | None:
     return None  # whitespace
 
 
+#: Data rows of a CSV record between two progress lines (a 10-million-row file takes about a minute).
+PROGRESS_ROWS = 2_000_000
+
+
+def _data_lines(fh: Iterable[str], first: int = 1) -> Iterator[tuple[int, str]]:
+    """``(line number, line)`` of the data lines of a CSV file: not blank, not a ``#`` comment."""
+    for i, ln in enumerate(fh, start=first):
+        ln = ln.rstrip("\r\n")
+        if ln.strip() and not ln.lstrip().startswith("#"):
+            yield i, ln
+
+
+def count_lines(path: str | Path) -> int:
+    """Lines of a text file (an upper bound on a CSV record's samples), counted without decoding it."""
+    n, last = 0, b"\n"
+    with open(path, "rb") as fh:
+        while block := fh.read(1 << 22):
+            n += block.count(b"\n")
+            last = block[-1:]
+    return n + (last != b"\n")
+
+
+#: Suffixes of NetCDF records (any other is read as CSV).
+NETCDF_SUFFIXES = (".nc", ".nc4", ".cdf", ".netcdf")
+
+
+def record_samples(path: str | Path) -> int:
+    """At most how many samples a record file holds, from its size alone (no value is read): a CSV's
+    lines, a NetCDF file's longest dimension; 0 for a file that cannot be read (the reader says why)."""
+    path = Path(path)
+    try:
+        if path.suffix.lower() not in NETCDF_SUFFIXES:
+            return count_lines(path)
+        import netCDF4
+        with NETCDF_LOCK, netCDF4.Dataset(path) as nc:
+            return max((len(d) for d in nc.dimensions.values()), default=0)
+    except OSError:
+        return 0
+
+
 def _read_csv(path: Path, quantity: str, column: str | None,
               sample_rate_hz: float | None) -> tuple[np.ndarray, float, str, str, str, tuple[str, ...]]:
+    """Read a CSV record row by row into the two arrays it needs (a list of rows of strings took ~600
+    bytes a sample: 6 GB for 10 million); a UTF-8 byte-order mark before the header is not part of it."""
     try:
-        text = path.read_text()
+        return _parse_csv(path, quantity, column, sample_rate_hz)
     except UnicodeDecodeError:
         raise DMWError(f"{path}: not a text (CSV) file; expected CSV or NetCDF (.nc)") from None
-    numbered = [(i + 1, ln) for i, ln in enumerate(text.splitlines())
-                if ln.strip() and not ln.lstrip().startswith("#")]
-    lines = [ln for _, ln in numbered]
-    line_nos = [i for i, _ in numbered]
-    if not lines:
-        raise DMWError(f"{path}: no data rows; expected a CSV record")
-    delim = _sniff_delimiter(lines[0])
-    if delim is None:
-        rows = [ln.split() for ln in lines]
+
+
+def _parse_csv(path: Path, quantity: str, column: str | None,
+               sample_rate_hz: float | None) -> tuple[np.ndarray, float, str, str, str, tuple[str, ...]]:
+    n_lines = count_lines(path)
+    with open(path, encoding="utf-8-sig") as fh:
+        lines = _data_lines(fh)
+        first = next(lines, None)
+        if first is None:
+            raise DMWError(f"{path}: no data rows; expected a CSV record")
+        delim = _sniff_delimiter(first[1])
+
+        def split(ln: str) -> list[str]:
+            if delim is None:
+                return ln.split()
+            cells = ln.split(delim) if '"' not in ln else next(csv.reader([ln], delimiter=delim))  # (quotes: csv)
+            return [c.strip() for c in cells]
+
+        head = split(first[1])
+        header = None if all(_numeric(c) for c in head if c != "") else head
+        ncol = len(head)
+        names = header if header is not None else [str(i) for i in range(ncol)]
+        labels = ([f"column {h!r}" for h in header] if header is not None
+                  else [f"column {i}" for i in range(ncol)])  # how a column is named in messages
+        split_names = [_split_header(h) for h in names] if header is not None else [(n, None) for n in names]
+        time_idx, val_idx = _columns(path, split_names, names, header is not None, column, quantity,
+                                     sample_rate_hz)
+        wanted = [val_idx] + ([time_idx] if time_idx is not None else [])
+        out = np.empty((len(wanted), n_lines))
+        n = 0
+        for line_no, ln in itertools.chain([] if header is not None else [first], lines):
+            row = split(ln)
+            if len(row) > ncol and any(c != "" for c in row[ncol:]):
+                raise DMWError(f"{path}: line {line_no}: {len(row)} columns; expected {ncol} "
+                               f"({', '.join(names)}) as in the first row")
+            for k, i in enumerate(wanted):
+                if i >= len(row) or row[i] == "":
+                    raise DMWError(f"{path}: {labels[i]}: missing value on line {line_no}; expected a number")
+                try:
+                    out[k, n] = float(row[i])
+                except ValueError:
+                    raise DMWError(f"{path}: {labels[i]}: non-numeric value {row[i]!r} on line {line_no}; "
+                                   f"expected a number") from None
+            n += 1
+            if n % PROGRESS_ROWS == 0:
+                log.info("dmw: %s: read %d of at most %d rows", path, n, n_lines)
+    field_name = labels[val_idx]
+    x = out[0, :n]
+    _check_values(path, field_name, x)
+    factor, unit, notes = _value_factor(path, field_name, split_names[val_idx][1], quantity)
+    if time_idx is not None:
+        t = out[1, :n] * _time_factor(path, labels[time_idx], split_names[time_idx][1])
+        rate = _rate_from_time(path, labels[time_idx], t)
+        if sample_rate_hz is not None and abs(rate / sample_rate_hz - 1) > 1e-6:
+            raise DMWError(f"{path}: {labels[time_idx]}: time axis gives {rate:.9g} Hz but "
+                           f"dmw.sample_rate_hz = {sample_rate_hz:g}; expected them to agree")
     else:
-        rows = [[c.strip() for c in r] for r in csv.reader(io.StringIO("\n".join(lines)), delimiter=delim)]
+        rate = float(sample_rate_hz)  # type: ignore[arg-type]
+    return x * factor, rate, names[val_idx], field_name, unit, notes
 
-    def numeric(s: str) -> bool:
-        try:
-            float(s)
-            return True
-        except ValueError:
-            return False
 
-    header = None
-    if not all(numeric(c) for c in rows[0] if c != ""):
-        header, rows, line_nos = rows[0], rows[1:], line_nos[1:]
-    ncol = len(header) if header is not None else len(rows[0]) if rows else 0
-    names = header if header is not None else [str(i) for i in range(ncol)]
-    labels = ([f"column {h!r}" for h in header] if header is not None
-              else [f"column {i}" for i in range(ncol)])  # how a column is named in messages
-    split = [_split_header(h) for h in names] if header is not None else [(n, None) for n in names]
+def _numeric(s: str) -> bool:
+    try:
+        float(s)
+        return True
+    except ValueError:
+        return False
 
-    # Which column is time, which holds the values.
-    time_idx = next((i for i, (b, _) in enumerate(split) if header is not None and _is_time_name(b)), None)
-    if time_idx is None and header is None and ncol == 2 and sample_rate_hz is None:
+
+def _columns(path: Path, split: list[tuple[str, str | None]], names: list[str], has_header: bool,
+             column: str | None, quantity: str, sample_rate_hz: float | None) -> tuple[int | None, int]:
+    """Indices of the time column (``None``: none) and of the value column of a CSV record."""
+    ncol = len(names)
+    time_idx = next((i for i, (b, _) in enumerate(split) if has_header and _is_time_name(b)), None)
+    if time_idx is None and not has_header and ncol == 2 and sample_rate_hz is None:
         time_idx = 0  # headerless two-column file: time, value
     if column is not None:
         key = column.strip().lower()
@@ -211,34 +302,7 @@ def _read_csv(path: Path, quantity: str, column: str | None,
     if time_idx is None and sample_rate_hz is None:
         raise DMWError(f"{path}: no time column (a header 'time', 'time [s]', 'time_s', ...) and no "
                        f"sample rate; expected a time column or dmw.sample_rate_hz")
-
-    def col(i: int) -> np.ndarray:
-        out = np.empty(len(rows))
-        for r, row in enumerate(rows):
-            line_no = line_nos[r]
-            if i >= len(row) or row[i] == "":
-                raise DMWError(f"{path}: {labels[i]}: missing value on line {line_no}; "
-                               f"expected a number")
-            try:
-                out[r] = float(row[i])
-            except ValueError:
-                raise DMWError(f"{path}: {labels[i]}: non-numeric value {row[i]!r} on line {line_no}; "
-                               f"expected a number") from None
-        return out
-
-    field_name = labels[val_idx]
-    x = col(val_idx)
-    _check_values(path, field_name, x)
-    factor, unit, notes = _value_factor(path, field_name, split[val_idx][1], quantity)
-    if time_idx is not None:
-        t = col(time_idx) * _time_factor(path, labels[time_idx], split[time_idx][1])
-        rate = _rate_from_time(path, labels[time_idx], t)
-        if sample_rate_hz is not None and abs(rate / sample_rate_hz - 1) > 1e-6:
-            raise DMWError(f"{path}: {labels[time_idx]}: time axis gives {rate:.9g} Hz but "
-                           f"dmw.sample_rate_hz = {sample_rate_hz:g}; expected them to agree")
-    else:
-        rate = float(sample_rate_hz)  # type: ignore[arg-type]
-    return x * factor, rate, names[val_idx], field_name, unit, notes
+    return time_idx, val_idx
 
 
 def _read_netcdf(path: Path, quantity: str, column: str | None,
@@ -342,7 +406,7 @@ def load_record(path: str | Path, quantity: str = "displacement", column: str | 
                        f"(dmw.sample_rate_hz)")
     if not path.is_file():
         raise DMWError(f"{path}: record file does not exist (dmw.source)")
-    reader = _read_netcdf if path.suffix.lower() in (".nc", ".nc4", ".cdf", ".netcdf") else _read_csv
+    reader = _read_netcdf if path.suffix.lower() in NETCDF_SUFFIXES else _read_csv
     x, rate, name, field_name, unit, notes = reader(path, quantity, column, sample_rate_hz)
     rec = Record(values=x, sample_rate_hz=float(rate), quantity=quantity, path=str(path), column=name,
                  field=field_name, units=unit, notes=notes)

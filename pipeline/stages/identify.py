@@ -65,7 +65,7 @@ import xarray as xr
 
 from ..analyses import plots
 from ..fanout import local_cluster
-from ..io import read_dataset, var
+from ..io import read_dataset, temporary_path, var
 from ..runner import Inputs, Stage, build
 from ..analyses.study import (Parameter, Target, cost, parse_parameters, residuals, scene_value, spreads,
                               target_protrusions, targets)
@@ -357,7 +357,7 @@ def write_identified_scene(scene: Any, params: Sequence[Parameter], ds: xr.Datas
     if path.is_file() and path.read_text() == text:
         return path
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp")
+    tmp = temporary_path(path)
     tmp.write_text(text)
     tmp.replace(path)
     return path

@@ -57,7 +57,9 @@ Figs 6-7 draw one line per combination (regime shading from the default one).
 
 from __future__ import annotations
 
+import errno
 import logging
+import shutil
 from pathlib import Path
 from typing import Any
 
@@ -69,7 +71,7 @@ from ..analyses.paper_comparison import comparison_markdown, identification_mark
 from ..analyses.report_figures import BAND_FIGURE, ENSEMBLE_FIGURE, FIGURES, INTERFACE_FIGURE
 from ..analyses.report_settings import ReportSettings, wants_ensemble
 from ..analyses.sweep_slices import combinations, split_ensemble
-from ..io import DatasetError
+from ..io import DatasetError, is_read_only, temporary_path
 from ..validity import OutsideValidity, describe
 from ..runner import Inputs, Stage, build
 
@@ -110,9 +112,12 @@ def load(inputs: Inputs) -> dict[str, xr.Dataset | None]:
 
 
 def _write_text(path: Path, text: str) -> None:
+    """Write ``text`` to ``path`` by a temporary file and a rename; an existing file keeps its mode."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp")
+    tmp = temporary_path(path)
     tmp.write_text(text, encoding="utf-8")
+    if path.is_file():
+        shutil.copymode(path, tmp)
     tmp.replace(path)
 
 
@@ -199,12 +204,16 @@ def refuse_invalid(sweep: xr.Dataset, path: Path) -> None:
 def update_readme(readme: Path, comparison: str, figdir: Path) -> None:
     """Replace the generated section of ``readme`` with ``comparison`` and copy the README's figures
     (:data:`pipeline.analyses.narrative.README_FIGURES`) from ``figdir`` to ``docs/figures/`` beside it.
-    A README without the section markers is left untouched."""
+    A README without the section markers is left untouched; a symbolic link is written through (its
+    target is updated, the link kept); a read-only README is refused."""
+    if is_read_only(readme):
+        raise PermissionError(errno.EACCES, "is read-only; make it writable (chmod u+w) or leave --readme out",
+                              str(readme))
     text = narrative.readme_with_comparison(readme.read_text(), comparison)
     if text is None:
         log.warning("report: %s has no generated section markers; not updated", readme)
         return
-    _write_text(readme, text)
+    _write_text(readme.resolve(), text)  # (the rename would replace a link by a file)
     docs = readme.parent / "docs" / "figures"
     docs.mkdir(parents=True, exist_ok=True)
     for name in narrative.README_FIGURES:
