@@ -114,7 +114,8 @@ class Stage:
         the same in :attr:`Inputs.optional` and must not read a dataset whose entry is ``None``.
     finish
         ``finish(scene, out, options)``: run after the stage was asked for and is current (computed or
-        not), for side effects outside the results folder (``report --readme``).
+        not), for side effects outside the results folder (``report --readme``); ``options`` are those
+        of :func:`build` and ``force``.
     doc
         One line for ``hdi --help``.
     """
@@ -519,7 +520,7 @@ class Runner:
                 self._make(name, force and name in targets)
             for name in targets:
                 if self.stage(name).finish is not None:
-                    self.stage(name).finish(self.scene, self.out, self.options)
+                    self.stage(name).finish(self.scene, self.out, {**self.options, "force": force})
         return {t: tuple(self.out / o for o in self.stage(t).output_names(self.scene)) for t in targets}
 
     def _make(self, name: str, force: bool) -> None:
