@@ -47,6 +47,7 @@ from typing import Any, Callable, Iterable, Iterator, Mapping
 import xarray as xr
 
 from .code_version import code_key
+from .fanout import shared_folder
 from .io import DatasetError, file_hash, read_attrs, read_dataset, write_dataset
 
 log = logging.getLogger(__name__)
@@ -182,7 +183,7 @@ class Inputs:
 
         No key is checked: the caller vouches for the datasets in ``out``.
         """
-        out = Path(out)
+        out = Path(out).absolute()  # (tasks carry paths under it to workers, whose working directory is not ours)
         return cls(out=out, options=options, staging=out)
 
     def path(self, name: str) -> Path:
@@ -535,13 +536,16 @@ class Runner:
         st = self.stage(name)
         log.info("%s: computing (%s)", name, reason)
         t0 = time.perf_counter()
-        staging = Path(tempfile.mkdtemp(prefix=STAGING_PREFIX, dir=self.out))
+        staging = Path(tempfile.mkdtemp(prefix=STAGING_PREFIX, dir=self.out.absolute()))
         try:
-            inputs = Inputs(out=self.out, key=key, files=dict(self.files(name)),
+            # the folder as an absolute path: the stage's tasks carry paths under it to dask workers, which
+            # resolve a relative path from their own working directory; they check they see it (fanout)
+            inputs = Inputs(out=self.out.absolute(), key=key, files=dict(self.files(name)),
                             upstream={u: self.key(u) for u in st.upstream_names(self.scene)},
                             optional=self.optional(name), options={**self.options, "force": force},
                             staging=staging)
-            result = st.compute(self.scene, inputs)
+            with shared_folder(inputs.out):
+                result = st.compute(self.scene, inputs)
             written = self._write(st, key, inputs, result, staging)
         finally:
             shutil.rmtree(staging, ignore_errors=True)
