@@ -55,8 +55,8 @@ def _parser(stages: dict[str, runner.Stage]) -> argparse.ArgumentParser:
     p.add_argument("--force", action="store_true", help="recompute even when outputs are up to date")
     p.add_argument("--write-scene", type=Path, default=None, metavar="PATH",
                    help="identify: also write the identified scene to PATH (it is always written into the "
-                        "results folder as <scene>-identified.toml); an existing PATH of other content is "
-                        "refused unless --force (which also recomputes the identification)")
+                        "results folder as <scene>-identified.toml); its folder must exist and be writable, and "
+                        "an existing PATH is refused unless --force (which also recomputes the identification)")
     p.add_argument("--readme", type=Path, default=None,
                    help="report: also rewrite the generated comparison section of this README")
     p.add_argument("--yes", action="store_true",
