@@ -269,7 +269,10 @@ def _finished(client: Any, futures: list, address: str, wait_s: float) -> Iterat
         now = time.monotonic()
         idle_since = now if idle_since is None else idle_since
         if now - idle_since >= wait_s:
-            n_workers = len(client.scheduler_info(n_workers=-1).get("workers", {}))
+            try:
+                n_workers = len(client.scheduler_info(n_workers=-1).get("workers", {}))
+            except (OSError, TimeoutError):
+                n_workers = 0
             why = "no worker left" if n_workers == 0 else f"{n_workers} worker(s) ran none of them"
             raise ClusterError(f"dask scheduler {address}: {len(pending)} of {len(futures)} tasks waited {wait_s:g} s "
                                f"with {why} (HDI_CLUSTER_WAIT_S sets the wait); finished work is kept, start "
