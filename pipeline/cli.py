@@ -94,7 +94,7 @@ def _logging(verbose: bool) -> None:
     log.setLevel(logging.DEBUG if verbose else logging.INFO)
     if not verbose:  # dask.distributed configures its own INFO loggers; keep the terminal quiet
         for name in ("distributed", "distributed.scheduler", "distributed.nanny", "distributed.core",
-                     "distributed.http.proxy"):
+                     "distributed.http.proxy", "distributed.client"):
             logging.getLogger(name).setLevel(logging.CRITICAL)  # (shutdown races log CommClosedError)
 
 

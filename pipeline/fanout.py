@@ -232,24 +232,27 @@ def _distributed(fn: Callable[..., Any], tasks: list[tuple], scheduler: str, wor
         name = getattr(fn, "__name__", "task")
         futures = [client.submit(in_shared_folder, folder, fn, *args, key=f"{name}-{uuid.uuid4().hex}", retries=2)
                    for args in tasks]
-        for fut in _finished(client, futures, address, wait_s):
-            done(_result(fut))
+        for result in _results(client, futures, address, wait_s):
+            done(result)
         return time.perf_counter() - t0
 
 
-def _result(fut: Any) -> Any:
-    """The result of a finished future; a task that killed its workers is one line."""
+def _result(fut: Any, timeout: float) -> Any:
+    """The result of a finished future (:class:`TimeoutError` when it did not arrive within ``timeout``
+    [s]: its worker was lost before sending it, and the task runs again); a task that killed its workers
+    is one line."""
     from distributed import KilledWorker
     try:
-        return fut.result()
+        return fut.result(timeout=timeout)
     except KilledWorker as exc:
         raise ClusterError(f"a task was lost with every worker that ran it ({exc}); a worker crashed or ran out "
                            "of memory: see the workers' logs; finished work is kept, run again to resume") from None
 
 
-def _finished(client: Any, futures: list, address: str, wait_s: float) -> Iterator[Any]:
-    """The futures as they finish; :class:`ClusterError` when for ``wait_s`` [s] none finished and no
-    task of theirs was running on a worker (the last worker lost, none attached, all busy elsewhere)."""
+def _results(client: Any, futures: list, address: str, wait_s: float) -> Iterator[Any]:
+    """The futures' results as they arrive; :class:`ClusterError` when for ``wait_s`` [s] none arrived
+    and no task of theirs was running on a worker (the last worker lost, none attached, all busy
+    elsewhere)."""
     from distributed import wait as wait_any
     pending = set(futures)
     idle_since: float | None = None
@@ -258,12 +261,20 @@ def _finished(client: Any, futures: list, address: str, wait_s: float) -> Iterat
             finished = wait_any(pending, timeout=_POLL_S, return_when="FIRST_COMPLETED").done
         except TimeoutError:
             finished = set()
-        if finished:
-            idle_since = None
-            pending -= finished
-            yield from finished
-            continue
-        if _running(client, pending, address):
+        arrived = False
+        for fut in finished:
+            asked = time.monotonic()
+            try:
+                # (bounded: a result whose worker died before sending it never arrives; the task is then
+                # computed again, so it stays pending, and the wait counts from when it was asked for)
+                result = _result(fut, timeout=wait_s)
+            except TimeoutError:
+                idle_since = asked if idle_since is None else idle_since
+                break
+            pending.discard(fut)
+            arrived = True
+            yield result
+        if arrived or _running(client, pending, address):
             idle_since = None
             continue
         now = time.monotonic()
