@@ -254,6 +254,7 @@ def _results(client: Any, futures: list, address: str, wait_s: float) -> Iterato
     and no task of theirs was running on a worker (the last worker lost, none attached, all busy
     elsewhere)."""
     from distributed import wait as wait_any
+    order = {fut: i for i, fut in enumerate(futures)}
     pending = set(futures)
     idle_since: float | None = None
     while pending:
@@ -262,15 +263,16 @@ def _results(client: Any, futures: list, address: str, wait_s: float) -> Iterato
         except TimeoutError:
             finished = set()
         arrived = False
-        for fut in finished:
+        for fut in sorted(finished, key=order.__getitem__):
             asked = time.monotonic()
+            left = wait_s if idle_since is None else wait_s - (asked - idle_since)
             try:
                 # (bounded: a result whose worker died before sending it never arrives; the task is then
                 # computed again, so it stays pending, and the wait counts from when it was asked for)
-                result = _result(fut, timeout=wait_s)
+                result = _result(fut, timeout=max(_POLL_S, left))
             except TimeoutError:
                 idle_since = asked if idle_since is None else idle_since
-                break
+                continue
             pending.discard(fut)
             arrived = True
             yield result
