@@ -62,7 +62,7 @@ def run(results: list[dict]) -> None:
     paper = str(ROOT / "configs" / "paper-2009.toml")
     ident = makefile_scene("IDENTIFY_SCENE")
     with tempfile.TemporaryDirectory() as tmp:
-        # identify writes <scene>-identified.toml beside the scene: run it on a copy (with what it extends)
+        # the scenes run from a copy (with what they extend): nothing of the study lands in configs/
         scene_dir = Path(tmp) / "configs"
         scene_dir.mkdir()
         for name in {Path(paper).name, Path(ident).name}:

@@ -53,6 +53,10 @@ def _parser(stages: dict[str, runner.Stage]) -> argparse.ArgumentParser:
     p.add_argument("--detrend", default=None, choices=("center", "height", "plane", "curvature"),
                    help="roughness: detrending of AFM scans (default plane)")
     p.add_argument("--force", action="store_true", help="recompute even when outputs are up to date")
+    p.add_argument("--write-scene", type=Path, default=None, metavar="PATH",
+                   help="identify: also write the identified scene to PATH (it is always written into the "
+                        "results folder as <scene>-identified.toml); its folder must exist and be writable, and "
+                        "an existing PATH is refused unless --force (which also recomputes the identification)")
     p.add_argument("--readme", type=Path, default=None,
                    help="report: also rewrite the generated comparison section of this README")
     p.add_argument("--yes", action="store_true",
@@ -77,7 +81,7 @@ class _Stderr(logging.StreamHandler):
 def _given(args: argparse.Namespace) -> dict:
     """The options :func:`pipeline.validation.check_options` checks."""
     return {name: getattr(args, name) for name in ("out", "scheduler", "workers", "yes", "readme", "channel",
-                                                    "detrend")}
+                                                    "detrend", "write_scene", "force")}
 
 
 def _logging(verbose: bool) -> None:
@@ -90,7 +94,7 @@ def _logging(verbose: bool) -> None:
     log.setLevel(logging.DEBUG if verbose else logging.INFO)
     if not verbose:  # dask.distributed configures its own INFO loggers; keep the terminal quiet
         for name in ("distributed", "distributed.scheduler", "distributed.nanny", "distributed.core",
-                     "distributed.http.proxy"):
+                     "distributed.http.proxy", "distributed.client"):
             logging.getLogger(name).setLevel(logging.CRITICAL)  # (shutdown races log CommClosedError)
 
 
@@ -134,7 +138,8 @@ def _main(argv: list[str] | None = None) -> int:
         check_options(args.stage, scene, **_given(args))
         out = results_dir(scene, args.out)
         targets = runner.main_job(scene, stages) if args.stage == "run" else [args.stage]
-        options = {"scheduler": args.scheduler, "workers": args.workers, "readme": args.readme}
+        options = {"scheduler": args.scheduler, "workers": args.workers, "readme": args.readme,
+                   **({"write_scene": args.write_scene} if args.write_scene is not None else {})}
         made = runner.Runner(scene, out, stages, **options).build(targets, force=args.force)
         for stage, paths in made.items():  # the dataset, or the folder of figures and tables
             print(f"{stage:>10}: {paths[0] if paths[0].suffix == '.nc' else paths[0].parent}", flush=True)

@@ -19,23 +19,77 @@
   dask-jobqueue), which is how a study outgrows one machine. Tasks are retried twice on a lost worker.
 
 Tasks must be deterministic functions of their arguments and safe to run twice (retries); large
-inputs travel by file path inside ``args``, not as arrays.
+inputs travel by file path inside ``args``, not as arrays. A worker resolves a relative path from its
+own working directory, so every path a task carries is absolute (the runner hands each stage its
+results folder as an absolute path) and the results folder must be on a file system the workers
+share: within :func:`shared_folder` (the runner sets it to the folder of the stage it computes) each
+task on a cluster first checks that its worker sees that folder, and a worker that does not ends the
+command with one line naming the folder (:class:`ClusterError`).
+
+On a cluster the client watches the progress while it waits: when for :data:`CLUSTER_WAIT_S` seconds
+(environment variable ``HDI_CLUSTER_WAIT_S``) no task finished and none was running on a worker (the
+last worker was lost, the scheduler has none, or they are all busy with other work), the command ends
+with one line (:class:`ClusterError`); finished tasks have written their outputs, so a rerun resumes.
 """
 
 from __future__ import annotations
 
 import contextlib
+import contextvars
 import logging
 import os
 import signal
+import socket
 import threading
 import time
+import uuid
 from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
+from pathlib import Path
 from typing import Any, Callable, Iterable, Iterator, Sequence
 
 log = logging.getLogger(__name__)
 
 LOCAL = ("synchronous", "threads", "processes")
+
+#: Seconds a dask.distributed cluster may go without finishing or running a task of the batch before
+#: the command ends (module docstring); ``HDI_CLUSTER_WAIT_S`` overrides it.
+CLUSTER_WAIT_S = 60.0
+#: Seconds between two looks at the cluster while waiting for results.
+_POLL_S = 1.0
+
+
+class ClusterError(ValueError):
+    """The cluster cannot run the batch: a worker does not see the results folder, no worker ran a task
+    for :data:`CLUSTER_WAIT_S`, or a task killed its workers (the command line says it in one line)."""
+
+
+_SHARED: contextvars.ContextVar[str | None] = contextvars.ContextVar("hdi_shared_folder", default=None)
+
+
+@contextlib.contextmanager
+def shared_folder(path: str | Path) -> Iterator[str]:
+    """Within the block, every task sent to a dask.distributed worker first checks that the worker sees
+    the folder ``path`` (made absolute: a worker's working directory is not ours)."""
+    folder = str(Path(path).absolute())
+    token = _SHARED.set(folder)
+    try:
+        yield folder
+    finally:
+        _SHARED.reset(token)
+
+
+def cluster_wait_s() -> float:
+    """:data:`CLUSTER_WAIT_S`, or the environment variable ``HDI_CLUSTER_WAIT_S`` (seconds > 0)."""
+    text = os.environ.get("HDI_CLUSTER_WAIT_S")
+    if text is None:
+        return CLUSTER_WAIT_S
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not value > 0 or value == float("inf"):
+        raise ClusterError(f"HDI_CLUSTER_WAIT_S={text}: expected a number of seconds > 0")
+    return value
 
 
 def available_cores() -> int:
@@ -156,15 +210,94 @@ def _warm_worker() -> None:
     importlib.import_module("pipeline.model.slider")  # (imported for its side effect: the kernels compiled or loaded)
 
 
+def in_shared_folder(folder: str | None, fn: Callable[..., Any], *args: Any) -> Any:
+    """``fn(*args)`` on a worker that sees ``folder`` (``None``: no check); else :class:`ClusterError`."""
+    if folder is not None and not os.path.isdir(folder):
+        raise ClusterError(f"{folder}: the results folder is not visible on dask worker {socket.gethostname()} "
+                           f"(working directory {os.getcwd()}); put it on a file system every worker shares "
+                           "and pass it as --out")
+    return fn(*args)
+
+
 def _distributed(fn: Callable[..., Any], tasks: list[tuple], scheduler: str, workers: int | None,
                  done: Callable[[Any], None]) -> float:
     """A local process cluster (``scheduler="processes"``) or the cluster at a scheduler address."""
-    from distributed import Client, as_completed
+    from distributed import Client
     n = local_workers(workers, len(tasks)) if scheduler == "processes" else None
+    folder, wait_s = _SHARED.get(), cluster_wait_s()
     with local_cluster(scheduler, n) as address, Client(address) as client:
         client.run(_warm_worker)
         t0 = time.perf_counter()
-        futures = [client.submit(fn, *args, pure=False, retries=2) for args in tasks]
-        for fut in as_completed(futures):
-            done(fut.result())
+        # (keys named after fn, as the dashboard and the workers' logs would name fn itself)
+        name = getattr(fn, "__name__", "task")
+        futures = [client.submit(in_shared_folder, folder, fn, *args, key=f"{name}-{uuid.uuid4().hex}", retries=2)
+                   for args in tasks]
+        for result in _results(client, futures, address, wait_s):
+            done(result)
         return time.perf_counter() - t0
+
+
+def _result(fut: Any, timeout: float) -> Any:
+    """The result of a finished future (:class:`TimeoutError` when it did not arrive within ``timeout``
+    [s]: its worker was lost before sending it, and the task runs again); a task that killed its workers
+    is one line."""
+    from distributed import KilledWorker
+    try:
+        return fut.result(timeout=timeout)
+    except KilledWorker as exc:
+        raise ClusterError(f"a task was lost with every worker that ran it ({exc}); a worker crashed or ran out "
+                           "of memory: see the workers' logs; finished work is kept, run again to resume") from None
+
+
+def _results(client: Any, futures: list, address: str, wait_s: float) -> Iterator[Any]:
+    """The futures' results as they arrive; :class:`ClusterError` when for ``wait_s`` [s] none arrived
+    and no task of theirs was running on a worker (the last worker lost, none attached, all busy
+    elsewhere)."""
+    from distributed import wait as wait_any
+    order = {fut: i for i, fut in enumerate(futures)}
+    pending = set(futures)
+    idle_since: float | None = None
+    while pending:
+        try:
+            finished = wait_any(pending, timeout=_POLL_S, return_when="FIRST_COMPLETED").done
+        except TimeoutError:
+            finished = set()
+        arrived = False
+        for fut in sorted(finished, key=order.__getitem__):
+            asked = time.monotonic()
+            left = wait_s if idle_since is None else wait_s - (asked - idle_since)
+            try:
+                # (bounded: a result whose worker died before sending it never arrives; the task is then
+                # computed again, so it stays pending, and the wait counts from when it was asked for)
+                result = _result(fut, timeout=max(_POLL_S, left))
+            except TimeoutError:
+                idle_since = asked if idle_since is None else idle_since
+                continue
+            pending.discard(fut)
+            arrived = True
+            yield result
+        if arrived or _running(client, pending, address):
+            idle_since = None
+            continue
+        now = time.monotonic()
+        idle_since = now if idle_since is None else idle_since
+        if now - idle_since >= wait_s:
+            try:
+                n_workers = len(client.scheduler_info(n_workers=-1).get("workers", {}))
+            except (OSError, TimeoutError):
+                n_workers = 0
+            why = "no worker left" if n_workers == 0 else f"{n_workers} worker(s) ran none of them"
+            raise ClusterError(f"dask scheduler {address}: {len(pending)} of {len(futures)} tasks waited {wait_s:g} s "
+                               f"with {why} (HDI_CLUSTER_WAIT_S sets the wait); finished work is kept, start "
+                               "workers and run again to resume")
+
+
+def _running(client: Any, pending: set, address: str) -> bool:
+    """Whether a worker is running one of the ``pending`` futures now."""
+    keys = {f.key for f in pending}
+    try:
+        processing = client.processing()
+    except (OSError, TimeoutError) as exc:
+        raise ClusterError(f"dask scheduler {address}: stopped answering ({exc}); finished work is kept, run "
+                           "again to resume") from None
+    return any(k in keys for ks in processing.values() for k in ks)

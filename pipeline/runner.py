@@ -50,6 +50,7 @@ from typing import Any, Callable, Iterable, Iterator, Mapping
 import xarray as xr
 
 from .code_version import code_key
+from .fanout import shared_folder
 from .io import (DatasetError, RUN_ID, file_hash, is_temporary, read_attrs, read_dataset, temporary_path,
                  write_dataset)
 
@@ -118,7 +119,8 @@ class Stage:
         the same in :attr:`Inputs.optional` and must not read a dataset whose entry is ``None``.
     finish
         ``finish(scene, out, options)``: run after the stage was asked for and is current (computed or
-        not), for side effects outside the results folder (``report --readme``).
+        not), for side effects outside the results folder (``report --readme``); ``options`` are those
+        of :func:`build` and ``force``.
     doc
         One line for ``hdi --help``.
     """
@@ -185,7 +187,7 @@ class Inputs:
 
         No key is checked: the caller vouches for the datasets in ``out``.
         """
-        out = Path(out)
+        out = Path(out).absolute()  # (tasks carry paths under it to workers, whose working directory is not ours)
         return cls(out=out, options=options, staging=out)
 
     def path(self, name: str) -> Path:
@@ -542,7 +544,7 @@ class Runner:
                 self._make(name, force and name in targets)
             for name in targets:
                 if self.stage(name).finish is not None:
-                    self.stage(name).finish(self.scene, self.out, self.options)
+                    self.stage(name).finish(self.scene, self.out, {**self.options, "force": force})
         return {t: tuple(self.out / o for o in self.stage(t).output_names(self.scene)) for t in targets}
 
     def _make(self, name: str, force: bool) -> None:
@@ -558,13 +560,16 @@ class Runner:
         self._check_outputs(st)
         log.info("%s: computing (%s)", name, reason)
         t0 = time.perf_counter()
-        staging = Path(tempfile.mkdtemp(prefix=STAGING_PREFIX, dir=self.out))
+        staging = Path(tempfile.mkdtemp(prefix=STAGING_PREFIX, dir=self.out.absolute()))
         try:
-            inputs = Inputs(out=self.out, key=key, files=dict(self.files(name)),
+            # the folder as an absolute path: the stage's tasks carry paths under it to dask workers, which
+            # resolve a relative path from their own working directory; they check they see it (fanout)
+            inputs = Inputs(out=self.out.absolute(), key=key, files=dict(self.files(name)),
                             upstream={u: self.key(u) for u in st.upstream_names(self.scene)},
                             optional=self.optional(name), options={**self.options, "force": force},
                             staging=staging)
-            result = st.compute(self.scene, inputs)
+            with shared_folder(inputs.out):
+                result = st.compute(self.scene, inputs)
             written = self._write(st, key, inputs, result, staging)
         finally:
             shutil.rmtree(staging, ignore_errors=True)

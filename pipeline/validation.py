@@ -54,11 +54,12 @@ OPTION_STAGES: dict[str, tuple[str, ...]] = {
     "yes": ("sweep", "run", "dmw", "interface", "calibrate", "simulate", "accuracy", "report", "identify",
             "sensitivity"),
     "readme": ("report", "run"),
+    "write_scene": ("identify",),
     "channel": ("roughness FILE...",),
     "detrend": ("roughness FILE...",),
 }
 _FLAG = {"scheduler": "--scheduler", "workers": "--workers", "yes": "--yes", "readme": "--readme",
-         "channel": "--channel", "detrend": "--detrend"}
+         "write_scene": "--write-scene", "channel": "--channel", "detrend": "--detrend"}
 _SCENE_KEY = {"channel": "roughness.channel", "detrend": "roughness.detrend"}
 
 
@@ -219,6 +220,29 @@ def check_readme(readme: str | Path | None) -> None:
                           "update it, or leave --readme out")
 
 
+def check_write_scene(path: str | Path | None, force: bool = False) -> None:
+    """``--write-scene PATH`` names a file that can be written in an existing folder, and that does not
+    exist unless ``force`` (identify's study runs for minutes: a path it cannot write to is refused
+    before it starts, not after)."""
+    if path is None:
+        return
+    path = Path(path)
+    if path.is_dir():
+        raise OptionError(f"--write-scene {path}: is a folder; expected the path of a scene file (.toml)")
+    if path.exists() and not force:
+        raise OptionError(f"--write-scene {path}: exists; name a new file, or pass --force to replace it "
+                          "(--force also recomputes the identification)")
+    folder = path.parent
+    if not folder.is_dir():
+        raise OptionError(f"--write-scene {path}: folder {folder} does not exist; expected an existing folder")
+    try:  # (a read-only folder or mount: found now, not after the study)
+        fd, tmp = tempfile.mkstemp(prefix=".hdi-write-test.", dir=folder)
+        os.close(fd)
+        os.unlink(tmp)
+    except OSError as exc:
+        raise OptionError(f"--write-scene {path}: folder {folder} is not writable: {exc.strerror or exc}") from None
+
+
 def grid_size(scene: Any) -> tuple[int, int, int]:
     """Number of protrusions, roughness sets and damping ratios of the sweep (no grid is built)."""
     n_sets = len(scene["sweep"]["roughness"] or [None])   # (no set is validated here: the sweep does)
@@ -284,7 +308,7 @@ def check_stage_options(stage: str, given: dict[str, Any], afm_files: bool = Fal
 
 
 def check_options(stage: str, scene: Any, *, out: str | Path | None = None, scheduler: str | None = None,
-                  workers: int | None = None, yes: bool = False, **given: Any) -> None:
+                  workers: int | None = None, yes: bool = False, force: bool = False, **given: Any) -> None:
     """Every check of this module that applies to ``hdi STAGE`` (``scene`` may be ``None`` for AFM files).
 
     Raises
@@ -297,6 +321,7 @@ def check_options(stage: str, scene: Any, *, out: str | Path | None = None, sche
     check_workers(workers)
     check_out(out)
     check_readme(given.get("readme"))
+    check_write_scene(given.get("write_scene"), force)
     if scene is not None and stage in ("sweep", "run"):
         check_grid(scene, yes)
     if scene is not None:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import threading
 import time
+from pathlib import Path
 
 import pytest
 
@@ -81,3 +82,104 @@ def test_a_failing_task_raises():
 
     with pytest.raises(ValueError, match="task 3"):
         run_tasks(bad, [(i,) for i in range(6)], scheduler="threads", workers=2)
+
+
+# ------------------------------------------------------------ issue 28: paths on workers, a cluster that stops
+def test_a_task_on_a_worker_that_does_not_see_the_results_folder_fails_in_one_line(tmp_path):
+    missing = tmp_path / "elsewhere"
+    with pytest.raises(fanout.ClusterError) as err:
+        fanout.in_shared_folder(str(missing), square, 3)
+    assert str(err.value).startswith(f"{missing}: the results folder is not visible on dask worker ")
+    assert "\n" not in str(err.value) and "file system every worker shares" in str(err.value)
+    assert fanout.in_shared_folder(str(tmp_path), square, 3)[:2] == (3, 9)
+    assert fanout.in_shared_folder(None, square, 2)[:2] == (2, 4)
+
+
+def test_the_runner_hands_a_stage_its_folder_as_an_absolute_path_for_its_tasks(tmp_path, monkeypatch, paper_scene):
+    # issue 28, 2: `--out relout` (or the default results/<scene>/) reached the workers as relative paths,
+    # which they resolved from their own working directory
+    import xarray as xr
+
+    from pipeline import runner
+    from pipeline.io import var
+    seen = {}
+
+    def compute(scene, inputs):
+        seen.update(out=inputs.out, shared=fanout._SHARED.get())
+        return xr.Dataset({"v": var(1.0, (), "1", "toy value")})
+
+    monkeypatch.chdir(tmp_path)
+    stages = {"toy": runner.Stage("toy", compute, outputs=("toy.nc",), reads=())}
+    made = runner.Runner(paper_scene, "relout", stages).build(["toy"])
+    assert made["toy"] == (Path("relout") / "toy.nc",)  # what the user named, as named
+    assert seen["out"] == tmp_path / "relout" and seen["out"].is_absolute()
+    assert seen["shared"] == str(tmp_path / "relout")
+    assert fanout._SHARED.get() is None  # only while the stage computes
+    assert runner.Inputs.folder("relout").out == tmp_path / "relout"
+
+
+def test_the_cluster_wait_is_a_documented_setting(monkeypatch):
+    monkeypatch.delenv("HDI_CLUSTER_WAIT_S", raising=False)
+    assert fanout.cluster_wait_s() == fanout.CLUSTER_WAIT_S
+    monkeypatch.setenv("HDI_CLUSTER_WAIT_S", "2.5")
+    assert fanout.cluster_wait_s() == 2.5
+    for bad in ("0", "-1", "soon", "inf", "nan"):
+        monkeypatch.setenv("HDI_CLUSTER_WAIT_S", bad)
+        with pytest.raises(fanout.ClusterError, match=f"HDI_CLUSTER_WAIT_S={bad}: expected a number of seconds > 0"):
+            fanout.cluster_wait_s()
+
+
+class _Future:
+    """A stand-in for a dask future: its result arrives, or never does (its worker died before sending it)."""
+
+    def __init__(self, key: str, value=None):
+        self.key, self.value = key, value
+
+    def result(self, timeout=None):
+        if self.value is None:
+            time.sleep(min(timeout, 0.05))
+            raise TimeoutError()
+        return self.value
+
+
+class _NoWorkers:
+    """A stand-in for a client whose scheduler has lost its last worker."""
+
+    def processing(self):
+        return {}
+
+    def scheduler_info(self, n_workers=-1):
+        return {"workers": {}}
+
+
+@pytest.mark.parametrize("lost_result", [False, True])
+def test_a_cluster_without_workers_ends_the_wait_in_one_line_within_the_bound(monkeypatch, lost_result):
+    # issue 28, 3: with the last worker killed, the client waited forever: on tasks no worker runs, or
+    # (the race the real-scheduler test can hit) on the result of a task whose worker died before sending it
+    import distributed
+
+    class _Done:
+        def __init__(self, done):
+            self.done = done
+
+    def wait(fs, timeout=None, return_when=None):
+        if lost_result:
+            return _Done({f for f in fs if f.key != "never"})
+        time.sleep(timeout)
+        raise TimeoutError()
+
+    monkeypatch.setattr(distributed, "wait", wait)
+    monkeypatch.setattr(fanout, "_POLL_S", 0.05)
+    futures = [_Future("ok", value=7), _Future("lost"), _Future("never")] if lost_result else [_Future("never")]
+    got = []
+    t0 = time.monotonic()
+    with pytest.raises(fanout.ClusterError) as err:
+        for result in fanout._results(_NoWorkers(), futures, "tcp://host:8786", wait_s=0.5):
+            got.append(result)
+    took = time.monotonic() - t0
+    assert got == ([7] if lost_result else [])  # what arrived was handed on (its part is kept)
+    assert 0.5 <= took < 2.0, took
+    n = 2 if lost_result else 1
+    assert str(err.value) == (f"dask scheduler tcp://host:8786: {n} of {len(futures)} tasks waited 0.5 s with no "
+                              "worker left (HDI_CLUSTER_WAIT_S sets the wait); finished work is kept, start workers "
+                              "and run again to resume")

@@ -76,7 +76,8 @@ def test_twin_experiment_recovers_the_true_parameters_within_the_reported_interv
     # the reconstructed point (evaluation 0) is worse than the identified one
     assert float(ds["cost"][0]) > float(ds["cost"][ds.attrs["best_evaluation"]])
     # the written scene extends the twin scene and loads with the identified values
-    written = path.parent / "twin-identified.toml"
+    written = out / "twin-identified.toml"  # in the results folder, not beside the scene
+    assert not (path.parent / "twin-identified.toml").exists()
     text = written.read_text()
     assert text.count("# [identified] interval [") == 2  # one per identified value, with its interval
     # the header names the budget the values came from
@@ -219,3 +220,101 @@ def test_a_profile_point_better_than_the_optimum_becomes_the_optimum(write_scene
     # the profiles of the last round pass through the optimum
     for n, b in zip(names, best):
         assert b in ds[f"{n}_profile"].values
+
+
+# ------------------------------------------------------- issue 28: outputs go only where the user said
+def _stub_batch(base, params, rows, protrusions, inputs):
+    """A stand-in for the slider: FHM and contact force linear in the parameters (the written scene is
+    what is tested here, not the fit)."""
+    n = len(protrusions)
+    out = []
+    for key, x in rows:
+        outputs = {"fhm_bv": [10.0 * float(x[0])] * n, "contact_fraction": [1.0] * n, "min_clearance": [-0.1] * n,
+                   "contact_force": [float(x[1])] * n, "interference": [0.5] * n, "mean_pressure": [400.0] * n}
+        out.append((key, {"params": list(map(float, x)), "protrusions": list(map(float, protrusions)),
+                          "outputs": outputs, "seconds": 0.0, "kernel_seconds": 0.0, "error": None}))
+    return out
+
+
+USER_TEXT = "# my own edits of the identified scene, which no identify run may touch\n"
+
+
+def _user_scene(tmp_path, paper_config):
+    """A scene in a folder of its own beside a user's ``twin-identified.toml``; the scene, loaded with a tiny budget."""
+    configs = tmp_path / "configs"
+    configs.mkdir()
+    path = configs / "twin.toml"
+    path.write_text(SCENE.format(paper=paper_config))
+    (configs / "twin-identified.toml").write_text(USER_TEXT)
+    return load_scene(path, ["identify.population=4", "identify.generations=1", "identify.profile_points=3"]), path
+
+
+def test_identify_writes_its_scene_into_the_results_folder_not_over_the_users_file(tmp_path, paper_config):
+    # issue 28, 1: `hdi identify configs/paper-2009.toml --out elsewhere` rewrote configs/paper-2009-identified.toml
+    scene, path = _user_scene(tmp_path, paper_config)
+    out = tmp_path / "elsewhere"
+    nc = identify.run(scene, out, scheduler="synchronous", task=_stub_batch)
+    beside = path.parent / "twin-identified.toml"
+    assert beside.read_text() == USER_TEXT
+    assert sorted(p.name for p in path.parent.iterdir()) == ["twin-identified.toml", "twin.toml"]
+    written = out / "twin-identified.toml"
+    ident = load_scene(written)  # extends the scene from the results folder
+    ds = xr.open_dataset(nc, engine="netcdf4")
+    assert ds.attrs["identified_scene"] == "twin-identified.toml"
+    assert ident["dmw"]["rms_nm"] == pytest.approx(float(ds["dmw__rms_nm_best"]), rel=1e-5)
+    assert ident["solver"]["duration_ms"] == 0.8
+    # a no-op rerun touches neither
+    before = written.stat().st_mtime_ns
+    identify.run(scene, out, scheduler="synchronous", task=_stub_batch)
+    assert beside.read_text() == USER_TEXT and written.stat().st_mtime_ns == before
+    # the copy goes only where named; an existing file of other content is left as it is unless forced
+    with pytest.raises(ValueError, match="twin-identified.toml: exists and differs"):
+        identify.run(scene, out, scheduler="synchronous", task=_stub_batch, write_scene=beside)
+    assert beside.read_text() == USER_TEXT
+    copy = tmp_path / "mine" / "twin-identified.toml"
+    copy.parent.mkdir()
+    identify.run(scene, out, scheduler="synchronous", task=_stub_batch, write_scene=copy)
+    assert load_scene(copy)["dmw"]["rms_nm"] == ident["dmw"]["rms_nm"]  # its extends resolved from its own folder
+    identify.run(scene, out, scheduler="synchronous", task=_stub_batch, write_scene=copy)  # same text: no error
+    identify.run(scene, out, scheduler="synchronous", task=_stub_batch, write_scene=beside, force=True)
+    assert load_scene(beside)["dmw"]["rms_nm"] == ident["dmw"]["rms_nm"]
+    assert not list(path.parent.glob(".*.tmp")) and not list(copy.parent.glob(".*.tmp"))
+
+
+def _fails(capsys, *argv: str) -> str:
+    from pipeline import cli
+    code = cli.main(list(argv))
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1, err
+    return err
+
+
+def test_write_scene_is_refused_before_the_study_starts(tmp_path, paper_config, capsys):
+    # issue 28, 1 and 6: a read-only scene folder failed only after the whole study; an existing file was replaced
+    scene, path = _user_scene(tmp_path, paper_config)
+    out = tmp_path / "out"
+    beside = path.parent / "twin-identified.toml"
+    err = _fails(capsys, "identify", str(path), "--out", str(out), "--write-scene", str(beside))
+    assert f"--write-scene {beside}: exists" in err and "--force" in err
+    # a folder no process may write in (root included)
+    err = _fails(capsys, "identify", str(path), "--out", str(out), "--write-scene", "/proc/twin-identified.toml")
+    assert "folder /proc is not writable" in err
+    err = _fails(capsys, "identify", str(path), "--out", str(out), "--write-scene", str(tmp_path / "no" / "x.toml"))
+    assert "does not exist" in err
+    err = _fails(capsys, "identify", str(path), "--out", str(out), "--write-scene", str(tmp_path))
+    assert "is a folder" in err
+    err = _fails(capsys, "sweep", str(path), "--out", str(out), "--write-scene", str(tmp_path / "x.toml"))
+    assert "--write-scene: not used by `hdi sweep`" in err
+    assert not out.exists() and beside.read_text() == USER_TEXT  # nothing ran, nothing written
+
+
+@pytest.mark.parametrize("name, text", [("...toml", ""), ("dots.toml", 'name = ".."\n'),
+                                        ("dot.toml", 'name = "."\n')])
+def test_a_scene_whose_name_leaves_the_results_folder_is_refused(tmp_path, paper_config, capsys, monkeypatch,
+                                                                   name, text):
+    # issue 28, 7: a scene named `..` (or a file `...toml`) wrote results/../, the current folder
+    (tmp_path / name).write_text(f'[scene]\n{text}extends = "{paper_config}"\n')
+    monkeypatch.chdir(tmp_path)
+    err = _fails(capsys, "dmw", name)
+    assert "scene.name" in err and "not '.' or '..'" in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == [name]

@@ -1,5 +1,8 @@
-"""Scale-out for real: a `dask scheduler` and two `dask worker` processes on loopback, each in its own
-working directory, and `hdi sweep --scheduler tcp://127.0.0.1:PORT` gives the dataset of a local run."""
+"""Scale-out for real: a `dask scheduler` and `dask worker` processes on loopback, each in its own
+working directory (not the client's): `hdi sweep --scheduler tcp://127.0.0.1:PORT` with a relative
+results folder gives the dataset of a local run; a worker that does not see the results folder, and
+the loss of the last worker mid-sweep, end the command with one line in bounded time, and a rerun
+resumes (issue 28)."""
 
 from __future__ import annotations
 
@@ -53,39 +56,51 @@ def _hdi(*args: str, cwd: Path) -> subprocess.CompletedProcess:
                           text=True, timeout=300)
 
 
-@pytest.fixture()
-def cluster(tmp_path):
-    """``tcp://127.0.0.1:PORT`` of a scheduler and two single-threaded workers (always torn down)."""
-    port = _free_port()
-    address = f"tcp://127.0.0.1:{port}"
-    env = dict(os.environ, PYTHONPATH=str(ROOT))  # the workers import this checkout's pipeline
-    procs: list[subprocess.Popen] = []
+class Cluster:
+    """A scheduler and its workers as processes of their own (each in its own session and folder)."""
 
-    def start(args: list[str], where: str) -> subprocess.Popen:
-        cwd = tmp_path / where
+    def __init__(self, tmp_path: Path):
+        self.tmp_path = tmp_path
+        self.port = _free_port()
+        self.address = f"tcp://127.0.0.1:{self.port}"
+        self.env = dict(os.environ, PYTHONPATH=str(ROOT))  # the workers import this checkout's pipeline
+        self.procs: list[subprocess.Popen] = []
+        self.workers: list[subprocess.Popen] = []
+
+    def _start(self, args: list[str], where: str) -> subprocess.Popen:
+        cwd = self.tmp_path / where
         cwd.mkdir()
-        p = subprocess.Popen([str(DASK), *args], cwd=cwd, env=env, stdout=subprocess.DEVNULL,
+        p = subprocess.Popen([str(DASK), *args], cwd=cwd, env=self.env, stdout=subprocess.DEVNULL,
                              stderr=(cwd / "log.txt").open("w"), start_new_session=True)
-        procs.append(p)
+        self.procs.append(p)
         return p
 
-    try:
-        sched = start(["scheduler", "--host", "127.0.0.1", "--port", str(port), "--dashboard-address", ":0"],
-                      "scheduler")
-        _wait_for_port(port, sched)
-        for i in (1, 2):
-            start(["worker", address, "--nthreads", "1", "--nworkers", "1", "--no-dashboard",
-                   "--local-directory", str(tmp_path / f"worker{i}" / "dask-scratch")], f"worker{i}")
+    def start_scheduler(self) -> None:
+        sched = self._start(["scheduler", "--host", "127.0.0.1", "--port", str(self.port),
+                             "--dashboard-address", ":0"], "scheduler")
+        _wait_for_port(self.port, sched)
+
+    def start_workers(self, n: int) -> None:
+        """``n`` more single-threaded workers; returns once the scheduler has them all."""
+        for _ in range(n):
+            name = f"worker{len(self.workers) + 1}"
+            self.workers.append(self._start(["worker", self.address, "--nthreads", "1", "--nworkers", "1",
+                                             "--no-dashboard", "--local-directory",
+                                             str(self.tmp_path / name / "dask-scratch")], name))
         from distributed import Client
-        with Client(address, timeout="30s") as client:
-            client.wait_for_workers(2, timeout=90)
-            assert len(client.scheduler_info()["workers"]) == 2
-        yield address
-    finally:
-        for p in reversed(procs):  # our own processes only, by their process group id
+        with Client(self.address, timeout="30s") as client:
+            client.wait_for_workers(sum(p.poll() is None for p in self.workers), timeout=90)
+
+    def kill_worker(self, p: subprocess.Popen) -> None:
+        """SIGKILL a worker and its nanny (its process group): a lost machine, nothing cleaned up."""
+        os.killpg(p.pid, signal.SIGKILL)
+        p.wait(timeout=20)
+
+    def stop(self) -> None:
+        for p in reversed(self.procs):  # our own processes only, by their process group id
             if p.poll() is None:
                 os.killpg(p.pid, signal.SIGTERM)
-        for p in procs:
+        for p in self.procs:
             try:
                 p.wait(timeout=20)
             except subprocess.TimeoutExpired:
@@ -93,11 +108,40 @@ def cluster(tmp_path):
                 p.wait(timeout=10)
 
 
+@pytest.fixture(scope="module")
+def cluster(tmp_path_factory):
+    """``tcp://127.0.0.1:PORT`` of a scheduler and two single-threaded workers (always torn down; shared by
+    the tests of this module that leave it as they found it)."""
+    c = Cluster(tmp_path_factory.mktemp("cluster"))
+    try:
+        c.start_scheduler()
+        c.start_workers(2)
+        from distributed import Client
+        with Client(c.address, timeout="30s") as client:
+            assert len(client.scheduler_info(n_workers=-1)["workers"]) == 2
+        yield c.address
+    finally:
+        c.stop()
+
+
+@pytest.fixture()
+def one_worker(tmp_path):
+    """A :class:`Cluster` of a scheduler and one worker (always torn down)."""
+    c = Cluster(tmp_path)
+    try:
+        c.start_scheduler()
+        c.start_workers(1)
+        yield c
+    finally:
+        c.stop()
+
+
 @pytest.mark.slow
 def test_sweep_on_a_remote_cluster_equals_the_local_run(cluster, tmp_path):
     sets = [a for s in SMALL for a in ("--set", s)]
-    remote = _hdi("sweep", str(PAPER), *sets, "--scheduler", cluster, "--out", str(tmp_path / "remote"),
-                  cwd=tmp_path)
+    # a relative results folder (the workers run in folders of their own: each task carries absolute paths);
+    # it was "No such file or directory: 'remote/sweep.parts/...'" on the workers (issue 28)
+    remote = _hdi("sweep", str(PAPER), *sets, "--scheduler", cluster, "--out", "remote", cwd=tmp_path)
     assert remote.returncode == 0, remote.stderr
     local = _hdi("sweep", str(PAPER), *sets, "--workers", "2", "--out", str(tmp_path / "local"), cwd=tmp_path)
     assert local.returncode == 0, local.stderr
@@ -118,3 +162,63 @@ def test_sweep_on_a_remote_cluster_equals_the_local_run(cluster, tmp_path):
     with Client(cluster, timeout="30s") as client:
         done = client.run(lambda dask_worker: sum(1 for k in dask_worker.state.log if "run_batch" in str(k[0])))
     assert len(done) == 2 and all(n > 0 for n in done.values()), done
+
+
+@pytest.mark.slow
+def test_a_worker_that_does_not_see_the_results_folder_is_one_line_naming_it(cluster, tmp_path):
+    from pipeline.fanout import ClusterError, available_cores, run_tasks, shared_folder
+    gone = tmp_path / "not-shared"  # a folder no worker sees (as on a disk local to the client's machine)
+    with shared_folder(gone), pytest.raises(ClusterError) as err:
+        run_tasks(available_cores, [(), ()], scheduler=cluster)
+    message = str(err.value)
+    assert message.startswith(f"{gone}: the results folder is not visible on dask worker") and "\n" not in message
+    gone.mkdir()  # once the workers see it, the same tasks run
+    with shared_folder(gone):
+        assert run_tasks(available_cores, [(), ()], scheduler=cluster) >= 0
+
+
+#: 2 protrusions in contact x 2 damping ratios, one protrusion a batch: 4 batches of seconds each on one worker.
+LOSS = ["solver.duration_ms=0.6", "solver.transient_ms=0.2", "contact.k=0.5",
+        "sweep.protrusion_nm={start=10.0, stop=10.5, step=0.5}", "sweep.batch_size=1",
+        "sweep.damping_ratio=[0.03, 0.05]", "sweep.histories_nm=[10.0]"]
+
+
+@pytest.mark.slow
+def test_losing_the_last_worker_ends_the_sweep_in_one_line_and_a_rerun_resumes(one_worker, tmp_path):
+    # issue 28, 3: kill the only worker mid-sweep and `hdi sweep --scheduler` printed nothing more, forever
+    wait_s = 3.0
+    env = dict(os.environ, PYTHONPATH=str(ROOT), HDI_CLUSTER_WAIT_S=f"{wait_s:g}")
+    args = [sys.executable, "-m", "pipeline.cli", "sweep", str(PAPER), *[a for s in LOSS for a in ("--set", s)],
+            "--scheduler", one_worker.address, "--out", "out"]
+    client = tmp_path / "client"
+    client.mkdir()
+    parts = client / "out" / "sweep.parts"
+    proc = subprocess.Popen(args, cwd=client, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        end = time.monotonic() + 240
+        while not list(parts.glob("batch-*.nc")) and proc.poll() is None and time.monotonic() < end:
+            time.sleep(0.05)
+        assert proc.poll() is None, proc.communicate()  # (still running: the worker is lost mid-sweep)
+        one_worker.kill_worker(one_worker.workers[0])
+        killed = time.monotonic()
+        _, err = proc.communicate(timeout=wait_s + 60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    took = time.monotonic() - killed
+    lines = err.strip().splitlines()
+    assert proc.returncode == 2 and "Traceback" not in err, err
+    assert lines[-1].startswith(f"hdi sweep: error: dask scheduler {one_worker.address}: ") \
+        and "no worker left" in lines[-1] and "run again to resume" in lines[-1], err
+    assert wait_s <= took < wait_s + 30, took  # within the documented wait (and the client's clean-up)
+    kept = len(list(parts.glob("batch-*.nc")))
+    assert 1 <= kept < 4
+    # a new worker, the same command: the finished parts are kept, only the others run
+    one_worker.start_workers(1)
+    again = subprocess.run(args, cwd=client, env=env, capture_output=True, text=True, timeout=300)
+    assert again.returncode == 0, again.stderr
+    import json
+    log = [json.loads(line) for line in (client / "out" / ".hdi" / "runs.jsonl").read_text().splitlines()]
+    assert log[-1]["batches"] == 4 and log[-1]["batches_run"] == 4 - kept
+    assert read_dataset(client / "out" / "sweep.nc").sizes["damping"] == 2

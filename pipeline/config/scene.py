@@ -105,11 +105,17 @@ _FREE = [
 TARGETS = ("touchdown", "fhm_flying", "fhm_touchdown", "bouncing", "sliding_bv", "interference", "contact_force",
            "real_area", "mean_pressure", "friction_coefficient", "net_force")
 
+def _folder_name(name: str) -> bool:
+    """Whether ``name`` names one folder below another (``results/<name>/``): letters, digits, '.', '_'
+    and '-', and not ``.`` or ``..``, which would put the outputs in the results folder's parent."""
+    return bool(re.fullmatch(r"[A-Za-z0-9_.-]+", name)) and name not in (".", "..")
+
+
 #: The schema: section -> key -> Key. Defaults are the paper scene (docs/model.md, section "Parameters").
 SCHEMA: dict[str, dict[str, Key]] = {
     "scene": {
-        "name": Key("str", None, (lambda v: bool(re.fullmatch(r"[A-Za-z0-9_.-]+", v)),
-                                  "a name of letters, digits, '.', '_' or '-'"),
+        "name": Key("str", None, (lambda v: _folder_name(v),
+                                  "a name of letters, digits, '.', '_' or '-', not '.' or '..'"),
                     doc="scene name; outputs go to results/<name>/"),
         "effects": Key("strs", list(EFFECTS), choices=EFFECTS,
                        doc="effects to simulate; others are not evaluated at all"),
@@ -637,6 +643,9 @@ def validate(raw: dict[str, Any], path: Path | None = None, *, overrides: Iterab
     if config["scene"]["name"] is None:
         if path is None:
             raise SceneError(f"{where}: scene.name is missing: expected a name")
+        if path.stem in (".", ".."):  # (a file `...toml`: results/../ would be the results folder's parent)
+            raise SceneError(f"{where}: scene.name is missing and the file name gives {path.stem!r}: expected "
+                             "scene.name = a name of letters, digits, '.', '_' or '-', not '.' or '..'")
         config["scene"]["name"] = path.stem
     _cross_checks(config, where)
     try:  # (a protrusion far beyond the flying height: no --yes makes it physical)

@@ -44,8 +44,11 @@ afresh.
 
 Outputs: ``identify.nc`` (every evaluation with its parameter values, target values, residuals and
 wall time; the best point, intervals, profiles, correlation matrix), the scene
-``<scene>-identified.toml`` next to the scene file (``extends`` the scene; each identified value with
+``<scene>-identified.toml`` in the results folder (``extends`` the scene; each identified value with
 its interval in a comment) and ``figures/identify.png`` (residuals per target, parameter profiles).
+Nothing is written beside the scene file: a copy of the identified scene goes elsewhere only where the
+user names it (``hdi identify --write-scene PATH``, option ``write_scene``), and never over an existing
+file of other content unless forced (``--force``).
 
 References
 ----------
@@ -304,8 +307,13 @@ def dataset(ident: Identification, params: Sequence[Parameter], out: dict[str, A
     return ds
 
 
-def write_identified_scene(scene: Any, params: Sequence[Parameter], ds: xr.Dataset, path: Path) -> Path:
-    """Write ``path``: a scene that ``extends`` the identified one, every identified value commented."""
+def write_identified_scene(scene: Any, params: Sequence[Parameter], ds: xr.Dataset, path: Path,
+                           replace: bool = True) -> Path:
+    """Write ``path``: a scene that ``extends`` the identified one, every identified value commented.
+
+    The file is written whole and renamed into place, and only when its text changes. ``replace=False``:
+    an existing ``path`` of other content is left as it is (:class:`ValueError` naming it).
+    """
     base = Path(scene.path) if scene.path else None
     rel = os.path.relpath(base, path.parent) if base else "<scene>"
     now = str(ds.attrs.get("history", "")).split(": hdi", 1)[0] or "?"  # when identify.nc was made
@@ -358,9 +366,26 @@ def write_identified_scene(scene: Any, params: Sequence[Parameter], ds: xr.Datas
         return path
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = temporary_path(path)
-    tmp.write_text(text)
-    tmp.replace(path)
+    try:
+        tmp.write_text(text)
+        if replace:
+            os.replace(tmp, path)
+        else:
+            _link_new(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
     return path
+
+
+def _link_new(tmp: Path, path: Path) -> None:
+    """Put the finished file ``tmp`` at ``path`` only if no file is there (a hard link fails on an
+    existing name, so a file written meanwhile is never replaced, and ``path`` is never half-written)."""
+    try:
+        os.link(tmp, path)
+    except FileExistsError:
+        raise ValueError(f"{path}: exists and differs from the identified scene; it was left as it is (the "
+                         "identified scene is in the results folder); pass --force to replace it, or name "
+                         "another file") from None
 
 
 def figure(ds: xr.Dataset, params: Sequence[Parameter], scene: str, path: Path) -> Path:
@@ -434,7 +459,8 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
         ident = Identification(ev, tlist, cfg["missing_residual"])
         result = identify(ident, params, x_base, cfg)
     ds = dataset(ident, params, result, x_base)
-    ds.attrs["identified_scene"] = str(identified_scene_path(scene, out))
+    # (its file name: the scene is in the results folder, wherever that folder is)
+    ds.attrs["identified_scene"] = identified_scene_path(scene, out).name
     figure(ds, params, scene.name, inputs.staging / "figures" / "identify.png")
     inputs.record(evaluations=int(ds.sizes["evaluation"]), evaluations_computed=ev.evaluated,
                   batch_seconds=round(ev.batch_seconds, 3), kernel_seconds=round(ev.kernel_seconds, 3))
@@ -445,19 +471,22 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
 
 
 def identified_scene_path(scene: Any, out: Path) -> Path:
-    """``<scene>-identified.toml`` next to the scene file (in ``out`` for a scene without a file)."""
-    folder = Path(scene.path).parent if scene.path else Path(out)
-    return folder / f"{scene.name}-identified.toml"
+    """``<scene>-identified.toml`` in the results folder ``out``."""
+    return Path(out) / f"{scene.name}-identified.toml"
 
 
 def _finish(scene: Any, out: Path, options: dict[str, Any]) -> None:
-    """Write the identified scene from ``identify.nc`` (outside the results folder, so not a stage output);
-    rewritten only when its text changes (its date is that of ``identify.nc``)."""
+    """Write the identified scene from ``identify.nc`` into the results folder and, with the option
+    ``write_scene`` (``--write-scene PATH``), to that path too: never over a file of other content unless
+    ``force``. Each is rewritten only when its text changes (its date is that of ``identify.nc``)."""
     ds = read_dataset(Path(out) / "identify.nc", stage="identify")
     params = parse_parameters(scene["identify"]["parameters"], str(scene.path or "<scene>"), "identify.parameters")
-    path = identified_scene_path(scene, out)
-    write_identified_scene(scene, params, ds, path)
+    path = write_identified_scene(scene, params, ds, identified_scene_path(scene, out))
     log.info("identified scene: %s", path)
+    if options.get("write_scene"):
+        copy = write_identified_scene(scene, params, ds, Path(options["write_scene"]),
+                                      replace=bool(options.get("force")))
+        log.info("identified scene: %s", copy)
 
 
 STAGE = Stage(
@@ -465,7 +494,8 @@ STAGE = Stage(
     reads=("*",), excludes=("sweep", "report", "sensitivity", "scene.name", "scene.description",
                             "identify.batch_size"),
     upstream=upstream, finish=_finish, order=80,
-    doc="the free [recon] parameters fitted to the paper's targets, identify.nc and <scene>-identified.toml")
+    doc="the free [recon] parameters fitted to the paper's targets, identify.nc and <scene>-identified.toml "
+        "(in the results folder; --write-scene PATH for a copy)")
 
 
 def run(scene: Any, out: Path, scheduler: str | None = None, workers: int | None = None, force: bool = False,
