@@ -238,7 +238,9 @@ def fig_clearance(hist: Sequence[tuple[float, xr.Dataset, int | None]], scene: s
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7, loc="best", framealpha=0.9)
     axes[-1, 0].set_xlabel(axis_label("time", "ms"))
-    fig.suptitle(title("Fig. 3: clearance histories, flying and light contact", scene), fontsize=11)
+    shown = list(dict.fromkeys(_regime_name(code) for _, _, code in hist))
+    what = ", ".join(shown[:-1]) + f" and {shown[-1]}" if len(shown) > 1 else shown[0]
+    fig.suptitle(title(f"Fig. 3: clearance histories, {what}", scene), fontsize=11)
     return save(fig, path)
 
 
@@ -396,36 +398,34 @@ def fig_ensemble(sweep: xr.Dataset, scene: str, path: Path, *, touchdown_nm: flo
 
 def fig_band(ens: xr.Dataset, scene: str, path: Path, *, band_nm: Sequence[float] = (), threshold: float = 20.0,
              touchdown_nm: float | None = None, previous_nm: float | None = None) -> Path:
-    """The bouncing band over DMW realisations (``ensemble.nc``): the bouncing BV (BV where the run touched,
-    0 where it flew) of every realisation with its median and 10-90 % range and the threshold (top); the
-    fraction of the realisations bouncing above it, the touchdown probability and the median contact
-    fraction with its 10-90 % range (bottom), versus protrusion [nm]; the paper's band shaded."""
-    from .ensemble import median_spread, touchdown_probability
-    from .study import bouncing_bv
+    """The bouncing band over DMW realisations (``ensemble.nc``, whose stage computed every statistic drawn):
+    the bouncing BV (BV where the run touched, 0 where it flew) of every realisation with its median and
+    10-90 % range and the threshold (top); the fraction of the realisations bouncing above it, the touchdown
+    probability and the median contact fraction with its 10-90 % range (bottom), versus protrusion [nm];
+    the paper's band shaded."""
     x = ens["protrusion"].values
     n = ens.sizes["realisation"]
-    bv = bouncing_bv(ens["fhm_bv"], ens["min_clearance"])
-    med, lo, hi = (np.asarray(v.values, float) for v in median_spread(bv))
     fig, (ax, ax2) = new_figure(2, 1, size=(8.5, 6.6), sharex=True)
     for a in (ax, ax2):
         if len(band_nm):
             a.axvspan(min(band_nm) - 0.1, max(band_nm) + 0.1, color="#ffbf00", alpha=0.15, lw=0,
                       label="the paper's band" if a is ax else None)
-    ax.plot(x, np.asarray(bv.values), ".", color="0.55", ms=3, alpha=0.6)
+    bv = ens["bouncing_bv"]
+    lo, hi = ens["bouncing_bv_spread"].values.T
+    ax.plot(x, bv.values, ".", color="0.55", ms=3, alpha=0.6)
     ax.fill_between(x, lo, hi, color=LINE_COLOURS[0], alpha=0.2, lw=0, label="10-90 % of the realisations")
-    ax.plot(x, med, color=LINE_COLOURS[0], lw=1.4, marker="o", ms=3, label=f"median over {n} DMW realisations")
+    ax.plot(x, ens["bouncing_bv_median"].values, color=LINE_COLOURS[0], lw=1.4, marker="o", ms=3,
+            label=f"median over {n} DMW realisations")
     ax.axhline(threshold, color="k", lw=0.8, ls="--", label=f"paper: BV > {threshold:g} %")
-    ax.set_ylabel(axis_label("bouncing BV (0 where flying)", ens["fhm_bv"].attrs.get("units", "%")))
-    above = (np.asarray(bv.values) > threshold).astype(float)
-    above[~np.isfinite(np.asarray(bv.values))] = np.nan
-    ax2.plot(x, np.nanmean(above, axis=1), color=LINE_COLOURS[3], lw=1.4, marker="s", ms=3,
+    ax.set_ylabel(axis_label("bouncing BV (0 where flying)", bv.attrs.get("units", "%")))
+    ax2.plot(x, ens["bv_exceedance_probability"].values, color=LINE_COLOURS[3], lw=1.4, marker="s", ms=3,
              label=f"P(bouncing BV > {threshold:g} %)")
-    ax2.plot(x, touchdown_probability(ens["min_clearance"]).values, color="#d62728", lw=1.0, ls="--",
-             label="touchdown probability")
-    if "contact_fraction" in ens:
-        cm, clo, chi = (np.asarray(v.values, float) for v in median_spread(ens["contact_fraction"].fillna(0.0)))
+    ax2.plot(x, ens["touchdown_probability"].values, color="#d62728", lw=1.0, ls="--", label="touchdown probability")
+    if "contact_fraction_median" in ens:
+        clo, chi = ens["contact_fraction_spread"].values.T
         ax2.fill_between(x, clo, chi, color=LINE_COLOURS[2], alpha=0.2, lw=0)
-        ax2.plot(x, cm, color=LINE_COLOURS[2], lw=1.2, label="contact fraction of the window (median, 10-90 %)")
+        ax2.plot(x, ens["contact_fraction_median"].values, color=LINE_COLOURS[2], lw=1.2,
+                 label="contact fraction of the window (median, 10-90 %)")
     ax2.axhline(0.5, color="k", lw=0.6, ls=":")
     ax2.set_ylim(-0.03, 1.03)
     ax2.set_ylabel(axis_label("probability / fraction", "1"))
@@ -438,6 +438,8 @@ def fig_band(ens: xr.Dataset, scene: str, path: Path, *, band_nm: Sequence[float
             a.axvline(previous_nm, color="#d62728", lw=0.8, ls=":")
         a.grid(alpha=0.3)
         a.legend(fontsize=7.5, loc="upper left", framealpha=0.9)
+    if len(band_nm):  # around the band: from 2 nm below it (the flying FHM targets far below add nothing here)
+        ax.set_xlim(max(float(np.min(x)), min(band_nm) - 2.0) - 0.1, float(np.max(x)) + 0.1)
     fig.suptitle(title("The bouncing band over DMW realisations", scene), fontsize=11)
     return save(fig, path)
 

@@ -122,7 +122,7 @@ def figure_jobs(data: dict[str, xr.Dataset | None], combos: list, settings: Repo
         jobs.append((plots.fig_ensemble, (data["ensemble"], name, figdir / ENSEMBLE_FIGURE),
                      dict(touchdown_nm=onset, previous_nm=previous)))
     checks = data.get("checks")
-    if checks is not None and "value_bouncing" in checks and "min_clearance" in checks:
+    if checks is not None and "value_bouncing" in checks and "bouncing_bv_median" in checks:
         jobs.append((plots.fig_band, (checks, name, figdir / BAND_FIGURE),
                      dict(band_nm=tuple(np.atleast_1d(checks["value_bouncing"].attrs["protrusions_nm"])),
                           threshold=float(checks["bv_exceedance_probability"].attrs["threshold_percent"]),

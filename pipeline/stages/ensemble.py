@@ -128,6 +128,18 @@ def judged(ds: xr.Dataset, scene: Any) -> dict[str, xr.Variable]:
     out["bv_exceedance_probability"] = var(en.exceedance_probability(bouncing, threshold).values, ("protrusion",),
                                            "1", f"fraction of the DMW realisations in contact with BV above "
                                                 f"{threshold:g} %", threshold_percent=threshold)
+    # the band's statistics for the report's band.png (which reads them, and imports no model code)
+    unit = SCALARS["fhm_bv"].units
+    out["bouncing_bv"] = var(bouncing.transpose("protrusion", "realisation").values, ("protrusion", "realisation"),
+                             unit, "bouncing BV: FHM/BV of a run in contact in the steady window, 0 where it flew")
+    for name, values, units, what in (("bouncing_bv", bouncing, unit, "bouncing BV"),
+                                      ("contact_fraction", ds.get("contact_fraction"), "1", "contact fraction")):
+        if values is None:
+            continue
+        med, lo, hi = en.median_spread(values.fillna(0.0) if name == "contact_fraction" else values)
+        out[f"{name}_median"] = var(med.values, ("protrusion",), units, f"median over the DMW realisations of the {what}")
+        out[f"{name}_spread"] = var(np.stack([lo.values, hi.values], axis=-1), ("protrusion", "bound"), units,
+                                    f"10-90 % range over the DMW realisations of the {what}")
     if "nominal_area" in ds:
         mean, std = en.mean_std(ds["nominal_area"])
         unit = SCALARS["nominal_area"].units
