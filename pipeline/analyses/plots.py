@@ -359,6 +359,19 @@ def fig_fhm(combos: Sequence[tuple[dict[str, Any], xr.Dataset]], scene: str, pat
 
 
 # ------------------------------------------------------------------------------------ DMW ensemble
+def touchdown_lines(axes: Sequence[Any], touchdown_nm: float | None, previous_nm: float | None,
+                    lw: float = 1.2) -> None:
+    """The measured touchdown [nm] (labelled on the first axes) and the previous step [nm] as vertical
+    lines on every axes, each gridded."""
+    for a in axes:
+        if touchdown_nm is not None:
+            a.axvline(touchdown_nm, color="#d62728", lw=lw, label=f"measured touchdown {touchdown_nm:g} nm"
+                      if a is axes[0] else None)
+        if previous_nm is not None:
+            a.axvline(previous_nm, color="#d62728", lw=0.8, ls=":")
+        a.grid(alpha=0.3)
+
+
 def fig_ensemble(sweep: xr.Dataset, scene: str, path: Path, *, touchdown_nm: float | None = None,
                  previous_nm: float | None = None) -> Path:
     """Touchdown probability (top) and FHM/BV ensemble mean with a +-1 std band (bottom) versus protrusion.
@@ -381,13 +394,7 @@ def fig_ensemble(sweep: xr.Dataset, scene: str, path: Path, *, touchdown_nm: flo
     ax2.plot(x, m, color=LINE_COLOURS[0], lw=1.4, marker="o", ms=2.5, label="ensemble mean")
     ax2.set_ylabel(axis_label("FHM / BV (peak-to-peak / FH0)", ds["fhm_bv"].attrs.get("units", "%")))
     ax2.set_xlabel(axis_label("TFC protrusion δ", "nm"))
-    for a in (ax, ax2):
-        if touchdown_nm is not None:
-            a.axvline(touchdown_nm, color="#d62728", lw=1.2, label=f"measured touchdown {touchdown_nm:g} nm"
-                      if a is ax else None)
-        if previous_nm is not None:
-            a.axvline(previous_nm, color="#d62728", lw=0.8, ls=":")
-        a.grid(alpha=0.3)
+    touchdown_lines((ax, ax2), touchdown_nm, previous_nm, lw=1.2)
     ax.legend(fontsize=7.5, loc="upper left", framealpha=0.9)
     ax2.legend(fontsize=7.5, loc="upper left", framealpha=0.9)
     what = ", ".join(f"{d} {ds[d].values.item()}" for d in sel)
@@ -430,13 +437,8 @@ def fig_band(ens: xr.Dataset, scene: str, path: Path, *, band_nm: Sequence[float
     ax2.set_ylim(-0.03, 1.03)
     ax2.set_ylabel(axis_label("probability / fraction", "1"))
     ax2.set_xlabel(axis_label("TFC protrusion δ", "nm"))
+    touchdown_lines((ax, ax2), touchdown_nm, previous_nm, lw=1.0)
     for a in (ax, ax2):
-        if touchdown_nm is not None:
-            a.axvline(touchdown_nm, color="#d62728", lw=1.0, label=f"measured touchdown {touchdown_nm:g} nm"
-                      if a is ax else None)
-        if previous_nm is not None:
-            a.axvline(previous_nm, color="#d62728", lw=0.8, ls=":")
-        a.grid(alpha=0.3)
         a.legend(fontsize=7.5, loc="upper left", framealpha=0.9)
     if len(band_nm):  # around the band: from 2 nm below it (the flying FHM targets far below add nothing here)
         ax.set_xlim(max(float(np.min(x)), min(band_nm) - 2.0) - 0.1, float(np.max(x)) + 0.1)
