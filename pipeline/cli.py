@@ -17,7 +17,7 @@ import threading
 import traceback
 from pathlib import Path
 
-from . import runner
+from . import __version__, runner
 from .io import DatasetError, os_error_line, results_dir
 from .config.scene import SceneError, load_scene
 from .stages import roughness
@@ -40,6 +40,8 @@ def _parser(stages: dict[str, runner.Stage]) -> argparse.ArgumentParser:
                                 epilog="stages:\n" + "\n".join(f"  {n:<11} {s.doc}" for n, s in stages.items())
                                 + "\n  run         the main job: " + " ".join(n for n, s in stages.items()
                                                                                if s.main_job))
+    p.add_argument("--version", action="version", version=f"hdi {__version__}",
+                   help="print the version and exit")
     p.add_argument("stage", choices=[*stages, "run"], help="the stage to run (run = the whole main job)")
     p.add_argument("inputs", nargs="+", metavar="CONFIG",
                    help="a scene file (TOML); for `roughness`, AFM files may be given instead")
