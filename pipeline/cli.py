@@ -19,7 +19,7 @@ from pathlib import Path
 
 from . import __version__, runner
 from .io import DatasetError, os_error_line, results_dir
-from .config.scene import SceneError, load_scene
+from .config.scene import SceneError, describe_keys, load_scene
 from .stages import roughness
 from .validation import MAX_SCENES, check_options, one_line_warnings
 
@@ -34,6 +34,18 @@ class _Format(logging.Formatter):
         return text if record.levelno < logging.WARNING else f"{record.levelname.lower()}: {text}"
 
 
+class _HelpKeys(argparse.Action):
+    """``--help-keys [SECTION]``: the scene schema (:func:`pipeline.config.scene.describe_keys`), then exit."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        try:
+            text = describe_keys(values or None)
+        except SceneError as exc:
+            parser.exit(2, f"hdi: error: {exc}\n")
+        sys.stdout.write(text)
+        parser.exit(0)
+
+
 def _parser(stages: dict[str, runner.Stage]) -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="hdi", description=__doc__.split("\n\n")[0],
                                 formatter_class=argparse.RawDescriptionHelpFormatter,
@@ -42,6 +54,8 @@ def _parser(stages: dict[str, runner.Stage]) -> argparse.ArgumentParser:
                                                                                if s.main_job))
     p.add_argument("--version", action="version", version=f"hdi {__version__}",
                    help="print the version and exit")
+    p.add_argument("--help-keys", nargs="?", const="", metavar="SECTION", action=_HelpKeys,
+                   help="print every scene key (or those of SECTION) with its default, type and unit, and exit")
     p.add_argument("stage", choices=[*stages, "run"], help="the stage to run (run = the whole main job)")
     p.add_argument("inputs", nargs="+", metavar="CONFIG",
                    help="a scene file (TOML); for `roughness`, AFM files may be given instead")

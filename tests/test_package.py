@@ -35,3 +35,24 @@ def test_license_and_citation_ship(repo_root):
     cff = (repo_root / "CITATION.cff").read_text()
     assert "cff-version: 1.2.0" in cff and "license: BSD-3-Clause" in cff
     assert "doi: 10.1109/TMAG.2009.2029410" in cff
+
+
+def test_help_keys_prints_the_schema(capsys):
+    """``hdi --help-keys [SECTION]``: every key of the schema with its default, type and doc, on stdout."""
+    from pipeline.config.scene import SCHEMA
+    with pytest.raises(SystemExit) as exc:
+        main(["--help-keys", "lubricant"])
+    assert exc.value.code == 0
+    out = capsys.readouterr().out
+    assert out.startswith("[lubricant]\n")
+    for key, spec in SCHEMA["lubricant"].items():
+        assert f"  {key} = " in out and spec.doc in out
+    assert "  bridge_work_of_adhesion_j_m2 = (no default)  (float)" in out
+    with pytest.raises(SystemExit) as exc:
+        main(["--help-keys"])
+    out = capsys.readouterr().out
+    assert exc.value.code == 0 and all(f"[{s}]" in out for s in SCHEMA)
+    with pytest.raises(SystemExit) as exc:
+        main(["--help-keys", "nope"])
+    err = capsys.readouterr().err
+    assert exc.value.code == 2 and len(err.strip().splitlines()) == 1 and "no section [nope]" in err

@@ -422,6 +422,32 @@ SCHEMA: dict[str, dict[str, Key]] = {
 }
 
 
+def describe_keys(section: str | None = None) -> str:
+    """The scene schema as text, one key a line: ``key = default  (kind; choices)  doc``, by section
+    (``hdi --help-keys [SECTION]``); ``section`` limits it to one.
+
+    Raises
+    ------
+    SceneError
+        For a section the schema does not have (the message lists them).
+    """
+    if section is not None and section not in SCHEMA:
+        raise SceneError(f"--help-keys {section}: no section [{section}]; expected one of {', '.join(SCHEMA)}")
+    out = []
+    for name, keys in SCHEMA.items():
+        if section is not None and name != section:
+            continue
+        out.append(f"[{name}]")
+        for key, spec in keys.items():
+            default = "(no default)" if spec.default is None else repr(spec.default)
+            if spec.kind == "tables" and spec.default:
+                default = f"({len(spec.default)} tables)"
+            kind = spec.kind + (f"; one of {', '.join(spec.choices)}" if spec.choices else "")
+            out.append(f"  {key} = {default}  ({kind})  {spec.doc}")
+        out.append("")
+    return "\n".join(out)
+
+
 def unit_suffix(key: str) -> str | None:
     """The unit suffix of a key name (``"flying_height_nm"`` -> ``"nm"``; ``None`` without one)."""
     return _strip_unit(key)[1]
