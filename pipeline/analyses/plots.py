@@ -427,7 +427,9 @@ def fig_band(ens: xr.Dataset, scene: str, path: Path, *, band_nm: Sequence[float
     ax.set_ylabel(axis_label("bouncing BV (0 where flying)", bv.attrs.get("units", "%")))
     ax2.plot(x, ens["bv_exceedance_probability"].values, color=LINE_COLOURS[3], lw=1.4, marker="s", ms=3,
              label=f"P(bouncing BV > {threshold:g} %)")
-    ax2.plot(x, ens["touchdown_probability"].values, color="#d62728", lw=1.0, ls="--", label="touchdown probability")
+    if "touchdown_probability" in ens:
+        ax2.plot(x, ens["touchdown_probability"].values, color="#d62728", lw=1.0, ls="--",
+                 label="touchdown probability")
     if "contact_fraction_median" in ens:
         clo, chi = ens["contact_fraction_spread"].values.T
         ax2.fill_between(x, clo, chi, color=LINE_COLOURS[2], alpha=0.2, lw=0)

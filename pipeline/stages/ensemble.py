@@ -124,6 +124,14 @@ def judged(ds: xr.Dataset, scene: Any) -> dict[str, xr.Variable]:
         out[f"single_{name}"] = var(single, (), t.units, f"{t.long_name}, the scene's own record alone")
     out["bound"] = var(np.array(["low", "high"], dtype=object), ("bound",), "", "lower/upper end of a spread")
     threshold = float(scene["identify"]["bouncing_min_percent"])
+    if "nominal_area" in ds:
+        mean, std = en.mean_std(ds["nominal_area"])
+        unit = SCALARS["nominal_area"].units
+        out["nominal_area_mean"] = var(mean.values, ("protrusion",), unit, "ensemble mean of the nominal contact area")
+        out["nominal_area_std"] = var(std.values, ("protrusion",), unit,
+                                      "ensemble standard deviation (ddof 1) of the nominal contact area")
+    if "min_clearance" not in ds:  # (no contact law: nothing bounces, as nothing touches)
+        return out
     bouncing = bouncing_bv(ds["fhm_bv"], ds["min_clearance"])  # (a flying FHM above it is no bounce)
     out["bv_exceedance_probability"] = var(en.exceedance_probability(bouncing, threshold).values, ("protrusion",),
                                            "1", f"fraction of the DMW realisations in contact with BV above "
@@ -140,12 +148,6 @@ def judged(ds: xr.Dataset, scene: Any) -> dict[str, xr.Variable]:
         out[f"{name}_median"] = var(med.values, ("protrusion",), units, f"median over the DMW realisations of the {what}")
         out[f"{name}_spread"] = var(np.stack([lo.values, hi.values], axis=-1), ("protrusion", "bound"), units,
                                     f"10-90 % range over the DMW realisations of the {what}")
-    if "nominal_area" in ds:
-        mean, std = en.mean_std(ds["nominal_area"])
-        unit = SCALARS["nominal_area"].units
-        out["nominal_area_mean"] = var(mean.values, ("protrusion",), unit, "ensemble mean of the nominal contact area")
-        out["nominal_area_std"] = var(std.values, ("protrusion",), unit,
-                                      "ensemble standard deviation (ddof 1) of the nominal contact area")
     return out
 
 
