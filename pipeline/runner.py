@@ -94,7 +94,8 @@ class Stage:
         Scene keys the result depends on, ``"section"`` or ``"section.key"``; ``"*"`` = the whole
         scene minus ``excludes``.
     excludes
-        Keys removed from ``"*"``.
+        Keys removed from ``"*"`` and from a whole section read (``"lubricant"`` minus
+        ``"lubricant.meniscus_time_us"``); a section named here is removed from ``"*"``.
     files
         ``files(scene) -> {role: path}``: input files named by scene keys (hashed by content).
     upstream
@@ -269,11 +270,13 @@ def scene_part(scene: Scene, reads: Iterable[str], excludes: Iterable[str] = ())
             else:
                 picked.pop(section, None)
         picked = {"*": picked}
+    excluded = set(excludes)
     for item in reads:
         if item == "*":
             continue
         section, _, key = item.partition(".")
-        picked[item] = cfg[section][key] if key else cfg[section]
+        picked[item] = cfg[section][key] if key else \
+            {k: v for k, v in cfg[section].items() if f"{section}.{k}" not in excluded}
     return picked
 
 

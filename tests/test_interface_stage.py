@@ -190,7 +190,11 @@ def test_load_missing_interface_dataset(tmp_path):
 
 def test_needed_quantities():
     assert interface_tables.needed_quantities(frozenset({"air_bearing"})) == ()
-    assert set(interface_tables.needed_quantities(frozenset({"contact", "friction", "adhesion"}))) == set(TABLES) | {"wetted_area_fraction"}
+    assert set(interface_tables.needed_quantities(frozenset({"contact", "friction", "adhesion"}))) == set(TABLES)
+    # the wetted area only for the lubricant-shear friction term
+    assert set(interface_tables.needed_quantities(frozenset({"contact", "friction", "adhesion"}), True)) == \
+        set(TABLES) | {"wetted_area_fraction"}
+    assert "wetted_area_fraction" not in interface_tables.needed_quantities(frozenset({"contact"}), True)
 
 
 def test_write_dataset_writes_what_to_netcdf_writes_without_importing_distributed(tmp_path):
@@ -222,3 +226,16 @@ def test_write_dataset_writes_what_to_netcdf_writes_without_importing_distribute
             "print('distributed' in sys.modules)")
     res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert res.stdout.strip() == "False"
+
+
+def test_wetted_area_only_with_the_lubricant_shear_and_keyed_on_it_alone(tmp_path, paper_config):
+    """The tables hold wetted_area_fraction only when the lubricant-shear term is on; the stage
+    recomputes when the term is switched on, not when its stress changes (it only scales the column)."""
+    out = tmp_path / "lub"
+    assert "wetted_area_fraction" not in _run(paper_config, out)
+    with_term = _run(paper_config, out, "lubricant.shear_stress_mpa=19")
+    assert "wetted_area_fraction" in with_term
+    stamp = (out / "interface.nc").stat().st_mtime_ns
+    again = _run(paper_config, out, "lubricant.shear_stress_mpa=25")
+    assert (out / "interface.nc").stat().st_mtime_ns == stamp
+    np.testing.assert_array_equal(again["wetted_area_fraction"].values, with_term["wetted_area_fraction"].values)

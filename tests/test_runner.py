@@ -464,3 +464,14 @@ def test_ctrl_c_prints_one_line(tmp_path):
     assert err.strip().splitlines()[-1] == "hdi sweep: interrupted; finished work is kept, run again to resume"
     assert len(err.strip().splitlines()) <= 8          # the stages' progress lines and that one line
     assert len(list(parts.glob("batch-*.nc"))) >= 2 and not (tmp_path / runner.LOCK_NAME).exists()
+
+
+def test_excludes_apply_to_a_whole_section_read(paper_scene):
+    """A stage reading a section without some of its keys (the interface stage: ``lubricant`` without
+    the meniscus time and the lubricant shear stress, properties of the dynamics) is keyed without them:
+    before, ``excludes`` acted on ``"*"`` only, so such a stage recomputed for keys it does not read."""
+    from pipeline.runner import scene_part
+    part = scene_part(paper_scene, ("lubricant",), ("lubricant.meniscus_time_us",))
+    assert "meniscus_time_us" not in part["lubricant"] and "thickness_nm" in part["lubricant"]
+    assert scene_part(paper_scene.replace(lubricant={"meniscus_time_us": 40.0}), ("lubricant",),
+                      ("lubricant.meniscus_time_us",)) == part

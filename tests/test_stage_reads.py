@@ -94,7 +94,9 @@ def declared(stage: runner.Stage, scene: Scene) -> set[str]:
         elif "." in name:
             items.add(name)
         else:
-            items |= {f"{name}.{k}" for k in value} | {f"{name}.*"}
+            items |= {f"{name}.{k}" for k in value}
+            if all(f"{name}.{k}" not in stage.excludes for k in scene.config[name]):
+                items.add(f"{name}.*")
     return items
 
 
@@ -102,7 +104,8 @@ def declared(stage: runner.Stage, scene: Scene) -> set[str]:
 #: cut rather than what it computes (each sweep part is checked against its batch, so parts of another
 #: batch size are recomputed, not mixed).
 DERIVED = {
-    "interface": {"tfc.protrusion_nm", "sweep.protrusion_nm"},  # deepest_protrusion_nm
+    # deepest_protrusion_nm; lubricant_shear (whether the term is on, not its stress)
+    "interface": {"tfc.protrusion_nm", "sweep.protrusion_nm", "lubricant.shear_stress_mpa"},
     "sweep": {"sweep.batch_size"},
 }
 

@@ -136,7 +136,7 @@ def test_model_friction_table_adds_the_lubricant_term():
     lubricant term needed for the paper's mu ~1.2 is ~19 MPa (docs/model.md, "Lubricant friction")."""
     sc0 = load_scene(IDENTIFIED, ["contact.k=0.978"])
     sc1 = load_scene(IDENTIFIED, ["contact.k=0.978", "lubricant.shear_stress_mpa=19"])
-    ds = build_tables(sc0, roughness_statistics(sc0))
+    ds = build_tables(sc1, roughness_statistics(sc1))  # (the tables with the wetted area: the term is on)
     sc0 = sc0.replace(scene={**sc0["scene"], "effects": [e for e in sc0.effects if e != "dmw"]})
     sc1 = sc1.replace(scene={**sc1["scene"], "effects": [e for e in sc1.effects if e != "dmw"]})
     m0, m1 = slider.build_model(sc0, ds, None, 0.978), slider.build_model(sc1, ds, None, 0.978)

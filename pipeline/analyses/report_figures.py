@@ -74,7 +74,7 @@ def figure_jobs(data: dict[str, xr.Dataset | None], combos: list, settings: Repo
             skipped[f] = "sweep_histories.nc is absent (no time histories were kept by the sweep)"
     else:
         prots = history_protrusions(hist, settings.histories_nm)
-        low, high = prots[0], prots[-1]
+        high = prots[-1]
         # every kept protrusion (the paper's Fig. 3: flying and light contact, and a step of the band when
         # report.histories_nm names one), at most four panels: the lowest, the highest and two between
         shown = prots if len(prots) <= 4 else [prots[0], *prots[1:-1][:2], prots[-1]]

@@ -83,16 +83,25 @@ def interface_parameters(scene: Any, stats: dict[str, float]) -> isbl.Interface:
                           dgamma_bridge=lub.bridge_work_of_adhesion)
 
 
-def needed_quantities(effects: frozenset[str]) -> tuple[str, ...]:
-    """The ISBL quantities a set of effects needs (empty for a flying-only scene)."""
+def needed_quantities(effects: frozenset[str], lubricant_shear: bool = False) -> tuple[str, ...]:
+    """The ISBL quantities a set of effects needs (empty for a flying-only scene); ``lubricant_shear``:
+    the lubricant-shear friction term is on (``lubricant.shear_stress_mpa > 0``), which reads the wetted
+    area (:func:`lubricant_shear_on`)."""
     q = []
     if "contact" in effects:
         q += ["contact_pressure", "real_area_fraction", "contact_fraction"]
     if "friction" in effects:
-        q += ["friction_stress", "wetted_area_fraction"]
+        q += ["friction_stress"] + (["wetted_area_fraction"] if lubricant_shear else [])
     if "adhesion" in effects:
         q += ["adhesion_pressure"]
     return tuple(q)
+
+
+def lubricant_shear_on(scene: Any) -> bool:
+    """Whether the scene's friction has the lubricant-shear term (``lubricant.shear_stress_mpa > 0`` with
+    the friction effect): the tables then hold ``wetted_area_fraction``. Its value does not change the
+    tables, only whether it is on (the interface stage keys on this, not on the stress)."""
+    return "friction" in scene.effects and scene["lubricant"]["shear_stress_mpa"] > 0
 
 
 def separation_labels(lo_nm: float, hi_nm: float, step_nm: float) -> np.ndarray:
@@ -108,7 +117,7 @@ def build_tables(scene: Any, stats: dict[str, float]) -> xr.Dataset:
     """Compute the interface dataset of a scene for given roughness statistics (no I/O)."""
     p = interface_parameters(scene, stats)
     sol = scene["solver"]
-    wanted = needed_quantities(scene.effects)
+    wanted = needed_quantities(scene.effects, lubricant_shear_on(scene))
     # dataset units and long names: pipeline/variables.py INTERFACE; values in SI here
     scalars = {
         "sigma": stats["sigma"], "sigma_s": p.sigma_s, "y_s": stats["y_s"], "summit_radius": p.R,

@@ -16,6 +16,20 @@ fully plastic         w > 110 w_c             H 2 pi R w    0                   
 with ``w = z - d``, ``d`` the separation of the flat from the mean of summit heights and ``z``
 measured from that mean, Gaussian with standard deviation ``sigma_s``.
 
+Quadrature
+----------
+Each population's range is clipped to ``|z| <= tail sigma_s`` (``tail = 12``: the Gaussian weight
+beyond is below 1e-31 of its peak) and integrated by composite Gauss-Legendre with ``panels`` panels
+of ``nodes`` nodes, split at every break of the single-summit laws (``w = 0, w_c, 6 w_c, 110 w_c``
+and ``z = d - t``), so each panel integrates a smooth function. In the elastic range the
+substitution ``w = (b - a) u^2`` removes the ``w^1.5`` branch point at ``w = 0``. The
+Lennard-Jones range, whose law has a pole just ``eps`` beyond its upper end, is split into
+sub-ranges graded geometrically towards that end. The integrands are then analytic on every
+panel, well away from their singularities, and Gauss-Legendre converges exponentially;
+``tests/test_isbl.py`` checks the default against adaptive ``scipy.integrate.quad`` and the closed
+forms, and that doubling the nodes changes nothing at the 1e-8 level. Integrals of a constant law against the
+Gaussian (meniscus adhesion, summit fractions) use the closed form (``scipy.special.ndtr``).
+
 Two adhesion populations
 ------------------------
 The adhesion is written as two parts (docs/model.md, section "Two adhesion populations"): the

@@ -18,7 +18,7 @@ from typing import Any
 import xarray as xr
 
 from ..io import read_dataset
-from ..model.interface_tables import build_tables, deepest_protrusion_nm, roughness_statistics
+from ..model.interface_tables import build_tables, deepest_protrusion_nm, lubricant_shear_on, roughness_statistics
 from ..runner import Inputs, Stage, build
 
 
@@ -36,9 +36,11 @@ STAGE = Stage(
     reads=("roughness", "materials", "lubricant", "solver.table_step_nm", "solver.table_min_sigma",
            "solver.table_max_nm", "solver.quadrature_nodes", "solver.quadrature_panels", "scene.effects",
            "air_bearing.flying_height_nm", "interface.model", "interface.adhesion", "solver.contact_grid_points"),
-    # properties of the dynamics, not of the tables (the lubricant shear stress scales wetted_area_fraction)
+    # properties of the dynamics, not of the tables (the lubricant shear stress scales wetted_area_fraction,
+    # which the tables hold when the term is on: `derived`)
     excludes=("lubricant.meniscus_time_us", "lubricant.shear_stress_mpa"),
-    derived=lambda scene: {"deepest_protrusion_nm": deepest_protrusion_nm(scene)},
+    derived=lambda scene: {"deepest_protrusion_nm": deepest_protrusion_nm(scene),
+                           "lubricant_shear": lubricant_shear_on(scene)},
     upstream=lambda scene: ("roughness",) if scene["roughness"]["afm"] else (),
     order=30, main_job=True, doc="ISBL tables versus separation, interface.nc")
 
