@@ -18,6 +18,7 @@ from __future__ import annotations
 import datetime as _dt
 import errno
 import hashlib
+import importlib.metadata
 import json
 import os
 import re
@@ -34,7 +35,7 @@ from typing import Any, Iterable, Mapping
 import numpy as np
 import xarray as xr
 
-from . import __version__
+from . import DISTRIBUTION, __version__
 
 try:  # (POSIX: the file size limit, ulimit -f)
     import resource
@@ -149,6 +150,28 @@ def cf_encoding(ds: xr.Dataset) -> tuple[xr.Dataset, dict[str, dict[str, Any]]]:
     return out, encoding
 
 
+#: The paper the model implements, as CF's ``references`` attribute of every dataset (its DOI).
+PAPER_REFERENCE = ("A. P. Vakis, S.-C. Lee, A. A. Polycarpou, \"Dynamic head-disk interface instabilities with "
+                   "friction for light contact (surfing) recording\", IEEE Trans. Magn. 45(11) 4966-4971 (2009), "
+                   "https://doi.org/10.1109/TMAG.2009.2029410")
+
+#: Libraries whose versions can change a dataset's numbers, recorded in every dataset's provenance.
+NUMERIC_LIBRARIES = ("numpy", "scipy", "numba", "xarray", "netCDF4")
+
+
+@lru_cache(maxsize=1)
+def software_versions() -> str:
+    """``"hdi-dynamics 0.1.0; numpy 2.4.6; ..."``: this package and :data:`NUMERIC_LIBRARIES`, from their
+    installed metadata (``"not installed"`` for one that is missing)."""
+    found = [f"{DISTRIBUTION} {__version__}"]
+    for name in NUMERIC_LIBRARIES:
+        try:
+            found.append(f"{name} {importlib.metadata.version(name)}")
+        except importlib.metadata.PackageNotFoundError:  # pragma: no cover
+            found.append(f"{name} not installed")
+    return "; ".join(found)
+
+
 def provenance(scene: Any = None, *, stage: str,
                inputs: Iterable[str | Path] | Mapping[str | Path, str] = ()) -> dict[str, str]:
     """Global attributes recording how a dataset was made.
@@ -167,11 +190,13 @@ def provenance(scene: Any = None, *, stage: str,
     attrs = {
         "title": f"HDI pipeline: {stage}",
         "Conventions": "CF-1.8",
-        "source": "pipeline (Vakis, Lee & Polycarpou, IEEE Trans. Magn. 45(11) 4966-4971, 2009, "
-                  "DOI 10.1109/TMAG.2009.2029410)",
+        "source": f"{DISTRIBUTION} {__version__}, the model of Vakis, Lee & Polycarpou, IEEE Trans. Magn. "
+                  "45(11) 4966-4971, 2009",
+        "references": PAPER_REFERENCE,
         "history": f"{now}: hdi {stage}" + (f" {scene.path}" if scene is not None and scene.path else ""),
         "stage": stage,
         "pipeline_version": __version__,
+        "software_versions": software_versions(),
         "git_revision": git_revision(),
     }
     if scene is not None:

@@ -56,3 +56,37 @@ def test_help_keys_prints_the_schema(capsys):
         main(["--help-keys", "nope"])
     err = capsys.readouterr().err
     assert exc.value.code == 2 and len(err.strip().splitlines()) == 1 and "no section [nope]" in err
+
+
+def test_distribution_name_and_one_version_source(repo_root):
+    """The distribution is ``hdi-dynamics`` (``pipeline`` is taken on PyPI); ``__version__`` is read from
+    its installed metadata, which pyproject.toml writes (no second copy in the code)."""
+    from importlib.metadata import distribution
+
+    from pipeline import DISTRIBUTION
+    meta = tomllib.loads((repo_root / "pyproject.toml").read_text())["project"]
+    assert meta["name"] == DISTRIBUTION == "hdi-dynamics"
+    dist = distribution(DISTRIBUTION)
+    assert dist.version == __version__
+    assert any(ep.name == "hdi" and ep.value == "pipeline.cli:entry" for ep in dist.entry_points)
+    init = (repo_root / "pipeline" / "__init__.py").read_text()
+    assert not re.search(r"__version__\s*=\s*[\"']\d+\.\d+", init)  # no literal version in the package
+
+
+def test_provenance_names_versions_and_the_papers_doi():
+    """Every dataset's provenance: the package version with those of the numerical libraries, and the
+    paper's DOI in CF's ``references`` attribute."""
+    import netCDF4
+    import numba
+    import numpy
+    import scipy
+    import xarray
+
+    from pipeline.io import provenance
+    attrs = provenance(stage="interface")
+    versions = dict(item.rsplit(" ", 1) for item in attrs["software_versions"].split("; "))
+    assert versions == {"hdi-dynamics": __version__, "numpy": numpy.__version__, "scipy": scipy.__version__,
+                        "numba": numba.__version__, "xarray": xarray.__version__,
+                        "netCDF4": netCDF4.__version__}
+    assert "https://doi.org/10.1109/TMAG.2009.2029410" in attrs["references"]
+    assert "10.1109" not in attrs["source"]

@@ -164,3 +164,42 @@ def test_scaling_from_si_matches_the_declared_units():
     assert float(vs.scalar("real_area", 3e-12, ()).values) == pytest.approx(3.0)
     assert float(vs.scalar("mean_pressure", 4.2e8, ()).values) == pytest.approx(420.0)
     assert float(vs.history("separation", 1.5e-9, ()).values) == pytest.approx(1.5)
+
+
+#: Variables the model computes in percent already (FHM/BV, docs/model.md "FHM and BV"): their
+#: ``si_unit`` is 1 against the unit ``%`` on purpose.
+PERCENT_FROM_MODEL = {"fhm_bv", "reference_fhm_bv", "fhm_bv_mean", "fhm_bv_std"}
+
+
+def test_every_declared_unit_is_read_by_pint_with_its_si_factor():
+    """Every unit string of the schema parses in cf_xarray's pint registry (the one the README names),
+    and converts to SI base units by exactly the factor ``si_unit`` the writer divides by."""
+    from cf_xarray.units import units as ureg
+    checked = 0
+    for group in vs.GROUPS.values():
+        for name, v in group.items():
+            if v.dtype == "str" or v.flag_values is not None or v.flag_masks is not None:
+                continue
+            factor = float(ureg.Quantity(1.0, v.units or "1").to_base_units().magnitude)
+            expected = 0.01 if name in PERCENT_FROM_MODEL else v.si_unit
+            assert factor == pytest.approx(expected, rel=1e-12), (name, v.units)
+            checked += 1
+    assert checked > 100
+
+
+def test_pint_quantify_works_on_every_dataset(datasets):
+    """``import cf_xarray.units, pint_xarray`` then ``ds.pint.quantify()`` on each stage's dataset:
+    every variable becomes a quantity in its declared unit (a clearance converts to metres by 1e-9)."""
+    import cf_xarray.units  # noqa: F401 (registers the UDUNITS-style registry with pint-xarray)
+    import pint_xarray  # noqa: F401 (the .pint accessor)
+    from cf_xarray.units import units as ureg
+    for dataset, path in datasets.items():
+        with xr.open_dataset(path) as ds:
+            q = ds.pint.quantify()
+            for name, var in ds.data_vars.items():
+                if "units" in var.attrs and "flag_values" not in var.attrs and "flag_masks" not in var.attrs:
+                    assert q[name].pint.units == ureg.Unit(var.attrs["units"] or "1"), (dataset, name)
+    with xr.open_dataset(datasets["summary"]) as ds:
+        q = ds.pint.quantify()
+        metres = q["min_clearance"].pint.to("m").pint.magnitude
+        np.testing.assert_allclose(metres, ds["min_clearance"].values * 1e-9, rtol=1e-15)
