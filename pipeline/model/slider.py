@@ -58,6 +58,7 @@ from ..physics.fhm import fhm
 from ..physics.friction import friction_stress_table, lubricant_shear_stress
 from ..physics.geometry import effective_radius, ellipsoid_table_integral, friction_arm, nominal_area
 from ..physics.statistics import explicit_statistics
+from ..config.si import to_si
 from ..variables import INTERFACE, Regime
 from .bulge_table import from_dataset
 from .dmw_record import disk_speed_m_s
@@ -340,10 +341,19 @@ def tfc_point_laws(scene: Any, fh0: float, tables: Mapping[str, Any] | None = No
                     raise ValueError(f"air_bearing.{key} = {a[key]!r} needs the {law.table} table "
                                      f"({law.table}.nc: run `hdi {law.table}`)")
                 law = replace(law, force=partial(law.force, table=TABLE_READERS[law.table](ds)))
+            if law.parameters:
+                law = replace(law, force=partial(law.force, **law_parameters(scene, law)))
             tabulated.append(law)
         else:
             raise ValueError(f"air_bearing.{key} = {a[key]!r}: no compiled form {law.closed_form!r} in the kernel")
     return gap_power, tuple(tabulated)
+
+
+def law_parameters(scene: Any, law: ab.TfcLaw) -> dict[str, Any]:
+    """The numbers a TFC-point law takes (:attr:`pipeline.physics.air_bearing.TfcLaw.parameters`), read from
+    the scene in SI units (:func:`pipeline.config.si.to_si`): keyword of its ``force`` -> value."""
+    si = to_si(scene)
+    return {keyword: si[where.partition(".")[0]][where.partition(".")[2]] for keyword, where in law.parameters}
 
 
 def tfc_table(model: Model, protrusion: float) -> tuple[np.ndarray, float, float] | None:
@@ -361,7 +371,7 @@ def tfc_table(model: Model, protrusion: float) -> tuple[np.ndarray, float, float
     fh0 = model.p.FH0
     g = np.linspace(min(law.gap_range[0] for law in laws) * fh0, max(law.gap_range[1] for law in laws) * fh0,
                     max(law.points for law in laws))
-    force = sum(np.asarray(law.force(g, protrusion, model.scene), dtype=float) for law in laws)
+    force = sum(np.asarray(law.force(g, protrusion), dtype=float) for law in laws)
     h = float(g[1] - g[0])
     return dyn.piecewise_coefficients(force, h, 3), float(g[0]), h
 
