@@ -39,7 +39,7 @@ from .fanout import run_tasks
 from .model import dmw_record, scene_inputs
 from .model import slider as sl
 from .model.bulge_table import scene_table
-from .model.inputs import SimulationInputs, Source, cached
+from .model.inputs import SimulationInputs, Source, cached, for_stage
 from .model.interface_tables import build_tables, roughness_statistics
 from .model.simulation import simulate
 from .runner import Runner, scene_part, simulation_inputs
@@ -325,7 +325,7 @@ def setup(scene: Any, stage_inputs: Any, section: str, force: bool = False) -> t
     ``force``)."""
     where = str(scene.path) if scene.path else "<scene>"
     params = parse_parameters(scene[section]["parameters"], where, f"{section}.parameters")
-    inputs = stage_inputs.simulation(scene, calibration=False)
+    inputs = for_stage(scene, stage_inputs, calibration=False)
     store_path = Path(stage_inputs.out) / f"{section}.evals.jsonl"
     if force:
         store_path.unlink(missing_ok=True)

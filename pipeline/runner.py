@@ -207,12 +207,6 @@ class Inputs:
                                    f"this run's {stage} stage (inputs_key {want[:12]})")
         return ds
 
-    def simulation(self, scene: Scene, calibration: bool = True, k: float | None = None) -> SimulationInputs:
-        """What one simulation of ``scene`` reads, from this stage's upstream datasets (their keys checked
-        when read): :func:`pipeline.model.inputs.from_folder` (``calibration``: resolve k; ``k``: an
-        explicit k)."""
-        return from_folder(scene, self.out, self.upstream, calibration, k)
-
     def record(self, **metrics: Any) -> None:
         """Numbers about this run (timings, counts) for the run log, never for the datasets."""
         self.metrics.update(metrics)
@@ -670,7 +664,7 @@ def ensure(name: str, scene: Scene, out: str | Path, **options: Any) -> Path:
 def simulation_inputs(scene: Scene, out: str | Path, calibration: bool = False) -> SimulationInputs:
     """What one simulation of ``scene`` reads, its upstream stages made current in ``out`` first
     (:func:`pipeline.model.scene_inputs.simulation_inputs`; scripts, benchmarks, tests: a stage reads
-    through :meth:`Inputs.simulation`). ``calibration``: also calibrate and resolve k."""
+    through :func:`pipeline.model.inputs.for_stage`). ``calibration``: also calibrate and resolve k."""
     wanted = wanted_inputs(scene, calibration)
     if wanted:
         build(wanted, scene, out)

@@ -38,6 +38,9 @@ from . import slider as sl
 #: varied ones, an ensemble's records (8 by default) and a sweep's roughness sets.
 CACHE_SIZE = 32
 
+#: Prefix of the identity of a file that carries no inputs key (its path, modification time and size).
+_FILE_ID = "file:"
+
 #: The file of each stage's dataset in a results folder.
 FILES = {"interface": "interface.nc", "dmw": dmw_record.FILENAME, "bulge": "bulge.nc"}
 
@@ -67,7 +70,7 @@ def _read(stage: str, path: str, key: str | None) -> Any:
     ``key``; a DMW record as ``(displacement [nm], sample rate [Hz])`` (read-only: shared)."""
     ds = read_dataset(path, stage=stage, variables=dmw_record.VARIABLES if stage == "dmw" else ())
     have = ds.attrs.get(KEY_ATTR)
-    if key is not None and have is not None and have != key:
+    if key is not None and not key.startswith(_FILE_ID) and have != key:
         raise DatasetError(f"{path}: made from other inputs (inputs_key {str(have)[:12]}) than this run's "
                            f"{stage} stage (inputs_key {key[:12]})")
     if stage != "dmw":
@@ -106,7 +109,7 @@ class Source:
                 key = None  # (a missing file: reading it says so, with the stage to run)
             if key is None and os.path.isfile(path):
                 st = os.stat(path)
-                key = f"file:{path}:{st.st_mtime_ns}:{st.st_size}"
+                key = f"{_FILE_ID}{path}:{st.st_mtime_ns}:{st.st_size}"
             return cls(stage, path, key and str(key))
         return cls(stage, path, key)
 
@@ -181,6 +184,12 @@ class SimulationInputs:
         overrides :attr:`k`, ``damping_ratio`` [1] the scene's (sweeps)."""
         return sl.build_model(scene, self.tables(), self.record(), self.k if k is None else k,
                               damping_ratio=damping_ratio, bulge=self.bulge_table())
+
+
+def for_stage(scene: Any, stage_inputs: Any, calibration: bool = True, k: float | None = None) -> SimulationInputs:
+    """:func:`from_folder` of a stage's :class:`pipeline.runner.Inputs` (``stage_inputs``): its results folder
+    and the keys of its upstream stages, which the runner made current."""
+    return from_folder(scene, stage_inputs.out, stage_inputs.upstream, calibration, k)
 
 
 def from_folder(scene: Any, out: str | Path, keys: Mapping[str, str | None] | None = None,

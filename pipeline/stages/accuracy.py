@@ -109,6 +109,7 @@ from ..model import slider as sl
 from ..analyses import accuracy as knob_study
 from ..analyses.accuracy import HEADLINE, POINTS, REFERENCE, TABLE_KEYS, TOLERANCE, Result, cast
 from ..model import dmw_record, scene_inputs
+from ..model.inputs import for_stage
 from ..model.interface_tables import build_tables, roughness_statistics
 from ..model.simulation import COUNTERS, simulate
 from ..runner import Inputs, Stage, build, ensure
@@ -269,7 +270,7 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
     repeat = int(options.get("repeat") or 5)
     tol = float(options.get("tolerance") or TOLERANCE)
     # k: the option, else by the one rule with the calibration (upstream when the scene fixes no k)
-    sim = inputs.simulation(scene, k=options.get("k"))
+    sim = for_stage(scene, inputs, k=options.get("k"))
     k, k_source = sim.k, sim.k_source
     knobs = knob_study.select_knobs(scene.effects, current, options.get("knobs"), options.get("only"),
                                     scene["interface"]["model"])
@@ -291,7 +292,7 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
 
 def _upstream(scene: Any) -> tuple[str, ...]:
     """Roughness scans (statistics), the bulge table with the tabulated bulge bearing, and, when the scene
-    fixes no k, the calibration (k by :meth:`pipeline.runner.Inputs.simulation`)."""
+    fixes no k, the calibration (k by :func:`pipeline.model.inputs.for_stage`)."""
     up = ["roughness"] if scene["roughness"]["afm"] else []
     up.extend(scene_inputs.table_stages(scene))
     if scene.has("contact") and scene["contact"]["k"] is None:

@@ -16,6 +16,7 @@ import xarray as xr
 
 from ..analyses.calibration import calibrate
 from ..model import scene_inputs
+from ..model.inputs import for_stage
 from ..runner import Inputs, Stage, build
 
 log = logging.getLogger(__name__)
@@ -24,7 +25,7 @@ log = logging.getLogger(__name__)
 def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
     """The ``calibration.nc`` dataset (module docstring); logs the outcome."""
     # the datasets by file and key: the fanned-out flying runs read them on their workers, once per process
-    sim = inputs.simulation(scene, calibration=False)
+    sim = for_stage(scene, inputs, calibration=False)
     ds = calibrate(scene, sim, scheduler=inputs.options.get("scheduler"), workers=inputs.options.get("workers"))
     # timings go to the run log (.hdi/runs.jsonl), not the dataset: equal inputs, equal dataset
     inputs.record(batch_seconds=ds.attrs.pop("batch_seconds"))

@@ -12,7 +12,7 @@ main job's time by ``N``; this stage runs only the protrusions the checks read:
   model (its touchdown need not be the paper's).
 
 Every realisation runs the scene with the sweep's k (``calibration.nc`` or the scene's rule,
-:meth:`pipeline.runner.Inputs.simulation`) on its own DMW record (realisation 0: the scene's ``dmw.nc``;
+:func:`pipeline.model.inputs.for_stage`) on its own DMW record (realisation 0: the scene's ``dmw.nc``;
 ``r >= 1``: :func:`pipeline.model.dmw_record.realisation_seeds`, the seeds of ``[sweep] realisations``),
 one fan-out task per local worker (:func:`pipeline.fanout.split`), whose realisations share their
 static starts (:func:`pipeline.evaluations.evaluate_realisations`). Writes ``ensemble.nc``: the steady-window scalars on
@@ -39,6 +39,7 @@ from ..evaluations import evaluate_realisations
 from ..fanout import run_tasks, split
 from ..io import var
 from ..model import dmw_record, scene_inputs
+from ..model.inputs import for_stage
 from ..runner import Inputs, Stage
 from ..variables import ENSEMBLE, SCALARS, coordinate
 
@@ -76,7 +77,7 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
                          "record (the dmw effect with dmw.source = \"synthetic\")")
     sweep = inputs.dataset("sweep.nc", stage="sweep")
     prot = protrusions(scene, sweep)
-    sim = inputs.simulation(scene)  # (k: the sweep's, calibration.nc or the scene's rule)
+    sim = for_stage(scene, inputs)  # (k: the sweep's, calibration.nc or the scene's rule)
     seeds = dmw_record.realisation_seeds(scene["dmw"]["seed"], n)
     results: dict[int, tuple[dict[str, list[float]], float, list[str]]] = {}
 

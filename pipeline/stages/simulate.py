@@ -20,6 +20,7 @@ from typing import Any
 import xarray as xr
 
 from ..model import scene_inputs
+from ..model.inputs import for_stage
 from ..model.simulation import histories_of, model_attrs, simulate, summary_of
 from ..runner import Inputs, Stage, build, simulation_inputs
 from ..variables import flag_meaning
@@ -30,14 +31,14 @@ log = logging.getLogger(__name__)
 def model_inputs(scene: Any, out: Path) -> tuple[xr.Dataset | None, tuple | None]:
     """Interface tables and DMW record of a scene, its upstream made current in ``out`` first (scripts,
     benchmarks, tests: :func:`pipeline.runner.simulation_inputs`; a stage reads through
-    :meth:`pipeline.runner.Inputs.simulation` instead)."""
+    :func:`pipeline.model.inputs.for_stage` instead)."""
     inputs = simulation_inputs(scene, out)
     return inputs.tables(), inputs.record()
 
 
 def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset]:
     """``histories.nc`` and ``summary.nc`` for the scene's protrusion (module docstring)."""
-    sim = inputs.simulation(scene)
+    sim = for_stage(scene, inputs)
     model = sim.model(scene)
     delta = scene["tfc"]["protrusion_nm"]
     ds = simulate(model, [delta], histories=[delta], counters=True)

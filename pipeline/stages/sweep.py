@@ -45,7 +45,7 @@ from ..io import read_attrs, read_dataset, write_dataset
 from ..runner import KEY_ATTR, Inputs, Stage, ensure
 from ..variables import ENSEMBLE, HISTORIES, SCALARS, STEPPING, coordinate
 from ..model import dmw_record, scene_inputs
-from ..model.inputs import SimulationInputs, Source
+from ..model.inputs import SimulationInputs, Source, for_stage
 from ..model.simulation import DIRECTIONS, model_attrs, simulate
 from ..analyses import ensemble
 from ..config.grid import damping_grid, protrusion_grid, roughness_sets, same_point
@@ -250,7 +250,7 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset | None]:
     """
     out, key, opts = inputs.out, inputs.key, inputs.options
     prot, sets, damp, batches = plan(scene)
-    sim = inputs.simulation(scene)  # (k, the bulge table and the scene's own record and tables)
+    sim = for_stage(scene, inputs)  # (k, the bulge table and the scene's own record and tables)
     interface_paths, dmw_path = prepare_inputs(scene, out, sets, bool(opts.get("force")))
     dmw_paths, seeds = realisation_inputs(scene, out, dmw_path, bool(opts.get("force")))
     parts = out / PARTS
