@@ -8,7 +8,7 @@ targets and residuals, is :mod:`pipeline.analyses.study`):
   rebuilt only when a key they depend on changed (the runner's inputs key of ``interface``,
   ~15-45 ms), its DMW record only when a ``[dmw]`` key changed (synthesis, ~0.1 ms); otherwise the
   base scene's ``interface.nc``/``dmw.nc`` are read by path, once per worker process
-  (:func:`candidate_inputs`);
+  (:func:`candidate_inputs`, :class:`pipeline.model.inputs.SimulationInputs` and its one cache);
 * it runs at the protrusions the study needs (:func:`pipeline.model.simulation.simulate`) and keeps the
   steady-window outputs of :func:`pipeline.model.slider.summarize` in dataset units
   (:data:`pipeline.variables.SCALARS`), with k by the one rule
@@ -25,8 +25,7 @@ import hashlib
 import json
 import os
 import time
-from dataclasses import dataclass, field
-from functools import lru_cache
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Callable, Iterable, Sequence
 
@@ -37,13 +36,13 @@ from .code_version import code_key
 from .config.grid import label
 from .config.scene import SceneError
 from .fanout import run_tasks
-from .io import read_dataset
 from .model import dmw_record, scene_inputs
 from .model import slider as sl
 from .model.bulge_table import scene_table
+from .model.inputs import SimulationInputs, Source, cached, for_stage
 from .model.interface_tables import build_tables, roughness_statistics
 from .model.simulation import simulate
-from .runner import KEY_ATTR, Runner, build, scene_part
+from .runner import Runner, scene_part, simulation_inputs
 from .variables import SCALARS
 
 
@@ -54,19 +53,7 @@ def upstream(scene: Any) -> tuple[str, ...]:
 
 
 # ---------------------------------------------------------------------------------- evaluations
-@dataclass(frozen=True)
-class Inputs:
-    """The base scene's inputs, by file path, and the stage keys they were made for."""
-
-    interface_path: str | None
-    interface_key: str | None
-    dmw_path: str | None
-    dmw_key: str | None
-    bulge_path: str | None = None
-    bulge_key: str | None = None
-
-
-def base_key(scene: Any, inputs: Inputs) -> str:
+def base_key(scene: Any, inputs: SimulationInputs) -> str:
     """Hash of what an evaluation depends on besides its parameters and protrusions.
 
     The scene keys a simulation reads (:data:`pipeline.model.scene_inputs.SIMULATION_EXCLUDES` left out), the
@@ -74,10 +61,12 @@ def base_key(scene: Any, inputs: Inputs) -> str:
     rescanned file under the same name is a new base, not a store to read back), and the code of this
     module and of what it imports (:func:`pipeline.code_version.code_key`).
     """
-    blob = {"scene": scene_part(scene, ("*",), scene_inputs.SIMULATION_EXCLUDES), "interface": inputs.interface_key, "dmw": inputs.dmw_key,
-            "code": code_key(__name__)}
-    if inputs.bulge_key is not None:  # (only with the tabulated bulge bearing: other stores keep their keys)
-        blob["bulge"] = inputs.bulge_key
+    keys = {stage: getattr(inputs, stage).key if getattr(inputs, stage) is not None else None
+            for stage in ("interface", "dmw", "bulge")}
+    blob = {"scene": scene_part(scene, ("*",), scene_inputs.SIMULATION_EXCLUDES), "interface": keys["interface"],
+            "dmw": keys["dmw"], "code": code_key(__name__)}
+    if keys["bulge"] is not None:  # (only with the tabulated bulge bearing: other stores keep their keys)
+        blob["bulge"] = keys["bulge"]
     return hashlib.sha256(json.dumps(blob, sort_keys=True).encode()).hexdigest()
 
 
@@ -97,60 +86,36 @@ def evaluation_key(base: str, params: Sequence[Parameter], values: Sequence[floa
     return hashlib.sha256(blob.encode()).hexdigest()
 
 
-@dataclass(frozen=True)
-class _Made:
-    """An input identified by its stage key alone (equal keys, equal data); ``make`` makes it."""
-
-    kind: str
-    key: str
-    make: Callable[[], Any] = field(compare=False)
-
-
-@lru_cache(maxsize=32)
-def _made(what: _Made) -> Any:
-    """Per-process cache of interface tables, DMW records and roughness statistics (thread-safe, least
-    recently used dropped: the base inputs every candidate shares stay while varied ones come and go;
-    32 holds an ensemble's records, 8 by default, of the base and of a candidate besides the tables)."""
-    return what.make()
-
-
-def candidate_inputs(scene: Any, inputs: Inputs) -> tuple[Any, tuple[np.ndarray, float] | None]:
-    """Interface tables and DMW record of a candidate: the base files when unchanged, else rebuilt."""
+def candidate_inputs(scene: Any, inputs: SimulationInputs) -> SimulationInputs:
+    """A candidate's interface tables, DMW record and bulge table: the base files where the candidate's
+    stage keys are the base's, else rebuilt (once per process and key). k is not resolved (:func:`evaluate`)."""
     key = Runner(scene, ".").key  # (one runner: its file hashes and upstream keys computed once)
-    interface = None
+    interface = record = bulge = None
     if scene_inputs.needs_interface(scene):
-        ikey = key("interface")
-        if inputs.interface_path and ikey == inputs.interface_key:
-            interface = _made(_Made("interface", ikey,
-                                    lambda: read_dataset(inputs.interface_path, stage="interface")))
-        else:
-            # AFM statistics once per process, not an AFM analysis per candidate
-            stats = _made(_Made("roughness", key("roughness"), lambda: roughness_statistics(scene)))
-            interface = _made(_Made("interface", ikey, lambda: build_tables(scene, stats)))
-    record = None
+        def tables() -> Any:  # (AFM statistics once per process, not an AFM analysis per candidate)
+            stats = cached("roughness", key("roughness"), lambda: roughness_statistics(scene))
+            return build_tables(scene, stats)
+        interface = _input(inputs.interface, "interface", key("interface"), tables)
     if scene.has("dmw"):
-        dkey = key("dmw")
-        if inputs.dmw_path and dkey == inputs.dmw_key:
-            record = _made(_Made("dmw", dkey, lambda: dmw_record.load(inputs.dmw_path)[1:]))
-        else:
+        def synthesise() -> tuple[np.ndarray, float]:
             s = dmw_record.settings(scene)
             if s["source"] != "synthetic":
                 raise ValueError("a [dmw] key of a measured record cannot be a free parameter (the record is "
                                  "used as measured)")
-            record = _made(_Made("dmw", dkey, lambda: (dmw_record.synthetic_record(s), s["sample_rate_hz"])))
-    return interface, record
+            return dmw_record.synthetic_record(s), s["sample_rate_hz"]
+        record = _input(inputs.dmw, "dmw", key("dmw"), synthesise)
+    if "bulge" in scene_inputs.table_stages(scene):
+        # (a changed bulge key solves the table again: ~20 s on one core for the paper scene, per new value)
+        bulge = _input(inputs.bulge, "bulge", key("bulge"), lambda: scene_table(scene))
+    return SimulationInputs(interface, record, bulge)
 
 
-def candidate_bulge(scene: Any, inputs: Inputs) -> Any:
-    """The bulge table of a candidate with the tabulated bulge bearing (``None`` without): the base
-    ``bulge.nc`` when its key is unchanged, else solved again (:func:`pipeline.model.bulge_table.scene_table`,
-    ~20 s on one core for the paper scene: a study that varies a bulge key pays it per new value)."""
-    if "bulge" not in scene_inputs.table_stages(scene):
-        return None
-    bkey = Runner(scene, ".").key("bulge")
-    if inputs.bulge_path and bkey == inputs.bulge_key:
-        return _made(_Made("bulge", bkey, lambda: read_dataset(inputs.bulge_path, stage="bulge")))
-    return _made(_Made("bulge", bkey, lambda: scene_table(scene)))
+def _input(base: Source | None, stage: str, key: str, make: Callable[[], Any]) -> Source:
+    """The base input when the candidate's stage ``key`` is the base's (read from its file once per
+    process), else the candidate's own, made once per process and key (:func:`pipeline.model.inputs.cached`)."""
+    if base is not None and base.path and key == base.key:
+        return base
+    return Source.memory(stage, cached(stage, key, make), key)
 
 
 def seeded_record(scene: Any, seed: int) -> tuple[np.ndarray, float]:
@@ -170,8 +135,7 @@ def seeded_record(scene: Any, seed: int) -> tuple[np.ndarray, float]:
                          f"realisation); got dmw.source = {scene['dmw']['source']!r}")
     sub = scene.replace(dmw={"seed": int(seed)})
     s = dmw_record.settings(sub)
-    return _made(_Made("dmw", Runner(sub, ".").key("dmw"), lambda: (dmw_record.synthetic_record(s),
-                                                                      s["sample_rate_hz"])))
+    return cached("dmw", Runner(sub, ".").key("dmw"), lambda: (dmw_record.synthetic_record(s), s["sample_rate_hz"]))
 
 
 def run_protrusions(model: sl.Model, protrusions: Sequence[float]) -> tuple[dict[str, list[float]], float, list[str]]:
@@ -190,35 +154,27 @@ def run_protrusions(model: sl.Model, protrusions: Sequence[float]) -> tuple[dict
     return outputs, timings["kernel_seconds"], errors
 
 
-def evaluate_realisations(scene: Any, protrusions: Sequence[float], inputs: Inputs, k: float | None,
+def evaluate_realisations(scene: Any, protrusions: Sequence[float], inputs: SimulationInputs,
                           realisations: Sequence[int], seeds: Sequence[int]) -> list[tuple[int, dict[str, list[float]], float, list[str]]]:
     """One fan-out task of an ensemble of ``scene`` itself (the report's, :mod:`pipeline.stages.ensemble`):
     the realisations ``realisations`` (0: the scene's own record; else :func:`seeded_record` of the
-    matching ``seeds``) at ``protrusions`` [nm] with contact criterion ``k`` [1]. Returns, per
+    matching ``seeds``) at ``protrusions`` [nm] with the contact criterion ``inputs.k`` [1]. Returns, per
     realisation, ``(realisation, *run_protrusions(...))``; the task's models share their static starts
     (:func:`pipeline.model.slider.share_statics`).
 
-    ``inputs`` are the scene's own (current upstream datasets of the calling stage), read by path once
-    per process under their stage keys (no candidate's keys to compare).
+    ``inputs`` are the scene's own (current upstream datasets of the calling stage, with k), read by path
+    once per process under their stage keys (no candidate's keys to compare).
     """
-    interface = None
-    if inputs.interface_path:
-        interface = _made(_Made("interface", str(inputs.interface_key),
-                                lambda: read_dataset(inputs.interface_path, stage="interface")))
-    bulge = None
-    if inputs.bulge_path:
-        bulge = _made(_Made("bulge", str(inputs.bulge_key), lambda: read_dataset(inputs.bulge_path, stage="bulge")))
     models = []
     for realisation, seed in zip(realisations, seeds):
-        record = seeded_record(scene, seed) if realisation > 0 else \
-            _made(_Made("dmw", str(inputs.dmw_key), lambda: dmw_record.load(inputs.dmw_path)[1:]))
-        models.append(sl.build_model(scene, interface, record, k, bulge=bulge))
+        sim = inputs if realisation == 0 else inputs.with_record(Source.memory("dmw", seeded_record(scene, seed)))
+        models.append(sim.model(scene))
     sl.share_statics(models)
     return [(r, *run_protrusions(model, protrusions)) for r, model in zip(realisations, models)]
 
 
 def evaluate(base: Any, params: Sequence[Parameter], values: Sequence[float], protrusions: Sequence[float],
-             inputs: Inputs, realisations: int = 1) -> dict[str, Any]:
+             inputs: SimulationInputs, realisations: int = 1) -> dict[str, Any]:
     """Run one candidate at ``protrusions`` [nm]; returns its record (see :class:`EvaluationStore`).
 
     Outputs: :func:`run_protrusions`, one value per protrusion. With ``realisations`` > 1 the candidate
@@ -234,14 +190,12 @@ def evaluate(base: Any, params: Sequence[Parameter], values: Sequence[float], pr
     per_seed: list[dict[str, list[float]]] = []
     try:
         scene = with_values(base, params, values)
-        interface, record = candidate_inputs(scene, inputs)
-        k = scene_inputs.contact_k(scene)[0]
-        records = [record]
+        sim = replace(candidate_inputs(scene, inputs), k=scene_inputs.contact_k(scene)[0])
+        sims = [sim]
         if realisations > 1:
             seeds = dmw_record.realisation_seeds(scene["dmw"]["seed"], realisations)
-            records += [seeded_record(scene, seed) for seed in seeds[1:]]
-        bulge = candidate_bulge(scene, inputs)
-        models = [sl.build_model(scene, interface, rec, k, bulge=bulge) for rec in records]
+            sims += [sim.with_record(Source.memory("dmw", seeded_record(scene, seed))) for seed in seeds[1:]]
+        models = [s.model(scene) for s in sims]
         sl.share_statics(models)  # (the static starts are on the mean disk: found once for all records)
     except (SceneError, ValueError, sl.IntegrationError) as exc:
         errors.append(str(exc))
@@ -267,7 +221,7 @@ def evaluate(base: Any, params: Sequence[Parameter], values: Sequence[float], pr
 
 
 def evaluate_batch(base: Any, params: Sequence[Parameter], rows: Sequence[tuple[str, Sequence[float]]],
-                   protrusions: Sequence[float], inputs: Inputs, realisations: int = 1) -> list[tuple[str, dict[str, Any]]]:
+                   protrusions: Sequence[float], inputs: SimulationInputs, realisations: int = 1) -> list[tuple[str, dict[str, Any]]]:
     """One fan-out task: evaluate the candidates ``rows = [(key, values), ...]`` (executed on a worker)."""
     return [(key, evaluate(base, params, values, protrusions, inputs, realisations)) for key, values in rows]
 
@@ -325,7 +279,7 @@ class Evaluator:
     base: Any
     params: Sequence[Parameter]
     protrusions: Sequence[float]
-    inputs: Inputs
+    inputs: SimulationInputs
     store: EvaluationStore
     batch_size: int = 8
     scheduler: str | None = None
@@ -364,39 +318,21 @@ class Evaluator:
         return [self.store[k] for k in keys]
 
 
-def stage_inputs_of(scene: Any, stage_inputs: Any) -> Inputs:
-    """The scene's own inputs of an evaluation, from a stage's :class:`pipeline.runner.Inputs` (the upstream
-    datasets the runner made current): the paths of what one simulation reads (:func:`upstream`) and
-    their stage keys."""
-    wanted = upstream(scene)
-    files = {"interface": "interface.nc", "dmw": dmw_record.FILENAME, "bulge": "bulge.nc"}
-    paths = {st: str(stage_inputs.path(f)) if st in wanted else None for st, f in files.items()}
-    keys = {st: stage_inputs.upstream.get(st) if paths[st] else None for st in files}
-    return Inputs(paths["interface"], keys["interface"], paths["dmw"], keys["dmw"], paths["bulge"], keys["bulge"])
-
-
-def setup(scene: Any, stage_inputs: Any, section: str, force: bool = False) -> tuple[list[Parameter], Inputs, EvaluationStore]:
+def setup(scene: Any, stage_inputs: Any, section: str, force: bool = False) -> tuple[list[Parameter], SimulationInputs, EvaluationStore]:
     """The free parameters of ``[section]``, the base inputs of the study stage (``stage_inputs``, its
-    :class:`pipeline.runner.Inputs`: the upstream datasets the runner made current) and the evaluation
-    store ``<results>/<section>.evals.jsonl`` (emptied first with ``force``)."""
+    :class:`pipeline.runner.Inputs`: the upstream datasets the runner made current, by file and key; k is
+    each candidate's own) and the evaluation store ``<results>/<section>.evals.jsonl`` (emptied first with
+    ``force``)."""
     where = str(scene.path) if scene.path else "<scene>"
     params = parse_parameters(scene[section]["parameters"], where, f"{section}.parameters")
-    inputs = stage_inputs_of(scene, stage_inputs)
+    inputs = for_stage(scene, stage_inputs, calibration=False)
     store_path = Path(stage_inputs.out) / f"{section}.evals.jsonl"
     if force:
         store_path.unlink(missing_ok=True)
     return params, inputs, EvaluationStore(store_path)
 
 
-def prepare_inputs(scene: Any, out: Path) -> Inputs:
-    """The base scene's ``interface.nc`` and ``dmw.nc`` in ``out``, made current by the runner, by path,
-    with the inputs keys they carry (scripts and tests; a study stage uses :func:`setup`)."""
-    wanted = upstream(scene)
-    paths = build(wanted, scene, out) if wanted else {}
-    ipath = str(paths["interface"][0]) if "interface" in paths else None
-    dpath = str(paths["dmw"][0]) if "dmw" in paths else None
-    bpath = str(paths["bulge"][0]) if "bulge" in paths else None
-    ikey = read_dataset(ipath).attrs.get(KEY_ATTR) if ipath else None
-    dkey = read_dataset(dpath).attrs.get(KEY_ATTR) if dpath else None
-    bkey = read_dataset(bpath).attrs.get(KEY_ATTR) if bpath else None
-    return Inputs(ipath, ikey, dpath, dkey, bpath, bkey)
+def prepare_inputs(scene: Any, out: Path) -> SimulationInputs:
+    """The base scene's inputs in ``out``, made current by the runner, by file and the inputs keys they
+    carry (scripts and tests; a study stage uses :func:`setup`)."""
+    return simulation_inputs(scene, out, calibration=False)

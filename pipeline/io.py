@@ -72,6 +72,11 @@ def is_temporary(name: str) -> bool:
     return _TEMPORARY.fullmatch(name) is not None
 
 
+#: Global attribute of every dataset the runner writes: the inputs key of the stage that made it
+#: (:mod:`pipeline.runner`); equal keys, equal data.
+KEY_ATTR = "inputs_key"
+
+
 class DatasetError(ValueError):
     """A dataset on disk is missing, unreadable, or lacks what a stage needs."""
 

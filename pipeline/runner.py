@@ -51,13 +51,13 @@ import xarray as xr
 
 from .code_version import code_key
 from .fanout import shared_folder
-from .io import (DatasetError, RUN_ID, file_hash, is_temporary, read_attrs, read_dataset, temporary_path,
+from .model.inputs import SimulationInputs, from_folder
+from .model.scene_inputs import simulation_inputs as wanted_inputs
+from .io import (KEY_ATTR, DatasetError, RUN_ID, file_hash, is_temporary, read_attrs, read_dataset, temporary_path,
                  write_dataset)
 
 log = logging.getLogger(__name__)
 
-#: Global attribute of every dataset the runner writes: the stage's inputs key.
-KEY_ATTR = "inputs_key"
 #: Global attribute of a stage's first dataset: JSON list of the outputs this computation produced.
 OUTPUTS_ATTR = "stage_outputs"
 #: Hidden folder of the runner inside a results folder (manifests of non-NetCDF outputs, run log).
@@ -659,6 +659,16 @@ def build(targets: str | Iterable[str], scene: Scene, out: str | Path, *, force:
 def ensure(name: str, scene: Scene, out: str | Path, **options: Any) -> Path:
     """The primary output of stage ``name`` in ``out``, made current first."""
     return build([name], scene, out, **options)[name][0]
+
+
+def simulation_inputs(scene: Scene, out: str | Path, calibration: bool = False) -> SimulationInputs:
+    """What one simulation of ``scene`` reads, its upstream stages made current in ``out`` first
+    (:func:`pipeline.model.scene_inputs.simulation_inputs`; scripts, benchmarks, tests: a stage reads
+    through :func:`pipeline.model.inputs.for_stage`). ``calibration``: also calibrate and resolve k."""
+    wanted = wanted_inputs(scene, calibration)
+    if wanted:
+        build(wanted, scene, out)
+    return from_folder(scene, out, calibration=calibration)
 
 
 def last_run(out: str | Path, stage: str) -> dict[str, Any] | None:

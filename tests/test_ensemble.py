@@ -10,7 +10,7 @@ import pytest
 from pipeline.io import read_dataset
 from pipeline.config.scene import load_scene
 from pipeline.model import dmw_record
-from pipeline.stages import dmw as dmw_stage
+from pipeline.analyses import ensemble
 from pipeline.stages import sweep as sweep_stage
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -70,7 +70,7 @@ def test_measured_record_has_one_realisation(tmp_path):
     rec.write_text("x\n1\n")
     scene = load_scene(PAPER, SMALL + ["sweep.realisations=2"])
     with pytest.raises(ValueError, match="synthetic"):
-        dmw_stage.realisation_record(scene.replace(dmw={"source": str(rec)}), tmp_path / "r", 1)
+        sweep_stage.realisation_record(scene.replace(dmw={"source": str(rec)}), tmp_path / "r", 1)
 
 
 def test_touchdown_probability_counts_computed_realisations_only():
@@ -79,7 +79,7 @@ def test_touchdown_probability_counts_computed_realisations_only():
     dims = ("protrusion", "realisation")
     regime = np.array([[0.0, 1.0, np.nan], [2.0, np.nan, np.nan], [np.nan, np.nan, np.nan]])
     fhm = np.where(np.isnan(regime), np.nan, 10.0)
-    stats = sweep_stage.ensemble_statistics({"regime": SCALARS["regime"].data(regime, dims),
+    stats = ensemble.statistics({"regime": SCALARS["regime"].data(regime, dims),
                                              "fhm_bv": SCALARS["fhm_bv"].data(fhm, dims)})
     p = stats["touchdown_probability"].values
     np.testing.assert_array_equal(p[:2], [0.5, 1.0])   # 1 of 2 computed, 1 of 1

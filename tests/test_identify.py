@@ -9,6 +9,7 @@ import xarray as xr
 from pipeline import evaluations
 from pipeline.analyses import study
 from pipeline.model import scene_inputs
+from pipeline.model.inputs import SimulationInputs, Source, cached
 from pipeline.config.scene import SceneError, load_scene
 from pipeline.stages import identify
 
@@ -161,20 +162,20 @@ def test_store_ignores_a_line_cut_short_by_a_kill(tmp_path):
 
 
 def test_base_key_follows_what_an_evaluation_reads(paper_scene):
-    inputs = evaluations.Inputs(None, "interface-key", None, "dmw-key")
+    inputs = SimulationInputs(Source("interface", key="interface-key"), Source("dmw", key="dmw-key"))
     key = evaluations.base_key(paper_scene, inputs)
     # settings of other stages and names do not change an evaluation
     assert evaluations.base_key(paper_scene.replace(sweep={"damping_ratio": [0.05]}, identify={"population": 5},
                                               scene={"description": "x"}), inputs) == key
     # a simulation key does; so does an input made from other data (e.g. a rescanned AFM file)
     assert evaluations.base_key(paper_scene.replace(solver={"duration_ms": 0.9}), inputs) != key
-    assert evaluations.base_key(paper_scene, evaluations.Inputs(None, "other", None, "dmw-key")) != key
+    assert evaluations.base_key(paper_scene, SimulationInputs(Source("interface", key="other"), inputs.dmw)) != key
 
 
 def test_candidate_inputs_are_cached_by_stage_key_alone():
     made = []
-    first = evaluations._made(evaluations._Made("test", "key-1", lambda: made.append(1) or "tables"))
-    again = evaluations._made(evaluations._Made("test", "key-1", lambda: made.append(2) or "other"))  # same key: not made again
+    first = cached("test", "key-1", lambda: made.append(1) or "tables")
+    again = cached("test", "key-1", lambda: made.append(2) or "other")  # same key: not made again
     assert first == again == "tables" and made == [1]
 
 

@@ -109,3 +109,113 @@ def test_the_checker_sees_an_upward_import(tmp_path):
     found = imports(probe, module)
     assert ("pipeline.model.slider", True, 1) in found and ("pipeline.stages.sweep", False, 4) in found
     assert all(rank(t) > rank(module) for t, _, _ in found)
+
+
+# ------------------------------------------------------------------------ rules beyond the layers
+#: The stage modules: each is a plug-in of the runner; what two stages share lives a layer down (model/,
+#: analyses/) or in a non-stage module of the stage layer (runner, evaluations), never in another stage.
+STAGES = "pipeline.stages"
+
+
+def stage_imports(path: Path, module: str | None = None) -> list[tuple[str, int]]:
+    """``(stage module, line)`` of every other stage module that the stage module ``path`` imports."""
+    me = module or module_name(path)
+    return [(t, line) for t, _, line in imports(path, me)
+            if t.startswith(STAGES + ".") and t.split(".")[2] != me.split(".")[2]]
+
+
+def _scene_sections() -> set[str]:
+    from pipeline.config.scene import SCHEMA
+    return set(SCHEMA)
+
+
+#: Parameter names that hand a physics function the scene (or a section of it) instead of numbers.
+SCENE_PARAMETERS = {"scene", "config", "cfg", "section"}
+
+
+def scene_reads(source: str, sections: set[str]) -> list[tuple[str, int]]:
+    """``(what, line)`` of each place a physics source reads a scene: a function parameter named as a
+    scene (:data:`SCENE_PARAMETERS`) or a subscript by a scene section's name (``x["air_bearing"]``)."""
+    found = []
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda)):
+            a = node.args
+            for arg in (*a.posonlyargs, *a.args, *a.kwonlyargs, a.vararg, a.kwarg):
+                if arg is not None and arg.arg in SCENE_PARAMETERS:
+                    found.append((f"parameter {arg.arg!r}", node.lineno))
+        elif isinstance(node, ast.Subscript) and isinstance(node.slice, ast.Constant) \
+                and node.slice.value in sections:
+            found.append((f"subscript [{node.slice.value!r}]", node.lineno))
+    return found
+
+
+#: Calls that read a file (by the called name: a function or a method), and the readers of pipeline.io.
+FILE_READERS = {"open", "read_dataset", "read_attrs", "open_dataset", "open_mfdataset", "load_dataset",
+                "open_dataarray", "load", "loadtxt", "genfromtxt", "fromfile", "read_text", "read_bytes",
+                "read_csv", "load_record"}
+IO_READERS = {"read_dataset", "read_attrs"}
+
+
+def file_reads(source: str) -> list[tuple[str, int]]:
+    """``(what, line)`` of each call in ``source`` that reads a file (:data:`FILE_READERS`, ``np.load``,
+    ``path.read_text()``, ...) and each import of a reader of :mod:`pipeline.io`."""
+    found = []
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.Call):
+            f = node.func
+            name = f.id if isinstance(f, ast.Name) else f.attr if isinstance(f, ast.Attribute) else None
+            if name in FILE_READERS:
+                found.append((f"call {name}()", node.lineno))
+        elif isinstance(node, ast.ImportFrom) and node.module and node.module.split(".")[-1] == "io" \
+                and (node.level or node.module.startswith("pipeline")):
+            found += [(f"import {a.name} from io", node.lineno) for a in node.names if a.name in IO_READERS]
+    return found
+
+
+def _in(package: str) -> list[Path]:
+    return [p for p in MODULES if module_name(p).startswith(package + ".")]
+
+
+@pytest.mark.parametrize("path", _in(STAGES), ids=lambda p: module_name(p))
+def test_no_stage_imports_another_stage(path):
+    found = stage_imports(path)
+    assert not found, (f"{module_name(path)} imports another stage: "
+                       + ", ".join(f"{t} (line {ln})" for t, ln in found)
+                       + "; move what they share to model/, analyses/ or a non-stage module (runner.py)")
+
+
+@pytest.mark.parametrize("path", _in("pipeline.physics"), ids=lambda p: module_name(p))
+def test_physics_reads_no_scene(path):
+    found = scene_reads(path.read_text(), _scene_sections())
+    assert not found, (f"{module_name(path)} reads a scene (physics takes numbers in SI; the model layer "
+                       "reads the scene): " + ", ".join(f"{w} (line {ln})" for w, ln in found))
+
+
+@pytest.mark.parametrize("path", _in("pipeline.analyses"), ids=lambda p: module_name(p))
+def test_analyses_open_no_files(path):
+    found = file_reads(path.read_text())
+    assert not found, (f"{module_name(path)} reads a file (an analysis works on data its stage read): "
+                       + ", ".join(f"{w} (line {ln})" for w, ln in found))
+
+
+def test_the_rules_see_a_stage_import_a_scene_read_and_a_file_read(tmp_path):
+    """Each rule can fail: synthetic offending sources are caught (parsed from temporary files under
+    the names of a stage, never written into the package), and clean ones are not."""
+    probe = tmp_path / "probe.py"
+    probe.write_text("from .sweep import batch_model\nfrom . import simulate\nfrom ..model import slider\n"
+                     "from .probe import x\n")
+    assert stage_imports(probe, "pipeline.stages.probe") == [("pipeline.stages.sweep", 1),
+                                                             ("pipeline.stages.simulate", 2)]
+    sections = _scene_sections()
+    assert scene_reads("def force(g, delta, scene):\n    return g\n", sections) == [("parameter 'scene'", 1)]
+    assert scene_reads("def f(g, *, cfg=None):\n    pass\n", sections) == [("parameter 'cfg'", 1)]
+    assert scene_reads("def f(s):\n    return s['air_bearing']['flying_height_nm']\n", sections) \
+        == [("subscript ['air_bearing']", 2)]
+    assert scene_reads("def f(g, g0, k_t):\n    return {'tfc': g}['x'] * g0\n", sections) == []
+    bad = ("import numpy as np\nfrom ..io import read_dataset, var\nfrom pathlib import Path\n"
+           "def f(p):\n    a = open(p)\n    b = np.load(p)\n    c = Path(p).read_text()\n"
+           "    d = xr.open_dataset(p)\n    return read_dataset(p)\n")
+    assert sorted(w for w, _ in file_reads(bad)) == sorted(
+        ["import read_dataset from io", "call open()", "call load()", "call read_text()", "call open_dataset()",
+         "call read_dataset()"])
+    assert file_reads("from ..io import temporary_path, var\ndef f(x):\n    return x.sum()\n") == []

@@ -43,7 +43,7 @@ def record(scene, duration_s=1.2e-3):
                            d["seed"]), fs
 
 
-def constant_lift(g: np.ndarray, delta: float, scene) -> np.ndarray:
+def constant_lift(g: np.ndarray, delta: float) -> np.ndarray:
     """A dummy law: ``LIFT`` [N] up at every gap [m] and protrusion."""
     return np.full_like(g, LIFT)
 
@@ -83,7 +83,7 @@ def test_a_new_tfc_law_is_its_function_and_one_registry_line(monkeypatch):
 def test_tabulated_law_reproduces_the_compiled_gap_power_law(monkeypatch):
     # The gap-power law registered a second time without its compiled form goes through the table:
     # force and stiffness at the TFC point and the whole run agree with the closed form.
-    monkeypatch.setitem(ab.TFC_STIFFENING, "gap-power-tabulated", ab.TfcLaw(ab.gap_power_force))
+    monkeypatch.setitem(ab.TFC_STIFFENING, "gap-power-tabulated", replace(ab.TFC_STIFFENING["gap-power"], closed_form=None))
     law = {"tfc_stiffness_n_m": 3.0e5, "tfc_stiffening_exponent": 1.5}
     effects = ["air_bearing", "pitch", "dmw"]
     compiled = make_scene(effects, tfc_stiffening="gap-power", **law)

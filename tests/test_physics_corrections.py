@@ -20,7 +20,7 @@ from pipeline.physics.fhm import FHM_MEASURES, fhm
 from pipeline.config.scene import SceneError, load_scene, scene_from_dict
 from pipeline.model.interface_tables import build_tables, roughness_statistics
 from pipeline.model import scene_inputs
-from pipeline.stages.simulate import model_attrs
+from pipeline.model.simulation import model_attrs
 
 NM = 1e-9
 K = 0.978  # docs/model.md, section "Contact criterion": the paper's 32.8 % two-sided

@@ -51,9 +51,8 @@ import xarray as xr
 
 from ..config.grid import label, protrusion_grid
 from ..fanout import run_tasks, split
-from ..io import read_dataset
-from ..model import dmw_record
 from ..model import slider as sl
+from ..model.inputs import SimulationInputs
 from ..physics.statistics import contact_probabilities, k_from_probability
 from ..units import NM
 from ..variables import CALIBRATION
@@ -215,18 +214,11 @@ def k_star(model: sl.Model, delta_nm: float, lo_steady: float, lo_all: float,
     return k, n
 
 
-def threshold_batch(scene: Any, interface_path: str, dmw_path: str | None, protrusions: tuple[float, ...],
-                    k_range: tuple[float, float], tol: float,
-                    bulge_path: str | None = None) -> list[tuple[float, float, float, str, int]]:
+def threshold_batch(scene: Any, inputs: SimulationInputs, protrusions: tuple[float, ...],
+                    k_range: tuple[float, float], tol: float) -> list[tuple[float, float, float, str, int]]:
     """``(protrusion [nm], k* [1], steady minimum of d [nm], note, simulations)`` for each protrusion (a task;
-    its inputs travel by file path; ``bulge_path``: the bulge table, with the tabulated bulge bearing)."""
-    interface = read_dataset(interface_path, stage="interface")
-    record = None
-    if dmw_path:
-        _, w_nm, fs = dmw_record.load(dmw_path)
-        record = (w_nm, fs)
-    bulge = read_dataset(bulge_path, stage="bulge") if bulge_path else None
-    model = sl.build_model(scene, interface, record, k=0.0, bulge=bulge)
+    its inputs travel as :class:`pipeline.model.inputs.SimulationInputs`, by file and key, not in the task)."""
+    model = inputs.model(scene, k=0.0)
     off = replace(model, k=CONTACT_OFF_K)  # (one model for the batch's flying runs: one fold search)
     rows = []
     for delta in protrusions:
@@ -237,9 +229,9 @@ def threshold_batch(scene: Any, interface_path: str, dmw_path: str | None, protr
     return rows
 
 
-def thresholds(scene: Any, interface_path: str, dmw_path: str | None, protrusions: np.ndarray,
+def thresholds(scene: Any, inputs: SimulationInputs, protrusions: np.ndarray,
                k_range: tuple[float, float], tol: float, scheduler: str | None = None,
-               workers: int | None = None, bulge_path: str | None = None) -> tuple[dict[float, tuple], float]:
+               workers: int | None = None) -> tuple[dict[float, tuple], float]:
     """``k*`` of every protrusion [nm], fanned out: ``({protrusion: (k*, min d [nm], note, sims)}, seconds)``."""
     chunks = split([float(p) for p in protrusions], scheduler, workers)
     result: dict[float, tuple] = {}
@@ -248,8 +240,7 @@ def thresholds(scene: Any, interface_path: str, dmw_path: str | None, protrusion
         for delta, k, lo, note, sims in rows:
             result[delta] = (k, lo, note, sims)
 
-    seconds = run_tasks(threshold_batch, [(scene, interface_path, dmw_path, c, k_range, tol, bulge_path)
-                                          for c in chunks],
+    seconds = run_tasks(threshold_batch, [(scene, inputs, c, k_range, tol) for c in chunks],
                         scheduler=scheduler, workers=workers, on_done=keep)
     return result, seconds
 
@@ -294,21 +285,20 @@ def choose_k(k_low: float, k_high: float, rule: str, probability: float | None) 
                f"(touchdown.k_choice = 'paper')")
 
 
-def calibrate(scene: Any, interface: xr.Dataset, record: tuple[np.ndarray, float] | None, interface_path: str,
-              dmw_path: str | None, scheduler: str | None = None, workers: int | None = None,
-              bulge: xr.Dataset | None = None, bulge_path: str | None = None) -> xr.Dataset:
+def calibrate(scene: Any, inputs: SimulationInputs, scheduler: str | None = None,
+              workers: int | None = None) -> xr.Dataset:
     """Run the calibration of a scene; returns ``calibration.nc``'s dataset.
 
-    ``interface``, ``record`` (and ``bulge``, the bulge table with the tabulated bulge bearing): its
-    interface tables and DMW record in memory; ``interface_path``, ``dmw_path`` (``bulge_path``): the
-    same as files, for the fanned-out flying runs of the exact method (tasks take file paths);
+    ``inputs``: its interface tables, DMW record and bulge table (the tabulated bulge bearing), given by
+    the calibrate stage (:class:`pipeline.model.inputs.SimulationInputs`; the fanned-out flying runs of the
+    exact method take them along and read files by path on their workers, once per process);
     ``scheduler``, ``workers``: where those runs go (:func:`pipeline.fanout.run_tasks`).
     """
     if not scene.has("contact"):
         raise ValueError("calibration needs the contact effect in scene.effects")
     td = scene["touchdown"]
     method = td["method"]
-    model = sl.build_model(scene, interface, record, k=0.0, bulge=bulge)
+    model = inputs.model(scene, k=0.0)
     k_range = tuple(td["k_range"])
     tol = td["k_tolerance"]
     grid = protrusion_grid(scene)
@@ -318,8 +308,7 @@ def calibrate(scene: Any, interface: xr.Dataset, record: tuple[np.ndarray, float
     collapsed: list[float] = []
     if method == "exact":
         todo = np.union1d(grid, label([td["onset_nm"], td["previous_nm"]]))
-        found, seconds = thresholds(scene, interface_path, dmw_path, todo, k_range, tol, scheduler, workers,
-                                    bulge_path)
+        found, seconds = thresholds(scene, inputs, todo, k_range, tol, scheduler, workers)
         k_on, st_on = _status(found[float(label(td["onset_nm"]))][0], k_range)
         k_prev, st_prev = _status(found[float(label(td["previous_nm"]))][0], k_range)
         n_on = n_prev = 0

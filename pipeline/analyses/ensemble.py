@@ -14,7 +14,9 @@ works on xarray data with a ``realisation`` dimension (and, where it says so, ``
 * :func:`median_spread` (FHM/BV: median and the 10-90 % range, robust to the one realisation that
   snaps into contact), :func:`mean_std` (the light-contact state: mean +- sample standard deviation),
   :func:`exceedance_probability` (``P(BV > 20 %)``), :func:`flying_mean` (each realisation's mean FHM
-  over its flying protrusions).
+  over its flying protrusions);
+* :func:`statistics`: the ensemble summaries of ``sweep.nc`` and ``ensemble.nc`` (``<name>_mean``/``_std``,
+  ``touchdown_probability``) from their per-realisation variables.
 
 Realisations without a value (NaN: a failed run, a contact quantity of a flying run) count in no
 statistic; a statistic with no value at all is NaN.
@@ -27,7 +29,8 @@ import warnings
 import numpy as np
 import xarray as xr
 
-from ..model.slider import touched_in_summary
+from ..model.slider import FLYING, touched_in_summary
+from ..variables import ENSEMBLE, ENSEMBLE_OF, REGIME_FILL
 
 #: The realisation dimension.
 DIM = "realisation"
@@ -118,3 +121,31 @@ def _nan_reduce(values: xr.DataArray, dim: str, fn) -> xr.DataArray:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         return xr.apply_ufunc(lambda a: fn(np.asarray(a, float), axis=-1), values, input_core_dims=[[dim]])
+
+
+def statistics(data: dict[str, xr.Variable]) -> dict[str, xr.Variable]:
+    """Mean, standard deviation and touchdown probability over the ``realisation`` dimension.
+
+    ``<name>_mean``/``<name>_std`` [units of name]: mean and sample standard deviation (ddof = 1) over
+    the realisations with a value (``interference`` and the stresses are NaN while flying);
+    ``touchdown_probability`` [1]: fraction of the realisations with a regime that are in contact at
+    some time of the steady window (regime not flying), versus protrusion, roughness and damping; a
+    point not computed (regime = its fill value) counts in neither, as the NaNs of the means.
+    """
+    out: dict[str, xr.Variable] = {}
+    for name in ENSEMBLE_OF:
+        if name not in data:
+            continue
+        v = data[name]
+        # (all-NaN slices, never in contact, give NaN, as documented)
+        mean, std = (x.values for x in mean_std(xr.DataArray(v).astype(float), dim=v.dims[-1]))
+        dims = v.dims[:-1]
+        out[name + "_mean"] = ENSEMBLE[name + "_mean"].data(mean, dims)
+        out[name + "_std"] = ENSEMBLE[name + "_std"].data(std, dims)
+    if "regime" in data:
+        reg = np.asarray(data["regime"].values)
+        computed = reg != REGIME_FILL
+        with np.errstate(invalid="ignore"):  # no realisation computed: NaN
+            p = np.sum(computed & (reg != FLYING), axis=-1) / np.sum(computed, axis=-1)
+        out["touchdown_probability"] = ENSEMBLE["touchdown_probability"].data(p, data["regime"].dims[:-1])
+    return out

@@ -18,9 +18,10 @@ import xarray as xr
 
 from ..physics import bulge_bearing as bb
 from ..config.grid import TOL_NM
+from ..config.si import to_si
 from .dmw_record import disk_speed_m_s
 from .interface_tables import deepest_protrusion_nm
-from ..units import MPA, NM, UM
+from ..units import NM, UM
 from ..variables import BULGE
 
 
@@ -149,9 +150,10 @@ def scene_table(scene: Any) -> xr.Dataset:
     speed of ``[dmw] radius_mm, rpm`` (:func:`pipeline.model.dmw_record.disk_speed_m_s`), the Reynolds grid
     ``solver.bulge_cells_per_a``, ``solver.bulge_cells_per_b``; gaps :func:`table_gaps`, protrusions
     :func:`table_protrusions` up to :func:`table_stop_nm`."""
-    a, t, sol = scene["air_bearing"], scene["tfc"], scene["solver"]
+    a, sol = scene["air_bearing"], scene["solver"]
+    si = to_si(scene)
     grid = bb.ReynoldsGrid(cells_per_a=sol["bulge_cells_per_a"], cells_per_b=sol["bulge_cells_per_b"])
-    return bulge_table(model=a["bulge"], p_pad=a["pad_pressure_mpa"] * MPA, a=t["half_length_um"] * UM,
-                       b=t["half_width_um"] * UM, speed=disk_speed_m_s(scene["dmw"]), gaps=table_gaps(),
+    return bulge_table(model=a["bulge"], p_pad=si.air_bearing.pad_pressure, a=si.tfc.half_length,
+                       b=si.tfc.half_width, speed=disk_speed_m_s(scene["dmw"]), gaps=table_gaps(),
                        protrusions=table_protrusions(table_stop_nm(scene), PROTRUSION_STEP_NM),
                        profile=a["bulge_profile"], slip=a["bulge_slip"], grid=grid)

@@ -15,8 +15,9 @@ from typing import Any
 import numpy as np
 
 from ..io import read_dataset
+from ..config.si import to_si
 from ..physics import dmw as phys
-from ..units import KHZ, MHZ, MM, MS
+from ..units import MM
 
 FILENAME = "dmw.nc"
 
@@ -44,13 +45,14 @@ def settings(scene: Any) -> dict[str, Any]:
     ``duration_s`` [s], ``record_rate_hz`` [Hz] or ``None``, ``disk_speed_m_s`` [m/s].
     """
     d = scene["dmw"]
-    band_hz = (float(d["band_khz"][0]) * KHZ, float(d["band_khz"][1]) * KHZ)
+    si = to_si(scene)
+    band_hz = tuple(float(f) for f in si.dmw.band)
     speed = disk_speed_m_s(d)
     if d["duration_ms"] is not None:
-        duration_s = float(d["duration_ms"]) * MS
+        duration_s = float(si.dmw.duration)
     else:
-        duration_s = default_duration(scene["solver"]["duration_ms"] * MS, scene["slider"], speed,
-                                      band_hz[0], float(d["sample_rate_mhz"]) * MHZ)
+        duration_s = default_duration(si.solver.duration, scene["slider"], speed, band_hz[0],
+                                      float(si.dmw.sample_rate))
     source = d["source"]
     if source != "synthetic":
         p = Path(source).expanduser()
@@ -65,7 +67,7 @@ def settings(scene: Any) -> dict[str, Any]:
         "band_hz": band_hz,
         "exponent": float(d["exponent"]),
         "seed": int(d["seed"]),
-        "sample_rate_hz": float(d["sample_rate_mhz"]) * MHZ,
+        "sample_rate_hz": float(si.dmw.sample_rate),
         "duration_s": duration_s,
         "record_rate_hz": d["sample_rate_hz"],
         "disk_speed_m_s": speed,

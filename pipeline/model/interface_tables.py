@@ -135,7 +135,7 @@ def build_tables(scene: Any, stats: dict[str, float]) -> xr.Dataset:
     if wanted:
         # The table must reach past the Gaussian window (TAIL sigma_s), where the contact terms vanish,
         # so that holding the last value beyond the table is exact for them (very rough surfaces).
-        d_max = max(sol["table_max_nm"] * NM, (isbl.TAIL + 0.5) * p.sigma_s)
+        d_max = max(to_si(scene).solver.table_max, (isbl.TAIL + 0.5) * p.sigma_s)
         # ... and start below every separation the slider can reach: table_min_sigma summit (and
         # surface) sigmas, and 1 nm below the deepest nominal interference FH0 - protrusion of the scene
         # and its sweep (below the table the kernel extrapolates linearly).

@@ -8,7 +8,9 @@ parameter studies, the benchmarks and the tests) shares:
 * :func:`contact_k`: the contact criterion constant k and where it came from (docs/model.md, section
   "Contact criterion").
 
-The model itself is :func:`pipeline.model.slider.build_model` of the scene and these inputs in memory.
+The inputs themselves, read or in memory, are :class:`pipeline.model.inputs.SimulationInputs`; the model
+is :func:`pipeline.model.slider.build_model` of the scene and those inputs
+(:meth:`pipeline.model.inputs.SimulationInputs.model`).
 """
 
 from __future__ import annotations

@@ -25,14 +25,14 @@ Protocols (scene key ``sweep.protocol``, docs/model.md, section "Heater stepping
 from __future__ import annotations
 
 import time
-from typing import Sequence
+from typing import Any, Sequence
 
 import numpy as np
 import xarray as xr
 
 from ..config.grid import same_point
 from ..config.scene import PROTOCOLS
-from ..units import NM
+from ..units import MS, NM
 from ..variables import HISTORIES, STEPPING, coordinate, history, scalar
 from . import slider as sl
 
@@ -231,3 +231,32 @@ def chain_protrusions(protrusions: np.ndarray, touched_up: np.ndarray,
         if free.size:
             to = float(protrusions[len(protrusions) - 1 - free[0]])
     return td, to
+
+
+def model_attrs(model: sl.Model, k_source: str) -> dict[str, Any]:
+    """Global attributes describing the assembled model (stiffness roots, damping, k)."""
+    info = model.info
+    extra: dict[str, Any] = {}
+    if model.tfc_stiffening is not None:
+        extra = {"tfc_stiffness_n_m": float(model.tfc_stiffening.k_t), "tfc_stiffening_exponent": float(model.tfc_stiffening.q)}
+    if info["friction_law"] == "coefficient":
+        extra["friction_coefficient"] = float(info["friction_coefficient"])
+    return extra | {
+        "k": model.k if np.isfinite(model.k) else "none",
+        "k_source": k_source,
+        "k_sigma_nm": model.k_sigma / NM,
+        "front_stiffness_n_m": info["k_f"], "rear_stiffness_n_m": info["k_r"],
+        "front_damper_n_s_m": info["c_f"], "rear_damper_n_s_m": info["c_r"],
+        "stiffness_roots": str([{k: float(v) for k, v in r.items()} for r in info["roots"]]),
+        "stiffness_root_chosen": info["chosen"],
+        "stiffness_roots_note": "node_mode1/2: position ahead of the CG [m] that does not move in the "
+                                "120/300 kHz modes; 'stiff-rear' takes k_r > k_f (docs/model.md, section 'Air bearing')",
+        "rear_law": info["rear_law"],
+        "tfc_stiffening": info["tfc_stiffening"],
+        "friction_law": info["friction_law"],
+        "summit_offset_y_s_nm": info["y_s"] / NM,
+        "separation_datum": "d = FH0 - delta + z - l_c theta - w - y_s: to the mean of summit heights (docs/model.md, section 'Separation datum')",
+        "damping_ratio": info["damping_ratio"],
+        "steady_window": f"{model.transient / MS:g} ms to {model.duration / MS:g} ms",
+        "fhm_measure": model.fhm_measure,
+    }

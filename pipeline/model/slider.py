@@ -51,13 +51,14 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from . import dynamics as dyn
-from ..units import KHZ, MM, MPA, MS, NM, NS, UM, US
+from ..units import KHZ, MS, NM
 from ..physics import air_bearing as ab
 from ..physics import bulge_bearing as bb
 from ..physics.fhm import fhm
 from ..physics.friction import friction_stress_table, lubricant_shear_stress
 from ..physics.geometry import effective_radius, ellipsoid_table_integral, friction_arm, nominal_area
 from ..physics.statistics import explicit_statistics
+from ..config.si import to_si
 from ..variables import INTERFACE, Regime
 from .bulge_table import from_dataset
 from .dmw_record import disk_speed_m_s
@@ -164,15 +165,17 @@ def slider_from_scene(scene: Any, damping_ratio: float | None = None) -> tuple[a
     height over the air-bearing surface) or ``T`` (``"gimbal"``; docs/model.md, section "Deviations", item 19).
     """
     s, a = scene["slider"], scene["air_bearing"]
-    L, W, T = s["length_mm"] * MM, s["width_mm"] * MM, s["thickness_mm"] * MM
+    si = to_si(scene)
+    ss, sa = si.slider, si.air_bearing
+    L, W, T = ss.length, ss.width, ss.thickness
     m, I = ab.mass_properties(L, W, T, s["density_kg_m3"])
-    l_f, l_r = s["front_arm_mm"] * MM, s["rear_arm_mm"] * MM
-    l_c = L / 2 - s["tfc_from_trailing_edge_um"] * UM
-    f1, f2 = (f * KHZ for f in a["frequencies_khz"])
+    l_f, l_r = ss.front_arm, ss.rear_arm
+    l_c = L / 2 - ss.tfc_from_trailing_edge
+    f1, f2 = sa.frequencies
     k_f, k_r, info = ab.choose_stiffness(f1, f2, m, I, l_f, l_r, L, a["stiffness_root"])
     zeta = a["damping_ratio"] if damping_ratio is None else damping_ratio
     c_f, c_r = ab.pad_damping(k_f, k_r, m, I, l_f, l_r, zeta) if zeta > 0 else (0.0, 0.0)
-    g0 = (a["rear_reference_gap_nm"] or a["flying_height_nm"]) * NM
+    g0 = sa.rear_reference_gap or sa.flying_height
     slider = ab.Slider(m=m, I=I, l_f=l_f, l_r=l_r, l_c=l_c, h_cg=friction_arm(T, s["friction_arm"]), k_f=k_f,
                        k_r=k_r, c_f=c_f, c_r=c_r, g0=g0, n=a["rear_exponent"])
     info["damping_ratio"] = zeta
@@ -200,16 +203,18 @@ def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float]
         raise ValueError("scene.effects must include 'air_bearing': nothing else holds the slider up")
     slider, info = slider_from_scene(scene, damping_ratio)
     a, sol, dm = scene["air_bearing"], scene["solver"], scene["dmw"]
+    si = to_si(scene)
+    s_sol = si.solver
     p = dyn.params(m=slider.m, I=slider.I, l_f=slider.l_f, l_r=slider.l_r, l_c=slider.l_c, h_cg=slider.h_cg,
                    k_f=slider.k_f, k_r=slider.k_r, c_f=slider.c_f, c_r=slider.c_r,
-                   g0=slider.g0, n=slider.n, F_r0=slider.rear_preload, FH0=a["flying_height_nm"] * NM)
+                   g0=slider.g0, n=slider.n, F_r0=slider.rear_preload, FH0=si.air_bearing.flying_height)
     gap_power, tabulated = tfc_point_laws(scene, p.FH0, {"bulge": bulge})
     rear_linear = True if ab.REAR_LAWS[a["rear_law"]].linear else None
     info.update({"rear_law": a["rear_law"], "tfc_stiffening": a["tfc_stiffening"],
                  "friction_law": scene["contact"]["friction_law"],
                  "friction_coefficient": scene["contact"]["friction_coefficient"]})
     p.c_c = scene["contact"]["damping_n_s_m"]
-    p.dwell = sol["min_dwell_ns"] * NS
+    p.dwell = s_sol.min_dwell
     p.h_stiff = sol["stiffness_step"]
     # The record gives the disk under the TFC point at time t; the front and rear pads see the same
     # disk point earlier, by the travel time from pad to TFC (the disk moves leading -> trailing edge).
@@ -218,7 +223,7 @@ def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float]
     p.off_r = (slider.l_c - slider.l_r) / V
     p.off_c = 0.0
     order = sol["interpolation_order"]
-    duration = sol["duration_ms"] * MS
+    duration = s_sol.duration
 
     dmw_c = None
     if "dmw" in eff:
@@ -257,7 +262,7 @@ def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float]
                     values = friction_stress_table(c["friction_law"],
                                                    interface["contact_pressure"].values * INTERFACE["contact_pressure"].si_unit,
                                                    values, c["friction_coefficient"])
-                    tau_lub = scene["lubricant"]["shear_stress_mpa"] * MPA
+                    tau_lub = si.lubricant.shear_stress
                     if tau_lub > 0.0:  # the lubricant-shear term beside the solid one (docs/model.md, "Lubricant friction")
                         if "wetted_area_fraction" not in interface:
                             raise ValueError("interface tables lack 'wetted_area_fraction', needed by "
@@ -273,7 +278,7 @@ def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float]
         p.y_s = float(interface["y_s"]) * NM
     elif scene["roughness"]["afm"]:  # y_s is a statistic of the scans: interface.nc has it
         raise ValueError("a scene with roughness.afm needs its interface.nc (y_s of the scans) even without "
-                         "contact or adhesion (pipeline.stages.simulate.needs_interface)")
+                         "contact or adhesion (pipeline.model.scene_inputs.needs_interface)")
     else:  # McCool's y_s of the explicit statistics (docs/model.md, section "Asperity statistics"), what the interface stage would write
         r = scene["roughness"]
         p.y_s = explicit_statistics(r["sigma_nm"], r["summit_radius_um"], r["summit_density_per_um2"])["y_s"]
@@ -282,10 +287,10 @@ def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float]
         if k is None or not np.isfinite(k):
             raise ValueError("the contact effect needs the criterion k: set contact.k or run `hdi calibrate`")
     k = float(k) if k is not None else np.nan
-    atol_len = sol["atol_nm"] * NM
+    atol_len = s_sol.atol
     w2 = 2 * np.pi * a["frequencies_khz"][1] * KHZ
     atol = np.array([atol_len, atol_len / slider.l_c, atol_len * w2, atol_len / slider.l_c * w2])
-    meniscus = scene["lubricant"]["meniscus_time_us"] * US
+    meniscus = si.lubricant.meniscus_time
     if meniscus > 0.0:
         if tabs["adhesion"] is None:
             raise ValueError("lubricant.meniscus_time_us > 0 relaxes the adhesion pressure: it needs the adhesion "
@@ -307,10 +312,10 @@ def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float]
                  friction=tabs["friction"], area=tabs["area"],
                  pitch=np.ones(1) if "pitch" in eff else None, sigma=sigma, k=k,
                  section_depth=scene["contact"]["section_depth_sigma"] * sigma,
-                 half_length=scene["tfc"]["half_length_um"] * UM, half_width=scene["tfc"]["half_width_um"] * UM,
-                 duration=duration, transient=sol["transient_ms"] * MS,
-                 output_step=sol["output_step_ns"] * NS, rtol=sol["rtol"], atol=atol,
-                 max_step=sol["max_step_ns"] * NS, fhm_measure=sol["fhm_measure"], effects=eff, info=info,
+                 half_length=si.tfc.half_length, half_width=si.tfc.half_width,
+                 duration=duration, transient=s_sol.transient,
+                 output_step=s_sol.output_step, rtol=sol["rtol"], atol=atol,
+                 max_step=s_sol.max_step, fhm_measure=sol["fhm_measure"], effects=eff, info=info,
                  tfc_stiffening=gap_power, rear_linear=rear_linear, tfc_tabulated=tabulated, scene=scene,
                  start=sol["start"], meniscus=meniscus, area_model=scene["contact"]["area_model"])
 
@@ -340,10 +345,19 @@ def tfc_point_laws(scene: Any, fh0: float, tables: Mapping[str, Any] | None = No
                     raise ValueError(f"air_bearing.{key} = {a[key]!r} needs the {law.table} table "
                                      f"({law.table}.nc: run `hdi {law.table}`)")
                 law = replace(law, force=partial(law.force, table=TABLE_READERS[law.table](ds)))
+            if law.parameters:
+                law = replace(law, force=partial(law.force, **law_parameters(scene, law)))
             tabulated.append(law)
         else:
             raise ValueError(f"air_bearing.{key} = {a[key]!r}: no compiled form {law.closed_form!r} in the kernel")
     return gap_power, tuple(tabulated)
+
+
+def law_parameters(scene: Any, law: ab.TfcLaw) -> dict[str, Any]:
+    """The numbers a TFC-point law takes (:attr:`pipeline.physics.air_bearing.TfcLaw.parameters`), read from
+    the scene in SI units (:func:`pipeline.config.si.to_si`): keyword of its ``force`` -> value."""
+    si = to_si(scene)
+    return {keyword: si[where.partition(".")[0]][where.partition(".")[2]] for keyword, where in law.parameters}
 
 
 def tfc_table(model: Model, protrusion: float) -> tuple[np.ndarray, float, float] | None:
@@ -361,7 +375,7 @@ def tfc_table(model: Model, protrusion: float) -> tuple[np.ndarray, float, float
     fh0 = model.p.FH0
     g = np.linspace(min(law.gap_range[0] for law in laws) * fh0, max(law.gap_range[1] for law in laws) * fh0,
                     max(law.points for law in laws))
-    force = sum(np.asarray(law.force(g, protrusion, model.scene), dtype=float) for law in laws)
+    force = sum(np.asarray(law.force(g, protrusion), dtype=float) for law in laws)
     h = float(g[1] - g[0])
     return dyn.piecewise_coefficients(force, h, 3), float(g[0]), h
 

@@ -19,7 +19,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..units import NM
 
 
 @dataclass(frozen=True)
@@ -307,13 +306,11 @@ def tfc_stiffening_force(g: np.ndarray, g_n: float, g0: float, k_t: float, p: fl
     return F, k
 
 
-def gap_power_force(g: np.ndarray, delta: float, scene) -> np.ndarray:
-    """Force [N] of the ``"gap-power"`` stiffening law at the gaps ``g`` [m] for the protrusion ``delta`` [m],
-    the scene's ``air_bearing.tfc_stiffness_n_m`` and ``tfc_stiffening_exponent``
-    (:func:`tfc_stiffening_force` with ``g0 = FH0``, nominal gap ``FH0 - delta``)."""
-    a = scene["air_bearing"]
-    g0 = a["flying_height_nm"] * NM
-    return tfc_stiffening_force(g, g0 - delta, g0, a["tfc_stiffness_n_m"], a["tfc_stiffening_exponent"])[0]
+def gap_power_force(g: np.ndarray, delta: float, g0: float, k_t: float, p: float) -> np.ndarray:
+    """Force [N] of the ``"gap-power"`` stiffening law at the gaps ``g`` [m] for the protrusion ``delta`` [m]:
+    :func:`tfc_stiffening_force` with the reference gap ``g0 = FH0`` [m], nominal gap ``FH0 - delta``,
+    stiffness scale ``k_t`` [N/m] and exponent ``p`` [1]."""
+    return tfc_stiffening_force(g, g0 - delta, g0, k_t, p)[0]
 
 
 @dataclass(frozen=True)
@@ -322,9 +319,9 @@ class TfcLaw:
 
     Attributes
     ----------
-    force : ``force(g, delta, scene) -> F``: force [N] (up positive, the lift of the air on the slider)
+    force : ``force(g, delta, **parameters) -> F``: force [N] (up positive, the lift of the air on the slider)
         at the gaps ``g`` [m] (an array, gap at the TFC point to the mean of surface heights) for the
-        protrusion ``delta`` [m] and the validated scene (the law reads its own keys)
+        protrusion ``delta`` [m], given the numbers named by ``parameters``
     closed_form : name of the kernel's compiled closed form of the same law (``"gap-power"``:
         :func:`pipeline.model.dynamics._stiffening`), or ``None``: the model assembly tabulates ``force``
         per protrusion and the kernel evaluates the table (:func:`pipeline.model.slider.tfc_table`)
@@ -335,6 +332,9 @@ class TfcLaw:
     table : name of the stage whose dataset the law reads (e.g. ``"bulge"``: a force solved once per
         scene and tabulated), or ``None``; such a law's ``force`` takes the table as the keyword
         ``table`` (the model assembly binds it, :func:`pipeline.model.slider.build_model`)
+    parameters : ``(keyword of force, "section.name")`` pairs: the scene value in SI units
+        (:func:`pipeline.config.si.to_si`, e.g. ``"air_bearing.flying_height"`` [m]) the model assembly
+        passes as that keyword (:func:`pipeline.model.slider.law_parameters`); the law reads no scene
     """
 
     force: Callable[..., np.ndarray]
@@ -343,6 +343,7 @@ class TfcLaw:
     points: int = 4001
     doc: str = ""
     table: str | None = None
+    parameters: tuple[tuple[str, str], ...] = ()
 
 
 #: Air-bearing force laws at the TFC point (``air_bearing.tfc_stiffening``): ``"none"`` = the model
@@ -350,5 +351,7 @@ class TfcLaw:
 TFC_STIFFENING: dict[str, TfcLaw | None] = {
     "none": None,
     "gap-power": TfcLaw(gap_power_force, closed_form="gap-power",
-                        doc="k(g) = k_t [(g0/g)^p - 1], force zero at the nominal gap"),
+                        doc="k(g) = k_t [(g0/g)^p - 1], force zero at the nominal gap",
+                        parameters=(("g0", "air_bearing.flying_height"), ("k_t", "air_bearing.tfc_stiffness"),
+                                    ("p", "air_bearing.tfc_stiffening_exponent"))),
 }

@@ -62,12 +62,10 @@ an upper bound here; the Reynolds lift falls below it only at bearing numbers a 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 from numba import njit
 
-from ..units import MPA, UM
 from .air_bearing import TfcLaw
 
 #: Profile codes of the compiled laws (floats, so a kernel can carry them in its parameter vector).
@@ -153,14 +151,11 @@ def ph_lift(g, delta, p_pad: float, a: float, b: float, profile: str = "ellipsoi
     return F.reshape(gb.shape), k.reshape(gb.shape)
 
 
-def ph_limit_force(g: np.ndarray, delta: float, scene: Any) -> np.ndarray:
+def ph_limit_force(g: np.ndarray, delta: float, p_pad: float, a: float, b: float, profile: str) -> np.ndarray:
     """Lift [N] of the bulge's air bearing in the p h = const limit at the TFC gaps ``g`` [m] for the
-    protrusion ``delta`` [m] (:func:`ph_lift`), from the scene's ``air_bearing.pad_pressure_mpa``,
-    ``air_bearing.bulge_profile`` and the bulge's semi-axes ``tfc.half_length_um``, ``tfc.half_width_um``
-    (docs/model.md, section "Bulge air bearing"). Zero at zero protrusion."""
-    a, t = scene["air_bearing"], scene["tfc"]
-    return ph_lift(g, delta, a["pad_pressure_mpa"] * MPA, t["half_length_um"] * UM, t["half_width_um"] * UM,
-                   a["bulge_profile"])[0]
+    protrusion ``delta`` [m] (:func:`ph_lift`): pad pressure ``p_pad`` [Pa], the bulge's semi-axes ``a``,
+    ``b`` [m] and its ``profile`` (docs/model.md, section "Bulge air bearing"). Zero at zero protrusion."""
+    return ph_lift(g, delta, p_pad, a, b, profile)[0]
 
 
 # --------------------------------------------------------------------------------------------------
@@ -555,12 +550,12 @@ def table_lift(table: LiftTable, g, delta: float, g_min: float | None = None) ->
     return rr * F_ph, rr * k_ph - F_ph * drr / gg * (g >= g_min)
 
 
-def reynolds_force(g: np.ndarray, delta: float, scene: Any, table: LiftTable) -> np.ndarray:
+def reynolds_force(g: np.ndarray, delta: float, table: LiftTable) -> np.ndarray:
     """Lift [N] of the bulge's air bearing from the Reynolds equation with molecular slip (the scene's
     table, ``bulge.nc``: :func:`reynolds_table` solved once per scene with the slip model
     ``air_bearing.bulge_slip``) at the TFC gaps ``g`` [m] for the protrusion ``delta`` [m]
     (:func:`table_lift`; docs/model.md, section "Slip-corrected Reynolds equation"). Zero at zero
-    protrusion. ``scene`` is not read: the table holds everything (the runner keeps it current)."""
+    protrusion. The table holds everything (the runner keeps it current)."""
     return table_lift(table, g, delta)[0]
 
 
@@ -569,7 +564,9 @@ def reynolds_force(g: np.ndarray, delta: float, scene: Any, table: LiftTable) ->
 #: ``"reynolds"`` reads its table from the ``bulge`` stage's dataset (``table="bulge"``).
 BULGE_LAWS: dict[str, TfcLaw | None] = {
     "none": None,
-    "ph-limit": TfcLaw(ph_limit_force, doc="p h = const under the bulge: F = p_pad pi a b [h_pad I(g, delta) - 1]"),
+    "ph-limit": TfcLaw(ph_limit_force, doc="p h = const under the bulge: F = p_pad pi a b [h_pad I(g, delta) - 1]",
+                       parameters=(("p_pad", "air_bearing.pad_pressure"), ("a", "tfc.half_length"),
+                                   ("b", "tfc.half_width"), ("profile", "air_bearing.bulge_profile"))),
     "reynolds": TfcLaw(reynolds_force, table="bulge",
                        doc="steady compressible Reynolds equation with molecular slip on the footprint, tabulated"),
 }

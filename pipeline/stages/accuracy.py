@@ -109,26 +109,17 @@ from ..model import slider as sl
 from ..analyses import accuracy as knob_study
 from ..analyses.accuracy import HEADLINE, POINTS, REFERENCE, TABLE_KEYS, TOLERANCE, Result, cast
 from ..model import dmw_record, scene_inputs
+from ..model.inputs import for_stage
 from ..model.interface_tables import build_tables, roughness_statistics
 from ..model.simulation import COUNTERS, simulate
-from ..runner import Inputs, Stage, build
+from ..runner import Inputs, Stage, build, ensure
 from ..units import MHZ
-from .dmw import run as run_dmw
 
 log = logging.getLogger(__name__)
 
 
 # ---------------------------------------------------------------------------------------------
 # scene -> model: tables, records, model assembly and the runs (what the study's ``evaluate`` does)
-
-def _contact_k(scene: Any, inputs: Inputs, k: float | None) -> tuple[float | None, str]:
-    """``k`` from the option, else by the one rule (:func:`pipeline.model.scene_inputs.contact_k`) with the
-    calibration (upstream when the scene fixes no k)."""
-    calibration = None
-    if k is None and scene.has("contact") and scene["contact"]["k"] is None:
-        calibration = inputs.dataset("calibration.nc", stage="calibrate")
-    return scene_inputs.contact_k(scene, calibration, override=k)
-
 
 def _timed(fn, repeat: int) -> tuple[Any, float]:
     """Result of ``fn()`` and the median wall time [s] of ``repeat`` calls."""
@@ -175,7 +166,7 @@ class _RunCache:
         if s["source"] == "synthetic":
             return dmw_record.synthetic_record(s)
         with tempfile.TemporaryDirectory() as tmp:
-            _, w, _ = dmw_record.load(run_dmw(sc, Path(tmp), force=True))
+            _, w, _ = dmw_record.load(ensure("dmw", sc, Path(tmp), force=True))
         return w
 
     def record(self, sc: Any) -> tuple[tuple[np.ndarray, float] | None, float]:
@@ -278,13 +269,14 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
     reference = {k_: v for k_, v in {**REFERENCE, **(options.get("reference") or {})}.items() if k_ in current}
     repeat = int(options.get("repeat") or 5)
     tol = float(options.get("tolerance") or TOLERANCE)
-    k, k_source = _contact_k(scene, inputs, options.get("k"))
+    # k: the option, else by the one rule with the calibration (upstream when the scene fixes no k)
+    sim = for_stage(scene, inputs, k=options.get("k"))
+    k, k_source = sim.k, sim.k_source
     knobs = knob_study.select_knobs(scene.effects, current, options.get("knobs"), options.get("only"),
                                     scene["interface"]["model"])
     t_start = time.perf_counter()
     cache = _RunCache(scene, out, repeat)  # tables and records of the runs, built once per setting
-    if "bulge" in scene_inputs.table_stages(scene):  # (the bulge table is no accuracy knob: the scene's, as is)
-        cache.bulge = inputs.dataset("bulge.nc", stage="bulge")
+    cache.bulge = sim.bulge_table()  # (the bulge table is no accuracy knob: the scene's, as is)
 
     def evaluate(values: dict[str, float], n: int) -> Result:
         return _evaluate(scene, values, cache, k, points, n)
@@ -300,7 +292,7 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
 
 def _upstream(scene: Any) -> tuple[str, ...]:
     """Roughness scans (statistics), the bulge table with the tabulated bulge bearing, and, when the scene
-    fixes no k, the calibration (:func:`_contact_k`)."""
+    fixes no k, the calibration (k by :func:`pipeline.model.inputs.for_stage`)."""
     up = ["roughness"] if scene["roughness"]["afm"] else []
     up.extend(scene_inputs.table_stages(scene))
     if scene.has("contact") and scene["contact"]["k"] is None:

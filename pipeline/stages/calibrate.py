@@ -15,21 +15,18 @@ import numpy as np
 import xarray as xr
 
 from ..analyses.calibration import calibrate
-from ..model import dmw_record, scene_inputs
+from ..model import scene_inputs
+from ..model.inputs import for_stage
 from ..runner import Inputs, Stage, build
-from .simulate import read_bulge, read_inputs
 
 log = logging.getLogger(__name__)
 
 
 def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
     """The ``calibration.nc`` dataset (module docstring); logs the outcome."""
-    interface, record = read_inputs(scene, inputs)
-    dmw_path = str(inputs.path(dmw_record.FILENAME)) if record is not None else None
-    bulge = read_bulge(scene, inputs)
-    ds = calibrate(scene, interface, record, str(inputs.path("interface.nc")), dmw_path,
-                   scheduler=inputs.options.get("scheduler"), workers=inputs.options.get("workers"),
-                   bulge=bulge, bulge_path=str(inputs.path("bulge.nc")) if bulge is not None else None)
+    # the datasets by file and key: the fanned-out flying runs read them on their workers, once per process
+    sim = for_stage(scene, inputs, calibration=False)
+    ds = calibrate(scene, sim, scheduler=inputs.options.get("scheduler"), workers=inputs.options.get("workers"))
     # timings go to the run log (.hdi/runs.jsonl), not the dataset: equal inputs, equal dataset
     inputs.record(batch_seconds=ds.attrs.pop("batch_seconds"))
     log.info("calibration: %s", ds.attrs["outcome"])

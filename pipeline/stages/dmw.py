@@ -200,13 +200,3 @@ STAGE = Stage(
 def run(scene: Any, out: Path, **options: Any) -> Path:
     """``dmw.nc`` in ``out``, recomputed only when its inputs changed (:func:`pipeline.runner.build`)."""
     return build("dmw", scene, out, **options)["dmw"][0]
-
-
-def realisation_record(scene: Any, folder: Path, seed: int, force: bool = False) -> Path:
-    """``folder/dmw.nc``: the scene's synthetic record with ``dmw.seed = seed`` (kept when up to date)."""
-    if scene["dmw"]["source"] != "synthetic":
-        where = str(scene.path) if getattr(scene, "path", None) else "<scene>"
-        raise ValueError(f"{where}: sweep.realisations > 1 needs dmw.source = \"synthetic\" (a measured record "
-                         f"has one realisation); got dmw.source = {scene['dmw']['source']!r}")
-    sub = scene.replace(dmw={"seed": int(seed)})
-    return run(sub, folder, force=force)

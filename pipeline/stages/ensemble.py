@@ -12,12 +12,12 @@ main job's time by ``N``; this stage runs only the protrusions the checks read:
   model (its touchdown need not be the paper's).
 
 Every realisation runs the scene with the sweep's k (``calibration.nc`` or the scene's rule,
-:func:`pipeline.stages.simulate.read_k`) on its own DMW record (realisation 0: the scene's ``dmw.nc``;
+:func:`pipeline.model.inputs.for_stage`) on its own DMW record (realisation 0: the scene's ``dmw.nc``;
 ``r >= 1``: :func:`pipeline.model.dmw_record.realisation_seeds`, the seeds of ``[sweep] realisations``),
 one fan-out task per local worker (:func:`pipeline.fanout.split`), whose realisations share their
 static starts (:func:`pipeline.evaluations.evaluate_realisations`). Writes ``ensemble.nc``: the steady-window scalars on
 ``(protrusion, realisation)`` in dataset units, ``dmw_seed``, and the sweep's ensemble summaries
-(``<name>_mean``/``_std``, ``touchdown_probability``; :func:`pipeline.stages.sweep.ensemble_statistics`).
+(``<name>_mean``/``_std``, ``touchdown_probability``; :func:`pipeline.analyses.ensemble.statistics`).
 
 Part of ``hdi run`` when ``report.realisations`` > 1 and the scene has a synthetic DMW record.
 """
@@ -35,14 +35,13 @@ from ..analyses.report_settings import wants_ensemble
 from ..analyses.study import bouncing_bv, ensemble_summary, target_protrusions, targets
 from ..analyses.sweep_slices import combinations, first_contact, split_ensemble
 from ..config.grid import label
-from ..evaluations import evaluate_realisations, stage_inputs_of
+from ..evaluations import evaluate_realisations
 from ..fanout import run_tasks, split
 from ..io import var
 from ..model import dmw_record, scene_inputs
+from ..model.inputs import for_stage
 from ..runner import Inputs, Stage
 from ..variables import ENSEMBLE, SCALARS, coordinate
-from .simulate import read_k
-from .sweep import ensemble_statistics
 
 log = logging.getLogger(__name__)
 
@@ -78,8 +77,7 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
                          "record (the dmw effect with dmw.source = \"synthetic\")")
     sweep = inputs.dataset("sweep.nc", stage="sweep")
     prot = protrusions(scene, sweep)
-    k, k_source = read_k(scene, inputs)
-    ev_inputs = stage_inputs_of(scene, inputs)
+    sim = for_stage(scene, inputs)  # (k: the sweep's, calibration.nc or the scene's rule)
     seeds = dmw_record.realisation_seeds(scene["dmw"]["seed"], n)
     results: dict[int, tuple[dict[str, list[float]], float, list[str]]] = {}
 
@@ -89,7 +87,7 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
 
     scheduler, workers = inputs.options.get("scheduler"), inputs.options.get("workers")
     # (a task's realisations share their static starts)
-    tasks = [(scene, prot, ev_inputs, k, c, tuple(seeds[r] for r in c)) for c in split(range(n), scheduler, workers)]
+    tasks = [(scene, prot, sim, c, tuple(seeds[r] for r in c)) for c in split(range(n), scheduler, workers)]
     seconds = run_tasks(evaluate_realisations, tasks, scheduler=scheduler, workers=workers, on_done=done)
     errors = [f"realisation {r}: {e}" for r in range(n) for e in results[r][2]]
     for e in errors:
@@ -97,7 +95,7 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
     inputs.record(compute_seconds=round(seconds, 3), runs=n * len(prot),
                   kernel_seconds=round(sum(results[r][1] for r in range(n)), 3))
     ds = dataset(prot, seeds, [results[r][0] for r in range(n)],
-                 {"k": k if k is not None else "none", "k_source": k_source, "realisations": n,
+                 {"k": sim.k if sim.k is not None else "none", "k_source": sim.k_source, "realisations": n,
                   "window_nm": WINDOW_NM, "errors": "; ".join(errors) or "none",
                   "protrusions_note": "the paper targets' protrusions ([identify]) and the sweep's grid within "
                                       f"{WINDOW_NM:g} nm of its first contact"})
@@ -153,13 +151,13 @@ def judged(ds: xr.Dataset, scene: Any) -> dict[str, xr.Variable]:
 
 def dataset(prot: list[float], seeds: list[int], outputs: list[dict[str, list[float]]], attrs: dict) -> xr.Dataset:
     """The realisations' outputs (dataset units, one dict per realisation) on ``(protrusion, realisation)``,
-    with ``dmw_seed`` and :func:`pipeline.stages.sweep.ensemble_statistics`."""
+    with ``dmw_seed`` and :func:`pipeline.analyses.ensemble.statistics`."""
     dims = ("protrusion", "realisation")
     names = [name for name in SCALARS if any(name in o for o in outputs)]
     nan = [float("nan")] * len(prot)
     data = {name: SCALARS[name].data(np.array([o.get(name, nan) for o in outputs], float).T, dims)
             for name in names}
-    data.update(ensemble_statistics(data))
+    data.update(en.statistics(data))
     data["dmw_seed"] = ENSEMBLE["dmw_seed"].data(np.array(seeds), ("realisation",))
     coords = {"protrusion": coordinate("protrusion", np.array(prot)),
               "realisation": ENSEMBLE["realisation"].data(np.arange(len(seeds)), ("realisation",))}

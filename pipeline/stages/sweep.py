@@ -32,7 +32,7 @@ import logging
 import os
 import sys
 import threading
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Callable
 
@@ -43,12 +43,11 @@ from ..model import slider as sl
 from ..fanout import run_tasks
 from ..io import read_attrs, read_dataset, write_dataset
 from ..runner import KEY_ATTR, Inputs, Stage, ensure
-from ..variables import ENSEMBLE, ENSEMBLE_OF, HISTORIES, REGIME_FILL, SCALARS, STEPPING, coordinate
+from ..variables import ENSEMBLE, HISTORIES, SCALARS, STEPPING, coordinate
 from ..model import dmw_record, scene_inputs
-from ..model.simulation import DIRECTIONS, simulate
+from ..model.inputs import SimulationInputs, Source, for_stage
+from ..model.simulation import DIRECTIONS, model_attrs, simulate
 from ..analyses import ensemble
-from .dmw import realisation_record
-from .simulate import model_attrs, read_k
 from ..config.grid import damping_grid, protrusion_grid, roughness_sets, same_point
 
 log = logging.getLogger(__name__)
@@ -123,59 +122,24 @@ def part_problem(path: Path, key: str, batch: Batch) -> str | None:
     return None
 
 
-def _file_id(path: str | None) -> tuple | None:
-    if path is None:
-        return None
-    st = os.stat(path)
-    return (path, st.st_mtime_ns, st.st_size)
-
-
-@functools.lru_cache(maxsize=8)
-def _read_inputs(interface_id: tuple | None, dmw_id: tuple | None) -> tuple[xr.Dataset | None, tuple | None]:
-    interface = read_dataset(interface_id[0], stage="interface") if interface_id else None
-    record = None
-    if dmw_id:
-        _, w_nm, fs = dmw_record.load(dmw_id[0])
-        w_nm.setflags(write=False)  # shared by the batches of this process: read-only
-        record = (w_nm, fs)
-    return interface, record
-
-
-@functools.lru_cache(maxsize=8)
-def _read_bulge(bulge_id: tuple) -> xr.Dataset:
-    """The bulge table of a sweep, read once per process (and file version)."""
-    return read_dataset(bulge_id[0], stage="bulge")
-
-
-def batch_inputs(interface_path: str | None, dmw_path: str | None) -> tuple[xr.Dataset | None, tuple | None]:
-    """Interface tables and DMW record of a batch, read once per process (and file version).
-
-    The batches of a threaded sweep share the process, so they share one copy instead of reading
-    both files per batch (NetCDF reads are serialised, see :data:`pipeline.io.NETCDF_LOCK`).
-    """
-    return _read_inputs(_file_id(interface_path), _file_id(dmw_path))
-
-
 _MODELS: dict[tuple, sl.Model] = {}
 _MODELS_LOCK = threading.Lock()
 
 
-def batch_model(scene: Any, interface_path: str | None, dmw_path: str | None, k: float | None,
-                damping: float, bulge_path: str | None = None) -> sl.Model:
-    """The model of a batch, built once per process for each scene, input files, k and damping ratio.
+def batch_model(scene: Any, inputs: SimulationInputs, damping: float) -> sl.Model:
+    """The model of a batch, built once per process for each scene, inputs and damping ratio.
 
     The batches of one roughness set and damping ratio share it (:func:`pipeline.model.slider.run_model`
     only reads a model): building it costs ~28 ms (the DMW record's spline, the modal solution), paid
-    by every batch before. Keyed by the scene's content hash and the files' identity
-    (:func:`_file_id`), so a changed input builds a new one. ``bulge_path``: the bulge table
-    (``bulge.nc``) with the tabulated bulge bearing, else ``None``.
+    by every batch before. Keyed by the scene's content hash and the inputs' identity
+    (:meth:`pipeline.model.inputs.SimulationInputs.identity`: their stage keys and k), so changed inputs
+    build a new one; the inputs themselves are read once per process (:func:`pipeline.model.inputs.cached`).
     """
-    key = (scene.hash, _file_id(interface_path), _file_id(dmw_path), k, damping, _file_id(bulge_path))
+    key = (scene.hash, inputs.identity(), damping)
     with _MODELS_LOCK:
         model = _MODELS.get(key)
     if model is None:
-        bulge = _read_bulge(_file_id(bulge_path)) if bulge_path else None
-        model = sl.build_model(scene, *batch_inputs(interface_path, dmw_path), k, damping_ratio=damping, bulge=bulge)
+        model = inputs.model(scene, damping_ratio=damping)
         with _MODELS_LOCK:
             if len(_MODELS) >= 64:  # (a long-lived worker of many studies: keep the memory bounded)
                 _MODELS.clear()
@@ -183,19 +147,18 @@ def batch_model(scene: Any, interface_path: str | None, dmw_path: str | None, k:
     return model
 
 
-def run_batch(scene: Any, batch: Batch, interface_path: str | None, dmw_path: str | None, k: float | None,
-              part_path: str, key: str, history_nm: tuple[float, ...],
-              bulge_path: str | None = None) -> tuple[str, xr.Dataset]:
+def run_batch(scene: Any, batch: Batch, inputs: SimulationInputs, part_path: str, key: str,
+              history_nm: tuple[float, ...]) -> tuple[str, xr.Dataset]:
     """Run one batch and write its part file (executed on a worker). Returns the part's path and dataset.
 
     The dataset comes back with the path so that the sweep assembles what this run computed from
     memory and reads back only the parts of an earlier, interrupted run.
 
-    ``scene``: the sweep's scene with the batch's roughness set; ``k``: contact criterion constant [1]
-    (``None`` without the contact effect); ``history_nm``: protrusions [nm] whose time histories the
-    part keeps; ``bulge_path``: the bulge table (:func:`batch_model`).
+    ``scene``: the sweep's scene with the batch's roughness set; ``inputs``: its set's interface tables,
+    the batch's DMW record, the bulge table and k (by file and key: read on the worker, once per process);
+    ``history_nm``: protrusions [nm] whose time histories the part keeps.
     """
-    model = batch_model(scene, interface_path, dmw_path, k, batch.damping, bulge_path)
+    model = batch_model(scene, inputs, batch.damping)
     ds = simulate(model, batch.protrusions, histories=history_nm, protocol=scene["sweep"]["protocol"])
     ds.attrs.update({KEY_ATTR: key, "roughness_label": batch.label, "damping_ratio": batch.damping,
                      "batch": batch.index, "realisation": batch.realisation})
@@ -214,7 +177,7 @@ def _progress(total: int, initial: int):
 
 def prepare_inputs(scene: Any, out: Path, sets: dict[str, dict],
                    force: bool = False) -> tuple[dict[str, str | None], str | None]:
-    """Interface tables per roughness set and the DMW record, as files the workers read.
+    """Interface tables per roughness set and the DMW record, as the paths of files the workers read.
 
     The scene's own set uses the interface stage's ``interface.nc`` (upstream of the sweep: current).
     Another set's tables are the interface stage of the scene with that ``[roughness]``, made current
@@ -237,6 +200,15 @@ def prepare_inputs(scene: Any, out: Path, sets: dict[str, dict],
     return interface_paths, dmw_path
 
 
+def realisation_record(scene: Any, folder: Path, seed: int, force: bool = False) -> Path:
+    """``folder/dmw.nc``: the scene's synthetic record with ``dmw.seed = seed`` (kept when up to date)."""
+    if scene["dmw"]["source"] != "synthetic":
+        where = str(scene.path) if getattr(scene, "path", None) else "<scene>"
+        raise ValueError(f"{where}: sweep.realisations > 1 needs dmw.source = \"synthetic\" (a measured record "
+                         f"has one realisation); got dmw.source = {scene['dmw']['source']!r}")
+    return ensure("dmw", scene.replace(dmw={"seed": int(seed)}), folder, force=force)
+
+
 def realisation_inputs(scene: Any, out: Path, dmw_path: str | None, force: bool = False) -> tuple[list[str | None], list[int]]:
     """DMW record paths and seeds of the ``[sweep] realisations`` (realisation 0: the scene's ``dmw.nc``).
 
@@ -257,6 +229,18 @@ def realisation_inputs(scene: Any, out: Path, dmw_path: str | None, force: bool 
     return paths, seeds
 
 
+def batch_inputs(sim: SimulationInputs, interface_path: str | None, dmw_path: str | None) -> SimulationInputs:
+    """``sim`` (the scene's own inputs: k, the bulge table) with the interface tables of ``interface_path``
+    (a roughness set's, ``None``: the set reads none) and the DMW record of ``dmw_path`` (a realisation's),
+    by file: the keys of files beyond the scene's own are those they carry."""
+    def source(stage: str, own: Source | None, path: str | None) -> Source | None:
+        if path is None:
+            return None
+        return own if own is not None and own.path == path else Source.file(stage, path)
+    return replace(sim, interface=source("interface", sim.interface, interface_path),
+                   dmw=source("dmw", sim.dmw, dmw_path))
+
+
 def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset | None]:
     """Run (or resume) the sweep; returns ``sweep.nc`` and ``sweep_histories.nc`` (module docstring).
 
@@ -266,7 +250,7 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset | None]:
     """
     out, key, opts = inputs.out, inputs.key, inputs.options
     prot, sets, damp, batches = plan(scene)
-    k, k_source = read_k(scene, inputs)
+    sim = for_stage(scene, inputs)  # (k, the bulge table and the scene's own record and tables)
     interface_paths, dmw_path = prepare_inputs(scene, out, sets, bool(opts.get("force")))
     dmw_paths, seeds = realisation_inputs(scene, out, dmw_path, bool(opts.get("force")))
     parts = out / PARTS
@@ -284,9 +268,10 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset | None]:
     set_scenes = {label: scene if table == dict(scene["roughness"]) else scene.replace(roughness=dict(table))
                   for label, table in sets.items()}
     # time histories of the first realisation only (the scene's own record)
-    bulge_path = str(out / "bulge.nc") if "bulge" in scene_inputs.simulation_inputs(scene) else None
-    tasks = [(set_scenes[b.label], b, interface_paths[b.label], dmw_paths[b.realisation], k,
-              str(_part_path(parts, b)), key, hist_nm if b.realisation == 0 else (), bulge_path) for b in todo]
+    # each set's and realisation's inputs once (a file's key is read from it)
+    batch_sim = functools.cache(lambda label, r: batch_inputs(sim, interface_paths[label], dmw_paths[r]))
+    tasks = [(set_scenes[b.label], b, batch_sim(b.label, b.realisation), str(_part_path(parts, b)), key,
+              hist_nm if b.realisation == 0 else ()) for b in todo]
     bar = _progress(len(batches), len(batches) - len(todo))
     done = [0]
     stop_after, on_batch = opts.get("stop_after"), opts.get("on_batch")
@@ -312,10 +297,9 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset | None]:
     log.info("sweep: batch phase %.2f s for %d batches", batch_seconds, len(todo))
     inputs.record(compute_seconds=round(batch_seconds, 3), batches_run=len(todo), batches=len(batches))
     first = next(iter(sets))  # (its set's scene and the scene's damping ratio: models the batches built)
-    model = batch_model(set_scenes[first], interface_paths[first], dmw_path, k,
-                        float(scene["air_bearing"]["damping_ratio"]), bulge_path)
-    attrs = model_attrs(model, k_source)
-    return assemble(scene, out, prot, list(sets), damp, batches, key, k_source, attrs, seeds, computed)
+    model = batch_model(set_scenes[first], batch_sim(first, 0), float(scene["air_bearing"]["damping_ratio"]))
+    attrs = model_attrs(model, sim.k_source)
+    return assemble(scene, out, prot, list(sets), damp, batches, key, sim.k_source, attrs, seeds, computed)
 
 
 def run_sweep(scene: Any, out: Path, scheduler: str | None = None, workers: int | None = None,
@@ -335,7 +319,7 @@ def assemble(scene: Any, out: Path, prot: np.ndarray, labels: list[str], damp: l
     other part is read from its file after :func:`part_problem` has accepted it.
 
     With more than one realisation the scalars gain a last dimension ``realisation`` and the
-    ensemble statistics of :func:`ensemble_statistics` are added.
+    ensemble statistics of :func:`pipeline.analyses.ensemble.statistics` are added.
 
     Raises
     ------
@@ -400,7 +384,7 @@ def assemble(scene: Any, out: Path, prot: np.ndarray, labels: list[str], damp: l
     if n_real > 1:
         coords["realisation"] = ENSEMBLE["realisation"].data(np.arange(n_real), ("realisation",))
         data["dmw_seed"] = ENSEMBLE["dmw_seed"].data(np.array(seeds), ("realisation",))
-        data.update(ensemble_statistics(data))
+        data.update(ensemble.statistics(data))
     ds = xr.Dataset(data, coords=coords)
     sets = roughness_sets(scene)
     for label in labels:
@@ -416,34 +400,6 @@ def assemble(scene: Any, out: Path, prot: np.ndarray, labels: list[str], damp: l
                           for name, a in hist.items()}, coords=hc)
         hds.attrs.update(ds.attrs)
     return {"sweep.nc": ds, "sweep_histories.nc": hds}
-
-
-def ensemble_statistics(data: dict[str, xr.Variable]) -> dict[str, xr.Variable]:
-    """Mean, standard deviation and touchdown probability over the ``realisation`` dimension.
-
-    ``<name>_mean``/``<name>_std`` [units of name]: mean and sample standard deviation (ddof = 1) over
-    the realisations with a value (``interference`` and the stresses are NaN while flying);
-    ``touchdown_probability`` [1]: fraction of the realisations with a regime that are in contact at
-    some time of the steady window (regime not flying), versus protrusion, roughness and damping; a
-    point not computed (regime = its fill value) counts in neither, as the NaNs of the means.
-    """
-    out: dict[str, xr.Variable] = {}
-    for name in ENSEMBLE_OF:
-        if name not in data:
-            continue
-        v = data[name]
-        # (the one home of the ensemble rules; all-NaN slices, never in contact, give NaN, as documented)
-        mean, std = (x.values for x in ensemble.mean_std(xr.DataArray(v).astype(float), dim=v.dims[-1]))
-        dims = v.dims[:-1]
-        out[name + "_mean"] = ENSEMBLE[name + "_mean"].data(mean, dims)
-        out[name + "_std"] = ENSEMBLE[name + "_std"].data(std, dims)
-    if "regime" in data:
-        reg = np.asarray(data["regime"].values)
-        computed = reg != REGIME_FILL
-        with np.errstate(invalid="ignore"):  # no realisation computed: NaN
-            p = np.sum(computed & (reg != sl.FLYING), axis=-1) / np.sum(computed, axis=-1)
-        out["touchdown_probability"] = ENSEMBLE["touchdown_probability"].data(p, data["regime"].dims[:-1])
-    return out
 
 
 def _files(scene: Any) -> dict[str, str]:
