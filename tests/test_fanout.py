@@ -47,15 +47,25 @@ def test_one_worker_or_one_task_runs_in_process():
         local_workers(-1, 3)
 
 
-def test_split_deals_every_item_once_into_one_task_per_worker():
+def test_split_deals_every_item_once_into_one_task_per_worker(monkeypatch):
     items = list(range(11))
+    monkeypatch.setattr(fanout, "cluster_threads", lambda address: {"tcp://big:8786": 64, "tcp://small:8786": 4}[address])
     for scheduler, workers, n in ((None, 3, 3), ("threads", 2, 2), ("synchronous", 20, 11),
-                                  ("tcp://scheduler:8786", None, fanout.CLUSTER_TASKS)):
+                                  ("tcp://small:8786", None, 4), ("tcp://big:8786", 3, 11)):
         chunks = split(items, scheduler, workers)
         assert len(chunks) == n and all(chunks)
         assert sorted(x for c in chunks for x in c) == items  # each once
         assert chunks[0] == tuple(items[::n])  # round-robin: each task spans the range
-    assert split([5], "tcp://scheduler:8786") == [(5,)]  # no empty task
+    assert split([5], "tcp://big:8786") == [(5,)]  # no empty task
+
+
+def test_a_cluster_split_follows_its_threads():
+    # issue 26, 3: a cluster always got 8 tasks (a 64-worker dask-jobqueue cluster ran calibrate on 8)
+    from distributed import LocalCluster
+    with LocalCluster(n_workers=2, threads_per_worker=3, processes=False, dashboard_address=None) as cluster:
+        assert fanout.cluster_threads(cluster.scheduler_address) == 6
+        chunks = split(list(range(20)), cluster.scheduler_address)
+    assert len(chunks) == 6 and sorted(x for c in chunks for x in c) == list(range(20))
 
 
 def test_an_error_in_on_done_cancels_what_has_not_started():
@@ -183,3 +193,39 @@ def test_a_cluster_without_workers_ends_the_wait_in_one_line_within_the_bound(mo
     assert str(err.value) == (f"dask scheduler tcp://host:8786: {n} of {len(futures)} tasks waited 0.5 s with no "
                               "worker left (HDI_CLUSTER_WAIT_S sets the wait); finished work is kept, start workers "
                               "and run again to resume")
+
+
+# ------------------------------------------------------------ issue 26, 3: a worker running other code
+class _Workers:
+    """A stand-in for a client whose workers answer ``run`` with these code keys (or exceptions)."""
+
+    def __init__(self, keys):
+        self.keys = keys
+
+    def run(self, fn, *args, on_error="raise"):
+        return self.keys
+
+
+def test_a_worker_with_another_code_key_is_refused_in_one_line_naming_it_and_both_keys():
+    from pipeline.code_version import code_key
+    ours = code_key("pipeline.code_version")
+    assert ours  # (a module of the package: a real key)
+    fanout.check_code(_Workers({"tcp://10.0.0.1:1": ours, "tcp://10.0.0.2:1": ours}), code_key)  # all current
+    with pytest.raises(fanout.ClusterError) as err:
+        fanout.check_code(_Workers({"tcp://10.0.0.1:1": ours, "tcp://10.0.0.2:1": "ab" * 32}), code_key)
+    assert str(err.value) == (f"dask worker tcp://10.0.0.2:1 runs other code than this hdi: code key of "
+                              f"pipeline.code_version {'ab' * 6} there, {ours[:12]} here; restart the workers from "
+                              "this version of pipeline (install it where they run) and run again")
+    with pytest.raises(fanout.ClusterError, match=r"^dask worker tcp://10.0.0.1:1 runs other code than this hdi: it "
+                                                  r"cannot check its code key \(AttributeError: gone\)"):
+        fanout.check_code(_Workers({"tcp://10.0.0.1:1": AttributeError("gone")}), code_key)
+
+
+def test_a_task_checks_the_code_key_on_its_worker(monkeypatch):
+    # a worker that joined after the check of the whole cluster (dask-jobqueue scaling up)
+    key = fanout.code_key("pipeline.code_version")
+    assert fanout.on_worker(None, ("pipeline.code_version", key), square, 3)[:2] == (3, 9)
+    monkeypatch.setattr(fanout, "code_key", lambda module: "0" * 64)
+    with pytest.raises(fanout.ClusterError, match=rf"^dask worker \S+ runs other code than this hdi: code key of "
+                                                  rf"pipeline.code_version 000000000000 there, {key[:12]} here; "):
+        fanout.on_worker(None, ("pipeline.code_version", key), square, 3)
