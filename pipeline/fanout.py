@@ -19,7 +19,7 @@
   dask-jobqueue), which is how a study outgrows one machine. Tasks are retried twice on a lost worker.
   (The command line also takes a scheduler file or ``DASK_SCHEDULER_ADDRESS``:
   :func:`pipeline.validation.check_scheduler` turns them into the address.) The first connection to a
-  scheduler with a dashboard logs its link (:func:`announce`).
+  scheduler logs its dashboard link (:func:`announce`).
 
 Tasks must be deterministic functions of their arguments and safe to run twice (retries); large
 inputs travel by file path inside ``args``, not as arrays. A worker resolves a relative path from its
@@ -154,7 +154,8 @@ _ANNOUNCED: set[str] = set()
 
 
 def announce(client: Any, address: str) -> None:
-    """Log (INFO) the dashboard link of the scheduler at ``address``, once per process, if it has one."""
+    """Log (INFO) the dashboard link of the scheduler at ``address``, once per process, if it has one
+    (as dask shows it: a scheduler without bokeh serves a page saying to install it there)."""
     if address in _ANNOUNCED:
         return
     _ANNOUNCED.add(address)
@@ -324,7 +325,8 @@ def _distributed(fn: Callable[..., Any], tasks: list[tuple], scheduler: str, wor
     folder, wait_s = _SHARED.get(), cluster_wait_s()
     code = _here_key(fn)
     with local_cluster(scheduler, n) as address, Client(address) as client:
-        announce(client, address)
+        if scheduler != "processes":  # (ours serves no dashboard pages: its HTTP port has dask's health routes only)
+            announce(client, address)
         check_code(client, fn)
         client.run(_warm_worker)
         t0 = time.perf_counter()

@@ -270,3 +270,19 @@ def test_the_calibration_does_not_depend_on_its_split(paper_config, tmp_path):
         got.append(read_dataset(path))
         got[-1].attrs.pop("history", None)
     assert got[0].identical(got[1]) and got[0].sizes["protrusion"] == 5
+
+
+def test_the_dashboard_link_is_logged_once_when_the_scheduler_has_one(caplog):
+    import logging
+
+    from distributed import Client, LocalCluster
+    caplog.set_level(logging.INFO, logger="pipeline.fanout")
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=":0") as cluster, \
+            Client(cluster.scheduler_address) as client:
+        address = cluster.scheduler_address
+        fanout.announce(client, address)
+        fanout.announce(client, address)  # (identify's generations connect again and again: once)
+        link = client.dashboard_link
+    lines = [r for r in caplog.records if r.name == "pipeline.fanout" and address in r.getMessage()]
+    assert [r.getMessage() for r in lines] == [f"dask scheduler {address}: dashboard {link}"]
+    assert link.startswith("http://") and link.endswith("/status") and lines[0].levelno == logging.INFO
