@@ -67,8 +67,12 @@ LOCAL = ("synchronous", "threads", "processes")
 CLUSTER_WAIT_S = 60.0
 #: Seconds between two looks at the cluster while waiting for results.
 _POLL_S = 1.0
-#: Seconds to wait for a dask scheduler to answer a connection (dask's own default is 30 s).
+#: Seconds to wait for a dask scheduler to answer a connection (dask's own default is 30 s), when the
+#: command starts (:func:`pipeline.validation.check_scheduler`) and to count its threads.
 CONNECT_TIMEOUT_S = 3.0
+#: Seconds a batch's client waits for the scheduler (dask's default: a busy scheduler of a long study
+#: answering late is no reason to stop); past them the command ends in one line.
+CLIENT_TIMEOUT_S = 30.0
 
 
 class ClusterError(ValueError):
@@ -130,15 +134,15 @@ def split(items: Sequence[Any], scheduler: str | None = None, workers: int | Non
 
 
 @contextlib.contextmanager
-def connect(address: str, timeout: float = CONNECT_TIMEOUT_S) -> Iterator[Any]:
+def connect(address: str, timeout: float | None = None) -> Iterator[Any]:
     """A ``distributed.Client`` of the scheduler at ``address``; one that does not answer within ``timeout``
-    [s] is :class:`ClusterError`."""
+    [s] (default :data:`CONNECT_TIMEOUT_S`) is :class:`ClusterError`."""
     from distributed import Client
     try:
-        client = Client(address, timeout=timeout)
+        client = Client(address, timeout=CONNECT_TIMEOUT_S if timeout is None else timeout)
     except (OSError, TimeoutError) as exc:
-        raise ClusterError(f"dask scheduler {address}: did not answer ({exc}); start it again, or leave "
-                           "--scheduler out to run locally") from None
+        raise ClusterError(f"dask scheduler {address}: did not answer ({exc}); start it again, or run locally "
+                           "(--scheduler threads)") from None
     with client:
         yield client
 
@@ -320,11 +324,10 @@ def on_worker(folder: str | None, code: tuple[str, str], fn: Callable[..., Any],
 def _distributed(fn: Callable[..., Any], tasks: list[tuple], scheduler: str, workers: int | None,
                  done: Callable[[Any], None]) -> float:
     """A local process cluster (``scheduler="processes"``) or the cluster at a scheduler address."""
-    from distributed import Client
     n = local_workers(workers, len(tasks)) if scheduler == "processes" else None
     folder, wait_s = _SHARED.get(), cluster_wait_s()
     code = _here_key(fn)
-    with local_cluster(scheduler, n) as address, Client(address) as client:
+    with local_cluster(scheduler, n) as address, connect(address, CLIENT_TIMEOUT_S) as client:
         if scheduler != "processes":  # (ours serves no dashboard pages: its HTTP port has dask's health routes only)
             announce(client, address)
         check_code(client, fn)

@@ -286,3 +286,16 @@ def test_the_dashboard_link_is_logged_once_when_the_scheduler_has_one(caplog):
     lines = [r for r in caplog.records if r.name == "pipeline.fanout" and address in r.getMessage()]
     assert [r.getMessage() for r in lines] == [f"dask scheduler {address}: dashboard {link}"]
     assert link.startswith("http://") and link.endswith("/status") and lines[0].levelno == logging.INFO
+
+
+def test_a_scheduler_that_does_not_answer_is_one_line(monkeypatch):
+    # (dask's own timeout, shortened: the split asks a scheduler that went away since the command started)
+    import socket
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        address = f"tcp://127.0.0.1:{s.getsockname()[1]}"
+    monkeypatch.setattr(fanout, "CONNECT_TIMEOUT_S", 0.5)
+    with pytest.raises(fanout.ClusterError) as err:
+        fanout.cluster_threads(address)
+    assert str(err.value).startswith(f"dask scheduler {address}: did not answer (Timed out trying to connect to "
+                                     f"{address} after 0.5 s); start it again") and "\n" not in str(err.value)
