@@ -129,7 +129,8 @@ def split(items: Sequence[Any], scheduler: str | None = None, workers: int | Non
     cluster's threads (:func:`cluster_threads`) for a scheduler address, none empty: for work whose items
     share a set-up in a task (a model and its static starts). The split decides where items run, not
     what they give (tests/test_fanout.py: a task's shared set-up gives each item what it gives alone)."""
-    n = local_workers(workers, len(items)) if scheduler is None or scheduler in LOCAL else cluster_threads(scheduler)
+    local = scheduler is None or scheduler in LOCAL
+    n = local_workers(workers, len(items)) if local else cluster_threads(scheduler)
     return [c for c in (tuple(items[i::n]) for i in range(n)) if c]
 
 

@@ -5,8 +5,8 @@ mistake ends in one line naming the option (exit 2, :class:`OptionError`) before
 and before anything is written: ``--workers`` must be a positive integer, ``--scheduler`` must
 answer as a dask scheduler with workers (its handshake within :data:`CONNECT_TIMEOUT_S`, instead of
 dask's 30 s, a hang on an HTTP port or a traceback; a scheduler file is read for its address, and
-without ``--scheduler`` the variable ``DASK_SCHEDULER_ADDRESS`` is one), ``--out`` must be a folder we can write in, the sweep grid must not exceed
-:data:`MAX_SCENES` unless ``--yes``, the report's history protrusions must lie on the sweep grid, and
+without ``--scheduler`` the variable ``DASK_SCHEDULER_ADDRESS`` is one), ``--out`` must be a folder
+we can write in, the sweep grid must not exceed :data:`MAX_SCENES` unless ``--yes``, the report's history protrusions must lie on the sweep grid, and
 an option the stage does not use is an error naming the option and the stages that use it.
 
 :func:`one_line_warnings` prints the :class:`~pipeline.physics.material_bounds.PhysicsWarning` of
@@ -106,6 +106,13 @@ def scheduler_address(given: str | None) -> tuple[str | None, str]:
     return address, f"{where} (address {address})"
 
 
+def _leave(named: str) -> str:
+    """How to run locally instead, for an error about the scheduler ``named``."""
+    if named.startswith(SCHEDULER_ENV):
+        return f"or unset {SCHEDULER_ENV} (or give --scheduler threads) to run locally"
+    return "or leave --scheduler out to use a local cluster"
+
+
 def check_scheduler(address: str | None, timeout: float = CONNECT_TIMEOUT_S,
                     worker_wait: float = WORKER_WAIT_S) -> str | None:
     """The scheduler the run uses (:func:`scheduler_address`), checked: absent, a local one
@@ -121,8 +128,7 @@ def check_scheduler(address: str | None, timeout: float = CONNECT_TIMEOUT_S,
     address, named = scheduler_address(address)
     if address is None or address in LOCAL:
         return address
-    leave = (f"or unset {SCHEDULER_ENV} (or give --scheduler threads) to run locally" if named.startswith(SCHEDULER_ENV)
-             else "or leave --scheduler out to use a local cluster")
+    leave = _leave(named)
     parts = urlsplit(address if "://" in address else f"tcp://{address}")
     if parts.scheme not in ("tcp", "tls"):
         raise OptionError(f"{named}: expected tcp://HOST:PORT (or tls://, or a scheduler file), got scheme "
@@ -204,7 +210,7 @@ def check_workers_attached(address: str, timeout: float = CONNECT_TIMEOUT_S,
     except (OSError, TimeoutError) as exc:
         raise OptionError(f"{named}: the dask scheduler did not answer ({exc})") from None
     raise OptionError(f"{named}: the dask scheduler has no workers ({worker_wait:g} s waited); "
-                      "start some (`dask worker " + address + "`) or leave --scheduler out")
+                      f"start some (`dask worker {address}`) {_leave(named)}")
 
 
 def check_out(out: str | Path | None) -> None:

@@ -49,7 +49,8 @@ def test_one_worker_or_one_task_runs_in_process():
 
 def test_split_deals_every_item_once_into_one_task_per_worker(monkeypatch):
     items = list(range(11))
-    monkeypatch.setattr(fanout, "cluster_threads", lambda address: {"tcp://big:8786": 64, "tcp://small:8786": 4}[address])
+    threads = {"tcp://big:8786": 64, "tcp://small:8786": 4}
+    monkeypatch.setattr(fanout, "cluster_threads", threads.__getitem__)
     for scheduler, workers, n in ((None, 3, 3), ("threads", 2, 2), ("synchronous", 20, 11),
                                   ("tcp://small:8786", None, 4), ("tcp://big:8786", 3, 11)):
         chunks = split(items, scheduler, workers)
@@ -250,7 +251,8 @@ def test_an_ensemble_realisation_does_not_depend_on_the_task_it_shares(paper_con
     seeds = dmw_record.realisation_seeds(scene["dmw"]["seed"], 4)
     inputs, prots = evaluations.Inputs(None, None, None, None), [2.0, 2.2]
     together = evaluations.evaluate_realisations(scene, prots, inputs, None, (1, 2, 3), tuple(seeds[1:]))
-    apart = [row for r in (1, 2, 3) for row in evaluations.evaluate_realisations(scene, prots, inputs, None, (r,), (seeds[r],))]
+    apart = [row for r in (1, 2, 3)
+             for row in evaluations.evaluate_realisations(scene, prots, inputs, None, (r,), (seeds[r],))]
     assert _same_rows(together, apart)
     assert not _same_rows(together[:1], together[1:2])  # (the realisations differ: the comparison can fail)
 
