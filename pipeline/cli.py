@@ -1,4 +1,4 @@
-"""The ``hdi`` command: ``hdi STAGE CONFIG [--set section.key=value ...] [--out DIR] [--scheduler ADDRESS]``.
+"""The ``hdi`` command: ``hdi STAGE CONFIG [--set section.key=value ...] [--out DIR] [--scheduler ADDRESS|FILE]``.
 
 The stages are the declarations :mod:`pipeline.runner` discovers in :mod:`pipeline.stages`; the runner
 makes the asked stage current, with everything upstream of it (a stage whose inputs did not change is
@@ -62,8 +62,11 @@ def _parser(stages: dict[str, runner.Stage]) -> argparse.ArgumentParser:
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="SECTION.KEY=VALUE",
                    help="override a scene key (TOML value syntax); repeatable")
     p.add_argument("--out", type=Path, default=None, help="output folder (default results/<scene name>/)")
-    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                   help="attach the sweep (identify, sensitivity) to an existing dask.distributed scheduler")
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS|FILE",
+                   help="run the fan-out (sweep, calibrate, ensemble, identify, sensitivity) on an existing "
+                        "dask.distributed scheduler: its address (tcp://HOST:8786) or the JSON file `dask scheduler "
+                        "--scheduler-file FILE` writes; without it, the address in DASK_SCHEDULER_ADDRESS if set, "
+                        "else local threads; threads, processes or synchronous name the local fan-outs")
     p.add_argument("--workers", type=int, default=None, help="local dask workers (default: one per core)")
     p.add_argument("--channel", default=None, help="roughness: AFM channel (default: the height channel)")
     p.add_argument("--detrend", default=None, choices=("center", "height", "plane", "curvature"),
@@ -151,10 +154,10 @@ def _main(argv: list[str] | None = None) -> int:
         if len(args.inputs) != 1:
             raise SceneError(f"hdi {args.stage}: expected one scene file, got {args.inputs}")
         scene = load_scene(args.inputs[0], args.overrides)
-        check_options(args.stage, scene, **_given(args))
+        scheduler = check_options(args.stage, scene, **_given(args))  # (a scheduler file's address, the env's)
         out = results_dir(scene, args.out)
         targets = runner.main_job(scene, stages) if args.stage == "run" else [args.stage]
-        options = {"scheduler": args.scheduler, "workers": args.workers, "readme": args.readme,
+        options = {"scheduler": scheduler, "workers": args.workers, "readme": args.readme,
                    **({"write_scene": args.write_scene} if args.write_scene is not None else {})}
         made = runner.Runner(scene, out, stages, **options).build(targets, force=args.force)
         for stage, paths in made.items():  # the dataset, or the folder of figures and tables

@@ -17,6 +17,9 @@
 * ``scheduler="synchronous"``: in this process, one after the other (tests, debugging, profiling).
 * any other string: the address of a running dask.distributed scheduler (e.g. one started by
   dask-jobqueue), which is how a study outgrows one machine. Tasks are retried twice on a lost worker.
+  (The command line also takes a scheduler file or ``DASK_SCHEDULER_ADDRESS``:
+  :func:`pipeline.validation.check_scheduler` turns them into the address.) The first connection to a
+  scheduler logs its dashboard link (:func:`announce`).
 
 Tasks must be deterministic functions of their arguments and safe to run twice (retries); large
 inputs travel by file path inside ``args``, not as arrays. A worker resolves a relative path from its
@@ -25,6 +28,12 @@ results folder as an absolute path) and the results folder must be on a file sys
 share: within :func:`shared_folder` (the runner sets it to the folder of the stage it computes) each
 task on a cluster first checks that its worker sees that folder, and a worker that does not ends the
 command with one line naming the folder (:class:`ClusterError`).
+
+Before a batch is sent to a cluster, every worker's :func:`pipeline.code_version.code_key` of the
+task's module is compared with this process's (:func:`check_code`), and each task checks it again on
+the worker that runs it (a worker that joined later): a worker that imported other code (started
+before an update, or from another install) would write parts stamped with this code's inputs key, so
+it ends the command with one line naming the worker and both keys (:class:`ClusterError`).
 
 On a cluster the client watches the progress while it waits: when for :data:`CLUSTER_WAIT_S` seconds
 (environment variable ``HDI_CLUSTER_WAIT_S``) no task finished and none was running on a worker (the
@@ -47,6 +56,8 @@ from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 from pathlib import Path
 from typing import Any, Callable, Iterable, Iterator, Sequence
 
+from .code_version import code_key
+
 log = logging.getLogger(__name__)
 
 LOCAL = ("synchronous", "threads", "processes")
@@ -56,11 +67,18 @@ LOCAL = ("synchronous", "threads", "processes")
 CLUSTER_WAIT_S = 60.0
 #: Seconds between two looks at the cluster while waiting for results.
 _POLL_S = 1.0
+#: Seconds to wait for a dask scheduler to answer a connection (dask's own default is 30 s), when the
+#: command starts (:func:`pipeline.validation.check_scheduler`) and to count its threads.
+CONNECT_TIMEOUT_S = 3.0
+#: Seconds a batch's client waits for the scheduler (dask's default: a busy scheduler of a long study
+#: answering late is no reason to stop); past them the command ends in one line.
+CLIENT_TIMEOUT_S = 30.0
 
 
 class ClusterError(ValueError):
-    """The cluster cannot run the batch: a worker does not see the results folder, no worker ran a task
-    for :data:`CLUSTER_WAIT_S`, or a task killed its workers (the command line says it in one line)."""
+    """The cluster cannot run the batch: a worker does not see the results folder or runs other code, no
+    worker ran a task for :data:`CLUSTER_WAIT_S`, or a task killed its workers (the command line says it
+    in one line)."""
 
 
 _SHARED: contextvars.ContextVar[str | None] = contextvars.ContextVar("hdi_shared_folder", default=None)
@@ -106,16 +124,86 @@ def local_workers(workers: int | None, n_tasks: int) -> int:
     return max(1, min(n, n_tasks))
 
 
-#: Tasks :func:`split` makes for a dask.distributed scheduler (its workers are not known here).
-CLUSTER_TASKS = 8
-
-
 def split(items: Sequence[Any], scheduler: str | None = None, workers: int | None = None) -> list[tuple]:
-    """``items`` dealt round-robin into as many tasks as local workers (:func:`local_workers`), or
-    :data:`CLUSTER_TASKS` for a cluster, none empty: for work whose items share a set-up in a task (a
-    model and its static starts)."""
-    n = local_workers(workers, len(items)) if scheduler is None or scheduler in LOCAL else CLUSTER_TASKS
+    """``items`` dealt round-robin into as many tasks as local workers (:func:`local_workers`), or as the
+    cluster's threads (:func:`cluster_threads`) for a scheduler address, none empty: for work whose items
+    share a set-up in a task (a model and its static starts). The split decides where items run, not
+    what they give (tests/test_fanout.py: a task's shared set-up gives each item what it gives alone)."""
+    local = scheduler is None or scheduler in LOCAL
+    n = local_workers(workers, len(items)) if local else cluster_threads(scheduler)
     return [c for c in (tuple(items[i::n]) for i in range(n)) if c]
+
+
+@contextlib.contextmanager
+def connect(address: str, timeout: float | None = None) -> Iterator[Any]:
+    """A ``distributed.Client`` of the scheduler at ``address``; one that does not answer within ``timeout``
+    [s] (default :data:`CONNECT_TIMEOUT_S`) is :class:`ClusterError`."""
+    from distributed import Client
+    try:
+        client = Client(address, timeout=CONNECT_TIMEOUT_S if timeout is None else timeout)
+    except (OSError, TimeoutError) as exc:
+        raise ClusterError(f"dask scheduler {address}: did not answer ({exc}); start it again, or run locally "
+                           "(--scheduler threads)") from None
+    with client:
+        yield client
+
+
+def cluster_threads(address: str) -> int:
+    """The threads of the workers the scheduler at ``address`` has now (at least 1): how many tasks
+    :func:`split` makes for it (a dask-jobqueue cluster of 64 single-threaded workers runs 64)."""
+    with connect(address) as client:
+        return max(1, sum(client.nthreads().values()))
+
+
+_ANNOUNCED: set[str] = set()
+
+
+def announce(client: Any, address: str) -> None:
+    """Log (INFO) the dashboard link of the scheduler at ``address``, once per process, if it has one
+    (as dask shows it: a scheduler without bokeh serves a page saying to install it there)."""
+    if address in _ANNOUNCED:
+        return
+    _ANNOUNCED.add(address)
+    try:
+        services = client.scheduler_info(n_workers=0).get("services", {})
+        link = client.dashboard_link if "dashboard" in services else None
+    except (OSError, TimeoutError, KeyError):  # (no link is no reason to stop)
+        return
+    if link:
+        log.info("dask scheduler %s: dashboard %s", address, link)
+
+
+def _worker_code_key(module: str) -> str:
+    """:func:`pipeline.code_version.code_key` of ``module`` in the process that runs this (a worker)."""
+    return code_key(module)
+
+
+def _here_key(fn: Callable[..., Any]) -> tuple[str, str]:
+    """The module of task function ``fn`` and its code key in this process (``""`` outside ``pipeline``)."""
+    module = getattr(fn, "__module__", None) or ""
+    return module, code_key(module)
+
+
+def _stale(worker: str, module: str, theirs: str, ours: str) -> ClusterError:
+    """The one line that refuses a worker whose code is not ours."""
+    return ClusterError(f"dask worker {worker} runs other code than this hdi: code key of {module} {theirs[:12] or '-'} "
+                        f"there, {ours[:12] or '-'} here; restart the workers from this version of pipeline "
+                        "(install it where they run) and run again")
+
+
+def check_code(client: Any, fn: Callable[..., Any]) -> None:
+    """Every worker of ``client`` has this process's code key of ``fn``'s module, else :class:`ClusterError`
+    naming the first worker (by address) that differs (a worker that cannot even run the check imports
+    an older ``pipeline``)."""
+    module, ours = _here_key(fn)
+    keys = client.run(_worker_code_key, module, on_error="return")
+    for worker, theirs in sorted(keys.items()):
+        if isinstance(theirs, BaseException):
+            raise ClusterError(f"dask worker {worker} runs other code than this hdi: it cannot check its code key "
+                               f"({type(theirs).__name__}: {theirs}); restart the workers from this version of "
+                               "pipeline (install it where they run) and run again")
+        if theirs != ours:
+            raise _stale(worker, module, theirs, ours)
 
 
 def run_tasks(fn: Callable[..., Any], tasks: Iterable[tuple], *, scheduler: str | None = None,
@@ -219,18 +307,36 @@ def in_shared_folder(folder: str | None, fn: Callable[..., Any], *args: Any) -> 
     return fn(*args)
 
 
+def on_worker(folder: str | None, code: tuple[str, str], fn: Callable[..., Any], *args: Any) -> Any:
+    """A task on a dask worker: the worker's code key of ``code = (module, key)`` must be ``key`` (a
+    worker that joined after :func:`check_code`), then :func:`in_shared_folder`."""
+    module, ours = code
+    theirs = code_key(module)
+    if theirs != ours:
+        try:
+            from distributed import get_worker
+            worker = get_worker().address
+        except (ImportError, ValueError):
+            worker = socket.gethostname()
+        raise _stale(worker, module, theirs, ours)
+    return in_shared_folder(folder, fn, *args)
+
+
 def _distributed(fn: Callable[..., Any], tasks: list[tuple], scheduler: str, workers: int | None,
                  done: Callable[[Any], None]) -> float:
     """A local process cluster (``scheduler="processes"``) or the cluster at a scheduler address."""
-    from distributed import Client
     n = local_workers(workers, len(tasks)) if scheduler == "processes" else None
     folder, wait_s = _SHARED.get(), cluster_wait_s()
-    with local_cluster(scheduler, n) as address, Client(address) as client:
+    code = _here_key(fn)
+    with local_cluster(scheduler, n) as address, connect(address, CLIENT_TIMEOUT_S) as client:
+        if scheduler != "processes":  # (ours serves no dashboard pages: its HTTP port has dask's health routes only)
+            announce(client, address)
+        check_code(client, fn)
         client.run(_warm_worker)
         t0 = time.perf_counter()
         # (keys named after fn, as the dashboard and the workers' logs would name fn itself)
         name = getattr(fn, "__name__", "task")
-        futures = [client.submit(in_shared_folder, folder, fn, *args, key=f"{name}-{uuid.uuid4().hex}", retries=2)
+        futures = [client.submit(on_worker, folder, code, fn, *args, key=f"{name}-{uuid.uuid4().hex}", retries=2)
                    for args in tasks]
         for result in _results(client, futures, address, wait_s):
             done(result)

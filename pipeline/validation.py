@@ -4,8 +4,9 @@
 mistake ends in one line naming the option (exit 2, :class:`OptionError`) before any stage starts
 and before anything is written: ``--workers`` must be a positive integer, ``--scheduler`` must
 answer as a dask scheduler with workers (its handshake within :data:`CONNECT_TIMEOUT_S`, instead of
-dask's 30 s, a hang on an HTTP port or a traceback), ``--out`` must be a folder we can write in, the sweep grid must not exceed
-:data:`MAX_SCENES` unless ``--yes``, the report's history protrusions must lie on the sweep grid, and
+dask's 30 s, a hang on an HTTP port or a traceback; a scheduler file is read for its address, and
+without ``--scheduler`` the variable ``DASK_SCHEDULER_ADDRESS`` is one), ``--out`` must be a folder
+we can write in, the sweep grid must not exceed :data:`MAX_SCENES` unless ``--yes``, the report's history protrusions must lie on the sweep grid, and
 an option the stage does not use is an error naming the option and the stages that use it.
 
 :func:`one_line_warnings` prints the :class:`~pipeline.physics.material_bounds.PhysicsWarning` of
@@ -15,6 +16,7 @@ stage computes: :mod:`pipeline.code_version` leaves this module out of the stage
 
 from __future__ import annotations
 
+import json
 import os
 import socket
 import struct
@@ -25,8 +27,9 @@ from typing import Any
 from urllib.parse import urlsplit
 
 from .config.grid import label, range_count, roughness_sets, same_point
-from .io import is_read_only
-from . import sizing
+from .io import is_read_only, os_error_line
+from . import fanout, sizing
+from .fanout import CONNECT_TIMEOUT_S, LOCAL
 from .config import limits
 from .physics.material_bounds import PhysicsWarning
 
@@ -35,8 +38,6 @@ class OptionError(ValueError):
     """A command-line option is invalid for this stage or scene (one line, names the option)."""
 
 
-#: Seconds to wait for a TCP connection to ``--scheduler`` before giving up.
-CONNECT_TIMEOUT_S = 3.0
 #: Seconds a scheduler without workers is given to get one (batch jobs starting) before giving up.
 WORKER_WAIT_S = 30.0
 #: Largest handshake [bytes] a dask server sends (it is ~100 bytes; a banner read as a length is huge).
@@ -69,37 +70,90 @@ def check_workers(workers: int | None) -> None:
         raise OptionError(f"--workers {workers}: expected a positive number of local workers (1 or more)")
 
 
+#: The environment variable dask itself reads for its ``scheduler-address`` setting.
+SCHEDULER_ENV = "DASK_SCHEDULER_ADDRESS"
+
+
+def scheduler_address(given: str | None) -> tuple[str | None, str]:
+    """The scheduler a run uses and how an error names it: ``--scheduler`` (a local fan-out, an address,
+    or a scheduler file), else :data:`SCHEDULER_ENV`, else ``None`` (local threads).
+
+    A scheduler file is the JSON ``dask scheduler --scheduler-file FILE`` writes: a ``--scheduler``
+    ending in ``.json``, or naming an existing file. dask's YAML config files are not read (importing
+    dask would cost every local run ~0.5 s).
+    """
+    if given is None:
+        env = os.environ.get(SCHEDULER_ENV, "").strip()
+        return (env, f"{SCHEDULER_ENV}={env}") if env else (None, "")
+    if given in LOCAL or "://" in given or not (given.endswith(".json") or Path(given).is_file()):
+        return given, f"--scheduler {given}"
+    where = f"--scheduler {given}"
+    try:
+        with open(given, encoding="utf-8") as f:
+            identity = json.load(f)
+    except FileNotFoundError:
+        raise OptionError(f"{where}: no such scheduler file (expected tcp://HOST:PORT, or the JSON file "
+                          "`dask scheduler --scheduler-file FILE` writes)") from None
+    except OSError as exc:
+        raise OptionError(f"{where}: {os_error_line(exc)}") from None
+    except (UnicodeDecodeError, ValueError) as exc:
+        raise OptionError(f"{where}: not a dask scheduler file ({exc}); expected the JSON file "
+                          "`dask scheduler --scheduler-file FILE` writes") from None
+    address = identity.get("address") if isinstance(identity, dict) else None
+    if not isinstance(address, str) or not address:
+        raise OptionError(f"{where}: field \"address\": expected the scheduler's address (tcp://HOST:PORT), "
+                          f"got {address!r}")
+    return address, f"{where} (address {address})"
+
+
+def _leave(named: str) -> str:
+    """How to run locally instead, for an error about the scheduler ``named``."""
+    if named.startswith(SCHEDULER_ENV):
+        return f"or unset {SCHEDULER_ENV} (or give --scheduler threads) to run locally"
+    return "or leave --scheduler out to use a local cluster"
+
+
 def check_scheduler(address: str | None, timeout: float = CONNECT_TIMEOUT_S,
-                    worker_wait: float = WORKER_WAIT_S) -> None:
-    """``--scheduler`` is absent, a local one (``synchronous``, ``threads``, ``processes``:
-    :mod:`pipeline.fanout`), or a ``[tcp://]HOST:PORT`` where a dask scheduler answers the handshake
-    within ``timeout`` [s] and has a worker within ``worker_wait`` [s] (``tls://``: the connection
-    alone is checked, the handshake is encrypted)."""
-    if address is None or address in ("synchronous", "threads", "processes"):
-        return
+                    worker_wait: float = WORKER_WAIT_S) -> str | None:
+    """The scheduler the run uses (:func:`scheduler_address`), checked: absent, a local one
+    (``synchronous``, ``threads``, ``processes``: :mod:`pipeline.fanout`), or a ``[tcp://]HOST:PORT``
+    where a dask scheduler answers the handshake within ``timeout`` [s] and has a worker within
+    ``worker_wait`` [s] (``tls://``: the connection alone is checked, the handshake is encrypted).
+
+    Returns
+    -------
+    str or None
+        The address (or local name) to hand the stages; ``None``: the local default.
+    """
+    address, named = scheduler_address(address)
+    if address is None or address in LOCAL:
+        return address
+    leave = _leave(named)
     parts = urlsplit(address if "://" in address else f"tcp://{address}")
     if parts.scheme not in ("tcp", "tls"):
-        raise OptionError(f"--scheduler {address}: expected tcp://HOST:PORT (or tls://), got scheme "
+        raise OptionError(f"{named}: expected tcp://HOST:PORT (or tls://, or a scheduler file), got scheme "
                           f"{parts.scheme!r}")
     try:
         host, port = parts.hostname, parts.port
     except ValueError:
         host, port = None, None
     if not host or port is None:
-        raise OptionError(f"--scheduler {address}: expected tcp://HOST:PORT")
+        raise OptionError(f"{named}: expected tcp://HOST:PORT (or a scheduler file)")
+    # (the handshake is read here, not by distributed.Client: against an HTTP server the client hangs
+    # past its own timeout, and it reads a banner such as SSH's as a frame length, a MemoryError)
     try:
         with socket.create_connection((host, port), timeout=timeout) as sock:
             what = _dask_handshake(sock, timeout) if parts.scheme == "tcp" else None
     except OSError as exc:
         reason = "timed out" if isinstance(exc, socket.timeout) else (exc.strerror or str(exc))
-        raise OptionError(f"--scheduler {address}: no scheduler answers at {host}:{port} ({reason}, "
-                          f"{timeout:g} s connect timeout); start one (`dask scheduler`) or leave "
-                          "--scheduler out to use a local cluster") from None
+        raise OptionError(f"{named}: no scheduler answers at {host}:{port} ({reason}, "
+                          f"{timeout:g} s connect timeout); start one (`dask scheduler`) {leave}") from None
     if what is not None:
-        raise OptionError(f"--scheduler {address}: {host}:{port} answers but is not a dask scheduler ({what}); "
-                          "give the scheduler's address (tcp://HOST:8786 by default, not the dashboard's "
-                          "8787) or leave --scheduler out to use a local cluster")
-    check_workers_attached(address, timeout, worker_wait)
+        raise OptionError(f"{named}: {host}:{port} answers but is not a dask scheduler ({what}); "
+                          f"give the scheduler's address (tcp://HOST:8786 by default, not the dashboard's "
+                          f"8787) {leave}")
+    check_workers_attached(address, timeout, worker_wait, named)
+    return address
 
 
 def _dask_handshake(sock: socket.socket, timeout: float) -> str | None:
@@ -134,13 +188,16 @@ def _dask_handshake(sock: socket.socket, timeout: float) -> str | None:
 
 
 def check_workers_attached(address: str, timeout: float = CONNECT_TIMEOUT_S,
-                           worker_wait: float = WORKER_WAIT_S) -> None:
+                           worker_wait: float = WORKER_WAIT_S, named: str | None = None) -> None:
     """The dask scheduler at ``address`` has at least one worker, or gets one within ``worker_wait`` [s]
-    (workers submitted as batch jobs may still be starting)."""
+    (workers submitted as batch jobs may still be starting); its dashboard link is logged
+    (:func:`pipeline.fanout.announce`). ``named``: how an error names the scheduler."""
     import logging
     from distributed import Client
+    named = named or f"--scheduler {address}"
     try:
         with Client(address, timeout=timeout) as client:
+            fanout.announce(client, address)
             if client.scheduler_info().get("workers"):
                 return
             logging.getLogger("pipeline").info("scheduler %s has no workers; waiting up to %g s for one",
@@ -151,9 +208,9 @@ def check_workers_attached(address: str, timeout: float = CONNECT_TIMEOUT_S,
             except (TimeoutError, OSError):
                 pass
     except (OSError, TimeoutError) as exc:
-        raise OptionError(f"--scheduler {address}: the dask scheduler did not answer ({exc})") from None
-    raise OptionError(f"--scheduler {address}: the dask scheduler has no workers ({worker_wait:g} s waited); "
-                      "start some (`dask worker " + address + "`) or leave --scheduler out")
+        raise OptionError(f"{named}: the dask scheduler did not answer ({exc})") from None
+    raise OptionError(f"{named}: the dask scheduler has no workers ({worker_wait:g} s waited); "
+                      f"start some (`dask worker {address}`) {_leave(named)}")
 
 
 def check_out(out: str | Path | None) -> None:
@@ -308,8 +365,14 @@ def check_stage_options(stage: str, given: dict[str, Any], afm_files: bool = Fal
 
 
 def check_options(stage: str, scene: Any, *, out: str | Path | None = None, scheduler: str | None = None,
-                  workers: int | None = None, yes: bool = False, force: bool = False, **given: Any) -> None:
+                  workers: int | None = None, yes: bool = False, force: bool = False, **given: Any) -> str | None:
     """Every check of this module that applies to ``hdi STAGE`` (``scene`` may be ``None`` for AFM files).
+
+    Returns
+    -------
+    str or None
+        The scheduler the stage's fan-out uses (:func:`check_scheduler`: ``--scheduler``, a scheduler
+        file's address or ``DASK_SCHEDULER_ADDRESS``); ``None``: the local default.
 
     Raises
     ------
@@ -336,7 +399,8 @@ def check_options(stage: str, scene: Any, *, out: str | Path | None = None, sche
             check_sweep_histories(scene)
         roughness_sets(scene)
     if stage in OPTION_STAGES["scheduler"]:
-        check_scheduler(scheduler)
+        return check_scheduler(scheduler)
+    return None
 
 
 def one_line_warnings() -> None:

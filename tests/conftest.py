@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import pytest
@@ -11,6 +12,7 @@ from pipeline.config.scene import load_scene
 #: The repository root (this file is tests/conftest.py).
 REPO = Path(__file__).resolve().parent.parent
 PAPER_CONFIG = REPO / "configs" / "paper-2009.toml"
+os.environ.pop("DASK_SCHEDULER_ADDRESS", None)  # (hdi honours it: a developer's cluster must not get the suite's runs)
 
 
 @pytest.fixture(scope="session")

@@ -47,15 +47,26 @@ def test_one_worker_or_one_task_runs_in_process():
         local_workers(-1, 3)
 
 
-def test_split_deals_every_item_once_into_one_task_per_worker():
+def test_split_deals_every_item_once_into_one_task_per_worker(monkeypatch):
     items = list(range(11))
+    threads = {"tcp://big:8786": 64, "tcp://small:8786": 4}
+    monkeypatch.setattr(fanout, "cluster_threads", threads.__getitem__)
     for scheduler, workers, n in ((None, 3, 3), ("threads", 2, 2), ("synchronous", 20, 11),
-                                  ("tcp://scheduler:8786", None, fanout.CLUSTER_TASKS)):
+                                  ("tcp://small:8786", None, 4), ("tcp://big:8786", 3, 11)):
         chunks = split(items, scheduler, workers)
         assert len(chunks) == n and all(chunks)
         assert sorted(x for c in chunks for x in c) == items  # each once
         assert chunks[0] == tuple(items[::n])  # round-robin: each task spans the range
-    assert split([5], "tcp://scheduler:8786") == [(5,)]  # no empty task
+    assert split([5], "tcp://big:8786") == [(5,)]  # no empty task
+
+
+def test_a_cluster_split_follows_its_threads():
+    # issue 26, 3: a cluster always got 8 tasks (a 64-worker dask-jobqueue cluster ran calibrate on 8)
+    from distributed import LocalCluster
+    with LocalCluster(n_workers=2, threads_per_worker=3, processes=False, dashboard_address=None) as cluster:
+        assert fanout.cluster_threads(cluster.scheduler_address) == 6
+        chunks = split(list(range(20)), cluster.scheduler_address)
+    assert len(chunks) == 6 and sorted(x for c in chunks for x in c) == list(range(20))
 
 
 def test_an_error_in_on_done_cancels_what_has_not_started():
@@ -183,3 +194,110 @@ def test_a_cluster_without_workers_ends_the_wait_in_one_line_within_the_bound(mo
     assert str(err.value) == (f"dask scheduler tcp://host:8786: {n} of {len(futures)} tasks waited 0.5 s with no "
                               "worker left (HDI_CLUSTER_WAIT_S sets the wait); finished work is kept, start workers "
                               "and run again to resume")
+
+
+# ------------------------------------------------------------ issue 26, 3: a worker running other code
+class _Workers:
+    """A stand-in for a client whose workers answer ``run`` with these code keys (or exceptions)."""
+
+    def __init__(self, keys):
+        self.keys = keys
+
+    def run(self, fn, *args, on_error="raise"):
+        return self.keys
+
+
+def test_a_worker_with_another_code_key_is_refused_in_one_line_naming_it_and_both_keys():
+    from pipeline.code_version import code_key
+    ours = code_key("pipeline.code_version")
+    assert ours  # (a module of the package: a real key)
+    fanout.check_code(_Workers({"tcp://10.0.0.1:1": ours, "tcp://10.0.0.2:1": ours}), code_key)  # all current
+    with pytest.raises(fanout.ClusterError) as err:
+        fanout.check_code(_Workers({"tcp://10.0.0.1:1": ours, "tcp://10.0.0.2:1": "ab" * 32}), code_key)
+    assert str(err.value) == (f"dask worker tcp://10.0.0.2:1 runs other code than this hdi: code key of "
+                              f"pipeline.code_version {'ab' * 6} there, {ours[:12]} here; restart the workers from "
+                              "this version of pipeline (install it where they run) and run again")
+    with pytest.raises(fanout.ClusterError, match=r"^dask worker tcp://10.0.0.1:1 runs other code than this hdi: it "
+                                                  r"cannot check its code key \(AttributeError: gone\)"):
+        fanout.check_code(_Workers({"tcp://10.0.0.1:1": AttributeError("gone")}), code_key)
+
+
+def test_a_task_checks_the_code_key_on_its_worker(monkeypatch):
+    # a worker that joined after the check of the whole cluster (dask-jobqueue scaling up)
+    key = fanout.code_key("pipeline.code_version")
+    assert fanout.on_worker(None, ("pipeline.code_version", key), square, 3)[:2] == (3, 9)
+    monkeypatch.setattr(fanout, "code_key", lambda module: "0" * 64)
+    with pytest.raises(fanout.ClusterError, match=rf"^dask worker \S+ runs other code than this hdi: code key of "
+                                                  rf"pipeline.code_version 000000000000 there, {key[:12]} here; "):
+        fanout.on_worker(None, ("pipeline.code_version", key), square, 3)
+
+
+# ------------------------------------------------------------ issue 26, 3: the split decides where, not what
+def _same_rows(a: list[tuple], b: list[tuple]) -> bool:
+    """Realisation rows ``(realisation, outputs, kernel seconds, errors)`` equal bit for bit but the timing."""
+    import numpy as np
+    return len(a) == len(b) and all(
+        x[0] == y[0] and x[3] == y[3] and x[1].keys() == y[1].keys()
+        and all(np.array_equal(x[1][k], y[1][k], equal_nan=True) for k in x[1]) for x, y in zip(a, b))
+
+
+def test_an_ensemble_realisation_does_not_depend_on_the_task_it_shares(paper_config):
+    # the split follows the cluster's threads: the realisations a task holds (sharing static starts) vary with it
+    from pipeline import evaluations
+    from pipeline.config.scene import load_scene
+    from pipeline.model import dmw_record
+    scene = load_scene(paper_config, ['scene.effects=["air_bearing","pitch","dmw"]', "solver.duration_ms=0.4",
+                                      "solver.transient_ms=0.1"])
+    seeds = dmw_record.realisation_seeds(scene["dmw"]["seed"], 4)
+    inputs, prots = evaluations.Inputs(None, None, None, None), [2.0, 2.2]
+    together = evaluations.evaluate_realisations(scene, prots, inputs, None, (1, 2, 3), tuple(seeds[1:]))
+    apart = [row for r in (1, 2, 3)
+             for row in evaluations.evaluate_realisations(scene, prots, inputs, None, (r,), (seeds[r],))]
+    assert _same_rows(together, apart)
+    assert not _same_rows(together[:1], together[1:2])  # (the realisations differ: the comparison can fail)
+
+
+@pytest.mark.slow
+def test_the_calibration_does_not_depend_on_its_split(paper_config, tmp_path):
+    # one task holding every protrusion (its flying runs share one model) against four
+    from pipeline.config.scene import load_scene
+    from pipeline.io import read_dataset
+    from pipeline.stages import calibrate
+    scene = load_scene(paper_config, ["solver.duration_ms=1.0", "solver.transient_ms=0.3", "touchdown.curve_points=5",
+                                      'scene.effects=["air_bearing","pitch","dmw","contact","friction"]',
+                                      "sweep.protrusion_nm={start=9.6, stop=10.4, step=0.2}"])
+    got = []
+    for workers in (1, 4):
+        path = calibrate.run(scene, tmp_path / f"w{workers}", scheduler="synchronous", workers=workers)
+        got.append(read_dataset(path))
+        got[-1].attrs.pop("history", None)
+    assert got[0].identical(got[1]) and got[0].sizes["protrusion"] == 5
+
+
+def test_the_dashboard_link_is_logged_once_when_the_scheduler_has_one(caplog):
+    import logging
+
+    from distributed import Client, LocalCluster
+    caplog.set_level(logging.INFO, logger="pipeline.fanout")
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=":0") as cluster, \
+            Client(cluster.scheduler_address) as client:
+        address = cluster.scheduler_address
+        fanout.announce(client, address)
+        fanout.announce(client, address)  # (identify's generations connect again and again: once)
+        link = client.dashboard_link
+    lines = [r for r in caplog.records if r.name == "pipeline.fanout" and address in r.getMessage()]
+    assert [r.getMessage() for r in lines] == [f"dask scheduler {address}: dashboard {link}"]
+    assert link.startswith("http://") and link.endswith("/status") and lines[0].levelno == logging.INFO
+
+
+def test_a_scheduler_that_does_not_answer_is_one_line(monkeypatch):
+    # (dask's own timeout, shortened: the split asks a scheduler that went away since the command started)
+    import socket
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        address = f"tcp://127.0.0.1:{s.getsockname()[1]}"
+    monkeypatch.setattr(fanout, "CONNECT_TIMEOUT_S", 0.5)
+    with pytest.raises(fanout.ClusterError) as err:
+        fanout.cluster_threads(address)
+    assert str(err.value).startswith(f"dask scheduler {address}: did not answer (Timed out trying to connect to "
+                                     f"{address} after 0.5 s); start it again") and "\n" not in str(err.value)

@@ -2,7 +2,8 @@
 working directory (not the client's): `hdi sweep --scheduler tcp://127.0.0.1:PORT` with a relative
 results folder gives the dataset of a local run; a worker that does not see the results folder, and
 the loss of the last worker mid-sweep, end the command with one line in bounded time, and a rerun
-resumes (issue 28)."""
+resumes (issue 28); a scheduler file or DASK_SCHEDULER_ADDRESS names the cluster, its dashboard link
+is printed, the batches follow its threads, and a worker running other code is refused (issue 26)."""
 
 from __future__ import annotations
 
@@ -50,8 +51,8 @@ def _wait_for_port(port: int, proc: subprocess.Popen, timeout: float = 60.0) -> 
     raise TimeoutError(f"no dask scheduler on port {port} after {timeout} s")
 
 
-def _hdi(*args: str, cwd: Path) -> subprocess.CompletedProcess:
-    env = dict(os.environ, PYTHONPATH=str(ROOT))
+def _hdi(*args: str, cwd: Path, **env_vars: str) -> subprocess.CompletedProcess:
+    env = dict(os.environ, PYTHONPATH=str(ROOT), **env_vars)
     return subprocess.run([sys.executable, "-m", "pipeline.cli", *args], cwd=cwd, env=env, capture_output=True,
                           text=True, timeout=300)
 
@@ -63,6 +64,7 @@ class Cluster:
         self.tmp_path = tmp_path
         self.port = _free_port()
         self.address = f"tcp://127.0.0.1:{self.port}"
+        self.scheduler_file = tmp_path / "scheduler.json"  # (what `dask scheduler --scheduler-file` writes)
         self.env = dict(os.environ, PYTHONPATH=str(ROOT))  # the workers import this checkout's pipeline
         self.procs: list[subprocess.Popen] = []
         self.workers: list[subprocess.Popen] = []
@@ -77,7 +79,7 @@ class Cluster:
 
     def start_scheduler(self) -> None:
         sched = self._start(["scheduler", "--host", "127.0.0.1", "--port", str(self.port),
-                             "--dashboard-address", ":0"], "scheduler")
+                             "--dashboard-address", ":0", "--scheduler-file", str(self.scheduler_file)], "scheduler")
         _wait_for_port(self.port, sched)
 
     def start_workers(self, n: int) -> None:
@@ -109,9 +111,9 @@ class Cluster:
 
 
 @pytest.fixture(scope="module")
-def cluster(tmp_path_factory):
-    """``tcp://127.0.0.1:PORT`` of a scheduler and two single-threaded workers (always torn down; shared by
-    the tests of this module that leave it as they found it)."""
+def running(tmp_path_factory):
+    """A :class:`Cluster` of a scheduler and two single-threaded workers (always torn down; shared by the
+    tests of this module that leave it as they found it)."""
     c = Cluster(tmp_path_factory.mktemp("cluster"))
     try:
         c.start_scheduler()
@@ -119,9 +121,15 @@ def cluster(tmp_path_factory):
         from distributed import Client
         with Client(c.address, timeout="30s") as client:
             assert len(client.scheduler_info(n_workers=-1)["workers"]) == 2
-        yield c.address
+        yield c
     finally:
         c.stop()
+
+
+@pytest.fixture(scope="module")
+def cluster(running):
+    """``tcp://127.0.0.1:PORT`` of :func:`running`."""
+    return running.address
 
 
 @pytest.fixture()
@@ -175,6 +183,75 @@ def test_a_worker_that_does_not_see_the_results_folder_is_one_line_naming_it(clu
     gone.mkdir()  # once the workers see it, the same tasks run
     with shared_folder(gone):
         assert run_tasks(available_cores, [(), ()], scheduler=cluster) >= 0
+
+
+def _ran(address: str, name: str) -> set[str]:
+    """The keys of the tasks of function ``name`` the workers of the cluster at ``address`` were given (a
+    task stolen from one worker by another is in both logs)."""
+    from distributed import Client
+    with Client(address, timeout="30s") as client:
+        logs = client.run(lambda dask_worker: {str(k[0]) for k in dask_worker.state.log if name in str(k[0])})
+    return set().union(*logs.values())
+
+
+@pytest.mark.slow
+def test_a_scheduler_file_or_dask_scheduler_address_names_the_cluster_and_its_dashboard_is_printed(running, tmp_path):
+    # issue 26, 3: only tcp:// addresses were taken, and no dashboard link was shown
+    sets = [a for s in SMALL for a in ("--set", s)]
+    before = _ran(running.address, "run_batch")
+    dashboard = f"dask scheduler {running.address}: dashboard http://127.0.0.1:"
+    viafile = _hdi("sweep", str(PAPER), *sets, "--scheduler", str(running.scheduler_file), "--out", "out", cwd=tmp_path)
+    assert viafile.returncode == 0, viafile.stderr
+    assert len(_ran(running.address, "run_batch") - before) == 4  # the batches ran on the cluster
+    assert [ln for ln in viafile.stderr.splitlines() if ln.startswith(dashboard)], viafile.stderr  # once, at INFO
+    # without --scheduler, dask's DASK_SCHEDULER_ADDRESS is the cluster (checked and announced; up to date)
+    viaenv = _hdi("sweep", str(PAPER), *sets, "--out", "out", cwd=tmp_path, DASK_SCHEDULER_ADDRESS=running.address)
+    assert viaenv.returncode == 0, viaenv.stderr
+    assert len([ln for ln in viaenv.stderr.splitlines() if ln.startswith(dashboard)]) == 1, viaenv.stderr
+    from pipeline.validation import check_scheduler
+    assert check_scheduler(str(running.scheduler_file)) == running.address
+
+
+@pytest.mark.slow
+def test_the_split_follows_the_cluster_threads(cluster):
+    from pipeline.fanout import cluster_threads, split
+    assert cluster_threads(cluster) == 2  # two single-threaded workers (it was 8 tasks whatever the cluster)
+    assert split(list(range(5)), cluster) == [(0, 2, 4), (1, 3)]
+
+
+@pytest.mark.slow
+def test_a_worker_running_other_code_is_refused_before_work_is_sent(cluster):
+    # issue 26, 3: a worker importing older code wrote parts stamped with the new inputs key
+    from distributed import Client
+
+    from pipeline.code_version import code_key
+    from pipeline.fanout import ClusterError, run_tasks
+
+    def make_stale():  # (nested: pickled by value, the workers import no test module)
+        import pipeline.fanout
+        pipeline.fanout.code_key = lambda module: "0" * 64
+
+    def restore():
+        import pipeline.code_version
+        import pipeline.fanout
+        pipeline.fanout.code_key = pipeline.code_version.code_key
+
+    with Client(cluster, timeout="30s") as client:
+        stale = sorted(client.scheduler_info(n_workers=-1)["workers"])[1]
+        client.run(make_stale, workers=[stale])
+        try:
+            with pytest.raises(ClusterError) as err:
+                run_tasks(code_key, [("pipeline.physics",), ("pipeline.model",)], scheduler=cluster)
+        finally:
+            client.run(restore, workers=[stale])
+    ours = code_key("pipeline.code_version")
+    assert str(err.value) == (f"dask worker {stale} runs other code than this hdi: code key of pipeline.code_version "
+                              f"000000000000 there, {ours[:12]} here; restart the workers from this version of "
+                              "pipeline (install it where they run) and run again")
+    assert _ran(cluster, "code_key-") == set()  # refused before any task was sent
+    got: list[str] = []
+    run_tasks(code_key, [("pipeline.physics",)], scheduler=cluster, on_done=got.append)  # restored: it runs
+    assert got == [code_key("pipeline.physics")]
 
 
 #: 2 protrusions in contact x 2 damping ratios, one protrusion a batch: 4 batches of seconds each on one worker.

@@ -68,9 +68,51 @@ def test_local_schedulers_are_not_addresses():
     without a connection attempt (it would fail: no host); anything else must be tcp://HOST:PORT."""
     from pipeline.validation import OptionError, check_scheduler
     for name in ("threads", "processes", "synchronous", None):
-        check_scheduler(name, timeout=0.01)
+        assert check_scheduler(name, timeout=0.01) == name
     with pytest.raises(OptionError, match="tcp://HOST:PORT"):
         check_scheduler("thread", timeout=0.01)
+
+
+def _free_address() -> str:
+    with socket.socket() as s:  # a free port nobody listens on once closed
+        s.bind(("127.0.0.1", 0))
+        return f"tcp://127.0.0.1:{s.getsockname()[1]}"
+
+
+def test_a_scheduler_file_is_read_for_its_address_and_a_bad_one_is_one_line(capsys, folder, tmp_path):
+    # issue 26, 3: --scheduler took tcp:// addresses only (dask users hand over `dask scheduler --scheduler-file`)
+    from pipeline.validation import scheduler_address
+    good = tmp_path / "scheduler.json"
+    good.write_text('{"type": "Scheduler", "address": "tcp://10.1.2.3:8786", "services": {"dashboard": 8787}}')
+    assert scheduler_address(str(good)) == ("tcp://10.1.2.3:8786", f"--scheduler {good} (address tcp://10.1.2.3:8786)")
+    address = _free_address()
+    good.write_text(f'{{"address": "{address}"}}')
+    err = _fails(capsys, folder, "sweep", str(PAPER), "--scheduler", str(good))
+    assert err.startswith(f"hdi sweep: error: --scheduler {good} (address {address}): no scheduler answers at ")
+    for text, expected in (("not json", "not a dask scheduler file (Expecting value: line 1 column 1 (char 0)); "
+                                        "expected the JSON file `dask scheduler --scheduler-file FILE` writes"),
+                           ('{"id": "Scheduler-1"}', 'field "address": expected the scheduler\'s address '
+                                                    "(tcp://HOST:PORT), got None")):
+        good.write_text(text)
+        err = _fails(capsys, folder, "sweep", str(PAPER), "--scheduler", str(good))
+        assert err == f"hdi sweep: error: --scheduler {good}: {expected}"
+    err = _fails(capsys, folder, "sweep", str(PAPER), "--scheduler", str(tmp_path / "none.json"))
+    assert err == (f"hdi sweep: error: --scheduler {tmp_path / 'none.json'}: no such scheduler file (expected "
+                   "tcp://HOST:PORT, or the JSON file `dask scheduler --scheduler-file FILE` writes)")
+
+
+def test_dask_scheduler_address_is_the_scheduler_when_none_is_given(capsys, folder, monkeypatch):
+    from pipeline.validation import check_scheduler
+    address = _free_address()
+    monkeypatch.setenv("DASK_SCHEDULER_ADDRESS", address)
+    err = _fails(capsys, folder, "sweep", str(PAPER))
+    assert err.startswith(f"hdi sweep: error: DASK_SCHEDULER_ADDRESS={address}: no scheduler answers at ")
+    assert err.endswith("or unset DASK_SCHEDULER_ADDRESS (or give --scheduler threads) to run locally")
+    assert check_scheduler("threads") == "threads"  # --scheduler comes first
+    from pipeline.validation import check_options
+    assert check_options("dmw", load_scene(PAPER)) is None  # a stage without a fan-out does not connect
+    monkeypatch.setenv("DASK_SCHEDULER_ADDRESS", " ")
+    assert check_scheduler(None) is None  # (blank: unset)
 
 
 def test_out_is_a_file(capsys, folder):

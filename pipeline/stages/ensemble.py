@@ -14,7 +14,7 @@ main job's time by ``N``; this stage runs only the protrusions the checks read:
 Every realisation runs the scene with the sweep's k (``calibration.nc`` or the scene's rule,
 :func:`pipeline.model.inputs.for_stage`) on its own DMW record (realisation 0: the scene's ``dmw.nc``;
 ``r >= 1``: :func:`pipeline.model.dmw_record.realisation_seeds`, the seeds of ``[sweep] realisations``),
-one fan-out task per local worker (:func:`pipeline.fanout.split`), whose realisations share their
+one fan-out task per local worker or cluster thread (:func:`pipeline.fanout.split`), whose realisations share their
 static starts (:func:`pipeline.evaluations.evaluate_realisations`). Writes ``ensemble.nc``: the steady-window scalars on
 ``(protrusion, realisation)`` in dataset units, ``dmw_seed``, and the sweep's ensemble summaries
 (``<name>_mean``/``_std``, ``touchdown_probability``; :func:`pipeline.analyses.ensemble.statistics`).
