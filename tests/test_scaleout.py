@@ -288,7 +288,9 @@ def test_losing_the_last_worker_ends_the_sweep_in_one_line_and_a_rerun_resumes(o
     assert proc.returncode == 2 and "Traceback" not in err, err
     assert lines[-1].startswith(f"hdi sweep: error: dask scheduler {one_worker.address}: ") \
         and "no worker left" in lines[-1] and "run again to resume" in lines[-1], err
-    assert wait_s <= took < wait_s + 30, took  # within the documented wait (and the client's clean-up)
+    # the documented wait, counted from when the scheduler lost the worker, which can be a little before
+    # kill_worker returns here (2.99 s was seen for a 3-s wait); and the client's clean-up
+    assert wait_s - 0.5 <= took < wait_s + 30, took
     kept = len(list(parts.glob("batch-*.nc")))
     assert 1 <= kept < 4
     # a new worker, the same command: the finished parts are kept, only the others run
