@@ -109,3 +109,75 @@ def test_a_declared_target_is_fitted_and_reported(dummy_target, write_scene, pap
     ens = ens.assign(ensemble.judged(ens, scene)).assign(dmw_seed=("realisation", [1, 2, 3]))
     assert float(ens["value_dummy"]) == pytest.approx(0.4) and float(ens["single_dummy"]) == pytest.approx(0.3)
     assert "| dummy clearance at 5 nm | 0.35 nm | 0.4 nm (10-90 %: 0.32-0.48) | 0.3 nm |" in ensemble_markdown(ens)
+
+
+# ------------------------------------------------------------------------------------------- stages
+DUMMY_STAGE = '''
+"""A dummy stage (a test): one dataset with the scene's flying height."""
+import xarray as xr
+from pipeline.runner import Stage
+
+
+def compute(scene, inputs):
+    return xr.Dataset({"flying_height": ((), scene["slider"]["length_mm"], {"units": "mm", "long_name": "x"})})
+
+
+STAGE = Stage("dummy_stage", compute, outputs=("dummy_stage.nc",), reads=("slider",), doc="a dummy stage (test)")
+'''
+
+
+def _make_n(folder, *goals: str) -> str:
+    """What ``make -n GOALS`` in ``folder`` would run."""
+    import subprocess
+    done = subprocess.run(["make", "-n", "--no-print-directory", "-C", str(folder), *goals], capture_output=True, text=True, check=False)
+    assert done.returncode == 0, done.stderr
+    return done.stdout
+
+
+def test_every_registered_stage_is_a_make_target_named_as_its_module(repo_root):
+    from pipeline import runner
+    stages = runner.registry()
+    modules = sorted(p.stem for p in (repo_root / "pipeline" / "stages").glob("*.py") if p.stem != "__init__")
+    # the Makefile lists the stage modules' files; each module is named after its stage
+    assert sorted(stages) == modules
+    assert {getattr(__import__(f"pipeline.stages.{m}", fromlist=["STAGE"]), "STAGE").name for m in modules} == \
+        set(modules)
+    lines = _make_n(repo_root, *stages).splitlines()
+    for name in stages:  # (sweep and identify run their own scenes)
+        assert any(line.split()[:2] == [".venv/bin/hdi", name] for line in lines), (name, lines)
+    assert "bulge" in stages
+
+
+def test_a_new_stage_module_is_a_stage_of_the_runner_the_cli_and_make(tmp_path, monkeypatch, paper_config,
+                                                                      repo_root):
+    import shutil
+    import sys
+
+    from pipeline import cli, runner, stages
+    folder = tmp_path / "more_stages"
+    folder.mkdir()
+    (folder / "dummy_stage.py").write_text(DUMMY_STAGE)
+    # the module beside the others, without a file in the repository: the package searches one more folder
+    monkeypatch.setattr(stages, "__path__", [*stages.__path__, str(folder)])
+    monkeypatch.delitem(sys.modules, "pipeline.stages.dummy_stage", raising=False)
+    try:
+        assert "dummy_stage" in runner.registry()
+        assert cli._parser(runner.registry()).parse_args(["dummy_stage", "x.toml"]).stage == "dummy_stage"
+        out = tmp_path / "out"
+        assert cli.main(["dummy_stage", str(paper_config), "--out", str(out)]) == 0
+        assert float(xr.open_dataset(out / "dummy_stage.nc", engine="netcdf4")["flying_height"]) == 0.85
+    finally:
+        sys.modules.pop("pipeline.stages.dummy_stage", None)
+    # make: the Makefile in a copy of the tree with the module added has the target
+    copy = tmp_path / "copy"
+    (copy / "pipeline" / "stages").mkdir(parents=True)
+    shutil.copy(repo_root / "Makefile", copy / "Makefile")
+    for p in (repo_root / "pipeline" / "stages").glob("*.py"):
+        (copy / "pipeline" / "stages" / p.name).touch()
+    for name in ("pyproject.toml", "uv.lock", ".venv/.installed-run"):  # (the stamp is newer: nothing to install)
+        (copy / name).parent.mkdir(exist_ok=True)
+        (copy / name).touch()
+    with pytest.raises(AssertionError, match="No rule to make target 'dummy_stage'"):
+        _make_n(copy, "dummy_stage")
+    (copy / "pipeline" / "stages" / "dummy_stage.py").write_text(DUMMY_STAGE)
+    assert _make_n(copy, "dummy_stage").split() == [".venv/bin/hdi", "dummy_stage", "configs/paper-2009-identified.toml"]
