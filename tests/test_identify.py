@@ -7,7 +7,7 @@ import pytest
 import xarray as xr
 
 from pipeline import evaluations
-from pipeline.analyses import study
+from pipeline.analyses import identification, study
 from pipeline.model import scene_inputs
 from pipeline.config.scene import SceneError, load_scene
 from pipeline.stages import identify
@@ -142,7 +142,7 @@ def test_two_sided_fallback_k(paper_scene):
 def test_interval_interpolates_crossings():
     g = np.array([0.0, 1.0, 2.0, 3.0, 4.0])
     m = np.array([3.0, 1.0, 0.0, 0.5, 2.0])
-    lo, hi = identify._interval(g, m, 1.0, 2.0)
+    lo, hi = identification.interval(g, m, 1.0, 2.0)
     assert lo == pytest.approx(1.0)
     assert hi == pytest.approx(3.0 + 0.5 / 1.5)
 
@@ -206,7 +206,7 @@ def test_a_profile_point_better_than_the_optimum_becomes_the_optimum(write_scene
                                                                                       "contact_force_mn")]])
     ds = xr.open_dataset(identify.run(scene, tmp_path / "out", scheduler="synchronous"), engine="netcdf4")
     rounds = int(ds.attrs["profile_rounds"])
-    assert 2 <= rounds <= identify.PROFILE_ROUNDS  # (here the global search stops short: it moved)
+    assert 2 <= rounds <= identification.PROFILE_ROUNDS  # (here the global search stops short: it moved)
     names = [p.var_name for p in study.parse_parameters(scene["identify"]["parameters"], "", "")]
     best = np.array([float(ds[f"{n}_best"]) for n in names])
     points = np.stack([ds[n].values for n in names], axis=1)
@@ -215,8 +215,8 @@ def test_a_profile_point_better_than_the_optimum_becomes_the_optimum(write_scene
     role, cost = ds["role"].values, ds["cost"].values
     c_best = float(cost[at_best[0]])
     assert c_best <= float(np.nanmin(cost[role <= 1]))  # at least as good as the global search's best
-    if rounds < identify.PROFILE_ROUNDS:  # no profile point beats it by more than the gain
-        assert c_best - float(np.nanmin(cost[role == 2])) <= identify.PROFILE_GAIN
+    if rounds < identification.PROFILE_ROUNDS:  # no profile point beats it by more than the gain
+        assert c_best - float(np.nanmin(cost[role == 2])) <= identification.PROFILE_GAIN
     # the profiles of the last round pass through the optimum
     for n, b in zip(names, best):
         assert b in ds[f"{n}_profile"].values
