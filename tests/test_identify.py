@@ -318,3 +318,24 @@ def test_a_scene_whose_name_leaves_the_results_folder_is_refused(tmp_path, paper
     err = _fails(capsys, "dmw", name)
     assert "scene.name" in err and "not '.' or '..'" in err
     assert sorted(p.name for p in tmp_path.iterdir()) == [name]
+
+
+def test_the_identification_takes_any_evaluation_callable(paper_scene):
+    # the algorithm (analyses) on a plain function, no stage, store or fan-out: the FHM at 9 nm is ten times
+    # the first parameter, which the second does not touch; the target is 9 % within 1 %
+    scene = paper_scene.replace(identify={"targets": ["fhm_touchdown"]})
+    tlist = study.targets(scene)
+    params = [study.Parameter("dmw.rms_nm", 0.5, 1.5), study.Parameter("air_bearing.damping_ratio", 0.01, 0.2)]
+
+    def evaluate(points):
+        return [{"key": repr(tuple(x)), "params": list(map(float, x)), "protrusions": [9.0],
+                 "outputs": {"fhm_bv": [10.0 * float(x[0])]}} for x in points]
+
+    ident = identification.Identification(evaluate, tlist, 10.0)
+    out = identification.identify(ident, params, np.array([1.2, 0.05]),
+                                  {"generations": 5, "population": 5, "seed": 1, "profile_points": 5})
+    assert out["within"] and abs(10.0 * out["best"][0] - 9.0) <= 1.0
+    # the interval of the first parameter is where |10 x - 9| <= 1; the second is seen by no target
+    assert out["intervals"][0] == pytest.approx([0.8, 1.0], abs=1e-9)
+    assert np.isinf(out["gn_std"][1]) and np.all(np.isnan(out["correlation"][1]))
+    assert ident.roles[ident.keys[0]] == 0 and len(ident.records) == len(set(ident.keys))
