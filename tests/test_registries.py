@@ -80,6 +80,17 @@ def test_a_declared_target_is_in_the_schema_with_its_keys(dummy_target, paper_co
     assert spec["touchdown_tolerance_nm"].default == 0.1
 
 
+def test_every_declaration_names_a_known_measurement_and_scene_keys():
+    assert set(study.MEASUREMENTS) == set(paper.MEASURES)
+    for t in paper.TARGETS.values():
+        assert t.measure.how in paper.MEASURES, t.name
+        where = t.measure.where if isinstance(t.measure.where, tuple) else (t.measure.where,)
+        for key in (*where, t.measure.step, t.value if isinstance(t.value, str) else ""):
+            if key:
+                section, _, name = key.rpartition(".")
+                assert name in SCHEMA[section or "identify"], (t.name, key)
+
+
 def test_without_the_declaration_the_target_is_refused(paper_config):
     with pytest.raises(SceneError, match="identify.targets"):
         load_scene(paper_config, ["identify.targets=['dummy']"])
