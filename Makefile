@@ -25,8 +25,11 @@ export MPLBACKEND := Agg
 export PYTHONHASHSEED := 0
 export UV_PYTHON_DOWNLOADS := never
 
-.PHONY: setup run test test-fast test-slow bench sweep readme clean \
-        roughness dmw interface calibrate simulate accuracy ensemble report identify sensitivity
+# The stages: one make target per module of pipeline/stages/ (the runner discovers the stages there and
+# each module is named after its stage, tests/test_registries.py): a new stage module is a new target
+STAGES := $(sort $(basename $(notdir $(filter-out %/__init__.py,$(wildcard pipeline/stages/*.py)))))
+
+.PHONY: setup run test test-fast test-slow bench sweep readme clean $(STAGES)
 
 setup: $(RUN_STAMP)
 
@@ -78,11 +81,13 @@ sweep: $(RUN_STAMP)
 readme: $(RUN_STAMP)
 	$(BIN)/hdi report $(SCENE) --readme README.md
 
-## parameter studies: identify the free [recon] parameters from the paper's targets; their sensitivity
-roughness dmw interface calibrate simulate accuracy ensemble report sensitivity: $(RUN_STAMP)
+## one stage (and what it needs) on the scene: `make NAME` is `hdi NAME $(SCENE)` (sweep and identify: their own scenes)
+$(filter-out sweep identify,$(STAGES)): $(RUN_STAMP)
 	$(BIN)/hdi $@ $(SCENE) $(ARGS)
 
-# the identification of configs/paper-2009-identified.toml: on the closed-form bulge scene (with p_pad free,
+## parameter studies: identify the free [recon] parameters from the paper's targets (their sensitivity:
+## `make sensitivity`, a stage target above)
+# The identification of configs/paper-2009-identified.toml: on the closed-form bulge scene (with p_pad free,
 # the Reynolds scene would re-solve its bulge table for every candidate); it writes
 # results/paper-2009-bulge/paper-2009-bulge-identified.toml (nothing in configs/; to write a copy there,
 # name it: make identify ARGS="--write-scene configs/paper-2009-bulge-identified.toml")

@@ -7,7 +7,7 @@ import pytest
 import xarray as xr
 
 from pipeline import evaluations
-from pipeline.analyses import study
+from pipeline.analyses import identification, study
 from pipeline.model import scene_inputs
 from pipeline.model.inputs import SimulationInputs, Source, cached
 from pipeline.config.scene import SceneError, load_scene
@@ -143,7 +143,7 @@ def test_two_sided_fallback_k(paper_scene):
 def test_interval_interpolates_crossings():
     g = np.array([0.0, 1.0, 2.0, 3.0, 4.0])
     m = np.array([3.0, 1.0, 0.0, 0.5, 2.0])
-    lo, hi = identify._interval(g, m, 1.0, 2.0)
+    lo, hi = identification.interval(g, m, 1.0, 2.0)
     assert lo == pytest.approx(1.0)
     assert hi == pytest.approx(3.0 + 0.5 / 1.5)
 
@@ -207,7 +207,7 @@ def test_a_profile_point_better_than_the_optimum_becomes_the_optimum(write_scene
                                                                                       "contact_force_mn")]])
     ds = xr.open_dataset(identify.run(scene, tmp_path / "out", scheduler="synchronous"), engine="netcdf4")
     rounds = int(ds.attrs["profile_rounds"])
-    assert 2 <= rounds <= identify.PROFILE_ROUNDS  # (here the global search stops short: it moved)
+    assert 2 <= rounds <= identification.PROFILE_ROUNDS  # (here the global search stops short: it moved)
     names = [p.var_name for p in study.parse_parameters(scene["identify"]["parameters"], "", "")]
     best = np.array([float(ds[f"{n}_best"]) for n in names])
     points = np.stack([ds[n].values for n in names], axis=1)
@@ -216,8 +216,8 @@ def test_a_profile_point_better_than_the_optimum_becomes_the_optimum(write_scene
     role, cost = ds["role"].values, ds["cost"].values
     c_best = float(cost[at_best[0]])
     assert c_best <= float(np.nanmin(cost[role <= 1]))  # at least as good as the global search's best
-    if rounds < identify.PROFILE_ROUNDS:  # no profile point beats it by more than the gain
-        assert c_best - float(np.nanmin(cost[role == 2])) <= identify.PROFILE_GAIN
+    if rounds < identification.PROFILE_ROUNDS:  # no profile point beats it by more than the gain
+        assert c_best - float(np.nanmin(cost[role == 2])) <= identification.PROFILE_GAIN
     # the profiles of the last round pass through the optimum
     for n, b in zip(names, best):
         assert b in ds[f"{n}_profile"].values
@@ -319,3 +319,24 @@ def test_a_scene_whose_name_leaves_the_results_folder_is_refused(tmp_path, paper
     err = _fails(capsys, "dmw", name)
     assert "scene.name" in err and "not '.' or '..'" in err
     assert sorted(p.name for p in tmp_path.iterdir()) == [name]
+
+
+def test_the_identification_takes_any_evaluation_callable(paper_scene):
+    # the algorithm (analyses) on a plain function, no stage, store or fan-out: the FHM at 9 nm is ten times
+    # the first parameter, which the second does not touch; the target is 9 % within 1 %
+    scene = paper_scene.replace(identify={"targets": ["fhm_touchdown"]})
+    tlist = study.targets(scene)
+    params = [study.Parameter("dmw.rms_nm", 0.5, 1.5), study.Parameter("air_bearing.damping_ratio", 0.01, 0.2)]
+
+    def evaluate(points):
+        return [{"key": repr(tuple(x)), "params": list(map(float, x)), "protrusions": [9.0],
+                 "outputs": {"fhm_bv": [10.0 * float(x[0])]}} for x in points]
+
+    ident = identification.Identification(evaluate, tlist, 10.0)
+    out = identification.identify(ident, params, np.array([1.2, 0.05]),
+                                  {"generations": 5, "population": 5, "seed": 1, "profile_points": 5})
+    assert out["within"] and abs(10.0 * out["best"][0] - 9.0) <= 1.0
+    # the interval of the first parameter is where |10 x - 9| <= 1; the second is seen by no target
+    assert out["intervals"][0] == pytest.approx([0.8, 1.0], abs=1e-9)
+    assert np.isinf(out["gn_std"][1]) and np.all(np.isnan(out["correlation"][1]))
+    assert ident.roles[ident.keys[0]] == 0 and len(ident.records) == len(set(ident.keys))

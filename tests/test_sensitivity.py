@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 import xarray as xr
 
 from pipeline.config.scene import load_scene
@@ -112,3 +113,22 @@ def test_morris_leaves_out_trajectories_with_undefined_points(write_scene, paper
     # the output without holes keeps every trajectory and its exact indices
     assert ds["mu_star_fhm_flying"].attrs["trajectories_used"] == 20
     np.testing.assert_allclose(ds["mu_star_fhm_flying"].values, np.abs(A) * 2 * math.pi, rtol=1e-9)
+
+
+def test_screening_takes_any_outputs_callable():
+    # the algorithms (analyses) on a plain function: y = 2 x0 over x0 in [0, 1], x1 not seen
+    from pipeline.analyses import screening, study
+    params = [study.Parameter("dmw.rms_nm", 0.0, 1.0), study.Parameter("air_bearing.damping_ratio", 0.0, 0.5)]
+
+    def outputs(X):
+        return {"y": 2.0 * X[:, 0]}
+
+    c = {"morris_trajectories": 4, "morris_levels": 4, "seed": 1, "bootstrap": 10, "confidence_level": 0.95,
+         "sobol_samples": 8}
+    X, Y, idx = screening.morris(outputs, params, c)
+    assert X.shape == (4 * 3, 2) and np.array_equal(Y["y"], 2.0 * X[:, 0])
+    assert idx["y"]["mu_star"] == pytest.approx([2.0, 0.0]) and idx["y"]["trajectories_used"] == 4
+    X, Y, idx = screening.sobol(outputs, params, c)
+    assert X.shape == (8 * 4, 2)
+    # (8 base samples: the estimate of x0 is rough; the parameter no output sees has exactly none)
+    assert idx["y"]["ST"][0] > 0.5 and idx["y"]["ST"][1] == 0.0 and idx["y"]["S1"][1] == 0.0

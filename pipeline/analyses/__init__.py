@@ -15,5 +15,9 @@ returns.
   probability and its 0.5 crossing, medians and 10-90 % ranges, mean ± std, exceedance probability);
 * :mod:`.ensemble_comparison`: the comparison's column and section over the realisations (formatting);
 * :mod:`.markdown`: numbers and tables as Markdown text;
-* :mod:`.accuracy`: the accuracy-knob study (error and cost of each knob, chosen defaults).
+* :mod:`.accuracy`: the accuracy-knob study (error and cost of each knob, chosen defaults);
+* :mod:`.study`: the parameter studies' free parameters, candidates and targets (the interpretation of
+  the declarations of :data:`pipeline.physics.paper.TARGETS`), residuals and headline outputs;
+* :mod:`.identification`: differential evolution, profiles and correlation of ``hdi identify``;
+* :mod:`.screening`: Morris and Sobol indices of ``hdi sensitivity``.
 """

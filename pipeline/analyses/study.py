@@ -15,10 +15,12 @@ candidate as a small sweep over protrusions:
   two-sided, k = 0.978). A calibration per candidate would make the touchdown target trivially true;
   with k fixed, touchdown at 9.8 nm is a property of the parameters, as in the paper.
 
-Targets (:func:`targets`) are scene data in ``[identify]``; each gives a value from a candidate's
-outputs and a residual normalised by its tolerance (inequality targets are zero inside their
-admissible side); a target the candidate cannot produce (no contact where contact is needed, a
-failed run) gets the residual ``identify.missing_residual``.
+Targets (:func:`targets`) are declared once, in :data:`pipeline.physics.paper.TARGETS` (published value,
+tolerance, how each is measured, where the paper states it), with their values and tolerances in the
+scene's ``[identify]`` (keys generated from the declarations); :data:`MEASUREMENTS` interprets each kind
+of measurement. Each gives a value from a candidate's outputs and a residual normalised by its tolerance
+(inequality targets are zero inside their admissible side); a target the candidate cannot produce (no
+contact where contact is needed, a failed run) gets the residual ``identify.missing_residual``.
 """
 
 from __future__ import annotations
@@ -34,8 +36,9 @@ import xarray as xr
 from . import ensemble as en
 from .ensemble_comparison import SPREAD_STD
 from ..config.grid import TOL_NM, label, range_grid
-from ..config.scene import SCHEMA, TARGETS, SceneError, unit_suffix
+from ..config.scene import SCHEMA, SceneError, unit_suffix
 from ..model.slider import touched_in_summary
+from ..physics import paper
 from ..units import cf_unit
 from ..variables import SCALARS
 
@@ -283,9 +286,103 @@ def _grid(lo: float, hi: float, step: float, open_low: bool = False) -> tuple[fl
     return pts[1:] if open_low else pts
 
 
+def _key(scene: Any, key: str) -> Any:
+    """The value of ``key``: ``"section.key"``, or a key of ``[identify]``."""
+    section, _, name = key.rpartition(".")
+    return scene[section or "identify"][name]
+
+
+def _median(values: xr.DataArray) -> tuple[float, float, float]:
+    m, lo, hi = en.median_spread(values)
+    return float(m), float(lo), float(hi)
+
+
+#: What a measurement gives :class:`Target`: its protrusions [nm], the value of a candidate's
+#: :class:`Table`, the ensemble statistic of a :func:`record_dataset`, the spread's meaning and the
+#: template fields of its protrusions.
+_Measured = tuple[tuple[float, ...], Callable[[Table], float], Callable[[xr.Dataset], tuple[float, float, float]],
+                  str, dict[str, float]]
+
+
+def _touchdown(m: paper.Measure, scene: Any, value: float) -> _Measured:
+    """Contact at the second protrusion of ``m.where``, none at the first; its value is the first evaluated
+    protrusion in contact, over realisations where the touchdown probability crosses 0.5."""
+    prots = tuple(_key(scene, k) for k in m.where)
+
+    def ensemble(ds: xr.Dataset) -> tuple[float, float, float]:
+        return en.touchdown_protrusion(at_protrusions(ds, m.output, np.sort(ds["protrusion"].values)))
+
+    return prots, lambda t: t.touchdown(), ensemble, SPREAD_QUANTILES, {"lo": prots[0], "hi": prots[-1]}
+
+
+def _flying_mean(m: paper.Measure, scene: Any, value: float) -> _Measured:
+    """The mean of ``m.output`` over the flying points of the range ``m.where`` (every ``m.step``)."""
+    fr = _grid(*_key(scene, m.where), _key(scene, m.step))
+
+    def ensemble(ds: xr.Dataset) -> tuple[float, float, float]:
+        return _median(en.flying_mean(at_protrusions(ds, m.output, fr), at_protrusions(ds, "min_clearance", fr)))
+
+    return fr, lambda t: t.flying_mean(m.output, fr), ensemble, SPREAD_QUANTILES, {"lo": fr[0], "hi": fr[-1]}
+
+
+def _band(m: paper.Measure, scene: Any, cap: float) -> _Measured:
+    """The graded band (:func:`targets`) over the steps of ``(lo, hi]`` of ``m.where`` (every ``m.step``),
+    each step's bouncing BV capped at the target ``cap``."""
+    step = _key(scene, m.step)
+    band = _grid(*_key(scene, m.where), step, open_low=True)
+
+    def value(t: Table) -> float:
+        v = bouncing_bv(t.values(m.output, band), t.values("min_clearance", band))
+        return float(np.mean(np.minimum(v, cap))) if v.size and np.all(np.isfinite(v)) else float("nan")
+
+    def ensemble(ds: xr.Dataset) -> tuple[float, float, float]:
+        bv = bouncing_bv(at_protrusions(ds, m.output, band), at_protrusions(ds, "min_clearance", band))
+        med, lo, hi = (v.values for v in en.median_spread(bv))
+        if not (med.size and np.all(np.isfinite(med))):
+            return float("nan"), float("nan"), float("nan")
+        return tuple(float(np.mean(np.minimum(v, cap))) for v in (med, lo, hi))
+
+    return band, value, ensemble, SPREAD_QUANTILES, {"lo": band[0], "hi": band[-1], "open_lo": band[0] - step}
+
+
+def _at(m: paper.Measure, scene: Any, value: float) -> _Measured:
+    """``m.output`` at the protrusion ``m.where``; over realisations its median (10-90 %) or its mean
+    (± 1 standard deviation), by ``m.statistic``."""
+    at = _key(scene, m.where)
+
+    def median(ds: xr.Dataset) -> tuple[float, float, float]:
+        return _median(at_protrusions(ds, m.output, (at,)).isel(protrusion=0))
+
+    def mean(ds: xr.Dataset) -> tuple[float, float, float]:
+        mu, sd = (float(v) for v in en.mean_std(at_protrusions(ds, m.output, (at,)).isel(protrusion=0)))
+        return mu, mu - sd, mu + sd
+
+    ensemble, spread = (mean, SPREAD_STD) if m.statistic == "mean" else (median, SPREAD_QUANTILES)
+    return (at,), lambda t: t.value(m.output, at), ensemble, spread, {"lo": at, "hi": at, "at": at}
+
+
+#: The interpretation of each kind of measurement (:data:`pipeline.physics.paper.MEASURES`).
+MEASUREMENTS: dict[str, Callable[[paper.Measure, Any, float], _Measured]] = {
+    "touchdown": _touchdown, "flying_mean": _flying_mean, "band": _band, "at": _at}
+
+
+def target(decl: paper.Target, scene: Any) -> Target:
+    """The target of the declaration ``decl`` (:data:`pipeline.physics.paper.TARGETS`) with the values of
+    ``scene``: its published value, tolerance and measurement (:data:`MEASUREMENTS`)."""
+    c = scene["identify"]
+    v = decl.value
+    value = c[v.key] if isinstance(v, paper.Setting) else _key(scene, v) if isinstance(v, str) else v
+    prots, of_table, of_ensemble, spread, fields = MEASUREMENTS[decl.measure.how](decl.measure, scene, value)
+    where = decl.measure.where if isinstance(decl.measure.where, tuple) else (decl.measure.where,)
+    names = {k.rpartition(".")[2]: _key(scene, k) for k in where if k} | {s.key: c[s.key] for s in decl.settings}
+    fields = {**names, **fields, "value": value}
+    return Target(decl.name, decl.long_name.format(**fields), decl.units, decl.kind, value, c[decl.tolerance.key],
+                  prots, of_table, decl.paper.format(**fields), of_ensemble, spread)
+
+
 def targets(scene: Any) -> list[Target]:
-    """The targets of ``[identify]`` that ``identify.targets`` selects, in the order of
-    :data:`pipeline.config.scene.TARGETS` (docs/model.md, section "Corrections"; the paper).
+    """The targets that ``identify.targets`` selects, in the order of their declarations
+    (:data:`pipeline.physics.paper.TARGETS`; docs/model.md, sections "Paper targets" and "Corrections").
 
     * ``touchdown``: contact at ``touchdown.onset_nm``, none at ``touchdown.previous_nm`` (exact
       minimum clearance of the steady window, which is continuous in the parameters where the
@@ -302,87 +399,8 @@ def targets(scene: Any) -> list[Target]:
     * at ``sliding_at_nm``: BV below ``sliding_bv_max_percent``; interference, contact force, real
       area, mean pressure and friction coefficient equal to the paper's; net force attractive (< 0).
     """
-    c = scene["identify"]
-    td = scene["touchdown"]
-    at = c["sliding_at_nm"]
-    fr = _grid(*c["fhm_flying_range_nm"], c["flying_step_nm"])
-    band = _grid(*c["bouncing_range_nm"], c["band_step_nm"], open_low=True)
-
-    def fhm_flying(t: Table) -> float:
-        return t.flying_mean("fhm_bv", fr)
-
-    cap = c["bouncing_min_percent"]
-
-    def band_graded(t: Table) -> float:
-        v = bouncing_bv(t.values("fhm_bv", band), t.values("min_clearance", band))
-        return float(np.mean(np.minimum(v, cap))) if v.size and np.all(np.isfinite(v)) else float("nan")
-
-    def at_sliding(name: str) -> Callable[[Table], float]:
-        return lambda t: t.value(name, at)
-
-    def touchdown(t: Table) -> float:
-        return t.touchdown()
-
-    def med(values: xr.DataArray) -> tuple[float, float, float]:
-        m, lo, hi = en.median_spread(values)
-        return float(m), float(lo), float(hi)
-
-    def e_touchdown(ds: xr.Dataset) -> tuple[float, float, float]:
-        return en.touchdown_protrusion(at_protrusions(ds, "min_clearance", np.sort(ds["protrusion"].values)))
-
-    def e_flying(ds: xr.Dataset) -> tuple[float, float, float]:
-        return med(en.flying_mean(at_protrusions(ds, "fhm_bv", fr), at_protrusions(ds, "min_clearance", fr)))
-
-    def e_band(ds: xr.Dataset) -> tuple[float, float, float]:
-        bv = bouncing_bv(at_protrusions(ds, "fhm_bv", band), at_protrusions(ds, "min_clearance", band))
-        m, lo, hi = (v.values for v in en.median_spread(bv))
-        if not (m.size and np.all(np.isfinite(m))):
-            return float("nan"), float("nan"), float("nan")
-        return tuple(float(np.mean(np.minimum(v, cap))) for v in (m, lo, hi))
-
-    def e_median_at(name: str, x: float) -> Callable[[xr.Dataset], tuple[float, float, float]]:
-        return lambda ds: med(at_protrusions(ds, name, (x,)).isel(protrusion=0))
-
-    def e_mean_at(name: str) -> Callable[[xr.Dataset], tuple[float, float, float]]:
-        def stat(ds: xr.Dataset) -> tuple[float, float, float]:
-            m, sd = (float(v) for v in en.mean_std(at_protrusions(ds, name, (at,)).isel(protrusion=0)))
-            return m, m - sd, m + sd
-        return stat
-
-    sl_ = f"at {at:g} nm"
-    all_targets = {
-        "touchdown": Target("touchdown", "touchdown protrusion", "nm", "touchdown", td["onset_nm"],
-                            c["touchdown_tolerance_nm"], (td["previous_nm"], td["onset_nm"]), touchdown,
-                            f"{td['onset_nm']:g} nm (none at {td['previous_nm']:g} nm)", e_touchdown),
-        "fhm_flying": Target("fhm_flying", f"flying FHM, mean over {fr[0]:g}-{fr[-1]:g} nm", "%", "equal",
-                             c["fhm_flying_percent"], c["fhm_flying_tolerance_percent"], fr, fhm_flying,
-                             f"about {c['fhm_flying_percent']:g} %", e_flying),
-        "fhm_touchdown": Target("fhm_touchdown", f"FHM at {c['fhm_touchdown_at_nm']:g} nm", "%", "equal",
-                                c["fhm_touchdown_percent"], c["fhm_touchdown_tolerance_percent"],
-                                (c["fhm_touchdown_at_nm"],), lambda t: t.value("fhm_bv", c["fhm_touchdown_at_nm"]),
-                                f"about {c['fhm_touchdown_percent']:g} %", e_median_at("fhm_bv", c["fhm_touchdown_at_nm"])),
-        "bouncing": Target("bouncing", f"bouncing BV over ({band[0] - c['band_step_nm']:g}, {band[-1]:g}] nm, "
-                                       f"mean over the steps, each capped at {cap:g} %", "%",
-                           "above", cap, c["bouncing_tolerance_percent"], band, band_graded,
-                           f"> {cap:g} % at every step ({cap:g} %)", e_band),
-        "sliding_bv": Target("sliding_bv", f"BV {sl_}", "%", "below", c["sliding_bv_max_percent"],
-                             c["sliding_bv_tolerance_percent"], (at,), at_sliding("fhm_bv"),
-                             f"< {c['sliding_bv_max_percent']:g} %", e_median_at("fhm_bv", at)),
-        "net_force": Target("net_force", f"net interface force {sl_} (negative: attractive)", "mN", "below", 0.0,
-                            c["net_force_tolerance_mn"], (at,), at_sliding("net_force"), "attractive (< 0)",
-                            e_mean_at("net_force"), SPREAD_STD),
-    }
-    # the paper's light-contact numbers: name -> (long name, units, scene key of the value, of the tolerance)
-    for name, (long_name, units, key, tol) in {
-            "interference": ("interference", "nm", "interference_nm", "interference_tolerance_nm"),
-            "contact_force": ("contact force", "mN", "contact_force_mn", "contact_force_tolerance_mn"),
-            "real_area": ("real contact area", "um2", "real_area_um2", "real_area_tolerance_um2"),
-            "mean_pressure": ("mean contact pressure", "MPa", "mean_pressure_mpa", "mean_pressure_tolerance_mpa"),
-            "friction_coefficient": ("friction coefficient", "1", "friction_coefficient",
-                                     "friction_coefficient_tolerance")}.items():
-        all_targets[name] = Target(name, f"{long_name} {sl_}", units, "equal", c[key], c[tol], (at,), at_sliding(name),
-                                   f"{c[key]:g}" + ("" if units == "1" else f" {units}"), e_mean_at(name), SPREAD_STD)
-    return [all_targets[name] for name in TARGETS if name in c["targets"]]
+    chosen = scene["identify"]["targets"]
+    return [target(decl, scene) for name, decl in paper.TARGETS.items() if name in chosen]
 
 
 def bouncing_bv(fhm_bv: Any, min_clearance: Any) -> Any:

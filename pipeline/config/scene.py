@@ -101,9 +101,26 @@ _FREE = [
     {"key": "contact.damping_n_s_m", "low": 0.0, "high": 0.05},
 ]
 
-#: The paper's targets ``hdi identify`` knows (:func:`pipeline.analyses.study.targets`); all fitted by default.
-TARGETS = ("touchdown", "fhm_flying", "fhm_touchdown", "bouncing", "sliding_bv", "interference", "contact_force",
-           "real_area", "mean_pressure", "friction_coefficient", "net_force")
+#: The checks a target's setting names (:attr:`pipeline.physics.paper.Setting.check`).
+_SETTING_CHECKS = {"positive": _pos, "nonnegative": _nonneg,
+                   "lo <= hi": (lambda v: v[0] <= v[1], "lo <= hi"), "lo < hi": (lambda v: v[0] < v[1], "lo < hi")}
+
+
+def target_keys() -> dict[str, Key]:
+    """The ``[identify]`` keys of the paper's targets, generated from their declarations
+    (:data:`pipeline.physics.paper.TARGETS`): per target its value, where it is measured and its
+    tolerance (:meth:`pipeline.physics.paper.Target.keys`); a key two targets share (``sliding_at_nm``)
+    once."""
+    keys: dict[str, Key] = {}
+    for t in paper.TARGETS.values():
+        for s in t.keys():
+            if s.key in keys:
+                continue
+            pair = isinstance(s.default, tuple)
+            keys[s.key] = Key("floats" if pair else "float", list(s.default) if pair else s.default,
+                              _SETTING_CHECKS[s.check], length=2 if pair else None, doc=s.doc)
+    return keys
+
 
 def _folder_name(name: str) -> bool:
     """Whether ``name`` names one folder below another (``results/<name>/``): letters, digits, '.', '_'
@@ -348,42 +365,12 @@ SCHEMA: dict[str, dict[str, Key]] = {
     "identify": {
         "parameters": Key("tables", _FREE, doc="free parameters: [{key = \"section.key\" or \"section.key[i]\", low, high}] (bounds in the key's "
                "unit; docs/model.md, section 'Corrections') [recon]"),
-        "targets": Key("strs", list(TARGETS), choices=TARGETS,
+        "targets": Key("strs", list(paper.TARGETS), choices=paper.TARGETS.keys(),  # (live: a declared target is a choice)
                        doc="targets the identification fits (touchdown uses [touchdown] onset_nm/previous_nm)"),
         "realisations": Key("int", 8, (lambda v: 1 <= v <= 1000, "an integer in [1, 1000]"),
                             doc="DMW realisations (seeds) each candidate runs; the targets are judged on their "
                                 "ensemble statistics (pipeline/analyses/ensemble.py); 1: the scene's record only"),
-        "touchdown_tolerance_nm": Key("float", 0.1, _pos,
-                                      doc="tolerance of the touchdown target on the minimum clearance [nm] (recon: "
-                                          "half the 0.2 nm actuation step)"),
-        "fhm_flying_percent": Key("float", paper.FHM_FLYING_PERCENT, _pos, doc="flying FHM over fhm_flying_range_nm [%] (paper)"),
-        "fhm_flying_range_nm": Key("floats", list(paper.FHM_FLYING_RANGE_NM), (lambda v: v[0] <= v[1], "lo <= hi"), length=2,
-                                   doc="protrusions of the flying FHM target [nm] (paper)"),
-        "fhm_flying_tolerance_percent": Key("float", 1.0, _pos, doc="tolerance of the flying FHM [%] (recon)"),
-        "fhm_touchdown_percent": Key("float", paper.FHM_TOUCHDOWN_PERCENT, _pos, doc="FHM just before touchdown [%] (paper)"),
-        "fhm_touchdown_at_nm": Key("float", paper.FHM_TOUCHDOWN_AT_NM, _nonneg, doc="protrusion of that FHM [nm] (paper)"),
-        "fhm_touchdown_tolerance_percent": Key("float", 1.0, _pos, doc="its tolerance [%] (recon)"),
-        "bouncing_min_percent": Key("float", paper.BOUNCING_MIN_PERCENT, _pos, doc="BV exceeds this after touchdown [%] (paper)"),
-        "bouncing_range_nm": Key("floats", list(paper.BOUNCING_RANGE_NM), (lambda v: v[0] < v[1], "lo < hi"), length=2,
-                                 doc="bouncing band (lo, hi] [nm] (paper)"),
-        "bouncing_tolerance_percent": Key("float", 2.0, _pos, doc="tolerance of the bouncing target [%] (recon)"),
-        "sliding_at_nm": Key("float", paper.LIGHT_CONTACT_NM, _nonneg, doc="protrusion of the light-contact targets [nm] (paper)"),
-        "sliding_bv_max_percent": Key("float", paper.SLIDING_BV_MAX_PERCENT, _pos, doc="BV in light contact below this [%] (paper)"),
-        "sliding_bv_tolerance_percent": Key("float", 0.5, _pos, doc="its tolerance [%] (recon)"),
-        "interference_nm": Key("float", paper.INTERFERENCE_NM, _pos, doc="interference in light contact [nm] (paper)"),
-        "interference_tolerance_nm": Key("float", 0.05, _pos, doc="its tolerance [nm] (recon)"),
-        "contact_force_mn": Key("float", paper.CONTACT_FORCE_MN, _pos, doc="contact force in light contact [mN] (paper, ~1 mN)"),
-        "contact_force_tolerance_mn": Key("float", 0.2, _pos, doc="its tolerance [mN] (recon)"),
-        "real_area_um2": Key("float", paper.REAL_AREA_UM2, _pos, doc="real contact area in light contact [um^2] (paper)"),
-        "real_area_tolerance_um2": Key("float", 0.3, _pos, doc="its tolerance [um^2] (recon)"),
-        "mean_pressure_mpa": Key("float", paper.MEAN_PRESSURE_MPA, _pos, doc="mean contact pressure in light contact [MPa] (paper)"),
-        "mean_pressure_tolerance_mpa": Key("float", 50.0, _pos, doc="its tolerance [MPa] (recon)"),
-        "friction_coefficient": Key("float", paper.FRICTION_COEFFICIENT, _pos, doc="friction coefficient in light contact [1] (paper)"),
-        "friction_coefficient_tolerance": Key("float", 0.15, _pos, doc="its tolerance [1] (recon)"),
-        "net_force_tolerance_mn": Key("float", 0.05, _pos,
-                                      doc="tolerance of the attractive net force (< 0) in light contact [mN] (recon)"),
-        "flying_step_nm": Key("float", 1.0, _pos, doc="protrusion step over the flying FHM range [nm]"),
-        "band_step_nm": Key("float", 0.2, _pos, doc="protrusion step over the bouncing band [nm] (paper's step)"),
+        **target_keys(),
         "missing_residual": Key("float", 10.0, _pos,
                                 doc="residual of a target a candidate cannot produce (no contact, failed run) [1]"),
         "population": Key("int", 10, (lambda v: v >= 4, "an integer >= 4"),

@@ -7,25 +7,9 @@ evaluation core of ``hdi identify`` (:mod:`pipeline.analyses.study`: same candid
 The headline outputs (:data:`pipeline.analyses.study.HEADLINES`) are the touchdown protrusion, the flying FHM
 at 4-7 nm, the BV after touchdown, and the interference, contact force and mean pressure at 11 nm.
 
-Methods (SALib [HU17]_):
-
-* **Morris** elementary effects [Mor91]_ with the improved measure ``mu*`` [CCS07]_:
-  ``morris_trajectories`` trajectories of ``parameters + 1`` points on a ``morris_levels`` grid.
-  ``mu*`` [output units] is the mean of ``|Delta y| / Delta`` over the trajectories, with the step
-  ``Delta = levels / (2 (levels - 1))`` a fraction of the parameter's range (SALib's scaling): the
-  output change extrapolated to the whole range (``y = a x`` gives ``|a|`` times the range);
-  ``sigma`` is the spread of the effects (interaction or nonlinearity); ``mu*`` has a bootstrap
-  confidence interval.
-* **Sobol** first-order ``S1`` and total ``ST`` indices [Sal02]_ [Sal10]_ from the Saltelli
-  extension of a Sobol' sequence, ``N (parameters + 2)`` evaluations (``sobol_samples = N``), with
-  bootstrap confidence intervals.
-
-A sample whose output does not exist (no touchdown on the grid, no contact at 11 nm, a failed run:
-e.g. two frequencies no real air bearing has) leaves that output undefined for the sample. Morris
-leaves out the trajectories with an undefined point (``trajectories_used`` on each index); the Sobol
-indices of an output with any undefined sample are NaN (the estimator needs every sample);
-``undefined_samples`` says how many (a parameter range that removes the contact is itself a
-finding). An output that does not vary at all has NaN Sobol indices (zero variance).
+Methods (:mod:`pipeline.analyses.screening`, which holds the sampling and the indices; this stage
+reads the scene, evaluates the samples and writes the outputs): Morris elementary effects with ``mu*``
+and its bootstrap confidence interval, and the Sobol first-order and total indices (SALib [HU17]_).
 
 Writes ``sensitivity.nc`` (indices with confidence intervals per output and parameter, the samples
 and their outputs) and ``figures/sensitivity.png``.
@@ -34,20 +18,11 @@ References
 ----------
 .. [HU17] J. Herman, W. Usher, "SALib: an open-source Python library for sensitivity analysis",
    J. Open Source Softw. 2(9) (2017) 97.
-.. [Mor91] M. D. Morris, "Factorial sampling plans for preliminary computational experiments",
-   Technometrics 33(2) (1991) 161-174.
-.. [CCS07] F. Campolongo, J. Cariboni, A. Saltelli, "An effective screening design for sensitivity
-   analysis of large models", Environ. Model. Softw. 22 (2007) 1509-1518.
-.. [Sal02] A. Saltelli, "Making best use of model evaluations to compute sensitivity indices",
-   Comput. Phys. Commun. 145 (2002) 280-297.
-.. [Sal10] A. Saltelli et al., "Variance based sensitivity analysis of model output. Design and
-   estimator for the total sensitivity index", Comput. Phys. Commun. 181 (2010) 259-270.
 """
 
 from __future__ import annotations
 
 import logging
-import warnings
 from pathlib import Path
 from typing import Any, Sequence
 
@@ -58,7 +33,8 @@ from ..analyses import plots
 from ..fanout import local_cluster
 from ..io import var
 from ..runner import Inputs, Stage, build
-from ..analyses.study import HEADLINES, Parameter, headline
+from ..analyses.screening import headline_outputs, morris, sobol
+from ..analyses.study import HEADLINES, Parameter
 from ..evaluations import Evaluator, evaluate_batch, setup, upstream
 from ..config.grid import protrusion_grid, range_grid
 
@@ -69,62 +45,6 @@ def grid(scene: Any) -> np.ndarray:
     """Protrusions [nm] of each evaluation: ``[sensitivity] protrusion_nm``, else the ``[sweep]`` grid."""
     g = scene["sensitivity"]["protrusion_nm"]
     return protrusion_grid(scene) if g is None else range_grid(g)
-
-
-def problem(params: Sequence[Parameter]) -> dict[str, Any]:
-    """The SALib problem of the parameters."""
-    return {"num_vars": len(params), "names": [p.name for p in params], "bounds": [[p.low, p.high] for p in params]}
-
-
-def _outputs(ev: Evaluator, X: np.ndarray, scene: Any) -> dict[str, np.ndarray]:
-    recs = ev(X)
-    heads = [headline(r, scene) for r in recs]
-    return {name: np.array([h[name] for h in heads], float) for name in HEADLINES}
-
-
-def morris(ev: Evaluator, params: Sequence[Parameter], scene: Any) -> tuple[np.ndarray, dict, dict]:
-    """Morris samples, headline outputs and indices per output (``mu``, ``mu_star``, ``sigma``, ``mu_star_conf``)."""
-    from SALib.analyze import morris as analyze
-    from SALib.sample import morris as sample
-    c = scene["sensitivity"]
-    prob = problem(params)
-    X = sample.sample(prob, N=c["morris_trajectories"], num_levels=c["morris_levels"], seed=c["seed"])
-    Y = _outputs(ev, X, scene)
-    out = {}
-    step = len(params) + 1
-    for name, y in Y.items():
-        # a trajectory with an undefined point has no complete elementary effects: leave it out
-        whole = np.all(np.isfinite(y.reshape(-1, step)), axis=1)
-        if whole.sum() < 2:
-            out[name] = None
-            continue
-        rows = np.repeat(whole, step)
-        si = analyze.analyze(prob, X[rows], y[rows], num_resamples=c["bootstrap"], conf_level=c["confidence_level"],
-                             num_levels=c["morris_levels"], seed=c["seed"])
-        out[name] = {k: np.asarray(si[k], float) for k in ("mu", "mu_star", "sigma", "mu_star_conf")}
-        out[name]["trajectories_used"] = int(whole.sum())
-    return X, Y, out
-
-
-def sobol(ev: Evaluator, params: Sequence[Parameter], scene: Any) -> tuple[np.ndarray, dict, dict]:
-    """Sobol samples, headline outputs and indices per output (``S1``, ``S1_conf``, ``ST``, ``ST_conf``)."""
-    from SALib.analyze import sobol as analyze
-    from SALib.sample import sobol as sample
-    c = scene["sensitivity"]
-    prob = problem(params)
-    X = sample.sample(prob, c["sobol_samples"], calc_second_order=False, seed=c["seed"])
-    Y = _outputs(ev, X, scene)
-    out = {}
-    for name, y in Y.items():
-        if not np.all(np.isfinite(y)) or np.ptp(y) == 0:
-            out[name] = None
-            continue
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)
-            si = analyze.analyze(prob, y, calc_second_order=False, num_resamples=c["bootstrap"],
-                                 conf_level=c["confidence_level"], seed=c["seed"])
-        out[name] = {k: np.asarray(si[k], float) for k in ("S1", "S1_conf", "ST", "ST_conf")}
-    return X, Y, out
 
 
 _INDEX_META = {
@@ -216,8 +136,12 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
     with local_cluster(opts.get("scheduler"), workers) as address:
         ev = Evaluator(scene, params, prots, base_inputs, store, c["batch_size"], address, workers,
                        task=opts.get("task") or evaluate_batch)
+
+        def outputs(X: np.ndarray) -> dict[str, np.ndarray]:
+            return headline_outputs(ev(X), scene)
+
         for method in c["methods"]:
-            results[method] = (morris if method == "morris" else sobol)(ev, params, scene)
+            results[method] = (morris if method == "morris" else sobol)(outputs, params, c)
     ds = dataset(params, results, scene)
     ds.attrs["protrusions_per_evaluation"] = len(prots)
     inputs.record(evaluations_computed=ev.evaluated, batch_seconds=round(ev.batch_seconds, 3),
