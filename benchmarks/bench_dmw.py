@@ -1,4 +1,4 @@
-"""Benchmarks of the DMW stage's physics (pipeline.physics.dmw).
+"""Benchmarks of the DMW stage's physics (pipeline.physics.microwaviness).
 
 Target (task brief): synthesising the paper scene's record, 2 ms at 4 MS/s (8000 samples), in well
 under 0.1 s. Also timed: the LDV processing of the same record (velocity to displacement) and its
@@ -8,7 +8,7 @@ periodogram, for reference.
 from __future__ import annotations
 
 from benchmarks.common import record, timeit
-from pipeline.physics import dmw
+from pipeline.physics import microwaviness as dmw
 
 FS = 4e6            # [Hz]
 BAND = (1e4, 5e5)   # [Hz]

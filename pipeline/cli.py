@@ -21,7 +21,7 @@ from . import __version__, runner
 from .io import DatasetError, os_error_line, results_dir
 from .config.scene import SceneError, describe_keys, load_scene
 from .stages import roughness
-from .validation import MAX_SCENES, check_options, one_line_warnings
+from .cli_checks import MAX_SCENES, check_options, one_line_warnings
 
 log = logging.getLogger("pipeline")
 
@@ -98,7 +98,7 @@ class _Stderr(logging.StreamHandler):
 
 
 def _given(args: argparse.Namespace) -> dict:
-    """The options :func:`pipeline.validation.check_options` checks."""
+    """The options :func:`pipeline.cli_checks.check_options` checks."""
     return {name: getattr(args, name) for name in ("out", "scheduler", "workers", "yes", "readme", "channel",
                                                     "detrend", "write_scene", "force")}
 

@@ -30,7 +30,7 @@ from pathlib import Path
 PACKAGE = "pipeline"
 ROOT = Path(__file__).resolve().parent
 #: Modules whose code does not change a result (where and when a stage runs, not what it computes).
-ORCHESTRATION = frozenset({"pipeline.runner", "pipeline.fanout", "pipeline.cli", "pipeline.validation"})
+ORCHESTRATION = frozenset({"pipeline.runner", "pipeline.fanout", "pipeline.cli", "pipeline.cli_checks"})
 
 
 @lru_cache(maxsize=None)

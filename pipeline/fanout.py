@@ -18,7 +18,7 @@
 * any other string: the address of a running dask.distributed scheduler (e.g. one started by
   dask-jobqueue), which is how a study outgrows one machine. Tasks are retried twice on a lost worker.
   (The command line also takes a scheduler file or ``DASK_SCHEDULER_ADDRESS``:
-  :func:`pipeline.validation.check_scheduler` turns them into the address.) The first connection to a
+  :func:`pipeline.cli_checks.check_scheduler` turns them into the address.) The first connection to a
   scheduler logs its dashboard link (:func:`announce`).
 
 Tasks must be deterministic functions of their arguments and safe to run twice (retries); large
@@ -68,7 +68,7 @@ CLUSTER_WAIT_S = 60.0
 #: Seconds between two looks at the cluster while waiting for results.
 _POLL_S = 1.0
 #: Seconds to wait for a dask scheduler to answer a connection (dask's own default is 30 s), when the
-#: command starts (:func:`pipeline.validation.check_scheduler`) and to count its threads.
+#: command starts (:func:`pipeline.cli_checks.check_scheduler`) and to count its threads.
 CONNECT_TIMEOUT_S = 3.0
 #: Seconds a batch's client waits for the scheduler (dask's default: a busy scheduler of a long study
 #: answering late is no reason to stop); past them the command ends in one line.

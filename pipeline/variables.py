@@ -387,7 +387,7 @@ ACCURACY = _group(
 ENSEMBLE_OF = ("fhm_bv", "clearance", "min_clearance", "interference", "contact_force", "friction_force",
                "net_force", "mean_pressure", "contact_fraction")
 
-#: ``sweep.nc`` of a DMW ensemble (:func:`pipeline.analyses.ensemble.statistics`).
+#: ``sweep.nc`` of a DMW ensemble (:func:`pipeline.analyses.ensemble_rules.statistics`).
 ENSEMBLE = _group(
     V("realisation", "1", "DMW realisation (0: the scene's own record)", dims=("realisation",), dtype="int32"),
     V("dmw_seed", "1", "seed of the synthetic DMW record of the realisation", dims=("realisation",),

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from pipeline.analyses import accuracy as knob_study
+from pipeline.analyses import knob_study as knob_study
 from pipeline.io import check_cf
 from pipeline.config.scene import load_scene
 from pipeline.stages import accuracy

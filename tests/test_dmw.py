@@ -1,4 +1,4 @@
-"""Tests of the DMW physics (pipeline.physics.dmw) and stage (pipeline.stages.dmw).
+"""Tests of the DMW physics (pipeline.physics.microwaviness) and stage (pipeline.stages.dmw).
 
 Known answers: the synthetic record's rms and band are exact by construction, its periodogram is
 the target power law bin by bin (fixed amplitudes), and the spectral derivative / integral pair is
@@ -16,7 +16,7 @@ from hypothesis import given, settings, strategies as st
 
 from pipeline.io import read_dataset
 from pipeline.model import measured_dmw
-from pipeline.physics import dmw
+from pipeline.physics import microwaviness as dmw
 from pipeline.config.scene import scene_from_dict
 from pipeline.model import dmw_record
 from pipeline.stages import dmw as stage

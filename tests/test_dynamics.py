@@ -16,7 +16,7 @@ import pytest
 from pipeline.model import dynamics as dyn
 from pipeline.model import slider as sl
 from pipeline.physics import air_bearing as ab
-from pipeline.physics import dmw as pdmw
+from pipeline.physics import microwaviness as pdmw
 from pipeline.config.scene import scene_from_dict
 from pipeline.model.interface_tables import build_tables, roughness_statistics
 

@@ -10,7 +10,7 @@ import pytest
 from pipeline.io import read_dataset
 from pipeline.config.scene import load_scene
 from pipeline.model import dmw_record
-from pipeline.analyses import ensemble
+from pipeline.analyses import ensemble_rules as ensemble
 from pipeline.stages import sweep as sweep_stage
 
 ROOT = Path(__file__).resolve().parents[1]

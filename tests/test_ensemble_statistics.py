@@ -1,4 +1,4 @@
-"""The ensemble statistics of the paper targets (pipeline/analyses/ensemble.py) on synthetic data with
+"""The ensemble statistics of the paper targets (pipeline/analyses/ensemble_rules.py) on synthetic data with
 known answers: probabilities, medians and quantiles, mean and standard deviation, the 0.5 crossing."""
 
 from __future__ import annotations
@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from pipeline.analyses import ensemble as en
+from pipeline.analyses import ensemble_rules as en
 
 
 def _da(values, prot=None):

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from pipeline import evaluations
-from pipeline.analyses import ensemble as en
+from pipeline.analyses import ensemble_rules as en
 from pipeline.analyses import study
 from pipeline.config.scene import SceneError, load_scene
 from pipeline.io import read_dataset

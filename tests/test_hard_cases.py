@@ -52,10 +52,10 @@ from pipeline.model import dynamics as dyn
 from pipeline.model import slider as sl
 from pipeline.physics import air_bearing as ab
 from pipeline.physics import asperity
-from pipeline.physics import dmw as pdmw
+from pipeline.physics import microwaviness as pdmw
 from pipeline.physics import isbl
 from pipeline.physics.adhesion import lennard_jones_force, meniscus_force
-from pipeline.physics.statistics import ALPHA_MIN, bandwidth_alpha, summit_sigma
+from pipeline.physics.asperity_statistics import ALPHA_MIN, bandwidth_alpha, summit_sigma
 from pipeline.config.scene import load_scene
 from pipeline.model import dmw_record
 from pipeline.model.interface_tables import build_tables, interface_parameters, roughness_statistics
@@ -322,7 +322,7 @@ def test_mccool_below_the_limit_raises_a_clear_error(base, alpha):
         summit_sigma(0.52e-9, eta, 5e-6)
 
 
-# Regression test (fixed): pipeline/physics/statistics.py:summit_sigma: ALPHA_MIN = 0.8968 is the
+# Regression test (fixed): pipeline/physics/asperity_statistics.py:summit_sigma: ALPHA_MIN = 0.8968 is the
 # rounded root of the radicand, whose constants give 3.717e-4 * 2412.74 = 0.8968155; for 0.8968 <
 # alpha <= 0.8968155 sigma**2 - 3.717e-4/(eta R)**2 < 0, so summit_sigma returns NaN
 # (RuntimeWarning) instead of raising, and the NaN reaches isbl.Interface (error 'Interface.sigma_s

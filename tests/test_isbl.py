@@ -13,7 +13,7 @@ from scipy import integrate
 from scipy.special import erfc, gamma, pbdv
 
 from pipeline.physics import adhesion, asperity, friction, isbl
-from pipeline.physics import statistics as st
+from pipeline.physics import asperity_statistics as st
 from pipeline.model.interface_tables import interface_parameters, roughness_statistics
 
 NM = 1e-9

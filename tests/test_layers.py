@@ -26,7 +26,7 @@ LAYERS = {
     "pipeline.model": 3,
     "pipeline.analyses": 4,
     "pipeline.stages": 5, "pipeline.runner": 5, "pipeline.evaluations": 5,
-    "pipeline.validation": 6, "pipeline.cli": 6, "pipeline.sizing": 6,
+    "pipeline.cli_checks": 6, "pipeline.cli": 6, "pipeline.sizing": 6,
 }
 NAMES = {0: "base", 1: "physics", 2: "config", 3: "model", 4: "analyses", 5: "stages", 6: "cli"}
 

@@ -16,7 +16,7 @@ import xarray as xr
 from pipeline.config.scene import scene_from_dict
 from pipeline.model import dynamics as dyn
 from pipeline.model import slider as sl
-from pipeline.physics import dmw as pdmw
+from pipeline.physics import microwaviness as pdmw
 
 NM = 1e-9
 P0, L = 40e6, 1.0 * NM  # [Pa], [m] the synthetic adhesion law

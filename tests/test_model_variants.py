@@ -17,7 +17,7 @@ from scipy.optimize import fsolve
 from pipeline.model import dynamics as dyn
 from pipeline.model import slider as sl
 from pipeline.physics import air_bearing as ab
-from pipeline.physics import dmw as pdmw
+from pipeline.physics import microwaviness as pdmw
 from pipeline.config.scene import scene_from_dict
 
 NM = 1e-9

@@ -14,7 +14,7 @@ import pytest
 from pipeline.model import dynamics as dyn
 from pipeline.model import slider as sl
 from pipeline.physics import air_bearing as ab
-from pipeline.physics import dmw as pdmw
+from pipeline.physics import microwaviness as pdmw
 from pipeline.physics import friction
 from pipeline.physics.fhm import FHM_MEASURES, fhm
 from pipeline.config.scene import SceneError, load_scene, scene_from_dict

@@ -320,7 +320,7 @@ def test_envelope_keeps_every_peak_of_a_long_trace():
 def test_every_file_the_report_draws_is_a_declared_output(full_out, paper_scene, tmp_path_factory):
     """The runner moves only declared outputs out of the staging folder: an ensemble sweep's
     ``figures/ensemble.png`` must be one of them, or it is drawn and thrown away."""
-    from pipeline.analyses.ensemble import statistics as ensemble_statistics
+    from pipeline.analyses.ensemble_rules import statistics as ensemble_statistics
     from pipeline.variables import ENSEMBLE
     sweep = xr.open_dataset(full_out / "sweep.nc", engine="netcdf4").load()
     ens = xr.concat([sweep, sweep], dim="realisation")

@@ -13,10 +13,10 @@ import xarray as xr
 from SurfaceTopography import Topography
 
 from pipeline.io import DatasetError, file_hash
-from pipeline.physics import statistics as st
+from pipeline.physics import asperity_statistics as st
 from pipeline.physics import surface as sf
 from pipeline.config.scene import scene_from_dict
-from pipeline.model import roughness as rough_model
+from pipeline.model import roughness_statistics as rough_model
 from pipeline.stages import roughness as rg
 
 AFM = Path(__file__).resolve().parent / "data" / "afm"  # real scans, kept in the repository

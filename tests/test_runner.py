@@ -22,7 +22,7 @@ import xarray as xr
 
 from pipeline import cli, runner
 from pipeline.io import DatasetError, read_dataset, var
-from pipeline.physics import dmw as phys_dmw
+from pipeline.physics import microwaviness as phys_dmw
 from pipeline.physics import surface as sf
 from pipeline.config.scene import load_scene
 from pipeline.stages import sweep as sweep_stage

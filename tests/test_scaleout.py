@@ -208,7 +208,7 @@ def test_a_scheduler_file_or_dask_scheduler_address_names_the_cluster_and_its_da
     viaenv = _hdi("sweep", str(PAPER), *sets, "--out", "out", cwd=tmp_path, DASK_SCHEDULER_ADDRESS=running.address)
     assert viaenv.returncode == 0, viaenv.stderr
     assert len([ln for ln in viaenv.stderr.splitlines() if ln.startswith(dashboard)]) == 1, viaenv.stderr
-    from pipeline.validation import check_scheduler
+    from pipeline.cli_checks import check_scheduler
     assert check_scheduler(str(running.scheduler_file)) == running.address
 
 

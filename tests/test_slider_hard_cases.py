@@ -38,7 +38,7 @@ import pytest
 from convergence import assert_converged, deltas
 
 from pipeline.model import slider as sl
-from pipeline.physics import dmw as pdmw
+from pipeline.physics import microwaviness as pdmw
 from pipeline.config.scene import SCHEMA, load_scene
 from pipeline.model import dmw_record
 from pipeline.stages import dmw as dmw_stage

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pipeline.physics import statistics as st
+from pipeline.physics import asperity_statistics as st
 from pipeline.physics.asperity import critical_interference
 from pipeline.model.interface_tables import interface_parameters, roughness_statistics
 

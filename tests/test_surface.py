@@ -18,7 +18,7 @@ import pytest
 from SurfaceTopography import Topography, open_topography
 from SurfaceTopography.Generation import fourier_synthesis
 
-from pipeline.physics import statistics as st
+from pipeline.physics import asperity_statistics as st
 from pipeline.physics import surface as sf
 
 AFM = Path(__file__).resolve().parent / "data" / "afm"  # real scans, kept in the repository

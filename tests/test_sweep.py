@@ -271,7 +271,7 @@ def test_each_roughness_set_flies_on_its_own_summit_datum(tmp_path):
     """Without contact or adhesion no set needs interface tables, and the trajectory does not depend
     on the roughness: each set's clearance is the scene's shifted by the difference of McCool's y_s
     (explicit statistics, docs/model.md, section "Asperity statistics"), exactly. (Every set was given the scene's y_s before.)"""
-    from pipeline.physics.statistics import explicit_statistics
+    from pipeline.physics.asperity_statistics import explicit_statistics
     scene = load_scene(ROOT / "configs" / "sweep-3x3.toml",
                        ['scene.effects=["air_bearing", "pitch", "dmw"]', "sweep.damping_ratio=[0.05]",
                         "sweep.protrusion_nm={start=0.0, stop=2.0, step=1.0}", "report.histories_nm=[]"])

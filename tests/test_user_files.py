@@ -25,9 +25,9 @@ import pytest
 from pipeline import cli, io, runner, sizing
 from pipeline.analyses import narrative
 from pipeline.model import measured_dmw
-from pipeline.physics.dmw import DMWError
+from pipeline.physics.microwaviness import DMWError
 from pipeline.stages import report
-from pipeline.validation import OptionError, check_readme
+from pipeline.cli_checks import OptionError, check_readme
 from pipeline.config.grid import roughness_sets
 from pipeline.config.scene import MAX_EXTENDS_DEPTH, SceneError, load_scene
 from pipeline.io import is_temporary, temporary_path, temporary_prefix

@@ -24,7 +24,7 @@ import pytest
 from pipeline import cli, runner
 from pipeline.io import read_dataset, write_dataset
 from pipeline.config.scene import load_scene
-from pipeline.validation import OptionError, check_scheduler
+from pipeline.cli_checks import OptionError, check_scheduler
 
 ROOT = Path(__file__).resolve().parents[1]
 PAPER = ROOT / "configs" / "paper-2009.toml"
@@ -244,7 +244,7 @@ def test_readme_keeps_its_identification_section_when_the_report_has_none(tmp_pa
 
 def test_with_a_measured_record_the_synthesis_keys_change_no_inputs_key(tmp_path):
     """``--set dmw.rms_nm`` (documented as ignored for a measured record) recomputed the whole chain."""
-    from pipeline.physics import dmw as phys_dmw
+    from pipeline.physics import microwaviness as phys_dmw
     rec = tmp_path / "record.csv"
     np.savetxt(rec, phys_dmw.synthesize(0.16, (1e4, 5e5), -2.0, 3e-3, 4e6, seed=5))
     base = [f"dmw.source={str(rec)!r}".replace("'", '"')]

@@ -1,4 +1,4 @@
-"""Bad input on the command line: one clear line, exit 2, nothing written or lost (pipeline.validation),
+"""Bad input on the command line: one clear line, exit 2, nothing written or lost (pipeline.cli_checks),
 and warnings with the numbers for derived material parameters outside physical bounds."""
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ from pipeline import cli
 from pipeline.config.scene import SceneError, load_scene
 from pipeline.model import interface_tables
 from pipeline.physics.material_bounds import PhysicsWarning, check_materials
-from pipeline.validation import CONNECT_TIMEOUT_S, MAX_SCENES, check_grid, check_out, grid_size
+from pipeline.cli_checks import CONNECT_TIMEOUT_S, MAX_SCENES, check_grid, check_out, grid_size
 
 ROOT = Path(__file__).resolve().parents[1]
 PAPER = ROOT / "configs" / "paper-2009.toml"
@@ -66,7 +66,7 @@ def test_unreachable_scheduler_fails_fast_with_one_line(capsys, folder):
 def test_local_schedulers_are_not_addresses():
     """`--scheduler threads|processes|synchronous` name the local fan-outs (pipeline.fanout): accepted
     without a connection attempt (it would fail: no host); anything else must be tcp://HOST:PORT."""
-    from pipeline.validation import OptionError, check_scheduler
+    from pipeline.cli_checks import OptionError, check_scheduler
     for name in ("threads", "processes", "synchronous", None):
         assert check_scheduler(name, timeout=0.01) == name
     with pytest.raises(OptionError, match="tcp://HOST:PORT"):
@@ -81,7 +81,7 @@ def _free_address() -> str:
 
 def test_a_scheduler_file_is_read_for_its_address_and_a_bad_one_is_one_line(capsys, folder, tmp_path):
     # issue 26, 3: --scheduler took tcp:// addresses only (dask users hand over `dask scheduler --scheduler-file`)
-    from pipeline.validation import scheduler_address
+    from pipeline.cli_checks import scheduler_address
     good = tmp_path / "scheduler.json"
     good.write_text('{"type": "Scheduler", "address": "tcp://10.1.2.3:8786", "services": {"dashboard": 8787}}')
     assert scheduler_address(str(good)) == ("tcp://10.1.2.3:8786", f"--scheduler {good} (address tcp://10.1.2.3:8786)")
@@ -102,14 +102,14 @@ def test_a_scheduler_file_is_read_for_its_address_and_a_bad_one_is_one_line(caps
 
 
 def test_dask_scheduler_address_is_the_scheduler_when_none_is_given(capsys, folder, monkeypatch):
-    from pipeline.validation import check_scheduler
+    from pipeline.cli_checks import check_scheduler
     address = _free_address()
     monkeypatch.setenv("DASK_SCHEDULER_ADDRESS", address)
     err = _fails(capsys, folder, "sweep", str(PAPER))
     assert err.startswith(f"hdi sweep: error: DASK_SCHEDULER_ADDRESS={address}: no scheduler answers at ")
     assert err.endswith("or unset DASK_SCHEDULER_ADDRESS (or give --scheduler threads) to run locally")
     assert check_scheduler("threads") == "threads"  # --scheduler comes first
-    from pipeline.validation import check_options
+    from pipeline.cli_checks import check_options
     assert check_options("dmw", load_scene(PAPER)) is None  # a stage without a fan-out does not connect
     monkeypatch.setenv("DASK_SCHEDULER_ADDRESS", " ")
     assert check_scheduler(None) is None  # (blank: unset)

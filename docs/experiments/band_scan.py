@@ -28,7 +28,7 @@ import xarray as xr
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
 
-from pipeline.analyses import ensemble as en  # noqa: E402
+from pipeline.analyses import ensemble_rules as en  # noqa: E402
 from pipeline.analyses.study import bouncing_bv  # noqa: E402
 from pipeline.io import read_dataset  # noqa: E402
 

@@ -53,7 +53,7 @@ from ..config.grid import label, protrusion_grid
 from ..fanout import run_tasks, split
 from ..model import slider as sl
 from ..model.inputs import SimulationInputs
-from ..physics.statistics import contact_probabilities, k_from_probability
+from ..physics.asperity_statistics import contact_probabilities, k_from_probability
 from ..units import NM
 from ..variables import CALIBRATION
 

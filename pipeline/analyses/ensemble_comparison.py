@@ -3,7 +3,7 @@
 Reads ``ensemble.nc`` (:mod:`pipeline.stages.ensemble`), in which every paper target is already judged
 over the realisations as ``hdi identify`` judges it (``value_<target>``, ``spread_<target>``,
 ``single_<target>``: :func:`pipeline.analyses.study.ensemble_summary`, the statistics of
-:mod:`pipeline.analyses.ensemble`), and writes each value with its spread beside it (10-90 % of the
+:mod:`pipeline.analyses.ensemble_rules`), and writes each value with its spread beside it (10-90 % of the
 realisations for the touchdown protrusion and the FHM/BV medians, mean ± 1 standard deviation for the
 light-contact state) next to the value of the scene's own record alone. Nothing is computed here.
 """
@@ -112,7 +112,7 @@ def ensemble_markdown(ens: xr.Dataset) -> str:
         "", f"## Paper targets over {n} DMW realisations", "",
         f"From `ensemble.nc`: the scene on {n} DMW records (seeds {seeds}; the first is the scene's own record, "
         "the sweep's), at the protrusions the targets read and near the sweep's first contact, with the sweep's k. "
-        "Each target is judged as `hdi identify` judges it (pipeline/analyses/ensemble.py): the touchdown where the "
+        "Each target is judged as `hdi identify` judges it (pipeline/analyses/ensemble_rules.py): the touchdown where the "
         "touchdown probability crosses 0.5, with the 10-90 % range of the realisations' touchdown protrusions; FHM/BV "
         "as the median over the realisations with its 10-90 % range; the light-contact state as mean ± 1 standard "
         "deviation over the realisations in contact. The last column is the scene's record alone.", "",

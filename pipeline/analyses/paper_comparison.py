@@ -18,7 +18,7 @@ import xarray as xr
 
 from . import optimum as opt
 from ..physics import paper
-from ..physics.statistics import contact_probabilities
+from ..physics.asperity_statistics import contact_probabilities
 from .plots import runs, unit_text
 from ..variables import regime_name
 from .markdown import difference, number, table

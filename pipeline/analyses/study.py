@@ -33,7 +33,7 @@ from typing import Any, Callable, Iterable, Sequence
 import numpy as np
 import xarray as xr
 
-from . import ensemble as en
+from . import ensemble_rules as en
 from .ensemble_comparison import SPREAD_STD
 from ..config.grid import TOL_NM, label, range_grid
 from ..config.scene import SCHEMA, SceneError, unit_suffix

@@ -369,7 +369,7 @@ SCHEMA: dict[str, dict[str, Key]] = {
                        doc="targets the identification fits (touchdown uses [touchdown] onset_nm/previous_nm)"),
         "realisations": Key("int", 8, (lambda v: 1 <= v <= 1000, "an integer in [1, 1000]"),
                             doc="DMW realisations (seeds) each candidate runs; the targets are judged on their "
-                                "ensemble statistics (pipeline/analyses/ensemble.py); 1: the scene's record only"),
+                                "ensemble statistics (pipeline/analyses/ensemble_rules.py); 1: the scene's record only"),
         **target_keys(),
         "missing_residual": Key("float", 10.0, _pos,
                                 doc="residual of a target a candidate cannot produce (no contact, failed run) [1]"),

@@ -16,7 +16,7 @@ import numpy as np
 
 from ..io import read_dataset
 from ..config.si import to_si
-from ..physics import dmw as phys
+from ..physics import microwaviness as phys
 from ..units import MM
 
 FILENAME = "dmw.nc"
@@ -24,7 +24,7 @@ FILENAME = "dmw.nc"
 
 def synthetic_record(s: dict[str, Any]) -> np.ndarray:
     """The synthetic displacement record [nm] of :func:`settings` ``s`` (``source = "synthetic"``):
-    :func:`pipeline.physics.dmw.synthesize` of its rms, band, exponent, duration, rate and seed."""
+    :func:`pipeline.physics.microwaviness.synthesize` of its rms, band, exponent, duration, rate and seed."""
     return phys.synthesize(s["rms_nm"], tuple(s["band_hz"]), s["exponent"], s["duration_s"], s["sample_rate_hz"],
                            s["seed"])
 

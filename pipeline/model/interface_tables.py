@@ -26,13 +26,13 @@ from ..physics import isbl
 from ..physics.asperity import critical_interference
 from ..physics.friction import shear_strength
 from ..physics.material_bounds import check_materials
-from ..physics.statistics import (composite_modulus, explicit_statistics, hardness_from_plasticity_gw,
+from ..physics.asperity_statistics import (composite_modulus, explicit_statistics, hardness_from_plasticity_gw,
                                   plasticity_index_gw, plasticity_index_ke)
 from ..config.grid import TOL_NM, label
 from ..config.si import to_si
 from ..units import MPA, NM, UM
 from ..variables import INTERFACE
-from . import roughness as rough
+from . import roughness_statistics as rough
 from .deterministic_tables import MODELS, deterministic_tables
 
 log = logging.getLogger(__name__)
@@ -43,7 +43,7 @@ def roughness_statistics(scene: Any, roughness: str | Path | xr.Dataset | None =
 
     With ``[roughness] afm``, the statistics of the ``combined`` surface (route ``[roughness] route``)
     of ``roughness``: a current ``roughness.nc`` (path or dataset) when the caller has one (a stage's
-    upstream), else computed here from the scans (:func:`pipeline.model.roughness.build_dataset`, the
+    upstream), else computed here from the scans (:func:`pipeline.model.roughness_statistics.build_dataset`, the
     numbers the roughness stage writes). Otherwise ``sigma_nm``, ``summit_radius_um`` and
     ``summit_density_per_um2`` give ``sigma_s`` and ``y_s`` by McCool's relations (docs/model.md,
     section "Asperity statistics").

@@ -2,8 +2,8 @@
 
 :func:`load_record` reads one column or variable of displacement [length] or velocity [length/s],
 finds or assumes its units and sampling rate, and checks every value; each problem is a
-:class:`pipeline.physics.dmw.DMWError` naming the file, the field and what was expected. The physics
-of the record (the paper's processing, synthesis, spectra) is :mod:`pipeline.physics.dmw`.
+:class:`pipeline.physics.microwaviness.DMWError` naming the file, the field and what was expected. The physics
+of the record (the paper's processing, synthesis, spectra) is :mod:`pipeline.physics.microwaviness`.
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from typing import Iterable, Iterator
 import numpy as np
 
 from ..io import NETCDF_LOCK
-from ..physics.dmw import TIME_JITTER_TOL, DMWError
+from ..physics.microwaviness import TIME_JITTER_TOL, DMWError
 from ..units import LENGTH_UNITS, TIME_UNITS, VELOCITY_UNITS
 from ..units import MS
 

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from ..physics.statistics import contact_probabilities, k_from_probability
+from ..physics.asperity_statistics import contact_probabilities, k_from_probability
 from .slider import TFC_POINT_LAWS
 
 #: Scene keys no simulation reads (other stages' settings, names): left out of the inputs keys of the

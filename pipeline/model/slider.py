@@ -57,7 +57,7 @@ from ..physics import bulge_bearing as bb
 from ..physics.fhm import fhm
 from ..physics.friction import friction_stress_table, lubricant_shear_stress
 from ..physics.geometry import effective_radius, ellipsoid_table_integral, friction_arm, nominal_area
-from ..physics.statistics import explicit_statistics
+from ..physics.asperity_statistics import explicit_statistics
 from ..config.si import to_si
 from ..variables import INTERFACE, Regime
 from .bulge_table import from_dataset

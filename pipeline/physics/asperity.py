@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .statistics import ke_hardness_factor
+from .asperity_statistics import ke_hardness_factor
 
 #: Boundaries of the Kogut-Etsion regimes in ``x = w / w_c`` [KE02].
 X_ELASTIC = 1.0

@@ -3,7 +3,7 @@
 :func:`check_materials` warns (:class:`PhysicsWarning`) when a hardness derived from the plasticity
 index, or a plasticity index derived from the hardness, lies outside physical bounds: e.g. an AFM
 scan with the paper's fixed psi = 0.52 can imply H = 58.5 GPa. Kept apart from the command line's
-checks (:mod:`pipeline.validation`), so that the interface stage's code key
+checks (:mod:`pipeline.cli_checks`), so that the interface stage's code key
 (:mod:`pipeline.code_version`) holds these bounds and not the command line's messages.
 """
 
@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import warnings
 
-from .statistics import plasticity_index_gw
+from .asperity_statistics import plasticity_index_gw
 from ..units import GPA, NM, UM
 
 
@@ -33,7 +33,7 @@ def check_materials(E: float, H: float, sigma_s: float, R: float, *, derived: st
 
     Parameters
     ----------
-    E, H, sigma_s, R : as :func:`pipeline.physics.statistics.plasticity_index_gw` [Pa, Pa, m, m]
+    E, H, sigma_s, R : as :func:`pipeline.physics.asperity_statistics.plasticity_index_gw` [Pa, Pa, m, m]
     derived : ``"hardness"`` (H from the scene's plasticity index) or ``"plasticity_index"`` (psi from the
         scene's hardness): which one was computed, named in the warning
     """

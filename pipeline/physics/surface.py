@@ -7,7 +7,7 @@ A height map is summarised by two independent routes:
 
 * **spectral** (Nayak 1971, McCool 1986): profile moments ``m0, m2, m4`` (variance of height, slope and
   curvature along a profile) give ``eta``, ``R``, ``alpha``, ``sigma_s`` and ``y_s`` through
-  :mod:`pipeline.physics.statistics`;
+  :mod:`pipeline.physics.asperity_statistics`;
 * **summits** (Greenwood-Williamson 1966, direct count): 8-neighbour local maxima of the sampled map, their
   curvature from the 5-point Laplacian, their heights.
 
@@ -38,7 +38,7 @@ from typing import Any, Iterable, Sequence
 
 import numpy as np
 
-from . import statistics as st
+from . import asperity_statistics as st
 from ..units import NM_IN_UM, PER_NM2_IN_PER_UM2
 
 #: Detrend modes accepted here; ``"plane"`` is SurfaceTopography's ``"height"`` (the rms-minimising plane).
@@ -346,7 +346,7 @@ def spectral_statistics(m0: float, m2: float, m4: float) -> RouteStatistics:
 
     ``eta = m4/(6 pi sqrt(3) m2)``, ``R = 0.375 sqrt(pi/m4)``, ``alpha = m0 m4/m2^2``,
     ``sigma_s = sqrt(sigma^2 - 3.717e-4/(eta R)^2)``, ``y_s = 4 sigma/sqrt(pi alpha)``
-    (all via :mod:`pipeline.physics.statistics`).
+    (all via :mod:`pipeline.physics.asperity_statistics`).
 
     Parameters
     ----------

@@ -14,7 +14,7 @@ interpolation, quadrature 64 Gauss-Legendre nodes x 8 panels, DMW record at 16 M
 entry of the ``rtol`` row (tolerance 1e-10 with the caps lifted: an independent step sequence)
 bounds the reference's own time-discretisation error (~1e-7 to 1e-6 relative in the paper scene).
 
-DMW sample rate. :func:`pipeline.physics.dmw.synthesize` draws the normals of every ``rfft`` bin
+DMW sample rate. :func:`pipeline.physics.microwaviness.synthesize` draws the normals of every ``rfft`` bin
 in bin order, and the record length (``dmw.duration_ms`` or the default 2.1 ms) does not depend on
 the rate, so one seed at 2, 4, 8 or 16 MS/s gives the *same* band-limited trigonometric polynomial
 sampled more or less densely (checked here: the subsampled 16 MS/s record equals the 4 MS/s one to
@@ -84,7 +84,7 @@ is kept. Chosen values and their errors: attributes
 ``combined_*``.
 
 The study itself (knobs, errors, choice of defaults, the dataset) is
-:func:`pipeline.analyses.accuracy.study`, the figure :func:`pipeline.analyses.plots.fig_work_precision`; this
+:func:`pipeline.analyses.knob_study.study`, the figure :func:`pipeline.analyses.plots.fig_work_precision`; this
 module assembles and runs the model for each configuration (:func:`_evaluate`, :class:`_RunCache`).
 
 The stage takes ``contact.k`` from the scene, else from ``calibration.nc``, else from
@@ -106,8 +106,8 @@ import xarray as xr
 
 from ..analyses import plots
 from ..model import slider as sl
-from ..analyses import accuracy as knob_study
-from ..analyses.accuracy import HEADLINE, POINTS, REFERENCE, TABLE_KEYS, TOLERANCE, Result, cast
+from ..analyses import knob_study as knob_study
+from ..analyses.knob_study import HEADLINE, POINTS, REFERENCE, TABLE_KEYS, TOLERANCE, Result, cast
 from ..model import dmw_record, scene_inputs
 from ..model.inputs import for_stage
 from ..model.interface_tables import build_tables, roughness_statistics

@@ -29,13 +29,13 @@ travel time over the slider (the dynamics reads the record ahead of ``t`` for th
 up to whole periods of the band's lower edge: 2.1 ms (8400 samples) in the paper scene. See
 :func:`default_duration`.
 
-Synthetic: :func:`pipeline.physics.dmw.synthesize` with ``rms_nm``, ``band_khz``, ``exponent``,
+Synthetic: :func:`pipeline.physics.microwaviness.synthesize` with ``rms_nm``, ``band_khz``, ``exponent``,
 ``seed``, ``sample_rate_mhz`` and that duration.
 
 Measured (``source`` a path): :func:`~pipeline.model.measured_dmw.load_record`, then the paper's processing
-at the record's own rate (velocity integrated, :func:`~pipeline.physics.dmw.velocity_to_displacement`;
-displacement detrended, :func:`~pipeline.physics.dmw.process_displacement`; both band-passed to
-``band_khz``), resampled to ``sample_rate_mhz`` (:func:`~pipeline.physics.dmw.resample`) and cut to
+at the record's own rate (velocity integrated, :func:`~pipeline.physics.microwaviness.velocity_to_displacement`;
+displacement detrended, :func:`~pipeline.physics.microwaviness.process_displacement`; both band-passed to
+``band_khz``), resampled to ``sample_rate_mhz`` (:func:`~pipeline.physics.microwaviness.resample`) and cut to
 the first ``duration_ms``. A measured record is never rescaled: ``rms_nm`` is ignored and the
 record's own rms is written (and a warning logged when it differs from ``rms_nm`` by more than 2x).
 The record is validated before anything is written, so a bad record never replaces an existing
@@ -62,7 +62,7 @@ import xarray as xr
 
 from ..model.dmw_record import FILENAME, settings, synthetic_record
 from ..model.measured_dmw import load_record
-from ..physics import dmw as phys
+from ..physics import microwaviness as phys
 from ..runner import Inputs, Stage, build
 from ..units import MS
 from ..variables import DMW, coordinate
@@ -135,7 +135,7 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
 
     Raises
     ------
-    pipeline.physics.dmw.DMWError
+    pipeline.physics.microwaviness.DMWError
         For an unusable measured record (nothing is written then).
     """
     s = settings(scene)
@@ -153,7 +153,7 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
         seed = s["seed"]
         w = synthetic_record(s)
         attrs = {"dmw_quantity": "displacement",
-                 "processing": "spectral synthesis (pipeline.physics.dmw.synthesize): complex-normal "
+                 "processing": "spectral synthesis (pipeline.physics.microwaviness.synthesize): complex-normal "
                                "rfft coefficients, power-law amplitudes in the band, zero outside, "
                                "rescaled to rms_nm",
                  "exponent": s["exponent"], "amplitudes": "gaussian", "synthesis_rms_nm": s["rms_nm"],

@@ -1,7 +1,7 @@
 """Stage ``ensemble``: the paper's checks over ``report.realisations`` DMW realisations, for the report.
 
 One DMW seed moves the touchdown by a 0.2-nm step, so the report judges the paper's targets over an
-ensemble (:mod:`pipeline.analyses.ensemble`). Running the whole sweep ``N`` times would multiply the
+ensemble (:mod:`pipeline.analyses.ensemble_rules`). Running the whole sweep ``N`` times would multiply the
 main job's time by ``N``; this stage runs only the protrusions the checks read:
 
 * the protrusions of the paper's targets (:func:`pipeline.analyses.study.target_protrusions` of
@@ -17,7 +17,7 @@ Every realisation runs the scene with the sweep's k (``calibration.nc`` or the s
 one fan-out task per local worker or cluster thread (:func:`pipeline.fanout.split`), whose realisations share their
 static starts (:func:`pipeline.evaluations.evaluate_realisations`). Writes ``ensemble.nc``: the steady-window scalars on
 ``(protrusion, realisation)`` in dataset units, ``dmw_seed``, and the sweep's ensemble summaries
-(``<name>_mean``/``_std``, ``touchdown_probability``; :func:`pipeline.analyses.ensemble.statistics`).
+(``<name>_mean``/``_std``, ``touchdown_probability``; :func:`pipeline.analyses.ensemble_rules.statistics`).
 
 Part of ``hdi run`` when ``report.realisations`` > 1 and the scene has a synthetic DMW record.
 """
@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from ..analyses import ensemble as en
+from ..analyses import ensemble_rules as en
 from ..analyses.report_settings import wants_ensemble
 from ..analyses.study import bouncing_bv, ensemble_summary, target_protrusions, targets
 from ..analyses.sweep_slices import combinations, first_contact, split_ensemble
@@ -109,7 +109,7 @@ def judged(ds: xr.Dataset, scene: Any) -> dict[str, xr.Variable]:
     they are in its ``spread`` attribute) and ``single_t`` (the scene's record alone), by
     :func:`pipeline.analyses.study.ensemble_summary`; ``bv_exceedance_probability`` [1], P(bouncing BV >
     ``identify.bouncing_min_percent``) (:func:`pipeline.analyses.study.bouncing_bv`: 0 where the run flew) versus protrusion; ``nominal_area_mean``/``_std`` [um2] versus
-    protrusion (:mod:`pipeline.analyses.ensemble`).
+    protrusion (:mod:`pipeline.analyses.ensemble_rules`).
     """
     tlist = targets(scene)
     out: dict[str, xr.Variable] = {}
@@ -151,7 +151,7 @@ def judged(ds: xr.Dataset, scene: Any) -> dict[str, xr.Variable]:
 
 def dataset(prot: list[float], seeds: list[int], outputs: list[dict[str, list[float]]], attrs: dict) -> xr.Dataset:
     """The realisations' outputs (dataset units, one dict per realisation) on ``(protrusion, realisation)``,
-    with ``dmw_seed`` and :func:`pipeline.analyses.ensemble.statistics`."""
+    with ``dmw_seed`` and :func:`pipeline.analyses.ensemble_rules.statistics`."""
     dims = ("protrusion", "realisation")
     names = [name for name in SCALARS if any(name in o for o in outputs)]
     nan = [float("nan")] * len(prot)

@@ -11,7 +11,7 @@ sum of squared residuals, each normalised by its tolerance (docs/model.md, secti
 Ensembles: each candidate runs on ``identify.realisations`` DMW records (default 8; the seeds of
 :func:`pipeline.model.dmw_record.realisation_seeds`, part of the evaluation's key), and every target
 is judged on its ensemble statistic (:attr:`pipeline.analyses.study.Target.ensemble`, the rules of
-:mod:`pipeline.analyses.ensemble`): one DMW seed moves the touchdown by a 0.2-nm step, so a fit to
+:mod:`pipeline.analyses.ensemble_rules`): one DMW seed moves the touchdown by a 0.2-nm step, so a fit to
 one record fits that record's noise. ``identify.nc`` then also holds each target's spread over the
 realisations (``spread_<target>``). One realisation is the single-record identification.
 
@@ -132,7 +132,7 @@ def dataset(ident: Identification, params: Sequence[Parameter], out: dict[str, A
         "correlation_method": f"Gauss-Newton (J^T J)^+ at the optimum, central differences of {GN_STEP:g} x range",
         "protrusions_nm": ev.protrusions,
         **({"realisations": n_real,
-            "ensemble_rules": "targets judged over the DMW realisations (pipeline/analyses/ensemble.py): touchdown "
+            "ensemble_rules": "targets judged over the DMW realisations (pipeline/analyses/ensemble_rules.py): touchdown "
                               "where the touchdown probability crosses 0.5 (residual on the median minimum clearance), "
                               "FHM/BV medians, the light-contact state as means"} if n_real > 1 else {}),
         # (this run's counts and fan-out time go to the run log, .hdi/runs.jsonl, not the dataset)

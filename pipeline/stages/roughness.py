@@ -40,7 +40,7 @@ from typing import Any, Sequence
 import xarray as xr
 
 from ..io import write_dataset
-from ..model.roughness import build_dataset, summaries
+from ..model.roughness_statistics import build_dataset, summaries
 from ..physics import surface as sf
 from ..runner import Inputs, Stage, build
 from ..units import PER_UM2_IN_PER_NM2, UM_IN_NM

@@ -47,7 +47,7 @@ from ..variables import ENSEMBLE, HISTORIES, SCALARS, STEPPING, coordinate
 from ..model import dmw_record, scene_inputs
 from ..model.inputs import SimulationInputs, Source, for_stage
 from ..model.simulation import DIRECTIONS, model_attrs, simulate
-from ..analyses import ensemble
+from ..analyses import ensemble_rules as ensemble
 from ..config.grid import damping_grid, protrusion_grid, roughness_sets, same_point
 
 log = logging.getLogger(__name__)
@@ -319,7 +319,7 @@ def assemble(scene: Any, out: Path, prot: np.ndarray, labels: list[str], damp: l
     other part is read from its file after :func:`part_problem` has accepted it.
 
     With more than one realisation the scalars gain a last dimension ``realisation`` and the
-    ensemble statistics of :func:`pipeline.analyses.ensemble.statistics` are added.
+    ensemble statistics of :func:`pipeline.analyses.ensemble_rules.statistics` are added.
 
     Raises
     ------

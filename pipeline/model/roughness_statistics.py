@@ -16,7 +16,7 @@ import numpy as np
 import xarray as xr
 
 from ..io import DatasetError, read_dataset
-from ..physics import statistics as st
+from ..physics import asperity_statistics as st
 from ..physics import surface as sf
 from ..units import NM_IN_UM, PER_NM2_IN_PER_UM2
 from ..variables import ROUGHNESS
