@@ -22,8 +22,9 @@ Interface
 :func:`rhs` evaluates the right-hand side from Python (the static start, tests).
 
 The slots. The tables and variants are the kernel's *slots*, in the one order :data:`SLOTS`
-(``Tables`` then ``Variants``, their fields' order). The compiled functions take them as separate
-arguments, last, in that order and under those names (tests/test_dynamics.py checks every one):
+(``Tables`` then ``Variants``, their fields' order). The compiled functions that take them all take
+them as separate arguments, last, in that order and under those names (the helpers a subset, under
+the same names):
 numba prunes a disabled effect's branch (``if x is None``) only where ``x`` is the compiled
 function's own argument, not a tuple's member, and an array taken out of a tuple costs two
 reference-count updates per use (measured: 10-30 % of the kernel's time, docs/kernel.md). So
@@ -33,7 +34,7 @@ types. All kernels are cached on disk (:mod:`pipeline.model.compiled`).
 
 Adding an input: a field of :class:`Tables` or :class:`Variants` (which fixes its place in
 :data:`SLOTS`), then the same name at that place in the signatures of the compiled functions that
-take the slots (tests/test_dynamics.py lists those that do not follow).
+take the slots (tests/test_dynamics.py checks the order of those that take them all).
 
 Adding a variant
 ----------------
