@@ -39,15 +39,16 @@ not be found in the on-disk cache by the next process: measured with numba 0.68.
 from __future__ import annotations
 
 import hashlib
+import warnings
 from typing import Any
 
 import numpy as np
 from numba import njit, types
-from numba.core.errors import NumbaError
+from numba.core.errors import NumbaError, NumbaWarning
 from numba.extending import NativeValue, models, overload, register_model, typeof_impl, unbox
 
 from ..physics import air_bearing as ab
-from .compiled import OPTIONS, kernel_jit
+from .compiled import kernel_jit
 from .piecewise import _ppat, _ppat_at, _ppindex, _ppslope_at, _ppval
 from .state import MENISCUS, THETA, THETA_RATE, Z, Z_RATE
 
@@ -68,10 +69,14 @@ class RearLawRef:
     code, part of its numba type, so an edited law (a test's, outside the package's code key) is not
     read from the on-disk cache of another."""
 
-    __slots__ = ("name", "key")
+    __slots__ = ("name", "key", "numba_type")
 
     def __init__(self, name: str, key: str):
         self.name, self.key = name, key
+        self.numba_type = RearLawType(name, key)  # (made once: numba types the argument at every call)
+
+    def __reduce__(self):
+        return RearLawRef, (self.name, self.key)
 
     def __repr__(self) -> str:
         return f"RearLawRef({self.name!r})"
@@ -87,7 +92,7 @@ class RearLawType(types.Type):
 
 @typeof_impl.register(RearLawRef)
 def _typeof_rear_law(val: RearLawRef, c: Any) -> RearLawType:
-    return RearLawType(val.name, val.key)
+    return val.numba_type
 
 
 register_model(RearLawType)(models.OpaqueModel)
@@ -126,8 +131,10 @@ def rear_law_ref(name: str) -> RearLawRef:
     if not callable(law.force) or not hasattr(law.force, "__code__"):
         raise ValueError(f"air_bearing.rear_law = {name!r}: the law has no compiled form (its force must be a "
                          "Python function of the numbers g, g0, n, F0, k_r: pipeline.physics.air_bearing.RearLaw)")
-    try:
-        njit(**{**OPTIONS, "cache": False})(law.force).compile((types.float64,) * 5)
+    try:  # (cached on disk like the kernel: a fresh process loads the check instead of compiling it)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", NumbaWarning)  # (a law numba cannot cache is still checked)
+            kernel_jit(__name__)(law.force).compile((types.float64,) * 5)
     except (NumbaError, TypeError, ValueError) as exc:
         first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
         raise ValueError(f"air_bearing.rear_law = {name!r}: its force does not compile for the kernel "
