@@ -42,7 +42,8 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.interpolate import CubicSpline
 
-from pipeline.model import dynamics as dyn
+from pipeline.model.forces import separation_at
+from pipeline.model.state import THETA, THETA_RATE, Z, Z_RATE
 
 #: Longest solve_ivp segment [s] with interface tables: the step cap is renewed at each segment start.
 SEGMENT = 20e-6
@@ -121,7 +122,7 @@ def simulate_naive(scene: Any, interface_ds: Any, dmw_tuple: tuple[np.ndarray, f
     eff = scene.effects
     # The model constants: the same assembly as the project (parameters, not dynamics).
     model = sl.build_model(scene, interface_ds, dmw_tuple, k)
-    if model.tfc_stiffening is not None or model.rear_linear is not None:
+    if model.tfc_stiffening is not None or model.rear_law.name != "power":
         raise NotImplementedError("the naive baseline implements the default model only (air_bearing.rear_law = "
                                   "'power', air_bearing.tfc_stiffening = 'none')")
     s = model.slider
@@ -130,11 +131,11 @@ def simulate_naive(scene: Any, interface_ds: Any, dmw_tuple: tuple[np.ndarray, f
     a = scene["air_bearing"]
     FH0 = a["flying_height_nm"] * NM
     delta = protrusion_nm * NM
-    # the separation datum from its one home (pipeline.model.dynamics.separation_at, docs/model.md, section "Separation datum"):
+    # the separation datum from its one home (pipeline.model.forces.separation_at, docs/model.md, section "Separation datum"):
     # d = d_nom + z - l_c theta - w with d_nom = FH0 - delta - y_s
     p_sep = model.p.copy()
     p_sep.delta = delta
-    d_nom = float(dyn.separation_at(p_sep, 0.0, 0.0, 0.0))
+    d_nom = float(separation_at(p_sep, 0.0, 0.0, 0.0))
     cc = scene["contact"]["damping_n_s_m"]
     sol_cfg = scene["solver"]
     dwell = sol_cfg["min_dwell_ns"] * 1e-9
@@ -285,7 +286,7 @@ def _summarize(scene, model, t_fine, Y_fine, C_fine, refine, disk, off_c, x, pa,
     """
     def sep(tt, YY):
         w, v = disk.many(tt + off_c) if hasattr(disk, "many") else (np.zeros_like(tt), np.zeros_like(tt))
-        return dyn.separation_at(p_sep, YY[:, 0], YY[:, 1], w), v
+        return separation_at(p_sep, YY[:, Z], YY[:, THETA], w), v
 
     d_fine = sep(t_fine, Y_fine)[0][t_fine >= model.transient - 1e-15]
     t, Y, C = t_fine[::refine], Y_fine[::refine], C_fine[::refine]
@@ -310,7 +311,7 @@ def _summarize(scene, model, t_fine, Y_fine, C_fine, refine, disk, off_c, x, pa,
         inc = C[win]
         fc = np.where(C, An * np.maximum(np.interp(d, x, pc), 0.0), 0.0)
         area = np.where(C, An * np.maximum(np.interp(d, x, ar), 0.0), 0.0)
-        ddot = Y[:, 2] - model.slider.l_c * Y[:, 3] - vc
+        ddot = Y[:, Z_RATE] - model.slider.l_c * Y[:, THETA_RATE] - vc
         net += fc + np.where(C, -cc * ddot, 0.0)
         frac = float(np.mean(inc))
         out["contact_fraction"] = frac

@@ -17,6 +17,7 @@ from pipeline.config.scene import load_scene
 from pipeline.io import read_dataset
 from pipeline.model import bulge_table as bt
 from pipeline.model import dynamics as dyn
+from pipeline.model import forces as fo
 from pipeline.model import scene_inputs
 from pipeline.model import slider as sl
 from pipeline.physics import bulge_bearing as bb
@@ -82,7 +83,7 @@ def test_kernel_stiffness_is_the_derivative_of_the_table_lift(table):
     for delta in (9.7 * NM, 10.0 * NM, 4.3 * NM):
         c, x0, h = sl.tfc_table(model, delta)
         p = dyn.with_values(model.p, delta=delta, tfc_x0=x0, tfc_h=h)
-        kernel = np.array([dyn._tfc_air_force(p, None, c, gi) for gi in g])
+        kernel = np.array([fo.tfc_air_force(p, None, c, gi) for gi in g])
         F = bb.table_lift(lt, g, delta)[0]
         eps = 1e-4 * g
         fd = -(bb.table_lift(lt, g + eps, delta)[0] - bb.table_lift(lt, g - eps, delta)[0]) / (2 * eps)

@@ -20,6 +20,8 @@ from scipy.integrate import dblquad
 
 from pipeline.config.scene import SceneError, scene_from_dict
 from pipeline.model import dynamics as dyn
+from pipeline.model import forces as fo
+from pipeline.model import piecewise as pw
 from pipeline.model import slider as sl
 from pipeline.physics import geometry as g
 
@@ -37,7 +39,7 @@ def closed_exponential(d: np.ndarray, delta: float, length: float) -> np.ndarray
 
 
 def table(values: np.ndarray, order: int = 3) -> np.ndarray:
-    return dyn.piecewise_coefficients(values, H, order)
+    return pw.piecewise_coefficients(values, H, order)
 
 
 GRID = np.arange(-3.0, 25.0 + 1e-9, 0.05) * NM
@@ -87,7 +89,7 @@ def test_exponential_law_converges_to_its_closed_form(delta_nm):
     errors = []
     for h in (0.1 * NM, 0.05 * NM, 0.025 * NM):
         x = np.arange(-3.0 * NM, 20.0 * NM + h / 2, h)
-        I = g.ellipsoid_table_integral(dyn.piecewise_coefficients(np.exp(-x / L_C), h, 3), h, delta)
+        I = g.ellipsoid_table_integral(pw.piecewise_coefficients(np.exp(-x / L_C), h, 3), h, delta)
         inside = x + delta <= x[-1]
         rel = np.abs(I[inside] / closed_exponential(x[inside], delta, L_C) - 1)
         assert np.max(rel) < 5e-5  # (the largest at the ends of the table: the not-a-knot spline)
@@ -192,13 +194,13 @@ def test_integrated_tables_feed_the_kernel_and_the_histories():
     # at the nodes, A_n times the kernel's tables is the integrated force of the same stresses
     nodes = GRID[GRID + delta <= GRID[-1]]
     scale = 2 * np.pi * A * B
-    contact = An * dyn.ppval(tables.contact, p.tab_x0, p.tab_h, nodes)
+    contact = An * pw.ppval(tables.contact, p.tab_x0, p.tab_h, nodes)
     exact = scale * 50 * MPA * closed_exponential(nodes, delta, L_C)
     assert contact == pytest.approx(exact, rel=2e-6)
-    adhesion = An * dyn.ppval(tables.adhesion, p.tab_x0, p.tab_h, nodes)
+    adhesion = An * pw.ppval(tables.adhesion, p.tab_x0, p.tab_h, nodes)
     assert adhesion == pytest.approx(scale * 40 * MPA * closed_exponential(nodes, delta, L_A), rel=2e-6)
     # ... far less than the flat section's at the apex gap (the rim of A_n is delta u higher)
-    flat = An * dyn.ppval(m.contact, p.tab_x0, p.tab_h, nodes)
+    flat = An * pw.ppval(m.contact, p.tab_x0, p.tab_h, nodes)
     assert np.all(contact < 0.5 * flat)
     # the run and its histories read the same tables: contact force, real area (the local fraction
     # capped at 1 before summing) and friction at the samples in contact
@@ -211,8 +213,8 @@ def test_integrated_tables_feed_the_kernel_and_the_histories():
                                                      rel=1e-5)
     it = sl.interface_tables(m, delta, An)
     assert np.array_equal(it.contact, tables.contact)  # (the same tables, kept or computed again)
-    capped = dyn.piecewise_coefficients(np.minimum(0.1 * np.exp(-GRID / L_C), 1.0), H, 3)
-    area = scale * dyn.ppval(dyn.piecewise_coefficients(g.ellipsoid_table_integral(capped, H, delta), H, 3),
+    capped = pw.piecewise_coefficients(np.minimum(0.1 * np.exp(-GRID / L_C), 1.0), H, 3)
+    area = scale * pw.ppval(pw.piecewise_coefficients(g.ellipsoid_table_integral(capped, H, delta), H, 3),
                              p.tab_x0, p.tab_h, d)
     assert hist["real_area"][c] == pytest.approx(area, rel=1e-12)
     assert np.all(hist["real_area"] <= np.pi * A * B)
@@ -245,12 +247,12 @@ def test_gimbal_arm_doubles_the_friction_moment():
     for m in (cg, gimbal):
         p, tables, variants = sl.run_parameters(m, delta)
         y = np.array([-0.2 * NM, -1e-6, 0.0, 0.0])
-        assert dyn.separation_at(p, y[0], y[1], 0.0) < p["k_sigma"]
+        assert fo.separation_at(p, y[0], y[1], 0.0) < p["k_sigma"]
         with_q, without = np.empty(4), np.empty(4)
         dyn.rhs(0.0, y, p, tables, variants, True, with_q)
         dyn.rhs(0.0, y, p, tables._replace(friction=None), variants, True, without)
-        d = dyn.separation_at(p, y[0], y[1], 0.0)
-        Q = p["A_n"] * float(dyn.ppval(tables.friction, p.tab_x0, p.tab_h, np.array([d]))[0])
+        d = fo.separation_at(p, y[0], y[1], 0.0)
+        Q = p["A_n"] * float(pw.ppval(tables.friction, p.tab_x0, p.tab_h, np.array([d]))[0])
         assert (with_q[3] - without[3]) * p["I"] == pytest.approx(-p["h_cg"] * Q, rel=1e-9)
         share.append(with_q[3] - without[3])
         assert with_q[2] == without[2]  # (no vertical force)
@@ -267,11 +269,11 @@ def test_gimbal_arm_about_doubles_the_static_gap_opening():
     p, _, _ = sl.run_parameters(base, delta)
     y0, note = sl.start(base, delta)
     assert "contact" in note
-    d0 = dyn.separation_at(p, y0[0], y0[1], 0.0)
+    d0 = fo.separation_at(p, y0[0], y0[1], 0.0)
     for arm in ("cg", "gimbal"):
         m = model(slider={"friction_arm": arm})
         y, note = sl.start(m, delta)
         assert "contact" in note
-        opening[arm] = dyn.separation_at(p, y[0], y[1], 0.0) - d0
+        opening[arm] = fo.separation_at(p, y[0], y[1], 0.0) - d0
     assert opening["cg"] > 0
     assert 1.5 < opening["gimbal"] / opening["cg"] < 2.0

@@ -14,11 +14,13 @@ import numpy as np
 import pytest
 
 from pipeline.model import dynamics as dyn
+from pipeline.model import piecewise as pw
 from pipeline.model import slider as sl
 from pipeline.physics import air_bearing as ab
 from pipeline.physics import microwaviness as pdmw
 from pipeline.config.scene import scene_from_dict
 from pipeline.model.interface_tables import build_tables, roughness_statistics
+from pipeline.model import state as st
 
 NM = 1e-9
 K = 0.445  # contact criterion constant used throughout (the brief's paper value)
@@ -123,8 +125,8 @@ def test_static_equilibrium_stays_put(effects):
     sc = make_scene(effects, solver={"duration_ms": 1.0, "transient_ms": 0.3})
     run = sl.run_model(build(sc), 5 * NM)
     assert np.all(np.isfinite(run.state))
-    assert np.abs(run.state[:, 0]).max() < 1e-18
-    assert np.abs(run.state[:, 1]).max() < 1e-18 / run.model.slider.l_c
+    assert np.abs(run.state[:, st.Z]).max() < 1e-18
+    assert np.abs(run.state[:, st.THETA]).max() < 1e-18 / run.model.slider.l_c
 
 
 # Regression test (fixed): pipeline/model/dynamics.py integrate(), lines 268-273 (`h = min(h, h_max, t_end
@@ -206,9 +208,9 @@ def test_observed_order_with_fixed_steps(smooth_reference):
     errs, steps = [], []
     for h_ns in (200.0, 141.0, 100.0, 71.0, 50.0):
         run = sl.run_model(smooth_model(1.0, 1e9, max_step_ns=h_ns), 5 * NM)
-        assert run.info[2] == 0  # no rejected steps: fixed-step DP5
+        assert run.info[st.REJECTED] == 0  # no rejected steps: fixed-step DP5
         errs.append(scaled_end_error(run, smooth_reference))
-        steps.append(run.info[1])
+        steps.append(run.info[st.ACCEPTED])
     slope = np.polyfit(np.log(steps), np.log(errs), 1)[0]
     assert -5.7 < slope < -4.3, (slope, errs, steps)
 
@@ -224,7 +226,7 @@ def test_observed_order_with_adaptive_steps(smooth_reference):
     for rtol in rtols:
         run = sl.run_model(smooth_model(rtol, rtol), 5 * NM)
         errs.append(scaled_end_error(run, smooth_reference))
-        steps.append(run.info[1] + run.info[2])
+        steps.append(run.info[st.ACCEPTED] + run.info[st.REJECTED])
     slope = np.polyfit(np.log(steps), np.log(errs), 1)[0]
     assert -5.7 < slope < -4.3, (slope, errs, steps)
     assert 0.8 < np.polyfit(np.log(rtols), np.log(errs), 1)[0] < 1.2
@@ -240,8 +242,8 @@ def test_dense_output_order(smooth_reference):
     errs, steps = [], []
     for h_ns in (200.0, 141.0, 100.0, 71.0, 50.0):
         run = sl.run_model(smooth_model(1.0, 1e9, max_step_ns=h_ns, output_step_ns=7.0), 5 * NM)
-        errs.append(np.abs(run.state[:, 0] - ref.state[:, 0]).max())
-        steps.append(run.info[1])
+        errs.append(np.abs(run.state[:, st.Z] - ref.state[:, st.Z]).max())
+        steps.append(run.info[st.ACCEPTED])
     slope = np.polyfit(np.log(steps), np.log(errs), 1)[0]
     assert slope < -3.5, (slope, errs)
 
@@ -272,7 +274,7 @@ def rigid_following_separation(run):
     s = m.slider
 
     def disk(off):
-        return dyn.ppval(m.dmw, p.dmw_t0, p.dmw_dt, t + off)
+        return pw.ppval(m.dmw, p.dmw_t0, p.dmw_dt, t + off)
 
     w_f, w_r, w_c = disk(p.off_f), disk(p.off_r), disk(p.off_c)
     theta = (w_f - w_r) / (s.l_f + s.l_r)
@@ -333,10 +335,10 @@ def test_contact_flag_matches_the_criterion_while_bouncing():
     s = sl.summarize(run, hist)
     assert s["regime"] == sl.BOUNCING
     assert 0.0 < s["contact_fraction"] < 1.0
-    assert run.info[3] > 0                      # located switches
+    assert run.info[st.SWITCHES] > 0                      # located switches
     bad, n_changes = unexplained_flag_mismatches(hist)
     assert bad.size == 0, (bad, hist["clearance"][bad])
-    assert 0 < n_changes <= run.info[3]         # every visible change of the flag is a located switch
+    assert 0 < n_changes <= run.info[st.SWITCHES]         # every visible change of the flag is a located switch
     # forces only in contact
     assert np.all(hist["contact_force"][~hist["in_contact"]] == 0.0)
     assert np.all(hist["friction_force"][~hist["in_contact"]] == 0.0)
@@ -348,7 +350,7 @@ def test_contact_events_located_at_touchdown_with_adhesion():
     # in contact in 97.5 % of the samples afterwards; 7.6 nm stays flying).
     sc = make_scene(ALL, dmw={"rms_nm": 0.163})
     run = sl.run_model(build(sc), 7.8 * NM)
-    assert run.info[3] > 0
+    assert run.info[st.SWITCHES] > 0
     assert run.contact[-1] and not run.contact[0]
 
 
@@ -436,12 +438,33 @@ def test_effects_change_the_dynamics_only_through_their_forces():
 
 def test_kernel_cache_folder_is_keyed_by_the_code_the_kernel_inlines():
     """numba checks only the timestamp of the file holding a jitted function; the kernel inlines the
-    air-bearing laws of another file, so its cache folder is named by the code key of dynamics and of
-    what it imports (air_bearing included): an edited law compiles anew instead of loading old code."""
+    air-bearing laws of another file and the functions of its other modules, so each kernel module's
+    cache folder is named by the code key of that module and of what it imports (air_bearing included):
+    an edited law compiles anew instead of loading old code."""
     import numba
     from pipeline import code_version as cv
-    assert "pipeline.physics.air_bearing" in cv.modules("pipeline.model.dynamics")
-    folder = f"numba-{cv.code_key('pipeline.model.dynamics')[:16]}"
-    for fn in (dyn._integrate, dyn._rhs_flat, dyn._rear_power, dyn._stiffening_potential):
-        assert folder in Path(fn._cache._cache_path).parts
-    assert folder not in str(numba.config.CACHE_DIR)  # numba's own setting is restored after the module
+    from pipeline.model import forces, piecewise, state, stepper
+    kernel = {"dynamics", "forces", "stepper", "piecewise", "state", "compiled"}
+    found = {m.rsplit(".", 1)[1] for m in cv.modules("pipeline.model.dynamics") if m.startswith("pipeline.model.")}
+    assert kernel <= found and "pipeline.physics.air_bearing" in cv.modules("pipeline.model.dynamics")
+    for module, functions in ((dyn, (dyn._integrate, dyn._rhs_python)),
+                              (forces, (forces.rhs_slots, forces.separation_at, forces._stiffening_potential)),
+                              (stepper, (stepper.step, stepper.d_extrema)), (piecewise, (piecewise.ppval,)),
+                              (state, (state.state_size,))):
+        folder = f"numba-{cv.code_key(module.__name__)[:16]}"
+        for fn in functions:
+            assert folder in Path(fn._cache._cache_path).parts, (module.__name__, fn)
+        assert folder not in str(numba.config.CACHE_DIR)  # numba's own setting is restored after decorating
+
+
+def test_compiled_functions_take_the_slots_in_one_order():
+    """Every compiled function that takes all the kernel's slots takes them last, under their names, in
+    the order :data:`pipeline.model.dynamics.SLOTS` (``gap_power_``: the record packed in an array)."""
+    import inspect
+    from pipeline.model import forces, stepper
+    takers = [dyn._integrate, dyn._rhs_python, forces.rhs_slots, stepper.step]
+    for fn in takers:
+        names = [n.rstrip("_") for n in inspect.signature(fn.py_func).parameters]
+        assert tuple(names[-len(dyn.SLOTS):]) == dyn.SLOTS, fn.py_func.__name__
+    assert dyn.SLOTS == ("dmw", "contact", "adhesion", "friction", "tfc", "pitch", "rear_law", "gap_power",
+                         "meniscus")

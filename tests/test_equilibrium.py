@@ -144,8 +144,8 @@ def paper_slider(rear: str = "linear"):
     m, I = ab.mass_properties(0.85e-3, 0.70e-3, 0.23e-3, 4250.0)
     k_f, k_r, _ = ab.choose_stiffness(120e3, 300e3, m, I, 0.30e-3, 0.40e-3, 0.85e-3)
     g0 = 11 * NM
-    law = ((lambda g: ab.rear_linear_law(g, g0, k_r)) if rear == "linear"
-           else (lambda g: ab.rear_power_law(g, g0, 2.0, k_r * g0 / 2)))
+    law = ((lambda g: ab.rear_linear_law(g, g0, 2.0, k_r * g0 / 2, k_r)) if rear == "linear"
+           else (lambda g: ab.rear_power_law(g, g0, 2.0, k_r * g0 / 2, k_r)))
     return dict(l_f=0.30e-3, l_r=0.40e-3, l_c=0.417e-3, h_cg=0.115e-3, k_f=k_f, g0=g0, rear=law), k_r
 
 

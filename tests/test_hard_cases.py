@@ -48,7 +48,7 @@ from hypothesis import strategies as hst
 from scipy import integrate
 
 from convergence import assert_converged, deltas
-from pipeline.model import dynamics as dyn
+from pipeline.model import piecewise as pw
 from pipeline.model import slider as sl
 from pipeline.physics import air_bearing as ab
 from pipeline.physics import asperity
@@ -59,6 +59,7 @@ from pipeline.physics.asperity_statistics import ALPHA_MIN, bandwidth_alpha, sum
 from pipeline.config.scene import load_scene
 from pipeline.model import dmw_record
 from pipeline.model.interface_tables import build_tables, interface_parameters, roughness_statistics
+from pipeline.model import state as st
 
 NM = 1e-9
 K = 0.445
@@ -347,7 +348,7 @@ def test_summit_sigma_just_above_alpha_min_is_positive_or_rejected():
 # isbl.separation_grid(table_min_sigma * sigma_s, ...)): the tables start at
 # table_min_sigma*sigma_s = -0.25 nm for alpha = 0.9 (sigma_s = 0.031 nm), but adhesion pulls the
 # surfing slider to d = -0.58 nm (-19 sigma_s), so the kernel extrapolates the tables linearly below
-# their range (dynamics._ppval) for the whole steady window (d down to -0.625 nm): FHM 0.826 %
+# their range (piecewise._ppval) for the whole steady window (d down to -0.625 nm): FHM 0.826 %
 # against 0.541 % with the table extended to -40 sigma_s, clearance -0.808 against -0.756 nm. Repro:
 # alpha 0.9 (eta 7.43 um^-2, sigma 0.52 nm, R 5 um) at 11 nm. Fix: start the grid at
 # min(table_min_sigma*sigma_s, table_min_sigma*sigma, FH0 - max protrusion - margin), and make the
@@ -435,10 +436,10 @@ def test_adhesion_pressure_is_smooth_across_the_lubricant_surface(base, t_nm, ep
             assert (pa[1] - pa[0]) / (2 * h) == pytest.approx(adhesion_slope(p, dd), rel=1e-6)
         interface = build_tables(scene, roughness_statistics(scene))
     x = interface["separation"].values * NM
-    c = dyn.piecewise_coefficients(interface["adhesion_pressure"].values * 1e6, x[1] - x[0], 3)
+    c = pw.piecewise_coefficients(interface["adhesion_pressure"].values * 1e6, x[1] - x[0], 3)
     xs = t + np.linspace(-0.3, 0.3, 13) * NM
     hh = 1e-5 * NM
-    spline_slope = (dyn.ppval(c, x[0], x[1] - x[0], xs + hh) - dyn.ppval(c, x[0], x[1] - x[0], xs - hh)) / (2 * hh)
+    spline_slope = (pw.ppval(c, x[0], x[1] - x[0], xs + hh) - pw.ppval(c, x[0], x[1] - x[0], xs - hh)) / (2 * hh)
     exact = np.array([adhesion_slope(p, v) for v in xs])
     assert np.all(np.isfinite(spline_slope))
     np.testing.assert_allclose(spline_slope, exact, rtol=0.05)
@@ -499,7 +500,7 @@ def test_nyquist_dmw_run_is_finite_physical_and_converged_in_rtol(nyquist, kind,
 # cubic through d and d' at the step's ends, but d contains the DMW spline with knots every 250 ns
 # while steps are up to 500 ns, so peaks between knots were missed (flying at 5 nm, band
 # [10, 2000] kHz + 0.05 nm sine at fs/2 - one bin: minimum missed by 0.0099 nm, rtol/atol halving
-# moved fhm_bv by 0.59 %). Fixed in pipeline/model/dynamics.py:_d_extrema: the step is split at the DMW
+# moved fhm_bv by 0.59 %). Fixed in pipeline/model/stepper.py:d_extrema (then dynamics.py:_d_extrema): the step is split at the DMW
 # knots and each piece's extrema are taken in closed form (d is a cubic between two knots).
 @pytest.mark.parametrize("kind", ["sine", "band+sine"])
 def test_nyquist_dmw_exact_extremes_bound_the_samples_and_converge(nyquist, kind):
@@ -515,8 +516,8 @@ def test_nyquist_dmw_exact_extremes_bound_the_samples_and_converge(nyquist, kind
     assert_refines(model, 5 * NM, max_step=False)
 
 
-# Regression test (fixed by splitting the event search at the DMW knots, dynamics._d_extrema):
-# pipeline/model/dynamics.py:_first_wrong_side: the contact criterion is checked at the step end,
+# Regression test (fixed by splitting the event search at the DMW knots, stepper.d_extrema):
+# pipeline/model/stepper.py:first_wrong_side: the contact criterion is checked at the step end,
 # at the extrema of the step's Hermite cubic of d and at 3 interior points, but the DMW term of d
 # varies between its 250-ns knots inside a 500-ns step: excursions of d below k sigma driven by DMW
 # content near the Nyquist frequency are missed. Repro: no adhesion, 11 nm, band [10, 2000] kHz
@@ -529,7 +530,7 @@ def test_nyquist_dmw_contact_flag_matches_the_criterion(base, nyquist):
     scene = scene0.replace(scene={"effects": ["air_bearing", "pitch", "dmw", "contact", "friction"]})
     model, _ = build(scene, records["band+sine"])
     run, hist, s = simulate(model, 11 * NM)
-    assert s["regime"] == sl.BOUNCING and run.info[3] > 100
+    assert s["regime"] == sl.BOUNCING and run.info[st.SWITCHES] > 100
     flag, c, t = hist["in_contact"], hist["clearance"], run.time
     change_t = t[1:][flag[1:] != flag[:-1]]
     idx = np.searchsorted(change_t, t, side="right") - 1
@@ -654,7 +655,7 @@ def strong_adhesion_scene(base, **solver):
 
 
 # Regression test (fixed): pipeline/physics/isbl.py:isbl_tables (real_area_fraction = eta int A phi
-# dz, not capped at 1) and pipeline/stages/interface.py:build_tables + pipeline/model/dynamics.py:_ppval
+# dz, not capped at 1) and pipeline/stages/interface.py:build_tables + pipeline/model/piecewise.py:_ppval
 # (linear extrapolation below the table's floor table_min_sigma*sigma_s): the real area of a run
 # exceeds the nominal area. (a) deep start: the paper surface scaled to sigma 0.25 nm (alpha, psi
 # kept) at 15 nm starts at d = FH0 - delta = -3.9 nm, below the floor -1.34 nm; the extrapolated

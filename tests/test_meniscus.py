@@ -15,6 +15,7 @@ import xarray as xr
 
 from pipeline.config.scene import scene_from_dict
 from pipeline.model import dynamics as dyn
+from pipeline.model import state as st
 from pipeline.model import slider as sl
 from pipeline.physics import microwaviness as pdmw
 
@@ -66,10 +67,10 @@ def test_fixed_separation_relaxes_exponentially():
     delta = 8 * NM
     run = sl.run_model(model, delta, y0=np.zeros(5))
     pa = P0 * np.exp(-(11 * NM - delta) / L)
-    q = run.state[:, 4]
+    q = run.state[:, st.MENISCUS]
     expected = pa * (1 - np.exp(-run.time / tau))
     np.testing.assert_allclose(q, expected, rtol=0, atol=1e-6 * pa)
-    assert abs(run.state[:, 0]).max() < 1e-18  # the slider did not move
+    assert abs(run.state[:, st.Z]).max() < 1e-18  # the slider did not move
     h = sl.histories(run)
     np.testing.assert_allclose(h["adhesion_force"], run.nominal_area * q, rtol=1e-15)
 
@@ -95,10 +96,10 @@ def test_meniscus_state_stays_between_the_extremes_of_its_target():
     # range, and it starts at its equilibrium
     model = make_model(10.0)
     run = sl.run_model(model, 9.5 * NM)
-    assert run.info[0] == dyn.OK and np.all(np.isfinite(run.state))
+    assert run.info[st.STATUS] == st.OK and np.all(np.isfinite(run.state))
     d = sl.histories(run)["separation"]
     pa = P0 * np.exp(-d / L)
-    q = run.state[:, 4]
+    q = run.state[:, st.MENISCUS]
     assert q[0] == pytest.approx(pa[0], rel=1e-6)
     assert q.min() >= pa.min() * (1 - 1e-3) and q.max() <= pa.max() * (1 + 1e-3)
     # the lag smooths: q varies less than its target

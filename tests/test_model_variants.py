@@ -15,10 +15,12 @@ import pytest
 from scipy.optimize import fsolve
 
 from pipeline.model import dynamics as dyn
+from pipeline.model import forces as fo
 from pipeline.model import slider as sl
 from pipeline.physics import air_bearing as ab
 from pipeline.physics import microwaviness as pdmw
 from pipeline.config.scene import scene_from_dict
+from pipeline.model import state as st
 
 NM = 1e-9
 LIFT = 1.0e-4  # [N] the dummy law's constant force
@@ -72,8 +74,8 @@ def test_a_new_tfc_law_is_its_function_and_one_registry_line(monkeypatch):
     z, theta = x[0] * NM, x[1] * 1e-6
     assert z > 0 and theta < 0  # lifted, trailing edge up
     assert abs(z / z_lin - 1) > 1e-3  # (the rear law's nonlinearity is resolved, not the tangent)
-    assert run.state[-1, 0] == pytest.approx(z, rel=1e-6)
-    assert run.state[-1, 1] == pytest.approx(theta, rel=1e-6)
+    assert run.state[-1, st.Z] == pytest.approx(z, rel=1e-6)
+    assert run.state[-1, st.THETA] == pytest.approx(theta, rel=1e-6)
     # the separation at the TFC point opens by z - l_c theta from its nominal value
     nominal = sl.run_model(sl.build_model(make_scene(["air_bearing", "pitch"]), None, None, None), 5 * NM)
     d, d_nominal = sl.histories(run)["separation"], sl.histories(nominal)["separation"]
@@ -98,7 +100,7 @@ def test_tabulated_law_reproduces_the_compiled_gap_power_law(monkeypatch):
     # relative above 1 nm (the spline's error grows towards the law's singular end at g_min = 0.22 nm)
     g = np.linspace(1.0, 20.0, 40) * NM
     F, k = ab.tfc_stiffening_force(g, 11 * NM - delta, 11 * NM, 3.0e5, 1.5)
-    kernel = np.array([dyn._tfc_air_force(p, None, c, gi) for gi in g])
+    kernel = np.array([fo.tfc_air_force(p, None, c, gi) for gi in g])
     np.testing.assert_allclose(kernel[:, 0], F, rtol=0, atol=1e-7 * np.abs(F).max())
     np.testing.assert_allclose(kernel[:, 1], k, rtol=1e-6)
     # the runs: separation within 2.5e-12 nm, FHM within 1.4e-12 relative (measured)

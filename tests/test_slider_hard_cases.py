@@ -43,6 +43,7 @@ from pipeline.config.scene import SCHEMA, load_scene
 from pipeline.model import dmw_record
 from pipeline.stages import dmw as dmw_stage
 from pipeline.model.interface_tables import build_tables, roughness_statistics
+from pipeline.model import state as st
 
 NM = 1e-9
 K = 0.445
@@ -266,7 +267,7 @@ def test_sliding_mode_outputs_versus_the_dwell(base, record, paper_hardness, nam
         p = model.p.copy()
         p.dwell = dwell
         run = sl.run_model(dataclasses.replace(model, p=p), 11 * NM)
-        out.append((sl.summarize(run), run.info[3]))
+        out.append((sl.summarize(run), run.info[st.SWITCHES]))
     forces = np.array([s["contact_force"] for s, _ in out])
     clearance = np.array([abs(s["clearance"]) for s, _ in out])
     fhm = np.array([s["fhm_bv"] for s, _ in out])

@@ -19,6 +19,7 @@ from pipeline.model import slider as sl
 from pipeline.model.simulation import chain_protrusions, histories_of, simulate, summary_of
 from pipeline.stages import sweep as sweep_stage
 from pipeline.units import NM
+from pipeline.model import state as st
 from test_dynamics import build, make_scene
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -89,7 +90,7 @@ def test_independent_simulate_keeps_histories_and_counters():
     hist, summary = histories_of(ds.sel(protrusion=[5.0])), summary_of(ds)
     run = sl.run_model(model, 5.0 * NM)
     np.testing.assert_array_equal(hist["separation"].values[0], sl.histories(run)["separation"] / NM)
-    assert int(hist["steps"][0]) == run.info[1]
+    assert int(hist["steps"][0]) == run.info[st.ACCEPTED]
     assert set(summary.dims) == {"protrusion"} and "steps" not in summary
 
 

@@ -11,6 +11,8 @@ from scipy.special import ndtr
 
 from pipeline.config.scene import SceneError, load_scene
 from pipeline.model import dynamics as dyn
+from pipeline.model import forces as fo
+from pipeline.model import piecewise as pw
 from pipeline.model import slider
 from pipeline.model.interface_tables import build_tables, roughness_statistics
 from pipeline.physics import adhesion, asperity, friction, isbl
@@ -142,11 +144,11 @@ def test_model_friction_table_adds_the_lubricant_term():
     m0, m1 = slider.build_model(sc0, ds, None, 0.978), slider.build_model(sc1, ds, None, 0.978)
     d = np.array([-0.08 * NM])
     x0, h = m0.p.tab_x0, m0.p.tab_h
-    extra = dyn.ppval(m1.friction, x0, h, d)[0] - dyn.ppval(m0.friction, x0, h, d)[0]
+    extra = pw.ppval(m1.friction, x0, h, d)[0] - pw.ppval(m0.friction, x0, h, d)[0]
     a_w = float(ds.wetted_area_fraction.interp(separation=-0.08))
     assert extra == pytest.approx(19e6 * a_w, rel=1e-3)
-    mu0 = dyn.ppval(m0.friction, x0, h, d)[0] / dyn.ppval(m0.contact, x0, h, d)[0]
-    mu1 = dyn.ppval(m1.friction, x0, h, d)[0] / dyn.ppval(m1.contact, x0, h, d)[0]
+    mu0 = pw.ppval(m0.friction, x0, h, d)[0] / pw.ppval(m0.contact, x0, h, d)[0]
+    mu1 = pw.ppval(m1.friction, x0, h, d)[0] / pw.ppval(m1.contact, x0, h, d)[0]
     assert 0.8 < mu0 < 0.9 and 1.1 < mu1 < 1.3
 
 
@@ -184,10 +186,10 @@ def test_kernel_two_part_slot_and_the_meniscus_state():
     ds = build_tables(sc, roughness_statistics(sc))
     x0, h = m.p.tab_x0, m.p.tab_h
     d = np.linspace(-1.0, 3.0, 41) * NM
-    total = dyn.ppval(dyn.static_table(m.adhesion), x0, h, d)
+    total = pw.ppval(pw.static_table(m.adhesion), x0, h, d)
     np.testing.assert_allclose(total, np.interp(d / NM, ds.separation, ds.adhesion_pressure) * 1e6,
                                rtol=2e-3, atol=1e-3 * float(ds.adhesion_pressure.max()) * 1e6)
-    np.testing.assert_allclose(dyn.ppval(np.ascontiguousarray(m.adhesion[:, :4]), x0, h, d),
+    np.testing.assert_allclose(pw.ppval(np.ascontiguousarray(m.adhesion[:, :4]), x0, h, d),
                                np.interp(d / NM, ds.separation, ds.adhesion_pressure_menisci) * 1e6,
                                rtol=2e-3, atol=1e-3 * float(ds.adhesion_pressure.max()) * 1e6)
     # the kernel's right-hand side at a state: only the adhesion differs between q = 0 and q = q1
@@ -200,12 +202,12 @@ def test_kernel_two_part_slot_and_the_meniscus_state():
     dyn.rhs(0.0, y, p, tables, variants, False, out1)
     assert (out0[2] - out1[2]) * p["m"] == pytest.approx(p["A_n"] * q1, rel=1e-9)
     # q's rate relaxes towards the menisci part at d(y = 0)
-    dd = dyn.separation_at(p, 0.0, 0.0, 0.0)
-    pm = dyn.ppval(np.ascontiguousarray(m.adhesion[:, :4]), x0, h, np.array([dd]))[0]
+    dd = fo.separation_at(p, 0.0, 0.0, 0.0)
+    pm = pw.ppval(np.ascontiguousarray(m.adhesion[:, :4]), x0, h, np.array([dd]))[0]
     assert out0[4] == pytest.approx(pm / m.meniscus, rel=1e-9)
     # the bridges act at once: with q = 0 the force is -A_n p_bridges(d) (no other interface force when
     # flying), seen as the difference to the model without adhesion effect at the same state
-    pb = dyn.ppval(np.ascontiguousarray(m.adhesion[:, 4:]), x0, h, np.array([dd]))[0]
+    pb = pw.ppval(np.ascontiguousarray(m.adhesion[:, 4:]), x0, h, np.array([dd]))[0]
     no_adh = dyn.Tables(dmw=None, contact=tables.contact, adhesion=None, friction=tables.friction, tfc=tables.tfc)
     out2 = np.empty(4)
     dyn.rhs(0.0, y[:4].copy(), p, no_adh, variants._replace(meniscus=None), False, out2)
@@ -217,8 +219,8 @@ def test_meniscus_state_starts_at_the_menisci_equilibrium():
     p, _, _ = slider.run_parameters(m, 9.0 * NM)
     y = np.zeros(4)
     q0 = slider.meniscus_equilibrium(m, p, y)
-    dd = dyn.separation_at(p, 0.0, 0.0, 0.0)
-    assert q0 == pytest.approx(dyn.ppval(np.ascontiguousarray(m.adhesion[:, :4]), p.tab_x0, p.tab_h,
+    dd = fo.separation_at(p, 0.0, 0.0, 0.0)
+    assert q0 == pytest.approx(pw.ppval(np.ascontiguousarray(m.adhesion[:, :4]), p.tab_x0, p.tab_h,
                                          np.array([dd]))[0], rel=1e-12)
 
 
@@ -234,5 +236,5 @@ def test_integrated_area_model_integrates_both_adhesion_parts():
     assert two.shape[1] == 8 and one.shape[1] == 4
     x0, h = m.p.tab_x0, m.p.tab_h
     d = np.linspace(-1.0, 3.0, 41) * NM
-    np.testing.assert_allclose(dyn.ppval(dyn.static_table(two), x0, h, d), dyn.ppval(one, x0, h, d),
+    np.testing.assert_allclose(pw.ppval(pw.static_table(two), x0, h, d), pw.ppval(one, x0, h, d),
                                rtol=1e-9, atol=1e-9 * np.max(np.abs(one)))

@@ -35,7 +35,9 @@ import xarray as xr
 
 from pipeline.analyses import study
 from pipeline.config.scene import load_scene
-from pipeline.model import dynamics as dyn
+from pipeline.model.forces import separation_at
+from pipeline.model.piecewise import ppval
+from pipeline.model.state import THETA, Z
 from pipeline.model import slider as sl
 from pipeline.physics.geometry import table_truncation
 from pipeline.stages.simulate import model_inputs
@@ -103,12 +105,12 @@ def same_state(out: Path) -> None:
             "integrated": sl.interface_tables(integrated, delta, p["A_n"])}
     for name, unit, scale in (("contact", "mN", 1e3), ("area", "um^2", 1e12), ("adhesion", "mN", 1e3),
                               ("friction", "mN", 1e3)):
-        v = {m: scale * p["A_n"] * float(np.mean(dyn.ppval(getattr(t, name), p.tab_x0, p.tab_h, d)))
+        v = {m: scale * p["A_n"] * float(np.mean(ppval(getattr(t, name), p.tab_x0, p.tab_h, d)))
              for m, t in tabs.items()}
         print(f"  {name:9s} flat {v['flat-section']:.4g} {unit}, integrated {v['integrated']:.4g} {unit} "
               f"(ratio {v['integrated'] / v['flat-section']:.3f})")
     x = p.tab_x0 + p.tab_h * np.arange(flat.adhesion.shape[0] + 1)
-    top = float(dyn.ppval(flat.adhesion, p.tab_x0, p.tab_h, x[-1:])[0])
+    top = float(ppval(flat.adhesion, p.tab_x0, p.tab_h, x[-1:])[0])
     cut = table_truncation(top, x, delta) * 2 * np.pi * flat.half_length * flat.half_width
     reach = x[-1] - delta
     print(f"  table top {x[-1] / NM:g} nm, adhesion there {top / 1e6:.3g} MPa: rows d <= {reach / NM:g} nm are exact; "
@@ -125,7 +127,7 @@ def gap_opening(out: Path) -> None:
         m = model_of(folder, sets, k)
         y, note = sl.start(m, delta)
         p, _, _ = sl.run_parameters(m, delta)
-        d[name] = dyn.separation_at(p, y[0], y[1], 0.0)
+        d[name] = separation_at(p, y[Z], y[THETA], 0.0)
         print(f"  friction {name:6s}: arm {m.p['h_cg'] * 1e3:.4g} mm, {note}, d = {d[name] / NM:.4f} nm")
     for arm in ("cg", "gimbal"):
         print(f"  opening with arm {arm}: {(d[arm] - d['none']) / NM:.4f} nm")

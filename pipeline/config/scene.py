@@ -166,7 +166,7 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "stiffness_root": Key("str", "stiff-rear", choices=tuple(STIFFNESS_ROOTS),
                               doc="root of the modal inversion: 'stiff-rear' k_r > k_f (docs/model.md, section 'Air bearing', recon), "
                                   "'pitch-first' (first reconstruction), 'bounce-first'"),
-        "rear_law": Key("str", "power", choices=tuple(REAR_LAWS),
+        "rear_law": Key("str", "power", choices=REAR_LAWS.keys(),  # (live: a registered law is a choice)
                         doc="rear bearing law: 'power' F_r0[(g0/g)^n - 1] (recon), 'linear' k_r (g0 - g)"),
         "tfc_stiffening": Key("str", "none", choices=TFC_STIFFENING.keys(),  # (live: a registered law is a choice)
                               doc="air-bearing stiffening under the TFC bulge (docs/model.md, section 'Gap-power stiffening'): 'none' or "

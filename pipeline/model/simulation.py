@@ -35,11 +35,12 @@ from ..config.scene import PROTOCOLS
 from ..units import MS, NM
 from ..variables import HISTORIES, STEPPING, coordinate, history, scalar
 from . import slider as sl
+from .state import STEP_COUNTERS
 
 #: The passes of a stepping chain (values of the ``direction`` coordinate).
 DIRECTIONS = ("up", "down")
 
-#: The integrator's counters of a run (``Run.info[1:4]``), kept with ``counters=True``.
+#: The integrator's counters of a run (``Run.info[STEP_COUNTERS]``: :mod:`pipeline.model.state`), kept with ``counters=True``.
 COUNTERS = ("steps", "rejected_steps", "contact_switches")
 
 #: The failures :func:`simulate` records as NaN with ``on_error="nan"`` (a failed integration, a
@@ -98,7 +99,7 @@ def simulate(model: sl.Model, protrusions: Sequence[float], *, histories: Sequen
             info.append(np.full(3, -1))
             continue
         rows.append(row)
-        info.append(run.info[1:4])
+        info.append(run.info[STEP_COUNTERS])
         if _kept(delta, histories):
             kept.append((float(delta), run, hist))
     ds = xr.Dataset(_scalars(rows, ("protrusion",)), coords={"protrusion": coordinate("protrusion", prot)})
@@ -189,7 +190,7 @@ def _stepping(model: sl.Model, prot: np.ndarray, histories: Sequence[float], cou
     for i, j in order:
         run, hist, rows[DIRECTIONS[j]][i] = _run(model, float(prot[i]), y0, timings)
         y0 = run.state[-1].copy()  # the end state: where the next heater step starts
-        info[i, j] = run.info[1:4]
+        info[i, j] = run.info[STEP_COUNTERS]
         touch[i, j] = sl.touched(run)
         if j == 0 and _kept(prot[i], histories):
             kept.append((float(prot[i]), run, hist))

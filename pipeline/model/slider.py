@@ -6,7 +6,7 @@ integrates one protrusion; :func:`histories` and :func:`summarize` turn a run in
 time series (Figs 3-5) and the steady-window scalars of the sweep.
 
 The separation ``d`` is measured to the mean of summit heights, ``y_s`` above the mean of surface
-heights to which ``FH0`` is measured (docs/model.md, section "Separation datum"; one home: :func:`pipeline.model.dynamics.separation_at`).
+heights to which ``FH0`` is measured (docs/model.md, section "Separation datum"; one home: :func:`pipeline.model.forces.separation_at`).
 Named model variants (scene keys, one registry each): ``air_bearing.stiffness_root``
 (:data:`pipeline.physics.air_bearing.STIFFNESS_ROOTS`), ``air_bearing.rear_law`` (``REAR_LAWS``),
 ``air_bearing.tfc_stiffening`` (``TFC_STIFFENING``), ``contact.friction_law``
@@ -51,6 +51,9 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from . import dynamics as dyn
+from .forces import RearLawRef, rear_law_ref, separation_at
+from .piecewise import disk_coefficients, disk_history, piecewise_coefficients, ppval
+from .state import ACCEPTED, MENISCUS, OK, REJECTED, STATUS, STATUS_TEXT, THETA, THETA_RATE, Z, Z_RATE
 from ..units import KHZ, MS, NM
 from ..physics import air_bearing as ab
 from ..physics import bulge_bearing as bb
@@ -102,7 +105,8 @@ class Model:
     pitch : ``None`` when the pitch DOF is locked
     tfc_stiffening : parameters of the compiled gap-power law at the TFC point (a
         :data:`pipeline.model.dynamics.GAP_POWER` record, ``f0`` set per protrusion), ``None`` without it
-    rear_linear : ``None`` for the power rear law, ``True`` for the linear one (``air_bearing.rear_law``)
+    rear_law : the rear-bearing law (``air_bearing.rear_law``) as the kernel takes it
+        (:func:`pipeline.model.forces.rear_law_ref`)
     tfc_tabulated : the selected TFC-point laws without a compiled form, tabulated per protrusion
         (:func:`tfc_table`); scene : the scene they read
     area_model : ``contact.area_model`` (:data:`pipeline.physics.geometry.AREA_MODELS`). The fields
@@ -135,7 +139,7 @@ class Model:
     effects: frozenset
     info: dict = field(default_factory=dict)
     tfc_stiffening: np.record | None = None
-    rear_linear: bool | None = None
+    rear_law: RearLawRef | None = None
     tfc_tabulated: tuple[ab.TfcLaw, ...] = ()
     scene: Any = None
     start: str = "nominal"
@@ -209,7 +213,7 @@ def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float]
                    k_f=slider.k_f, k_r=slider.k_r, c_f=slider.c_f, c_r=slider.c_r,
                    g0=slider.g0, n=slider.n, F_r0=slider.rear_preload, FH0=si.air_bearing.flying_height)
     gap_power, tabulated = tfc_point_laws(scene, p.FH0, {"bulge": bulge})
-    rear_linear = True if ab.REAR_LAWS[a["rear_law"]].linear else None
+    rear_law = rear_law_ref(a["rear_law"])  # (a law that does not compile fails here, one line)
     info.update({"rear_law": a["rear_law"], "tfc_stiffening": a["tfc_stiffening"],
                  "friction_law": scene["contact"]["friction_law"],
                  "friction_coefficient": scene["contact"]["friction_coefficient"]})
@@ -236,7 +240,7 @@ def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float]
             raise ValueError(f"DMW record of {have / MS:.4g} ms is shorter than the {need / MS:.4g} ms the "
                              f"simulation needs (duration plus the pad-to-TFC travel time); set "
                              f"dmw.duration_ms >= {np.ceil(need * 1e5) / 1e2:g}")
-        dmw_c = dyn.disk_coefficients(np.asarray(w_nm, float) * NM, 1.0 / fs, order,
+        dmw_c = disk_coefficients(np.asarray(w_nm, float) * NM, 1.0 / fs, order,
                                       (p.off_c, p.off_f, p.off_r))
         p.dmw_t0, p.dmw_dt = 0.0, 1.0 / fs
         info["disk_speed_m_s"] = V
@@ -268,7 +272,7 @@ def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float]
                             raise ValueError("interface tables lack 'wetted_area_fraction', needed by "
                                              "lubricant.shear_stress_mpa > 0; re-run `hdi interface`")
                         values = values + lubricant_shear_stress(interface["wetted_area_fraction"].values, tau_lub)
-                tabs[key] = dyn.piecewise_coefficients(values, h, order)
+                tabs[key] = piecewise_coefficients(values, h, order)
     elif eff & {"contact", "adhesion"}:
         raise ValueError("the contact/adhesion effects need interface tables (run `hdi interface`)")
     sigma = float(interface["sigma"]) * NM if interface is not None else np.nan
@@ -300,7 +304,7 @@ def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float]
             # section "Two adhesion populations"): two tables side by side (pipeline.model.dynamics.Tables)
             parts = [interface[v].values * INTERFACE[v].si_unit
                      for v in ("adhesion_pressure_menisci", "adhesion_pressure_bridges")]
-            tabs["adhesion"] = np.ascontiguousarray(np.hstack([dyn.piecewise_coefficients(v, p.tab_h, order)
+            tabs["adhesion"] = np.ascontiguousarray(np.hstack([piecewise_coefficients(v, p.tab_h, order)
                                                                for v in parts]))
         # the meniscus state q [Pa]: absolute tolerance a millionth of the largest pressure it relaxes towards
         # (the flat-section table's also with contact.area_model = "integrated": a tolerance, of the same order)
@@ -316,7 +320,7 @@ def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float]
                  duration=duration, transient=s_sol.transient,
                  output_step=s_sol.output_step, rtol=sol["rtol"], atol=atol,
                  max_step=s_sol.max_step, fhm_measure=sol["fhm_measure"], effects=eff, info=info,
-                 tfc_stiffening=gap_power, rear_linear=rear_linear, tfc_tabulated=tabulated, scene=scene,
+                 tfc_stiffening=gap_power, rear_law=rear_law, tfc_tabulated=tabulated, scene=scene,
                  start=sol["start"], meniscus=meniscus, area_model=scene["contact"]["area_model"])
 
 
@@ -362,7 +366,7 @@ def law_parameters(scene: Any, law: ab.TfcLaw) -> dict[str, Any]:
 
 def tfc_table(model: Model, protrusion: float) -> tuple[np.ndarray, float, float] | None:
     """The tabulated TFC-point force of the model at a protrusion [m]: piecewise-cubic coefficients
-    (:func:`pipeline.model.dynamics.piecewise_coefficients`, not-a-knot spline) of the sum of the laws of
+    (:func:`pipeline.model.piecewise.piecewise_coefficients`, not-a-knot spline) of the sum of the laws of
     ``model.tfc_tabulated`` [N] on a uniform gap grid, its first gap [m] and step [m]; ``None`` without.
 
     The kernel takes the force and its stiffness ``-dF/dg`` from the same cubic (linear continuation
@@ -377,7 +381,7 @@ def tfc_table(model: Model, protrusion: float) -> tuple[np.ndarray, float, float
                     max(law.points for law in laws))
     force = sum(np.asarray(law.force(g, protrusion), dtype=float) for law in laws)
     h = float(g[1] - g[0])
-    return dyn.piecewise_coefficients(force, h, 3), float(g[0]), h
+    return piecewise_coefficients(force, h, 3), float(g[0]), h
 
 
 @dataclass
@@ -464,9 +468,9 @@ def run_model(model: Model, protrusion: float, y0: np.ndarray | None = None, max
         y0 = np.append(y0, meniscus_equilibrium(model, p, y0))
     Y, C, info, ext = dyn.integrate(y0, dyn.Grid(model.duration, t_out), p, tables, variants,
                                     dyn.Solver(model.rtol, model.atol, model.max_step, max_steps))
-    if info[0] != dyn.OK:
+    if info[STATUS] != OK:
         raise IntegrationError(f"integration failed at protrusion {protrusion / NM:.3g} nm: "
-                               f"{dyn.STATUS_TEXT[int(info[0])]} (steps {info[1]}, rejected {info[2]})")
+                               f"{STATUS_TEXT[int(info[STATUS])]} (steps {info[ACCEPTED]}, rejected {info[REJECTED]})")
     return Run(model=model, protrusion=protrusion, p=p, nominal_area=An, time=t_out, state=Y, contact=C, info=info,
                d_extremes=(float(ext[0]), float(ext[1])), start=start_note)
 
@@ -475,10 +479,10 @@ def meniscus_equilibrium(model: Model, p: np.record, y: np.ndarray) -> float:
     """The meniscus state's equilibrium ``q = p_a(d)`` [Pa] at the state ``y`` (z [m], theta [rad], ...)
     at ``t = 0``, the disk under the TFC point where the DMW record puts it (docs/model.md, section
     "Meniscus formation"): the start value of ``q``."""
-    w = dyn.disk_history(model.dmw, p, np.zeros(1))[0][0] if model.dmw is not None else 0.0
-    d = dyn.separation_at(p, float(y[0]), float(y[1]), w)
+    w = disk_history(model.dmw, p, np.zeros(1))[0][0] if model.dmw is not None else 0.0
+    d = separation_at(p, float(y[Z]), float(y[THETA]), w)
     adhesion = interface_tables(model, p["delta"], p["A_n"]).adhesion
-    return float(dyn.ppval(adhesion, p.tab_x0, p.tab_h, np.array([d]))[0])
+    return float(ppval(adhesion, p.tab_x0, p.tab_h, np.array([d]))[0])
 
 
 class InterfaceTables(NamedTuple):
@@ -538,9 +542,9 @@ def _integrated_tables(model: Model, flat: InterfaceTables, protrusion: float, n
     if "area" in names and "capped_area" not in model.integrated:
         # a patch of the footprint has at most its own area in contact: the local fraction capped at 1
         c = flat.area
-        nodes = np.append(c[:, 3], dyn.ppval(c, 0.0, h, np.array([c.shape[0] * h])))
+        nodes = np.append(c[:, 3], ppval(c, 0.0, h, np.array([c.shape[0] * h])))
         model.integrated["capped_area"] = c if not np.any(nodes > 1.0) else \
-            dyn.piecewise_coefficients(np.minimum(nodes, 1.0), h, order)
+            piecewise_coefficients(np.minimum(nodes, 1.0), h, order)
     tables = [model.integrated["capped_area"] if n == "area" else getattr(flat, n) for n in names]
     # (the two adhesion tables of the meniscus state side by side, dynamics.Tables: each integrated on its own)
     split = "adhesion" in names and flat.adhesion.shape[1] == 8
@@ -560,10 +564,10 @@ def _integrated_tables(model: Model, flat: InterfaceTables, protrusion: float, n
 
 def _splines(values: np.ndarray, h: float, order: int) -> list[np.ndarray]:
     """The piecewise-cubic coefficients of each column of ``values`` (nodes x tables) on a grid of step ``h``,
-    as :func:`pipeline.model.dynamics.piecewise_coefficients` makes them (the not-a-knot spline of all the
+    as :func:`pipeline.model.piecewise.piecewise_coefficients` makes them (the not-a-knot spline of all the
     columns in one solve for ``order`` 3: a third of the cost of one solve per column)."""
     if order != 3:
-        return [dyn.piecewise_coefficients(values[:, j], h, order) for j in range(values.shape[1])]
+        return [piecewise_coefficients(values[:, j], h, order) for j in range(values.shape[1])]
     c = CubicSpline(h * np.arange(values.shape[0]), values, axis=0).c  # (4, pieces, columns)
     return [np.ascontiguousarray(c[:, :, j].T) for j in range(values.shape[1])]
 
@@ -581,7 +585,7 @@ def kernel_slots(model: Model, p: np.record) -> tuple[dyn.Tables, dyn.Variants]:
         tfc, p["tfc_x0"], p["tfc_h"] = tfc
     it = interface_tables(model, delta, p["A_n"])
     tables = dyn.Tables(dmw=model.dmw, contact=it.contact, adhesion=it.adhesion, friction=it.friction, tfc=tfc)
-    variants = dyn.Variants(pitch=True if model.pitch is not None else None, rear_linear=model.rear_linear,
+    variants = dyn.Variants(pitch=True if model.pitch is not None else None, rear_law=model.rear_law,
                             gap_power=gap_power, meniscus=model.meniscus)
     return tables, variants
 
@@ -602,17 +606,17 @@ def histories(run: Run) -> dict[str, np.ndarray]:
     w = np.zeros_like(t)
     wdot = np.zeros_like(t)
     if m.dmw is not None:
-        w, wdot = dyn.disk_history(m.dmw, p, t)
-    d = dyn.separation_at(p, Y[:, 0], Y[:, 1], w)
-    out: dict[str, np.ndarray] = {"separation": d, "disk_displacement": w, "z": Y[:, 0], "pitch": Y[:, 1]}
+        w, wdot = disk_history(m.dmw, p, t)
+    d = separation_at(p, Y[:, Z], Y[:, THETA], w)
+    out: dict[str, np.ndarray] = {"separation": d, "disk_displacement": w, "z": Y[:, Z], "pitch": Y[:, THETA]}
     out["clearance"] = d - m.k_sigma
     x0, h, An = p.tab_x0, p.tab_h, run.nominal_area
     tabs = interface_tables(m, run.protrusion, An)  # (those the kernel ran with: contact.area_model)
     net = np.zeros_like(t)
     if tabs.adhesion is not None:  # (the meniscus state q is the adhesion pressure when it is on)
-        out["adhesion_force"] = An * (Y[:, 4] if m.meniscus is not None else dyn.ppval(tabs.adhesion, x0, h, d))
+        out["adhesion_force"] = An * (Y[:, MENISCUS] if m.meniscus is not None else ppval(tabs.adhesion, x0, h, d))
         if m.meniscus is not None and tabs.adhesion.shape[1] == 8:  # the part acting at once (dynamics.Tables)
-            out["adhesion_force"] += An * dyn.ppval(np.ascontiguousarray(tabs.adhesion[:, 4:]), x0, h, d)
+            out["adhesion_force"] += An * ppval(np.ascontiguousarray(tabs.adhesion[:, 4:]), x0, h, d)
         net -= out["adhesion_force"]
     if m.contact is not None:
         c = run.contact
@@ -621,12 +625,12 @@ def histories(run: Run) -> dict[str, np.ndarray]:
             """``A_n`` times a table at the samples in contact (its laws are off elsewhere: 0)."""
             v = np.zeros_like(t)
             if c.any():
-                v[c] = An * np.clip(dyn.ppval(table, x0, h, d[c]), 0.0, upper)
+                v[c] = An * np.clip(ppval(table, x0, h, d[c]), 0.0, upper)
             return v
 
         out["in_contact"] = c
         fc = on_contact(tabs.contact)
-        ddot = Y[:, 2] - m.slider.l_c * Y[:, 3] - wdot
+        ddot = Y[:, Z_RATE] - m.slider.l_c * Y[:, THETA_RATE] - wdot
         out["contact_force"] = fc
         out["contact_damping_force"] = np.where(c, -p.c_c * ddot, 0.0)
         net += fc + out["contact_damping_force"]

@@ -30,6 +30,9 @@ import numpy as np
 from ..physics.equilibrium import STARTS, branch_fold, static_equilibrium
 from ..units import NM, URAD
 from . import dynamics as dyn
+from .forces import separation_at
+from .piecewise import static_table
+from .state import N_STATE, THETA, THETA_RATE, Z, Z_RATE
 
 #: Typical sizes of the static state (z [m], theta [rad]) for the equilibrium solver's scaling and steps.
 SCALE = np.array([NM, URAD])
@@ -56,8 +59,8 @@ def static_forces(run_parameters):
     ``theta`` (it stays at zero).
     """
     cache: dict[float, tuple] = {}
-    out = np.empty(4)
-    y4 = np.zeros(4)
+    out = np.empty(N_STATE)
+    y4 = np.zeros(N_STATE)
 
     def inputs(mu: float):
         if mu not in cache:
@@ -65,21 +68,21 @@ def static_forces(run_parameters):
             cache.clear()  # (continuation: one protrusion at a time)
             # the meniscus state at rest is at its equilibrium q = p_a(d): the static forces are those
             # without it (docs/model.md, section "Meniscus formation"); the run appends q
-            cache[mu] = (p, tables._replace(dmw=None, adhesion=dyn.static_table(tables.adhesion)),
+            cache[mu] = (p, tables._replace(dmw=None, adhesion=static_table(tables.adhesion)),
                          variants._replace(meniscus=None))
         return cache[mu]
 
     def R(y: np.ndarray, mu: float) -> np.ndarray:
         p, tables, variants = inputs(float(mu))
-        y4[0], y4[1] = y[0], y[1]
-        contact = bool(dyn.separation_at(p, y4[0], y4[1], 0.0) < p["k_sigma"])
-        dyn.rhs(0.0, y4, p, tables, variants, contact, out)
-        moment = p["I"] * out[3] if variants.pitch is not None else y[1]
-        return np.array([p["m"] * out[2], moment])
+        y4[Z], y4[THETA] = y[0], y[1]  # (y: the static state (z, theta))
+        in_contact = bool(separation_at(p, y4[Z], y4[THETA], 0.0) < p["k_sigma"])
+        dyn.rhs(0.0, y4, p, tables, variants, in_contact, out)
+        moment = p["I"] * out[THETA_RATE] if variants.pitch is not None else y[1]
+        return np.array([p["m"] * out[Z_RATE], moment])
 
     def flying(y: np.ndarray) -> bool:
         p = next(iter(cache.values()))[0]
-        return bool(dyn.separation_at(p, y[0], y[1], 0.0) >= p["k_sigma"])
+        return bool(separation_at(p, y[0], y[1], 0.0) >= p["k_sigma"])
 
     return R, flying
 

@@ -213,20 +213,23 @@ def damping_ratios(s: Slider) -> tuple[np.ndarray, np.ndarray]:
 
 # The laws below that take plain numbers (rear_power_law, rear_linear_law, stiffening_potential,
 # stiffening_stiffness) are the only definitions of these laws: the numba kernel
-# (pipeline.model.dynamics) compiles these same functions, Python code calls them on floats or arrays.
+# (pipeline.model.forces) compiles these same functions, Python code calls them on floats or arrays.
 
-def rear_power_law(g, g0: float, n: float, F0: float):
+def rear_power_law(g, g0: float, n: float, F0: float, k_r: float):
     """Power rear bearing force ``F0 [(g0/g)^n - 1]`` [N] on gap ``g`` [m] (docs/model.md, section "Slider dynamics", [recon]).
 
-    ``n = 2`` squares rather than calling ``pow()``, the costliest call of the kernel's right-hand side.
+    The arguments of every rear law (:class:`RearLaw`); ``k_r`` is not used (this law's stiffness at
+    ``g0`` is ``n F0 / g0``). ``n = 2`` squares rather than calling ``pow()``, the costliest call of the
+    kernel's right-hand side.
     """
     ratio = g0 / g
     law = ratio * ratio if n == 2.0 else ratio**n
     return F0 * (law - 1.0)
 
 
-def rear_linear_law(g, g0: float, k_r: float):
-    """Linear rear bearing force ``k_r (g0 - g)`` [N] on gap ``g`` [m], stiffness ``k_r`` [N/m] (docs/model.md, section "Slider dynamics")."""
+def rear_linear_law(g, g0: float, n: float, F0: float, k_r: float):
+    """Linear rear bearing force ``k_r (g0 - g)`` [N] on gap ``g`` [m], stiffness ``k_r`` [N/m] (docs/model.md,
+    section "Slider dynamics"); the arguments of every rear law (:class:`RearLaw`), ``n`` and ``F0`` not used."""
     return k_r * (g0 - g)
 
 
@@ -235,29 +238,46 @@ def rear_force(g: np.ndarray, g0: float, n: float, F0: float) -> np.ndarray:
 
     ``F_r = F0 [(g0/g)^n - 1]`` (:func:`rear_power_law`); zero at ``g = g0``, stiffness ``n F0 / g0`` there.
     """
-    return rear_power_law(np.asarray(g, dtype=float), g0, n, F0)
+    return rear_power_law(np.asarray(g, dtype=float), g0, n, F0, n * F0 / g0)
 
 
 def rear_force_linear(g: np.ndarray, g0: float, n: float, F0: float) -> np.ndarray:
     """Linear rear bearing force [N] ``F_r = k_r (g0 - g)`` with ``k_r = n F0 / g0`` [N/m] on gap ``g`` [m]:
     the tangent of :func:`rear_force` at ``g0`` (same modal stiffness, no nonlinearity)."""
-    return rear_linear_law(np.asarray(g, dtype=float), g0, n * F0 / g0)
+    return rear_linear_law(np.asarray(g, dtype=float), g0, n, F0, n * F0 / g0)
+
+
+#: Rear gap below which the power law is evaluated at this gap instead, as a fraction of ``g0`` [1]:
+#: the law is singular at zero gap (never reached in practice).
+REAR_MIN_GAP = 1e-3
 
 
 @dataclass(frozen=True)
 class RearLaw:
-    """A rear-bearing law: its force (Python, for outputs and tests) and the kernel's compile-time switch
-    (``linear``: :class:`pipeline.model.dynamics.Variants` gets ``rear_linear=True``, else ``None``)."""
+    """A rear-bearing law (``air_bearing.rear_law``).
 
-    force: object
-    linear: bool
+    Attributes
+    ----------
+    force : ``force(g, g0, n, F0, k_r) -> F`` [N] (up positive) at the rear gap ``g`` [m], from the rear
+        pad's numbers: reference gap ``g0`` [m], exponent ``n`` [1], preload ``F0 = k_r g0 / n`` [N] and
+        stiffness ``k_r`` [N/m] at ``g0``. The law's one definition and its compiled form: the kernel
+        compiles it (numba's nopython mode: numbers, ``math`` and numpy functions only) and inlines it
+        into its right-hand side (:func:`pipeline.model.forces.call_rear_law`); Python calls it on floats or
+        arrays. A law whose ``force`` is ``None`` or does not compile is refused when a model is built
+    doc : one line for the documentation
+    min_gap : the kernel evaluates the law at ``max(g, min_gap g0)`` (a law singular at zero gap);
+        ``None``: at ``g``
+    """
+
+    force: Callable[..., float] | None
     doc: str
+    min_gap: float | None = None
 
 
 #: Rear bearing laws (``air_bearing.rear_law``), docs/model.md, section "Slider dynamics".
 REAR_LAWS = {
-    "power": RearLaw(rear_force, False, "F_r = F_r0 [(g0/g)^n - 1], F_r0 = k_r g0 / n [recon]"),
-    "linear": RearLaw(rear_force_linear, True, "F_r = k_r (g0 - g)"),
+    "power": RearLaw(rear_power_law, "F_r = F_r0 [(g0/g)^n - 1], F_r0 = k_r g0 / n [recon]", REAR_MIN_GAP),
+    "linear": RearLaw(rear_linear_law, "F_r = k_r (g0 - g)"),
 }
 
 #: Gap below which the stiffening law is continued linearly, as a fraction of ``g0`` [1]: the law is
@@ -323,7 +343,7 @@ class TfcLaw:
         at the gaps ``g`` [m] (an array, gap at the TFC point to the mean of surface heights) for the
         protrusion ``delta`` [m], given the numbers named by ``parameters``
     closed_form : name of the kernel's compiled closed form of the same law (``"gap-power"``:
-        :func:`pipeline.model.dynamics._stiffening`), or ``None``: the model assembly tabulates ``force``
+        :func:`pipeline.model.forces._stiffening`), or ``None``: the model assembly tabulates ``force``
         per protrusion and the kernel evaluates the table (:func:`pipeline.model.slider.tfc_table`)
     gap_range : lowest and highest gap of the table as fractions of ``FH0`` [1]: linear continuation
         below (the law's slope at the lowest gap), constant above

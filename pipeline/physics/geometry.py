@@ -164,7 +164,7 @@ def ellipsoid_table_integral(c: np.ndarray, h: float, delta: float) -> np.ndarra
     """``I(d_i) = int_0^1 p(d_i + delta u) (1 - u) du`` [unit of p] at every node ``d_i = x0 + i h`` of a
     piecewise-cubic table ``p``, exactly (the force over the bulge is ``2 pi a b I``, :func:`ellipsoid_force`).
 
-    The table is the kernel's (:func:`pipeline.model.dynamics.piecewise_coefficients`: ``n`` rows
+    The table is the kernel's (:func:`pipeline.model.piecewise.piecewise_coefficients`: ``n`` rows
     ``c0..c3`` of ``p(x_k + s) = c0 s^3 + c1 s^2 + c2 s + c3`` on ``0 <= s <= h``). Since every ``d_i`` is
     a node, ``[d_i, d_i + delta]`` is whole pieces plus one partial piece of length
     ``delta - h floor(delta/h)``, and on each the integrand is a cubic times a linear weight: its

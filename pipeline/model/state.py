@@ -1,0 +1,47 @@
+"""The kernel's state vector, its counters and its status codes, by name.
+
+The names are module-level integers: numba reads a global integer as a compile-time constant, so
+``y[THETA]`` compiles to the same code as ``y[1]``.
+
+State ``y`` (SI units), docs/model.md, section "Slider dynamics":
+
+* :data:`Z` vertical displacement of the CG [m] (up positive), :data:`THETA` pitch [rad] (leading edge up),
+  :data:`Z_RATE` [m/s], :data:`THETA_RATE` [rad/s];
+* :data:`MENISCUS` the adhesion pressure ``q`` [Pa] of the meniscus state (docs/model.md, section
+  "Meniscus formation"), present only with a meniscus formation time: the state then has
+  :data:`N_STATE` + 1 components (:func:`state_size`).
+
+Counters ``info`` of an integration (:func:`pipeline.model.dynamics.integrate`): :data:`STATUS` (one of
+the status codes below), :data:`ACCEPTED` steps, :data:`REJECTED` steps, contact :data:`SWITCHES`,
+:data:`RHS_CALLS` (right-hand-side evaluations).
+"""
+
+from __future__ import annotations
+
+from .compiled import kernel_jit
+
+# the state's components
+Z, THETA, Z_RATE, THETA_RATE = 0, 1, 2, 3
+MENISCUS = 4
+#: length of the state without the meniscus state
+N_STATE = 4
+
+# the integration's counters
+STATUS, ACCEPTED, REJECTED, SWITCHES, RHS_CALLS = 0, 1, 2, 3, 4
+N_COUNTERS = 5
+#: the step counters (accepted, rejected, switches), a slice of ``info``
+STEP_COUNTERS = slice(ACCEPTED, SWITCHES + 1)
+
+# status codes (``info[STATUS]``)
+OK, MAX_STEPS, STEP_UNDERFLOW, NOT_FINITE = 0, 1, 2, 3
+STATUS_TEXT = {OK: "ok", MAX_STEPS: "too many steps", STEP_UNDERFLOW: "step size underflow",
+               NOT_FINITE: "state became non-finite"}
+
+
+@kernel_jit(__name__, inline="always")
+def state_size(meniscus):
+    """Length of the state: :data:`N_STATE` and, with a meniscus formation time, the meniscus state
+    (a compile-time constant: the four-component code is unchanged without the meniscus)."""
+    if meniscus is not None:
+        return N_STATE + 1
+    return N_STATE

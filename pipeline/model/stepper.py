@@ -1,0 +1,316 @@
+"""The integrator's step: Dormand-Prince 5(4) with dense output, error norm, events and extremes.
+
+Dormand-Prince 5(4) with classical step control (Hairer, Norsett & Wanner, *Solving ODEs I*, II.4
+and II.5), local extrapolation, error norm the RMS of the embedded error scaled by
+``atol + rtol |y|`` (:func:`error_norm`). The state between a step's ends is the cubic Hermite
+interpolant through its end values and derivatives (:func:`_hermite`): the outputs
+(:func:`sample_outputs`) and the events are taken on it.
+
+Events. The contact switch is a discontinuity of the force: a sign change of ``g = d - k sigma`` over
+an accepted step (at its ends, or at an interior extremum of ``d``, so a grazing contact shorter than
+a step is not missed: :func:`first_wrong_side`) is located by bisection on the step's interpolant
+(:func:`switch_point`); the driver redoes the step exactly up to it.
+
+Interior extrema of ``d`` in a step (:func:`d_extrema`, for the event search and the exact
+steady-window extremes, :func:`track_extremes`) are those of ``d(t) = const + s(t) - w(t)``:
+``s = z - l_c theta`` on the state's Hermite cubic and ``w`` the DMW spline. Between two DMW knots
+both are cubics, so the step is split at the knots it contains and each piece's extrema come in
+closed form: exact for DMW content up to the Nyquist frequency, where a 500-ns step spans several
+250-ns knots (one cubic through the step's ends would miss the peaks in between).
+
+The inlined helpers here end an array's use unconditionally and call no compiled function, so that
+numba can prune the reference counts of their array arguments (docs/kernel.md).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .compiled import kernel_jit
+from .forces import interface_stiffness, rhs_slots, separation, tfc_air_force
+from .state import N_STATE, THETA, Z, state_size
+
+_jit = kernel_jit(__name__)
+_inline = kernel_jit(__name__, inline="always")
+
+# Dormand-Prince 5(4) tableau (Hairer, Norsett & Wanner, Table II.5.2)
+A21 = 1 / 5
+A31, A32 = 3 / 40, 9 / 40
+A41, A42, A43 = 44 / 45, -56 / 15, 32 / 9
+A51, A52, A53, A54 = 19372 / 6561, -25360 / 2187, 64448 / 6561, -212 / 729
+A61, A62, A63, A64, A65 = 9017 / 3168, -355 / 33, 46732 / 5247, 49 / 176, -5103 / 18656
+B1, B3, B4, B5, B6 = 35 / 384, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84
+E1, E3, E4, E5, E6, E7 = (71 / 57600, -71 / 16695, 71 / 1920, -17253 / 339200, 22 / 525, -1 / 40)
+
+
+@_jit
+def step(t, y, k1, h, p, in_contact, ynew, k7, err, tmp, k2, k3, k4, k5, k6,
+         dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power, meniscus):
+    """One Dormand-Prince step: ``ynew``, its derivative ``k7`` and the error estimate ``err``
+    (``tmp``, ``k2``...``k6``: work arrays, passed one by one: an array taken out of a tuple or a
+    2-D array costs reference-count updates per use, docs/kernel.md); the slots as in
+    :data:`pipeline.model.dynamics.SLOTS`."""
+    ns = state_size(meniscus)
+    for i in range(ns):
+        tmp[i] = y[i] + h * A21 * k1[i]
+    rhs_slots(t + h / 5, tmp, p, in_contact, k2,
+              dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power, meniscus)
+    for i in range(ns):
+        tmp[i] = y[i] + h * (A31 * k1[i] + A32 * k2[i])
+    rhs_slots(t + 3 * h / 10, tmp, p, in_contact, k3,
+              dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power, meniscus)
+    for i in range(ns):
+        tmp[i] = y[i] + h * (A41 * k1[i] + A42 * k2[i] + A43 * k3[i])
+    rhs_slots(t + 4 * h / 5, tmp, p, in_contact, k4,
+              dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power, meniscus)
+    for i in range(ns):
+        tmp[i] = y[i] + h * (A51 * k1[i] + A52 * k2[i] + A53 * k3[i] + A54 * k4[i])
+    rhs_slots(t + 8 * h / 9, tmp, p, in_contact, k5,
+              dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power, meniscus)
+    for i in range(ns):
+        tmp[i] = y[i] + h * (A61 * k1[i] + A62 * k2[i] + A63 * k3[i] + A64 * k4[i] + A65 * k5[i])
+    rhs_slots(t + h, tmp, p, in_contact, k6,
+              dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power, meniscus)
+    for i in range(ns):
+        ynew[i] = y[i] + h * (B1 * k1[i] + B3 * k3[i] + B4 * k4[i] + B5 * k5[i] + B6 * k6[i])
+    rhs_slots(t + h, ynew, p, in_contact, k7,
+              dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power, meniscus)
+    for i in range(ns):
+        err[i] = h * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i] + E7 * k7[i])
+
+
+@_inline
+def _hermite(y0, f0, y1, f1, h, frac, i):
+    """Cubic Hermite interpolant of component ``i`` at ``t0 + frac h`` (``frac``: fraction of the step)."""
+    t2 = frac * frac
+    t3 = t2 * frac
+    return ((2 * t3 - 3 * t2 + 1) * y0[i] + (t3 - 2 * t2 + frac) * h * f0[i]
+            + (-2 * t3 + 3 * t2) * y1[i] + (t3 - t2) * h * f1[i])
+
+
+@_inline
+def _dcubic(d0, dd0, d1, dd1, h):
+    """Coefficients ``(a, b, c, e)`` of the cubic Hermite ``d(frac) = a frac^3 + b frac^2 + c frac + e``
+    through ``d0, d1`` with slopes ``dd0, dd1`` [per unit time] over a step ``h``: locates the interior
+    extrema of ``d`` in closed form (their values are then taken on the state interpolant)."""
+    return (2.0 * d0 + h * dd0 - 2.0 * d1 + h * dd1,
+            -3.0 * d0 - 2.0 * h * dd0 + 3.0 * d1 - h * dd1,
+            h * dd0, d0)
+
+
+@_inline
+def _extrema(a, b, c):
+    """Roots in (0, 1), ascending, of ``3 a x^2 + 2 b x + c`` (the extrema of the cubic): ``(n, x1, x2)``."""
+    A, B, C = 3.0 * a, 2.0 * b, c
+    r1, r2 = -1.0, -1.0
+    if abs(A) <= 1e-14 * (abs(B) + abs(C)):
+        if B != 0.0:
+            r1 = -C / B
+    else:
+        disc = B * B - 4.0 * A * C
+        if disc >= 0.0:
+            q = -0.5 * (B + (np.sqrt(disc) if B >= 0.0 else -np.sqrt(disc)))
+            if q != 0.0:
+                r1, r2 = q / A, C / q
+            else:
+                r1 = 0.0
+    if r2 < r1:
+        r1, r2 = r2, r1
+    n = 0
+    x1, x2 = 0.0, 0.0
+    if 0.0 < r1 < 1.0:
+        x1 = r1
+        n = 1
+    if 0.0 < r2 < 1.0 and r2 != r1:
+        if n == 0:
+            x1 = r2
+        else:
+            x2 = r2
+        n += 1
+    return n, x1, x2
+
+
+@_inline
+def d_extrema(p, dmw, t, h, y, k1, ynew, k7, d0, dd0, d1, dd1, buf):
+    """Interior extrema of ``d`` in the step ``[t, t + h]``: their step fractions in (0, 1) go into ``buf``;
+    returns how many.
+
+    Without a knot of the DMW spline inside the step, ``d`` is one cubic, the Hermite through its end
+    values and slopes. Otherwise the step is split at the knots and on each piece ``d = const + s - w``
+    (``s = z - l_c theta`` on the state's Hermite cubic, ``w`` the spline piece) is a cubic whose
+    Taylor coefficients at the piece's start give the extrema in closed form (module docstring).
+    """
+    n_b = 0
+    if dmw is not None:
+        # the arrays read before the branch (their last use unconditional: docs/kernel.md)
+        z0, th0, vz0, vth0 = y[Z], y[THETA], k1[Z], k1[THETA]
+        z1, th1, vz1, vth1 = ynew[Z], ynew[THETA], k7[Z], k7[THETA]
+        t0, hd = p.dmw_t0, p.dmw_dt
+        i_a = int((t - t0) / hd)
+        first_knot = t0 + (i_a + 1) * hd
+        if first_knot < t + h:
+            lc = p.l_c
+            # s(frac) = A frac^3 + B frac^2 + C frac + E over the whole step
+            A, B, C, E = _dcubic(z0 - lc * th0, vz0 - lc * vth0, z1 - lc * th1, vz1 - lc * vth1, h)
+            n_pieces = dmw.shape[0]
+            ta = t
+            i = i_a
+            while ta < t + h and n_b + 2 <= buf.shape[0]:
+                tb = min(t0 + (i + 1) * hd, t + h)
+                tha, L = (ta - t) / h, (tb - ta) / h
+                if L > 0.0:
+                    S1 = (3.0 * A * tha + 2.0 * B) * tha + C
+                    S2 = 6.0 * A * tha + 2.0 * B
+                    j = min(max(i, 0), n_pieces - 1)
+                    sg = ta - (t0 + j * hd)
+                    r0, r1, r2 = dmw[j, 0], dmw[j, 1], dmw[j, 2]
+                    W1 = (3.0 * r0 * sg + 2.0 * r1) * sg + r2
+                    W2 = 6.0 * r0 * sg + 2.0 * r1
+                    Lh = L * h
+                    n_ex, x1, x2 = _extrema((A * L ** 3 - r0 * Lh ** 3), 0.5 * (S2 * L * L - W2 * Lh * Lh),
+                                            S1 * L - W1 * Lh)
+                    if n_ex > 0:
+                        buf[n_b] = tha + x1 * L
+                        n_b += 1
+                    if n_ex > 1:
+                        buf[n_b] = tha + x2 * L
+                        n_b += 1
+                ta = tb
+                i += 1
+            return n_b
+    ca, cb, cc, ce = _dcubic(d0, dd0, d1, dd1, h)
+    n_ex, buf[0], buf[1] = _extrema(ca, cb, cc)  # both slots always (unused ones ignored): no branch on buf
+    return n_ex
+
+
+@_inline
+def _interp_state(y0, f0, y1, f1, h, frac, out):
+    """The slider's state (not the meniscus state) at ``t0 + frac h`` into ``out`` (:func:`_hermite`)."""
+    for i in range(N_STATE):
+        out[i] = _hermite(y0, f0, y1, f1, h, frac, i)
+
+
+@_inline
+def first_wrong_side(p, dmw, in_contact, t, y, k1, ynew, k7, h, d0, dd0, d1, dd1, ys, buf):
+    """Smallest fraction ``frac`` in (0, 1] of the step where the criterion disagrees with the mode, or -1.
+
+    Checks the step's end, the interior extrema of ``d`` (closed form, :func:`d_extrema`) and, when
+    ``d`` passes near the threshold, a few interior points; values are taken on the state
+    interpolant, the one outputs and the bisection use.
+    """
+    ks = p.k_sigma
+    best = 2.0
+    if (d1 - ks < 0.0) != in_contact:
+        best = 1.0
+    n_ex = d_extrema(p, dmw, t, h, y, k1, ynew, k7, d0, dd0, d1, dd1, buf)
+    near = min(abs(d0 - ks), abs(d1 - ks)) < 0.5 * h * max(abs(dd0), abs(dd1))
+    n_try = n_ex + (3 if near else 0)
+    for i_ex in range(n_try):
+        if i_ex < n_ex:
+            frac = buf[i_ex]
+        else:
+            frac = 0.25 * (i_ex - n_ex + 1)
+        if frac >= best:
+            continue
+        _interp_state(y, k1, ynew, k7, h, frac, ys)
+        if (separation(p, dmw, t + frac * h, ys)[0] - ks < 0.0) != in_contact:
+            best = frac
+    return best if best <= 1.0 else -1.0
+
+
+@_inline
+def switch_point(p, dmw, in_contact, t, y, k1, ynew, k7, h, d0, dd0, d1, dd1, ys, buf):
+    """The contact switch in the step ``[t, t + h]``: its step fraction in (0, 1], or -1 if the criterion
+    agrees with the mode over the whole step.
+
+    The first point where the criterion disagrees (:func:`first_wrong_side`) is bisected on the
+    step's interpolant to 1e-16 s (``(hi - lo) h``); the returned fraction is on the
+    side where the criterion disagrees. :func:`pipeline.model.dynamics._integrate` redoes the step up to it (the call of
+    :func:`step` stays there: a call has an exception exit, past which numba cannot prune the
+    reference counts of an inlined helper's arrays). The bisection loop has one exit (a counter, no
+    ``break``) for the same reason (see :func:`pipeline.model.dynamics._integrate`).
+    """
+    hi = first_wrong_side(p, dmw, in_contact, t, y, k1, ynew, k7, h, d0, dd0, d1, dd1, ys, buf)
+    lo = 0.0
+    n = 60 if hi >= 0.0 else 0
+    while n > 0:  # (one exit: see the docstring)
+        n -= 1
+        mid = 0.5 * (lo + hi)
+        _interp_state(y, k1, ynew, k7, h, mid, ys)
+        g = separation(p, dmw, t + mid * h, ys)[0] - p.k_sigma
+        if (g < 0.0) != in_contact:
+            hi = mid
+        else:
+            lo = mid
+        if (hi - lo) * h < 1e-16:
+            n = 0
+    return hi
+
+
+@_inline
+def track_extremes(p, dmw, t, h, y, k1, ynew, k7, d0, dd0, d1, dd1, ys, buf, ext):
+    """Exact extremes of ``d`` over the steady window into ``ext``: at the step's end and at the interior
+    extrema of ``d`` on the step's cubic (peak-to-peak free of aliasing by the output grid)."""
+    ext[0] = min(ext[0], d1)
+    ext[1] = max(ext[1], d1)
+    n_ex = d_extrema(p, dmw, t, h, y, k1, ynew, k7, d0, dd0, d1, dd1, buf)
+    for i_ex in range(n_ex):
+        frac = buf[i_ex]
+        if t + frac * h >= p.t_win:
+            _interp_state(y, k1, ynew, k7, h, frac, ys)
+            de = separation(p, dmw, t + frac * h, ys)[0]
+            ext[0] = min(ext[0], de)
+            ext[1] = max(ext[1], de)
+
+
+@_inline
+def sample_outputs(t, h, y, k1, ynew, k7, in_contact, t_out, j, Y, C, ns):
+    """Sample the step ``[t, t + h]`` at the output times from ``t_out[j]`` on; returns the next ``j``."""
+    n_out = t_out.shape[0]
+    while j < n_out and t_out[j] <= t + h:
+        frac = (t_out[j] - t) / h
+        for i in range(ns):
+            Y[j, i] = _hermite(y, k1, ynew, k7, h, frac, i)
+        C[j] = in_contact
+        j += 1
+    return j
+
+
+@_inline
+def error_norm(y, ynew, err, atol, rtol, ns):
+    """RMS of the embedded error scaled by ``atol + rtol max(|y|, |ynew|)`` over the ``ns`` state components."""
+    e = 0.0
+    for i in range(ns):
+        sc = atol[i] + rtol * max(abs(y[i]), abs(ynew[i]))
+        e += (err[i] / sc) ** 2
+    return np.sqrt(e / float(ns))
+
+
+@_inline
+def extrema_slots(p, dmw, h_max):
+    """Size of the buffer of interior extrema of ``d``: at most 2 per DMW spline piece a step spans."""
+    if dmw is not None:
+        return 2 * (int(h_max / p.dmw_dt) + 3)
+    return 2
+
+
+@_inline
+def inverse_mass_at_tfc(p, pitch):
+    """``1/m + l_c^2/I`` [1/kg] (``1/m`` with the pitch locked): the mass the interface spring moves."""
+    return 1.0 / p.m + (p.l_c ** 2 / p.I if pitch is not None else 0.0)
+
+
+@_inline
+def stiffness_cap(p, in_contact, d, h_max, m_eff_inv, contact, adhesion, tfc, gap_power, meniscus):
+    """Largest step [s] after a step ending at separation ``d`` [m]: ``p.h_stiff`` over the angular
+    frequency of the local interface spring (``h_max`` without one).
+
+    A stiff contact would otherwise run the explicit method at its stability limit, where the step
+    controller is erratic (Hairer & Wanner, Solving ODEs II, IV.2).
+    """
+    if adhesion is None and contact is None and gap_power is None and tfc is None:
+        return h_max
+    kk = tfc_air_force(p, gap_power, tfc, d + p.y_s)[1]
+    kk = abs(interface_stiffness(p, contact, adhesion, meniscus, in_contact, kk, d))
+    return p.h_stiff / np.sqrt(kk * m_eff_inv) if kk > 0.0 else h_max
+
