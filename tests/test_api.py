@@ -113,3 +113,13 @@ def test_a_panel_draws_on_the_axes_it_is_given_and_returns_them(draw, args, kw, 
     assert mine.get_ylabel() == ylabel and mine.lines and not other.lines and not other.get_ylabel()
     fresh = draw(*args(), **kw)  # no axes given: a new figure's
     assert fresh is not mine and fresh.figure is not fig and fresh.get_ylabel() == ylabel
+
+
+def test_the_api_is_no_part_of_any_stage_code_key():
+    """The package's ``__init__`` names the API (a lazy import the key's scan sees): were the API keyed, every
+    stage would be keyed on what the API imports: editing the simulation would recompute the DMW record."""
+    from pipeline import code_version, runner
+    for name in runner.registry():
+        found = code_version.modules(f"pipeline.stages.{name}")
+        assert "pipeline" in found and "pipeline.api" not in found, name
+    assert "pipeline.model.simulation" not in code_version.modules("pipeline.stages.dmw")
