@@ -22,6 +22,7 @@ API = ("load_scene", "simulation_inputs", "build_model", "simulate", "histories_
 
 
 def __getattr__(name: str):
+    """A name of :data:`API`, from :mod:`pipeline.api` (imported now, on first use)."""
     if name in API:
         from . import api  # (the one import of a layer above: tests/test_layers.py, UPWARD_ALLOWED)
         return getattr(api, name)
@@ -29,4 +30,5 @@ def __getattr__(name: str):
 
 
 def __dir__() -> list[str]:
+    """The package's names with those of :data:`API`."""
     return sorted({*globals(), *API})
