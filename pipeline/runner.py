@@ -661,14 +661,17 @@ def ensure(name: str, scene: Scene, out: str | Path, **options: Any) -> Path:
     return build([name], scene, out, **options)[name][0]
 
 
-def simulation_inputs(scene: Scene, out: str | Path, calibration: bool = False) -> SimulationInputs:
+def simulation_inputs(scene: Scene, out: str | Path, calibration: bool = False,
+                      k: float | None = None) -> SimulationInputs:
     """What one simulation of ``scene`` reads, its upstream stages made current in ``out`` first
-    (:func:`pipeline.model.scene_inputs.simulation_inputs`; scripts, benchmarks, tests: a stage reads
-    through :func:`pipeline.model.inputs.for_stage`). ``calibration``: also calibrate and resolve k."""
-    wanted = wanted_inputs(scene, calibration)
+    (:func:`pipeline.model.scene_inputs.simulation_inputs`; scripts, benchmarks, tests, :mod:`pipeline.api`:
+    a stage reads through :func:`pipeline.model.inputs.for_stage`). ``calibration``: also calibrate and
+    resolve k; ``k``: an explicit k [1] instead, resolved without a calibration (the ``option k`` of
+    :func:`pipeline.model.scene_inputs.contact_k`)."""
+    wanted = wanted_inputs(scene, calibration and k is None)
     if wanted:
         build(wanted, scene, out)
-    return from_folder(scene, out, calibration=calibration)
+    return from_folder(scene, out, calibration=calibration or k is not None, k=k)
 
 
 def last_run(out: str | Path, stage: str) -> dict[str, Any] | None:

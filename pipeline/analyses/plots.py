@@ -1,7 +1,9 @@
 """Figures of the report stage (matplotlib object API: no pyplot, no global state).
 
-Every function takes datasets as written by the stages (dataset units, see the README), draws one
-figure, writes it as PNG with :func:`save` and returns the path. Figures are
+Every ``fig_*`` function takes datasets as written by the stages (dataset units, see the README), draws
+one figure, writes it as PNG with :func:`save` and returns the path. The panels a notebook draws on its
+own axes are ``plot_*`` functions: each takes ``ax=`` (a matplotlib ``Axes``; ``None``: a new figure's)
+and returns the axes it drew on; the ``fig_*`` figures are made of them. Figures are
 :class:`matplotlib.figure.Figure` objects that are never registered with pyplot, so nothing leaks
 between calls and nothing needs a display (``MPLBACKEND=Agg`` or not).
 
@@ -30,6 +32,7 @@ from ..units import KHZ, S_IN_MS
 from ..variables import GROUPS, Regime, regime_name
 
 if TYPE_CHECKING:
+    from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
 #: Regime code -> (name, shading colour); names from the variable schema.
@@ -75,6 +78,11 @@ def new_figure(nrows: int = 1, ncols: int = 1, *, size: tuple[float, float] = (7
     fig = Figure(figsize=size, layout="constrained")
     axes = fig.subplots(nrows, ncols, sharex=sharex, sharey=sharey, squeeze=squeeze)
     return fig, axes
+
+
+def panel(ax: Axes | None, size: tuple[float, float] = (7.5, 4.8)) -> Axes:
+    """``ax``, or the axes of a new figure of ``size`` [inch] (:func:`new_figure`) when it is ``None``."""
+    return ax if ax is not None else new_figure(size=size)[1]
 
 
 def envelope(x: np.ndarray, y: np.ndarray, bins: int = 2000) -> tuple[np.ndarray, np.ndarray]:
@@ -217,31 +225,55 @@ def fig_clearance(hist: Sequence[tuple[float, xr.Dataset, int | None]], scene: s
     """
     fig, axes = new_figure(len(hist), 1, size=(7.5, 2.6 * len(hist) + 0.8), sharex=True, squeeze=False)
     for ax, (delta, h, code) in zip(axes[:, 0], hist):
-        t = h["time"].values * S_IN_MS
-        name = "clearance" if "clearance" in h else "separation"
-        y = h[name]
-        _shade_transient(ax, transient_ms)
-        ax.plot(*envelope(t, y.values), lw=0.6, color=LINE_COLOURS[0], label=name)
-        if name == "clearance":
-            ax.axhline(0.0, color="k", lw=0.8, ls="--", label="contact threshold d = k σ")
-        if "in_contact" in h:
-            c = np.nan_to_num(h["in_contact"].values) > 0.5
-            frac = c.mean() if c.size else 0.0
-            for n, (i0, i1) in enumerate(runs(c)[:400]):
-                ax.axvspan(t[i0], t[i1], color="#d62728", alpha=0.12, lw=0, zorder=0,
-                           label="in contact" if n == 0 else None)
-            state = f"{_regime_name(code)}; in contact {100 * frac:.0f} % of the time"
-        else:
-            state = _regime_name(code)
-        ax.set_ylabel(var_label(y, name))
-        ax.set_title(f"protrusion δ = {delta:g} nm ({state})", fontsize=10)
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=7, loc="best", framealpha=0.9)
+        plot_clearance(h, delta, code, transient_ms=transient_ms, ax=ax)
     axes[-1, 0].set_xlabel(axis_label("time", "ms"))
     shown = list(dict.fromkeys(_regime_name(code) for _, _, code in hist))
     what = ", ".join(shown[:-1]) + f" and {shown[-1]}" if len(shown) > 1 else shown[0]
     fig.suptitle(title(f"Fig. 3: clearance histories, {what}", scene), fontsize=11)
     return save(fig, path)
+
+
+def plot_clearance(h: xr.Dataset, delta: float, code: int | None = None, *, transient_ms: float | None = None,
+                   ax: Axes | None = None) -> Axes:
+    """One protrusion's clearance (separation when absent) [nm] versus time [ms], contact shaded (a panel
+    of Fig. 3).
+
+    Parameters
+    ----------
+    h : one protrusion's histories (dim ``time`` [s]): ``clearance`` or ``separation`` [nm], and
+        ``in_contact`` when kept
+    delta : its TFC protrusion [nm] (the panel's title)
+    code : its regime code (:class:`pipeline.variables.Regime`; ``None``: unknown)
+    transient_ms : the start-up transient [ms] shaded as discarded (``None``: none)
+    ax : the axes to draw on (``None``: a new figure's)
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn on (the time axis is not labelled: a figure labels its lowest panel).
+    """
+    ax = panel(ax, (7.5, 3.4))
+    t = h["time"].values * S_IN_MS
+    name = "clearance" if "clearance" in h else "separation"
+    y = h[name]
+    _shade_transient(ax, transient_ms)
+    ax.plot(*envelope(t, y.values), lw=0.6, color=LINE_COLOURS[0], label=name)
+    if name == "clearance":
+        ax.axhline(0.0, color="k", lw=0.8, ls="--", label="contact threshold d = k σ")
+    if "in_contact" in h:
+        c = np.nan_to_num(h["in_contact"].values) > 0.5
+        frac = c.mean() if c.size else 0.0
+        for n, (i0, i1) in enumerate(runs(c)[:400]):
+            ax.axvspan(t[i0], t[i1], color="#d62728", alpha=0.12, lw=0, zorder=0,
+                       label="in contact" if n == 0 else None)
+        state = f"{_regime_name(code)}; in contact {100 * frac:.0f} % of the time"
+    else:
+        state = _regime_name(code)
+    ax.set_ylabel(var_label(y, name))
+    ax.set_title(f"protrusion δ = {delta:g} nm ({state})", fontsize=10)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, loc="best", framealpha=0.9)
+    return ax
 
 
 # --------------------------------------------------------------------------------------------- Fig. 4
@@ -252,6 +284,26 @@ FORCES = (("contact_force", "contact", LINE_COLOURS[0]), ("friction_force", "fri
 def fig_forces(h: xr.Dataset, delta: float, scene: str, path: Path, transient_ms: float | None = None) -> Path:
     """Contact, friction, adhesion and net force histories at one protrusion (paper Fig. 4)."""
     fig, ax = new_figure(size=(7.5, 4.6))
+    plot_forces(h, transient_ms=transient_ms, ax=ax)
+    fig.suptitle(title(f"Fig. 4: interface forces in light contact, protrusion {delta:g} nm", scene), fontsize=11)
+    return save(fig, path)
+
+
+def plot_forces(h: xr.Dataset, *, transient_ms: float | None = None, ax: Axes | None = None) -> Axes:
+    """Contact, friction, adhesion and net vertical force [mN] versus time [ms] at one protrusion (Fig. 4).
+
+    Parameters
+    ----------
+    h : one protrusion's histories (dim ``time`` [s]); the forces of :data:`FORCES` it holds are drawn
+    transient_ms : the start-up transient [ms] shaded as discarded (``None``: none)
+    ax : the axes to draw on (``None``: a new figure's)
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn on.
+    """
+    ax = panel(ax, (7.5, 4.6))
     t = h["time"].values * S_IN_MS
     _shade_transient(ax, transient_ms)
     units = None
@@ -264,8 +316,7 @@ def fig_forces(h: xr.Dataset, delta: float, scene: str, path: Path, transient_ms
     ax.set_ylabel(axis_label("force", units or "mN"))
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, loc="best", framealpha=0.9)
-    fig.suptitle(title(f"Fig. 4: interface forces in light contact, protrusion {delta:g} nm", scene), fontsize=11)
-    return save(fig, path)
+    return ax
 
 
 # --------------------------------------------------------------------------------------------- Fig. 5
@@ -327,6 +378,35 @@ def fig_fhm(combos: Sequence[tuple[dict[str, Any], xr.Dataset]], scene: str, pat
     both stay readable.
     """
     fig, ax = new_figure(size=(10.0, 5.0))
+    plot_fhm(combos, touchdown_nm=touchdown_nm, previous_nm=previous_nm, limit=limit, first_contact=first_contact,
+             ax=ax)
+    fig.suptitle(title("Fig. 6: flying-height modulation / bouncing vibration versus protrusion", scene), fontsize=11)
+    return save(fig, path)
+
+
+def plot_fhm(combos: xr.Dataset | Sequence[tuple[dict[str, Any], xr.Dataset]], *, touchdown_nm: float | None = None,
+             previous_nm: float | None = None, limit: float = 10.0, first_contact: float | None = None,
+             ax: Axes | None = None) -> Axes:
+    """FHM/BV [%] versus TFC protrusion [nm], regimes shaded (from the first combination): Fig. 6's axes.
+
+    Parameters
+    ----------
+    combos : a dataset with ``fhm_bv`` [%] (and ``regime``) on dim ``protrusion`` [nm] (a ``simulate``
+        result, one slice of ``sweep.nc``), or ``(labels, dataset)`` pairs, one line each (labels: the
+        slice's ``roughness`` and ``damping``)
+    touchdown_nm, previous_nm : the measured touchdown and the step before it [nm] (``None``: not drawn)
+    limit : the stable-flying limit of FHM [%]
+    first_contact : the first protrusion in contact here [nm] (``None``: not drawn)
+    ax : the axes to draw on (``None``: a new figure's)
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn on (a log scale when FHM and BV differ by more than a factor 20).
+    """
+    ax = panel(ax, (10.0, 5.0))
+    if isinstance(combos, xr.Dataset):
+        combos = [({}, combos)]
     first = combos[0][1]
     x0 = first["protrusion"].values
     if "regime" in first:
@@ -354,19 +434,18 @@ def fig_fhm(combos: Sequence[tuple[dict[str, Any], xr.Dataset]], scene: str, pat
     shade_note = "regimes shaded for " + _combo_label(combos[0][0]) if len(combos) > 1 else None
     ax.legend(fontsize=7.5, loc="upper left", bbox_to_anchor=(1.01, 1.0), framealpha=0.9, title=shade_note,
               title_fontsize=7.5)
-    fig.suptitle(title("Fig. 6: flying-height modulation / bouncing vibration versus protrusion", scene), fontsize=11)
-    return save(fig, path)
+    return ax
 
 
 # ------------------------------------------------------------------------------------ DMW ensemble
 def touchdown_lines(axes: Sequence[Any], touchdown_nm: float | None, previous_nm: float | None,
-                    lw: float = 1.2) -> None:
-    """The measured touchdown [nm] (labelled on the first axes) and the previous step [nm] as vertical
-    lines on every axes, each gridded."""
+                    lw: float = 1.2, labelled: bool = True) -> None:
+    """The measured touchdown [nm] (labelled on the first axes unless not ``labelled``) and the previous
+    step [nm] as vertical lines on every axes, each gridded."""
     for a in axes:
         if touchdown_nm is not None:
             a.axvline(touchdown_nm, color="#d62728", lw=lw, label=f"measured touchdown {touchdown_nm:g} nm"
-                      if a is axes[0] else None)
+                      if labelled and a is axes[0] else None)
         if previous_nm is not None:
             a.axvline(previous_nm, color="#d62728", lw=0.8, ls=":")
         a.grid(alpha=0.3)
@@ -379,44 +458,120 @@ def fig_ensemble(sweep: xr.Dataset, scene: str, path: Path, *, touchdown_nm: flo
     From the ``realisation`` statistics of ``sweep.nc`` (``[sweep] realisations > 1``), the first
     roughness set and damping ratio; each realisation's FHM/BV is drawn faintly behind the band.
     """
+    fig, (ax, ax2) = new_figure(2, 1, size=(8.5, 6.4), sharex=True)
+    plot_touchdown_probability(sweep, touchdown_nm=touchdown_nm, previous_nm=previous_nm, ax=ax)
+    plot_ensemble_fhm(sweep, touchdown_nm=touchdown_nm, previous_nm=previous_nm, ax=ax2, labelled=False)
+    fig.suptitle(title("Touchdown and FHM/BV over DMW realisations", scene), fontsize=11)
+    return save(fig, path)
+
+
+def _first_combination(sweep: xr.Dataset) -> tuple[xr.Dataset, dict[str, int]]:
+    """The first roughness set and damping ratio of a sweep, and the selection that took them."""
     sel = {d: 0 for d in ("roughness", "damping") if d in sweep.dims}
-    ds = sweep.isel(sel)
+    return sweep.isel(sel), sel
+
+
+def plot_touchdown_probability(sweep: xr.Dataset, *, touchdown_nm: float | None = None,
+                               previous_nm: float | None = None, ax: Axes | None = None) -> Axes:
+    """The touchdown probability [1] over DMW realisations versus TFC protrusion [nm] (top of
+    :func:`fig_ensemble`), of the sweep's first roughness set and damping ratio.
+
+    Parameters
+    ----------
+    sweep : ``sweep.nc`` of ``[sweep] realisations > 1`` (``touchdown_probability`` on ``protrusion``)
+    touchdown_nm, previous_nm : the measured touchdown and the step before it [nm] (``None``: not drawn)
+    ax : the axes to draw on (``None``: a new figure's)
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn on.
+    """
+    ax = panel(ax, (8.5, 3.4))
+    ds, sel = _first_combination(sweep)
     x = ds["protrusion"].values
     n = ds.sizes.get("realisation", 1)
-    fig, (ax, ax2) = new_figure(2, 1, size=(8.5, 6.4), sharex=True)
     p = ds["touchdown_probability"]
     ax.step(x, p.values, where="mid", color=LINE_COLOURS[3], lw=1.4, label=f"{n} DMW realisations")
     ax.set_ylim(-0.03, 1.03)
     ax.set_ylabel(var_label(p, "touchdown probability"))
-    ax2.plot(x, np.asarray(ds["fhm_bv"].values).reshape(x.size, -1), color="0.6", lw=0.4, alpha=0.5)
-    m, s = ds["fhm_bv_mean"].values, ds["fhm_bv_std"].values
-    ax2.fill_between(x, m - s, m + s, color=LINE_COLOURS[0], alpha=0.25, lw=0, label="mean ± 1 std")
-    ax2.plot(x, m, color=LINE_COLOURS[0], lw=1.4, marker="o", ms=2.5, label="ensemble mean")
-    ax2.set_ylabel(axis_label("FHM / BV (peak-to-peak / FH0)", ds["fhm_bv"].attrs.get("units", "%")))
-    ax2.set_xlabel(axis_label("TFC protrusion δ", "nm"))
-    touchdown_lines((ax, ax2), touchdown_nm, previous_nm, lw=1.2)
+    touchdown_lines((ax,), touchdown_nm, previous_nm, lw=1.2)
     ax.legend(fontsize=7.5, loc="upper left", framealpha=0.9)
-    ax2.legend(fontsize=7.5, loc="upper left", framealpha=0.9)
     what = ", ".join(f"{d} {ds[d].values.item()}" for d in sel)
     ax.set_title(f"first grid combination ({what})" if what else "", fontsize=9)
-    fig.suptitle(title("Touchdown and FHM/BV over DMW realisations", scene), fontsize=11)
-    return save(fig, path)
+    return ax
+
+
+def plot_ensemble_fhm(sweep: xr.Dataset, *, touchdown_nm: float | None = None, previous_nm: float | None = None,
+                      ax: Axes | None = None, labelled: bool = True) -> Axes:
+    """FHM/BV [%] of every DMW realisation, their mean and a +-1 std band versus TFC protrusion [nm]
+    (bottom of :func:`fig_ensemble`), of the sweep's first roughness set and damping ratio.
+
+    Parameters
+    ----------
+    sweep : ``sweep.nc`` of ``[sweep] realisations > 1`` (``fhm_bv``, ``fhm_bv_mean``, ``fhm_bv_std``)
+    touchdown_nm, previous_nm : the measured touchdown and the step before it [nm] (``None``: not drawn)
+    ax : the axes to draw on (``None``: a new figure's)
+    labelled : name the touchdown line in the legend (a figure names it once, on its top panel)
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn on.
+    """
+    ax = panel(ax, (8.5, 3.4))
+    ds, _ = _first_combination(sweep)
+    x = ds["protrusion"].values
+    ax.plot(x, np.asarray(ds["fhm_bv"].values).reshape(x.size, -1), color="0.6", lw=0.4, alpha=0.5)
+    m, s = ds["fhm_bv_mean"].values, ds["fhm_bv_std"].values
+    ax.fill_between(x, m - s, m + s, color=LINE_COLOURS[0], alpha=0.25, lw=0, label="mean ± 1 std")
+    ax.plot(x, m, color=LINE_COLOURS[0], lw=1.4, marker="o", ms=2.5, label="ensemble mean")
+    ax.set_ylabel(axis_label("FHM / BV (peak-to-peak / FH0)", ds["fhm_bv"].attrs.get("units", "%")))
+    ax.set_xlabel(axis_label("TFC protrusion δ", "nm"))
+    touchdown_lines((ax,), touchdown_nm, previous_nm, lw=1.2, labelled=labelled)
+    ax.legend(fontsize=7.5, loc="upper left", framealpha=0.9)
+    return ax
 
 
 def fig_band(ens: xr.Dataset, scene: str, path: Path, *, band_nm: Sequence[float] = (), threshold: float = 20.0,
              touchdown_nm: float | None = None, previous_nm: float | None = None) -> Path:
     """The bouncing band over DMW realisations (``ensemble.nc``, whose stage computed every statistic drawn):
-    the bouncing BV (BV where the run touched, 0 where it flew) of every realisation with its median and
-    10-90 % range and the threshold (top); the fraction of the realisations bouncing above it, the touchdown
-    probability and the median contact fraction with its 10-90 % range (bottom), versus protrusion [nm];
-    the paper's band shaded."""
+    :func:`plot_band` (top) and :func:`plot_band_probabilities` (bottom) versus protrusion [nm]."""
+    fig, (ax, ax2) = new_figure(2, 1, size=(8.5, 6.6), sharex=True)
+    plot_band(ens, band_nm=band_nm, threshold=threshold, touchdown_nm=touchdown_nm, previous_nm=previous_nm, ax=ax)
+    plot_band_probabilities(ens, band_nm=band_nm, threshold=threshold, touchdown_nm=touchdown_nm,
+                            previous_nm=previous_nm, ax=ax2, labelled=False)
+    fig.suptitle(title("The bouncing band over DMW realisations", scene), fontsize=11)
+    return save(fig, path)
+
+
+def _paper_band(ax: Axes, band_nm: Sequence[float], label: str | None) -> None:
+    if len(band_nm):
+        ax.axvspan(min(band_nm) - 0.1, max(band_nm) + 0.1, color="#ffbf00", alpha=0.15, lw=0, label=label)
+
+
+def plot_band(ens: xr.Dataset, *, band_nm: Sequence[float] = (), threshold: float = 20.0,
+              touchdown_nm: float | None = None, previous_nm: float | None = None, ax: Axes | None = None) -> Axes:
+    """The bouncing BV [%] (BV where the run touched, 0 where it flew) of every DMW realisation, with its
+    median and 10-90 % range and the paper's threshold, versus TFC protrusion [nm] (top of :func:`fig_band`).
+
+    Parameters
+    ----------
+    ens : ``ensemble.nc`` (``bouncing_bv``, ``bouncing_bv_spread``, ``bouncing_bv_median``)
+    band_nm : the paper's band of protrusions [nm], shaded (empty: none); the axes then start 2 nm below it
+    threshold : the bouncing threshold of BV [%]
+    touchdown_nm, previous_nm : the measured touchdown and the step before it [nm] (``None``: not drawn)
+    ax : the axes to draw on (``None``: a new figure's)
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn on.
+    """
+    ax = panel(ax, (8.5, 3.4))
     x = ens["protrusion"].values
     n = ens.sizes["realisation"]
-    fig, (ax, ax2) = new_figure(2, 1, size=(8.5, 6.6), sharex=True)
-    for a in (ax, ax2):
-        if len(band_nm):
-            a.axvspan(min(band_nm) - 0.1, max(band_nm) + 0.1, color="#ffbf00", alpha=0.15, lw=0,
-                      label="the paper's band" if a is ax else None)
+    _paper_band(ax, band_nm, "the paper's band")
     bv = ens["bouncing_bv"]
     lo, hi = ens["bouncing_bv_spread"].values.T
     ax.plot(x, bv.values, ".", color="0.55", ms=3, alpha=0.6)
@@ -425,27 +580,55 @@ def fig_band(ens: xr.Dataset, scene: str, path: Path, *, band_nm: Sequence[float
             label=f"median over {n} DMW realisations")
     ax.axhline(threshold, color="k", lw=0.8, ls="--", label=f"paper: BV > {threshold:g} %")
     ax.set_ylabel(axis_label("bouncing BV (0 where flying)", bv.attrs.get("units", "%")))
-    ax2.plot(x, ens["bv_exceedance_probability"].values, color=LINE_COLOURS[3], lw=1.4, marker="s", ms=3,
-             label=f"P(bouncing BV > {threshold:g} %)")
-    if "touchdown_probability" in ens:
-        ax2.plot(x, ens["touchdown_probability"].values, color="#d62728", lw=1.0, ls="--",
-                 label="touchdown probability")
-    if "contact_fraction_median" in ens:
-        clo, chi = ens["contact_fraction_spread"].values.T
-        ax2.fill_between(x, clo, chi, color=LINE_COLOURS[2], alpha=0.2, lw=0)
-        ax2.plot(x, ens["contact_fraction_median"].values, color=LINE_COLOURS[2], lw=1.2,
-                 label="contact fraction of the window (median, 10-90 %)")
-    ax2.axhline(0.5, color="k", lw=0.6, ls=":")
-    ax2.set_ylim(-0.03, 1.03)
-    ax2.set_ylabel(axis_label("probability / fraction", "1"))
-    ax2.set_xlabel(axis_label("TFC protrusion δ", "nm"))
-    touchdown_lines((ax, ax2), touchdown_nm, previous_nm, lw=1.0)
-    for a in (ax, ax2):
-        a.legend(fontsize=7.5, loc="upper left", framealpha=0.9)
+    touchdown_lines((ax,), touchdown_nm, previous_nm, lw=1.0)
+    ax.legend(fontsize=7.5, loc="upper left", framealpha=0.9)
     if len(band_nm):  # around the band: from 2 nm below it (the flying FHM targets far below add nothing here)
         ax.set_xlim(max(float(np.min(x)), min(band_nm) - 2.0) - 0.1, float(np.max(x)) + 0.1)
-    fig.suptitle(title("The bouncing band over DMW realisations", scene), fontsize=11)
-    return save(fig, path)
+    return ax
+
+
+def plot_band_probabilities(ens: xr.Dataset, *, band_nm: Sequence[float] = (), threshold: float = 20.0,
+                            touchdown_nm: float | None = None, previous_nm: float | None = None,
+                            ax: Axes | None = None, labelled: bool = True) -> Axes:
+    """The fraction of the DMW realisations bouncing above the threshold, the touchdown probability and the
+    median contact fraction with its 10-90 % range [1] versus TFC protrusion [nm] (bottom of :func:`fig_band`).
+
+    Parameters
+    ----------
+    ens : ``ensemble.nc`` (``bv_exceedance_probability``; ``touchdown_probability`` and
+        ``contact_fraction_median``/``_spread`` when present)
+    band_nm : the paper's band of protrusions [nm], shaded (empty: none)
+    threshold : the bouncing threshold of BV [%] (the legend)
+    touchdown_nm, previous_nm : the measured touchdown and the step before it [nm] (``None``: not drawn)
+    ax : the axes to draw on (``None``: a new figure's)
+    labelled : name the paper's band and the touchdown line in the legend (a figure names them once, on
+        its top panel)
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn on.
+    """
+    ax = panel(ax, (8.5, 3.4))
+    x = ens["protrusion"].values
+    _paper_band(ax, band_nm, "the paper's band" if labelled else None)
+    ax.plot(x, ens["bv_exceedance_probability"].values, color=LINE_COLOURS[3], lw=1.4, marker="s", ms=3,
+            label=f"P(bouncing BV > {threshold:g} %)")
+    if "touchdown_probability" in ens:
+        ax.plot(x, ens["touchdown_probability"].values, color="#d62728", lw=1.0, ls="--",
+                label="touchdown probability")
+    if "contact_fraction_median" in ens:
+        clo, chi = ens["contact_fraction_spread"].values.T
+        ax.fill_between(x, clo, chi, color=LINE_COLOURS[2], alpha=0.2, lw=0)
+        ax.plot(x, ens["contact_fraction_median"].values, color=LINE_COLOURS[2], lw=1.2,
+                label="contact fraction of the window (median, 10-90 %)")
+    ax.axhline(0.5, color="k", lw=0.6, ls=":")
+    ax.set_ylim(-0.03, 1.03)
+    ax.set_ylabel(axis_label("probability / fraction", "1"))
+    ax.set_xlabel(axis_label("TFC protrusion δ", "nm"))
+    touchdown_lines((ax,), touchdown_nm, previous_nm, lw=1.0, labelled=labelled)
+    ax.legend(fontsize=7.5, loc="upper left", framealpha=0.9)
+    return ax
 
 
 # --------------------------------------------------------------------------------------------- Fig. 7

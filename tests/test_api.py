@@ -1,0 +1,125 @@
+"""The public API (pipeline.api, re-exported by the package): the calls the stages make, so a model built
+from Python simulates exactly as the stages do; and the plot panels that take and return axes."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import xarray as xr
+
+import pipeline as hdi
+from pipeline.analyses import plots
+from pipeline.cli_checks import OptionError
+from pipeline.config.scene import SceneError
+from pipeline.io import DatasetError
+
+#: Flying only (no interface tables to make), short runs, three protrusions [nm].
+FLYING = ['scene.effects=["air_bearing","pitch","dmw"]', "solver.duration_ms=0.6", "solver.transient_ms=0.2",
+          "sweep.protrusion_nm={start=4.0, stop=5.0, step=0.5}", "sweep.batch_size=3"]
+
+
+@pytest.fixture(scope="module")
+def flying(paper_config):
+    return hdi.load_scene(paper_config, FLYING)
+
+
+def test_the_package_exports_the_api():
+    assert {"load_scene", "build_model", "simulate", "open_dataset", "run_stage", "run"} <= set(dir(hdi))
+    assert hdi.simulate is __import__("pipeline.model.simulation", fromlist=["simulate"]).simulate
+    with pytest.raises(AttributeError, match="no attribute 'nope'"):
+        hdi.nope
+
+
+def test_a_model_from_python_simulates_as_the_stages_do(flying, tmp_path):
+    """In memory, from a results folder, and the simulate and sweep stages: the same numbers, bit for bit."""
+    delta = float(flying["tfc"]["protrusion_nm"])
+    mem = hdi.simulate(hdi.build_model(flying), [delta, 4.5], histories=[delta])
+    folder = hdi.simulate(hdi.build_model(flying, tmp_path), [delta, 4.5])
+    assert mem["fhm_bv"].values.tobytes() == folder["fhm_bv"].values.tobytes()
+    assert (tmp_path / "dmw.nc").is_file() and not (tmp_path / "interface.nc").exists()  # (flying: no tables)
+    summary = hdi.run_stage("simulate", flying, tmp_path).parent / "summary.nc"
+    assert hdi.open_dataset(tmp_path, summary.name)["fhm_bv"].values.tobytes() == mem["fhm_bv"][:1].values.tobytes()
+    history = hdi.histories_of(mem).sel(protrusion=delta)
+    assert history["separation"].shape == (history.sizes["time"],) == (2401,)  # 0.6 ms at 0.25 us
+    assert np.array_equal(history["separation"].values, hdi.open_dataset(tmp_path, "simulate")["separation"][0].values)
+    sweep = hdi.open_dataset(hdi.run_stage("sweep", flying, tmp_path, scheduler="synchronous").parent, "sweep")
+    assert sweep["fhm_bv"].sel(protrusion=4.5).values.ravel().tobytes() == mem["fhm_bv"][1:].values.tobytes()
+    assert 1.0 < float(mem["fhm_bv"][1]) < 50.0  # flying: FHM [%] of a 0.27-nm DMW over a few nm
+
+
+def test_k_given_is_used_without_a_calibration(paper_config, tmp_path):
+    scene = hdi.load_scene(paper_config, ["solver.duration_ms=0.6", "solver.transient_ms=0.2"])
+    assert scene["contact"]["k"] is None  # (without k the calibration would run first)
+    sim = hdi.simulation_inputs(scene, tmp_path, k=0.7)
+    assert (sim.k, sim.k_source) == (0.7, "option k") and not (tmp_path / "calibration.nc").exists()
+    assert sim.model(scene).k == 0.7 and (tmp_path / "interface.nc").is_file()
+
+
+def test_bad_input_raises_the_errors_the_command_line_reports(flying, paper_config, tmp_path):
+    with pytest.raises(SceneError, match="solver.duration_ms"):
+        hdi.load_scene(paper_config, ["solver.duration_ms=-1"])
+    with pytest.raises(DatasetError, match=r"sweep\.nc: dataset does not exist \(run `hdi sweep` first\)"):
+        hdi.open_dataset(tmp_path, "sweep")
+    with pytest.raises(ValueError, match="stage 'report' writes no dataset"):
+        hdi.open_dataset(tmp_path, "report")
+    with pytest.raises(ValueError, match="expected a stage"):
+        hdi.open_dataset(tmp_path, "swep")
+    with pytest.raises(ValueError, match="unknown stage 'swep'"):
+        hdi.run_stage("swep", flying, tmp_path)
+    with pytest.raises(OptionError, match="--workers 0"):
+        hdi.run_stage("sweep", flying, tmp_path, workers=0)
+    assert list(tmp_path.iterdir()) == []  # (refused before anything was written)
+
+
+def _history(n=400):
+    t = np.arange(n) * 1.5e-6
+    c = (t > 2e-4).astype(float)
+    return xr.Dataset({"clearance": ("time", 0.5 - c + 0.1 * np.sin(t * 1e5), {"units": "nm"}),
+                       "in_contact": ("time", c), "contact_force": ("time", c * 1.5, {"units": "mN"}),
+                       "net_force": ("time", c - 1.0, {"units": "mN"})}, coords={"time": ("time", t)})
+
+
+def _sweep(realisations=0):
+    x = np.array([9.0, 9.5, 10.0])
+    if not realisations:
+        return xr.Dataset({"fhm_bv": ("protrusion", [12.0, 30.0, 25.0], {"units": "%"}),
+                           "regime": ("protrusion", [0, 1, 2])}, coords={"protrusion": x})
+    f = np.arange(x.size * realisations, dtype=float).reshape(x.size, realisations) + 1.0
+    return xr.Dataset({"fhm_bv": (("protrusion", "realisation"), f, {"units": "%"}),
+                       "fhm_bv_mean": ("protrusion", f.mean(1)), "fhm_bv_std": ("protrusion", f.std(1)),
+                       "touchdown_probability": ("protrusion", [0.0, 0.5, 1.0]),
+                       "bouncing_bv": (("protrusion", "realisation"), f),
+                       "bouncing_bv_spread": (("protrusion", "q"), np.stack([f.min(1), f.max(1)], 1)),
+                       "bouncing_bv_median": ("protrusion", np.median(f, 1)),
+                       "bv_exceedance_probability": ("protrusion", [0.0, 0.3, 1.0])},
+                      coords={"protrusion": x, "realisation": np.arange(realisations)})
+
+
+PANELS = [
+    (plots.plot_clearance, lambda: (_history(), 10.0, 2), {"transient_ms": 0.1}, "clearance [nm]"),
+    (plots.plot_forces, lambda: (_history(),), {}, "force [mN]"),
+    (plots.plot_fhm, lambda: (_sweep(),), {"touchdown_nm": 9.5}, "FHM / BV (peak-to-peak / FH0) [%]"),
+    (plots.plot_touchdown_probability, lambda: (_sweep(3),), {}, "touchdown probability [-]"),
+    (plots.plot_ensemble_fhm, lambda: (_sweep(3),), {}, "FHM / BV (peak-to-peak / FH0) [%]"),
+    (plots.plot_band, lambda: (_sweep(3),), {"band_nm": (9.5, 10.0)}, "bouncing BV (0 where flying) [%]"),
+    (plots.plot_band_probabilities, lambda: (_sweep(3),), {}, "probability / fraction [-]"),
+]
+
+
+@pytest.mark.parametrize("draw, args, kw, ylabel", PANELS, ids=lambda v: getattr(v, "__name__", ""))
+def test_a_panel_draws_on_the_axes_it_is_given_and_returns_them(draw, args, kw, ylabel):
+    fig, (mine, other) = plots.new_figure(2, 1)
+    assert draw(*args(), ax=mine, **kw) is mine
+    assert mine.get_ylabel() == ylabel and mine.lines and not other.lines and not other.get_ylabel()
+    fresh = draw(*args(), **kw)  # no axes given: a new figure's
+    assert fresh is not mine and fresh.figure is not fig and fresh.get_ylabel() == ylabel
+
+
+def test_the_api_is_no_part_of_any_stage_code_key():
+    """The package's ``__init__`` names the API (a lazy import the key's scan sees): were the API keyed, every
+    stage would be keyed on what the API imports: editing the simulation would recompute the DMW record."""
+    from pipeline import code_version, runner
+    for name in runner.registry():
+        found = code_version.modules(f"pipeline.stages.{name}")
+        assert "pipeline" in found and "pipeline.api" not in found, name
+    assert "pipeline.model.simulation" not in code_version.modules("pipeline.stages.dmw")
