@@ -9,7 +9,8 @@ itself is chosen when it starts (:func:`display`):
   logging), or another :class:`Progress` is running in this context: the outer one owns the display
   (the generations of ``hdi identify``, not each generation's fan-out);
 * ``"bar"``: stderr is an interactive terminal and ``CI`` is not set: a tqdm bar with its ETA; while it
-  runs, the ``pipeline`` log lines are written above it (tqdm's logging redirect), not over it;
+  runs, the ``pipeline`` log lines (tqdm's logging redirect) and the warnings are written above it, not
+  over it;
 * ``"lines"``: otherwise (a batch job's log, a pipe, a file): every :func:`interval_s` seconds (default
   :data:`INTERVAL_S`, environment variable ``HDI_PROGRESS_S``) one INFO line
   ``"<stage>: k/N <unit>s done, elapsed M:SS, ETA M:SS"``, and one at the end when the work took that
@@ -28,6 +29,7 @@ import os
 import sys
 import threading
 import time
+import warnings
 from typing import Any, Iterator
 
 log = logging.getLogger(__name__)
@@ -106,6 +108,7 @@ class Progress:
         self._lines = 0
         self._bar: Any = None
         self._redirect: Any = None
+        self._showwarning: Any = None
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self._token: contextvars.Token | None = None
@@ -128,6 +131,14 @@ class Progress:
             from tqdm.contrib.logging import logging_redirect_tqdm
             self._redirect = logging_redirect_tqdm(loggers=[logging.getLogger("pipeline")])
             self._redirect.__enter__()
+            self._showwarning = warnings.showwarning
+
+            def show(message: Any, category: Any, filename: str, lineno: int, file: Any = None,
+                     line: str | None = None) -> None:  # (a warning above the bar too, as formatted)
+                text = warnings.formatwarning(message, category, filename, lineno, line)
+                tqdm.write(text.rstrip("\n"), file=sys.stderr)
+
+            warnings.showwarning = show
             self._bar = tqdm(total=self.total, initial=self.initial, unit=self.unit, desc=self.label,
                              file=sys.stderr, dynamic_ncols=True)
         else:
@@ -180,6 +191,7 @@ class Progress:
         if self._redirect is not None:
             self._redirect.__exit__(None, None, None)
             self._redirect = None
+            warnings.showwarning = self._showwarning
         if self._token is not None:
             _ACTIVE.reset(self._token)
             self._token = None

@@ -7,6 +7,7 @@ import os
 import re
 import sys
 import time
+import warnings
 
 import pytest
 
@@ -86,6 +87,7 @@ def test_on_a_pseudo_terminal_a_bar_counts_and_log_lines_go_above_it(monkeypatch
     fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", 24, 100, 0, 0))  # (a terminal 100 wide)
     tty = os.fdopen(slave, "w")
     try:
+        shown = warnings.showwarning
         monkeypatch.setattr(sys, "stderr", tty)
         monkeypatch.delenv("CI", raising=False)
         with progress.stage("demo"), progress.Progress(3, unit="generation") as bar:
@@ -93,6 +95,7 @@ def test_on_a_pseudo_terminal_a_bar_counts_and_log_lines_go_above_it(monkeypatch
             for i in range(3):
                 logging.getLogger("pipeline.demo").info("message %d", i)
                 bar.update(note=f"best cost {3 - i}")
+            warnings.warn("a warning above the bar", UserWarning)
         tty.flush()
         monkeypatch.undo()
     finally:
@@ -111,7 +114,9 @@ def test_on_a_pseudo_terminal_a_bar_counts_and_log_lines_go_above_it(monkeypatch
     assert "3/3" in out and "best cost 1" in out and "demo" in out, out
     # each message is a line of its own (tqdm cleared the bar before it and drew it again after)
     rows = re.split(r"[\r\n]+", out)
-    assert {"message 0", "message 1", "message 2"} <= {r.strip() for r in rows}, rows
+    expected = {"message 0", "message 1", "message 2", "UserWarning: a warning above the bar"}
+    assert expected <= {r.strip() for r in rows}, rows
+    assert sys.stderr is not tty and warnings.showwarning is shown  # (both given back)
 
 
 SCENE = """
