@@ -19,6 +19,7 @@ from pathlib import Path
 
 from . import __version__, runner
 from .io import DatasetError, os_error_line, results_dir
+from .progress import interval_s
 from .config.scene import SceneError, describe_keys, load_scene
 from .stages import roughness
 from .cli_checks import MAX_SCENES, check_options, one_line_warnings
@@ -81,7 +82,11 @@ def _parser(stages: dict[str, runner.Stage]) -> argparse.ArgumentParser:
     p.add_argument("--yes", action="store_true",
                    help=f"run a big job: a sweep of more than {MAX_SCENES:,} scenes, or tables, histories, "
                         "records or studies beyond the limits of pipeline/config/limits.py")
-    p.add_argument("-v", "--verbose", action="store_true")
+    talk = p.add_mutually_exclusive_group()
+    talk.add_argument("-v", "--verbose", action="count", default=0,
+                      help="-v: also a traceback with an error and dask's own messages; -vv: also debug messages")
+    talk.add_argument("-q", "--quiet", action="store_true",
+                      help="warnings and errors only: no progress bar or lines, no stage messages")
     return p
 
 
@@ -103,18 +108,24 @@ def _given(args: argparse.Namespace) -> dict:
                                                     "detrend", "write_scene", "force")}
 
 
-def _logging(verbose: bool) -> None:
-    """The stages' progress (INFO of the ``pipeline`` loggers) on stderr; more with ``-v``."""
+#: dask.distributed's loggers, which it configures at INFO itself.
+_DASK_LOGGERS = ("distributed", "distributed.scheduler", "distributed.nanny", "distributed.core",
+                 "distributed.http.proxy", "distributed.client")
+
+
+def _logging(verbose: int = 0, quiet: bool = False) -> None:
+    """The stages' messages and progress (INFO of the ``pipeline`` loggers, :mod:`pipeline.progress`) on
+    stderr; with ``quiet`` (``-q``) warnings and errors only; ``verbose`` 1 (``-v``) adds dask's own
+    messages, 2 (``-vv``) the DEBUG ones."""
     one_line_warnings()
     if not any(isinstance(h, _Stderr) for h in log.handlers):
         handler = _Stderr()
         handler.setFormatter(_Format("%(message)s"))
         log.addHandler(handler)
-    log.setLevel(logging.DEBUG if verbose else logging.INFO)
-    if not verbose:  # dask.distributed configures its own INFO loggers; keep the terminal quiet
-        for name in ("distributed", "distributed.scheduler", "distributed.nanny", "distributed.core",
-                     "distributed.http.proxy", "distributed.client"):
-            logging.getLogger(name).setLevel(logging.CRITICAL)  # (shutdown races log CommClosedError)
+    log.setLevel(logging.WARNING if quiet else logging.DEBUG if verbose >= 2 else logging.INFO)
+    if not verbose:  # keep the terminal quiet (dask's shutdown races log CommClosedError)
+        for name in _DASK_LOGGERS:
+            logging.getLogger(name).setLevel(logging.CRITICAL)
 
 
 class Terminated(KeyboardInterrupt):
@@ -140,7 +151,7 @@ def main(argv: list[str] | None = None) -> int:
 def _main(argv: list[str] | None = None) -> int:
     stages = runner.registry()
     args = _parser(stages).parse_args(argv)
-    _logging(args.verbose)
+    _logging(args.verbose, args.quiet)
     try:
         if args.stage == "roughness" and not (len(args.inputs) == 1 and args.inputs[0].endswith(".toml")):
             if args.out is None:
@@ -151,6 +162,7 @@ def _main(argv: list[str] | None = None) -> int:
                                            channel=args.channel, detrend=args.detrend or "plane")
             print(path)
             return 0
+        interval_s()  # (a bad HDI_PROGRESS_S is one line now, not after the upstream stages)
         if len(args.inputs) != 1:
             raise SceneError(f"hdi {args.stage}: expected one scene file, got {args.inputs}")
         scene = load_scene(args.inputs[0], args.overrides)

@@ -57,6 +57,7 @@ from pathlib import Path
 from typing import Any, Callable, Iterable, Iterator, Sequence
 
 from .code_version import code_key
+from .progress import Progress
 
 log = logging.getLogger(__name__)
 
@@ -221,6 +222,9 @@ def run_tasks(fn: Callable[..., Any], tasks: Iterable[tuple], *, scheduler: str 
         ``KeyboardInterrupt``) cancels the tasks not yet started and is re-raised once the running
         ones have finished (each task's own output is then complete, never half-written)
 
+    The finished tasks are counted on a :class:`pipeline.progress.Progress` (a bar on a terminal,
+    periodic lines in a log), unless the caller counts its own work around the call.
+
     Returns
     -------
     float
@@ -228,18 +232,25 @@ def run_tasks(fn: Callable[..., Any], tasks: Iterable[tuple], *, scheduler: str 
         to ``on_done`` (a process cluster is started and warmed up before it).
     """
     tasks = list(tasks)
-    done = on_done if on_done is not None else (lambda result: None)
+    given = on_done if on_done is not None else (lambda result: None)
     if scheduler is None:
         n = local_workers(workers, len(tasks))
         scheduler = "synchronous" if n == 1 else "threads"
-    if scheduler == "synchronous" or not tasks:
-        t0 = time.perf_counter()
-        for args in tasks:
-            done(fn(*args))
-        return time.perf_counter() - t0
-    if scheduler == "threads":
-        return _threads(fn, tasks, local_workers(workers, len(tasks)), done)
-    return _distributed(fn, tasks, scheduler, workers, done)
+    with Progress(len(tasks), unit="task") as progress:
+
+        def done(result: Any) -> None:
+            given(result)
+            progress.update()
+
+        if scheduler == "synchronous" or not tasks:
+            log.debug("fan-out: %d tasks in this process, one after the other", len(tasks))
+            t0 = time.perf_counter()
+            for args in tasks:
+                done(fn(*args))
+            return time.perf_counter() - t0
+        if scheduler == "threads":
+            return _threads(fn, tasks, local_workers(workers, len(tasks)), done)
+        return _distributed(fn, tasks, scheduler, workers, done)
 
 
 def _threads(fn: Callable[..., Any], tasks: list[tuple], n: int, done: Callable[[Any], None]) -> float:

@@ -51,6 +51,7 @@ import xarray as xr
 
 from .code_version import code_key
 from .fanout import shared_folder
+from .progress import stage as progress_stage
 from .model.inputs import SimulationInputs, from_folder
 from .model.scene_inputs import simulation_inputs as wanted_inputs
 from .io import (KEY_ATTR, DatasetError, RUN_ID, file_hash, is_temporary, read_attrs, read_dataset, temporary_path,
@@ -571,7 +572,7 @@ class Runner:
                             upstream={u: self.key(u) for u in st.upstream_names(self.scene)},
                             optional=self.optional(name), options={**self.options, "force": force},
                             staging=staging)
-            with shared_folder(inputs.out):
+            with shared_folder(inputs.out), progress_stage(name):  # (its progress lines carry its name)
                 result = st.compute(self.scene, inputs)
             written = self._write(st, key, inputs, result, staging)
         finally:

@@ -35,6 +35,7 @@ References
 
 from __future__ import annotations
 
+import contextlib
 from typing import Any, Callable, Sequence
 
 import numpy as np
@@ -116,13 +117,19 @@ def interval(grid: np.ndarray, metric: np.ndarray, limit: float, centre: float) 
     return walk(-1), walk(+1)
 
 
-def identify(ident: Identification, params: Sequence[Parameter], x_base: np.ndarray, cfg: dict) -> dict[str, Any]:
+def identify(ident: Identification, params: Sequence[Parameter], x_base: np.ndarray, cfg: dict,
+             progress: Callable[..., Any] | None = None) -> dict[str, Any]:
     """Run the three steps of the module docstring from the reconstructed point ``x_base``.
 
     ``cfg``: ``generations``, ``population``, ``seed``, ``profile_points`` (``[identify]``). Returns the
     best point, its residuals, whether it is within tolerance, the intervals and their criterion, the
     profiles, the correlation and the optimiser's report (arrays, for ``identify.nc``); the records are
     in ``ident``.
+
+    ``progress``: how the global search shows its generations, ``progress(total, unit=...)`` a context
+    manager whose ``update(note=...)`` is called after each generation with the best cost so far
+    (:class:`pipeline.progress.Progress` in ``hdi identify``; default: nothing shown). It only watches:
+    the search is the same with or without it.
     """
     lo = np.array([p.low for p in params])
     hi = np.array([p.high for p in params])
@@ -134,10 +141,18 @@ def identify(ident: Identification, params: Sequence[Parameter], x_base: np.ndar
         return ident.costs(np.atleast_2d(X.T), 1)
 
     from scipy.optimize import differential_evolution  # (here: its import is not paid by every hdi command)
-    result = differential_evolution(objective, list(zip(lo, hi)), strategy="best1bin", maxiter=cfg["generations"],
-                                    popsize=cfg["population"], tol=0.01, seed=cfg["seed"], polish=False,
-                                    init="latinhypercube", x0=x_base if inside else None, vectorized=True,
-                                    updating="deferred")
+    shown = progress(cfg["generations"], unit="generation") if progress else contextlib.nullcontext()
+    with shown as bar:
+
+        def generation(intermediate_result: Any) -> None:  # (scipy passes the best so far by this name)
+            if bar is not None:
+                bar.update(note=f"best cost {float(intermediate_result.fun):.4g}")
+
+        result = differential_evolution(objective, list(zip(lo, hi)), strategy="best1bin",
+                                        maxiter=cfg["generations"], popsize=cfg["population"], tol=0.01,
+                                        seed=cfg["seed"], polish=False, init="latinhypercube",
+                                        x0=x_base if inside else None, vectorized=True, updating="deferred",
+                                        callback=generation)
     # the best of everything evaluated so far (the reconstruction included)
     pts, res = _all(ident, params)
     c = np.sum(res**2, axis=1)

@@ -112,6 +112,7 @@ from ..model import dmw_record, scene_inputs
 from ..model.inputs import for_stage
 from ..model.interface_tables import build_tables, roughness_statistics
 from ..model.simulation import COUNTERS, simulate
+from ..progress import Progress
 from ..runner import Inputs, Stage, build, ensure
 from ..units import MHZ
 
@@ -278,12 +279,18 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
     cache = _RunCache(scene, out, repeat)  # tables and records of the runs, built once per setting
     cache.bulge = sim.bulge_table()  # (the bulge table is no accuracy knob: the scene's, as is)
 
-    def evaluate(values: dict[str, float], n: int) -> Result:
-        return _evaluate(scene, values, cache, k, points, n)
+    # the runs counted: the reference twice, each knob setting once, the chosen defaults together and the
+    # scene's settings (each step back of the combination adds runs; settings equal to the reference share one)
+    with Progress(2 + sum(len(kb.settings) for kb in knobs) + 2, unit="configuration") as progress:
 
-    ds, summary = knob_study.study(evaluate, knobs, reference, points, current, repeat=repeat, tol=tol,
-                                   combined_tol=options.get("combined_tolerance"), k=k, k_source=k_source,
-                                   record_notes=cache.record_notes)
+        def evaluate(values: dict[str, float], n: int) -> Result:
+            res = _evaluate(scene, values, cache, k, points, n)
+            progress.update()
+            return res
+
+        ds, summary = knob_study.study(evaluate, knobs, reference, points, current, repeat=repeat, tol=tol,
+                                       combined_tol=options.get("combined_tolerance"), k=k, k_source=k_source,
+                                       record_notes=cache.record_notes)
     ds.attrs["stage_wall_time_s"] = time.perf_counter() - t_start
     fig = plots.fig_work_precision(ds, inputs.staging / "figures" / "work_precision.png")
     knob_study.log_summary(ds, summary, fig.name)

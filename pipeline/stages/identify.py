@@ -51,6 +51,7 @@ import xarray as xr
 
 from ..analyses import plots
 from ..fanout import local_cluster
+from ..progress import Progress
 from ..io import read_dataset, temporary_path, var
 from ..runner import Inputs, Stage, build
 from ..analyses.identification import GN_STEP, ROLES, Identification, identify
@@ -290,7 +291,7 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
         ev = Evaluator(scene, params, prots, base_inputs, store, cfg["batch_size"], address, workers,
                        task=opts.get("task") or evaluate_batch, realisations=cfg["realisations"])
         ident = Identification(ev, tlist, cfg["missing_residual"])
-        result = identify(ident, params, x_base, cfg)
+        result = identify(ident, params, x_base, cfg, progress=Progress)  # (generations, best cost)
     ds = dataset(ident, params, result, x_base, ev)
     # (its file name: the scene is in the results folder, wherever that folder is)
     ds.attrs["identified_scene"] = identified_scene_path(scene, out).name

@@ -29,8 +29,6 @@ from __future__ import annotations
 import functools
 import json
 import logging
-import os
-import sys
 import threading
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -41,6 +39,7 @@ import xarray as xr
 
 from ..model import slider as sl
 from ..fanout import run_tasks
+from ..progress import Progress
 from ..io import read_attrs, read_dataset, write_dataset
 from ..runner import KEY_ATTR, Inputs, Stage, ensure
 from ..variables import ENSEMBLE, HISTORIES, SCALARS, STEPPING, coordinate
@@ -166,13 +165,10 @@ def run_batch(scene: Any, batch: Batch, inputs: SimulationInputs, part_path: str
     return part_path, ds
 
 
-def _progress(total: int, initial: int):
-    """A tqdm bar on an interactive terminal; nothing when piped or in CI."""
-    quiet = not sys.stderr.isatty() or os.environ.get("CI")
-    if quiet:
-        return None
-    from tqdm import tqdm
-    return tqdm(total=total, initial=initial, unit="batch", desc="sweep", file=sys.stderr)
+def _progress(total: int, initial: int) -> Progress:
+    """The batches counted (:class:`pipeline.progress.Progress`: a bar on a terminal, periodic lines in a
+    log, nothing with ``-q``), those of an earlier run included."""
+    return Progress(total, unit="batch", label="sweep", initial=initial).start()
 
 
 def prepare_inputs(scene: Any, out: Path, sets: dict[str, dict],

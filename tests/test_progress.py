@@ -1,0 +1,203 @@
+"""Progress of long work (issue 25, item 4): lines with an ETA in a log, a bar on a terminal, -q and -vv."""
+
+from __future__ import annotations
+
+import logging
+import os
+import re
+import sys
+import time
+import warnings
+
+import pytest
+
+from pipeline import cli, fanout, progress
+from pipeline.config.scene import load_scene
+from pipeline.stages import identify
+
+LINE = re.compile(r"^(\w+): (\d+)/(\d+) (\w+) done, elapsed \d+:\d\d, ETA (\d+:\d\d|\?)(?: \((.*)\))?$")
+
+
+def _lines(text: str, label: str) -> list[tuple[int, int, str, str]]:
+    """``(k, N, unit, note)`` of every progress line of ``label`` in ``text``."""
+    found = [LINE.match(line) for line in text.splitlines()]
+    return [(int(m[2]), int(m[3]), m[4], m[6] or "") for m in found if m and m[1] == label]
+
+
+def _slow(x: int) -> int:
+    time.sleep(0.12)
+    return x
+
+
+@pytest.fixture()
+def info_logging():
+    """The command line's logging (INFO of ``pipeline`` on stderr), put back as it was afterwards."""
+    logger = logging.getLogger("pipeline")
+    level, handlers = logger.level, list(logger.handlers)
+    cli._logging(0)
+    yield logger
+    logger.setLevel(level)
+    logger.handlers[:] = handlers
+
+
+def test_a_fan_out_in_a_log_writes_counted_lines_with_an_eta_at_the_interval(monkeypatch, capsys, info_logging):
+    monkeypatch.setenv("HDI_PROGRESS_S", "0.2")
+    monkeypatch.delenv("CI", raising=False)
+    got = []
+    with progress.stage("demo"):
+        fanout.run_tasks(_slow, [(i,) for i in range(8)], scheduler="synchronous", on_done=got.append)
+    assert got == list(range(8))  # (progress is output only)
+    err = capsys.readouterr().err
+    lines = _lines(err, "demo")
+    assert len(lines) >= 3, err  # ~1 s of work at 0.2 s: several lines, then the last
+    counts = [k for k, n, unit, _ in lines]
+    assert all(n == 8 and unit == "tasks" for _, n, unit, _ in lines)
+    assert counts == sorted(counts) and counts[0] < 8 and counts[-1] == 8, counts
+    assert "ETA" in err and "\r" not in err  # (no bar written into a log)
+
+
+def test_progress_counts_from_this_runs_rate_and_says_units_and_notes():
+    p = progress.Progress(10, unit="batch", label="sweep", initial=4)  # a resumed sweep: 4 done before
+    p._t0 = time.perf_counter() - 60.0
+    p.update(2, note="best cost 0.5")
+    assert p.line() == "sweep: 6/10 batches done, elapsed 1:00, ETA 2:00 (best cost 0.5)"
+    p.update(5)  # more than foreseen: the total follows
+    assert p.line().startswith("sweep: 11/11 batches done") and "ETA 0:00" in p.line()
+    assert progress.clock(3725) == "1:02:05"
+
+
+def test_the_display_is_a_bar_on_a_terminal_lines_elsewhere_and_none_when_quiet_or_nested(monkeypatch,
+                                                                                            info_logging):
+    monkeypatch.delenv("CI", raising=False)
+    assert progress.display() == "lines"  # (pytest's captured stderr is no terminal)
+    with progress.Progress(3) as outer:
+        assert outer.mode == "lines"
+        assert progress.display() == "off"  # an inner count (a generation's fan-out) leaves the display to it
+    assert progress.display() == "lines"
+    info_logging.setLevel(logging.WARNING)  # hdi -q
+    assert progress.display() == "off"
+
+
+def test_on_a_pseudo_terminal_a_bar_counts_and_log_lines_go_above_it(monkeypatch, info_logging):
+    import pty
+    import fcntl
+    import struct
+    import termios
+    master, slave = pty.openpty()
+    fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", 24, 100, 0, 0))  # (a terminal 100 wide)
+    tty = os.fdopen(slave, "w")
+    try:
+        shown = warnings.showwarning
+        monkeypatch.setattr(sys, "stderr", tty)
+        monkeypatch.delenv("CI", raising=False)
+        with progress.stage("demo"), progress.Progress(3, unit="generation") as bar:
+            assert bar.mode == "bar"
+            for i in range(3):
+                logging.getLogger("pipeline.demo").info("message %d", i)
+                bar.update(note=f"best cost {3 - i}")
+            warnings.warn("a warning above the bar", UserWarning)
+        tty.flush()
+        monkeypatch.undo()
+    finally:
+        tty.close()
+    text = b""
+    while True:
+        try:
+            chunk = os.read(master, 65536)
+        except OSError:  # (the terminal's other end is closed: everything is read)
+            break
+        if not chunk:
+            break
+        text += chunk
+    os.close(master)
+    out = text.decode()
+    assert "3/3" in out and "best cost 1" in out and "demo" in out, out
+    # each message is a line of its own (tqdm cleared the bar before it and drew it again after)
+    rows = re.split(r"[\r\n]+", out)
+    expected = {"message 0", "message 1", "message 2", "UserWarning: a warning above the bar"}
+    assert expected <= {r.strip() for r in rows}, rows
+    assert sys.stderr is not tty and warnings.showwarning is shown  # (both given back)
+
+
+SCENE = """
+[scene]
+name = "twin"
+extends = "{paper}"
+
+[solver]
+duration_ms = 0.8
+transient_ms = 0.3
+
+[contact]
+k = 0.978
+
+[identify]
+parameters = [{{key = "dmw.rms_nm", low = 0.08, high = 0.25}},
+              {{key = "lubricant.work_of_adhesion_j_m2", low = 0.03, high = 0.11}}]
+targets = ["contact_force"]
+contact_force_mn = 0.1
+population = 4
+generations = 4
+profile_points = 3
+batch_size = 4
+realisations = 1
+"""
+
+
+def _slow_batch(base, params, rows, protrusions, inputs):
+    """A stand-in for the slider (outputs linear in the parameters) that takes its time."""
+    time.sleep(0.1)
+    n = len(protrusions)
+    return [(key, {"params": list(map(float, x)), "protrusions": list(map(float, protrusions)),
+                   "outputs": {"fhm_bv": [10.0 * float(x[0])] * n, "contact_fraction": [1.0] * n,
+                               "min_clearance": [-0.1] * n, "contact_force": [float(x[1])] * n,
+                               "interference": [0.5] * n, "mean_pressure": [400.0] * n},
+                   "seconds": 0.0, "kernel_seconds": 0.0, "error": None}) for key, x in rows]
+
+
+def test_hdi_identify_in_a_log_counts_generations_with_the_best_cost_and_q_and_vv(tmp_path, paper_config,
+                                                                                  monkeypatch, capsys):
+    path = tmp_path / "twin.toml"
+    path.write_text(SCENE.format(paper=paper_config))
+    assert load_scene(path)["identify"]["generations"] == 4
+    monkeypatch.setattr(identify, "evaluate_batch", _slow_batch)
+    monkeypatch.setenv("HDI_PROGRESS_S", "0.05")
+    monkeypatch.delenv("CI", raising=False)
+    logger = logging.getLogger("pipeline")
+    level, handlers = logger.level, list(logger.handlers)
+    try:
+        argv = ["identify", str(path), "--out", str(tmp_path / "out"), "--scheduler", "synchronous"]
+        assert cli.main(argv) == 0
+        err = capsys.readouterr().err
+        gens = _lines(err, "identify")
+        gens = [(k, n, note) for k, n, unit, note in gens if unit == "generations"]
+        assert gens, err
+        assert all(n == 4 for _, n, _ in gens)
+        counts = [k for k, _, _ in gens]
+        # a generation is a 0.1-s batch, the interval 0.05 s: a line or more per generation, then the end
+        assert counts == sorted(counts) and len(set(counts)) >= 4 and counts[-1] == 4, counts
+        costs = [float(note.removeprefix("best cost ")) for k, _, note in gens if k > 0]
+        assert costs and costs == sorted(costs, reverse=True)  # the best so far only improves
+        # -q: no progress and no stage messages; the dataset's path still on stdout
+        assert cli.main([*argv, "--force", "-q"]) == 0
+        out = capsys.readouterr()
+        assert out.err == "" and out.out.strip().endswith("identify.nc")
+        # -vv: the debug messages too (the fan-outs of each generation, run in this process)
+        assert cli.main([*argv, "--force", "-vv"]) == 0
+        err = capsys.readouterr().err
+        assert logger.level == logging.DEBUG
+        assert "fan-out:" in err and "in this process, one after the other" in err
+        assert _lines(err, "identify")
+    finally:
+        logger.setLevel(level)
+        logger.handlers[:] = handlers
+
+
+def test_a_bad_progress_interval_is_one_line(tmp_path, paper_config, monkeypatch, capsys):
+    monkeypatch.setenv("HDI_PROGRESS_S", "soon")
+    path = tmp_path / "twin.toml"
+    path.write_text(SCENE.format(paper=paper_config))
+    assert cli.main(["identify", str(path), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == "hdi identify: error: HDI_PROGRESS_S=soon: expected a number of seconds > 0"
+    assert not (tmp_path / "out").exists()
