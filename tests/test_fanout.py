@@ -246,13 +246,14 @@ def test_an_ensemble_realisation_does_not_depend_on_the_task_it_shares(paper_con
     from pipeline import evaluations
     from pipeline.config.scene import load_scene
     from pipeline.model import dmw_record
+    from pipeline.model.inputs import SimulationInputs
     scene = load_scene(paper_config, ['scene.effects=["air_bearing","pitch","dmw"]', "solver.duration_ms=0.4",
                                       "solver.transient_ms=0.1"])
     seeds = dmw_record.realisation_seeds(scene["dmw"]["seed"], 4)
-    inputs, prots = evaluations.Inputs(None, None, None, None), [2.0, 2.2]
-    together = evaluations.evaluate_realisations(scene, prots, inputs, None, (1, 2, 3), tuple(seeds[1:]))
+    inputs, prots = SimulationInputs(), [2.0, 2.2]  # (no contact: no k; seeded records, no dmw.nc)
+    together = evaluations.evaluate_realisations(scene, prots, inputs, (1, 2, 3), tuple(seeds[1:]))
     apart = [row for r in (1, 2, 3)
-             for row in evaluations.evaluate_realisations(scene, prots, inputs, None, (r,), (seeds[r],))]
+             for row in evaluations.evaluate_realisations(scene, prots, inputs, (r,), (seeds[r],))]
     assert _same_rows(together, apart)
     assert not _same_rows(together[:1], together[1:2])  # (the realisations differ: the comparison can fail)
 
