@@ -392,8 +392,8 @@ def assemble(scene: Any, out: Path, prot: np.ndarray, labels: list[str], damp: l
     sets = roughness_sets(scene)
     coords.update(roughness_coordinates([sets[label] for label in labels]))
     ds = xr.Dataset(data, coords=coords).assign(run or {})
-    for label in labels:
-        ds.attrs[f"roughness_{label}"] = json.dumps(sets[label], default=str)
+    # one attribute for all sets: a label made from the values has '.', which CF's attribute names exclude
+    ds.attrs["roughness_sets"] = json.dumps({label: sets[label] for label in labels}, default=str)
     ds.attrs.update(attrs)
     ds.attrs["k_source"] = k_source
     own = scene_label(scene)
