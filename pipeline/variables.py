@@ -35,7 +35,7 @@ from typing import Any, Iterable
 
 import numpy as np
 import xarray as xr
-from .units import GPA, MN, MPA, NM, PER_UM2, UM, UM2, URAD
+from .units import GPA, MN, MPA, MS, NM, PER_UM2, UM, UM2, URAD
 
 from .validity import Validity
 
@@ -172,6 +172,33 @@ COORDINATES = _group(
     V("hist_protrusion", "nm", "protrusion of the kept histories", NM, dims=("hist_protrusion",)),
     V("direction", "", "pass of a heater-stepping chain (up: increasing protrusion, down: decreasing)",
       dims=("direction",), dtype="str"),
+    # the statistics of each roughness set along ``roughness``, so that runs combined on that dimension
+    # keep each set's own values (NaN: an AFM set, whose statistics come from its scans)
+    V("roughness_sigma", "nm", "combined rms roughness sigma of the roughness set", NM, dims=("roughness",)),
+    V("roughness_summit_radius", "um", "summit radius of the roughness set", UM, dims=("roughness",)),
+    V("roughness_summit_density", "um-2", "summit density of the roughness set", PER_UM2, dims=("roughness",)),
+)
+
+#: Values of the whole run, one number each (0-d variables of ``summary.nc``, ``histories.nc``,
+#: ``sweep.nc``, ``sweep_histories.nc`` and ``ensemble.nc``; :func:`pipeline.model.simulation.run_values`).
+#: Variables, not only global attributes: ``xr.open_mfdataset(..., combine="nested", concat_dim="run")``
+#: gives each run its own value, where it keeps the first file's global attributes for all.
+#: In ``sweep.nc`` the bearing values are the model's at the scene's damping ratio and first roughness set.
+RUN = _group(
+    V("k", "1", "contact criterion k: contact where the separation is below k sigma (NaN: no contact law)"),
+    V("k_source", "", "where k comes from (the scene, the calibration, a rule)", dtype="str"),
+    V("k_sigma", "nm", "contact threshold k sigma", NM),
+    V("front_stiffness", "N m-1", "air-bearing stiffness of the front pad"),
+    V("rear_stiffness", "N m-1", "air-bearing stiffness of the rear pad"),
+    V("front_damper", "N s m-1", "air-bearing damping coefficient of the front pad"),
+    V("rear_damper", "N s m-1", "air-bearing damping coefficient of the rear pad"),
+    V("damping_ratio", "1", "modal damping ratio of the air bearing of the run's model"),
+    V("summit_offset", "nm", "mean of summit heights minus mean of surface heights y_s", NM),
+    V("steady_window_start", "ms", "start of the steady window", MS),
+    V("steady_window_end", "ms", "end of the steady window (the simulated duration)", MS),
+    V("tfc_stiffness", "N m-1", "stiffness k_t of the TFC bulge's stiffening"),
+    V("tfc_stiffening_exponent", "1", "exponent q of the TFC bulge's stiffening"),
+    V("friction_law_coefficient", "1", "friction coefficient of the coefficient friction law"),
 )
 
 #: Steady-window scalars of one scene (:func:`pipeline.model.slider.summarize`; ``summary.nc``, ``sweep.nc``).
@@ -429,7 +456,7 @@ STEPPING = _group(
 GROUPS: dict[str, dict[str, Variable]] = {
     "coordinates": COORDINATES, "scalars": SCALARS, "histories": HISTORIES, "roughness": ROUGHNESS,
     "dmw": DMW, "interface": INTERFACE, "calibration": CALIBRATION, "accuracy": ACCURACY,
-    "ensemble": ENSEMBLE, "bulge": BULGE, "stepping": STEPPING,
+    "ensemble": ENSEMBLE, "bulge": BULGE, "stepping": STEPPING, "run": RUN,
 }
 
 #: The groups each dataset file (by stem) may hold, first match wins.
@@ -438,10 +465,10 @@ DATASETS: dict[str, tuple[str, ...]] = {
     "dmw": ("coordinates", "dmw"),
     "interface": ("interface",),
     "calibration": ("calibration",),
-    "summary": ("coordinates", "scalars"),
-    "histories": ("coordinates", "histories"),
-    "sweep": ("coordinates", "scalars", "ensemble", "stepping"),
-    "sweep_histories": ("coordinates", "histories"),
+    "summary": ("coordinates", "scalars", "run"),
+    "histories": ("coordinates", "histories", "run"),
+    "sweep": ("coordinates", "scalars", "ensemble", "stepping", "run"),
+    "sweep_histories": ("coordinates", "histories", "run"),
     "sweep-part": ("coordinates", "scalars", "histories", "stepping"),
     "accuracy": ("accuracy",),
     "bulge": ("bulge",),

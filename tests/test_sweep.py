@@ -20,7 +20,7 @@ from pipeline.analyses import calibration
 from pipeline.stages import calibrate as calibrate_stage
 from pipeline.stages import sweep as sweep_stage
 from pipeline.stages.simulate import model_inputs
-from pipeline.config.grid import roughness_sets
+from pipeline.config.grid import roughness_label, roughness_sets, scene_label
 
 ROOT = Path(__file__).resolve().parents[1]
 PAPER = ROOT / "configs" / "paper-2009.toml"
@@ -242,11 +242,26 @@ def test_unknown_roughness_label_is_a_clear_error():
 def test_roughness_sets_inherit_and_validate():
     scene = load_scene(PAPER, ['sweep.roughness=[{label="rough", sigma_nm=0.8}, "scene"]'])
     sets = roughness_sets(scene)
-    assert list(sets) == ["rough", "scene"]
+    assert list(sets) == ["rough", "sigma0.52nm_R5um_eta13.3"]  # ("scene": labelled by its values)
     assert sets["rough"]["sigma_nm"] == 0.8 and sets["rough"]["summit_radius_um"] == 5.0
     bad = load_scene(PAPER, ['sweep.roughness=[{label="x", sigma_nm=-1.0}]'])
     with pytest.raises(SceneError, match="sigma_nm"):
         roughness_sets(bad)
+
+
+def test_roughness_labels_are_made_from_the_values_and_tell_sets_apart():
+    """Without a label, a set is labelled by its values (exactly: sets that differ in the 7th digit
+    differ in label), the same in every run; the scene's own set too, and a sweep over it alone."""
+    assert list(roughness_sets(load_scene(PAPER))) == ["sigma0.52nm_R5um_eta13.3"]
+    scene = load_scene(PAPER, ['sweep.roughness=[{sigma_nm=0.4}, {sigma_nm=0.4000001, summit_radius_um=2.5}, '
+                               '{label="mine", sigma_nm=0.9}]'])
+    sets = roughness_sets(scene)
+    assert list(sets) == ["sigma0.4nm_R5um_eta13.3", "sigma0.4000001nm_R2.5um_eta13.3", "mine"]
+    assert list(roughness_sets(scene)) == list(sets)
+    assert roughness_label({"afm": ["/x/di-3.di", "/y/mi 1.mi"], "route": "summits"}) == "afm-di-3+mi_1-summits"
+    twice = load_scene(PAPER, ['sweep.roughness=[{sigma_nm=0.52}, "scene"]'])
+    with pytest.raises(SceneError, match="used twice"):
+        roughness_sets(twice)
 
 
 def test_tables_of_other_roughness_sets_follow_their_own_inputs(tmp_path):
@@ -257,7 +272,7 @@ def test_tables_of_other_roughness_sets_follow_their_own_inputs(tmp_path):
     paths, _ = sweep_stage.prepare_inputs(scene, tmp_path, roughness_sets(scene))
     rough = Path(paths["rough"])
     assert rough == tmp_path / sweep_stage.PARTS / "interface-rough" / "interface.nc"
-    assert paths["scene"] == str(tmp_path / "interface.nc")      # the interface stage's own, not a copy
+    assert paths[scene_label(scene)] == str(tmp_path / "interface.nc")  # the interface stage's own, not a copy
     assert float(read_dataset(rough).sigma) == pytest.approx(0.8)
     stamp = rough.stat().st_mtime_ns
     damped = load_scene(PAPER, base + ["sweep.damping_ratio=[0.02, 0.05]"])

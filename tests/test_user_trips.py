@@ -338,7 +338,7 @@ def test_a_slider_shaken_beyond_its_flying_height_is_flagged_and_the_report_refu
     err = [line for line in capsys.readouterr().err.strip().splitlines() if "error" in line]  # (no progress)
     assert len(err) == 1, err
     assert err[0].startswith(f"hdi report: error: {tmp_path / 'sweep.nc'}: 3 of 3 scenes outside the model's validity "
-                             "[protrusion 2, roughness scene, damping 0.05], [protrusion 2.2, ")
+                             "[protrusion 2, roughness sigma0.52nm_R5um_eta13.3, damping 0.05], [protrusion 2.2, ")
     assert err[0].endswith("the slider moved by more than the flying height (outside the air bearing's range); "
                            "no report drawn from them (see its variable validity)")
     sw = read_dataset(tmp_path / "sweep.nc")

@@ -31,13 +31,16 @@ def split_ensemble(sweep: xr.Dataset) -> tuple[xr.Dataset, xr.Dataset | None]:
 def combinations(sweep: xr.Dataset, damping_ratio: float | None = None) -> list[tuple[dict[str, Any], xr.Dataset]]:
     """``(labels, one-slice dataset)`` per roughness x damping, the default combination first.
 
-    The default is roughness set ``scene`` (else the first set) at ``damping_ratio`` [1] (the scene's
-    ``air_bearing.damping_ratio``) when it is on the grid, else the first damping; the others keep grid order.
+    The default is the scene's own roughness set (the label in the global attribute ``scene_roughness``;
+    ``scene`` in sweeps written before labels were made from the values; else the first set) at
+    ``damping_ratio`` [1] (the scene's ``air_bearing.damping_ratio``) when it is on the grid, else the
+    first damping; the others keep grid order.
     """
     items = list(opt.slices(sweep))
     rough = [str(r) for r in sweep["roughness"].values] if "roughness" in sweep.dims else [None]
     damp = [float(d) for d in sweep["damping"].values] if "damping" in sweep.dims else [None]
-    r0 = "scene" if "scene" in rough else rough[0]
+    own = str(sweep.attrs.get("scene_roughness", "scene"))
+    r0 = own if own in rough else rough[0]
     d0 = damp[0]
     if damping_ratio is not None and damp[0] is not None:
         close = [d for d in damp if abs(d - float(damping_ratio)) < 1e-12]

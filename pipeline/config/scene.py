@@ -339,7 +339,7 @@ SCHEMA: dict[str, dict[str, Key]] = {
     "sweep": {
         "protrusion_nm": Key("range", dict(zip(("start", "stop", "step"), paper.PROTRUSION_GRID_NM)),
                              doc="protrusion grid {start, stop, step} [nm] (paper)"),
-        "roughness": Key("tables", None, doc="labelled roughness sets: [{label=..., sigma_nm=...}, ...]"),
+        "roughness": Key("tables", None, doc="roughness sets: [{label=..., sigma_nm=...}, ...] (label optional: made from the values)"),
         "damping_ratio": Key("floats", None, (lambda v: len(v) > 0 and all(0 <= x < 1 for x in v),
                                               "a non-empty list of numbers in [0, 1)"),
                              doc="modal damping ratios [1]"),

@@ -33,7 +33,7 @@ import xarray as xr
 from ..config.grid import same_point
 from ..config.scene import PROTOCOLS
 from ..units import MS, NM
-from ..variables import HISTORIES, STEPPING, coordinate, history, scalar
+from ..variables import HISTORIES, RUN, STEPPING, coordinate, history, scalar
 from . import slider as sl
 from .state import STEP_COUNTERS
 
@@ -261,3 +261,24 @@ def model_attrs(model: sl.Model, k_source: str) -> dict[str, Any]:
         "steady_window": f"{model.transient / MS:g} ms to {model.duration / MS:g} ms",
         "fhm_measure": model.fhm_measure,
     }
+
+
+def run_values(model: sl.Model, k_source: str) -> dict[str, xr.Variable]:
+    """The numbers of :func:`model_attrs` as the 0-d variables of :data:`pipeline.variables.RUN`
+    (dataset units), so that datasets of several runs combine with each run's own values.
+
+    ``k`` is NaN without a contact law (its attribute says ``"none"``); the TFC stiffening and the
+    coefficient of the coefficient friction law are present only when the model has them.
+    """
+    info = model.info
+    si = {"k": model.k if np.isfinite(model.k) else np.nan, "k_sigma": model.k_sigma,
+          "front_stiffness": info["k_f"], "rear_stiffness": info["k_r"],
+          "front_damper": info["c_f"], "rear_damper": info["c_r"], "damping_ratio": info["damping_ratio"],
+          "summit_offset": info["y_s"], "steady_window_start": model.transient, "steady_window_end": model.duration}
+    if model.tfc_stiffening is not None:
+        si |= {"tfc_stiffness": model.tfc_stiffening.k_t, "tfc_stiffening_exponent": model.tfc_stiffening.q}
+    if info["friction_law"] == "coefficient":
+        si["friction_law_coefficient"] = info["friction_coefficient"]
+    out = {name: RUN[name].from_si(float(v), ()) for name, v in si.items()}
+    out["k_source"] = RUN["k_source"].data(np.array(k_source, dtype=object), ())
+    return out

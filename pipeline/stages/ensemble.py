@@ -41,7 +41,7 @@ from ..io import var
 from ..model import dmw_record, scene_inputs
 from ..model.inputs import for_stage
 from ..runner import Inputs, Stage
-from ..variables import ENSEMBLE, SCALARS, coordinate
+from ..variables import ENSEMBLE, RUN, SCALARS, coordinate
 
 log = logging.getLogger(__name__)
 
@@ -99,7 +99,9 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
                   "window_nm": WINDOW_NM, "errors": "; ".join(errors) or "none",
                   "protrusions_note": "the paper targets' protrusions ([identify]) and the sweep's grid within "
                                       f"{WINDOW_NM:g} nm of its first contact"})
-    return ds.assign(judged(ds, scene))
+    run = {"k": RUN["k"].data(sim.k if sim.k is not None and np.isfinite(sim.k) else np.nan, ()),
+           "k_source": RUN["k_source"].data(np.array(sim.k_source, dtype=object), ())}
+    return ds.assign(judged(ds, scene)).assign(run)
 
 
 def judged(ds: xr.Dataset, scene: Any) -> dict[str, xr.Variable]:

@@ -21,7 +21,7 @@ import xarray as xr
 
 from ..model import scene_inputs
 from ..model.inputs import for_stage
-from ..model.simulation import histories_of, model_attrs, simulate, summary_of
+from ..model.simulation import histories_of, model_attrs, run_values, simulate, summary_of
 from ..runner import Inputs, Stage, build, simulation_inputs
 from ..variables import flag_meaning
 
@@ -52,7 +52,8 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset]:
             log.info("  %-22s %12s", name, flag_meaning(v.attrs, float(v[0])))
         else:
             log.info("  %-22s %12.5g %s", name, float(v[0]), v.attrs["units"])
-    return {"histories.nc": histories, "summary.nc": summary}
+    run = run_values(model, sim.k_source)  # (besides the attributes: what combined runs keep apart)
+    return {"histories.nc": histories.assign(run), "summary.nc": summary.assign(run)}
 
 
 STAGE = Stage(

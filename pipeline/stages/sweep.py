@@ -42,12 +42,12 @@ from ..fanout import run_tasks
 from ..progress import Progress
 from ..io import read_attrs, read_dataset, write_dataset
 from ..runner import KEY_ATTR, Inputs, Stage, ensure
-from ..variables import ENSEMBLE, HISTORIES, SCALARS, STEPPING, coordinate
+from ..variables import COORDINATES, ENSEMBLE, HISTORIES, SCALARS, STEPPING, coordinate
 from ..model import dmw_record, scene_inputs
 from ..model.inputs import SimulationInputs, Source, for_stage
-from ..model.simulation import DIRECTIONS, model_attrs, simulate
+from ..model.simulation import DIRECTIONS, model_attrs, run_values, simulate
 from ..analyses import ensemble_rules as ensemble
-from ..config.grid import damping_grid, protrusion_grid, roughness_sets, same_point
+from ..config.grid import damping_grid, protrusion_grid, roughness_sets, same_point, scene_label
 
 log = logging.getLogger(__name__)
 PARTS = "sweep.parts"
@@ -295,7 +295,8 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset | None]:
     first = next(iter(sets))  # (its set's scene and the scene's damping ratio: models the batches built)
     model = batch_model(set_scenes[first], batch_sim(first, 0), float(scene["air_bearing"]["damping_ratio"]))
     attrs = model_attrs(model, sim.k_source)
-    return assemble(scene, out, prot, list(sets), damp, batches, key, sim.k_source, attrs, seeds, computed)
+    return assemble(scene, out, prot, list(sets), damp, batches, key, sim.k_source, attrs, seeds, computed,
+                    run_values(model, sim.k_source))
 
 
 def run_sweep(scene: Any, out: Path, scheduler: str | None = None, workers: int | None = None,
@@ -308,11 +309,14 @@ def run_sweep(scene: Any, out: Path, scheduler: str | None = None, workers: int 
 
 def assemble(scene: Any, out: Path, prot: np.ndarray, labels: list[str], damp: list[float], batches: list[Batch],
              key: str, k_source: str, attrs: dict, seeds: list[int] | None = None,
-             computed: dict[str, xr.Dataset] | None = None) -> dict[str, xr.Dataset | None]:
+             computed: dict[str, xr.Dataset] | None = None,
+             run: dict[str, xr.Variable] | None = None) -> dict[str, xr.Dataset | None]:
     """``sweep.nc`` (and ``sweep_histories.nc``) filled from the parts, in batch order.
 
     ``computed``: the parts run by this call (path -> dataset, as written), used as they are; every
-    other part is read from its file after :func:`part_problem` has accepted it.
+    other part is read from its file after :func:`part_problem` has accepted it. ``run``: the run's
+    0-d variables (:func:`pipeline.model.simulation.run_values`), written into both datasets; each
+    roughness set's statistics become coordinates along ``roughness`` (:func:`roughness_coordinates`).
 
     With more than one realisation the scalars gain a last dimension ``realisation`` and the
     ensemble statistics of :func:`pipeline.analyses.ensemble_rules.statistics` are added.
@@ -381,21 +385,35 @@ def assemble(scene: Any, out: Path, prot: np.ndarray, labels: list[str], damp: l
         coords["realisation"] = ENSEMBLE["realisation"].data(np.arange(n_real), ("realisation",))
         data["dmw_seed"] = ENSEMBLE["dmw_seed"].data(np.array(seeds), ("realisation",))
         data.update(ensemble.statistics(data))
-    ds = xr.Dataset(data, coords=coords)
     sets = roughness_sets(scene)
-    for label in labels:
-        ds.attrs[f"roughness_{label}"] = json.dumps(sets[label], default=str)
+    coords.update(roughness_coordinates([sets[label] for label in labels]))
+    ds = xr.Dataset(data, coords=coords).assign(run or {})
+    # one attribute for all sets: a label made from the values has '.', which CF's attribute names exclude
+    ds.attrs["roughness_sets"] = json.dumps({label: sets[label] for label in labels}, default=str)
     ds.attrs.update(attrs)
     ds.attrs["k_source"] = k_source
+    own = scene_label(scene)
+    if own in labels:  # (the report's default slice: the scene's own roughness)
+        ds.attrs["scene_roughness"] = own
     hds = None
     if hist:
         hc = {name: c for name, c in coords.items() if name != "realisation"}  # (realisation 0 only)
         hc["protrusion"] = coordinate("protrusion", hist_prot)
         hc["time"] = coordinate("time", time)
         hds = xr.Dataset({name: HISTORIES[name].data(a, ("protrusion", "roughness", "damping", "time"))
-                          for name, a in hist.items()}, coords=hc)
+                          for name, a in hist.items()}, coords=hc).assign(run or {})
         hds.attrs.update(ds.attrs)
     return {"sweep.nc": ds, "sweep_histories.nc": hds}
+
+
+def roughness_coordinates(tables: list[dict[str, Any]]) -> dict[str, xr.Variable]:
+    """``roughness_sigma`` [nm], ``roughness_summit_radius`` [um] and ``roughness_summit_density`` [um^-2] of
+    each roughness set (full ``[roughness]`` tables, in the order of the ``roughness`` dimension); NaN for
+    an AFM set, whose statistics come from its scans (``interface.nc``), not from these keys."""
+    keys = {"roughness_sigma": "sigma_nm", "roughness_summit_radius": "summit_radius_um",
+            "roughness_summit_density": "summit_density_per_um2"}
+    return {name: COORDINATES[name].data([np.nan if t.get("afm") else float(t[key]) for t in tables], ("roughness",))
+            for name, key in keys.items()}
 
 
 def _files(scene: Any) -> dict[str, str]:
