@@ -5,7 +5,7 @@ PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
 # `make run` runs the scene that meets the most paper checks over 8 DMW realisations: the identified one
-# (the bulge's air bearing, the meniscus-formation time, README, "Reproducing the paper")
+# (the bulge's air bearing, the meniscus-formation time, docs/results.md, "Reproducing the paper")
 SCENE  ?= configs/paper-2009-identified.toml
 ARGS   ?=
 
@@ -77,9 +77,9 @@ bench: $(RUN_STAMP)
 sweep: $(RUN_STAMP)
 	$(BIN)/hdi sweep configs/sweep-3x3.toml $(ARGS)
 
-## rewrite the README's generated comparison section and figures from the last `make run`
+## rewrite the generated comparison section of docs/results.md and its figures from the last `make run`
 readme: $(RUN_STAMP)
-	$(BIN)/hdi report $(SCENE) --readme README.md
+	$(BIN)/hdi report $(SCENE) --readme docs/results.md
 
 ## one stage (and what it needs) on the scene: `make NAME` is `hdi NAME $(SCENE)` (sweep and identify: their own scenes)
 $(filter-out sweep identify,$(STAGES)): $(RUN_STAMP)

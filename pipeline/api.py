@@ -148,7 +148,7 @@ def open_dataset(results: str | Path, name: str) -> xr.Dataset:
     Returns
     -------
     xarray.Dataset
-        The dataset in the units its variables' ``units`` attributes name (README, "Datasets").
+        The dataset in the units its variables' ``units`` attributes name (docs/datasets.md).
 
     Raises
     ------

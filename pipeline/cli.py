@@ -77,8 +77,9 @@ def _parser(stages: dict[str, runner.Stage]) -> argparse.ArgumentParser:
                    help="identify: also write the identified scene to PATH (it is always written into the "
                         "results folder as <scene>-identified.toml); its folder must exist and be writable, and "
                         "an existing PATH is refused unless --force (which also recomputes the identification)")
-    p.add_argument("--readme", type=Path, default=None,
-                   help="report: also rewrite the generated comparison section of this README")
+    p.add_argument("--readme", type=Path, default=None, metavar="PAGE",
+                   help="report: also rewrite the generated comparison section of this page "
+                        "(docs/results.md) and copy its figures to figures/ beside it")
     p.add_argument("--yes", action="store_true",
                    help=f"run a big job: a sweep of more than {MAX_SCENES:,} scenes, or tables, histories, "
                         "records or studies beyond the limits of pipeline/config/limits.py")

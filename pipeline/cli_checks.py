@@ -43,7 +43,7 @@ WORKER_WAIT_S = 30.0
 #: Largest handshake [bytes] a dask server sends (it is ~100 bytes; a banner read as a length is huge).
 _HANDSHAKE_MAX = 1 << 20
 #: Largest sweep grid (protrusions x roughness sets x damping ratios) run without ``--yes``:
-#: about 30 CPU-minutes at ~20 ms per 2 ms scene on one core (README, "Tests and benchmarks");
+#: about 30 CPU-minutes at ~20 ms per 2 ms scene on one core (docs/performance.md, "Tests and benchmarks");
 #: the other sizes are bounded in :mod:`pipeline.config.limits`.
 MAX_SCENES = limits.MAX_SCENES
 
@@ -260,18 +260,19 @@ def check_name_lengths(path: Path, existing: Path, option: str) -> None:
 
 
 def check_readme(readme: str | Path | None) -> None:
-    """``--readme`` is an existing README file (a symbolic link to one: the report writes through it)
+    """``--readme`` is an existing markdown page, the one holding the generated section (``make readme``:
+    docs/results.md; a symbolic link to one: the report writes through it)
     that is not read-only: checked before the run, which would otherwise fail, or overwrite a file
     the user protected, only at its end."""
     if readme is None:
         return
     path = Path(readme)
     if path.is_dir():
-        raise OptionError(f"--readme {readme}: is a folder; expected the README file whose generated "
-                          "section the report rewrites (e.g. README.md)")
+        raise OptionError(f"--readme {readme}: is a folder; expected the page whose generated "
+                          "section the report rewrites (e.g. docs/results.md)")
     if not path.is_file():
-        raise OptionError(f"--readme {readme}: file does not exist; expected the README file whose generated "
-                          "section the report rewrites (e.g. README.md)")
+        raise OptionError(f"--readme {readme}: file does not exist; expected the page whose generated "
+                          "section the report rewrites (e.g. docs/results.md)")
     if is_read_only(path):
         raise OptionError(f"--readme {readme}: is read-only; make it writable (chmod u+w) for the report to "
                           "update it, or leave --readme out")

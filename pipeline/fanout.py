@@ -10,7 +10,7 @@
   job pays no start-up: no worker processes to spawn, no modules to import again, no numba cache
   to reload, no task graph to serialise. The Python around the kernels (histories, summaries,
   NetCDF I/O, which xarray serialises with its HDF5 lock) is the part that does not scale.
-  Measured on 2 cores (benchmarks/bench_fanout.py): see the README's benchmark table.
+  Measured on 2 cores (benchmarks/bench_fanout.py): see the benchmark table of docs/performance.md.
 * ``scheduler="threads"`` / ``"processes"``: force the thread pool / a ``distributed.LocalCluster``
   of ``workers`` single-threaded worker processes (the process cluster isolates tasks that hold
   the GIL, at a start-up cost of about a second per job).

@@ -263,7 +263,8 @@ def test_readme_a_folder_is_one_line_before_anything_runs(tmp_path, capsys):
     (tmp_path / "README.md").mkdir()
     out = tmp_path / "out"
     assert cli.main(["report", str(PAPER), "--readme", str(tmp_path / "README.md"), "--out", str(out)]) == 2
-    assert "README.md: is a folder; expected the README file" in _one_line_error(capsys, "report")
+    assert ("README.md: is a folder; expected the page whose generated section the report rewrites "
+            "(e.g. docs/results.md)") in _one_line_error(capsys, "report")
     assert not out.exists()
 
 
@@ -352,31 +353,40 @@ def test_a_bad_roughness_set_is_refused_before_any_stage_runs(tmp_path, capsys):
 
 @pytest.fixture
 def readme_report(tmp_path):
-    """A results folder with a report, and a README holding the generated-section markers."""
+    """A results folder with a report and a figure, and a page holding the generated-section markers
+    (where ``make readme`` writes: docs/results.md)."""
     out = tmp_path / "out"
     (out / "report").mkdir(parents=True)
     (out / "report" / "comparison.md").write_text("the comparison\n")
     (out / "figures").mkdir()
-    readme = tmp_path / "docs-repo" / "README.md"
-    readme.parent.mkdir()
+    (out / "figures" / narrative.README_FIGURES[0]).write_bytes(b"png")
+    readme = tmp_path / "docs-repo" / "docs" / "results.md"
+    readme.parent.mkdir(parents=True)
     readme.write_text(f"# README\n{narrative.README_BEGIN}\nold\n{narrative.README_END}\nend\n")
     return out, readme
 
 
 def test_readme_a_symlink_is_written_through_and_stays_a_link(tmp_path, readme_report):
     out, readme = readme_report
-    link = tmp_path / "README.md"
+    link = tmp_path / "results.md"
     link.symlink_to(readme)
     report._finish(load_scene(PAPER), out, {"readme": link})
     assert link.is_symlink() and link.resolve() == readme
     assert "the comparison" in readme.read_text()
 
 
+def test_readme_copies_the_figures_to_the_figures_folder_beside_the_page(tmp_path, readme_report):
+    out, page = readme_report  # docs/results.md: its image links, and the README's, name docs/figures/
+    report._finish(load_scene(PAPER), out, {"readme": page})
+    assert (page.parent / "figures" / narrative.README_FIGURES[0]).read_bytes() == b"png"
+    assert not (page.parent / "docs").exists()
+
+
 def test_a_read_only_readme_is_refused_and_left_untouched(tmp_path, readme_report, capsys):
     out, readme = readme_report
     readme.chmod(0o444)
     before = readme.read_bytes()
-    with pytest.raises(OptionError, match=r"README\.md: is read-only; make it writable"):
+    with pytest.raises(OptionError, match=r"results\.md: is read-only; make it writable"):
         check_readme(readme)
     with pytest.raises(PermissionError):
         report._finish(load_scene(PAPER), out, {"readme": readme})

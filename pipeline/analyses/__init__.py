@@ -10,7 +10,7 @@ returns.
 * :mod:`.report_tables`: ``summary.csv`` and ``summary.md``;
 * :mod:`.report_figures`: which report figures to draw from which data (drawing: :mod:`pipeline.analyses.plots`);
 * :mod:`.paper_comparison`: ``comparison.md``, our numbers against :mod:`pipeline.physics.paper`;
-* :mod:`.narrative`: the generated observations and the README's generated section;
+* :mod:`.narrative`: the generated observations and the generated section of docs/results.md;
 * :mod:`.ensemble`: the statistics that judge a paper target over DMW realisations (touchdown
   probability and its 0.5 crossing, medians and 10-90 % ranges, mean ± std, exceedance probability);
 * :mod:`.ensemble_comparison`: the comparison's column and section over the realisations (formatting);

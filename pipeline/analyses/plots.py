@@ -1,6 +1,6 @@
 """Figures of the report stage (matplotlib object API: no pyplot, no global state).
 
-Every ``fig_*`` function takes datasets as written by the stages (dataset units, see the README), draws
+Every ``fig_*`` function takes datasets as written by the stages (dataset units, see docs/datasets.md), draws
 one figure, writes it as PNG with :func:`save` and returns the path. The panels a notebook draws on its
 own axes are ``plot_*`` functions: each takes ``ax=`` (a matplotlib ``Axes``; ``None``: a new figure's)
 and returns the axes it drew on; the ``fig_*`` figures are made of them. Figures are

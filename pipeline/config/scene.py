@@ -1,6 +1,6 @@
 """Scene files: load, validate and override a TOML scene.
 
-A scene is one TOML file with the sections of docs/model.md and the README. Units are part of the key names
+A scene is one TOML file with the sections of docs/model.md and docs/cli.md. Units are part of the key names
 (``flying_height_nm``), so a key with the right quantity in another unit (``flying_height_um``)
 is reported as a unit error rather than silently misread. Every key has a documented default
 (the paper scene's value), so a scene only states what it changes; a disabled effect's inputs
@@ -40,7 +40,7 @@ try:  # Python >= 3.11
 except ModuleNotFoundError:  # pragma: no cover - Python 3.10
     import tomli as tomllib  # type: ignore[no-redef]
 
-#: Effects a scene may ask for (README, \"Scenes and effects\").
+#: Effects a scene may ask for (docs/cli.md, \"Scenes\").
 EFFECTS = ("air_bearing", "pitch", "dmw", "adhesion", "contact", "friction")
 
 #: Fewest output samples of a run's steady window (after ``solver.transient_ms``) a scene may ask for:

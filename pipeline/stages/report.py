@@ -166,8 +166,9 @@ def _upstream(scene: Any) -> tuple[str, ...]:
 
 
 def _finish(scene: Any, out: Path, options: dict[str, Any]) -> None:
-    """``--readme README``: rewrite the README's generated section from this report's comparison
-    (:func:`pipeline.analyses.narrative.readme_with_comparison`) and copy its figures beside it."""
+    """``--readme PAGE`` (``make readme``: docs/results.md): rewrite the page's generated section from
+    this report's comparison (:func:`pipeline.analyses.narrative.readme_with_comparison`) and copy its
+    figures beside it."""
     if options.get("readme"):
         update_readme(Path(options["readme"]), (out / "report" / "comparison.md").read_text(), out / "figures")
 
@@ -202,10 +203,11 @@ def refuse_invalid(sweep: xr.Dataset, path: Path) -> None:
 
 
 def update_readme(readme: Path, comparison: str, figdir: Path) -> None:
-    """Replace the generated section of ``readme`` with ``comparison`` and copy the README's figures
-    (:data:`pipeline.analyses.narrative.README_FIGURES`) from ``figdir`` to ``docs/figures/`` beside it.
-    A README without the section markers is left untouched; a symbolic link is written through (its
-    target is updated, the link kept); a read-only README is refused."""
+    """Replace the generated section of the page ``readme`` (docs/results.md) with ``comparison`` and copy
+    the page's figures (:data:`pipeline.analyses.narrative.README_FIGURES`) from ``figdir`` to the folder
+    ``figures/`` beside it (docs/figures/, which the page's and the README's image links name).
+    A page without the section markers is left untouched; a symbolic link is written through (its
+    target is updated, the link kept); a read-only page is refused."""
     if is_read_only(readme):
         raise PermissionError(errno.EACCES, "is read-only; make it writable (chmod u+w) or leave --readme out",
                               str(readme))
@@ -214,7 +216,7 @@ def update_readme(readme: Path, comparison: str, figdir: Path) -> None:
         log.warning("report: %s has no generated section markers; not updated", readme)
         return
     _write_text(readme.resolve(), text)  # (the rename would replace a link by a file)
-    docs = readme.parent / "docs" / "figures"
+    docs = readme.parent / "figures"
     docs.mkdir(parents=True, exist_ok=True)
     for name in narrative.README_FIGURES:
         if (figdir / name).is_file():
