@@ -3,7 +3,7 @@
 Every dataset is written through :func:`write_dataset` (by :mod:`pipeline.runner` for the stages), which
 
 * refuses a variable or coordinate without ``units`` and ``long_name`` (CF conventions),
-* adds the global attributes of the README (title, history, source, Conventions, package version,
+* adds the global attributes of docs/datasets.md (title, history, source, Conventions, package and library versions, references,
   git revision, config hash, input-file hashes),
 * writes to a temporary file in the same folder and renames it into place, so an interrupted
   run never leaves a half-written file and never destroys the previous one.

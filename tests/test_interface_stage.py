@@ -1,4 +1,4 @@
-"""Stage ``interface`` end to end through ``hdi interface`` (the README: interface.nc, provenance,
+"""Stage ``interface`` end to end through ``hdi interface`` (docs/datasets.md: interface.nc, provenance,
 effects, atomic writes)."""
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """The package's layers import downward only, and no import inside a function dodges a cycle.
 
-Layers, lowest first (README, "Architecture"): the base modules every layer may use (units table,
+Layers, lowest first (docs/architecture.md): the base modules every layer may use (units table,
 dataset schema and I/O, code keys, the fan-out), ``physics`` (pure laws in SI), ``config`` (scene
 schema, loading, validation, grids), ``model`` (scene to model, kernel, outcome rules), ``analyses``
 (calibration, studies, optimum, figures), the stages with their runner and the study evaluations,

@@ -1,7 +1,7 @@
 """Scene files: the paper scene, --set overrides, and one test per class of validation error.
 
 Every error must be a SceneError whose message names the file, the key and what was expected
-(the README, "Scenes and effects": "validated on load with a clear error for every bad field").
+(docs/cli.md, "Scenes": "validated on load with a clear error for every bad field").
 """
 
 from __future__ import annotations
