@@ -3,8 +3,8 @@
 Every dataset is written through :func:`write_dataset` (by :mod:`pipeline.runner` for the stages), which
 
 * refuses a variable or coordinate without ``units`` and ``long_name`` (CF conventions),
-* adds the global attributes of docs/datasets.md (title, history, source, Conventions, package and library versions, references,
-  git revision, config hash, input-file hashes),
+* adds the global attributes of docs/datasets.md (title, history, source, references, Conventions, the
+  package's and the numerical libraries' versions, git revision, config hash, input-file hashes),
 * writes to a temporary file in the same folder and renames it into place, so an interrupted
   run never leaves a half-written file and never destroys the previous one.
 
