@@ -178,6 +178,11 @@ def test_hdi_identify_in_a_log_counts_generations_with_the_best_cost_and_q_and_v
         assert counts == sorted(counts) and len(set(counts)) >= 4 and counts[-1] == 4, counts
         costs = [float(note.removeprefix("best cost ")) for k, _, note in gens if k > 0]
         assert costs and costs == sorted(costs, reverse=True)  # the best so far only improves
+        # then the profiles and the correlation count their evaluations (lines through the whole stage):
+        # 2 parameters x (3 profile points + the optimum) + 2 x 2 Jacobian points, or more with a round more
+        evals = [(k, n, note) for k, n, unit, note in _lines(err, "identify") if unit == "evaluations"]
+        assert evals and evals[-1][0] == evals[-1][1] >= 2 * 4 + 4 and evals[-1][2] == "correlation", err
+        assert [k for k, _, _ in evals] == sorted(k for k, _, _ in evals)
         # -q: no progress and no stage messages; the dataset's path still on stdout
         assert cli.main([*argv, "--force", "-q"]) == 0
         out = capsys.readouterr()

@@ -126,10 +126,12 @@ def identify(ident: Identification, params: Sequence[Parameter], x_base: np.ndar
     profiles, the correlation and the optimiser's report (arrays, for ``identify.nc``); the records are
     in ``ident``.
 
-    ``progress``: how the global search shows its generations, ``progress(total, unit=...)`` a context
-    manager whose ``update(note=...)`` is called after each generation with the best cost so far
-    (:class:`pipeline.progress.Progress` in ``hdi identify``; default: nothing shown). It only watches:
-    the search is the same with or without it.
+    ``progress``: how the work shows itself, ``progress(total, unit=...)`` a context manager whose
+    ``update(n, note=...)`` counts steps (:class:`pipeline.progress.Progress` in ``hdi identify``;
+    default: nothing shown): the global search counts its generations with the best cost so far, then
+    the profiles and the correlation count their evaluations (so a log shows a line at every interval
+    through the whole stage, not only through the search). It only watches: the results are the same
+    with or without it.
     """
     lo = np.array([p.low for p in params])
     hi = np.array([p.high for p in params])
@@ -163,20 +165,30 @@ def identify(ident: Identification, params: Sequence[Parameter], x_base: np.ndar
     # made again around it (at most PROFILE_ROUNDS times): the written point is the best evaluated
     m = cfg["profile_points"]
     c_best = float(np.sum(best_res**2))
-    for rounds in range(1, PROFILE_ROUNDS + 1):
-        grids = [np.unique(np.append(np.linspace(lo[i], hi[i], m), best[i])) for i in range(n)]
-        rows = []
-        for i, g in enumerate(grids):
-            for v in g:
-                x = best.copy()
-                x[i] = v
-                rows.append(x)
-        _, _, r_prof = ident.evaluate(np.array(rows), 2)
-        c_prof = np.sum(r_prof**2, axis=1)
-        j = int(np.nanargmin(c_prof)) if np.isfinite(c_prof).any() else -1
-        if j < 0 or not c_prof[j] < c_best - PROFILE_GAIN or rounds == PROFILE_ROUNDS:
-            break
-        best, best_res, c_best = np.array(rows[j]), r_prof[j], float(c_prof[j])
+    # a count of the profile and correlation evaluations (a round more raises its total as it runs)
+    first = sum(len(np.unique(np.append(np.linspace(lo[i], hi[i], m), best[i]))) for i in range(n))
+    counted = progress(first + 2 * n, unit="evaluation") if progress else contextlib.nullcontext()
+    with counted as after:
+        for rounds in range(1, PROFILE_ROUNDS + 1):
+            grids = [np.unique(np.append(np.linspace(lo[i], hi[i], m), best[i])) for i in range(n)]
+            rows = []
+            for i, g in enumerate(grids):
+                for v in g:
+                    x = best.copy()
+                    x[i] = v
+                    rows.append(x)
+            _, _, r_prof = ident.evaluate(np.array(rows), 2)
+            if after is not None:
+                after.update(len(rows), note=f"profiles, round {rounds}")
+            c_prof = np.sum(r_prof**2, axis=1)
+            j = int(np.nanargmin(c_prof)) if np.isfinite(c_prof).any() else -1
+            if j < 0 or not c_prof[j] < c_best - PROFILE_GAIN or rounds == PROFILE_ROUNDS:
+                break
+            best, best_res, c_best = np.array(rows[j]), r_prof[j], float(c_prof[j])
+        gn_pts, plus, minus = _gauss_newton_points(best, lo, hi)
+        _, _, r_gn = ident.evaluate(np.array(gn_pts), 3)
+        if after is not None:
+            after.update(len(gn_pts), note="correlation")
     within = bool(np.all(np.abs(best_res) <= 1.0))
     size = max(len(g) for g in grids)
     prof_x = np.full((n, size), np.nan)
@@ -198,16 +210,7 @@ def identify(ident: Identification, params: Sequence[Parameter], x_base: np.ndar
             cc = prof_cost[i, :len(g)]
             intervals[i] = interval(g, cc - np.nanmin(cc), 1.0, best[i])
 
-    # Gauss-Newton correlation (parameters scaled to their bounds)
-    h = GN_STEP * (hi - lo)
-    plus = np.minimum(best + h, hi)
-    minus = np.maximum(best - h, lo)
-    gn_pts = []
-    for i in range(n):
-        a, b = best.copy(), best.copy()
-        a[i], b[i] = plus[i], minus[i]
-        gn_pts += [a, b]
-    _, _, r_gn = ident.evaluate(np.array(gn_pts), 3)
+    # Gauss-Newton correlation (parameters scaled to their bounds; its points evaluated above)
     J = np.stack([(r_gn[2 * i] - r_gn[2 * i + 1]) / ((plus[i] - minus[i]) / (hi[i] - lo[i])) for i in range(n)],
                  axis=1)
     JTJ = J.T @ J
@@ -225,6 +228,20 @@ def identify(ident: Identification, params: Sequence[Parameter], x_base: np.ndar
             "criterion": criterion, "profile_value": prof_x, "profile_cost": prof_cost, "profile_max": prof_max,
             "correlation": corr, "gn_std": np.sqrt(var_u) * (hi - lo), "de_message": str(result.message),
             "de_generations": int(result.nit), "de_evaluations": int(result.nfev), "profile_rounds": rounds}
+
+
+def _gauss_newton_points(best: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> tuple[list, np.ndarray, np.ndarray]:
+    """The central-difference points of the Jacobian at ``best`` (steps of :data:`GN_STEP` of each
+    parameter's range, kept inside the bounds): ``(points, plus, minus)``."""
+    h = GN_STEP * (hi - lo)
+    plus = np.minimum(best + h, hi)
+    minus = np.maximum(best - h, lo)
+    points = []
+    for i in range(len(best)):
+        a, b = best.copy(), best.copy()
+        a[i], b[i] = plus[i], minus[i]
+        points += [a, b]
+    return points, plus, minus
 
 
 def _all(ident: Identification, params: Sequence[Parameter]) -> tuple[np.ndarray, np.ndarray]:
