@@ -11,7 +11,12 @@ from pipeline.analyses import optimum
 from pipeline.physics import paper
 from pipeline.config.scene import SCHEMA
 
-ABOVE = ("pipeline.stages", "pipeline.runner", "pipeline.cli")
+ABOVE = ("pipeline.stages", "pipeline.runner", "pipeline.cli", "pipeline.api")
+
+#: The one import edge not followed: the package's lazy re-export of the public API (imported on first
+#: use of one of its names, never when a module below imports the package; tests/test_layers.py
+#: LAZY_ALLOWED, where a subprocess checks that ``import pipeline`` loads no submodule).
+LAZY_EDGES = {("pipeline", "pipeline.api")}
 
 
 def test_analyses_import_only_downward():
@@ -24,7 +29,7 @@ def test_analyses_import_only_downward():
             if mod in seen:
                 continue
             seen.add(mod)
-            todo.extend(cv.imports(mod))
+            todo.extend(m for m in cv.imports(mod) if (mod, m) not in LAZY_EDGES)
         above = sorted(m for m in seen if m.startswith(ABOVE))
         assert not above, f"{name} imports {above}"
 
