@@ -42,14 +42,13 @@ import hashlib
 import warnings
 from typing import Any
 
-import numpy as np
 from numba import njit, types
 from numba.core.errors import NumbaError, NumbaWarning
 from numba.extending import NativeValue, models, overload, register_model, typeof_impl, unbox
 
 from ..physics import air_bearing as ab
 from .compiled import kernel_jit
-from .piecewise import _ppat, _ppat_at, _ppindex, _ppslope_at, _ppval
+from .piecewise import _ppat, _ppat_at, _ppindex, _ppslope_at, _ppval, disk, disk3
 from .state import MENISCUS, THETA, THETA_RATE, Z, Z_RATE
 
 _jit = kernel_jit(__name__)
@@ -190,31 +189,6 @@ def separation_at(p, z, theta, w):
     tables are functions of this d).
     """
     return gap_at(p, z, theta, w) - p.y_s
-
-
-@_inline
-def disk(p, dmw, t):
-    """Disk displacement [m] and velocity [m/s] under the TFC point at time ``t`` (zero without a DMW)."""
-    if dmw is None:
-        return 0.0, 0.0
-    return _ppval(dmw, p.dmw_t0, p.dmw_dt, t)
-
-
-@_inline
-def disk3(p, dmw, t):
-    """Disk displacement and velocity under the TFC point, the front and the rear pad at ``t``
-    (:func:`pipeline.model.piecewise.disk_coefficients`: one row of 12 coefficients per piece)."""
-    if dmw is None:
-        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-    h = p.dmw_dt
-    n = dmw.shape[0]
-    i = int((t - p.dmw_t0) / h)
-    i = min(max(i, 0), n - 1)
-    s = t - (p.dmw_t0 + i * h)
-    r = dmw[i]
-    return (((r[0] * s + r[1]) * s + r[2]) * s + r[3], (3.0 * r[0] * s + 2.0 * r[1]) * s + r[2],
-            ((r[4] * s + r[5]) * s + r[6]) * s + r[7], (3.0 * r[4] * s + 2.0 * r[5]) * s + r[6],
-            ((r[8] * s + r[9]) * s + r[10]) * s + r[11], (3.0 * r[8] * s + 2.0 * r[9]) * s + r[10])
 
 
 @_inline

@@ -153,21 +153,22 @@ def disk_history(dmw, p, t):
     w = np.empty(t.shape[0])
     v = np.empty(t.shape[0])
     for j in range(t.shape[0]):
-        w[j], v[j] = _disk(p, dmw, t[j])
+        w[j], v[j] = disk(p, dmw, t[j])
     return w, v
 
 
 @_inline
-def _disk(p, dmw, t):
-    """Disk displacement [m] and velocity [m/s] under the TFC point at time ``t``."""
+def disk(p, dmw, t):
+    """Disk displacement [m] and velocity [m/s] under the TFC point at time ``t`` (zero without a DMW)."""
     if dmw is None:
         return 0.0, 0.0
     return _ppval(dmw, p.dmw_t0, p.dmw_dt, t)
 
 
 @_inline
-def _disk3(p, dmw, t):
-    """Disk displacement and velocity under the TFC point, the front and the rear pad at ``t``."""
+def disk3(p, dmw, t):
+    """Disk displacement [m] and velocity [m/s] under the TFC point, the front and the rear pad at ``t``
+    (:func:`disk_coefficients`: one row of 12 coefficients per piece)."""
     if dmw is None:
         return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     h = p.dmw_dt
