@@ -57,7 +57,7 @@ from pathlib import Path
 from typing import Any, Callable, Iterable, Iterator, Sequence
 
 from .code_version import code_key
-from .progress import Progress
+from .progress import Progress, env_seconds
 
 log = logging.getLogger(__name__)
 
@@ -98,17 +98,12 @@ def shared_folder(path: str | Path) -> Iterator[str]:
 
 
 def cluster_wait_s() -> float:
-    """:data:`CLUSTER_WAIT_S`, or the environment variable ``HDI_CLUSTER_WAIT_S`` (seconds > 0)."""
-    text = os.environ.get("HDI_CLUSTER_WAIT_S")
-    if text is None:
-        return CLUSTER_WAIT_S
+    """:data:`CLUSTER_WAIT_S` [s], or the environment variable ``HDI_CLUSTER_WAIT_S``
+    (:func:`pipeline.progress.env_seconds`; a bad value is a :class:`ClusterError`)."""
     try:
-        value = float(text)
-    except ValueError:
-        value = float("nan")
-    if not value > 0 or value == float("inf"):
-        raise ClusterError(f"HDI_CLUSTER_WAIT_S={text}: expected a number of seconds > 0")
-    return value
+        return env_seconds("HDI_CLUSTER_WAIT_S", CLUSTER_WAIT_S)
+    except ValueError as exc:
+        raise ClusterError(str(exc)) from None
 
 
 def available_cores() -> int:

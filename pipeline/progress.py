@@ -51,18 +51,29 @@ def stage(name: str) -> Iterator[str]:
         _LABEL.reset(token)
 
 
-def interval_s() -> float:
-    """:data:`INTERVAL_S`, or the environment variable ``HDI_PROGRESS_S`` (seconds > 0)."""
-    text = os.environ.get("HDI_PROGRESS_S")
+def env_seconds(name: str, default: float) -> float:
+    """A duration [s] set by the environment variable ``name`` (a finite number > 0), else ``default``.
+
+    Raises
+    ------
+    ValueError
+        One line naming the variable, its value and what was expected.
+    """
+    text = os.environ.get(name)
     if text is None:
-        return INTERVAL_S
+        return default
     try:
         value = float(text)
     except ValueError:
         value = float("nan")
     if not 0 < value < float("inf"):
-        raise ValueError(f"HDI_PROGRESS_S={text}: expected a number of seconds > 0")
+        raise ValueError(f"{name}={text}: expected a number of seconds > 0")
     return value
+
+
+def interval_s() -> float:
+    """:data:`INTERVAL_S` [s], or the environment variable ``HDI_PROGRESS_S`` (:func:`env_seconds`)."""
+    return env_seconds("HDI_PROGRESS_S", INTERVAL_S)
 
 
 def display() -> str:
