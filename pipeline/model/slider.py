@@ -80,6 +80,10 @@ MENISCUS_ATOL = 1e-6
 #: start's continuation for many once each.
 INTEGRATED_CACHE = 8
 
+#: How many protrusions' tabulated TFC-point forces a model keeps (:func:`tfc_table`): the static starts'
+#: continuation ladder (about 2 FH0 / 1 nm protrusions) and a batch's runs.
+TFC_CACHE = 64
+
 #: Scene keys of ``[air_bearing]`` whose named laws (:class:`pipeline.physics.air_bearing.TfcLaw`) act at
 #: the TFC point, each with its registry: the selected laws are summed in the kernel's TFC-point force.
 TFC_POINT_LAWS: Mapping[str, Mapping[str, ab.TfcLaw | None]] = {"tfc_stiffening": ab.TFC_STIFFENING,
@@ -153,6 +157,10 @@ class Model:
     #: the integrated interface tables of the last protrusions asked for, by (protrusion, A_n), and the real-area
     #: table capped at 1 they sum ("capped_area"; :func:`interface_tables`)
     integrated: dict = field(default_factory=dict, init=False, repr=False, compare=False)
+    #: the tabulated TFC-point force of the last :data:`TFC_CACHE` protrusions asked for, by protrusion
+    #: (:func:`tfc_table`): a run and the static starts at one protrusion build it once. Copies with the
+    #: same laws share it (:func:`with_criterion`, :func:`with_solver`, :func:`share_statics`)
+    tfc_tables: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @property
     def k_sigma(self) -> float:
@@ -371,12 +379,28 @@ def tfc_table(model: Model, protrusion: float) -> tuple[np.ndarray, float, float
 
     The kernel takes the force and its stiffness ``-dF/dg`` from the same cubic (linear continuation
     below the grid, constant above). The grid spans the laws' ``gap_range`` times ``FH0`` with their
-    largest ``points``.
+    largest ``points``. Kept in ``model.tfc_tables`` (the last :data:`TFC_CACHE` protrusions).
     """
     laws = model.tfc_tabulated
     if not laws:
         return None
-    fh0 = model.p.FH0
+    cache = model.tfc_tables
+    key = float(protrusion)
+    found = cache.get(key)
+    if found is None:
+        found = _tfc_table(laws, model.p.FH0, key)
+        while len(cache) >= TFC_CACHE:
+            try:  # (oldest first; another thread may have removed it already)
+                cache.pop(next(iter(cache)), None)
+            except (StopIteration, RuntimeError):
+                break
+        cache[key] = found
+    return found
+
+
+def _tfc_table(laws: tuple[ab.TfcLaw, ...], fh0: float, protrusion: float) -> tuple[np.ndarray, float, float]:
+    """The table of :func:`tfc_table` made anew: the laws' summed force at ``protrusion`` [m] on their gap
+    grid over the flying height ``fh0`` [m]."""
     g = np.linspace(min(law.gap_range[0] for law in laws) * fh0, max(law.gap_range[1] for law in laws) * fh0,
                     max(law.points for law in laws))
     force = sum(np.asarray(law.force(g, protrusion), dtype=float) for law in laws)
@@ -451,6 +475,7 @@ def share_statics(models: Sequence[Model]) -> None:
             raise ValueError("share_statics: the models must be of one scene and criterion k "
                              "(they may differ in their DMW record only)")
         m.statics = first.statics
+        m.tfc_tables = first.tfc_tables
 
 
 def run_model(model: Model, protrusion: float, y0: np.ndarray | None = None, max_steps: int = 5_000_000) -> Run:
@@ -736,9 +761,11 @@ def with_criterion(model: Model, k: float) -> Model:
     those of a fresh model with ``k`` (tests/test_start.py).
     """
     copy = replace(model, k=float(k))
+    copy.tfc_tables = model.tfc_tables  # (the criterion changes no force law)
     fold = model.statics.get("fold")
     if fold is not None and copy.k_sigma >= model.k_sigma:
         copy.statics["bound"] = fold
+        copy.statics["bound_ladder"] = model.statics.get("ladder")
     return copy
 
 
@@ -762,4 +789,5 @@ def with_solver(model: Model, **changes: Any) -> Model:
         raise ValueError(f"with_solver changes solver settings only ({sorted(SOLVER_FIELDS)}), not {sorted(other)}")
     copy = replace(model, **changes)
     copy.statics = model.statics
+    copy.tfc_tables = model.tfc_tables
     return copy

@@ -39,6 +39,12 @@ from ..units import NM, URAD
 
 Forces = Callable[[np.ndarray, float], np.ndarray]
 
+#: ``solve(mu, y0, max_step=None, max_iter=50, tol=1e-10) -> Equilibrium``: Newton's method
+#: (:func:`newton`) on ``R(., mu)`` from ``y0``; the continuation's one use of the forces. By default
+#: :func:`newton` on the caller's ``forces`` (:func:`python_solve`); the model's static start passes a
+#: compiled one on the kernel's own forces (:mod:`pipeline.model.static_solver`).
+Solve = Callable[..., "Equilibrium"]
+
 #: Start rules of a run (``solver.start``, :mod:`pipeline.model.start`): its static equilibrium, or the
 #: nominal attitude.
 STARTS = ("static", "nominal")
@@ -121,6 +127,13 @@ def newton(forces: Callable[[np.ndarray], np.ndarray], y0, *, scale=None, jac=No
                        else False, it, float(np.max(np.abs(R)) / fscale) if fscale > 0 else np.inf)
 
 
+def python_solve(forces: Forces, scale=None) -> Solve:
+    """The :data:`Solve` of :func:`newton` on ``forces(y, mu)`` with the state scale ``scale``."""
+    def solve(mu: float, y0, max_step=None, max_iter: int = 50, tol: float = 1e-10) -> Equilibrium:
+        return newton(lambda y: forces(y, mu), y0, scale=scale, tol=tol, max_iter=max_iter, max_step=max_step)
+    return solve
+
+
 @dataclass
 class Branch:
     """A continued stable branch.
@@ -146,7 +159,8 @@ class Branch:
 
 
 def flying_branch(forces: Forces, mu_values, y0=None, *, scale=None, accept: Callable[[np.ndarray], bool] | None = None,
-                  mu_tol: float | None = None, tol: float = 1e-10, max_iter: int = 50) -> Branch:
+                  mu_tol: float | None = None, tol: float = 1e-10, max_iter: int = 50,
+                  solve: Solve | None = None) -> Branch:
     """Continue the stable equilibrium branch through increasing ``mu_values`` from ``y0`` at ``mu_values[0]``.
 
     Each step starts Newton from the secant predictor; a step is accepted when Newton converges to a
@@ -159,6 +173,7 @@ def flying_branch(forces: Forces, mu_values, y0=None, *, scale=None, accept: Cal
     forces : ``R(y, mu)``; mu_values : increasing parameters to report (e.g. protrusions [m])
     y0 : state at ``mu_values[0]`` (default zeros: the nominal attitude) or a start for Newton there
     scale : as :func:`newton`; mu_tol : fold bracket (default ``1e-6`` of the range)
+    solve : the Newton solve (:data:`Solve`; default :func:`newton` on ``forces``)
     """
     mus = np.asarray(mu_values, dtype=float)
     if mus.ndim != 1 or mus.size < 1 or np.any(np.diff(mus) <= 0):
@@ -167,12 +182,13 @@ def flying_branch(forces: Forces, mu_values, y0=None, *, scale=None, accept: Cal
     mu_tol = 1e-6 * span if mu_tol is None else mu_tol
     y0 = np.zeros(2 if scale is None else len(scale)) if y0 is None else np.asarray(y0, dtype=float)
     ok = accept or (lambda y: True)
+    newton_at = solve or python_solve(forces, scale)
 
-    def solve(mu, start):
-        return newton(lambda y: forces(y, mu), start, scale=scale, tol=tol, max_iter=max_iter)
+    def solve_at(mu, start):
+        return newton_at(mu, start, max_iter=max_iter, tol=tol)
 
     br = Branch()
-    e = solve(mus[0], y0)
+    e = solve_at(mus[0], y0)
     if not (e.converged and e.stable and ok(e.y)):
         br.fold = float(mus[0])
         return br
@@ -186,7 +202,7 @@ def flying_branch(forces: Forces, mu_values, y0=None, *, scale=None, accept: Cal
             step = min(step, target - mu)
             trial = mu + step
             pred = y if y_prev is None else y + (y - y_prev) * (trial - mu) / (mu - mu_prev)
-            e = solve(trial, pred)
+            e = solve_at(trial, pred)
             if e.converged and e.stable and ok(e.y):
                 y_prev, mu_prev, y, mu = y, mu, e.y, trial
                 br.last = e
@@ -221,7 +237,8 @@ class StaticState:
 def static_equilibrium(forces: Forces, mu: float, *, mu_start: float = 0.0, y_start=None, scale=None,
                        accept: Callable[[np.ndarray], bool] | None = None, contact_start=None,
                        contact_max_step=None, steps: int = 20, mu_tol: float | None = None,
-                       fold: float | None = None) -> StaticState:
+                       fold: float | None = None, solve: Solve | None = None, ladder: Branch | None = None
+                       ) -> StaticState:
     """The static state at ``mu``: the flying equilibrium, else the contact-branch equilibrium.
 
     The flying state is continued from ``y_start`` (default the nominal attitude, zeros) at ``mu_start``
@@ -235,29 +252,54 @@ def static_equilibrium(forces: Forces, mu: float, *, mu_start: float = 0.0, y_st
 
     ``fold``: where the flying branch of the same forces, continued from the same start, is known to end
     (:func:`branch_fold`); at or past it the continuation, whose step halving to ``mu_tol`` at the fold
-    is most of the cost, is not repeated.
+    is most of the cost, is not repeated. ``solve``: the Newton solve (:data:`Solve`; default :func:`newton`
+    on ``forces``).
+
+    ``ladder``: the flying branch of the same forces and start, continued once for all protrusions
+    (:func:`flying_ladder`): its fold is then ``fold``, and a ``mu`` before it is continued from the
+    ladder's last state at or below ``mu`` in one step (the same state to the Newton tolerance as the
+    continuation from ``mu_start``: the branch is smooth and both converge to its one state at ``mu``).
     """
+    solve = solve or python_solve(forces, scale)
+    if ladder is not None:
+        fold = ladder.fold
     if fold is not None and np.isfinite(fold) and mu >= fold:
         br = Branch(fold=float(fold))
+    elif ladder is not None and ladder.mu and ladder.mu[0] <= mu:
+        j = int(np.searchsorted(ladder.mu, mu, side="right")) - 1
+        mus = np.array([ladder.mu[j], mu]) if mu > ladder.mu[j] else np.array([mu])
+        br = flying_branch(forces, mus, ladder.states[j], scale=scale, accept=accept, mu_tol=mu_tol, solve=solve)
     else:
         mus = np.linspace(mu_start, mu, steps + 1) if mu > mu_start else np.array([mu])
-        br = flying_branch(forces, mus, y_start, scale=scale, accept=accept, mu_tol=mu_tol)
+        br = flying_branch(forces, mus, y_start, scale=scale, accept=accept, mu_tol=mu_tol, solve=solve)
     if np.isnan(br.fold):
         return StaticState("flying", br.last, np.nan, f"flying equilibrium at {mu:.6g}")
     msg = f"no flying equilibrium at {mu:.6g} (the flying branch ends at a fold at {br.fold:.6g})"
     if contact_start is None:
         return StaticState("none", None, br.fold, msg + "; no contact start given")
-    e = newton(lambda y: forces(y, mu), contact_start, scale=scale, max_step=contact_max_step, max_iter=200)
+    e = solve(mu, contact_start, max_step=contact_max_step, max_iter=200)
     if e.converged and e.stable:
         return StaticState("contact", e, br.fold, msg + "; contact-branch equilibrium found")
     return StaticState("none", None, br.fold, msg + "; Newton found no stable contact state either")
 
 
-def branch_fold(forces: Forces, mu_max: float, *, mu_start: float = 0.0, y_start=None, scale=None,
-                accept: Callable[[np.ndarray], bool] | None = None, step: float, mu_tol: float | None = None) -> float:
-    """Where the stable flying branch continued from ``y_start`` at ``mu_start`` ends (NaN: not before
-    ``mu_max``), with continuation steps of at most ``step`` (:func:`flying_branch`, the fold bracketed to
-    ``mu_tol``). One continuation answers :func:`static_equilibrium` at every ``mu`` past the fold."""
+def flying_ladder(forces: Forces, mu_max: float, *, mu_start: float = 0.0, y_start=None, scale=None,
+                  accept: Callable[[np.ndarray], bool] | None = None, step: float, mu_tol: float | None = None,
+                  solve: Solve | None = None) -> Branch:
+    """The stable flying branch continued from ``y_start`` at ``mu_start`` towards ``mu_max`` through equal
+    steps of at most ``step`` (:func:`flying_branch`): its states at those steps (the *ladder*) and where
+    it ends (``fold``, bracketed to ``mu_tol``; NaN: not before ``mu_max``). One continuation answers
+    :func:`static_equilibrium` at every ``mu``: past the fold there is no flying state, and before it the
+    branch is continued from the ladder's state below ``mu`` (argument ``ladder``), at most one step."""
     n = max(1, int(np.ceil((mu_max - mu_start) / step)))
     return flying_branch(forces, np.linspace(mu_start, mu_max, n + 1), y_start, scale=scale, accept=accept,
-                         mu_tol=mu_tol).fold
+                         mu_tol=mu_tol, solve=solve)
+
+
+def branch_fold(forces: Forces, mu_max: float, *, mu_start: float = 0.0, y_start=None, scale=None,
+                accept: Callable[[np.ndarray], bool] | None = None, step: float, mu_tol: float | None = None,
+                solve: Solve | None = None) -> float:
+    """Where the stable flying branch continued from ``y_start`` at ``mu_start`` ends (NaN: not before
+    ``mu_max``): the fold of :func:`flying_ladder` (same arguments)."""
+    return flying_ladder(forces, mu_max, mu_start=mu_start, y_start=y_start, scale=scale, accept=accept, step=step,
+                         mu_tol=mu_tol, solve=solve).fold
