@@ -131,3 +131,103 @@ def test_the_realisations_of_an_ensemble_share_their_static_starts():
     assert np.isnan(pair[0].k)
     sl.share_statics(pair)
     assert pair[1].statics is pair[0].statics
+
+
+# ------------------------------------------------ issue 26: the static start compiled, and its ladder
+from pipeline.model import static_solver  # noqa: E402
+from pipeline.model.start import SCALE, start_state, static_forces  # noqa: E402
+from pipeline.physics import equilibrium as eq  # noqa: E402
+
+#: Newton's convergence test (pipeline.physics.equilibrium.newton): updates below 1e-10 of the scale
+NEWTON_TOL = 1e-10 * SCALE
+
+
+#: TFC-point air-bearing laws: none; compiled in the kernel (gap-power); tabulated per protrusion (ph-limit)
+LAWS = {"none": {}, "gap-power": {"tfc_stiffening": "gap-power"}, "ph-limit": {"bulge": "ph-limit"}}
+
+
+@pytest.mark.parametrize("law", list(LAWS))
+def test_the_compiled_start_is_the_python_newton_start(law):
+    # the compiled Newton (static_solver) and the Python one (physics.equilibrium.newton) on the same
+    # forces reach the same state, flying before the fold and in contact past it, to the Newton tolerance
+    model = build(make_scene(("air_bearing", "pitch", "adhesion", "contact", "friction"), solver=SOLVER,
+                             air_bearing=LAWS[law]))
+    fold = None
+    kinds = set()
+    for delta in (0.0, 3.0, 7.5, 9.0, 11.0, 14.0):
+        states = {}
+        for compiled in (True, False):
+            m = replace(model)  # (each its own fold and ladder)
+            states[compiled] = start_state(lambda mu, m=m: sl.run_parameters(m, mu), delta * NM, "static",
+                                           delta * NM + m.p["y_s"] - m.p["FH0"], statics=m.statics,
+                                           fold_max=2 * m.p["FH0"], compiled=compiled)
+            fold = m.statics["fold"] if fold is None else fold
+            assert m.statics["fold"] == fold  # the same fold, bracketed by the same steps
+        (y_c, note_c), (y_p, note_p) = states[True], states[False]
+        assert np.all(np.abs(y_c[:2] - y_p[:2]) <= NEWTON_TOL), (law, delta, y_c - y_p)
+        assert note_c.split("(")[0] == note_p.split("(")[0], (note_c, note_p)
+        kinds.add(note_c.split("(")[0].strip())
+    # the protrusions reach both branches: the test compares the contact Newton too
+    assert {"static flying equilibrium", "static contact equilibrium"} <= kinds, kinds
+
+
+def test_the_compiled_newton_reports_what_the_python_newton_reports():
+    # the Equilibrium of one solve: state, stiffness, convergence, stability, iterations, residual
+    model = build(make_scene(("air_bearing", "pitch", "adhesion", "contact"), solver=SOLVER))
+    R, flying, solve = static_forces(
+        lambda mu: sl.run_parameters(model, mu))
+    for delta, y0, max_step in ((4 * NM, np.zeros(2), None), (12 * NM, np.array([1 * NM, 0.0]), 0.05 * SCALE)):
+        c = solve(delta, y0, max_step=max_step, max_iter=200)
+        p = eq.newton(lambda y: R(y, delta), y0, scale=SCALE, max_step=max_step, max_iter=200)
+        assert c.converged and p.converged and c.stable == p.stable and c.iterations == p.iterations
+        assert np.all(np.abs(c.y - p.y) <= NEWTON_TOL)
+        np.testing.assert_allclose(c.stiffness, p.stiffness, rtol=1e-6)
+        assert c.residual == pytest.approx(p.residual, abs=1e-12)
+    # an unstable state (the saddle of the adhesion fold's other branch) is reported unstable by both:
+    # Newton from deep below the flying state at a protrusion just before the fold
+    fold = eq.branch_fold(R, 2 * model.p["FH0"], y_start=np.zeros(2), scale=SCALE, accept=flying, step=1 * NM,
+                          mu_tol=1e-3 * NM, solve=solve)
+    delta = fold - 0.05 * NM
+    flying_y = solve(delta, np.zeros(2)).y
+    for start in (flying_y - np.array([0.5 * NM, 0.0]),):
+        c = solve(delta, start, max_iter=200)
+        p = eq.newton(lambda y: R(y, delta), start, scale=SCALE, max_iter=200)
+        assert c.stable == p.stable and np.all(np.abs(c.y - p.y) <= NEWTON_TOL)
+
+
+def test_the_compiled_solve_of_two_equations():
+    # the 2x2 solve (partial pivoting) against numpy's, a zero pivot reported as singular
+    rng = np.random.default_rng(3)
+    x = np.empty(2)
+    for _ in range(200):
+        J, b = rng.normal(size=(2, 2)) * 10.0 ** rng.integers(-6, 6, size=2), rng.normal(size=2)
+        assert static_solver._solve2(J, b, x)
+        np.testing.assert_allclose(x, np.linalg.solve(J, b), rtol=1e-9)
+    assert static_solver._solve2(np.array([[0.0, 1.0], [2.0, 0.0]]), np.array([1.0, 4.0]), x)  # needs the pivot
+    np.testing.assert_array_equal(x, [2.0, 1.0])
+    assert not static_solver._solve2(np.array([[1.0, 2.0], [2.0, 4.0]]), np.ones(2), x)
+    assert not static_solver._solve2(np.zeros((2, 2)), np.ones(2), x)
+    # and it runs without the GIL, like the kernel (the point of compiling it: parallel threads)
+    assert static_solver._newton.targetoptions["nogil"]
+
+
+def test_a_start_from_the_ladder_is_the_start_continued_from_zero_protrusion():
+    # the ladder (the flying branch kept per model) changes the continuation's path, not its end: a
+    # start continued one step from the ladder's state below it equals, to the Newton tolerance, the
+    # start continued from the nominal attitude at zero protrusion in STEPS steps (the start before)
+    model = build(make_scene(("air_bearing", "pitch", "adhesion", "contact", "friction"), solver=SOLVER,
+                             air_bearing=LAWS["ph-limit"]))
+    assert model.tfc_tabulated  # (the law tabulated per protrusion: the ladder's tables are kept)
+    R, flying, solve = static_forces(
+        lambda mu: sl.run_parameters(model, mu))
+    ladder = eq.flying_ladder(R, 2 * model.p["FH0"], y_start=np.zeros(2), scale=SCALE, accept=flying, step=1 * NM,
+                              mu_tol=1e-3 * NM, solve=solve)
+    assert len(ladder.mu) >= 5 and np.isfinite(ladder.fold)
+    deltas = [0.0, 2.5 * NM, 4.0 * NM, 6.3 * NM, ladder.fold - 0.2 * NM, ladder.fold + 0.5 * NM]
+    for delta in deltas:
+        kw = dict(scale=SCALE, accept=flying, contact_start=np.array([delta + model.p["y_s"] - model.p["FH0"], 0.0]),
+                  contact_max_step=0.05 * SCALE, mu_tol=1e-3 * NM, solve=solve)
+        from_ladder = eq.static_equilibrium(R, delta, ladder=ladder, **kw)
+        from_zero = eq.static_equilibrium(R, delta, steps=6, **kw)
+        assert from_ladder.kind == from_zero.kind == ("flying" if delta < ladder.fold else "contact"), delta / NM
+        assert np.all(np.abs(from_ladder.equilibrium.y - from_zero.equilibrium.y) <= NEWTON_TOL), delta / NM
