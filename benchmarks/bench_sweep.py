@@ -6,7 +6,8 @@ Rows and targets:
    ``2 x its sequential kernel time + one interpreter start`` measured here (ratio < 1 passes);
 2. the same sweep per scheduler (synchronous, threads, a process LocalCluster): batch phase and
    whole command -- the measurement behind the local default of :mod:`pipeline.fanout`;
-3. 2 workers over 1 on the 684-scene grid (configs/sweep-3x3.toml), whole command, target >= 1.8;
+3. 2 workers over 1 on the 684-scene grid (configs/sweep-3x3.toml), whole command, target >= 1.6 (issue
+   26; before the static starts were compiled: 9.5 s / 7.9 s, 1.2x);
 4. an ensemble of 32 DMW realisations over the paper grid (2432 scenes), whole command, target < 60 s.
 """
 
@@ -24,6 +25,11 @@ PAPER = str(ROOT / "configs" / "paper-2009.toml")
 GRID = str(ROOT / "configs" / "sweep-3x3.toml")
 INPUTS = ("roughness.nc", "dmw.nc", "interface.nc", "calibration.nc")
 
+
+#: 2 workers over 1 on the 684-scene grid, whole command (issue 26)
+SPEEDUP_TARGET = 1.6
+#: The grid's whole command with 1 and 2 workers before the static starts were compiled (issue 26, quiet machine) [s]
+GRID_BEFORE_S = (9.5, 7.9)
 
 CPU: dict[str, list[float]] = {}  # CPU seconds [s] of the timed commands, by label
 
@@ -116,11 +122,13 @@ def run(results: list[dict]) -> None:
         serial = statistics.median(g1) - statistics.median(c1)
         bound = statistics.median(g1) / (serial + statistics.median(c1) / 2)
         record(results, "sweep-3x3 grid, 684 scenes, 2 workers, whole command", g2, speedup_vs_1_worker=speedup,
-               speedup_target=1.8, meets_speedup_target=bool(speedup >= 1.8), batch_phase_speedup=speedup_c,
+               speedup_target=SPEEDUP_TARGET, meets_speedup_target=bool(speedup >= SPEEDUP_TARGET),
+               before_issue_26_s=GRID_BEFORE_S, speedup_vs_before_1_worker=GRID_BEFORE_S[0] / statistics.median(g1),
+               speedup_vs_before_2_workers=GRID_BEFORE_S[1] / statistics.median(g2), batch_phase_speedup=speedup_c,
                batch_phase_median_s=statistics.median(c2), cpu_median_s=_cpu("grid2"),
                serial_seconds_1_worker=serial, speedup_bound_perfect_batch_phase=bound)
         print(f"  speed-up of 2 workers over 1 on the 684-scene grid: {speedup:.2f} whole command, "
-              f"{speedup_c:.2f} batch phase (target >= 1.8; bound with a perfect batch phase {bound:.2f})")
+              f"{speedup_c:.2f} batch phase (target >= {SPEEDUP_TARGET}; bound with a perfect batch phase {bound:.2f})")
         ens = sweep_wall(PAPER, inputs, "--set", "sweep.realisations=32", repeat=1, label="ensemble")
         record(results, "DMW ensemble, 32 realisations x 76 protrusions (2432 scenes), whole command", ens,
                target_s=60.0, ratio_to_one_realisation=ens[0] / statistics.median(wall), cpu_median_s=_cpu("ensemble"))
