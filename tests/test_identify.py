@@ -334,7 +334,8 @@ def test_the_identification_takes_any_evaluation_callable(paper_scene):
 
     ident = identification.Identification(evaluate, tlist, 10.0)
     out = identification.identify(ident, params, np.array([1.2, 0.05]),
-                                  {"generations": 5, "population": 5, "seed": 1, "profile_points": 5})
+                                  {"generations": 5, "population": 5, "seed": 1, "profile_points": 5,
+                                   "profile_method": "optimised", "profile_evaluations": 40})
     assert out["within"] and abs(10.0 * out["best"][0] - 9.0) <= 1.0
     # the interval of the first parameter is where |10 x - 9| <= 1; the second is seen by no target
     assert out["intervals"][0] == pytest.approx([0.8, 1.0], abs=1e-9)
