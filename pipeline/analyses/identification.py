@@ -13,15 +13,30 @@ Method
    fan-out of batches, ``updating="deferred"``, seeded). The objective is noisy and partly discrete
    (a contact flag switches; a run snaps into contact or not), so no gradient polish (``polish=False``):
    L-BFGS-B on a piecewise-constant residual stops where it starts.
-2. **Profiles**: each parameter alone across its bounds (``profile_points``), the others at the
-   optimum. A profile point better than the optimum (by more than :data:`PROFILE_GAIN`) means the
-   global search stopped short: it becomes the optimum and the profiles are made again around it, at
-   most :data:`PROFILE_ROUNDS` rounds (``profile_rounds`` in the dataset; after the last, a better
-   point is left where it is, and ``best_evaluation`` then names it, not the optimum). The interval of a parameter is the connected range around the optimum where **every target
-   stays within tolerance** (all ``|r| <= 1``); when the optimum itself misses a target, that range
-   does not exist and the stage reports instead the range where the objective stays within 1 of its
-   profile minimum (the 68 % profile interval if tolerances were one standard deviation) and says so.
-   Crossings are interpolated linearly between profile points.
+2. **Profiles**: first a *slice* of each parameter across its bounds (``profile_points`` and the
+   optimum's value), the others held at the optimum. A slice is narrower than the profile where
+   parameters correlate (it is the conditional, not the marginal, range), so with
+   ``profile_method = "optimised"`` (the default) the others are then **re-optimised** at each point:
+   two walks per parameter go outward from the optimum, all advanced together (each round one
+   fan-out, role ``profile-optimiser``). At each value the others start from the neighbouring
+   re-optimised point moved along the valley (the Gauss-Newton slope of step 3's Jacobian for the
+   first step, exact on a quadratic objective; the secant of the last two points after), the slice
+   point competes with that prediction, and a compass search (polls of +- :data:`PROFILE_STEP` of
+   each other parameter's range while one improves, then one point at the vertex of the parabolas
+   through the poll; no gradients: the objective is noisy and partly piecewise constant) lowers the
+   interval criterion's metric (the largest ``|r|``, or the objective; below). A walk stops past the
+   first point outside the interval, at the bounds, or when the parameter's ``profile_evaluations``
+   are spent; the points it did not reach keep the slice's values (``profile_optimised`` 0 in the
+   dataset). A profile point is never worse than the slice's, so (with the optimum the profile's
+   minimum) its interval is never narrower. A profile point better than the optimum (by more than
+   :data:`PROFILE_GAIN`) means the global search stopped short: it becomes the optimum and the
+   profiles are made again around it, at most :data:`PROFILE_ROUNDS` rounds (``profile_rounds`` in
+   the dataset; after the last, a better point is left where it is, and ``best_evaluation`` then
+   names it, not the optimum). The interval of a parameter is the connected range around the
+   optimum where **every target stays within tolerance** (all ``|r| <= 1``); when the optimum itself
+   misses a target, that range does not exist and the stage reports instead the range where the
+   objective stays within 1 of its profile minimum (the 68 % profile interval if tolerances were one
+   standard deviation) and says so. Crossings are interpolated linearly between profile points.
 3. **Correlation**: Gauss-Newton at the optimum, ``C = (J^T J)^+`` with ``J`` the central-difference
    Jacobian of the residuals in parameters scaled to their bounds (steps of 2 % of the range);
    ``corr_ij = C_ij / sqrt(C_ii C_jj)``. A direction with no curvature (a parameter no target sees)
@@ -305,20 +320,26 @@ class _Walk:
 
     At each value the other parameters start from a prediction (the neighbouring re-optimised point
     moved along the valley: the Gauss-Newton slope for the first step, the secant of the last two
-    points after) and a compass search refines them (:meth:`candidates`, :meth:`update`): polls of
-    +- :data:`PROFILE_STEP` of each other parameter's range while one finds a better point, then one
-    point at the vertex of the parabolas through each coordinate's poll (finer than the step). The walk
-    ends past the first point outside the interval criterion (``outside``), at the grid's end, or when
-    its parameter's budget is spent (:meth:`stop`). ``found``: value -> (point, residuals).
+    points after) and a compass search lowers the interval criterion's ``metric`` of the residuals
+    (:meth:`candidates`, :meth:`update`): polls of +- :data:`PROFILE_STEP` of each other parameter's
+    range while one finds a better point, then one point at the vertex of the parabolas through each
+    coordinate's poll (finer than the step). The walk ends past the first point whose metric exceeds
+    ``limit`` (outside the interval), at the grid's end, or when its parameter's budget is spent
+    (:meth:`stop`). ``found``: value -> (point, residuals).
     """
 
     def __init__(self, i: int, values: np.ndarray, start: np.ndarray, slope: np.ndarray, lo: np.ndarray,
-                 hi: np.ndarray, outside: Callable[[np.ndarray], bool]):
-        self.i, self.values, self.slope, self.lo, self.hi, self.outside = i, values, slope, lo, hi, outside
+                 hi: np.ndarray, metric: Callable[[np.ndarray], float], limit: float,
+                 slice_at: Callable[[float], tuple[np.ndarray, np.ndarray]]):
+        self.i, self.values, self.slope, self.lo, self.hi = i, values, slope, lo, hi
+        self.metric, self.limit, self.slice_at = metric, limit, slice_at
         self.path = [start]  # the finished points, the optimum first
         self.found: dict[float, tuple[np.ndarray, np.ndarray]] = {}
         self.k, self.done = -1, False
-        self.polls: list[tuple[int, float]] = []  # (coordinate, offset) of each poll point asked for
+        #: residuals of every point this walk knows (a poll after a move meets the point it left: not asked again)
+        self.seen: dict[tuple, np.ndarray] = {}
+        self.asked: list[np.ndarray] = []  # this round's points, known ones included
+        self.polls: list[tuple[int, float]] = []  # (coordinate, offset) of each poll point
         self._next()
 
     @property
@@ -337,43 +358,50 @@ class _Walk:
         x = np.clip(prev + slope * (self.value - prev[i]), self.lo, self.hi)
         x[i] = self.value
         self.x, self.res, self.vertex = x, None, None
+        self.slice = self.slice_at(self.value)
+        self.seen[_point(self.slice[0])] = self.slice[1]
 
     def candidates(self) -> list[np.ndarray]:
-        """The points of this round: the parabolas' vertex after a poll that found nothing better; else
-        the predicted point (at a new value) and the compass poll around the current one."""
+        """The points of this round not yet known: the parabolas' vertex after a poll that found nothing
+        better; else the predicted point (at a new value) and the compass poll around the current one."""
         if self.vertex is not None:
-            return [self.vertex]
-        pts = [self.x] if self.res is None else []
-        self.polls = []
-        for j in range(len(self.x)):
-            if j == self.i:
-                continue
-            for sign in (1.0, -1.0):
-                p = self.x.copy()
-                p[j] = np.clip(p[j] + sign * PROFILE_STEP * (self.hi[j] - self.lo[j]), self.lo[j], self.hi[j])
-                if p[j] != self.x[j]:
-                    pts.append(p)
-                    self.polls.append((j, p[j] - self.x[j]))
-        return pts
+            self.asked = [self.vertex]
+        else:
+            self.asked = [self.x] if self.res is None else []
+            self.polls = []
+            for j in range(len(self.x)):
+                if j == self.i:
+                    continue
+                for sign in (1.0, -1.0):
+                    p = self.x.copy()
+                    p[j] = np.clip(p[j] + sign * PROFILE_STEP * (self.hi[j] - self.lo[j]), self.lo[j], self.hi[j])
+                    if p[j] != self.x[j]:
+                        self.asked.append(p)
+                        self.polls.append((j, p[j] - self.x[j]))
+        new = {_point(p): p for p in self.asked if _point(p) not in self.seen}
+        return list(new.values())
 
-    def update(self, pts: list[np.ndarray], res: np.ndarray, slice_x: np.ndarray, slice_res: np.ndarray) -> None:
-        """Take the round's results: move to the best poll point if it is better (and poll again), else
-        try the parabolas' vertex once, then the point is finished. At a new value the slice point
-        (the others at the optimum) competes with the prediction, so a profile point is never worse
-        than the slice's."""
+    def update(self, pts: list[np.ndarray], res: np.ndarray) -> None:
+        """Take the round's results (``res`` of the new points ``pts``): move to the best poll point if
+        it is better (and poll again), else try the parabolas' vertex once, then the point is finished.
+        At a new value the slice point (the others at the optimum) competes with the prediction, so a
+        profile point is never worse than the slice's."""
+        self.seen.update((_point(p), r) for p, r in zip(pts, res))
+        pts = self.asked
+        res = [self.seen[_point(p)] for p in pts]
         if self.vertex is not None:
-            if cost(res[0]) < cost(self.res):
+            if self.metric(res[0]) < self.metric(self.res):
                 self.x, self.res = self.vertex, res[0]
             self._finish()
             return
         moved = False
         if self.res is None:
             self.res, pts, res = res[0], pts[1:], res[1:]
-            if cost(slice_res) < cost(self.res):
-                self.x, self.res, moved = slice_x, slice_res, True
-        c = np.sum(res**2, axis=1)
+            if self.metric(self.slice[1]) < self.metric(self.res):
+                self.x, self.res, moved = self.slice[0], self.slice[1], True
+        c = np.array([self.metric(r) for r in res])
         j = int(np.nanargmin(c)) if np.isfinite(c).any() else -1
-        if j >= 0 and c[j] < cost(self.res):
+        if j >= 0 and c[j] < self.metric(self.res):
             self.x, self.res = pts[j], res[j]
         elif not moved:  # (after a move to the slice point the poll was around another point: poll again)
             self.vertex = self._vertex(c)
@@ -381,9 +409,9 @@ class _Walk:
                 self._finish()
 
     def _vertex(self, c: np.ndarray) -> np.ndarray | None:
-        """The point at the vertex of the parabola through each coordinate's two poll points (costs
+        """The point at the vertex of the parabola through each coordinate's two poll points (metrics
         ``c``) and the current point, where it curves upward (at most one step off), or None."""
-        c0, step = cost(self.res), {}
+        c0, step = self.metric(self.res), {}
         for (j, d), cj in zip(self.polls, c):
             step.setdefault(j, {})[np.sign(d)] = (abs(d), cj)
         x = self.x.copy()
@@ -400,7 +428,7 @@ class _Walk:
         """The current point is re-optimised: keep it; go on to the next value unless it is outside."""
         self.found[self.value] = (self.x, self.res)
         self.path.append(self.x)
-        if self.outside(self.res):
+        if self.metric(self.res) > self.limit:
             self.done = True
         else:
             self._next()
@@ -412,6 +440,12 @@ class _Walk:
         self.done = True
 
 
+def _point(x: np.ndarray) -> tuple[float, ...]:
+    """A point's identity to 12 significant digits (a poll back to the point it left is that point, whatever
+    the rounding of x + h - h; the evaluation keys round so too)."""
+    return tuple(float(f"{v:.12g}") for v in x)
+
+
 def _reoptimise(ident: Identification, best: np.ndarray, c_best: float, within: bool, slices: list[dict],
                 slopes: np.ndarray, lo: np.ndarray, hi: np.ndarray, budget: int,
                 count: Callable[[int, str], None]) -> tuple[list[dict], list, np.ndarray]:
@@ -420,17 +454,23 @@ def _reoptimise(ident: Identification, best: np.ndarray, c_best: float, within: 
     ``budget`` evaluations. Returns ``found`` (per parameter: value -> (point, residuals)) and the rows
     and residuals evaluated.
 
-    A walk stops past the first point outside the interval: where the optimum is within tolerance,
-    a point with a |r| > 1; else a point whose objective exceeds the optimum's by more than 1 (the
-    profile minimum is at most the optimum's, so that point is outside too)."""
-    def outside(r: np.ndarray) -> bool:
-        return bool(np.max(np.abs(r)) > 1.0) if within else cost(r) > c_best + 1.0
+    The walks lower the metric of the interval criterion: where the optimum is within tolerance, the
+    largest |r| (the profile of "some setting of the others keeps every target within tolerance"), and
+    a walk stops past the first point with a |r| > 1; else the objective, and a walk stops past the
+    first point whose objective exceeds the optimum's by more than 1 (the profile minimum is at most
+    the optimum's, so that point is outside too)."""
+    metric = (lambda r: float(np.max(np.abs(r)))) if within else cost
+    limit = 1.0 if within else c_best + 1.0
+
+    def slice_at(i: int) -> Callable[[float], tuple[np.ndarray, np.ndarray]]:
+        s = slices[i]
+        return lambda v: (s["x"][s["value"] == v][0], s["res"][s["value"] == v][0])
 
     walks = []
     for i, s in enumerate(slices):
         g = s["value"]
         for values in (g[g < best[i]][::-1], g[g > best[i]]):
-            walks.append(_Walk(i, values, best, slopes[i], lo, hi, outside))
+            walks.append(_Walk(i, values, best, slopes[i], lo, hi, metric, limit, slice_at(i)))
     spent = np.zeros(len(best), int)
     rows: list[np.ndarray] = []
     results: list[np.ndarray] = []
@@ -448,15 +488,13 @@ def _reoptimise(ident: Identification, best: np.ndarray, c_best: float, within: 
         if not batch:
             break
         flat = [p for _, ps in batch for p in ps]
-        _, _, r = ident.evaluate(np.array(flat), 4) if flat else (None, None, np.zeros((0, len(ident.tlist))))
+        r = ident.evaluate(np.array(flat), 4)[2] if flat else np.zeros((0, len(ident.tlist)))
         count(len(flat), "profiles, others re-optimised")
         rows += flat
         results.append(r)
         k = 0
         for w, ps in batch:
-            s = slices[w.i]
-            at = int(np.flatnonzero(s["value"] == w.value)[0])
-            w.update(ps, r[k:k + len(ps)], s["x"][at], s["res"][at])
+            w.update(ps, r[k:k + len(ps)])
             k += len(ps)
     found = [{} for _ in slices]
     for w in walks:
