@@ -30,7 +30,8 @@ Method
    dataset). A profile point is never worse than the slice's, so (with the optimum the profile's
    minimum) its interval is never narrower. A profile point better than the optimum (by more than
    :data:`PROFILE_GAIN`) means the global search stopped short: it becomes the optimum and the
-   profiles are made again around it, at most :data:`PROFILE_ROUNDS` rounds (``profile_rounds`` in
+   profiles are made again around it (a round's re-optimisation stops at the first such point, and
+   does not start after a slice found one), at most :data:`PROFILE_ROUNDS` rounds (``profile_rounds`` in
    the dataset; after the last, a better point is left where it is, and ``best_evaluation`` then
    names it, not the optimum). The interval of a parameter is the connected range around the
    optimum where **every target stays within tolerance** (all ``|r| <= 1``); when the optimum itself
@@ -173,40 +174,21 @@ def identify(ident: Identification, params: Sequence[Parameter], x_base: np.ndar
     m = cfg["profile_points"]
     optimised = cfg["profile_method"] == "optimised" and n > 1  # (one parameter has no others)
     budget = cfg["profile_evaluations"] if optimised else 0
-    c_best = float(np.sum(best_res**2))
     # a count of the profile and correlation evaluations (a round more raises its total as it runs; the
-    # re-optimisation's budget is an upper bound)
+    # re-optimisation's budget is an upper bound, the total lowered when it ends)
     first = sum(len(_grid(lo[i], hi[i], m, best[i])) for i in range(n)) + 2 * n + n * budget
     counted = progress(first, unit="evaluation") if progress else contextlib.nullcontext()
     with counted as after:
+        done = [0]
 
-        def count(k: int, note: str) -> None:
+        def count(k: int, note: str, left: int | None = None) -> None:
+            """``k`` evaluations more; ``left``: how many are still to come, where that is now known."""
+            done[0] += k
             if after is not None:
-                after.update(k, note=note)
+                after.update(k, note=note, **({} if left is None else {"total": done[0] + left}))
 
-        spent = 0
-        for rounds in range(1, PROFILE_ROUNDS + 1):
-            grids = [_grid(lo[i], hi[i], m, best[i]) for i in range(n)]
-            slices, rows, r_round = _slices(ident, best, grids)
-            count(len(rows), f"profiles, round {rounds}")
-            profiles = slices
-            if optimised:
-                J = _jacobian(ident, best, lo, hi)
-                count(2 * n, "correlation")
-                within = bool(np.all(np.abs(best_res) <= 1.0))
-                found, w_rows, w_res = _reoptimise(ident, best, c_best, within, slices, _valley_slopes(J, lo, hi),
-                                                   lo, hi, budget, count)
-                profiles = _merge(slices, found)
-                spent += len(w_rows)
-                rows, r_round = rows + w_rows, np.concatenate([r_round, w_res]) if w_rows else r_round
-            c_prof = np.sum(r_round**2, axis=1)
-            j = int(np.nanargmin(c_prof)) if np.isfinite(c_prof).any() else -1
-            if j < 0 or not c_prof[j] < c_best - PROFILE_GAIN or rounds == PROFILE_ROUNDS:
-                break
-            best, best_res, c_best = np.array(rows[j]), r_round[j], float(c_prof[j])
-        if not optimised:  # (a slice's correlation after its profiles, as before the re-optimised method)
-            J = _jacobian(ident, best, lo, hi)
-            count(2 * n, "correlation")
+        best, best_res, slices, profiles, J, rounds, spent = _profile_rounds(ident, best, best_res, lo, hi, m, budget,
+                                                                             count)
     within = bool(np.all(np.abs(best_res) <= 1.0))
     criterion = "all targets within tolerance (|r| <= 1)" if within else \
         "objective within 1 of its profile minimum (the optimum misses a target, so no range keeps all within tolerance)"
@@ -218,6 +200,42 @@ def identify(ident: Identification, params: Sequence[Parameter], x_base: np.ndar
             "correlation": corr, "gn_std": gn_std, "de_message": str(result.message),
             "de_generations": int(result.nit), "de_evaluations": int(result.nfev), "profile_rounds": rounds,
             "profile_optimiser_evaluations": spent}
+
+
+def _profile_rounds(ident: Identification, best: np.ndarray, best_res: np.ndarray, lo: np.ndarray, hi: np.ndarray,
+                    m: int, budget: int, count: Callable[[int, str], None]) -> tuple:
+    """Step 2 and the Jacobian of step 3, in rounds (module docstring); ``budget`` 0: slices only.
+
+    Returns the optimum and its residuals, the last round's slices and profiles (:func:`_profile`
+    dicts), the Jacobian at the optimum, the number of rounds and the re-optimisation's evaluations."""
+    n = len(best)
+    c_best, spent = float(np.sum(best_res**2)), 0
+    for rounds in range(1, PROFILE_ROUNDS + 1):
+        grids = [_grid(lo[i], hi[i], m, best[i]) for i in range(n)]
+        slices, rows, r_round = _slices(ident, best, grids)
+        count(len(rows), f"profiles, round {rounds}")
+        profiles = slices
+        # a point this much better ends the round (a round more follows around it): not after the last round
+        moved = c_best - PROFILE_GAIN if rounds < PROFILE_ROUNDS else -np.inf
+        if budget and not np.nanmin(np.sum(r_round**2, axis=1), initial=np.inf) < moved:
+            J = _jacobian(ident, best, lo, hi)  # (first: it predicts the walks' first steps)
+            count(2 * n, "correlation")
+            within = bool(np.all(np.abs(best_res) <= 1.0))
+            found, w_rows, w_res = _reoptimise(ident, best, c_best, within, slices, _valley_slopes(J, lo, hi),
+                                               lo, hi, budget, count, moved)
+            profiles = _merge(slices, found)
+            spent += len(w_rows)
+            count(0, "profiles, others re-optimised", left=0)  # (the budget's rest unspent)
+            rows, r_round = rows + w_rows, np.concatenate([r_round, w_res])
+        c_prof = np.sum(r_round**2, axis=1)
+        j = int(np.nanargmin(c_prof)) if np.isfinite(c_prof).any() else -1
+        if j < 0 or not c_prof[j] < c_best - PROFILE_GAIN or rounds == PROFILE_ROUNDS:
+            break
+        best, best_res, c_best = np.array(rows[j]), r_round[j], float(c_prof[j])
+    if not budget:  # (a slice's Jacobian after its profiles, as before the re-optimised method)
+        J = _jacobian(ident, best, lo, hi)
+        count(2 * n, "correlation")
+    return best, best_res, slices, profiles, J, rounds, spent
 
 
 def _global_search(ident: Identification, lo: np.ndarray, hi: np.ndarray, x_base: np.ndarray, cfg: dict,
@@ -354,7 +372,10 @@ class _Walk:
             self.done = True
             return
         prev, i = self.path[-1], self.i
-        slope = self.slope if len(self.path) < 2 else (self.path[-1] - self.path[-2]) / (self.path[-1][i] - self.path[-2][i])
+        if len(self.path) < 2:
+            slope = self.slope
+        else:  # the secant of the last two points
+            slope = (prev - self.path[-2]) / (prev[i] - self.path[-2][i])
         x = np.clip(prev + slope * (self.value - prev[i]), self.lo, self.hi)
         x[i] = self.value
         self.x, self.res, self.vertex = x, None, None
@@ -448,11 +469,12 @@ def _point(x: np.ndarray) -> tuple[float, ...]:
 
 def _reoptimise(ident: Identification, best: np.ndarray, c_best: float, within: bool, slices: list[dict],
                 slopes: np.ndarray, lo: np.ndarray, hi: np.ndarray, budget: int,
-                count: Callable[[int, str], None]) -> tuple[list[dict], list, np.ndarray]:
+                count: Callable[[int, str], None], moved: float = -np.inf) -> tuple[list[dict], list, np.ndarray]:
     """The re-optimised profile points of every parameter: two walks (:class:`_Walk`) per parameter,
     all advanced together, one fan-out per round (role 4), each parameter's walks spending at most
-    ``budget`` evaluations. Returns ``found`` (per parameter: value -> (point, residuals)) and the rows
-    and residuals evaluated.
+    ``budget`` evaluations; all stop at once when a point's objective falls below ``moved`` (the
+    optimum moves there and the profiles are made again). Returns ``found`` (per parameter: value ->
+    (point, residuals)) and the rows and residuals evaluated.
 
     The walks lower the metric of the interval criterion: where the optimum is within tolerance, the
     largest |r| (the profile of "some setting of the others keeps every target within tolerance"), and
@@ -492,6 +514,8 @@ def _reoptimise(ident: Identification, best: np.ndarray, c_best: float, within: 
         count(len(flat), "profiles, others re-optimised")
         rows += flat
         results.append(r)
+        if np.nanmin(np.sum(r**2, axis=1), initial=np.inf) < moved:
+            break
         k = 0
         for w, ps in batch:
             w.update(ps, r[k:k + len(ps)])
