@@ -72,6 +72,8 @@ def test_a_slice_is_the_conditional_width_a_profile_the_marginal_one():
     sliced = identification.identify(_identification(_quadratic), PARAMS, np.zeros(2), _cfg("slice"))
     np.testing.assert_array_equal(sliced["intervals"], out["slice_intervals"])
     assert sliced["method"] == identification.METHODS["slice"] and not sliced["profile_optimised"].any()
+    from pipeline.analyses.paper_comparison import SLICE_METHOD  # (the report's name of an older dataset's intervals)
+    assert SLICE_METHOD == identification.METHODS["slice"]
 
 
 def test_a_curved_valley_is_followed_by_the_compass_search():

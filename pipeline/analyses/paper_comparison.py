@@ -17,7 +17,6 @@ import numpy as np
 import xarray as xr
 
 from . import optimum as opt
-from .identification import METHODS
 from ..physics import paper
 from ..physics.asperity_statistics import contact_probabilities
 from .plots import runs, unit_text
@@ -323,6 +322,11 @@ def comparison_markdown(combos: list, data: dict, settings: ReportSettings, name
 
 
 # ------------------------------------------------------------------- comparison: paper / reconstructed / identified
+#: What an identify.nc made before the re-optimised profiles gave (``METHODS["slice"]`` of
+#: pipeline/analyses/identification.py, not imported: the report's code key would take in the model with it).
+SLICE_METHOD = "slice, other parameters held at the optimum"
+
+
 def _interval_text(bounds: np.ndarray) -> str:
     """``[lo, hi]`` of an interval, or "none" where it does not exist."""
     lo, hi = bounds
@@ -377,7 +381,7 @@ def identification_markdown(ident: xr.Dataset) -> str:
                              "mechanism the free parameters do not provide (docs/model.md, sections 'Gap-power stiffening' and 'Bouncing band').")
     params = [str(p) for p in ident["parameter"].values]
     # (an identify.nc made before the re-optimised profiles has slices only)
-    method = str(ident.attrs.get("interval_method", METHODS["slice"]))
+    method = str(ident.attrs.get("interval_method", SLICE_METHOD))
     sliced = [f"{p}_slice_interval" for p in params if f"{p}_slice_interval" in ident]
     prow = []
     for p in params:
