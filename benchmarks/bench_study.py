@@ -6,8 +6,8 @@
   12 generations, 5 profile points): wall and CPU time of the whole command (target 15 min on 2 cores),
   evaluations per second of the fan-out, the share of the workers' time in the integrator
   (``kernel_seconds`` over workers x batch wall time), and the projection of the schema's default
-  budget (population 10 x parameters, 20 generations, 11 profile points) from the measured seconds per
-  evaluation.
+  budget (population 10 x parameters, 20 generations, 11 profile points, optimised profiles of at most 40
+  evaluations per parameter) from the measured seconds per evaluation.
 * ``hdi sensitivity`` Morris screening, 10 trajectories over the 8 default parameters = 90 sweeps of
   the 76-protrusion paper grid (target 5 min on 2 cores).
 
@@ -26,7 +26,8 @@ from .common import ROOT, hdi, makefile_scene, record
 
 WORKERS = 2
 #: The schema's default budget of ``[identify]`` (pipeline/config/scene.py), for the projection.
-DEFAULT_BUDGET = {"population": 10, "generations": 20, "profile_points": 11}
+DEFAULT_BUDGET = {"population": 10, "generations": 20, "profile_points": 11, "profile_method": "optimised",
+                  "profile_evaluations": 40}
 #: The default budget's identify on 8-record ensembles on the 2 cores (issue 26: ~20 min projected before
 #: the static starts were compiled) [s]
 DEFAULT_BUDGET_TARGET_S = 600.0
@@ -34,12 +35,15 @@ DEFAULT_BUDGET_TARGET_S = 600.0
 
 def evaluation_budget(scene_path: str, **budget: int) -> int:
     """Largest number of evaluations of identify (differential evolution may stop earlier) with the
-    scene's ``[identify]`` budget, or ``budget`` (population, generations, profile_points) instead: the
-    reconstructed point, population x parameters x (generations + 1), the profiles and Gauss-Newton."""
+    scene's ``[identify]`` budget, or ``budget`` (population, generations, profile_points, profile_method,
+    profile_evaluations) instead: the reconstructed point, population x parameters x (generations + 1),
+    the slices and Gauss-Newton, and an optimised profile's re-optimisation (profile_evaluations per
+    parameter at most); one profile round (a profile point better than the optimum repeats them)."""
     from pipeline.config.scene import load_scene
     i = {**load_scene(scene_path)["identify"], **budget}
     n = len(i["parameters"])
-    return 1 + i["population"] * n * (i["generations"] + 1) + (i["profile_points"] + 1) * n + 2 * n
+    reopt = i["profile_evaluations"] * n if i["profile_method"] == "optimised" and n > 1 else 0
+    return 1 + i["population"] * n * (i["generations"] + 1) + (i["profile_points"] + 1) * n + 2 * n + reopt
 
 
 def _hdi(*args: str) -> float:

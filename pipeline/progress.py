@@ -158,11 +158,18 @@ class Progress:
             self._thread.start()
         return self
 
-    def update(self, n: int = 1, note: str | None = None) -> None:
-        """``n`` more steps done; ``note`` (e.g. ``"best cost 0.12"``) is shown beside the count."""
+    def update(self, n: int = 1, note: str | None = None, total: int | None = None) -> None:
+        """``n`` more steps done; ``note`` (e.g. ``"best cost 0.12"``) is shown beside the count;
+        ``total``: the steps now expected, where the work turned out shorter than foreseen (an upper
+        bound of it, as a budget, came to an end early)."""
         self.done += n
         if note is not None:
             self.note = note
+        if total is not None and total != self.total:
+            self.total = int(total)
+            if self._bar is not None:
+                self._bar.total = max(self.total, self.done)
+                self._bar.refresh()
         if self.done > self.total:  # (work that took more steps than foreseen: the count stays honest)
             self.total = self.done
             if self._bar is not None:

@@ -71,9 +71,11 @@ def sizes(scene: Any, stage: str) -> list[tuple[str, int, int]]:
     if stage == "identify":
         i = scene["identify"]
         n_par = len(i["parameters"])
-        n = (i["population"] * n_par * (i["generations"] + 1) + i["profile_points"] * n_par) * i["realisations"]
-        out.append(("identify evaluations (population x parameters x (generations + 1) + profile_points x "
-                    "parameters, x realisations)", n, MAX_EVALUATIONS))
+        reopt = i["profile_evaluations"] if i["profile_method"] == "optimised" else 0
+        n = (i["population"] * n_par * (i["generations"] + 1) + (i["profile_points"] + reopt) * n_par) \
+            * i["realisations"]
+        out.append(("identify evaluations (population x parameters x (generations + 1) + (profile_points + "
+                    "profile_evaluations of an optimised profile) x parameters, x realisations)", n, MAX_EVALUATIONS))
     if stage == "sensitivity":
         s = scene["sensitivity"]
         n_par = len(s["parameters"])

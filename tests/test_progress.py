@@ -63,6 +63,10 @@ def test_progress_counts_from_this_runs_rate_and_says_units_and_notes():
     assert p.line() == "sweep: 6/10 batches done, elapsed 1:00, ETA 2:00 (best cost 0.5)"
     p.update(5)  # more than foreseen: the total follows
     assert p.line().startswith("sweep: 11/11 batches done") and "ETA 0:00" in p.line()
+    budget = progress.Progress(20, unit="evaluation", label="identify")  # a budget, an upper bound
+    budget.update(5)
+    budget.update(0, note="ended early", total=5)  # ... that ended early: the total follows down
+    assert budget.line().startswith("identify: 5/5 evaluations done") and "ETA 0:00" in budget.line()
     assert progress.clock(3725) == "1:02:05"
 
 
@@ -179,9 +183,11 @@ def test_hdi_identify_in_a_log_counts_generations_with_the_best_cost_and_q_and_v
         costs = [float(note.removeprefix("best cost ")) for k, _, note in gens if k > 0]
         assert costs and costs == sorted(costs, reverse=True)  # the best so far only improves
         # then the profiles and the correlation count their evaluations (lines through the whole stage):
-        # 2 parameters x (3 profile points + the optimum) + 2 x 2 Jacobian points, or more with a round more
+        # 2 parameters x (3 profile points + the optimum) + 2 x 2 Jacobian points, or more with a round more,
+        # and the re-optimisation of the profiles last (its budget's rest taken off the total when it ends)
         evals = [(k, n, note) for k, n, unit, note in _lines(err, "identify") if unit == "evaluations"]
-        assert evals and evals[-1][0] == evals[-1][1] >= 2 * 4 + 4 and evals[-1][2] == "correlation", err
+        assert evals and evals[-1][0] == evals[-1][1] >= 2 * 4 + 4, err
+        assert evals[-1][2] == "profiles, others re-optimised", err
         assert [k for k, _, _ in evals] == sorted(k for k, _, _ in evals)
         # -q: no progress and no stage messages; the dataset's path still on stdout
         assert cli.main([*argv, "--force", "-q"]) == 0

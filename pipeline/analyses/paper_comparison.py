@@ -322,6 +322,17 @@ def comparison_markdown(combos: list, data: dict, settings: ReportSettings, name
 
 
 # ------------------------------------------------------------------- comparison: paper / reconstructed / identified
+#: What an identify.nc made before the re-optimised profiles gave (``METHODS["slice"]`` of
+#: pipeline/analyses/identification.py, not imported: the report's code key would take in the model with it).
+SLICE_METHOD = "slice, other parameters held at the optimum"
+
+
+def _interval_text(bounds: np.ndarray) -> str:
+    """``[lo, hi]`` of an interval, or "none" where it does not exist."""
+    lo, hi = bounds
+    return f"[{number(lo)}, {number(hi)}]" if np.isfinite(lo) else "none"
+
+
 def identification_markdown(ident: xr.Dataset) -> str:
     """Three columns per target of ``identify.nc``: the paper, the reconstructed scene, the identified scene.
 
@@ -369,13 +380,19 @@ def identification_markdown(ident: xr.Dataset) -> str:
                              "evaluations with both, so BV > 20 % with a flying FHM of about 12.5 % needs a "
                              "mechanism the free parameters do not provide (docs/model.md, sections 'Gap-power stiffening' and 'Bouncing band').")
     params = [str(p) for p in ident["parameter"].values]
+    # (an identify.nc made before the re-optimised profiles has slices only)
+    method = str(ident.attrs.get("interval_method", SLICE_METHOD))
+    sliced = [f"{p}_slice_interval" for p in params if f"{p}_slice_interval" in ident]
     prow = []
     for p in params:
         best = ident[f"{p}_best"]
-        lo, hi = ident[f"{p}_interval"].values
         prow.append([best.attrs["scene_key"], f"{number(float(ident[f'{p}_reconstructed']))}",
-                     f"{number(float(best))}", f"[{number(lo)}, {number(hi)}]" if np.isfinite(lo) else "none",
+                     f"{number(float(best))}", _interval_text(ident[f"{p}_interval"].values),
+                     *([_interval_text(ident[f"{p}_slice_interval"].values)] if sliced else []),
                      unit_text(best.attrs["units"])])
+    kind = method.split(",")[0]  # "profile" or "slice"
+    heads = ["parameter", "reconstructed", "identified", f"{kind} interval", *(["slice interval"] if sliced else []),
+             "unit"]
     text = ["", "## Paper, reconstructed scene, identified scene", "",
             f"From `identify.nc` ({ident.sizes['evaluation']} evaluations; identified scene "
             f"`{Path(str(ident.attrs.get('identified_scene', ''))).name}`). r = residual / tolerance "
@@ -385,8 +402,11 @@ def identification_markdown(ident: xr.Dataset) -> str:
             *([f"Over {int(ident.attrs['realisations'])} DMW realisations per evaluation; in brackets each value's "
                "spread (10-90 % of the realisations, or mean ± 1 standard deviation for the light-contact state).", ""]
               if "realisations" in ident.attrs else []),
-            table(["parameter", "reconstructed", "identified", "interval", "unit"], prow), "",
-            f"Interval: {ident.attrs['interval_criterion']}. Correlation: {ident.attrs['correlation_method']}.", ""]
+            table(heads, prow), "",
+            f"Interval ({method}): {ident.attrs['interval_criterion']}."
+            + (" The slice interval (the other parameters held at the optimum) is narrower where parameters "
+               "correlate." if sliced else "")
+            + f" Correlation: {ident.attrs['correlation_method']}.", ""]
     if unreached:
         text += ["### Targets no parameter set within the bounds reaches", ""] + [f"- {u}" for u in unreached]
     else:

@@ -381,6 +381,18 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "batch_size": Key("int", 6, (lambda v: v >= 1, "an integer >= 1"), doc="candidates per dask task"),
         "profile_points": Key("int", 11, (lambda v: v >= 3, "an integer >= 3"),
                               doc="points of each parameter profile across its bounds"),
+        "profile_method": Key("str", "optimised", choices=("optimised", "slice"),
+                              doc="intervals from 'optimised' profiles (the other parameters re-optimised at each "
+                                  "point: a compass search warm-started from the neighbouring point, at most "
+                                  "profile_evaluations more evaluations per parameter) or 'slice's (the others held "
+                                  "at the optimum: narrower where parameters correlate; no evaluations beyond the "
+                                  "(profile_points + 1) per parameter both methods make); docs/model.md, section "
+                                  "'Identification'"),
+        "profile_evaluations": Key("int", 40, (lambda v: v >= 1, "an integer >= 1"),
+                                   doc="budget of an 'optimised' profile: evaluations each parameter's profile may spend "
+                                       "re-optimising the others (each point 1 + 2 x (parameters - 1) at least; "
+                                       "6 parameters: <= 240 per profile round, four generations of the default "
+                                       "population)"),
     },
     # hdi sensitivity: [recon] parameters with bounds; Morris screening and Sobol indices (SALib)
     "sensitivity": {

@@ -179,6 +179,7 @@ STAGE = Stage(
     # optimiser's settings)
     excludes=("tfc.protrusion_nm", "sweep", "sensitivity", "scene.name", "scene.description", "report.histories_nm",
               "identify.parameters", "identify.population", "identify.generations", "identify.seed",
-              "identify.batch_size", "identify.profile_points", "identify.realisations"),
+              "identify.batch_size", "identify.profile_points", "identify.profile_method",
+              "identify.profile_evaluations", "identify.realisations"),
     upstream=_upstream, applies=applies, order=57, main_job=True,
     doc="the paper's checks over report.realisations DMW realisations (ensemble.nc, for the report)")

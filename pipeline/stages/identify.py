@@ -54,7 +54,7 @@ from ..fanout import local_cluster
 from ..progress import Progress
 from ..io import read_dataset, temporary_path, var
 from ..runner import Inputs, Stage, build
-from ..analyses.identification import GN_STEP, ROLES, Identification, identify
+from ..analyses.identification import GN_STEP, METHODS, PROFILE_STEP, ROLES, Identification, identify
 from ..analyses.study import Parameter, parse_parameters, residuals, scene_value, spreads, target_protrusions, targets
 from ..evaluations import Evaluator, evaluate_batch, setup, upstream
 
@@ -72,6 +72,7 @@ def dataset(ident: Identification, params: Sequence[Parameter], out: dict[str, A
     pts = np.array([r["params"] for r in recs])
     costs = np.sum(res**2, axis=1)
     i_best = int(np.nanargmin(costs))
+    optimised = out["method"] == METHODS["optimised"]
     data: dict[str, Any] = {}
     for j, p in enumerate(params):
         u = p.units
@@ -80,8 +81,8 @@ def dataset(ident: Identification, params: Sequence[Parameter], out: dict[str, A
         data[f"{name}_best"] = var(out["best"][j], (), u, f"identified {p.name}", scene_key=p.name)
         data[f"{name}_reconstructed"] = var(x_base[j], (), u, f"reconstructed (scene) value of {p.name}")
         data[f"{name}_bounds"] = var(np.array([p.low, p.high]), "bound", u, f"search bounds of {p.name}")
-        data[f"{name}_interval"] = var(out["intervals"][j], "bound", u, f"interval of {p.name}",
-                                       criterion=out["criterion"])
+        data[f"{name}_interval"] = var(out["intervals"][j], "bound", u, f"interval of {p.name} ({out['method']})",
+                                       criterion=out["criterion"], method=out["method"])
         data[f"{name}_gauss_newton_std"] = var(out["gn_std"][j], (), u,
                                                f"Gauss-Newton standard deviation of {p.name} (tolerances as 1 sigma)")
         data[f"{name}_profile"] = var(out["profile_value"][j], "profile_point", u, f"profile values of {p.name}")
@@ -89,6 +90,8 @@ def dataset(ident: Identification, params: Sequence[Parameter], out: dict[str, A
                                            f"objective along the profile of {p.name}")
         data[f"{name}_profile_max_residual"] = var(out["profile_max"][j], "profile_point", "1",
                                                    f"largest |residual| along the profile of {p.name}")
+        if optimised:  # (a slice's others are the optimum's: nothing more to say)
+            data.update(_optimised_variables(p, j, out))
     n_real = ev.realisations
     spr = np.array([spreads(r, tl) for r in recs]) if n_real > 1 else None
     for j, t in enumerate(tl):
@@ -112,6 +115,11 @@ def dataset(ident: Identification, params: Sequence[Parameter], out: dict[str, A
     data["failed"] = var(np.array([r["error"] is not None for r in recs], np.int8), "evaluation", "1",
                          "1 when a run of the evaluation failed (its message in the evaluation store)")
     names = [p.var_name for p in params]
+    if optimised:
+        data["profile_optimised"] = var(out["profile_optimised"].astype(np.int8), ("parameter", "profile_point"), "1",
+                                        "1 where the other parameters were re-optimised at the profile point, 0 where "
+                                        "they are held at the optimum (past the walk's end or its budget)",
+                                        flag_values=np.array([0, 1], np.int8), flag_meanings="held re_optimised")
     data["correlation"] = var(out["correlation"], ("parameter", "parameter_b"), "1",
                               "correlation of the parameters, Gauss-Newton (J^T J)^+ at the optimum")
     coords = {
@@ -130,6 +138,12 @@ def dataset(ident: Identification, params: Sequence[Parameter], out: dict[str, A
                      "vectorized (one fan-out per generation), deferred updating, polish=False",
         "optimiser_message": out["de_message"], "generations": out["de_generations"],
         "optimiser_evaluations": out["de_evaluations"], "profile_rounds": out["profile_rounds"],
+        "interval_method": out["method"],
+        **({"profile_optimiser": f"compass search over the other parameters (steps of {PROFILE_STEP:g} x range) from "
+                                 "the neighbouring re-optimised point moved along the Gauss-Newton valley (first step) "
+                                 "or the secant of the last two points, walked outward from the optimum; each walk "
+                                 "stops past the first point outside the interval criterion",
+            "profile_optimiser_evaluations": out["profile_optimiser_evaluations"]} if optimised else {}),
         "correlation_method": f"Gauss-Newton (J^T J)^+ at the optimum, central differences of {GN_STEP:g} x range",
         "protrusions_nm": ev.protrusions,
         **({"realisations": n_real,
@@ -139,6 +153,22 @@ def dataset(ident: Identification, params: Sequence[Parameter], out: dict[str, A
         # (this run's counts and fan-out time go to the run log, .hdi/runs.jsonl, not the dataset)
     })
     return ds
+
+
+def _optimised_variables(p: Parameter, j: int, out: dict[str, Any]) -> dict[str, Any]:
+    """The variables of an optimised profile of ``p`` (the ``j``-th parameter): its slice's interval and
+    objective, and ``p`` itself at every point of every profile (re-optimised on the others' profiles)."""
+    name, u = p.var_name, p.units
+    return {
+        f"{name}_slice_interval": var(out["slice_intervals"][j], "bound", u,
+                                      f"interval of {p.name} from its slice ({METHODS['slice']})",
+                                      criterion=out["criterion"], method=METHODS["slice"]),
+        f"{name}_slice_cost": var(out["slice_cost"][j], "profile_point", "1",
+                                  f"objective along the slice of {p.name} (the other parameters at the optimum)"),
+        f"{name}_along_profiles": var(out["profile_points_x"][:, :, j], ("parameter", "profile_point"), u,
+                                      f"{p.name} at each point of each parameter's profile (re-optimised on the other "
+                                      "parameters' profiles where profile_optimised is 1; the profiled value on its own)"),
+    }
 
 
 def write_identified_scene(scene: Any, params: Sequence[Parameter], ds: xr.Dataset, path: Path,
@@ -156,7 +186,8 @@ def write_identified_scene(scene: Any, params: Sequence[Parameter], ds: xr.Datas
     cfg = scene["identify"]
     lines = [f"# Identified by `hdi identify {base.name if base else ''}` on {now} (git {rev});",
              "# every value below is [identified]: fitted to the paper's targets ([identify] of the base scene),",
-             f"# with its interval ({ds.attrs['interval_criterion']}).",
+             f"# with its interval ({ds.attrs['interval_criterion']}; "
+             f"{ds.attrs.get('interval_method', METHODS['slice'])}).",
              f"# Budget: differential evolution population {cfg['population']} x {len(params)} parameters, at most "
              f"{cfg['generations']} generations ({ds.attrs.get('generations', '?')} run), {cfg['profile_points']} "
              f"profile points, {ds.attrs.get('realisations', 1)} DMW realisation(s) per candidate; "
@@ -249,11 +280,15 @@ def figure(ds: xr.Dataset, params: Sequence[Parameter], scene: str, path: Path) 
         name = p.var_name
         xv = ds[f"{name}_profile"].values
         ok = np.isfinite(xv)
+        optimised = f"{name}_slice_cost" in ds
+        if optimised:  # the slice it started from, for comparison (narrower where parameters correlate)
+            a.semilogy(xv[ok], np.maximum(ds[f"{name}_slice_cost"].values[ok], 1e-3), "s--", ms=2, lw=0.8,
+                       color="0.6", label="slice (others at the optimum)")
         a.semilogy(xv[ok], np.maximum(ds[f"{name}_profile_cost"].values[ok], 1e-3), "o-", ms=3,
-                   color=plots.LINE_COLOURS[2])
+                   color=plots.LINE_COLOURS[2], label="profile (others re-optimised)" if optimised else "slice")
         lo_i, hi_i = ds[f"{name}_interval"].values
         if np.isfinite(lo_i):
-            a.axvspan(lo_i, hi_i, color="#d5f5d0", label="interval")
+            a.axvspan(lo_i, hi_i, color="#d5f5d0", label="profile interval" if optimised else "slice interval")
         a.axvline(float(ds[f"{name}_best"]), color=plots.LINE_COLOURS[1], lw=1, label="identified")
         a.axvline(float(ds[f"{name}_reconstructed"]), color=plots.LINE_COLOURS[0], lw=1, ls="--",
                   label="reconstructed")
