@@ -13,24 +13,11 @@ from pipeline.model.inputs import SimulationInputs, Source, cached
 from pipeline.config.scene import SceneError, load_scene
 from pipeline.physics import paper
 from pipeline.stages import identify
+import twin
 
 TRUE = {"dmw.rms_nm": 0.14, "lubricant.work_of_adhesion_j_m2": 0.07}
 
-SCENE = """
-[scene]
-name = "twin"
-extends = "{paper}"
-
-[solver]
-duration_ms = 0.8
-transient_ms = 0.3
-
-[contact]
-k = 0.978
-
-[identify]
-parameters = [{{key = "dmw.rms_nm", low = 0.08, high = 0.25}},
-              {{key = "lubricant.work_of_adhesion_j_m2", low = 0.03, high = 0.11}}]
+SCENE = twin.scene_text("""
 targets = ["fhm_flying", "contact_force"]
 fhm_flying_tolerance_percent = 0.3
 contact_force_tolerance_mn = 0.05
@@ -39,7 +26,7 @@ generations = 8
 profile_points = 9
 batch_size = 4
 realisations = 1
-"""
+""")
 
 
 def _twin_scene(write_scene, paper_config, tmp_path, text=SCENE):
@@ -276,14 +263,9 @@ def test_twin_correlated_pair_profile_interval_is_wider_than_the_slice(write_sce
 def _stub_batch(base, params, rows, protrusions, inputs):
     """A stand-in for the slider: FHM and contact force linear in the parameters (the written scene is
     what is tested here, not the fit)."""
-    n = len(protrusions)
-    out = []
-    for key, x in rows:
-        outputs = {"fhm_bv": [10.0 * float(x[0])] * n, "contact_fraction": [1.0] * n, "min_clearance": [-0.1] * n,
-                   "contact_force": [float(x[1])] * n, "interference": [0.5] * n, "mean_pressure": [400.0] * n}
-        out.append((key, {"params": list(map(float, x)), "protrusions": list(map(float, protrusions)),
-                          "outputs": outputs, "seconds": 0.0, "kernel_seconds": 0.0, "error": None}))
-    return out
+    return twin.stub_records(rows, protrusions, lambda x: {
+        "fhm_bv": 10.0 * float(x[0]), "contact_fraction": 1.0, "min_clearance": -0.1, "contact_force": float(x[1]),
+        "interference": 0.5, "mean_pressure": 400.0})
 
 
 USER_TEXT = "# my own edits of the identified scene, which no identify run may touch\n"

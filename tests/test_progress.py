@@ -14,6 +14,7 @@ import pytest
 from pipeline import cli, fanout, progress
 from pipeline.config.scene import load_scene
 from pipeline.stages import identify
+import twin
 
 LINE = re.compile(r"^(\w+): (\d+)/(\d+) (\w+) done, elapsed \d+:\d\d, ETA (\d+:\d\d|\?)(?: \((.*)\))?$")
 
@@ -123,21 +124,7 @@ def test_on_a_pseudo_terminal_a_bar_counts_and_log_lines_go_above_it(monkeypatch
     assert sys.stderr is not tty and warnings.showwarning is shown  # (both given back)
 
 
-SCENE = """
-[scene]
-name = "twin"
-extends = "{paper}"
-
-[solver]
-duration_ms = 0.8
-transient_ms = 0.3
-
-[contact]
-k = 0.978
-
-[identify]
-parameters = [{{key = "dmw.rms_nm", low = 0.08, high = 0.25}},
-              {{key = "lubricant.work_of_adhesion_j_m2", low = 0.03, high = 0.11}}]
+SCENE = twin.scene_text("""
 targets = ["contact_force"]
 contact_force_mn = 0.1
 population = 4
@@ -145,18 +132,15 @@ generations = 4
 profile_points = 3
 batch_size = 4
 realisations = 1
-"""
+""")
 
 
 def _slow_batch(base, params, rows, protrusions, inputs):
     """A stand-in for the slider (outputs linear in the parameters) that takes its time."""
     time.sleep(0.1)
-    n = len(protrusions)
-    return [(key, {"params": list(map(float, x)), "protrusions": list(map(float, protrusions)),
-                   "outputs": {"fhm_bv": [10.0 * float(x[0])] * n, "contact_fraction": [1.0] * n,
-                               "min_clearance": [-0.1] * n, "contact_force": [float(x[1])] * n,
-                               "interference": [0.5] * n, "mean_pressure": [400.0] * n},
-                   "seconds": 0.0, "kernel_seconds": 0.0, "error": None}) for key, x in rows]
+    return twin.stub_records(rows, protrusions, lambda x: {
+        "fhm_bv": 10.0 * float(x[0]), "contact_fraction": 1.0, "min_clearance": -0.1, "contact_force": float(x[1]),
+        "interference": 0.5, "mean_pressure": 400.0})
 
 
 def test_hdi_identify_in_a_log_counts_generations_with_the_best_cost_and_q_and_vv(tmp_path, paper_config,

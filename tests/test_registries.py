@@ -13,6 +13,7 @@ from pipeline.config import scene as scene_schema
 from pipeline.config.scene import SCHEMA, SceneError, load_scene
 from pipeline.physics import paper
 from pipeline.stages import ensemble, identify
+import twin
 
 #: A target of a kind the paper does not state: the mean clearance at 5 nm protrusion equal to 0.3 nm.
 DUMMY = paper.Target(
@@ -22,40 +23,20 @@ DUMMY = paper.Target(
     paper.Measure("at", "clearance", "dummy_at_nm"), "{value:g} nm", "nowhere (a test)",
     (paper.Setting("dummy_at_nm", 5.0, "protrusion of the dummy clearance [nm] (test)", "nonnegative"),))
 
-SCENE = """
-[scene]
-name = "dummy"
-extends = "{paper}"
-
-[solver]
-duration_ms = 0.8
-transient_ms = 0.3
-
-[contact]
-k = 0.978
-
-[identify]
-parameters = [{{key = "dmw.rms_nm", low = 0.08, high = 0.25}},
-              {{key = "lubricant.work_of_adhesion_j_m2", low = 0.03, high = 0.11}}]
+SCENE = twin.scene_text("""
 targets = ["fhm_touchdown", "dummy"]
 dummy_clearance_nm = 0.35
 population = 4
 generations = 1
 profile_points = 3
 realisations = 1
-"""
+""", name="dummy")
 
 
 def _clearance_batch(base, params, rows, protrusions, inputs):
     """A stand-in for the slider: the clearance is twice the first parameter [nm], the FHM ten times it."""
-    n = len(protrusions)
-    out = []
-    for key, x in rows:
-        outputs = {"clearance": [2.0 * float(x[0])] * n, "fhm_bv": [10.0 * float(x[0])] * n,
-                   "min_clearance": [0.1] * n}
-        out.append((key, {"params": list(map(float, x)), "protrusions": list(map(float, protrusions)),
-                          "outputs": outputs, "seconds": 0.0, "kernel_seconds": 0.0, "error": None}))
-    return out
+    return twin.stub_records(rows, protrusions, lambda x: {"clearance": 2.0 * float(x[0]), "fhm_bv": 10.0 * float(x[0]),
+                                                           "min_clearance": 0.1})
 
 
 @pytest.fixture()
