@@ -120,3 +120,30 @@ def test_the_rough_table_and_its_stage(repo_root):
     with pytest.raises(ValueError, match="needs the gap's roughness"):
         bt.bulge_table(model="rough-reynolds", p_pad=P_PAD, a=A_SEMI, b=B_SEMI, speed=U, gaps=bt.table_gaps(),
                        protrusions=np.array([0.0, 10.0]) * NM)
+
+
+def test_the_report_draws_the_bulge_figure_when_the_law_is_tabulated(repo_root, tmp_path):
+    """``bulge.nc`` is upstream of the report exactly when the bulge law is tabulated, and ``bulge.png`` is drawn
+    from it (with the cap of ``air_bearing.lift_cap_gap_nm`` when set)."""
+    from test_report import check_png
+
+    from pipeline.analyses import plots, report_figures
+    from pipeline.analyses.report_settings import ReportSettings
+    from pipeline.stages import report
+
+    path = repo_root / "configs" / "paper-2009-bulge.toml"
+    for law, upstream in (("rough-reynolds", True), ("reynolds", True), ("ph-limit", False)):
+        scene = load_scene(path, [f'air_bearing.bulge="{law}"'])
+        assert ("bulge" in report._upstream(scene)) is upstream
+    ds = bt.bulge_table(model="rough-reynolds", p_pad=P_PAD, a=A_SEMI, b=B_SEMI, speed=U, gaps=bt.table_gaps(),
+                        protrusions=np.arange(0.0, 11.5, 0.5) * NM, grid=bb.ReynoldsGrid(cells_per_a=8, cells_per_b=4),
+                        roughness=ROUGH)
+    settings = ReportSettings(bulge="rough-reynolds", lift_cap_nm=1.65)
+    data = {"sweep_histories": None, "calibration": None, "roughness": None, "dmw": None, "interface": None,
+            "bulge": ds}
+    import xarray as xr
+    sweep = xr.Dataset(coords={"protrusion": [4.0, 11.0]})
+    jobs, _ = report_figures.figure_jobs(data | {"sweep": sweep}, [({}, sweep)], settings, "test", tmp_path)
+    job = next(j for j in jobs if j[0] is plots.fig_bulge)
+    assert job[2] == {"cap_nm": 1.65}
+    check_png(plots.fig_bulge(*job[1], **job[2]))
