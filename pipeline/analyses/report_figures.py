@@ -24,7 +24,8 @@ FIGURES = ("fig3_clearance.png", "fig4_forces.png", "fig5_stresses.png", "fig6_f
 ENSEMBLE_FIGURE = "ensemble.png"
 #: Drawn only with the paper's checks over DMW realisations (``ensemble.nc``, ``report.realisations > 1``).
 BAND_FIGURE = "band.png"
-#: Drawn only when the scene's bulge law is tabulated (``bulge.nc``: ``air_bearing.bulge = "reynolds"``, ``"rough-reynolds"``).
+#: Drawn only when the scene's bulge law is tabulated (``bulge.nc``: ``air_bearing.bulge = "reynolds"`` or
+#: ``"rough-reynolds"``).
 BULGE_FIGURE = "bulge.png"
 #: Drawn only when interface.nc holds both interface models (``interface.model = "deterministic"``).
 INTERFACE_FIGURE = "interface_models.png"

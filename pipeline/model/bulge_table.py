@@ -158,8 +158,9 @@ def table_stop_nm(scene: Any) -> float:
 def scene_table(scene: Any) -> xr.Dataset:
     """The ``bulge.nc`` dataset of a scene (:func:`bulge_table` of its keys): model ``air_bearing.bulge``,
     pad pressure ``air_bearing.pad_pressure_mpa``, profile ``air_bearing.bulge_profile``, slip model
-    ``air_bearing.bulge_slip``, the roughness of :func:`scene_roughness` (rough law), footprint semi-axes ``tfc.half_length_um``, ``tfc.half_width_um``, the disk
-    speed of ``[dmw] radius_mm, rpm`` (:func:`pipeline.model.dmw_record.disk_speed_m_s`), the Reynolds grid
+    ``air_bearing.bulge_slip``, the roughness of :func:`scene_roughness` (rough law), footprint semi-axes
+    ``tfc.half_length_um``, ``tfc.half_width_um``, the disk speed of ``[dmw] radius_mm, rpm``
+    (:func:`pipeline.model.dmw_record.disk_speed_m_s`), the Reynolds grid
     ``solver.bulge_cells_per_a``, ``solver.bulge_cells_per_b``; gaps :func:`table_gaps`, protrusions
     :func:`table_protrusions` up to :func:`table_stop_nm`."""
     a, sol = scene["air_bearing"], scene["solver"]

@@ -360,7 +360,8 @@ def tfc_point_laws(scene: Any, fh0: float, tables: Mapping[str, Any] | None = No
             if law.parameters:
                 law = replace(law, force=partial(law.force, **law_parameters(scene, law)))
             if key == "bulge" and a["lift_cap_gap_nm"] is not None:  # hypothesis H8 (off by default)
-                law = replace(law, force=partial(capped_lift, force=law.force, gap=to_si(scene).air_bearing.lift_cap_gap))
+                g_s = to_si(scene).air_bearing.lift_cap_gap
+                law = replace(law, force=partial(capped_lift, force=law.force, gap=g_s))
             tabulated.append(law)
         else:
             raise ValueError(f"air_bearing.{key} = {a[key]!r}: no compiled form {law.closed_form!r} in the kernel")

@@ -157,8 +157,8 @@ def rough_ph_lift(g, delta: float, p_pad: float, a: float, b: float, roughness: 
     """Lift [N] of the bulge over a rough gap in the high-bearing-number limit, at apex gaps ``g`` [m].
 
     The disk's mass flow ``U/2 p (h_T + sigma phi_s)`` is conserved along the flow (the Poiseuille term drops
-    out), so ``p c(h) = p_pad c(h_pad)`` with the Couette gap ``c`` (:meth:`pipeline.physics.gas_flow.RoughGap.couette_gap`),
-    and ``F = p_pad pi a b int_0^1 [(1 - alpha(h)) c(h_pad) / c(h(u)) - 1] du`` with the closed fraction
+    out), so ``p c(h) = p_pad c(h_pad)`` with the Couette gap ``c``
+    (:meth:`pipeline.physics.gas_flow.RoughGap.couette_gap`), and ``F = p_pad pi a b int_0^1 [(1 - alpha(h)) c(h_pad) / c(h(u)) - 1] du`` with the closed fraction
     ``alpha`` (docs/model.md, section "Rough-gap bulge bearing"). Gauss-Legendre quadrature in
     ``s = sqrt(1 - u)`` (ellipsoid; ``u`` for the paraboloid) with ``nodes`` points. The limit a rough
     Reynolds solve tends to as the bearing number grows (tests/test_bulge_rough.py).

@@ -182,8 +182,8 @@ def _finish(scene: Any, out: Path, options: dict[str, Any]) -> None:
 
 STAGE = Stage(
     "report", compute,
-    outputs=tuple(f"figures/{f}" for f in FIGURES + (ENSEMBLE_FIGURE, BAND_FIGURE, INTERFACE_FIGURE, BULGE_FIGURE)) + ("report/summary.csv", "report/summary.md",
-                                                                          "report/comparison.md"),
+    outputs=tuple(f"figures/{f}" for f in FIGURES + (ENSEMBLE_FIGURE, BAND_FIGURE, INTERFACE_FIGURE, BULGE_FIGURE))
+    + ("report/summary.csv", "report/summary.md", "report/comparison.md"),
     reads=("*",), upstream=_upstream, optional=("identify",), finish=_finish, order=60, main_job=True,
     doc="the paper's figures, a summary table and the comparison with the paper")
 
