@@ -545,6 +545,35 @@ def fig_band(ens: xr.Dataset, scene: str, path: Path, *, band_nm: Sequence[float
     return save(fig, path)
 
 
+def fig_bulge(bulge: xr.Dataset, scene: str, path: Path, *, protrusions_nm: Sequence[float] = (9.8, 10.4, 11.0),
+              cap_nm: float | None = None) -> Path:
+    """The bulge's air-bearing lift [mN] versus apex gap [nm] (``bulge.nc``: the scene's law, solid, and the
+    p h = const closed form on the same grid, dashed) at the table's protrusions nearest ``protrusions_nm``,
+    from 5 nm down to the table's smallest gap; with ``cap_nm`` (``air_bearing.lift_cap_gap_nm``) the capped
+    lift the model runs with, grey (docs/model.md, sections "Rough-gap bulge bearing", "Lift cap (hypothesis H8)")."""
+    fig, ax = new_figure(size=(7.5, 4.8))
+    g = bulge["apex_gap"].values
+    keep = g <= 5.0 + 1e-9
+    prot = bulge["protrusion"].values
+    for i, want in enumerate(dict.fromkeys(float(prot[np.argmin(np.abs(prot - w))]) for w in protrusions_nm)):
+        row = bulge.sel(protrusion=want)
+        lift, ph = row["bulge_lift"].values, row["bulge_lift_ph_limit"].values
+        ax.plot(g[keep], lift[keep], color=f"C{i}", lw=1.8,
+                label=f"{bulge.attrs.get('bulge_model', 'law')}, {want:g} nm")
+        ax.plot(g[keep], ph[keep], color=f"C{i}", lw=1.0, ls="--", label=f"p h = const, {want:g} nm")
+        if cap_nm:
+            held = np.interp(np.log(cap_nm), np.log(g), lift)
+            ax.plot(g[keep], np.where(g[keep] < cap_nm, held, lift[keep]), color="0.5", lw=4, alpha=0.35,
+                    label="lift cap (H8)" if i == 0 else None)
+    ax.set_xscale("log")
+    ax.set_xlabel(axis_label("apex gap", bulge["apex_gap"].attrs.get("units", "nm")))
+    ax.set_ylabel(axis_label("bulge lift", bulge["bulge_lift"].attrs.get("units", "mN")))
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=7, ncol=2)
+    ax.set_title(title(f"Bulge air-bearing lift at p_pad {float(bulge['pad_pressure']):g} MPa", scene), fontsize=11)
+    return save(fig, path)
+
+
 def _paper_band(ax: Axes, band_nm: Sequence[float], label: str | None) -> None:
     if len(band_nm):
         ax.axvspan(min(band_nm) - 0.1, max(band_nm) + 0.1, color="#ffbf00", alpha=0.15, lw=0, label=label)

@@ -24,6 +24,9 @@ FIGURES = ("fig3_clearance.png", "fig4_forces.png", "fig5_stresses.png", "fig6_f
 ENSEMBLE_FIGURE = "ensemble.png"
 #: Drawn only with the paper's checks over DMW realisations (``ensemble.nc``, ``report.realisations > 1``).
 BAND_FIGURE = "band.png"
+#: Drawn only when the scene's bulge law is tabulated (``bulge.nc``: ``air_bearing.bulge = "reynolds"`` or
+#: ``"rough-reynolds"``).
+BULGE_FIGURE = "bulge.png"
 #: Drawn only when interface.nc holds both interface models (``interface.model = "deterministic"``).
 INTERFACE_FIGURE = "interface_models.png"
 
@@ -59,7 +62,7 @@ def figure_jobs(data: dict[str, xr.Dataset | None], combos: list, settings: Repo
     figures' reasons.
 
     ``data`` holds the datasets by name (``sweep``, ``ensemble``, ``sweep_histories``, ``calibration``,
-    ``roughness``, ``dmw``, ``interface``; ``None`` when absent); ``combos`` the sweep's slices, the
+    ``roughness``, ``dmw``, ``interface``, ``bulge``; ``None`` when absent); ``combos`` the sweep's slices, the
     default first.
     """
     jobs: list[Job] = []
@@ -127,6 +130,9 @@ def figure_jobs(data: dict[str, xr.Dataset | None], combos: list, settings: Repo
                      dict(band_nm=tuple(np.atleast_1d(checks["value_bouncing"].attrs["protrusions_nm"])),
                           threshold=float(checks["bv_exceedance_probability"].attrs["threshold_percent"]),
                           touchdown_nm=onset, previous_nm=previous)))
+    if data.get("bulge") is not None:
+        jobs.append((plots.fig_bulge, (data["bulge"], name, figdir / BULGE_FIGURE),
+                     dict(cap_nm=settings.lift_cap_nm)))
     if data["interface"] is not None and "model" in data["interface"].dims:  # interface.model = "deterministic"
         jobs.append((plots.fig_interface_models, (data["interface"], name, figdir / INTERFACE_FIGURE), {}))
     return jobs, skipped

@@ -34,6 +34,7 @@ class ReportSettings:
     hardness_gpa : the scene's hardness [GPa]; plasticity_index : the scene's psi [1] (H derived from it)
     section_depth_sigma : nominal-area section depth [sigma]
     bulge : the bulge's air-bearing law (``air_bearing.bulge``; ``"none"`` without it)
+    lift_cap_nm : the lift cap of hypothesis H8 (``air_bearing.lift_cap_gap_nm``) [nm], ``None`` when off
     """
 
     damping_ratio: float | None = None
@@ -48,6 +49,7 @@ class ReportSettings:
     plasticity_index: float | None = None
     section_depth_sigma: float | None = None
     bulge: str = "none"
+    lift_cap_nm: float | None = None
 
     @classmethod
     def from_scene(cls, scene: Any) -> "ReportSettings":
@@ -65,6 +67,7 @@ class ReportSettings:
             plasticity_index=_get(scene, "materials", "plasticity_index"),
             section_depth_sigma=_get(scene, "contact", "section_depth_sigma"),
             bulge=_get(scene, "air_bearing", "bulge", "none"),
+            lift_cap_nm=_get(scene, "air_bearing", "lift_cap_gap_nm"),
         )
 
 

@@ -172,9 +172,19 @@ SCHEMA: dict[str, dict[str, Key]] = {
                               doc="air-bearing stiffening under the TFC bulge (docs/model.md, section 'Gap-power stiffening'): 'none' or "
                                   "'gap-power', added stiffness k_t[(FH0/g)^p - 1] at the TFC gap g"),
         "bulge": Key("str", "none", choices=BULGE_LAWS.keys(),
-                     doc="the air bearing of the TFC bulge itself: 'none', 'ph-limit' (p h = const under the bulge) or "
-                         "'reynolds' (slip-corrected Reynolds equation, tabulated by the bulge stage); docs/model.md, "
-                         "section 'Bulge air bearing'"),
+                     doc="the air bearing of the TFC bulge itself: 'none', 'ph-limit' (p h = const under the bulge), "
+                         "'reynolds' (slip-corrected Reynolds equation, tabulated by the bulge stage) or "
+                         "'rough-reynolds' (its rough-gap form down to contact: Boltzmann flow rate, Patir-Cheng flow "
+                         "factors, closed area out of the film); docs/model.md, section 'Bulge air bearing'"),
+        "disk_roughness_share": Key("float", 1.0, (lambda v: 0.5 <= v <= 1.0, "a share in [0.5, 1]"),
+                                    doc="share of the combined roughness variance on the moving disk [1], for the "
+                                        "shear flow factor of the 'rough-reynolds' bulge bearing (recon: 1, the polished "
+                                        "TFC pole tip taken as smooth; 0.5 = equal roughness, no shear flow); "
+                                        "docs/model.md, section 'Rough-gap bulge bearing'"),
+        "lift_cap_gap_nm": Key("float", None, _nonneg,
+                               doc="hypothesis H8 (off by default): the bulge lift held at its value at this apex "
+                                   "gap g_s [nm] for smaller gaps; no physical basis found (docs/model.md, section "
+                                   "'Lift cap (hypothesis H8)')"),
         "pad_pressure_mpa": Key("float", 1.0, (lambda v: 0.1 <= v <= 10.0, "a pressure in [0.1, 10] MPa"),
                                 doc="air pressure p_pad under the trailing pad around the bulge [MPa] (recon; "
                                     "about 0.3-3 MPa for a femto trailing pad)"),
@@ -182,7 +192,8 @@ SCHEMA: dict[str, dict[str, Key]] = {
                              doc="profile of the bulge under the bearing: 'ellipsoid' (the TFC geometry) or 'paraboloid'"),
         "bulge_slip": Key("str", "first-order", choices=tuple(SLIP_MODELS),
                           doc="rarefaction of the 'reynolds' bulge bearing: 'first-order' slip (Burgdorfer 1959), "
-                              "'second-order' (Hsia & Domoto 1983) or 'none'; docs/model.md, section "
+                              "'second-order' (Hsia & Domoto 1983), 'none' or 'boltzmann' (Fukui & Kaneko 1990's fit; "
+                              "the 'rough-reynolds' law always uses it); docs/model.md, section "
                               "'Slip-corrected Reynolds equation'"),
         "tfc_stiffness_n_m": Key("float", 1.0e5, _nonneg,
                                  doc="stiffness scale k_t of the TFC stiffening spring [N/m] (recon, to be identified)"),
@@ -704,6 +715,10 @@ def _cross_checks(config: dict[str, dict[str, Any]], where: str) -> None:
     if "air_bearing" not in eff:
         raise SceneError(f"{where}: scene.effects = {sorted(eff)}: expected 'air_bearing' among them "
                          "(nothing else holds the slider up)")
+    ab = config["air_bearing"]
+    if ab["lift_cap_gap_nm"] is not None and ab["bulge"] == "none":
+        raise SceneError(f"{where}: air_bearing.lift_cap_gap_nm = {ab['lift_cap_gap_nm']:g} caps the bulge lift: it "
+                         "needs air_bearing.bulge = 'ph-limit', 'reynolds' or 'rough-reynolds' (it is 'none')")
     c = config["contact"]
     if c["friction_law"] == "coefficient" and c["friction_coefficient"] is None:
         raise SceneError(f"{where}: contact.friction_law = 'coefficient' needs contact.friction_coefficient "

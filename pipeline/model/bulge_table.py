@@ -17,6 +17,7 @@ import numpy as np
 import xarray as xr
 
 from ..physics import bulge_bearing as bb
+from ..physics import gas_flow
 from ..config.grid import TOL_NM
 from ..config.si import to_si
 from .dmw_record import disk_speed_m_s
@@ -33,7 +34,7 @@ AIR_MEAN_FREE_PATH = 65e-9
 AMBIENT_PRESSURE = 101325.0
 
 #: The models with a table (``air_bearing.bulge``; ``"none"`` has none).
-MODELS = ("ph-limit", "reynolds")
+MODELS = ("ph-limit", "reynolds", "rough-reynolds")
 
 
 def table_gaps(low_nm: float = 0.05, high_nm: float = 20.0, points: int = 25) -> np.ndarray:
@@ -57,16 +58,19 @@ def table_protrusions(stop_nm: float = 15.0, step_nm: float = 0.5) -> np.ndarray
 def bulge_table(*, model: str, p_pad: float, a: float, b: float, speed: float, gaps: np.ndarray,
                 protrusions: np.ndarray, profile: str = "ellipsoid", slip: str = "first-order",
                 viscosity: float = AIR_VISCOSITY, mean_free_path: float = AIR_MEAN_FREE_PATH,
-                ambient_pressure: float = AMBIENT_PRESSURE, grid: bb.ReynoldsGrid = bb.ReynoldsGrid()) -> xr.Dataset:
+                ambient_pressure: float = AMBIENT_PRESSURE, grid: bb.ReynoldsGrid = bb.ReynoldsGrid(),
+                roughness: gas_flow.RoughGap | None = None) -> xr.Dataset:
     """The bulge lift table of a scene as a dataset (variables :data:`pipeline.variables.BULGE`).
 
     Parameters
     ----------
-    model : ``"ph-limit"`` (closed form) or ``"reynolds"`` (slip-corrected Reynolds solve per protrusion)
+    model : ``"ph-limit"`` (closed form), ``"reynolds"`` (slip-corrected Reynolds solve per protrusion) or
+        ``"rough-reynolds"`` (the Reynolds solve of the rough gap with the Boltzmann flow rate, ``slip`` ignored)
     p_pad : pad pressure [Pa]; a, b : footprint semi-axes along / across sliding [m]; speed : disk speed [m/s]
     gaps : apex gaps [m] (increasing, > 0; :func:`table_gaps`); protrusions : [m] (>= 0; :func:`table_protrusions`)
     profile : ``"ellipsoid"`` or ``"paraboloid"``; slip : :data:`pipeline.physics.bulge_bearing.SLIP_MODELS`
     viscosity [Pa s], mean_free_path [m] at ambient_pressure [Pa]; grid : the Reynolds solver's settings
+    roughness : the gap's roughness (:class:`pipeline.physics.gas_flow.RoughGap`), required by ``"rough-reynolds"``
 
     Returns
     -------
@@ -81,10 +85,15 @@ def bulge_table(*, model: str, p_pad: float, a: float, b: float, speed: float, g
     protrusions = np.asarray(protrusions, dtype=float)
     if np.any(protrusions < 0):
         raise ValueError("bulge table: protrusions must be >= 0 [m]")
-    if model == "reynolds":
+    rough = model == "rough-reynolds"
+    if rough:
+        if roughness is None:
+            raise ValueError("bulge table: air_bearing.bulge = 'rough-reynolds' needs the gap's roughness")
+        slip = "boltzmann"
+    if model in ("reynolds", "rough-reynolds"):
         t = bb.reynolds_table(gaps, protrusions, p_pad=p_pad, a=a, b=b, speed=speed, viscosity=viscosity,
                               mean_free_path=mean_free_path, ambient_pressure=ambient_pressure, profile=profile,
-                              slip=slip, grid=grid)
+                              slip=slip, grid=grid, roughness=roughness if rough else None)
         lift, stiff, lift_ph, lam = t["lift"], t["stiffness"], t["lift_ph"], t["bearing_number"]
     else:
         lift_ph, stiff = bb.ph_lift(gaps[None, :], protrusions[:, None], p_pad, a, b, profile)
@@ -100,13 +109,16 @@ def bulge_table(*, model: str, p_pad: float, a: float, b: float, speed: float, g
         coords={"protrusion": BULGE["protrusion"].from_si(protrusions, ("protrusion",)),
                 "apex_gap": BULGE["apex_gap"].from_si(gaps, ("apex_gap",))})
     ds.attrs.update({
-        "bulge_model": model, "bulge_profile": profile, "slip_model": slip if model == "reynolds" else "n/a",
+        "bulge_model": model, "bulge_profile": profile, "slip_model": slip if model != "ph-limit" else "n/a",
         "footprint_semi_axes_um": np.array([a, b]) / UM, "disk_speed_m_s": speed,
         "air_viscosity_pa_s": viscosity, "mean_free_path_nm": mean_free_path / NM,
         "ambient_pressure_pa": ambient_pressure,
         "reynolds_grid": (f"cells_per_a={grid.cells_per_a} cells_per_b={grid.cells_per_b} margin_a={grid.margin_a} "
-                          f"margin_b={grid.margin_b} tol={grid.tol}") if model == "reynolds" else "n/a",
+                          f"margin_b={grid.margin_b} tol={grid.tol}") if model != "ph-limit" else "n/a",
     })
+    if rough:
+        ds.attrs.update({"roughness_sigma_nm": roughness.sigma / NM, "disk_roughness_share": roughness.disk_share,
+                         "wetting_gap_nm": roughness.wet_gap / NM})
     return ds
 
 
@@ -146,14 +158,27 @@ def table_stop_nm(scene: Any) -> float:
 def scene_table(scene: Any) -> xr.Dataset:
     """The ``bulge.nc`` dataset of a scene (:func:`bulge_table` of its keys): model ``air_bearing.bulge``,
     pad pressure ``air_bearing.pad_pressure_mpa``, profile ``air_bearing.bulge_profile``, slip model
-    ``air_bearing.bulge_slip``, footprint semi-axes ``tfc.half_length_um``, ``tfc.half_width_um``, the disk
-    speed of ``[dmw] radius_mm, rpm`` (:func:`pipeline.model.dmw_record.disk_speed_m_s`), the Reynolds grid
+    ``air_bearing.bulge_slip``, the roughness of :func:`scene_roughness` (rough law), footprint semi-axes
+    ``tfc.half_length_um``, ``tfc.half_width_um``, the disk speed of ``[dmw] radius_mm, rpm``
+    (:func:`pipeline.model.dmw_record.disk_speed_m_s`), the Reynolds grid
     ``solver.bulge_cells_per_a``, ``solver.bulge_cells_per_b``; gaps :func:`table_gaps`, protrusions
     :func:`table_protrusions` up to :func:`table_stop_nm`."""
     a, sol = scene["air_bearing"], scene["solver"]
     si = to_si(scene)
     grid = bb.ReynoldsGrid(cells_per_a=sol["bulge_cells_per_a"], cells_per_b=sol["bulge_cells_per_b"])
+    rough = scene_roughness(scene)
     return bulge_table(model=a["bulge"], p_pad=si.air_bearing.pad_pressure, a=si.tfc.half_length,
                        b=si.tfc.half_width, speed=disk_speed_m_s(scene["dmw"]), gaps=table_gaps(),
                        protrusions=table_protrusions(table_stop_nm(scene), PROTRUSION_STEP_NM),
-                       profile=a["bulge_profile"], slip=a["bulge_slip"], grid=grid)
+                       profile=a["bulge_profile"], slip=a["bulge_slip"], grid=grid, roughness=rough)
+
+
+def scene_roughness(scene: Any) -> gas_flow.RoughGap | None:
+    """The roughness of the bulge's gap for ``air_bearing.bulge = "rough-reynolds"`` (else ``None``): the
+    combined ``roughness.sigma_nm``, the disk's share ``air_bearing.disk_roughness_share`` of its variance and
+    the wetting gap ``lubricant.thickness_nm`` (docs/model.md, section "Rough-gap bulge bearing")."""
+    if scene["air_bearing"]["bulge"] != "rough-reynolds":
+        return None
+    si = to_si(scene)
+    return gas_flow.RoughGap(sigma=si.roughness.sigma, disk_share=scene["air_bearing"]["disk_roughness_share"],
+                             wet_gap=si.lubricant.thickness)

@@ -359,10 +359,20 @@ def tfc_point_laws(scene: Any, fh0: float, tables: Mapping[str, Any] | None = No
                 law = replace(law, force=partial(law.force, table=TABLE_READERS[law.table](ds)))
             if law.parameters:
                 law = replace(law, force=partial(law.force, **law_parameters(scene, law)))
+            if key == "bulge" and a["lift_cap_gap_nm"] is not None:  # hypothesis H8 (off by default)
+                g_s = to_si(scene).air_bearing.lift_cap_gap
+                law = replace(law, force=partial(capped_lift, force=law.force, gap=g_s))
             tabulated.append(law)
         else:
             raise ValueError(f"air_bearing.{key} = {a[key]!r}: no compiled form {law.closed_form!r} in the kernel")
     return gap_power, tuple(tabulated)
+
+
+def capped_lift(g: np.ndarray, delta: float, *, force: Callable[..., np.ndarray], gap: float) -> np.ndarray:
+    """The bulge lift [N] of ``force`` held at its value at the apex gap ``gap`` [m] for smaller gaps ``g`` [m]
+    (``air_bearing.lift_cap_gap_nm``: hypothesis H8, a device without a physical basis; docs/model.md, section
+    "Lift cap (hypothesis H8)"); unchanged above it."""
+    return force(np.maximum(np.asarray(g, dtype=float), gap), delta)
 
 
 def law_parameters(scene: Any, law: ab.TfcLaw) -> dict[str, Any]:

@@ -66,6 +66,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit
 
+from . import gas_flow
 from .air_bearing import TfcLaw
 
 #: Profile codes of the compiled laws (floats, so a kernel can carry them in its parameter vector).
@@ -151,6 +152,30 @@ def ph_lift(g, delta, p_pad: float, a: float, b: float, profile: str = "ellipsoi
     return F.reshape(gb.shape), k.reshape(gb.shape)
 
 
+def rough_ph_lift(g, delta: float, p_pad: float, a: float, b: float, roughness: gas_flow.RoughGap,
+                  profile: str = "ellipsoid", nodes: int = 400) -> np.ndarray:
+    """Lift [N] of the bulge over a rough gap in the high-bearing-number limit, at apex gaps ``g`` [m].
+
+    The disk's mass flow ``U/2 p (h_T + sigma phi_s)`` is conserved along the flow (the Poiseuille term drops
+    out), so ``p c(h) = p_pad c(h_pad)`` with the Couette gap ``c``
+    (:meth:`pipeline.physics.gas_flow.RoughGap.couette_gap`), and ``F = p_pad pi a b int_0^1 [(1 - alpha(h)) c(h_pad) / c(h(u)) - 1] du`` with the closed fraction
+    ``alpha`` (docs/model.md, section "Rough-gap bulge bearing"). Gauss-Legendre quadrature in
+    ``s = sqrt(1 - u)`` (ellipsoid; ``u`` for the paraboloid) with ``nodes`` points. The limit a rough
+    Reynolds solve tends to as the bearing number grows (tests/test_bulge_rough.py).
+    """
+    x, w = np.polynomial.legendre.leggauss(nodes)
+    t, w = 0.5 * (x + 1.0), 0.5 * w  # on [0, 1]
+    g = np.asarray(g, dtype=float)[..., None]
+    if profile == "ellipsoid":  # u = 1 - s^2, du = 2 s ds, h = g + delta (1 - s)
+        h, wu = g + delta * (1.0 - t), 2.0 * t * w
+    elif profile == "paraboloid":
+        h, wu = g + delta * t, w
+    else:
+        raise ValueError(f"bulge profile {profile!r} unknown; expected one of {list(PROFILES)}")
+    ratio = roughness.couette_gap(g + delta) / roughness.couette_gap(h)
+    return p_pad * np.pi * a * b * ((roughness.air_fraction(h) * ratio - 1.0) * wu).sum(axis=-1)
+
+
 def ph_limit_force(g: np.ndarray, delta: float, p_pad: float, a: float, b: float, profile: str) -> np.ndarray:
     """Lift [N] of the bulge's air bearing in the p h = const limit at the TFC gaps ``g`` [m] for the
     protrusion ``delta`` [m] (:func:`ph_lift`): pad pressure ``p_pad`` [Pa], the bulge's semi-axes ``a``,
@@ -184,7 +209,10 @@ def ph_limit_force(g: np.ndarray, delta: float, p_pad: float, a: float, b: float
 #: default: the simplest, with exact coefficients, and its flux stays affine in ``p`` (a simple Newton
 #: Jacobian). Where compression is incomplete it leaks less than the second-order form and lifts more;
 #: at the paper's bearing numbers the two lifts differ by at most 0.6 % (measured at delta 9.6-11 nm, g 1-2 nm).
-SLIP_MODELS = {"first-order": (6.0, 0.0), "second-order": (6.0, 6.0), "none": (0.0, 0.0)}
+#: * ``"boltzmann"``: the linearised-Boltzmann flow rate of Fukui & Kaneko (J. Tribol. 110 (1988) 253; the
+#:   fit of J. Tribol. 112 (1990) 78, :func:`pipeline.physics.gas_flow.poiseuille_factor`), not of the form
+#:   above (``None``); the rarefaction of the rough-gap law (docs/model.md, section "Rough-gap bulge bearing").
+SLIP_MODELS = {"first-order": (6.0, 0.0), "second-order": (6.0, 6.0), "none": (0.0, 0.0), "boltzmann": None}
 
 
 @dataclass(frozen=True)
@@ -240,24 +268,33 @@ def _bernoulli(z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return B, dB
 
 
-def _face_flux(PL, PR, H, Lam, Kn0, kappa, dx, slip):
+def _face_flux(PL, PR, H, Lam, Kn0, kappa, dx, slip, Hc=None, phi=None):
     """Scharfetter-Gummel flux ``J = (D/dx) [B(-Pe) P_L - B(Pe) P_R]`` [scaled] across a face and its
     derivatives with respect to ``P_L`` and ``P_R``.
 
-    ``J`` approximates the scaled mass flux ``Lambda H P - D dP/dX`` (``Lambda = 0`` across the sliding
-    direction), ``D = kappa C(P_f, H)`` with ``P_f = (P_L + P_R)/2``; ``Pe = Lambda H dx / D``. The
-    exponential fitting is exact for constant coefficients in 1-D and stable at any cell Peclet number
-    (Scharfetter & Gummel, IEEE Trans. Electron Devices 16 (1969) 64; Patankar, Numerical Heat
-    Transfer and Fluid Flow (1980), sec. 5.2).
+    ``J`` approximates the scaled mass flux ``Lambda H_c P - D dP/dX`` (``Lambda = 0`` across the sliding
+    direction), ``D = kappa phi C(P_f, H)`` with ``P_f = (P_L + P_R)/2``; ``Pe = Lambda H_c dx / D``. The
+    Couette gap ``H_c`` is ``H`` on a smooth gap and ``(h_T + sigma phi_s) / h_pad`` on a rough one, ``phi``
+    the pressure flow factor (1 when ``None``). The exponential fitting is exact for constant coefficients
+    in 1-D and stable at any cell Peclet number (Scharfetter & Gummel, IEEE Trans. Electron Devices 16
+    (1969) 64; Patankar, Numerical Heat Transfer and Fluid Flow (1980), sec. 5.2).
     """
-    c1, c2 = SLIP_MODELS[slip]
     Pf = 0.5 * (PL + PR)
-    D = kappa * (Pf * H**3 + c1 * Kn0 * H**2 + c2 * Kn0**2 * H / Pf)
-    dD = kappa * (H**3 - c2 * Kn0**2 * H / Pf**2)  # dD/dP_f
+    if slip == "boltzmann":  # C = P H^3 Q(Kn), Kn = Kn0 / (P H): dC/dP = H^3 (Q - Kn dQ/dKn)
+        kn = Kn0 / (Pf * H)
+        q, dq = gas_flow.poiseuille_factor(kn)
+        D = kappa * Pf * H**3 * q
+        dD = kappa * H**3 * (q - kn * dq)
+    else:
+        c1, c2 = SLIP_MODELS[slip]
+        D = kappa * (Pf * H**3 + c1 * Kn0 * H**2 + c2 * Kn0**2 * H / Pf)
+        dD = kappa * (H**3 - c2 * Kn0**2 * H / Pf**2)  # dD/dP_f
+    if phi is not None:
+        D, dD = D * phi, dD * phi
     if np.isscalar(Lam) and Lam == 0.0:  # pure diffusion (across the sliding direction): B = 1
         dJdD = (PL - PR) / dx
         return D / dx * (PL - PR), D / dx + 0.5 * dJdD * dD, -D / dx + 0.5 * dJdD * dD
-    Pe = Lam * H * dx / D
+    Pe = Lam * (H if Hc is None else Hc) * dx / D
     Bm, dBm = _bernoulli(-Pe)
     Bp, dBp = _bernoulli(Pe)
     J = D / dx * (Bm * PL - Bp * PR)
@@ -286,10 +323,15 @@ class _Mesh:
         self.u_c = self.Xc[:, None] ** 2 + self.Yc[None, :] ** 2
 
 
+def _part(couette, phi, where) -> tuple:
+    """The Couette gap and pressure flow factor of a rough gap at some faces (``()`` for a smooth gap)."""
+    return () if couette is None else (couette[where], phi[where])
+
+
 def reynolds_solve(g, delta, *, p_pad: float, a: float, b: float, speed: float, viscosity: float,
                    mean_free_path: float, ambient_pressure: float, profile: str = "ellipsoid",
                    slip: str = "first-order", grid: ReynoldsGrid = ReynoldsGrid(),
-                   fields: bool = False) -> dict:
+                   fields: bool = False, roughness: gas_flow.RoughGap | None = None) -> dict:
     """Extra lift [N] of the bulge from the steady compressible Reynolds equation with molecular slip.
 
     Solves ``div(p h^3 Q/(12 mu) grad p) = (U/2) d(p h)/dx`` (slip model :data:`SLIP_MODELS`) on the
@@ -307,6 +349,10 @@ def reynolds_solve(g, delta, *, p_pad: float, a: float, b: float, speed: float, 
     mean_free_path : mean free path of air at ``ambient_pressure`` [m]; ambient_pressure [Pa]
     profile : ``"ellipsoid"`` or ``"paraboloid"``; slip : a key of :data:`SLIP_MODELS`
     fields : also return the scaled pressure ``P = p/p_pad`` (cases x nx x ny, half domain y >= 0)
+    roughness : ``None`` (a smooth gap) or the gap's roughness (:class:`pipeline.physics.gas_flow.RoughGap`):
+        Patir-Cheng average flow, ``div(phi_x Q p h^3 grad p) = 6 mu U d(p (h_T + sigma phi_s))/dx`` with
+        the nominal gap ``h``, and the lift ``int [(1 - alpha) p - p_pad] dA`` with ``alpha`` the closed
+        area fraction (docs/model.md, section "Rough-gap bulge bearing")
 
     Returns
     -------
@@ -337,6 +383,12 @@ def reynolds_solve(g, delta, *, p_pad: float, a: float, b: float, speed: float, 
         return gap_profile(u[None], gv[:, None, None], dv[:, None, None], profile) / hp[:, None, None]
 
     Hx, Hy, Hc = H(mesh.u_x), H(mesh.u_y), H(mesh.u_c)
+    # rough gap: the Couette gap (h_T + sigma phi_s)/h_pad and phi_x at the faces, the air's share at the centres
+    Cx = Cy = phx = phy = None
+    if roughness is not None:
+        hps = hp[:, None, None]
+        Cx, Cy = (roughness.couette_gap(Hf * hps) / hps for Hf in (Hx, Hy))
+        phx, phy = (roughness.pressure_factor(Hf * hps) for Hf in (Hx, Hy))
     # sparsity: cell index, and the four neighbour couplings of each interior face
     idx = np.arange(nc * nx * ny).reshape(nc, nx, ny)
     xl, xr = idx[:, :-1, :].ravel(), idx[:, 1:, :].ravel()  # interior X faces
@@ -353,17 +405,21 @@ def reynolds_solve(g, delta, *, p_pad: float, a: float, b: float, speed: float, 
         Jx = np.empty((nc, nx + 1, ny))
         dLx = np.empty_like(Jx)
         dRx = np.empty_like(Jx)
-        Jx[:, 1:-1], dLx[:, 1:-1], dRx[:, 1:-1] = _face_flux(P[:, :-1], P[:, 1:], Hx[:, 1:-1], Lam, Kn0, 1.0, dX, slip)
-        Jx[:, :1], dLx[:, :1], dRx[:, :1] = _face_flux(one, P[:, :1], Hx[:, :1], Lam, Kn0, 1.0, dX / 2, slip)
-        Jx[:, -1:], dLx[:, -1:], dRx[:, -1:] = _face_flux(P[:, -1:], one, Hx[:, -1:], Lam, Kn0, 1.0, dX / 2, slip)
+        Jx[:, 1:-1], dLx[:, 1:-1], dRx[:, 1:-1] = _face_flux(P[:, :-1], P[:, 1:], Hx[:, 1:-1], Lam, Kn0, 1.0, dX, slip,
+                                                             *_part(Cx, phx, np.s_[:, 1:-1]))
+        Jx[:, :1], dLx[:, :1], dRx[:, :1] = _face_flux(one, P[:, :1], Hx[:, :1], Lam, Kn0, 1.0, dX / 2, slip,
+                                                       *_part(Cx, phx, np.s_[:, :1]))
+        Jx[:, -1:], dLx[:, -1:], dRx[:, -1:] = _face_flux(P[:, -1:], one, Hx[:, -1:], Lam, Kn0, 1.0, dX / 2, slip,
+                                                          *_part(Cx, phx, np.s_[:, -1:]))
         # Y faces: zero flux at Y = 0 (symmetry), P = 1 at Y = Ly
         Jy = np.zeros((nc, nx, ny + 1))
         dLy = np.zeros_like(Jy)
         dRy = np.zeros_like(Jy)
         Jy[:, :, 1:-1], dLy[:, :, 1:-1], dRy[:, :, 1:-1] = _face_flux(P[:, :, :-1], P[:, :, 1:], Hy[:, :, 1:-1], 0.0,
-                                                                      Kn0, kappa, dY, slip)
+                                                                      Kn0, kappa, dY, slip,
+                                                                      *_part(Cy, phy, np.s_[:, :, 1:-1]))
         Jy[:, :, -1:], dLy[:, :, -1:], dRy[:, :, -1:] = _face_flux(P[:, :, -1:], one, Hy[:, :, -1:], 0.0, Kn0, kappa,
-                                                                   dY / 2, slip)
+                                                                   dY / 2, slip, *_part(Cy, phy, np.s_[:, :, -1:]))
         return Jx, dLx, dRx, Jy, dLy, dRy
 
     def residual(P):
@@ -382,7 +438,11 @@ def reynolds_solve(g, delta, *, p_pad: float, a: float, b: float, speed: float, 
     N = nc * nx * ny
     band_index = (ny + rows - cols) * N + cols
 
-    P = 1.0 / Hc  # the p h = const limit: Newton's start
+    if roughness is None:
+        P = 1.0 / Hc  # the p h = const limit: Newton's start
+    else:  # its rough form, p (h_T + sigma phi_s) = const
+        hps = hp[:, None, None]
+        P = (roughness.couette_gap(hps) / hps) / (roughness.couette_gap(Hc * hps) / hps)
     active = dv > 0  # delta = 0: P = 1 solves the problem exactly
     iterations = np.zeros(nc, dtype=int)
     for it in range(grid.max_iter):
@@ -394,7 +454,7 @@ def reynolds_solve(g, delta, *, p_pad: float, a: float, b: float, speed: float, 
         dP = solve_banded((ny, ny), ab, -R.ravel(), overwrite_ab=True, check_finite=False).reshape(P.shape)
         dP[~active] = 0.0
         # damping per case: keep P above a tenth of its value
-        with np.errstate(divide="ignore", invalid="ignore"):
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             lim = np.where(dP < 0, -0.9 * P / dP, np.inf).reshape(nc, -1).min(axis=1)
         alpha = np.minimum(1.0, lim)[:, None, None]
         P = P + alpha * dP
@@ -407,7 +467,11 @@ def reynolds_solve(g, delta, *, p_pad: float, a: float, b: float, speed: float, 
             raise RuntimeError(f"reynolds_solve: Newton did not converge in {grid.max_iter} iterations for "
                                f"{int(active.sum())} of {nc} cases (largest update {step[active].max():.3g})")
     _, _, (Jx, Jy) = residual(P)
-    lift = 2.0 * p_pad * a * b * (P - 1.0).sum(axis=(1, 2)) * dX * dY
+    if roughness is None:
+        lift = 2.0 * p_pad * a * b * (P - 1.0).sum(axis=(1, 2)) * dX * dY
+    else:  # the closed area of the footprint carries no air (its load is the interface's; the pad's is the rear law's)
+        air = np.where(mesh.u_c[None] < 1.0, roughness.air_fraction(Hc * hp[:, None, None]), 1.0)
+        lift = 2.0 * p_pad * a * b * (air * P - 1.0).sum(axis=(1, 2)) * dX * dY
     inflow = 2.0 * Jx[:, 0].sum(axis=1) * dY
     outflow = 2.0 * Jx[:, -1].sum(axis=1) * dY
     side = 2.0 * Jy[:, :, -1].sum(axis=1) * dX
@@ -422,7 +486,8 @@ def reynolds_solve(g, delta, *, p_pad: float, a: float, b: float, speed: float, 
 
 def reynolds_table(gaps, protrusions, *, p_pad: float, a: float, b: float, speed: float, viscosity: float,
                    mean_free_path: float, ambient_pressure: float, profile: str = "ellipsoid",
-                   slip: str = "first-order", grid: ReynoldsGrid = ReynoldsGrid()) -> dict[str, np.ndarray]:
+                   slip: str = "first-order", grid: ReynoldsGrid = ReynoldsGrid(),
+                   roughness: gas_flow.RoughGap | None = None) -> dict[str, np.ndarray]:
     """Lift [N] and stiffness [N/m] of the Reynolds bulge bearing tabulated on protrusion x apex gap.
 
     One :func:`reynolds_solve` per protrusion, all gaps at once. The stiffness ``k = -dF/dg`` comes from
@@ -455,7 +520,7 @@ def reynolds_table(gaps, protrusions, *, p_pad: float, a: float, b: float, speed
         if dl > 0:
             r = reynolds_solve(gaps, dl, p_pad=p_pad, a=a, b=b, speed=speed, viscosity=viscosity,
                                mean_free_path=mean_free_path, ambient_pressure=ambient_pressure, profile=profile,
-                               slip=slip, grid=grid)
+                               slip=slip, grid=grid, roughness=roughness)
             lift[i], lam[i], its[i] = r["lift"], r["bearing_number"], r["iterations"]
         else:
             lam[i] = 6.0 * viscosity * speed * a / (p_pad * gaps**2)
@@ -555,7 +620,8 @@ def reynolds_force(g: np.ndarray, delta: float, table: LiftTable) -> np.ndarray:
     table, ``bulge.nc``: :func:`reynolds_table` solved once per scene with the slip model
     ``air_bearing.bulge_slip``) at the TFC gaps ``g`` [m] for the protrusion ``delta`` [m]
     (:func:`table_lift`; docs/model.md, section "Slip-corrected Reynolds equation"). Zero at zero
-    protrusion. The table holds everything (the runner keeps it current)."""
+    protrusion. The table holds everything (the runner keeps it current). The same reader serves the
+    rough-gap law ``"rough-reynolds"`` (docs/model.md, section "Rough-gap bulge bearing")."""
     return table_lift(table, g, delta)[0]
 
 
@@ -569,4 +635,7 @@ BULGE_LAWS: dict[str, TfcLaw | None] = {
                                    ("b", "tfc.half_width"), ("profile", "air_bearing.bulge_profile"))),
     "reynolds": TfcLaw(reynolds_force, table="bulge",
                        doc="steady compressible Reynolds equation with molecular slip on the footprint, tabulated"),
+    "rough-reynolds": TfcLaw(reynolds_force, table="bulge",
+                             doc="Reynolds equation of the rough gap down to contact: Boltzmann flow rate, Patir-Cheng "
+                                 "flow factors, closed area out of the film, tabulated"),
 }

@@ -1,6 +1,7 @@
 """Stage ``bulge``: the lift of the bulge's air bearing versus apex gap and protrusion, ``bulge.nc``.
 
-For ``air_bearing.bulge = "reynolds"`` the steady compressible Reynolds equation with molecular slip is
+For ``air_bearing.bulge = "reynolds"`` (and ``"rough-reynolds"``, its rough-gap form down to contact,
+docs/model.md, section "Rough-gap bulge bearing") the steady compressible Reynolds equation with molecular slip is
 solved on the bulge footprint once per scene, for every tabulated protrusion and apex gap
 (:func:`pipeline.model.bulge_table.scene_table`; docs/model.md, section "Slip-corrected Reynolds
 equation"). Writes ``bulge.nc``: ``bulge_lift`` [mN], ``bulge_stiffness`` [N/m] (minus its gap
@@ -23,10 +24,12 @@ from ..model.bulge_table import scene_table, table_stop_nm
 from ..model.scene_inputs import table_stages
 from ..runner import Inputs, Stage, build
 
-#: The scene keys the table depends on (besides the deepest protrusion, :func:`table_stop_nm`).
+#: The scene keys the table depends on (besides the deepest protrusion, :func:`table_stop_nm`); the last
+#: three only with ``"rough-reynolds"`` (:func:`pipeline.model.bulge_table.scene_roughness`).
 READS = ("air_bearing.bulge", "air_bearing.pad_pressure_mpa", "air_bearing.bulge_profile", "air_bearing.bulge_slip",
          "tfc.half_length_um", "tfc.half_width_um", "dmw.radius_mm", "dmw.rpm", "solver.bulge_cells_per_a",
-         "solver.bulge_cells_per_b")
+         "solver.bulge_cells_per_b", "roughness.sigma_nm", "air_bearing.disk_roughness_share",
+         "lubricant.thickness_nm")
 
 
 def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
