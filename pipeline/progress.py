@@ -2,7 +2,8 @@
 
 Every fan-out (:func:`pipeline.fanout.run_tasks`) counts its tasks through a :class:`Progress`, and the
 work that is not one fan-out counts its own steps (the sweep its batches, ``hdi identify`` its
-generations with the best cost so far, ``hdi accuracy`` its runs). How a :class:`Progress` shows
+phases: its search's generations, each round of profiles, the scoring, with the best objective so far;
+``hdi accuracy`` its runs). How a :class:`Progress` shows
 itself is chosen when it starts (:func:`display`):
 
 * ``"off"``: the ``pipeline`` logger does not show INFO (``hdi -q``, or a library caller that set up no
@@ -194,7 +195,7 @@ class Progress:
         return f"{self.label} ({self.name})" if self.name else self.label
 
     def update(self, n: int = 1, note: str | None = None, total: int | None = None) -> None:
-        """``n`` more steps done; ``note`` (e.g. ``"best cost 0.12"``) is shown beside the count;
+        """``n`` more steps done; ``note`` (e.g. ``"best objective 0.12"``) is shown beside the count;
         ``total``: the steps now expected, where the work turned out shorter than foreseen (an upper
         bound of it, as a budget, came to an end early)."""
         self.done += n

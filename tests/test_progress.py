@@ -141,6 +141,8 @@ def test_on_a_pseudo_terminal_a_bar_counts_and_log_lines_go_above_it(monkeypatch
                 logging.getLogger("pipeline.demo").info("message %d", i)
                 bar.update(note=f"best cost {3 - i}")
             warnings.warn("a warning above the bar", UserWarning)
+            bar.phase("second", 2, unit="evaluation")  # a phase of its own: the bar counts again, its label says it
+            bar.update(2)
         tty.flush()
         monkeypatch.undo()
     finally:
@@ -157,6 +159,7 @@ def test_on_a_pseudo_terminal_a_bar_counts_and_log_lines_go_above_it(monkeypatch
     os.close(master)
     out = text.decode()
     assert "3/3" in out and "best cost 1" in out and "demo" in out, out
+    assert "demo (second)" in out and "2/2" in out and "evaluation" in out, out
     # each message is a line of its own (tqdm cleared the bar before it and drew it again after)
     rows = re.split(r"[\r\n]+", out)
     expected = {"message 0", "message 1", "message 2", "UserWarning: a warning above the bar"}

@@ -13,7 +13,7 @@ Ensembles: each candidate runs on ``identify.realisations`` DMW records (default
 is judged on its ensemble statistic (:attr:`pipeline.analyses.study.Target.ensemble`, the rules of
 :mod:`pipeline.analyses.ensemble_rules`): one DMW seed moves the touchdown by a 0.2-nm step, so a fit to
 one record fits that record's noise. ``identify.nc`` then also holds each target's spread over the
-realisations (``spread_<target>``). One realisation is the single-record identification.
+realisations (``spread(evaluation, target, bound)``). One realisation is the single-record identification.
 
 Method (:mod:`pipeline.analyses.identification`, which holds the algorithm; this stage reads the
 scene, makes the evaluator, calls it and writes the outputs): a global search by differential evolution
@@ -216,9 +216,9 @@ def write_identified_scene(scene: Any, params: Sequence[Parameter], ds: xr.Datas
     rev = rev[:12] + ("-dirty" if rev.endswith("-dirty") else "")
     cfg = scene["identify"]
     lines = [f"# Identified by `hdi identify {base.name if base else ''}` on {now} (git {rev});",
-             f"# the identified scene of {base if base else 'a scene given in memory'} (scene "
-             f"\"{scene.name}\"), best evaluation {ds.attrs['best_evaluation']} of identify.nc "
-             f"(objective {float(ds.attrs['best_objective']):.4g});",
+             f"# the identified scene of {base.name if base else 'a scene given in memory'} (scene "
+             f"\"{scene.name}\", the file `extends` names), best evaluation {ds.attrs['best_evaluation']} of "
+             f"identify.nc (objective {float(ds.attrs['best_objective']):.4g});",
              "# every value below is [identified]: fitted to the paper's targets ([identify] of the base scene),",
              f"# with its interval ({ds.attrs['interval_criterion']}; "
              f"{ds.attrs.get('interval_method', METHODS['slice'])}).",
