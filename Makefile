@@ -93,8 +93,8 @@ $(filter-out sweep identify,$(STAGES)): $(RUN_STAMP)
 ## `make sensitivity`, a stage target above)
 # The identification of configs/paper-2009-identified.toml: on the closed-form bulge scene (with p_pad free,
 # the Reynolds scene would re-solve its bulge table for every candidate); it writes
-# results/paper-2009-bulge/paper-2009-bulge-identified.toml (nothing in configs/; to write a copy there,
-# name it: make identify ARGS="--write-scene configs/paper-2009-bulge-identified.toml")
+# results/paper-2009-bulge/identified.toml (nothing in configs/; to write a copy there, name it:
+# make identify ARGS="--write-scene configs/paper-2009-bulge-identified.toml")
 IDENTIFY_SCENE ?= configs/paper-2009-bulge.toml
 identify: $(RUN_STAMP)
 	$(BIN)/hdi identify $(IDENTIFY_SCENE) $(ARGS)

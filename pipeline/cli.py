@@ -75,7 +75,7 @@ def _parser(stages: dict[str, runner.Stage]) -> argparse.ArgumentParser:
     p.add_argument("--force", action="store_true", help="recompute even when outputs are up to date")
     p.add_argument("--write-scene", type=Path, default=None, metavar="PATH",
                    help="identify: also write the identified scene to PATH (it is always written into the "
-                        "results folder as <scene>-identified.toml); its folder must exist and be writable, and "
+                        "results folder as identified.toml); its folder must exist and be writable, and "
                         "an existing PATH is refused unless --force (which also recomputes the identification)")
     p.add_argument("--readme", type=Path, default=None, metavar="PAGE",
                    help="report: also rewrite the generated comparison section of this page "

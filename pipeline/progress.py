@@ -2,7 +2,8 @@
 
 Every fan-out (:func:`pipeline.fanout.run_tasks`) counts its tasks through a :class:`Progress`, and the
 work that is not one fan-out counts its own steps (the sweep its batches, ``hdi identify`` its
-generations with the best cost so far, ``hdi accuracy`` its runs). How a :class:`Progress` shows
+phases: its search's generations, each round of profiles, the scoring, with the best objective so far;
+``hdi accuracy`` its runs). How a :class:`Progress` shows
 itself is chosen when it starts (:func:`display`):
 
 * ``"off"``: the ``pipeline`` logger does not show INFO (``hdi -q``, or a library caller that set up no
@@ -15,6 +16,12 @@ itself is chosen when it starts (:func:`display`):
   :data:`INTERVAL_S`, environment variable ``HDI_PROGRESS_S``) one INFO line
   ``"<stage>: k/N <unit>s done, elapsed M:SS, ETA M:SS"``, and one at the end when the work took that
   long (a shorter one says its end at DEBUG, ``hdi -vv``).
+
+Work in phases of different kinds (``hdi identify``: the search's generations, each round of profiles'
+evaluations, the scoring of the evaluations) counts each phase with a total of its own, fixed when the
+phase starts (:meth:`Progress.phase`): ``"<stage> (<phase>): k/N <unit>s done, elapsed M:SS, ETA M:SS"``,
+the ETA from the phase's own rate, the elapsed time one clock from the start of the whole work. A total
+known only as an upper bound (a budget) may be lowered when the phase ends early, never raised.
 
 The stage's name comes from :func:`stage` (the runner sets it around each stage it computes). Progress
 is output only: nothing it does changes what is computed.
@@ -30,7 +37,7 @@ import sys
 import threading
 import time
 import warnings
-from typing import Any, Iterator
+from typing import Any, Callable, Iterator
 
 log = logging.getLogger(__name__)
 
@@ -107,15 +114,23 @@ class Progress:
     unit : what a step is (``"task"``, ``"batch"``, ``"generation"``)
     label : the name the lines start with (default: the stage's, :func:`stage`)
     initial : steps already done before this run (a resumed sweep); the ETA counts from this run's rate
+    timer : the clock [s] of the elapsed time and the ETA (default :func:`time.perf_counter`; a test's own)
+    phase : the name of the first phase, where the work is in phases (:meth:`phase`)
+
+    Work in phases (a total each, one elapsed clock): :meth:`phase`.
     """
 
-    def __init__(self, total: int, unit: str = "task", label: str | None = None, initial: int = 0):
+    def __init__(self, total: int, unit: str = "task", label: str | None = None, initial: int = 0,
+                 timer: Callable[[], float] = time.perf_counter, phase: str = ""):
+        self._now = timer
         self.total, self.unit, self.initial = int(total), unit, int(initial)
         self.label = label or _LABEL.get()
         self.done = self.initial
         self.note = ""
         self.mode = "off"
-        self._t0 = time.perf_counter()
+        self.name = phase  # the current phase (:meth:`phase`); "" for work in one piece
+        self._t0 = self._now()
+        self._phase_t0 = self._t0  # (the ETA counts from the phase's start, the elapsed time from _t0)
         self._lines = 0
         self._bar: Any = None
         self._redirect: Any = None
@@ -133,7 +148,7 @@ class Progress:
     def start(self) -> "Progress":
         """Choose the display (:func:`display`) and start it; returns ``self``."""
         self.mode = display()
-        self._t0 = time.perf_counter()
+        self._t0 = self._phase_t0 = self._now()
         if self.mode == "off":
             return self
         self._token = _ACTIVE.set(True)
@@ -150,7 +165,7 @@ class Progress:
                 tqdm.write(text.rstrip("\n"), file=sys.stderr)
 
             warnings.showwarning = show
-            self._bar = tqdm(total=self.total, initial=self.initial, unit=self.unit, desc=self.label,
+            self._bar = tqdm(total=self.total, initial=self.initial, unit=self.unit, desc=self._label(),
                              file=sys.stderr, dynamic_ncols=True)
         else:
             self._thread = threading.Thread(target=self._tick, args=(interval_s(),), daemon=True,
@@ -158,8 +173,29 @@ class Progress:
             self._thread.start()
         return self
 
+    def phase(self, name: str, total: int, unit: str | None = None) -> None:
+        """Start the phase ``name`` of ``total`` steps (of ``unit``, default: the unit so far): the count
+        starts again from 0 with its own total and ETA; the elapsed time goes on (module docstring). The
+        phase that ends says its end as :meth:`close` does (the first phase, named when the work started,
+        starts again without a word if nothing was counted yet)."""
+        if self.name and self._thread is not None and (name != self.name or self.done > self.initial):
+            self._say_end()
+        self.name, self.total, self.done, self.initial = name, int(total), 0, 0
+        self.unit = unit or self.unit
+        self._phase_t0 = self._now()
+        self._lines = 0
+        if self._bar is not None:
+            self._bar.reset(total=self.total)
+            self._bar.unit = self.unit
+            self._bar.start_t = self._bar._time() - (self._now() - self._t0)  # (one clock, in tqdm's)
+            self._bar.set_description_str(self._label(), refresh=True)
+
+    def _label(self) -> str:
+        """The label, with the phase where there is one."""
+        return f"{self.label} ({self.name})" if self.name else self.label
+
     def update(self, n: int = 1, note: str | None = None, total: int | None = None) -> None:
-        """``n`` more steps done; ``note`` (e.g. ``"best cost 0.12"``) is shown beside the count;
+        """``n`` more steps done; ``note`` (e.g. ``"best objective 0.12"``) is shown beside the count;
         ``total``: the steps now expected, where the work turned out shorter than foreseen (an upper
         bound of it, as a budget, came to an end early)."""
         self.done += n
@@ -181,12 +217,13 @@ class Progress:
 
     def line(self) -> str:
         """``"<label>: k/N <unit>s done, elapsed M:SS, ETA M:SS"`` (and the note) as of now."""
-        elapsed = time.perf_counter() - self._t0
+        now = self._now()
+        elapsed, ran_for = now - self._t0, now - self._phase_t0
         ran = self.done - self.initial
         left = self.total - self.done
-        eta = clock(elapsed / ran * left) if ran > 0 else ("0:00" if left <= 0 else "?")
+        eta = clock(ran_for / ran * left) if ran > 0 else ("0:00" if left <= 0 else "?")
         units = self.unit + ("es" if self.unit.endswith(("s", "sh", "ch", "x")) else "s")
-        text = f"{self.label}: {self.done}/{self.total} {units} done, elapsed {clock(elapsed)}, ETA {eta}"
+        text = f"{self._label()}: {self.done}/{self.total} {units} done, elapsed {clock(elapsed)}, ETA {eta}"
         return f"{text} ({self.note})" if self.note else text
 
     def _tick(self, every: float) -> None:
@@ -195,14 +232,19 @@ class Progress:
             self._lines += 1
             log.info(self.line())
 
+    def _say_end(self) -> None:
+        """The ``"lines"`` display's last line of the work (or of a phase): INFO when it took an interval
+        or more, else DEBUG."""
+        long = self._lines > 0 or self._now() - self._phase_t0 >= interval_s()
+        log.log(logging.INFO if long else logging.DEBUG, self.line())
+
     def close(self) -> None:
         """End the display: the bar closes; the lines say the end (module docstring)."""
         if self._thread is not None:
             self._stop.set()
             self._thread.join()
             self._thread = None
-            long = self._lines > 0 or time.perf_counter() - self._t0 >= interval_s()
-            log.log(logging.INFO if long else logging.DEBUG, self.line())
+            self._say_end()
         if self._bar is not None:
             self._bar.close()
             self._bar = None

@@ -168,21 +168,22 @@ realisations = 2
     # the stored value and spread are the ensemble statistics of each record: median and 10-90 % of
     # the two FHM values at 9 nm, mean +- std of the two contact forces at 11 nm
     i = int(ds.attrs["best_evaluation"])
-    x = float(ds["dmw__rms_nm"][i])  # (the best evaluation's record, found by its parameter value)
+    x = float(ds["parameter_value"].sel(parameter="dmw.rms_nm")[i])  # (the best evaluation's record, by its value)
     rec = next(r for r in recs if abs(r["params"][0] - x) < 1e-12)
     prots = rec["protrusions"]
     fhm = np.array(rec["outputs"]["fhm_bv"])[prots.index(9.0)]
-    assert float(ds["value_fhm_touchdown"][i]) == pytest.approx(np.median(fhm), rel=1e-12)
-    np.testing.assert_allclose(ds["spread_fhm_touchdown"][i].values, np.quantile(fhm, [0.1, 0.9]), rtol=1e-12)
+    assert float(ds["value"].sel(target="fhm_touchdown")[i]) == pytest.approx(np.median(fhm), rel=1e-12)
+    np.testing.assert_allclose(ds["spread"].sel(target="fhm_touchdown")[i].values, np.quantile(fhm, [0.1, 0.9]),
+                               rtol=1e-12)
     f = np.array(rec["outputs"]["contact_force"])[prots.index(11.0)]
-    np.testing.assert_allclose(ds["spread_contact_force"][i].values,
+    np.testing.assert_allclose(ds["spread"].sel(target="contact_force")[i].values,
                                np.mean(f) + np.array([-1, 1]) * np.std(f, ddof=1), rtol=1e-12)
     from cf_check import cf_report
     failures, crashed = cf_report(nc)
     assert crashed == [] and failures[3] == [] and failures[2] == [], failures
     md = identification_markdown(ds)
     assert "Over 2 DMW realisations per evaluation" in md
-    lo, hi = ds["spread_contact_force"][i].values
+    lo, hi = ds["spread"].sel(target="contact_force")[i].values
     assert f"[{lo:.4g}, {hi:.4g}]" in md
 
 

@@ -54,23 +54,25 @@ def test_twin_experiment_recovers_the_true_parameters_within_the_reported_interv
     assert crashed == [] and failures[3] == [] and failures[2] == [], failures
     assert ds.attrs["interval_method"] == identification.METHODS["optimised"]  # (the default)
     for p in study.parse_parameters(scene["identify"]["parameters"], "", ""):
-        name = p.var_name
-        lo, hi = ds[f"{name}_interval"].values
-        assert lo <= TRUE[p.name] <= hi, (p.name, lo, hi, float(ds[f"{name}_best"]))
+        at = ds.sel(parameter=p.name)
+        lo, hi = float(at["interval"].sel(bound="low")), float(at["interval"].sel(bound="high"))
+        assert lo <= TRUE[p.name] <= hi, (p.name, lo, hi, float(at["best"]))
         # the interval is informative: well inside the bounds
         assert hi - lo < 0.5 * (p.high - p.low)
         # and never narrower than the slice it started from
-        slo, shi = ds[f"{name}_slice_interval"].values
+        slo, shi = at["slice_interval"].values
         assert lo <= slo and shi <= hi
-    # every evaluation is in the dataset, with units
-    for v in ds.data_vars:
-        assert "units" in ds[v].attrs and "long_name" in ds[v].attrs
+        assert str(at["parameter_units"].values) == p.units
+    # every evaluation is in the dataset, with units (its own, or the variable holding each parameter's or target's)
+    for v in list(ds.data_vars) + list(ds.coords):
+        a = ds[v].attrs
+        assert "long_name" in a and ("units" in a or a.get("unit_variable") in ds or ds[v].dtype.kind in "OSU"), v
     assert ds.sizes["evaluation"] == len(evaluations.EvaluationStore(out / "identify.evals.jsonl").records)
     # the reconstructed point (evaluation 0) is worse than the identified one
-    assert float(ds["cost"][0]) > float(ds["cost"][ds.attrs["best_evaluation"]])
+    assert float(ds["objective"][0]) > float(ds["objective"][ds.attrs["best_evaluation"]])
     # the written scene extends the twin scene and loads with the identified values
-    written = out / "twin-identified.toml"  # in the results folder, not beside the scene
-    assert not (path.parent / "twin-identified.toml").exists()
+    written = out / "identified.toml"  # in the results folder, not beside the scene
+    assert not (path.parent / "identified.toml").exists() and not (path.parent / "twin-identified.toml").exists()
     text = written.read_text()
     assert text.count("# [identified] interval [") == 2  # one per identified value, with its interval
     # the header names the budget the values came from
@@ -82,7 +84,7 @@ def test_twin_experiment_recovers_the_true_parameters_within_the_reported_interv
     rev = ds.attrs["git_revision"]  # the revision identify.nc was made at, a dirty tree said so
     assert f"(git {rev[:12]}{'-dirty' if rev.endswith('-dirty') else ''});" in text.splitlines()[0]
     ident = load_scene(written)
-    assert ident["dmw"]["rms_nm"] == pytest.approx(float(ds["dmw__rms_nm_best"]), rel=1e-5)
+    assert ident["dmw"]["rms_nm"] == pytest.approx(float(ds.best.sel(parameter="dmw.rms_nm")), rel=1e-5)
     assert ident["solver"]["duration_ms"] == 0.8  # inherited
     # the report's three columns: paper, reconstructed, identified; nothing unreached in a twin experiment
     from pipeline.analyses.paper_comparison import identification_markdown
@@ -96,7 +98,7 @@ def test_twin_experiment_recovers_the_true_parameters_within_the_reported_interv
     k = int(np.argmin(np.abs(far["residual"][:, 1].values)))
     md = identification_markdown(far)
     assert "Targets no parameter set within the bounds reaches" in md
-    assert f"reached {float(far['value_contact_force'][k]):.4g} mN" in md
+    assert f"reached {float(far['value'].sel(target='contact_force')[k]):.4g} mN" in md
     # unchanged inputs: the runner keeps identify.nc (nothing run); resuming after identify.nc is lost:
     # every evaluation is read back from the store, none computed, the same result
     from pipeline.runner import last_run
@@ -106,7 +108,7 @@ def test_twin_experiment_recovers_the_true_parameters_within_the_reported_interv
     nc2 = identify.run(scene, out, scheduler="synchronous")
     assert last_run(out, "identify")["evaluations_computed"] == 0
     ds2 = xr.open_dataset(nc2, engine="netcdf4")
-    np.testing.assert_array_equal(ds2["cost"].values, ds["cost"].values)
+    np.testing.assert_array_equal(ds2["objective"].values, ds["objective"].values)
 
 
 def test_bad_parameter_key_names_the_field(paper_scene):
@@ -200,19 +202,21 @@ def test_a_profile_point_better_than_the_optimum_becomes_the_optimum(write_scene
     ds = xr.open_dataset(identify.run(scene, tmp_path / "out", scheduler="synchronous"), engine="netcdf4")
     rounds = int(ds.attrs["profile_rounds"])
     assert 2 <= rounds <= identification.PROFILE_ROUNDS  # (here the global search stops short: it moved)
-    names = [p.var_name for p in study.parse_parameters(scene["identify"]["parameters"], "", "")]
-    best = np.array([float(ds[f"{n}_best"]) for n in names])
-    points = np.stack([ds[n].values for n in names], axis=1)
-    at_best = np.flatnonzero(np.all(points == best, axis=1))
-    assert at_best.size >= 1  # the written optimum is an evaluated point
-    role, cost = ds["role"].values, ds["cost"].values
-    c_best = float(cost[at_best[0]])
-    assert c_best <= float(np.nanmin(cost[role <= 1]))  # at least as good as the global search's best
-    if rounds < identification.PROFILE_ROUNDS:  # no profile point (slice or re-optimised) beats it by more than the gain
-        assert c_best - float(np.nanmin(cost[(role == 2) | (role == 4)])) <= identification.PROFILE_GAIN
-    # the profiles of the last round pass through the optimum
-    for n, b in zip(names, best):
-        assert b in ds[f"{n}_profile"].values
+    best = ds["best"].values
+    points = ds["parameter_value"].values
+    i_best = int(ds.attrs["best_evaluation"])
+    np.testing.assert_array_equal(points[i_best], best)  # the written optimum is the best evaluated point
+    role, cost = ds["role"].values, ds["objective"].values
+    assert cost[i_best] == np.nanmin(cost) == ds.attrs["best_objective"]
+    # the profiles' centre: no profile point (slice or re-optimised) beats it by more than the gain
+    i_centre = int(ds.attrs["profile_centre_evaluation"])
+    centre, c_centre = points[i_centre], float(cost[i_centre])
+    assert c_centre <= float(np.nanmin(cost[role <= 1]))  # at least as good as the global search's best
+    if rounds < identification.PROFILE_ROUNDS:
+        assert c_centre - float(np.nanmin(cost[(role == 2) | (role == 4)])) <= identification.PROFILE_GAIN
+    # the profiles of the last round pass through their centre
+    for j, c in enumerate(centre):
+        assert c in ds["profile"][j].values
 
 
 #: The twin with a correlated pair: the FHM at 9 nm grows with the DMW amplitude and falls with the work of
@@ -235,15 +239,15 @@ def test_twin_correlated_pair_profile_interval_is_wider_than_the_slice(write_sce
     assert float(ds["correlation"][0, 1]) > 0.8
     params = study.parse_parameters(scene["identify"]["parameters"], "", "")
     for p in params:
-        name = p.var_name
-        lo, hi = ds[f"{name}_interval"].values
-        slo, shi = ds[f"{name}_slice_interval"].values
+        lo, hi = ds["interval"].sel(parameter=p.name).values
+        slo, shi = ds["slice_interval"].sel(parameter=p.name).values
         assert lo <= slo and shi <= hi and lo <= TRUE[p.name] <= hi, (p.name, lo, hi, slo, shi)
         # 1 / sqrt(1 - rho^2) wider in theory (2.4 at rho 0.9); the grid's linear crossings make it ~2.2
         assert hi - lo > 1.5 * (shi - slo), (p.name, lo, hi, slo, shi)
-        assert ds[f"{name}_along_profiles"].attrs["units"] == p.units
+        assert str(ds["parameter_b_units"].sel(parameter_b=p.name).values) == p.units
+    assert ds["profile_parameters"].attrs["unit_variable"] == "parameter_b_units"
     # the other parameter moves along the valley on each profile (correlation > 0: both up or both down)
-    rms, w = (ds[f"{p.var_name}_along_profiles"].values for p in params)
+    rms, w = (ds["profile_parameters"].sel(parameter_b=p.name).values for p in params)
     opt = ds["profile_optimised"].values.astype(bool)
     assert opt[0].sum() >= 2 and opt[1].sum() >= 2
     moved = opt[0] & (rms[0] != TRUE["dmw.rms_nm"])
@@ -256,7 +260,7 @@ def test_twin_correlated_pair_profile_interval_is_wider_than_the_slice(write_sce
     from pipeline.analyses.paper_comparison import identification_markdown
     md = identification_markdown(ds)
     assert "| profile interval | slice interval |" in md and "Interval (profile, other parameters re-optimised)" in md
-    assert "profile, other parameters re-optimised" in (out / "twin-identified.toml").read_text().splitlines()[2]
+    assert "profile, other parameters re-optimised" in (out / "identified.toml").read_text().splitlines()[3]
 
 
 # ------------------------------------------------------- issue 28: outputs go only where the user said
@@ -289,11 +293,11 @@ def test_identify_writes_its_scene_into_the_results_folder_not_over_the_users_fi
     beside = path.parent / "twin-identified.toml"
     assert beside.read_text() == USER_TEXT
     assert sorted(p.name for p in path.parent.iterdir()) == ["twin-identified.toml", "twin.toml"]
-    written = out / "twin-identified.toml"
+    written = out / "identified.toml"
     ident = load_scene(written)  # extends the scene from the results folder
     ds = xr.open_dataset(nc, engine="netcdf4")
-    assert ds.attrs["identified_scene"] == "twin-identified.toml"
-    assert ident["dmw"]["rms_nm"] == pytest.approx(float(ds["dmw__rms_nm_best"]), rel=1e-5)
+    assert ds.attrs["identified_scene"] == "identified.toml"
+    assert ident["dmw"]["rms_nm"] == pytest.approx(float(ds.best.sel(parameter="dmw.rms_nm")), rel=1e-5)
     assert ident["solver"]["duration_ms"] == 0.8
     # a no-op rerun touches neither
     before = written.stat().st_mtime_ns
@@ -372,3 +376,116 @@ def test_the_identification_takes_any_evaluation_callable(paper_scene):
     assert out["intervals"][0] == pytest.approx([0.8, 1.0], abs=1e-9)
     assert np.isinf(out["gn_std"][1]) and np.all(np.isnan(out["correlation"][1]))
     assert ident.roles[ident.keys[0]] == 0 and len(ident.records) == len(set(ident.keys))
+
+
+# ------------------------------------------- issue 34, 3: one best point, wherever the profiles found it
+def _separable_batch(base, params, rows, protrusions, inputs):
+    """A stand-in for the slider whose objective has its minimum at grid points of the profiles (5 points of
+    the twin's bounds: dmw.rms_nm 0.165, work of adhesion 0.07): it flies everywhere, its FHM is 100 x the
+    DMW amplitude [%] and its contact force 10 x the work of adhesion [mN]."""
+    return twin.stub_records(rows, protrusions, lambda x: {
+        "fhm_bv": 100.0 * float(x[0]), "contact_fraction": 0.0, "min_clearance": 0.1,
+        "contact_force": 10.0 * float(x[1]), "interference": 0.0, "mean_pressure": 0.0})
+
+
+#: The stand-in's targets, one generation of a small population: the search stops short of the minimum
+BEST_POINT = twin.scene_text("""
+targets = ["fhm_flying", "contact_force"]
+fhm_flying_percent = 16.5
+contact_force_mn = 0.7
+population = 4
+generations = 1
+profile_points = 5
+seed = 3
+realisations = 1
+""")
+
+
+@pytest.mark.parametrize("tolerances, rounds", [
+    # the last round's profiles find a point far better than their centre (rounds = 1: no round more moves it)
+    (["identify.fhm_flying_tolerance_percent=0.1", "identify.contact_force_tolerance_mn=0.01"], 1),
+    # a point better than the centre by less than PROFILE_GAIN (wide tolerances: the whole objective is below 1)
+    (["identify.fhm_flying_tolerance_percent=30", "identify.contact_force_tolerance_mn=2"], None)])
+def test_a_profile_point_better_than_the_centre_is_the_one_best_point_everywhere(tmp_path, paper_config, monkeypatch,
+                                                                                   caplog, tolerances, rounds):
+    # issue 34, 3: identify.nc's best_evaluation (a profile point, the lowest objective) and its *_best values and
+    # the written scene (the profiles' centre) named two different points
+    if rounds is not None:
+        monkeypatch.setattr(identification, "PROFILE_ROUNDS", rounds)
+    path = tmp_path / "twin.toml"
+    path.write_text(BEST_POINT.format(paper=paper_config))
+    scene = load_scene(path, tolerances)
+    out = tmp_path / "out"
+    with caplog.at_level("INFO", logger="pipeline"):
+        ds = xr.open_dataset(identify.run(scene, out, scheduler="synchronous", task=_separable_batch),
+                             engine="netcdf4").load()
+    objective, role = ds["objective"].values, ds["role"].values
+    i_best, i_centre = int(ds.attrs["best_evaluation"]), int(ds.attrs["profile_centre_evaluation"])
+    # the case this test is for: a profile point (slice or re-optimised) is the best, not the profiles' centre
+    assert role[i_best] in (2, 4) and i_best != i_centre
+    gain = objective[i_centre] - objective[i_best]
+    assert gain > identification.PROFILE_GAIN if rounds else 0 < gain <= identification.PROFILE_GAIN
+    # ... one best point: the lowest objective, its values, the written scene, the log's last line
+    assert objective[i_best] == np.min(objective) == ds.attrs["best_objective"]
+    np.testing.assert_array_equal(ds["best"].values, ds["parameter_value"][i_best].values)
+    written = load_scene(out / "identified.toml")
+    for p in study.parse_parameters(scene["identify"]["parameters"], "", ""):
+        section, key, _ = p.parts
+        assert written[section][key] == pytest.approx(float(ds["best"].sel(parameter=p.name)), rel=1e-5)
+    last = [r.getMessage() for r in caplog.records if "evaluations (" in r.getMessage()]
+    assert len(last) == 1 and f"best objective {objective[i_best]:.4g} (evaluation {i_best})" in last[0]
+    assert any(f"the best point (evaluation {i_best}) is not the profiles' centre (evaluation {i_centre})"
+               in r.getMessage() for r in caplog.records)
+    # the intervals are read around the best point: each holds its value
+    lo, hi = ds["interval"].sel(bound="low").values, ds["interval"].sel(bound="high").values
+    assert np.all((lo <= ds["best"].values) & (ds["best"].values <= hi)), (lo, hi, ds["best"].values)
+    # the residual bars of the figure and the report's identified column are the best evaluation's
+    from pipeline.analyses.paper_comparison import identification_markdown
+    md = identification_markdown(ds)
+    r = ds["residual"][i_best].values
+    assert f"(r = {r[1]:+.2g}) |" in md.split("| contact force", 1)[1].splitlines()[0]
+    # the header of the written scene names the scene it comes from and the best evaluation
+    head = (out / "identified.toml").read_text().splitlines()[1]
+    assert f'identified scene of twin.toml (scene "twin"' in head and f"best evaluation {i_best} of identify.nc" in head
+
+
+def test_identify_nc_has_parameter_target_and_bound_dimensions(tmp_path, paper_config):
+    # issue 34, 4: identify.nc had 103 variables named like air_bearing__frequencies_khz_1_slice_interval
+    path = tmp_path / "twin.toml"
+    path.write_text(BEST_POINT.format(paper=paper_config))
+    scene = load_scene(path, ["identify.fhm_flying_tolerance_percent=0.1", "identify.contact_force_tolerance_mn=0.01"])
+    nc = identify.run(scene, tmp_path / "out", scheduler="synchronous", task=_separable_batch)
+    ds = xr.open_dataset(nc, engine="netcdf4").load()
+    assert list(ds["parameter"].values) == ["dmw.rms_nm", "lubricant.work_of_adhesion_j_m2"]
+    assert list(ds["target"].values) == ["fhm_flying", "contact_force"]
+    assert ds["interval"].dims == ("parameter", "bound") and ds["slice_interval"].dims == ("parameter", "bound")
+    assert ds["profile"].dims == ds["profile_objective"].dims == ("parameter", "point")
+    assert ds["best"].dims == ("parameter",) and ds["residual"].dims == ("evaluation", "target")
+    assert ds["value"].dims == ("evaluation", "target") and ds["parameter_value"].dims == ("evaluation", "parameter")
+    assert not [v for v in ds.data_vars if "__" in str(v)]  # no variable per parameter
+    # the values in each parameter's units, which a coordinate along the dimension holds
+    rms = ds.sel(parameter="dmw.rms_nm", bound="low")
+    assert str(rms["parameter_units"].values) == "nm" and ds["interval"].attrs["unit_variable"] == "parameter_units"
+    assert float(ds["search_bounds"].sel(parameter="dmw.rms_nm", bound="low")) == 0.08
+    assert float(rms["interval"]) <= float(rms["best"]) <= float(ds["interval"].sel(parameter="dmw.rms_nm",
+                                                                                    bound="high"))
+    ct = ds.sel(target="contact_force")
+    assert str(ct["target_units"].values) == "mN" and float(ct["goal"]) == 0.7 and float(ct["tolerance"]) == 0.01
+    np.testing.assert_allclose(ct["value"].values, 10.0 * ds["parameter_value"].sel(
+        parameter="lubricant.work_of_adhesion_j_m2").values)
+    np.testing.assert_allclose(ds["objective"].values, (ds["residual"]**2).sum("target").values)
+    # the profile of each parameter passes through the best point's value here (centre = best or not, it is a grid)
+    assert ds["correlation"].dims == ("parameter", "parameter_b")
+    from cf_check import cf_report  # CF-checked like every dataset
+    failures, crashed = cf_report(nc)
+    assert crashed == [] and failures[3] == [] and failures[2] == [], failures
+
+
+def test_the_report_refuses_an_identify_nc_of_the_older_layout_in_one_line():
+    from pipeline.analyses.paper_comparison import identification_markdown
+    old = xr.Dataset({"dmw__rms_nm_best": xr.DataArray(0.14, attrs={"units": "nm"}),
+                      "value_contact_force": xr.DataArray([1.0], dims="evaluation")},
+                     attrs={"best_evaluation": 0, "reconstructed_evaluation": 0})
+    with pytest.raises(ValueError, match=r"identify.nc: written by an older hdi identify .*dmw__rms_nm_best.*run "
+                                         r"`hdi identify` again"):
+        identification_markdown(old)

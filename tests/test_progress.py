@@ -16,13 +16,30 @@ from pipeline.config.scene import load_scene
 from pipeline.stages import identify
 import twin
 
-LINE = re.compile(r"^(\w+): (\d+)/(\d+) (\w+) done, elapsed \d+:\d\d, ETA (\d+:\d\d|\?)(?: \((.*)\))?$")
+LINE = re.compile(r"^(\w+)(?: \(([^)]*)\))?: (\d+)/(\d+) (\w+) done, elapsed (\d+:\d\d), ETA (\d+:\d\d|\?)"
+                  r"(?: \((.*)\))?$")
 
 
 def _lines(text: str, label: str) -> list[tuple[int, int, str, str]]:
     """``(k, N, unit, note)`` of every progress line of ``label`` in ``text``."""
+    return [(k, n, unit, note) for _, k, n, unit, note, _ in _phase_lines(text, label)]
+
+
+def _phase_lines(text: str, label: str) -> list[tuple[str, int, int, str, str, int]]:
+    """``(phase, k, N, unit, note, elapsed [s])`` of every progress line of ``label`` in ``text``."""
     found = [LINE.match(line) for line in text.splitlines()]
-    return [(int(m[2]), int(m[3]), m[4], m[6] or "") for m in found if m and m[1] == label]
+    return [(m[2] or "", int(m[3]), int(m[4]), m[5], m[8] or "",
+             int(m[6].split(":")[0]) * 60 + int(m[6].split(":")[1])) for m in found if m and m[1] == label]
+
+
+class FakeClock:
+    """A clock [s] that moves only when told."""
+
+    def __init__(self) -> None:
+        self.now = 1000.0
+
+    def __call__(self) -> float:
+        return self.now
 
 
 def _slow(x: int) -> int:
@@ -58,10 +75,11 @@ def test_a_fan_out_in_a_log_writes_counted_lines_with_an_eta_at_the_interval(mon
 
 
 def test_progress_counts_from_this_runs_rate_and_says_units_and_notes():
-    p = progress.Progress(10, unit="batch", label="sweep", initial=4)  # a resumed sweep: 4 done before
-    p._t0 = time.perf_counter() - 60.0
-    p.update(2, note="best cost 0.5")
-    assert p.line() == "sweep: 6/10 batches done, elapsed 1:00, ETA 2:00 (best cost 0.5)"
+    clock = FakeClock()
+    p = progress.Progress(10, unit="batch", label="sweep", initial=4, timer=clock)  # a resumed sweep: 4 done before
+    clock.now += 60.0
+    p.update(2, note="best objective 0.5")
+    assert p.line() == "sweep: 6/10 batches done, elapsed 1:00, ETA 2:00 (best objective 0.5)"
     p.update(5)  # more than foreseen: the total follows
     assert p.line().startswith("sweep: 11/11 batches done") and "ETA 0:00" in p.line()
     budget = progress.Progress(20, unit="evaluation", label="identify")  # a budget, an upper bound
@@ -69,6 +87,28 @@ def test_progress_counts_from_this_runs_rate_and_says_units_and_notes():
     budget.update(0, note="ended early", total=5)  # ... that ended early: the total follows down
     assert budget.line().startswith("identify: 5/5 evaluations done") and "ETA 0:00" in budget.line()
     assert progress.clock(3725) == "1:02:05"
+
+
+def test_phases_have_their_own_total_and_eta_and_one_elapsed_clock():
+    # issue 34, 3: identify's total grew as it ran (276 -> 293 -> 317) and its elapsed time restarted per phase
+    clock = FakeClock()
+    p = progress.Progress(5, unit="generation", label="identify", timer=clock)
+    p.phase("search", 5, unit="generation")
+    clock.now += 50.0
+    p.update(note="best objective 3")
+    assert p.line() == "identify (search): 1/5 generations done, elapsed 0:50, ETA 3:20 (best objective 3)"
+    clock.now += 50.0
+    p.update(4)
+    p.phase("profiles, round 1 of at most 3", 40, unit="evaluation")
+    # (the note goes on: the best objective so far)
+    assert p.line() == ("identify (profiles, round 1 of at most 3): 0/40 evaluations done, elapsed 1:40, ETA ? "
+                        "(best objective 3)")
+    clock.now += 20.0
+    p.update(10)  # the ETA from this phase's rate (2 s an evaluation), the elapsed time from the start
+    assert p.line().startswith("identify (profiles, round 1 of at most 3): 10/40 evaluations done, elapsed 2:00, "
+                               "ETA 1:00")
+    p.update(0, total=10)  # a budget that ended early: lowered to what was spent, never raised
+    assert p.line().startswith("identify (profiles, round 1 of at most 3): 10/10 evaluations done, elapsed 2:00")
 
 
 def test_the_display_is_a_bar_on_a_terminal_lines_elsewhere_and_none_when_quiet_or_nested(monkeypatch,
@@ -101,6 +141,8 @@ def test_on_a_pseudo_terminal_a_bar_counts_and_log_lines_go_above_it(monkeypatch
                 logging.getLogger("pipeline.demo").info("message %d", i)
                 bar.update(note=f"best cost {3 - i}")
             warnings.warn("a warning above the bar", UserWarning)
+            bar.phase("second", 2, unit="evaluation")  # a phase of its own: the bar counts again, its label says it
+            bar.update(2)
         tty.flush()
         monkeypatch.undo()
     finally:
@@ -117,6 +159,7 @@ def test_on_a_pseudo_terminal_a_bar_counts_and_log_lines_go_above_it(monkeypatch
     os.close(master)
     out = text.decode()
     assert "3/3" in out and "best cost 1" in out and "demo" in out, out
+    assert "demo (second)" in out and "2/2" in out and "evaluation" in out, out
     # each message is a line of its own (tqdm cleared the bar before it and drew it again after)
     rows = re.split(r"[\r\n]+", out)
     expected = {"message 0", "message 1", "message 2", "UserWarning: a warning above the bar"}
@@ -157,22 +200,38 @@ def test_hdi_identify_in_a_log_counts_generations_with_the_best_cost_and_q_and_v
         argv = ["identify", str(path), "--out", str(tmp_path / "out"), "--scheduler", "synchronous"]
         assert cli.main(argv) == 0
         err = capsys.readouterr().err
-        gens = _lines(err, "identify")
-        gens = [(k, n, note) for k, n, unit, note in gens if unit == "generations"]
+        lines = _phase_lines(err, "identify")
+        gens = [(k, n, note) for phase, k, n, unit, note, _ in lines if phase == "search"]
         assert gens, err
         assert all(n == 4 for _, n, _ in gens)
         counts = [k for k, _, _ in gens]
         # a generation is a 0.1-s batch, the interval 0.05 s: a line or more per generation, then the end
         assert counts == sorted(counts) and len(set(counts)) >= 4 and counts[-1] == 4, counts
-        costs = [float(note.removeprefix("best cost ")) for k, _, note in gens if k > 0]
+        costs = [float(note.removeprefix("best objective ")) for k, _, note in gens if k > 0]
         assert costs and costs == sorted(costs, reverse=True)  # the best so far only improves
-        # then the profiles and the correlation count their evaluations (lines through the whole stage):
-        # 2 parameters x (3 profile points + the optimum) + 2 x 2 Jacobian points, or more with a round more,
-        # and the re-optimisation of the profiles last (its budget's rest taken off the total when it ends)
-        evals = [(k, n, note) for k, n, unit, note in _lines(err, "identify") if unit == "evaluations"]
-        assert evals and evals[-1][0] == evals[-1][1] >= 2 * 4 + 4, err
-        assert evals[-1][2] == "profiles, others re-optimised", err
-        assert [k for k, _, _ in evals] == sorted(k for k, _, _ in evals)
+        # then each round of profiles counts its evaluations, with a total fixed when it starts (2 parameters
+        # x (3 profile points + the optimum) + 2 x 2 Jacobian points + 2 x the re-optimisation's budget of 40),
+        # lowered to what was spent when the round ends; then the scoring of every evaluation
+        phases = list(dict.fromkeys(phase for phase, *_ in lines))
+        assert phases[0] == "search" and phases[1] == "profiles, round 1 of at most 3", phases
+        assert set(phases) <= {"search", "scoring", *(f"profiles, round {r} of at most 3" for r in (1, 2, 3))}, phases
+        for phase in (ph for ph in phases if ph.startswith("profiles")):
+            evals = [(k, n) for ph, k, n, unit, _, _ in lines if ph == phase]
+            assert all(unit == "evaluations" for ph, _, _, unit, _, _ in lines if ph == phase)
+            assert {n for _, n in evals[:-1]} <= {2 * 4 + 4 + 2 * 40}, evals  # (stable while it runs)
+            assert evals[-1][0] == evals[-1][1] <= 2 * 4 + 4 + 2 * 40, evals
+            assert [k for k, _ in evals] == sorted(k for k, _ in evals)
+        # one clock: the elapsed time never goes back from one phase to the next
+        elapsed = [e for *_, e in lines]
+        assert elapsed == sorted(elapsed), elapsed
+        # one name for the objective: the notes and the last line say "best objective", the same number
+        assert "best cost" not in err
+        final = [line for line in err.splitlines() if "evaluations (" in line and "best objective" in line]
+        assert len(final) == 1, err
+        import xarray as xr
+        ds = xr.open_dataset(tmp_path / "out" / "identify.nc", engine="netcdf4")
+        assert f"best objective {ds.attrs['best_objective']:.4g} (evaluation {ds.attrs['best_evaluation']})" in final[0]
+        assert lines[-1][4] == f"best objective {ds.attrs['best_objective']:.4g}"
         # -q: no progress and no stage messages; the dataset's path still on stdout
         assert cli.main([*argv, "--force", "-q"]) == 0
         out = capsys.readouterr()
@@ -183,9 +242,18 @@ def test_hdi_identify_in_a_log_counts_generations_with_the_best_cost_and_q_and_v
         assert logger.level == logging.DEBUG
         assert "fan-out:" in err and "in this process, one after the other" in err
         assert _lines(err, "identify")
+        # the scoring of the evaluations after the profiles is a phase of its own (its end at DEBUG when short)
+        assert [n for phase, k, n, *_ in _phase_lines(err, "identify") if phase == "scoring"][-1] == \
+            len(evaluations_of(tmp_path / "out"))
     finally:
         logger.setLevel(level)
         logger.handlers[:] = handlers
+
+
+def evaluations_of(out) -> list:
+    """The records of the evaluation store of ``hdi identify`` in ``out``."""
+    from pipeline.evaluations import EvaluationStore
+    return list(EvaluationStore(out / "identify.evals.jsonl").records)
 
 
 def test_a_bad_progress_interval_is_one_line(tmp_path, paper_config, monkeypatch, capsys):

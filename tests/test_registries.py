@@ -86,10 +86,11 @@ def test_a_declared_target_is_fitted_and_reported(dummy_target, write_scene, pap
     nc = identify.run(scene, tmp_path / "out", scheduler="synchronous", task=_clearance_batch)
     ds = xr.open_dataset(nc, engine="netcdf4").load()
     assert [str(n) for n in ds["target"].values] == ["fhm_touchdown", "dummy"]
-    rms = ds["dmw__rms_nm"].values
-    np.testing.assert_allclose(ds["value_dummy"].values, 2.0 * rms)
+    rms = ds["parameter_value"].sel(parameter="dmw.rms_nm").values
+    np.testing.assert_allclose(ds["value"].sel(target="dummy").values, 2.0 * rms)
     np.testing.assert_allclose(ds["residual"].sel(target="dummy").values, (2.0 * rms - 0.35) / 0.05)
-    assert ds["value_dummy"].attrs["paper"] == "0.35 nm" and ds["value_dummy"].attrs["units"] == "nm"
+    dummy = ds.sel(target="dummy")
+    assert str(dummy["target_paper"].values) == "0.35 nm" and str(dummy["target_units"].values) == "nm"
     # the report's comparison lists it, paper and reconstructed value (rms 0.14 of the paper scene)
     md = identification_markdown(ds)
     assert f"| dummy clearance at 5 nm | 0.35 nm | {2.0 * rms[0]:.4g} nm (r = " in md

@@ -32,12 +32,17 @@ Method
    :data:`PROFILE_GAIN`) means the global search stopped short: it becomes the optimum and the
    profiles are made again around it (a round's re-optimisation stops at the first such point, and
    does not start after a slice found one), at most :data:`PROFILE_ROUNDS` rounds (``profile_rounds`` in
-   the dataset; after the last, a better point is left where it is, and ``best_evaluation`` then
-   names it, not the optimum). The interval of a parameter is the connected range around the
-   optimum where **every target stays within tolerance** (all ``|r| <= 1``); when the optimum itself
-   misses a target, that range does not exist and the stage reports instead the range where the
-   objective stays within 1 of its profile minimum (the 68 % profile interval if tolerances were one
-   standard deviation) and says so. Crossings are interpolated linearly between profile points.
+   the dataset).
+   **The best point** is the evaluation of lowest objective of all (the reconstructed scene, the
+   search, the profiles, the Gauss-Newton points; the first in request order on a tie): the identified
+   values, ``best_evaluation``, the written scene and the log's last line all name it. It is the
+   profiles' centre unless a point better by less than :data:`PROFILE_GAIN`, or one found in the last
+   round or at the Gauss-Newton points, was left where it is (``profile_centre_evaluation`` then
+   names the centre). The interval of a parameter is the connected range of its profile around the
+   best point's value where **every target stays within tolerance** (all ``|r| <= 1``); when the best
+   point itself misses a target, that range does not exist and the stage reports instead the range
+   where the objective stays within 1 of its profile minimum (the 68 % profile interval if tolerances
+   were one standard deviation) and says so. Crossings are interpolated linearly between profile points.
 3. **Correlation**: Gauss-Newton at the optimum, ``C = (J^T J)^+`` with ``J`` the central-difference
    Jacobian of the residuals in parameters scaled to their bounds (steps of 2 % of the range);
    ``corr_ij = C_ij / sqrt(C_ii C_jj)``. A direction with no curvature (a parameter no target sees)
@@ -51,7 +56,6 @@ References
 
 from __future__ import annotations
 
-import contextlib
 from typing import Any, Callable, Sequence
 
 import numpy as np
@@ -98,11 +102,21 @@ class Identification:
         #: every record asked for, by key, in request order; and the role of its first request
         self.records: dict[str, dict[str, Any]] = {}
         self.roles: dict[str, int] = {}
+        #: target values and residuals of every record, by key, scored once when it first comes back
+        self.scores: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+        #: the key and objective of the best record so far (lowest objective, the first on a tie)
+        self.best_key: str | None = None
+        self.best_cost = float("inf")
 
     @property
     def keys(self) -> list[str]:
         """The keys of every record asked for, in request order."""
         return list(self.records)
+
+    @property
+    def best_index(self) -> int:
+        """The request-order index (:attr:`keys`) of the best record so far."""
+        return self.keys.index(self.best_key) if self.best_key is not None else -1
 
     def evaluate(self, points: np.ndarray, role: int) -> tuple[list[dict], np.ndarray, np.ndarray]:
         """Records, target values and residuals of ``points`` (shape (n, parameters))."""
@@ -111,7 +125,11 @@ class Identification:
             if r["key"] not in self.roles:
                 self.roles[r["key"]] = role
                 self.records[r["key"]] = r
-        vals, res = zip(*(residuals(r, self.tlist, self.missing) for r in recs)) if recs else ((), ())
+                self.scores[r["key"]] = residuals(r, self.tlist, self.missing)
+                c = cost(self.scores[r["key"]][1])
+                if c < self.best_cost:  # (strictly: the first of equal objectives stays the best)
+                    self.best_key, self.best_cost = r["key"], c
+        vals, res = zip(*(self.scores[r["key"]] for r in recs)) if recs else ((), ())
         return recs, np.array(vals).reshape(len(recs), -1), np.array(res).reshape(len(recs), -1)
 
     def costs(self, points: np.ndarray, role: int) -> np.ndarray:
@@ -151,50 +169,47 @@ def identify(ident: Identification, params: Sequence[Parameter], x_base: np.ndar
     profiles (with the slices they started from), the correlation and the optimiser's report (arrays,
     for ``identify.nc``); the records are in ``ident``.
 
-    ``progress``: how the work shows itself, ``progress(total, unit=...)`` a context manager whose
-    ``update(n, note=...)`` counts steps (:class:`pipeline.progress.Progress` in ``hdi identify``;
-    default: nothing shown): the global search counts its generations with the best cost so far, then
-    the profiles and the correlation count their evaluations (so a log shows a line at every interval
-    through the whole stage, not only through the search). It only watches: the results are the same
-    with or without it.
+    ``progress``: how the work shows itself, a started :class:`pipeline.progress.Progress` (in ``hdi
+    identify``; default None: nothing shown), counted in phases (:meth:`~pipeline.progress.Progress.phase`),
+    each with a total fixed when it starts: the search's generations (``cfg["generations"]``), then each
+    round of profiles its evaluations (the slices, the Gauss-Newton points and the re-optimisation's
+    budget, an upper bound lowered when the round ends), each step noted with the best objective so far.
+    It only watches: the results are the same with or without it.
+
+    ``best``, ``best_residuals`` and ``best_evaluation`` (its index in ``ident.keys``) are the best
+    point of the module docstring; ``centre`` and ``centre_evaluation`` the profiles' centre.
     """
     lo = np.array([p.low for p in params])
     hi = np.array([p.high for p in params])
     n = len(params)
+    if progress is not None:  # (the reconstructed point and the search's first population: before generation 1)
+        progress.phase("search", cfg["generations"], unit="generation")
     ident.evaluate(x_base[None, :], 0)
     result = _global_search(ident, lo, hi, x_base, cfg, progress)
-    # the best of everything evaluated so far (the reconstruction included)
-    pts, res = _all(ident, params)
-    c = np.sum(res**2, axis=1)
-    best = pts[int(np.nanargmin(c))]
-    best_res = res[int(np.nanargmin(c))]
+    # the profiles' first centre: the best of everything evaluated so far (the reconstruction included)
+    centre = np.array(ident.records[ident.best_key]["params"], float)
+    centre_res = ident.scores[ident.best_key][1]
 
     # profiles; a profile point better than the optimum is the new optimum, and the profiles are
-    # made again around it (at most PROFILE_ROUNDS times): the written point is the best evaluated
+    # made again around it (at most PROFILE_ROUNDS times)
     m = cfg["profile_points"]
     optimised = cfg["profile_method"] == "optimised" and n > 1  # (one parameter has no others)
     budget = cfg["profile_evaluations"] if optimised else 0
-    # a count of the profile and correlation evaluations (a round more raises its total as it runs; the
-    # re-optimisation's budget is an upper bound, the total lowered when it ends)
-    first = sum(len(_grid(lo[i], hi[i], m, best[i])) for i in range(n)) + 2 * n + n * budget
-    counted = progress(first, unit="evaluation") if progress else contextlib.nullcontext()
-    with counted as after:
-        done = [0]
-
-        def count(k: int, note: str, left: int | None = None) -> None:
-            """``k`` evaluations more; ``left``: how many are still to come, where that is now known."""
-            done[0] += k
-            if after is not None:
-                after.update(k, note=note, **({} if left is None else {"total": done[0] + left}))
-
-        best, best_res, slices, profiles, J, rounds, spent = _profile_rounds(ident, best, best_res, lo, hi, m, budget,
-                                                                             count)
+    centre, centre_res, slices, profiles, J, rounds, spent = _profile_rounds(ident, centre, centre_res, lo, hi, m,
+                                                                             budget, progress)
+    # the best point: the lowest objective of every evaluation (module docstring)
+    i_best = ident.best_index
+    best = np.array(ident.records[ident.best_key]["params"], float)
+    best_res = ident.scores[ident.best_key][1]
     within = bool(np.all(np.abs(best_res) <= 1.0))
     criterion = "all targets within tolerance (|r| <= 1)" if within else \
         "objective within 1 of its profile minimum (the optimum misses a target, so no range keeps all within tolerance)"
     arrays = _profile_arrays(profiles, slices, n)
     corr, gn_std = _correlation(J, lo, hi)
-    return {"best": best, "best_residuals": best_res, "within": within,
+    pts = np.array([r["params"] for r in ident.records.values()], float)
+    i_centre = int(np.argmin(np.max(np.abs(pts - centre), axis=1)))  # (the centre is an evaluated point)
+    return {"best": best, "best_residuals": best_res, "best_evaluation": i_best, "within": within,
+            "centre": centre, "centre_evaluation": i_centre,
             "intervals": _intervals(profiles, best, within), "slice_intervals": _intervals(slices, best, within),
             "criterion": criterion, "method": METHODS["optimised" if optimised else "slice"], **arrays,
             "correlation": corr, "gn_std": gn_std, "de_message": str(result.message),
@@ -202,39 +217,62 @@ def identify(ident: Identification, params: Sequence[Parameter], x_base: np.ndar
             "profile_optimiser_evaluations": spent}
 
 
-def _profile_rounds(ident: Identification, best: np.ndarray, best_res: np.ndarray, lo: np.ndarray, hi: np.ndarray,
-                    m: int, budget: int, count: Callable[[int, str], None]) -> tuple:
-    """Step 2 and the Jacobian of step 3, in rounds (module docstring); ``budget`` 0: slices only.
+def _note(ident: Identification) -> str:
+    """The progress note: the best objective so far (one name: the log's last line says the same)."""
+    return f"best objective {ident.best_cost:.4g}"
 
-    Returns the optimum and its residuals, the last round's slices and profiles (:func:`_profile`
-    dicts), the Jacobian at the optimum, the number of rounds and the re-optimisation's evaluations."""
+
+def _profile_rounds(ident: Identification, best: np.ndarray, best_res: np.ndarray, lo: np.ndarray, hi: np.ndarray,
+                    m: int, budget: int, progress: Any | None) -> tuple:
+    """Step 2 and the Jacobian of step 3, in rounds (module docstring); ``budget`` 0: slices only. Each
+    round is a phase of ``progress`` (:func:`identify`) whose total, fixed when it starts, is the
+    slices' points, the Gauss-Newton points and the re-optimisation's budget (an upper bound: the total
+    is lowered to what was spent when the round ends).
+
+    Returns the optimum (the profiles' centre) and its residuals, the last round's slices and profiles
+    (:func:`_profile` dicts), the Jacobian at the optimum, the number of rounds and the
+    re-optimisation's evaluations."""
     n = len(best)
     c_best, spent = float(np.sum(best_res**2)), 0
+    done = [0]
+
+    def count(k: int, *_: Any) -> None:
+        """``k`` evaluations more in this round."""
+        done[0] += k
+        if progress is not None:
+            progress.update(k, note=_note(ident))
+
     for rounds in range(1, PROFILE_ROUNDS + 1):
         grids = [_grid(lo[i], hi[i], m, best[i]) for i in range(n)]
+        done[0] = 0
+        if progress is not None:
+            progress.phase(f"profiles, round {rounds} of at most {PROFILE_ROUNDS}",
+                           sum(len(g) for g in grids) + 2 * n + n * budget, unit="evaluation")
         slices, rows, r_round = _slices(ident, best, grids)
-        count(len(rows), f"profiles, round {rounds}")
+        count(len(rows))
         profiles = slices
         # a point this much better ends the round (a round more follows around it): not after the last round
         moved = c_best - PROFILE_GAIN if rounds < PROFILE_ROUNDS else -np.inf
         if budget and not np.nanmin(np.sum(r_round**2, axis=1), initial=np.inf) < moved:
             J = _jacobian(ident, best, lo, hi)  # (first: it predicts the walks' first steps)
-            count(2 * n, "correlation")
+            count(2 * n)
             within = bool(np.all(np.abs(best_res) <= 1.0))
             found, w_rows, w_res = _reoptimise(ident, best, c_best, within, slices, _valley_slopes(J, lo, hi),
                                                lo, hi, budget, count, moved)
             profiles = _merge(slices, found)
             spent += len(w_rows)
-            count(0, "profiles, others re-optimised", left=0)  # (the budget's rest unspent)
             rows, r_round = rows + w_rows, np.concatenate([r_round, w_res])
         c_prof = np.sum(r_round**2, axis=1)
         j = int(np.nanargmin(c_prof)) if np.isfinite(c_prof).any() else -1
-        if j < 0 or not c_prof[j] < c_best - PROFILE_GAIN or rounds == PROFILE_ROUNDS:
+        last = j < 0 or not c_prof[j] < c_best - PROFILE_GAIN or rounds == PROFILE_ROUNDS
+        if last and not budget:  # (a slice's Jacobian after its profiles, as before the re-optimised method)
+            J = _jacobian(ident, best, lo, hi)
+            count(2 * n)
+        if progress is not None:  # (the budget's rest unspent, or a round that moved the optimum)
+            progress.update(0, total=done[0])
+        if last:
             break
         best, best_res, c_best = np.array(rows[j]), r_round[j], float(c_prof[j])
-    if not budget:  # (a slice's Jacobian after its profiles, as before the re-optimised method)
-        J = _jacobian(ident, best, lo, hi)
-        count(2 * n, "correlation")
     return best, best_res, slices, profiles, J, rounds, spent
 
 
@@ -247,18 +285,19 @@ def _global_search(ident: Identification, lo: np.ndarray, hi: np.ndarray, x_base
         return ident.costs(np.atleast_2d(X.T), 1)
 
     from scipy.optimize import differential_evolution  # (here: its import is not paid by every hdi command)
-    shown = progress(cfg["generations"], unit="generation") if progress else contextlib.nullcontext()
-    with shown as bar:
 
-        def generation(intermediate_result: Any) -> None:  # (scipy passes the best so far by this name)
-            if bar is not None:
-                bar.update(note=f"best cost {float(intermediate_result.fun):.4g}")
+    def generation(intermediate_result: Any) -> None:  # (scipy passes the best so far by this name)
+        if progress is not None:  # (the best of every evaluation: the reconstructed point included)
+            progress.update(note=_note(ident))
 
-        return differential_evolution(objective, list(zip(lo, hi)), strategy="best1bin",
-                                      maxiter=cfg["generations"], popsize=cfg["population"], tol=0.01,
-                                      seed=cfg["seed"], polish=False, init="latinhypercube",
-                                      x0=x_base if inside else None, vectorized=True, updating="deferred",
-                                      callback=generation)
+    result = differential_evolution(objective, list(zip(lo, hi)), strategy="best1bin",
+                                    maxiter=cfg["generations"], popsize=cfg["population"], tol=0.01,
+                                    seed=cfg["seed"], polish=False, init="latinhypercube",
+                                    x0=x_base if inside else None, vectorized=True, updating="deferred",
+                                    callback=generation)
+    if progress is not None:  # (converged before the last generation)
+        progress.update(0, total=progress.done)
+    return result
 
 
 def _grid(low: float, high: float, m: int, centre: float) -> np.ndarray:
@@ -469,7 +508,7 @@ def _point(x: np.ndarray) -> tuple[float, ...]:
 
 def _reoptimise(ident: Identification, best: np.ndarray, c_best: float, within: bool, slices: list[dict],
                 slopes: np.ndarray, lo: np.ndarray, hi: np.ndarray, budget: int,
-                count: Callable[[int, str], None], moved: float = -np.inf) -> tuple[list[dict], list, np.ndarray]:
+                count: Callable[[int], None], moved: float = -np.inf) -> tuple[list[dict], list, np.ndarray]:
     """The re-optimised profile points of every parameter: two walks (:class:`_Walk`) per parameter,
     all advanced together, one fan-out per round (role 4), each parameter's walks spending at most
     ``budget`` evaluations; all stop at once when a point's objective falls below ``moved`` (the
@@ -511,7 +550,7 @@ def _reoptimise(ident: Identification, best: np.ndarray, c_best: float, within: 
             break
         flat = [p for _, ps in batch for p in ps]
         r = ident.evaluate(np.array(flat), 4)[2] if flat else np.zeros((0, len(ident.tlist)))
-        count(len(flat), "profiles, others re-optimised")
+        count(len(flat))
         rows += flat
         results.append(r)
         if np.nanmin(np.sum(r**2, axis=1), initial=np.inf) < moved:
@@ -581,11 +620,3 @@ def _gauss_newton_points(best: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> tu
         a[i], b[i] = plus[i], minus[i]
         points += [a, b]
     return points, plus, minus
-
-
-def _all(ident: Identification, params: Sequence[Parameter]) -> tuple[np.ndarray, np.ndarray]:
-    """Parameter values and residuals of every evaluation so far (in request order)."""
-    recs = list(ident.records.values())
-    pts = np.array([r["params"] for r in recs])
-    res = np.array([residuals(r, ident.tlist, ident.missing)[1] for r in recs])
-    return pts, res

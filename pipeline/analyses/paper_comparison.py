@@ -333,23 +333,38 @@ def _interval_text(bounds: np.ndarray) -> str:
     return f"[{number(lo)}, {number(hi)}]" if np.isfinite(lo) else "none"
 
 
+def check_identify_layout(ident: xr.Dataset, where: str = "identify.nc") -> None:
+    """Refuse an ``identify.nc`` written before its ``parameter``/``target``/``bound`` dimensions (a variable
+    per parameter and target, ``<key>_best``, ``value_<target>``), in one line that says what to do."""
+    if "best" not in ident or "value" not in ident or "target_units" not in ident.coords:
+        old = next((str(v) for v in ident.data_vars if str(v).endswith("_best") or str(v).startswith("value_")),
+                   "none")
+        raise ValueError(f"{where}: written by an older hdi identify (a variable per parameter and target, e.g. "
+                         f"{old}); expected the variables best(parameter), value(evaluation, target), ...: run "
+                         "`hdi identify` again (it reads its evaluations back from identify.evals.jsonl)")
+
+
 def identification_markdown(ident: xr.Dataset) -> str:
     """Three columns per target of ``identify.nc``: the paper, the reconstructed scene, the identified scene.
 
     Both scenes are evaluated the same way (the target protrusions, k of :func:`pipeline.analyses.study.criterion_k`).
     A target that no evaluation brought within tolerance (smallest ``|residual|`` over all of them > 1)
     is listed with the closest value reached and the range of values over every evaluation (measured).
+    An ``identify.nc`` of the older layout is refused (:func:`check_identify_layout`).
     """
+    check_identify_layout(ident)
     i0, i1 = int(ident.attrs["reconstructed_evaluation"]), int(ident.attrs["best_evaluation"])
     names = [str(t) for t in ident["target"].values]
     res = ident["residual"].values
     rows, unreached = [], []
     for j, t in enumerate(names):
-        v = ident[f"value_{t}"]
-        u = "" if v.attrs["units"] == "1" else f" {v.attrs['units']}"
-        vals = v.values
+        at = ident.sel(target=t)
+        units = str(at["target_units"].values)
+        u = "" if units == "1" else f" {units}"
+        vals = at["value"].values
+        long_name, stated = str(at["target_description"].values), str(at["target_paper"].values)
 
-        spread = ident.get(f"spread_{t}")  # (ensembles: the spread over the DMW realisations beside the value)
+        spread = at.get("spread")  # (ensembles: the spread over the DMW realisations beside the value)
 
         def cell(i: int) -> str:
             text = f"{number(vals[i])}{u}" if np.isfinite(vals[i]) else "none"
@@ -358,19 +373,19 @@ def identification_markdown(ident: xr.Dataset) -> str:
                 text += (f" [{number(lo)}, {number(hi)}]" if np.isfinite(lo) and np.isfinite(hi) else " [–]")
             return text + f" (r = {res[i, j]:+.2g})"
 
-        rows.append([v.attrs["long_name"], str(v.attrs["paper"]), cell(i0), cell(i1)])
-        best = float(ident["best_abs_residual"][j])
+        rows.append([long_name, stated, cell(i0), cell(i1)])
+        best = float(at["best_abs_residual"])
         if best > 1.0:
             k = int(np.nanargmin(np.abs(res[:, j])))
             fin = vals[np.isfinite(vals)]
             span = f"{number(fin.min())}-{number(fin.max())}{u}" if fin.size else "never defined"
-            unreached.append(f"**{v.attrs['long_name']}** (paper: {v.attrs['paper']}): the closest of "
+            unreached.append(f"**{long_name}** (paper: {stated}): the closest of "
                              f"{len(vals)} evaluations within the bounds reached "
                              f"{number(vals[k]) if np.isfinite(vals[k]) else 'none'}{u} (residual {res[k, j]:+.3g}; "
-                             f"tolerance {number(float(v.attrs['tolerance']))}{u}); over all evaluations it spans {span}"
+                             f"tolerance {number(float(at['tolerance']))}{u}); over all evaluations it spans {span}"
                              f" ({int(np.sum(~np.isfinite(vals)))} without a value).")
-    fly = ident.get("value_fhm_flying")
-    band = ident.get("value_bouncing")
+    fly = ident["value"].sel(target="fhm_flying") if "fhm_flying" in names else None
+    band = ident["value"].sel(target="bouncing") if "bouncing" in names else None
     if fly is not None and band is not None and any("bouncing" in u_ for u_ in unreached):
         ratio = band.values / fly.values
         ok = np.isfinite(ratio)
@@ -380,16 +395,15 @@ def identification_markdown(ident: xr.Dataset) -> str:
                              "evaluations with both, so BV > 20 % with a flying FHM of about 12.5 % needs a "
                              "mechanism the free parameters do not provide (docs/model.md, sections 'Gap-power stiffening' and 'Bouncing band').")
     params = [str(p) for p in ident["parameter"].values]
-    # (an identify.nc made before the re-optimised profiles has slices only)
     method = str(ident.attrs.get("interval_method", SLICE_METHOD))
-    sliced = [f"{p}_slice_interval" for p in params if f"{p}_slice_interval" in ident]
+    sliced = "slice_interval" in ident  # (a slice's interval beside the re-optimised profile's)
     prow = []
     for p in params:
-        best = ident[f"{p}_best"]
-        prow.append([best.attrs["scene_key"], f"{number(float(ident[f'{p}_reconstructed']))}",
-                     f"{number(float(best))}", _interval_text(ident[f"{p}_interval"].values),
-                     *([_interval_text(ident[f"{p}_slice_interval"].values)] if sliced else []),
-                     unit_text(best.attrs["units"])])
+        at = ident.sel(parameter=p)
+        prow.append([p, f"{number(float(at['reconstructed']))}",
+                     f"{number(float(at['best']))}", _interval_text(at["interval"].values),
+                     *([_interval_text(at["slice_interval"].values)] if sliced else []),
+                     unit_text(str(at["parameter_units"].values))])
     kind = method.split(",")[0]  # "profile" or "slice"
     heads = ["parameter", "reconstructed", "identified", f"{kind} interval", *(["slice interval"] if sliced else []),
              "unit"]

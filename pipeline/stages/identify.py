@@ -13,7 +13,7 @@ Ensembles: each candidate runs on ``identify.realisations`` DMW records (default
 is judged on its ensemble statistic (:attr:`pipeline.analyses.study.Target.ensemble`, the rules of
 :mod:`pipeline.analyses.ensemble_rules`): one DMW seed moves the touchdown by a 0.2-nm step, so a fit to
 one record fits that record's noise. ``identify.nc`` then also holds each target's spread over the
-realisations (``spread_<target>``). One realisation is the single-record identification.
+realisations (``spread(evaluation, target, bound)``). One realisation is the single-record identification.
 
 Method (:mod:`pipeline.analyses.identification`, which holds the algorithm; this stage reads the
 scene, makes the evaluator, calls it and writes the outputs): a global search by differential evolution
@@ -26,9 +26,11 @@ after an interrupt replays the same candidates and reads the finished ones back.
 afresh.
 
 Outputs: ``identify.nc`` (every evaluation with its parameter values, target values, residuals and
-wall time; the best point, intervals, profiles, correlation matrix), the scene
-``<scene>-identified.toml`` in the results folder (``extends`` the scene; each identified value with
-its interval in a comment) and ``figures/identify.png`` (residuals per target, parameter profiles).
+wall time; the best point, intervals, profiles, correlation matrix; dimensions ``evaluation``,
+``parameter``, ``target``, ``bound``, ``point``: docs/datasets.md), the scene ``identified.toml`` in the
+results folder (``extends`` the scene, which its header names; each identified value with its interval
+in a comment; the best evaluation's values, as ``best`` in identify.nc) and ``figures/identify.png``
+(residuals per target, parameter profiles).
 Nothing is written beside the scene file: a copy of the identified scene goes elsewhere only where the
 user names it (``hdi identify --write-scene PATH``, option ``write_scene``), and never over an existing
 file of other content unless forced (``--force``).
@@ -54,85 +56,130 @@ from ..fanout import local_cluster
 from ..progress import Progress
 from ..io import read_dataset, temporary_path, var
 from ..runner import Inputs, Stage, build
-from ..analyses.identification import GN_STEP, METHODS, PROFILE_STEP, ROLES, Identification, identify
-from ..analyses.study import Parameter, parse_parameters, residuals, scene_value, spreads, target_protrusions, targets
+from ..analyses.identification import (GN_STEP, METHODS, PROFILE_GAIN, PROFILE_STEP, ROLES, Identification,
+                                       identify)
+from ..analyses.study import Parameter, parse_parameters, scene_value, spreads, target_protrusions, targets
 from ..evaluations import Evaluator, evaluate_batch, setup, upstream
 
 log = logging.getLogger(__name__)
 
 
 def dataset(ident: Identification, params: Sequence[Parameter], out: dict[str, Any], x_base: np.ndarray,
-            ev: Evaluator) -> xr.Dataset:
+            ev: Evaluator, progress: Any | None = None) -> xr.Dataset:
     """``identify.nc``: every evaluation of ``ident`` (made by ``ev``) and the result ``out`` of
-    :func:`pipeline.analyses.identification.identify` (CF units and long_name on every variable)."""
+    :func:`pipeline.analyses.identification.identify`, on the dimensions ``evaluation``, ``parameter``
+    (the scene keys), ``target``, ``bound`` (low, high) and ``point`` (of a profile); docs/datasets.md.
+
+    Every variable has its ``long_name`` and ``units``; one whose values are in each parameter's (or
+    target's) own unit names the variable that holds those units instead (``unit_variable``:
+    ``parameter_units``, ``target_units``), as ``accuracy.nc``'s settings do. ``progress`` (a started
+    :class:`pipeline.progress.Progress`) counts the scoring of the evaluations as a phase of its own.
+    """
     recs = list(ident.records.values())
+    keys = ident.keys
     tl = ident.tlist
-    vals = np.array([residuals(r, tl, ident.missing)[0] for r in recs])
-    res = np.array([residuals(r, tl, ident.missing)[1] for r in recs])
-    pts = np.array([r["params"] for r in recs])
-    costs = np.sum(res**2, axis=1)
-    i_best = int(np.nanargmin(costs))
-    optimised = out["method"] == METHODS["optimised"]
-    data: dict[str, Any] = {}
-    for j, p in enumerate(params):
-        u = p.units
-        name = p.var_name
-        data[name] = var(pts[:, j], "evaluation", u, f"{p.name}: {p.doc}", scene_key=p.name)
-        data[f"{name}_best"] = var(out["best"][j], (), u, f"identified {p.name}", scene_key=p.name)
-        data[f"{name}_reconstructed"] = var(x_base[j], (), u, f"reconstructed (scene) value of {p.name}")
-        data[f"{name}_bounds"] = var(np.array([p.low, p.high]), "bound", u, f"search bounds of {p.name}")
-        data[f"{name}_interval"] = var(out["intervals"][j], "bound", u, f"interval of {p.name} ({out['method']})",
-                                       criterion=out["criterion"], method=out["method"])
-        data[f"{name}_gauss_newton_std"] = var(out["gn_std"][j], (), u,
-                                               f"Gauss-Newton standard deviation of {p.name} (tolerances as 1 sigma)")
-        data[f"{name}_profile"] = var(out["profile_value"][j], "profile_point", u, f"profile values of {p.name}")
-        data[f"{name}_profile_cost"] = var(out["profile_cost"][j], "profile_point", "1",
-                                           f"objective along the profile of {p.name}")
-        data[f"{name}_profile_max_residual"] = var(out["profile_max"][j], "profile_point", "1",
-                                                   f"largest |residual| along the profile of {p.name}")
-        if optimised:  # (a slice's others are the optimum's: nothing more to say)
-            data.update(_optimised_variables(p, j, out))
     n_real = ev.realisations
-    spr = np.array([spreads(r, tl) for r in recs]) if n_real > 1 else None
-    for j, t in enumerate(tl):
-        data[f"value_{t.name}"] = var(vals[:, j], "evaluation", t.units, t.long_name, paper=t.paper,
-                                      target=t.target, tolerance=t.tolerance, kind=t.kind)
-        if spr is not None:  # (ensembles only: a single-record identify.nc is unchanged)
-            data[f"spread_{t.name}"] = var(spr[:, j], ("evaluation", "bound"), t.units,
-                                           f"spread of the {t.long_name} over the DMW realisations ({t.spread})",
-                                           spread=t.spread)
-    data["residual"] = var(res, ("evaluation", "target"), "1", "residual of each target normalised by its tolerance "
-                           "(inequality targets: zero on the admissible side)")
-    data["cost"] = var(costs, "evaluation", "1", "objective: sum of squared normalised residuals")
-    data["best_abs_residual"] = var(np.nanmin(np.abs(res), axis=0), "target", "1",
-                                    "smallest |residual| of each target over all evaluations")
-    data["seconds"] = var(np.array([r["seconds"] for r in recs]), "evaluation", "s", "wall time of the evaluation")
-    data["kernel_seconds"] = var(np.array([r["kernel_seconds"] for r in recs]), "evaluation", "s",
-                                 "time in the integrator (run_model) of the evaluation")
-    data["role"] = var(np.array([ident.roles[k] for k in ident.keys], np.int8), "evaluation", "1",
-                       "role of the evaluation", flag_values=np.array(sorted(ROLES), np.int8),
-                       flag_meanings=" ".join(ROLES[k] for k in sorted(ROLES)))
-    data["failed"] = var(np.array([r["error"] is not None for r in recs], np.int8), "evaluation", "1",
-                         "1 when a run of the evaluation failed (its message in the evaluation store)")
-    names = [p.var_name for p in params]
-    if optimised:
-        data["profile_optimised"] = var(out["profile_optimised"].astype(np.int8), ("parameter", "profile_point"), "1",
-                                        "1 where the other parameters were re-optimised at the profile point, 0 where "
-                                        "they are held at the optimum (past the walk's end or its budget)",
-                                        flag_values=np.array([0, 1], np.int8), flag_meanings="held re_optimised")
-    data["correlation"] = var(out["correlation"], ("parameter", "parameter_b"), "1",
-                              "correlation of the parameters, Gauss-Newton (J^T J)^+ at the optimum")
+    vals = np.array([ident.scores[k][0] for k in keys]).reshape(len(keys), len(tl))
+    res = np.array([ident.scores[k][1] for k in keys]).reshape(len(keys), len(tl))
+    spr = np.full((len(keys), len(tl), 2), np.nan)
+    if progress is not None:
+        progress.phase("scoring", len(recs), unit="evaluation")
+    for i, r in enumerate(recs):  # (ensembles: the spread of each target over the realisations)
+        if n_real > 1:
+            spr[i] = spreads(r, tl)
+        if progress is not None:
+            progress.update()
+    pts = np.array([r["params"] for r in recs], float)
+    objective = np.sum(res**2, axis=1)
+    i_best = int(out["best_evaluation"])
+    optimised = out["method"] == METHODS["optimised"]
+    E, P, T, B, K = ("evaluation",), ("parameter",), ("target",), ("bound",), ("point",)
+    PU, TU = {"unit_variable": "parameter_units"}, {"unit_variable": "target_units"}
+    data: dict[str, Any] = {
+        "parameter_value": var(pts, E + P, "", "value of each free parameter at each evaluation", **PU),
+        "best": var(out["best"], P, "", "identified value of each parameter: the best evaluation's "
+                    "(best_evaluation, lowest objective)", **PU),
+        "reconstructed": var(x_base, P, "", "reconstructed (scene) value of each parameter", **PU),
+        "search_bounds": var(np.array([[p.low, p.high] for p in params]), P + B, "",
+                             "search bounds of each parameter", **PU),
+        "interval": var(out["intervals"], P + B, "", f"interval of each parameter ({out['method']})",
+                        criterion=out["criterion"], method=out["method"], **PU),
+        "gauss_newton_std": var(out["gn_std"], P, "", "Gauss-Newton standard deviation of each parameter "
+                                "(tolerances as 1 sigma)", **PU),
+        "profile": var(out["profile_value"], P + K, "", "values of each parameter along its profile "
+                       "(NaN past the end of its grid)", **PU),
+        "profile_objective": var(out["profile_cost"], P + K, "1", "objective along each parameter's profile"),
+        "profile_max_residual": var(out["profile_max"], P + K, "1",
+                                    "largest |residual| along each parameter's profile"),
+    }
+    if optimised:  # (a slice's others are the optimum's: nothing more to say)
+        data.update({
+            "slice_interval": var(out["slice_intervals"], P + B, "", f"interval of each parameter from its slice "
+                                  f"({METHODS['slice']})", criterion=out["criterion"], method=METHODS["slice"], **PU),
+            "slice_objective": var(out["slice_cost"], P + K, "1", "objective along each parameter's slice (the "
+                                   "other parameters at the optimum)"),
+            "profile_parameters": var(out["profile_points_x"], P + K + ("parameter_b",), "",
+                                      "every parameter (parameter_b) at each point of each parameter's profile "
+                                      "(re-optimised where profile_optimised is 1; the profiled value on its own)",
+                                      unit_variable="parameter_b_units"),
+            "profile_optimised": var(out["profile_optimised"].astype(np.int8), P + K, "1",
+                                     "1 where the other parameters were re-optimised at the profile point, 0 where "
+                                     "they are held at the optimum (past the walk's end or its budget)",
+                                     flag_values=np.array([0, 1], np.int8), flag_meanings="held re_optimised"),
+        })
+    data.update({
+        "goal": var(np.array([t.target for t in tl], float), T, "", "value each target aims at ([identify])",
+                    **TU),
+        "tolerance": var(np.array([t.tolerance for t in tl], float), T, "", "tolerance of each target", **TU),
+        "target_kind": var(np.array([t.kind for t in tl], dtype=object), T, "",
+                           "kind of each target: equal, above, below, touchdown"),
+        "target_paper": var(np.array([t.paper for t in tl], dtype=object), T, "",
+                            "each target as the paper states it"),
+        "target_description": var(np.array([t.long_name for t in tl], dtype=object), T, "",
+                                  "what each target measures"),
+        "value": var(vals, E + T, "", "value of each target at each evaluation", **TU),
+    })
+    if n_real > 1:  # (ensembles only: a single-record identify.nc has none)
+        data["spread"] = var(spr, E + T + B, "", "spread of each target over the DMW realisations "
+                             "(target_spread says which)", **TU)
+        data["target_spread"] = var(np.array([t.spread for t in tl], dtype=object), T, "",
+                                    "what the spread of each target is")
+    data.update({
+        "residual": var(res, E + T, "1", "residual of each target normalised by its tolerance "
+                        "(inequality targets: zero on the admissible side)"),
+        "objective": var(objective, E, "1", "objective: sum of squared normalised residuals"),
+        "best_abs_residual": var(np.nanmin(np.abs(res), axis=0), T, "1",
+                                 "smallest |residual| of each target over all evaluations"),
+        "seconds": var(np.array([r["seconds"] for r in recs]), E, "s", "wall time of the evaluation"),
+        "kernel_seconds": var(np.array([r["kernel_seconds"] for r in recs]), E, "s",
+                              "time in the integrator (run_model) of the evaluation"),
+        "role": var(np.array([ident.roles[k] for k in keys], np.int8), E, "1", "role of the evaluation",
+                    flag_values=np.array(sorted(ROLES), np.int8),
+                    flag_meanings=" ".join(ROLES[k] for k in sorted(ROLES))),
+        "failed": var(np.array([r["error"] is not None for r in recs], np.int8), E, "1",
+                      "1 when a run of the evaluation failed (its message in the evaluation store)"),
+        "correlation": var(out["correlation"], ("parameter", "parameter_b"), "1",
+                           "correlation of the parameters, Gauss-Newton (J^T J)^+ at the optimum"),
+    })
+    names = np.array([p.name for p in params], dtype=object)
+    units = np.array([p.units for p in params], dtype=object)
     coords = {
-        "evaluation": var(np.arange(len(recs)), "evaluation", "1", "evaluation index (request order)"),
-        "target": var(np.array([t.name for t in tl], dtype=object), "target", "1", "target name"),
-        "parameter": var(np.array(names, dtype=object), "parameter", "1", "free parameter"),
-        "parameter_b": var(np.array(names, dtype=object), "parameter_b", "1", "free parameter"),
-        "bound": var(np.array(["low", "high"], dtype=object), "bound", "1", "lower/upper end"),
-        "profile_point": var(np.arange(out["profile_value"].shape[1]), "profile_point", "1", "profile point index"),
+        "evaluation": var(np.arange(len(recs)), E, "1", "evaluation index (request order)"),
+        "parameter": var(names, P, "", "free parameter (scene key)"),
+        "parameter_b": var(names, ("parameter_b",), "", "free parameter (scene key)"),
+        "parameter_units": var(units, P, "", "units of each free parameter (UDUNITS)"),
+        "parameter_b_units": var(units, ("parameter_b",), "", "units of each free parameter (UDUNITS)"),
+        "parameter_description": var(np.array([p.doc for p in params], dtype=object), P, "",
+                                     "what each free parameter is"),
+        "target": var(np.array([t.name for t in tl], dtype=object), T, "", "target name"),
+        "target_units": var(np.array([t.units for t in tl], dtype=object), T, "", "units of each target (UDUNITS)"),
+        "bound": var(np.array(["low", "high"], dtype=object), B, "", "lower/upper end"),
+        "point": var(np.arange(out["profile_value"].shape[1]), K, "1", "profile point index"),
     }
     ds = xr.Dataset(data, coords=coords)
     ds.attrs.update({
-        "best_evaluation": i_best, "reconstructed_evaluation": 0,
+        "best_evaluation": i_best, "best_objective": float(objective[i_best]),
+        "profile_centre_evaluation": int(out["centre_evaluation"]), "reconstructed_evaluation": 0,
         "within_tolerance": int(out["within"]), "interval_criterion": out["criterion"],
         "optimiser": "scipy.optimize.differential_evolution best1bin, latinhypercube + reconstructed x0, "
                      "vectorized (one fan-out per generation), deferred updating, polish=False",
@@ -155,22 +202,6 @@ def dataset(ident: Identification, params: Sequence[Parameter], out: dict[str, A
     return ds
 
 
-def _optimised_variables(p: Parameter, j: int, out: dict[str, Any]) -> dict[str, Any]:
-    """The variables of an optimised profile of ``p`` (the ``j``-th parameter): its slice's interval and
-    objective, and ``p`` itself at every point of every profile (re-optimised on the others' profiles)."""
-    name, u = p.var_name, p.units
-    return {
-        f"{name}_slice_interval": var(out["slice_intervals"][j], "bound", u,
-                                      f"interval of {p.name} from its slice ({METHODS['slice']})",
-                                      criterion=out["criterion"], method=METHODS["slice"]),
-        f"{name}_slice_cost": var(out["slice_cost"][j], "profile_point", "1",
-                                  f"objective along the slice of {p.name} (the other parameters at the optimum)"),
-        f"{name}_along_profiles": var(out["profile_points_x"][:, :, j], ("parameter", "profile_point"), u,
-                                      f"{p.name} at each point of each parameter's profile (re-optimised on the other "
-                                      "parameters' profiles where profile_optimised is 1; the profiled value on its own)"),
-    }
-
-
 def write_identified_scene(scene: Any, params: Sequence[Parameter], ds: xr.Dataset, path: Path,
                            replace: bool = True) -> Path:
     """Write ``path``: a scene that ``extends`` the identified one, every identified value commented.
@@ -185,6 +216,9 @@ def write_identified_scene(scene: Any, params: Sequence[Parameter], ds: xr.Datas
     rev = rev[:12] + ("-dirty" if rev.endswith("-dirty") else "")
     cfg = scene["identify"]
     lines = [f"# Identified by `hdi identify {base.name if base else ''}` on {now} (git {rev});",
+             f"# the identified scene of {base.name if base else 'a scene given in memory'} (scene "
+             f"\"{scene.name}\", the file `extends` names), best evaluation {ds.attrs['best_evaluation']} of "
+             f"identify.nc (objective {float(ds.attrs['best_objective']):.4g});",
              "# every value below is [identified]: fitted to the paper's targets ([identify] of the base scene),",
              f"# with its interval ({ds.attrs['interval_criterion']}; "
              f"{ds.attrs.get('interval_method', METHODS['slice'])}).",
@@ -201,12 +235,12 @@ def write_identified_scene(scene: Any, params: Sequence[Parameter], ds: xr.Datas
     lists: dict[tuple[str, str], list] = {}
     for p in params:
         section, key, index = p.parts
-        name = p.var_name
-        best = float(ds[f"{name}_best"])
-        lo_i, hi_i = (float(v) for v in ds[f"{name}_interval"].values)
+        at = ds.sel(parameter=p.name)
+        best = float(at["best"])
+        lo_i, hi_i = (float(at["interval"].sel(bound=b)) for b in ("low", "high"))
         note = (f"[identified] interval [{lo_i:.4g}, {hi_i:.4g}]" if np.isfinite(lo_i)
                 else "[identified] interval: none (see identify.nc)") + \
-            f", bounds [{p.low:g}, {p.high:g}], reconstructed {float(ds[f'{name}_reconstructed']):.4g}"
+            f", bounds [{p.low:g}, {p.high:g}], reconstructed {float(at['reconstructed']):.4g}"
         if index is None:
             sections.setdefault(section, []).append(f"{key} = {best:.6g}  # {note}")
         else:
@@ -275,24 +309,24 @@ def figure(ds: xr.Dataset, params: Sequence[Parameter], scene: str, path: Path) 
     ax.set_ylim(-lim, lim)
     ax.legend(fontsize=8, loc="upper right")
     ax.set_title(plots.title("Residual per target", scene), fontsize=9)
+    optimised = "slice_objective" in ds
     for j, p in enumerate(params):
         a = fig.add_subplot(gs[1 + j // ncols, j % ncols])
-        name = p.var_name
-        xv = ds[f"{name}_profile"].values
+        at = ds.sel(parameter=p.name)
+        xv = at["profile"].values
         ok = np.isfinite(xv)
-        optimised = f"{name}_slice_cost" in ds
         if optimised:  # the slice it started from, for comparison (narrower where parameters correlate)
-            a.semilogy(xv[ok], np.maximum(ds[f"{name}_slice_cost"].values[ok], 1e-3), "s--", ms=2, lw=0.8,
+            a.semilogy(xv[ok], np.maximum(at["slice_objective"].values[ok], 1e-3), "s--", ms=2, lw=0.8,
                        color="0.6", label="slice (others at the optimum)")
-        a.semilogy(xv[ok], np.maximum(ds[f"{name}_profile_cost"].values[ok], 1e-3), "o-", ms=3,
+        a.semilogy(xv[ok], np.maximum(at["profile_objective"].values[ok], 1e-3), "o-", ms=3,
                    color=plots.LINE_COLOURS[2], label="profile (others re-optimised)" if optimised else "slice")
-        lo_i, hi_i = ds[f"{name}_interval"].values
+        lo_i, hi_i = at["interval"].values
         if np.isfinite(lo_i):
             a.axvspan(lo_i, hi_i, color="#d5f5d0", label="profile interval" if optimised else "slice interval")
-        a.axvline(float(ds[f"{name}_best"]), color=plots.LINE_COLOURS[1], lw=1, label="identified")
-        a.axvline(float(ds[f"{name}_reconstructed"]), color=plots.LINE_COLOURS[0], lw=1, ls="--",
+        a.axvline(float(at["best"]), color=plots.LINE_COLOURS[1], lw=1, label="identified")
+        a.axvline(float(at["reconstructed"]), color=plots.LINE_COLOURS[0], lw=1, ls="--",
                   label="reconstructed")
-        a.set_xlabel(plots.axis_label(p.name, ds[f"{name}_best"].attrs["units"]), fontsize=8)
+        a.set_xlabel(plots.axis_label(p.name, str(at["parameter_units"].values)), fontsize=8)
         a.set_ylabel(plots.axis_label("objective", "1"), fontsize=8)
         if j == 0:
             a.legend(fontsize=7)
@@ -322,26 +356,42 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
         bad = [p.name for p, v in zip(params, x_base) if not np.isfinite(v)]
         raise ValueError(f"{where}: identify.parameters {bad}: the scene sets no value for these keys")
     workers = opts.get("workers")
-    with local_cluster(opts.get("scheduler"), workers) as address:
-        ev = Evaluator(scene, params, prots, base_inputs, store, cfg["batch_size"], address, workers,
-                       task=opts.get("task") or evaluate_batch, realisations=cfg["realisations"])
-        ident = Identification(ev, tlist, cfg["missing_residual"])
-        result = identify(ident, params, x_base, cfg, progress=Progress)  # (generations, best cost)
-    ds = dataset(ident, params, result, x_base, ev)
+    # one count through the stage, in phases (the search, each round of profiles, the scoring), one clock
+    with Progress(cfg["generations"], unit="generation", phase="search") as shown:
+        shown = shown if shown.mode != "off" else None
+        with local_cluster(opts.get("scheduler"), workers) as address:
+            ev = Evaluator(scene, params, prots, base_inputs, store, cfg["batch_size"], address, workers,
+                           task=opts.get("task") or evaluate_batch, realisations=cfg["realisations"])
+            ident = Identification(ev, tlist, cfg["missing_residual"])
+            result = identify(ident, params, x_base, cfg, progress=shown)
+        ds = dataset(ident, params, result, x_base, ev, progress=shown)
     # (its file name: the scene is in the results folder, wherever that folder is)
     ds.attrs["identified_scene"] = identified_scene_path(scene, out).name
     figure(ds, params, scene.name, inputs.staging / "figures" / "identify.png")
     inputs.record(evaluations=int(ds.sizes["evaluation"]), evaluations_computed=ev.evaluated,
                   batch_seconds=round(ev.batch_seconds, 3), kernel_seconds=round(ev.kernel_seconds, 3))
-    log.info("identify: %d evaluations (%d computed) in %.1f s of fan-out; kernel %.1f s; best objective %.4g; "
-             "within tolerance: %s", ds.sizes["evaluation"], ev.evaluated, ev.batch_seconds, ev.kernel_seconds,
-             float(ds["cost"][ds.attrs["best_evaluation"]]), "yes" if result["within"] else "no")
+    i_best, i_centre = int(ds.attrs["best_evaluation"]), int(ds.attrs["profile_centre_evaluation"])
+    if i_centre != i_best:
+        gain = float(ds["objective"][i_centre]) - float(ds.attrs["best_objective"])
+        log.info("identify: the best point (evaluation %d) is not the profiles' centre (evaluation %d): it is better by "
+                 "%.4g in the objective, %s; its intervals are read from the profiles made around the centre",
+                 i_best, i_centre, gain, f"less than the {PROFILE_GAIN:g} that makes the profiles again"
+                 if gain <= PROFILE_GAIN else "found after the last round of profiles could move the centre")
+    log.info("identify: %d evaluations (%d computed) in %.1f s of fan-out; kernel %.1f s; best objective %.4g "
+             "(evaluation %d); within tolerance: %s", ds.sizes["evaluation"], ev.evaluated, ev.batch_seconds,
+             ev.kernel_seconds, ds.attrs["best_objective"], i_best, "yes" if result["within"] else "no")
     return ds
 
 
+#: The file name of the identified scene in the results folder: not ``<scene>-identified.toml``, which
+#: reads as a shipped scene of configs/ (the scene it comes from is named in its header).
+IDENTIFIED_SCENE = "identified.toml"
+
+
 def identified_scene_path(scene: Any, out: Path) -> Path:
-    """``<scene>-identified.toml`` in the results folder ``out``."""
-    return Path(out) / f"{scene.name}-identified.toml"
+    """:data:`IDENTIFIED_SCENE` in the results folder ``out`` (``scene``: for callers that name it; the
+    file name is the same for every scene, its folder is the scene's)."""
+    return Path(out) / IDENTIFIED_SCENE
 
 
 def _finish(scene: Any, out: Path, options: dict[str, Any]) -> None:
@@ -363,7 +413,7 @@ STAGE = Stage(
     reads=("*",), excludes=("sweep", "report", "sensitivity", "scene.name", "scene.description",
                             "identify.batch_size"),
     upstream=upstream, finish=_finish, order=80,
-    doc="the free [recon] parameters fitted to the paper's targets, identify.nc and <scene>-identified.toml "
+    doc="the free [recon] parameters fitted to the paper's targets, identify.nc and identified.toml "
         "(in the results folder; --write-scene PATH for a copy)")
 
 
