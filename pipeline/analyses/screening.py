@@ -51,13 +51,18 @@ References
 
 from __future__ import annotations
 
+import textwrap
 import warnings
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
+import xarray as xr
 
+from . import plots
 from .study import HEADLINES, Parameter, headline
+from ..io import var
 
 #: An evaluation callable: the outputs of samples (shape ``(samples, parameters)``), one array per name.
 Outputs = Callable[[np.ndarray], dict[str, np.ndarray]]
@@ -204,7 +209,7 @@ def failures_text(errors: Sequence[str | None]) -> str:
 
 
 def dataset(params: Sequence[Parameter], results: Mapping[str, tuple], errors: Mapping[str, Sequence[str | None]],
-            level: float) -> Any:
+            level: float) -> xr.Dataset:
     """``sensitivity.nc``: the indices over ``(output, parameter)``, the samples and their outputs.
 
     ``results``: method -> ``(X, Y, {output: Indices})`` of :func:`morris`/:func:`sobol`; ``errors``:
@@ -212,8 +217,6 @@ def dataset(params: Sequence[Parameter], results: Mapping[str, tuple], errors: M
     Outputs differ in unit: the Morris indices and the outputs name the variable holding each output's
     unit (``unit_variable = "output_units"``), the samples each parameter's (``parameter_units``).
     """
-    import xarray as xr
-    from ..io import var
     outs = list(HEADLINES)
     P, O = ("parameter",), ("output",)
     coords: dict[str, Any] = {
@@ -264,16 +267,14 @@ def dataset(params: Sequence[Parameter], results: Mapping[str, tuple], errors: M
     ds.attrs.update({"methods": " ".join(results), "outputs": " ".join(outs), "failed_evaluations": n_failed,
                      "evaluations": total,
                      "sampling": "uniform within [low, high] of each parameter (SALib)",
-                     "references": "Morris 1991; Campolongo, Cariboni & Saltelli 2007; Saltelli 2002, 2010; "
+                     "method_references": "Morris 1991; Campolongo, Cariboni & Saltelli 2007; Saltelli 2002, 2010; "
                                    "SALib (Herman & Usher 2017)"})
     return ds
 
 
-def figure(ds: Any, scene: str, path: Any) -> Any:
+def figure(ds: xr.Dataset, scene: str, path: Path) -> Path:
     """Morris mu* (error bars: its confidence interval) and Sobol S1/ST per output and parameter; a panel
     whose indices are undefined, or use only part of the samples, says so (``<method>_note``)."""
-    import textwrap
-    from . import plots
     outs = [str(o) for o in ds["output"].values]
     methods = ds.attrs["methods"].split()
     names = [str(p) for p in ds["parameter"].values]
@@ -298,7 +299,7 @@ def figure(ds: Any, scene: str, path: Any) -> Any:
             note = str(at[f"{method}_note"].values)
             if note:
                 # (the reason, shortened to the panel: the whole note is in sensitivity.nc and the log)
-                text = note.split("; ")[0] if np.any(np.isfinite(main)) else note
+                text = note.split(" (")[0].split("; ")[0] if np.any(np.isfinite(main)) else note
                 plots.note(ax, textwrap.fill(text, 34), loc="upper right", fontsize=6)
             ax.set_yticks(y, labels if j == 0 else [], fontsize=7)
             ax.set_title(f"{str(at['output_long_name'].values)[:40]}\n[{method}]", fontsize=7)
