@@ -22,12 +22,12 @@ evaluation failed leaves that output undefined for the sample, and the indices u
 method allows without it:
 
 * **Morris**: the elementary effects of the trajectories whose every point is defined (a trajectory
-  with an undefined point has no complete set of effects); ``trajectories_used`` of the
+  with an undefined point has no complete set of effects); ``used`` of the
   ``morris_trajectories``; undefined (NaN) with fewer than :data:`MIN_WHOLE` whole trajectories.
 * **Sobol**: the Saltelli design comes in blocks of ``parameters + 2`` rows per base sample (A, the
   ``AB_i`` rows and B: SALib's order), and the estimators are means over the base samples, so the
   blocks with an undefined row are left out and the indices computed over the whole blocks
-  (``blocks_used`` of ``sobol_samples``). Where the undefined samples cluster in a part of the box the
+  (``used`` of ``sobol_samples``). Where the undefined samples cluster in a part of the box the
   kept samples are not uniform over it, and the indices are those of the defined part, approximate;
   the note says so. Undefined (NaN) with fewer than :data:`MIN_WHOLE` whole blocks, or when the output
   does not vary over them (zero variance).
