@@ -12,7 +12,8 @@ candidate meets when it is built (:func:`problem`), each the model's own:
   "Asperity statistics");
 * the plasticity limits (:func:`pipeline.physics.material_bounds.check_materials`): the hardness derived
   from the plasticity index (or the index from the hardness) within the bounds of real solids and
-  measured surfaces; a warning for one scene, a refusal for a study's box (its results may be meaningless);
+  measured surfaces; a warning for one scene, a refusal for a study's box (its results may be meaningless),
+  unless the scene itself is outside them (its box is then held to the other rules);
 * the air bearing's modal inversion (:func:`pipeline.model.slider.slider_from_scene`): a real stiffness
   pair of the two frequencies that the scene's root rule accepts, pad dampers >= 0;
 * the contact criterion k without a calibration (:func:`pipeline.model.scene_inputs.contact_k`) and a
@@ -62,16 +63,16 @@ def _strip(message: str, where: str) -> str:
     return message[len(where) + 2:] if message.startswith(where + ": ") else message
 
 
-def problem(scene: Any, params: Sequence[Parameter], values: Sequence[float]) -> str | None:
+def problem(scene: Any, params: Sequence[Parameter], values: Sequence[float], plasticity: bool = True) -> str | None:
     """Why the candidate of ``scene`` with ``params`` at ``values`` cannot be evaluated (one line), or
-    ``None`` when the model's rules (module docstring) accept it."""
+    ``None`` when the model's rules (module docstring) accept it; ``plasticity=False`` leaves out the
+    plasticity limits."""
     where = _where(scene)
     try:
         cand = with_values(scene, params, values)
     except SceneError as exc:
         return _strip(str(exc), where)
     r = cand["roughness"]
-    stats = None
     if not r["afm"]:
         sigma, R, eta = r["sigma_nm"] * NM, r["summit_radius_um"] * UM, r["summit_density_per_um2"] / UM2
         alpha = bandwidth_alpha(sigma, eta, R)
@@ -83,7 +84,7 @@ def problem(scene: Any, params: Sequence[Parameter], values: Sequence[float]) ->
             stats = explicit_statistics(r["sigma_nm"], r["summit_radius_um"], r["summit_density_per_um2"])
         except ValueError as exc:
             return str(exc)
-        if scene_inputs.needs_interface(cand):
+        if plasticity and scene_inputs.needs_interface(cand):
             with warnings.catch_warnings():
                 warnings.simplefilter("error", PhysicsWarning)
                 try:
@@ -164,11 +165,14 @@ def check_box(scene: Any, params: Sequence[Parameter], field: str) -> None:
         and, for a bound alone, the limit of the key where the rules pass.
     """
     where = _where(scene)
+    ref = reference(scene, params)
+    # a scene outside the plasticity limits itself runs with a warning (the interface stage's): its box is
+    # held to the scene's other rules only, not refused for what the scene already does
+    plastic = not (problem(scene, params, ref) or "").startswith("plasticity limits")
 
     def check(x: np.ndarray) -> str | None:
-        return problem(scene, params, x)
+        return problem(scene, params, x, plastic)
 
-    ref = reference(scene, params)
     why = check(ref)
     if why is not None:
         at = ", ".join(f"{p.name} = {v:g}" for p, v in zip(params, ref))
