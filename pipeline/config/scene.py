@@ -405,7 +405,7 @@ SCHEMA: dict[str, dict[str, Key]] = {
             {"key": "air_bearing.frequencies_khz[1]", "low": 260.0, "high": 400.0},
             {"key": "air_bearing.rear_exponent", "low": 1.0, "high": 3.0},
             # density from 8 um^-2: McCool's relations need alpha = 2412.74 (sigma eta R)^2 > 0.8968, i.e.
-            # eta >= 7.42 um^-2 at the paper's sigma 0.52 nm and R 5 um (below it every sample fails)
+            # eta >= 7.42 um^-2 at the paper's sigma 0.52 nm and R 5 um (every sample below it fails)
             {"key": "roughness.summit_density_per_um2", "low": 8.0, "high": 20.0},
         ], doc="[recon] parameters and bounds: [{key = \"section.key\" or \"section.key[i]\", low, high}]; the box "
                "is checked before sampling (every bound and corner a model the study can build: McCool's alpha > "
