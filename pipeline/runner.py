@@ -119,6 +119,10 @@ class Stage:
         (e.g. ``identify`` for the report: a minutes-long study is never started by the report). The
         key holds each one's inputs key when its dataset is current, else ``None``; ``compute`` sees
         the same in :attr:`Inputs.optional` and must not read a dataset whose entry is ``None``.
+    check
+        ``check(scene)``: refuses, before anything is built or written, a scene the stage cannot use (a
+        one-line :class:`~pipeline.config.scene.SceneError`; e.g. a study's box the model cannot evaluate,
+        :func:`pipeline.analyses.feasibility.check_study`).
     finish
         ``finish(scene, out, options)``: run after the stage was asked for and is current (computed or
         not), for side effects outside the results folder (``report --readme``); ``options`` are those
@@ -140,6 +144,7 @@ class Stage:
     applies: Callable[[Scene], bool] = _constant(True)
     derived: Callable[[Scene], Mapping[str, Any]] = _constant({})
     optional: tuple[str, ...] = ()
+    check: Callable[[Scene], None] | None = None
     finish: Callable[[Scene, Path, dict], None] | None = None
     doc: str = ""
 
@@ -543,6 +548,9 @@ class Runner:
         ``force`` recomputes the targets themselves even when current (not their upstream stages).
         """
         targets = list(targets)
+        for name in targets:  # (before the folder is made: a refused scene writes nothing)
+            if self.stage(name).check is not None:
+                self.stage(name).check(self.scene)
         with folder_lock(self.out):
             for name in self.plan(targets):
                 self._make(name, force and name in targets)

@@ -91,12 +91,15 @@ _nonneg = (lambda v: v >= 0, "a number >= 0")
 _frac = (lambda v: 0 <= v < 1, "a number in [0, 1)")
 
 #: Free [recon] parameters of ``hdi identify`` and ``hdi sensitivity`` with their bounds (docs/model.md, section "Corrections"): work of
-#: adhesion (7.5), DMW rms (5), modal damping, the two frequencies, contact damping.
+#: adhesion (7.5), DMW rms (5), modal damping, the two frequencies, contact damping. Every corner of the box
+#: is a model the study can build (pipeline/analyses/feasibility.py checks it before a study starts): f1 up to
+#: 140 kHz, as the paper slider's modal inversion has a real stiffness pair only for f1/f2 <= 0.697 (200/210 kHz,
+#: the corner of the first bounds 60-200 kHz, has none; 140/210 = 0.667).
 _FREE = [
     {"key": "lubricant.work_of_adhesion_j_m2", "low": 0.03, "high": 0.11},
     {"key": "dmw.rms_nm", "low": 0.08, "high": 0.30},
     {"key": "air_bearing.damping_ratio", "low": 0.01, "high": 0.20},
-    {"key": "air_bearing.frequencies_khz[0]", "low": 60.0, "high": 200.0},
+    {"key": "air_bearing.frequencies_khz[0]", "low": 60.0, "high": 140.0},
     {"key": "air_bearing.frequencies_khz[1]", "low": 210.0, "high": 500.0},
     {"key": "contact.damping_n_s_m", "low": 0.0, "high": 0.05},
 ]
@@ -412,8 +415,13 @@ SCHEMA: dict[str, dict[str, Key]] = {
             {"key": "air_bearing.frequencies_khz[0]", "low": 90.0, "high": 140.0},
             {"key": "air_bearing.frequencies_khz[1]", "low": 260.0, "high": 400.0},
             {"key": "air_bearing.rear_exponent", "low": 1.0, "high": 3.0},
-            {"key": "roughness.summit_density_per_um2", "low": 5.0, "high": 20.0},
-        ], doc="[recon] parameters and bounds: [{key = \"section.key\" or \"section.key[i]\", low, high}]"),
+            # density from 8 um^-2: McCool's relations need alpha = 2412.74 (sigma eta R)^2 > 0.8968, i.e.
+            # eta >= 7.42 um^-2 at the paper's sigma 0.52 nm and R 5 um (every sample below it fails)
+            {"key": "roughness.summit_density_per_um2", "low": 8.0, "high": 20.0},
+        ], doc="[recon] parameters and bounds: [{key = \"section.key\" or \"section.key[i]\", low, high}]; the box "
+               "is checked before sampling (every bound and corner a model the study can build: McCool's alpha > "
+               "0.8968, so summit_density_per_um2 >= 7.42 at the paper's sigma and R; f1/f2 <= 0.697 for a real "
+               "air-bearing root; plasticity limits; the scene's checks)"),
         "methods": Key("strs", ["morris", "sobol"], choices=("morris", "sobol"), doc="methods to run"),
         "morris_trajectories": Key("int", 10, (lambda v: v >= 2, "an integer >= 2"),
                                    doc="Morris trajectories (each parameters + 1 evaluations)"),

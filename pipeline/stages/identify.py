@@ -52,6 +52,7 @@ import numpy as np
 import xarray as xr
 
 from ..analyses import plots
+from ..analyses.feasibility import box_check
 from ..fanout import local_cluster
 from ..progress import Progress
 from ..io import read_dataset, temporary_path, var
@@ -412,7 +413,7 @@ STAGE = Stage(
     "identify", compute, outputs=("identify.nc", "figures/identify.png"),
     reads=("*",), excludes=("sweep", "report", "sensitivity", "scene.name", "scene.description",
                             "identify.batch_size"),
-    upstream=upstream, finish=_finish, order=80,
+    upstream=upstream, check=box_check("identify"), finish=_finish, order=80,
     doc="the free [recon] parameters fitted to the paper's targets, identify.nc and identified.toml "
         "(in the results folder; --write-scene PATH for a copy)")
 
