@@ -295,6 +295,9 @@ def test_each_roughness_set_flies_on_its_own_summit_datum(tmp_path):
     y_s = {label: explicit_statistics(t["sigma_nm"], t["summit_radius_um"], t["summit_density_per_um2"])["y_s"] / 1e-9
            for label, t in sets.items()}
     assert len(set(y_s.values())) == 3
+    for label in sets:  # (the sets read no tables: their statistics are computed as the interface stage would)
+        assert float(ds.summit_offset.sel(roughness=label)) == pytest.approx(y_s[label], rel=1e-12)
+        assert float(ds.roughness_plasticity_index.sel(roughness=label)) == pytest.approx(0.52, rel=1e-12)
     ref = ds["min_clearance"].sel(roughness="paper", damping=0.05).values
     for label in sets:
         got = ds["min_clearance"].sel(roughness=label, damping=0.05).values
