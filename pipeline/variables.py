@@ -172,18 +172,22 @@ COORDINATES = _group(
     V("hist_protrusion", "nm", "protrusion of the kept histories", NM, dims=("hist_protrusion",)),
     V("direction", "", "pass of a heater-stepping chain (up: increasing protrusion, down: decreasing)",
       dims=("direction",), dtype="str"),
-    # the statistics of each roughness set along ``roughness``, so that runs combined on that dimension
-    # keep each set's own values (NaN: an AFM set, whose statistics come from its scans)
+    # the statistics each roughness set's interface model used (the given keys, or its AFM scans'), along
+    # ``roughness``, so that runs combined on that dimension keep each set's own values
+    # (:func:`pipeline.model.interface_tables.used_statistics`)
     V("roughness_sigma", "nm", "combined rms roughness sigma of the roughness set", NM, dims=("roughness",)),
     V("roughness_summit_radius", "um", "summit radius of the roughness set", UM, dims=("roughness",)),
     V("roughness_summit_density", "um-2", "summit density of the roughness set", PER_UM2, dims=("roughness",)),
+    V("roughness_plasticity_index", "1", "plasticity index (Greenwood-Williamson form) of the roughness set",
+      dims=("roughness",)),
 )
 
 #: Values of the whole run, one number each (0-d variables of ``summary.nc``, ``histories.nc``,
 #: ``sweep.nc``, ``sweep_histories.nc`` and ``ensemble.nc``; :func:`pipeline.model.simulation.run_values`).
 #: Variables, not only global attributes: ``xr.open_mfdataset(..., combine="nested", concat_dim="run")``
 #: gives each run its own value, where it keeps the first file's global attributes for all.
-#: In ``sweep.nc`` the bearing values are the model's at the scene's damping ratio and first roughness set.
+#: In ``sweep.nc`` and ``sweep_histories.nc`` those that depend on the grid carry its dimension
+#: (:data:`RUN_GRID_DIMS`); the others are one number for all the grid's models.
 RUN = _group(
     V("k", "1", "contact criterion k: contact where the separation is below k sigma (NaN: no contact law)"),
     V("k_source", "", "where k comes from (the scene, the calibration, a rule)", dtype="str"),
@@ -200,6 +204,12 @@ RUN = _group(
     V("tfc_stiffening_exponent", "1", "exponent q of the TFC bulge's stiffening"),
     V("friction_law_coefficient", "1", "friction coefficient of the coefficient friction law"),
 )
+
+#: The run values (:data:`RUN`) that depend on the sweep's grid, and the dimension they take in ``sweep.nc``
+#: (:func:`pipeline.model.simulation.grid_run_values`): the contact threshold and the summit offset are
+#: the roughness set's, the pad dampers (and the modal damping ratio itself) the damping ratio's.
+RUN_GRID_DIMS: dict[str, str] = {"k_sigma": "roughness", "summit_offset": "roughness",
+                                 "front_damper": "damping", "rear_damper": "damping", "damping_ratio": "damping"}
 
 #: Steady-window scalars of one scene (:func:`pipeline.model.slider.summarize`; ``summary.nc``, ``sweep.nc``).
 SCALARS = _group(

@@ -64,7 +64,10 @@ def test_open_mfdataset_keeps_each_runs_k_and_roughness(runs, new_defaults):
                                               one["fhm_bv"].sel(roughness=label).values)
                 others = [lab for lab in ds["roughness"].values if lab != label]
                 assert np.isnan(ds["fhm_bv"].isel(run=r).sel(roughness=others).values).all()
-        assert ds["k_sigma"].values.tolist() == pytest.approx([0.5 * 0.4, 0.7 * 0.6])
+        # k sigma is a roughness set's: each run's along its own set (NaN for the set it did not run)
+        assert ds["k_sigma"].dims == ("run", "roughness")
+        for r, ((scene, _), k_sigma) in enumerate(zip(runs.values(), (0.5 * 0.4, 0.7 * 0.6))):
+            assert float(ds["k_sigma"].isel(run=r).sel(roughness=scene_label(scene))) == pytest.approx(k_sigma, rel=1e-15)
 
 
 def test_open_mfdataset_by_coords_concatenates_the_roughness_sets(runs):

@@ -93,3 +93,69 @@ def test_make_readme_writes_the_page_that_holds_the_generated_section():
     # the page's images are where `--readme` copies the report's figures: figures/ beside the page
     for name in narrative.README_FIGURES[:2]:
         assert f"](figures/{name})" in text
+
+
+#: A path into the package as the pages write it: ``pipeline/model/slider.py``, ``pipeline/analyses/``
+#: (a component in capitals, ``pipeline/stages/NAME.py``, is a placeholder).
+SOURCE_PATH = re.compile(r"(?<![\w./-])pipeline/[\w/]*(?:\.py)?")
+#: A dotted name in the package: ``pipeline.model.forces.separation_at``, ``pipeline.analyses.plots.plot_*``.
+DOTTED = re.compile(r"(?<![\w./-])pipeline(?:\.[A-Za-z_]\w*)+\*?")
+
+
+def path_exists(path: str) -> bool:
+    """Whether a ``pipeline/...`` path of a page is a file or folder of the repository (placeholders aside)."""
+    if any(part.split(".")[0].isupper() for part in path.split("/")):
+        return True
+    return (ROOT / path.rstrip("/")).exists()
+
+
+def resolves(dotted: str) -> bool:
+    """Whether ``pipeline.a.b.c`` names a module of the package or an attribute of one (``pipeline.a.b_*``:
+    an attribute of ``pipeline.a`` starting with ``b_``)."""
+    import importlib
+    prefix = dotted.endswith("*")
+    parts = dotted.rstrip("*").split(".")
+    for n in range(len(parts), 0, -1):
+        try:
+            obj = importlib.import_module(".".join(parts[:n]))
+        except ImportError:
+            continue
+        rest = parts[n:]
+        if prefix and not rest:  # (a module named by its whole prefix: pipeline.stages.roughness*)
+            return True
+        for i, name in enumerate(rest):
+            if prefix and i == len(rest) - 1:
+                return any(a.startswith(name) for a in dir(obj))
+            if not hasattr(obj, name):
+                return False
+            obj = getattr(obj, name)
+        return True
+    return False
+
+
+@pytest.mark.parametrize("page", PAGES, ids=lambda p: str(p.relative_to(ROOT)))
+def test_every_path_into_the_package_exists(page):
+    """A page that names ``pipeline/scene.py`` (moved to ``pipeline/config/scene.py``) or
+    ``pipeline.scene.load`` sends its reader nowhere: every path and dotted name into ``pipeline`` resolves."""
+    text = page.read_text(encoding="utf-8")
+    missing = sorted({p for p in SOURCE_PATH.findall(text) if not path_exists(p)})
+    missing += sorted({d for d in DOTTED.findall(text) if not resolves(d)})
+    assert not missing, f"{page.relative_to(ROOT)}: no such path or name in the package: " + ", ".join(missing)
+
+
+#: What a clone does not have: the project's issue tracker, its lab notes and its shared planning files.
+#: (``/shared/...`` in a command line is a user's shared folder, not these.)
+NOTES = re.compile(r"\bissue \d+|\blab (?:H\d|notes?|runs?|scans?|rounds?)\b|\bSPEC\.md|\bDESIGN\.md"
+                   r"|until [^.]{0,60}\bmerged\b", re.I)
+
+
+@pytest.mark.parametrize("page", PAGES, ids=lambda p: str(p.relative_to(ROOT)))
+def test_no_page_sends_its_reader_to_notes_a_clone_lacks(page):
+    """"lab H4", "issue 27" or "until merged" point at notes outside the repository: a page states the
+    measurement itself or links a docs page (the generated section of docs/results.md is left to
+    ``make readme``)."""
+    text = page.read_text(encoding="utf-8")
+    if narrative.README_BEGIN in text:
+        text = text[:text.index(narrative.README_BEGIN)] + text[text.index(narrative.README_END):]
+    found = sorted({m.group(0) for m in NOTES.finditer(text)})
+    assert not found, f"{page.relative_to(ROOT)}: cites notes a clone does not have: " + ", ".join(found)

@@ -295,9 +295,108 @@ def test_each_roughness_set_flies_on_its_own_summit_datum(tmp_path):
     y_s = {label: explicit_statistics(t["sigma_nm"], t["summit_radius_um"], t["summit_density_per_um2"])["y_s"] / 1e-9
            for label, t in sets.items()}
     assert len(set(y_s.values())) == 3
+    for label in sets:  # (the sets read no tables: their statistics are computed as the interface stage would)
+        assert float(ds.summit_offset.sel(roughness=label)) == pytest.approx(y_s[label], rel=1e-12)
+        assert float(ds.roughness_plasticity_index.sel(roughness=label)) == pytest.approx(0.52, rel=1e-12)
     ref = ds["min_clearance"].sel(roughness="paper", damping=0.05).values
     for label in sets:
         got = ds["min_clearance"].sel(roughness=label, damping=0.05).values
         np.testing.assert_allclose(got - ref, -(y_s[label] - y_s["paper"]), rtol=0, atol=1e-9)
         np.testing.assert_allclose(ds["fhm_bv"].sel(roughness=label).values, ds["fhm_bv"].sel(roughness="paper").values,
                                    rtol=1e-12)
+
+
+AFM = ROOT / "tests" / "data" / "afm"
+#: A sweep over the scene's own set, a scan and another given set at two damping ratios: one protrusion,
+#: short runs, a fixed k and hardness (so that the plasticity index differs from set to set).
+AFM_SWEEP = ['scene.effects=["air_bearing","pitch","contact"]', "contact.k=0.5", "materials.hardness_gpa=1.7",
+             "solver.duration_ms=0.3", "solver.transient_ms=0.1", "sweep.protrusion_nm={start=9.0, stop=9.0, step=0.2}",
+             f'sweep.roughness=["scene", {{label="afm-mi1", afm=["{AFM / "mi-1.mi"}"]}}, {{label="rough", sigma_nm=0.8}}]',
+             "sweep.damping_ratio=[0.03, 0.05]", "report.histories_nm=[]"]
+
+
+@pytest.fixture(scope="module")
+def afm_sweep(tmp_path_factory):
+    out = tmp_path_factory.mktemp("afm-sweep")
+    scene = load_scene(PAPER, AFM_SWEEP)
+    return scene, read_dataset(sweep_stage.run_sweep(scene, out, scheduler="synchronous")), out
+
+
+def test_an_afm_roughness_set_is_described_by_the_statistics_its_interface_used(afm_sweep):
+    """Issue 34: the scan set's sigma, R and eta on ``roughness`` were NaN and ``roughness_sets`` recorded the
+    scene's defaults (0.52 nm, 5 um, 13.3 um^-2) while the interface used the scan's (3.43 nm, 2.23 um,
+    11.4 um^-2). Now every set carries the statistics its interface tables were built from: the scan's
+    (equal to its own ``interface.nc``), the given values exactly, and the GW plasticity index
+    psi = (E'/H) sqrt(sigma_s/R) of each (Greenwood & Williamson 1966)."""
+    import hashlib
+    import json
+    from pipeline.physics.asperity_statistics import composite_modulus, explicit_statistics
+    scene, ds, out = afm_sweep
+    own = scene_label(scene)
+    scan = read_dataset(out / sweep_stage.PARTS / "interface-afm-mi1" / "interface.nc")
+    for name, var in (("roughness_sigma", "sigma"), ("roughness_summit_radius", "summit_radius"),
+                      ("roughness_summit_density", "summit_density"), ("roughness_plasticity_index", "plasticity_index_gw")):
+        assert float(ds[name].sel(roughness="afm-mi1")) == float(scan[var]), name
+    # the scan's numbers as the issue measured them (spectral route, combined surface)
+    assert float(ds.roughness_sigma.sel(roughness="afm-mi1")) == pytest.approx(3.43, abs=0.005)
+    assert float(ds.roughness_summit_radius.sel(roughness="afm-mi1")) == pytest.approx(2.23, abs=0.005)
+    assert float(ds.roughness_summit_density.sel(roughness="afm-mi1")) == pytest.approx(11.4, abs=0.05)
+    E = composite_modulus(150e9, 200e9, 0.3)
+    for label, (sigma, R, eta) in ((own, (0.52, 5.0, 13.3)), ("rough", (0.8, 5.0, 13.3))):
+        assert float(ds.roughness_sigma.sel(roughness=label)) == sigma
+        assert float(ds.roughness_summit_radius.sel(roughness=label)) == R
+        assert float(ds.roughness_summit_density.sel(roughness=label)) == eta
+        st = explicit_statistics(sigma, R, eta)
+        assert float(ds.roughness_plasticity_index.sel(roughness=label)) == pytest.approx(
+            E / 1.7e9 * np.sqrt(st["sigma_s"] / st["R"]), rel=1e-12)
+    # the attribute records what was used and the scans by their content
+    sets = json.loads(ds.attrs["roughness_sets"])
+    for label in ds.roughness.values:
+        for key, name in (("sigma_nm", "roughness_sigma"), ("summit_radius_um", "roughness_summit_radius"),
+                          ("summit_density_per_um2", "roughness_summit_density"),
+                          ("plasticity_index", "roughness_plasticity_index")):
+            assert sets[label][key] == float(ds[name].sel(roughness=label)), (label, key)
+    path = str((AFM / "mi-1.mi").resolve())
+    assert sets["afm-mi1"]["afm_sha256"] == {path: hashlib.sha256((AFM / "mi-1.mi").read_bytes()).hexdigest()}
+    assert "afm_sha256" not in sets["rough"]
+
+
+def test_run_numbers_that_depend_on_the_grid_carry_its_dimension(afm_sweep):
+    """``k_sigma`` = k sigma and the summit offset y_s of every roughness set (they were the first set's
+    for all); the pad dampers of every damping ratio, proportional to it (c = 2 zeta omega m per mode)."""
+    from pipeline.physics.asperity_statistics import explicit_statistics
+    scene, ds, out = afm_sweep
+    scan = read_dataset(out / sweep_stage.PARTS / "interface-afm-mi1" / "interface.nc")
+    assert ds.k_sigma.dims == ("roughness",) and ds.summit_offset.dims == ("roughness",)
+    np.testing.assert_allclose(ds.k_sigma.values, 0.5 * ds.roughness_sigma.values, rtol=1e-14)
+    assert float(ds.summit_offset.sel(roughness="afm-mi1")) == pytest.approx(float(scan.y_s), rel=1e-14)
+    y_s = explicit_statistics(0.8, 5.0, 13.3)["y_s"] / 1e-9
+    assert float(ds.summit_offset.sel(roughness="rough")) == pytest.approx(y_s, rel=1e-12)
+    for name in ("front_damper", "rear_damper", "damping_ratio"):
+        assert ds[name].dims == ("damping",), name
+    np.testing.assert_allclose(ds.damping_ratio.values, ds.damping.values, rtol=0)
+    ratio = ds.front_damper.sel(damping=0.05) / ds.front_damper.sel(damping=0.03)
+    assert float(ratio) == pytest.approx(5 / 3, rel=1e-12)
+    for name in ("k", "front_stiffness", "rear_stiffness", "steady_window_start"):
+        assert ds[name].dims == (), name
+    # what is not one number for the whole run is not a global attribute either
+    assert not {"k_sigma_nm", "summit_offset_y_s_nm", "front_damper_n_s_m", "rear_damper_n_s_m"} & set(ds.attrs)
+
+
+def test_help_keys_documents_both_forms_of_a_roughness_set(capsys):
+    from pipeline.cli import main
+    with pytest.raises(SystemExit):
+        main(["--help-keys", "sweep"])
+    text = capsys.readouterr().out
+    assert "sigma_nm=" in text and "afm=[" in text
+
+
+def test_the_reports_title_of_a_scan_set_states_its_statistics(afm_sweep):
+    """A label that does not state the values (an AFM set) is followed by the statistics its interface used;
+    a label made from the values is not repeated."""
+    from pipeline.analyses.sweep_slices import combinations, combo_title
+    scene, ds, out = afm_sweep
+    titles = [combo_title(labels, sub) for labels, sub in combinations(ds, 0.05)]
+    assert titles[0] == f"roughness `{scene_label(scene)}`, damping ratio 0.05"  # (the default first)
+    assert "roughness `afm-mi1` (sigma 3.43 nm, R 2.23 um, eta 11.4 um^-2), damping ratio 0.03" in titles
+    assert "roughness `rough` (sigma 0.8 nm, R 5 um, eta 13.3 um^-2), damping ratio 0.05" in titles

@@ -274,7 +274,7 @@ def _other_combinations(combos: list) -> list[str]:
     for lab, d in combos[1:]:
         f = first_contact(d)
         p = opt.optimum_points(d)
-        other.append([combo_title(lab), f"{f:g} nm" if f is not None else "none",
+        other.append([combo_title(lab, d), f"{f:g} nm" if f is not None else "none",
                       p["before_touchdown"].summary(),
                       p["steady_sliding"].summary()])
     return ["", "## Other roughness/damping combinations", "",

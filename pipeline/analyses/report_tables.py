@@ -84,7 +84,7 @@ def optima_lines(combos: Combos) -> list[str]:
     lines = []
     for labels, ds in combos:
         pts = opt.optimum_points(ds)
-        lines.append(f"- {combo_title(labels)}:")
+        lines.append(f"- {combo_title(labels, ds)}:")
         for p in pts.values():
             lines.append(f"  - {p.describe()}")
     return lines
@@ -109,7 +109,7 @@ def summary_markdown(combos: Combos, sweep: xr.Dataset, name: str, figures: list
         block = [r for r in rows if r[0] == (labels["roughness"] or "") and
                  (r[1] == "" or labels["damping"] is None or abs(float(r[1]) - labels["damping"]) < 1e-12)]
         fc = first_contact(ds)
-        out += [f"## {combo_title(labels)}", "",
+        out += [f"## {combo_title(labels, ds)}", "",
                 f"First contact at {fc:g} nm." if fc is not None else "No contact anywhere on the grid.", ""]
         body = [[number(r[2], 6), r[3]] + [number(v) for v in r[4:n_cols]] for r in block]
         out += [table(header[2:], body), ""]

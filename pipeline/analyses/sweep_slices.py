@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from ..config.grid import roughness_label
 from . import optimum as opt
 
 #: Protrusions equal within this [nm] are the same grid point.
@@ -63,11 +64,34 @@ def first_contact(ds: xr.Dataset) -> float | None:
     return float(x[idx].min()) if idx.size else None
 
 
-def combo_title(labels: dict[str, Any]) -> str:
-    """``roughness `set`, damping ratio z`` of a slice's labels (``sweep`` when it has none)."""
+#: The statistics of a roughness set in a slice's title: symbol, ``sweep.nc`` coordinate, ``[roughness]`` key.
+_STATS = (("sigma", "roughness_sigma", "sigma_nm"), ("R", "roughness_summit_radius", "summit_radius_um"),
+          ("eta", "roughness_summit_density", "summit_density_per_um2"))
+
+
+def roughness_statistics(ds: xr.Dataset, label: str | None = None) -> str:
+    """``sigma 3.43 nm, R 2.23 um, eta 11.4 um^-2`` of a one-set slice: the statistics its interface used
+    (the coordinates ``roughness_sigma``, ... of ``sweep.nc``); ``""`` when the slice lacks them or when
+    ``label`` is the one made from these values (:func:`pipeline.config.grid.roughness_label`: it states them)."""
+    if not all(name in ds.coords and ds[name].size == 1 for _, name, _ in _STATS):
+        return ""
+    if label is not None and label == roughness_label({key: float(ds[name]) for _, name, key in _STATS}):
+        return ""
+    return ", ".join(f"{sym} {float(ds[name]):.3g} {ds[name].attrs.get('units', '')}".replace("um-2", "um^-2")
+                     for sym, name, _ in _STATS)
+
+
+def combo_title(labels: dict[str, Any], ds: xr.Dataset | None = None) -> str:
+    """``roughness `set`, damping ratio z`` of a slice's labels (``sweep`` when it has none). With the
+    slice ``ds`` of a set whose label does not state its values (an AFM set, a set named by the user),
+    the statistics its interface used follow the label (:func:`roughness_statistics`)."""
     parts = []
     if labels["roughness"] is not None:
-        parts.append(f"roughness `{labels['roughness']}`")
+        stats = roughness_statistics(ds, str(labels["roughness"])) if ds is not None else ""
+        if stats:
+            parts.append(f"roughness `{labels['roughness']}` ({stats})")
+        else:
+            parts.append(f"roughness `{labels['roughness']}`")
     if labels["damping"] is not None:
         parts.append(f"damping ratio {labels['damping']:g}")
     return ", ".join(parts) or "sweep"

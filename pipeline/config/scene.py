@@ -353,7 +353,11 @@ SCHEMA: dict[str, dict[str, Key]] = {
     "sweep": {
         "protrusion_nm": Key("range", dict(zip(("start", "stop", "step"), paper.PROTRUSION_GRID_NM)),
                              doc="protrusion grid {start, stop, step} [nm] (paper)"),
-        "roughness": Key("tables", None, doc="roughness sets: [{label=..., sigma_nm=...}, ...] (label optional: made from the values)"),
+        "roughness": Key("tables", None, doc="roughness sets, each given or measured: {label=..., sigma_nm=..., summit_radius_um=..., "
+                     "summit_density_per_um2=...} (keys left out: the scene's [roughness]) or {label=..., afm=[\"scan\", "
+                     "...]} (AFM scans, any [roughness] key such as route); \"scene\": the scene's own [roughness]; "
+                     "label optional (made from the values, or afm-<file stems>). sweep.nc holds the statistics each "
+                     "set's interface used (roughness_sigma, ...; docs/datasets.md)"),
         "damping_ratio": Key("floats", None, (lambda v: len(v) > 0 and all(0 <= x < 1 for x in v),
                                               "a non-empty list of numbers in [0, 1)"),
                              doc="modal damping ratios [1]"),

@@ -66,6 +66,36 @@ def roughness_statistics(scene: Any, roughness: str | Path | xr.Dataset | None =
             "source": "explicit statistics"}
 
 
+#: The statistics of a roughness set as :func:`used_statistics` gives them: its scene key (units in the name)
+#: and the ``interface.nc`` variable (dataset units) it is read from.
+USED_STATISTICS = (("sigma_nm", "sigma"), ("summit_radius_um", "summit_radius"),
+                   ("summit_density_per_um2", "summit_density"), ("plasticity_index", "plasticity_index_gw"),
+                   ("y_s_nm", "y_s"))
+
+
+def used_statistics(scene: Any, interface: xr.Dataset | None = None) -> dict[str, Any]:
+    """The roughness statistics the scene's interface model used, in the units of the scene keys.
+
+    ``sigma_nm`` [nm], ``summit_radius_um`` [um], ``summit_density_per_um2`` [um^-2], the GW plasticity index
+    ``plasticity_index`` [1] (docs/model.md, section "Asperity statistics") and the summit offset ``y_s_nm``
+    [nm], plus ``source`` (``interface.nc``'s ``roughness_source``). ``interface``: the scene's interface
+    tables (the interface stage's ``interface.nc``), ``None`` for a scene that reads none (flying only), whose
+    statistics are then computed here as the stage would (:func:`build_tables` without tables, no quadrature).
+    With ``[roughness] afm`` every number is the scans' (the interface stage's); with explicit statistics
+    sigma, R and eta are the given keys exactly (the dataset's unit conversion is not always exact:
+    13.3 um^-2 reads back as 13.300000000000002) and psi and y_s follow from them.
+    """
+    if interface is None:
+        stats = roughness_statistics(scene)
+        interface = xr.Dataset(interface_scalars(scene, stats)[1], attrs={"roughness_source": stats["source"]})
+    out: dict[str, Any] = {key: float(interface[var]) for key, var in USED_STATISTICS}
+    r = scene["roughness"]
+    if not r["afm"]:
+        out.update({key: float(r[key]) for key in ("sigma_nm", "summit_radius_um", "summit_density_per_um2")})
+    out["source"] = str(interface.attrs.get("roughness_source", ""))
+    return out
+
+
 def interface_parameters(scene: Any, stats: dict[str, float]) -> isbl.Interface:
     """The :class:`~pipeline.physics.isbl.Interface` of a scene and its roughness statistics.
 
@@ -113,11 +143,10 @@ def separation_labels(lo_nm: float, hi_nm: float, step_nm: float) -> np.ndarray:
     return label(step_nm * (first + np.arange(n)))
 
 
-def build_tables(scene: Any, stats: dict[str, float]) -> xr.Dataset:
-    """Compute the interface dataset of a scene for given roughness statistics (no I/O)."""
+def interface_scalars(scene: Any, stats: dict[str, float]) -> tuple[isbl.Interface, dict[str, xr.Variable]]:
+    """The interface parameters of a scene and its roughness statistics (:func:`interface_parameters`) and
+    the 0-d variables of ``interface.nc`` that describe them (roughness, materials, lubricant; dataset units)."""
     p = interface_parameters(scene, stats)
-    sol = scene["solver"]
-    wanted = needed_quantities(scene.effects, lubricant_shear_on(scene))
     # dataset units and long names: pipeline/variables.py INTERFACE; values in SI here
     scalars = {
         "sigma": stats["sigma"], "sigma_s": p.sigma_s, "y_s": stats["y_s"], "summit_radius": p.R,
@@ -130,7 +159,14 @@ def build_tables(scene: Any, stats: dict[str, float]) -> xr.Dataset:
     }
     if p.dgamma_bridge is not None:
         scalars["bridge_work_of_adhesion"] = p.dgamma_bridge
-    data = {k: INTERFACE[k].from_si(v, ()) for k, v in scalars.items()}
+    return p, {k: INTERFACE[k].from_si(v, ()) for k, v in scalars.items()}
+
+
+def build_tables(scene: Any, stats: dict[str, float]) -> xr.Dataset:
+    """Compute the interface dataset of a scene for given roughness statistics (no I/O)."""
+    p, data = interface_scalars(scene, stats)
+    sol = scene["solver"]
+    wanted = needed_quantities(scene.effects, lubricant_shear_on(scene))
     coords = {}
     if wanted:
         # The table must reach past the Gaussian window (TAIL sigma_s), where the contact terms vanish,

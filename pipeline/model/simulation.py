@@ -33,7 +33,7 @@ import xarray as xr
 from ..config.grid import same_point
 from ..config.scene import PROTOCOLS
 from ..units import MS, NM
-from ..variables import HISTORIES, RUN, STEPPING, coordinate, history, scalar
+from ..variables import HISTORIES, RUN, RUN_GRID_DIMS, STEPPING, coordinate, history, scalar
 from . import slider as sl
 from .state import STEP_COUNTERS
 
@@ -281,4 +281,44 @@ def run_values(model: sl.Model, k_source: str) -> dict[str, xr.Variable]:
         si["friction_law_coefficient"] = info["friction_coefficient"]
     out = {name: RUN[name].from_si(float(v), ()) for name, v in si.items()}
     out["k_source"] = RUN["k_source"].data(np.array(k_source, dtype=object), ())
+    return out
+
+
+#: The global attributes of :func:`model_attrs` that hold a run value of :data:`pipeline.variables.RUN_GRID_DIMS`
+#: (a grid with several values along its dimension has no one number for them: :func:`grid_run_values`).
+GRID_ATTRS = {"k_sigma_nm": "k_sigma", "summit_offset_y_s_nm": "summit_offset", "front_damper_n_s_m": "front_damper",
+              "rear_damper_n_s_m": "rear_damper", "damping_ratio": "damping_ratio"}
+
+
+def grid_run_values(models: dict[tuple[str, float], sl.Model], labels: Sequence[str], damping: Sequence[float],
+                    k_source: str) -> dict[str, xr.Variable]:
+    """The run values (:func:`run_values`) of a sweep's grid of models, one model per roughness set and
+    damping ratio [1] (``models[(label, damping)]``): those of :data:`pipeline.variables.RUN_GRID_DIMS` along
+    ``roughness`` or ``damping`` (in the order of ``labels`` and ``damping``), the others 0-d.
+
+    Raises
+    ------
+    ValueError
+        When a value differs between models where its declaration says it cannot (a run value that
+        depends on the grid but is not declared in ``RUN_GRID_DIMS``): the dataset would state one model's
+        number for all.
+    """
+    values = {key: run_values(m, k_source) for key, m in models.items()}
+    first = values[(labels[0], damping[0])]
+    out: dict[str, xr.Variable] = {}
+    for name, var in first.items():
+        dim = RUN_GRID_DIMS.get(name)
+        for (label, d), vals in values.items():  # every model agrees with the one the layout keeps
+            kept = values[(label if dim == "roughness" else labels[0], d if dim == "damping" else damping[0])][name]
+            if not np.array_equal(vals[name].values, kept.values, equal_nan=vals[name].dtype.kind == "f"):
+                raise ValueError(f"run value {name!r} differs between the models of roughness {label!r}, damping "
+                                 f"{d} and of the grid's first ({vals[name].values} != {kept.values}): declare it "
+                                 "in pipeline.variables.RUN_GRID_DIMS")
+        if dim is None:
+            out[name] = var
+            continue
+        along = [values[(label, damping[0])] for label in labels] if dim == "roughness" \
+            else [values[(labels[0], d)] for d in damping]
+        out[name] = xr.Variable((dim,), np.array([float(v[name].values) for v in along]), attrs=var.attrs,
+                                encoding=var.encoding)
     return out

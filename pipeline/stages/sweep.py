@@ -40,12 +40,13 @@ import xarray as xr
 from ..model import slider as sl
 from ..fanout import run_tasks
 from ..progress import Progress
-from ..io import read_attrs, read_dataset, write_dataset
+from ..io import file_hash, read_attrs, read_dataset, write_dataset
 from ..runner import KEY_ATTR, Inputs, Stage, ensure
 from ..variables import COORDINATES, ENSEMBLE, HISTORIES, SCALARS, STEPPING, coordinate
 from ..model import dmw_record, scene_inputs
 from ..model.inputs import SimulationInputs, Source, for_stage
-from ..model.simulation import DIRECTIONS, model_attrs, run_values, simulate
+from ..model.interface_tables import used_statistics
+from ..model.simulation import DIRECTIONS, GRID_ATTRS, grid_run_values, model_attrs, simulate
 from ..analyses import ensemble_rules as ensemble
 from ..config.grid import damping_grid, protrusion_grid, roughness_sets, same_point, scene_label
 
@@ -292,11 +293,19 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset | None]:
             bar.close()
     log.info("sweep: batch phase %.2f s for %d batches", batch_seconds, len(todo))
     inputs.record(compute_seconds=round(batch_seconds, 3), batches_run=len(todo), batches=len(batches))
-    first = next(iter(sets))  # (its set's scene and the scene's damping ratio: models the batches built)
-    model = batch_model(set_scenes[first], batch_sim(first, 0), float(scene["air_bearing"]["damping_ratio"]))
-    attrs = model_attrs(model, sim.k_source)
-    return assemble(scene, out, prot, list(sets), damp, batches, key, sim.k_source, attrs, seeds, computed,
-                    run_values(model, sim.k_source))
+    # the run values of every set and damping ratio (the models the batches built, cached in this process)
+    models = {(label, float(d)): batch_model(set_scenes[label], batch_sim(label, 0), float(d))
+              for label in sets for d in damp}
+    labels = list(sets)
+    run = grid_run_values(models, labels, damp, sim.k_source)
+    attrs = {name: value for name, value in model_attrs(models[(labels[0], float(damp[0]))], sim.k_source).items()
+             if name not in GRID_ATTRS or run[GRID_ATTRS[name]].size == 1}  # (several values: the variable has them)
+    # each set's statistics as its interface model used them: its tables' (the scans'), or the given keys
+    stats = {label: used_statistics(set_scenes[label], None if interface_paths[label] is None
+                                    else read_dataset(interface_paths[label], stage="interface"))
+             for label in labels}
+    return assemble(scene, out, prot, labels, damp, batches, key, sim.k_source, attrs, seeds, computed, run,
+                    statistics=stats)
 
 
 def run_sweep(scene: Any, out: Path, scheduler: str | None = None, workers: int | None = None,
@@ -310,13 +319,17 @@ def run_sweep(scene: Any, out: Path, scheduler: str | None = None, workers: int 
 def assemble(scene: Any, out: Path, prot: np.ndarray, labels: list[str], damp: list[float], batches: list[Batch],
              key: str, k_source: str, attrs: dict, seeds: list[int] | None = None,
              computed: dict[str, xr.Dataset] | None = None,
-             run: dict[str, xr.Variable] | None = None) -> dict[str, xr.Dataset | None]:
+             run: dict[str, xr.Variable] | None = None, *,
+             statistics: dict[str, dict[str, Any]]) -> dict[str, xr.Dataset | None]:
     """``sweep.nc`` (and ``sweep_histories.nc``) filled from the parts, in batch order.
 
     ``computed``: the parts run by this call (path -> dataset, as written), used as they are; every
     other part is read from its file after :func:`part_problem` has accepted it. ``run``: the run's
-    0-d variables (:func:`pipeline.model.simulation.run_values`), written into both datasets; each
-    roughness set's statistics become coordinates along ``roughness`` (:func:`roughness_coordinates`).
+    values (:func:`pipeline.model.simulation.grid_run_values`: 0-d, or along ``roughness`` or ``damping``),
+    written into both datasets. ``statistics``: each roughness set's statistics as its interface model
+    used them (label -> :func:`pipeline.model.interface_tables.used_statistics`), which become coordinates
+    along ``roughness`` (:func:`roughness_coordinates`) and, with the scans' hashes, the JSON attribute
+    ``roughness_sets`` (:func:`roughness_record`).
 
     With more than one realisation the scalars gain a last dimension ``realisation`` and the
     ensemble statistics of :func:`pipeline.analyses.ensemble_rules.statistics` are added.
@@ -386,10 +399,11 @@ def assemble(scene: Any, out: Path, prot: np.ndarray, labels: list[str], damp: l
         data["dmw_seed"] = ENSEMBLE["dmw_seed"].data(np.array(seeds), ("realisation",))
         data.update(ensemble.statistics(data))
     sets = roughness_sets(scene)
-    coords.update(roughness_coordinates([sets[label] for label in labels]))
+    coords.update(roughness_coordinates([statistics[label] for label in labels]))
     ds = xr.Dataset(data, coords=coords).assign(run or {})
     # one attribute for all sets: a label made from the values has '.', which CF's attribute names exclude
-    ds.attrs["roughness_sets"] = json.dumps({label: sets[label] for label in labels}, default=str)
+    ds.attrs["roughness_sets"] = json.dumps({label: roughness_record(sets[label], statistics[label])
+                                             for label in labels}, default=str)
     ds.attrs.update(attrs)
     ds.attrs["k_source"] = k_source
     own = scene_label(scene)
@@ -406,14 +420,33 @@ def assemble(scene: Any, out: Path, prot: np.ndarray, labels: list[str], damp: l
     return {"sweep.nc": ds, "sweep_histories.nc": hds}
 
 
-def roughness_coordinates(tables: list[dict[str, Any]]) -> dict[str, xr.Variable]:
-    """``roughness_sigma`` [nm], ``roughness_summit_radius`` [um] and ``roughness_summit_density`` [um^-2] of
-    each roughness set (full ``[roughness]`` tables, in the order of the ``roughness`` dimension); NaN for
-    an AFM set, whose statistics come from its scans (``interface.nc``), not from these keys."""
-    keys = {"roughness_sigma": "sigma_nm", "roughness_summit_radius": "summit_radius_um",
-            "roughness_summit_density": "summit_density_per_um2"}
-    return {name: COORDINATES[name].data([np.nan if t.get("afm") else float(t[key]) for t in tables], ("roughness",))
-            for name, key in keys.items()}
+def roughness_coordinates(statistics: list[dict[str, Any]]) -> dict[str, xr.Variable]:
+    """``roughness_sigma`` [nm], ``roughness_summit_radius`` [um], ``roughness_summit_density`` [um^-2] and
+    ``roughness_plasticity_index`` [1] of each roughness set, from the statistics its interface model used
+    (:func:`pipeline.model.interface_tables.used_statistics`, in the order of the ``roughness`` dimension):
+    the given keys of explicit statistics, the scans' of an AFM set."""
+    return {name: COORDINATES[name].data([float(st[key]) for st in statistics], ("roughness",))
+            for name, key in ROUGHNESS_COORDINATES.items()}
+
+
+#: The coordinates along ``roughness`` and the statistics (:func:`pipeline.model.interface_tables.used_statistics`)
+#: they hold.
+ROUGHNESS_COORDINATES = {"roughness_sigma": "sigma_nm", "roughness_summit_radius": "summit_radius_um",
+                         "roughness_summit_density": "summit_density_per_um2",
+                         "roughness_plasticity_index": "plasticity_index"}
+
+
+def roughness_record(table: dict[str, Any], statistics: dict[str, Any]) -> dict[str, Any]:
+    """A roughness set as ``roughness_sets`` records it: its ``[roughness]`` table with the statistics its
+    interface model used in place of the keys (an AFM set's ``sigma_nm``, ... are the scans', not the
+    scene's unused defaults), the plasticity index, the summit offset ``y_s_nm``, where they came from
+    (``statistics_source``) and, for an AFM set, each scan's SHA-256 (``afm_sha256``: path -> hex digest)."""
+    record = dict(table)
+    record.update({key: value for key, value in statistics.items() if key != "source"})
+    record["statistics_source"] = statistics.get("source", "")
+    if table.get("afm"):
+        record["afm_sha256"] = {str(f): file_hash(f) for f in table["afm"]}
+    return record
 
 
 def _files(scene: Any) -> dict[str, str]:
