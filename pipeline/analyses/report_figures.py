@@ -27,6 +27,9 @@ BAND_FIGURE = "band.png"
 #: Drawn only when interface.nc holds both interface models (``interface.model = "deterministic"``).
 INTERFACE_FIGURE = "interface_models.png"
 
+#: Drawn with the statics map (``statics.nc``, the ``statics`` stage).
+STATICS_FIGURE = "statics.png"
+
 #: One drawing job: figure function, positional arguments, keyword arguments.
 Job = tuple[Callable[..., Any], tuple, dict]
 
@@ -127,6 +130,8 @@ def figure_jobs(data: dict[str, xr.Dataset | None], combos: list, settings: Repo
                      dict(band_nm=tuple(np.atleast_1d(checks["value_bouncing"].attrs["protrusions_nm"])),
                           threshold=float(checks["bv_exceedance_probability"].attrs["threshold_percent"]),
                           touchdown_nm=onset, previous_nm=previous)))
+    if data.get("statics") is not None:
+        jobs.append((plots.fig_statics, (data["statics"], name, figdir / STATICS_FIGURE), {}))
     if data["interface"] is not None and "model" in data["interface"].dims:  # interface.model = "deterministic"
         jobs.append((plots.fig_interface_models, (data["interface"], name, figdir / INTERFACE_FIGURE), {}))
     return jobs, skipped

@@ -13,6 +13,7 @@ file                       needed    used for
 ``interface.nc``           optional  plasticity index, shear strength line of Fig. 7
 ``ensemble.nc``            optional  the paper's targets over ``report.realisations`` DMW records
                                      (upstream when ``report.realisations`` > 1), with spreads
+``statics.nc``             optional  ``statics.png``, the static states versus protrusion
 =========================  ========  ==========================================================
 
 A missing optional input skips its figures (a stale PNG of an earlier run is removed) and the
@@ -31,6 +32,8 @@ Writes ``out/figures/`` (returned):
 * ``fig6_fhm.png``: FHM/BV versus protrusion, regimes shaded, the 10 % line, measured touchdown (Fig. 6);
 * ``fig7_shear.png``: shear stress and mean contact pressure versus protrusion past touchdown (Fig. 7);
 * ``calibration.png``, ``roughness.png``, ``dmw.png``;
+* ``statics.png`` (with ``statics.nc``): the clearance of every static state versus protrusion, stable
+  solid and unstable dashed, and the barriers out of the stable states beside the DMW's energy scales;
 * ``band.png`` (with ``ensemble.nc``): the bouncing BV, the fraction bouncing above 20 %, the touchdown
   probability and the contact fraction over the DMW realisations versus protrusion;
 
@@ -68,7 +71,7 @@ import xarray as xr
 
 from ..analyses import narrative, report_figures, report_tables
 from ..analyses.paper_comparison import comparison_markdown, identification_markdown
-from ..analyses.report_figures import BAND_FIGURE, ENSEMBLE_FIGURE, FIGURES, INTERFACE_FIGURE
+from ..analyses.report_figures import BAND_FIGURE, ENSEMBLE_FIGURE, FIGURES, INTERFACE_FIGURE, STATICS_FIGURE
 from ..analyses.report_settings import ReportSettings, wants_ensemble
 from ..analyses.sweep_slices import combinations, split_ensemble
 from ..io import DatasetError, is_read_only, temporary_path
@@ -79,7 +82,7 @@ log = logging.getLogger(__name__)
 
 #: Optional datasets: name -> the stage that writes it.
 OPTIONAL = (("sweep_histories", "sweep"), ("calibration", "calibrate"), ("roughness", "roughness"),
-            ("dmw", "dmw"), ("interface", "interface"))
+            ("dmw", "dmw"), ("interface", "interface"), ("statics", "statics"))
 
 
 def load(inputs: Inputs) -> dict[str, xr.Dataset | None]:
@@ -136,7 +139,8 @@ def compute(scene: Any, inputs: Inputs) -> dict:
     repdir.mkdir(parents=True, exist_ok=True)
     jobs, skipped = report_figures.figure_jobs(data, combos, settings, name, figdir)
     drawn = {a.name for _, args, _ in jobs for a in args if isinstance(a, Path)}
-    stale = list(skipped) + [f for f in (ENSEMBLE_FIGURE, BAND_FIGURE, INTERFACE_FIGURE) if f not in drawn]
+    stale = list(skipped) + [f for f in (ENSEMBLE_FIGURE, BAND_FIGURE, INTERFACE_FIGURE, STATICS_FIGURE)
+                             if f not in drawn]
     for f in stale:  # never leave a figure of an earlier run next to the new ones
         (figdir / f).unlink(missing_ok=True)
     made = report_figures.draw(jobs)
@@ -155,7 +159,7 @@ def compute(scene: Any, inputs: Inputs) -> dict:
 
 
 def _upstream(scene: Any) -> tuple[str, ...]:
-    up = ["roughness", "interface", "sweep"]
+    up = ["roughness", "interface", "statics", "sweep"]
     if scene.has("dmw"):
         up.append("dmw")
     if scene.has("contact") and scene["contact"]["k"] is None:
@@ -175,7 +179,7 @@ def _finish(scene: Any, out: Path, options: dict[str, Any]) -> None:
 
 STAGE = Stage(
     "report", compute,
-    outputs=tuple(f"figures/{f}" for f in FIGURES + (ENSEMBLE_FIGURE, BAND_FIGURE, INTERFACE_FIGURE)) + ("report/summary.csv", "report/summary.md",
+    outputs=tuple(f"figures/{f}" for f in FIGURES + (ENSEMBLE_FIGURE, BAND_FIGURE, INTERFACE_FIGURE, STATICS_FIGURE)) + ("report/summary.csv", "report/summary.md",
                                                                           "report/comparison.md"),
     reads=("*",), upstream=_upstream, optional=("identify",), finish=_finish, order=60, main_job=True,
     doc="the paper's figures, a summary table and the comparison with the paper")
