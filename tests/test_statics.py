@@ -196,3 +196,51 @@ def test_the_two_population_scene_has_the_labs_state_on_the_criterion(repo_root)
     y, note = sl.start(model, 9.8 * NM)
     assert "flying" in note
     assert st.states_at(model, 9.8 * NM)[0]["z"] == pytest.approx(y[0], abs=1e-5 * NM)
+
+
+# ------------------------------------------------------------------------- the DMW as free parameters
+FREE_DMW = ('identify.parameters=[{key = "dmw.rms_nm", low = 0.08, high = 2.0}, '
+            '{key = "dmw.exponent", low = -4.5, high = -1.0}]')
+
+
+def test_the_two_population_scene_frees_the_dmw_exponent_and_rms_within_their_bounds(repo_root):
+    from pipeline.analyses import study
+    from pipeline.config.scene import DMW_EXPONENT_BOUNDS
+    scene = load_scene(repo_root / "configs" / "paper-2009-two-population.toml")
+    params = {p.name: p for p in study.parse_parameters(scene["identify"]["parameters"], "f", "identify.parameters")}
+    assert (params["dmw.exponent"].low, params["dmw.exponent"].high) == DMW_EXPONENT_BOUNDS == (-4.5, -1.0)
+    assert (params["dmw.rms_nm"].low, params["dmw.rms_nm"].high) == (0.08, 2.0)
+    assert "fhm_flying" in scene["identify"]["targets"]  # the flying FHM is still fitted
+
+
+@pytest.mark.parametrize("table, culprit", [
+    ('[{key = "dmw.exponent", low = -6.0, high = -1.0}]', "dmw.exponent low = -6.0"),
+    ('[{key = "dmw.exponent", low = -4.0, high = 0.0}]', "dmw.exponent low = -4.0, high = 0.0"),
+    ('[{key = "dmw.rms_nm", low = 0.1, high = 3.0}]', "dmw.rms_nm low = 0.1, high = 3.0"),
+])
+def test_bounds_beyond_the_band_limited_range_are_refused_naming_the_key(paper_config, table, culprit):
+    from pipeline.config.scene import SceneError
+    with pytest.raises(SceneError, match=r"identify\.parameters: " + culprit.replace(".", r"\.") + ".*expected bounds within"):
+        load_scene(paper_config, [f"identify.parameters={table}"])
+
+
+@pytest.mark.parametrize("exponent, rms", [(-4.0, 1.8), (-1.5, 0.12)])
+def test_an_evaluation_with_both_set_builds_the_record_of_that_rms_and_slope(paper_config, exponent, rms):
+    from pipeline import evaluations
+    from pipeline.analyses import study
+    from pipeline.model.inputs import SimulationInputs
+    from pipeline.physics.microwaviness import power_law_fit
+    # flying only: the candidate's inputs are its DMW record alone (no interface tables to build)
+    scene = load_scene(paper_config, ['scene.effects=["air_bearing", "pitch", "dmw"]', FREE_DMW])
+    params = study.parse_parameters(scene["identify"]["parameters"], "f", "identify.parameters")
+    candidate = study.with_values(scene, params, [rms, exponent])
+    w, fs = evaluations.candidate_inputs(candidate, SimulationInputs()).record()
+    assert np.sqrt(np.mean(w**2)) == pytest.approx(rms, rel=1e-9)  # the synthesis scales to the rms [nm]
+    # the slope of the record's periodogram over the 10-500 kHz band: Gaussian bins, each an exponential
+    # variable times S(f); the least-squares slope over ~1000 bins has a standard deviation of ~0.05
+    c = np.fft.rfft(w)
+    f = np.fft.rfftfreq(w.size, 1.0 / fs)
+    slope, _ = power_law_fit(f, np.abs(c) ** 2, (10e3, 500e3))
+    assert slope == pytest.approx(exponent, abs=0.2)
+    base, _ = evaluations.candidate_inputs(scene, SimulationInputs()).record()  # the scene's own: -2, 0.5 nm
+    assert not np.allclose(base, w)
