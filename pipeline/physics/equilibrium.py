@@ -342,9 +342,10 @@ def relaxed_path(forces: Callable[[np.ndarray], np.ndarray], a, u_values, s0: fl
     ``R(y) . t = 0``. Then ``R = f a`` and the path force ``f(u) = R_0 / a_0`` is the force the state
     exerts on the holder [N]; its zeros are the system's equilibria (the holding force vanishes) and
     ``-int f du`` is the work of the static forces along the path, the potential whose rises between
-    equilibria are the barriers (the minimum-energy path over the relaxed freedom: the saddle's energy
-    is exact where the relaxed state is one continuous function of ``u``; Henkelman & Jonsson,
-    J. Chem. Phys. 113 (2000) 9978 use the same constrained relaxation as a reaction path's first guess).
+    equilibria are the barriers: holding one coordinate and relaxing the other is the "drag method" of
+    reaction paths (Henkelman, Johannesson & Jonsson 2000, docs/model.md [HJJ00]), whose saddle is the
+    true one where the relaxed state is one continuous function of ``u`` (docs/model.md, section
+    "Statics map").
 
     Parameters
     ----------
