@@ -130,6 +130,18 @@ def test_at_a_small_protrusion_the_one_state_is_the_runs_static_start(paper_mode
     assert s["path_stiffness"] == pytest.approx(st.tfc_point_scales(paper_model)[0], rel=0.02)
 
 
+def test_the_compiled_path_finds_the_states_of_the_python_reference(paper_model):
+    # the same secant iteration, compiled on the kernel's forces or from Python on the same forces: the states
+    # agree to far below the 1e-6-nm Brent tolerance, the barriers to the quadrature's 1e-8
+    for delta in (4.0, 7.0, 11.0):
+        fast = st.states_at(paper_model, delta * NM)
+        ref = st.states_at(paper_model, delta * NM, compiled=False)
+        assert [(s["type"], s["stable"]) for s in fast] == [(s["type"], s["stable"]) for s in ref]
+        for a, b in zip(fast, ref):
+            assert a["clearance"] == pytest.approx(b["clearance"], abs=1e-7 * NM)
+            assert a["barrier"] == pytest.approx(b["barrier"], rel=1e-7, nan_ok=True)
+
+
 def test_in_the_adhesion_hysteresis_a_flying_and_a_contact_state_coexist(paper_model):
     # the paper's adhesion folds the flying branch at 7.88 nm (the start's fold search): at 7.0 nm a flying
     # state, a saddle and a contact state; past the fold the contact state alone
@@ -152,7 +164,7 @@ def test_in_the_adhesion_hysteresis_a_flying_and_a_contact_state_coexist(paper_m
 
 
 def test_the_dataset_has_labelled_dims_and_units(paper_model):
-    ds = st.statics_map(paper_model, np.array([4.0, 7.0]) * NM, synthetic_record(paper_model.scene, 2.2e-3))
+    ds = st.statics_map(paper_model, [4.0, 7.0], synthetic_record(paper_model.scene, 2.2e-3))
     assert ds["clearance"].dims == ("protrusion", "state") and ds.sizes["state"] == 3
     assert list(ds["state_count"].values) == [1, 3] and list(ds["stable_count"].values) == [1, 2]
     assert ds["stiffness_eigenvalue"].dims == ("protrusion", "state", "mode")

@@ -22,8 +22,14 @@ import xarray as xr
 from ..physics.equilibrium import _is_stable, jacobian, path_equilibria, relaxed_path
 from ..units import NM, URAD
 from ..variables import STATICS
+from . import dynamics as dyn
 from . import slider as sl
-from .start import SCALE, static_forces
+from .compiled import kernel_jit
+from .start import SCALE, static_forces, static_inputs
+from .state import N_STATE
+from .static_solver import _forces
+
+_jit = kernel_jit(__name__)
 
 #: Clearance grid [m]: fine (:data:`FINE_STEP`) from :data:`DEPTH` below the criterion to :data:`FINE_TOP`
 #: above it, where contact and adhesion act and the states lie close together; coarse
@@ -37,18 +43,87 @@ FINE_TOP = 3.0 * NM
 #: inwards at both ends: up at the bottom (the contact law), down at the top (the air bearing).
 EXTEND = 8
 
+#: Tolerance of the relaxed pitch, relative to 1 urad: its error moves the path force by about
+#: ``K_z,theta`` (~100 N/rad) times 1e-14 rad, 1e-12 N, far below the 1e-6-nm resolution of the states
+#: (times a stiffness of ~1e6 N/m: 1e-9 N).
+TOL = 1e-8
+
 #: State types (the ``state_type`` flag): above the criterion, below it, on it (a switch state).
 FLYING, CONTACT, CRITERION = 0, 1, 2
+
+
+@_jit
+def _path(us, a0, a1, s_start, slope_start, s_scale, tol, max_iter, params, dmw, contact, adhesion, friction, tfc,
+          pitch, rear_law, gap_power_, meniscus):
+    """:func:`pipeline.physics.equilibrium.relaxed_path` on the kernel's static forces, compiled (the same secant
+    iteration, started from a secant predictor of the two points before): returns ``(f [N], s, slope)``."""
+    p = params[0]
+    gap_power = dyn._unpacked(gap_power_)
+    n = us.size
+    f = np.empty(n)
+    s_out = np.empty(n)
+    R = np.empty(2)
+    y4 = np.zeros(N_STATE)
+    out = np.empty(N_STATE)
+    t0 = -a1 / a0
+    tol_s = tol * s_scale
+    s = s_start
+    slope = slope_start
+    for i in range(n):
+        u = us[i]
+        if i >= 2 and us[i - 1] != us[i - 2]:
+            s = s_out[i - 1] + (s_out[i - 1] - s_out[i - 2]) * (u - us[i - 1]) / (us[i - 1] - us[i - 2])
+        _forces(u / a0 + s * t0, s, p, R, y4, out, dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power,
+                meniscus)
+        g = R[0] * t0 + R[1]
+        if not (slope != 0.0 and np.isfinite(slope)):
+            h = 1e-3 * s_scale
+            _forces(u / a0 + (s + h) * t0, s + h, p, R, y4, out, dmw, contact, adhesion, friction, tfc, pitch,
+                    rear_law, gap_power, meniscus)
+            slope = (R[0] * t0 + R[1] - g) / h
+            _forces(u / a0 + s * t0, s, p, R, y4, out, dmw, contact, adhesion, friction, tfc, pitch, rear_law,
+                    gap_power, meniscus)
+        for _ in range(max_iter):
+            if not (np.isfinite(g) and np.isfinite(slope) and slope != 0.0):
+                break
+            ds = -g / slope
+            if abs(ds) < tol_s:
+                break
+            _forces(u / a0 + (s + ds) * t0, s + ds, p, R, y4, out, dmw, contact, adhesion, friction, tfc, pitch,
+                    rear_law, gap_power, meniscus)
+            gn = R[0] * t0 + R[1]
+            if np.isfinite(gn) and gn != g:
+                slope = (gn - g) / ds
+            s = s + ds
+            g = gn
+        f[i] = R[0] / a0
+        s_out[i] = s
+    return f, s_out, slope
 
 
 class PathForce:
     """``f(u)``: the static force [N] at the TFC point held at ``u = z - l_c theta`` [m] (pitch relaxed), at one
     protrusion; the relaxed pitch of the last call starts the next (the callers walk along the path)."""
 
-    def __init__(self, R: Callable[[np.ndarray], np.ndarray], a: np.ndarray):
+    def __init__(self, R: Callable[[np.ndarray], np.ndarray], a: np.ndarray, compiled: tuple | None = None):
         self.R, self.a = R, a
         self.s, self.slope = 0.0, None
         self.last: list[tuple[float, float]] = []  # the last two (u, s): a secant predictor of s
+        #: ``(params, slots)`` of the kernel's static forces: the path solved compiled (:func:`_path`)
+        self.compiled = compiled
+
+    def many(self, us: np.ndarray) -> np.ndarray:
+        """The path force [N] at the points ``us``, continued along them in order (one compiled call)."""
+        us = np.asarray(us, dtype=float)
+        if self.compiled is None:
+            return np.array([self(u) for u in us])
+        params, slots = self.compiled
+        f, s, slope = _path(us, float(self.a[0]), float(self.a[1]), self.s, self.slope or 0.0, URAD, TOL, 30,
+                            params, *slots)
+        if np.isfinite(s[-1]):
+            self.s, self.slope = float(s[-1]), float(slope)
+            self.last = [(float(u), float(v)) for u, v in zip(us[-2:], s[-2:])][-2:]
+        return f
 
     def restart(self) -> None:
         """Forget the relaxed state (a jump along the path)."""
@@ -60,7 +135,13 @@ class PathForce:
         if len(self.last) == 2 and self.last[1][0] != self.last[0][0]:
             (u1, s1), (u2, s2) = self.last
             s0 = s2 + (s2 - s1) * (u - u2) / (u2 - u1)
-        f, s, _ = relaxed_path(self.R, self.a, [u], s0, s_scale=URAD, slope=self.slope, tol=1e-8)
+        if self.compiled is not None:
+            params, slots = self.compiled
+            f, s, slope = _path(np.array([float(u)]), float(self.a[0]), float(self.a[1]), s0, self.slope or 0.0,
+                                URAD, TOL, 30, params, *slots)
+            self.slope = float(slope) if np.isfinite(slope) and slope != 0 else self.slope
+        else:
+            f, s, _ = relaxed_path(self.R, self.a, [u], s0, s_scale=URAD, slope=self.slope, tol=TOL)
         if np.isfinite(s[0]):
             self.last = (self.last + [(float(u), float(s[0]))])[-2:]
             if self.slope is None:
@@ -109,14 +190,16 @@ def dmw_energies(model: sl.Model, record: tuple[np.ndarray, float] | None) -> tu
     return 0.5 * k_b * sigma_w**2, 0.5 * m_b * sigma_v**2
 
 
-def states_at(model: sl.Model, protrusion: float) -> list[dict]:
+def states_at(model: sl.Model, protrusion: float, compiled: bool = True) -> list[dict]:
     """Every static state of ``model`` at ``protrusion`` [m], from the highest clearance down (module docstring).
 
     Each state: ``clearance`` [m], ``z`` [m], ``theta`` [rad], ``type`` (:data:`FLYING`, :data:`CONTACT`,
     :data:`CRITERION`), ``stable``, ``barrier`` [J], ``potential`` [J] (from the deepest state),
     ``path_stiffness`` [N/m] (``-df/du``, NaN on the criterion) and ``eigenvalues`` [N/m] (of ``D K D``,
     ``D = diag(1, 1/l_c)``: the stiffness in the coordinates ``(z, l_c theta)``, real parts, ascending; the
-    second NaN with the pitch locked, both NaN on the criterion).
+    second NaN with the pitch locked, both NaN on the criterion). ``compiled``: the path solved compiled on the
+    kernel's forces (:func:`_path`, the default), else by :func:`pipeline.physics.equilibrium.relaxed_path`
+    from Python (the reference).
     """
     R2, _, _ = static_forces(lambda mu: sl.run_parameters(model, mu))
     pitch = model.pitch is not None
@@ -129,7 +212,8 @@ def states_at(model: sl.Model, protrusion: float) -> list[dict]:
     p = model.p
     k_sigma = model.k_sigma
     u_of_c = float(k_sigma + p["y_s"] + protrusion - p["FH0"])  # u = c + u_of_c (d = FH0 - delta + u - y_s)
-    f = PathForce(R, a)
+    p_, _, _, slots = static_inputs(lambda mu: sl.run_parameters(model, mu), protrusion)
+    f = PathForce(R, a, (dyn._packed(p_), slots) if compiled else None)
     lo = -DEPTH
     hi = max(FINE_TOP, -u_of_c + FINE_TOP)  # (u = 0: the nominal attitude's clearance)
     for _ in range(EXTEND):  # the bottom: the contact law pushes up there
@@ -146,7 +230,7 @@ def states_at(model: sl.Model, protrusion: float) -> list[dict]:
     grid_c = np.concatenate([lo + FINE_STEP * np.arange(int(np.ceil((top - lo) / FINE_STEP - 1e-6))),
                              top + COARSE_STEP * np.arange(int(np.ceil((hi - top) / COARSE_STEP)) + 1)])
     breaks = [u_of_c] if model.contact is not None else []  # the contact law switches on there
-    found = path_equilibria(f, grid_c + u_of_c, breaks, xtol=1e-6 * NM)
+    found = path_equilibria(f, grid_c + u_of_c, breaks, xtol=1e-6 * NM, f_many=f.many)
     D = np.diag([1.0, 1.0 / l_c])
     states = []
     for st in reversed(found):
@@ -171,10 +255,11 @@ def states_at(model: sl.Model, protrusion: float) -> list[dict]:
 
 
 def statics_map(model: sl.Model, protrusions, record: tuple[np.ndarray, float] | None = None) -> xr.Dataset:
-    """The ``statics.nc`` dataset: :func:`states_at` at each protrusion [m] on dims ``(protrusion, state)`` (states
+    """The ``statics.nc`` dataset: :func:`states_at` at each protrusion [nm] on dims ``(protrusion, state)`` (states
     padded with NaN / the flags' fill to the largest count), the DMW energy scales (:func:`dmw_energies`) and
     the TFC-point scales (:func:`tfc_point_scales`); variables :data:`pipeline.variables.STATICS`."""
-    mus = np.asarray(protrusions, dtype=float)
+    labels = np.asarray(protrusions, dtype=float)  # [nm]: the coordinate as given (the sweep's labels)
+    mus = labels * NM
     found = [states_at(model, mu) for mu in mus]
     n = max(1, max(len(s) for s in found))
     shape = (mus.size, n)
@@ -210,7 +295,7 @@ def statics_map(model: sl.Model, protrusions, record: tuple[np.ndarray, float] |
          "dmw_kinetic_energy": V["dmw_kinetic_energy"].from_si(e_v, ()),
          "bearing_stiffness_tfc": V["bearing_stiffness_tfc"].from_si(k_b, ()),
          "effective_mass_tfc": V["effective_mass_tfc"].from_si(m_b, ())},
-        coords={"protrusion": V["protrusion"].from_si(mus, ("protrusion",)),
+        coords={"protrusion": V["protrusion"].data(labels, ("protrusion",)),
                 "state": V["state"].data(np.arange(n), ("state",)),
                 "mode": V["mode"].data(np.arange(2), ("mode",))})
     ds.attrs.update({

@@ -388,11 +388,12 @@ def relaxed_path(forces: Callable[[np.ndarray], np.ndarray], a, u_values, s0: fl
 
 
 def path_equilibria(f: Callable[[float], float], u_grid, breaks=(), *, xtol: float = 0.0,
-                    epsilon: float | None = None) -> list[PathState]:
+                    epsilon: float | None = None, f_many: Callable[[np.ndarray], np.ndarray] | None = None
+                    ) -> list[PathState]:
     """Every equilibrium of a 1-D force ``f(u)`` on ``[u_grid[0], u_grid[-1]]``, with potentials and barriers.
 
-    The force is sampled on ``u_grid`` and just below each break (``b - epsilon``; at ``b`` itself it takes its
-    upper value): a sign change between samples is an equilibrium, refined by Brent's method to ``xtol``
+    The force is sampled on ``u_grid`` and on both sides of each break (``b -+ epsilon``, never on it): a sign
+    change between samples is an equilibrium, refined by Brent's method to ``xtol``
     (a continuous zero) or placed on the break when it is one of the jump (a *switch* state: with the contact
     law switched on at a criterion, the slider is held on it from both sides, the sliding equilibrium of a
     Filippov system; Filippov, "Differential equations with discontinuous righthand sides", Kluwer 1988).
@@ -406,7 +407,8 @@ def path_equilibria(f: Callable[[float], float], u_grid, breaks=(), *, xtol: flo
     ----------
     f : the path force [N] (positive: pushing towards larger ``u``)
     u_grid : increasing sample points; breaks : points where ``f`` may jump (inside the grid)
-    xtol : Brent's absolute tolerance on ``u``; epsilon : the offset below a break (default ``1e-6`` of the
+    f_many : ``f`` at an increasing array of points, in one call (default: ``f`` at each): the samples
+    xtol : Brent's absolute tolerance on ``u``; epsilon : the offset either side of a break (default ``1e-6`` of the
         smallest grid step)
     """
     from scipy.integrate import quad
@@ -420,17 +422,18 @@ def path_equilibria(f: Callable[[float], float], u_grid, breaks=(), *, xtol: flo
     near = np.zeros(u.size, bool)  # (a sample within 2 epsilon of a break would split its jump)
     for b in inside:
         near |= np.abs(u - b) < 2 * eps
-    pts = np.union1d(u[~near], inside)
-    below = {b: b - eps for b in inside}
-    xs = np.sort(np.concatenate([pts, list(below.values())]))
-    fs = np.array([f(x) for x in xs])
+    # each break sampled on both sides, never on it: there the side a solver lands on is rounding's choice
+    sides = {b: (b - eps, b + eps) for b in inside}
+    xs = np.sort(np.concatenate([u[~near], [x for pair in sides.values() for x in pair]]))
+    fs = np.asarray(f_many(xs), dtype=float) if f_many is not None else np.array([f(x) for x in xs])
     states: list[PathState] = []
     for i in range(xs.size - 1):
         f0, f1 = fs[i], fs[i + 1]
         if not (np.isfinite(f0) and np.isfinite(f1)) or (f0 > 0) == (f1 > 0):
             continue
-        on_break = any(xs[i] == below[b] and xs[i + 1] == b for b in inside)
-        x = xs[i + 1] if on_break else brentq(f, xs[i], xs[i + 1], xtol=xtol or 4 * np.finfo(float).eps)
+        at = [b for b in inside if (xs[i], xs[i + 1]) == sides[b]]
+        on_break = bool(at)
+        x = at[0] if on_break else brentq(f, xs[i], xs[i + 1], xtol=xtol or 4 * np.finfo(float).eps)
         states.append(PathState(float(x), bool(f0 > f1), bool(on_break)))
     if not states:
         return states

@@ -25,7 +25,6 @@ from ..model.inputs import for_stage
 from ..model.simulation import model_attrs
 from ..model.statics import statics_map
 from ..runner import Inputs, Stage, build
-from ..units import NM
 
 log = logging.getLogger(__name__)
 
@@ -34,7 +33,7 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
     """The ``statics.nc`` dataset (module docstring); logs the bistable protrusions."""
     sim = for_stage(scene, inputs)
     model = sim.model(scene)
-    ds = statics_map(model, protrusion_grid(scene) * NM, sim.record())
+    ds = statics_map(model, protrusion_grid(scene), sim.record())
     ds.attrs.update(model_attrs(model, sim.k_source))
     multi = ds["protrusion"].values[ds["stable_count"].values > 1]
     log.info("statics: %s", f"more than one stable state at {', '.join(f'{p:g}' for p in multi)} nm" if multi.size
