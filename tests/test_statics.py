@@ -274,3 +274,10 @@ def test_the_stage_writes_a_cf_dataset_of_the_sweep_protrusions_and_keeps_it(pap
     assert crashed == [] and failures[3] == [] and failures[2] + failures[1] == []
     mtime = path.stat().st_mtime_ns
     assert stage.run(scene, tmp_path) == path and path.stat().st_mtime_ns == mtime  # current: not recomputed
+    # the report's figure of it: states and barriers versus protrusion
+    from pipeline.analyses import plots
+    from pipeline.analyses.report_figures import STATICS_FIGURE
+    from pipeline.stages import report
+    assert f"figures/{STATICS_FIGURE}" in report.STAGE.output_names(scene) and "statics" in report._upstream(scene)
+    png = plots.fig_statics(ds, "paper", tmp_path / STATICS_FIGURE)
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 20_000
