@@ -234,7 +234,7 @@ def states_at(model: sl.Model, protrusion: float, compiled: bool = True) -> list
     D = np.diag([1.0, 1.0 / l_c])
     states = []
     for st in reversed(found):
-        fu, y = f.solve(st.u)
+        _, y = f.solve(st.u)
         c = st.u - u_of_c
         if st.switch:
             kind, stable, eig, k_path = CRITERION, st.stable, np.array([np.nan, np.nan]), np.nan
