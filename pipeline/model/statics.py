@@ -247,7 +247,7 @@ def states_at(model: sl.Model, protrusion: float, compiled: bool = True) -> list
                 stable, eig = bool(K[0, 0] > 0), np.array([K[0, 0], np.nan])
             h = 1e-4 * NM
             k_path = -(f(st.u + h) - f(st.u - h)) / (2 * h)
-            kind = FLYING if c > 0 else CONTACT
+            kind = FLYING if c > 0 or model.contact is None else CONTACT  # (no contact law: no criterion)
         states.append({"clearance": c, "z": y[0], "theta": y[1], "type": kind, "stable": bool(stable),
                        "barrier": st.barrier, "potential": st.potential, "path_stiffness": k_path,
                        "eigenvalues": eig})
