@@ -142,6 +142,29 @@ def test_the_compiled_path_finds_the_states_of_the_python_reference(paper_model)
             assert a["barrier"] == pytest.approx(b["barrier"], rel=1e-7, nan_ok=True)
 
 
+@pytest.mark.parametrize("effects", [["air_bearing", "pitch", "dmw"], ["air_bearing", "dmw"]])
+def test_on_the_bearing_alone_the_one_state_is_the_nominal_attitude_with_the_bearings_stiffness(paper_config,
+                                                                                                 effects):
+    # no force at the TFC point: the slider flies at y = 0 and the TFC point's stiffness is the pads' own,
+    # 1/(a K^-1 a) with the pitch relaxed, k_f + k_r with it locked (the rear law's stiffness at g0 is k_r)
+    scene = load_scene(paper_config, ["scene.effects=[" + ", ".join(f'"{e}"' for e in effects) + "]"])
+    model = build(scene, synthetic_record(scene, 2.2e-3))
+    (s,) = st.states_at(model, 5.0 * NM)
+    assert s["stable"] and s["type"] == st.FLYING
+    assert s["z"] == pytest.approx(0.0, abs=1e-6 * NM) and s["theta"] == pytest.approx(0.0, abs=1e-6 * URAD)
+    k_b, m_b = st.tfc_point_scales(model)
+    K = model.slider.stiffness_matrix
+    if "pitch" in effects:
+        a = np.array([1.0, -model.slider.l_c])
+        assert k_b == pytest.approx(1.0 / (a @ np.linalg.solve(K, a)), rel=1e-12)
+        assert 1.0 / m_b == pytest.approx(1.0 / model.slider.m + model.slider.l_c**2 / model.slider.I, rel=1e-12)
+    else:
+        assert (k_b, m_b) == (K[0, 0], model.slider.m) and np.isnan(s["eigenvalues"][1])
+    assert s["path_stiffness"] == pytest.approx(k_b, rel=1e-5)
+    # no criterion without the contact law: the clearance is the separation d, FH0 - delta - y_s at y = 0
+    assert s["clearance"] == pytest.approx(model.p["FH0"] - 5.0 * NM - model.p["y_s"], abs=1e-6 * NM)
+
+
 def test_in_the_adhesion_hysteresis_a_flying_and_a_contact_state_coexist(paper_model):
     # the paper's adhesion folds the flying branch at 7.88 nm (the start's fold search): at 7.0 nm a flying
     # state, a saddle and a contact state; past the fold the contact state alone

@@ -163,10 +163,12 @@ def tfc_point_scales(model: sl.Model) -> tuple[float, float]:
     A vertical force at the TFC point (arm ``l_c`` behind the CG) moves it by ``a K^-1 a^T`` per newton,
     ``a = (1, -l_c)``, ``K`` the pads' stiffness matrix (docs/model.md, section "Slider dynamics"); its
     inverse is the point stiffness. Likewise ``1 / m_b = a M^-1 a^T = 1/m + l_c^2 / I``. With the pitch
-    locked, ``a = (1, 0)``.
+    locked the slider heaves only: ``k_b = k_f + k_r``, ``m_b = m``.
     """
     s = model.slider
-    a = np.array([1.0, -s.l_c]) if model.pitch is not None else np.array([1.0, 0.0])
+    if model.pitch is None:
+        return float(s.stiffness_matrix[0, 0]), float(s.m)
+    a = np.array([1.0, -s.l_c])
     k_b = 1.0 / float(a @ np.linalg.solve(s.stiffness_matrix, a))
     m_b = 1.0 / float(a @ np.linalg.solve(s.mass_matrix, a))
     return k_b, m_b
