@@ -304,3 +304,11 @@ def test_the_stage_writes_a_cf_dataset_of_the_sweep_protrusions_and_keeps_it(pap
     assert f"figures/{STATICS_FIGURE}" in report.STAGE.output_names(scene) and "statics" in report._upstream(scene)
     png = plots.fig_statics(ds, "paper", tmp_path / STATICS_FIGURE)
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 20_000
+
+
+def test_a_statics_grid_beyond_the_scene_limit_is_refused_before_anything_runs(paper_config, tmp_path, capsys):
+    from pipeline import cli
+    out = tmp_path / "out"
+    assert cli.main(["statics", str(paper_config), "--out", str(out), "--set",
+                     "sweep.protrusion_nm={start=0.0, stop=15.0, step=1e-5}"]) == 2
+    assert "1,500,001 statics protrusions" in capsys.readouterr().err and not (out / "statics.nc").exists()
