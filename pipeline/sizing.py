@@ -68,6 +68,10 @@ def sizes(scene: Any, stage: str) -> list[tuple[str, int, int]]:
              * len(scene["sweep"]["damping_ratio"] or [None]) * scene["sweep"]["realisations"])
         out.append((f"sweep scenes (sweep.protrusion_nm = {{start={g['start']:g}, stop={g['stop']:g}, "
                     f"step={g['step']:g}}} x roughness sets x damping ratios x realisations)", n, MAX_SCENES))
+    if stage == "statics":  # (within `run` the sweep's count bounds the same grid)
+        g = scene["sweep"]["protrusion_nm"]
+        out.append((f"statics protrusions (sweep.protrusion_nm = {{start={g['start']:g}, stop={g['stop']:g}, "
+                    f"step={g['step']:g}}})", range_count(g), MAX_SCENES))
     if stage == "identify":
         i = scene["identify"]
         n_par = len(i["parameters"])

@@ -462,11 +462,43 @@ STEPPING = _group(
     V("hysteresis", "nm", "touchdown minus take-off protrusion of the heater-stepping chain", NM, effect="contact"),
 )
 
+#: ``statics.nc`` (:mod:`pipeline.stages.statics`, :mod:`pipeline.model.statics`): every static state of the slider
+#: versus protrusion (docs/model.md, section "Statics map").
+_PS = ("protrusion", "state")
+STATICS = _group(
+    V("protrusion", "nm", "TFC protrusion", NM, dims=("protrusion",)),
+    V("state", "1", "index of a static state at one protrusion, from the highest clearance down", dims=("state",),
+      dtype="int32"),
+    V("mode", "1", "index of an eigenvalue of the static stiffness, ascending", dims=("mode",), dtype="int32"),
+    V("clearance", "nm", "static clearance d - k sigma of the TFC point in the state", NM, dims=_PS),
+    V("z", "nm", "vertical displacement of the centre of gravity in the state (up positive)", NM, dims=_PS),
+    V("pitch", "urad", "pitch angle in the state (leading edge up positive)", URAD, dims=_PS),
+    V("state_type", "1", "where the state lies: above the contact criterion, below it, or on it (held there by "
+                         "the jump of the switched contact law)", dims=_PS, dtype="int8", flag_values=(0, 1, 2),
+      flag_meanings="flying contact criterion", fill_value=-1),
+    V("stable", "1", "whether the state is statically stable", dims=_PS, dtype="int8", flag_values=(0, 1),
+      flag_meanings="unstable stable", fill_value=-1),
+    V("barrier", "J", "energy barrier out of a stable state: the rise of the static potential along the relaxed path "
+                      "to the lower neighbouring unstable state", dims=_PS),
+    V("potential", "J", "static potential of the state along the relaxed path, from the deepest state", dims=_PS),
+    V("path_stiffness", "N m-1", "stiffness of the state at the TFC point with the pitch relaxed", dims=_PS),
+    V("stiffness_eigenvalue", "N m-1", "eigenvalue (real part) of the static stiffness in the coordinates "
+                                       "(z, l_c theta)", dims=(*_PS, "mode")),
+    V("state_count", "1", "number of static states at the protrusion", dims=("protrusion",), dtype="int32"),
+    V("stable_count", "1", "number of stable static states at the protrusion", dims=("protrusion",), dtype="int32"),
+    V("dmw_energy", "J", "DMW energy scale 0.5 k_b sigma_w^2: the air bearing's energy at the TFC point displaced "
+                         "by one DMW rms"),
+    V("dmw_kinetic_energy", "J", "DMW kinetic energy scale 0.5 m_b sigma_v^2: the TFC point's effective mass at "
+                                 "the DMW's rms rate"),
+    V("bearing_stiffness_tfc", "N m-1", "linear air-bearing stiffness at the TFC point"),
+    V("effective_mass_tfc", "kg", "effective mass of the slider at the TFC point"),
+)
+
 #: Groups by name.
 GROUPS: dict[str, dict[str, Variable]] = {
     "coordinates": COORDINATES, "scalars": SCALARS, "histories": HISTORIES, "roughness": ROUGHNESS,
     "dmw": DMW, "interface": INTERFACE, "calibration": CALIBRATION, "accuracy": ACCURACY,
-    "ensemble": ENSEMBLE, "bulge": BULGE, "stepping": STEPPING, "run": RUN,
+    "ensemble": ENSEMBLE, "bulge": BULGE, "stepping": STEPPING, "run": RUN, "statics": STATICS,
 }
 
 #: The groups each dataset file (by stem) may hold, first match wins.
@@ -482,6 +514,7 @@ DATASETS: dict[str, tuple[str, ...]] = {
     "sweep-part": ("coordinates", "scalars", "histories", "stepping"),
     "accuracy": ("accuracy",),
     "bulge": ("bulge",),
+    "statics": ("statics",),
 }
 
 

@@ -406,14 +406,14 @@ def test_orphaned_temporaries_are_cleaned(tmp_path, paper_config):
 # ------------------------------------------------------------------------------------------ registry
 def test_registry_holds_every_stage_and_the_main_job(paper_scene):
     stages = runner.registry()
-    assert list(stages)[:10] == ["roughness", "dmw", "interface", "bulge", "calibrate", "simulate", "sweep",
-                                 "accuracy", "ensemble", "report"]
-    assert runner.main_job(paper_scene) == ["roughness", "dmw", "interface", "calibrate", "sweep", "ensemble",
-                                            "report"]
+    assert list(stages)[:11] == ["roughness", "dmw", "interface", "bulge", "calibrate", "simulate", "statics",
+                                 "sweep", "accuracy", "ensemble", "report"]
+    assert runner.main_job(paper_scene) == ["roughness", "dmw", "interface", "calibrate", "statics", "sweep",
+                                            "ensemble", "report"]
     single = paper_scene.replace(report={"realisations": 1})  # (the report's checks on the scene's record alone)
-    assert runner.main_job(single) == ["roughness", "dmw", "interface", "calibrate", "sweep", "report"]
+    assert runner.main_job(single) == ["roughness", "dmw", "interface", "calibrate", "statics", "sweep", "report"]
     flying = paper_scene.replace(scene={"effects": ["air_bearing", "pitch", "dmw"]})
-    assert runner.main_job(flying) == ["roughness", "dmw", "interface", "sweep", "ensemble", "report"]
+    assert runner.main_job(flying) == ["roughness", "dmw", "interface", "statics", "sweep", "ensemble", "report"]
     plan = runner.Runner(paper_scene, "unused", stages).plan(["report"])
     assert plan.index("calibrate") < plan.index("sweep") < plan.index("report")
     assert runner.Runner(paper_scene.replace(contact={"k": 0.5}), "unused", stages).plan(["sweep"]) == \

@@ -30,6 +30,9 @@ BULGE_FIGURE = "bulge.png"
 #: Drawn only when interface.nc holds both interface models (``interface.model = "deterministic"``).
 INTERFACE_FIGURE = "interface_models.png"
 
+#: Drawn with the statics map (``statics.nc``, the ``statics`` stage).
+STATICS_FIGURE = "statics.png"
+
 #: One drawing job: figure function, positional arguments, keyword arguments.
 Job = tuple[Callable[..., Any], tuple, dict]
 
@@ -133,6 +136,8 @@ def figure_jobs(data: dict[str, xr.Dataset | None], combos: list, settings: Repo
     if data.get("bulge") is not None:
         jobs.append((plots.fig_bulge, (data["bulge"], name, figdir / BULGE_FIGURE),
                      dict(cap_nm=settings.lift_cap_nm)))
+    if data.get("statics") is not None:
+        jobs.append((plots.fig_statics, (data["statics"], name, figdir / STATICS_FIGURE), {}))
     if data["interface"] is not None and "model" in data["interface"].dims:  # interface.model = "deterministic"
         jobs.append((plots.fig_interface_models, (data["interface"], name, figdir / INTERFACE_FIGURE), {}))
     return jobs, skipped

@@ -104,6 +104,26 @@ _FREE = [
     {"key": "contact.damping_n_s_m", "low": 0.0, "high": 0.05},
 ]
 
+#: Bounds of the DMW's spectral exponent ``beta`` [1] as a free parameter (docs/model.md, section "DMW as
+#: free parameters"). The paper's record is "larger than expected" because its 10-kHz high-pass lets in the
+#: long wavelengths: its displacement variance falls with frequency over the 10-500 kHz band, steeper than
+#: equal power per decade, so beta < -1 (the upper bound). At beta = -4.5 more than 90 % of the variance lies
+#: in the band's first octave (10-20 kHz: 1 - 2^(beta + 1) = 0.91): steeper spectra all look like the
+#: high-pass edge and the exponent no longer shapes the record (the lower bound).
+DMW_EXPONENT_BOUNDS = (-4.5, -1.0)
+#: Bounds of the DMW rms [nm] as a free parameter beside the exponent: above 0 (a record), at most 2.0 nm,
+#: where a Gaussian record's peak-to-peak (about 6 rms, 12 nm) passes the flying height (11 nm). A steep
+#: spectrum needs a large rms for the paper's flying FHM because the slider tracks the long wavelengths:
+#: 1.5-1.8 nm at beta = -4 for 12.4 % (docs/model.md, section "DMW as free parameters").
+DMW_RMS_BOUNDS_NM = (0.0, 2.0)
+#: The physical range of a free parameter's bounds, checked on ``identify.parameters`` when a scene is
+#: loaded: key -> (lowest low, highest high, why). (``hdi sensitivity`` screens keys over any range: its
+#: tests use them as dummies of known functions.)
+FREE_LIMITS = {
+    "dmw.exponent": (*DMW_EXPONENT_BOUNDS, "the DMW's content between the 10-kHz high-pass and 500 kHz"),
+    "dmw.rms_nm": (*DMW_RMS_BOUNDS_NM, "a record whose peak-to-peak stays within the flying height"),
+}
+
 #: The checks a target's setting names (:attr:`pipeline.physics.paper.Setting.check`).
 _SETTING_CHECKS = {"positive": _pos, "nonnegative": _nonneg,
                    "lo <= hi": (lambda v: v[0] <= v[1], "lo <= hi"), "lo < hi": (lambda v: v[0] < v[1], "lo < hi")}
@@ -288,7 +308,8 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "rms_nm": Key("float", 0.5, _nonneg, doc="DMW rms [nm] (recon: set for FHM ~12.5 %)"),
         "band_khz": Key("floats", list(paper.DMW_BAND_KHZ), (lambda v: 0 <= v[0] < v[1], "0 <= lo < hi"), length=2,
                         doc="DMW band [kHz] (paper)"),
-        "exponent": Key("float", -2.0, doc="power-law exponent of the displacement PSD [1] (recon)"),
+        "exponent": Key("float", -2.0, doc="power-law exponent of the displacement PSD [1] (recon; as a free "
+                                            "parameter within [-4.5, -1], docs/model.md, section 'DMW as free parameters')"),
         "rpm": Key("float", paper.DISK_RPM, _pos, doc="disk speed [rpm] (paper)"),
         "radius_mm": Key("float", paper.TRACK_RADIUS_MM, _pos, doc="track radius [mm] (paper)"),
         "seed": Key("int", 20090601, (lambda v: 0 <= v < 2**32, "an integer in [0, 2**32 - 1]"),
@@ -718,6 +739,15 @@ def _cross_checks(config: dict[str, dict[str, Any]], where: str) -> None:
                          f"{sol['transient_ms']:g} leaves a steady window of {steady:.3g} samples of "
                          f"output_step_ns = {sol['output_step_ns']:g}; expected at least {MIN_STEADY_SAMPLES} "
                          "samples to judge a regime and an FHM on")
+    for item in config["identify"]["parameters"] or []:  # (the tables' form: checked by the study reading them)
+        key = item.get("key") if isinstance(item, dict) else None
+        if key not in FREE_LIMITS:
+            continue
+        lo, hi, why = FREE_LIMITS[key]
+        low, high = item.get("low"), item.get("high")
+        if all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in (low, high)) and (low < lo or high > hi):
+            raise SceneError(f"{where}: identify.parameters: {key} low = {low}, high = {high}: expected bounds "
+                             f"within [{lo:g}, {hi:g}] ({why}; docs/model.md, section 'DMW as free parameters')")
     damping = config["sweep"]["damping_ratio"] or []
     twice = sorted({d for d in damping if damping.count(d) > 1})
     if twice:

@@ -54,6 +54,17 @@ FOLD_TOL = 1e-3 * NM
 FOLD_STEP = 1.0 * NM
 
 
+def static_inputs(run_parameters, mu: float) -> tuple:
+    """``(p, tables, variants, slots)``: the kernel's inputs of the static forces at the protrusion ``mu`` [m]
+    (:func:`static_forces`), ``slots`` as the compiled functions take them (:func:`pipeline.model.dynamics._slots`)."""
+    p, tables, variants = run_parameters(mu)
+    # the meniscus state at rest is at its equilibrium q = p_a(d): the static forces are those
+    # without it (docs/model.md, section "Meniscus formation"); the run appends q
+    tables = tables._replace(dmw=None, adhesion=static_table(tables.adhesion))
+    variants = variants._replace(meniscus=None)
+    return p, tables, variants, dyn._slots(tables, variants)
+
+
 def static_forces(run_parameters):
     """``(R, flying, solve)``: ``R(y, mu) -> (F_z [N], M_theta [N m])``, the static force and moment on the
     slider at ``y = (z, theta)`` for the protrusion ``mu`` [m], from the kernel's right-hand side at zero
@@ -72,13 +83,8 @@ def static_forces(run_parameters):
 
     def inputs(mu: float):
         if mu not in cache:
-            p, tables, variants = run_parameters(mu)
             cache.clear()  # (continuation: one protrusion at a time)
-            # the meniscus state at rest is at its equilibrium q = p_a(d): the static forces are those
-            # without it (docs/model.md, section "Meniscus formation"); the run appends q
-            tables = tables._replace(dmw=None, adhesion=static_table(tables.adhesion))
-            variants = variants._replace(meniscus=None)
-            cache[mu] = (p, tables, variants, dyn._slots(tables, variants))
+            cache[mu] = static_inputs(run_parameters, mu)
         return cache[mu]
 
     def R(y: np.ndarray, mu: float) -> np.ndarray:

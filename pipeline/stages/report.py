@@ -15,6 +15,7 @@ file                       needed    used for
                                      (upstream when ``report.realisations`` > 1), with spreads
 ``bulge.nc``               optional  ``bulge.png``: the bulge lift versus apex gap (a tabulated
                                      bulge law: upstream then)
+``statics.nc``             optional  ``statics.png``, the static states versus protrusion
 =========================  ========  ==========================================================
 
 A missing optional input skips its figures (a stale PNG of an earlier run is removed) and the
@@ -35,6 +36,8 @@ Writes ``out/figures/`` (returned):
 * ``calibration.png``, ``roughness.png``, ``dmw.png``;
 * ``bulge.png`` (with ``bulge.nc``): the bulge's lift versus apex gap beside p h = const (and the lift cap of
   ``air_bearing.lift_cap_gap_nm``);
+* ``statics.png`` (with ``statics.nc``): the clearance of every static state versus protrusion, stable
+  solid and unstable dashed, and the barriers out of the stable states beside the DMW's energy scales;
 * ``band.png`` (with ``ensemble.nc``): the bouncing BV, the fraction bouncing above 20 %, the touchdown
   probability and the contact fraction over the DMW realisations versus protrusion;
 
@@ -72,7 +75,8 @@ import xarray as xr
 
 from ..analyses import narrative, report_figures, report_tables
 from ..analyses.paper_comparison import comparison_markdown, identification_markdown
-from ..analyses.report_figures import BAND_FIGURE, BULGE_FIGURE, ENSEMBLE_FIGURE, FIGURES, INTERFACE_FIGURE
+from ..analyses.report_figures import (BAND_FIGURE, BULGE_FIGURE, ENSEMBLE_FIGURE, FIGURES, INTERFACE_FIGURE,
+                                      STATICS_FIGURE)
 from ..analyses.report_settings import ReportSettings, wants_ensemble
 from ..analyses.sweep_slices import combinations, split_ensemble
 from ..model.scene_inputs import table_stages
@@ -84,7 +88,7 @@ log = logging.getLogger(__name__)
 
 #: Optional datasets: name -> the stage that writes it.
 OPTIONAL = (("sweep_histories", "sweep"), ("calibration", "calibrate"), ("roughness", "roughness"),
-            ("dmw", "dmw"), ("interface", "interface"), ("bulge", "bulge"))
+            ("dmw", "dmw"), ("interface", "interface"), ("bulge", "bulge"), ("statics", "statics"))
 
 
 def load(inputs: Inputs) -> dict[str, xr.Dataset | None]:
@@ -141,7 +145,7 @@ def compute(scene: Any, inputs: Inputs) -> dict:
     repdir.mkdir(parents=True, exist_ok=True)
     jobs, skipped = report_figures.figure_jobs(data, combos, settings, name, figdir)
     drawn = {a.name for _, args, _ in jobs for a in args if isinstance(a, Path)}
-    stale = list(skipped) + [f for f in (ENSEMBLE_FIGURE, BAND_FIGURE, INTERFACE_FIGURE, BULGE_FIGURE)
+    stale = list(skipped) + [f for f in (ENSEMBLE_FIGURE, BAND_FIGURE, INTERFACE_FIGURE, BULGE_FIGURE, STATICS_FIGURE)
                              if f not in drawn]
     for f in stale:  # never leave a figure of an earlier run next to the new ones
         (figdir / f).unlink(missing_ok=True)
@@ -161,7 +165,7 @@ def compute(scene: Any, inputs: Inputs) -> dict:
 
 
 def _upstream(scene: Any) -> tuple[str, ...]:
-    up = ["roughness", "interface", "sweep"]
+    up = ["roughness", "interface", "statics", "sweep"]
     if scene.has("dmw"):
         up.append("dmw")
     if scene.has("contact") and scene["contact"]["k"] is None:
@@ -182,7 +186,8 @@ def _finish(scene: Any, out: Path, options: dict[str, Any]) -> None:
 
 STAGE = Stage(
     "report", compute,
-    outputs=tuple(f"figures/{f}" for f in FIGURES + (ENSEMBLE_FIGURE, BAND_FIGURE, INTERFACE_FIGURE, BULGE_FIGURE))
+    outputs=tuple(f"figures/{f}" for f in FIGURES + (ENSEMBLE_FIGURE, BAND_FIGURE, INTERFACE_FIGURE, BULGE_FIGURE,
+                                                      STATICS_FIGURE))
     + ("report/summary.csv", "report/summary.md", "report/comparison.md"),
     reads=("*",), upstream=_upstream, optional=("identify",), finish=_finish, order=60, main_job=True,
     doc="the paper's figures, a summary table and the comparison with the paper")
