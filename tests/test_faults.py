@@ -1,0 +1,148 @@
+"""Every fault in one line (issue 38, items 4, 6 and 7): each test reproduces one probe that ended in a
+traceback, failed late or silently, or (the Python API) raised an undocumented error, and checks the one
+line or the documented error it gets now.
+"""
+
+from __future__ import annotations
+
+import math
+import socket
+import struct
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pipeline import cli, fanout
+from pipeline.cli_checks import OptionError, check_options, check_scheduler
+from pipeline.config import limits
+from pipeline.config.scene import SceneError, load_scene
+
+ROOT = Path(__file__).resolve().parents[1]
+PAPER = ROOT / "configs" / "paper-2009.toml"
+#: A flying scene of short runs (no contact law: no calibration, no interface tables).
+FLY = ['scene.effects=["air_bearing","pitch","dmw"]', "solver.duration_ms=0.6", "solver.transient_ms=0.2",
+       "sweep.protrusion_nm={start=2.0, stop=2.4, step=0.2}", "sweep.batch_size=1"]
+
+
+def _sets(overrides: list[str]) -> list[str]:
+    return [a for s in overrides for a in ("--set", s)]
+
+
+def _one_line(capsys, prefix: str) -> str:
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err and "Traceback" not in "\n".join(err)
+    assert err[-1].startswith(prefix), err
+    return err[-1]
+
+
+# ------------------------------------------------------------------------------ the scheduler lost
+def _slow_task(seconds: float) -> float:
+    time.sleep(seconds)
+    return seconds
+
+
+def test_a_scheduler_lost_mid_batch_is_one_line_to_rerun():
+    """A real in-process dask scheduler, closed after the first result: dask cancels the futures it held
+    (``FuturesCancelledError`` escaped ``fanout``, which caught only TimeoutError around its wait)."""
+    from distributed import LocalCluster
+    cluster = LocalCluster(n_workers=1, threads_per_worker=1, processes=False, protocol="tcp://",
+                           host="127.0.0.1", dashboard_address=None)
+    done = []
+
+    def close_after_first(result):
+        done.append(result)
+        if len(done) == 1:
+            cluster.close()
+
+    try:
+        with pytest.raises(fanout.ClusterError) as exc:
+            fanout.run_tasks(_slow_task, [(0.3,)] * 6, scheduler=cluster.scheduler_address, on_done=close_after_first)
+    finally:
+        cluster.close()
+    text = str(exc.value)
+    assert "\n" not in text and len(done) == 1
+    assert text.startswith(f"dask scheduler {cluster.scheduler_address}: lost with ")
+    assert text.endswith("finished work is kept, run again to resume")
+
+
+# ------------------------------------------------------------------------------ heater stepping
+def test_a_stepping_sweep_gives_the_ensemble_and_the_report_its_upward_pass():
+    """``hdi run --set sweep.protocol=stepping`` ended in an IndexError at the ensemble stage: the
+    ``(protrusion, direction)`` regimes were read as one flat list of twice the protrusions."""
+    from pipeline.analyses.sweep_slices import combinations, first_contact, split_ensemble
+    from pipeline.model.simulation import simulate
+    from pipeline.model import slider as sl
+    from pipeline.stages import ensemble
+    from test_dynamics import build, make_scene
+    scene = make_scene(["air_bearing", "pitch", "contact"], solver={"duration_ms": 0.3, "transient_ms": 0.1})
+    prot = [9.0, 10.0, 11.0, 12.0, 13.0]
+    chain = simulate(build(scene), prot, protocol="stepping")
+    up = chain.sel(direction="up")
+    touched = sl.touched_in_summary(up["min_clearance"].values)
+    assert touched.any() and not touched.all()  # (a touchdown inside the chain: the case that failed)
+    sweep, whole = split_ensemble(chain)
+    assert whole is None and "direction" not in sweep.dims
+    (_, ds), = combinations(sweep)
+    fc = first_contact(ds)
+    # the upward pass's first protrusion in contact: the chain's touchdown
+    assert fc == float(chain["touchdown_protrusion"]) == prot[int(np.argmax(touched))]
+    assert first_contact(chain) == fc  # (a slice with both passes: the upward one)
+    pts = ensemble.protrusions(scene, chain)
+    assert {p for p in prot if abs(p - fc) <= ensemble.WINDOW_NM} <= set(pts)
+
+
+# ------------------------------------------------------------------------------ bounds at load
+@pytest.mark.parametrize("override, message", [
+    ("solver.max_step_ns=1e-6", r"solver\.max_step_ns = 1e-06: a run of solver\.duration_ms = 2 needs at least 2e\+12 "
+                                r"steps of it, beyond the integrator's 5,000,000; expected at least 0\.4 ns"),
+    ("lubricant.work_of_adhesion_j_m2=1e99", r"lubricant\.work_of_adhesion_j_m2 = 1e\+99: expected a number in \[0, 1\] "
+                                             r"J/m\^2"),
+    ("sensitivity.bootstrap=1000000000", r"sensitivity\.bootstrap = 1000000000: expected an integer in \[10, 100,000\]"),
+    ("sweep.histories_nm=[5.0, 11.0, 5.0]", r"sweep\.histories_nm = \[5\.0, 11\.0, 5\.0\]: 5 appears more than once; "
+                                            r"expected distinct protrusions"),
+])
+def test_a_hopeless_value_is_refused_at_load_in_one_line(override, message):
+    with pytest.raises(SceneError, match=message) as exc:
+        load_scene(PAPER, [override])
+    assert "\n" not in str(exc.value)
+
+
+def test_the_step_bound_is_the_integrators_budget():
+    import inspect
+    from pipeline.model.slider import run_model
+    assert inspect.signature(run_model).parameters["max_steps"].default == limits.MAX_STEPS
+    # the largest step that can still finish a run loads; a hair below it does not
+    assert load_scene(PAPER, ["solver.max_step_ns=0.4"])["solver"]["max_step_ns"] == 0.4
+    with pytest.raises(SceneError, match="max_step_ns"):
+        load_scene(PAPER, ["solver.max_step_ns=0.3999"])
+
+
+def test_a_file_name_that_is_no_folder_name_is_refused_at_load(tmp_path, capsys):
+    """A scene file ``paper-2009 (copy).toml`` without ``scene.name`` failed only at the sweep, after
+    roughness, dmw, interface and calibrate had run."""
+    text = PAPER.read_text().replace('name = "paper-2009"\n', "")
+    copy = tmp_path / "paper-2009 (copy).toml"
+    copy.write_text(text)
+    with pytest.raises(SceneError, match=r"scene\.name is missing and the file name gives 'paper-2009 \(copy\)': "
+                                         r"expected scene\.name = a name of letters"):
+        load_scene(copy)
+    assert cli.main(["run", str(copy), "--out", str(tmp_path / "out")]) == 2
+    _one_line(capsys, f"hdi run: error: {copy}: scene.name is missing")
+    assert not (tmp_path / "out").exists()
+    (tmp_path / "paper-2009-copy.toml").write_text(text)  # (a name the folder can take loads)
+    assert load_scene(tmp_path / "paper-2009-copy.toml").name == "paper-2009-copy"
+
+
+def test_the_histories_a_whole_sweep_keeps_are_bounded_before_it_runs(tmp_path):
+    """Each run within the per-run limit of history samples, the sweep's total unchecked: a MemoryError."""
+    over = ["solver.duration_ms=100", "solver.output_step_ns=100", "sweep.histories_nm=[2.0, 4.0, 6.0, 8.0, 10.0]"]
+    # 1,000,001 samples per run (within 2,000,000) x 5 histories x 3 damping ratios: 15 million, kept
+    check_options("sweep", load_scene(PAPER, over + ["sweep.damping_ratio=[0.03, 0.05, 0.07]"]), out=tmp_path)
+    many = load_scene(PAPER, over + ["sweep.damping_ratio=[0.03, 0.04, 0.05, 0.06, 0.07]"])  # 25 million
+    with pytest.raises(OptionError, match=r": 25,000,025 kept history samples \(5 protrusions of sweep\.histories_nm "
+                                          r".* exceed 20,000,000; pass --yes to run them anyway$"):
+        check_options("sweep", many, out=tmp_path)
+    check_options("sweep", many, out=tmp_path, yes=True)  # (a big job that is legitimate)
