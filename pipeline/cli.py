@@ -22,7 +22,8 @@ from .io import DatasetError, os_error_line, results_dir
 from .progress import interval_s
 from .config.scene import SceneError, describe_keys, load_scene
 from .stages import roughness
-from .cli_checks import MAX_SCENES, check_options, one_line_warnings
+from .cli_checks import MAX_SCENES, check_options, integration_line, one_line_warnings
+from .model.slider import IntegrationError
 
 log = logging.getLogger("pipeline")
 
@@ -153,6 +154,7 @@ def _main(argv: list[str] | None = None) -> int:
     stages = runner.registry()
     args = _parser(stages).parse_args(argv)
     _logging(args.verbose, args.quiet)
+    scene = None
     try:
         if args.stage == "roughness" and not (len(args.inputs) == 1 and args.inputs[0].endswith(".toml")):
             if args.out is None:
@@ -181,6 +183,11 @@ def _main(argv: list[str] | None = None) -> int:
         if args.verbose:
             traceback.print_exc()
         print(f"hdi {args.stage}: error: {exc}", file=sys.stderr)
+        return 2
+    except IntegrationError as exc:  # (a RuntimeError: the scene, the protrusion and what to change)
+        if args.verbose:
+            traceback.print_exc()
+        print(f"hdi {args.stage}: error: {integration_line(exc, scene)}", file=sys.stderr)
         return 2
     except OSError as exc:  # the file system: a full disk, permissions, a name too long, a folder for a file
         if args.verbose:

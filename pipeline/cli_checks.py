@@ -209,8 +209,45 @@ def check_workers_attached(address: str, timeout: float = CONNECT_TIMEOUT_S,
                 pass
     except (OSError, TimeoutError) as exc:
         raise OptionError(f"{named}: the dask scheduler did not answer ({exc})") from None
+    except Exception as exc:  # noqa: BLE001 (fail closed: a server imitating the handshake sent garbage after it,
+        # and dask's frame reader raised struct.error; whatever dask raises on it is no scheduler)
+        raise OptionError(f"{named}: answers with a dask-like handshake but not as a dask scheduler "
+                          f"({type(exc).__name__}: {_first_line(exc)}); give the scheduler's address "
+                          f"(tcp://HOST:8786 by default) {_leave(named)}") from None
     raise OptionError(f"{named}: the dask scheduler has no workers ({worker_wait:g} s waited); "
                       f"start some (`dask worker {address}`) {_leave(named)}")
+
+
+def _first_line(exc: BaseException, width: int = 120) -> str:
+    """The first line of an exception's text, at most ``width`` characters (an error quoting what a server
+    sent must stay one line)."""
+    text = (str(exc).strip().splitlines() or [""])[0]
+    return text if len(text) <= width else text[:width] + "..."
+
+
+#: What to change after a failed integration, by the integrator's status (:data:`pipeline.model.state.STATUS_TEXT`).
+_INTEGRATION_HINTS = {
+    "too many steps": f"the integrator gave up after {limits.MAX_STEPS:,} steps: shorten solver.duration_ms, or "
+                      "hold contact modes longer against chattering on the contact criterion (solver.min_dwell_ns), "
+                      "or move the protrusion or contact.k off the touchdown edge",
+    "step size underflow": "the forces change faster than any step resolves: loosen solver.rtol or solver.atol_nm, "
+                           "or check the interface keys (lubricant.work_of_adhesion_j_m2, contact.k)",
+    "state became non-finite": "a force overflowed: check the interface keys (lubricant.work_of_adhesion_j_m2, "
+                               "contact.k) and the protrusion against air_bearing.flying_height_nm",
+}
+
+
+def integration_line(exc: BaseException, scene: Any = None) -> str:
+    """One line for a failed integration (:class:`pipeline.model.slider.IntegrationError`, whose text names
+    the protrusion and the integrator's status): the scene (its file and name), the failure, and what to
+    change (:data:`_INTEGRATION_HINTS`)."""
+    text = _first_line(exc, 300)
+    hint = next((h for status, h in _INTEGRATION_HINTS.items() if status in text), None)
+    where = ""
+    if scene is not None:
+        path = getattr(scene, "path", None)
+        where = f"{path} (scene {scene.name}): " if path else f"scene {scene.name}: "
+    return f"{where}{text}" + (f"; {hint}" if hint else "")
 
 
 def check_out(out: str | Path | None) -> None:

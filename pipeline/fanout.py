@@ -142,6 +142,9 @@ def connect(address: str, timeout: float | None = None) -> Iterator[Any]:
     except (OSError, TimeoutError) as exc:
         raise ClusterError(f"dask scheduler {address}: did not answer ({exc}); start it again, or run locally "
                            "(--scheduler threads)") from None
+    except Exception as exc:  # noqa: BLE001 (fail closed: garbage after a dask-like handshake, e.g. struct.error)
+        raise ClusterError(f"dask scheduler {address}: answers, but not as a dask scheduler ({type(exc).__name__}); "
+                           "give the scheduler's address, or run locally (--scheduler threads)") from None
     with client:
         yield client
 

@@ -146,3 +146,64 @@ def test_the_histories_a_whole_sweep_keeps_are_bounded_before_it_runs(tmp_path):
                                           r".* exceed 20,000,000; pass --yes to run them anyway$"):
         check_options("sweep", many, out=tmp_path)
     check_options("sweep", many, out=tmp_path, yes=True)  # (a big job that is legitimate)
+
+
+# ------------------------------------------------------------------------------ a fake handshake
+@pytest.fixture
+def fake_dask_server():
+    """A loopback server that sends what looks like a dask handshake (a length, then a body naming
+    ``pickle-protocol`` and ``compression``) and then garbage: dask's frame reader raised struct.error.
+    It serves for at most 20 s and closes itself."""
+    srv = socket.create_server(("127.0.0.1", 0))
+    body = b"pickle-protocol compression \xff\xfe garbage"
+    stop = threading.Event()
+
+    def serve():
+        srv.settimeout(0.2)
+        end = time.monotonic() + 20
+        while not stop.is_set() and time.monotonic() < end:
+            try:
+                conn, _ = srv.accept()
+            except socket.timeout:
+                continue
+            with conn:
+                conn.sendall(struct.pack("<Q", len(body)) + body)
+                time.sleep(0.3)
+        srv.close()
+
+    thread = threading.Thread(target=serve, daemon=True)
+    thread.start()
+    yield f"tcp://127.0.0.1:{srv.getsockname()[1]}"
+    stop.set()
+    thread.join()
+
+
+def test_a_server_imitating_the_dask_handshake_fails_closed_in_one_line(fake_dask_server, tmp_path, capsys):
+    with pytest.raises(OptionError, match=r"answers with a dask-like handshake but not as a dask scheduler "
+                                          r"\(error: ") as exc:
+        check_scheduler(fake_dask_server, timeout=1.0, worker_wait=1.0)
+    assert "\n" not in str(exc.value)
+    args = ["sweep", str(PAPER), "--out", str(tmp_path / "out"), "--scheduler", fake_dask_server, *_sets(FLY)]
+    assert cli.main(args) == 2
+    _one_line(capsys, f"hdi sweep: error: --scheduler {fake_dask_server}: answers with a dask-like handshake")
+    assert not (tmp_path / "out").exists()
+    with pytest.raises(fanout.ClusterError, match=r"answers, but not as a dask scheduler \(error\)"):
+        fanout.cluster_threads(fake_dask_server)  # (a scheduler replaced mid-run: the fan-out's own connection)
+
+
+# ------------------------------------------------------------------------------ a failed integration
+def test_a_failed_integration_is_one_line_naming_the_scene_the_protrusion_and_what_to_change(tmp_path, capsys,
+                                                                                            monkeypatch):
+    """``solver.duration_ms=100`` on the two-population scene at 10 nm with k = 0.5 took 5,000,000 steps
+    (chattering on the contact criterion) and the IntegrationError, a RuntimeError, escaped the CLI's
+    one-line path as a traceback. The same failure here in a second: the integrator's step budget
+    lowered to 200 steps (a 0.6-ms flying run needs more than 1,200 of 500 ns)."""
+    from pipeline.model import slider as sl
+    monkeypatch.setattr(sl.run_model, "__defaults__", (None, 200))
+    args = ["simulate", str(PAPER), "--out", str(tmp_path), *_sets(FLY[:3] + ["tfc.protrusion_nm=2.0"])]
+    assert cli.main(args) == 2
+    line = _one_line(capsys, f"hdi simulate: error: {PAPER} (scene paper-2009): integration failed at protrusion 2 nm: "
+                             "too many steps (steps 200, ")
+    assert line.endswith("shorten solver.duration_ms, or hold contact modes longer against chattering on the "
+                         "contact criterion (solver.min_dwell_ns), or move the protrusion or contact.k off the "
+                         "touchdown edge")
