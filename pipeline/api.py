@@ -182,7 +182,7 @@ def run_stage(stage: str, scene: SceneLike, out: str | Path | None = None, *, fo
     scene : a scene (:func:`load_scene`) or the path of its file
     out : the results folder (``None``: ``results/<scene name>/``, relative to the working directory)
     force : recompute the stage even when its outputs are current (``--force``)
-    scheduler, workers : the fan-out of sweep, calibrate, identify and sensitivity (``--scheduler``,
+    scheduler, workers : the fan-out of sweep, calibrate, ensemble, identify and sensitivity (``--scheduler``,
         ``--workers``; ``None``: local threads, one per core)
     yes : allow a big job beyond the limits of :mod:`pipeline.config.limits` (``--yes``)
 

@@ -65,7 +65,8 @@ def _parser(stages: dict[str, runner.Stage]) -> argparse.ArgumentParser:
                    help="override a scene key (TOML value syntax); repeatable")
     p.add_argument("--out", type=Path, default=None, help="output folder (default results/<scene name>/)")
     p.add_argument("--scheduler", default=None, metavar="ADDRESS|FILE",
-                   help="run the fan-out (sweep, calibrate, ensemble, identify, sensitivity) on an existing "
+                   help="run the fan-out (sweep, calibrate, ensemble, identify, sensitivity, and the report's "
+                        "upstream stages) on an existing "
                         "dask.distributed scheduler: its address (tcp://HOST:8786) or the JSON file `dask scheduler "
                         "--scheduler-file FILE` writes; without it, the address in DASK_SCHEDULER_ADDRESS if set, "
                         "else local threads; threads, processes or synchronous name the local fan-outs")

@@ -50,8 +50,9 @@ MAX_SCENES = limits.MAX_SCENES
 #: Options and the stages that use them (``run`` uses those of all its stages; ``--force`` and
 #: ``--out`` apply to every stage). ``--channel``/``--detrend`` act only on AFM files given directly.
 OPTION_STAGES: dict[str, tuple[str, ...]] = {
-    "scheduler": ("sweep", "run", "calibrate", "identify", "sensitivity"),
-    "workers": ("sweep", "run", "calibrate", "identify", "sensitivity"),
+    # (the ensemble fans out its realisations; the report makes sweep, calibrate and ensemble current first)
+    "scheduler": ("sweep", "run", "calibrate", "ensemble", "report", "identify", "sensitivity"),
+    "workers": ("sweep", "run", "calibrate", "ensemble", "report", "identify", "sensitivity"),
     "yes": ("sweep", "run", "dmw", "interface", "calibrate", "simulate", "accuracy", "report", "identify",
             "sensitivity"),
     "readme": ("report", "run"),

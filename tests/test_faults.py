@@ -207,3 +207,22 @@ def test_a_failed_integration_is_one_line_naming_the_scene_the_protrusion_and_wh
     assert line.endswith("shorten solver.duration_ms, or hold contact modes longer against chattering on the "
                          "contact criterion (solver.min_dwell_ns), or move the protrusion or contact.k off the "
                          "touchdown edge")
+
+
+# ------------------------------------------------------------------------------ ensemble and report fan out
+@pytest.mark.parametrize("stage", ["ensemble", "report"])
+def test_the_ensemble_and_the_report_take_the_scheduler_like_the_other_fan_out_stages(stage, tmp_path, capsys,
+                                                                                       monkeypatch):
+    """They refused ``--scheduler`` and ``--workers`` and silently ignored ``DASK_SCHEDULER_ADDRESS``, though
+    ``--help`` lists the ensemble among the fan-out stages (and the report makes it current)."""
+    scene = load_scene(PAPER)
+    assert check_options(stage, scene, out=tmp_path, scheduler="threads", workers=2) == "threads"
+    closed = socket.create_server(("127.0.0.1", 0))
+    port = closed.getsockname()[1]
+    closed.close()  # (nothing listens there now)
+    monkeypatch.setenv("DASK_SCHEDULER_ADDRESS", f"tcp://127.0.0.1:{port}")
+    with pytest.raises(OptionError, match=rf"^DASK_SCHEDULER_ADDRESS=tcp://127\.0\.0\.1:{port}: no scheduler answers"):
+        check_options(stage, scene, out=tmp_path)
+    assert cli.main([stage, str(PAPER), "--out", str(tmp_path / "out")]) == 2
+    _one_line(capsys, f"hdi {stage}: error: DASK_SCHEDULER_ADDRESS=tcp://127.0.0.1:{port}: no scheduler answers")
+    assert not (tmp_path / "out").exists()
