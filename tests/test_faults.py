@@ -19,6 +19,7 @@ from pipeline import cli, fanout
 from pipeline.cli_checks import OptionError, check_options, check_scheduler
 from pipeline.config import limits
 from pipeline.config.scene import SceneError, load_scene
+from pipeline.io import DatasetError
 
 ROOT = Path(__file__).resolve().parents[1]
 PAPER = ROOT / "configs" / "paper-2009.toml"
@@ -226,3 +227,112 @@ def test_the_ensemble_and_the_report_take_the_scheduler_like_the_other_fan_out_s
     assert cli.main([stage, str(PAPER), "--out", str(tmp_path / "out")]) == 2
     _one_line(capsys, f"hdi {stage}: error: DASK_SCHEDULER_ADDRESS=tcp://127.0.0.1:{port}: no scheduler answers")
     assert not (tmp_path / "out").exists()
+
+
+# ------------------------------------------------------------------------------ the Python API
+API_FLY = ['scene.effects=["air_bearing","pitch","dmw"]', "solver.duration_ms=0.6", "solver.transient_ms=0.2",
+           "sweep.protrusion_nm={start=4.0, stop=5.0, step=0.5}"]
+
+
+@pytest.fixture(scope="module")
+def api_model():
+    import pipeline as hdi
+    scene = hdi.load_scene(PAPER, API_FLY)
+    return scene, hdi.build_model(scene)
+
+
+def _calls(scene, model, tmp: Path):
+    """``(call, error class, message)``: arguments of the wrong type or range; each raised TypeError,
+    AttributeError or a raw OSError, or (a negative protrusion) returned results marked valid."""
+    import pipeline as hdi
+    afile = tmp / "afile.txt"
+    afile.write_text("x")
+    return [
+        (lambda: hdi.load_scene(123), SceneError, r"^load_scene: path = 123: expected the path of a scene file"),
+        (lambda: hdi.load_scene(None), SceneError, r"^load_scene: path = None: expected the path"),
+        (lambda: hdi.load_scene(PAPER, "contact.k=0.5"), SceneError,
+         r"^load_scene: overrides = 'contact.k=0.5': expected a list of \"section.key=value\" strings"),
+        (lambda: hdi.load_scene(PAPER, [0.5]), SceneError, r"^load_scene: overrides\[0\] = 0.5: expected a"),
+        (lambda: hdi.load_scene(PAPER, None), SceneError, r"^load_scene: overrides = None: expected a list"),
+        (lambda: hdi.build_model(123), SceneError, r"^scene = 123: expected a scene \(load_scene\) or the path"),
+        (lambda: hdi.build_model(scene, afile), OptionError, rf"^results {afile}: is a file; expected a folder"),
+        (lambda: hdi.build_model(scene, 42), OptionError, r"^results 42: expected a path"),
+        (lambda: hdi.build_model(scene, k="0.5"), SceneError, r"^k: contact\.k = '0\.5': expected a number"),
+        (lambda: hdi.build_model(scene, k=math.nan), SceneError, r"^k: contact\.k = nan: expected a finite number"),
+        (lambda: hdi.simulate(model, 9.0), OptionError, r"^protrusions = 9\.0: expected a list of protrusions \[nm\] "
+                                                        r"\(e\.g\. \[9\.0\] for one\), got float"),
+        (lambda: hdi.simulate(model, "9"), OptionError, r"^protrusions = '9': expected a list"),
+        (lambda: hdi.simulate(model, [-1.0]), OptionError, r"^protrusions\[0\] = -1\.0: expected a number >= 0 "
+                                                           r"\[nm\], finite \(as tfc\.protrusion_nm\)"),
+        (lambda: hdi.simulate(model, [9.0, math.nan]), OptionError, r"^protrusions\[1\] = nan: expected a number >= 0"),
+        (lambda: hdi.simulate(model, [1e6]), OptionError, r"^protrusions\[0\] = 1e\+06 nm: expected at most the "
+                                                          r"flying height 11 nm \+ 100 nm"),
+        (lambda: hdi.simulate(model, ["9"]), OptionError, r"^protrusions\[0\] = '9': expected a number \[nm\], got str"),
+        (lambda: hdi.simulate(model, []), OptionError, r"^protrusions = \[\]: expected at least one protrusion"),
+        (lambda: hdi.simulate(model, [9.0], histories=9.0), OptionError, r"^histories = 9\.0: expected a list"),
+        (lambda: hdi.simulate("model", [9.0]), ValueError, r"^model = 'model': expected the model of build_model"),
+        (lambda: hdi.simulate(model, [9.0], counters="yes"), OptionError, r"^--counters 'yes': expected True or False"),
+        (lambda: hdi.histories_of(None), ValueError, r"^histories_of: expected the dataset of simulate"),
+        (lambda: hdi.open_dataset(123, "sweep"), OptionError, r"^results 123: expected a path"),
+        (lambda: hdi.open_dataset(tmp, 7), ValueError, r"^name = 7: expected a stage"),
+        (lambda: hdi.open_dataset(afile, "sweep"), DatasetError, rf"^{afile}: is a file; expected a results folder"),
+        (lambda: hdi.run_stage("sweep", scene, tmp / "o", workers="2"), OptionError,
+         r"^--workers '2': expected a positive integer number of local workers \(1 or more\), got str"),
+        (lambda: hdi.run_stage("sweep", scene, tmp / "o", workers=2.0), OptionError, r"^--workers 2\.0: expected"),
+        (lambda: hdi.run_stage("sweep", scene, tmp / "o", scheduler=8786), OptionError,
+         r"^--scheduler 8786: expected an address"),
+        (lambda: hdi.run_stage("sweep", scene, tmp / "o", force="no"), OptionError, r"^--force 'no': expected True"),
+        (lambda: hdi.run_stage("sweep", scene, tmp / "o", yes=1), OptionError, r"^--yes 1: expected True or False"),
+        (lambda: hdi.run_stage("sweep", scene, 3.5), OptionError, r"^--out 3\.5: expected a path"),
+        (lambda: hdi.run_stage(None, scene, tmp / "o"), ValueError, r"^stage = None: expected a stage name"),
+        (lambda: hdi.run(scene, afile), OptionError, rf"^--out {afile}: is a file; expected a folder"),
+    ]
+
+
+def test_the_api_raises_its_documented_errors_for_bad_arguments(api_model, tmp_path):
+    """22 calls raised TypeError, AttributeError or a raw OSError; ``simulate(model, [-1.0])`` returned
+    results marked valid where the command line refuses a negative protrusion. Each is now the error
+    the API documents (pipeline/api.py), in one line, before anything runs or is written."""
+    scene, model = api_model
+    for call, error, message in _calls(scene, model, tmp_path):
+        with pytest.raises(error, match=message) as exc:
+            call()
+        assert "\n" not in str(exc.value)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["afile.txt"]
+
+
+def test_the_api_refuses_a_folder_it_cannot_write_even_when_up_to_date(api_model, tmp_path, monkeypatch):
+    """An up-to-date results folder made read-only: building its model raised a raw PermissionError (the
+    runner locks the folder). As root every folder is writable, so there the file system's refusal is
+    emulated where the check meets it (``tempfile.mkstemp`` in the folder)."""
+    import os
+    import tempfile
+    import pipeline as hdi
+    scene, _ = api_model
+    folder = tmp_path / "res"
+    hdi.build_model(scene, folder)  # (made current)
+    os.chmod(folder, 0o555)
+    try:
+        if os.geteuid() == 0:
+            real = tempfile.mkstemp
+
+            def refuse(*args, dir=None, **kw):
+                if dir is not None and Path(dir) == folder:
+                    raise PermissionError(13, "Permission denied")
+                return real(*args, dir=dir, **kw)
+            monkeypatch.setattr(tempfile, "mkstemp", refuse)
+        with pytest.raises(OptionError, match=rf"^results {folder}: not writable: Permission denied$"):
+            hdi.build_model(scene, folder)
+    finally:
+        os.chmod(folder, 0o755)
+
+
+def test_a_failed_integration_from_the_api_is_the_same_one_line(api_model, monkeypatch):
+    """NaN protrusions reached the integrator (an IntegrationError without the scene or what to change)."""
+    import pipeline as hdi
+    from pipeline.model import slider as sl
+    scene, model = api_model
+    monkeypatch.setattr(sl.run_model, "__defaults__", (None, 200))
+    with pytest.raises(sl.IntegrationError, match=rf"^{PAPER} \(scene paper-2009\): integration failed at protrusion "
+                                                  r"4\.5 nm: too many steps .*; shorten solver\.duration_ms"):
+        hdi.simulate(model, [4.5])
