@@ -190,6 +190,12 @@ def _main(argv: list[str] | None = None) -> int:
             traceback.print_exc()
         print(f"hdi {args.stage}: error: {integration_line(exc, scene)}", file=sys.stderr)
         return 2
+    except MemoryError:  # (the sizes of config/limits.py are checked first; what they do not foresee)
+        if args.verbose:
+            traceback.print_exc()
+        print(f"hdi {args.stage}: error: out of memory (MemoryError); finished work is kept: ask for less (the sizes "
+              "bounded in pipeline/config/limits.py), or run on a machine with more memory", file=sys.stderr)
+        return 2
     except OSError as exc:  # the file system: a full disk, permissions, a name too long, a folder for a file
         if args.verbose:
             traceback.print_exc()

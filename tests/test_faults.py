@@ -104,6 +104,7 @@ def test_a_stepping_sweep_gives_the_ensemble_and_the_report_its_upward_pass():
     ("sensitivity.bootstrap=1000000000", r"sensitivity\.bootstrap = 1000000000: expected an integer in \[10, 100,000\]"),
     ("sweep.histories_nm=[5.0, 11.0, 5.0]", r"sweep\.histories_nm = \[5\.0, 11\.0, 5\.0\]: 5 appears more than once; "
                                             r"expected distinct protrusions"),
+    ("report.histories_nm=[11.0, 11.0]", r"report\.histories_nm = \[11\.0, 11\.0\]: 11 appears more than once"),
 ])
 def test_a_hopeless_value_is_refused_at_load_in_one_line(override, message):
     with pytest.raises(SceneError, match=message) as exc:
@@ -336,3 +337,15 @@ def test_a_failed_integration_from_the_api_is_the_same_one_line(api_model, monke
     with pytest.raises(sl.IntegrationError, match=rf"^{PAPER} \(scene paper-2009\): integration failed at protrusion "
                                                   r"4\.5 nm: too many steps .*; shorten solver\.duration_ms"):
         hdi.simulate(model, [4.5])
+
+
+def test_memory_no_limit_foresaw_is_one_line(tmp_path, capsys, monkeypatch):
+    """The sizes of config/limits.py are checked before a run; a MemoryError past them (a machine with
+    less memory than they assume) is one line, not a traceback."""
+    from pipeline import runner
+
+    def exhausted(self, targets, force=False):
+        raise MemoryError()
+    monkeypatch.setattr(runner.Runner, "build", exhausted)
+    assert cli.main(["sweep", str(PAPER), "--out", str(tmp_path), *_sets(FLY)]) == 2
+    _one_line(capsys, "hdi sweep: error: out of memory (MemoryError); finished work is kept")

@@ -705,12 +705,13 @@ def _cross_checks(config: dict[str, dict[str, Any]], where: str) -> None:
                          f"{sol['transient_ms']:g} leaves a steady window of {steady:.3g} samples of "
                          f"output_step_ns = {sol['output_step_ns']:g}; expected at least {MIN_STEADY_SAMPLES} "
                          "samples to judge a regime and an FHM on")
-    kept = config["sweep"]["histories_nm"] or []
-    # (the histories' coordinate is the protrusion: a value twice gave two equal labels, one row all NaN)
-    twice = sorted({round(h, 9) for i, h in enumerate(kept) for g in kept[:i] if abs(h - g) < 1e-9})
-    if twice:
-        raise SceneError(f"{where}: sweep.histories_nm = {kept}: {twice[0]:.10g} appears more than once; "
-                         "expected distinct protrusions [nm] (each is a coordinate value of the kept histories)")
+    for section in ("sweep", "report"):  # (the sweep keeps those of report.histories_nm without its own)
+        kept = config[section]["histories_nm"] or []
+        # (the histories' coordinate is the protrusion: a value twice gave two equal labels, one row all NaN)
+        twice = sorted({round(h, 9) for i, h in enumerate(kept) for g in kept[:i] if abs(h - g) < 1e-9})
+        if twice:
+            raise SceneError(f"{where}: {section}.histories_nm = {kept}: {twice[0]:.10g} appears more than once; "
+                             "expected distinct protrusions [nm] (each is a coordinate value of the kept histories)")
     if sol["duration_ms"] * (MS / NS) / sol["max_step_ns"] > MAX_STEPS:
         raise SceneError(f"{where}: solver.max_step_ns = {sol['max_step_ns']:g}: a run of solver.duration_ms = "
                          f"{sol['duration_ms']:g} needs at least {sol['duration_ms'] * (MS / NS) / sol['max_step_ns']:.3g} "
