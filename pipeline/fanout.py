@@ -80,8 +80,8 @@ CLIENT_TIMEOUT_S = 30.0
 
 class ClusterError(ValueError):
     """The cluster cannot run the batch: a worker does not see the results folder or runs other code, no
-    worker ran a task for :data:`CLUSTER_WAIT_S`, or a task killed its workers (the command line says it
-    in one line)."""
+    worker ran a task for :data:`CLUSTER_WAIT_S`, a task killed its workers, or the scheduler was lost or
+    is none (the command line says it in one line)."""
 
 
 _SHARED: contextvars.ContextVar[str | None] = contextvars.ContextVar("hdi_shared_folder", default=None)
