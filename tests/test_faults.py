@@ -349,3 +349,22 @@ def test_memory_no_limit_foresaw_is_one_line(tmp_path, capsys, monkeypatch):
     monkeypatch.setattr(runner.Runner, "build", exhausted)
     assert cli.main(["sweep", str(PAPER), "--out", str(tmp_path), *_sets(FLY)]) == 2
     _one_line(capsys, "hdi sweep: error: out of memory (MemoryError); finished work is kept")
+
+
+@pytest.mark.slow
+def test_hdi_run_with_heater_stepping_finishes(tmp_path, capsys):
+    """The probe itself: ``hdi run --set sweep.protocol=stepping`` (short runs, a grid through touchdown)
+    stopped at the ensemble stage with an IndexError; now the ensemble and the report are written."""
+    import xarray as xr
+    over = ["sweep.protocol=stepping", "solver.duration_ms=0.5", "solver.transient_ms=0.2", "contact.k=0.978",
+            "sweep.protrusion_nm={start=5.0, stop=9.0, step=0.5}", "report.realisations=2",
+            "report.histories_nm=[5.0, 9.0]"]
+    assert cli.main(["run", str(PAPER), "--out", str(tmp_path), "-q", *_sets(over)]) == 0, capsys.readouterr().err
+    sweep = xr.open_dataset(tmp_path / "sweep.nc", engine="netcdf4")
+    ens = xr.open_dataset(tmp_path / "ensemble.nc", engine="netcdf4")
+    td = float(sweep["touchdown_protrusion"].squeeze())
+    assert 5.0 < td <= 9.0  # (the chain touched down inside the grid: the case that failed)
+    # the ensemble runs the grid points within its window of the upward pass's first contact
+    from pipeline.stages.ensemble import WINDOW_NM
+    assert {p for p in np.arange(5.0, 9.01, 0.5) if abs(p - td) <= WINDOW_NM} <= set(ens["protrusion"].values)
+    assert (tmp_path / "report" / "summary.md").is_file()
