@@ -201,7 +201,7 @@ def simulate(model: Model, protrusions: Iterable[float], *, histories: Iterable[
     if not prot:
         raise OptionError("protrusions = []: expected at least one protrusion [nm]")
     kept = check_protrusions(histories, fh0, "histories")
-    check_flag("counters", counters)
+    check_flag("counters =", counters)
     if timings is not None and not isinstance(timings, MutableMapping):
         raise ValueError(f"timings = {timings!r}: expected a dict (or None), got {type(timings).__name__}")
     try:

@@ -78,10 +78,11 @@ def check_workers(workers: int | None) -> None:
         raise OptionError(f"--workers {workers}: expected a positive number of local workers (1 or more)")
 
 
-def check_flag(name: str, value: Any) -> None:
-    """A switch (``--force``, ``--yes``) given from Python is ``True`` or ``False`` (``"no"`` is truthy)."""
+def check_flag(option: str, value: Any) -> None:
+    """A switch given from Python (``option``: how an error names it, ``--force``, ``--yes``) is ``True`` or
+    ``False`` (``"no"`` is truthy)."""
     if not isinstance(value, bool):
-        raise OptionError(f"--{name.replace('_', '-')} {value!r}: expected True or False, got {type(value).__name__}")
+        raise OptionError(f"{option} {value!r}: expected True or False, got {type(value).__name__}")
 
 
 def check_path_option(value: Any, option: str) -> None:
@@ -479,8 +480,8 @@ def check_options(stage: str, scene: Any, *, out: str | Path | None = None, sche
     check_stage_options(stage, {"scheduler": scheduler, "workers": workers, "yes": yes, **given},
                         afm_files=scene is None)
     check_workers(workers)
-    check_flag("yes", yes)
-    check_flag("force", force)
+    check_flag("--yes", yes)
+    check_flag("--force", force)
     for name in ("readme", "write_scene"):
         check_path_option(given.get(name), _FLAG[name])
     check_out(out)

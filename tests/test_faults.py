@@ -272,7 +272,7 @@ def _calls(scene, model, tmp: Path):
         (lambda: hdi.simulate(model, []), OptionError, r"^protrusions = \[\]: expected at least one protrusion"),
         (lambda: hdi.simulate(model, [9.0], histories=9.0), OptionError, r"^histories = 9\.0: expected a list"),
         (lambda: hdi.simulate("model", [9.0]), ValueError, r"^model = 'model': expected the model of build_model"),
-        (lambda: hdi.simulate(model, [9.0], counters="yes"), OptionError, r"^--counters 'yes': expected True or False"),
+        (lambda: hdi.simulate(model, [9.0], counters="yes"), OptionError, r"^counters = 'yes': expected True or False"),
         (lambda: hdi.histories_of(None), ValueError, r"^histories_of: expected the dataset of simulate"),
         (lambda: hdi.open_dataset(123, "sweep"), OptionError, r"^results 123: expected a path"),
         (lambda: hdi.open_dataset(tmp, 7), ValueError, r"^name = 7: expected a stage"),
