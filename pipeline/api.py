@@ -18,9 +18,14 @@ a stage is run by :class:`pipeline.runner.Runner` after the command line's check
 (:func:`pipeline.cli_checks.check_options`), a dataset is read by :func:`pipeline.io.read_dataset`. So a
 model built here simulates exactly as the ``simulate`` and ``sweep`` stages do.
 
-Bad input raises the exception the command line turns into its one-line error:
-:class:`pipeline.config.scene.SceneError` (a scene or an override), :class:`pipeline.io.DatasetError` (a
-missing or foreign dataset), :class:`pipeline.cli_checks.OptionError` (an option), ``ValueError``.
+Bad input raises the exception the command line turns into its one-line error, checked as the command
+line checks it (:mod:`pipeline.cli_checks`) before anything runs or is written:
+:class:`pipeline.config.scene.SceneError` (a scene, its path or an override), :class:`pipeline.io.DatasetError`
+(a missing or foreign dataset), :class:`pipeline.cli_checks.OptionError` (an option or argument of the wrong
+type or range: ``workers="2"``, a results folder that is a file or cannot be written, a negative or NaN
+protrusion), ``ValueError``; all are ``ValueError``. A run whose integration fails raises
+:class:`pipeline.model.slider.IntegrationError` in one line naming the scene, the protrusion and what to
+change (the command line's message); a file system that fails mid-run (a full disk) raises ``OSError``.
 """
 
 from __future__ import annotations
@@ -31,13 +36,17 @@ from typing import Iterable, Mapping
 
 import xarray as xr
 
+import os
+from collections.abc import MutableMapping
+
 from . import runner
-from .cli_checks import check_options
-from .config.scene import Scene, load_scene as _load_scene
-from .io import read_dataset, results_dir
+from .cli_checks import (OptionError, check_flag, check_options, check_out, check_path_option, check_protrusions,
+                         integration_line)
+from .config.scene import SCHEMA, Scene, SceneError, _check_value, load_scene as _load_scene
+from .io import DatasetError, read_dataset, results_dir
 from .model.inputs import SimulationInputs
-from .model.simulation import histories_of, simulate
-from .model.slider import Model
+from .model.simulation import histories_of as _histories_of, simulate as _simulate
+from .model.slider import IntegrationError, Model
 
 __all__ = ["load_scene", "simulation_inputs", "build_model", "simulate", "histories_of", "open_dataset",
            "run_stage", "run"]
@@ -64,13 +73,42 @@ def load_scene(path: str | Path, overrides: Iterable[str] = ()) -> Scene:
     Raises
     ------
     pipeline.config.scene.SceneError
-        A missing file, bad TOML or an invalid key, naming the file, the key and what was expected.
+        A missing file, bad TOML or an invalid key, naming the file, the key and what was expected; a
+        ``path`` that is no path (``123``) or ``overrides`` that are not a list of strings.
     """
+    if not isinstance(path, (str, os.PathLike)):
+        raise SceneError(f"load_scene: path = {path!r}: expected the path of a scene file (str or pathlib.Path), "
+                         f"got {type(path).__name__}")
+    # (a single string would be read character by character)
+    if isinstance(overrides, (str, bytes)) or not hasattr(overrides, "__iter__"):
+        raise SceneError(f"load_scene: overrides = {overrides!r}: expected a list of \"section.key=value\" strings "
+                         "(e.g. [\"contact.k=0.5\"])")
+    overrides = list(overrides)
+    for i, text in enumerate(overrides):
+        if not isinstance(text, str):
+            raise SceneError(f"load_scene: overrides[{i}] = {text!r}: expected a \"section.key=value\" string, "
+                             f"got {type(text).__name__}")
     return _load_scene(path, overrides)
 
 
 def _scene(scene: SceneLike) -> Scene:
-    return scene if isinstance(scene, Scene) else _load_scene(scene)
+    """A scene, or the scene of a file (:func:`load_scene`); anything else is a :class:`SceneError`."""
+    if isinstance(scene, Scene):
+        return scene
+    if not isinstance(scene, (str, os.PathLike)):
+        raise SceneError(f"scene = {scene!r}: expected a scene (load_scene) or the path of its file, "
+                         f"got {type(scene).__name__}")
+    return load_scene(scene)
+
+
+def _k(k: float | None) -> float | None:
+    """``k`` [1] checked as the scene key ``contact.k`` is."""
+    return None if k is None else _check_value("contact", "k", SCHEMA["contact"]["k"], k, "k", None)
+
+
+def _integration(exc: IntegrationError, scene: Scene | None) -> IntegrationError:
+    """The command line's one line of a failed integration (:func:`pipeline.cli_checks.integration_line`)."""
+    return IntegrationError(integration_line(exc, scene))
 
 
 def simulation_inputs(scene: SceneLike, results: str | Path | None = None, *,
@@ -92,8 +130,16 @@ def simulation_inputs(scene: SceneLike, results: str | Path | None = None, *,
     -------
     pipeline.model.inputs.SimulationInputs
         The inputs, with ``k`` [1] and ``k_source`` (where k came from); ``.model(scene)`` is the model.
+
+    Raises
+    ------
+    pipeline.cli_checks.OptionError
+        ``results`` is no path, a file, or a folder that cannot be written (the runner locks it and
+        keeps its datasets there, even when they are up to date).
     """
     scene = _scene(scene)
+    check_out(results, "results")
+    k = _k(k)
     if results is not None:
         return runner.simulation_inputs(scene, results, calibration=True, k=k)
     with tempfile.TemporaryDirectory(prefix="hdi-inputs-") as tmp:
@@ -119,6 +165,65 @@ def build_model(scene: SceneLike, results: str | Path | None = None, *, k: float
     """
     scene = _scene(scene)
     return simulation_inputs(scene, results, k=k).model(scene)
+
+
+def simulate(model: Model, protrusions: Iterable[float], *, histories: Iterable[float] = (),
+             protocol: str = "independent", counters: bool = False, on_error: str = "raise",
+             timings: MutableMapping[str, float] | None = None) -> xr.Dataset:
+    """Run ``model`` at ``protrusions`` [nm]: :func:`pipeline.model.simulation.simulate`, the call of the
+    ``simulate`` and ``sweep`` stages, after the command line's checks of a protrusion.
+
+    Parameters
+    ----------
+    model : the model of :func:`build_model`
+    protrusions : TFC protrusions [nm], a list (``[9.0]`` for one), each as ``tfc.protrusion_nm`` allows:
+        finite, >= 0 and at most the flying height + 100 nm (:func:`pipeline.cli_checks.check_protrusions`)
+    histories, protocol, counters, on_error, timings : as :func:`pipeline.model.simulation.simulate`
+        (``histories``: protrusions [nm] whose time histories are kept)
+
+    Returns
+    -------
+    xarray.Dataset
+        The steady-window scalars on ``protrusion`` (and the kept histories), in dataset units.
+
+    Raises
+    ------
+    pipeline.cli_checks.OptionError
+        A protrusion that is no number, NaN, negative or beyond the flying height + 100 nm, or a
+        protrusion list that is a single number; ``ValueError`` for the other arguments.
+    pipeline.model.slider.IntegrationError
+        A run failed (``on_error="raise"``), in one line naming the scene, the protrusion and what to change.
+    """
+    if not isinstance(model, Model):
+        raise ValueError(f"model = {model!r:.80}: expected the model of build_model, got {type(model).__name__}")
+    fh0 = model.scene["air_bearing"]["flying_height_nm"]
+    prot = check_protrusions(protrusions, fh0, "protrusions")
+    if not prot:
+        raise OptionError("protrusions = []: expected at least one protrusion [nm]")
+    kept = check_protrusions(histories, fh0, "histories")
+    check_flag("counters =", counters)
+    if timings is not None and not isinstance(timings, MutableMapping):
+        raise ValueError(f"timings = {timings!r}: expected a dict (or None), got {type(timings).__name__}")
+    try:
+        return _simulate(model, prot, histories=kept, protocol=protocol, counters=counters, on_error=on_error,
+                         timings=timings)
+    except IntegrationError as exc:
+        raise _integration(exc, model.scene) from None
+
+
+def histories_of(ds: xr.Dataset) -> xr.Dataset:
+    """The time histories of a :func:`simulate` result as ``histories.nc`` holds them
+    (:func:`pipeline.model.simulation.histories_of`).
+
+    Raises
+    ------
+    ValueError
+        ``ds`` is not a result of :func:`simulate` with ``histories``.
+    """
+    if not isinstance(ds, xr.Dataset) or "hist_protrusion" not in ds.dims:
+        raise ValueError(f"histories_of: expected the dataset of simulate(model, ..., histories=[...]) with its "
+                         f"kept histories (dim hist_protrusion), got {type(ds).__name__}")
+    return _histories_of(ds)
 
 
 def _stage_of(name: str) -> tuple[str, str | None]:
@@ -155,6 +260,11 @@ def open_dataset(results: str | Path, name: str) -> xr.Dataset:
     pipeline.io.DatasetError
         When the file is missing (naming the stage to run) or not a readable dataset.
     """
+    check_path_option(results, "results")
+    if not isinstance(name, str):
+        raise ValueError(f"name = {name!r}: expected a stage or a dataset's file name (str), got {type(name).__name__}")
+    if Path(results).is_file():
+        raise DatasetError(f"{results}: is a file; expected a results folder (hdi ... --out)")
     file, stage = _stage_of(name)
     return read_dataset(Path(results) / file, stage=stage)
 
@@ -164,12 +274,17 @@ def _build(target: str, scene: SceneLike, out: str | Path | None, force: bool, s
     """Make ``target`` (a stage, or ``"run"``: the main job) current, as ``hdi TARGET`` does."""
     scene = _scene(scene)
     stages = runner.registry()
+    if not isinstance(target, str):
+        raise ValueError(f"stage = {target!r}: expected a stage name (str), got {type(target).__name__}")
     if target != "run" and target not in stages:
         raise ValueError(f"unknown stage {target!r}; expected one of {', '.join(stages)}")
     scheduler = check_options(target, scene, out=out, scheduler=scheduler, workers=workers, yes=yes, force=force)
     targets = runner.main_job(scene, stages) if target == "run" else [target]
-    return runner.Runner(scene, results_dir(scene, out), stages, scheduler=scheduler,
-                         workers=workers).build(targets, force=force)
+    try:
+        return runner.Runner(scene, results_dir(scene, out), stages, scheduler=scheduler,
+                             workers=workers).build(targets, force=force)
+    except IntegrationError as exc:
+        raise _integration(exc, scene) from None
 
 
 def run_stage(stage: str, scene: SceneLike, out: str | Path | None = None, *, force: bool = False,
@@ -182,7 +297,7 @@ def run_stage(stage: str, scene: SceneLike, out: str | Path | None = None, *, fo
     scene : a scene (:func:`load_scene`) or the path of its file
     out : the results folder (``None``: ``results/<scene name>/``, relative to the working directory)
     force : recompute the stage even when its outputs are current (``--force``)
-    scheduler, workers : the fan-out of sweep, calibrate, identify and sensitivity (``--scheduler``,
+    scheduler, workers : the fan-out of sweep, calibrate, ensemble, identify and sensitivity (``--scheduler``,
         ``--workers``; ``None``: local threads, one per core)
     yes : allow a big job beyond the limits of :mod:`pipeline.config.limits` (``--yes``)
 

@@ -22,7 +22,8 @@ from .io import DatasetError, os_error_line, results_dir
 from .progress import interval_s
 from .config.scene import SceneError, describe_keys, load_scene
 from .stages import roughness
-from .cli_checks import MAX_SCENES, check_options, one_line_warnings
+from .cli_checks import MAX_SCENES, check_options, integration_line, one_line_warnings
+from .model.slider import IntegrationError
 
 log = logging.getLogger("pipeline")
 
@@ -64,7 +65,8 @@ def _parser(stages: dict[str, runner.Stage]) -> argparse.ArgumentParser:
                    help="override a scene key (TOML value syntax); repeatable")
     p.add_argument("--out", type=Path, default=None, help="output folder (default results/<scene name>/)")
     p.add_argument("--scheduler", default=None, metavar="ADDRESS|FILE",
-                   help="run the fan-out (sweep, calibrate, ensemble, identify, sensitivity) on an existing "
+                   help="run the fan-out (sweep, calibrate, ensemble, identify, sensitivity, and the report's "
+                        "upstream stages) on an existing "
                         "dask.distributed scheduler: its address (tcp://HOST:8786) or the JSON file `dask scheduler "
                         "--scheduler-file FILE` writes; without it, the address in DASK_SCHEDULER_ADDRESS if set, "
                         "else local threads; threads, processes or synchronous name the local fan-outs")
@@ -153,6 +155,7 @@ def _main(argv: list[str] | None = None) -> int:
     stages = runner.registry()
     args = _parser(stages).parse_args(argv)
     _logging(args.verbose, args.quiet)
+    scene = None
     try:
         if args.stage == "roughness" and not (len(args.inputs) == 1 and args.inputs[0].endswith(".toml")):
             if args.out is None:
@@ -181,6 +184,17 @@ def _main(argv: list[str] | None = None) -> int:
         if args.verbose:
             traceback.print_exc()
         print(f"hdi {args.stage}: error: {exc}", file=sys.stderr)
+        return 2
+    except IntegrationError as exc:  # (a RuntimeError: the scene, the protrusion and what to change)
+        if args.verbose:
+            traceback.print_exc()
+        print(f"hdi {args.stage}: error: {integration_line(exc, scene)}", file=sys.stderr)
+        return 2
+    except MemoryError:  # (the sizes of config/limits.py are checked first; what they do not foresee)
+        if args.verbose:
+            traceback.print_exc()
+        print(f"hdi {args.stage}: error: out of memory (MemoryError); finished work is kept: ask for less (the sizes "
+              "bounded in pipeline/config/limits.py), or run on a machine with more memory", file=sys.stderr)
         return 2
     except OSError as exc:  # the file system: a full disk, permissions, a name too long, a folder for a file
         if args.verbose:

@@ -17,6 +17,7 @@ stage computes: :mod:`pipeline.code_version` leaves this module out of the stage
 from __future__ import annotations
 
 import json
+import math
 import os
 import socket
 import struct
@@ -26,7 +27,10 @@ from pathlib import Path
 from typing import Any
 from urllib.parse import urlsplit
 
+import numpy as np
+
 from .config.grid import label, range_count, roughness_sets, same_point
+from .config.scene import SCHEMA
 from .io import is_read_only, os_error_line
 from . import fanout, sizing
 from .fanout import CONNECT_TIMEOUT_S, LOCAL
@@ -50,8 +54,9 @@ MAX_SCENES = limits.MAX_SCENES
 #: Options and the stages that use them (``run`` uses those of all its stages; ``--force`` and
 #: ``--out`` apply to every stage). ``--channel``/``--detrend`` act only on AFM files given directly.
 OPTION_STAGES: dict[str, tuple[str, ...]] = {
-    "scheduler": ("sweep", "run", "calibrate", "identify", "sensitivity"),
-    "workers": ("sweep", "run", "calibrate", "identify", "sensitivity"),
+    # (the ensemble fans out its realisations; the report makes sweep, calibrate and ensemble current first)
+    "scheduler": ("sweep", "run", "calibrate", "ensemble", "report", "identify", "sensitivity"),
+    "workers": ("sweep", "run", "calibrate", "ensemble", "report", "identify", "sensitivity"),
     "yes": ("sweep", "run", "dmw", "interface", "calibrate", "simulate", "accuracy", "report", "identify",
             "sensitivity"),
     "readme": ("report", "run"),
@@ -65,9 +70,58 @@ _SCENE_KEY = {"channel": "roughness.channel", "detrend": "roughness.detrend"}
 
 
 def check_workers(workers: int | None) -> None:
-    """``--workers`` is absent or a positive integer."""
+    """``--workers`` is absent or a positive integer (from Python: an ``int``, not ``"2"`` or ``2.0``)."""
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)):
+        raise OptionError(f"--workers {workers!r}: expected a positive integer number of local workers (1 or more), "
+                          f"got {type(workers).__name__}")
     if workers is not None and workers < 1:
         raise OptionError(f"--workers {workers}: expected a positive number of local workers (1 or more)")
+
+
+def check_flag(option: str, value: Any) -> None:
+    """A switch given from Python (``option``: how an error names it, ``--force``, ``--yes``) is ``True`` or
+    ``False`` (``"no"`` is truthy)."""
+    if not isinstance(value, bool):
+        raise OptionError(f"{option} {value!r}: expected True or False, got {type(value).__name__}")
+
+
+def check_path_option(value: Any, option: str) -> None:
+    """An option naming a file or folder is absent or a path (``str`` or ``os.PathLike``), not ``123``."""
+    if value is not None and not isinstance(value, (str, os.PathLike)):
+        raise OptionError(f"{option} {value!r}: expected a path (str or pathlib.Path), got {type(value).__name__}")
+
+
+def check_protrusions(values: Any, flying_height_nm: float, what: str = "protrusions") -> list[float]:
+    """TFC protrusions [nm] given from Python: a sequence of numbers, each as ``tfc.protrusion_nm`` allows
+    (finite, >= 0: the scene key's own check, :data:`pipeline.config.scene.SCHEMA`) and at most
+    ``flying_height_nm`` + :data:`pipeline.config.limits.MAX_INTERFERENCE_NM` (:func:`pipeline.config.limits.check_physical`).
+
+    Returns
+    -------
+    list of float
+        The protrusions [nm].
+
+    Raises
+    ------
+    OptionError
+        Naming ``what``, the position and the value.
+    """
+    if isinstance(values, (str, bytes)) or not hasattr(values, "__len__") or getattr(values, "ndim", 1) != 1:
+        raise OptionError(f"{what} = {values!r}: expected a list of protrusions [nm] (e.g. [9.0] for one), "
+                          f"got {type(values).__name__}")
+    pred, expected = SCHEMA["tfc"]["protrusion_nm"].check or (lambda v: True, "")
+    out = []
+    for i, v in enumerate(values):
+        if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, float, np.integer, np.floating)):
+            raise OptionError(f"{what}[{i}] = {v!r}: expected a number [nm], got {type(v).__name__}")
+        v = float(v)
+        if not math.isfinite(v) or not pred(v):
+            raise OptionError(f"{what}[{i}] = {v!r}: expected {expected} [nm], finite (as tfc.protrusion_nm)")
+        if v - flying_height_nm > limits.MAX_INTERFERENCE_NM:
+            raise OptionError(f"{what}[{i}] = {v:g} nm: expected at most the flying height {flying_height_nm:g} nm "
+                              f"+ {limits.MAX_INTERFERENCE_NM:g} nm (as tfc.protrusion_nm)")
+        out.append(v)
+    return out
 
 
 #: The environment variable dask itself reads for its ``scheduler-address`` setting.
@@ -82,6 +136,10 @@ def scheduler_address(given: str | None) -> tuple[str | None, str]:
     ending in ``.json``, or naming an existing file. dask's YAML config files are not read (importing
     dask would cost every local run ~0.5 s).
     """
+    if given is not None and not isinstance(given, (str, os.PathLike)):
+        raise OptionError(f"--scheduler {given!r}: expected an address (tcp://HOST:PORT), a scheduler file or one of "
+                          f"{', '.join(LOCAL)}, got {type(given).__name__}")
+    given = os.fspath(given) if given is not None else None
     if given is None:
         env = os.environ.get(SCHEDULER_ENV, "").strip()
         return (env, f"{SCHEDULER_ENV}={env}") if env else (None, "")
@@ -209,14 +267,53 @@ def check_workers_attached(address: str, timeout: float = CONNECT_TIMEOUT_S,
                 pass
     except (OSError, TimeoutError) as exc:
         raise OptionError(f"{named}: the dask scheduler did not answer ({exc})") from None
+    except Exception as exc:  # noqa: BLE001 (fail closed: a server imitating the handshake sent garbage after it,
+        # and dask's frame reader raised struct.error; whatever dask raises on it is no scheduler)
+        raise OptionError(f"{named}: answers with a dask-like handshake but not as a dask scheduler "
+                          f"({type(exc).__name__}: {_first_line(exc)}); give the scheduler's address "
+                          f"(tcp://HOST:8786 by default) {_leave(named)}") from None
     raise OptionError(f"{named}: the dask scheduler has no workers ({worker_wait:g} s waited); "
                       f"start some (`dask worker {address}`) {_leave(named)}")
 
 
-def check_out(out: str | Path | None) -> None:
-    """``--out`` is a folder that exists or can be created, and that we can write in."""
+def _first_line(exc: BaseException, width: int = 120) -> str:
+    """The first line of an exception's text, at most ``width`` characters (an error quoting what a server
+    sent must stay one line)."""
+    text = (str(exc).strip().splitlines() or [""])[0]
+    return text if len(text) <= width else text[:width] + "..."
+
+
+#: What to change after a failed integration, by the integrator's status (:data:`pipeline.model.state.STATUS_TEXT`).
+_INTEGRATION_HINTS = {
+    "too many steps": "shorten solver.duration_ms, or "
+                      "hold contact modes longer against chattering on the contact criterion (solver.min_dwell_ns), "
+                      "or move the protrusion or contact.k off the touchdown edge",
+    "step size underflow": "the forces change faster than any step resolves: loosen solver.rtol or solver.atol_nm, "
+                           "or check the interface keys (lubricant.work_of_adhesion_j_m2, contact.k)",
+    "state became non-finite": "a force overflowed: check the interface keys (lubricant.work_of_adhesion_j_m2, "
+                               "contact.k) and the protrusion against air_bearing.flying_height_nm",
+}
+
+
+def integration_line(exc: BaseException, scene: Any = None) -> str:
+    """One line for a failed integration (:class:`pipeline.model.slider.IntegrationError`, whose text names
+    the protrusion and the integrator's status): the scene (its file and name), the failure, and what to
+    change (:data:`_INTEGRATION_HINTS`)."""
+    text = _first_line(exc, 300)
+    hint = next((h for status, h in _INTEGRATION_HINTS.items() if status in text), None)
+    where = ""
+    if scene is not None:
+        path = getattr(scene, "path", None)
+        where = f"{path} (scene {scene.name}): " if path else f"scene {scene.name}: "
+    return f"{where}{text}" + (f"; {hint}" if hint else "")
+
+
+def check_out(out: str | Path | None, option: str = "--out") -> None:
+    """``--out`` (``option``: how an error names it) is a folder that exists or can be created, and that we
+    can write in."""
     if out is None:
         return
+    check_path_option(out, option)
     path = Path(out)
     probe = path
     while not _exists(probe):  # the nearest existing ancestor decides whether the folder can be made
@@ -225,15 +322,15 @@ def check_out(out: str | Path | None) -> None:
         probe = probe.parent
     if probe.exists() and not probe.is_dir():
         what = "is a file" if probe == path else f"cannot be created: {probe} is a file"
-        raise OptionError(f"--out {out}: {what}; expected a folder")
-    check_name_lengths(path, probe, "--out")
+        raise OptionError(f"{option} {out}: {what}; expected a folder")
+    check_name_lengths(path, probe, option)
     try:  # os.access alone misses read-only mounts and says yes to root everywhere
         fd, tmp = tempfile.mkstemp(prefix=".hdi-write-test.", dir=probe)
         os.close(fd)
         os.unlink(tmp)
     except OSError as exc:
         where = "" if probe == path else f" (cannot create it in {probe})"
-        raise OptionError(f"--out {out}: not writable{where}: {exc.strerror or exc}") from None
+        raise OptionError(f"{option} {out}: not writable{where}: {exc.strerror or exc}") from None
 
 
 def _exists(path: Path) -> bool:
@@ -383,6 +480,10 @@ def check_options(stage: str, scene: Any, *, out: str | Path | None = None, sche
     check_stage_options(stage, {"scheduler": scheduler, "workers": workers, "yes": yes, **given},
                         afm_files=scene is None)
     check_workers(workers)
+    check_flag("--yes", yes)
+    check_flag("--force", force)
+    for name in ("readme", "write_scene"):
+        check_path_option(given.get(name), _FLAG[name])
     check_out(out)
     check_readme(given.get("readme"))
     check_write_scene(given.get("write_scene"), force)

@@ -39,6 +39,8 @@ On a cluster the client watches the progress while it waits: when for :data:`CLU
 (environment variable ``HDI_CLUSTER_WAIT_S``) no task finished and none was running on a worker (the
 last worker was lost, the scheduler has none, or they are all busy with other work), the command ends
 with one line (:class:`ClusterError`); finished tasks have written their outputs, so a rerun resumes.
+A scheduler lost mid-batch (stopped, or its connection broken: dask cancels the futures) ends it the
+same way.
 """
 
 from __future__ import annotations
@@ -52,7 +54,7 @@ import socket
 import threading
 import time
 import uuid
-from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
+from concurrent.futures import FIRST_COMPLETED, CancelledError, ThreadPoolExecutor, wait
 from pathlib import Path
 from typing import Any, Callable, Iterable, Iterator, Sequence
 
@@ -78,8 +80,8 @@ CLIENT_TIMEOUT_S = 30.0
 
 class ClusterError(ValueError):
     """The cluster cannot run the batch: a worker does not see the results folder or runs other code, no
-    worker ran a task for :data:`CLUSTER_WAIT_S`, or a task killed its workers (the command line says it
-    in one line)."""
+    worker ran a task for :data:`CLUSTER_WAIT_S`, a task killed its workers, or the scheduler was lost or
+    is none (the command line says it in one line)."""
 
 
 _SHARED: contextvars.ContextVar[str | None] = contextvars.ContextVar("hdi_shared_folder", default=None)
@@ -140,6 +142,9 @@ def connect(address: str, timeout: float | None = None) -> Iterator[Any]:
     except (OSError, TimeoutError) as exc:
         raise ClusterError(f"dask scheduler {address}: did not answer ({exc}); start it again, or run locally "
                            "(--scheduler threads)") from None
+    except Exception as exc:  # noqa: BLE001 (fail closed: garbage after a dask-like handshake, e.g. struct.error)
+        raise ClusterError(f"dask scheduler {address}: answers, but not as a dask scheduler ({type(exc).__name__}); "
+                           "give the scheduler's address, or run locally (--scheduler threads)") from None
     with client:
         yield client
 
@@ -374,6 +379,8 @@ def _results(client: Any, futures: list, address: str, wait_s: float) -> Iterato
             finished = wait_any(pending, timeout=_POLL_S, return_when="FIRST_COMPLETED").done
         except TimeoutError:
             finished = set()
+        except CancelledError:  # (distributed's FuturesCancelledError: the scheduler went away)
+            raise _lost(address, len(pending), len(futures)) from None
         arrived = False
         for fut in sorted(finished, key=order.__getitem__):
             asked = time.monotonic()
@@ -385,6 +392,8 @@ def _results(client: Any, futures: list, address: str, wait_s: float) -> Iterato
             except TimeoutError:
                 idle_since = asked if idle_since is None else idle_since
                 continue
+            except CancelledError:
+                raise _lost(address, len(pending), len(futures)) from None
             pending.discard(fut)
             arrived = True
             yield result
@@ -402,6 +411,13 @@ def _results(client: Any, futures: list, address: str, wait_s: float) -> Iterato
             raise ClusterError(f"dask scheduler {address}: {len(pending)} of {len(futures)} tasks waited {wait_s:g} s "
                                f"with {why} (HDI_CLUSTER_WAIT_S sets the wait); finished work is kept, start "
                                "workers and run again to resume")
+
+
+def _lost(address: str, pending: int, total: int) -> ClusterError:
+    """The one line of a scheduler lost mid-batch: dask cancels every future it held (``FuturesCancelledError``,
+    whose text lists each one over many lines)."""
+    return ClusterError(f"dask scheduler {address}: lost with {pending} of {total} tasks unfinished (it stopped, "
+                        "or the connection to it broke); finished work is kept, run again to resume")
 
 
 def _running(client: Any, pending: set, address: str) -> bool:

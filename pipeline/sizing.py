@@ -1,7 +1,8 @@
 """How big the work a scene asks for is, against the limits of :mod:`pipeline.config.limits`.
 
 The command line checks a stage's sizes before anything runs (one line per limit, ``--yes`` lifts
-them): interface-table rows, history and DMW record samples, sweep scenes and study evaluations.
+them): interface-table rows, history samples (per run, and kept by a whole sweep), DMW record samples,
+sweep scenes and study evaluations.
 """
 
 from __future__ import annotations
@@ -10,8 +11,8 @@ import math
 from typing import Any
 
 from .config.grid import TOL_NM, range_count
-from .config.limits import (check_physical, MAX_EVALUATIONS, MAX_HISTORY_SAMPLES, MAX_RECORD_SAMPLES, MAX_SCENES, MAX_TABLE_ROWS,
-                            LimitError)
+from .config.limits import (check_physical, MAX_EVALUATIONS, MAX_HISTORY_SAMPLES, MAX_KEPT_HISTORY_SAMPLES,
+                            MAX_RECORD_SAMPLES, MAX_SCENES, MAX_TABLE_ROWS, LimitError)
 from .model import interface_tables
 from .model.dmw_record import settings as dmw_settings
 from .model.measured_dmw import record_samples
@@ -68,6 +69,12 @@ def sizes(scene: Any, stage: str) -> list[tuple[str, int, int]]:
              * len(scene["sweep"]["damping_ratio"] or [None]) * scene["sweep"]["realisations"])
         out.append((f"sweep scenes (sweep.protrusion_nm = {{start={g['start']:g}, stop={g['stop']:g}, "
                     f"step={g['step']:g}}} x roughness sets x damping ratios x realisations)", n, MAX_SCENES))
+        per_run = _count(sol["duration_ms"] * MS / NS / sol["output_step_ns"]) + 1
+        kept = len(set(scene["sweep"]["histories_nm"] or scene["report"]["histories_nm"] or []))
+        out.append((f"kept history samples ({kept} protrusions of sweep.histories_nm (else report.histories_nm) x "
+                    "roughness sets x damping ratios x samples per run)",
+                    kept * len(scene["sweep"]["roughness"] or [None]) * len(scene["sweep"]["damping_ratio"] or [None])
+                    * per_run, MAX_KEPT_HISTORY_SAMPLES))
     if stage == "statics":  # (within `run` the sweep's count bounds the same grid)
         g = scene["sweep"]["protrusion_nm"]
         out.append((f"statics protrusions (sweep.protrusion_nm = {{start={g['start']:g}, stop={g['stop']:g}, "

@@ -266,7 +266,7 @@ def test_limits_count_the_paper_scene_exactly(tmp_path):
     sizes = {what.split(" (")[0]: n for what, n, _ in limits.sizes(scene, "run")}
     rows = read_dataset(interface.run(scene, tmp_path)).sizes["separation"]
     assert sizes == {"interface table rows": rows, "history samples per run": 8001, "DMW record samples": 8400,
-                     "sweep scenes": 76}
+                     "sweep scenes": 76, "kept history samples": 2 * 8001}  # (report.histories_nm: 5 and 11 nm)
     assert rows == 701
 
 

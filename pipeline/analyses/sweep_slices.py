@@ -23,7 +23,13 @@ TOL = 1e-6
 
 def split_ensemble(sweep: xr.Dataset) -> tuple[xr.Dataset, xr.Dataset | None]:
     """``(sweep, ensemble)``: a sweep over DMW realisations is reported through its first realisation
-    (the scene's own record), the whole ensemble kept apart; ``ensemble`` is ``None`` for one realisation."""
+    (the scene's own record), the whole ensemble kept apart; ``ensemble`` is ``None`` for one realisation.
+
+    A heater-stepping sweep (``sweep.protocol = "stepping"``: dim ``direction``) is reported through its
+    upward pass, the experiment's approach to touchdown (:func:`upward`); both are then on ``protrusion``
+    (and the slices' dims) alone, as an independent sweep is.
+    """
+    sweep = upward(sweep)
     if "realisation" in sweep.dims:
         return sweep.isel(realisation=0), sweep
     return sweep, None
@@ -54,11 +60,24 @@ def combinations(sweep: xr.Dataset, damping_ratio: float | None = None) -> list[
     return items
 
 
+def upward(ds: xr.Dataset) -> xr.Dataset:
+    """The upward pass of a heater-stepping sweep or slice (dim ``direction``: the heater stepped up, as in
+    the experiment's approach to touchdown; the take-off and hysteresis of the downward pass stay in
+    ``sweep.nc``); any other dataset unchanged."""
+    return ds.sel(direction="up", drop=True) if "direction" in ds.dims else ds
+
+
 def first_contact(ds: xr.Dataset) -> float | None:
-    """Smallest protrusion [nm] of a slice in contact (regime 1 or 2), ``None`` when none is."""
+    """Smallest protrusion [nm] of a slice in contact (regime 1 or 2), ``None`` when none is; of the upward
+    pass for a heater-stepping slice (:func:`upward`: its ``(protrusion, direction)`` regimes were read as
+    one flat list, an IndexError)."""
     if "regime" not in ds:
         return None
-    reg = np.asarray(ds["regime"].values).reshape(-1)
+    ds = upward(ds)
+    if ds["regime"].dims != ("protrusion",):
+        raise ValueError(f"first_contact: expected the regimes of one slice on (protrusion,), got dims "
+                         f"{ds['regime'].dims}")
+    reg = np.asarray(ds["regime"].values)
     x = ds["protrusion"].values
     idx = np.flatnonzero((reg == 1) | (reg == 2))
     return float(x[idx].min()) if idx.size else None

@@ -31,12 +31,29 @@ MAX_INTEGER = 2**63 - 1
 MAX_TABLE_ROWS = 200_000
 #: Output samples of one run, duration / output step (paper: 8000); ~20 histories of 8 bytes each.
 MAX_HISTORY_SAMPLES = 2_000_000
+#: Output samples of every history a sweep keeps, histories x roughness sets x damping ratios x samples per
+#: run (paper: 2 x 8000): the sweep holds them all in memory to write ``sweep_histories.nc``, ~20 variables
+#: of 8 bytes each (3.2 GB at the limit); each run within :data:`MAX_HISTORY_SAMPLES` said nothing of the total.
+MAX_KEPT_HISTORY_SAMPLES = 10 * MAX_HISTORY_SAMPLES
 #: Samples of the DMW record, duration x sampling rate (paper: 8000).
 MAX_RECORD_SAMPLES = 20_000_000
 #: Scenes of a sweep, protrusions x roughness sets x damping ratios x realisations (paper: 76).
 MAX_SCENES = 100_000
 #: Evaluations (small sweeps) of a parameter study, times their DMW realisations (identify's default: 1337 x 8).
 MAX_EVALUATIONS = 50_000
+#: Steps the integrator takes in one run before it gives up (``max_steps`` of
+#: :func:`pipeline.model.slider.run_model`): a run of ``solver.duration_ms`` needs at least
+#: duration / ``solver.max_step_ns`` of them, so a largest step below duration / MAX_STEPS can never finish.
+MAX_STEPS = 5_000_000
+#: Largest work of adhesion [J/m^2] of ``lubricant.work_of_adhesion_j_m2`` (and the bridges'): ten times the
+#: paper scene's 0.106 and above twice the surface energy of the carbon overcoats and lubricants of a disk
+#: interface (2 gamma ~ 0.05-0.3 J/m^2). Beyond it the adhesive pull takes the run nowhere the model
+#: describes: at 10 J/m^2 a 0.3-ms run of the paper scene at 9 nm did not finish in 5 minutes (1 J/m^2: 5 s),
+#: and 1e99 overflowed the integrator with a traceback.
+MAX_WORK_OF_ADHESION = 1.0
+#: Largest ``sensitivity.bootstrap``: resamples of the confidence intervals (default 200; the
+#: resampling error of an interval's end falls as 1/sqrt(B), so 1e5 is far below any use; 1e9 took 15 GiB).
+MAX_BOOTSTRAP = 100_000
 
 
 class LimitError(ValueError):

@@ -29,7 +29,7 @@ from ..physics.fhm import FHM_MEASURES
 from ..physics.friction import FRICTION_LAWS
 from ..physics.geometry import AREA_MODELS, FRICTION_ARMS
 from ..units import MHZ_IN_KHZ, MS, NS, SUFFIX_FACTORS
-from .limits import MAX_INTEGER, MAX_MAGNITUDE, LimitError, check_physical
+from .limits import MAX_BOOTSTRAP, MAX_INTEGER, MAX_MAGNITUDE, MAX_STEPS, MAX_WORK_OF_ADHESION, LimitError, check_physical
 
 #: The sweep's protocols (``sweep.protocol``; :func:`pipeline.model.simulation.simulate`, docs/model.md,
 #: section "Heater stepping").
@@ -89,6 +89,10 @@ class Key:
 _pos = (lambda v: v > 0, "a positive number")
 _nonneg = (lambda v: v >= 0, "a number >= 0")
 _frac = (lambda v: 0 <= v < 1, "a number in [0, 1)")
+#: A work of adhesion [J/m^2]: >= 0 and at most :data:`pipeline.config.limits.MAX_WORK_OF_ADHESION`.
+_adhesion = (lambda v: 0 <= v <= MAX_WORK_OF_ADHESION,
+             f"a number in [0, {MAX_WORK_OF_ADHESION:g}] J/m^2 (ten times a lubricated disk's ~0.1; "
+             "pipeline/config/limits.py says why)")
 
 #: Free [recon] parameters of ``hdi identify`` and ``hdi sensitivity`` with their bounds (docs/model.md, section "Corrections"): work of
 #: adhesion (7.5), DMW rms (5), modal damping, the two frequencies, contact damping. Every corner of the box
@@ -253,14 +257,14 @@ SCHEMA: dict[str, dict[str, Key]] = {
     },
     "lubricant": {
         "thickness_nm": Key("float", paper.LUBRICANT_THICKNESS_NM, _nonneg, doc="bonded lubricant thickness t [nm] (paper)"),
-        "work_of_adhesion_j_m2": Key("float", 0.106, _nonneg, doc="work of adhesion dgamma [J/m^2] (recon, CML)"),
+        "work_of_adhesion_j_m2": Key("float", 0.106, _adhesion, doc="work of adhesion dgamma [J/m^2] (recon, CML)"),
         "intermolecular_distance_nm": Key("float", 0.3, _pos, doc="intermolecular distance eps [nm] (recon, CML)"),
         "meniscus_time_us": Key("float", 0.0, _nonneg,
                                 doc="meniscus formation time tau_m [us]: the adhesion pressure relaxes towards its "
                                     "ISBL value with this time constant (docs/model.md, section 'Meniscus "
                                     "formation'); 0: at once (the ISBL value). With interface.adhesion = "
                                     "'two-population' it acts on the menisci around solid contacts only"),
-        "bridge_work_of_adhesion_j_m2": Key("float", None, _nonneg,
+        "bridge_work_of_adhesion_j_m2": Key("float", None, _adhesion,
                                             doc="work of adhesion of the bridges before solid contact [J/m^2] "
                                                 "(interface.adhesion = 'two-population': Lennard-Jones of the "
                                                 "non-wetted summits and menisci of the wetted non-touching ones; "
@@ -456,7 +460,10 @@ SCHEMA: dict[str, dict[str, Key]] = {
                              doc="Sobol base samples N (N x (parameters + 2) evaluations)"),
         "confidence_level": Key("float", 0.95, (lambda v: 0 < v < 1, "a number in (0, 1)"),
                                 doc="level of the bootstrap confidence intervals [1]"),
-        "bootstrap": Key("int", 200, (lambda v: v >= 10, "an integer >= 10"), doc="bootstrap resamples"),
+        "bootstrap": Key("int", 200, (lambda v: 10 <= v <= MAX_BOOTSTRAP,
+                                       f"an integer in [10, {MAX_BOOTSTRAP:,}] (the intervals' resampling error "
+                                       "is negligible long before; 1e9 resamples needed 15 GiB)"),
+                          doc="bootstrap resamples"),
         "protrusion_nm": Key("range", None, doc="protrusion grid of each evaluation {start, stop, step} [nm] "
                                                 "(default: [sweep] protrusion_nm)"),
         "seed": Key("int", 20090601, _nonneg, doc="seed of the samples and the bootstrap"),
@@ -712,9 +719,12 @@ def validate(raw: dict[str, Any], path: Path | None = None, *, overrides: Iterab
     if config["scene"]["name"] is None:
         if path is None:
             raise SceneError(f"{where}: scene.name is missing: expected a name")
-        if path.stem in (".", ".."):  # (a file `...toml`: results/../ would be the results folder's parent)
+        # (the name makes results/<name>/ and the sweep's part files: a file `paper-2009 (copy).toml` failed
+        # only at the sweep, after the upstream stages ran; a file `...toml` would put results/../)
+        if not _folder_name(path.stem):
             raise SceneError(f"{where}: scene.name is missing and the file name gives {path.stem!r}: expected "
-                             "scene.name = a name of letters, digits, '.', '_' or '-', not '.' or '..'")
+                             "scene.name = a name of letters, digits, '.', '_' or '-', not '.' or '..' "
+                             "(set scene.name in the file, or rename the file)")
         config["scene"]["name"] = path.stem
     _cross_checks(config, where)
     try:  # (a protrusion far beyond the flying height: no --yes makes it physical)
@@ -748,6 +758,18 @@ def _cross_checks(config: dict[str, dict[str, Any]], where: str) -> None:
         if all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in (low, high)) and (low < lo or high > hi):
             raise SceneError(f"{where}: identify.parameters: {key} low = {low}, high = {high}: expected bounds "
                              f"within [{lo:g}, {hi:g}] ({why}; docs/model.md, section 'DMW as free parameters')")
+    for section in ("sweep", "report"):  # (the sweep keeps those of report.histories_nm without its own)
+        kept = config[section]["histories_nm"] or []
+        # (the histories' coordinate is the protrusion: a value twice gave two equal labels, one row all NaN)
+        twice = sorted({round(h, 9) for i, h in enumerate(kept) for g in kept[:i] if abs(h - g) < 1e-9})
+        if twice:
+            raise SceneError(f"{where}: {section}.histories_nm = {kept}: {twice[0]:.10g} appears more than once; "
+                             "expected distinct protrusions [nm] (each is a coordinate value of the kept histories)")
+    if sol["duration_ms"] * (MS / NS) / sol["max_step_ns"] > MAX_STEPS:
+        raise SceneError(f"{where}: solver.max_step_ns = {sol['max_step_ns']:g}: a run of solver.duration_ms = "
+                         f"{sol['duration_ms']:g} needs at least {sol['duration_ms'] * (MS / NS) / sol['max_step_ns']:.3g} "
+                         f"steps of it, beyond the integrator's {MAX_STEPS:,}; expected at least "
+                         f"{sol['duration_ms'] * (MS / NS) / MAX_STEPS:.3g} ns (default 500)")
     damping = config["sweep"]["damping_ratio"] or []
     twice = sorted({d for d in damping if damping.count(d) > 1})
     if twice:

@@ -96,11 +96,10 @@ def load(inputs: Inputs) -> dict[str, xr.Dataset | None]:
     when absent, unreadable, made from other inputs, or not upstream of the report).
 
     A sweep over DMW realisations is reported through its first realisation; the whole ensemble is
-    ``"ensemble"`` (``None`` for a single realisation).
+    ``"ensemble"`` (``None`` for a single realisation); a heater-stepping sweep through its upward pass
+    (:func:`pipeline.analyses.sweep_slices.split_ensemble`).
     """
     sweep = inputs.dataset("sweep.nc", stage="sweep", variables=("fhm_bv", "protrusion"))
-    if "direction" in sweep.dims:  # heater stepping: the upward pass, the experiment's approach to touchdown
-        sweep = sweep.sel(direction="up", drop=True)
     data: dict[str, xr.Dataset | None] = dict(zip(("sweep", "ensemble"), split_ensemble(sweep)))
     for name, stage in OPTIONAL:
         data[name] = None
