@@ -41,6 +41,7 @@ import os
 import pkgutil
 import shutil
 import socket
+import stat
 import tempfile
 import time
 from dataclasses import dataclass, field
@@ -54,8 +55,8 @@ from .fanout import shared_folder
 from .progress import stage as progress_stage
 from .model.inputs import SimulationInputs, from_folder
 from .model.scene_inputs import simulation_inputs as wanted_inputs
-from .io import (KEY_ATTR, DatasetError, RUN_ID, file_hash, is_temporary, read_attrs, read_dataset, temporary_path,
-                 write_dataset)
+from .io import (KEY_ATTR, DatasetError, LinkRefused, RUN_ID, append_text, file_hash, guarded, is_temporary,
+                 read_attrs, read_dataset, refuse_links, special_kind, temporary_path, write_dataset)
 
 log = logging.getLogger(__name__)
 
@@ -64,6 +65,8 @@ OUTPUTS_ATTR = "stage_outputs"
 #: Hidden folder of the runner inside a results folder (manifests of non-NetCDF outputs, run log).
 STATE_DIR = ".hdi"
 LOCK_NAME = ".hdi.lock"
+#: The run log in :data:`STATE_DIR`: one JSON line of timings per computed stage.
+RUN_LOG = "runs.jsonl"
 STAGING_PREFIX = ".hdi-staging-"
 #: How deep below a results folder the cleaner looks for orphaned temporary files (``sweep.parts/interface-x/``).
 _TMP_DEPTH = 2
@@ -331,11 +334,11 @@ def clean_orphans(out: Path) -> list[Path]:
         dirs[:] = [] if depth >= _TMP_DEPTH else [d for d in dirs if not (Path(folder, d) / LOCK_NAME).exists()]
         for name in names:
             p = Path(folder, name)
-            if is_temporary(name) and p.is_file():
+            if is_temporary(name) and p.is_file() and not p.is_symlink():  # (a link: not a file hdi made)
                 p.unlink(missing_ok=True)
                 removed.append(p)
     for p in out.glob(STAGING_PREFIX + "*"):
-        if p.is_dir():
+        if p.is_dir() and not p.is_symlink():
             shutil.rmtree(p, ignore_errors=True)
             removed.append(p)
     if removed:
@@ -378,7 +381,7 @@ def folder_lock(out: str | Path) -> Iterator[Path]:
     """
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    path = (out / LOCK_NAME).resolve()
+    path = out.resolve() / LOCK_NAME  # (the folder resolved, never the lock file: a planted link is refused)
     if path in _HELD:
         raise RuntimeError(f"{out}: this process already holds the folder; a stage's compute reads its "
                            "inputs through runner.Inputs and does not build in its own folder")
@@ -390,8 +393,8 @@ def folder_lock(out: str | Path) -> Iterator[Path]:
                 fd = os.open(path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
             except FileExistsError:
                 try:
-                    other = json.loads(path.read_text() or "{}")
-                except (OSError, ValueError):
+                    other = json.loads(_read_lock(path) or "{}")
+                except (UnicodeDecodeError, ValueError):
                     other = {}
                 if not isinstance(other, dict) or not _is_pid(other.get("pid")):  # (`[1, 2]`: JSON, but
                     other = {}                                                 # not what a holder writes)
@@ -415,11 +418,31 @@ def folder_lock(out: str | Path) -> Iterator[Path]:
             raise FolderBusy(f"{out}: could not take the lock file {path}")
     _HELD.add(path)
     try:
-        clean_orphans(out)
-        yield path
+        with guarded(out):
+            clean_orphans(out)
+            yield path
     finally:
         _HELD.discard(path)
         path.unlink(missing_ok=True)
+
+
+def _read_lock(path: Path) -> str:
+    """The text of an existing lock file, read without following a link (a link planted at
+    :data:`LOCK_NAME` is refused: taking it over would delete the link's target before) and without
+    blocking (a FIFO there is refused too)."""
+    try:
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_NONBLOCK", 0))
+    except FileNotFoundError:
+        return ""
+    except OSError as exc:
+        if exc.errno == errno.ELOOP or path.is_symlink():
+            raise LinkRefused(path) from None
+        raise
+    with os.fdopen(fd, "rb") as fh:
+        if not stat.S_ISREG(os.fstat(fh.fileno()).st_mode):
+            raise OSError(errno.EINVAL, f"is {special_kind(path) or 'not a regular file'}, not hdi's lock file; "
+                                        "remove it", str(path))
+        return fh.read(1 << 16).decode("utf-8")
 
 
 # -------------------------------------------------------------------------------------- the runner
@@ -584,9 +607,12 @@ class Runner:
 
     def _check_outputs(self, st: Stage) -> None:
         """Refuse, before the stage computes, an output path that is a folder or lies below a file
-        (``sweep.nc`` a folder, ``figures`` a file): the write would fail only after the computation."""
+        (``sweep.nc`` a folder, ``figures`` a file): the write would fail only after the computation; and
+        a symbolic link on the way to an output or to the runner's records (:func:`pipeline.io.refuse_links`)."""
+        refuse_links(self._manifest(st.name))
+        refuse_links(self.out / STATE_DIR / RUN_LOG)
         for o in st.output_names(self.scene):
-            target = self.out / o
+            target = refuse_links(self.out / o)  # (a planted link: refused before the stage computes)
             if target.is_dir():
                 raise IsADirectoryError(errno.EISDIR, os.strerror(errno.EISDIR), str(target))
             for parent in list(Path(o).parents)[:-1]:
@@ -611,7 +637,7 @@ class Runner:
                 continue
             ds = result.get(o)
             if ds is None:
-                (self.out / o).unlink(missing_ok=True)  # not produced this time: no stale file of an older run
+                refuse_links(self.out / o).unlink(missing_ok=True)  # not produced this time: no stale file of an older run
                 continue
             extra = dict(attrs)
             if first:
@@ -621,7 +647,7 @@ class Runner:
                           inputs={p: self._hash(p) for p in inputs.files.values()}, extra_attrs=extra)
         hashes = {}
         for o in others:
-            target = self.out / o
+            target = refuse_links(self.out / o)
             if (staging / o).is_file():
                 target.parent.mkdir(parents=True, exist_ok=True)
                 os.replace(staging / o, target)
@@ -630,8 +656,9 @@ class Runner:
             else:
                 target.unlink(missing_ok=True)
         if others:
-            manifest = self._manifest(st.name)
+            manifest = refuse_links(self._manifest(st.name))
             manifest.parent.mkdir(parents=True, exist_ok=True)
+            refuse_links(manifest)
             tmp = temporary_path(manifest)
             tmp.write_text(json.dumps({"key": key, "outputs": produced, "hashes": hashes}, indent=1))
             os.replace(tmp, manifest)
@@ -643,10 +670,7 @@ class Runner:
             return
         entry = {"stage": name, "inputs_key": key, "finished": _dt.datetime.now(_dt.timezone.utc).isoformat(),
                  "seconds": round(seconds, 3), "outputs": written, **metrics}
-        path = self.out / STATE_DIR / "runs.jsonl"
-        path.parent.mkdir(parents=True, exist_ok=True)
-        with open(path, "a") as fh:
-            fh.write(json.dumps(entry, default=str) + "\n")
+        append_text(self.out / STATE_DIR / RUN_LOG, json.dumps(entry, default=str) + "\n")
 
 
 def build(targets: str | Iterable[str], scene: Scene, out: str | Path, *, force: bool = False,
@@ -677,7 +701,7 @@ def simulation_inputs(scene: Scene, out: str | Path, calibration: bool = False,
 
 def last_run(out: str | Path, stage: str) -> dict[str, Any] | None:
     """The last run-log entry of a stage in ``out`` (``None`` when there is none)."""
-    path = Path(out) / STATE_DIR / "runs.jsonl"
+    path = Path(out) / STATE_DIR / RUN_LOG
     if not path.is_file():
         return None
     entries = [json.loads(line) for line in path.read_text().splitlines() if line.strip()]

@@ -27,7 +27,7 @@ import numpy as np
 import xarray as xr
 
 from ..fanout import available_cores
-from ..io import temporary_path
+from ..io import refuse_links, temporary_path
 from ..units import KHZ, S_IN_MS
 from ..variables import GROUPS, Regime, regime_name
 
@@ -106,7 +106,7 @@ def envelope(x: np.ndarray, y: np.ndarray, bins: int = 2000) -> tuple[np.ndarray
 
 def save(fig: Figure, path: str | Path, dpi: int = DPI) -> Path:
     """Write ``fig`` as PNG to ``path`` (folder created) and release its artists."""
-    path = Path(path)
+    path = refuse_links(Path(path))
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = temporary_path(path)
     fig.savefig(tmp, dpi=dpi, format="png")

@@ -52,7 +52,7 @@ import xarray as xr
 from ..analyses import plots
 from ..fanout import local_cluster
 from ..progress import Progress
-from ..io import read_dataset, temporary_path, var
+from ..io import read_dataset, refuse_links, temporary_path, var
 from ..runner import Inputs, Stage, build
 from ..analyses.identification import GN_STEP, METHODS, PROFILE_STEP, ROLES, Identification, identify
 from ..analyses.study import Parameter, parse_parameters, residuals, scene_value, spreads, target_protrusions, targets
@@ -229,6 +229,7 @@ def write_identified_scene(scene: Any, params: Sequence[Parameter], ds: xr.Datas
     text = "\n".join(lines)
     if path.is_file() and path.read_text() == text:
         return path
+    refuse_links(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = temporary_path(path)
     try:

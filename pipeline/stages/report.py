@@ -71,7 +71,7 @@ from ..analyses.paper_comparison import comparison_markdown, identification_mark
 from ..analyses.report_figures import BAND_FIGURE, ENSEMBLE_FIGURE, FIGURES, INTERFACE_FIGURE
 from ..analyses.report_settings import ReportSettings, wants_ensemble
 from ..analyses.sweep_slices import combinations, split_ensemble
-from ..io import DatasetError, is_read_only, temporary_path
+from ..io import DatasetError, is_read_only, refuse_links, temporary_path
 from ..validity import OutsideValidity, describe
 from ..runner import Inputs, Stage, build
 
@@ -113,6 +113,7 @@ def load(inputs: Inputs) -> dict[str, xr.Dataset | None]:
 
 def _write_text(path: Path, text: str) -> None:
     """Write ``text`` to ``path`` by a temporary file and a rename; an existing file keeps its mode."""
+    refuse_links(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = temporary_path(path)
     tmp.write_text(text, encoding="utf-8")

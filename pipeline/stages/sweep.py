@@ -40,7 +40,7 @@ import xarray as xr
 from ..model import slider as sl
 from ..fanout import run_tasks
 from ..progress import Progress
-from ..io import read_attrs, read_dataset, write_dataset
+from ..io import read_attrs, read_dataset, refuse_links, write_dataset
 from ..runner import KEY_ATTR, Inputs, Stage, ensure
 from ..variables import COORDINATES, ENSEMBLE, HISTORIES, SCALARS, STEPPING, coordinate
 from ..model import dmw_record, scene_inputs
@@ -181,7 +181,7 @@ def prepare_inputs(scene: Any, out: Path, sets: dict[str, dict],
     they are recomputed only when their own inputs change. The records of realisations beyond the
     first: :func:`realisation_inputs`.
     """
-    parts = out / PARTS
+    parts = refuse_links(out / PARTS)  # (its parts may be written by worker processes, which hold no folder)
     parts.mkdir(parents=True, exist_ok=True)
     interface_paths: dict[str, str | None] = {}
     for label, table in sets.items():
