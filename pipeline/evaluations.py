@@ -35,7 +35,7 @@ from .code_version import code_key
 from .config.grid import label
 from .config.scene import SceneError
 from .fanout import run_tasks
-from .io import append_text, refuse_links
+from .paths import append_text, refuse_links
 from .model import dmw_record, scene_inputs
 from .model import slider as sl
 from .model.bulge_table import scene_table

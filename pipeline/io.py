@@ -15,7 +15,6 @@ those names apart from a user's (``.notes.tmp``), so the runner's cleaner remove
 
 from __future__ import annotations
 
-import contextlib
 import datetime as _dt
 import errno
 import hashlib
@@ -31,12 +30,13 @@ import tempfile
 import threading
 from functools import lru_cache
 from pathlib import Path
-from typing import Any, Iterable, Iterator, Mapping
+from typing import Any, Iterable, Mapping
 
 import numpy as np
 import xarray as xr
 
-from . import DISTRIBUTION, __version__
+from . import DISTRIBUTION, __version__, interrupts
+from .paths import refuse_links
 
 try:  # (POSIX: the file size limit, ulimit -f)
     import resource
@@ -71,100 +71,6 @@ def temporary_path(path: str | Path) -> Path:
 def is_temporary(name: str) -> bool:
     """Whether a file name is one of hdi's temporary files (:func:`temporary_path`), of any run."""
     return _TEMPORARY.fullmatch(name) is not None
-
-
-# ------------------------------------------------------------------ links and special files
-#: The results folders this process holds (:func:`pipeline.runner.folder_lock` enters :func:`guarded`):
-#: below them hdi follows no symbolic link for a file it writes, locks or deletes (:func:`refuse_links`).
-_ROOTS: list[Path] = []
-
-
-class LinkRefused(OSError):
-    """A symbolic link inside a results folder where hdi would write, lock or delete a file: in a shared,
-    group-writable folder another user can plant one to make hdi write or delete elsewhere."""
-
-    def __init__(self, link: str | Path):
-        try:
-            target = f" (to {os.readlink(link)})"
-        except OSError:
-            target = ""
-        super().__init__(errno.ELOOP, f"is a symbolic link{target}; hdi writes, locks and deletes no file through "
-                                      "a link inside its results folder: remove the link", str(link))
-
-
-@contextlib.contextmanager
-def guarded(folder: str | Path) -> Iterator[Path]:
-    """Within the block, :func:`refuse_links` checks every path below ``folder`` (a results folder this
-    process holds); ``folder`` itself may be a link (the user chose it)."""
-    root = Path(os.path.abspath(folder))
-    _ROOTS.append(root)
-    try:
-        yield root
-    finally:
-        _ROOTS.remove(root)
-
-
-def refuse_links(path: str | Path) -> Path:
-    """``path``, after checking that neither it nor a folder between it and the outermost held results
-    folder (:func:`guarded`) containing it is a symbolic link; a path outside every held folder is not
-    checked (a user's ``--readme`` page, a test's file).
-
-    Raises
-    ------
-    LinkRefused
-        Naming the first link found.
-    """
-    p = Path(os.path.abspath(path))
-    roots = [r for r in list(_ROOTS) if p == r or r in p.parents]
-    if roots:
-        here = min(roots, key=lambda r: len(r.parts))
-        for part in p.relative_to(here).parts:
-            here = here / part
-            try:
-                mode = os.lstat(here).st_mode
-            except (FileNotFoundError, NotADirectoryError):
-                break
-            if stat.S_ISLNK(mode):
-                raise LinkRefused(here)
-    return Path(path)
-
-
-def append_text(path: str | Path, text: str, sync: bool = False) -> None:
-    """Append ``text`` to the file ``path`` (created 0666 less the umask; its folder too), never through a
-    symbolic link (:func:`refuse_links`, and ``O_NOFOLLOW`` for the file itself); ``sync``: flushed to
-    the disk before returning (a resume point)."""
-    path = refuse_links(Path(path))
-    path.parent.mkdir(parents=True, exist_ok=True)
-    refuse_links(path)
-    try:
-        fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT | getattr(os, "O_NOFOLLOW", 0), 0o666)
-    except OSError as exc:
-        if exc.errno == errno.ELOOP:  # (a link planted since the check)
-            raise LinkRefused(path) from None
-        raise
-    with os.fdopen(fd, "a", encoding="utf-8") as fh:
-        fh.write(text)
-        fh.flush()
-        if sync:
-            os.fsync(fh.fileno())
-
-
-#: What a file that is not a regular file is (:func:`special_kind`), by its ``stat`` type.
-_KINDS = ((stat.S_ISFIFO, "a FIFO (named pipe)"), (stat.S_ISCHR, "a character device"),
-          (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket"), (stat.S_ISDIR, "a folder"))
-
-
-def special_kind(path: str | Path) -> str | None:
-    """What ``path`` (a link followed) is when it exists but is not a regular file (``"a FIFO (named
-    pipe)"``, ``"a character device"``, ...), else ``None``: reading a FIFO or ``/dev/zero`` never ends,
-    so a file hdi reads is checked with this before it is opened."""
-    try:
-        mode = os.stat(path).st_mode
-    except (OSError, ValueError):
-        return None
-    if stat.S_ISREG(mode):
-        return None
-    return next((what for test, what in _KINDS if test(mode)), "not a regular file")
 
 
 #: Global attribute of every dataset the runner writes: the inputs key of the stage that made it
@@ -399,6 +305,7 @@ def write_dataset(ds: xr.Dataset, path: str | Path, scene: Any = None, *, stage:
             raise IsADirectoryError(errno.EISDIR, os.strerror(errno.EISDIR), str(path))
         with NETCDF_LOCK:
             _to_netcdf(out, tmp, encoding)
+        interrupts.check()  # (a signal HDF5's callbacks swallowed: the temporary file is removed, nothing replaced)
         os.replace(tmp, path)
     except (OSError, RuntimeError) as exc:  # (netCDF4 says RuntimeError "NetCDF: HDF error" for a full disk)
         Path(tmp).unlink(missing_ok=True)
@@ -523,6 +430,7 @@ def read_attrs(path: str | Path, variables: Iterable[str] = ()) -> tuple[dict[st
     with NETCDF_LOCK, netCDF4.Dataset(path) as nc:
         attrs = {k: nc.getncattr(k) for k in nc.ncattrs()}
         values = {v: np.asarray(nc.variables[v][:]) for v in variables if v in nc.variables}
+    interrupts.check()  # (netCDF4's error checks can swallow a signal raised during the read)
     return attrs, values
 
 
@@ -543,6 +451,7 @@ def read_dataset(path: str | Path, *, stage: str | None = None, variables: Itera
             ds = ds.load()
     except (OSError, ValueError) as exc:
         raise DatasetError(f"{path}: not a readable NetCDF dataset: {exc}") from None
+    interrupts.check()  # (netCDF4's error checks can swallow a signal raised during the read)
     if TIME_ON_DISK in ds.variables and "time" not in ds.variables:
         ds = ds.rename({TIME_ON_DISK: "time"})
     elif "time" in ds.variables and ds["time"].attrs.get("units") == OLD_TIME_UNITS:

@@ -50,13 +50,15 @@ from typing import Any, Callable, Iterable, Iterator, Mapping
 
 import xarray as xr
 
+from . import interrupts
 from .code_version import code_key
 from .fanout import shared_folder
 from .progress import stage as progress_stage
 from .model.inputs import SimulationInputs, from_folder
 from .model.scene_inputs import simulation_inputs as wanted_inputs
-from .io import (KEY_ATTR, DatasetError, LinkRefused, RUN_ID, append_text, file_hash, guarded, is_temporary,
-                 read_attrs, read_dataset, refuse_links, special_kind, temporary_path, write_dataset)
+from .io import (KEY_ATTR, DatasetError, RUN_ID, file_hash, is_temporary, read_attrs, read_dataset, temporary_path,
+                 write_dataset)
+from .paths import LinkRefused, append_text, guarded, refuse_links, special_kind
 
 log = logging.getLogger(__name__)
 
@@ -597,6 +599,7 @@ class Runner:
                             staging=staging)
             with shared_folder(inputs.out), progress_stage(name):  # (its progress lines carry its name)
                 result = st.compute(self.scene, inputs)
+            interrupts.check()  # (a signal a library swallowed during the computation: nothing is written)
             written = self._write(st, key, inputs, result, staging)
         finally:
             shutil.rmtree(staging, ignore_errors=True)

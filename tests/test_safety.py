@@ -14,13 +14,16 @@ from __future__ import annotations
 import errno
 import json
 import os
+import signal
+import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
 import xarray as xr
 
-from pipeline import cli, io, runner
+from pipeline import cli, io, paths, runner
 from pipeline.config.scene import load_scene
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -54,7 +57,7 @@ def test_a_lock_file_that_is_a_link_is_refused_and_its_target_kept(tmp_path):
     """Before: hdi "took over the lock" and unlinked the link's target."""
     victim, out = _toy(tmp_path)
     (out / runner.LOCK_NAME).symlink_to(victim)
-    with pytest.raises(io.LinkRefused) as info:
+    with pytest.raises(paths.LinkRefused) as info:
         with runner.folder_lock(out):
             pass
     _link_line(info.value, out.resolve() / runner.LOCK_NAME)
@@ -64,7 +67,7 @@ def test_a_lock_file_that_is_a_link_is_refused_and_its_target_kept(tmp_path):
 def test_a_dangling_lock_link_is_refused_and_nothing_is_created(tmp_path):
     _, out = _toy(tmp_path)
     (out / runner.LOCK_NAME).symlink_to(tmp_path / "not-there")
-    with pytest.raises(io.LinkRefused):
+    with pytest.raises(paths.LinkRefused):
         with runner.folder_lock(out):
             pass
     assert not (tmp_path / "not-there").exists()
@@ -109,7 +112,7 @@ def test_a_planted_link_on_the_way_to_an_output_is_refused_before_computing(tmp_
     computed = []
     stage = _stage_writing("toy", output, metrics)
     stage = runner.Stage("toy", lambda s, i: (computed.append(1), stage.compute(s, i))[1], outputs=stage.outputs)
-    with pytest.raises(io.LinkRefused) as info:
+    with pytest.raises(paths.LinkRefused) as info:
         runner.Runner(load_scene(PAPER), out, {"toy": stage}).build(["toy"])
     _link_line(info.value, link)
     assert computed == []
@@ -128,7 +131,7 @@ def test_a_link_planted_while_the_stage_computes_is_refused_at_the_write(tmp_pat
         (inputs.staging / "figures" / "a.png").write_text("drawn")
         return {}
     stage = runner.Stage("toy", compute, outputs=("figures/a.png",))
-    with pytest.raises(io.LinkRefused):
+    with pytest.raises(paths.LinkRefused):
         runner.Runner(load_scene(PAPER), out, {"toy": stage}).build(["toy"])
     assert list(elsewhere.iterdir()) == []
 
@@ -139,10 +142,10 @@ def test_write_dataset_and_the_run_log_refuse_links_below_a_held_folder(tmp_path
     (out / ".hdi").mkdir()
     (out / ".hdi" / runner.RUN_LOG).symlink_to(victim)
     with runner.folder_lock(out):
-        with pytest.raises(io.LinkRefused):
+        with pytest.raises(paths.LinkRefused):
             io.write_dataset(_dataset(), out / "d.nc", stage="test")
-        with pytest.raises(io.LinkRefused):
-            io.append_text(out / ".hdi" / runner.RUN_LOG, "{}\n")
+        with pytest.raises(paths.LinkRefused):
+            paths.append_text(out / ".hdi" / runner.RUN_LOG, "{}\n")
     assert victim.read_text() == "a user's file"
     io.write_dataset(_dataset(), tmp_path / "free.nc", stage="test")   # (outside a held folder: no check)
 
@@ -166,3 +169,132 @@ def test_a_fifo_at_the_lock_name_is_refused_without_blocking(tmp_path):
             pass
     assert io.os_error_line(info.value) == (f"{out.resolve() / runner.LOCK_NAME}: is a FIFO (named pipe), not hdi's "
                                             "lock file; remove it")
+
+
+# ------------------------------------------------------------------------------------ 2. signals
+def test_a_signal_swallowed_where_it_was_raised_is_raised_again_at_the_next_check():
+    from pipeline import interrupts
+    with interrupts.handling():
+        try:
+            os.kill(os.getpid(), signal.SIGTERM)
+            for _ in range(10_000):  # (the handler runs between two of these bytecodes)
+                pass
+        except BaseException:        # what a C library's error check did with it
+            pass
+        assert signal.getsignal(signal.SIGTERM) is interrupts._handler   # never left ignored
+        with pytest.raises(interrupts.Terminated):
+            interrupts.check()
+        assert interrupts.pending() == signal.SIGTERM
+        interrupts.answered()
+        interrupts.check()           # answered: nothing more to raise
+    assert signal.getsignal(signal.SIGTERM) is signal.SIG_DFL
+
+
+def test_a_second_signal_while_the_first_unwinds_does_not_cut_the_clean_up_short():
+    from pipeline import interrupts
+    cleaned = []
+    with interrupts.handling():
+        with pytest.raises(interrupts.Terminated):
+            try:
+                os.kill(os.getpid(), signal.SIGTERM)
+                for _ in range(10_000):
+                    pass
+            finally:
+                os.kill(os.getpid(), signal.SIGTERM)   # (a batch system's repeated cancel)
+                for _ in range(10_000):
+                    pass
+                cleaned.append(True)
+        assert cleaned == [True] and interrupts.pending() == signal.SIGTERM
+        interrupts.answered()
+
+
+#: ``hdi report`` on the datasets of tests/test_report.py with no upstream stage; SIGTERM delivered
+#: during the report's read of ``sweep.nc`` and swallowed there, as netCDF4's error check did.
+_SWALLOWED = """
+import dataclasses, os, signal, sys
+from pipeline import cli, io, paths, runner
+from pipeline.stages import report
+stage = dataclasses.replace(report.STAGE, upstream=(), optional=())
+runner.registry = lambda: {"report": stage}
+real = io.xr.open_dataset
+
+def swallowing(path, *args, **kwargs):
+    ds = real(path, *args, **kwargs)
+    if str(path).endswith("sweep.nc"):
+        try:
+            os.kill(os.getpid(), signal.SIGTERM)
+            for _ in range(10_000):
+                pass
+        except BaseException:
+            pass
+    return ds
+
+io.xr.open_dataset = swallowing
+sys.exit(cli.main(sys.argv[1:]))
+"""
+
+
+def test_sigterm_during_the_reports_netcdf_reads_never_ends_with_exit_0(tmp_path):
+    """Before: the run went on to draw the report and exited 0 (2-3 of 10 trials with a real SIGTERM)."""
+    from test_report import write_dmw, write_histories, write_roughness, write_sweep
+    out = tmp_path / "out"
+    out.mkdir()
+    for write in (write_sweep, write_histories, write_dmw, write_roughness):
+        write(out)
+    done = subprocess.run([sys.executable, "-c", _SWALLOWED, "report", str(PAPER), "--out", str(out)], cwd=ROOT,
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 143, done.stderr
+    assert done.stderr.strip().splitlines()[-1] == ("hdi report: terminated (SIGTERM); finished work is kept, run "
+                                                    "again to resume")
+    assert not (out / "figures").exists() and not (out / runner.LOCK_NAME).exists()
+
+
+# ------------------------------------------------------------------------------------ 3. figure workers
+#: Draws two figures that never end in forked workers (each writes its pid first).
+_DRAWING = """
+import os, sys, time
+from pipeline.analyses import plots
+
+def forever(folder):
+    (folder / f"{os.getpid()}.pid").write_text("")
+    time.sleep(600)
+
+from pathlib import Path
+folder = Path(sys.argv[1])
+plots.draw_all([(forever, (folder,), {}), (forever, (folder,), {})], workers=2)
+"""
+
+
+def _alive(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/stat") as fh:
+            return fh.read().rsplit(")", 1)[1].split()[0] != "Z"   # (a zombie is dead, waiting to be reaped)
+    except (FileNotFoundError, ProcessLookupError):
+        return False
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="the figure pool forks on Linux only")
+def test_figure_workers_die_with_a_killed_parent(tmp_path):
+    """Before: SIGKILL (or SIGHUP) of hdi while drawing left its workers sleeping forever, holding its
+    stdout and stderr (``hdi run ... | tee log`` never ended)."""
+    proc = subprocess.Popen([sys.executable, "-c", _DRAWING, str(tmp_path)], cwd=ROOT,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        deadline = time.monotonic() + 60
+        while len(list(tmp_path.glob("*.pid"))) < 2 and time.monotonic() < deadline:
+            time.sleep(0.05)
+        workers = [int(p.stem) for p in tmp_path.glob("*.pid")]
+        assert len(workers) == 2 and all(_alive(w) for w in workers)
+        proc.kill()
+        proc.wait(timeout=10)
+        deadline = time.monotonic() + 10
+        while any(_alive(w) for w in workers) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert not any(_alive(w) for w in workers)
+    finally:
+        proc.kill()
+        for p in tmp_path.glob("*.pid"):
+            try:
+                os.kill(int(p.stem), signal.SIGKILL)
+            except ProcessLookupError:
+                pass

@@ -19,7 +19,9 @@ from typing import Iterable, Iterator
 
 import numpy as np
 
+from .. import interrupts
 from ..io import NETCDF_LOCK
+from ..paths import special_kind
 from ..physics.microwaviness import TIME_JITTER_TOL, DMWError
 from ..units import LENGTH_UNITS, TIME_UNITS, VELOCITY_UNITS
 from ..units import MS
@@ -186,6 +188,8 @@ def record_samples(path: str | Path) -> int:
     """At most how many samples a record file holds, from its size alone (no value is read): a CSV's
     lines, a NetCDF file's longest dimension; 0 for a file that cannot be read (the reader says why)."""
     path = Path(path)
+    if special_kind(path) is not None:  # (a FIFO, /dev/zero: never opened; the reader refuses it)
+        return 0
     try:
         if path.suffix.lower() not in NETCDF_SUFFIXES:
             return count_lines(path)
@@ -314,6 +318,7 @@ def _read_netcdf(path: Path, quantity: str, column: str | None,
     except (OSError, ValueError) as exc:
         raise DMWError(f"{path}: not a readable NetCDF file ({exc}); expected NetCDF with a variable "
                        f"on a 'time' coordinate") from None
+    interrupts.check()  # (netCDF4's error checks can swallow a signal raised during the read)
     if "elapsed_time" in ds.variables and "time" not in ds.variables:  # a dmw.nc of this pipeline (io.TIME_ON_DISK)
         ds = ds.rename({"elapsed_time": "time"})
     if column is not None:
@@ -404,6 +409,9 @@ def load_record(path: str | Path, quantity: str = "displacement", column: str | 
     if sample_rate_hz is not None and not (sample_rate_hz > 0 and math.isfinite(sample_rate_hz)):
         raise DMWError(f"{path}: sample_rate_hz = {sample_rate_hz!r}: expected a positive number "
                        f"(dmw.sample_rate_hz)")
+    if special_kind(path) is not None:  # (checked before opening: reading a FIFO or /dev/zero never ends)
+        raise DMWError(f"{path}: is {special_kind(path)}; expected a regular file, a CSV or NetCDF record "
+                       "(dmw.source)")
     if not path.is_file():
         raise DMWError(f"{path}: record file does not exist (dmw.source)")
     reader = _read_netcdf if path.suffix.lower() in NETCDF_SUFFIXES else _read_csv

@@ -52,7 +52,8 @@ import xarray as xr
 from ..analyses import plots
 from ..fanout import local_cluster
 from ..progress import Progress
-from ..io import read_dataset, refuse_links, temporary_path, var
+from ..io import read_dataset, temporary_path, var
+from ..paths import refuse_links
 from ..runner import Inputs, Stage, build
 from ..analyses.identification import GN_STEP, METHODS, PROFILE_STEP, ROLES, Identification, identify
 from ..analyses.study import Parameter, parse_parameters, residuals, scene_value, spreads, target_protrusions, targets

@@ -71,7 +71,8 @@ from ..analyses.paper_comparison import comparison_markdown, identification_mark
 from ..analyses.report_figures import BAND_FIGURE, ENSEMBLE_FIGURE, FIGURES, INTERFACE_FIGURE
 from ..analyses.report_settings import ReportSettings, wants_ensemble
 from ..analyses.sweep_slices import combinations, split_ensemble
-from ..io import DatasetError, is_read_only, refuse_links, temporary_path
+from ..io import DatasetError, is_read_only, temporary_path
+from ..paths import refuse_links
 from ..validity import OutsideValidity, describe
 from ..runner import Inputs, Stage, build
 

@@ -40,7 +40,8 @@ import xarray as xr
 from ..model import slider as sl
 from ..fanout import run_tasks
 from ..progress import Progress
-from ..io import read_attrs, read_dataset, refuse_links, write_dataset
+from ..io import read_attrs, read_dataset, write_dataset
+from ..paths import refuse_links
 from ..runner import KEY_ATTR, Inputs, Stage, ensure
 from ..variables import COORDINATES, ENSEMBLE, HISTORIES, SCALARS, STEPPING, coordinate
 from ..model import dmw_record, scene_inputs
