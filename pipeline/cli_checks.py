@@ -28,6 +28,7 @@ from urllib.parse import urlsplit
 
 from .config.grid import label, range_count, roughness_sets, same_point
 from .io import is_read_only, os_error_line
+from .paths import special_kind
 from . import fanout, sizing
 from .fanout import CONNECT_TIMEOUT_S, LOCAL
 from .config import limits
@@ -85,9 +86,13 @@ def scheduler_address(given: str | None) -> tuple[str | None, str]:
     if given is None:
         env = os.environ.get(SCHEDULER_ENV, "").strip()
         return (env, f"{SCHEDULER_ENV}={env}") if env else (None, "")
-    if given in LOCAL or "://" in given or not (given.endswith(".json") or Path(given).is_file()):
-        return given, f"--scheduler {given}"
     where = f"--scheduler {given}"
+    if given not in LOCAL and "://" not in given and special_kind(given) is not None:
+        # (checked before opening: reading a FIFO waits for a writer forever)
+        raise OptionError(f"{where}: is {special_kind(given)}; expected the JSON file `dask scheduler "
+                          "--scheduler-file FILE` writes, or tcp://HOST:PORT")
+    if given in LOCAL or "://" in given or not (given.endswith(".json") or Path(given).is_file()):
+        return given, where
     try:
         with open(given, encoding="utf-8") as f:
             identity = json.load(f)

@@ -14,6 +14,7 @@ from __future__ import annotations
 import errno
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -298,3 +299,78 @@ def test_figure_workers_die_with_a_killed_parent(tmp_path):
                 os.kill(int(p.stem), signal.SIGKILL)
             except ProcessLookupError:
                 pass
+
+
+# ------------------------------------------------------------------------------------ 4. special files
+def _hdi(args: list[str], timeout: float = 120) -> subprocess.CompletedProcess:
+    """``hdi ARGS`` in a subprocess (a hang fails the test at ``timeout`` instead of blocking the run)."""
+    return subprocess.run([sys.executable, "-m", "pipeline.cli", *args], cwd=ROOT, capture_output=True, text=True,
+                          timeout=timeout)
+
+
+def _one_error(done: subprocess.CompletedProcess) -> str:
+    assert done.returncode == 2, done.stderr
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in done.stderr, done.stderr
+    return lines[0]
+
+
+@pytest.mark.parametrize("kind", ["fifo", "device"])
+def test_a_special_file_as_the_dmw_record_is_refused_at_load(tmp_path, kind):
+    """Before: a FIFO or ``/dev/zero`` as ``dmw.source`` hung (the record's size was counted by reading it)."""
+    if kind == "fifo":
+        source = tmp_path / "record.csv"
+        os.mkfifo(source)
+        what = "a FIFO (named pipe)"
+    else:
+        source, what = Path("/dev/zero"), "a character device"
+    done = _hdi(["dmw", str(PAPER), "--out", str(tmp_path / "out"), "--set", f'dmw.source="{source}"'], timeout=60)
+    assert _one_error(done) == (f"hdi dmw: error: {PAPER}: dmw.source: {source} is {what}; expected a regular file "
+                                "(a CSV or NetCDF record)")
+    assert not (tmp_path / "out").exists()
+
+
+def test_the_record_reader_refuses_a_special_file_before_opening_it(tmp_path):
+    from pipeline.model import measured_dmw
+    from pipeline.physics.microwaviness import DMWError
+    os.mkfifo(tmp_path / "record.csv")
+    assert measured_dmw.record_samples(tmp_path / "record.csv") == 0
+    with pytest.raises(DMWError, match=r"record\.csv: is a FIFO \(named pipe\); expected a regular file"):
+        measured_dmw.load_record(tmp_path / "record.csv")
+
+
+def test_a_fifo_as_the_scheduler_file_is_refused(tmp_path):
+    fifo = tmp_path / "scheduler.json"
+    os.mkfifo(fifo)
+    done = _hdi(["sweep", str(PAPER), "--out", str(tmp_path / "out"), "--scheduler", str(fifo)], timeout=60)
+    assert _one_error(done) == (f"hdi sweep: error: --scheduler {fifo}: is a FIFO (named pipe); expected the JSON "
+                                "file `dask scheduler --scheduler-file FILE` writes, or tcp://HOST:PORT")
+
+
+@pytest.mark.parametrize("content, kw", [
+    (b"SHELL=/bin/bash\x00SECRET_TOKEN=abc123\x00HOME=/root\x00", {}),               # /proc/self/environ
+    (b"SECRET_TOKEN=abc123\nHOME=/root\n", {"sample_rate_hz": 1e6}),                  # the same, as text
+    (b"time,value\n0,1\n1e-6,SECRET_TOKEN=abc123\n", {}),                              # a data value
+    (b"SECRET_TOKEN=abc123 HOME=/root\n1 2\n", {"column": "x", "sample_rate_hz": 1e6}),  # a header listed
+    (b"time [s],x [SECRET_TOKEN=abc123]\n0,1\n1e-6,2\n", {}),                          # a unit
+])
+def test_record_errors_never_repeat_the_files_content(tmp_path, content, kw):
+    """Before: ``dmw.source = "/proc/self/environ"`` printed the environment in the error."""
+    from pipeline.model import measured_dmw
+    from pipeline.physics.microwaviness import DMWError
+    path = tmp_path / "record.csv"
+    path.write_bytes(content)
+    with pytest.raises(DMWError) as info:
+        measured_dmw.load_record(path, **kw)
+    message = str(info.value)
+    assert message.startswith(f"{path}: ") and "\n" not in message
+    assert "SECRET" not in message and "abc123" not in message and "HOME" not in message
+
+
+def test_proc_self_environ_as_the_record_is_one_line_without_the_environment(tmp_path):
+    done = _hdi(["dmw", str(PAPER), "-q", "--out", str(tmp_path), "--set", 'dmw.source="/proc/self/environ"',
+                 "--set", "dmw.sample_rate_hz=1e6"], timeout=120)
+    line = _one_error(done)
+    assert re.fullmatch(r"hdi dmw: error: /proc/(self|\d+)/environ: not a text \(CSV\) file \(it holds NUL bytes\); "
+                        r"expected CSV or NetCDF \(\.nc\)", line), line
+    assert "PATH=" not in done.stderr and os.environ.get("HOME", "~") not in done.stderr

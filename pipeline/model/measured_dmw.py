@@ -64,6 +64,18 @@ _BRACKET = re.compile(r"^\s*(.*?)\s*[\[\(]\s*([^\]\)]*?)\s*[\]\)]\s*$")
 _SUFFIXES = ("nm_s", "um_s", "mm_s", "m_s", "nm", "um", "mm", "m", "ms", "us", "ns", "s")
 
 
+#: What a column name or unit of a record's header must look like to be repeated in a message: a short
+#: name of letters, digits and the signs of units. Anything else is file content (``dmw.source`` set to
+#: ``/proc/self/environ`` or a key file printed it): a message names the column by its index instead,
+#: and it never repeats a data value.
+_NAME = re.compile(r"[A-Za-z_µμ][\w .\-\[\]()/%µμ^*+]{0,39}")
+
+
+def _shown(text: str) -> str:
+    """``text`` quoted for a message when it looks like a name (:data:`_NAME`), else ``(not shown)``."""
+    return repr(text) if _NAME.fullmatch(text) else "(not shown)"
+
+
 def _norm_unit(u: str) -> str:
     u = u.strip().lower().replace("µ", "u").replace("μ", "u")
     u = re.sub(r"\s*(s\^?-1|s⁻¹)$", "/s", u)          # "m s-1" -> "m/s"
@@ -101,9 +113,9 @@ def _value_factor(path: Path, field_name: str, unit: str | None,
         return units[unit], unit, ()
     other_kind, other_units, _ = _QUANTITY_UNITS[other]
     if unit in other_units:  # a unit of the other quantity: the scene names the wrong one
-        raise DMWError(f"{path}: {field_name}: has {other_kind} units {unit!r} but the quantity is "
+        raise DMWError(f"{path}: {field_name}: has {other_kind} units {_shown(unit)} but the quantity is "
                        f"'{quantity}': set dmw.quantity = \"{other}\"")
-    raise DMWError(f"{path}: {field_name}: unknown {kind} unit {unit!r}; expected one of " + ", ".join(units))
+    raise DMWError(f"{path}: {field_name}: unknown {kind} unit {_shown(unit)}; expected one of " + ", ".join(units))
 
 
 def _time_factor(path: Path, field_name: str, unit: str | None) -> float:
@@ -111,7 +123,7 @@ def _time_factor(path: Path, field_name: str, unit: str | None) -> float:
         return 1.0
     unit = unit.split(" since ")[0].strip()
     if unit not in TIME_UNITS:
-        raise DMWError(f"{path}: {field_name}: unknown time unit {unit!r}; expected one of "
+        raise DMWError(f"{path}: {field_name}: unknown time unit {_shown(unit)}; expected one of "
                        + ", ".join(TIME_UNITS))
     return TIME_UNITS[unit]
 
@@ -213,6 +225,9 @@ def _read_csv(path: Path, quantity: str, column: str | None,
 def _parse_csv(path: Path, quantity: str, column: str | None,
                sample_rate_hz: float | None) -> tuple[np.ndarray, float, str, str, str, tuple[str, ...]]:
     n_lines = count_lines(path)
+    with open(path, "rb") as fh:
+        if b"\x00" in fh.read(1 << 16):  # (a binary file, or /proc/self/environ: NUL is no CSV character)
+            raise DMWError(f"{path}: not a text (CSV) file (it holds NUL bytes); expected CSV or NetCDF (.nc)")
     with open(path, encoding="utf-8-sig") as fh:
         lines = _data_lines(fh)
         first = next(lines, None)
@@ -230,10 +245,11 @@ def _parse_csv(path: Path, quantity: str, column: str | None,
         header = None if all(_numeric(c) for c in head if c != "") else head
         ncol = len(head)
         names = header if header is not None else [str(i) for i in range(ncol)]
-        labels = ([f"column {h!r}" for h in header] if header is not None
-                  else [f"column {i}" for i in range(ncol)])  # how a column is named in messages
+        # how a column is named in messages: its header name when it looks like one, else its index
+        labels = [f"column {h!r}" if header is not None and _NAME.fullmatch(h) else f"column {i}"
+                  for i, h in enumerate(names)]
         split_names = [_split_header(h) for h in names] if header is not None else [(n, None) for n in names]
-        time_idx, val_idx = _columns(path, split_names, names, header is not None, column, quantity,
+        time_idx, val_idx = _columns(path, split_names, names, labels, header is not None, column, quantity,
                                      sample_rate_hz)
         wanted = [val_idx] + ([time_idx] if time_idx is not None else [])
         out = np.empty((len(wanted), n_lines))
@@ -242,15 +258,15 @@ def _parse_csv(path: Path, quantity: str, column: str | None,
             row = split(ln)
             if len(row) > ncol and any(c != "" for c in row[ncol:]):
                 raise DMWError(f"{path}: line {line_no}: {len(row)} columns; expected {ncol} "
-                               f"({', '.join(names)}) as in the first row")
+                               f"({', '.join(labels)}) as in the first row")
             for k, i in enumerate(wanted):
                 if i >= len(row) or row[i] == "":
                     raise DMWError(f"{path}: {labels[i]}: missing value on line {line_no}; expected a number")
                 try:
                     out[k, n] = float(row[i])
                 except ValueError:
-                    raise DMWError(f"{path}: {labels[i]}: non-numeric value {row[i]!r} on line {line_no}; "
-                                   f"expected a number") from None
+                    raise DMWError(f"{path}: {labels[i]}: non-numeric value on line {line_no}; "
+                                   f"expected a number") from None  # (the value not shown: file content)
             n += 1
             if n % PROGRESS_ROWS == 0:
                 log.info("dmw: %s: read %d of at most %d rows", path, n, n_lines)
@@ -277,8 +293,9 @@ def _numeric(s: str) -> bool:
         return False
 
 
-def _columns(path: Path, split: list[tuple[str, str | None]], names: list[str], has_header: bool,
-             column: str | None, quantity: str, sample_rate_hz: float | None) -> tuple[int | None, int]:
+def _columns(path: Path, split: list[tuple[str, str | None]], names: list[str], labels: list[str],
+             has_header: bool, column: str | None, quantity: str,
+             sample_rate_hz: float | None) -> tuple[int | None, int]:
     """Indices of the time column (``None``: none) and of the value column of a CSV record."""
     ncol = len(names)
     time_idx = next((i for i, (b, _) in enumerate(split) if has_header and _is_time_name(b)), None)
@@ -290,8 +307,8 @@ def _columns(path: Path, split: list[tuple[str, str | None]], names: list[str], 
         if not matches and key.isdigit() and int(key) < ncol:
             matches = [int(key)]
         if not matches:
-            raise DMWError(f"{path}: column {column!r} not found; expected one of {names} "
-                           f"(or a column index 0..{ncol - 1}) (dmw.column)")
+            raise DMWError(f"{path}: column {column!r} not found; expected one of {', '.join(labels)} "
+                           f"(a name or a column index 0..{ncol - 1}) (dmw.column)")
         val_idx = matches[0]
     else:
         candidates = [i for i in range(ncol) if i != time_idx]
@@ -301,7 +318,7 @@ def _columns(path: Path, split: list[tuple[str, str | None]], names: list[str], 
         elif len(candidates) == 1:
             val_idx = candidates[0]
         else:
-            raise DMWError(f"{path}: {len(candidates)} value columns {[names[i] for i in candidates]}; "
+            raise DMWError(f"{path}: {len(candidates)} value columns ({', '.join(labels[i] for i in candidates)}); "
                            f"expected one: set dmw.column")
     if time_idx is None and sample_rate_hz is None:
         raise DMWError(f"{path}: no time column (a header 'time', 'time [s]', 'time_s', ...) and no "
@@ -324,7 +341,7 @@ def _read_netcdf(path: Path, quantity: str, column: str | None,
     if column is not None:
         if column not in ds.data_vars:
             raise DMWError(f"{path}: variable {column!r} not found; expected one of "
-                           f"{sorted(map(str, ds.data_vars))} (dmw.column)")
+                           f"{', '.join(_shown(str(v)) for v in sorted(map(str, ds.data_vars)))} (dmw.column)")
         name = column
     else:
         cands = [str(v) for v in ds.data_vars if ds[v].dims == ("time",)]
@@ -334,9 +351,10 @@ def _read_netcdf(path: Path, quantity: str, column: str | None,
         elif len(cands) == 1:
             name = cands[0]
         else:
-            raise DMWError(f"{path}: {len(cands)} variables on 'time' {cands}; expected one: set dmw.column")
+            raise DMWError(f"{path}: {len(cands)} variables on 'time' ({', '.join(map(_shown, cands))}); expected "
+                           "one: set dmw.column")
     da = ds[name]
-    field_name = f"variable {name!r}"
+    field_name = f"variable {_shown(name)}"
     if da.dims != ("time",):
         raise DMWError(f"{path}: {field_name}: dimensions {da.dims}; expected ('time',)")
     try:
