@@ -56,8 +56,8 @@ from .fanout import shared_folder
 from .progress import stage as progress_stage
 from .model.inputs import SimulationInputs, from_folder
 from .model.scene_inputs import simulation_inputs as wanted_inputs
-from .io import (KEY_ATTR, DatasetError, RUN_ID, file_hash, is_temporary, read_attrs, read_dataset, temporary_path,
-                 write_dataset)
+from .io import (KEY_ATTR, DatasetBusy, DatasetError, RUN_ID, file_hash, is_temporary, read_attrs, read_dataset,
+                 temporary_path, write_dataset)
 from .paths import LinkRefused, append_text, guarded, refuse_links, special_kind
 
 log = logging.getLogger(__name__)
@@ -294,6 +294,8 @@ def _dataset_key(path: Path) -> tuple[str | None, list[str] | None]:
     """The ``inputs_key`` and produced-outputs list of a dataset (``None`` when unreadable)."""
     try:
         attrs, _ = read_attrs(path)
+    except DatasetBusy:  # (not "no inputs key": the dataset would be replaced under its writer)
+        raise
     except (OSError, ValueError):
         return None, None
     outputs = attrs.get(OUTPUTS_ATTR)

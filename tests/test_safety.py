@@ -374,3 +374,43 @@ def test_proc_self_environ_as_the_record_is_one_line_without_the_environment(tmp
     assert re.fullmatch(r"hdi dmw: error: /proc/(self|\d+)/environ: not a text \(CSV\) file \(it holds NUL bytes\); "
                         r"expected CSV or NetCDF \(\.nc\)", line), line
     assert "PATH=" not in done.stderr and os.environ.get("HOME", "~") not in done.stderr
+
+
+# ------------------------------------------------------------------------------------ 5. busy datasets
+def test_a_dataset_another_process_writes_is_busy_and_never_replaced(tmp_path):
+    """Before: reported as "has no inputs key" and replaced (that process's edit lost). The HDF5 file lock
+    of a writer in this process stands in for another's (``flock`` locks conflict between open files)."""
+    import netCDF4
+    out = tmp_path / "out"
+    computed = []
+    stage = runner.Stage("toy", lambda scene, inputs: computed.append(1) or _dataset(), outputs=("a.nc",))
+    io.write_dataset(_dataset(), out / "a.nc", stage="a user's")           # (no inputs key: stale)
+    with netCDF4.Dataset(out / "a.nc", "a") as nc:
+        nc.setncattr("edit", "being written")
+        with pytest.raises(io.DatasetBusy) as info:
+            runner.Runner(load_scene(PAPER), out, {"toy": stage}).build(["toy"])
+        assert str(info.value) == (f"{out / 'a.nc'}: busy: another process has it open for writing (its HDF5 "
+                                   "file lock); close it there, or wait for that process, and run again")
+        with pytest.raises(io.DatasetBusy):
+            io.read_dataset(out / "a.nc")
+    assert computed == [] and netCDF4.Dataset(out / "a.nc").getncattr("edit") == "being written"
+    assert not (out / runner.LOCK_NAME).exists()
+    runner.Runner(load_scene(PAPER), out, {"toy": stage}).build(["toy"])    # closed: replaced as usual
+    assert computed == [1] and io.read_attrs(out / "a.nc")[0][io.KEY_ATTR]
+
+
+def test_a_dataset_opened_for_writing_during_the_computation_is_not_replaced(tmp_path):
+    import netCDF4
+    out = tmp_path / "out"
+    io.write_dataset(_dataset(), out / "a.nc", stage="a user's")
+    held = []
+
+    def compute(scene, inputs):
+        held.append(netCDF4.Dataset(out / "a.nc", "a"))     # another writer, while the stage runs
+        return _dataset()
+    with pytest.raises(io.DatasetBusy):
+        runner.Runner(load_scene(PAPER), out, {"toy": runner.Stage("toy", compute, outputs=("a.nc",))}).build(["toy"])
+    held[0].close()
+    assert io.read_attrs(out / "a.nc")[0]["stage"] == "a user's"
+    assert [p.name for p in out.iterdir() if p.name.startswith(".")] == []   # no temporary file left
+    assert not io.is_busy(out / "a.nc") and not io.is_busy(out / "missing.nc")
