@@ -24,8 +24,12 @@ A results folder is used by one ``hdi`` process at a time: :func:`folder_lock` h
 ``.hdi.lock`` (pid, host, start time) and refuses a second process, naming the first; a lock whose
 process is gone (same host) is taken over. Temporary files an interrupted run left behind
 (hdi's own names, ``.NAME.hdi-RUNID*.tmp`` of :func:`pipeline.io.temporary_path`, and ``.hdi-staging-*``)
-are removed when the lock is taken; a user's files and another results folder holding its lock (a
-run in a sub-folder) are left alone.
+are removed when the lock is taken; a user's files, links and another results folder holding its lock
+(a run in a sub-folder) are left alone. While the lock is held no symbolic link inside the folder is
+followed for a file the runner or a stage writes or deletes (:func:`pipeline.paths.refuse_links`): the
+outputs, manifests and run log are checked before a stage computes and again at each write, and a lock
+file that is a link is refused, not taken over. Before any stage runs, the longest path the build
+writes is checked against the file system's limits (:meth:`Runner.check_lengths`).
 """
 
 from __future__ import annotations
@@ -70,6 +74,9 @@ LOCK_NAME = ".hdi.lock"
 #: The run log in :data:`STATE_DIR`: one JSON line of timings per computed stage.
 RUN_LOG = "runs.jsonl"
 STAGING_PREFIX = ".hdi-staging-"
+#: The longest file name of the common file systems [B] (ext4, XFS, btrfs, tmpfs), for a folder name checked
+#: before the file system can be asked (:meth:`Runner.check_lengths`).
+_NAME_MAX_FALLBACK = 255
 #: How deep below a results folder the cleaner looks for orphaned temporary files (``sweep.parts/interface-x/``).
 _TMP_DEPTH = 2
 
@@ -124,6 +131,10 @@ class Stage:
         (e.g. ``identify`` for the report: a minutes-long study is never started by the report). The
         key holds each one's inputs key when its dataset is current, else ``None``; ``compute`` sees
         the same in :attr:`Inputs.optional` and must not read a dataset whose entry is ``None``.
+    keeps
+        ``keeps(scene) -> (path, ...)``: the longest paths, relative to the results folder, of the files
+        the stage writes there beyond its outputs (sweep parts, an evaluation store, the identified
+        scene); only their lengths matter (:meth:`Runner.check_lengths`).
     finish
         ``finish(scene, out, options)``: run after the stage was asked for and is current (computed or
         not), for side effects outside the results folder (``report --readme``); ``options`` are those
@@ -145,6 +156,7 @@ class Stage:
     applies: Callable[[Scene], bool] = _constant(True)
     derived: Callable[[Scene], Mapping[str, Any]] = _constant({})
     optional: tuple[str, ...] = ()
+    keeps: Callable[[Scene], tuple[str, ...]] = _constant(())
     finish: Callable[[Scene, Path, dict], None] | None = None
     doc: str = ""
 
@@ -570,6 +582,7 @@ class Runner:
         ``force`` recomputes the targets themselves even when current (not their upstream stages).
         """
         targets = list(targets)
+        self.check_lengths(targets)
         with folder_lock(self.out):
             for name in self.plan(targets):
                 self._make(name, force and name in targets)
@@ -577,6 +590,61 @@ class Runner:
                 if self.stage(name).finish is not None:
                     self.stage(name).finish(self.scene, self.out, {**self.options, "force": force})
         return {t: tuple(self.out / o for o in self.stage(t).output_names(self.scene)) for t in targets}
+
+    def written_paths(self, targets: Iterable[str]) -> list[str]:
+        """The paths, relative to the results folder, a build of ``targets`` may write, each with the
+        longest temporary name hdi gives it (:func:`pipeline.io.temporary_prefix` and ``mkstemp``'s 8
+        characters): outputs, their staging copies, the runner's records and what stages keep."""
+        probe = f".hdi-{RUN_ID}.{'x' * 8}.tmp"
+        staging = STAGING_PREFIX + "x" * 8
+        paths = [LOCK_NAME, f"{STATE_DIR}/.{RUN_LOG}{probe}"]
+        for name in self.plan(targets):
+            st = self.stage(name)
+            paths.append(f"{STATE_DIR}/.{name}.json{probe}")
+            outputs = st.output_names(self.scene)
+            for o in (*outputs, *st.keeps(self.scene)):
+                folder, _, base = o.rpartition("/")
+                tmp = f"{folder}/.{base}{probe}" if folder else f".{base}{probe}"
+                paths.append(tmp)
+                if o in outputs and not o.endswith(".nc"):  # (drawn in the staging folder, then moved)
+                    paths.append(f"{staging}/{tmp}")
+        return paths
+
+    def check_lengths(self, targets: Iterable[str]) -> None:
+        """Refuse, before any stage runs, a results folder or scene name that makes a path the build writes
+        longer than the file system allows (``PC_NAME_MAX`` for one name, ``PC_PATH_MAX`` for the whole
+        path): such a write failed only when it came, after the stages before it (a 250-character scene
+        name after the whole identification, a 4030-byte ``--out`` at the report, naming a temporary file).
+
+        Raises
+        ------
+        OSError
+            ``ENAMETOOLONG``, naming the results folder, the longest name or length and the limit.
+        """
+        out = Path(os.path.abspath(self.out))
+        for part in out.parts[1:]:  # (checked first: a path with too long a name cannot even be looked up)
+            if len(os.fsencode(part)) > _NAME_MAX_FALLBACK:
+                raise OSError(errno.ENAMETOOLONG, f"a folder name of {len(os.fsencode(part))} bytes in it, the file "
+                              f"system allows {_NAME_MAX_FALLBACK}; choose a shorter --out or scene name", str(self.out))
+        existing = next(p for p in (out, *out.parents) if p.exists())
+        try:
+            name_max = os.pathconf(existing, "PC_NAME_MAX")
+            path_max = os.pathconf(existing, "PC_PATH_MAX")
+        except (OSError, ValueError):  # (not POSIX, or the file system does not say)
+            return
+        paths = self.written_paths(targets)
+        for rel in paths:
+            for part in Path(rel).parts:
+                if len(os.fsencode(part)) > name_max:
+                    raise OSError(errno.ENAMETOOLONG, f"the file name {part!r} this run writes (its temporary "
+                                  f"name) is {len(os.fsencode(part))} bytes long, the file system allows {name_max}; "
+                                  "choose a shorter scene name (scene.name)", str(self.out))
+        longest = max(paths, key=lambda rel: len(os.fsencode(rel)))
+        size = len(os.fsencode(str(out / longest)))
+        if size >= path_max:  # (PC_PATH_MAX counts the terminating NUL)
+            raise OSError(errno.ENAMETOOLONG, f"the longest path this run writes, {longest} (a temporary name) in "
+                          f"it, is {size} bytes long, the file system allows {path_max - 1}; choose a shorter --out",
+                          str(self.out))
 
     def _make(self, name: str, force: bool) -> None:
         if name in self._done:

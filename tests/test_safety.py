@@ -414,3 +414,46 @@ def test_a_dataset_opened_for_writing_during_the_computation_is_not_replaced(tmp
     assert io.read_attrs(out / "a.nc")[0]["stage"] == "a user's"
     assert [p.name for p in out.iterdir() if p.name.startswith(".")] == []   # no temporary file left
     assert not io.is_busy(out / "a.nc") and not io.is_busy(out / "missing.nc")
+
+
+# ------------------------------------------------------------------------------------ 6. lengths
+def test_a_scene_name_too_long_for_the_identified_scene_is_one_line_before_any_stage(tmp_path):
+    """Before: a 250-character name failed after the whole identification (``<name>-identified.toml``)."""
+    out = tmp_path / "out"
+    done = _hdi(["identify", str(PAPER), "--out", str(out), "--set", f'scene.name="{"a" * 250}"'], timeout=120)
+    line = _one_error(done)
+    assert line.startswith(f"hdi identify: error: {out}: the file name '.{'a' * 250}-identified.toml.hdi-")
+    assert line.endswith(" bytes long, the file system allows 255; choose a shorter scene name (scene.name)")
+    assert not out.exists()
+
+
+def test_a_results_folder_too_long_for_the_reports_files_is_one_line_before_any_stage(tmp_path):
+    """Before: a 4030-byte ``--out`` failed at the report, naming a temporary file."""
+    limit = os.pathconf(tmp_path, "PC_PATH_MAX")
+    out = tmp_path
+    while len(os.fsencode(str(out))) < limit - 66 - 200:
+        out = out / ("d" * 200)
+    out = out / ("e" * (limit - 66 - len(os.fsencode(str(out))) - 1))
+    assert len(os.fsencode(str(out))) == limit - 66
+    done = _hdi(["report", str(PAPER), "--out", str(out)], timeout=120)
+    line = _one_error(done)
+    assert line.startswith(f"hdi report: error: {out}: the longest path this run writes, ")
+    assert line.endswith(f" bytes long, the file system allows {limit - 1}; choose a shorter --out")
+    assert not (tmp_path / ("d" * 200)).exists()
+
+
+def test_the_paths_a_run_writes_include_temporary_names_and_what_stages_keep(tmp_path):
+    scene = load_scene(PAPER)
+    paths = runner.Runner(scene, tmp_path).written_paths(["identify", "report", "sweep"])
+    assert f".{scene.name}-identified.toml.hdi-{io.RUN_ID}.xxxxxxxx.tmp" in paths
+    assert f"{runner.STAGING_PREFIX}xxxxxxxx/figures/.fig3_clearance.png.hdi-{io.RUN_ID}.xxxxxxxx.tmp" in paths
+    assert f"sweep.parts/.batch-00000.nc.hdi-{io.RUN_ID}.xxxxxxxx.tmp" in paths
+    runner.Runner(scene, tmp_path).check_lengths(["identify", "report", "sweep"])     # (a usual folder: passes)
+
+
+def test_a_fifo_as_an_afm_file_is_refused_before_opening(tmp_path):
+    fifo = tmp_path / "scan.ibw"
+    os.mkfifo(fifo)
+    done = _hdi(["roughness", str(fifo), "--out", str(tmp_path / "out")], timeout=120)
+    assert _one_error(done) == (f"hdi roughness: error: {fifo}: is a FIFO (named pipe) (expected a regular file, an "
+                                "AFM/profilometer height map in a format SurfaceTopography reads)")

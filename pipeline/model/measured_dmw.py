@@ -246,10 +246,10 @@ def _parse_csv(path: Path, quantity: str, column: str | None,
         ncol = len(head)
         names = header if header is not None else [str(i) for i in range(ncol)]
         # how a column is named in messages: its header name when it looks like one, else its index
-        labels = [f"column {h!r}" if header is not None and _NAME.fullmatch(h) else f"column {i}"
-                  for i, h in enumerate(names)]
+        shown = [h if header is not None and _NAME.fullmatch(h) else f"column {i}" for i, h in enumerate(names)]
+        labels = [f"column {h!r}" if h == n else h for h, n in zip(shown, names)]
         split_names = [_split_header(h) for h in names] if header is not None else [(n, None) for n in names]
-        time_idx, val_idx = _columns(path, split_names, names, labels, header is not None, column, quantity,
+        time_idx, val_idx = _columns(path, split_names, names, shown, header is not None, column, quantity,
                                      sample_rate_hz)
         wanted = [val_idx] + ([time_idx] if time_idx is not None else [])
         out = np.empty((len(wanted), n_lines))
@@ -258,7 +258,7 @@ def _parse_csv(path: Path, quantity: str, column: str | None,
             row = split(ln)
             if len(row) > ncol and any(c != "" for c in row[ncol:]):
                 raise DMWError(f"{path}: line {line_no}: {len(row)} columns; expected {ncol} "
-                               f"({', '.join(labels)}) as in the first row")
+                               f"({', '.join(shown)}) as in the first row")
             for k, i in enumerate(wanted):
                 if i >= len(row) or row[i] == "":
                     raise DMWError(f"{path}: {labels[i]}: missing value on line {line_no}; expected a number")
@@ -293,7 +293,7 @@ def _numeric(s: str) -> bool:
         return False
 
 
-def _columns(path: Path, split: list[tuple[str, str | None]], names: list[str], labels: list[str],
+def _columns(path: Path, split: list[tuple[str, str | None]], names: list[str], shown: list[str],
              has_header: bool, column: str | None, quantity: str,
              sample_rate_hz: float | None) -> tuple[int | None, int]:
     """Indices of the time column (``None``: none) and of the value column of a CSV record."""
@@ -307,8 +307,8 @@ def _columns(path: Path, split: list[tuple[str, str | None]], names: list[str], 
         if not matches and key.isdigit() and int(key) < ncol:
             matches = [int(key)]
         if not matches:
-            raise DMWError(f"{path}: column {column!r} not found; expected one of {', '.join(labels)} "
-                           f"(a name or a column index 0..{ncol - 1}) (dmw.column)")
+            raise DMWError(f"{path}: column {column!r} not found; expected one of {shown} "
+                           f"(or a column index 0..{ncol - 1}) (dmw.column)")
         val_idx = matches[0]
     else:
         candidates = [i for i in range(ncol) if i != time_idx]
@@ -318,7 +318,7 @@ def _columns(path: Path, split: list[tuple[str, str | None]], names: list[str], 
         elif len(candidates) == 1:
             val_idx = candidates[0]
         else:
-            raise DMWError(f"{path}: {len(candidates)} value columns ({', '.join(labels[i] for i in candidates)}); "
+            raise DMWError(f"{path}: {len(candidates)} value columns {[shown[i] for i in candidates]}; "
                            f"expected one: set dmw.column")
     if time_idx is None and sample_rate_hz is None:
         raise DMWError(f"{path}: no time column (a header 'time', 'time [s]', 'time_s', ...) and no "

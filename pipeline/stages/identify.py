@@ -365,6 +365,7 @@ STAGE = Stage(
     reads=("*",), excludes=("sweep", "report", "sensitivity", "scene.name", "scene.description",
                             "identify.batch_size"),
     upstream=upstream, finish=_finish, order=80,
+    keeps=lambda scene: (identified_scene_path(scene, Path()).name, "identify.evals.jsonl"),
     doc="the free [recon] parameters fitted to the paper's targets, identify.nc and <scene>-identified.toml "
         "(in the results folder; --write-scene PATH for a copy)")
 

@@ -156,7 +156,7 @@ STAGE = Stage(
     "sensitivity", compute, outputs=("sensitivity.nc", "figures/sensitivity.png"),
     # (the [sweep] grid is the default protrusion grid of the evaluations: not excluded)
     reads=("*",), excludes=("report", "identify", "scene.name", "scene.description", "sensitivity.batch_size"),
-    upstream=upstream, order=85,
+    upstream=upstream, order=85, keeps=lambda scene: ("sensitivity.evals.jsonl",),
     doc="Morris and Sobol indices of the headline outputs over the [sensitivity] parameters, sensitivity.nc")
 
 
