@@ -395,7 +395,7 @@ def folder_lock(out: str | Path) -> Iterator[Path]:
     RuntimeError
         When this process already holds the folder.
     """
-    out = Path(out)
+    out = refuse_links(Path(out))  # (a sub-folder of a held folder, sweep.parts/interface-x: no link either)
     out.mkdir(parents=True, exist_ok=True)
     path = out.resolve() / LOCK_NAME  # (the folder resolved, never the lock file: a planted link is refused)
     if path in _HELD:

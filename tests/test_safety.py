@@ -457,3 +457,17 @@ def test_a_fifo_as_an_afm_file_is_refused_before_opening(tmp_path):
     done = _hdi(["roughness", str(fifo), "--out", str(tmp_path / "out")], timeout=120)
     assert _one_error(done) == (f"hdi roughness: error: {fifo}: is a FIFO (named pipe) (expected a regular file, an "
                                 "AFM/profilometer height map in a format SurfaceTopography reads)")
+
+
+def test_a_nested_results_folder_that_is_a_link_is_refused(tmp_path):
+    """A stage's own sub-run (``sweep.parts/interface-<label>/``) locks no folder a planted link leads to."""
+    _, out = _toy(tmp_path)
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    with runner.folder_lock(out):
+        (out / "sweep.parts").mkdir()
+        (out / "sweep.parts" / "interface-x").symlink_to(elsewhere)
+        with pytest.raises(paths.LinkRefused):
+            with runner.folder_lock(out / "sweep.parts" / "interface-x"):
+                pass
+    assert list(elsewhere.iterdir()) == []
