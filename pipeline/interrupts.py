@@ -54,8 +54,10 @@ def pending() -> int | None:
 
 def check() -> None:
     """The safe point: raise the recorded signal again (it may have been swallowed where it was raised),
-    unless it is being handled now."""
-    if _PENDING and not _unwinding():
+    unless it is being handled now. In the main thread only, where signals are handled: a fan-out's
+    worker thread that finishes its task while the main thread unwinds still writes its output (a sweep
+    part kept for the resume)."""
+    if _PENDING and not _unwinding() and threading.current_thread() is threading.main_thread():
         raise _exception(_PENDING[0])
 
 

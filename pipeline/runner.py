@@ -624,8 +624,9 @@ class Runner:
         out = Path(os.path.abspath(self.out))
         for part in out.parts[1:]:  # (checked first: a path with too long a name cannot even be looked up)
             if len(os.fsencode(part)) > _NAME_MAX_FALLBACK:
-                raise OSError(errno.ENAMETOOLONG, f"a folder name of {len(os.fsencode(part))} bytes in it, the file "
-                              f"system allows {_NAME_MAX_FALLBACK}; choose a shorter --out or scene name", str(self.out))
+                raise OSError(errno.ENAMETOOLONG, f"a folder name of {len(os.fsencode(part))} bytes in it, the "
+                              f"file system allows {_NAME_MAX_FALLBACK}; choose a shorter --out or scene name",
+                              str(self.out))
         existing = next(p for p in (out, *out.parents) if p.exists())
         try:
             name_max = os.pathconf(existing, "PC_NAME_MAX")
@@ -681,7 +682,7 @@ class Runner:
     def _check_outputs(self, st: Stage) -> None:
         """Refuse, before the stage computes, an output path that is a folder or lies below a file
         (``sweep.nc`` a folder, ``figures`` a file): the write would fail only after the computation; and
-        a symbolic link on the way to an output or to the runner's records (:func:`pipeline.io.refuse_links`)."""
+        a symbolic link on the way to an output or to the runner's records (:func:`pipeline.paths.refuse_links`)."""
         refuse_links(self._manifest(st.name))
         refuse_links(self.out / STATE_DIR / RUN_LOG)
         for o in st.output_names(self.scene):
@@ -710,7 +711,8 @@ class Runner:
                 continue
             ds = result.get(o)
             if ds is None:
-                refuse_links(self.out / o).unlink(missing_ok=True)  # not produced this time: no stale file of an older run
+                # not produced this time: no stale file of an older run
+                refuse_links(self.out / o).unlink(missing_ok=True)
                 continue
             extra = dict(attrs)
             if first:

@@ -79,7 +79,8 @@ def test_the_cli_refuses_a_planted_lock_link_in_one_line(tmp_path, capsys):
     (out / runner.LOCK_NAME).symlink_to(victim)
     assert cli.main(["dmw", str(PAPER), "--out", str(out)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and err[0].startswith(f"hdi dmw: error: {out.resolve() / runner.LOCK_NAME}: is a symbolic link")
+    lock = out.resolve() / runner.LOCK_NAME
+    assert len(err) == 1 and err[0].startswith(f"hdi dmw: error: {lock}: is a symbolic link")
     assert victim.read_text() == "a user's file" and sorted(p.name for p in out.iterdir()) == [runner.LOCK_NAME]
 
 
@@ -471,3 +472,25 @@ def test_a_nested_results_folder_that_is_a_link_is_refused(tmp_path):
             with runner.folder_lock(out / "sweep.parts" / "interface-x"):
                 pass
     assert list(elsewhere.iterdir()) == []
+
+
+def test_a_worker_thread_finishing_while_the_main_thread_unwinds_keeps_its_output():
+    """The check raises in the main thread only: a fan-out task still writes its finished part."""
+    import threading
+    from pipeline import interrupts
+    raised = []
+
+    def task():
+        try:
+            interrupts.check()
+        except KeyboardInterrupt:
+            raised.append(True)
+    with interrupts.handling():
+        interrupts._PENDING.append(signal.SIGTERM)
+        worker = threading.Thread(target=task)
+        worker.start()
+        worker.join()
+        with pytest.raises(interrupts.Terminated):
+            interrupts.check()
+        interrupts.answered()
+    assert raised == []

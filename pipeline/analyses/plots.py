@@ -140,7 +140,8 @@ def draw_all(jobs: Sequence[tuple[Callable[..., Path], tuple, dict]], workers: i
     imported and the datasets: only an index goes to a worker and a path comes back. Anywhere else
     (another OS, or threads that might hold a lock at the fork) they are drawn here, in order. A
     figure's error is raised here either way (a worker that dies: ``BrokenProcessPool``). A worker dies
-    with this process however it ends (:func:`pipeline.interrupts.die_with_parent`). The paper scene's 8 figures: ``make bench``, row
+    with this process however it ends (:func:`pipeline.interrupts.die_with_parent`). The paper scene's 8
+    figures: ``make bench``, row
     "report".
     """
     jobs = list(jobs)
