@@ -275,6 +275,9 @@ def check_readme(readme: str | Path | None) -> None:
     if path.is_dir():
         raise OptionError(f"--readme {readme}: is a folder; expected the page whose generated "
                           "section the report rewrites (e.g. docs/results.md)")
+    if special_kind(path) is not None:  # (a FIFO: reading it would wait forever)
+        raise OptionError(f"--readme {readme}: is {special_kind(path)}; expected the page whose generated "
+                          "section the report rewrites (e.g. docs/results.md)")
     if not path.is_file():
         raise OptionError(f"--readme {readme}: file does not exist; expected the page whose generated "
                           "section the report rewrites (e.g. docs/results.md)")

@@ -494,3 +494,13 @@ def test_a_worker_thread_finishing_while_the_main_thread_unwinds_keeps_its_outpu
             interrupts.check()
         interrupts.answered()
     assert raised == []
+
+
+def test_a_fifo_as_the_readme_page_is_refused_before_the_run():
+    from pipeline.cli_checks import OptionError, check_readme
+    import tempfile
+    with tempfile.TemporaryDirectory() as folder:
+        page = Path(folder) / "results.md"
+        os.mkfifo(page)
+        with pytest.raises(OptionError, match=r"results\.md: is a FIFO \(named pipe\); expected the page whose"):
+            check_readme(page)
