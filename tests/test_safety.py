@@ -504,3 +504,54 @@ def test_a_fifo_as_the_readme_page_is_refused_before_the_run():
         os.mkfifo(page)
         with pytest.raises(OptionError, match=r"results\.md: is a FIFO \(named pipe\); expected the page whose"):
             check_readme(page)
+
+
+#: ``hdi report`` (no upstream stage) whose figures never finish: each forked worker writes its pid first.
+_REPORT_DRAWING = """
+import dataclasses, os, sys, time
+from pathlib import Path
+from pipeline import cli, runner
+from pipeline.analyses import plots
+from pipeline.stages import report
+stage = dataclasses.replace(report.STAGE, upstream=(), optional=())
+runner.registry = lambda: {"report": stage}
+folder = Path(sys.argv[1])
+
+def drawing(i):
+    (folder / f"{os.getpid()}.pid").write_text("")
+    time.sleep(600)
+
+plots._draw = drawing
+sys.exit(cli.main(sys.argv[2:]))
+"""
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="the figure pool forks on Linux only")
+def test_sigkill_of_hdi_report_during_figure_drawing_leaves_no_worker(tmp_path):
+    from test_report import write_dmw, write_histories, write_roughness, write_sweep
+    out, pids = tmp_path / "out", tmp_path / "pids"
+    out.mkdir()
+    pids.mkdir()
+    for write in (write_sweep, write_histories, write_dmw, write_roughness):
+        write(out)
+    proc = subprocess.Popen([sys.executable, "-c", _REPORT_DRAWING, str(pids), "report", str(PAPER), "--out", str(out),
+                             "-q"], cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        deadline = time.monotonic() + 120
+        while len(list(pids.glob("*.pid"))) < 2 and time.monotonic() < deadline and proc.poll() is None:
+            time.sleep(0.05)
+        workers = [int(p.stem) for p in pids.glob("*.pid")]
+        assert len(workers) == 2 and proc.pid not in workers and all(_alive(w) for w in workers)
+        proc.kill()                                   # SIGKILL: no handler of hdi runs
+        proc.wait(timeout=10)
+        deadline = time.monotonic() + 10
+        while any(_alive(w) for w in workers) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert not any(_alive(w) for w in workers)
+    finally:
+        proc.kill()
+        for p in pids.glob("*.pid"):
+            try:
+                os.kill(int(p.stem), signal.SIGKILL)
+            except ProcessLookupError:
+                pass
