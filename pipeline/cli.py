@@ -13,11 +13,10 @@ import logging
 import os
 import signal
 import sys
-import threading
 import traceback
 from pathlib import Path
 
-from . import __version__, runner
+from . import __version__, interrupts, runner
 from .io import DatasetError, os_error_line, results_dir
 from .progress import interval_s
 from .config.scene import SceneError, describe_keys, load_scene
@@ -131,24 +130,25 @@ def _logging(verbose: int = 0, quiet: bool = False) -> None:
             logging.getLogger(name).setLevel(logging.CRITICAL)
 
 
-class Terminated(KeyboardInterrupt):
-    """SIGTERM (``timeout``, ``kill``, SLURM's ``scancel`` and requeue) arrived: unwound like Ctrl-C, so
-    the folder lock and the staging folder are removed and finished work is kept."""
-
-
-def _terminate(signum: int, frame: object) -> None:
-    signal.signal(signal.SIGTERM, signal.SIG_IGN)  # (a second SIGTERM must not cut the clean-up short)
-    raise Terminated()
+#: SIGTERM unwound like Ctrl-C (:mod:`pipeline.interrupts`).
+Terminated = interrupts.Terminated
 
 
 def main(argv: list[str] | None = None) -> int:
-    if threading.current_thread() is threading.main_thread():
-        previous = signal.signal(signal.SIGTERM, _terminate)
-        try:
-            return _main(argv)
-        finally:
-            signal.signal(signal.SIGTERM, previous)
-    return _main(argv)
+    with interrupts.handling():
+        code = _main(argv)
+    signum = interrupts.pending()
+    if signum is not None:  # (recorded, never raised to the top: swallowed where it was raised)
+        interrupts.answered()
+        if code == 0:
+            print(f"hdi: {_how(signum == signal.SIGTERM)}; finished work is kept, run again to resume",
+                  file=sys.stderr)
+            code = interrupts.exit_code(signum)
+    return code
+
+
+def _how(terminated: bool) -> str:
+    return "terminated (SIGTERM)" if terminated else "interrupted"
 
 
 def _main(argv: list[str] | None = None) -> int:
@@ -164,6 +164,7 @@ def _main(argv: list[str] | None = None) -> int:
             with runner.folder_lock(args.out):
                 path = roughness.run_files([Path(f) for f in args.inputs], args.out,
                                            channel=args.channel, detrend=args.detrend or "plane")
+            interrupts.check()
             print(path)
             return 0
         interval_s()  # (a bad HDI_PROGRESS_S is one line now, not after the upstream stages)
@@ -176,6 +177,7 @@ def _main(argv: list[str] | None = None) -> int:
         options = {"scheduler": scheduler, "workers": args.workers, "readme": args.readme,
                    **({"write_scene": args.write_scene} if args.write_scene is not None else {})}
         made = runner.Runner(scene, out, stages, **options).build(targets, force=args.force)
+        interrupts.check()  # (a signal swallowed inside a library's C code is answered here, never exit 0)
         for stage, paths in made.items():  # the dataset, or the folder of figures and tables
             print(f"{stage:>10}: {paths[0] if paths[0].suffix == '.nc' else paths[0].parent}", flush=True)
         return 0
@@ -202,9 +204,10 @@ def _main(argv: list[str] | None = None) -> int:
         print(f"hdi {args.stage}: error: {os_error_line(exc)}", file=sys.stderr)
         return 2
     except KeyboardInterrupt as exc:
-        how = "terminated (SIGTERM)" if isinstance(exc, Terminated) else "interrupted"
-        print(f"hdi {args.stage}: {how}; finished work is kept, run again to resume", file=sys.stderr)
-        return 143 if isinstance(exc, Terminated) else 130
+        interrupts.answered()
+        print(f"hdi {args.stage}: {_how(isinstance(exc, Terminated))}; finished work is kept, run again to resume",
+              file=sys.stderr)
+        return interrupts.exit_code(signal.SIGTERM if isinstance(exc, Terminated) else signal.SIGINT)
 
 
 def entry() -> None:  # pragma: no cover (the console script; tests call main)

@@ -32,6 +32,7 @@ import numpy as np
 from .config.grid import label, range_count, roughness_sets, same_point
 from .config.scene import SCHEMA
 from .io import is_read_only, os_error_line
+from .paths import special_kind
 from . import fanout, sizing
 from .fanout import CONNECT_TIMEOUT_S, LOCAL
 from .config import limits
@@ -143,9 +144,13 @@ def scheduler_address(given: str | None) -> tuple[str | None, str]:
     if given is None:
         env = os.environ.get(SCHEDULER_ENV, "").strip()
         return (env, f"{SCHEDULER_ENV}={env}") if env else (None, "")
-    if given in LOCAL or "://" in given or not (given.endswith(".json") or Path(given).is_file()):
-        return given, f"--scheduler {given}"
     where = f"--scheduler {given}"
+    if given not in LOCAL and "://" not in given and special_kind(given) is not None:
+        # (checked before opening: reading a FIFO waits for a writer forever)
+        raise OptionError(f"{where}: is {special_kind(given)}; expected the JSON file `dask scheduler "
+                          "--scheduler-file FILE` writes, or tcp://HOST:PORT")
+    if given in LOCAL or "://" in given or not (given.endswith(".json") or Path(given).is_file()):
+        return given, where
     try:
         with open(given, encoding="utf-8") as f:
             identity = json.load(f)
@@ -366,6 +371,9 @@ def check_readme(readme: str | Path | None) -> None:
     path = Path(readme)
     if path.is_dir():
         raise OptionError(f"--readme {readme}: is a folder; expected the page whose generated "
+                          "section the report rewrites (e.g. docs/results.md)")
+    if special_kind(path) is not None:  # (a FIFO: reading it would wait forever)
+        raise OptionError(f"--readme {readme}: is {special_kind(path)}; expected the page whose generated "
                           "section the report rewrites (e.g. docs/results.md)")
     if not path.is_file():
         raise OptionError(f"--readme {readme}: file does not exist; expected the page whose generated "

@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
 import time
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -36,6 +35,7 @@ from .code_version import code_key
 from .config.grid import label
 from .config.scene import SceneError
 from .fanout import run_tasks
+from .paths import append_text, refuse_links
 from .model import dmw_record, scene_inputs
 from .model import slider as sl
 from .model.bulge_table import scene_table
@@ -258,12 +258,8 @@ class EvaluationStore:
         new = {k: {"key": k, **rec} for k, rec in items if k not in self.records}
         if not new:
             return
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        with open(self.path, "a") as fh:
-            lines = "".join(json.dumps(rec, allow_nan=True) + "\n" for rec in new.values())
-            fh.write(("\n" if self._cut else "") + lines)
-            fh.flush()
-            os.fsync(fh.fileno())
+        lines = "".join(json.dumps(rec, allow_nan=True) + "\n" for rec in new.values())
+        append_text(self.path, ("\n" if self._cut else "") + lines, sync=True)
         self._cut = False
         self.records.update(new)
 
@@ -328,7 +324,7 @@ def setup(scene: Any, stage_inputs: Any, section: str, force: bool = False) -> t
     inputs = for_stage(scene, stage_inputs, calibration=False)
     store_path = Path(stage_inputs.out) / f"{section}.evals.jsonl"
     if force:
-        store_path.unlink(missing_ok=True)
+        refuse_links(store_path).unlink(missing_ok=True)
     return params, inputs, EvaluationStore(store_path)
 
 

@@ -35,7 +35,8 @@ from typing import Any, Iterable, Mapping
 import numpy as np
 import xarray as xr
 
-from . import DISTRIBUTION, __version__
+from . import DISTRIBUTION, __version__, interrupts
+from .paths import refuse_links
 
 try:  # (POSIX: the file size limit, ulimit -f)
     import resource
@@ -79,6 +80,39 @@ KEY_ATTR = "inputs_key"
 
 class DatasetError(ValueError):
     """A dataset on disk is missing, unreadable, or lacks what a stage needs."""
+
+
+class DatasetBusy(DatasetError):
+    """Another process holds a dataset open for writing: hdi neither reads nor replaces it (the edit of
+    that process would be lost)."""
+
+    def __init__(self, path: str | Path):
+        super().__init__(f"{path}: busy: another process has it open for writing (its HDF5 file lock); close it "
+                         "there, or wait for that process, and run again")
+
+
+def is_busy(path: str | Path) -> bool:
+    """Whether another process holds the NetCDF/HDF5 file ``path`` open for writing: the HDF5 library
+    (1.10 and later) holds an exclusive ``flock`` on a file it has open for writing, so a shared one
+    cannot be had. ``False`` for a missing file, where ``flock`` does not exist, or when the writer's
+    library does not lock (``HDF5_USE_FILE_LOCKING=FALSE``)."""
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover (not POSIX)
+        return False
+    try:
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+    except OSError:
+        return False
+    try:
+        fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
+    except BlockingIOError:
+        return True
+    except OSError:  # (a file system without flock: cannot tell)
+        return False
+    finally:
+        os.close(fd)  # (releases the shared lock)
+    return False
 
 
 @lru_cache(maxsize=1)
@@ -287,7 +321,7 @@ def write_dataset(ds: xr.Dataset, path: str | Path, scene: Any = None, *, stage:
     Path
         The written file.
     """
-    path = Path(path)
+    path = refuse_links(Path(path))  # (a planted link in a results folder: not written through)
     check_cf(ds, str(path))
     path.parent.mkdir(parents=True, exist_ok=True)
     out, encoding = cf_encoding(ds)
@@ -304,6 +338,9 @@ def write_dataset(ds: xr.Dataset, path: str | Path, scene: Any = None, *, stage:
             raise IsADirectoryError(errno.EISDIR, os.strerror(errno.EISDIR), str(path))
         with NETCDF_LOCK:
             _to_netcdf(out, tmp, encoding)
+        interrupts.check()  # (a signal HDF5's callbacks swallowed: the temporary file is removed, nothing replaced)
+        if is_busy(path):  # (another process's open file: replacing it would lose that process's edit)
+            raise DatasetBusy(path)
         os.replace(tmp, path)
     except (OSError, RuntimeError) as exc:  # (netCDF4 says RuntimeError "NetCDF: HDF error" for a full disk)
         Path(tmp).unlink(missing_ok=True)
@@ -425,9 +462,12 @@ def read_attrs(path: str | Path, variables: Iterable[str] = ()) -> tuple[dict[st
         When the file is missing or not NetCDF (as :class:`netCDF4.Dataset` raises it).
     """
     import netCDF4
+    if is_busy(path):
+        raise DatasetBusy(path)
     with NETCDF_LOCK, netCDF4.Dataset(path) as nc:
         attrs = {k: nc.getncattr(k) for k in nc.ncattrs()}
         values = {v: np.asarray(nc.variables[v][:]) for v in variables if v in nc.variables}
+    interrupts.check()  # (netCDF4's error checks can swallow a signal raised during the read)
     return attrs, values
 
 
@@ -443,11 +483,14 @@ def read_dataset(path: str | Path, *, stage: str | None = None, variables: Itera
     if not path.is_file():
         hint = f" (run `hdi {stage}` first)" if stage else ""
         raise DatasetError(f"{path}: dataset does not exist{hint}")
+    if is_busy(path):
+        raise DatasetBusy(path)
     try:
         with NETCDF_LOCK, xr.open_dataset(path, engine=ENGINE, decode_times=False, decode_timedelta=False) as ds:
             ds = ds.load()
     except (OSError, ValueError) as exc:
         raise DatasetError(f"{path}: not a readable NetCDF dataset: {exc}") from None
+    interrupts.check()  # (netCDF4's error checks can swallow a signal raised during the read)
     if TIME_ON_DISK in ds.variables and "time" not in ds.variables:
         ds = ds.rename({TIME_ON_DISK: "time"})
     elif "time" in ds.variables and ds["time"].attrs.get("units") == OLD_TIME_UNITS:

@@ -24,8 +24,12 @@ A results folder is used by one ``hdi`` process at a time: :func:`folder_lock` h
 ``.hdi.lock`` (pid, host, start time) and refuses a second process, naming the first; a lock whose
 process is gone (same host) is taken over. Temporary files an interrupted run left behind
 (hdi's own names, ``.NAME.hdi-RUNID*.tmp`` of :func:`pipeline.io.temporary_path`, and ``.hdi-staging-*``)
-are removed when the lock is taken; a user's files and another results folder holding its lock (a
-run in a sub-folder) are left alone.
+are removed when the lock is taken; a user's files, links and another results folder holding its lock
+(a run in a sub-folder) are left alone. While the lock is held no symbolic link inside the folder is
+followed for a file the runner or a stage writes or deletes (:func:`pipeline.paths.refuse_links`): the
+outputs, manifests and run log are checked before a stage computes and again at each write, and a lock
+file that is a link is refused, not taken over. Before any stage runs, the longest path the build
+writes is checked against the file system's limits (:meth:`Runner.check_lengths`).
 """
 
 from __future__ import annotations
@@ -41,6 +45,7 @@ import os
 import pkgutil
 import shutil
 import socket
+import stat
 import tempfile
 import time
 from dataclasses import dataclass, field
@@ -49,13 +54,15 @@ from typing import Any, Callable, Iterable, Iterator, Mapping
 
 import xarray as xr
 
+from . import interrupts
 from .code_version import code_key
 from .fanout import shared_folder
 from .progress import stage as progress_stage
 from .model.inputs import SimulationInputs, from_folder
 from .model.scene_inputs import simulation_inputs as wanted_inputs
-from .io import (KEY_ATTR, DatasetError, RUN_ID, file_hash, is_temporary, read_attrs, read_dataset, temporary_path,
-                 write_dataset)
+from .io import (KEY_ATTR, DatasetBusy, DatasetError, RUN_ID, file_hash, is_temporary, read_attrs, read_dataset,
+                 temporary_path, write_dataset)
+from .paths import LinkRefused, append_text, guarded, refuse_links, special_kind
 
 log = logging.getLogger(__name__)
 
@@ -64,7 +71,12 @@ OUTPUTS_ATTR = "stage_outputs"
 #: Hidden folder of the runner inside a results folder (manifests of non-NetCDF outputs, run log).
 STATE_DIR = ".hdi"
 LOCK_NAME = ".hdi.lock"
+#: The run log in :data:`STATE_DIR`: one JSON line of timings per computed stage.
+RUN_LOG = "runs.jsonl"
 STAGING_PREFIX = ".hdi-staging-"
+#: The longest file name of the common file systems [B] (ext4, XFS, btrfs, tmpfs), for a folder name checked
+#: before the file system can be asked (:meth:`Runner.check_lengths`).
+_NAME_MAX_FALLBACK = 255
 #: How deep below a results folder the cleaner looks for orphaned temporary files (``sweep.parts/interface-x/``).
 _TMP_DEPTH = 2
 
@@ -123,6 +135,10 @@ class Stage:
         ``check(scene)``: refuses, before anything is built or written, a scene the stage cannot use (a
         one-line :class:`~pipeline.config.scene.SceneError`; e.g. a study's box the model cannot evaluate,
         :func:`pipeline.analyses.feasibility.check_study`).
+    keeps
+        ``keeps(scene) -> (path, ...)``: the longest paths, relative to the results folder, of the files
+        the stage writes there beyond its outputs (sweep parts, an evaluation store, the identified
+        scene); only their lengths matter (:meth:`Runner.check_lengths`).
     finish
         ``finish(scene, out, options)``: run after the stage was asked for and is current (computed or
         not), for side effects outside the results folder (``report --readme``); ``options`` are those
@@ -145,6 +161,7 @@ class Stage:
     derived: Callable[[Scene], Mapping[str, Any]] = _constant({})
     optional: tuple[str, ...] = ()
     check: Callable[[Scene], None] | None = None
+    keeps: Callable[[Scene], tuple[str, ...]] = _constant(())
     finish: Callable[[Scene, Path, dict], None] | None = None
     doc: str = ""
 
@@ -294,6 +311,8 @@ def _dataset_key(path: Path) -> tuple[str | None, list[str] | None]:
     """The ``inputs_key`` and produced-outputs list of a dataset (``None`` when unreadable)."""
     try:
         attrs, _ = read_attrs(path)
+    except DatasetBusy:  # (not "no inputs key": the dataset would be replaced under its writer)
+        raise
     except (OSError, ValueError):
         return None, None
     outputs = attrs.get(OUTPUTS_ATTR)
@@ -336,11 +355,11 @@ def clean_orphans(out: Path) -> list[Path]:
         dirs[:] = [] if depth >= _TMP_DEPTH else [d for d in dirs if not (Path(folder, d) / LOCK_NAME).exists()]
         for name in names:
             p = Path(folder, name)
-            if is_temporary(name) and p.is_file():
+            if is_temporary(name) and p.is_file() and not p.is_symlink():  # (a link: not a file hdi made)
                 p.unlink(missing_ok=True)
                 removed.append(p)
     for p in out.glob(STAGING_PREFIX + "*"):
-        if p.is_dir():
+        if p.is_dir() and not p.is_symlink():
             shutil.rmtree(p, ignore_errors=True)
             removed.append(p)
     if removed:
@@ -381,9 +400,9 @@ def folder_lock(out: str | Path) -> Iterator[Path]:
     RuntimeError
         When this process already holds the folder.
     """
-    out = Path(out)
+    out = refuse_links(Path(out))  # (a sub-folder of a held folder, sweep.parts/interface-x: no link either)
     out.mkdir(parents=True, exist_ok=True)
-    path = (out / LOCK_NAME).resolve()
+    path = out.resolve() / LOCK_NAME  # (the folder resolved, never the lock file: a planted link is refused)
     if path in _HELD:
         raise RuntimeError(f"{out}: this process already holds the folder; a stage's compute reads its "
                            "inputs through runner.Inputs and does not build in its own folder")
@@ -395,8 +414,8 @@ def folder_lock(out: str | Path) -> Iterator[Path]:
                 fd = os.open(path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
             except FileExistsError:
                 try:
-                    other = json.loads(path.read_text() or "{}")
-                except (OSError, ValueError):
+                    other = json.loads(_read_lock(path) or "{}")
+                except (UnicodeDecodeError, ValueError):
                     other = {}
                 if not isinstance(other, dict) or not _is_pid(other.get("pid")):  # (`[1, 2]`: JSON, but
                     other = {}                                                 # not what a holder writes)
@@ -420,11 +439,31 @@ def folder_lock(out: str | Path) -> Iterator[Path]:
             raise FolderBusy(f"{out}: could not take the lock file {path}")
     _HELD.add(path)
     try:
-        clean_orphans(out)
-        yield path
+        with guarded(out):
+            clean_orphans(out)
+            yield path
     finally:
         _HELD.discard(path)
         path.unlink(missing_ok=True)
+
+
+def _read_lock(path: Path) -> str:
+    """The text of an existing lock file, read without following a link (a link planted at
+    :data:`LOCK_NAME` is refused: taking it over would delete the link's target before) and without
+    blocking (a FIFO there is refused too)."""
+    try:
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_NONBLOCK", 0))
+    except FileNotFoundError:
+        return ""
+    except OSError as exc:
+        if exc.errno == errno.ELOOP or path.is_symlink():
+            raise LinkRefused(path) from None
+        raise
+    with os.fdopen(fd, "rb") as fh:
+        if not stat.S_ISREG(os.fstat(fh.fileno()).st_mode):
+            raise OSError(errno.EINVAL, f"is {special_kind(path) or 'not a regular file'}, not hdi's lock file; "
+                                        "remove it", str(path))
+        return fh.read(1 << 16).decode("utf-8")
 
 
 # -------------------------------------------------------------------------------------- the runner
@@ -551,6 +590,7 @@ class Runner:
         for name in targets:  # (before the folder is made: a refused scene writes nothing)
             if self.stage(name).check is not None:
                 self.stage(name).check(self.scene)
+        self.check_lengths(targets)
         with folder_lock(self.out):
             for name in self.plan(targets):
                 self._make(name, force and name in targets)
@@ -558,6 +598,62 @@ class Runner:
                 if self.stage(name).finish is not None:
                     self.stage(name).finish(self.scene, self.out, {**self.options, "force": force})
         return {t: tuple(self.out / o for o in self.stage(t).output_names(self.scene)) for t in targets}
+
+    def written_paths(self, targets: Iterable[str]) -> list[str]:
+        """The paths, relative to the results folder, a build of ``targets`` may write, each with the
+        longest temporary name hdi gives it (:func:`pipeline.io.temporary_prefix` and ``mkstemp``'s 8
+        characters): outputs, their staging copies, the runner's records and what stages keep."""
+        probe = f".hdi-{RUN_ID}.{'x' * 8}.tmp"
+        staging = STAGING_PREFIX + "x" * 8
+        paths = [LOCK_NAME, f"{STATE_DIR}/.{RUN_LOG}{probe}"]
+        for name in self.plan(targets):
+            st = self.stage(name)
+            paths.append(f"{STATE_DIR}/.{name}.json{probe}")
+            outputs = st.output_names(self.scene)
+            for o in (*outputs, *st.keeps(self.scene)):
+                folder, _, base = o.rpartition("/")
+                tmp = f"{folder}/.{base}{probe}" if folder else f".{base}{probe}"
+                paths.append(tmp)
+                if o in outputs and not o.endswith(".nc"):  # (drawn in the staging folder, then moved)
+                    paths.append(f"{staging}/{tmp}")
+        return paths
+
+    def check_lengths(self, targets: Iterable[str]) -> None:
+        """Refuse, before any stage runs, a results folder or scene name that makes a path the build writes
+        longer than the file system allows (``PC_NAME_MAX`` for one name, ``PC_PATH_MAX`` for the whole
+        path): such a write failed only when it came, after the stages before it (a 250-character scene
+        name after the whole identification, a 4030-byte ``--out`` at the report, naming a temporary file).
+
+        Raises
+        ------
+        OSError
+            ``ENAMETOOLONG``, naming the results folder, the longest name or length and the limit.
+        """
+        out = Path(os.path.abspath(self.out))
+        for part in out.parts[1:]:  # (checked first: a path with too long a name cannot even be looked up)
+            if len(os.fsencode(part)) > _NAME_MAX_FALLBACK:
+                raise OSError(errno.ENAMETOOLONG, f"a folder name of {len(os.fsencode(part))} bytes in it, the "
+                              f"file system allows {_NAME_MAX_FALLBACK}; choose a shorter --out or scene name",
+                              str(self.out))
+        existing = next(p for p in (out, *out.parents) if p.exists())
+        try:
+            name_max = os.pathconf(existing, "PC_NAME_MAX")
+            path_max = os.pathconf(existing, "PC_PATH_MAX")
+        except (OSError, ValueError):  # (not POSIX, or the file system does not say)
+            return
+        paths = self.written_paths(targets)
+        for rel in paths:
+            for part in Path(rel).parts:
+                if len(os.fsencode(part)) > name_max:
+                    raise OSError(errno.ENAMETOOLONG, f"the file name {part!r} this run writes (its temporary "
+                                  f"name) is {len(os.fsencode(part))} bytes long, the file system allows {name_max}; "
+                                  "choose a shorter scene name (scene.name)", str(self.out))
+        longest = max(paths, key=lambda rel: len(os.fsencode(rel)))
+        size = len(os.fsencode(str(out / longest)))
+        if size >= path_max:  # (PC_PATH_MAX counts the terminating NUL)
+            raise OSError(errno.ENAMETOOLONG, f"the longest path this run writes, {longest} (a temporary name) in "
+                          f"it, is {size} bytes long, the file system allows {path_max - 1}; choose a shorter --out",
+                          str(self.out))
 
     def _make(self, name: str, force: bool) -> None:
         if name in self._done:
@@ -582,6 +678,7 @@ class Runner:
                             staging=staging)
             with shared_folder(inputs.out), progress_stage(name):  # (its progress lines carry its name)
                 result = st.compute(self.scene, inputs)
+            interrupts.check()  # (a signal a library swallowed during the computation: nothing is written)
             written = self._write(st, key, inputs, result, staging)
         finally:
             shutil.rmtree(staging, ignore_errors=True)
@@ -592,9 +689,12 @@ class Runner:
 
     def _check_outputs(self, st: Stage) -> None:
         """Refuse, before the stage computes, an output path that is a folder or lies below a file
-        (``sweep.nc`` a folder, ``figures`` a file): the write would fail only after the computation."""
+        (``sweep.nc`` a folder, ``figures`` a file): the write would fail only after the computation; and
+        a symbolic link on the way to an output or to the runner's records (:func:`pipeline.paths.refuse_links`)."""
+        refuse_links(self._manifest(st.name))
+        refuse_links(self.out / STATE_DIR / RUN_LOG)
         for o in st.output_names(self.scene):
-            target = self.out / o
+            target = refuse_links(self.out / o)  # (a planted link: refused before the stage computes)
             if target.is_dir():
                 raise IsADirectoryError(errno.EISDIR, os.strerror(errno.EISDIR), str(target))
             for parent in list(Path(o).parents)[:-1]:
@@ -619,7 +719,8 @@ class Runner:
                 continue
             ds = result.get(o)
             if ds is None:
-                (self.out / o).unlink(missing_ok=True)  # not produced this time: no stale file of an older run
+                # not produced this time: no stale file of an older run
+                refuse_links(self.out / o).unlink(missing_ok=True)
                 continue
             extra = dict(attrs)
             if first:
@@ -629,7 +730,7 @@ class Runner:
                           inputs={p: self._hash(p) for p in inputs.files.values()}, extra_attrs=extra)
         hashes = {}
         for o in others:
-            target = self.out / o
+            target = refuse_links(self.out / o)
             if (staging / o).is_file():
                 target.parent.mkdir(parents=True, exist_ok=True)
                 os.replace(staging / o, target)
@@ -638,8 +739,9 @@ class Runner:
             else:
                 target.unlink(missing_ok=True)
         if others:
-            manifest = self._manifest(st.name)
+            manifest = refuse_links(self._manifest(st.name))
             manifest.parent.mkdir(parents=True, exist_ok=True)
+            refuse_links(manifest)
             tmp = temporary_path(manifest)
             tmp.write_text(json.dumps({"key": key, "outputs": produced, "hashes": hashes}, indent=1))
             os.replace(tmp, manifest)
@@ -651,10 +753,7 @@ class Runner:
             return
         entry = {"stage": name, "inputs_key": key, "finished": _dt.datetime.now(_dt.timezone.utc).isoformat(),
                  "seconds": round(seconds, 3), "outputs": written, **metrics}
-        path = self.out / STATE_DIR / "runs.jsonl"
-        path.parent.mkdir(parents=True, exist_ok=True)
-        with open(path, "a") as fh:
-            fh.write(json.dumps(entry, default=str) + "\n")
+        append_text(self.out / STATE_DIR / RUN_LOG, json.dumps(entry, default=str) + "\n")
 
 
 def build(targets: str | Iterable[str], scene: Scene, out: str | Path, *, force: bool = False,
@@ -685,7 +784,7 @@ def simulation_inputs(scene: Scene, out: str | Path, calibration: bool = False,
 
 def last_run(out: str | Path, stage: str) -> dict[str, Any] | None:
     """The last run-log entry of a stage in ``out`` (``None`` when there is none)."""
-    path = Path(out) / STATE_DIR / "runs.jsonl"
+    path = Path(out) / STATE_DIR / RUN_LOG
     if not path.is_file():
         return None
     entries = [json.loads(line) for line in path.read_text().splitlines() if line.strip()]

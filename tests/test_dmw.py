@@ -236,7 +236,7 @@ def _errors(tmp_path: Path) -> dict[str, tuple[Path, dict, str]]:
                 r"one\.csv: column 'displacement \[nm\]'.*1 sample"),
         "text": (_write_csv(tmp_path / "text.csv", "time [s],displacement [nm]",
                             [(0.0, 1.0), (2.5e-7, "abc"), (5e-7, 2.0)]), {},
-                 r"text\.csv: column 'displacement \[nm\]': non-numeric value 'abc' on line 3"),
+                 r"text\.csv: column 'displacement \[nm\]': non-numeric value on line 3; expected a number$"),
         "backwards": (_write_csv(tmp_path / "back.csv", "time [s],displacement [nm]", list(zip(t[::-1], v))),
                       {}, r"back\.csv: column 'time \[s\]'.*does not increase"),
         "no_time": (_write_csv(tmp_path / "notime.csv", "displacement [nm]", [(c,) for c in v]), {},

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import importlib
 import multiprocessing
-import signal
+import os
 import sys
 import threading
 from concurrent.futures import ProcessPoolExecutor
@@ -26,8 +26,10 @@ from typing import TYPE_CHECKING, Any, Callable, Sequence
 import numpy as np
 import xarray as xr
 
+from .. import interrupts
 from ..fanout import available_cores
 from ..io import temporary_path
+from ..paths import refuse_links
 from ..units import KHZ, S_IN_MS
 from ..variables import GROUPS, Regime, regime_name
 
@@ -106,7 +108,7 @@ def envelope(x: np.ndarray, y: np.ndarray, bins: int = 2000) -> tuple[np.ndarray
 
 def save(fig: Figure, path: str | Path, dpi: int = DPI) -> Path:
     """Write ``fig`` as PNG to ``path`` (folder created) and release its artists."""
-    path = Path(path)
+    path = refuse_links(Path(path))
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = temporary_path(path)
     fig.savefig(tmp, dpi=dpi, format="png")
@@ -124,8 +126,9 @@ def _draw(i: int) -> Path:
     return fn(*args, **kwargs)
 
 
-def _worker_init() -> None:
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C: the parent answers it and stops the pool
+def _worker_init(parent: int) -> None:
+    # Ctrl-C: the parent answers it and stops the pool; a killed parent takes its workers with it
+    interrupts.default_in_child(parent)
 
 
 def draw_all(jobs: Sequence[tuple[Callable[..., Path], tuple, dict]], workers: int | None = None) -> list[Path]:
@@ -136,7 +139,9 @@ def draw_all(jobs: Sequence[tuple[Callable[..., Path], tuple, dict]], workers: i
     (default: the cores this process may use) *forked* processes, which inherit matplotlib already
     imported and the datasets: only an index goes to a worker and a path comes back. Anywhere else
     (another OS, or threads that might hold a lock at the fork) they are drawn here, in order. A
-    figure's error is raised here either way (a worker that dies: ``BrokenProcessPool``). The paper scene's 8 figures: ``make bench``, row
+    figure's error is raised here either way (a worker that dies: ``BrokenProcessPool``). A worker dies
+    with this process however it ends (:func:`pipeline.interrupts.die_with_parent`). The paper scene's 8
+    figures: ``make bench``, row
     "report".
     """
     jobs = list(jobs)
@@ -149,9 +154,12 @@ def draw_all(jobs: Sequence[tuple[Callable[..., Path], tuple, dict]], workers: i
     _JOBS = jobs
     # (an executor, not multiprocessing.Pool: a worker that dies, e.g. killed for memory, raises
     # BrokenProcessPool here where Pool.map would wait for its lost figure forever)
-    pool = ProcessPoolExecutor(n, mp_context=multiprocessing.get_context("fork"), initializer=_worker_init)
+    pool = ProcessPoolExecutor(n, mp_context=multiprocessing.get_context("fork"), initializer=_worker_init,
+                               initargs=(os.getpid(),))
     try:
-        return list(pool.map(_draw, range(len(jobs))))
+        paths = list(pool.map(_draw, range(len(jobs))))
+        interrupts.check()
+        return paths
     finally:
         pool.shutdown(wait=True, cancel_futures=True)
         _JOBS = []

@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Iterable
 
+from ..paths import special_kind
 from ..physics import paper
 from ..physics.air_bearing import REAR_LAWS, STIFFNESS_ROOTS, TFC_STIFFENING
 from ..physics.bulge_bearing import BULGE_LAWS, SLIP_MODELS
@@ -656,6 +657,8 @@ def _check_value(section: str, key: str, spec: Key, value: Any, where: str, base
                 p = (base / p).resolve()
             if not p.exists():
                 raise SceneError(f"{where}: {name}: file {item!r} does not exist (looked for {p}){doc}")
+            if special_kind(p) not in (None, "a folder"):  # (reading a FIFO or a device never ends)
+                raise SceneError(f"{where}: {name}: {p} is {special_kind(p)}; expected a regular file{doc}")
             resolved.append(str(p))
         value = resolved if isinstance(value, list) else resolved[0]
     return value
@@ -816,6 +819,9 @@ def _cross_checks(config: dict[str, dict[str, Any]], where: str) -> None:
             if not p.exists():
                 raise SceneError(f"{where}: dmw.source: file {src!r} does not exist (looked for {p}); "
                                  f"expected \"synthetic\" or a record file")
+            if special_kind(p) is not None:  # (reading a FIFO or /dev/zero never ends)
+                raise SceneError(f"{where}: dmw.source: {p} is {special_kind(p)}; expected a regular file (a "
+                                 "CSV or NetCDF record)")
             config["dmw"]["source"] = str(p.resolve())
     lo, hi = config["dmw"]["band_khz"]
     nyq = config["dmw"]["sample_rate_mhz"] * MHZ_IN_KHZ / 2
@@ -884,6 +890,8 @@ def _read_raw(path: Path, seen: tuple[Path, ...] = ()) -> dict[str, Any]:
     """
     if path.is_dir():
         raise SceneError(f"{path}: is a folder; expected a scene file (TOML), e.g. configs/paper-2009.toml")
+    if special_kind(path) is not None:  # (reading a FIFO or a device never ends)
+        raise SceneError(f"{path}: is {special_kind(path)}; expected a scene file (TOML)")
     if not path.is_file():
         raise SceneError(f"{path}: scene file does not exist")
     try:  # (utf-8-sig: a byte-order mark, as some Windows editors write, is not part of the TOML)

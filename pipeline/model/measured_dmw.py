@@ -19,7 +19,9 @@ from typing import Iterable, Iterator
 
 import numpy as np
 
+from .. import interrupts
 from ..io import NETCDF_LOCK
+from ..paths import special_kind
 from ..physics.microwaviness import TIME_JITTER_TOL, DMWError
 from ..units import LENGTH_UNITS, TIME_UNITS, VELOCITY_UNITS
 from ..units import MS
@@ -62,6 +64,18 @@ _BRACKET = re.compile(r"^\s*(.*?)\s*[\[\(]\s*([^\]\)]*?)\s*[\]\)]\s*$")
 _SUFFIXES = ("nm_s", "um_s", "mm_s", "m_s", "nm", "um", "mm", "m", "ms", "us", "ns", "s")
 
 
+#: What a column name or unit of a record's header must look like to be repeated in a message: a short
+#: name of letters, digits and the signs of units. Anything else is file content (``dmw.source`` set to
+#: ``/proc/self/environ`` or a key file printed it): a message names the column by its index instead,
+#: and it never repeats a data value.
+_NAME = re.compile(r"[A-Za-z_µμ][\w .\-\[\]()/%µμ^*+]{0,39}")
+
+
+def _shown(text: str) -> str:
+    """``text`` quoted for a message when it looks like a name (:data:`_NAME`), else ``(not shown)``."""
+    return repr(text) if _NAME.fullmatch(text) else "(not shown)"
+
+
 def _norm_unit(u: str) -> str:
     u = u.strip().lower().replace("µ", "u").replace("μ", "u")
     u = re.sub(r"\s*(s\^?-1|s⁻¹)$", "/s", u)          # "m s-1" -> "m/s"
@@ -99,9 +113,9 @@ def _value_factor(path: Path, field_name: str, unit: str | None,
         return units[unit], unit, ()
     other_kind, other_units, _ = _QUANTITY_UNITS[other]
     if unit in other_units:  # a unit of the other quantity: the scene names the wrong one
-        raise DMWError(f"{path}: {field_name}: has {other_kind} units {unit!r} but the quantity is "
+        raise DMWError(f"{path}: {field_name}: has {other_kind} units {_shown(unit)} but the quantity is "
                        f"'{quantity}': set dmw.quantity = \"{other}\"")
-    raise DMWError(f"{path}: {field_name}: unknown {kind} unit {unit!r}; expected one of " + ", ".join(units))
+    raise DMWError(f"{path}: {field_name}: unknown {kind} unit {_shown(unit)}; expected one of " + ", ".join(units))
 
 
 def _time_factor(path: Path, field_name: str, unit: str | None) -> float:
@@ -109,7 +123,7 @@ def _time_factor(path: Path, field_name: str, unit: str | None) -> float:
         return 1.0
     unit = unit.split(" since ")[0].strip()
     if unit not in TIME_UNITS:
-        raise DMWError(f"{path}: {field_name}: unknown time unit {unit!r}; expected one of "
+        raise DMWError(f"{path}: {field_name}: unknown time unit {_shown(unit)}; expected one of "
                        + ", ".join(TIME_UNITS))
     return TIME_UNITS[unit]
 
@@ -186,6 +200,8 @@ def record_samples(path: str | Path) -> int:
     """At most how many samples a record file holds, from its size alone (no value is read): a CSV's
     lines, a NetCDF file's longest dimension; 0 for a file that cannot be read (the reader says why)."""
     path = Path(path)
+    if special_kind(path) is not None:  # (a FIFO, /dev/zero: never opened; the reader refuses it)
+        return 0
     try:
         if path.suffix.lower() not in NETCDF_SUFFIXES:
             return count_lines(path)
@@ -209,6 +225,9 @@ def _read_csv(path: Path, quantity: str, column: str | None,
 def _parse_csv(path: Path, quantity: str, column: str | None,
                sample_rate_hz: float | None) -> tuple[np.ndarray, float, str, str, str, tuple[str, ...]]:
     n_lines = count_lines(path)
+    with open(path, "rb") as fh:
+        if b"\x00" in fh.read(1 << 16):  # (a binary file, or /proc/self/environ: NUL is no CSV character)
+            raise DMWError(f"{path}: not a text (CSV) file (it holds NUL bytes); expected CSV or NetCDF (.nc)")
     with open(path, encoding="utf-8-sig") as fh:
         lines = _data_lines(fh)
         first = next(lines, None)
@@ -226,10 +245,11 @@ def _parse_csv(path: Path, quantity: str, column: str | None,
         header = None if all(_numeric(c) for c in head if c != "") else head
         ncol = len(head)
         names = header if header is not None else [str(i) for i in range(ncol)]
-        labels = ([f"column {h!r}" for h in header] if header is not None
-                  else [f"column {i}" for i in range(ncol)])  # how a column is named in messages
+        # how a column is named in messages: its header name when it looks like one, else its index
+        shown = [h if header is not None and _NAME.fullmatch(h) else f"column {i}" for i, h in enumerate(names)]
+        labels = [f"column {h!r}" if h == n else h for h, n in zip(shown, names)]
         split_names = [_split_header(h) for h in names] if header is not None else [(n, None) for n in names]
-        time_idx, val_idx = _columns(path, split_names, names, header is not None, column, quantity,
+        time_idx, val_idx = _columns(path, split_names, names, shown, header is not None, column, quantity,
                                      sample_rate_hz)
         wanted = [val_idx] + ([time_idx] if time_idx is not None else [])
         out = np.empty((len(wanted), n_lines))
@@ -238,15 +258,15 @@ def _parse_csv(path: Path, quantity: str, column: str | None,
             row = split(ln)
             if len(row) > ncol and any(c != "" for c in row[ncol:]):
                 raise DMWError(f"{path}: line {line_no}: {len(row)} columns; expected {ncol} "
-                               f"({', '.join(names)}) as in the first row")
+                               f"({', '.join(shown)}) as in the first row")
             for k, i in enumerate(wanted):
                 if i >= len(row) or row[i] == "":
                     raise DMWError(f"{path}: {labels[i]}: missing value on line {line_no}; expected a number")
                 try:
                     out[k, n] = float(row[i])
                 except ValueError:
-                    raise DMWError(f"{path}: {labels[i]}: non-numeric value {row[i]!r} on line {line_no}; "
-                                   f"expected a number") from None
+                    raise DMWError(f"{path}: {labels[i]}: non-numeric value on line {line_no}; "
+                                   f"expected a number") from None  # (the value not shown: file content)
             n += 1
             if n % PROGRESS_ROWS == 0:
                 log.info("dmw: %s: read %d of at most %d rows", path, n, n_lines)
@@ -273,8 +293,9 @@ def _numeric(s: str) -> bool:
         return False
 
 
-def _columns(path: Path, split: list[tuple[str, str | None]], names: list[str], has_header: bool,
-             column: str | None, quantity: str, sample_rate_hz: float | None) -> tuple[int | None, int]:
+def _columns(path: Path, split: list[tuple[str, str | None]], names: list[str], shown: list[str],
+             has_header: bool, column: str | None, quantity: str,
+             sample_rate_hz: float | None) -> tuple[int | None, int]:
     """Indices of the time column (``None``: none) and of the value column of a CSV record."""
     ncol = len(names)
     time_idx = next((i for i, (b, _) in enumerate(split) if has_header and _is_time_name(b)), None)
@@ -286,7 +307,7 @@ def _columns(path: Path, split: list[tuple[str, str | None]], names: list[str], 
         if not matches and key.isdigit() and int(key) < ncol:
             matches = [int(key)]
         if not matches:
-            raise DMWError(f"{path}: column {column!r} not found; expected one of {names} "
+            raise DMWError(f"{path}: column {column!r} not found; expected one of {shown} "
                            f"(or a column index 0..{ncol - 1}) (dmw.column)")
         val_idx = matches[0]
     else:
@@ -297,7 +318,7 @@ def _columns(path: Path, split: list[tuple[str, str | None]], names: list[str], 
         elif len(candidates) == 1:
             val_idx = candidates[0]
         else:
-            raise DMWError(f"{path}: {len(candidates)} value columns {[names[i] for i in candidates]}; "
+            raise DMWError(f"{path}: {len(candidates)} value columns {[shown[i] for i in candidates]}; "
                            f"expected one: set dmw.column")
     if time_idx is None and sample_rate_hz is None:
         raise DMWError(f"{path}: no time column (a header 'time', 'time [s]', 'time_s', ...) and no "
@@ -314,12 +335,13 @@ def _read_netcdf(path: Path, quantity: str, column: str | None,
     except (OSError, ValueError) as exc:
         raise DMWError(f"{path}: not a readable NetCDF file ({exc}); expected NetCDF with a variable "
                        f"on a 'time' coordinate") from None
+    interrupts.check()  # (netCDF4's error checks can swallow a signal raised during the read)
     if "elapsed_time" in ds.variables and "time" not in ds.variables:  # a dmw.nc of this pipeline (io.TIME_ON_DISK)
         ds = ds.rename({"elapsed_time": "time"})
     if column is not None:
         if column not in ds.data_vars:
             raise DMWError(f"{path}: variable {column!r} not found; expected one of "
-                           f"{sorted(map(str, ds.data_vars))} (dmw.column)")
+                           f"{', '.join(_shown(str(v)) for v in sorted(map(str, ds.data_vars)))} (dmw.column)")
         name = column
     else:
         cands = [str(v) for v in ds.data_vars if ds[v].dims == ("time",)]
@@ -329,9 +351,10 @@ def _read_netcdf(path: Path, quantity: str, column: str | None,
         elif len(cands) == 1:
             name = cands[0]
         else:
-            raise DMWError(f"{path}: {len(cands)} variables on 'time' {cands}; expected one: set dmw.column")
+            raise DMWError(f"{path}: {len(cands)} variables on 'time' ({', '.join(map(_shown, cands))}); expected "
+                           "one: set dmw.column")
     da = ds[name]
-    field_name = f"variable {name!r}"
+    field_name = f"variable {_shown(name)}"
     if da.dims != ("time",):
         raise DMWError(f"{path}: {field_name}: dimensions {da.dims}; expected ('time',)")
     try:
@@ -404,6 +427,9 @@ def load_record(path: str | Path, quantity: str = "displacement", column: str | 
     if sample_rate_hz is not None and not (sample_rate_hz > 0 and math.isfinite(sample_rate_hz)):
         raise DMWError(f"{path}: sample_rate_hz = {sample_rate_hz!r}: expected a positive number "
                        f"(dmw.sample_rate_hz)")
+    if special_kind(path) is not None:  # (checked before opening: reading a FIFO or /dev/zero never ends)
+        raise DMWError(f"{path}: is {special_kind(path)}; expected a regular file, a CSV or NetCDF record "
+                       "(dmw.source)")
     if not path.is_file():
         raise DMWError(f"{path}: record file does not exist (dmw.source)")
     reader = _read_netcdf if path.suffix.lower() in NETCDF_SUFFIXES else _read_csv

@@ -39,6 +39,7 @@ from typing import Any, Iterable, Sequence
 import numpy as np
 
 from . import asperity_statistics as st
+from ..paths import special_kind
 from ..units import NM_IN_UM, PER_NM2_IN_PER_UM2
 
 #: Detrend modes accepted here; ``"plane"`` is SurfaceTopography's ``"height"`` (the rms-minimising plane).
@@ -245,6 +246,8 @@ def read_topography(path: str | Path, channel: str | int | None = None, detrend_
 
     path = Path(path)
     expect = "an AFM/profilometer height map in a format SurfaceTopography reads"
+    if special_kind(path) is not None:  # (checked before opening: a FIFO or a device never ends)
+        raise AFMError(f"{path}: is {special_kind(path)} (expected a regular file, {expect})")
     if not path.is_file():
         raise AFMError(f"{path}: file does not exist (expected {expect})")
     if path.stat().st_size == 0:

@@ -56,6 +56,7 @@ from ..analyses.feasibility import box_check
 from ..fanout import local_cluster
 from ..progress import Progress
 from ..io import read_dataset, temporary_path, var
+from ..paths import refuse_links
 from ..runner import Inputs, Stage, build
 from ..analyses.identification import (GN_STEP, METHODS, PROFILE_GAIN, PROFILE_STEP, ROLES, Identification,
                                        identify)
@@ -264,6 +265,7 @@ def write_identified_scene(scene: Any, params: Sequence[Parameter], ds: xr.Datas
     text = "\n".join(lines)
     if path.is_file() and path.read_text() == text:
         return path
+    refuse_links(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = temporary_path(path)
     try:
@@ -414,6 +416,7 @@ STAGE = Stage(
     reads=("*",), excludes=("sweep", "report", "sensitivity", "scene.name", "scene.description",
                             "identify.batch_size"),
     upstream=upstream, check=box_check("identify"), finish=_finish, order=80,
+    keeps=lambda scene: (identified_scene_path(scene, Path()).name, "identify.evals.jsonl"),
     doc="the free [recon] parameters fitted to the paper's targets, identify.nc and identified.toml "
         "(in the results folder; --write-scene PATH for a copy)")
 

@@ -81,6 +81,7 @@ from ..analyses.report_settings import ReportSettings, wants_ensemble
 from ..analyses.sweep_slices import combinations, split_ensemble
 from ..model.scene_inputs import table_stages
 from ..io import DatasetError, is_read_only, temporary_path
+from ..paths import refuse_links
 from ..validity import OutsideValidity, describe
 from ..runner import Inputs, Stage, build
 
@@ -121,6 +122,7 @@ def load(inputs: Inputs) -> dict[str, xr.Dataset | None]:
 
 def _write_text(path: Path, text: str) -> None:
     """Write ``text`` to ``path`` by a temporary file and a rename; an existing file keeps its mode."""
+    refuse_links(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = temporary_path(path)
     tmp.write_text(text, encoding="utf-8")

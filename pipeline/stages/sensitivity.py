@@ -97,7 +97,7 @@ STAGE = Stage(
     "sensitivity", compute, outputs=("sensitivity.nc", "figures/sensitivity.png"),
     # (the [sweep] grid is the default protrusion grid of the evaluations: not excluded)
     reads=("*",), excludes=("report", "identify", "scene.name", "scene.description", "sensitivity.batch_size"),
-    upstream=upstream, check=box_check("sensitivity"), order=85,
+    upstream=upstream, check=box_check("sensitivity"), order=85, keeps=lambda scene: ("sensitivity.evals.jsonl",),
     doc="Morris and Sobol indices of the headline outputs over the [sensitivity] parameters, sensitivity.nc")
 
 

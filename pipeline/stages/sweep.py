@@ -41,6 +41,7 @@ from ..model import slider as sl
 from ..fanout import run_tasks
 from ..progress import Progress
 from ..io import file_hash, read_attrs, read_dataset, write_dataset
+from ..paths import refuse_links
 from ..runner import KEY_ATTR, Inputs, Stage, ensure
 from ..variables import COORDINATES, ENSEMBLE, HISTORIES, SCALARS, STEPPING, coordinate
 from ..model import dmw_record, scene_inputs
@@ -182,7 +183,7 @@ def prepare_inputs(scene: Any, out: Path, sets: dict[str, dict],
     they are recomputed only when their own inputs change. The records of realisations beyond the
     first: :func:`realisation_inputs`.
     """
-    parts = out / PARTS
+    parts = refuse_links(out / PARTS)  # (its parts may be written by worker processes, which hold no folder)
     parts.mkdir(parents=True, exist_ok=True)
     interface_paths: dict[str, str | None] = {}
     for label, table in sets.items():
@@ -455,11 +456,24 @@ def _files(scene: Any) -> dict[str, str]:
             for label, table in roughness_sets(scene).items() for i, f in enumerate(table.get("afm") or [])}
 
 
+def _keeps(scene: Any) -> tuple[str, ...]:
+    """The longest paths the sweep keeps in the results folder: a part, another set's interface tables
+    (with its roughness dataset) and a realisation's DMW record."""
+    others = [label for label, table in roughness_sets(scene).items() if table != dict(scene["roughness"])]
+    kept = [f"{PARTS}/batch-00000.nc"]
+    if others:  # (another set's tables: prepare_inputs)
+        longest = max(others, key=len)
+        kept += [f"{PARTS}/interface-{longest}/roughness.nc", f"{PARTS}/interface-{longest}/interface.nc"]
+    if scene["sweep"]["realisations"] > 1:
+        kept.append(f"{PARTS}/dmw-00000/dmw.nc")
+    return tuple(kept)
+
+
 STAGE = Stage(
     "sweep", compute, outputs=("sweep.nc", "sweep_histories.nc"),
     reads=("*", "report.histories_nm"),
     # (the batch size changes how the work is cut, not the result: parts of another cut are rejected)
     excludes=("tfc.protrusion_nm", *(e for e in scene_inputs.SIMULATION_EXCLUDES if e != "sweep"), "sweep.batch_size"),
-    files=_files, upstream=scene_inputs.simulation_inputs, order=50, main_job=True,
+    files=_files, upstream=scene_inputs.simulation_inputs, order=50, main_job=True, keeps=_keeps,
     doc="protrusion x roughness x damping, fanned out, sweep.nc and sweep_histories.nc")
 
