@@ -418,14 +418,14 @@ def test_a_dataset_opened_for_writing_during_the_computation_is_not_replaced(tmp
 
 
 # ------------------------------------------------------------------------------------ 6. lengths
-def test_a_scene_name_too_long_for_the_identified_scene_is_one_line_before_any_stage(tmp_path):
-    """Before: a 250-character name failed after the whole identification (``<name>-identified.toml``)."""
-    out = tmp_path / "out"
-    done = _hdi(["identify", str(PAPER), "--out", str(out), "--set", f'scene.name="{"a" * 250}"'], timeout=120)
-    line = _one_error(done)
-    assert line.startswith(f"hdi identify: error: {out}: the file name '.{'a' * 250}-identified.toml.hdi-")
-    assert line.endswith(" bytes long, the file system allows 255; choose a shorter scene name (scene.name)")
-    assert not out.exists()
+def test_a_long_scene_name_no_longer_lengthens_the_identified_scenes_file(tmp_path):
+    """Before: a 250-character name failed after the whole identification (``<name>-identified.toml``); the
+    identified scene is now ``identified.toml`` whatever the name, so the length check passes before any stage."""
+    scene = load_scene(PAPER, [f'scene.name="{"a" * 250}"'])
+    paths = runner.Runner(scene, tmp_path).written_paths(["identify"])
+    assert f".identified.toml.hdi-{io.RUN_ID}.xxxxxxxx.tmp" in paths
+    assert not any("a" * 250 in p for p in paths)
+    runner.Runner(scene, tmp_path).check_lengths(["identify"])
 
 
 def test_a_results_folder_too_long_for_the_reports_files_is_one_line_before_any_stage(tmp_path):
@@ -446,7 +446,7 @@ def test_a_results_folder_too_long_for_the_reports_files_is_one_line_before_any_
 def test_the_paths_a_run_writes_include_temporary_names_and_what_stages_keep(tmp_path):
     scene = load_scene(PAPER)
     paths = runner.Runner(scene, tmp_path).written_paths(["identify", "report", "sweep"])
-    assert f".{scene.name}-identified.toml.hdi-{io.RUN_ID}.xxxxxxxx.tmp" in paths
+    assert f".identified.toml.hdi-{io.RUN_ID}.xxxxxxxx.tmp" in paths
     assert f"{runner.STAGING_PREFIX}xxxxxxxx/figures/.fig3_clearance.png.hdi-{io.RUN_ID}.xxxxxxxx.tmp" in paths
     assert f"sweep.parts/.batch-00000.nc.hdi-{io.RUN_ID}.xxxxxxxx.tmp" in paths
     runner.Runner(scene, tmp_path).check_lengths(["identify", "report", "sweep"])     # (a usual folder: passes)

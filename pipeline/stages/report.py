@@ -14,7 +14,7 @@ file                       needed    used for
 ``ensemble.nc``            optional  the paper's targets over ``report.realisations`` DMW records
                                      (upstream when ``report.realisations`` > 1), with spreads
 ``bulge.nc``               optional  ``bulge.png``: the bulge lift versus apex gap (a tabulated
-                                     bulge law: upstream then)
+                                     bulge law: current then, as an input of the sweep)
 ``statics.nc``             optional  ``statics.png``, the static states versus protrusion
 =========================  ========  ==========================================================
 
@@ -79,7 +79,6 @@ from ..analyses.report_figures import (BAND_FIGURE, BULGE_FIGURE, ENSEMBLE_FIGUR
                                       STATICS_FIGURE)
 from ..analyses.report_settings import ReportSettings, wants_ensemble
 from ..analyses.sweep_slices import combinations, split_ensemble
-from ..model.scene_inputs import table_stages
 from ..io import DatasetError, is_read_only, temporary_path
 from ..paths import refuse_links
 from ..validity import OutsideValidity, describe
@@ -173,7 +172,6 @@ def _upstream(scene: Any) -> tuple[str, ...]:
         up.append("calibrate")
     if wants_ensemble(scene):
         up.append("ensemble")
-    up.extend(table_stages(scene))  # bulge.nc of a tabulated bulge law: bulge.png
     return tuple(up)
 
 
