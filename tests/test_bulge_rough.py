@@ -123,18 +123,21 @@ def test_the_rough_table_and_its_stage(repo_root):
 
 
 def test_the_report_draws_the_bulge_figure_when_the_law_is_tabulated(repo_root, tmp_path):
-    """``bulge.nc`` is upstream of the report exactly when the bulge law is tabulated, and ``bulge.png`` is drawn
+    """``bulge.nc`` is made before the report (as an input of the sweep) exactly when the bulge law is tabulated,
+    and ``bulge.png`` is drawn
     from it (with the cap of ``air_bearing.lift_cap_gap_nm`` when set)."""
     from test_report import check_png
 
     from pipeline.analyses import plots, report_figures
     from pipeline.analyses.report_settings import ReportSettings
+    from pipeline.runner import Runner
     from pipeline.stages import report
 
     path = repo_root / "configs" / "paper-2009-bulge.toml"
     for law, upstream in (("rough-reynolds", True), ("reynolds", True), ("ph-limit", False)):
         scene = load_scene(path, [f'air_bearing.bulge="{law}"'])
-        assert ("bulge" in report._upstream(scene)) is upstream
+        assert ("bulge" in Runner(scene, tmp_path).plan(["report"])) is upstream
+        assert ("bulge", "bulge") in report.OPTIONAL
     ds = bt.bulge_table(model="rough-reynolds", p_pad=P_PAD, a=A_SEMI, b=B_SEMI, speed=U, gaps=bt.table_gaps(),
                         protrusions=np.arange(0.0, 11.5, 0.5) * NM, grid=bb.ReynoldsGrid(cells_per_a=8, cells_per_b=4),
                         roughness=ROUGH)
