@@ -169,6 +169,20 @@ def test_steady_contact_counts_none_after_its_transient(two_population):
     assert run.info[SWITCHES] >= run.info[WINDOW_SWITCHES]
 
 
+def test_a_constructed_chattering_case_counts_thousands_per_ms():
+    """k = -1 puts the criterion 1 sigma below the summit mean, where the contact pressure that switches on
+    (p_c(k sigma)) exceeds the pull into contact: without DMW the exact solution slides along d = k sigma
+    (docs/model.md, section "Integrator") and the kernel switches at about its 20-ns dwell, at most 5e4 per ms."""
+    k = -1.0
+    sc = load_scene(TWO, [f"contact.k={k}", "solver.duration_ms=0.6", "solver.transient_ms=0.2"])
+    sc = sc.replace(scene={**sc["scene"], "effects": [e for e in sc.effects if e != "dmw"]})
+    model = sl.build_model(sc, build_tables(sc, roughness_statistics(sc)), None, k)
+    s = sl.summarize(sl.run_model(model, 11.0 * NM))
+    rate = s["contact_switches_per_ms"] * 1e-3  # [1/ms]
+    assert 1e4 < rate <= 1.0 / (sc["solver"]["min_dwell_ns"] * 1e-6)
+    assert s["fhm_bv"] < 0.1 and abs(s["min_clearance"]) < 0.01 * NM  # held on the criterion
+
+
 def test_the_count_is_the_criterions_transitions_in_a_fine_history():
     """A bouncing run (10.0 nm) sampled every 5 ns: the kernel's count equals the transitions of the
     sampled contact mode and the sign changes of the clearance d - k sigma in the window, and the
@@ -225,3 +239,17 @@ def test_integrated_area_model_integrates_both_friction_parts():
     np.testing.assert_allclose(parts, pw.ppval(one.friction, x0, h, d), rtol=1e-9,
                                atol=1e-9 * np.max(np.abs(one.friction)))
     assert np.all(pw.ppval(np.ascontiguousarray(two.friction[:, 4:]), x0, h, d) > 0)  # the lubricant shear
+
+
+def test_ensembles_carry_the_switch_rate_mean_and_spread():
+    """``sweep.nc``/``ensemble.nc`` of a DMW ensemble: the mean and sample standard deviation of the rate
+    over the realisations, in its unit (pipeline.variables.ENSEMBLE_OF)."""
+    from pipeline.analyses.ensemble_rules import statistics
+    from pipeline.variables import SCALARS
+
+    rate = np.array([[0.0, 30.0, 60.0], [900.0, 500.0, 100.0]])  # [1/ms], (protrusion, realisation)
+    out = statistics({"contact_switches_per_ms": SCALARS["contact_switches_per_ms"].data(rate, ("protrusion",
+                                                                                               "realisation"))})
+    np.testing.assert_allclose(out["contact_switches_per_ms_mean"].values, [30.0, 500.0])
+    np.testing.assert_allclose(out["contact_switches_per_ms_std"].values, [30.0, 400.0])
+    assert out["contact_switches_per_ms_mean"].attrs["units"] == "ms-1"
