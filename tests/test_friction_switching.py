@@ -201,7 +201,6 @@ def test_the_count_is_the_criterions_transitions_in_a_fine_history():
     assert float(ds["contact_switches_per_ms"][0]) == pytest.approx(n / 0.5, rel=1e-12)  # 0.5-ms window
 
 
-@pytest.mark.slow
 def test_the_switched_friction_holds_a_sliding_mode_the_continuous_one_does_not():
     """The lab's case (two-population scene, gimbal arm, 50 MPa, 10.2 nm): with the friction switched
     by the criterion the TFC point is held on it, thousands of switches per ms (the 20-ns dwell bounds
