@@ -35,7 +35,7 @@ from typing import Any, Iterable
 
 import numpy as np
 import xarray as xr
-from .units import GPA, MN, MPA, MS, NM, PER_UM2, UM, UM2, URAD
+from .units import GPA, KHZ, MN, MPA, MS, NM, PER_UM2, UM, UM2, URAD
 
 from .validity import Validity
 
@@ -228,6 +228,8 @@ SCALARS = _group(
     V("nominal_area", "um2", "nominal contact area of the TFC bulge", UM2),
     V("protrusion_radius", "um", "effective radius of the bulge in the sliding direction", UM),
     V("contact_fraction", "1", "fraction of the steady window spent in contact", effect="contact"),
+    V("contact_switches_per_ms", "ms-1", "transitions of the contact criterion d < k sigma per unit time over the "
+      "steady window (counted by the integrator)", KHZ, effect="contact"),
     V("regime", "1", "regime of the steady window", effect="contact", dtype="int8",
       flag_values=tuple(int(r) for r in Regime), flag_meanings=" ".join(r.name.lower() for r in Regime),
       fill_value=REGIME_FILL,
@@ -422,7 +424,7 @@ ACCURACY = _group(
 
 #: Scalars whose ensemble mean and spread ``sweep.nc`` carries with ``[sweep] realisations`` > 1.
 ENSEMBLE_OF = ("fhm_bv", "clearance", "min_clearance", "interference", "contact_force", "friction_force",
-               "net_force", "mean_pressure", "contact_fraction")
+               "net_force", "mean_pressure", "contact_fraction", "contact_switches_per_ms")
 
 #: ``sweep.nc`` of a DMW ensemble (:func:`pipeline.analyses.ensemble_rules.statistics`).
 ENSEMBLE = _group(

@@ -27,7 +27,7 @@ from ..physics.air_bearing import REAR_LAWS, STIFFNESS_ROOTS, TFC_STIFFENING
 from ..physics.bulge_bearing import BULGE_LAWS, SLIP_MODELS
 from ..physics.equilibrium import STARTS
 from ..physics.fhm import FHM_MEASURES
-from ..physics.friction import FRICTION_LAWS
+from ..physics.friction import FRICTION_LAWS, FRICTION_SWITCHING
 from ..physics.geometry import AREA_MODELS, FRICTION_ARMS
 from ..units import MHZ_IN_KHZ, MS, NS, SUFFIX_FACTORS
 from .limits import MAX_BOOTSTRAP, MAX_INTEGER, MAX_MAGNITUDE, MAX_STEPS, MAX_WORK_OF_ADHESION, LimitError, check_physical
@@ -300,6 +300,11 @@ SCHEMA: dict[str, dict[str, Key]] = {
                                 "'coefficient' Q = mu P (docs/model.md, section 'Friction')"),
         "friction_coefficient": Key("float", None, _nonneg,
                                     doc="friction coefficient mu of the 'coefficient' law [1] (paper: ~1.2)"),
+        "friction_switching": Key("str", "criterion", choices=FRICTION_SWITCHING,
+                                  doc="how the friction is switched: 'criterion' the whole friction with the contact "
+                                      "criterion d < k sigma (paper, default) or 'continuous' the lubricant shear "
+                                      "on the wetted summits at every separation, the solid friction with the "
+                                      "contact force (docs/model.md, section 'Switched and continuous friction')"),
         "area_model": Key("str", "flat-section", choices=tuple(AREA_MODELS),
                           doc="interface forces: 'flat-section' stresses at the apex separation times A_n (paper, "
                               "default) or 'integrated' the same stresses summed over the bulge's gap field "
@@ -797,6 +802,9 @@ def _cross_checks(config: dict[str, dict[str, Any]], where: str) -> None:
     if not two and lub["bridge_work_of_adhesion_j_m2"] is not None:
         raise SceneError(f"{where}: lubricant.bridge_work_of_adhesion_j_m2 acts only with interface.adhesion = "
                          "'two-population' (it is 'isbl': one work of adhesion for every summit)")
+    if c["friction_switching"] != "criterion" and "friction" not in eff:
+        raise SceneError(f"{where}: contact.friction_switching = {c['friction_switching']!r} says how the friction "
+                         "acts: it needs the 'friction' effect (or 'criterion', the default)")
     if lub["shear_stress_mpa"] > 0 and "friction" not in eff:
         raise SceneError(f"{where}: lubricant.shear_stress_mpa > 0 is a friction term: it needs the 'friction' effect")
     if config["interface"]["model"] == "deterministic":

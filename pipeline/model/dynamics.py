@@ -73,6 +73,9 @@ for at least ``p.dwell`` seconds after a switch (``solver.min_dwell_ns``); if th
 otherwise when the dwell ends, the mode switches there. The resulting fast switching averages the
 contact force to the sliding-mode value with an error of the order of the dwell; the dwell is an
 accuracy knob of the accuracy stage. Crossings further apart than the dwell are located exactly.
+The switches at ``t >= p.t_win`` are counted apart (``info[WINDOW_SWITCHES]``): a run reports them per
+ms (:func:`pipeline.model.slider.contact_switch_rate`), so that a sliding mode held on the criterion
+shows in the data (docs/model.md, section "Switched and continuous friction").
 """
 
 from __future__ import annotations
@@ -85,7 +88,7 @@ from ..units import NS
 from .compiled import kernel_jit
 from .forces import RearLawRef, rear_law_ref, rhs_slots, separation
 from .state import (ACCEPTED, MAX_STEPS, N_COUNTERS, NOT_FINITE, REJECTED, RHS_CALLS, STATUS, STEP_UNDERFLOW,
-                    SWITCHES, state_size)
+                    SWITCHES, WINDOW_SWITCHES, state_size)
 from .stepper import (error_norm, extrema_slots, inverse_mass_at_tfc, sample_outputs, step, stiffness_cap,
                       switch_point, track_extremes)
 
@@ -340,6 +343,8 @@ def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, cont
             if (d0 - p.k_sigma < 0.0) != in_contact:
                 in_contact = not in_contact
                 info[SWITCHES] += 1
+                if t >= p.t_win:
+                    info[WINDOW_SWITCHES] += 1
                 t_hold = t + p.dwell
                 rhs_slots(t, y, p, in_contact, k1, dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power,
               meniscus)
@@ -407,6 +412,8 @@ def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, cont
             t = t_hold  # land exactly on the end of the dwell (checked at the top of the loop)
         if switched:
             in_contact = not in_contact
+            if t >= p.t_win:  # (the mode changes at the step's end: counted in the window from t_win on)
+                info[WINDOW_SWITCHES] += 1
             t_hold = t + p.dwell if p.dwell > 0.0 else -1.0
             rhs_slots(t, y, p, in_contact, k1, dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power,
               meniscus)

@@ -15,6 +15,9 @@ Equations of motion (docs/model.md, section "Slider dynamics"), state ``y = (z, 
   ``A_n p_c(d) - c_c d'`` while in contact (``d < k sigma``, the paper's criterion)
 * friction ``Q = A_n tau(d)`` in contact, along the disk's motion (leading to trailing edge) at the
   air-bearing surface; its moment about the CG is ``-h_cg Q`` (it pitches the leading edge down).
+  With ``contact.friction_switching = "continuous"`` (docs/model.md, section "Switched and continuous
+  friction") the friction table holds two tables side by side (8 columns): the solid friction stress
+  (columns 0-3), in contact as above, and the lubricant shear ``tau_lub a_w(d)`` (4-7), at every ``d``.
 * the disk under each point moves with the DMW ``w(t)`` delayed by the disk's travel time.
 * an air-bearing force at the TFC point (docs/model.md, section "Model variants"): the closed-form
   gap-power stiffening spring ``F_t = k_t [G(g_n) - G(g)]``, stiffness ``-dF_t/dg = k_t [(g0/g)^p - 1]``
@@ -254,6 +257,10 @@ def _interface_force(p, contact, adhesion, friction, meniscus, F_i, z, theta, vz
     ``F_i`` [N]: adhesion always, contact pressure and damper in contact; returns it, the friction
     force ``Q`` [N] and the rate ``dq/dt`` [Pa/s] of the meniscus state (0 without one).
 
+    Friction: the table's (first) stress in contact; a second table beside it (8 columns: the
+    continuous lubricant shear, docs/model.md, section "Switched and continuous friction") acts in
+    either mode, continuous in ``d`` as the wetted area is.
+
     With a meniscus formation time ``meniscus`` [s] the adhesion pressure is the state ``q`` [Pa],
     relaxing towards the table's ``p_a(d)``: ``dq/dt = (p_a(d) - q) / meniscus`` (docs/model.md,
     section "Meniscus formation").
@@ -277,6 +284,8 @@ def _interface_force(p, contact, adhesion, friction, meniscus, F_i, z, theta, vz
                 F_i += p.A_n * max(_ppat(contact, i, s), 0.0) - p.c_c * dd
                 if friction is not None:
                     Q = p.A_n * max(_ppat(friction, i, s), 0.0)
+            if friction is not None and friction.shape[1] == 8:  # the lubricant shear, not switched
+                Q += p.A_n * max(_ppat_at(friction, i, s, 4), 0.0)
     return F_i, Q, dq
 
 

@@ -30,12 +30,15 @@ Steady-window definitions (over ``transient_ms <= t <= duration_ms``, sampled ev
   are the exact ones tracked by the integrator, not those of the output samples.
 * ``clearance``/``min_clearance`` [nm]: mean/minimum of ``c = d - k sigma`` (the minimum exact, as above).
 * ``interference`` [nm]: mean of ``-c`` over the samples in contact (NaN if none).
-* forces [mN]: time means over the window (zero while out of contact); ``net_force`` is the
+* forces [mN]: time means over the window (zero while out of contact, but for the continuous lubricant
+  shear of ``contact.friction_switching = "continuous"``); ``net_force`` is the
   vertical interface force on the slider, contact + contact damping - adhesion.
 * ``friction_coefficient`` [1]: mean friction / mean contact force.
 * ``mean_pressure``, ``shear_stress`` [MPa]: total contact / friction force over total real area,
   over the samples in contact; ``real_area`` [um2]: mean real area while in contact.
 * ``contact_fraction`` [1]: fraction of the window's samples in contact.
+* ``contact_switches_per_ms`` [1/ms]: transitions of the contact mode in the window per ms
+  (:func:`contact_switch_rate`, counted by the kernel).
 * ``regime``: 0 flying (no contact in the steady window, :func:`touched`), 2 surfing (steady
   sliding: in contact in at least 99 % of the samples), 1 bouncing (otherwise, including contacts
   shorter than the output step).
@@ -53,12 +56,13 @@ from scipy.interpolate import CubicSpline
 from . import dynamics as dyn
 from .forces import RearLawRef, rear_law_ref, separation_at
 from .piecewise import disk_coefficients, disk_history, piecewise_coefficients, ppval
-from .state import ACCEPTED, MENISCUS, OK, REJECTED, STATUS, STATUS_TEXT, THETA, THETA_RATE, Z, Z_RATE
+from .state import (ACCEPTED, MENISCUS, OK, REJECTED, STATUS, STATUS_TEXT, THETA, THETA_RATE, WINDOW_SWITCHES, Z,
+                    Z_RATE)
 from ..units import KHZ, MS, NM
 from ..physics import air_bearing as ab
 from ..physics import bulge_bearing as bb
 from ..physics.fhm import fhm
-from ..physics.friction import friction_stress_table, lubricant_shear_stress
+from ..physics.friction import friction_parts, friction_stress_table, lubricant_shear_stress
 from ..physics.geometry import effective_radius, ellipsoid_table_integral, friction_arm, nominal_area
 from ..physics.asperity_statistics import explicit_statistics
 from ..config.si import to_si
@@ -105,7 +109,9 @@ class Model:
     p : the kernel's named parameters (a :data:`pipeline.model.dynamics.PARAMS` record; the
         protrusion-dependent fields are set by :func:`run_model`)
     dmw : DMW coefficients [m] or ``None``; contact, adhesion, friction, area : interface-table
-        coefficients [Pa] / [1] versus separation [m], or ``None`` when the effect is off
+        coefficients [Pa] / [1] versus separation [m], or ``None`` when the effect is off (``friction``
+        with ``contact.friction_switching = "continuous"`` and lubricant shear: two tables side by side,
+        the switched solid friction and the continuous lubricant shear, :func:`pipeline.physics.friction.friction_parts`)
     pitch : ``None`` when the pitch DOF is locked
     tfc_stiffening : parameters of the compiled gap-power law at the TFC point (a
         :data:`pipeline.model.dynamics.GAP_POWER` record, ``f0`` set per protrusion), ``None`` without it
@@ -274,12 +280,19 @@ def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float]
                     values = friction_stress_table(c["friction_law"],
                                                    interface["contact_pressure"].values * INTERFACE["contact_pressure"].si_unit,
                                                    values, c["friction_coefficient"])
-                    tau_lub = si.lubricant.shear_stress
+                    tau_lub, lub = si.lubricant.shear_stress, None
                     if tau_lub > 0.0:  # the lubricant-shear term beside the solid one (docs/model.md, "Lubricant friction")
                         if "wetted_area_fraction" not in interface:
                             raise ValueError("interface tables lack 'wetted_area_fraction', needed by "
                                              "lubricant.shear_stress_mpa > 0; re-run `hdi interface`")
-                        values = values + lubricant_shear_stress(interface["wetted_area_fraction"].values, tau_lub)
+                        lub = lubricant_shear_stress(interface["wetted_area_fraction"].values, tau_lub)
+                    # switched with the contact criterion, or the lubricant shear apart: at every separation
+                    # (docs/model.md, section "Switched and continuous friction"; two tables side by side)
+                    values, always = friction_parts(c["friction_switching"], values, lub)
+                    if always is not None:
+                        tabs[key] = np.ascontiguousarray(np.hstack([piecewise_coefficients(values, h, order),
+                                                                    piecewise_coefficients(always, h, order)]))
+                        continue
                 tabs[key] = piecewise_coefficients(values, h, order)
     elif eff & {"contact", "adhesion"}:
         raise ValueError("the contact/adhesion effects need interface tables (run `hdi interface`)")
@@ -581,15 +594,19 @@ def _integrated_tables(model: Model, flat: InterfaceTables, protrusion: float, n
         model.integrated["capped_area"] = c if not np.any(nodes > 1.0) else \
             piecewise_coefficients(np.minimum(nodes, 1.0), h, order)
     tables = [model.integrated["capped_area"] if n == "area" else getattr(flat, n) for n in names]
-    # (the two adhesion tables of the meniscus state side by side, dynamics.Tables: each integrated on its own)
-    split = "adhesion" in names and flat.adhesion.shape[1] == 8
-    if split:
-        j = names.index("adhesion")
-        tables[j:j + 1] = [flat.adhesion[:, :4], flat.adhesion[:, 4:]]
+    # (two tables side by side, dynamics.Tables: the adhesion of the meniscus state, the continuous
+    # friction; each integrated on its own)
+    split = [n for n in names if getattr(flat, n).shape[1] == 8]
+    for n in split:
+        j = names.index(n)
+        names[j:j + 1] = [n, n + "+"]
+        tables[j:j + 1] = [getattr(flat, n)[:, :4], getattr(flat, n)[:, 4:]]
     # the tables at once (one grid): the integral, then the spline through its node values
     integral = scale * ellipsoid_table_integral(np.stack(tables, axis=-1), h, protrusion)
     splines = _splines(integral, h, order)
-    if split:
+    for n in split:
+        j = names.index(n)
+        del names[j + 1]
         splines[j:j + 2] = [np.ascontiguousarray(np.hstack(splines[j:j + 2]))]
     tabs = dict.fromkeys(InterfaceTables._fields[:4])
     tabs.update(zip(names, splines))
@@ -676,7 +693,10 @@ def histories(run: Run) -> dict[str, np.ndarray]:
         with np.errstate(invalid="ignore", divide="ignore"):
             out["mean_pressure"] = np.where(c & (area > 0), fc / np.where(area > 0, area, 1.0), np.nan)
             if tabs.friction is not None:
-                ff = on_contact(tabs.friction)
+                two = tabs.friction.shape[1] == 8  # the continuous lubricant shear beside (forces.py)
+                ff = on_contact(np.ascontiguousarray(tabs.friction[:, :4]) if two else tabs.friction)
+                if two:  # ... at every sample
+                    ff = ff + An * np.maximum(ppval(np.ascontiguousarray(tabs.friction[:, 4:]), x0, h, d), 0.0)
                 out["friction_force"] = ff
                 out["friction_coefficient"] = np.where(c & (fc > 0), ff / np.where(fc > 0, fc, 1.0), np.nan)
                 out["shear_stress"] = np.where(c & (area > 0), ff / np.where(area > 0, area, 1.0), np.nan)
@@ -714,6 +734,7 @@ def summarize(run: Run, hist: dict[str, np.ndarray] | None = None) -> dict[str, 
         frac = float(np.mean(inc))
         out["contact_fraction"] = frac
         out["regime"] = FLYING if not touched(run) else (SURFING if frac >= SURFING_FRACTION else BOUNCING)
+        out["contact_switches_per_ms"] = contact_switch_rate(run)  # [1/s]; the dataset's unit is 1/ms
         fc = hist["contact_force"][win]
         area = hist["real_area"][win]
         out["contact_force"] = float(np.mean(fc))
@@ -724,9 +745,20 @@ def summarize(run: Run, hist: dict[str, np.ndarray] | None = None) -> dict[str, 
             ff = hist["friction_force"][win]
             out["friction_force"] = float(np.mean(ff))
             out["friction_coefficient"] = float(ff.sum() / fc.sum()) if fc.sum() > 0 else np.nan
-            out["shear_stress"] = float(ff.sum() / area.sum()) if area.sum() > 0 else np.nan
+            # (the friction in contact: the continuous lubricant shear also acts out of contact)
+            out["shear_stress"] = float(np.where(inc, ff, 0.0).sum() / area.sum()) if area.sum() > 0 else np.nan
     out["validity"] = int(_validity(run, hist, win))
     return out
+
+
+def contact_switch_rate(run: Run) -> float:
+    """Transitions of the contact mode (``d < k sigma``) in the steady window per unit time [1/s]: the
+    kernel's count (:data:`pipeline.model.state.WINDOW_SWITCHES`, every switch, also those between output
+    samples) over the window's length (``contact_switches_per_ms`` in the datasets, [1/ms]). Near 0 for
+    a run flying or in steady contact, a few per ms for bouncing, thousands per ms for a sliding mode
+    held on the criterion (docs/model.md, section "Switched and continuous friction")."""
+    window = run.model.duration - run.model.transient
+    return float(run.info[WINDOW_SWITCHES]) / window if window > 0 else np.nan
 
 
 def touched(run: Run) -> bool:

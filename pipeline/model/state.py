@@ -13,7 +13,8 @@ State ``y`` (SI units), docs/model.md, section "Slider dynamics":
 
 Counters ``info`` of an integration (:func:`pipeline.model.dynamics.integrate`): :data:`STATUS` (one of
 the status codes below), :data:`ACCEPTED` steps, :data:`REJECTED` steps, contact :data:`SWITCHES`,
-:data:`RHS_CALLS` (right-hand-side evaluations).
+:data:`RHS_CALLS` (right-hand-side evaluations), :data:`WINDOW_SWITCHES` (the contact mode's transitions at
+``t >= p.t_win``, the steady window: :func:`pipeline.model.slider.summarize` reports them per ms).
 """
 
 from __future__ import annotations
@@ -27,8 +28,8 @@ MENISCUS = 4
 N_STATE = 4
 
 # the integration's counters
-STATUS, ACCEPTED, REJECTED, SWITCHES, RHS_CALLS = 0, 1, 2, 3, 4
-N_COUNTERS = 5
+STATUS, ACCEPTED, REJECTED, SWITCHES, RHS_CALLS, WINDOW_SWITCHES = 0, 1, 2, 3, 4, 5
+N_COUNTERS = 6
 #: the step counters (accepted, rejected, switches), a slice of ``info``
 STEP_COUNTERS = slice(ACCEPTED, SWITCHES + 1)
 

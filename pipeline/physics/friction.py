@@ -24,6 +24,15 @@ References
    thin lubricants", Tribol. Lett. 45 (2012) 37-48 (online 2011): friction from the solid contacts and
    from the lubricant sheared on the wetted asperities.
 
+Switched and continuous friction (``contact.friction_switching``, :data:`FRICTION_SWITCHING`; docs/model.md,
+section "Switched and continuous friction"). ``"criterion"`` (the default, the paper's model): the whole
+friction stress acts while the contact criterion ``d < k sigma`` holds and is off otherwise, like the
+contact pressure. ``"continuous"``: the solid friction (the law above) still follows the contact force,
+which the criterion switches, but the lubricant shear ``tau_lub a_w(d)`` acts on the wetted summits
+wherever they are wetted, a continuous function of ``d`` as ``a_w`` is [VP11]: the criterion is a
+threshold of the contact model, not of the lubricant film, which the summits reach before they touch
+(:func:`friction_parts`).
+
 A third law, Kogut & Etsion's (2004) static friction of a summit at the inception of sliding, is not
 offered: it gives the largest tangential load a pre-loaded stationary contact sustains, with its
 coefficient defined against the external normal load, while the slider here slides continuously and
@@ -113,3 +122,36 @@ def friction_stress_table(law: str, contact_pressure: np.ndarray, shear_strength
     if law not in FRICTION_LAWS:
         raise ValueError(f"friction law {law!r} unknown; expected one of {list(FRICTION_LAWS)}")
     return FRICTION_LAWS[law](contact_pressure, shear_strength_stress, mu)
+
+
+#: How the friction is switched (``contact.friction_switching``; module docstring): ``"criterion"``
+#: the whole friction stress with the contact criterion (the paper's model, default), ``"continuous"``
+#: the lubricant shear at every separation, the solid friction with the contact force.
+FRICTION_SWITCHING = ("criterion", "continuous")
+
+
+def friction_parts(switching: str, solid: np.ndarray, lubricant: np.ndarray | None
+                   ) -> tuple[np.ndarray, np.ndarray | None]:
+    """The friction stress per nominal area [Pa] versus separation split by how it is switched: the
+    part that acts only in contact (``d < k sigma``, with the contact force) and the part that acts at
+    every separation (``None``: none).
+
+    ``"criterion"``: ``(solid + lubricant, None)``, the paper's switched friction (the sum as
+    :func:`lubricant_shear_stress` adds it); ``"continuous"``: ``(solid, lubricant)``: the lubricant
+    shear on the wetted summits is continuous in the separation, as the wetted area is [VP11]; the
+    solid friction follows the contact force (docs/model.md, section "Switched and continuous friction").
+
+    Parameters
+    ----------
+    switching : one of :data:`FRICTION_SWITCHING`
+    solid : the friction-law stress table (:func:`friction_stress_table`) [Pa]
+    lubricant : the lubricant-shear stress table (:func:`lubricant_shear_stress`) [Pa], ``None`` when the
+        term is off (``lubricant.shear_stress_mpa = 0``)
+    """
+    if switching not in FRICTION_SWITCHING:
+        raise ValueError(f"contact.friction_switching = {switching!r}: expected one of {list(FRICTION_SWITCHING)}")
+    if lubricant is None:
+        return solid, None
+    if switching == "criterion":
+        return solid + lubricant, None
+    return solid, np.asarray(lubricant, dtype=float)
