@@ -14,6 +14,7 @@ from SurfaceTopography import Topography
 
 from pipeline.io import DatasetError, file_hash
 from pipeline.physics import asperity_statistics as st
+from pipeline.model import afm_scan
 from pipeline.physics import surface as sf
 from pipeline.config.scene import scene_from_dict
 from pipeline.model import roughness_statistics as rough_model
@@ -69,7 +70,7 @@ def test_layout_units_and_combination(two_files: list[Path], tmp_path: Path) -> 
     assert ds["sigma"].dims == ("surface", "route") and ds["m0"].dims == ("surface",)
     # per-surface values against the physics module
     for f in two_files:
-        s = sf.summarise(sf.read_topography(f, detrend_mode="center"))
+        s = afm_scan.summarise(afm_scan.read_topography(f, detrend_mode="center"))
         row = ds.sel(surface=f.stem)
         assert float(row["m0"]) == pytest.approx(s.m0, rel=1e-12)
         assert float(row["sigma"].sel({"route": "summits"})) == pytest.approx(s.summits.sigma, rel=1e-12)
@@ -167,7 +168,7 @@ def test_failing_input_leaves_existing_output_untouched(two_files: list[Path], t
     before = file_hash(path)
     bad = tmp_path / "broken.di"
     bad.write_text("not a Nanoscope file\n")
-    with pytest.raises(sf.AFMError, match="broken.di"):
+    with pytest.raises(afm_scan.AFMError, match="broken.di"):
         _run(two_files + [bad], out)
     assert file_hash(path) == before
     assert sorted(p.name for p in out.iterdir()) == ["roughness.nc"]  # no temporary leftovers

@@ -62,7 +62,7 @@ def run_files(files: Sequence[Path], out: Path, channel: str | None = None, detr
 
     Raises
     ------
-    pipeline.physics.surface.AFMError
+    pipeline.model.afm_scan.AFMError
         For an unusable file; nothing is written then.
     """
     files = [Path(f) for f in files]
