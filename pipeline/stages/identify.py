@@ -10,8 +10,8 @@ sum of squared residuals, each normalised by its tolerance (docs/model.md, secti
 
 Ensembles: each candidate runs on ``identify.realisations`` DMW records (default 8; the seeds of
 :func:`pipeline.model.dmw_record.realisation_seeds`, part of the evaluation's key), and every target
-is judged on its ensemble statistic (:attr:`pipeline.analyses.study.Target.ensemble`, the rules of
-:mod:`pipeline.analyses.ensemble_rules`): one DMW seed moves the touchdown by a 0.2-nm step, so a fit to
+is judged on its ensemble statistic (:attr:`pipeline.analyses.study.ObjectiveTerm.ensemble`, the rules
+of :mod:`pipeline.analyses.ensemble_rules`): one DMW seed moves the touchdown by a 0.2-nm step, so a fit to
 one record fits that record's noise. ``identify.nc`` then also holds each target's spread over the
 realisations (``spread(evaluation, target, bound)``). One realisation is the single-record identification.
 
