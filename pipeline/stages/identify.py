@@ -56,7 +56,7 @@ from ..analyses.feasibility import box_check
 from ..fanout import local_cluster
 from ..progress import Progress
 from ..io import read_dataset, temporary_path, var
-from ..runner import Inputs, Stage, build
+from ..runner import Inputs, Stage
 from ..analyses.identification import (GN_STEP, METHODS, PROFILE_GAIN, PROFILE_STEP, ROLES, Identification,
                                        identify)
 from ..analyses.study import Parameter, parse_parameters, scene_value, spreads, target_protrusions, targets
@@ -416,10 +416,3 @@ STAGE = Stage(
     upstream=upstream, check=box_check("identify"), finish=_finish, order=80,
     doc="the free [recon] parameters fitted to the paper's targets, identify.nc and identified.toml "
         "(in the results folder; --write-scene PATH for a copy)")
-
-
-def run(scene: Any, out: Path, scheduler: str | None = None, workers: int | None = None, force: bool = False,
-        **options: Any) -> Path:
-    """Stage entry point (``hdi identify``): makes ``identify.nc`` current (:func:`pipeline.runner.build`)."""
-    return build("identify", scene, out, force=force, scheduler=scheduler, workers=workers,
-                 **options)["identify"][0]

@@ -192,12 +192,6 @@ STAGE = Stage(
     doc="the paper's figures, a summary table and the comparison with the paper")
 
 
-def run(scene: Any, out: Path, **options: Any) -> Path:
-    """Make the report current in ``out``; returns the figures folder."""
-    build("report", scene, out, **options)
-    return Path(out) / "figures"
-
-
 def refuse_invalid(sweep: xr.Dataset, path: Path) -> None:
     """Raise :class:`pipeline.model.validity.OutsideValidity` (one line: which scenes, why) when a scene of
     the sweep is flagged in ``validity``: its numbers are not results of the model."""
