@@ -13,6 +13,7 @@ from pipeline.analyses import knob_study as knob_study
 from pipeline.io import check_cf
 from pipeline.config.scene import load_scene
 from pipeline.stages import accuracy
+from pipeline.runner import ensure
 
 #: A light reference and two settings per knob (three for rtol, to see a trend).
 REFERENCE = {"table_step_nm": 0.005, "quadrature_nodes": 16, "quadrature_panels": 2, "sample_rate_mhz": 8.0}
@@ -36,7 +37,7 @@ def result(tmp_path_factory, paper_config):
 
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(accuracy, "_evaluate", spy)
-        path = accuracy.run(scene, out, reference=REFERENCE, knobs=KNOBS, repeat=1)
+        path = ensure("accuracy", scene, out, reference=REFERENCE, knobs=KNOBS, repeat=1)
     with xr.open_dataset(path, engine="netcdf4") as ds:
         ds = ds.load()
     return out, path, ds, runs

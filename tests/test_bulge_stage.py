@@ -180,13 +180,12 @@ def test_the_accuracy_stage_runs_the_reynolds_scene(bulge_scene, tmp_path):
     """The accuracy stage reads the bulge table too (its runs are the scene's model): one knob, one
     point, every run integrated and within 1 % of the reference (measured 4e-5 at rtol 1e-8 and 8e-4 at
     1e-6, the FHM of a 0.3-ms window)."""
-    from pipeline.stages import accuracy
     scene = bulge_scene.replace(solver={"duration_ms": 0.4, "transient_ms": 0.1, "bulge_cells_per_a": 8,
                                         "bulge_cells_per_b": 4},
                                 scene={"effects": ["air_bearing", "pitch", "dmw"]})  # (an FHM to compare)
     assert "bulge" in runner.Runner(scene, tmp_path).plan(["accuracy"])
-    path = accuracy.run(scene, tmp_path, points={"flying": 9.0}, knobs={"rtol": [1e-8, 1e-6]}, only=["rtol"],
-                        repeat=1)
+    path = runner.ensure("accuracy", scene, tmp_path, points={"flying": 9.0}, knobs={"rtol": [1e-8, 1e-6]},
+                         only=["rtol"], repeat=1)
     ds = read_dataset(path)
     assert "bulge" in ds.attrs["upstream_keys"]
     assert not ds["failed"].values.any()

@@ -10,7 +10,7 @@ import pytest
 from pipeline.io import read_dataset
 from pipeline.config.scene import load_scene
 from pipeline.analyses import calibration
-from pipeline.stages import calibrate as calibrate_stage
+from pipeline.runner import ensure
 
 ROOT = Path(__file__).resolve().parents[1]
 PAPER = ROOT / "configs" / "paper-2009.toml"
@@ -26,7 +26,7 @@ def _both(overrides: list[str], tmp_path: Path):
     out = {}
     for method in ("exact", "bisection"):
         scene = load_scene(PAPER, overrides + [f'touchdown.method="{method}"'])
-        calibrate_stage.run(scene, tmp_path / method, force=True, scheduler="synchronous")
+        ensure("calibrate", scene, tmp_path / method, force=True, scheduler="synchronous")
         out[method] = read_dataset(tmp_path / method / "calibration.nc")
     return out["exact"], out["bisection"]
 

@@ -60,7 +60,7 @@ def test_each_stage_is_keyed_on_the_code_it_runs():
         assert mod in sweep and mod in cv.modules("pipeline.stages.calibrate") and mod not in rough
     assert "pipeline.physics.asperity" in cv.modules("pipeline.stages.interface")
     assert "pipeline.analyses.plots" in report and "pipeline.analyses.plots" not in sweep and "pipeline.model.dynamics" not in report
-    assert "pipeline.physics.surface" in rough
+    assert "pipeline.physics.surface" in rough and "pipeline.model.afm_scan" in rough
     # the stages import the orchestration (the runner for Stage, the fan-out) and the code key leaves it
     # out, with the command line's option checks; the material bounds the interface stage runs are in
     assert {"pipeline.runner", "pipeline.fanout"} <= cv.imports("pipeline.stages.sweep")

@@ -19,7 +19,7 @@ from pipeline.model import measured_dmw
 from pipeline.physics import microwaviness as dmw
 from pipeline.config.scene import scene_from_dict
 from pipeline.model import dmw_record
-from pipeline.stages import dmw as stage
+from pipeline.runner import ensure
 
 FS = 4e6            # [Hz] the paper's sampling rate
 BAND = (1e4, 5e5)   # [Hz] the paper's band
@@ -273,7 +273,7 @@ def test_nan_in_netcdf_rejected(tmp_path):
 
 def test_stage_writes_synthetic_dmw(tmp_path):
     scene = scene_from_dict({"dmw": {"rms_nm": 0.5}})
-    path = stage.run(scene, tmp_path)
+    path = ensure("dmw", scene, tmp_path)
     assert path == tmp_path / "dmw.nc"
     ds = read_dataset(path)
     units = {"time": "s", "displacement": "nm", "frequency": "Hz", "psd": "nm2 Hz-1", "rms": "nm",
@@ -301,9 +301,9 @@ def test_stage_duration_default_and_override(tmp_path):
     need = 2e-3 + (0.30e-3 + 0.85e-3) / V                   # front arm + slider length [m] / V
     assert need < dmw_record.settings(scene)["duration_s"] == pytest.approx(2.1e-3, rel=1e-12)
     s1 = scene_from_dict({"solver": {"duration_ms": 1.0, "transient_ms": 0.2}})
-    assert dmw_record.load(stage.run(s1, tmp_path / "a"))[1].size == 4400
+    assert dmw_record.load(ensure("dmw", s1, tmp_path / "a"))[1].size == 4400
     s2 = scene_from_dict({"dmw": {"duration_ms": 3.0, "sample_rate_mhz": 2.0}})
-    assert dmw_record.load(stage.run(s2, tmp_path / "b"))[1].size == 6000
+    assert dmw_record.load(ensure("dmw", s2, tmp_path / "b"))[1].size == 6000
 
 
 def test_stage_measured_velocity_record(tmp_path):
@@ -314,7 +314,7 @@ def test_stage_measured_velocity_record(tmp_path):
     np.savetxt(rec, np.column_stack([np.arange(x8.size) / 8e6, v8]), delimiter=",",
                header="time_s,velocity_um_s", comments="")
     scene = scene_from_dict({"dmw": {"source": str(rec), "quantity": "velocity", "rms_nm": 5.0}})
-    ds = read_dataset(stage.run(scene, tmp_path / "out"))
+    ds = read_dataset(ensure("dmw", scene, tmp_path / "out"))
     w = ds.displacement.values
     assert w.size == 8400
     assert rms(w - x8[:16800:2]) / 0.7 < 0.01
@@ -331,17 +331,17 @@ def test_stage_measured_too_short_or_undersampled(tmp_path):
     np.savetxt(rec, np.column_stack([np.arange(x.size) / FS, x]), delimiter=",",
                header="time [s],displacement [nm]", comments="")
     with pytest.raises(dmw.DMWError, match=r"short\.csv.*1 ms long.*2\.1 ms"):
-        stage.run(scene_from_dict({"dmw": {"source": str(rec)}}), tmp_path)
+        ensure("dmw", scene_from_dict({"dmw": {"source": str(rec)}}), tmp_path)
     slow = tmp_path / "slow.csv"
     x = dmw.synthesize(0.5, (1e4, 2e5), -2.0, 3e-3, 5e5, seed=1)
     np.savetxt(slow, x)
     scene = scene_from_dict({"dmw": {"source": str(slow), "sample_rate_hz": 5e5}})
     with pytest.raises(dmw.DMWError, match=r"slow\.csv: column 0: sampled at 500000 Hz.*Nyquist"):
-        stage.run(scene, tmp_path)
+        ensure("dmw", scene, tmp_path)
 
 
 def test_failing_load_keeps_existing_dataset(tmp_path):
-    good = stage.run(scene_from_dict({}), tmp_path)
+    good = ensure("dmw", scene_from_dict({}), tmp_path)
     before = good.read_bytes()
     bad = tmp_path / "bad.csv"
     t = np.arange(10000) / FS
@@ -349,7 +349,7 @@ def test_failing_load_keeps_existing_dataset(tmp_path):
     w[123] = np.nan
     np.savetxt(bad, np.column_stack([t, w]), delimiter=",", header="time [s],displacement [nm]", comments="")
     with pytest.raises(dmw.DMWError, match=r"bad\.csv.*NaN"):
-        stage.run(scene_from_dict({"dmw": {"source": str(bad)}}), tmp_path)
+        ensure("dmw", scene_from_dict({"dmw": {"source": str(bad)}}), tmp_path)
     assert good.read_bytes() == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.csv", "dmw.nc"]   # no temp files left
 
@@ -357,7 +357,7 @@ def test_failing_load_keeps_existing_dataset(tmp_path):
 def test_effect_off_writes_zero_dmw_and_needs_no_record(tmp_path):
     scene = scene_from_dict({"scene": {"effects": ["air_bearing", "pitch", "contact"]},
                              "dmw": {"source": str(tmp_path / "does-not-exist.csv")}})
-    ds = read_dataset(stage.run(scene, tmp_path))
+    ds = read_dataset(ensure("dmw", scene, tmp_path))
     assert ds.attrs["dmw_enabled"] == 0 and "not in scene" in ds.attrs["disabled"]
     assert float(ds.rms) == 0.0 and not np.any(ds.displacement.values)
     assert ds.sizes["time"] == 8400
@@ -371,7 +371,7 @@ def test_disk_speed_formula():
 def test_default_record_is_long_enough_for_the_dynamics(tmp_path):
     from pipeline.model import slider
     scene = scene_from_dict({"scene": {"effects": ["air_bearing", "pitch", "dmw"]}})
-    _, w, fs = dmw_record.load(stage.run(scene, tmp_path))
+    _, w, fs = dmw_record.load(ensure("dmw", scene, tmp_path))
     model = slider.build_model(scene, None, (w, fs), None)   # raises if the record is too short
     assert model.dmw is not None
 
@@ -379,13 +379,13 @@ def test_default_record_is_long_enough_for_the_dynamics(tmp_path):
 def test_stage_skips_when_up_to_date(tmp_path):
     import os
     scene = scene_from_dict({})
-    path = stage.run(scene, tmp_path)
+    path = ensure("dmw", scene, tmp_path)
     os.utime(path, (1, 1))
-    assert stage.run(scene, tmp_path) == path and path.stat().st_mtime == 1          # not rewritten
-    stage.run(scene.replace(slider={"length_mm": 3.0}), tmp_path)                    # longer default record
+    assert ensure("dmw", scene, tmp_path) == path and path.stat().st_mtime == 1          # not rewritten
+    ensure("dmw", scene.replace(slider={"length_mm": 3.0}), tmp_path)                    # longer default record
     assert path.stat().st_mtime != 1 and dmw_record.load(path)[1].size == 8800
     os.utime(path, (1, 1))
-    stage.run(scene.replace(slider={"length_mm": 3.0}), tmp_path, force=True)
+    ensure("dmw", scene.replace(slider={"length_mm": 3.0}), tmp_path, force=True)
     assert path.stat().st_mtime != 1
 
 
@@ -395,12 +395,12 @@ def test_stage_reruns_when_record_changes(tmp_path):
     x = dmw.synthesize(0.5, BAND, -2.0, 3e-3, FS, seed=1)
     np.savetxt(rec, x)
     scene = scene_from_dict({"dmw": {"source": str(rec), "sample_rate_hz": FS}})
-    path = stage.run(scene, tmp_path / "out")
+    path = ensure("dmw", scene, tmp_path / "out")
     rms1 = float(read_dataset(path).rms)
     os.utime(path, (1, 1))
-    assert stage.run(scene, tmp_path / "out") == path and path.stat().st_mtime == 1
+    assert ensure("dmw", scene, tmp_path / "out") == path and path.stat().st_mtime == 1
     np.savetxt(rec, 2 * x)
-    stage.run(scene, tmp_path / "out")
+    ensure("dmw", scene, tmp_path / "out")
     assert path.stat().st_mtime != 1
     assert float(read_dataset(path).rms) == pytest.approx(2 * rms1, rel=1e-9)    # processing is linear
 

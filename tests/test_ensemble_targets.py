@@ -15,7 +15,7 @@ from pipeline.analyses import study
 from pipeline.config.scene import SceneError, load_scene
 from pipeline.io import read_dataset
 from pipeline.model import dmw_record
-from pipeline.runner import build
+from pipeline.runner import build, ensure
 
 ROOT = Path(__file__).resolve().parents[1]
 PAPER = ROOT / "configs" / "paper-2009.toml"
@@ -136,7 +136,6 @@ def test_identify_stage_over_two_realisations_writes_each_targets_spread(write_s
     import xarray as xr
 
     from pipeline.analyses.paper_comparison import identification_markdown
-    from pipeline.stages import identify
 
     path = write_scene(f"""
 [scene]
@@ -159,7 +158,7 @@ profile_points = 3
 realisations = 2
 """)
     scene = load_scene(path)
-    nc = identify.run(scene, tmp_path / "out", scheduler="synchronous")
+    nc = ensure("identify", scene, tmp_path / "out", scheduler="synchronous")
     ds = xr.open_dataset(nc, engine="netcdf4").load()
     assert ds.attrs["realisations"] == 2
     store = evaluations.EvaluationStore(tmp_path / "out" / "identify.evals.jsonl")
@@ -188,9 +187,8 @@ realisations = 2
 
 
 def test_identify_ensemble_of_a_scene_without_dmw_is_refused_in_one_line(tmp_path):
-    from pipeline.stages import identify
 
     scene = load_scene(PAPER, SHORT + ['scene.effects=["air_bearing", "pitch", "adhesion", "contact", "friction"]'])
     with pytest.raises(ValueError, match=r"identify\.realisations = 8 needs a synthetic DMW record.*set "
                                          r"identify\.realisations = 1"):
-        identify.run(scene, tmp_path, scheduler="synchronous")
+        ensure("identify", scene, tmp_path, scheduler="synchronous")

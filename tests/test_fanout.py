@@ -10,6 +10,7 @@ import pytest
 
 from pipeline import fanout
 from pipeline.fanout import local_workers, run_tasks, split
+from pipeline.runner import ensure
 
 
 def square(x: int) -> tuple[int, int, str]:
@@ -263,13 +264,12 @@ def test_the_calibration_does_not_depend_on_its_split(paper_config, tmp_path):
     # one task holding every protrusion (its flying runs share one model) against four
     from pipeline.config.scene import load_scene
     from pipeline.io import read_dataset
-    from pipeline.stages import calibrate
     scene = load_scene(paper_config, ["solver.duration_ms=1.0", "solver.transient_ms=0.3", "touchdown.curve_points=5",
                                       'scene.effects=["air_bearing","pitch","dmw","contact","friction"]',
                                       "sweep.protrusion_nm={start=9.6, stop=10.4, step=0.2}"])
     got = []
     for workers in (1, 4):
-        path = calibrate.run(scene, tmp_path / f"w{workers}", scheduler="synchronous", workers=workers)
+        path = ensure("calibrate", scene, tmp_path / f"w{workers}", scheduler="synchronous", workers=workers)
         got.append(read_dataset(path))
         got[-1].attrs.pop("history", None)
     assert got[0].identical(got[1]) and got[0].sizes["protrusion"] == 5

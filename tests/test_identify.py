@@ -12,7 +12,7 @@ from pipeline.model import scene_inputs
 from pipeline.model.inputs import SimulationInputs, Source, cached
 from pipeline.config.scene import SceneError, load_scene
 from pipeline.physics import paper
-from pipeline.stages import identify
+from pipeline.runner import ensure
 import twin
 
 TRUE = {"dmw.rms_nm": 0.14, "lubricant.work_of_adhesion_j_m2": 0.07}
@@ -46,7 +46,7 @@ def test_twin_experiment_recovers_the_true_parameters_within_the_reported_interv
                                                                                     tmp_path):
     scene, path = _twin_scene(write_scene, paper_config, tmp_path)
     out = tmp_path / "out"
-    nc = identify.run(scene, out, scheduler="synchronous")
+    nc = ensure("identify", scene, out, scheduler="synchronous")
     ds = xr.open_dataset(nc, engine="netcdf4")
     assert ds.attrs["within_tolerance"] == 1
     from cf_check import cf_report  # identify.nc fits the ecosystem like the other datasets
@@ -103,9 +103,9 @@ def test_twin_experiment_recovers_the_true_parameters_within_the_reported_interv
     # every evaluation is read back from the store, none computed, the same result
     from pipeline.runner import last_run
     runs = last_run(out, "identify")
-    assert identify.run(scene, out, scheduler="synchronous") == nc and last_run(out, "identify") == runs
+    assert ensure("identify", scene, out, scheduler="synchronous") == nc and last_run(out, "identify") == runs
     nc.unlink()
-    nc2 = identify.run(scene, out, scheduler="synchronous")
+    nc2 = ensure("identify", scene, out, scheduler="synchronous")
     assert last_run(out, "identify")["evaluations_computed"] == 0
     ds2 = xr.open_dataset(nc2, engine="netcdf4")
     np.testing.assert_array_equal(ds2["objective"].values, ds["objective"].values)
@@ -199,7 +199,7 @@ def test_a_profile_point_better_than_the_optimum_becomes_the_optimum(write_scene
                               "identify.seed=1",
                               *[f"identify.{k}={scene['identify'][k]!r}" for k in ("fhm_flying_percent",
                                                                                       "contact_force_mn")]])
-    ds = xr.open_dataset(identify.run(scene, tmp_path / "out", scheduler="synchronous"), engine="netcdf4")
+    ds = xr.open_dataset(ensure("identify", scene, tmp_path / "out", scheduler="synchronous"), engine="netcdf4")
     rounds = int(ds.attrs["profile_rounds"])
     assert 2 <= rounds <= identification.PROFILE_ROUNDS  # (here the global search stops short: it moved)
     best = ds["best"].values
@@ -234,7 +234,7 @@ def test_twin_correlated_pair_profile_interval_is_wider_than_the_slice(write_sce
     # correlate; the profile re-optimises it and finds the wider interval, which holds the truth
     scene, path = _twin_scene(write_scene, paper_config, tmp_path, CORRELATED)
     out = tmp_path / "out"
-    ds = xr.open_dataset(identify.run(scene, out, scheduler="synchronous"), engine="netcdf4").load()
+    ds = xr.open_dataset(ensure("identify", scene, out, scheduler="synchronous"), engine="netcdf4").load()
     assert ds.attrs["within_tolerance"] == 1 and ds.attrs["interval_method"] == identification.METHODS["optimised"]
     assert float(ds["correlation"][0, 1]) > 0.8
     params = study.parse_parameters(scene["identify"]["parameters"], "", "")
@@ -289,7 +289,7 @@ def test_identify_writes_its_scene_into_the_results_folder_not_over_the_users_fi
     # issue 28, 1: `hdi identify configs/paper-2009.toml --out elsewhere` rewrote configs/paper-2009-identified.toml
     scene, path = _user_scene(tmp_path, paper_config)
     out = tmp_path / "elsewhere"
-    nc = identify.run(scene, out, scheduler="synchronous", task=_stub_batch)
+    nc = ensure("identify", scene, out, scheduler="synchronous", task=_stub_batch)
     beside = path.parent / "twin-identified.toml"
     assert beside.read_text() == USER_TEXT
     assert sorted(p.name for p in path.parent.iterdir()) == ["twin-identified.toml", "twin.toml"]
@@ -301,18 +301,18 @@ def test_identify_writes_its_scene_into_the_results_folder_not_over_the_users_fi
     assert ident["solver"]["duration_ms"] == 0.8
     # a no-op rerun touches neither
     before = written.stat().st_mtime_ns
-    identify.run(scene, out, scheduler="synchronous", task=_stub_batch)
+    ensure("identify", scene, out, scheduler="synchronous", task=_stub_batch)
     assert beside.read_text() == USER_TEXT and written.stat().st_mtime_ns == before
     # the copy goes only where named; an existing file of other content is left as it is unless forced
     with pytest.raises(ValueError, match="twin-identified.toml: exists and differs"):
-        identify.run(scene, out, scheduler="synchronous", task=_stub_batch, write_scene=beside)
+        ensure("identify", scene, out, scheduler="synchronous", task=_stub_batch, write_scene=beside)
     assert beside.read_text() == USER_TEXT
     copy = tmp_path / "mine" / "twin-identified.toml"
     copy.parent.mkdir()
-    identify.run(scene, out, scheduler="synchronous", task=_stub_batch, write_scene=copy)
+    ensure("identify", scene, out, scheduler="synchronous", task=_stub_batch, write_scene=copy)
     assert load_scene(copy)["dmw"]["rms_nm"] == ident["dmw"]["rms_nm"]  # its extends resolved from its own folder
-    identify.run(scene, out, scheduler="synchronous", task=_stub_batch, write_scene=copy)  # same text: no error
-    identify.run(scene, out, scheduler="synchronous", task=_stub_batch, write_scene=beside, force=True)
+    ensure("identify", scene, out, scheduler="synchronous", task=_stub_batch, write_scene=copy)  # same text: no error
+    ensure("identify", scene, out, scheduler="synchronous", task=_stub_batch, write_scene=beside, force=True)
     assert load_scene(beside)["dmw"]["rms_nm"] == ident["dmw"]["rms_nm"]
     assert not list(path.parent.glob(".*.tmp")) and not list(copy.parent.glob(".*.tmp"))
 
@@ -417,7 +417,7 @@ def test_a_profile_point_better_than_the_centre_is_the_one_best_point_everywhere
     scene = load_scene(path, tolerances)
     out = tmp_path / "out"
     with caplog.at_level("INFO", logger="pipeline"):
-        ds = xr.open_dataset(identify.run(scene, out, scheduler="synchronous", task=_separable_batch),
+        ds = xr.open_dataset(ensure("identify", scene, out, scheduler="synchronous", task=_separable_batch),
                              engine="netcdf4").load()
     objective, role = ds["objective"].values, ds["role"].values
     i_best, i_centre = int(ds.attrs["best_evaluation"]), int(ds.attrs["profile_centre_evaluation"])
@@ -454,7 +454,7 @@ def test_identify_nc_has_parameter_target_and_bound_dimensions(tmp_path, paper_c
     path = tmp_path / "twin.toml"
     path.write_text(BEST_POINT.format(paper=paper_config))
     scene = load_scene(path, ["identify.fhm_flying_tolerance_percent=0.1", "identify.contact_force_tolerance_mn=0.01"])
-    nc = identify.run(scene, tmp_path / "out", scheduler="synchronous", task=_separable_batch)
+    nc = ensure("identify", scene, tmp_path / "out", scheduler="synchronous", task=_separable_batch)
     ds = xr.open_dataset(nc, engine="netcdf4").load()
     assert list(ds["parameter"].values) == ["dmw.rms_nm", "lubricant.work_of_adhesion_j_m2"]
     assert list(ds["target"].values) == ["fhm_flying", "contact_force"]

@@ -12,6 +12,7 @@ from pipeline import cli, io
 from pipeline.config.scene import SCHEMA, load_scene
 from pipeline.model import interface_tables
 from pipeline.stages import interface
+from pipeline.runner import ensure
 
 TABLES = ("contact_pressure", "adhesion_pressure", "friction_stress", "real_area_fraction", "contact_fraction")
 
@@ -155,7 +156,7 @@ def test_failed_write_keeps_previous_file(tmp_path, paper_config, monkeypatch, e
     monkeypatch.setattr(io, "_to_netcdf", broken)  # (where write_dataset writes the bytes)
     scene = load_scene(paper_config, ["lubricant.thickness_nm=1.0"])
     with pytest.raises(raised):
-        interface.run(scene, tmp_path)
+        ensure("interface", scene, tmp_path)
     assert path.read_bytes() == before                       # the old file is intact
     assert sorted(p.name for p in tmp_path.iterdir()) == ["interface.nc"]  # no temporary left
     monkeypatch.undo()

@@ -192,6 +192,30 @@ def file_reads(source: str) -> list[tuple[str, int]]:
     return found
 
 
+#: Names by which SurfaceTopography reads a file: its readers' entry points (a call or an import) and its IO package.
+TOPOGRAPHY_READERS = {"open_topography", "read_topography", "read_container", "open_container"}
+
+
+def topography_reads(source: str) -> list[tuple[str, int]]:
+    """``(what, line)`` of each call of a SurfaceTopography file reader (:data:`TOPOGRAPHY_READERS`) and each
+    import of one or of ``SurfaceTopography.IO``, in ``source``."""
+    found = []
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.Call):
+            f = node.func
+            name = f.id if isinstance(f, ast.Name) else f.attr if isinstance(f, ast.Attribute) else None
+            if name in TOPOGRAPHY_READERS:
+                found.append((f"call {name}()", node.lineno))
+        elif isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("SurfaceTopography"):
+            if node.module.startswith("SurfaceTopography.IO"):
+                found.append((f"import from {node.module}", node.lineno))
+            found += [(f"import {a.name}", node.lineno) for a in node.names if a.name in TOPOGRAPHY_READERS]
+        elif isinstance(node, ast.Import):
+            found += [(f"import {a.name}", node.lineno) for a in node.names
+                      if a.name.startswith("SurfaceTopography.IO")]
+    return found
+
+
 def _in(package: str) -> list[Path]:
     return [p for p in MODULES if module_name(p).startswith(package + ".")]
 
@@ -218,6 +242,15 @@ def test_analyses_open_no_files(path):
                        + ", ".join(f"{w} (line {ln})" for w, ln in found))
 
 
+@pytest.mark.parametrize("path", _in("pipeline.physics"), ids=lambda p: module_name(p))
+def test_physics_opens_no_files(path):
+    source = path.read_text()
+    found = file_reads(source) + topography_reads(source)
+    assert not found, (f"{module_name(path)} reads a file (physics is pure functions on numbers; files are read "
+                       "in the model layer, e.g. pipeline.model.afm_scan): "
+                       + ", ".join(f"{w} (line {ln})" for w, ln in found))
+
+
 def test_the_rules_see_a_stage_import_a_scene_read_and_a_file_read(tmp_path):
     """Each rule can fail: synthetic offending sources are caught (parsed from temporary files under
     the names of a stage, never written into the package), and clean ones are not."""
@@ -239,3 +272,9 @@ def test_the_rules_see_a_stage_import_a_scene_read_and_a_file_read(tmp_path):
         ["import read_dataset from io", "call open()", "call load()", "call read_text()", "call open_dataset()",
          "call read_dataset()"])
     assert file_reads("from ..io import temporary_path, var\ndef f(x):\n    return x.sum()\n") == []
+    afm = ("from SurfaceTopography import Topography, open_topography\nimport SurfaceTopography.IO\n"
+           "def f(p):\n    from SurfaceTopography.IO import readers\n    return open_topography(p)\n")
+    assert sorted(w for w, _ in topography_reads(afm)) == sorted(
+        ["import open_topography", "import SurfaceTopography.IO", "import from SurfaceTopography.IO",
+         "call open_topography()"])
+    assert topography_reads("from SurfaceTopography import Topography\nt = Topography(h, (1, 1))\n") == []

@@ -16,9 +16,9 @@ R = np.linalg.cholesky(np.linalg.inv(np.array([[1.0, RHO], [RHO, 1.0]]))).T
 OFFSET = 2.0
 
 
-def _targets(n: int) -> list[study.Target]:
+def _targets(n: int) -> list[study.ObjectiveTerm]:
     """``n`` equality targets r0.. of value 0 and tolerance 1, each read from the output of its name."""
-    return [study.Target(f"r{k}", f"residual {k}", "1", "equal", 0.0, 1.0, (9.0,),
+    return [study.ObjectiveTerm(f"r{k}", f"residual {k}", "1", "equal", 0.0, 1.0, (9.0,),
                          lambda t, k=k: t.value(f"r{k}", 9.0), "") for k in range(n)]
 
 

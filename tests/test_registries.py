@@ -12,7 +12,8 @@ from pipeline.analyses.paper_comparison import identification_markdown
 from pipeline.config import scene as scene_schema
 from pipeline.config.scene import SCHEMA, SceneError, load_scene
 from pipeline.physics import paper
-from pipeline.stages import ensemble, identify
+from pipeline.runner import ensure
+from pipeline.stages import ensemble
 import twin
 
 #: A target of a kind the paper does not state: the mean clearance at 5 nm protrusion equal to 0.3 nm.
@@ -83,7 +84,7 @@ def test_a_declared_target_is_fitted_and_reported(dummy_target, write_scene, pap
     assert (t.long_name, t.paper, t.target, t.tolerance, t.protrusions) == \
         ("dummy clearance at 5 nm", "0.35 nm", 0.35, 0.05, (5.0,))
     # identify: the residual vector has the dummy's entry, (2 x rms - 0.35) / 0.05 at every evaluation
-    nc = identify.run(scene, tmp_path / "out", scheduler="synchronous", task=_clearance_batch)
+    nc = ensure("identify", scene, tmp_path / "out", scheduler="synchronous", task=_clearance_batch)
     ds = xr.open_dataset(nc, engine="netcdf4").load()
     assert [str(n) for n in ds["target"].values] == ["fhm_touchdown", "dummy"]
     rms = ds["parameter_value"].sel(parameter="dmw.rms_nm").values

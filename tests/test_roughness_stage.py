@@ -14,10 +14,12 @@ from SurfaceTopography import Topography
 
 from pipeline.io import DatasetError, file_hash
 from pipeline.physics import asperity_statistics as st
+from pipeline.model import afm_scan
 from pipeline.physics import surface as sf
 from pipeline.config.scene import scene_from_dict
 from pipeline.model import roughness_statistics as rough_model
 from pipeline.stages import roughness as rg
+from pipeline.runner import ensure
 
 AFM = Path(__file__).resolve().parent / "data" / "afm"  # real scans, kept in the repository
 
@@ -69,7 +71,7 @@ def test_layout_units_and_combination(two_files: list[Path], tmp_path: Path) -> 
     assert ds["sigma"].dims == ("surface", "route") and ds["m0"].dims == ("surface",)
     # per-surface values against the physics module
     for f in two_files:
-        s = sf.summarise(sf.read_topography(f, detrend_mode="center"))
+        s = afm_scan.summarise(afm_scan.read_topography(f, detrend_mode="center"))
         row = ds.sel(surface=f.stem)
         assert float(row["m0"]) == pytest.approx(s.m0, rel=1e-12)
         assert float(row["sigma"].sel({"route": "summits"})) == pytest.approx(s.summits.sigma, rel=1e-12)
@@ -118,7 +120,7 @@ def test_single_file_combined_is_the_file(two_files: list[Path], tmp_path: Path)
 def test_explicit_statistics_use_mccool(tmp_path: Path) -> None:
     # H = 1.683 GPa: the hardness psi = 0.52 gives with the corrected statistics (docs/model.md, section "Separation datum")
     scene = scene_from_dict({"scene": {"name": "paper"}, "materials": {"hardness_gpa": 1.683}})
-    ds = _open(rg.run(scene, tmp_path))
+    ds = _open(ensure("roughness", scene, tmp_path))
     assert list(ds["surface"].values) == ["explicit", "combined"]
     sp = ds.sel({"surface": "combined", "route": "spectral"})
     sigma, eta, R = 0.52, 13.3e-6, 5000.0  # nm, nm^-2, nm (the paper scene's defaults, docs/model.md, section "Separation datum")
@@ -136,7 +138,7 @@ def test_explicit_statistics_use_mccool(tmp_path: Path) -> None:
     assert np.isnan(ds["sigma"].sel({"route": "summits"}).values).all()
     assert ds.attrs["scene_name"] == "paper"
     # without a hardness, the plasticity index is not defined
-    ds2 = _open(rg.run(scene_from_dict({}), tmp_path / "nohardness"))
+    ds2 = _open(ensure("roughness", scene_from_dict({}), tmp_path / "nohardness"))
     assert np.isnan(ds2["plasticity_index"].values).all()
 
 
@@ -145,11 +147,12 @@ def test_scene_with_afm_files_and_up_to_date_skip(two_files: list[Path], tmp_pat
     out = tmp_path / "res"
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", sf.SurfaceWarning)
-        path = rg.run(scene, out)
+        path = ensure("roughness", scene, out)
         stamp = path.stat().st_mtime_ns
-        assert rg.run(scene, out) == path and path.stat().st_mtime_ns == stamp  # inputs unchanged: not recomputed
+        # inputs unchanged: not recomputed
+        assert ensure("roughness", scene, out) == path and path.stat().st_mtime_ns == stamp
         os.utime(path, ns=(stamp - 10**9, stamp - 10**9))
-        rg.run(scene, out, force=True)
+        ensure("roughness", scene, out, force=True)
     assert path.stat().st_mtime_ns != stamp - 10**9
     assert list(_open(path)["surface"].values) == ["disk", "tfc", "combined"]
     # an input file changed in place (same path, new bytes) is recomputed
@@ -157,7 +160,7 @@ def test_scene_with_afm_files_and_up_to_date_skip(two_files: list[Path], tmp_pat
     _synthetic_file(two_files[0], 0.8, 6, seed=1)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", sf.SurfaceWarning)
-        rg.run(scene, out)
+        ensure("roughness", scene, out)
     assert float(_open(path)["m0"].sel(surface="disk")) == pytest.approx(4 * m0, rel=1e-12)
 
 
@@ -167,7 +170,7 @@ def test_failing_input_leaves_existing_output_untouched(two_files: list[Path], t
     before = file_hash(path)
     bad = tmp_path / "broken.di"
     bad.write_text("not a Nanoscope file\n")
-    with pytest.raises(sf.AFMError, match="broken.di"):
+    with pytest.raises(afm_scan.AFMError, match="broken.di"):
         _run(two_files + [bad], out)
     assert file_hash(path) == before
     assert sorted(p.name for p in out.iterdir()) == ["roughness.nc"]  # no temporary leftovers

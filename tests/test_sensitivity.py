@@ -21,7 +21,7 @@ import pytest
 import xarray as xr
 
 from pipeline.config.scene import load_scene
-from pipeline.stages import sensitivity
+from pipeline.runner import ensure
 
 A = np.array([2.0, -1.0, 0.5, 0.0])
 S1_ISHIGAMI = np.array([0.3139, 0.4424, 0.0, 0.0])
@@ -76,7 +76,7 @@ batch_size = 512
 
 def test_indices_of_known_models_through_the_evaluation_path(write_scene, paper_config, tmp_path):
     scene = load_scene(write_scene(SCENE.format(paper=paper_config)))
-    nc = sensitivity.run(scene, tmp_path / "out", scheduler="synchronous", task=stub_batch)
+    nc = ensure("sensitivity", scene, tmp_path / "out", scheduler="synchronous", task=stub_batch)
     ds = xr.open_dataset(nc, engine="netcdf4")
     span = 2 * math.pi
     # the layout: indices over (output, parameter), selected by the scene key and the output's name
@@ -128,7 +128,7 @@ def stub_with_holes(base, params, rows, protrusions, inputs):
 def test_morris_leaves_out_trajectories_with_undefined_points(write_scene, paper_config, tmp_path):
     text = SCENE.format(paper=paper_config).replace("[sensitivity]", '[sensitivity]\nmethods = ["morris"]')
     scene = load_scene(write_scene(text))
-    ds = xr.open_dataset(sensitivity.run(scene, tmp_path / "out", scheduler="synchronous", task=stub_with_holes),
+    ds = xr.open_dataset(ensure("sensitivity", scene, tmp_path / "out", scheduler="synchronous", task=stub_with_holes),
                          engine="netcdf4")
     force, fhm = ds.sel(output="contact_force"), ds.sel(output="fhm_flying")
     used, undefined = int(force["morris_used"]), int(force["morris_undefined_samples"])
@@ -176,7 +176,7 @@ def test_failed_evaluations_are_counted_and_the_indices_use_the_samples_left(wri
     text = SCENE.format(paper=paper_config).replace("sobol_samples = 1024", "sobol_samples = 256")
     scene = load_scene(write_scene(text))
     with caplog.at_level("INFO", logger="pipeline.stages.sensitivity"):
-        nc = sensitivity.run(scene, tmp_path / "out", scheduler="synchronous", task=stub_failing)
+        nc = ensure("sensitivity", scene, tmp_path / "out", scheduler="synchronous", task=stub_failing)
     ds = xr.open_dataset(nc, engine="netcdf4")
     for method, rows in (("morris", 20 * 5), ("sobol", 256 * 6)):
         X = ds[f"{method}_values"].values
@@ -223,7 +223,7 @@ def test_indices_undefined_without_whole_trajectories_say_why(write_scene, paper
             rec["outputs"], rec["error"] = {}, "no model"
         return out
     text = SCENE.format(paper=paper_config).replace("sobol_samples = 1024", "sobol_samples = 8")
-    nc = sensitivity.run(load_scene(write_scene(text)), tmp_path / "out", scheduler="synchronous", task=all_fail)
+    nc = ensure("sensitivity", load_scene(write_scene(text)), tmp_path / "out", scheduler="synchronous", task=all_fail)
     ds = xr.open_dataset(nc, engine="netcdf4")
     assert np.all(np.isnan(ds["mu_star"].values)) and np.all(np.isnan(ds["ST"].values))
     assert ds.attrs["failed_evaluations"] == 20 * 5 + 8 * 6

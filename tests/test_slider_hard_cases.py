@@ -41,9 +41,9 @@ from pipeline.model import slider as sl
 from pipeline.physics import microwaviness as pdmw
 from pipeline.config.scene import SCHEMA, load_scene
 from pipeline.model import dmw_record
-from pipeline.stages import dmw as dmw_stage
 from pipeline.model.interface_tables import build_tables, roughness_statistics
 from pipeline.model import state as st
+from pipeline.runner import ensure
 
 NM = 1e-9
 K = 0.445
@@ -64,7 +64,7 @@ def record(base, tmp_path_factory):
         w = pdmw.synthesize(s["rms_nm"], s["band_hz"], s["exponent"], s["duration_s"], s["sample_rate_hz"],
                             s["seed"])
         return w, s["sample_rate_hz"]
-    _, w, fs = dmw_record.load(dmw_stage.run(base, tmp_path_factory.mktemp("dmw")))
+    _, w, fs = dmw_record.load(ensure("dmw", base, tmp_path_factory.mktemp("dmw")))
     return w, fs
 
 

@@ -20,6 +20,7 @@ from pipeline.model import statics as st
 from pipeline.physics.equilibrium import path_equilibria, relaxed_path
 from pipeline.units import NM, URAD
 from pipeline.variables import STATICS
+from pipeline.runner import ensure
 from test_dynamics import build, synthetic_record
 
 
@@ -285,9 +286,8 @@ def test_an_evaluation_with_both_set_builds_the_record_of_that_rms_and_slope(pap
 def test_the_stage_writes_a_cf_dataset_of_the_sweep_protrusions_and_keeps_it(paper_config, tmp_path):
     from cf_check import cf_report
     from pipeline.io import read_dataset
-    from pipeline.stages import statics as stage
     scene = load_scene(paper_config, ["contact.k=0.978", "sweep.protrusion_nm={start=6.0, stop=8.0, step=1.0}"])
-    path = stage.run(scene, tmp_path)
+    path = ensure("statics", scene, tmp_path)
     ds = read_dataset(path)
     assert list(ds["protrusion"].values) == [6.0, 7.0, 8.0]
     assert list(ds["stable_count"].values) == [2, 2, 1]  # the adhesion hysteresis at 6-7 nm (fold 7.88 nm)
@@ -296,7 +296,7 @@ def test_the_stage_writes_a_cf_dataset_of_the_sweep_protrusions_and_keeps_it(pap
     failures, crashed = cf_report(path)
     assert crashed == [] and failures[3] == [] and failures[2] + failures[1] == []
     mtime = path.stat().st_mtime_ns
-    assert stage.run(scene, tmp_path) == path and path.stat().st_mtime_ns == mtime  # current: not recomputed
+    assert ensure("statics", scene, tmp_path) == path and path.stat().st_mtime_ns == mtime  # current: not recomputed
     # the report's figure of it: states and barriers versus protrusion
     from pipeline.analyses import plots
     from pipeline.analyses.report_figures import STATICS_FIGURE

@@ -1,5 +1,8 @@
 """Tests of pipeline.physics.surface against surfaces whose statistics are known exactly.
 
+The maps are SurfaceTopography topographies, taken to numbers by :mod:`pipeline.model.afm_scan`
+(``profile_moments``, ``summarise``); reading AFM files is tested in tests/test_afm_scan.py.
+
 Analytic cases: sinusoids (moments in closed form, also for the finite-difference stencils), a
 paraboloid (one summit of known curvature), an egg-crate of two sinusoids (summit density and curvature
 known; the summit route converges with grid refinement). Random case: SurfaceTopography's
@@ -11,18 +14,15 @@ from __future__ import annotations
 
 import math
 import warnings
-from pathlib import Path
 
 import numpy as np
 import pytest
-from SurfaceTopography import Topography, open_topography
+from SurfaceTopography import Topography
 from SurfaceTopography.Generation import fourier_synthesis
 
 from pipeline.physics import asperity_statistics as st
+from pipeline.model import afm_scan
 from pipeline.physics import surface as sf
-
-AFM = Path(__file__).resolve().parent / "data" / "afm"  # real scans, kept in the repository
-
 
 def _grid(n: int, length: float, offset: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     x = (np.arange(n) + offset) * (length / n)
@@ -59,7 +59,7 @@ def test_sinusoid_moments_exact(along: str) -> None:
     """z = A sin(kx): m0 = A^2/2; along x m2 = A^2 k^2/2, m4 = A^2 k^4/2, along y zero; we average both."""
     A = 3.0
     t, k, dx = _sine(A=A, along=along)
-    m0, m2, m4 = sf.profile_moments(t)
+    m0, m2, m4 = afm_scan.profile_moments(t)
     s = math.sin(k * dx / 2) / (k * dx / 2)  # transfer function of the difference stencils
     assert m0 == pytest.approx(A**2 / 2, rel=1e-12)
     assert m2 == pytest.approx(A**2 * k**2 / 4 * s**2, rel=1e-10)
@@ -72,14 +72,14 @@ def test_sinusoid_moments_exact(along: str) -> None:
 def test_moments_match_surfacetopography_profile_values() -> None:
     """The x terms of our m2, m4 are SurfaceTopography's Rdq^2, Rddq^2; the y terms those of the transpose."""
     t, _ = _smooth_psd_surface(n=128, q0=0.15)
-    _, m2, m4 = sf.profile_moments(t)
+    _, m2, m4 = afm_scan.profile_moments(t)
     assert m2 == pytest.approx((t.Rdq() ** 2 + t.transpose().Rdq() ** 2) / 2, rel=1e-12)
     assert m4 == pytest.approx((t.Rddq() ** 2 + t.transpose().Rddq() ** 2) / 2, rel=1e-12)
 
 
 def test_fourier_synthesis_moments_within_two_percent() -> None:
     t, exact = _smooth_psd_surface(n=256, q0=0.1)
-    m = np.array(sf.profile_moments(t))
+    m = np.array(afm_scan.profile_moments(t))
     np.testing.assert_allclose(m, exact, rtol=0.02)
     s = sf.spectral_statistics(*m)
     assert s.sigma == pytest.approx(1.0, rel=0.02)
@@ -118,7 +118,7 @@ def test_paraboloid_single_summit_exact() -> None:
     assert s.sigma_s == 0.0
     assert s.y_s == pytest.approx(-z.mean(), rel=1e-12)
     # spectral: curvature is constant, so m4 = 1/R0^2 exactly, R = 0.375 sqrt(pi) R0
-    _, _, m4 = sf.profile_moments(Topography(z, (n * dx, n * dx), unit="nm"))
+    _, _, m4 = afm_scan.profile_moments(Topography(z, (n * dx, n * dx), unit="nm"))
     assert m4 == pytest.approx(1 / R0**2, rel=1e-12)
 
 
@@ -161,7 +161,7 @@ def test_routes_agree_on_a_gaussian_surface() -> None:
     t, _ = _smooth_psd_surface(n=512, q0=0.15, seed=3)
     with warnings.catch_warnings():
         warnings.simplefilter("error", sf.SurfaceWarning)  # no disagreement warning here
-        s = sf.summarise(t, label="gauss")
+        s = afm_scan.summarise(t, label="gauss")
     assert s.summits.eta == pytest.approx(s.spectral.eta, rel=0.15)
     assert s.summits.R == pytest.approx(s.spectral.R, rel=0.10)
     assert s.summits.sigma_s == pytest.approx(s.spectral.sigma_s, rel=0.15)
@@ -179,7 +179,7 @@ def test_disagreeing_routes_warn_with_the_reason() -> None:
     z = 3.0 * np.sin(k * X) + 0.5 * np.cos(q * (Y - 128.3))
     t = Topography(z, (float(n), float(n)), periodic=True, unit="nm")
     with pytest.warns(sf.SurfaceWarning, match="sampling interval.*noise.*cut-off"):
-        s = sf.summarise(t, label="ridges")
+        s = afm_scan.summarise(t, label="ridges")
     assert any("ridges: summit density eta differs" in w for w in s.warnings)
     assert s.summits.count == 16  # one per ridge (the y maximum at y = 128.3 lies inside)
     assert s.spectral.eta / s.summits.eta > 10
@@ -195,7 +195,7 @@ def test_moments_of_a_sum_of_orthogonal_surfaces_add() -> None:
     t2, _, _ = _sine(A=1.5, periods=9, along="y")
     both = Topography(t1.heights() + t2.heights(), t1.physical_sizes, periodic=True, unit="nm")
     with pytest.warns(sf.SurfaceWarning, match="no summit"):  # straight ridges have no strict maxima
-        s1, s2, s12 = (sf.summarise(t, label=lab) for t, lab in ((t1, "a"), (t2, "b"), (both, "ab")))
+        s1, s2, s12 = (afm_scan.summarise(t, label=lab) for t, lab in ((t1, "a"), (t2, "b"), (both, "ab")))
     c = sf.combine([s1, s2])
     np.testing.assert_allclose([c.m0, c.m2, c.m4], [s12.m0, s12.m2, s12.m4], rtol=1e-10)
     assert c.spectral.sigma**2 == pytest.approx(s1.spectral.sigma**2 + s2.spectral.sigma**2, rel=1e-12)
@@ -207,7 +207,7 @@ def test_moments_of_a_sum_of_orthogonal_surfaces_add() -> None:
 def test_combined_random_surfaces_sigma_squared_adds() -> None:
     t1, _ = _smooth_psd_surface(n=128, q0=0.15, seed=1)
     t2, _ = _smooth_psd_surface(n=128, q0=0.3, seed=2)
-    s1, s2 = sf.summarise(t1), sf.summarise(t2)
+    s1, s2 = afm_scan.summarise(t1), afm_scan.summarise(t2)
     c = sf.combine([s1, s2])
     ref = st.statistics_from_moments(*sf.combine_moments([(s1.m0, s1.m2, s1.m4), (s2.m0, s2.m2, s2.m4)]))
     assert c.spectral.sigma == pytest.approx(math.sqrt(s1.m0 + s2.m0), rel=1e-12)
@@ -215,91 +215,11 @@ def test_combined_random_surfaces_sigma_squared_adds() -> None:
     assert c.spectral.R == pytest.approx(ref["R"], rel=1e-12)
     # the summed height map has (nearly) the summed moments: independent phases, small cross terms
     both = Topography(t1.heights() + t2.heights(), t1.physical_sizes, periodic=True, unit="nm")
-    np.testing.assert_allclose(sf.profile_moments(both), [c.m0, c.m2, c.m4], rtol=0.05)
+    np.testing.assert_allclose(afm_scan.profile_moments(both), [c.m0, c.m2, c.m4], rtol=0.05)
 
 
 def test_combine_single_surface_is_a_copy() -> None:
     t, _ = _smooth_psd_surface(n=64, q0=0.3)
-    s = sf.summarise(t, label="one")
+    s = afm_scan.summarise(t, label="one")
     c = sf.combine([s])
     assert c.label == "combined" and c.spectral == s.spectral and c.summits == s.summits
-
-
-# ---------------------------------------------------------------------------------------------------
-# Shared AFM files
-# ---------------------------------------------------------------------------------------------------
-
-#: file -> the channel our rule must pick
-SHARED = {"di-3.di": "ZSensor", "di-5.di": "ZSensor", "mi-1.mi": "Topography",
-          "nid-1.nid": "Scan forward (Z-Axis)", "spot_1-1000nm.ibw": "HeightTrace"}
-
-
-def _shared(name: str) -> Path:
-    return AFM / name
-
-
-@pytest.mark.parametrize("name", sorted(SHARED))
-def test_shared_afm_rms_height_equals_surfacetopography(name: str) -> None:
-    path = _shared(name)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", sf.SurfaceWarning)
-        s = sf.summarise_file(path)
-    assert s.channel == SHARED[name]
-    reader = open_topography(str(path))
-    index = [c.name for c in reader.channels].index(SHARED[name])
-    ref = reader.topography(channel_index=index).to_unit("nm").detrend(detrend_mode="height")
-    assert s.spectral.sigma == pytest.approx(ref.Sq(), rel=1e-10)
-    assert s.summits.sigma == pytest.approx(ref.Sq(), rel=1e-10)
-    assert s.pixel_size == pytest.approx(float(np.sqrt(np.prod(ref.pixel_size))), rel=1e-12)
-    assert s.summits.count > 100
-    assert np.isfinite([s.spectral.eta, s.spectral.R, s.spectral.alpha, s.summits.eta, s.summits.R]).all()
-
-
-def test_named_channel_and_detrend_option() -> None:
-    path = _shared("di-3.di")
-    t = sf.read_topography(path, channel="Height", detrend_mode="curvature")
-    assert t.info["channel_name"] == "Height" and t.unit == "nm"
-    ref = open_topography(str(path)).topography(channel_index=3).to_unit("nm").detrend(detrend_mode="curvature")
-    assert t.Sq() == pytest.approx(ref.Sq(), rel=1e-10)
-    with pytest.raises(sf.AFMError, match=r"di-3\.di: no channel named 'Nope'.*'ZSensor'"):
-        sf.read_topography(path, channel="Nope")
-
-
-def test_no_height_channel_is_reported() -> None:
-    """The real channel lists of shared files without their height channels."""
-    for name in ("di-5.di", "spot_1-1000nm.ibw"):
-        path = _shared(name)
-        others = [c for c in open_topography(str(path)).channels
-                  if not sf.HEIGHT_NAME.search(c.name)]
-        with pytest.raises(sf.AFMError, match=rf"{name}: no height channel.*expected a 2-D map"):
-            sf.select_height_channel(others, path)
-
-
-# ---------------------------------------------------------------------------------------------------
-# Errors
-# ---------------------------------------------------------------------------------------------------
-
-def test_errors_name_the_file(tmp_path: Path) -> None:
-    empty = tmp_path / "empty.di"
-    empty.write_bytes(b"")
-    text = tmp_path / "notes.di"
-    text.write_text("hello world\nthis is not an AFM file\n")
-    line = tmp_path / "line.txt"
-    line.write_text("1 2 3\n4 5 6\n7 8 9\n")
-    nosize = tmp_path / "nosize.txt"
-    nosize.write_text("\n".join(" ".join(["1.0", "2.0", "3.0", "4.5"]) for _ in range(5)))
-    cases = [(tmp_path / "missing.di", "does not exist"), (empty, "empty"),
-             (text, "cannot be read as a .di file"), (line, "line scan"), (nosize, "no lateral scan size")]
-    for path, what in cases:
-        with pytest.raises(sf.AFMError, match=what) as info:
-            sf.summarise_file(path)
-        assert str(path) in str(info.value)
-        assert isinstance(info.value, ValueError)
-
-
-def test_truncated_file_is_reported_as_corrupt(tmp_path: Path) -> None:
-    src = _shared("spot_1-1000nm.ibw")
-    bad = tmp_path / "cut.ibw"
-    bad.write_bytes(src.read_bytes()[:4000])
-    with pytest.raises(sf.AFMError, match=r"cut\.ibw: cannot be read as a \.ibw file.*truncated"):
-        sf.read_topography(bad)

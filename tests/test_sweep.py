@@ -17,10 +17,10 @@ from pipeline.model import slider as sl
 from pipeline.io import read_dataset
 from pipeline.config.scene import SceneError, load_scene
 from pipeline.analyses import calibration
-from pipeline.stages import calibrate as calibrate_stage
 from pipeline.stages import sweep as sweep_stage
 from pipeline.stages.simulate import model_inputs
 from pipeline.config.grid import roughness_label, roughness_sets, scene_label
+from pipeline.runner import ensure
 
 ROOT = Path(__file__).resolve().parents[1]
 PAPER = ROOT / "configs" / "paper-2009.toml"
@@ -41,7 +41,7 @@ FAST = [
 def calibrated(tmp_path_factory):
     out = tmp_path_factory.mktemp("cal")
     scene = load_scene(PAPER, FAST)
-    calibrate_stage.run(scene, out)
+    ensure("calibrate", scene, out)
     return scene, out
 
 
@@ -102,7 +102,7 @@ def test_calibrated_k_puts_first_contact_at_touchdown(calibrated, tmp_path):
 def test_uncalibratable_scene_writes_no_k(tmp_path):
     """The paper scene with adhesion snaps in below 9.6 nm: no k, and the outcome says why."""
     scene = load_scene(PAPER, ["solver.duration_ms=1.0", "solver.transient_ms=0.3", "touchdown.curve_points=2"])
-    calibrate_stage.run(scene, tmp_path)
+    ensure("calibrate", scene, tmp_path)
     cal = read_dataset(tmp_path / "calibration.nc")
     assert np.isnan(float(cal.k_calibrated))
     assert "no admissible k" in cal.attrs["outcome"]

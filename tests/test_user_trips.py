@@ -25,6 +25,7 @@ from pipeline import cli, runner
 from pipeline.io import read_dataset, write_dataset
 from pipeline.config.scene import load_scene
 from pipeline.cli_checks import OptionError, check_scheduler
+from pipeline.runner import ensure
 
 ROOT = Path(__file__).resolve().parents[1]
 PAPER = ROOT / "configs" / "paper-2009.toml"
@@ -155,9 +156,8 @@ def test_sigterm_removes_the_lock_and_the_staging_folder_like_ctrl_c(tmp_path):
 
 # ------------------------------------------------------------------------------ 7. interface labels
 def test_interface_separation_labels_are_exact_for_sel(tmp_path):
-    from pipeline.stages import interface
     scene = load_scene(PAPER)
-    ds = read_dataset(interface.run(scene, tmp_path))
+    ds = read_dataset(ensure("interface", scene, tmp_path))
     d = ds["separation"].values
     step = scene["solver"]["table_step_nm"]
     np.testing.assert_array_equal(d, np.round(d, 9))
@@ -261,10 +261,9 @@ def test_with_a_measured_record_the_synthesis_keys_change_no_inputs_key(tmp_path
 # ------------------------------------------------------------------------------ 3. upper bounds
 def test_limits_count_the_paper_scene_exactly(tmp_path):
     from pipeline import sizing as limits
-    from pipeline.stages import interface
     scene = load_scene(PAPER)
     sizes = {what.split(" (")[0]: n for what, n, _ in limits.sizes(scene, "run")}
-    rows = read_dataset(interface.run(scene, tmp_path)).sizes["separation"]
+    rows = read_dataset(ensure("interface", scene, tmp_path)).sizes["separation"]
     assert sizes == {"interface table rows": rows, "history samples per run": 8001, "DMW record samples": 8400,
                      "sweep scenes": 76, "kept history samples": 2 * 8001}  # (report.histories_nm: 5 and 11 nm)
     assert rows == 701

@@ -13,7 +13,8 @@ from cf_check import cf_report
 from pipeline import variables as vs
 from pipeline.io import TIME_ON_DISK, read_dataset, write_dataset
 from pipeline.config.scene import load_scene
-from pipeline.stages import calibrate, dmw, interface, roughness, simulate, sweep
+from pipeline.stages import roughness, sweep
+from pipeline.runner import ensure
 
 ROOT = Path(__file__).resolve().parents[1]
 AFM = ROOT / "tests" / "data" / "afm"
@@ -35,10 +36,10 @@ def datasets(tmp_path_factory) -> dict[str, Path]:
     out = tmp_path_factory.mktemp("small")
     scene = load_scene(ROOT / "configs" / "paper-2009.toml", SMALL)
     paths = {
-        "dmw": dmw.run(scene, out),
-        "interface": interface.run(scene, out),
-        "calibration": calibrate.run(scene, out),
-        "histories": simulate.run(scene, out),
+        "dmw": ensure("dmw", scene, out),
+        "interface": ensure("interface", scene, out),
+        "calibration": ensure("calibrate", scene, out),
+        "histories": ensure("simulate", scene, out),
         "summary": out / "summary.nc",
         "sweep": sweep.run_sweep(scene, out, scheduler="synchronous"),
         "sweep_histories": out / "sweep_histories.nc",
@@ -63,7 +64,7 @@ def test_effects_off_leave_their_variables_out(datasets, tmp_path):
     """Variables declared for an effect the scene lacks are absent (and the rest is declared)."""
     scene = load_scene(ROOT / "configs" / "paper-2009.toml",
                        SMALL + ['scene.effects=["air_bearing","pitch","dmw","contact"]'])
-    simulate.run(scene, tmp_path)
+    ensure("simulate", scene, tmp_path)
     ds = read_dataset(tmp_path / "summary.nc")
     absent = {n for n, v in vs.SCALARS.items() if v.effect in ("friction", "adhesion")}
     assert absent == {"friction_force", "adhesion_force", "friction_coefficient", "shear_stress"}

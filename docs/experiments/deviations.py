@@ -10,7 +10,7 @@
        hdi run configs/paper-2009-identified.toml --set slider.friction_arm='"gimbal"' --out OUT/gimbal
 
    (run by this script unless ``--no-run``; up to date folders are not recomputed). Each target is judged
-   as ``hdi identify`` judges it (:meth:`pipeline.analyses.study.Target.ensemble_residual`, ``|r| <= 1``:
+   as ``hdi identify`` judges it (:meth:`pipeline.analyses.study.ObjectiveTerm.ensemble_residual`, ``|r| <= 1``:
    within tolerance).
 2. At the identified 11-nm state of the default run (the scene's record, steady window): the contact
    force, real area and adhesion of the flat section against those of the same stresses integrated over

@@ -16,7 +16,7 @@ import xarray as xr
 from .markdown import number, table
 
 #: The ``spread`` attribute of a target judged by mean ± 1 standard deviation (the light-contact state;
-#: :attr:`pipeline.analyses.study.Target.spread`); the others give the 10-90 % range.
+#: :attr:`pipeline.analyses.study.ObjectiveTerm.spread`); the others give the 10-90 % range.
 SPREAD_STD = "mean +- 1 standard deviation"
 
 

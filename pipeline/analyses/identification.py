@@ -60,7 +60,7 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from .study import Parameter, Target, cost, residuals
+from .study import ObjectiveTerm, Parameter, cost, residuals
 
 #: Role of an evaluation (``role`` variable of identify.nc).
 ROLES = {0: "reconstructed", 1: "optimiser", 2: "profile", 3: "gauss-newton", 4: "profile-optimiser"}
@@ -96,7 +96,7 @@ class Identification:
         The residual of a target a record cannot produce (``identify.missing_residual``).
     """
 
-    def __init__(self, evaluate: Callable[[np.ndarray], list[dict[str, Any]]], tlist: Sequence[Target],
+    def __init__(self, evaluate: Callable[[np.ndarray], list[dict[str, Any]]], tlist: Sequence[ObjectiveTerm],
                  missing: float):
         self.evaluate_points, self.tlist, self.missing = evaluate, list(tlist), missing
         #: every record asked for, by key, in request order; and the role of its first request

@@ -223,8 +223,9 @@ SPREAD_QUANTILES = f"{100 * en.SPREAD[0]:g}-{100 * en.SPREAD[1]:g} % of the real
 
 
 @dataclass(frozen=True)
-class Target:
-    """A published target: its value from a candidate and its normalised residual.
+class ObjectiveTerm:
+    """A paper target (:class:`pipeline.physics.paper.Target`) resolved for one scene: a term of the
+    identification objective, with its value from a candidate and its normalised residual.
 
     ``kind``: ``"equal"`` (residual (v - target)/tol), ``"above"`` (zero when v >= target, else
     (target - v)/tol), ``"below"`` (zero when v <= target), ``"touchdown"`` (see :func:`targets`).
@@ -297,7 +298,7 @@ def _median(values: xr.DataArray) -> tuple[float, float, float]:
     return float(m), float(lo), float(hi)
 
 
-#: What a measurement gives :class:`Target`: its protrusions [nm], the value of a candidate's
+#: What a measurement gives :class:`ObjectiveTerm`: its protrusions [nm], the value of a candidate's
 #: :class:`Table`, the ensemble statistic of a :func:`record_dataset`, the spread's meaning and the
 #: template fields of its protrusions.
 _Measured = tuple[tuple[float, ...], Callable[[Table], float], Callable[[xr.Dataset], tuple[float, float, float]],
@@ -366,7 +367,7 @@ MEASUREMENTS: dict[str, Callable[[paper.Measure, Any, float], _Measured]] = {
     "touchdown": _touchdown, "flying_mean": _flying_mean, "band": _band, "at": _at}
 
 
-def target(decl: paper.Target, scene: Any) -> Target:
+def target(decl: paper.Target, scene: Any) -> ObjectiveTerm:
     """The target of the declaration ``decl`` (:data:`pipeline.physics.paper.TARGETS`) with the values of
     ``scene``: its published value, tolerance and measurement (:data:`MEASUREMENTS`)."""
     c = scene["identify"]
@@ -376,11 +377,11 @@ def target(decl: paper.Target, scene: Any) -> Target:
     where = decl.measure.where if isinstance(decl.measure.where, tuple) else (decl.measure.where,)
     names = {k.rpartition(".")[2]: _key(scene, k) for k in where if k} | {s.key: c[s.key] for s in decl.settings}
     fields = {**names, **fields, "value": value}
-    return Target(decl.name, decl.long_name.format(**fields), decl.units, decl.kind, value, c[decl.tolerance.key],
-                  prots, of_table, decl.paper.format(**fields), of_ensemble, spread)
+    return ObjectiveTerm(decl.name, decl.long_name.format(**fields), decl.units, decl.kind, value,
+                         c[decl.tolerance.key], prots, of_table, decl.paper.format(**fields), of_ensemble, spread)
 
 
-def targets(scene: Any) -> list[Target]:
+def targets(scene: Any) -> list[ObjectiveTerm]:
     """The targets that ``identify.targets`` selects, in the order of their declarations
     (:data:`pipeline.physics.paper.TARGETS`; docs/model.md, sections "Paper targets" and "Corrections").
 
@@ -412,7 +413,7 @@ def bouncing_bv(fhm_bv: Any, min_clearance: Any) -> Any:
     return fhm_bv.copy(data=values) if isinstance(fhm_bv, xr.DataArray) else values
 
 
-def target_protrusions(tlist: Sequence[Target]) -> list[float]:
+def target_protrusions(tlist: Sequence[ObjectiveTerm]) -> list[float]:
     """Sorted union of the protrusions [nm] the targets need."""
     return sorted({float(label(float(x))) for t in tlist for x in t.protrusions})
 
@@ -422,9 +423,10 @@ def realisations_of(record: dict[str, Any]) -> int:
     return int(record.get("realisations", 1))
 
 
-def residuals(record: dict[str, Any], tlist: Sequence[Target], missing: float) -> tuple[np.ndarray, np.ndarray]:
+def residuals(record: dict[str, Any], tlist: Sequence[ObjectiveTerm],
+              missing: float) -> tuple[np.ndarray, np.ndarray]:
     """Values and normalised residuals of the targets for one evaluation record (over its realisations
-    for an ensemble record: :attr:`Target.ensemble`, :meth:`Target.ensemble_residual`)."""
+    for an ensemble record: :attr:`ObjectiveTerm.ensemble`, :meth:`ObjectiveTerm.ensemble_residual`)."""
     if realisations_of(record) > 1:
         ds = record_dataset(record)
         vals = np.array([t.ensemble(ds)[0] if t.ensemble else np.nan for t in tlist], float)
@@ -436,8 +438,8 @@ def residuals(record: dict[str, Any], tlist: Sequence[Target], missing: float) -
     return vals, res
 
 
-def spreads(record: dict[str, Any], tlist: Sequence[Target]) -> np.ndarray:
-    """``(low, high)`` of each target's ensemble value (:attr:`Target.spread` says which), shape
+def spreads(record: dict[str, Any], tlist: Sequence[ObjectiveTerm]) -> np.ndarray:
+    """``(low, high)`` of each target's ensemble value (:attr:`ObjectiveTerm.spread` says which), shape
     ``(targets, 2)``; NaN for a single-record evaluation."""
     out = np.full((len(tlist), 2), np.nan)
     if realisations_of(record) > 1:
@@ -448,10 +450,10 @@ def spreads(record: dict[str, Any], tlist: Sequence[Target]) -> np.ndarray:
     return out
 
 
-def ensemble_summary(ds: xr.Dataset, tlist: Sequence[Target]) -> dict[str, tuple[float, float, float, float]]:
+def ensemble_summary(ds: xr.Dataset, tlist: Sequence[ObjectiveTerm]) -> dict[str, tuple[float, float, float, float]]:
     """Per target name: ``(value, low, high, single)`` over the realisations of ``ds`` (dims ``(protrusion,
-    realisation)``, dataset units: :func:`record_dataset` or ``ensemble.nc``): :attr:`Target.ensemble`
-    and, as ``single``, :attr:`Target.value` of realisation 0 (the scene's own record) alone."""
+    realisation)``, dataset units: :func:`record_dataset` or ``ensemble.nc``): :attr:`ObjectiveTerm.ensemble`
+    and, as ``single``, :attr:`ObjectiveTerm.value` of realisation 0 (the scene's own record) alone."""
     outputs = {name: np.asarray(ds[name].values, float)[:, 0] for name in ds.data_vars
                if ds[name].dims == ("protrusion", en.DIM)}
     single = Table({"protrusions": ds["protrusion"].values, "outputs": outputs})

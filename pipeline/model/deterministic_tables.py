@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from ..physics import deterministic_contact as dc
-from ..physics import surface as sf
+from . import afm_scan
 from ..physics.friction import shear_strength
 from ..units import NM
 
@@ -50,7 +50,7 @@ def combined_topography(scene: Any, max_points: int | None) -> tuple[np.ndarray,
         raise ValueError("interface.model = 'deterministic' needs measured surfaces: set roughness.afm")
     maps = []
     for f in r["afm"]:
-        t = sf.read_topography(f, channel=r["channel"], detrend_mode=r["detrend"])
+        t = afm_scan.read_topography(f, channel=r["channel"], detrend_mode=r["detrend"])
         maps.append((np.ma.getdata(t.heights()).astype(float), tuple(float(s) for s in t.physical_sizes)))
     h, sizes = dc.combine_maps(maps)
     h = dc.resample(h, max_points)

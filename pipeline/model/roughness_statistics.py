@@ -18,6 +18,7 @@ import xarray as xr
 from ..io import DatasetError, read_dataset
 from ..physics import asperity_statistics as st
 from ..physics import surface as sf
+from . import afm_scan
 from ..units import NM_IN_UM, PER_NM2_IN_PER_UM2
 from ..variables import ROUGHNESS
 
@@ -65,7 +66,7 @@ def build_dataset(summaries: Sequence[sf.SurfaceSummary], scene: Any = None, det
 
     Parameters
     ----------
-    summaries : per-surface results (:func:`pipeline.physics.surface.summarise_file` or ``from_statistics``)
+    summaries : per-surface results (:func:`pipeline.model.afm_scan.summarise_file` or ``from_statistics``)
     scene : the scene (materials for the plasticity index), or ``None``
     detrend : detrend mode used (recorded)
     """
@@ -131,7 +132,7 @@ def build_dataset(summaries: Sequence[sf.SurfaceSummary], scene: Any = None, det
 def summaries(files: Sequence[Path], channel: str | None, detrend: str) -> list[sf.SurfaceSummary]:
     """Both routes' statistics of each AFM file (labels: unique file stems)."""
     labels = _unique_labels(files)
-    return [sf.summarise_file(f, channel=channel, detrend_mode=detrend, label=lab) for f, lab in zip(files, labels)]
+    return [afm_scan.summarise_file(f, channel=channel, detrend_mode=detrend, label=lab) for f, lab in zip(files, labels)]
 
 
 def combined_statistics(path: str | Path | xr.Dataset, route: str = "spectral") -> dict[str, float]:

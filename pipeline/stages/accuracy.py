@@ -313,8 +313,3 @@ STAGE = Stage(
     upstream=_upstream,
     options=("points", "reference", "knobs", "only", "repeat", "tolerance", "combined_tolerance", "k"),
     order=55, doc="error and wall time of each accuracy knob, accuracy.nc and figures/work_precision.png")
-
-
-def run(scene: Any, out: Path, **options: Any) -> Path:
-    """``accuracy.nc`` (and the work-precision figure) in ``out``, recomputed when its inputs changed."""
-    return build("accuracy", scene, out, **options)["accuracy"][0]

@@ -22,7 +22,7 @@ import xarray as xr
 from ..io import read_dataset
 from ..model.bulge_table import scene_table, table_stop_nm
 from ..model.scene_inputs import table_stages
-from ..runner import Inputs, Stage, build
+from ..runner import Inputs, Stage
 
 #: The scene keys the table depends on (besides the deepest protrusion, :func:`table_stop_nm`); the last
 #: three only with ``"rough-reynolds"`` (:func:`pipeline.model.bulge_table.scene_roughness`).
@@ -42,11 +42,6 @@ STAGE = Stage(
     derived=lambda scene: {"table_stop_nm": table_stop_nm(scene)},
     order=35, main_job=True, applies=lambda scene: "bulge" in table_stages(scene),
     doc="the bulge's air-bearing lift (Reynolds, slip) versus apex gap and protrusion, bulge.nc")
-
-
-def run(scene: Any, out: Path, **options: Any) -> Path:
-    """``bulge.nc`` in ``out``, recomputed only when its inputs changed (:func:`pipeline.runner.build`)."""
-    return build("bulge", scene, out, **options)["bulge"][0]
 
 
 def load(path: Path) -> xr.Dataset:

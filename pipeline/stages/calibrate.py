@@ -8,7 +8,6 @@ through the runner and writes its result.
 from __future__ import annotations
 
 import logging
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -17,7 +16,7 @@ import xarray as xr
 from ..analyses.calibration import calibrate
 from ..model import scene_inputs
 from ..model.inputs import for_stage
-from ..runner import Inputs, Stage, build
+from ..runner import Inputs, Stage
 
 log = logging.getLogger(__name__)
 
@@ -46,8 +45,3 @@ STAGE = Stage(
     upstream=lambda scene: scene_inputs.simulation_inputs(scene, calibration=False),
     order=40, main_job=True, applies=lambda scene: scene.has("contact"),
     doc="the contact-criterion constant k from the measured touchdown, calibration.nc")
-
-
-def run(scene: Any, out: Path, **options: Any) -> Path:
-    """``calibration.nc`` in ``out``, recomputed only when its inputs changed (:func:`pipeline.runner.build`)."""
-    return build("calibrate", scene, out, **options)["calibrate"][0]

@@ -54,7 +54,6 @@ the slider's length and front arm (the default record length) and the bytes of a
 from __future__ import annotations
 
 import logging
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -63,7 +62,7 @@ import xarray as xr
 from ..model.dmw_record import FILENAME, settings, synthetic_record
 from ..model.measured_dmw import load_record
 from ..physics import microwaviness as phys
-from ..runner import Inputs, Stage, build
+from ..runner import Inputs, Stage
 from ..units import MS
 from ..variables import DMW, coordinate
 
@@ -195,8 +194,3 @@ STAGE = Stage(
     reads=("dmw", "solver.duration_ms", "scene.effects", "slider.length_mm", "slider.front_arm_mm"),
     files=_files, order=20, main_job=True,
     doc="the disk's dynamic microwaviness, synthesised or measured, dmw.nc")
-
-
-def run(scene: Any, out: Path, **options: Any) -> Path:
-    """``dmw.nc`` in ``out``, recomputed only when its inputs changed (:func:`pipeline.runner.build`)."""
-    return build("dmw", scene, out, **options)["dmw"][0]

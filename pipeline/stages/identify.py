@@ -10,8 +10,8 @@ sum of squared residuals, each normalised by its tolerance (docs/model.md, secti
 
 Ensembles: each candidate runs on ``identify.realisations`` DMW records (default 8; the seeds of
 :func:`pipeline.model.dmw_record.realisation_seeds`, part of the evaluation's key), and every target
-is judged on its ensemble statistic (:attr:`pipeline.analyses.study.Target.ensemble`, the rules of
-:mod:`pipeline.analyses.ensemble_rules`): one DMW seed moves the touchdown by a 0.2-nm step, so a fit to
+is judged on its ensemble statistic (:attr:`pipeline.analyses.study.ObjectiveTerm.ensemble`, the rules
+of :mod:`pipeline.analyses.ensemble_rules`): one DMW seed moves the touchdown by a 0.2-nm step, so a fit to
 one record fits that record's noise. ``identify.nc`` then also holds each target's spread over the
 realisations (``spread(evaluation, target, bound)``). One realisation is the single-record identification.
 
@@ -57,7 +57,7 @@ from ..fanout import local_cluster
 from ..progress import Progress
 from ..io import read_dataset, temporary_path, var
 from ..paths import refuse_links
-from ..runner import Inputs, Stage, build
+from ..runner import Inputs, Stage
 from ..analyses.identification import (GN_STEP, METHODS, PROFILE_GAIN, PROFILE_STEP, ROLES, Identification,
                                        identify)
 from ..analyses.study import Parameter, parse_parameters, scene_value, spreads, target_protrusions, targets
@@ -419,10 +419,3 @@ STAGE = Stage(
     keeps=lambda scene: (identified_scene_path(scene, Path()).name, "identify.evals.jsonl"),
     doc="the free [recon] parameters fitted to the paper's targets, identify.nc and identified.toml "
         "(in the results folder; --write-scene PATH for a copy)")
-
-
-def run(scene: Any, out: Path, scheduler: str | None = None, workers: int | None = None, force: bool = False,
-        **options: Any) -> Path:
-    """Stage entry point (``hdi identify``): makes ``identify.nc`` current (:func:`pipeline.runner.build`)."""
-    return build("identify", scene, out, force=force, scheduler=scheduler, workers=workers,
-                 **options)["identify"][0]

@@ -19,7 +19,7 @@ import xarray as xr
 
 from ..io import read_dataset
 from ..model.interface_tables import build_tables, deepest_protrusion_nm, lubricant_shear_on, roughness_statistics
-from ..runner import Inputs, Stage, build
+from ..runner import Inputs, Stage
 
 
 def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
@@ -43,11 +43,6 @@ STAGE = Stage(
                            "lubricant_shear": lubricant_shear_on(scene)},
     upstream=lambda scene: ("roughness",) if scene["roughness"]["afm"] else (),
     order=30, main_job=True, doc="ISBL tables versus separation, interface.nc")
-
-
-def run(scene: Any, out: Path, **options: Any) -> Path:
-    """``interface.nc`` in ``out``, recomputed only when its inputs changed (:func:`pipeline.runner.build`)."""
-    return build("interface", scene, out, **options)["interface"][0]
 
 
 def load(path: Path) -> xr.Dataset:

@@ -82,7 +82,7 @@ from ..analyses.sweep_slices import combinations, split_ensemble
 from ..io import DatasetError, is_read_only, temporary_path
 from ..paths import refuse_links
 from ..validity import OutsideValidity, describe
-from ..runner import Inputs, Stage, build
+from ..runner import Inputs, Stage
 
 log = logging.getLogger(__name__)
 
@@ -190,12 +190,6 @@ STAGE = Stage(
     + ("report/summary.csv", "report/summary.md", "report/comparison.md"),
     reads=("*",), upstream=_upstream, optional=("identify",), finish=_finish, order=60, main_job=True,
     doc="the paper's figures, a summary table and the comparison with the paper")
-
-
-def run(scene: Any, out: Path, **options: Any) -> Path:
-    """Make the report current in ``out``; returns the figures folder."""
-    build("report", scene, out, **options)
-    return Path(out) / "figures"
 
 
 def refuse_invalid(sweep: xr.Dataset, path: Path) -> None:

@@ -42,7 +42,7 @@ import xarray as xr
 from ..io import write_dataset
 from ..model.roughness_statistics import build_dataset, summaries
 from ..physics import surface as sf
-from ..runner import Inputs, Stage, build
+from ..runner import Inputs, Stage
 from ..units import PER_UM2_IN_PER_NM2, UM_IN_NM
 
 FILENAME = "roughness.nc"
@@ -62,7 +62,7 @@ def run_files(files: Sequence[Path], out: Path, channel: str | None = None, detr
 
     Raises
     ------
-    pipeline.physics.surface.AFMError
+    pipeline.model.afm_scan.AFMError
         For an unusable file; nothing is written then.
     """
     files = [Path(f) for f in files]
@@ -89,10 +89,3 @@ STAGE = Stage(
     "roughness", compute, outputs=(FILENAME,), reads=("roughness", "materials"),
     files=lambda scene: {f"roughness.afm[{i}]": f for i, f in enumerate(scene["roughness"]["afm"] or [])},
     order=10, main_job=True, doc="AFM scans (or explicit statistics) to asperity statistics, roughness.nc")
-
-
-def run(scene: Any, out: Path, **options: Any) -> Path:
-    """``roughness.nc`` in ``out``, recomputed only when its inputs changed (:func:`pipeline.runner.build`)."""
-    return build("roughness", scene, out, **options)["roughness"][0]
-
-

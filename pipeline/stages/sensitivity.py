@@ -33,7 +33,6 @@ References
 from __future__ import annotations
 
 import logging
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -41,7 +40,7 @@ import xarray as xr
 
 from ..analyses.feasibility import box_check
 from ..fanout import local_cluster
-from ..runner import Inputs, Stage, build
+from ..runner import Inputs, Stage
 from ..analyses.screening import dataset, failures_text, figure, headline_outputs, morris, sobol
 from ..evaluations import Evaluator, evaluate_batch, setup, upstream
 from ..config.grid import protrusion_grid, range_grid
@@ -99,10 +98,3 @@ STAGE = Stage(
     reads=("*",), excludes=("report", "identify", "scene.name", "scene.description", "sensitivity.batch_size"),
     upstream=upstream, check=box_check("sensitivity"), order=85, keeps=lambda scene: ("sensitivity.evals.jsonl",),
     doc="Morris and Sobol indices of the headline outputs over the [sensitivity] parameters, sensitivity.nc")
-
-
-def run(scene: Any, out: Path, scheduler: str | None = None, workers: int | None = None, force: bool = False,
-        **options: Any) -> Path:
-    """Stage entry point (``hdi sensitivity``): makes ``sensitivity.nc`` current (:func:`pipeline.runner.build`)."""
-    return build("sensitivity", scene, out, force=force, scheduler=scheduler, workers=workers,
-                 **options)["sensitivity"][0]

@@ -22,7 +22,7 @@ import xarray as xr
 from ..model import scene_inputs
 from ..model.inputs import for_stage
 from ..model.simulation import histories_of, model_attrs, run_values, simulate, summary_of
-from ..runner import Inputs, Stage, build, simulation_inputs
+from ..runner import Inputs, Stage, simulation_inputs
 from ..variables import flag_meaning
 
 log = logging.getLogger(__name__)
@@ -60,8 +60,3 @@ STAGE = Stage(
     "simulate", compute, outputs=("histories.nc", "summary.nc"),
     reads=("*",), excludes=scene_inputs.SIMULATION_EXCLUDES,
     upstream=scene_inputs.simulation_inputs, order=45, doc="one protrusion in time, histories.nc and summary.nc")
-
-
-def run(scene: Any, out: Path, **options: Any) -> Path:
-    """``histories.nc`` (and ``summary.nc``) in ``out``, recomputed only when their inputs changed."""
-    return build("simulate", scene, out, **options)["simulate"][0]

@@ -24,7 +24,7 @@ from ..model import scene_inputs
 from ..model.inputs import for_stage
 from ..model.simulation import model_attrs
 from ..model.statics import statics_map
-from ..runner import Inputs, Stage, build
+from ..runner import Inputs, Stage
 
 log = logging.getLogger(__name__)
 
@@ -50,11 +50,6 @@ STAGE = Stage(
     excludes=("tfc.protrusion_nm", *scene_inputs.SIMULATION_EXCLUDES),
     upstream=scene_inputs.simulation_inputs, order=47, main_job=True,
     doc="every static state versus protrusion: clearance, stability, barriers, DMW energy, statics.nc")
-
-
-def run(scene: Any, out: Path, **options: Any) -> Path:
-    """``statics.nc`` in ``out``, recomputed only when its inputs changed (:func:`pipeline.runner.build`)."""
-    return build("statics", scene, out, **options)["statics"][0]
 
 
 def load(path: Path) -> xr.Dataset:
