@@ -446,7 +446,7 @@ def test_a_profile_point_better_than_the_centre_is_the_one_best_point_everywhere
     assert f"(r = {r[1]:+.2g}) |" in md.split("| contact force", 1)[1].splitlines()[0]
     # the header of the written scene names the scene it comes from and the best evaluation
     head = (out / "identified.toml").read_text().splitlines()[1]
-    assert f'identified scene of twin.toml (scene "twin"' in head and f"best evaluation {i_best} of identify.nc" in head
+    assert 'identified scene of twin.toml (scene "twin"' in head and f"best evaluation {i_best} of identify.nc" in head
 
 
 def test_identify_nc_has_parameter_target_and_bound_dimensions(tmp_path, paper_config):

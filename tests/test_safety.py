@@ -11,8 +11,6 @@
 
 from __future__ import annotations
 
-import errno
-import json
 import os
 import re
 import signal

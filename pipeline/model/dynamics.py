@@ -291,7 +291,6 @@ def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, cont
     and how to check a change (``_integrate.inspect_llvm()``): docs/kernel.md.
     """
     p = params[0]
-    p = params[0]
     gap_power = _unpacked(gap_power_)
     ns = state_size(meniscus)
     has_contact = contact is not None
@@ -347,7 +346,7 @@ def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, cont
                     info[WINDOW_SWITCHES] += 1
                 t_hold = t + p.dwell
                 rhs_slots(t, y, p, in_contact, k1, dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power,
-              meniscus)
+                          meniscus)
                 info[RHS_CALLS] += 1
         h = min(h, h_max, h_stiff)
         if t + 1.01 * h >= t_end:  # land on t_end exactly, never leave a sliver (Hairer's DOPRI5 rule)
@@ -416,7 +415,7 @@ def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, cont
                 info[WINDOW_SWITCHES] += 1
             t_hold = t + p.dwell if p.dwell > 0.0 else -1.0
             rhs_slots(t, y, p, in_contact, k1, dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power,
-              meniscus)
+                      meniscus)
             info[RHS_CALLS] += 1
         else:
             for i in range(ns):

@@ -113,7 +113,7 @@ from ..model.inputs import for_stage
 from ..model.interface_tables import build_tables, roughness_statistics
 from ..model.simulation import COUNTERS, simulate
 from ..progress import Progress
-from ..runner import Inputs, Stage, build, ensure
+from ..runner import Inputs, Stage, ensure
 from ..units import MHZ
 
 log = logging.getLogger(__name__)
