@@ -19,7 +19,8 @@ from pathlib import Path
 from . import __version__, interrupts, runner
 from .io import DatasetError, os_error_line, results_dir
 from .progress import interval_s
-from .config.scene import SceneError, describe_keys, load_scene
+from .config.loading import load_scene
+from .config.schema import SceneError, describe_keys
 from .stages import roughness
 from .cli_checks import MAX_SCENES, check_options, integration_line, one_line_warnings
 from .model.slider import IntegrationError
