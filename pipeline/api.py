@@ -42,7 +42,9 @@ from collections.abc import MutableMapping
 from . import runner
 from .cli_checks import (OptionError, check_flag, check_options, check_out, check_path_option, check_protrusions,
                          integration_line)
-from .config.scene import SCHEMA, Scene, SceneError, _check_value, load_scene as _load_scene
+from .config.loading import load_scene as _load_scene
+from .config.schema import SCHEMA, SceneError
+from .config.validation import Scene, check_value
 from .io import DatasetError, read_dataset, results_dir
 from .model.inputs import SimulationInputs
 from .model.simulation import histories_of as _histories_of, simulate as _simulate
@@ -103,7 +105,7 @@ def _scene(scene: SceneLike) -> Scene:
 
 def _k(k: float | None) -> float | None:
     """``k`` [1] checked as the scene key ``contact.k`` is."""
-    return None if k is None else _check_value("contact", "k", SCHEMA["contact"]["k"], k, "k", None)
+    return None if k is None else check_value("contact", "k", SCHEMA["contact"]["k"], k, "k", None)
 
 
 def _integration(exc: IntegrationError, scene: Scene | None) -> IntegrationError:

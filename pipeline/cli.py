@@ -19,7 +19,9 @@ from pathlib import Path
 from . import __version__, interrupts, runner
 from .io import DatasetError, os_error_line, results_dir
 from .progress import interval_s
-from .config.scene import SceneError, describe_keys, load_scene
+from .config.loading import load_scene
+from .config.schema import SceneError, describe_keys
+from .folder_lock import folder_lock
 from .stages import roughness
 from .cli_checks import MAX_SCENES, check_options, integration_line, one_line_warnings
 from .model.slider import IntegrationError
@@ -161,7 +163,7 @@ def _main(argv: list[str] | None = None) -> int:
             if args.out is None:
                 raise SceneError("hdi roughness FILE...: --out DIR is required when AFM files are given")
             check_options("roughness", None, **_given(args))
-            with runner.folder_lock(args.out):
+            with folder_lock(args.out):
                 path = roughness.run_files([Path(f) for f in args.inputs], args.out,
                                            channel=args.channel, detrend=args.detrend or "plane")
             interrupts.check()

@@ -30,7 +30,7 @@ from urllib.parse import urlsplit
 import numpy as np
 
 from .config.grid import label, range_count, roughness_sets, same_point
-from .config.scene import SCHEMA
+from .config.schema import SCHEMA
 from .io import is_read_only, os_error_line
 from .paths import special_kind
 from . import fanout, sizing

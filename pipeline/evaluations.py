@@ -33,7 +33,7 @@ import numpy as np
 from .analyses.study import Parameter, parse_parameters, with_values
 from .code_version import code_key
 from .config.grid import label
-from .config.scene import SceneError
+from .config.schema import SceneError
 from .fanout import run_tasks
 from .paths import append_text, refuse_links
 from .model import dmw_record, scene_inputs

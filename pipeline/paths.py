@@ -2,7 +2,7 @@
 
 In a shared, group-writable results folder another user can plant a symbolic link where hdi writes
 (``figures/``, ``.hdi/``, the lock file): :func:`refuse_links` refuses every link below a folder this
-process holds (:func:`guarded`, entered by :func:`pipeline.runner.folder_lock`) on the way to a file hdi
+process holds (:func:`guarded`, entered by :func:`pipeline.folder_lock.folder_lock`) on the way to a file hdi
 writes, locks or deletes, in one line naming the link (:class:`LinkRefused`). A FIFO or a device as an
 input file (``dmw.source = "/dev/zero"``) would block or never end: :func:`special_kind` names what it is,
 checked before the file is opened.
@@ -17,7 +17,7 @@ import stat
 from pathlib import Path
 from typing import Iterator
 
-#: The results folders this process holds (:func:`pipeline.runner.folder_lock` enters :func:`guarded`):
+#: The results folders this process holds (:func:`pipeline.folder_lock.folder_lock` enters :func:`guarded`):
 #: below them hdi follows no symbolic link for a file it writes, locks or deletes (:func:`refuse_links`).
 _ROOTS: list[Path] = []
 

@@ -20,21 +20,17 @@ whose outputs carry the key of its current inputs is not recomputed; otherwise i
 downstream of it too. Datasets are written through :func:`pipeline.io.write_dataset` (temporary file
 and rename), other outputs are renamed into place from the staging folder.
 
-A results folder is used by one ``hdi`` process at a time: :func:`folder_lock` holds
-``.hdi.lock`` (pid, host, start time) and refuses a second process, naming the first; a lock whose
-process is gone (same host) is taken over. Temporary files an interrupted run left behind
-(hdi's own names, ``.NAME.hdi-RUNID*.tmp`` of :func:`pipeline.io.temporary_path`, and ``.hdi-staging-*``)
-are removed when the lock is taken; a user's files, links and another results folder holding its lock
-(a run in a sub-folder) are left alone. While the lock is held no symbolic link inside the folder is
-followed for a file the runner or a stage writes or deletes (:func:`pipeline.paths.refuse_links`): the
-outputs, manifests and run log are checked before a stage computes and again at each write, and a lock
-file that is a link is refused, not taken over. Before any stage runs, the longest path the build
+A results folder is used by one ``hdi`` process at a time: the runner builds while holding
+:func:`pipeline.folder_lock.folder_lock` (``.hdi.lock``: a second process is refused, naming the first; a
+lock whose process is gone is taken over; an interrupted run's temporary files are removed). While the
+lock is held no symbolic link inside the folder is followed for a file the runner or a stage writes or
+deletes (:func:`pipeline.paths.refuse_links`): the outputs, manifests and run log are checked before a
+stage computes and again at each write. Before any stage runs, the longest path the build
 writes is checked against the file system's limits (:meth:`Runner.check_lengths`).
 """
 
 from __future__ import annotations
 
-import contextlib
 import datetime as _dt
 import errno
 import hashlib
@@ -44,13 +40,11 @@ import logging
 import os
 import pkgutil
 import shutil
-import socket
-import stat
 import tempfile
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Iterable, Iterator, Mapping
+from typing import Any, Callable, Iterable, Mapping
 
 import xarray as xr
 
@@ -60,9 +54,10 @@ from .fanout import shared_folder
 from .progress import stage as progress_stage
 from .model.inputs import SimulationInputs, from_folder
 from .model.scene_inputs import simulation_inputs as wanted_inputs
-from .io import (KEY_ATTR, DatasetBusy, DatasetError, RUN_ID, file_hash, is_temporary, read_attrs, read_dataset,
-                 temporary_path, write_dataset)
-from .paths import LinkRefused, append_text, guarded, refuse_links, special_kind
+from .folder_lock import LOCK_NAME, STAGING_PREFIX, folder_lock
+from .io import (KEY_ATTR, DatasetBusy, DatasetError, RUN_ID, file_hash, read_attrs, read_dataset, temporary_path,
+                 write_dataset)
+from .paths import append_text, refuse_links
 
 log = logging.getLogger(__name__)
 
@@ -70,15 +65,11 @@ log = logging.getLogger(__name__)
 OUTPUTS_ATTR = "stage_outputs"
 #: Hidden folder of the runner inside a results folder (manifests of non-NetCDF outputs, run log).
 STATE_DIR = ".hdi"
-LOCK_NAME = ".hdi.lock"
 #: The run log in :data:`STATE_DIR`: one JSON line of timings per computed stage.
 RUN_LOG = "runs.jsonl"
-STAGING_PREFIX = ".hdi-staging-"
 #: The longest file name of the common file systems [B] (ext4, XFS, btrfs, tmpfs), for a folder name checked
 #: before the file system can be asked (:meth:`Runner.check_lengths`).
 _NAME_MAX_FALLBACK = 255
-#: How deep below a results folder the cleaner looks for orphaned temporary files (``sweep.parts/interface-x/``).
-_TMP_DEPTH = 2
 
 Scene = Any
 
@@ -317,153 +308,6 @@ def _dataset_key(path: Path) -> tuple[str | None, list[str] | None]:
         return None, None
     outputs = attrs.get(OUTPUTS_ATTR)
     return attrs.get(KEY_ATTR), (json.loads(outputs) if outputs else None)
-
-
-# ---------------------------------------------------------------------------------------- the lock
-class FolderBusy(DatasetError):
-    """Another ``hdi`` process is working in the results folder."""
-
-
-_HELD: set[Path] = set()
-
-
-def _is_pid(value: Any) -> bool:
-    """Whether a lock file's ``pid`` is a process id (a positive 32-bit integer, as ``os.kill`` takes)."""
-    return isinstance(value, int) and not isinstance(value, bool) and 0 < value < 2**31
-
-
-def _alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True
-
-
-def clean_orphans(out: Path) -> list[Path]:
-    """Remove the temporary files and staging folders an interrupted run left in ``out``.
-
-    Only hdi's own temporary files (:func:`pipeline.io.is_temporary`) are removed, up to
-    :data:`_TMP_DEPTH` folders deep, and never below a sub-folder that holds a :data:`LOCK_NAME`:
-    that is another results folder, maybe in use by another run (``--out`` its parent).
-    """
-    removed = []
-    for folder, dirs, names in os.walk(out):
-        depth = len(Path(folder).relative_to(out).parts)
-        dirs[:] = [] if depth >= _TMP_DEPTH else [d for d in dirs if not (Path(folder, d) / LOCK_NAME).exists()]
-        for name in names:
-            p = Path(folder, name)
-            if is_temporary(name) and p.is_file() and not p.is_symlink():  # (a link: not a file hdi made)
-                p.unlink(missing_ok=True)
-                removed.append(p)
-    for p in out.glob(STAGING_PREFIX + "*"):
-        if p.is_dir() and not p.is_symlink():
-            shutil.rmtree(p, ignore_errors=True)
-            removed.append(p)
-    if removed:
-        log.info("%s: removed %d temporary file(s) of an interrupted run", out, len(removed))
-    return removed
-
-
-@contextlib.contextmanager
-def _deciding(out: Path) -> Iterator[None]:
-    """One process at a time decides who holds ``out``'s lock: an exclusive ``flock`` on the folder
-    itself, held while the lock file is read, judged stale, removed and written. Without it two
-    processes could both find a dead holder's lock, and the second remove the first's new one."""
-    try:
-        import fcntl
-    except ImportError:  # (not POSIX: the lock file alone)
-        yield
-        return
-    fd = os.open(out, os.O_RDONLY)
-    try:
-        fcntl.flock(fd, fcntl.LOCK_EX)
-        yield
-    finally:
-        os.close(fd)  # (releases the flock)
-
-
-@contextlib.contextmanager
-def folder_lock(out: str | Path) -> Iterator[Path]:
-    """Hold ``out/.hdi.lock``; refuse when another live process holds it.
-
-    Not re-entrant: a stage's ``compute`` reads its inputs through :class:`Inputs` (made current by
-    the runner before it runs) and never builds in its own folder, so a second hold of the same folder
-    in one process is a programming error, reported as such.
-
-    Raises
-    ------
-    FolderBusy
-        Naming the other process and the lock file.
-    RuntimeError
-        When this process already holds the folder.
-    """
-    out = refuse_links(Path(out))  # (a sub-folder of a held folder, sweep.parts/interface-x: no link either)
-    out.mkdir(parents=True, exist_ok=True)
-    path = out.resolve() / LOCK_NAME  # (the folder resolved, never the lock file: a planted link is refused)
-    if path in _HELD:
-        raise RuntimeError(f"{out}: this process already holds the folder; a stage's compute reads its "
-                           "inputs through runner.Inputs and does not build in its own folder")
-    me = {"pid": os.getpid(), "host": socket.gethostname(), "run": RUN_ID,
-          "started": _dt.datetime.now(_dt.timezone.utc).replace(microsecond=0).isoformat()}
-    with _deciding(out):
-        for _ in range(2):
-            try:
-                fd = os.open(path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
-            except FileExistsError:
-                try:
-                    other = json.loads(_read_lock(path) or "{}")
-                except (UnicodeDecodeError, ValueError):
-                    other = {}
-                if not isinstance(other, dict) or not _is_pid(other.get("pid")):  # (`[1, 2]`: JSON, but
-                    other = {}                                                 # not what a holder writes)
-                pid, host = other.get("pid"), other.get("host")
-                if not other or (host == me["host"] and not _alive(pid)):
-                    # (an empty or unreadable file is garbage: a holder writes its file before it
-                    # lets the next process decide)
-                    if other:
-                        log.warning("%s: taking over the lock of hdi process %s, which is gone", out, pid)
-                    else:
-                        log.warning("%s: taking over the lock file %s, which names no hdi process", out, path)
-                    path.unlink(missing_ok=True)
-                    continue
-                raise FolderBusy(f"{out}: in use by hdi process {pid} on {host} since {other.get('started')} "
-                                 f"(lock file {path}); wait for it to finish, or delete the lock file if that "
-                                 "process no longer exists") from None
-            with os.fdopen(fd, "w") as fh:
-                json.dump(me, fh)
-            break
-        else:
-            raise FolderBusy(f"{out}: could not take the lock file {path}")
-    _HELD.add(path)
-    try:
-        with guarded(out):
-            clean_orphans(out)
-            yield path
-    finally:
-        _HELD.discard(path)
-        path.unlink(missing_ok=True)
-
-
-def _read_lock(path: Path) -> str:
-    """The text of an existing lock file, read without following a link (a link planted at
-    :data:`LOCK_NAME` is refused: taking it over would delete the link's target before) and without
-    blocking (a FIFO there is refused too)."""
-    try:
-        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_NONBLOCK", 0))
-    except FileNotFoundError:
-        return ""
-    except OSError as exc:
-        if exc.errno == errno.ELOOP or path.is_symlink():
-            raise LinkRefused(path) from None
-        raise
-    with os.fdopen(fd, "rb") as fh:
-        if not stat.S_ISREG(os.fstat(fh.fileno()).st_mode):
-            raise OSError(errno.EINVAL, f"is {special_kind(path) or 'not a regular file'}, not hdi's lock file; "
-                                        "remove it", str(path))
-        return fh.read(1 << 16).decode("utf-8")
 
 
 # -------------------------------------------------------------------------------------- the runner

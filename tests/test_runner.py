@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from pipeline import cli, runner
+from pipeline import cli, folder_lock, runner
 from pipeline.io import DatasetError, read_dataset, var
 from pipeline.physics import microwaviness as phys_dmw
 from pipeline.physics import surface as sf
@@ -347,7 +347,7 @@ def test_second_process_on_a_folder_is_refused(tmp_path, paper_config, capsys):
     try:
         (tmp_path / runner.LOCK_NAME).write_text(json.dumps({"pid": sleeper.pid, "host": os.uname().nodename,
                                                              "started": "2026-01-01T00:00:00+00:00"}))
-        with pytest.raises(runner.FolderBusy, match=rf"in use by hdi process {sleeper.pid}"):
+        with pytest.raises(folder_lock.FolderBusy, match=rf"in use by hdi process {sleeper.pid}"):
             runner.build("dmw", load_scene(paper_config), tmp_path)
         assert cli.main(["dmw", str(paper_config), "--out", str(tmp_path)]) == 2
         assert f"in use by hdi process {sleeper.pid}" in capsys.readouterr().err
@@ -362,14 +362,14 @@ def test_second_process_on_a_folder_is_refused(tmp_path, paper_config, capsys):
 
 _CONTENDER = """
 import sys, time
-from pipeline import runner
-alive = runner._alive
-runner._alive = lambda pid: (time.sleep(0.5), alive(pid))[1]   # widen the check-and-take window
+from pipeline import folder_lock as lock
+alive = lock._alive
+lock._alive = lambda pid: (time.sleep(0.5), alive(pid))[1]   # widen the check-and-take window
 try:
-    with runner.folder_lock(sys.argv[1]):
+    with lock.folder_lock(sys.argv[1]):
         print("HOLDS", flush=True)
         time.sleep(1.5)
-except runner.FolderBusy:
+except lock.FolderBusy:
     print("REFUSED", flush=True)
 """
 

@@ -22,7 +22,7 @@ from pathlib import Path
 import pytest
 import xarray as xr
 
-from pipeline import cli, io, paths, runner
+from pipeline import cli, folder_lock, io, paths, runner
 from pipeline.config.scene import load_scene
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -57,7 +57,7 @@ def test_a_lock_file_that_is_a_link_is_refused_and_its_target_kept(tmp_path):
     victim, out = _toy(tmp_path)
     (out / runner.LOCK_NAME).symlink_to(victim)
     with pytest.raises(paths.LinkRefused) as info:
-        with runner.folder_lock(out):
+        with folder_lock.folder_lock(out):
             pass
     _link_line(info.value, out.resolve() / runner.LOCK_NAME)
     assert victim.read_text() == "a user's file" and (out / runner.LOCK_NAME).is_symlink()
@@ -67,7 +67,7 @@ def test_a_dangling_lock_link_is_refused_and_nothing_is_created(tmp_path):
     _, out = _toy(tmp_path)
     (out / runner.LOCK_NAME).symlink_to(tmp_path / "not-there")
     with pytest.raises(paths.LinkRefused):
-        with runner.folder_lock(out):
+        with folder_lock.folder_lock(out):
             pass
     assert not (tmp_path / "not-there").exists()
 
@@ -141,7 +141,7 @@ def test_write_dataset_and_the_run_log_refuse_links_below_a_held_folder(tmp_path
     (out / "d.nc").symlink_to(victim)
     (out / ".hdi").mkdir()
     (out / ".hdi" / runner.RUN_LOG).symlink_to(victim)
-    with runner.folder_lock(out):
+    with folder_lock.folder_lock(out):
         with pytest.raises(paths.LinkRefused):
             io.write_dataset(_dataset(), out / "d.nc", stage="test")
         with pytest.raises(paths.LinkRefused):
@@ -156,7 +156,7 @@ def test_the_cleaner_removes_no_link_named_like_a_temporary_file(tmp_path):
     link.symlink_to(victim)
     staging = out / (runner.STAGING_PREFIX + "x")
     staging.symlink_to(tmp_path)
-    with runner.folder_lock(out):
+    with folder_lock.folder_lock(out):
         pass
     assert link.is_symlink() and staging.is_symlink() and victim.read_text() == "a user's file"
 
@@ -165,7 +165,7 @@ def test_a_fifo_at_the_lock_name_is_refused_without_blocking(tmp_path):
     _, out = _toy(tmp_path)
     os.mkfifo(out / runner.LOCK_NAME)
     with pytest.raises(OSError) as info:
-        with runner.folder_lock(out):
+        with folder_lock.folder_lock(out):
             pass
     assert io.os_error_line(info.value) == (f"{out.resolve() / runner.LOCK_NAME}: is a FIFO (named pipe), not hdi's "
                                             "lock file; remove it")
@@ -463,11 +463,11 @@ def test_a_nested_results_folder_that_is_a_link_is_refused(tmp_path):
     _, out = _toy(tmp_path)
     elsewhere = tmp_path / "elsewhere"
     elsewhere.mkdir()
-    with runner.folder_lock(out):
+    with folder_lock.folder_lock(out):
         (out / "sweep.parts").mkdir()
         (out / "sweep.parts" / "interface-x").symlink_to(elsewhere)
         with pytest.raises(paths.LinkRefused):
-            with runner.folder_lock(out / "sweep.parts" / "interface-x"):
+            with folder_lock.folder_lock(out / "sweep.parts" / "interface-x"):
                 pass
     assert list(elsewhere.iterdir()) == []
 

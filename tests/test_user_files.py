@@ -22,7 +22,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 
-from pipeline import cli, io, runner, sizing
+from pipeline import cli, folder_lock, io, runner, sizing
 from pipeline.analyses import narrative
 from pipeline.model import measured_dmw
 from pipeline.physics.microwaviness import DMWError
@@ -236,7 +236,7 @@ def test_a_number_that_overflows_is_refused_at_load(tmp_path, capsys):
 @pytest.mark.parametrize("garbage", ["[1,2]", '{"pid": 1000000000000000000000000000000}', '"x"', '{"pid": true}'])
 def test_a_lock_file_no_hdi_process_wrote_is_taken_over(tmp_path, garbage):
     (tmp_path / runner.LOCK_NAME).write_text(garbage)
-    with runner.folder_lock(tmp_path) as path:
+    with folder_lock.folder_lock(tmp_path) as path:
         assert json.loads(path.read_text())["pid"] == os.getpid()
 
 

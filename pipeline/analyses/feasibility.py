@@ -38,7 +38,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from .study import Parameter, parse_parameters, scene_value, with_values
-from ..config.scene import SceneError
+from ..config.schema import SceneError
 from ..model import scene_inputs
 from ..model.interface_tables import interface_parameters
 from ..model.slider import slider_from_scene

@@ -36,7 +36,7 @@ import xarray as xr
 from . import ensemble_rules as en
 from .ensemble_comparison import SPREAD_STD
 from ..config.grid import TOL_NM, label, range_grid
-from ..config.scene import SCHEMA, SceneError, unit_suffix
+from ..config.schema import SCHEMA, SceneError, unit_suffix
 from ..model.slider import touched_in_summary
 from ..physics import paper
 from ..units import cf_unit

@@ -15,7 +15,8 @@ from typing import Any
 
 import numpy as np
 
-from .scene import SCHEMA, SceneError, _check_value
+from .schema import SCHEMA, SceneError
+from .validation import check_value
 
 
 #: Protrusion labels [nm] are rounded to this many decimals, so a label computed twice is the same
@@ -120,7 +121,7 @@ def roughness_sets(scene: Any) -> dict[str, dict[str, Any]]:
             if key not in SCHEMA["roughness"]:
                 raise SceneError(f"{where}: unknown key sweep.roughness[{i}].{key} (set {name!r}): expected "
                                  "label or one of " + ", ".join(SCHEMA["roughness"]))
-            table[key] = _check_value("sweep.roughness", f"{key} (set {name!r})", SCHEMA["roughness"][key],
+            table[key] = check_value("sweep.roughness", f"{key} (set {name!r})", SCHEMA["roughness"][key],
                                       value, where, folder)
         label = roughness_label(table) if "label" not in item else name
         if not isinstance(label, str) or not LABEL.fullmatch(label):

@@ -16,7 +16,7 @@ from __future__ import annotations
 from typing import Any, Mapping
 
 from ..units import si_factor
-from .scene import _strip_unit
+from .schema import strip_unit
 
 
 #: SI names of keys that would collide with another key of their section once the suffix is dropped.
@@ -75,7 +75,7 @@ def section_si(section: str, values: Mapping[str, Any]) -> Group:
     its SI name is read."""
     keys: dict[str, tuple[str, float | None]] = {}
     for key in values.keys():
-        name, suffix = _strip_unit(key)
+        name, suffix = strip_unit(key)
         name = SI_NAMES.get((section, key), name)
         if name in keys:
             raise ValueError(f"[{section}] {key}: its SI name {name!r} collides with another key of the section")

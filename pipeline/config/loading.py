@@ -1,0 +1,161 @@
+"""Loading a scene: read a TOML file, merge the base scenes it ``extends``, apply ``--set`` overrides and
+validate (:func:`pipeline.config.validation.validate`).
+
+A base scene's relative file paths are made absolute from the base's own folder before the merge; an
+override names itself in the errors of the keys it set.
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+import re
+from pathlib import Path
+from typing import Any, Iterable
+
+from ..paths import special_kind
+from .schema import SCHEMA, SceneError
+from .validation import Scene, validate
+
+try:  # Python >= 3.11
+    import tomllib
+except ModuleNotFoundError:  # pragma: no cover - Python 3.10
+    import tomli as tomllib  # type: ignore[no-redef]
+
+
+def parse_override(text: str) -> tuple[str, str, Any]:
+    """Parse ``section.key=value`` (value in TOML syntax; bare words are strings)."""
+    m = re.fullmatch(r"\s*([A-Za-z_]+)\.([A-Za-z0-9_]+)\s*=\s*(.*)", text, re.S)
+    if not m:
+        raise SceneError(f"--set {text!r}: expected section.key=value")
+    section, key, value = m.groups()
+    try:
+        parsed = tomllib.loads(f"v = {value}")["v"]
+    except tomllib.TOMLDecodeError:
+        parsed = value.strip()
+    return section, key, parsed
+
+
+def load_scene(path: str | Path, overrides: Iterable[str] = ()) -> Scene:
+    """Read, override and validate a scene file.
+
+    Parameters
+    ----------
+    path
+        The TOML scene.
+    overrides
+        ``section.key=value`` strings applied after reading (``--set`` on the command line).
+
+    Raises
+    ------
+    SceneError
+        For a missing or unreadable file, bad TOML, or any invalid field (see :func:`validate`).
+    """
+    path = Path(path)
+    raw = _read_raw(path)
+    overrides = list(overrides)
+    blame: dict[tuple[str, str], str] = {}
+    for text in overrides:
+        section, key, value = parse_override(text)
+        if (section, key) == ("scene", "extends"):  # (it was applied while reading: a --set came too late)
+            raise SceneError(f"--set {text}: scene.extends cannot be set on the command line; write "
+                             f"`extends = {json.dumps(str(value))}` in the [scene] section of a scene file "
+                             f"(or give the base scene itself with --set for the keys that differ)")
+        raw.setdefault(section, {})
+        if not isinstance(raw[section], dict):
+            raise SceneError(f"{path}: --set {text!r}: [{section}] is not a table")
+        raw[section][key] = value
+        blame[(section, key)] = f"--set {text}"
+    return validate(raw, path, overrides=overrides, blame=blame)
+
+
+#: Deepest chain of ``scene.extends`` a scene may build on (a scene, its base, the base's base, ...):
+#: far beyond any real chain (the identified scene extends the paper scene: 2), and far below Python's
+#: recursion limit, which a chain of 1,200 files reached with a traceback.
+MAX_EXTENDS_DEPTH = 32
+
+
+def _read_raw(path: Path, seen: tuple[Path, ...] = ()) -> dict[str, Any]:
+    """Parse a scene file, merging in the base scene it ``extends`` (keys of this file win).
+
+    The base's relative file paths are made absolute from the base's own folder (:func:`_anchor_paths`)
+    before the merge: a path means what it meant in the file that wrote it, not beside the derived scene.
+    """
+    if path.is_dir():
+        raise SceneError(f"{path}: is a folder; expected a scene file (TOML), e.g. configs/paper-2009.toml")
+    if special_kind(path) is not None:  # (reading a FIFO or a device never ends)
+        raise SceneError(f"{path}: is {special_kind(path)}; expected a scene file (TOML)")
+    if not path.is_file():
+        raise SceneError(f"{path}: scene file does not exist")
+    try:  # (utf-8-sig: a byte-order mark, as some Windows editors write, is not part of the TOML)
+        raw = tomllib.loads(path.read_text(encoding="utf-8-sig"))
+    except UnicodeDecodeError as exc:
+        raise SceneError(f"{path}: not UTF-8 text (byte {exc.start}); expected a TOML file in UTF-8") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneError(f"{path}: not valid TOML: {exc}") from None
+    except OSError as exc:
+        raise SceneError(f"{path}: cannot read the scene file: {exc.strerror or exc}") from None
+    for section, table in raw.items():  # (here, where the file is known: a base's error names the base)
+        if section in SCHEMA and not isinstance(table, dict):
+            raise SceneError(f"{path}: {section} must be a table [{section}]")
+    base_name = raw.get("scene", {}).get("extends")
+    if base_name is None:
+        return raw
+    if not isinstance(base_name, str):
+        raise SceneError(f"{path}: scene.extends = {base_name!r}: expected a file name")
+    base_path = (path.parent / base_name).resolve()
+    if base_path in seen or base_path == path.resolve():
+        raise SceneError(f"{path}: scene.extends = {base_name!r}: circular extension")
+    if len(seen) + 1 >= MAX_EXTENDS_DEPTH:
+        raise SceneError(f"{path}: scene.extends = {base_name!r}: a chain of more than {MAX_EXTENDS_DEPTH} "
+                         f"scenes extending one another; expected at most {MAX_EXTENDS_DEPTH} (write the keys "
+                         "into fewer files)")
+    if not base_path.is_file():
+        raise SceneError(f"{path}: scene.extends: file {base_name!r} does not exist (looked for {base_path})")
+    base = _anchor_paths(_read_raw(base_path, seen + (path.resolve(),)), base_path.parent)
+    base.get("scene", {}).pop("name", None)
+    for section, table in raw.items():
+        if isinstance(table, dict) and isinstance(base.get(section), dict):
+            base[section].update(table)
+        else:
+            base[section] = table
+    base["scene"]["extends"] = str(base_path)
+    return base
+
+
+def _anchor(value: Any, folder: Path) -> Any:
+    """A relative file path (a string) made absolute from ``folder``; anything else unchanged."""
+    if not isinstance(value, str):
+        return value
+    p = Path(value).expanduser()
+    return value if p.is_absolute() else str((folder / p).resolve())
+
+
+def _anchor_paths(raw: dict[str, Any], folder: Path) -> dict[str, Any]:
+    """``raw`` with the relative file paths it names made absolute from ``folder`` (the folder of the
+    file that wrote them): the keys with ``path=True`` in :data:`SCHEMA`, a measured ``dmw.source``
+    and the AFM scans of ``sweep.roughness`` sets. Values of the wrong type are left to
+    :func:`validate` to report."""
+    for section, keys in SCHEMA.items():
+        table = raw.get(section)
+        if not isinstance(table, dict):
+            continue
+        for key, spec in keys.items():
+            if spec.path and key in table:
+                v = table[key]
+                table[key] = [_anchor(x, folder) for x in v] if isinstance(v, list) else _anchor(v, folder)
+    dmw = raw.get("dmw")
+    if isinstance(dmw, dict) and dmw.get("source", "synthetic") != "synthetic":
+        dmw["source"] = _anchor(dmw["source"], folder)
+    sets = raw["sweep"].get("roughness") if isinstance(raw.get("sweep"), dict) else None
+    for item in sets if isinstance(sets, list) else []:
+        if isinstance(item, dict) and isinstance(item.get("afm"), list):
+            item["afm"] = [_anchor(x, folder) for x in item["afm"]]
+    return raw
+
+
+def scene_from_dict(raw: dict[str, Any], base: Path | None = None) -> Scene:
+    """Validate a scene given as a dict (for tests and notebooks)."""
+    raw = copy.deepcopy(raw)
+    raw.setdefault("scene", {}).setdefault("name", "scene")
+    return validate(raw, base / "scene.toml" if base else None)
