@@ -273,18 +273,15 @@ def _alive(pid: int) -> bool:
         return False
 
 
-@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="the figure pool forks on Linux only")
-def test_figure_workers_die_with_a_killed_parent(tmp_path):
-    """Before: SIGKILL (or SIGHUP) of hdi while drawing left its workers sleeping forever, holding its
-    stdout and stderr (``hdi run ... | tee log`` never ended)."""
-    proc = subprocess.Popen([sys.executable, "-c", _DRAWING, str(tmp_path)], cwd=ROOT,
-                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+def _kill_and_expect_no_worker(proc: subprocess.Popen, pids: Path, wait_s: float) -> None:
+    """Wait for the two figure workers to write their pid files into ``pids``, SIGKILL ``proc`` (no handler
+    of hdi runs) and expect no worker alive within 10 s; the workers are killed in any case."""
     try:
-        deadline = time.monotonic() + 60
-        while len(list(tmp_path.glob("*.pid"))) < 2 and time.monotonic() < deadline:
+        deadline = time.monotonic() + wait_s
+        while len(list(pids.glob("*.pid"))) < 2 and time.monotonic() < deadline and proc.poll() is None:
             time.sleep(0.05)
-        workers = [int(p.stem) for p in tmp_path.glob("*.pid")]
-        assert len(workers) == 2 and all(_alive(w) for w in workers)
+        workers = [int(p.stem) for p in pids.glob("*.pid")]
+        assert len(workers) == 2 and proc.pid not in workers and all(_alive(w) for w in workers)
         proc.kill()
         proc.wait(timeout=10)
         deadline = time.monotonic() + 10
@@ -293,11 +290,21 @@ def test_figure_workers_die_with_a_killed_parent(tmp_path):
         assert not any(_alive(w) for w in workers)
     finally:
         proc.kill()
-        for p in tmp_path.glob("*.pid"):
+        for p in pids.glob("*.pid"):
             try:
                 os.kill(int(p.stem), signal.SIGKILL)
             except ProcessLookupError:
                 pass
+
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="the figure pool forks on Linux only")
+def test_figure_workers_die_with_a_killed_parent(tmp_path):
+    """Before: SIGKILL (or SIGHUP) of hdi while drawing left its workers sleeping forever, holding its
+    stdout and stderr (``hdi run ... | tee log`` never ended)."""
+    proc = subprocess.Popen([sys.executable, "-c", _DRAWING, str(tmp_path)], cwd=ROOT,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    _kill_and_expect_no_worker(proc, tmp_path, 60)
 
 
 # ------------------------------------------------------------------------------------ 4. special files
@@ -534,22 +541,4 @@ def test_sigkill_of_hdi_report_during_figure_drawing_leaves_no_worker(tmp_path):
         write(out)
     proc = subprocess.Popen([sys.executable, "-c", _REPORT_DRAWING, str(pids), "report", str(PAPER), "--out", str(out),
                              "-q"], cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    try:
-        deadline = time.monotonic() + 120
-        while len(list(pids.glob("*.pid"))) < 2 and time.monotonic() < deadline and proc.poll() is None:
-            time.sleep(0.05)
-        workers = [int(p.stem) for p in pids.glob("*.pid")]
-        assert len(workers) == 2 and proc.pid not in workers and all(_alive(w) for w in workers)
-        proc.kill()                                   # SIGKILL: no handler of hdi runs
-        proc.wait(timeout=10)
-        deadline = time.monotonic() + 10
-        while any(_alive(w) for w in workers) and time.monotonic() < deadline:
-            time.sleep(0.05)
-        assert not any(_alive(w) for w in workers)
-    finally:
-        proc.kill()
-        for p in pids.glob("*.pid"):
-            try:
-                os.kill(int(p.stem), signal.SIGKILL)
-            except ProcessLookupError:
-                pass
+    _kill_and_expect_no_worker(proc, pids, 120)
