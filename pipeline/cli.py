@@ -22,7 +22,7 @@ from .progress import interval_s
 from .config.scene import SceneError, describe_keys, load_scene
 from .stages import roughness
 from .cli_checks import MAX_SCENES, check_options, integration_line, one_line_warnings
-from .model.slider import IntegrationError
+from .model.running import IntegrationError
 
 log = logging.getLogger("pipeline")
 

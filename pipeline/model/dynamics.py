@@ -44,11 +44,11 @@ force law at the TFC point (the bulge's air bearing, a "reynolds" table F(g, del
 tabulated, not compiled: its law is a plain Python function of the gap array and the protrusion in
 its physics module, registered with ONE line in its registry
 (:data:`pipeline.physics.air_bearing.TFC_STIFFENING`: ``"name": TfcLaw(force)``). The model assembly
-(:func:`pipeline.model.slider.tfc_table`) samples it per protrusion on a gap grid into a piecewise
+(:func:`pipeline.model.kernel_inputs.tfc_table`) samples it per protrusion on a gap grid into a piecewise
 cubic (as the interface tables), which the kernel's one generic slot ``Tables.tfc`` evaluates: force
 and stiffness ``-dF/dg`` (the step-size cap) from the same cubic, so the kernel, its argument list and
 its compiled cache are untouched. A tabulated law costs one cubic evaluation, like an interface
-table, and is exact to the table's interpolation error (:func:`pipeline.model.slider.tfc_table`; the
+table, and is exact to the table's interpolation error (:func:`pipeline.model.kernel_inputs.tfc_table`; the
 gap-power law tabulated: force within 3e-8 of its range, stiffness 5e-8 relative above 1 nm, a 1-ms
 run's separation within 1e-10 nm of the closed form's, tests/test_model_variants.py). The closed-form
 gap-power law keeps its compiled branch (bit-identical results).
@@ -74,7 +74,7 @@ otherwise when the dwell ends, the mode switches there. The resulting fast switc
 contact force to the sliding-mode value with an error of the order of the dwell; the dwell is an
 accuracy knob of the accuracy stage. Crossings further apart than the dwell are located exactly.
 The switches at ``t >= p.t_win`` are counted apart (``info[WINDOW_SWITCHES]``): a run reports them per
-ms (:func:`pipeline.model.slider.contact_switch_rate`), so that a sliding mode held on the criterion
+ms (:func:`pipeline.model.outcomes.contact_switch_rate`), so that a sliding mode held on the criterion
 shows in the data (docs/model.md, section "Switched and continuous friction").
 """
 

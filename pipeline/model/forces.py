@@ -22,7 +22,7 @@ Equations of motion (docs/model.md, section "Slider dynamics"), state ``y = (z, 
 * an air-bearing force at the TFC point (docs/model.md, section "Model variants"): the closed-form
   gap-power stiffening spring ``F_t = k_t [G(g_n) - G(g)]``, stiffness ``-dF_t/dg = k_t [(g0/g)^p - 1]``
   (``Variants.gap_power``, :func:`pipeline.physics.air_bearing.tfc_stiffening_force`), or any law
-  tabulated versus the gap (``Tables.tfc``, :func:`pipeline.model.slider.tfc_table`), or both.
+  tabulated versus the gap (``Tables.tfc``, :func:`pipeline.model.kernel_inputs.tfc_table`), or both.
 
 The closed-form laws are compiled from their one definition in :mod:`pipeline.physics.air_bearing`.
 
