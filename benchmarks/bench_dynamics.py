@@ -50,7 +50,7 @@ FRESH = textwrap.dedent("""
     import sys
     from pipeline.io import read_dataset
     from pipeline.config.scene import load_scene
-    from pipeline.model import dmw_record
+    from pipeline.model import assembly, dmw_record, outcomes, running
     t1 = time.perf_counter()
     out = sys.argv[1]
     scene = load_scene(sys.argv[2], ["contact.k=%(k)s"])

@@ -200,6 +200,7 @@ def test_a_failed_integration_is_one_line_naming_the_scene_the_protrusion_and_wh
     (chattering on the contact criterion) and the IntegrationError, a RuntimeError, escaped the CLI's
     one-line path as a traceback. The same failure here in a second: the integrator's step budget
     lowered to 200 steps (a 0.6-ms flying run needs more than 1,200 of 500 ns)."""
+    from pipeline.model import running
     monkeypatch.setattr(running.run_model, "__defaults__", (None, 200))
     args = ["simulate", str(PAPER), "--out", str(tmp_path), *_sets(FLY[:3] + ["tfc.protrusion_nm=2.0"])]
     assert cli.main(args) == 2
@@ -331,6 +332,7 @@ def test_a_failed_integration_from_the_api_is_the_same_one_line(api_model, monke
     """NaN protrusions reached the integrator (an IntegrationError without the scene or what to change)."""
     import pipeline as hdi
     scene, model = api_model
+    from pipeline.model import running
     monkeypatch.setattr(running.run_model, "__defaults__", (None, 200))
     with pytest.raises(running.IntegrationError, match=rf"^{PAPER} \(scene paper-2009\): integration failed at protrusion "
                                                   r"4\.5 nm: too many steps .*; shorten solver\.duration_ms"):

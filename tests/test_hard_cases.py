@@ -151,7 +151,7 @@ def assert_physical(run, hist, s):
         frac = s["contact_fraction"]
         assert 0.0 <= frac <= 1.0
         assert s["regime"] in (outcomes.FLYING, outcomes.BOUNCING, outcomes.SURFING)
-        # flying: no sample in contact and the exact minimum of d above k sigma (slider.summarize)
+        # flying: no sample in contact and the exact minimum of d above k sigma (outcomes.summarize)
         touched = frac > 0 or run.d_extremes[0] < run.model.k_sigma
         assert (s["regime"] == outcomes.FLYING) == (not touched)
         assert (s["regime"] == outcomes.SURFING) == (frac >= outcomes.SURFING_FRACTION)

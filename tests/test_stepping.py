@@ -106,7 +106,7 @@ def test_a_failed_protrusion_is_nan_with_its_reason(monkeypatch):
             raise running.IntegrationError("integration failed at protrusion 4 nm: too many steps")
         return run_model(m, delta, **kw)
 
-    monkeypatch.setattr(sl, "run_model", failing)
+    monkeypatch.setattr(running, "run_model", failing)
     ds = simulate(model, [4.0, 5.0], on_error="nan")
     assert ds.attrs["errors"] == "4 nm: integration failed at protrusion 4 nm: too many steps"
     assert np.isnan(float(ds["clearance"][0])) and float(ds["clearance"][1]) == float(good["clearance"][1])
