@@ -3,7 +3,7 @@
 Same physics as :func:`pipeline.model.dynamics.rhs` (docs/model.md, section "Slider dynamics"): linear front pad, nonlinear rear
 pad ``F_r0 [(g0/g)^n - 1]``, the disk under each point moving with the DMW record delayed by the
 travel time, adhesion ``-A_n p_a(d)`` always, contact ``A_n p_c(d) - c_c d'`` and friction
-``A_n tau(d)`` (moment ``-h_cg Q``) while ``d < k sigma``. Written the plain way:
+``A_n tau(d)`` (moment ``-friction_arm Q``) while ``d < k sigma``. Written the plain way:
 
 * :func:`scipy.integrate.solve_ivp` with ``RK45`` (the same Dormand-Prince 5(4) pair as the project's
   kernel) at the scene's ``rtol``, per-component ``atol`` and ``max_step`` (the same values the
@@ -126,7 +126,7 @@ def simulate_naive(scene: Any, interface_ds: Any, dmw_tuple: tuple[np.ndarray, f
         raise NotImplementedError("the naive baseline implements the default model only (air_bearing.rear_law = "
                                   "'power', air_bearing.tfc_stiffening = 'none')")
     s = model.slider
-    m, I, lf, lr, lc, hcg = s.m, s.I, s.l_f, s.l_r, s.l_c, s.h_cg
+    m, I, lf, lr, lc, hcg = s.m, s.I, s.l_f, s.l_r, s.l_c, s.friction_arm
     kf, cf, cr, g0, n, Fr0 = s.k_f, s.c_f, s.c_r, s.g0, s.n, s.rear_preload
     a = scene["air_bearing"]
     FH0 = a["flying_height_nm"] * NM

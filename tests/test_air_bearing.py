@@ -111,7 +111,7 @@ def test_scene_slider_uses_the_chosen_root_and_frequencies():
     np.testing.assert_allclose(w / (2 * np.pi), [F1, F2], rtol=1e-9)
     # TFC point 8 um before the trailing edge, CG at mid-length; friction arm T/2
     assert s.l_c == pytest.approx(L / 2 - 8e-6, rel=1e-12)
-    assert s.h_cg == pytest.approx(T / 2, rel=1e-12)
+    assert s.friction_arm == pytest.approx(T / 2, rel=1e-12)
     # rear preload F_r0 = k_r g0 / n, with g0 = FH0 = 11 nm and n = 2 (docs/model.md, section "Slider dynamics")
     assert s.rear_preload == pytest.approx(s.k_r * 11 * NM / 2, rel=1e-12)
 

@@ -238,7 +238,7 @@ def test_unknown_options_are_one_line_errors():
 def test_gimbal_arm_doubles_the_friction_moment():
     cg, gimbal = model(), model(slider={"friction_arm": "gimbal"})
     T = 0.23e-3
-    assert cg.p["h_cg"] == T / 2 and gimbal.p["h_cg"] == T
+    assert cg.p["friction_arm"] == T / 2 and gimbal.p["friction_arm"] == T
     assert gimbal.info["friction_arm"] == "gimbal"
     # the kernel's pitch acceleration at a state in contact, with and without the friction table: the
     # friction's share is -arm Q / I, twice as large with the gimbal's arm
@@ -253,7 +253,7 @@ def test_gimbal_arm_doubles_the_friction_moment():
         dyn.rhs(0.0, y, p, tables._replace(friction=None), variants, True, without)
         d = fo.separation_at(p, y[0], y[1], 0.0)
         Q = p["A_n"] * float(pw.ppval(tables.friction, p.tab_x0, p.tab_h, np.array([d]))[0])
-        assert (with_q[3] - without[3]) * p["I"] == pytest.approx(-p["h_cg"] * Q, rel=1e-9)
+        assert (with_q[3] - without[3]) * p["I"] == pytest.approx(-p["friction_arm"] * Q, rel=1e-9)
         share.append(with_q[3] - without[3])
         assert with_q[2] == without[2]  # (no vertical force)
     assert share[1] / share[0] == pytest.approx(2.0, rel=1e-12)

@@ -107,7 +107,7 @@ def _accelerations(model, d, in_contact, delta=10.2 * NM):
 @pytest.mark.parametrize("above_nm", [0.05, 0.3, 1.0])
 def test_out_of_contact_only_the_continuous_lubricant_shear_acts(models, above_nm):
     """Above the criterion the switched friction is off; the continuous one is A_n tau_lub a_w(d), seen
-    as the pitch moment -h_cg Q alone (the vertical force is unchanged)."""
+    as the pitch moment -friction_arm Q alone (the vertical force is unchanged)."""
     crit, cont = models["criterion"], models["continuous"]
     d = crit.k_sigma + above_nm * NM
     az0, at0, p = _accelerations(crit, d, False)
@@ -117,7 +117,7 @@ def test_out_of_contact_only_the_continuous_lubricant_shear_acts(models, above_n
     a_w = isbl.isbl_tables(np.array([d]), models["interface"], quantities=["wetted_area_fraction"])
     Q = p["A_n"] * 19e6 * float(a_w["wetted_area_fraction"][0])
     assert Q > 0
-    assert (at0 - at1) * p["I"] / p["h_cg"] == pytest.approx(Q, rel=1e-4)
+    assert (at0 - at1) * p["I"] / p["friction_arm"] == pytest.approx(Q, rel=1e-4)
 
 
 @pytest.mark.parametrize("below_nm", [0.05, 0.3])
@@ -140,7 +140,7 @@ def test_the_jump_at_the_criterion_is_the_solid_friction_alone(models):
     _, _, p = _accelerations(crit, d, True)
     tau_solid, tau_all = (pw.ppval(m.friction[:, :4].copy(), p.tab_x0, p.tab_h, np.array([d]))[0]
                           for m in (solid, crit))
-    moment = -p["h_cg"] * p["A_n"] / p["I"]  # (the contact force's moment is in every jump alike)
+    moment = -p["friction_arm"] * p["A_n"] / p["I"]  # (the contact force's moment is in every jump alike)
     assert jump["continuous"] == pytest.approx(jump["solid"], rel=1e-9)
     assert jump["criterion"] - jump["continuous"] == pytest.approx(moment * (tau_all - tau_solid), rel=1e-6)
 

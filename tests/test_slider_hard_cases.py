@@ -196,7 +196,7 @@ def test_hard_case_is_finite_physical_and_converged(base, record, paper_hardness
 # contact mode accumulate over the 2 ms and the default solver errs by several per cent (measured for
 # undamped, frictionless surfing at 11 nm: FHM/BV 9.65 % at the defaults against 9.05 % converged); they
 # converge under refinement from rtol 1e-8, which the test checks. With friction and no damping the
-# friction moment -h_cg A_n tau(d), a circulatory force, destabilises surfing: no convergence is
+# friction moment -friction_arm A_n tau(d), a circulatory force, destabilises surfing: no convergence is
 # expected and only finiteness and physical bounds are checked (test_hard_case_is_finite_...).
 @pytest.mark.parametrize("name, protrusion, rtol", [("deep_interference", 15.0, None),
                                                     ("zero_damping_frictionless", 11.0, 1e-8),
@@ -236,7 +236,7 @@ def test_dmw_step_is_followed_and_settles(base, record):
 
 
 def test_zero_damping_deep_interference_stays_finite(base, record, paper_hardness):
-    # Zero damping at 15 nm: friction (a moment -h_cg A_n tau(d) that depends on d, a circulatory,
+    # Zero damping at 15 nm: friction (a moment -friction_arm A_n tau(d) that depends on d, a circulatory,
     # non-conservative force) and the DMW pump energy into the slider and nothing takes it out: it
     # bounces violently (measured FHM/BV ~700-1000 %, contact in 5-7 % of the window). This motion is
     # chaotic, so it does not converge under tolerance changes (FHM changes ~15 %); it must still stay

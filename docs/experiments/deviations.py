@@ -128,7 +128,7 @@ def gap_opening(out: Path) -> None:
         y, note = running.start(m, delta)
         p, _, _ = kernel_inputs.run_parameters(m, delta)
         d[name] = separation_at(p, y[Z], y[THETA], 0.0)
-        print(f"  friction {name:6s}: arm {m.p['h_cg'] * 1e3:.4g} mm, {note}, d = {d[name] / NM:.4f} nm")
+        print(f"  friction {name:6s}: arm {m.p['friction_arm'] * 1e3:.4g} mm, {note}, d = {d[name] / NM:.4f} nm")
     for arm in ("cg", "gimbal"):
         print(f"  opening with arm {arm}: {(d[arm] - d['none']) / NM:.4f} nm")
 

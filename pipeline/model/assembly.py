@@ -148,32 +148,32 @@ def slider_from_scene(scene: Any, damping_ratio: float | None = None) -> tuple[a
 
     Stiffnesses by modal inversion of the two natural frequencies (root chosen by the named rule
     ``air_bearing.stiffness_root``, default ``"stiff-rear"``: docs/model.md, section "Air bearing"), pad dampers for the modal
-    damping ratio. ``h_cg``, the friction force's moment arm about the CG, by the named rule
+    damping ratio. ``friction_arm``, the friction force's moment arm about the CG, by the named rule
     ``slider.friction_arm`` (:func:`pipeline.physics.geometry.friction_arm`): ``T/2`` (``"cg"``, the CG
     height over the air-bearing surface) or ``T`` (``"gimbal"``; docs/model.md, section "Deviations", item 19).
     """
-    s, a = scene["slider"], scene["air_bearing"]
     si = to_si(scene)
     ss, sa = si.slider, si.air_bearing
     L, W, T = ss.length, ss.width, ss.thickness
-    m, I = ab.mass_properties(L, W, T, s["density_kg_m3"])
+    m, I = ab.mass_properties(L, W, T, ss.density)
     l_f, l_r = ss.front_arm, ss.rear_arm
     l_c = L / 2 - ss.tfc_from_trailing_edge
     f1, f2 = sa.frequencies
-    k_f, k_r, info = ab.choose_stiffness(f1, f2, m, I, l_f, l_r, L, a["stiffness_root"])
-    zeta = a["damping_ratio"] if damping_ratio is None else damping_ratio
+    k_f, k_r, info = ab.choose_stiffness(f1, f2, m, I, l_f, l_r, L, sa.stiffness_root)
+    zeta = sa.damping_ratio if damping_ratio is None else damping_ratio
     c_f, c_r = ab.pad_damping(k_f, k_r, m, I, l_f, l_r, zeta) if zeta > 0 else (0.0, 0.0)
     g0 = sa.rear_reference_gap or sa.flying_height
-    slider = ab.Slider(m=m, I=I, l_f=l_f, l_r=l_r, l_c=l_c, h_cg=friction_arm(T, s["friction_arm"]), k_f=k_f,
-                       k_r=k_r, c_f=c_f, c_r=c_r, g0=g0, n=a["rear_exponent"])
+    slider = ab.Slider(m=m, I=I, l_f=l_f, l_r=l_r, l_c=l_c, friction_arm=friction_arm(T, ss.friction_arm), k_f=k_f,
+                       k_r=k_r, c_f=c_f, c_r=c_r, g0=g0, n=sa.rear_exponent)
     info["damping_ratio"] = zeta
-    info["friction_arm"] = s["friction_arm"]
+    info["friction_arm"] = ss.friction_arm
     return slider, info
 
 
 def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float] | None, k: float | None,
                 damping_ratio: float | None = None, bulge: Any | None = None) -> Model:
-    """Assemble the model of a scene.
+    """Assemble the model of a scene, in named steps (each reads the scene through its SI view,
+    :func:`pipeline.config.si.to_si`).
 
     Parameters
     ----------
@@ -189,130 +189,194 @@ def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float]
     eff = scene.effects
     if "air_bearing" not in eff:
         raise ValueError("scene.effects must include 'air_bearing': nothing else holds the slider up")
-    slider, info = slider_from_scene(scene, damping_ratio)
-    a, sol, dm = scene["air_bearing"], scene["solver"], scene["dmw"]
     si = to_si(scene)
-    s_sol = si.solver
-    p = dyn.params(m=slider.m, I=slider.I, l_f=slider.l_f, l_r=slider.l_r, l_c=slider.l_c, h_cg=slider.h_cg,
-                   k_f=slider.k_f, k_r=slider.k_r, c_f=slider.c_f, c_r=slider.c_r,
-                   g0=slider.g0, n=slider.n, F_r0=slider.rear_preload, FH0=si.air_bearing.flying_height)
+    sa, sc, s_sol = si.air_bearing, si.contact, si.solver
+    slider, info = slider_from_scene(scene, damping_ratio)
+    p = kernel_record(slider, si)
     gap_power, tabulated = tfc_point_laws(scene, p.FH0, {"bulge": bulge})
-    rear_law = rear_law_ref(a["rear_law"])  # (a law that does not compile fails here, one line)
-    info.update({"rear_law": a["rear_law"], "tfc_stiffening": a["tfc_stiffening"],
-                 "friction_law": scene["contact"]["friction_law"],
-                 "friction_coefficient": scene["contact"]["friction_coefficient"]})
-    p.c_c = scene["contact"]["damping_n_s_m"]
-    p.dwell = s_sol.min_dwell
-    p.h_stiff = sol["stiffness_step"]
-    # The record gives the disk under the TFC point at time t; the front and rear pads see the same
-    # disk point earlier, by the travel time from pad to TFC (the disk moves leading -> trailing edge).
-    V = disk_speed_m_s(dm)
-    p.off_f = (slider.l_f + slider.l_c) / V
-    p.off_r = (slider.l_c - slider.l_r) / V
-    p.off_c = 0.0
-    order = sol["interpolation_order"]
-    duration = s_sol.duration
-
-    dmw_c = None
-    if "dmw" in eff:
-        if dmw is None:
-            raise ValueError("the dmw effect needs a DMW record")
-        w_nm, fs = dmw
-        need = duration + max(p.off_f, 0.0) + 2.0 / fs
-        have = (w_nm.size - 1) / fs
-        if have < need:
-            raise ValueError(f"DMW record of {have / MS:.4g} ms is shorter than the {need / MS:.4g} ms the "
-                             f"simulation needs (duration plus the pad-to-TFC travel time); set "
-                             f"dmw.duration_ms >= {np.ceil(need * 1e5) / 1e2:g}")
-        dmw_c = disk_coefficients(np.asarray(w_nm, float) * NM, 1.0 / fs, order,
-                                      (p.off_c, p.off_f, p.off_r))
-        p.dmw_t0, p.dmw_dt = 0.0, 1.0 / fs
-        info["disk_speed_m_s"] = V
-
-    tabs = {"contact": None, "adhesion": None, "friction": None, "area": None}
-    if interface is not None and "model" in interface.dims:  # both models' tables: the scene's (interface.model)
-        interface = interface.sel(model=scene["interface"]["model"])
-    if interface is not None and "separation" in interface.coords:
-        x = interface["separation"].values * NM
-        h = float(x[1] - x[0])
-        p.tab_x0, p.tab_h, p.tab_n = x[0], h, x.size - 1
-        names = {"contact": ("contact_pressure", "contact"), "adhesion": ("adhesion_pressure", "adhesion"),
-                 "friction": ("friction_stress", "friction"), "area": ("real_area_fraction", "contact")}
-        for key, (var, effect) in names.items():
-            scale = INTERFACE[var].si_unit  # dataset unit -> SI, declared once (pipeline/variables.py)
-            if effect in eff:
-                if var not in interface:
-                    raise ValueError(f"interface tables lack {var!r}, needed by the {effect} effect; "
-                                     "re-run `hdi interface`")
-                values = interface[var].values * scale
-                if key == "friction":  # the named friction law (docs/model.md, section "Friction") acts through the table
-                    c = scene["contact"]
-                    values = friction_stress_table(c["friction_law"],
-                                                   interface["contact_pressure"].values * INTERFACE["contact_pressure"].si_unit,
-                                                   values, c["friction_coefficient"])
-                    tau_lub, lub = si.lubricant.shear_stress, None
-                    if tau_lub > 0.0:  # the lubricant-shear term beside the solid one (docs/model.md, "Lubricant friction")
-                        if "wetted_area_fraction" not in interface:
-                            raise ValueError("interface tables lack 'wetted_area_fraction', needed by "
-                                             "lubricant.shear_stress_mpa > 0; re-run `hdi interface`")
-                        lub = lubricant_shear_stress(interface["wetted_area_fraction"].values, tau_lub)
-                    # switched with the contact criterion, or the lubricant shear apart: at every separation
-                    # (docs/model.md, section "Switched and continuous friction"; two tables side by side)
-                    values, always = friction_parts(c["friction_switching"], values, lub)
-                    if always is not None:
-                        tabs[key] = np.ascontiguousarray(np.hstack([piecewise_coefficients(values, h, order),
-                                                                    piecewise_coefficients(always, h, order)]))
-                        continue
-                tabs[key] = piecewise_coefficients(values, h, order)
-    elif eff & {"contact", "adhesion"}:
-        raise ValueError("the contact/adhesion effects need interface tables (run `hdi interface`)")
+    rear_law = rear_law_ref(sa.rear_law)  # (a law that does not compile fails here, one line)
+    info.update({"rear_law": sa.rear_law, "tfc_stiffening": sa.tfc_stiffening, "friction_law": sc.friction_law,
+                 "friction_coefficient": sc.friction_coefficient})
+    dmw_c = disk_record(scene, p, dmw, info)
+    interface = scene_interface(scene, interface)
+    tabs = flat_tables(scene, p, interface)
     sigma = float(interface["sigma"]) * NM if interface is not None else np.nan
-    # separation datum: d is measured to the mean of summit heights, y_s above the mean of surface
-    # heights to which FH0 is measured (docs/model.md, section "Separation datum")
-    if interface is not None and "y_s" in interface:
-        p.y_s = float(interface["y_s"]) * NM
-    elif scene["roughness"]["afm"]:  # y_s is a statistic of the scans: interface.nc has it
-        raise ValueError("a scene with roughness.afm needs its interface.nc (y_s of the scans) even without "
-                         "contact or adhesion (pipeline.model.scene_inputs.needs_interface)")
-    else:  # McCool's y_s of the explicit statistics (docs/model.md, section "Asperity statistics"), what the interface stage would write
-        r = scene["roughness"]
-        p.y_s = explicit_statistics(r["sigma_nm"], r["summit_radius_um"], r["summit_density_per_um2"])["y_s"]
+    p.y_s = summit_datum(scene, interface)
     info["y_s"] = p.y_s
-    if "contact" in eff:
-        if k is None or not np.isfinite(k):
-            raise ValueError("the contact effect needs the criterion k: set contact.k or run `hdi calibrate`")
-    k = float(k) if k is not None else np.nan
-    atol_len = s_sol.atol
-    w2 = 2 * np.pi * a["frequencies_khz"][1] * KHZ
-    atol = np.array([atol_len, atol_len / slider.l_c, atol_len * w2, atol_len / slider.l_c * w2])
-    meniscus = si.lubricant.meniscus_time
-    if meniscus > 0.0:
-        if tabs["adhesion"] is None:
-            raise ValueError("lubricant.meniscus_time_us > 0 relaxes the adhesion pressure: it needs the adhesion "
-                             "effect in scene.effects")
-        if scene["interface"]["adhesion"] == "two-population":
-            # the state relaxes towards the menisci around contacts; the bridges act at once (docs/model.md,
-            # section "Two adhesion populations"): two tables side by side (pipeline.model.dynamics.Tables)
-            parts = [interface[v].values * INTERFACE[v].si_unit
-                     for v in ("adhesion_pressure_menisci", "adhesion_pressure_bridges")]
-            tabs["adhesion"] = np.ascontiguousarray(np.hstack([piecewise_coefficients(v, p.tab_h, order)
-                                                               for v in parts]))
-        # the meniscus state q [Pa]: absolute tolerance a millionth of the largest pressure it relaxes towards
-        # (the flat-section table's also with contact.area_model = "integrated": a tolerance, of the same order)
-        atol = np.append(atol, MENISCUS_ATOL * np.max(np.abs(tabs["adhesion"][:, 3])))
-    else:
-        meniscus = None
+    k = criterion(eff, k)
+    atol = tolerances(scene, slider)
+    meniscus, tabs["adhesion"], atol = meniscus_state(scene, interface, p, tabs["adhesion"], atol)
     info.update({"k_f": slider.k_f, "k_r": slider.k_r, "c_f": slider.c_f, "c_r": slider.c_r})
     return Model(slider=slider, p=p, dmw=dmw_c, contact=tabs["contact"], adhesion=tabs["adhesion"],
                  friction=tabs["friction"], area=tabs["area"],
                  pitch=np.ones(1) if "pitch" in eff else None, sigma=sigma, k=k,
-                 section_depth=scene["contact"]["section_depth_sigma"] * sigma,
+                 section_depth=sc.section_depth * sigma,
                  half_length=si.tfc.half_length, half_width=si.tfc.half_width,
-                 duration=duration, transient=s_sol.transient,
-                 output_step=s_sol.output_step, rtol=sol["rtol"], atol=atol,
-                 max_step=s_sol.max_step, fhm_measure=sol["fhm_measure"], effects=eff, info=info,
+                 duration=s_sol.duration, transient=s_sol.transient,
+                 output_step=s_sol.output_step, rtol=s_sol.rtol, atol=atol,
+                 max_step=s_sol.max_step, fhm_measure=s_sol.fhm_measure, effects=eff, info=info,
                  tfc_stiffening=gap_power, rear_law=rear_law, tfc_tabulated=tabulated, scene=scene,
-                 start=sol["start"], meniscus=meniscus, area_model=scene["contact"]["area_model"])
+                 start=s_sol.start, meniscus=meniscus, area_model=sc.area_model)
+
+
+def kernel_record(slider: ab.Slider, si: Any) -> np.record:
+    """Step 1: the kernel's parameter record (:data:`pipeline.model.dynamics.PARAMS`) with the fields the
+    scene fixes: the rigid body and its air bearing (:func:`slider_from_scene`), the flying height, the
+    contact damper and the solver's contact thresholds; ``si``: the scene's SI view. The grids are set
+    by the later steps, the protrusion-dependent fields per run
+    (:func:`pipeline.model.kernel_inputs.run_parameters`)."""
+    return dyn.params(m=slider.m, I=slider.I, l_f=slider.l_f, l_r=slider.l_r, l_c=slider.l_c,
+                      friction_arm=slider.friction_arm, k_f=slider.k_f, k_r=slider.k_r, c_f=slider.c_f,
+                      c_r=slider.c_r, g0=slider.g0, n=slider.n, F_r0=slider.rear_preload,
+                      FH0=si.air_bearing.flying_height, c_c=si.contact.damping, dwell=si.solver.min_dwell,
+                      h_stiff=si.solver.stiffness_step)
+
+
+def disk_record(scene: Any, p: np.record, dmw: tuple[np.ndarray, float] | None, info: dict) -> np.ndarray | None:
+    """Step 2: the disk travel times from each pad to the TFC point into ``p`` (``off_f``, ``off_r``,
+    ``off_c`` [s]) and, with the ``dmw`` effect, the DMW record's coefficients [m] (``None`` without), its
+    grid into ``p`` (``dmw_t0``, ``dmw_dt`` [s]) and the disk speed into ``info``."""
+    # The record gives the disk under the TFC point at time t; the front and rear pads see the same
+    # disk point earlier, by the travel time from pad to TFC (the disk moves leading -> trailing edge).
+    V = disk_speed_m_s(scene["dmw"])
+    p.off_f = (p.l_f + p.l_c) / V
+    p.off_r = (p.l_c - p.l_r) / V
+    p.off_c = 0.0
+    if "dmw" not in scene.effects:
+        return None
+    if dmw is None:
+        raise ValueError("the dmw effect needs a DMW record")
+    s_sol = to_si(scene).solver
+    w_nm, fs = dmw
+    need = s_sol.duration + max(p.off_f, 0.0) + 2.0 / fs
+    have = (w_nm.size - 1) / fs
+    if have < need:
+        raise ValueError(f"DMW record of {have / MS:.4g} ms is shorter than the {need / MS:.4g} ms the "
+                         f"simulation needs (duration plus the pad-to-TFC travel time); set "
+                         f"dmw.duration_ms >= {np.ceil(need * 1e5) / 1e2:g}")
+    coefficients = disk_coefficients(np.asarray(w_nm, float) * NM, 1.0 / fs, s_sol.interpolation_order,
+                                     (p.off_c, p.off_f, p.off_r))
+    p.dmw_t0, p.dmw_dt = 0.0, 1.0 / fs
+    info["disk_speed_m_s"] = V
+    return coefficients
+
+
+def scene_interface(scene: Any, interface: Any | None) -> Any | None:
+    """The interface dataset of the scene's ``interface.model`` (a dataset of both models has the
+    dimension ``model``), or ``interface`` as it is."""
+    if interface is not None and "model" in interface.dims:
+        return interface.sel(model=to_si(scene).interface.model)
+    return interface
+
+
+#: The interface tables of the model: field of :class:`Model` -> (variable of ``interface.nc``, the
+#: effect that needs it).
+TABLES = {"contact": ("contact_pressure", "contact"), "adhesion": ("adhesion_pressure", "adhesion"),
+          "friction": ("friction_stress", "friction"), "area": ("real_area_fraction", "contact")}
+
+
+def flat_tables(scene: Any, p: np.record, interface: Any | None) -> dict[str, np.ndarray | None]:
+    """Step 3: the flat-section interface tables of the scene's effects (piecewise-cubic coefficients in
+    SI versus the separation, :data:`TABLES`; ``None``: effect off) and their grid into ``p``
+    (``tab_x0``, ``tab_h`` [m], ``tab_n``). The friction table is the named friction law's
+    (``contact.friction_law``) with, for ``lubricant.shear_stress_mpa > 0``, the lubricant shear beside
+    (two tables side by side, :func:`pipeline.physics.friction.friction_parts`)."""
+    eff = scene.effects
+    tabs: dict[str, np.ndarray | None] = dict.fromkeys(TABLES)
+    if interface is None or "separation" not in interface.coords:
+        if eff & {"contact", "adhesion"}:
+            raise ValueError("the contact/adhesion effects need interface tables (run `hdi interface`)")
+        return tabs
+    si = to_si(scene)
+    order = si.solver.interpolation_order
+    x = interface["separation"].values * NM
+    h = float(x[1] - x[0])
+    p.tab_x0, p.tab_h, p.tab_n = x[0], h, x.size - 1
+    for key, (var, effect) in TABLES.items():
+        if effect not in eff:
+            continue
+        if var not in interface:
+            raise ValueError(f"interface tables lack {var!r}, needed by the {effect} effect; re-run `hdi interface`")
+        values = interface[var].values * INTERFACE[var].si_unit  # dataset unit -> SI (pipeline/variables.py)
+        if key == "friction":  # the named friction law (docs/model.md, section "Friction") acts through the table
+            values, always = friction_tables(scene, interface, values)
+            if always is not None:
+                tabs[key] = np.ascontiguousarray(np.hstack([piecewise_coefficients(values, h, order),
+                                                            piecewise_coefficients(always, h, order)]))
+                continue
+        tabs[key] = piecewise_coefficients(values, h, order)
+    return tabs
+
+
+def friction_tables(scene: Any, interface: Any, stress: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+    """The friction stress [Pa] of the named law (``contact.friction_law``) on the interface's friction
+    stress ``stress`` [Pa], switched with the contact criterion, and the part acting at every separation
+    (``contact.friction_switching``, the lubricant shear of ``lubricant.shear_stress_mpa``; ``None``:
+    none; docs/model.md, sections "Lubricant friction", "Switched and continuous friction")."""
+    si = to_si(scene)
+    sc = si.contact
+    pressure = interface["contact_pressure"].values * INTERFACE["contact_pressure"].si_unit
+    values = friction_stress_table(sc.friction_law, pressure, stress, sc.friction_coefficient)
+    tau_lub, lub = si.lubricant.shear_stress, None
+    if tau_lub > 0.0:
+        if "wetted_area_fraction" not in interface:
+            raise ValueError("interface tables lack 'wetted_area_fraction', needed by "
+                             "lubricant.shear_stress_mpa > 0; re-run `hdi interface`")
+        lub = lubricant_shear_stress(interface["wetted_area_fraction"].values, tau_lub)
+    return friction_parts(sc.friction_switching, values, lub)
+
+
+def summit_datum(scene: Any, interface: Any | None) -> float:
+    """Step 4: ``y_s`` [m], the mean of summit heights over the mean of surface heights to which
+    ``FH0`` is measured (docs/model.md, section "Separation datum"): the interface's (``interface.nc``),
+    else McCool's of the explicit statistics (section "Asperity statistics"), what the interface stage
+    would write."""
+    if interface is not None and "y_s" in interface:
+        return float(interface["y_s"]) * NM
+    if to_si(scene).roughness.afm:  # y_s is a statistic of the scans: interface.nc has it
+        raise ValueError("a scene with roughness.afm needs its interface.nc (y_s of the scans) even without "
+                         "contact or adhesion (pipeline.model.scene_inputs.needs_interface)")
+    # (the scene's own units: explicit_statistics converts them; to_si would divide the density differently)
+    r = scene["roughness"]
+    return explicit_statistics(r["sigma_nm"], r["summit_radius_um"], r["summit_density_per_um2"])["y_s"]
+
+
+def criterion(effects: frozenset, k: float | None) -> float:
+    """Step 5: the contact criterion ``k`` [1], required with the contact effect (NaN without)."""
+    if "contact" in effects and (k is None or not np.isfinite(k)):
+        raise ValueError("the contact effect needs the criterion k: set contact.k or run `hdi calibrate`")
+    return float(k) if k is not None else np.nan
+
+
+def tolerances(scene: Any, slider: ab.Slider) -> np.ndarray:
+    """Step 6: the absolute tolerances of the state ``(z, theta, z', theta')``: ``solver.atol_nm`` on
+    ``z``, over ``l_c`` on ``theta``, times the second natural frequency on the rates."""
+    atol_len = to_si(scene).solver.atol
+    # (the hand conversion kept: to_si's frequency [Hz] would round 2 pi f_kHz 1e3 in another order)
+    w2 = 2 * np.pi * scene["air_bearing"]["frequencies_khz"][1] * KHZ
+    return np.array([atol_len, atol_len / slider.l_c, atol_len * w2, atol_len / slider.l_c * w2])
+
+
+def meniscus_state(scene: Any, interface: Any | None, p: np.record, adhesion: np.ndarray | None,
+                   atol: np.ndarray) -> tuple[float | None, np.ndarray | None, np.ndarray]:
+    """Step 7: the meniscus relaxation time [s] (``lubricant.meniscus_time_us``; ``None``: off), the
+    adhesion table it relaxes towards, and the tolerances with the meniscus state's appended."""
+    meniscus = to_si(scene).lubricant.meniscus_time
+    if not meniscus > 0.0:
+        return None, adhesion, atol
+    if adhesion is None:
+        raise ValueError("lubricant.meniscus_time_us > 0 relaxes the adhesion pressure: it needs the adhesion "
+                         "effect in scene.effects")
+    if to_si(scene).interface.adhesion == "two-population":
+        # the state relaxes towards the menisci around contacts; the bridges act at once (docs/model.md,
+        # section "Two adhesion populations"): two tables side by side (pipeline.model.dynamics.Tables)
+        order = to_si(scene).solver.interpolation_order
+        parts = [interface[v].values * INTERFACE[v].si_unit
+                 for v in ("adhesion_pressure_menisci", "adhesion_pressure_bridges")]
+        adhesion = np.ascontiguousarray(np.hstack([piecewise_coefficients(v, p.tab_h, order) for v in parts]))
+    # the meniscus state q [Pa]: absolute tolerance a millionth of the largest pressure it relaxes towards
+    # (the flat-section table's also with contact.area_model = "integrated": a tolerance, of the same order)
+    return meniscus, adhesion, np.append(atol, MENISCUS_ATOL * np.max(np.abs(adhesion[:, 3])))
 
 
 def tfc_point_laws(scene: Any, fh0: float, tables: Mapping[str, Any] | None = None
@@ -322,7 +386,7 @@ def tfc_point_laws(scene: Any, fh0: float, tables: Mapping[str, Any] | None = No
     to tabulate (:func:`pipeline.model.kernel_inputs.tfc_table`). ``fh0``: the flying height [m]; ``tables``: the datasets of the stages
     the laws read, by stage name (:attr:`pipeline.physics.air_bearing.TfcLaw.table`); a law that reads one
     gets it bound, in SI (:func:`pipeline.model.bulge_table.from_dataset`)."""
-    a = scene["air_bearing"]
+    a, sa = scene["air_bearing"], to_si(scene).air_bearing  # (the law names, the numbers in SI)
     tables = tables or {}
     gap_power, tabulated = None, []
     for key, registry in TFC_POINT_LAWS.items():
@@ -330,7 +394,7 @@ def tfc_point_laws(scene: Any, fh0: float, tables: Mapping[str, Any] | None = No
         if law is None:
             continue
         if law.closed_form == "gap-power":  # docs/model.md, section "Model variants"
-            k_t, q = a["tfc_stiffness_n_m"], a["tfc_stiffening_exponent"]
+            k_t, q = sa.tfc_stiffness, sa.tfc_stiffening_exponent
             gap_power = dyn.params(dyn.GAP_POWER, k_t=k_t, q=q, g0=fh0, g_min=ab.TFC_MIN_GAP * fh0,
                                    k_min=ab.stiffening_stiffness(ab.TFC_MIN_GAP, 1.0, k_t, q))  # at g = g_min
         elif law.closed_form is None:
@@ -342,9 +406,8 @@ def tfc_point_laws(scene: Any, fh0: float, tables: Mapping[str, Any] | None = No
                 law = replace(law, force=partial(law.force, table=TABLE_READERS[law.table](ds)))
             if law.parameters:
                 law = replace(law, force=partial(law.force, **law_parameters(scene, law)))
-            if key == "bulge" and a["lift_cap_gap_nm"] is not None:  # hypothesis H8 (off by default)
-                g_s = to_si(scene).air_bearing.lift_cap_gap
-                law = replace(law, force=partial(capped_lift, force=law.force, gap=g_s))
+            if key == "bulge" and sa.lift_cap_gap is not None:  # hypothesis H8 (off by default)
+                law = replace(law, force=partial(capped_lift, force=law.force, gap=sa.lift_cap_gap))
             tabulated.append(law)
         else:
             raise ValueError(f"air_bearing.{key} = {a[key]!r}: no compiled form {law.closed_form!r} in the kernel")

@@ -29,7 +29,8 @@ class Slider:
     ----------
     m : mass [kg]; I : pitch inertia about the CG [kg m^2]
     l_f, l_r, l_c : arms of the front pad, rear pad, TFC point from the CG [m] (front ahead, others behind)
-    h_cg : height of the CG above the air-bearing surface [m] (friction moment arm)
+    friction_arm : the friction force's moment arm about the CG [m] (``slider.friction_arm``: the CG height
+        over the air-bearing surface, or the slider's thickness; :func:`pipeline.physics.geometry.friction_arm`)
     k_f, k_r : front and rear bearing stiffness [N/m]; c_f, c_r : their dampers [N s/m]
     g0 : rear reference gap [m]; n : rear exponent [1]
     """
@@ -39,7 +40,7 @@ class Slider:
     l_f: float
     l_r: float
     l_c: float
-    h_cg: float
+    friction_arm: float
     k_f: float
     k_r: float
     c_f: float
