@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from benchmarks.common import makefile_scene, record, timeit
-from pipeline.model import slider as sl
+from pipeline.model import assembly
 from pipeline.config.scene import load_scene
 from pipeline.analyses import calibration as cal
 from pipeline.stages.simulate import model_inputs
@@ -39,7 +39,7 @@ def run(results: list[dict]) -> None:
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp)
         interface, rec = model_inputs(scene, out)
-        model = sl.build_model(scene, interface, rec, k=0.0)
+        model = assembly.build_model(scene, interface, rec, k=0.0)
         todo = np.union1d(protrusion_grid(scene), [td["onset_nm"], td["previous_nm"]])
 
         def exact() -> None:

@@ -1,4 +1,4 @@
-"""Benchmarks of the slider dynamics (pipeline.model.dynamics via pipeline.model.slider), against the naive baseline.
+"""Benchmarks of the slider dynamics (pipeline.model.dynamics via pipeline.model.running), against the naive baseline.
 
 Rows (targets from the task brief):
 
@@ -34,7 +34,7 @@ import numpy as np
 
 from benchmarks.common import record, timeit
 from benchmarks.naive import simulate_naive
-from pipeline.model import slider as sl
+from pipeline.model import assembly, outcomes, running
 from pipeline.config.scene import load_scene
 from pipeline.stages.simulate import model_inputs
 from pipeline.config.grid import protrusion_grid
@@ -48,17 +48,16 @@ FRESH = textwrap.dedent("""
     import time
     t0 = time.perf_counter()
     import sys
-    from pipeline.model import slider as sl
     from pipeline.io import read_dataset
     from pipeline.config.scene import load_scene
-    from pipeline.model import dmw_record
+    from pipeline.model import assembly, dmw_record, outcomes, running
     t1 = time.perf_counter()
     out = sys.argv[1]
     scene = load_scene(sys.argv[2], ["contact.k=%(k)s"])
     interface = read_dataset(out + "/interface.nc", stage="interface")
     _, w, fs = dmw_record.load(out + "/dmw.nc")
-    model = sl.build_model(scene, interface, (w, fs), %(k)s)
-    s = sl.summarize(sl.run_model(model, 11e-9))
+    model = assembly.build_model(scene, interface, (w, fs), %(k)s)
+    s = outcomes.summarize(running.run_model(model, 11e-9))
     t2 = time.perf_counter()
     print({"import_s": t1 - t0, "first_call_s": t2 - t1, "total_s": t2 - t0, "fhm_bv": s["fhm_bv"]}, flush=True)
     if sys.argv[3] == "fast-exit":
@@ -91,15 +90,15 @@ def run(results: list[dict]) -> None:
         t0 = time.perf_counter()
         interface, rec = model_inputs(scene, folder)
         t_inputs = time.perf_counter() - t0
-        model = sl.build_model(scene, interface, rec, K)
+        model = assembly.build_model(scene, interface, rec, K)
 
         def project(prot_nm: float):
-            return lambda: sl.summarize(sl.run_model(model, prot_nm * 1e-9))
+            return lambda: outcomes.summarize(running.run_model(model, prot_nm * 1e-9))
 
         # (1) one paper scene at default accuracy
         proj = {}
         for label, prot in (("sliding", 11.0), ("flying", 5.0)):
-            run_ = sl.run_model(model, prot * 1e-9)
+            run_ = running.run_model(model, prot * 1e-9)
             proj[prot] = record(results, f"dynamics: paper scene 2 ms, {label} {prot:g} nm (run + summarize)",
                                 timeit(project(prot), repeat=21), target_s=0.05, steps=int(run_.info[1]),
                                 rejected=int(run_.info[2]), rhs_evaluations=int(run_.info[4]))
@@ -112,12 +111,12 @@ def run(results: list[dict]) -> None:
 
         # (3) what the effects cost: air bearing only versus the full scene
         ab_scene = scene.replace(scene={"effects": ["air_bearing"]})
-        ab_model = sl.build_model(ab_scene, None, None, None)
-        ab = timeit(lambda: sl.summarize(sl.run_model(ab_model, 11e-9)), repeat=21)
+        ab_model = assembly.build_model(ab_scene, None, None, None)
+        ab = timeit(lambda: outcomes.summarize(running.run_model(ab_model, 11e-9)), repeat=21)
         full = statistics.median(timeit(project(11.0), repeat=21))
         record(results, "dynamics: air_bearing-only scene, 11 nm (ratio = full / air_bearing-only)", ab,
                ratio_full_to_air_bearing=full / statistics.median(ab), full_median_s=full,
-               steps=int(sl.run_model(ab_model, 11e-9).info[1]))
+               steps=int(running.run_model(ab_model, 11e-9).info[1]))
 
         # (4) project versus naive, per scene
         for label, prot in (("flying", 5.0), ("sliding", 11.0)):
@@ -125,7 +124,7 @@ def run(results: list[dict]) -> None:
             t_naive = statistics.median(naive_times)
             t_proj = statistics.median(timeit(project(prot), repeat=21))
             n = simulate_naive(scene, interface, rec, K, prot)
-            p = sl.summarize(sl.run_model(model, prot * 1e-9))
+            p = outcomes.summarize(running.run_model(model, prot * 1e-9))
             record(results, f"naive baseline (solve_ivp RK45 + Python rhs), {label} {prot:g} nm", naive_times,
                    rhs_evaluations=int(n["rhs_evaluations"]))
             record(results, f"dynamics vs naive, {label} {prot:g} nm (project; target speed-up >= 100)",
@@ -139,14 +138,14 @@ def run(results: list[dict]) -> None:
         record(results, "naive baseline with np.interp on the DMW record (linear), sliding 11 nm", lin,
                speedup=statistics.median(lin) / t_proj,
                fhm_bv_rel_diff=abs(simulate_naive(scene, interface, rec, K, 11.0, dmw_interpolation="linear")
-                                   ["fhm_bv"] / sl.summarize(sl.run_model(model, 11e-9))["fhm_bv"] - 1))
+                                   ["fhm_bv"] / outcomes.summarize(running.run_model(model, 11e-9))["fhm_bv"] - 1))
 
         # (5) the paper sweep, sequential
         grid = protrusion_grid(scene)
 
         def sweep() -> None:
             for prot in grid:
-                sl.summarize(sl.run_model(model, prot * 1e-9))
+                outcomes.summarize(running.run_model(model, prot * 1e-9))
 
         sweep_times = timeit(sweep, repeat=3)
         t_sweep = statistics.median(sweep_times)

@@ -26,7 +26,7 @@ import numpy as np
 from benchmarks.common import record, timeit
 from pipeline.config.grid import protrusion_grid
 from pipeline.config.scene import load_scene
-from pipeline.model import slider as sl
+from pipeline.model import assembly, kernel_inputs, running
 from pipeline.model.start import start_state
 from pipeline.stages.simulate import model_inputs
 from pipeline.units import NM
@@ -39,22 +39,22 @@ def run(results: list[dict]) -> None:
     """Append the start-state rows to ``results``."""
     scene = load_scene(ROOT / "configs" / "paper-2009.toml", [f"contact.k={K}", "solver.start=static"])
     with tempfile.TemporaryDirectory() as tmp:
-        model = sl.build_model(scene, *model_inputs(scene, Path(tmp)), K)
+        model = assembly.build_model(scene, *model_inputs(scene, Path(tmp)), K)
     grid = protrusion_grid(scene) * NM
 
     def cached(compiled: bool = True) -> None:
         m = replace(model)  # a fresh fold cache: the fold's search is in the time, once
         for p in grid:
-            start_state(lambda mu: sl.run_parameters(m, mu), p, "static", p + m.p["y_s"] - m.p["FH0"],
+            start_state(lambda mu: kernel_inputs.run_parameters(m, mu), p, "static", p + m.p["y_s"] - m.p["FH0"],
                         statics=m.statics, fold_max=2 * m.p["FH0"], compiled=compiled)
 
     def uncached(compiled: bool = True) -> None:
         for p in grid:
-            start_state(lambda mu: sl.run_parameters(model, mu), p, "static",
+            start_state(lambda mu: kernel_inputs.run_parameters(model, mu), p, "static",
                         p + model.p["y_s"] - model.p["FH0"], compiled=compiled)
 
     def fold() -> None:
-        sl.start(replace(model), 0.0)
+        running.start(replace(model), 0.0)
 
     t_cached, t_plain = timeit(cached, repeat=5), timeit(uncached, repeat=3)
     t_cached_py = timeit(lambda: cached(False), repeat=3)

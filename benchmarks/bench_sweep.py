@@ -44,7 +44,7 @@ def _hdi(*args: str, label: str | None = None) -> float:
 
 def kernel_seconds(config: str, inputs: Path, repeat: int = 3) -> list[float]:
     """Sequential kernel time [s] of the paper sweep: ``run_model`` of every protrusion, in process."""
-    from pipeline.model import slider as sl
+    from pipeline.model import assembly, running
     from pipeline.config.scene import load_scene
     from pipeline.io import read_dataset
     from pipeline.model.scene_inputs import contact_k
@@ -52,14 +52,14 @@ def kernel_seconds(config: str, inputs: Path, repeat: int = 3) -> list[float]:
     from pipeline.config.grid import protrusion_grid
     scene = load_scene(config)
     interface, record_ = model_inputs(scene, inputs)
-    model = sl.build_model(scene, interface, record_, contact_k(scene, read_dataset(Path(inputs) / "calibration.nc"))[0])
+    model = assembly.build_model(scene, interface, record_, contact_k(scene, read_dataset(Path(inputs) / "calibration.nc"))[0])
     grid = protrusion_grid(scene)
-    sl.run_model(model, grid[0] * 1e-9)  # compile / load the cache
+    running.run_model(model, grid[0] * 1e-9)  # compile / load the cache
     times = []
     for _ in range(repeat):
         t0 = time.perf_counter()
         for p in grid:
-            sl.run_model(model, p * 1e-9)
+            running.run_model(model, p * 1e-9)
         times.append(time.perf_counter() - t0)
     return times
 

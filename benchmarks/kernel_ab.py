@@ -30,6 +30,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from types import SimpleNamespace
 
 ROOT = Path(__file__).resolve().parents[1]
 CASES = ("air_bearing_11", "flying_5", "sliding_11")
@@ -44,8 +45,14 @@ def _layered() -> bool:
 
 def _modules():
     if _layered():
-        from pipeline.model import dynamics as dyn, slider as sl
+        from pipeline.model import dynamics as dyn
         from pipeline.config.scene import load_scene
+        try:  # (model/slider.py split into assembly, running, ...)
+            from pipeline.model import assembly, running
+            sl = SimpleNamespace(build_model=assembly.build_model, run_model=running.run_model,
+                                 __file__=assembly.__file__)
+        except ImportError:
+            from pipeline.model import slider as sl
     else:  # commit e6348f9
         from pipeline import dynamics as dyn, slider as sl
         from pipeline.scene import load_scene

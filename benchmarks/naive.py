@@ -3,11 +3,11 @@
 Same physics as :func:`pipeline.model.dynamics.rhs` (docs/model.md, section "Slider dynamics"): linear front pad, nonlinear rear
 pad ``F_r0 [(g0/g)^n - 1]``, the disk under each point moving with the DMW record delayed by the
 travel time, adhesion ``-A_n p_a(d)`` always, contact ``A_n p_c(d) - c_c d'`` and friction
-``A_n tau(d)`` (moment ``-h_cg Q``) while ``d < k sigma``. Written the plain way:
+``A_n tau(d)`` (moment ``-friction_arm Q``) while ``d < k sigma``. Written the plain way:
 
 * :func:`scipy.integrate.solve_ivp` with ``RK45`` (the same Dormand-Prince 5(4) pair as the project's
   kernel) at the scene's ``rtol``, per-component ``atol`` and ``max_step`` (the same values the
-  project uses, taken from :func:`pipeline.model.slider.build_model`);
+  project uses, taken from :func:`pipeline.model.assembly.build_model`);
 * a Python right-hand side that interpolates the ``interface.nc`` tables with :func:`numpy.interp`;
 * the contact switch as a terminal ``solve_ivp`` event on ``g = d - k sigma`` (direction: leaving
   the current mode), integration restarted in the new mode from the event state; after a switch the
@@ -26,7 +26,7 @@ Nothing here is deliberately slow: the model constants are computed once, the ri
 plain scalar Python with no allocation beyond the returned list, and there is no per-step Python
 logic other than what ``solve_ivp`` does itself.
 
-:func:`simulate_naive` returns the same steady-window scalars as :func:`pipeline.model.slider.summarize`
+:func:`simulate_naive` returns the same steady-window scalars as :func:`pipeline.model.outcomes.summarize`
 (SI units, same definitions), computed here directly from the naive run: means over the output grid;
 the peak-to-peak (FHM/BV) and minimum of the separation, which the project takes from the exact
 extremes tracked by its integrator, from ``solve_ivp``'s dense output sampled 10x finer than the
@@ -47,7 +47,7 @@ from pipeline.model.state import THETA, THETA_RATE, Z, Z_RATE
 
 #: Longest solve_ivp segment [s] with interface tables: the step cap is renewed at each segment start.
 SEGMENT = 20e-6
-from pipeline.model import slider as sl
+from pipeline.model import assembly, outcomes, running
 from pipeline.physics.geometry import effective_radius, nominal_area
 
 NM, UM, MM = 1e-9, 1e-6, 1e-3
@@ -116,17 +116,17 @@ def simulate_naive(scene: Any, interface_ds: Any, dmw_tuple: tuple[np.ndarray, f
     Returns
     -------
     dict
-        The keys of :func:`pipeline.model.slider.summarize` (SI units) plus ``rhs_evaluations``,
+        The keys of :func:`pipeline.model.outcomes.summarize` (SI units) plus ``rhs_evaluations``,
         ``segments`` (``solve_ivp`` calls) and ``contact_switches``.
     """
     eff = scene.effects
     # The model constants: the same assembly as the project (parameters, not dynamics).
-    model = sl.build_model(scene, interface_ds, dmw_tuple, k)
+    model = assembly.build_model(scene, interface_ds, dmw_tuple, k)
     if model.tfc_stiffening is not None or model.rear_law.name != "power":
         raise NotImplementedError("the naive baseline implements the default model only (air_bearing.rear_law = "
                                   "'power', air_bearing.tfc_stiffening = 'none')")
     s = model.slider
-    m, I, lf, lr, lc, hcg = s.m, s.I, s.l_f, s.l_r, s.l_c, s.h_cg
+    m, I, lf, lr, lc, hcg = s.m, s.I, s.l_f, s.l_r, s.l_c, s.friction_arm
     kf, cf, cr, g0, n, Fr0 = s.k_f, s.c_f, s.c_r, s.g0, s.n, s.rear_preload
     a = scene["air_bearing"]
     FH0 = a["flying_height_nm"] * NM
@@ -191,7 +191,7 @@ def simulate_naive(scene: Any, interface_ds: Any, dmw_tuple: tuple[np.ndarray, f
     def gap(t: float, y: np.ndarray) -> float:
         return d_nom + y[0] - lc * y[1] - disk(t + off_c)[0] - ksig
 
-    # output grid, as pipeline.model.slider.run_model, refined REFINE times for the peak-to-peak of d (the
+    # output grid, as pipeline.model.running.run_model, refined REFINE times for the peak-to-peak of d (the
     # project tracks the exact extremes of d; sampling 10x finer than the output grid comes within
     # ~0.3 % of them for the content of these runs, while the output grid alone aliases by a few %)
     n_coarse = int(round(model.duration / model.output_step)) + 1
@@ -247,7 +247,7 @@ def simulate_naive(scene: Any, interface_ds: Any, dmw_tuple: tuple[np.ndarray, f
         sol = solve_ivp(rhs, (t, t_stop), y, t_eval=t_eval, events=events, args=(contact,), **opts)
         segments += 1
         if sol.status < 0:
-            raise sl.IntegrationError(f"naive solve_ivp failed at t = {t:.6g} s: {sol.message}")
+            raise running.IntegrationError(f"naive solve_ivp failed at t = {t:.6g} s: {sol.message}")
         got = min(np.size(sol.t), jj - j)  # (sol.t is an empty list when no t_eval point was reached)
         if got:
             Y[j:j + got] = np.asarray(sol.y)[:, :got].T
@@ -279,7 +279,7 @@ def simulate_naive(scene: Any, interface_ds: Any, dmw_tuple: tuple[np.ndarray, f
 
 def _summarize(scene, model, t_fine, Y_fine, C_fine, refine, disk, off_c, x, pa, pc, ar, ft, An, ksig, cc, FH0,
                p_sep, delta, s_n, has_contact) -> dict[str, float]:
-    """The steady-window scalars of :func:`pipeline.model.slider.summarize`, from the naive run.
+    """The steady-window scalars of :func:`pipeline.model.outcomes.summarize`, from the naive run.
 
     Means over the output grid (every ``refine``-th sample); the peak-to-peak and the minimum of ``d``
     over all samples of the window (``refine`` per output step).
@@ -315,7 +315,7 @@ def _summarize(scene, model, t_fine, Y_fine, C_fine, refine, disk, off_c, x, pa,
         net += fc + np.where(C, -cc * ddot, 0.0)
         frac = float(np.mean(inc))
         out["contact_fraction"] = frac
-        out["regime"] = sl.FLYING if frac == 0 else (sl.SURFING if frac >= sl.SURFING_FRACTION else sl.BOUNCING)
+        out["regime"] = outcomes.FLYING if frac == 0 else (outcomes.SURFING if frac >= outcomes.SURFING_FRACTION else outcomes.BOUNCING)
         fcw, aw = fc[win], area[win]
         out["contact_force"] = float(np.mean(fcw))
         out["interference"] = float(np.mean(-cw[inc])) if inc.any() else np.nan

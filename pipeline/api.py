@@ -24,7 +24,7 @@ line checks it (:mod:`pipeline.cli_checks`) before anything runs or is written:
 (a missing or foreign dataset), :class:`pipeline.cli_checks.OptionError` (an option or argument of the wrong
 type or range: ``workers="2"``, a results folder that is a file or cannot be written, a negative or NaN
 protrusion), ``ValueError``; all are ``ValueError``. A run whose integration fails raises
-:class:`pipeline.model.slider.IntegrationError` in one line naming the scene, the protrusion and what to
+:class:`pipeline.model.running.IntegrationError` in one line naming the scene, the protrusion and what to
 change (the command line's message); a file system that fails mid-run (a full disk) raises ``OSError``.
 """
 
@@ -48,7 +48,8 @@ from .config.validation import Scene, check_value
 from .io import DatasetError, read_dataset, results_dir
 from .model.inputs import SimulationInputs
 from .model.simulation import histories_of as _histories_of, simulate as _simulate
-from .model.slider import IntegrationError, Model
+from .model.assembly import Model
+from .model.running import IntegrationError
 
 __all__ = ["load_scene", "simulation_inputs", "build_model", "simulate", "histories_of", "open_dataset",
            "run_stage", "run"]
@@ -162,7 +163,7 @@ def build_model(scene: SceneLike, results: str | Path | None = None, *, k: float
 
     Returns
     -------
-    pipeline.model.slider.Model
+    pipeline.model.assembly.Model
         The assembled model in SI units (``model.k`` [1]); run it with :func:`simulate`.
     """
     scene = _scene(scene)
@@ -193,7 +194,7 @@ def simulate(model: Model, protrusions: Iterable[float], *, histories: Iterable[
     pipeline.cli_checks.OptionError
         A protrusion that is no number, NaN, negative or beyond the flying height + 100 nm, or a
         protrusion list that is a single number; ``ValueError`` for the other arguments.
-    pipeline.model.slider.IntegrationError
+    pipeline.model.running.IntegrationError
         A run failed (``on_error="raise"``), in one line naming the scene, the protrusion and what to change.
     """
     if not isinstance(model, Model):

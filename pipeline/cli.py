@@ -24,7 +24,7 @@ from .config.schema import SceneError, describe_keys
 from .folder_lock import folder_lock
 from .stages import roughness
 from .cli_checks import MAX_SCENES, check_options, integration_line, one_line_warnings
-from .model.slider import IntegrationError
+from .model.running import IntegrationError
 
 log = logging.getLogger("pipeline")
 

@@ -301,7 +301,7 @@ _INTEGRATION_HINTS = {
 
 
 def integration_line(exc: BaseException, scene: Any = None) -> str:
-    """One line for a failed integration (:class:`pipeline.model.slider.IntegrationError`, whose text names
+    """One line for a failed integration (:class:`pipeline.model.running.IntegrationError`, whose text names
     the protrusion and the integrator's status): the scene (its file and name), the failure, and what to
     change (:data:`_INTEGRATION_HINTS`)."""
     text = _first_line(exc, 300)

@@ -7,7 +7,7 @@ imports, directly or not, at module level or inside a function (a lazy import is
 the friction law recomputes the stages that simulate, not the roughness stage; editing a figure
 recomputes the report only.
 
-The imports are read from the source text (``from .x import a``, ``from .. import slider``,
+The imports are read from the source text (``from .x import a``, ``from .. import units``,
 ``from pipeline.x import ...``, ``import pipeline.x``), not by parsing it: the whole package parses in
 0.2 s, which every ``hdi`` command would pay, where the text scan takes ~11 ms a stage (0.11 s for
 all ten, once per process). The scan is
@@ -72,7 +72,7 @@ def imports(name: str, root: Path = ROOT, package: str = PACKAGE) -> set[str]:
         for item in names.strip("()").replace("\n", " ").split(","):
             sub = item.split(" as ")[0].strip()
             if sub and sub != "*" and module_file(f"{base}.{sub}", root, package) is not None:
-                found.add(f"{base}.{sub}")  # (``from .. import slider``: a module, not a name)
+                found.add(f"{base}.{sub}")  # (``from .. import units``: a module, not a name)
     found.update(import_.findall(text))
     return {m for m in found if module_file(m, root, package) is not None}
 

@@ -10,7 +10,7 @@ targets and residuals, is :mod:`pipeline.analyses.study`):
   base scene's ``interface.nc``/``dmw.nc`` are read by path, once per worker process
   (:func:`candidate_inputs`, :class:`pipeline.model.inputs.SimulationInputs` and its one cache);
 * it runs at the protrusions the study needs (:func:`pipeline.model.simulation.simulate`) and keeps the
-  steady-window outputs of :func:`pipeline.model.slider.summarize` in dataset units
+  steady-window outputs of :func:`pipeline.model.outcomes.summarize` in dataset units
   (:data:`pipeline.variables.SCALARS`), with k by the one rule
   :func:`pipeline.model.scene_inputs.contact_k` without a calibration (:func:`evaluate`);
 * candidates are fanned out in batches (:func:`evaluate_batch`, via :func:`pipeline.fanout.run_tasks`);
@@ -37,7 +37,7 @@ from .config.schema import SceneError
 from .fanout import run_tasks
 from .paths import append_text, refuse_links
 from .model import dmw_record, scene_inputs
-from .model import slider as sl
+from .model import assembly, copies, running
 from .model.bulge_table import scene_table
 from .model.inputs import SimulationInputs, Source, cached, for_stage
 from .model.interface_tables import build_tables, roughness_statistics
@@ -138,7 +138,7 @@ def seeded_record(scene: Any, seed: int) -> tuple[np.ndarray, float]:
     return cached("dmw", Runner(sub, ".").key("dmw"), lambda: (dmw_record.synthetic_record(s), s["sample_rate_hz"]))
 
 
-def run_protrusions(model: sl.Model, protrusions: Sequence[float]) -> tuple[dict[str, list[float]], float, list[str]]:
+def run_protrusions(model: assembly.Model, protrusions: Sequence[float]) -> tuple[dict[str, list[float]], float, list[str]]:
     """Steady-window summaries of ``model`` at ``protrusions`` [nm], in dataset units (``fhm_bv`` [%],
     ``min_clearance`` [nm], ``contact_force`` [mN], ...), one value per protrusion, NaN where the run
     failed or the quantity does not exist (no contact), by :func:`pipeline.model.simulation.simulate`.
@@ -160,7 +160,7 @@ def evaluate_realisations(scene: Any, protrusions: Sequence[float], inputs: Simu
     the realisations ``realisations`` (0: the scene's own record; else :func:`seeded_record` of the
     matching ``seeds``) at ``protrusions`` [nm] with the contact criterion ``inputs.k`` [1]. Returns, per
     realisation, ``(realisation, *run_protrusions(...))``; the task's models share their static starts
-    (:func:`pipeline.model.slider.share_statics`).
+    (:func:`pipeline.model.copies.share_statics`).
 
     ``inputs`` are the scene's own (current upstream datasets of the calling stage, with k), read by path
     once per process under their stage keys (no candidate's keys to compare).
@@ -169,7 +169,7 @@ def evaluate_realisations(scene: Any, protrusions: Sequence[float], inputs: Simu
     for realisation, seed in zip(realisations, seeds):
         sim = inputs if realisation == 0 else inputs.with_record(Source.memory("dmw", seeded_record(scene, seed)))
         models.append(sim.model(scene))
-    sl.share_statics(models)
+    copies.share_statics(models)
     return [(r, *run_protrusions(model, protrusions)) for r, model in zip(realisations, models)]
 
 
@@ -196,8 +196,8 @@ def evaluate(base: Any, params: Sequence[Parameter], values: Sequence[float], pr
             seeds = dmw_record.realisation_seeds(scene["dmw"]["seed"], realisations)
             sims += [sim.with_record(Source.memory("dmw", seeded_record(scene, seed))) for seed in seeds[1:]]
         models = [s.model(scene) for s in sims]
-        sl.share_statics(models)  # (the static starts are on the mean disk: found once for all records)
-    except (SceneError, ValueError, sl.IntegrationError) as exc:
+        copies.share_statics(models)  # (the static starts are on the mean disk: found once for all records)
+    except (SceneError, ValueError, running.IntegrationError) as exc:
         errors.append(str(exc))
         models = []
     for r, model in enumerate(models):

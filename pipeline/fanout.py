@@ -306,7 +306,7 @@ def local_cluster(scheduler: str | None = None, workers: int | None = None) -> I
 def _warm_worker() -> None:
     """Import the model on a worker (and load its numba cache index) before timing starts."""
     import importlib
-    importlib.import_module("pipeline.model.slider")  # (imported for its side effect: the kernels compiled or loaded)
+    importlib.import_module("pipeline.model.running")  # (imported for its side effect: the kernels compiled or loaded)
 
 
 def in_shared_folder(folder: str | None, fn: Callable[..., Any], *args: Any) -> Any:

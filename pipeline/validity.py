@@ -16,7 +16,7 @@ checked here and the bits of :class:`Validity` say what it left:
   bearing's load scale ``(k_f + k_r) FH0``, the force that closes the bearing's gap (7.9 mN for the
   paper scene), i.e. orders of magnitude beyond anything a slider of that bearing carries.
 
-:func:`pipeline.model.slider.summarize` stores the flags as the scalar ``validity`` (0: valid; declared in
+:func:`pipeline.model.outcomes.summarize` stores the flags as the scalar ``validity`` (0: valid; declared in
 :mod:`pipeline.variables`), and the report refuses a sweep with a flagged scene
 (:func:`describe` names them).
 """

@@ -43,7 +43,7 @@ from .validity import Validity
 class Regime(IntEnum):
     """Regime of a steady window (the ``regime`` variable's ``flag_values``).
 
-    Rule (:func:`pipeline.model.slider.summarize`): flying = no contact in the steady window (no sample in
+    Rule (:func:`pipeline.model.outcomes.summarize`): flying = no contact in the steady window (no sample in
     contact and the integrator's exact minimum of d above k sigma); surfing = in contact in at least
     99 % of the samples (steady sliding); bouncing = otherwise.
     """
@@ -211,7 +211,7 @@ RUN = _group(
 RUN_GRID_DIMS: dict[str, str] = {"k_sigma": "roughness", "summit_offset": "roughness",
                                  "front_damper": "damping", "rear_damper": "damping", "damping_ratio": "damping"}
 
-#: Steady-window scalars of one scene (:func:`pipeline.model.slider.summarize`; ``summary.nc``, ``sweep.nc``).
+#: Steady-window scalars of one scene (:func:`pipeline.model.outcomes.summarize`; ``summary.nc``, ``sweep.nc``).
 SCALARS = _group(
     V("fhm_bv", "%", "flying-height modulation (flying) / bouncing vibration (contact), peak-to-peak over FH0"),
     V("clearance", "nm", "mean clearance d - k sigma over the steady window", NM),
@@ -243,7 +243,7 @@ SCALARS = _group(
                       "(pipeline/validity.py)"),)),
 )
 
-#: Time histories of one scene (:func:`pipeline.model.slider.histories`; ``histories.nc``,
+#: Time histories of one scene (:func:`pipeline.model.outcomes.histories`; ``histories.nc``,
 #: ``sweep_histories.nc``, and ``h_<name>`` in sweep part files).
 HISTORIES = _group(
     V("separation", "nm", "separation d of the TFC surface from the mean of summit heights", NM, dims=("time",)),

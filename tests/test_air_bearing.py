@@ -9,7 +9,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from pipeline.model import slider as sl
+from pipeline.model import assembly
 from pipeline.physics import air_bearing as ab
 from pipeline.config.scene import scene_from_dict
 
@@ -103,7 +103,7 @@ def test_named_alternative_roots_and_their_mode_shapes(mass):
 
 
 def test_scene_slider_uses_the_chosen_root_and_frequencies():
-    s, info = sl.slider_from_scene(scene_from_dict({}))
+    s, info = assembly.slider_from_scene(scene_from_dict({}))
     m, I = ab.mass_properties(L, W, T, RHO)
     k_f, k_r, _ = ab.choose_stiffness(F1, F2, m, I, L_F, L_R, L)
     assert (s.k_f, s.k_r) == pytest.approx((k_f, k_r), rel=1e-12)
@@ -111,7 +111,7 @@ def test_scene_slider_uses_the_chosen_root_and_frequencies():
     np.testing.assert_allclose(w / (2 * np.pi), [F1, F2], rtol=1e-9)
     # TFC point 8 um before the trailing edge, CG at mid-length; friction arm T/2
     assert s.l_c == pytest.approx(L / 2 - 8e-6, rel=1e-12)
-    assert s.h_cg == pytest.approx(T / 2, rel=1e-12)
+    assert s.friction_arm == pytest.approx(T / 2, rel=1e-12)
     # rear preload F_r0 = k_r g0 / n, with g0 = FH0 = 11 nm and n = 2 (docs/model.md, section "Slider dynamics")
     assert s.rear_preload == pytest.approx(s.k_r * 11 * NM / 2, rel=1e-12)
 
@@ -121,7 +121,7 @@ def test_pad_dampers_give_the_modal_damping_ratio(zeta):
     # Pad dampers are not proportional damping, so the exact damping ratios of the linearised
     # slider (eigenvalues of the first-order system) deviate slightly from the target: measured
     # 0.05000111 for zeta = 0.05; required within 1e-3 of zeta (the brief's tolerance).
-    s, _ = sl.slider_from_scene(scene_from_dict({}))
+    s, _ = assembly.slider_from_scene(scene_from_dict({}))
     c_f, c_r = ab.pad_damping(s.k_f, s.k_r, s.m, s.I, s.l_f, s.l_r, zeta)
     assert c_f > 0 and c_r > 0
     s = dataclasses.replace(s, c_f=c_f, c_r=c_r)
@@ -134,10 +134,10 @@ def test_pad_dampers_give_the_modal_damping_ratio(zeta):
 
 
 def test_scene_damping_ratio_reaches_the_slider():
-    s, info = sl.slider_from_scene(scene_from_dict({"air_bearing": {"damping_ratio": 0.05}}))
+    s, info = assembly.slider_from_scene(scene_from_dict({"air_bearing": {"damping_ratio": 0.05}}))
     assert info["damping_ratio"] == 0.05
     np.testing.assert_allclose(ab.damping_ratios(s)[1], [0.05, 0.05], atol=1e-3)
-    s0, _ = sl.slider_from_scene(scene_from_dict({"air_bearing": {"damping_ratio": 0.0}}))
+    s0, _ = assembly.slider_from_scene(scene_from_dict({"air_bearing": {"damping_ratio": 0.0}}))
     assert s0.c_f == 0.0 and s0.c_r == 0.0
 
 
@@ -176,4 +176,4 @@ def test_scene_with_impossible_frequencies_fails_to_build():
     sc = scene_from_dict({"scene": {"effects": ["air_bearing", "pitch"]},
                           "air_bearing": {"frequencies_khz": [120.0, 130.0]}})
     with pytest.raises(ValueError):
-        sl.build_model(sc, None, None, None)
+        assembly.build_model(sc, None, None, None)

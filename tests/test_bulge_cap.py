@@ -11,7 +11,8 @@ from pipeline import runner
 from pipeline.config.scene import SceneError, load_scene
 from pipeline.model import dynamics as dyn
 from pipeline.model import forces as fo
-from pipeline.model import slider as sl
+from pipeline.model import assembly, kernel_inputs
+from pipeline.model import piecewise as pw
 from pipeline.physics import bulge_bearing as bb
 
 NM = 1e-9
@@ -27,7 +28,7 @@ def scenes(repo_root):
 
 
 def _kernel_force(model, delta, g):
-    c, x0, h = sl.tfc_table(model, delta)
+    c, x0, h = kernel_inputs.tfc_table(model, delta)
     p = dyn.with_values(model.p, delta=delta, tfc_x0=x0, tfc_h=h)
     return np.array([fo.tfc_air_force(p, None, c, gi) for gi in g])
 
@@ -35,21 +36,21 @@ def _kernel_force(model, delta, g):
 def test_off_leaves_the_table_identical(scenes):
     """No cap (the default) and a cap at 0 give the same TFC-point table, bit for bit, as the bare p h = const
     law sampled on the kernel's grid."""
-    plain = sl.build_model(scenes[None], None, None, None)
-    zero = sl.build_model(scenes[0.0], None, None, None)
+    plain = assembly.build_model(scenes[None], None, None, None)
+    zero = assembly.build_model(scenes[0.0], None, None, None)
     for delta in (4 * NM, 10.4 * NM):
-        a, x0, h = sl.tfc_table(plain, delta)
-        b, _, _ = sl.tfc_table(zero, delta)
+        a, x0, h = kernel_inputs.tfc_table(plain, delta)
+        b, _, _ = kernel_inputs.tfc_table(zero, delta)
         assert np.array_equal(a, b)
         law = bb.BULGE_LAWS["ph-limit"]
         g = np.linspace(law.gap_range[0] * plain.p.FH0, law.gap_range[1] * plain.p.FH0, law.points)
-        F = bb.ph_limit_force(g, delta, **sl.law_parameters(scenes[None], law))
-        np.testing.assert_array_equal(a, sl.piecewise_coefficients(F, h, 3))
+        F = bb.ph_limit_force(g, delta, **assembly.law_parameters(scenes[None], law))
+        np.testing.assert_array_equal(a, pw.piecewise_coefficients(F, h, 3))
 
 
 def test_on_holds_the_force_below_the_cap_gap_and_not_above(scenes):
-    plain = sl.build_model(scenes[None], None, None, None)
-    capped = sl.build_model(scenes[1.65], None, None, None)
+    plain = assembly.build_model(scenes[None], None, None, None)
+    capped = assembly.build_model(scenes[1.65], None, None, None)
     delta = 10.4 * NM
     F_s = bb.ph_limit_force(np.array([1.65 * NM]), delta, 2.2e6, 3e-6, 25e-6, "ellipsoid")[0]
     below = np.array([0.3, 0.7, 1.0, 1.5]) * NM

@@ -19,7 +19,7 @@ from pipeline.model import bulge_table as bt
 from pipeline.model import dynamics as dyn
 from pipeline.model import forces as fo
 from pipeline.model import scene_inputs
-from pipeline.model import slider as sl
+from pipeline.model import assembly, kernel_inputs
 from pipeline.physics import bulge_bearing as bb
 from test_stage_reads import declared, recording
 
@@ -40,7 +40,7 @@ def bulge_scene(repo_root):
 def table(bulge_scene):
     """The scene's bulge.nc dataset (the stage's compute) and the model built on it."""
     ds = bt.scene_table(bulge_scene)
-    return ds, sl.build_model(bulge_scene, None, None, None, bulge=ds)
+    return ds, assembly.build_model(bulge_scene, None, None, None, bulge=ds)
 
 
 def _solve(g, delta, ds, speed=None):
@@ -58,13 +58,13 @@ def test_the_stage_is_upstream_only_with_the_reynolds_law(bulge_scene):
         assert "bulge" not in runner.main_job(other)
     assert "bulge" in runner.main_job(bulge_scene)
     with pytest.raises(ValueError, match="needs the bulge table"):
-        sl.build_model(bulge_scene, None, None, None)
+        assembly.build_model(bulge_scene, None, None, None)
 
 
 def test_zero_lift_at_zero_protrusion(table):
     ds, model = table
     assert np.all(ds["bulge_lift"].values[0] == 0.0) and ds["protrusion"].values[0] == 0.0
-    coefficients, _, _ = sl.tfc_table(model, 0.0)
+    coefficients, _, _ = kernel_inputs.tfc_table(model, 0.0)
     assert np.all(coefficients == 0.0)
     # and it grows from zero: 1e-3 of the 10-nm lift at 0.01 nm, at the TFC gap of the nominal attitude
     fh0 = model.p.FH0
@@ -74,14 +74,14 @@ def test_zero_lift_at_zero_protrusion(table):
 
 def test_kernel_stiffness_is_the_derivative_of_the_table_lift(table):
     """The kernel takes force and stiffness from one cubic through the law sampled on 4001 gaps
-    (:func:`pipeline.model.slider.tfc_table`): against the table's lift and its central difference,
+    (:func:`pipeline.model.kernel_inputs.tfc_table`): against the table's lift and its central difference,
     measured within 2e-10 (force) and 2.5e-7 (stiffness) relative over 0.5-19.5 nm, between table rows
     (9.7 nm) and on one (10 nm); and the table's own stiffness variable at its nodes."""
     ds, model = table
     lt = bt.from_dataset(ds)
     g = np.linspace(0.5, 19.5, 39) * NM
     for delta in (9.7 * NM, 10.0 * NM, 4.3 * NM):
-        c, x0, h = sl.tfc_table(model, delta)
+        c, x0, h = kernel_inputs.tfc_table(model, delta)
         p = dyn.with_values(model.p, delta=delta, tfc_x0=x0, tfc_h=h)
         kernel = np.array([fo.tfc_air_force(p, None, c, gi) for gi in g])
         F = bb.table_lift(lt, g, delta)[0]

@@ -73,10 +73,10 @@ def test_threshold_is_where_touching_starts():
     scene = load_scene(PAPER, NO_ADHESION)
     import tempfile
     with tempfile.TemporaryDirectory() as tmp:
-        from pipeline.model import slider as sl
+        from pipeline.model import assembly
         from pipeline.stages.simulate import model_inputs
         interface, record = model_inputs(scene, Path(tmp))
-        model = sl.build_model(scene, interface, record, k=0.0)
+        model = assembly.build_model(scene, interface, record, k=0.0)
         lo, lo_all, note = calibration.flying_minimum(model, 9.8)
         assert note == "" and lo_all <= lo
         tol = 1e-6

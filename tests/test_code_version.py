@@ -56,7 +56,8 @@ def test_each_stage_is_keyed_on_the_code_it_runs():
     sweep = cv.modules("pipeline.stages.sweep")
     report = cv.modules("pipeline.stages.report")
     rough = cv.modules("pipeline.stages.roughness")
-    for mod in ("pipeline.model.dynamics", "pipeline.model.slider", "pipeline.physics.friction", "pipeline.physics.air_bearing"):
+    for mod in ("pipeline.model.dynamics", "pipeline.model.running", "pipeline.model.assembly", "pipeline.model.outcomes",
+                "pipeline.physics.friction", "pipeline.physics.air_bearing"):
         assert mod in sweep and mod in cv.modules("pipeline.stages.calibrate") and mod not in rough
     assert "pipeline.physics.asperity" in cv.modules("pipeline.stages.interface")
     assert "pipeline.analyses.plots" in report and "pipeline.analyses.plots" not in sweep and "pipeline.model.dynamics" not in report

@@ -182,11 +182,11 @@ def test_both_models_side_by_side_on_a_model_coordinate(both_models):
 
 
 def test_dynamics_read_the_scene_s_model(both_models):
-    from pipeline.model import slider
+    from pipeline.model import assembly
     stat, det, ds_stat, ds = both_models
-    m_stat = slider.build_model(stat, ds_stat, None, 1.0)
-    m_same = slider.build_model(stat, ds, None, 1.0)       # both tables, statistical scene
-    m_det = slider.build_model(det, ds, None, 1.0)
+    m_stat = assembly.build_model(stat, ds_stat, None, 1.0)
+    m_same = assembly.build_model(stat, ds, None, 1.0)       # both tables, statistical scene
+    m_det = assembly.build_model(det, ds, None, 1.0)
     for key in ("contact", "friction", "area", "adhesion"):
         assert np.array_equal(getattr(m_stat, key), getattr(m_same, key))
     assert np.array_equal(m_det.adhesion, m_stat.adhesion)  # adhesion stays statistical

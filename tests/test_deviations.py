@@ -22,7 +22,7 @@ from pipeline.config.scene import SceneError, scene_from_dict
 from pipeline.model import dynamics as dyn
 from pipeline.model import forces as fo
 from pipeline.model import piecewise as pw
-from pipeline.model import slider as sl
+from pipeline.model import assembly, kernel_inputs, outcomes, running
 from pipeline.physics import geometry as g
 
 NM, UM, MPA = 1e-9, 1e-6, 1e6
@@ -169,18 +169,18 @@ def model(contact=None, slider=None, effects=EFFECTS, k=1.0):
         "contact": {"k": k, **(contact or {})},
         "slider": slider or {},
     })
-    return sl.build_model(scene, synthetic_interface(), None, k)
+    return assembly.build_model(scene, synthetic_interface(), None, k)
 
 
 def test_flat_section_is_the_default_and_today():
     base, named = model(), model(contact={"area_model": "flat-section"})
     assert base.area_model == "flat-section"
-    p, tables, _ = sl.run_parameters(named, 11 * NM)
+    p, tables, _ = kernel_inputs.run_parameters(named, 11 * NM)
     assert tables.contact is named.contact and tables.adhesion is named.adhesion
     assert tables.friction is named.friction
-    a, b = sl.run_model(base, 11 * NM), sl.run_model(named, 11 * NM)
+    a, b = running.run_model(base, 11 * NM), running.run_model(named, 11 * NM)
     np.testing.assert_array_equal(a.state, b.state)
-    ha, hb = sl.histories(a), sl.histories(b)
+    ha, hb = outcomes.histories(a), outcomes.histories(b)
     for name in ha:
         np.testing.assert_array_equal(ha[name], hb[name])
 
@@ -188,7 +188,7 @@ def test_flat_section_is_the_default_and_today():
 def test_integrated_tables_feed_the_kernel_and_the_histories():
     delta = 11 * NM
     m = model(contact={"area_model": "integrated"})
-    p, tables, _ = sl.run_parameters(m, delta)
+    p, tables, _ = kernel_inputs.run_parameters(m, delta)
     An = p["A_n"]
     assert An == pytest.approx(float(g.nominal_area(delta, A, B, 3 * 0.52 * NM)), rel=1e-14)
     # at the nodes, A_n times the kernel's tables is the integrated force of the same stresses
@@ -204,14 +204,14 @@ def test_integrated_tables_feed_the_kernel_and_the_histories():
     assert np.all(contact < 0.5 * flat)
     # the run and its histories read the same tables: contact force, real area (the local fraction
     # capped at 1 before summing) and friction at the samples in contact
-    run = sl.run_model(m, delta)
-    hist = sl.histories(run)
+    run = running.run_model(m, delta)
+    hist = outcomes.histories(run)
     c = hist["in_contact"]
     assert c.any()
     d = hist["separation"][c]
     assert hist["contact_force"][c] == pytest.approx(scale * 50 * MPA * closed_exponential(d, delta, L_C),
                                                      rel=1e-5)
-    it = sl.interface_tables(m, delta, An)
+    it = kernel_inputs.interface_tables(m, delta, An)
     assert np.array_equal(it.contact, tables.contact)  # (the same tables, kept or computed again)
     capped = pw.piecewise_coefficients(np.minimum(0.1 * np.exp(-GRID / L_C), 1.0), H, 3)
     area = scale * pw.ppval(pw.piecewise_coefficients(g.ellipsoid_table_integral(capped, H, delta), H, 3),
@@ -219,7 +219,7 @@ def test_integrated_tables_feed_the_kernel_and_the_histories():
     assert hist["real_area"][c] == pytest.approx(area, rel=1e-12)
     assert np.all(hist["real_area"] <= np.pi * A * B)
     assert hist["mean_pressure"][c] == pytest.approx(hist["contact_force"][c] / hist["real_area"][c], rel=1e-12)
-    s = sl.summarize(run, hist)
+    s = outcomes.summarize(run, hist)
     assert s["nominal_area"] == An  # A_n stays the flat section's: the report's "A_n at 11 nm"
 
 
@@ -238,14 +238,14 @@ def test_unknown_options_are_one_line_errors():
 def test_gimbal_arm_doubles_the_friction_moment():
     cg, gimbal = model(), model(slider={"friction_arm": "gimbal"})
     T = 0.23e-3
-    assert cg.p["h_cg"] == T / 2 and gimbal.p["h_cg"] == T
+    assert cg.p["friction_arm"] == T / 2 and gimbal.p["friction_arm"] == T
     assert gimbal.info["friction_arm"] == "gimbal"
     # the kernel's pitch acceleration at a state in contact, with and without the friction table: the
     # friction's share is -arm Q / I, twice as large with the gimbal's arm
     delta = 11 * NM
     share = []
     for m in (cg, gimbal):
-        p, tables, variants = sl.run_parameters(m, delta)
+        p, tables, variants = kernel_inputs.run_parameters(m, delta)
         y = np.array([-0.2 * NM, -1e-6, 0.0, 0.0])
         assert fo.separation_at(p, y[0], y[1], 0.0) < p["k_sigma"]
         with_q, without = np.empty(4), np.empty(4)
@@ -253,7 +253,7 @@ def test_gimbal_arm_doubles_the_friction_moment():
         dyn.rhs(0.0, y, p, tables._replace(friction=None), variants, True, without)
         d = fo.separation_at(p, y[0], y[1], 0.0)
         Q = p["A_n"] * float(pw.ppval(tables.friction, p.tab_x0, p.tab_h, np.array([d]))[0])
-        assert (with_q[3] - without[3]) * p["I"] == pytest.approx(-p["h_cg"] * Q, rel=1e-9)
+        assert (with_q[3] - without[3]) * p["I"] == pytest.approx(-p["friction_arm"] * Q, rel=1e-9)
         share.append(with_q[3] - without[3])
         assert with_q[2] == without[2]  # (no vertical force)
     assert share[1] / share[0] == pytest.approx(2.0, rel=1e-12)
@@ -266,13 +266,13 @@ def test_gimbal_arm_about_doubles_the_static_gap_opening():
     delta = 11 * NM
     opening = {}
     base = model(effects=EFFECTS[:-1])
-    p, _, _ = sl.run_parameters(base, delta)
-    y0, note = sl.start(base, delta)
+    p, _, _ = kernel_inputs.run_parameters(base, delta)
+    y0, note = running.start(base, delta)
     assert "contact" in note
     d0 = fo.separation_at(p, y0[0], y0[1], 0.0)
     for arm in ("cg", "gimbal"):
         m = model(slider={"friction_arm": arm})
-        y, note = sl.start(m, delta)
+        y, note = running.start(m, delta)
         assert "contact" in note
         opening[arm] = fo.separation_at(p, y[0], y[1], 0.0) - d0
     assert opening["cg"] > 0

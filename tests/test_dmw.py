@@ -369,10 +369,10 @@ def test_disk_speed_formula():
 
 
 def test_default_record_is_long_enough_for_the_dynamics(tmp_path):
-    from pipeline.model import slider
+    from pipeline.model import assembly
     scene = scene_from_dict({"scene": {"effects": ["air_bearing", "pitch", "dmw"]}})
     _, w, fs = dmw_record.load(ensure("dmw", scene, tmp_path))
-    model = slider.build_model(scene, None, (w, fs), None)   # raises if the record is too short
+    model = assembly.build_model(scene, None, (w, fs), None)   # raises if the record is too short
     assert model.dmw is not None
 
 

@@ -95,7 +95,7 @@ def test_make_readme_writes_the_page_that_holds_the_generated_section():
         assert f"](figures/{name})" in text
 
 
-#: A path into the package as the pages write it: ``pipeline/model/slider.py``, ``pipeline/analyses/``
+#: A path into the package as the pages write it: ``pipeline/model/assembly.py``, ``pipeline/analyses/``
 #: (a component in capitals, ``pipeline/stages/NAME.py``, is a placeholder).
 SOURCE_PATH = re.compile(r"(?<![\w./-])pipeline/[\w/]*(?:\.py)?")
 #: A dotted name in the package: ``pipeline.model.forces.separation_at``, ``pipeline.analyses.plots.plot_*``.

@@ -1,4 +1,4 @@
-"""The 2-DOF slider dynamics (docs/model.md, section "Slider dynamics"; pipeline.model.dynamics, pipeline.model.slider): modal free
+"""The 2-DOF slider dynamics (docs/model.md, section "Slider dynamics"; pipeline.model.dynamics, pipeline.model.running): modal free
 vibration, static equilibrium, modal damping, the integrator's observed order, FHM limits, contact
 switch events, and effect selection.
 
@@ -15,7 +15,8 @@ import pytest
 
 from pipeline.model import dynamics as dyn
 from pipeline.model import piecewise as pw
-from pipeline.model import slider as sl
+from pipeline.model import assembly, outcomes, running
+from pipeline.physics.fhm import fhm as pw_fhm
 from pipeline.physics import air_bearing as ab
 from pipeline.physics import microwaviness as pdmw
 from pipeline.config.scene import scene_from_dict
@@ -56,7 +57,7 @@ def build(scene, record=None, k=K):
     interface = build_tables(scene, roughness_statistics(scene)) if scene.effects & {"contact", "adhesion"} else None
     if "dmw" in scene.effects and record is None:
         record = synthetic_record(scene)
-    return sl.build_model(scene, interface, record if "dmw" in scene.effects else None,
+    return assembly.build_model(scene, interface, record if "dmw" in scene.effects else None,
                           k if "contact" in scene.effects else None)
 
 
@@ -106,7 +107,7 @@ def test_free_vibration_matches_modal_frequencies(mode):
                             "transient_ms": 0.0, "output_step_ns": 5.0})
     m = build(sc)
     y0, w, phi = modal_state(m, mode, 0.01 * NM)
-    run = sl.run_model(m, 5 * NM, y0=y0)
+    run = running.run_model(m, 5 * NM, y0=y0)
     q = modal_coordinates(run, phi)
     f, n_cross = zero_crossing_frequency(q[mode], run.time)
     f_theory = w[mode] / (2 * np.pi)
@@ -123,7 +124,7 @@ def test_static_equilibrium_stays_put(effects):
     # At y = 0 every force vanishes exactly (front spring unloaded, rear law F_r0[(g0/g0)^n - 1] = 0),
     # so without DMW nothing can move the slider.
     sc = make_scene(effects, solver={"duration_ms": 1.0, "transient_ms": 0.3})
-    run = sl.run_model(build(sc), 5 * NM)
+    run = running.run_model(build(sc), 5 * NM)
     assert np.all(np.isfinite(run.state))
     assert np.abs(run.state[:, st.Z]).max() < 1e-18
     assert np.abs(run.state[:, st.THETA]).max() < 1e-18 / run.model.slider.l_c
@@ -138,7 +139,7 @@ def test_static_equilibrium_stays_put(effects):
 def test_static_run_does_not_underflow_at_the_end():
     sc = make_scene(FLYING, solver={"duration_ms": 0.1, "transient_ms": 0.0, "max_step_ns": 30.0,
                                     "output_step_ns": 30.0})
-    run = sl.run_model(build(sc), 5 * NM)
+    run = running.run_model(build(sc), 5 * NM)
     assert np.all(np.isfinite(run.state))
 
 
@@ -154,7 +155,7 @@ def test_damping_decays_at_the_modal_rate(mode):
                             "duration_ms": [0.1, 0.05][mode], "transient_ms": 0.0, "output_step_ns": 5.0})
     m = build(sc)
     y0, w, phi = modal_state(m, mode, 0.01 * NM)
-    run = sl.run_model(m, 5 * NM, y0=y0)
+    run = running.run_model(m, 5 * NM, y0=y0)
     q = modal_coordinates(run, phi)[mode]
     rate, n_peaks = peak_decay_rate(q, run.time)
     assert n_peaks >= 10
@@ -182,12 +183,12 @@ def smooth_model(rtol, atol_nm, max_step_ns=1e5, duration_ms=0.1, output_step_ns
                             "output_step_ns": output_step_ns or duration_ms * 1e5})
     fs = 40e6
     t = np.arange(int(0.2e-3 * fs) + 1) / fs
-    return sl.build_model(sc, None, (0.5 * np.sin(2 * np.pi * 20e3 * t), fs), None)
+    return assembly.build_model(sc, None, (0.5 * np.sin(2 * np.pi * 20e3 * t), fs), None)
 
 
 @pytest.fixture(scope="module")
 def smooth_reference():
-    return sl.run_model(smooth_model(1e-14, 1e-14), 5 * NM)
+    return running.run_model(smooth_model(1e-14, 1e-14), 5 * NM)
 
 
 def scaled_end_error(run, ref):
@@ -207,7 +208,7 @@ def test_observed_order_with_fixed_steps(smooth_reference):
     # controlled directly. Measured slope: -4.86 (local slopes -4.75 ... -4.91).
     errs, steps = [], []
     for h_ns in (200.0, 141.0, 100.0, 71.0, 50.0):
-        run = sl.run_model(smooth_model(1.0, 1e9, max_step_ns=h_ns), 5 * NM)
+        run = running.run_model(smooth_model(1.0, 1e9, max_step_ns=h_ns), 5 * NM)
         assert run.info[st.REJECTED] == 0  # no rejected steps: fixed-step DP5
         errs.append(scaled_end_error(run, smooth_reference))
         steps.append(run.info[st.ACCEPTED])
@@ -224,7 +225,7 @@ def test_observed_order_with_adaptive_steps(smooth_reference):
     rtols = np.array([1e-8, 1e-9, 1e-10, 1e-11])
     errs, steps = [], []
     for rtol in rtols:
-        run = sl.run_model(smooth_model(rtol, rtol), 5 * NM)
+        run = running.run_model(smooth_model(rtol, rtol), 5 * NM)
         errs.append(scaled_end_error(run, smooth_reference))
         steps.append(run.info[st.ACCEPTED] + run.info[st.REJECTED])
     slope = np.polyfit(np.log(steps), np.log(errs), 1)[0]
@@ -238,10 +239,10 @@ def test_dense_output_order(smooth_reference):
     # error ~ h^4 y'''' / 384, one order below the DP5 solution itself. Measured: slope -3.98 at
     # samples between step ends, whose error is 1400 x (h = 200 ns) to 4800 x (50 ns) that at step ends
     # (a weakness, see the test report; DP5's own continuous extension would be one order better).
-    ref = sl.run_model(smooth_model(1e-14, 1e-14, output_step_ns=7.0), 5 * NM)
+    ref = running.run_model(smooth_model(1e-14, 1e-14, output_step_ns=7.0), 5 * NM)
     errs, steps = [], []
     for h_ns in (200.0, 141.0, 100.0, 71.0, 50.0):
-        run = sl.run_model(smooth_model(1.0, 1e9, max_step_ns=h_ns, output_step_ns=7.0), 5 * NM)
+        run = running.run_model(smooth_model(1.0, 1e9, max_step_ns=h_ns, output_step_ns=7.0), 5 * NM)
         errs.append(np.abs(run.state[:, st.Z] - ref.state[:, st.Z]).max())
         steps.append(run.info[st.ACCEPTED])
     slope = np.polyfit(np.log(steps), np.log(errs), 1)[0]
@@ -255,12 +256,12 @@ def test_dense_output_order(smooth_reference):
 def test_fhm_is_zero_without_dmw_and_contact(effects):
     # No DMW and no interface forces: the slider stays at its nominal attitude, d = FH0 - delta - y_s
     # (docs/model.md, section "Separation datum": d to the mean of summit heights, y_s = 0.691 nm for the default roughness).
-    run = sl.run_model(build(make_scene(effects)), 5 * NM)
-    s = sl.summarize(run)
+    run = running.run_model(build(make_scene(effects)), 5 * NM)
+    s = outcomes.summarize(run)
     assert s["fhm_bv"] < 1e-9
     y_s = run.model.p.y_s
     assert y_s == pytest.approx(0.691 * NM, abs=1e-3 * NM)
-    assert sl.histories(run)["separation"] == pytest.approx(6 * NM - y_s, abs=1e-18)
+    assert outcomes.histories(run)["separation"] == pytest.approx(6 * NM - y_s, abs=1e-18)
 
 
 def rigid_following_separation(run):
@@ -295,10 +296,10 @@ def test_fhm_falls_to_the_rigid_following_limit_as_the_bearing_stiffens():
         sc = make_scene(FLYING + ["dmw"],
                         air_bearing={"damping_ratio": 0.05, "frequencies_khz": [120.0 * factor, 300.0 * factor]},
                         solver={"output_step_ns": 50.0})
-        run = sl.run_model(build(sc), 5 * NM)
-        f = sl.summarize(run)["fhm_bv"]
+        run = running.run_model(build(sc), 5 * NM)
+        f = outcomes.summarize(run)["fhm_bv"]
         win = run.time >= run.model.transient - 1e-15
-        f_rigid = sl.fhm(rigid_following_separation(run)[win], 11 * NM)
+        f_rigid = pw_fhm(rigid_following_separation(run)[win], 11 * NM)
         fhm.append(f)
         excess.append(f - f_rigid)
     assert np.all(np.diff(fhm) < 0), fhm
@@ -330,10 +331,10 @@ def test_contact_flag_matches_the_criterion_while_bouncing():
     # ~15 % of the steady window, ~670 located switches in 1 ms. The recorded contact flag must be
     # d < k sigma at every output sample, except next to a switch.
     sc = make_scene(["air_bearing", "pitch", "dmw", "contact", "friction"], dmw={"rms_nm": 0.163})
-    run = sl.run_model(build(sc), 11 * NM)
-    hist = sl.histories(run)
-    s = sl.summarize(run, hist)
-    assert s["regime"] == sl.BOUNCING
+    run = running.run_model(build(sc), 11 * NM)
+    hist = outcomes.histories(run)
+    s = outcomes.summarize(run, hist)
+    assert s["regime"] == outcomes.BOUNCING
     assert 0.0 < s["contact_fraction"] < 1.0
     assert run.info[st.SWITCHES] > 0                      # located switches
     bad, n_changes = unexplained_flag_mismatches(hist)
@@ -349,7 +350,7 @@ def test_contact_events_located_at_touchdown_with_adhesion():
     # (measured with the summit datum and the stiff-rear bearing of docs/model.md, section "Corrections": 23 located switches,
     # in contact in 97.5 % of the samples afterwards; 7.6 nm stays flying).
     sc = make_scene(ALL, dmw={"rms_nm": 0.163})
-    run = sl.run_model(build(sc), 7.8 * NM)
+    run = running.run_model(build(sc), 7.8 * NM)
     assert run.info[st.SWITCHES] > 0
     assert run.contact[-1] and not run.contact[0]
 
@@ -371,9 +372,9 @@ def test_contact_flag_catches_brief_excursions():
     flying = build(make_scene(FLYING, air_bearing=ab_, solver=solver))
     contact = build(make_scene(["air_bearing", "pitch", "contact"], air_bearing=ab_, solver=solver))
     y0, _, _ = modal_state(flying, 0, 1.0 * NM)
-    d_min = sl.histories(sl.run_model(flying, 0.0, y0=y0))["separation"].min()
+    d_min = outcomes.histories(running.run_model(flying, 0.0, y0=y0))["separation"].min()
     delta = d_min - (contact.k_sigma - 0.01 * NM)   # the free motion dips 0.01 nm below k sigma
-    hist = sl.histories(sl.run_model(contact, delta, y0=y0))
+    hist = outcomes.histories(running.run_model(contact, delta, y0=y0))
     assert (hist["clearance"] < 0).any()
     bad, _ = unexplained_flag_mismatches(hist)
     assert bad.size == 0, f"{bad.size} samples with d < k sigma recorded as flying"
@@ -390,14 +391,14 @@ def test_air_bearing_only_builds_no_interface_tables():
                                     "real_area_fraction", "contact_fraction"}
     assert "none" in ds.attrs["quantities"]
     for interface in (None, ds):
-        m = sl.build_model(sc, interface, None, None)
+        m = assembly.build_model(sc, interface, None, None)
         assert m.contact is None and m.adhesion is None and m.friction is None and m.area is None
         assert m.dmw is None and m.pitch is None
-        run = sl.run_model(m, 5 * NM)
-        hist = sl.histories(run)
+        run = running.run_model(m, 5 * NM)
+        hist = outcomes.histories(run)
         assert set(hist) == {"separation", "disk_displacement", "z", "pitch", "clearance"}
         assert not np.any(hist["pitch"])  # pitch locked
-        s = sl.summarize(run, hist)
+        s = outcomes.summarize(run, hist)
         assert not set(s) & {"adhesion_force", "contact_force", "contact_fraction", "net_force",
                              "friction_force", "regime"}
 
@@ -408,9 +409,9 @@ def test_a_disabled_effect_has_no_tables_and_no_outputs(missing):
     sc = make_scene(effects, dmw={"rms_nm": 0.163})
     ds = build_tables(sc, roughness_statistics(sc))
     m = build(sc)
-    run = sl.run_model(m, 11 * NM)
-    hist = sl.histories(run)
-    s = sl.summarize(run, hist)
+    run = running.run_model(m, 11 * NM)
+    hist = outcomes.histories(run)
+    s = outcomes.summarize(run, hist)
     assert np.all(np.isfinite(run.state))
     if missing == "friction":
         assert "friction_stress" not in ds and "adhesion_pressure" in ds
@@ -430,8 +431,8 @@ def test_a_disabled_effect_has_no_tables_and_no_outputs(missing):
 def test_effects_change_the_dynamics_only_through_their_forces():
     # Friction acts only as a pitch moment in contact: a flying run (no contact at 5 nm) is identical
     # with and without the friction effect.
-    a = sl.run_model(build(make_scene(ALL, dmw={"rms_nm": 0.163})), 5 * NM)
-    b = sl.run_model(build(make_scene([e for e in ALL if e != "friction"], dmw={"rms_nm": 0.163})), 5 * NM)
+    a = running.run_model(build(make_scene(ALL, dmw={"rms_nm": 0.163})), 5 * NM)
+    b = running.run_model(build(make_scene([e for e in ALL if e != "friction"], dmw={"rms_nm": 0.163})), 5 * NM)
     assert not a.contact.any()
     np.testing.assert_array_equal(a.state, b.state)
 

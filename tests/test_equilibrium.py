@@ -14,7 +14,7 @@ from pipeline.physics import air_bearing as ab
 from pipeline.physics import equilibrium as eq
 
 
-def slider_forces(*, l_f: float, l_r: float, l_c: float, h_cg: float, k_f: float, g0: float,
+def slider_forces(*, l_f: float, l_r: float, l_c: float, friction_arm: float, k_f: float, g0: float,
                   rear: Callable[[float], float], nominal_gap: Callable[[float], float],
                   interface: Callable[[float, float], tuple[float, float]], pitch: bool = True) -> eq.Forces:
     """Generalised static forces ``R(y, mu)`` of a 2-DOF slider with a given interface law: a fixture of
@@ -22,14 +22,14 @@ def slider_forces(*, l_f: float, l_r: float, l_c: float, h_cg: float, k_f: float
 
     ``F_f = -k_f (z + l_f theta)`` (front, linear), ``F_r = rear(g_r)`` on the rear gap ``g_r = g0 + z - l_r theta``
     (e.g. :func:`pipeline.physics.air_bearing.rear_power_law`), the interface force ``F_i`` (up) and friction
-    ``Q`` (along the disk's motion, at the air-bearing surface, ``h_cg`` below the CG) at the TFC point
+    ``Q`` (along the disk's motion, at the air-bearing surface, ``friction_arm`` below the CG) at the TFC point
     ``l_c`` behind the CG, whose gap is ``g = nominal_gap(mu) + z - l_c theta`` (e.g. ``FH0 - delta``):
-    ``R = (F_f + F_r + F_i, l_f F_f - l_r F_r - l_c F_i - h_cg Q)`` (:mod:`pipeline.physics.air_bearing`;
+    ``R = (F_f + F_r + F_i, l_f F_f - l_r F_r - l_c F_i - friction_arm Q)`` (:mod:`pipeline.physics.air_bearing`;
     docs/model.md, section "Slider"). With ``pitch=False`` the state is ``(z,)``.
 
     Parameters
     ----------
-    l_f, l_r, l_c, h_cg [m]; k_f [N/m]; g0 : rear reference gap [m]; rear : ``g_r -> F_r`` [N]
+    l_f, l_r, l_c, friction_arm [m]; k_f [N/m]; g0 : rear reference gap [m]; rear : ``g_r -> F_r`` [N]
     nominal_gap : ``mu -> `` TFC gap at the nominal attitude [m]
     interface : ``(g, mu) -> (F_i [N], Q [N])``: everything acting at the TFC point (bulge lift, adhesion,
         contact, friction) at gap ``g`` [m]
@@ -42,7 +42,7 @@ def slider_forces(*, l_f: float, l_r: float, l_c: float, h_cg: float, k_f: float
         F_i, Q = interface(nominal_gap(mu) + z - l_c * th, mu)
         if not pitch:
             return np.array([F_f + F_r + F_i])
-        return np.array([F_f + F_r + F_i, l_f * F_f - l_r * F_r - l_c * F_i - h_cg * Q])
+        return np.array([F_f + F_r + F_i, l_f * F_f - l_r * F_r - l_c * F_i - friction_arm * Q])
 
     return R
 
@@ -146,7 +146,7 @@ def paper_slider(rear: str = "linear"):
     g0 = 11 * NM
     law = ((lambda g: ab.rear_linear_law(g, g0, 2.0, k_r * g0 / 2, k_r)) if rear == "linear"
            else (lambda g: ab.rear_power_law(g, g0, 2.0, k_r * g0 / 2, k_r)))
-    return dict(l_f=0.30e-3, l_r=0.40e-3, l_c=0.417e-3, h_cg=0.115e-3, k_f=k_f, g0=g0, rear=law), k_r
+    return dict(l_f=0.30e-3, l_r=0.40e-3, l_c=0.417e-3, friction_arm=0.115e-3, k_f=k_f, g0=g0, rear=law), k_r
 
 
 def test_linear_slider_under_a_tfc_force_is_the_compliance_solution():
@@ -159,10 +159,10 @@ def test_linear_slider_under_a_tfc_force_is_the_compliance_solution():
     assert e.converged and e.stable
     assert e.y == pytest.approx(np.linalg.solve(Kmat, [F, -p["l_c"] * F]), rel=1e-8)
     assert e.stiffness == pytest.approx(Kmat, rel=1e-6)
-    # the friction moment -h_cg Q pitches the nose down (theta < 0), as in the dynamics
+    # the friction moment -friction_arm Q pitches the nose down (theta < 0), as in the dynamics
     R = slider_forces(**p, nominal_gap=lambda mu: 11 * NM - mu, interface=lambda g, mu: (0.0, F))
     e = eq.newton(lambda y: R(y, 0.0), np.zeros(2))
-    assert e.y == pytest.approx(np.linalg.solve(Kmat, [0.0, -p["h_cg"] * F]), rel=1e-8) and e.y[1] < 0
+    assert e.y == pytest.approx(np.linalg.solve(Kmat, [0.0, -p["friction_arm"] * F]), rel=1e-8) and e.y[1] < 0
 
 
 def test_two_dof_fold_is_the_one_dof_fold_of_the_tfc_point_compliance():

@@ -75,14 +75,14 @@ def test_a_stepping_sweep_gives_the_ensemble_and_the_report_its_upward_pass():
     ``(protrusion, direction)`` regimes were read as one flat list of twice the protrusions."""
     from pipeline.analyses.sweep_slices import combinations, first_contact, split_ensemble
     from pipeline.model.simulation import simulate
-    from pipeline.model import slider as sl
+    from pipeline.model import outcomes
     from pipeline.stages import ensemble
     from test_dynamics import build, make_scene
     scene = make_scene(["air_bearing", "pitch", "contact"], solver={"duration_ms": 0.3, "transient_ms": 0.1})
     prot = [9.0, 10.0, 11.0, 12.0, 13.0]
     chain = simulate(build(scene), prot, protocol="stepping")
     up = chain.sel(direction="up")
-    touched = sl.touched_in_summary(up["min_clearance"].values)
+    touched = outcomes.touched_in_summary(up["min_clearance"].values)
     assert touched.any() and not touched.all()  # (a touchdown inside the chain: the case that failed)
     sweep, whole = split_ensemble(chain)
     assert whole is None and "direction" not in sweep.dims
@@ -114,7 +114,7 @@ def test_a_hopeless_value_is_refused_at_load_in_one_line(override, message):
 
 def test_the_step_bound_is_the_integrators_budget():
     import inspect
-    from pipeline.model.slider import run_model
+    from pipeline.model.running import run_model
     assert inspect.signature(run_model).parameters["max_steps"].default == limits.MAX_STEPS
     # the largest step that can still finish a run loads; a hair below it does not
     assert load_scene(PAPER, ["solver.max_step_ns=0.4"])["solver"]["max_step_ns"] == 0.4
@@ -200,8 +200,8 @@ def test_a_failed_integration_is_one_line_naming_the_scene_the_protrusion_and_wh
     (chattering on the contact criterion) and the IntegrationError, a RuntimeError, escaped the CLI's
     one-line path as a traceback. The same failure here in a second: the integrator's step budget
     lowered to 200 steps (a 0.6-ms flying run needs more than 1,200 of 500 ns)."""
-    from pipeline.model import slider as sl
-    monkeypatch.setattr(sl.run_model, "__defaults__", (None, 200))
+    from pipeline.model import running
+    monkeypatch.setattr(running.run_model, "__defaults__", (None, 200))
     args = ["simulate", str(PAPER), "--out", str(tmp_path), *_sets(FLY[:3] + ["tfc.protrusion_nm=2.0"])]
     assert cli.main(args) == 2
     line = _one_line(capsys, f"hdi simulate: error: {PAPER} (scene paper-2009): integration failed at protrusion 2 nm: "
@@ -331,10 +331,10 @@ def test_the_api_refuses_a_folder_it_cannot_write_even_when_up_to_date(api_model
 def test_a_failed_integration_from_the_api_is_the_same_one_line(api_model, monkeypatch):
     """NaN protrusions reached the integrator (an IntegrationError without the scene or what to change)."""
     import pipeline as hdi
-    from pipeline.model import slider as sl
     scene, model = api_model
-    monkeypatch.setattr(sl.run_model, "__defaults__", (None, 200))
-    with pytest.raises(sl.IntegrationError, match=rf"^{PAPER} \(scene paper-2009\): integration failed at protrusion "
+    from pipeline.model import running
+    monkeypatch.setattr(running.run_model, "__defaults__", (None, 200))
+    with pytest.raises(running.IntegrationError, match=rf"^{PAPER} \(scene paper-2009\): integration failed at protrusion "
                                                   r"4\.5 nm: too many steps .*; shorten solver\.duration_ms"):
         hdi.simulate(model, [4.5])
 

@@ -17,7 +17,7 @@ import pipeline as hdi
 from pipeline.config.scene import SceneError, load_scene
 from pipeline.model import dynamics as dyn
 from pipeline.model import piecewise as pw
-from pipeline.model import slider as sl
+from pipeline.model import assembly, kernel_inputs, outcomes, running
 from pipeline.model.interface_tables import build_tables, interface_parameters, roughness_statistics
 from pipeline.model.state import SWITCHES, THETA_RATE, WINDOW_SWITCHES, Z_RATE
 from pipeline.physics import isbl
@@ -73,7 +73,7 @@ def models():
     base = scene()
     stats = roughness_statistics(base)
     ds = build_tables(base, stats)
-    out = {name: sl.build_model(scene(*o), ds, None, K) for name, o in (
+    out = {name: assembly.build_model(scene(*o), ds, None, K) for name, o in (
         ("criterion", ()), ("continuous", ("contact.friction_switching=continuous",)),
         ("solid", ("lubricant.shear_stress_mpa=0",)))}
     out["tables"] = ds
@@ -97,7 +97,7 @@ def test_continuous_tables_are_the_solid_and_the_lubricant_side_by_side(models):
 
 def _accelerations(model, d, in_contact, delta=10.2 * NM):
     """The kernel's dz''/dt and dtheta''/dt at rest with the separation ``d`` [m] (theta = 0, disk at 0)."""
-    p, tables, variants = sl.run_parameters(model, delta)
+    p, tables, variants = kernel_inputs.run_parameters(model, delta)
     z = d - (p["FH0"] - delta - p["y_s"])  # d = FH0 - delta + z - y_s at theta = 0, w = 0
     out = np.empty(4)
     dyn.rhs(0.0, np.array([z, 0.0, 0.0, 0.0]), p, tables, variants, in_contact, out)
@@ -107,7 +107,7 @@ def _accelerations(model, d, in_contact, delta=10.2 * NM):
 @pytest.mark.parametrize("above_nm", [0.05, 0.3, 1.0])
 def test_out_of_contact_only_the_continuous_lubricant_shear_acts(models, above_nm):
     """Above the criterion the switched friction is off; the continuous one is A_n tau_lub a_w(d), seen
-    as the pitch moment -h_cg Q alone (the vertical force is unchanged)."""
+    as the pitch moment -friction_arm Q alone (the vertical force is unchanged)."""
     crit, cont = models["criterion"], models["continuous"]
     d = crit.k_sigma + above_nm * NM
     az0, at0, p = _accelerations(crit, d, False)
@@ -117,7 +117,7 @@ def test_out_of_contact_only_the_continuous_lubricant_shear_acts(models, above_n
     a_w = isbl.isbl_tables(np.array([d]), models["interface"], quantities=["wetted_area_fraction"])
     Q = p["A_n"] * 19e6 * float(a_w["wetted_area_fraction"][0])
     assert Q > 0
-    assert (at0 - at1) * p["I"] / p["h_cg"] == pytest.approx(Q, rel=1e-4)
+    assert (at0 - at1) * p["I"] / p["friction_arm"] == pytest.approx(Q, rel=1e-4)
 
 
 @pytest.mark.parametrize("below_nm", [0.05, 0.3])
@@ -140,7 +140,7 @@ def test_the_jump_at_the_criterion_is_the_solid_friction_alone(models):
     _, _, p = _accelerations(crit, d, True)
     tau_solid, tau_all = (pw.ppval(m.friction[:, :4].copy(), p.tab_x0, p.tab_h, np.array([d]))[0]
                           for m in (solid, crit))
-    moment = -p["h_cg"] * p["A_n"] / p["I"]  # (the contact force's moment is in every jump alike)
+    moment = -p["friction_arm"] * p["A_n"] / p["I"]  # (the contact force's moment is in every jump alike)
     assert jump["continuous"] == pytest.approx(jump["solid"], rel=1e-9)
     assert jump["criterion"] - jump["continuous"] == pytest.approx(moment * (tau_all - tau_solid), rel=1e-6)
 
@@ -155,15 +155,15 @@ def two_population():
 
 
 def test_a_flying_run_counts_no_switch(two_population):
-    run = sl.run_model(two_population, 5.0 * NM)
-    s = sl.summarize(run)
-    assert s["regime"] == sl.FLYING
+    run = running.run_model(two_population, 5.0 * NM)
+    s = outcomes.summarize(run)
+    assert s["regime"] == outcomes.FLYING
     assert run.info[WINDOW_SWITCHES] == 0 and s["contact_switches_per_ms"] == 0.0
 
 
 def test_steady_contact_counts_none_after_its_transient(two_population):
-    run = sl.run_model(two_population, 11.0 * NM)
-    s = sl.summarize(run)
+    run = running.run_model(two_population, 11.0 * NM)
+    s = outcomes.summarize(run)
     assert s["contact_fraction"] == 1.0
     assert s["contact_switches_per_ms"] == 0.0  # [1/s]: none in the window
     assert run.info[SWITCHES] >= run.info[WINDOW_SWITCHES]
@@ -176,8 +176,8 @@ def test_a_constructed_chattering_case_counts_thousands_per_ms():
     k = -1.0
     sc = load_scene(TWO, [f"contact.k={k}", "solver.duration_ms=0.6", "solver.transient_ms=0.2"])
     sc = sc.replace(scene={**sc["scene"], "effects": [e for e in sc.effects if e != "dmw"]})
-    model = sl.build_model(sc, build_tables(sc, roughness_statistics(sc)), None, k)
-    s = sl.summarize(sl.run_model(model, 11.0 * NM))
+    model = assembly.build_model(sc, build_tables(sc, roughness_statistics(sc)), None, k)
+    s = outcomes.summarize(running.run_model(model, 11.0 * NM))
     rate = s["contact_switches_per_ms"] * 1e-3  # [1/ms]
     assert 1e4 < rate <= 1.0 / (sc["solver"]["min_dwell_ns"] * 1e-6)
     assert s["fhm_bv"] < 0.1 and abs(s["min_clearance"]) < 0.01 * NM  # held on the criterion
@@ -189,12 +189,12 @@ def test_the_count_is_the_criterions_transitions_in_a_fine_history():
     dataset says it per ms."""
     scene = load_scene(TWO, [f"contact.k={K}", "solver.output_step_ns=5", "solver.duration_ms=1.0"])
     model = hdi.build_model(scene)
-    run = sl.run_model(model, 10.0 * NM)
+    run = running.run_model(model, 10.0 * NM)
     win = run.time >= model.transient - 1e-15
     n = int(run.info[WINDOW_SWITCHES])
     assert n > 20  # (bouncing: a few hundred per ms)
     assert np.count_nonzero(np.diff(run.contact[win])) == n
-    clearance = sl.histories(run)["clearance"][win]
+    clearance = outcomes.histories(run)["clearance"][win]
     assert np.count_nonzero(np.diff(clearance < 0)) == n
     ds = hdi.simulate(model, [10.0])
     assert ds["contact_switches_per_ms"].attrs["units"] == "ms-1"
@@ -224,11 +224,11 @@ def test_integrated_area_model_integrates_both_friction_parts():
         sc = load_scene(TWO, [f"contact.k={K}", "contact.area_model=integrated", "lubricant.meniscus_time_us=46",
                               *overrides])
         sc = sc.replace(scene={**sc["scene"], "effects": [e for e in sc.effects if e != "dmw"]})
-        return sl.build_model(sc, build_tables(sc, roughness_statistics(sc)), None, K)
+        return assembly.build_model(sc, build_tables(sc, roughness_statistics(sc)), None, K)
 
     cont, crit = model("contact.friction_switching=continuous"), model()
     delta, An = 11.0 * NM, 62e-12
-    two, one = sl.interface_tables(cont, delta, An), sl.interface_tables(crit, delta, An)
+    two, one = kernel_inputs.interface_tables(cont, delta, An), kernel_inputs.interface_tables(crit, delta, An)
     assert two.friction.shape[1] == 8 and one.friction.shape[1] == 4
     assert two.adhesion.shape[1] == 8  # (the adhesion's two tables still side by side)
     np.testing.assert_allclose(two.adhesion, one.adhesion, rtol=1e-12, atol=0)

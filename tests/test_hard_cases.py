@@ -49,7 +49,7 @@ from scipy import integrate
 
 from convergence import assert_converged, deltas
 from pipeline.model import piecewise as pw
-from pipeline.model import slider as sl
+from pipeline.model import assembly, copies, outcomes, running
 from pipeline.physics import air_bearing as ab
 from pipeline.physics import asperity
 from pipeline.physics import microwaviness as pdmw
@@ -99,13 +99,13 @@ def build(scene, record=None):
     if "dmw" in scene.effects and record is None:
         record = scene_record(scene)
     k = scene["contact"]["k"] if "contact" in scene.effects else None
-    return sl.build_model(scene, interface, record if "dmw" in scene.effects else None, k), interface
+    return assembly.build_model(scene, interface, record if "dmw" in scene.effects else None, k), interface
 
 
 def simulate(model, delta, y0=None):
-    run = sl.run_model(model, delta, y0=y0)
-    hist = sl.histories(run)
-    return run, hist, sl.summarize(run, hist)
+    run = running.run_model(model, delta, y0=y0)
+    hist = outcomes.histories(run)
+    return run, hist, outcomes.summarize(run, hist)
 
 
 def scaled_roughness(scene, sigma_nm):
@@ -150,11 +150,11 @@ def assert_physical(run, hist, s):
     if "contact_fraction" in s:
         frac = s["contact_fraction"]
         assert 0.0 <= frac <= 1.0
-        assert s["regime"] in (sl.FLYING, sl.BOUNCING, sl.SURFING)
-        # flying: no sample in contact and the exact minimum of d above k sigma (slider.summarize)
+        assert s["regime"] in (outcomes.FLYING, outcomes.BOUNCING, outcomes.SURFING)
+        # flying: no sample in contact and the exact minimum of d above k sigma (outcomes.summarize)
         touched = frac > 0 or run.d_extremes[0] < run.model.k_sigma
-        assert (s["regime"] == sl.FLYING) == (not touched)
-        assert (s["regime"] == sl.SURFING) == (frac >= sl.SURFING_FRACTION)
+        assert (s["regime"] == outcomes.FLYING) == (not touched)
+        assert (s["regime"] == outcomes.SURFING) == (frac >= outcomes.SURFING_FRACTION)
     for name, v in s.items():
         if name == "protrusion_radius":
             assert v > 0            # inf for a flat slider (protrusion 0) or beyond float range (1e-313 nm)
@@ -179,12 +179,12 @@ def assert_physical(run, hist, s):
 
 def refine(model, delta, max_step=True):
     """Headline changes when rtol/atol are halved, and when max_step is halved as well."""
-    s = sl.summarize(sl.run_model(model, delta))
-    half = sl.with_solver(model, rtol=model.rtol / 2, atol=model.atol / 2)
-    out = {"rtol/atol halved": deltas(s, sl.summarize(sl.run_model(half, delta)))}
+    s = outcomes.summarize(running.run_model(model, delta))
+    half = copies.with_solver(model, rtol=model.rtol / 2, atol=model.atol / 2)
+    out = {"rtol/atol halved": deltas(s, outcomes.summarize(running.run_model(half, delta)))}
     if max_step:
-        half_all = sl.with_solver(half, max_step=model.max_step / 2)
-        out["rtol/atol/max_step halved"] = deltas(s, sl.summarize(sl.run_model(half_all, delta)))
+        half_all = copies.with_solver(half, max_step=model.max_step / 2)
+        out["rtol/atol/max_step halved"] = deltas(s, outcomes.summarize(running.run_model(half_all, delta)))
     return out
 
 
@@ -207,12 +207,12 @@ def test_very_large_damping_is_finite_physical_and_converged(base, record, zeta,
     #   0.9  surfing  fhm 2.2e-5 | 2.2e-5,  clearance 3e-9, contact force 5e-9 (the stiffness cap sets the steps)
     #   0.99 surfing  fhm 5.8e-5 | 5.8e-5,  clearance 4e-10, contact force 8e-10
     interface = build_tables(base, roughness_statistics(base))
-    model = sl.build_model(base, interface, record, K, damping_ratio=zeta)
+    model = assembly.build_model(base, interface, record, K, damping_ratio=zeta)
     assert model.info["damping_ratio"] == zeta
     assert model.slider.c_f > 0 and model.slider.c_r > 0
     run, hist, s = simulate(model, protrusion * NM)
     assert_physical(run, hist, s)
-    assert s["regime"] == (sl.FLYING if protrusion == 5.0 else sl.SURFING)
+    assert s["regime"] == (outcomes.FLYING if protrusion == 5.0 else outcomes.SURFING)
     assert_refines(model, protrusion * NM)
 
 
@@ -226,8 +226,8 @@ def test_flying_fhm_falls_monotonically_with_damping(base, record):
     interface = build_tables(base, roughness_statistics(base))
     fhm = {}
     for zeta in (0.02, 0.05, 0.2, 0.9, 0.99):
-        run, hist, s = simulate(sl.build_model(base, interface, record, K, damping_ratio=zeta), 5 * NM)
-        assert s["regime"] == sl.FLYING
+        run, hist, s = simulate(assembly.build_model(base, interface, record, K, damping_ratio=zeta), 5 * NM)
+        assert s["regime"] == outcomes.FLYING
         fhm[zeta] = s["fhm_bv"]
     seq = [fhm[z] for z in (0.02, 0.05, 0.2, 0.9)]
     assert np.all(np.diff(seq) < 0), fhm
@@ -310,7 +310,7 @@ def test_mccool_edge_statistics_tables_and_run(base, record, alpha):
     assert np.all(np.diff(interface["adhesion_pressure"].values[d >= 0]) <= 0)
     run, hist, s = simulate(model, 11 * NM)
     assert_physical(run, hist, s)
-    assert s["regime"] == sl.SURFING
+    assert s["regime"] == outcomes.SURFING
 
 
 @pytest.mark.parametrize("alpha", [0.5, 0.85, 0.8967])
@@ -357,7 +357,7 @@ def test_mccool_edge_outputs_do_not_depend_on_the_table_floor(base, record):
     model, interface = build(edge_scene(base, 0.9), record)
     run, _, s = simulate(model, 11 * NM)
     wide, _ = build(edge_scene(base, 0.9, table_min_sigma=-40.0), record)
-    s_wide = sl.summarize(sl.run_model(wide, 11 * NM))
+    s_wide = outcomes.summarize(running.run_model(wide, 11 * NM))
     assert run.d_extremes[0] >= interface["separation"].values[0] * NM, \
         f"steady d down to {run.d_extremes[0] / NM:.3f} nm, table from {interface['separation'].values[0]:.3f} nm"
     assert_converged(deltas(s, s_wide), "table floor -8 -> -40 sigma_s")
@@ -489,10 +489,10 @@ def test_nyquist_dmw_run_is_finite_physical_and_converged_in_rtol(nyquist, kind,
     # 11 nm bounces, in contact 96 % of the window, and its BV and clearance move by 1.1 and 1.6 %
     # with rtol/atol halved: impacts driven by content at the Nyquist limit.)
     scene, interface, records = nyquist
-    model = sl.build_model(scene, interface, records[kind], K)
+    model = assembly.build_model(scene, interface, records[kind], K)
     run, hist, s = simulate(model, protrusion * NM)
     assert_physical(run, hist, s)
-    assert s["regime"] == (sl.FLYING if protrusion == 5.0 else sl.SURFING)
+    assert s["regime"] == (outcomes.FLYING if protrusion == 5.0 else outcomes.SURFING)
     assert_refines(model, protrusion * NM, max_step=False)
 
 
@@ -505,7 +505,7 @@ def test_nyquist_dmw_run_is_finite_physical_and_converged_in_rtol(nyquist, kind,
 @pytest.mark.parametrize("kind", ["sine", "band+sine"])
 def test_nyquist_dmw_exact_extremes_bound_the_samples_and_converge(nyquist, kind):
     scene, interface, records = nyquist
-    model = sl.build_model(scene, interface, records[kind], K)
+    model = assembly.build_model(scene, interface, records[kind], K)
     run, hist, s = simulate(model, 5 * NM)
     win = run.time >= model.transient - 1e-15
     d = hist["separation"][win]
@@ -530,7 +530,7 @@ def test_nyquist_dmw_contact_flag_matches_the_criterion(base, nyquist):
     scene = scene0.replace(scene={"effects": ["air_bearing", "pitch", "dmw", "contact", "friction"]})
     model, _ = build(scene, records["band+sine"])
     run, hist, s = simulate(model, 11 * NM)
-    assert s["regime"] == sl.BOUNCING and run.info[st.SWITCHES] > 100
+    assert s["regime"] == outcomes.BOUNCING and run.info[st.SWITCHES] > 100
     flag, c, t = hist["in_contact"], hist["clearance"], run.time
     change_t = t[1:][flag[1:] != flag[:-1]]
     idx = np.searchsorted(change_t, t, side="right") - 1
@@ -551,11 +551,11 @@ def free_vibration(base, max_step_ns=None, amplitude=0.01 * NM):
         solver["max_step_ns"] = max_step_ns
     scene = base.replace(scene={"effects": ["air_bearing", "pitch"]}, air_bearing={"damping_ratio": 0.0},
                          solver=solver)
-    model = sl.build_model(scene, None, None, None)
+    model = assembly.build_model(scene, None, None, None)
     s = model.slider
     _, phi = ab.modes(s.stiffness_matrix, s.mass_matrix)
     x = sum(phi[:, i] / (phi[0, i] - s.l_c * phi[1, i]) for i in range(2)) * amplitude
-    return sl.run_model(model, 5 * NM, y0=np.r_[x, 0.0, 0.0])
+    return running.run_model(model, 5 * NM, y0=np.r_[x, 0.0, 0.0])
 
 
 def energies(run):
@@ -598,7 +598,7 @@ def test_undamped_free_vibration_conserves_energy_over_20ms(base):
 
 
 @pytest.mark.xfail(strict=True, reason=(
-    "BUG pipeline/config/scene.py SCHEMA solver.max_step_ns (default 500 ns) with pipeline/model/slider.py "
+    "BUG pipeline/config/scene.py SCHEMA solver.max_step_ns (default 500 ns) with pipeline/model/assembly.py "
     "build_model (no cap for undamped scenes): undamped free vibration loses 76 % of its energy in "
     "20 ms at the default solver (exact and linearised energy alike; 13 % in the default 2 ms run): the "
     "steps sit at max_step, h omega = 0.94 for the 300 kHz mode, where DP5 damps numerically (an "
@@ -628,10 +628,10 @@ def test_long_surfing_run_does_not_drift(base):
     period, _ = scene_record(scene, duration_s=2e-3)
     tiled = np.tile(period, int(np.ceil(w.size / period.size)))
     for label, rec in (("scene record", (w, fs)), ("2-ms periodic record", (tiled, fs))):
-        model = sl.build_model(scene, interface, rec, K)
+        model = assembly.build_model(scene, interface, rec, K)
         run, hist, s = simulate(model, 11 * NM)
         assert_physical(run, hist, s)
-        assert s["regime"] == sl.SURFING
+        assert s["regime"] == outcomes.SURFING
         c, t = hist["clearance"], run.time
         first, last = c[t < 2e-3].mean(), c[t >= 18e-3].mean()
         assert abs(last - first) < 1e-3 * NM, (label, (last - first) / NM)

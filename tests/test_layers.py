@@ -124,10 +124,10 @@ def test_the_checker_sees_an_upward_import(tmp_path):
     """The test can fail: a physics module importing the model layer is reported (the probe is parsed
     from a temporary file under a physics module's name, never written into the package)."""
     probe = tmp_path / "probe.py"
-    probe.write_text("from ..model import slider\n\ndef f():\n    from ..stages import sweep\n")
+    probe.write_text("from ..model import running\n\ndef f():\n    from ..stages import sweep\n")
     module = "pipeline.physics.probe"
     found = imports(probe, module)
-    assert ("pipeline.model.slider", True, 1) in found and ("pipeline.stages.sweep", False, 4) in found
+    assert ("pipeline.model.running", True, 1) in found and ("pipeline.stages.sweep", False, 4) in found
     assert all(rank(t) > rank(module) for t, _, _ in found)
 
 
@@ -255,7 +255,7 @@ def test_the_rules_see_a_stage_import_a_scene_read_and_a_file_read(tmp_path):
     """Each rule can fail: synthetic offending sources are caught (parsed from temporary files under
     the names of a stage, never written into the package), and clean ones are not."""
     probe = tmp_path / "probe.py"
-    probe.write_text("from .sweep import batch_model\nfrom . import simulate\nfrom ..model import slider\n"
+    probe.write_text("from .sweep import batch_model\nfrom . import simulate\nfrom ..model import running\n"
                      "from .probe import x\n")
     assert stage_imports(probe, "pipeline.stages.probe") == [("pipeline.stages.sweep", 1),
                                                              ("pipeline.stages.simulate", 2)]

@@ -16,7 +16,7 @@ import xarray as xr
 from pipeline.config.scene import scene_from_dict
 from pipeline.model import dynamics as dyn
 from pipeline.model import state as st
-from pipeline.model import slider as sl
+from pipeline.model import assembly, outcomes, running
 from pipeline.physics import microwaviness as pdmw
 
 NM = 1e-9
@@ -46,14 +46,14 @@ def make_model(tau_us: float | None, effects=("air_bearing", "pitch", "adhesion"
     if "dmw" in effects:
         fs = DMW["sample_rate_mhz"] * 1e6
         rec = pdmw.synthesize(DMW["rms_nm"], (10e3, 500e3), -2.0, 1.2 * duration_ms * 1e-3, fs, DMW["seed"]), fs
-    return sl.build_model(scene, adhesion_interface(), rec, None)
+    return assembly.build_model(scene, adhesion_interface(), rec, None)
 
 
 def test_zero_time_is_the_model_without_the_state():
     # tau_m = 0 (the default) is today's kernel: no fifth state, the same numbers as a scene without the key
     a, b = make_model(0.0), make_model(None)
     assert a.meniscus is None and a.atol.size == 4
-    ra, rb = sl.run_model(a, 8 * NM), sl.run_model(b, 8 * NM)
+    ra, rb = running.run_model(a, 8 * NM), running.run_model(b, 8 * NM)
     assert ra.state.shape[1] == 4
     np.testing.assert_array_equal(ra.state, rb.state)
 
@@ -65,13 +65,13 @@ def test_fixed_separation_relaxes_exponentially():
     model = make_model(tau / 1e-6, effects=("air_bearing", "pitch", "adhesion"), duration_ms=0.1)
     model = replace(model, p=dyn.with_values(model.p, m=1e20, I=1e20))
     delta = 8 * NM
-    run = sl.run_model(model, delta, y0=np.zeros(5))
+    run = running.run_model(model, delta, y0=np.zeros(5))
     pa = P0 * np.exp(-(11 * NM - delta) / L)
     q = run.state[:, st.MENISCUS]
     expected = pa * (1 - np.exp(-run.time / tau))
     np.testing.assert_allclose(q, expected, rtol=0, atol=1e-6 * pa)
     assert abs(run.state[:, st.Z]).max() < 1e-18  # the slider did not move
-    h = sl.histories(run)
+    h = outcomes.histories(run)
     np.testing.assert_allclose(h["adhesion_force"], run.nominal_area * q, rtol=1e-15)
 
 
@@ -82,8 +82,8 @@ def test_short_times_converge_to_the_instantaneous_adhesion():
     # transient; no DMW, whose response amplifies lags)
     effects = ("air_bearing", "pitch", "adhesion")
     delta = 7 * NM
-    d0 = sl.histories(sl.run_model(make_model(0.0, effects, start="nominal"), delta))["separation"]
-    err = [np.max(np.abs(sl.histories(sl.run_model(make_model(tau_us, effects, start="nominal"), delta))["separation"]
+    d0 = outcomes.histories(running.run_model(make_model(0.0, effects, start="nominal"), delta))["separation"]
+    err = [np.max(np.abs(outcomes.histories(running.run_model(make_model(tau_us, effects, start="nominal"), delta))["separation"]
                          - d0))
            for tau_us in (0.1, 0.01, 0.001)]
     assert err[0] > 1e-3 * NM  # (measured 0.038 nm, 0.0046 nm, 0.0004 nm)
@@ -95,9 +95,9 @@ def test_meniscus_state_stays_between_the_extremes_of_its_target():
     # q is a weighted average of its start value p_a(d(0)) and past p_a(d(t)): it never leaves their
     # range, and it starts at its equilibrium
     model = make_model(10.0)
-    run = sl.run_model(model, 9.5 * NM)
+    run = running.run_model(model, 9.5 * NM)
     assert run.info[st.STATUS] == st.OK and np.all(np.isfinite(run.state))
-    d = sl.histories(run)["separation"]
+    d = outcomes.histories(run)["separation"]
     pa = P0 * np.exp(-d / L)
     q = run.state[:, st.MENISCUS]
     assert q[0] == pytest.approx(pa[0], rel=1e-6)
@@ -113,4 +113,4 @@ def test_meniscus_needs_the_adhesion_effect():
     interface = adhesion_interface().assign(contact_pressure=("separation", np.zeros(221)),
                                             real_area_fraction=("separation", np.zeros(221)))
     with pytest.raises(ValueError, match="meniscus_time_us"):
-        sl.build_model(scene, interface, None, 1.0)
+        assembly.build_model(scene, interface, None, 1.0)

@@ -1,6 +1,6 @@
 """Model variants are open: a new air-bearing law at the TFC point is its function plus one registry
 line (pipeline.physics.air_bearing.TFC_STIFFENING), tabulated per protrusion into the kernel's generic
-TFC-point slot (pipeline.model.slider.tfc_table, pipeline.model.dynamics.Tables.tfc) with no kernel change.
+TFC-point slot (pipeline.model.kernel_inputs.tfc_table, pipeline.model.dynamics.Tables.tfc) with no kernel change.
 
 The laws registered here live in test-local entries (monkeypatch: the module's registry is restored
 after each test). Scenes are built in code with explicit values for what a test depends on.
@@ -16,7 +16,7 @@ from scipy.optimize import fsolve
 
 from pipeline.model import dynamics as dyn
 from pipeline.model import forces as fo
-from pipeline.model import slider as sl
+from pipeline.model import assembly, kernel_inputs, outcomes, running
 from pipeline.physics import air_bearing as ab
 from pipeline.physics import microwaviness as pdmw
 from pipeline.config.scene import scene_from_dict
@@ -54,9 +54,9 @@ def test_a_new_tfc_law_is_its_function_and_one_registry_line(monkeypatch):
     # the whole change a new variant needs: its law (above) and one line in its registry
     monkeypatch.setitem(ab.TFC_STIFFENING, "constant-lift", ab.TfcLaw(constant_lift))
     scene = make_scene(["air_bearing", "pitch"], tfc_stiffening="constant-lift")
-    model = sl.build_model(scene, None, None, None)
+    model = assembly.build_model(scene, None, None, None)
     assert model.tfc_stiffening is None and model.tfc_tabulated == (ab.TFC_STIFFENING["constant-lift"],)
-    run = sl.run_model(model, 5 * NM)
+    run = running.run_model(model, 5 * NM)
     # static equilibrium under the lift at the TFC point (l_c behind the CG), linear front pad and
     # power-law rear pad: F_f + F_r + L = 0, l_f F_f - l_r F_r - l_c L = 0; the damped transient
     # (zeta 0.05 at 120 kHz: 27 us) is gone after 1 ms
@@ -77,8 +77,8 @@ def test_a_new_tfc_law_is_its_function_and_one_registry_line(monkeypatch):
     assert run.state[-1, st.Z] == pytest.approx(z, rel=1e-6)
     assert run.state[-1, st.THETA] == pytest.approx(theta, rel=1e-6)
     # the separation at the TFC point opens by z - l_c theta from its nominal value
-    nominal = sl.run_model(sl.build_model(make_scene(["air_bearing", "pitch"]), None, None, None), 5 * NM)
-    d, d_nominal = sl.histories(run)["separation"], sl.histories(nominal)["separation"]
+    nominal = running.run_model(assembly.build_model(make_scene(["air_bearing", "pitch"]), None, None, None), 5 * NM)
+    d, d_nominal = outcomes.histories(run)["separation"], outcomes.histories(nominal)["separation"]
     assert d[-1] - d_nominal[-1] == pytest.approx(z - s.l_c * theta, rel=1e-6)
 
 
@@ -91,10 +91,10 @@ def test_tabulated_law_reproduces_the_compiled_gap_power_law(monkeypatch):
     compiled = make_scene(effects, tfc_stiffening="gap-power", **law)
     tabulated = make_scene(effects, tfc_stiffening="gap-power-tabulated", **law)
     rec = record(compiled)
-    m_c, m_t = sl.build_model(compiled, None, rec, None), sl.build_model(tabulated, None, rec, None)
+    m_c, m_t = assembly.build_model(compiled, None, rec, None), assembly.build_model(tabulated, None, rec, None)
     assert m_t.tfc_stiffening is None and m_c.tfc_tabulated == ()
     delta = 5 * NM
-    c, x0, h = sl.tfc_table(m_t, delta)
+    c, x0, h = kernel_inputs.tfc_table(m_t, delta)
     p = dyn.with_values(m_t.p, delta=delta, tfc_x0=x0, tfc_h=h)
     # measured: force within 3e-8 of its largest value over 0.25-30 nm, stiffness within 5e-8
     # relative above 1 nm (the spline's error grows towards the law's singular end at g_min = 0.22 nm)
@@ -104,32 +104,32 @@ def test_tabulated_law_reproduces_the_compiled_gap_power_law(monkeypatch):
     np.testing.assert_allclose(kernel[:, 0], F, rtol=0, atol=1e-7 * np.abs(F).max())
     np.testing.assert_allclose(kernel[:, 1], k, rtol=1e-6)
     # the runs: separation within 2.5e-12 nm, FHM within 1.4e-12 relative (measured)
-    run_c, run_t = sl.run_model(m_c, delta), sl.run_model(m_t, delta)
-    d_c, d_t = sl.histories(run_c)["separation"], sl.histories(run_t)["separation"]
+    run_c, run_t = running.run_model(m_c, delta), running.run_model(m_t, delta)
+    d_c, d_t = outcomes.histories(run_c)["separation"], outcomes.histories(run_t)["separation"]
     assert np.abs(d_t - d_c).max() < 1e-9 * NM
-    s_c, s_t = sl.summarize(run_c), sl.summarize(run_t)
+    s_c, s_t = outcomes.summarize(run_c), outcomes.summarize(run_t)
     assert s_t["fhm_bv"] == pytest.approx(s_c["fhm_bv"], rel=1e-9)
     # and the law matters: without it the FHM differs by far more than the table's error
-    s_none = sl.summarize(sl.run_model(sl.build_model(make_scene(effects), None, rec, None), delta))
+    s_none = outcomes.summarize(running.run_model(assembly.build_model(make_scene(effects), None, rec, None), delta))
     assert abs(s_none["fhm_bv"] - s_c["fhm_bv"]) > 100 * abs(s_t["fhm_bv"] - s_c["fhm_bv"])
 
 
 def test_an_unknown_compiled_form_is_refused(monkeypatch):
     monkeypatch.setitem(ab.TFC_STIFFENING, "bogus", ab.TfcLaw(constant_lift, closed_form="bogus"))
     with pytest.raises(ValueError, match="air_bearing.tfc_stiffening = 'bogus': no compiled form 'bogus'"):
-        sl.build_model(make_scene(["air_bearing"], tfc_stiffening="bogus"), None, None, None)
+        assembly.build_model(make_scene(["air_bearing"], tfc_stiffening="bogus"), None, None, None)
 
 
 def test_touched_is_the_regime_and_calibration_rule():
     # A flying run does not touch; the same run with k sigma above its exact minimum separation does,
     # although no output sample is in contact (there is no contact effect): the rule reads the exact minimum.
     scene = make_scene(["air_bearing", "pitch", "dmw"])
-    model = sl.build_model(scene, None, record(scene), None)
-    run = sl.run_model(model, 5 * NM)
+    model = assembly.build_model(scene, None, record(scene), None)
+    run = running.run_model(model, 5 * NM)
     lo = run.d_extremes[0]
-    assert not sl.touched(run) and not run.contact.any()
+    assert not outcomes.touched(run) and not run.contact.any()
     above = replace(run, model=replace(model, k=1.0, sigma=lo + 1e-3 * NM))
-    assert above.model.k_sigma > lo and sl.touched(above)
+    assert above.model.k_sigma > lo and outcomes.touched(above)
 
 
 def test_with_values_copies_the_record():

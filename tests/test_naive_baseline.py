@@ -9,7 +9,7 @@ import sys
 import numpy as np
 import pytest
 
-from pipeline.model import slider as sl
+from pipeline.model import assembly, outcomes, running
 from pipeline.config.scene import load_scene
 from pipeline.stages.simulate import model_inputs
 
@@ -22,7 +22,7 @@ def setup(tmp_path_factory, paper_config, repo_root):
         sys.path.insert(0, str(repo_root))
     scene = load_scene(paper_config, ["solver.duration_ms=1.0", "solver.transient_ms=0.4", f"contact.k={K}"])
     interface, record = model_inputs(scene, tmp_path_factory.mktemp("naive"))
-    model = sl.build_model(scene, interface, record, K)
+    model = assembly.build_model(scene, interface, record, K)
     return scene, interface, record, model
 
 
@@ -31,7 +31,7 @@ def test_naive_agrees_with_project(setup, protrusion):
     from benchmarks.naive import simulate_naive
 
     scene, interface, record, model = setup
-    project = sl.summarize(sl.run_model(model, protrusion * 1e-9))
+    project = outcomes.summarize(running.run_model(model, protrusion * 1e-9))
     naive = simulate_naive(scene, interface, record, K, protrusion)
     assert naive["regime"] == project["regime"] == (0 if protrusion < 7 else 2)
     for name in ("fhm_bv", "clearance", "contact_force", "friction_coefficient", "mean_pressure"):
@@ -52,7 +52,7 @@ def test_linear_record_interpolation_variant(setup):
     from benchmarks.naive import simulate_naive
 
     scene, interface, record, model = setup
-    project = sl.summarize(sl.run_model(model, 11e-9))
+    project = outcomes.summarize(running.run_model(model, 11e-9))
     linear = simulate_naive(scene, interface, record, K, 11.0, dmw_interpolation="linear")
     # BV 0.34 % at 11 nm with the corrected paper scene (docs/model.md, section "Corrections"): linear interpolation of the record
     # moves it by a measured 3.4 % (0.0013 nm of peak-to-peak)

@@ -13,7 +13,7 @@ import pytest
 
 from pipeline.model import dynamics as dyn
 from pipeline.model import forces as fo
-from pipeline.model import slider as sl
+from pipeline.model import assembly, kernel_inputs, outcomes, running
 from pipeline.physics import air_bearing as ab
 from pipeline.physics import microwaviness as pdmw
 from pipeline.physics import friction
@@ -39,7 +39,7 @@ def record_of(scene):
 
 def build(scene, k=K):
     interface = build_tables(scene, roughness_statistics(scene))
-    return sl.build_model(scene, interface, record_of(scene), k), interface
+    return assembly.build_model(scene, interface, record_of(scene), k), interface
 
 
 @pytest.fixture(scope="module")
@@ -72,12 +72,12 @@ def test_paper_clearances_follow_from_the_summit_datum(paper, delta, paper_clear
     model, interface = build(scene)
     nominal = 11.0 - delta - float(interface["y_s"]) - K * float(interface["sigma"])
     assert nominal == pytest.approx(paper_clearance, abs=0.01)
-    run = sl.run_model(model, delta * NM)
-    s = sl.summarize(run)
+    run = running.run_model(model, delta * NM)
+    s = outcomes.summarize(run)
     assert s["contact_fraction"] == 0.0
     assert s["clearance"] / NM == pytest.approx(paper_clearance, abs=0.05)
     assert s["clearance"] / NM == pytest.approx(nominal, abs=0.01)
-    with_adhesion = sl.summarize(sl.run_model(build(paper)[0], delta * NM))
+    with_adhesion = outcomes.summarize(running.run_model(build(paper)[0], delta * NM))
     assert 0.0 < (s["clearance"] - with_adhesion["clearance"]) / NM < 0.15
 
 
@@ -88,21 +88,21 @@ def test_flying_scene_datum_without_interface_tables(paper):
     from pathlib import Path
 
     flying = paper.replace(scene={"effects": ["air_bearing", "pitch"]})
-    model = sl.build_model(flying, None, None, None)
+    model = assembly.build_model(flying, None, None, None)
     assert model.p.y_s == pytest.approx(0.691e-9, abs=1e-12)
     assert model.p.y_s == roughness_statistics(paper)["y_s"]  # what interface.nc is made from
     scan = Path(__file__).parent / "data" / "afm" / "di-3.di"
     afm = flying.replace(roughness={"afm": [str(scan)]})
     with pytest.raises(ValueError, match="interface.nc"):
-        sl.build_model(afm, None, None, None)
+        assembly.build_model(afm, None, None, None)
     assert "interface" in scene_inputs.simulation_inputs(afm) and "interface" not in scene_inputs.simulation_inputs(flying)
 
 
 def test_separation_has_one_home(paper):
     # histories, the kernel's exact extremes and the datum function agree: d = gap - y_s
     model, interface = build(paper.replace(scene={"effects": NO_ADHESION}))
-    run = sl.run_model(model, 5 * NM)
-    hist = sl.histories(run)
+    run = running.run_model(model, 5 * NM)
+    hist = outcomes.histories(run)
     p = model.p.copy()
     p.delta = 5 * NM
     w = hist["disk_displacement"]
@@ -153,7 +153,7 @@ def kernel_rhs(model, delta, y, tfs=True):
     """dy/dt of the kernel at t = 0 for state ``y`` (flying mode), with the scene's stiffening or none."""
     p = model.p.copy()
     p.delta = delta
-    _, variants = sl.kernel_slots(model, p)
+    _, variants = kernel_inputs.kernel_slots(model, p)
     out = np.empty(4)
     dyn.rhs(0.0, np.asarray(y, float), p, dyn.Tables(), variants if tfs else variants._replace(gap_power=None),
             False, out)
@@ -188,17 +188,17 @@ def test_stiffening_leaves_the_modal_stiffness_at_the_nominal_gap(paper):
 def test_stiffening_off_is_bit_identical(paper):
     # "none" ignores the stiffening keys, and k_t = 0 adds an exact zero: identical runs
     base = paper.replace(scene={"effects": NO_ADHESION})
-    ref = sl.run_model(build(base)[0], 10 * NM)
-    other = sl.run_model(build(base.replace(air_bearing={"tfc_stiffness_n_m": 7e5,
+    ref = running.run_model(build(base)[0], 10 * NM)
+    other = running.run_model(build(base.replace(air_bearing={"tfc_stiffness_n_m": 7e5,
                                                          "tfc_stiffening_exponent": 3.0}))[0], 10 * NM)
-    zero = sl.run_model(build(stiffening_scene(paper, k_t=0.0))[0], 10 * NM)
+    zero = running.run_model(build(stiffening_scene(paper, k_t=0.0))[0], 10 * NM)
     assert ref.model.tfc_stiffening is None and zero.model.tfc_stiffening is not None
     for r in (other, zero):
         np.testing.assert_array_equal(r.state, ref.state)
         np.testing.assert_array_equal(r.contact, ref.contact)
         assert r.d_extremes == ref.d_extremes
     # switched on, it changes the run (the spring acts)
-    on = sl.run_model(build(stiffening_scene(paper))[0], 10 * NM)
+    on = running.run_model(build(stiffening_scene(paper))[0], 10 * NM)
     assert not np.array_equal(on.state, ref.state)
 
 
@@ -214,7 +214,7 @@ def test_stiffening_scene_keys_are_checked(paper_config):
 
 def test_rear_law_registry_and_kernel(paper):
     scene = paper.replace(scene={"effects": ["air_bearing", "pitch"]}, air_bearing={"rear_law": "linear"})
-    model = sl.build_model(scene, None, None, None)
+    model = assembly.build_model(scene, None, None, None)
     assert model.rear_law.name == "linear"
     s = model.slider
     y = np.array([-2 * NM, 1e-6, 0.0, 0.0])
@@ -225,7 +225,7 @@ def test_rear_law_registry_and_kernel(paper):
     assert F_r == pytest.approx(s.k_r * (s.g0 - g_r), rel=1e-12)
     assert out[2] == pytest.approx((F_f + F_r) / s.m, rel=1e-12)
     # the power law differs at this 2 nm displacement by its curvature, n (n+1)/2 k_r x^2 / g0
-    power = sl.build_model(paper.replace(scene={"effects": ["air_bearing", "pitch"]}), None, None, None)
+    power = assembly.build_model(paper.replace(scene={"effects": ["air_bearing", "pitch"]}), None, None, None)
     F_p = ab.rear_force(g_r, s.g0, s.n, s.rear_preload)
     assert kernel_rhs(power, 0.0, y)[2] == pytest.approx((F_f + F_p) / s.m, rel=1e-12)
     with pytest.raises(SceneError, match="'power', 'linear'"):
@@ -235,8 +235,8 @@ def test_rear_law_registry_and_kernel(paper):
 def test_friction_coefficient_law_gives_its_mu(paper):
     scene = paper.replace(contact={"friction_law": "coefficient", "friction_coefficient": 1.2})
     model, _ = build(scene)
-    run = sl.run_model(model, 11 * NM)
-    s = sl.summarize(run)
+    run = running.run_model(model, 11 * NM)
+    s = outcomes.summarize(run)
     assert s["contact_fraction"] > 0.99
     assert s["friction_coefficient"] == pytest.approx(1.2, rel=1e-9)
     attrs = model_attrs(model, "test")

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from pipeline.model import forces as fo
-from pipeline.model import slider as sl
+from pipeline.model import running
 from pipeline.model import state as st
 from pipeline.physics import air_bearing as ab
 from test_dynamics import build, make_scene
@@ -36,7 +36,7 @@ def bounce_frequency(law: str) -> tuple[float, float]:
     ``k`` the law's stiffness."""
     model = build(make_scene(["air_bearing"], air_bearing={"rear_law": law, "damping_ratio": 0.0},
                              solver={"duration_ms": 0.5, "transient_ms": 0.0}))
-    run = sl.run_model(model, 5 * NM, y0=np.array([0.5 * NM, 0.0, 0.0, 0.0]))
+    run = running.run_model(model, 5 * NM, y0=np.array([0.5 * NM, 0.0, 0.0, 0.0]))
     assert run.info[st.STATUS] == st.OK
     z, t = run.state[:, st.Z], run.time
     i = np.flatnonzero(np.sign(z[:-1]) != np.sign(z[1:]))

@@ -37,7 +37,7 @@ import pytest
 
 from convergence import assert_converged, deltas
 
-from pipeline.model import slider as sl
+from pipeline.model import assembly, copies, outcomes, running
 from pipeline.physics import microwaviness as pdmw
 from pipeline.config.scene import SCHEMA, load_scene
 from pipeline.model import dmw_record
@@ -104,7 +104,7 @@ def case_scene(base, name, paper_hardness):
 
 def build(scene, record):
     interface = build_tables(scene, roughness_statistics(scene))
-    return sl.build_model(scene, interface, record, scene["contact"]["k"]), interface
+    return assembly.build_model(scene, interface, record, scene["contact"]["k"]), interface
 
 
 def case_record(name, record):
@@ -177,17 +177,17 @@ def test_hard_case_is_finite_physical_and_converged(base, record, paper_hardness
         assert float(interface["hardness"]) == pytest.approx(paper_hardness[0], rel=1e-12)
 
     delta = protrusion * NM
-    run = sl.run_model(model, delta)
-    hist = sl.histories(run)
-    s = sl.summarize(run, hist)
+    run = running.run_model(model, delta)
+    hist = outcomes.histories(run)
+    s = outcomes.summarize(run, hist)
     assert_physical(run, hist, s)
     assert s["contact_fraction"] > 0  # every case is in contact at these protrusions
 
-    half_tol = sl.with_solver(model, rtol=model.rtol / 2, atol=model.atol / 2)
-    s_tol = sl.summarize(sl.run_model(half_tol, delta))
+    half_tol = copies.with_solver(model, rtol=model.rtol / 2, atol=model.atol / 2)
+    s_tol = outcomes.summarize(running.run_model(half_tol, delta))
     assert_converged(deltas(s, s_tol), f"{name}, rtol/atol halved")
-    half_all = sl.with_solver(half_tol, max_step=model.max_step / 2)
-    s_all = sl.summarize(sl.run_model(half_all, delta))
+    half_all = copies.with_solver(half_tol, max_step=model.max_step / 2)
+    s_all = outcomes.summarize(running.run_model(half_all, delta))
     assert_converged(deltas(s, s_all), f"{name}, rtol/atol/max_step halved", skip=("fhm_bv",) if sliding else ())
 
 
@@ -196,7 +196,7 @@ def test_hard_case_is_finite_physical_and_converged(base, record, paper_hardness
 # contact mode accumulate over the 2 ms and the default solver errs by several per cent (measured for
 # undamped, frictionless surfing at 11 nm: FHM/BV 9.65 % at the defaults against 9.05 % converged); they
 # converge under refinement from rtol 1e-8, which the test checks. With friction and no damping the
-# friction moment -h_cg A_n tau(d), a circulatory force, destabilises surfing: no convergence is
+# friction moment -friction_arm A_n tau(d), a circulatory force, destabilises surfing: no convergence is
 # expected and only finiteness and physical bounds are checked (test_hard_case_is_finite_...).
 @pytest.mark.parametrize("name, protrusion, rtol", [("deep_interference", 15.0, None),
                                                     ("zero_damping_frictionless", 11.0, 1e-8),
@@ -207,10 +207,10 @@ def test_default_solver_converges_under_tolerance_halving(base, record, paper_ha
                 "output_step_ns": SCHEMA["solver"]["output_step_ns"].default})
     model, _ = build(scene, case_record(name, record))
     if rtol is not None:
-        model = sl.with_solver(model, rtol=rtol, atol=model.atol * rtol / model.rtol)
+        model = copies.with_solver(model, rtol=rtol, atol=model.atol * rtol / model.rtol)
     delta = protrusion * NM
-    s = sl.summarize(sl.run_model(model, delta))
-    s_half = sl.summarize(sl.run_model(sl.with_solver(model, rtol=model.rtol / 2, atol=model.atol / 2), delta))
+    s = outcomes.summarize(running.run_model(model, delta))
+    s_half = outcomes.summarize(running.run_model(copies.with_solver(model, rtol=model.rtol / 2, atol=model.atol / 2), delta))
     assert_converged(deltas(s, s_half), f"{name} at the default solver")
 
 
@@ -223,8 +223,8 @@ def test_dmw_step_is_followed_and_settles(base, record):
     runs = {}
     for label, rec in (("plain", record), ("step", case_record("dmw_step", record))):
         model, _ = build(base, rec)
-        run = sl.run_model(model, 11 * NM)
-        runs[label] = (run.time, sl.histories(run))
+        run = running.run_model(model, 11 * NM)
+        runs[label] = (run.time, outcomes.histories(run))
     t, h = runs["step"]
     _, h0 = runs["plain"]
     d, d0 = h["separation"], h0["separation"]
@@ -236,7 +236,7 @@ def test_dmw_step_is_followed_and_settles(base, record):
 
 
 def test_zero_damping_deep_interference_stays_finite(base, record, paper_hardness):
-    # Zero damping at 15 nm: friction (a moment -h_cg A_n tau(d) that depends on d, a circulatory,
+    # Zero damping at 15 nm: friction (a moment -friction_arm A_n tau(d) that depends on d, a circulatory,
     # non-conservative force) and the DMW pump energy into the slider and nothing takes it out: it
     # bounces violently (measured FHM/BV ~700-1000 %, contact in 5-7 % of the window). This motion is
     # chaotic, so it does not converge under tolerance changes (FHM changes ~15 %); it must still stay
@@ -244,11 +244,11 @@ def test_zero_damping_deep_interference_stays_finite(base, record, paper_hardnes
     # which nothing damps. From its static contact equilibrium (the default start) the same slider
     # stays surfing over the 2 ms (measured): the case is the nominal start's.
     model, _ = build(case_scene(base, "zero_damping", paper_hardness).replace(solver={"start": "nominal"}), record)
-    run = sl.run_model(model, 15 * NM)
-    hist = sl.histories(run)
-    s = sl.summarize(run, hist)
+    run = running.run_model(model, 15 * NM)
+    hist = outcomes.histories(run)
+    s = outcomes.summarize(run, hist)
     assert_physical(run, hist, s)
-    assert s["regime"] == sl.BOUNCING
+    assert s["regime"] == outcomes.BOUNCING
 
 
 @pytest.mark.parametrize("name", ["rough_x100", "stiff_contact"])
@@ -266,8 +266,8 @@ def test_sliding_mode_outputs_versus_the_dwell(base, record, paper_hardness, nam
     for dwell in (20e-9, 10e-9, 5e-9):
         p = model.p.copy()
         p.dwell = dwell
-        run = sl.run_model(dataclasses.replace(model, p=p), 11 * NM)
-        out.append((sl.summarize(run), run.info[st.SWITCHES]))
+        run = running.run_model(dataclasses.replace(model, p=p), 11 * NM)
+        out.append((outcomes.summarize(run), run.info[st.SWITCHES]))
     forces = np.array([s["contact_force"] for s, _ in out])
     clearance = np.array([abs(s["clearance"]) for s, _ in out])
     fhm = np.array([s["fhm_bv"] for s, _ in out])
@@ -278,7 +278,7 @@ def test_sliding_mode_outputs_versus_the_dwell(base, record, paper_hardness, nam
     assert clearance[-1] < 1e-3 * NM * 5                        # and is a few thousandths of a nm at most
 
 
-# Regression test (fixed): pipeline/model/slider.py build_model (solver defaults): with the default
+# Regression test (fixed): pipeline/model/assembly.py build_model (solver defaults): with the default
 # max_step 250 ns the contact mode of the smooth surface (~1.4 MHz, A_n dp_c/dd = 1.2e7 N/m on the
 # TFC point's effective mass) is integrated at the DP5 stability boundary (h*omega ~ 2.3, 34 %
 # rejected steps); its ringing error accumulates to 0.002-0.003 nm (20-30 x atol), FHM is 0.190 %
@@ -289,6 +289,6 @@ def test_sliding_mode_outputs_versus_the_dwell(base, record, paper_hardness, nam
 def test_smooth_surface_converges_at_the_default_max_step(base, record, paper_hardness):
     scene = case_scene(base, "smooth_div10", paper_hardness).replace(solver={"max_step_ns": 250.0})
     model, _ = build(scene, record)
-    s = sl.summarize(sl.run_model(model, 11 * NM))
-    s_half = sl.summarize(sl.run_model(sl.with_solver(model, rtol=model.rtol / 2, atol=model.atol / 2), 11 * NM))
+    s = outcomes.summarize(running.run_model(model, 11 * NM))
+    s_half = outcomes.summarize(running.run_model(copies.with_solver(model, rtol=model.rtol / 2, atol=model.atol / 2), 11 * NM))
     assert_converged(deltas(s, s_half), "smooth surface at max_step 250 ns")

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_array_equal
 
-from pipeline.model import slider as sl
+from pipeline.model import copies, kernel_inputs, outcomes, running
 from pipeline.model.simulation import simulate
 from pipeline.units import NM
 from test_dynamics import build, make_scene, synthetic_record
@@ -37,7 +37,7 @@ def test_the_start_does_not_decide_the_steady_state(delta):
     static = build(scene)
     assert static.start == "static"  # the default
     nominal = replace(static, start="nominal")
-    y_static, note = sl.start(static, delta * NM)
+    y_static, note = running.start(static, delta * NM)
     # the starts differ by far more than the tolerance: the test can tell them apart
     assert abs(y_static[0]) > 100 * TOL_NM * NM, note
     runs = {"static": simulate(static, [delta]).isel(protrusion=0),
@@ -53,7 +53,7 @@ def test_the_start_does_not_decide_the_steady_state(delta):
         assert float(ds["fhm_bv"]) == pytest.approx(float(ref["fhm_bv"]), abs=100 * TOL_NM / 11.0), how
         assert float(ds["contact_force"]) == pytest.approx(float(ref["contact_force"]), rel=1e-4, abs=1e-9), how
         assert int(ds["regime"]) == int(ref["regime"]), how
-    assert int(ref["regime"]) == (sl.FLYING if delta == 5.0 else sl.SURFING)
+    assert int(ref["regime"]) == (outcomes.FLYING if delta == 5.0 else outcomes.SURFING)
 
 
 def test_a_solver_copy_shares_the_fold_and_reaches_the_same_start():
@@ -62,17 +62,17 @@ def test_a_solver_copy_shares_the_fold_and_reaches_the_same_start():
     model = build(make_scene(("air_bearing", "pitch", "adhesion", "contact"), solver=SOLVER))
     fresh = replace(model)  # (dataclasses.replace: its own, empty fold cache)
     delta = 11 * NM  # past the fold: the start needs it
-    y_model, note_model = sl.start(model, delta)
+    y_model, note_model = running.start(model, delta)
     assert "fold" in model.statics
-    copy = sl.with_solver(model, duration=0.1e-3, transient=0.0, rtol=1e-7)
+    copy = copies.with_solver(model, duration=0.1e-3, transient=0.0, rtol=1e-7)
     assert copy.statics is model.statics and copy.duration == 0.1e-3
     assert fresh.statics is not model.statics and not fresh.statics
-    y_copy, note_copy = sl.start(copy, delta)
-    y_fresh, _ = sl.start(fresh, delta)
+    y_copy, note_copy = running.start(copy, delta)
+    y_fresh, _ = running.start(fresh, delta)
     assert note_copy == note_model and "contact" in note_model
     assert (y_copy == y_model).all() and (y_fresh == y_model).all()
     with pytest.raises(ValueError, match="solver settings only"):
-        sl.with_solver(model, k=0.5)
+        copies.with_solver(model, k=0.5)
 
 
 def test_a_criterion_copy_starts_where_a_fresh_model_does_without_its_own_fold_search():
@@ -81,16 +81,16 @@ def test_a_criterion_copy_starts_where_a_fresh_model_does_without_its_own_fold_s
     # and past it (the contact branch), equal a fresh model's with k, which searches its own fold
     model = build(make_scene(("air_bearing", "pitch", "adhesion", "contact"), solver=SOLVER))
     off = replace(model, k=-1e300)
-    sl.start(off, 0.0)
+    running.start(off, 0.0)
     bound = off.statics["fold"]
     assert 5 * NM < bound < 11 * NM  # the adhesion fold of this scene
     # k sigma 0.5 nm ends the flying branch before the adhesion fold: a bound, not the fold itself
     for k in (-1.0, 0.0, 1.0, 3.0):
-        copy = sl.with_criterion(off, k)
+        copy = copies.with_criterion(off, k)
         fresh = replace(model, k=k)
         for delta in (5 * NM, bound - 0.3 * NM, bound, 11 * NM):
-            y_copy, note_copy = sl.start(copy, delta)
-            y_fresh, note_fresh = sl.start(fresh, delta)
+            y_copy, note_copy = running.start(copy, delta)
+            y_fresh, note_fresh = running.start(fresh, delta)
             assert (y_copy == y_fresh).all(), (k, delta / NM, note_copy, note_fresh)
             assert note_copy.split(":")[0] == note_fresh.split(":")[0]  # same kind of state and values
             assert ("contact" in note_copy) == (delta >= fresh.statics["fold"]), (k, delta / NM)
@@ -98,9 +98,9 @@ def test_a_criterion_copy_starts_where_a_fresh_model_does_without_its_own_fold_s
         assert fresh.statics["fold"] <= bound, k
     # a model's own fold bounds a higher criterion's, not a lower one's (whose fold may lie past it)
     one = replace(model, k=1.0)
-    sl.start(one, 0.0)
-    assert sl.with_criterion(one, 2.0).statics["bound"] == one.statics["fold"]
-    assert "bound" not in sl.with_criterion(one, 0.5).statics
+    running.start(one, 0.0)
+    assert copies.with_criterion(one, 2.0).statics["bound"] == one.statics["fold"]
+    assert "bound" not in copies.with_criterion(one, 0.5).statics
 
 
 def test_the_realisations_of_an_ensemble_share_their_static_starts():
@@ -114,7 +114,7 @@ def test_the_realisations_of_an_ensemble_share_their_static_starts():
     assert not np.array_equal(records[0][0], records[1][0])
     alone = [build(scene, rec) for rec in records]
     shared = [build(scene, rec) for rec in records]
-    sl.share_statics(shared)
+    copies.share_statics(shared)
     deltas = [5.0, 11.0]  # flying; past the fold (contact branch)
     for a, s in zip(alone, shared):
         ra, rs = simulate(a, deltas), simulate(s, deltas)
@@ -124,12 +124,12 @@ def test_the_realisations_of_an_ensemble_share_their_static_starts():
     assert sorted(mu for _, mu in shared[0].statics["starts"]) == [5 * NM, 11 * NM]  # one dict: found once for the three
     assert not np.array_equal(simulate(shared[0], [5.0])["fhm_bv"], simulate(shared[1], [5.0])["fhm_bv"])
     with pytest.raises(ValueError, match="one scene and criterion"):
-        sl.share_statics([alone[0], replace(alone[1], k=0.5)])
+        copies.share_statics([alone[0], replace(alone[1], k=0.5)])
     # without the contact law k is NaN on every model: one criterion all the same
     flying = make_scene(("air_bearing", "pitch", "dmw"), solver={"duration_ms": 0.6, "transient_ms": 0.3})
     pair = [build(flying, rec) for rec in records[:2]]
     assert np.isnan(pair[0].k)
-    sl.share_statics(pair)
+    copies.share_statics(pair)
     assert pair[1].statics is pair[0].statics
 
 
@@ -158,7 +158,7 @@ def test_the_compiled_start_is_the_python_newton_start(law):
         states = {}
         for compiled in (True, False):
             m = replace(model)  # (each its own fold and ladder)
-            states[compiled] = start_state(lambda mu, m=m: sl.run_parameters(m, mu), delta * NM, "static",
+            states[compiled] = start_state(lambda mu, m=m: kernel_inputs.run_parameters(m, mu), delta * NM, "static",
                                            delta * NM + m.p["y_s"] - m.p["FH0"], statics=m.statics,
                                            fold_max=2 * m.p["FH0"], compiled=compiled)
             fold = m.statics["fold"] if fold is None else fold
@@ -175,7 +175,7 @@ def test_the_compiled_newton_reports_what_the_python_newton_reports():
     # the Equilibrium of one solve: state, stiffness, convergence, stability, iterations, residual
     model = build(make_scene(("air_bearing", "pitch", "adhesion", "contact"), solver=SOLVER))
     R, flying, solve = static_forces(
-        lambda mu: sl.run_parameters(model, mu))
+        lambda mu: kernel_inputs.run_parameters(model, mu))
     for delta, y0, max_step in ((4 * NM, np.zeros(2), None), (12 * NM, np.array([1 * NM, 0.0]), 0.05 * SCALE)):
         c = solve(delta, y0, max_step=max_step, max_iter=200)
         p = eq.newton(lambda y: R(y, delta), y0, scale=SCALE, max_step=max_step, max_iter=200)
@@ -219,7 +219,7 @@ def test_a_start_from_the_ladder_is_the_start_continued_from_zero_protrusion():
                              air_bearing=LAWS["ph-limit"]))
     assert model.tfc_tabulated  # (the law tabulated per protrusion: the ladder's tables are kept)
     R, flying, solve = static_forces(
-        lambda mu: sl.run_parameters(model, mu))
+        lambda mu: kernel_inputs.run_parameters(model, mu))
     ladder = eq.flying_ladder(R, 2 * model.p["FH0"], y_start=np.zeros(2), scale=SCALE, accept=flying, step=1 * NM,
                               mu_tol=1e-3 * NM, solve=solve)
     assert len(ladder.mu) >= 5 and np.isfinite(ladder.fold)

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from pipeline.config.scene import load_scene
-from pipeline.model import slider as sl
+from pipeline.model import kernel_inputs, running
 from pipeline.model import statics as st
 from pipeline.physics.equilibrium import path_equilibria, relaxed_path
 from pipeline.units import NM, URAD
@@ -115,14 +115,14 @@ def test_at_a_small_protrusion_the_one_state_is_the_runs_static_start(paper_mode
     assert len(states) == 1
     (s,) = states
     assert s["stable"] and s["type"] == st.FLYING and np.isnan(s["barrier"])
-    y, note = sl.start(paper_model, delta)
+    y, note = running.start(paper_model, delta)
     assert "flying" in note
     # the start's Newton converges to 1e-10 of its scale; the path's Brent to 1e-6 nm of the TFC height
     assert s["z"] == pytest.approx(y[0], abs=1e-5 * NM) and s["theta"] == pytest.approx(y[1], abs=1e-5 * URAD)
     # with the pitch relaxed the TFC point's stiffness is 1/(a K^-1 a) of the state's 2-DOF stiffness
     from pipeline.physics.equilibrium import jacobian
     from pipeline.model.start import SCALE, static_forces
-    R, _, _ = static_forces(lambda mu: sl.run_parameters(paper_model, mu))
+    R, _, _ = static_forces(lambda mu: kernel_inputs.run_parameters(paper_model, mu))
     K = -jacobian(lambda v: R(v, delta), y[:2], SCALE)
     a = np.array([1.0, -paper_model.slider.l_c])
     assert s["path_stiffness"] == pytest.approx(1.0 / (a @ np.linalg.solve(K, a)), rel=1e-4)
@@ -183,7 +183,7 @@ def test_in_the_adhesion_hysteresis_a_flying_and_a_contact_state_coexist(paper_m
     assert 7.0 * NM < fold < 8.0 * NM
     past = st.states_at(paper_model, 8.0 * NM)
     assert len(past) == 1 and past[0]["type"] == st.CONTACT and past[0]["stable"]
-    y, note = sl.start(paper_model, 8.0 * NM)
+    y, note = running.start(paper_model, 8.0 * NM)
     assert "contact" in note and past[0]["z"] == pytest.approx(y[0], abs=1e-4 * NM)
 
 
@@ -229,7 +229,7 @@ def test_the_two_population_scene_has_the_labs_state_on_the_criterion(repo_root)
     assert 0.6e-15 <= ten[2]["barrier"] <= 0.6e-15 + 1.2e-15
     (on,) = st.states_at(model, 10.2 * NM)
     assert on["type"] == st.CRITERION and on["stable"] and abs(on["clearance"] / NM - (-0.006)) <= 0.01
-    y, note = sl.start(model, 9.8 * NM)
+    y, note = running.start(model, 9.8 * NM)
     assert "flying" in note
     assert st.states_at(model, 9.8 * NM)[0]["z"] == pytest.approx(y[0], abs=1e-5 * NM)
 

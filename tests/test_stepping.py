@@ -15,7 +15,7 @@ import xarray as xr
 
 from pipeline.config.scene import load_scene
 from pipeline.io import read_dataset
-from pipeline.model import slider as sl
+from pipeline.model import outcomes, running
 from pipeline.model.simulation import chain_protrusions, histories_of, simulate, summary_of
 from pipeline.stages import sweep as sweep_stage
 from pipeline.units import NM
@@ -54,7 +54,7 @@ def test_stepping_without_adhesion_reaches_the_independent_steady_states():
         np.testing.assert_array_equal(step["regime"], free["regime"])
     # the chain's first step is an independent run (solver.start), bit for bit
     assert float(chain["clearance"].sel(direction="up")[0]) == float(free["clearance"][0])
-    touched = sl.touched_in_summary(free["min_clearance"].values)
+    touched = outcomes.touched_in_summary(free["min_clearance"].values)
     td = prot[int(np.argmax(touched))]
     assert float(chain["touchdown_protrusion"]) == td == 11.0
     assert float(chain["takeoff_protrusion"]) == td - 1.0
@@ -71,7 +71,7 @@ def test_adhesion_holds_contact_on_the_way_down():
     chain = simulate(model, prot, protocol="stepping")
     td, to = float(chain["touchdown_protrusion"]), float(chain["takeoff_protrusion"])
     # touchdown is the first grid protrusion past the fold: no static flying equilibrium there
-    notes = {p: sl.start(model, p * NM)[1] for p in prot}
+    notes = {p: running.start(model, p * NM)[1] for p in prot}
     flying = [p for p in prot if notes[p].startswith("static flying equilibrium")]
     assert td == min(p for p in prot if p not in flying)
     assert flying == [p for p in prot if p < td]
@@ -80,7 +80,7 @@ def test_adhesion_holds_contact_on_the_way_down():
     assert below, f"no hysteresis beyond the grid step: touchdown {td} nm, take-off {to} nm"
     up, down = chain["regime"].sel(direction="up"), chain["regime"].sel(direction="down")
     for p in below:
-        assert int(up.sel(protrusion=p)) == sl.FLYING and int(down.sel(protrusion=p)) != sl.FLYING
+        assert int(up.sel(protrusion=p)) == outcomes.FLYING and int(down.sel(protrusion=p)) != outcomes.FLYING
     assert float(chain["hysteresis"]) == pytest.approx(td - to)
 
 
@@ -88,8 +88,8 @@ def test_independent_simulate_keeps_histories_and_counters():
     model = build(make_scene(["air_bearing", "pitch"], solver=SHORT))
     ds = simulate(model, [4.0, 5.0], histories=[5.0], counters=True)
     hist, summary = histories_of(ds.sel(protrusion=[5.0])), summary_of(ds)
-    run = sl.run_model(model, 5.0 * NM)
-    np.testing.assert_array_equal(hist["separation"].values[0], sl.histories(run)["separation"] / NM)
+    run = running.run_model(model, 5.0 * NM)
+    np.testing.assert_array_equal(hist["separation"].values[0], outcomes.histories(run)["separation"] / NM)
     assert int(hist["steps"][0]) == run.info[st.ACCEPTED]
     assert set(summary.dims) == {"protrusion"} and "steps" not in summary
 
@@ -99,19 +99,19 @@ def test_a_failed_protrusion_is_nan_with_its_reason(monkeypatch):
     timings: dict[str, float] = {}
     good = simulate(model, [4.0, 5.0], on_error="nan", timings=timings)
     assert "errors" not in good.attrs and timings["kernel_seconds"] > 0
-    run_model = sl.run_model
+    run_model = running.run_model
 
     def failing(m, delta, **kw):  # the integrator gives up at 4 nm
         if abs(delta - 4.0 * NM) < 1e-3 * NM:
-            raise sl.IntegrationError("integration failed at protrusion 4 nm: too many steps")
+            raise running.IntegrationError("integration failed at protrusion 4 nm: too many steps")
         return run_model(m, delta, **kw)
 
-    monkeypatch.setattr(sl, "run_model", failing)
+    monkeypatch.setattr(running, "run_model", failing)
     ds = simulate(model, [4.0, 5.0], on_error="nan")
     assert ds.attrs["errors"] == "4 nm: integration failed at protrusion 4 nm: too many steps"
     assert np.isnan(float(ds["clearance"][0])) and float(ds["clearance"][1]) == float(good["clearance"][1])
     assert int(ds["regime"][0]) == ds["regime"].encoding["_FillValue"]
-    with pytest.raises(sl.IntegrationError):
+    with pytest.raises(running.IntegrationError):
         simulate(model, [4.0, 5.0])
 
 
@@ -152,6 +152,6 @@ def test_stepping_sweep_runs_one_batch_per_chain_and_resumes(tmp_path):
     top = a.isel(protrusion=-1)
     np.testing.assert_array_equal(top["clearance"].sel(direction="up"), top["clearance"].sel(direction="down"))
     # touchdown where the chain's upward pass first touches
-    touched = sl.touched_in_summary(a["min_clearance"].sel(direction="up").values)
+    touched = outcomes.touched_in_summary(a["min_clearance"].sel(direction="up").values)
     first = prot[np.argmax(touched, axis=0)]
     np.testing.assert_array_equal(a["touchdown_protrusion"].values, first)

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from pipeline.model import slider as sl
+from pipeline.model import assembly, outcomes
 from pipeline.io import read_dataset
 from pipeline.config.scene import SceneError, load_scene
 from pipeline.analyses import calibration
@@ -74,7 +74,7 @@ def test_calibration_interval_ends_are_where_full_runs_start_touching(calibrated
     tol = float(cal.attrs["k_tolerance"])          # bisection resolves k* to within tol (exact: to 0)
     assert hi - lo > 4 * tol                         # the probes below stay inside the interval
     interface, record = model_inputs(scene, out)
-    model = sl.build_model(scene, interface, record, k=0.0)
+    model = assembly.build_model(scene, interface, record, k=0.0)
     td = scene["touchdown"]
     for delta, k_star in ((td["onset_nm"], lo), (td["previous_nm"], hi)):
         assert calibration.touches(model, delta, k_star + tol), (delta, k_star)
@@ -92,7 +92,7 @@ def test_calibrated_k_puts_first_contact_at_touchdown(calibrated, tmp_path):
     path = sweep_stage.run_sweep(scene, tmp_path, scheduler="synchronous")
     ds = read_dataset(path)
     regime = ds.regime.isel(roughness=0, damping=0)
-    touching = regime.protrusion.values[regime.values != sl.FLYING]
+    touching = regime.protrusion.values[regime.values != outcomes.FLYING]
     assert touching.min() == pytest.approx(9.8)
     assert float(ds.min_clearance.isel(roughness=0, damping=0).sel(protrusion=9.6)) > 0
     assert float(ds.min_clearance.isel(roughness=0, damping=0).sel(protrusion=9.8)) < 0

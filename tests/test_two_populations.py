@@ -13,7 +13,7 @@ from pipeline.config.scene import SceneError, load_scene
 from pipeline.model import dynamics as dyn
 from pipeline.model import forces as fo
 from pipeline.model import piecewise as pw
-from pipeline.model import slider
+from pipeline.model import assembly, kernel_inputs, running
 from pipeline.model.interface_tables import build_tables, roughness_statistics
 from pipeline.physics import adhesion, asperity, friction, isbl
 
@@ -141,7 +141,7 @@ def test_model_friction_table_adds_the_lubricant_term():
     ds = build_tables(sc1, roughness_statistics(sc1))  # (the tables with the wetted area: the term is on)
     sc0 = sc0.replace(scene={**sc0["scene"], "effects": [e for e in sc0.effects if e != "dmw"]})
     sc1 = sc1.replace(scene={**sc1["scene"], "effects": [e for e in sc1.effects if e != "dmw"]})
-    m0, m1 = slider.build_model(sc0, ds, None, 0.978), slider.build_model(sc1, ds, None, 0.978)
+    m0, m1 = assembly.build_model(sc0, ds, None, 0.978), assembly.build_model(sc1, ds, None, 0.978)
     d = np.array([-0.08 * NM])
     x0, h = m0.p.tab_x0, m0.p.tab_h
     extra = pw.ppval(m1.friction, x0, h, d)[0] - pw.ppval(m0.friction, x0, h, d)[0]
@@ -174,7 +174,7 @@ def test_lubricant_shear_needs_friction(write_scene, repo_root):
 def _meniscus_model(overrides):
     sc = load_scene(IDENTIFIED, ["contact.k=0.978", *overrides])
     sc = sc.replace(scene={**sc["scene"], "effects": [e for e in sc.effects if e != "dmw"]})
-    return sc, slider.build_model(sc, build_tables(sc, roughness_statistics(sc)), None, 0.978)
+    return sc, assembly.build_model(sc, build_tables(sc, roughness_statistics(sc)), None, 0.978)
 
 
 def test_kernel_two_part_slot_and_the_meniscus_state():
@@ -193,7 +193,7 @@ def test_kernel_two_part_slot_and_the_meniscus_state():
                                np.interp(d / NM, ds.separation, ds.adhesion_pressure_menisci) * 1e6,
                                rtol=2e-3, atol=1e-3 * float(ds.adhesion_pressure.max()) * 1e6)
     # the kernel's right-hand side at a state: only the adhesion differs between q = 0 and q = q1
-    p, tables, variants = slider.run_parameters(m, 9.0 * NM)
+    p, tables, variants = kernel_inputs.run_parameters(m, 9.0 * NM)
     y = np.array([0.0, 0.0, 0.0, 0.0, 0.0])
     out0, out1 = np.empty(5), np.empty(5)
     dyn.rhs(0.0, y, p, tables, variants, False, out0)
@@ -216,9 +216,9 @@ def test_kernel_two_part_slot_and_the_meniscus_state():
 
 def test_meniscus_state_starts_at_the_menisci_equilibrium():
     _, m = _meniscus_model(TWO)
-    p, _, _ = slider.run_parameters(m, 9.0 * NM)
+    p, _, _ = kernel_inputs.run_parameters(m, 9.0 * NM)
     y = np.zeros(4)
-    q0 = slider.meniscus_equilibrium(m, p, y)
+    q0 = running.meniscus_equilibrium(m, p, y)
     dd = fo.separation_at(p, 0.0, 0.0, 0.0)
     assert q0 == pytest.approx(pw.ppval(np.ascontiguousarray(m.adhesion[:, :4]), p.tab_x0, p.tab_h,
                                          np.array([dd]))[0], rel=1e-12)
@@ -231,8 +231,8 @@ def test_integrated_area_model_integrates_both_adhesion_parts():
     sc, m = _meniscus_model(TWO + ["lubricant.meniscus_time_us=46", "contact.area_model=integrated"])
     sc0, m0 = _meniscus_model(TWO + ["lubricant.meniscus_time_us=0", "contact.area_model=integrated"])
     delta, An = 11.0 * NM, 62e-12
-    two = slider.interface_tables(m, delta, An).adhesion
-    one = slider.interface_tables(m0, delta, An).adhesion
+    two = kernel_inputs.interface_tables(m, delta, An).adhesion
+    one = kernel_inputs.interface_tables(m0, delta, An).adhesion
     assert two.shape[1] == 8 and one.shape[1] == 4
     x0, h = m.p.tab_x0, m.p.tab_h
     d = np.linspace(-1.0, 3.0, 41) * NM

@@ -38,7 +38,7 @@ from pipeline.config.scene import load_scene
 from pipeline.model.forces import separation_at
 from pipeline.model.piecewise import ppval
 from pipeline.model.state import THETA, Z
-from pipeline.model import slider as sl
+from pipeline.model import assembly, kernel_inputs, outcomes, running
 from pipeline.physics.geometry import table_truncation
 from pipeline.stages.simulate import model_inputs
 from pipeline.units import NM
@@ -80,11 +80,11 @@ def checks(out: Path) -> None:
                                             for ds in ens.values()) + " |")
 
 
-def model_of(out: Path, sets: list[str], k: float) -> sl.Model:
+def model_of(out: Path, sets: list[str], k: float) -> assembly.Model:
     scene = load_scene(CONFIG, [f"contact.k={k}"] + sets)
     interface, record = model_inputs(scene, out)
     bulge = xr.open_dataset(out / "bulge.nc") if (out / "bulge.nc").exists() else None
-    return sl.build_model(scene, interface, record, k, bulge=bulge)
+    return assembly.build_model(scene, interface, record, k, bulge=bulge)
 
 
 def same_state(out: Path) -> None:
@@ -94,15 +94,15 @@ def same_state(out: Path) -> None:
     flat = model_of(folder, [], k)
     integrated = model_of(folder, OPTIONS["integrated"], k)
     delta = 11 * NM
-    run = sl.run_model(flat, delta)
-    hist = sl.histories(run)
+    run = running.run_model(flat, delta)
+    hist = outcomes.histories(run)
     win = (run.time >= flat.transient - 1e-15) & hist["in_contact"]
     d = hist["separation"][win]
     p = run.p
     print(f"11 nm, default run, scene's record: {win.sum()} samples in contact, separation "
           f"{d.mean() / NM:.4f} nm (range {d.min() / NM:.4f} to {d.max() / NM:.4f})")
-    tabs = {"flat-section": sl.interface_tables(flat, delta, p["A_n"]),
-            "integrated": sl.interface_tables(integrated, delta, p["A_n"])}
+    tabs = {"flat-section": kernel_inputs.interface_tables(flat, delta, p["A_n"]),
+            "integrated": kernel_inputs.interface_tables(integrated, delta, p["A_n"])}
     for name, unit, scale in (("contact", "mN", 1e3), ("area", "um^2", 1e12), ("adhesion", "mN", 1e3),
                               ("friction", "mN", 1e3)):
         v = {m: scale * p["A_n"] * float(np.mean(ppval(getattr(t, name), p.tab_x0, p.tab_h, d)))
@@ -125,10 +125,10 @@ def gap_opening(out: Path) -> None:
     d = {}
     for name, sets in (("none", [EFFECTS_NO_FRICTION]), ("cg", []), ("gimbal", OPTIONS["gimbal"])):
         m = model_of(folder, sets, k)
-        y, note = sl.start(m, delta)
-        p, _, _ = sl.run_parameters(m, delta)
+        y, note = running.start(m, delta)
+        p, _, _ = kernel_inputs.run_parameters(m, delta)
         d[name] = separation_at(p, y[Z], y[THETA], 0.0)
-        print(f"  friction {name:6s}: arm {m.p['h_cg'] * 1e3:.4g} mm, {note}, d = {d[name] / NM:.4f} nm")
+        print(f"  friction {name:6s}: arm {m.p['friction_arm'] * 1e3:.4g} mm, {note}, d = {d[name] / NM:.4f} nm")
     for arm in ("cg", "gimbal"):
         print(f"  opening with arm {arm}: {(d[arm] - d['none']) / NM:.4f} nm")
 

@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from pipeline.config.scene import load_scene
-from pipeline.model import slider as sl
+from pipeline.model import assembly, outcomes, running
 from pipeline.stages.simulate import model_inputs
 from pipeline.units import NM
 
@@ -40,11 +40,11 @@ ROOT = Path(__file__).resolve().parents[2]
 CONFIG = ROOT / "configs" / "paper-2009-bulge.toml"
 
 
-def quarters_bv(run: sl.Run) -> tuple[float, list[float], float, float, float]:
+def quarters_bv(run: running.Run) -> tuple[float, list[float], float, float, float]:
     """BV over the steady window [%], BV of its four quarters [%], contact fraction, mean interference
     [nm] and mean contact force [mN] of a run."""
     m = run.model
-    h = sl.histories(run)
+    h = outcomes.histories(run)
     win = run.time >= m.transient - 1e-15
     d = h["separation"][win]
     fh0 = m.p.FH0
@@ -79,10 +79,10 @@ def main() -> None:
             interface, rec = model_inputs(load_scene(CONFIG, base), folder)
             for tau in taus:
                 scene = load_scene(CONFIG, base + [f"lubricant.meniscus_time_us={tau}"])
-                model = sl.build_model(scene, interface, rec, a.k)
+                model = assembly.build_model(scene, interface, rec, a.k)
                 y0 = None
                 for prot in prots:
-                    run = sl.run_model(model, prot * NM, y0=y0)
+                    run = running.run_model(model, prot * NM, y0=y0)
                     if a.protocol == "stepping":
                         y0 = run.state[-1]
                     res = quarters_bv(run)

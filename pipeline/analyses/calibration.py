@@ -15,7 +15,7 @@ interval is empty within ``touchdown.k_range`` (default [-3, 3], contact probabi
 * ``"exact"`` (default): before its first contact the trajectory does not depend on k (the contact
   force is off while ``d >= k sigma``), so one run with the contact law switched off gives every
   ``k*`` at once: ``k* = min(d)/sigma`` over the steady window, with the integrator's exact minimum
-  (:attr:`pipeline.model.slider.Run.d_extremes`, not the output samples). Two cases need more care:
+  (:attr:`pipeline.model.running.Run.d_extremes`, not the output samples). Two cases need more care:
   (a) when ``d`` over the transient dips below its steady-window minimum, a k in
   ``(min_all/sigma, min_steady/sigma]`` first touches in the transient and the trajectory after
   that depends on k: that interval (where it meets ``k_range``) is resolved by bisection with real
@@ -51,7 +51,7 @@ import xarray as xr
 
 from ..config.grid import label, protrusion_grid
 from ..fanout import run_tasks, split
-from ..model import slider as sl
+from ..model import assembly, copies, outcomes, running
 from ..model.inputs import SimulationInputs
 from ..physics.asperity_statistics import contact_probabilities, k_from_probability
 from ..units import NM
@@ -61,16 +61,16 @@ log = logging.getLogger(__name__)
 METHODS = ("exact", "bisection")
 
 
-def touches(model: sl.Model, delta_nm: float, k: float) -> bool:
+def touches(model: assembly.Model, delta_nm: float, k: float) -> bool:
     """Whether the scene at protrusion ``delta_nm`` [nm] with criterion ``k`` is in contact in the window.
 
-    ``model``: the scene's model with any criterion (a copy with ``k`` is run: :func:`pipeline.model.slider.with_criterion`;
+    ``model``: the scene's model with any criterion (a copy with ``k`` is run: :func:`pipeline.model.copies.with_criterion`;
     from the contact-off model, whose static-start fold bounds every k's, starts past it need no fold search).
 
     In contact at an output sample of the steady window, or ``d < k sigma`` at the exact minimum of
     the window (a contact shorter than the output step falls between samples).
     """
-    return sl.touched(sl.run_model(sl.with_criterion(model, k), delta_nm * NM))
+    return outcomes.touched(running.run_model(copies.with_criterion(model, k), delta_nm * NM))
 
 
 def _bisection_end(lo: float, hi: float, tol: float, touching: bool) -> float:
@@ -86,7 +86,7 @@ def _bisection_end(lo: float, hi: float, tol: float, touching: bool) -> float:
     return mid
 
 
-def k_threshold(model: sl.Model, delta_nm: float, k_range: tuple[float, float], tol: float,
+def k_threshold(model: assembly.Model, delta_nm: float, k_range: tuple[float, float], tol: float,
                 memo: dict[float, bool] | None = None) -> tuple[float, str, int]:
     """Smallest k [1] giving contact at ``delta_nm``, by bisection within ``k_range``.
 
@@ -136,7 +136,7 @@ def k_threshold(model: sl.Model, delta_nm: float, k_range: tuple[float, float], 
     return hi, "found", n
 
 
-def touchdown_protrusion(model: sl.Model, k: float, grid_nm: np.ndarray) -> float:
+def touchdown_protrusion(model: assembly.Model, k: float, grid_nm: np.ndarray) -> float:
     """First protrusion of ``grid_nm`` [nm] that touches with criterion ``k`` (NaN if none), by bisection."""
     if not touches(model, grid_nm[-1], k):
         return np.nan
@@ -160,7 +160,7 @@ def touchdown_protrusion(model: sl.Model, k: float, grid_nm: np.ndarray) -> floa
 CONTACT_OFF_K = -1e300
 
 
-def flying_minimum(model: sl.Model, delta_nm: float) -> tuple[float, float, str]:
+def flying_minimum(model: assembly.Model, delta_nm: float) -> tuple[float, float, str]:
     """Minimum separation [m] of the run with the contact law off: ``(steady window, whole run, note)``.
 
     ``model``: the scene's model, or its copy with the contact law off already (``k = CONTACT_OFF_K``:
@@ -173,12 +173,12 @@ def flying_minimum(model: sl.Model, delta_nm: float) -> tuple[float, float, str]
     """
     off = model if model.k == CONTACT_OFF_K else replace(model, k=CONTACT_OFF_K)
     try:
-        run = sl.run_model(off, delta_nm * NM)
+        run = running.run_model(off, delta_nm * NM)
         lo_all = run.d_extremes[0]  # t = 0 included when there is no transient
         if model.transient > 0:
-            early = sl.run_model(sl.with_solver(off, duration=off.transient, transient=0.0), delta_nm * NM)
+            early = running.run_model(copies.with_solver(off, duration=off.transient, transient=0.0), delta_nm * NM)
             lo_all = min(lo_all, early.d_extremes[0])
-    except sl.IntegrationError as exc:
+    except running.IntegrationError as exc:
         return -math.inf, -math.inf, f"flying run failed ({exc})"
     lo = run.d_extremes[0]
     x0 = model.p.tab_x0
@@ -188,7 +188,7 @@ def flying_minimum(model: sl.Model, delta_nm: float) -> tuple[float, float, str]
     return lo, lo_all, ""
 
 
-def k_star(model: sl.Model, delta_nm: float, lo_steady: float, lo_all: float,
+def k_star(model: assembly.Model, delta_nm: float, lo_steady: float, lo_all: float,
            k_range: tuple[float, float], tol: float) -> tuple[float, int]:
     """Smallest k [1] giving contact at ``delta_nm`` from the flying run's minima [m] (module docstring).
 
@@ -223,7 +223,7 @@ def threshold_batch(scene: Any, inputs: SimulationInputs, protrusions: tuple[flo
     rows = []
     for delta in protrusions:
         lo, lo_all, note = flying_minimum(off, delta)
-        # (the bisection's models are copies of `off`, whose fold bounds theirs: sl.with_criterion)
+        # (the bisection's models are copies of `off`, whose fold bounds theirs: copies.with_criterion)
         k, n = k_star(off, delta, lo, lo_all, k_range, tol)
         rows.append((delta, k, lo / NM, note, n))
     return rows

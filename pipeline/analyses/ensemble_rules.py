@@ -6,7 +6,7 @@ realisations (``identify.realisations``, ``report.realisations``). Every functio
 works on xarray data with a ``realisation`` dimension (and, where it says so, ``protrusion`` [nm]):
 
 * :func:`touched`, :func:`touchdown_probability`: contact in the steady window, the rule of the regime
-  and of the calibration (:func:`pipeline.model.slider.touched_in_summary`: the exact minimum
+  and of the calibration (:func:`pipeline.model.outcomes.touched_in_summary`: the exact minimum
   clearance below zero), and the fraction of the realisations that touch, versus protrusion;
 * :func:`crossing`: where a curve first rises through a level, interpolated linearly between the
   evaluated protrusions (the touchdown protrusion is where the probability crosses 0.5, its spread
@@ -29,7 +29,7 @@ import warnings
 import numpy as np
 import xarray as xr
 
-from ..model.slider import FLYING, touched_in_summary
+from ..model.outcomes import FLYING, touched_in_summary
 from ..variables import ENSEMBLE, ENSEMBLE_OF, REGIME_FILL
 
 #: The realisation dimension.

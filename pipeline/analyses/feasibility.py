@@ -14,7 +14,7 @@ candidate meets when it is built (:func:`problem`), each the model's own:
   from the plasticity index (or the index from the hardness) within the bounds of real solids and
   measured surfaces; a warning for one scene, a refusal for a study's box (its results may be meaningless),
   unless the scene itself is outside them (its box is then held to the other rules);
-* the air bearing's modal inversion (:func:`pipeline.model.slider.slider_from_scene`): a real stiffness
+* the air bearing's modal inversion (:func:`pipeline.model.assembly.slider_from_scene`): a real stiffness
   pair of the two frequencies that the scene's root rule accepts, pad dampers >= 0;
 * the contact criterion k without a calibration (:func:`pipeline.model.scene_inputs.contact_k`) and a
   ``[dmw]`` key only with a synthetic record (:func:`pipeline.evaluations.candidate_inputs`).
@@ -41,7 +41,7 @@ from .study import Parameter, parse_parameters, scene_value, with_values
 from ..config.schema import SceneError
 from ..model import scene_inputs
 from ..model.interface_tables import interface_parameters
-from ..model.slider import slider_from_scene
+from ..model.assembly import slider_from_scene
 from ..physics.asperity_statistics import ALPHA_MIN, bandwidth_alpha, explicit_statistics
 from ..physics.material_bounds import PhysicsWarning
 from ..units import NM, UM, UM2

@@ -102,7 +102,7 @@ def summary_markdown(combos: Combos, sweep: xr.Dataset, name: str, figures: list
            f"{sweep.attrs.get('fhm_measure', '?')} over FH0.", "",
            "Rows: every protrusion from 2 nm before the first contact to the end of the grid (the whole grid "
            "when nothing touches), in the paper's Table III spirit. Columns are steady-window values "
-           "(definitions in `pipeline/model/slider.py`); '–' = undefined (no contact). One block per roughness x "
+           "(definitions in `pipeline/model/outcomes.py`); '–' = undefined (no contact). One block per roughness x "
            "damping combination, the scene's default combination first; `summary.csv` holds the same rows.", ""]
     n_cols = len(header)
     for labels, ds in combos:

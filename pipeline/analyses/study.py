@@ -37,7 +37,7 @@ from . import ensemble_rules as en
 from .ensemble_comparison import SPREAD_STD
 from ..config.grid import TOL_NM, label, range_grid
 from ..config.schema import SCHEMA, SceneError, unit_suffix
-from ..model.slider import touched_in_summary
+from ..model.outcomes import touched_in_summary
 from ..physics import paper
 from ..units import cf_unit
 from ..variables import SCALARS
@@ -171,7 +171,7 @@ class Table:
 
     def touching(self, at: Iterable[float]) -> np.ndarray:
         """Contact in the steady window at the protrusions ``at`` [nm]: the exact minimum clearance below
-        zero, the rule of the calibration and of the regime (:func:`pipeline.model.slider.summarize`), which
+        zero, the rule of the calibration and of the regime (:func:`pipeline.model.outcomes.summarize`), which
         also counts a contact shorter than the output step. False where not evaluated."""
         return touched_in_summary(self.values("min_clearance", at))
 
@@ -406,7 +406,7 @@ def targets(scene: Any) -> list[ObjectiveTerm]:
 
 def bouncing_bv(fhm_bv: Any, min_clearance: Any) -> Any:
     """The BV of a bounce [%]: ``fhm_bv`` where the run touched in the steady window (the rule of
-    :func:`pipeline.model.slider.touched_in_summary`), 0 where it flew, NaN where not evaluated; numpy
+    :func:`pipeline.model.outcomes.touched_in_summary`), 0 where it flew, NaN where not evaluated; numpy
     arrays or xarray data of one shape."""
     ok = np.isfinite(np.asarray(min_clearance, float))
     values = np.where(ok, np.where(touched_in_summary(min_clearance), np.asarray(fhm_bv, float), 0.0), np.nan)

@@ -42,7 +42,7 @@ MAX_SCENES = 100_000
 #: Evaluations (small sweeps) of a parameter study, times their DMW realisations (identify's default: 1337 x 8).
 MAX_EVALUATIONS = 50_000
 #: Steps the integrator takes in one run before it gives up (``max_steps`` of
-#: :func:`pipeline.model.slider.run_model`): a run of ``solver.duration_ms`` needs at least
+#: :func:`pipeline.model.running.run_model`): a run of ``solver.duration_ms`` needs at least
 #: duration / ``solver.max_step_ns`` of them, so a largest step below duration / MAX_STEPS can never finish.
 MAX_STEPS = 5_000_000
 #: Largest work of adhesion [J/m^2] of ``lubricant.work_of_adhesion_j_m2`` (and the bridges'): ten times the

@@ -79,7 +79,7 @@ def default_duration(sim_duration_s: float, slider: dict[str, Any], disk_speed_m
     """Record length [s] when ``dmw.duration_ms`` is not given.
 
     The dynamics reads the record at ``t`` plus the disk's travel time from the front pad to the
-    TFC point (``pipeline.model.slider.build_model`` requires ``duration + (l_f + l_c)/V + 2/fs``). This
+    TFC point (``pipeline.model.assembly.build_model`` requires ``duration + (l_f + l_c)/V + 2/fs``). This
     takes the simulated duration plus ``(front_arm + length)/V`` (an upper bound of that delay,
     since the TFC point is less than a slider length behind the centre of gravity) plus 4 samples,
     rounded up to a whole number of periods ``1/band_low`` so that the band's lower edge, where a

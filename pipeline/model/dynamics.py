@@ -44,11 +44,11 @@ force law at the TFC point (the bulge's air bearing, a "reynolds" table F(g, del
 tabulated, not compiled: its law is a plain Python function of the gap array and the protrusion in
 its physics module, registered with ONE line in its registry
 (:data:`pipeline.physics.air_bearing.TFC_STIFFENING`: ``"name": TfcLaw(force)``). The model assembly
-(:func:`pipeline.model.slider.tfc_table`) samples it per protrusion on a gap grid into a piecewise
+(:func:`pipeline.model.kernel_inputs.tfc_table`) samples it per protrusion on a gap grid into a piecewise
 cubic (as the interface tables), which the kernel's one generic slot ``Tables.tfc`` evaluates: force
 and stiffness ``-dF/dg`` (the step-size cap) from the same cubic, so the kernel, its argument list and
 its compiled cache are untouched. A tabulated law costs one cubic evaluation, like an interface
-table, and is exact to the table's interpolation error (:func:`pipeline.model.slider.tfc_table`; the
+table, and is exact to the table's interpolation error (:func:`pipeline.model.kernel_inputs.tfc_table`; the
 gap-power law tabulated: force within 3e-8 of its range, stiffness 5e-8 relative above 1 nm, a 1-ms
 run's separation within 1e-10 nm of the closed form's, tests/test_model_variants.py). The closed-form
 gap-power law keeps its compiled branch (bit-identical results).
@@ -74,7 +74,7 @@ otherwise when the dwell ends, the mode switches there. The resulting fast switc
 contact force to the sliding-mode value with an error of the order of the dwell; the dwell is an
 accuracy knob of the accuracy stage. Crossings further apart than the dwell are located exactly.
 The switches at ``t >= p.t_win`` are counted apart (``info[WINDOW_SWITCHES]``): a run reports them per
-ms (:func:`pipeline.model.slider.contact_switch_rate`), so that a sliding mode held on the criterion
+ms (:func:`pipeline.model.outcomes.contact_switch_rate`), so that a sliding mode held on the criterion
 shows in the data (docs/model.md, section "Switched and continuous friction").
 """
 
@@ -98,23 +98,33 @@ _inline = kernel_jit(__name__, inline="always")
 #: The rear law of :class:`Variants` with ``rear_law=None`` (the scene's default, ``air_bearing.rear_law``).
 DEFAULT_REAR_LAW = "power"
 
-#: The kernel's named parameters (all SI), one record (``np.record``; numba: ``Record``).
+#: The kernel's named parameters (all SI), one record (``np.record``; numba: ``Record``). Each comment
+#: names the scene keys the field comes from (:func:`pipeline.model.assembly.build_model`); "per run":
+#: set for each protrusion (:func:`pipeline.model.kernel_inputs.run_parameters`).
 PARAMS = np.dtype((np.record, [
-    ("m", "f8"), ("I", "f8"),                        # mass [kg], pitch inertia [kg m^2]
-    ("l_f", "f8"), ("l_r", "f8"), ("l_c", "f8"),     # arms of the front pad, rear pad, TFC point [m]
-    ("h_cg", "f8"),                                  # CG height over the air-bearing surface [m]
-    ("k_f", "f8"), ("k_r", "f8"), ("c_f", "f8"), ("c_r", "f8"),  # pad stiffness [N/m], dampers [N s/m]
-    ("g0", "f8"), ("n", "f8"), ("F_r0", "f8"),       # rear law: reference gap [m], exponent [1], preload [N]
-    ("FH0", "f8"), ("delta", "f8"),                  # flying height [m], protrusion [m]
-    ("A_n", "f8"), ("k_sigma", "f8"), ("c_c", "f8"),  # nominal area [m^2], criterion [m], contact damper [N s/m]
-    ("off_f", "f8"), ("off_r", "f8"), ("off_c", "f8"),  # disk travel time to the front pad, rear pad, TFC [s]
-    ("dmw_t0", "f8"), ("dmw_dt", "f8"),              # DMW spline grid: start, step [s]
-    ("tab_x0", "f8"), ("tab_h", "f8"), ("tab_n", "i8"),  # interface-table grid: start [m], step [m], pieces
-    ("tfc_x0", "f8"), ("tfc_h", "f8"),               # tabulated TFC-point law grid: start, step [m]
-    ("dwell", "f8"),                                 # minimum dwell in a contact mode [s]
-    ("t_win", "f8"),                                 # start of the steady window [s]
-    ("h_stiff", "f8"),                               # step cap over 1/omega of the interface spring [1]
-    ("y_s", "f8"),                                   # summit mean height over the surface mean [m]
+    ("m", "f8"), ("I", "f8"),        # mass [kg], pitch inertia [kg m^2]: slider.*_mm, density_kg_m3
+    ("l_f", "f8"), ("l_r", "f8"),    # arms of the front and rear pad [m]: slider.front_arm_mm, rear_arm_mm
+    ("l_c", "f8"),                   # arm of the TFC point [m]: slider.length_mm / 2 - tfc_from_trailing_edge_um
+    ("friction_arm", "f8"),          # the friction moment's arm [m]: slider.friction_arm (of slider.thickness_mm)
+    ("k_f", "f8"), ("k_r", "f8"),    # pad stiffness [N/m]: air_bearing.frequencies_khz, stiffness_root
+    ("c_f", "f8"), ("c_r", "f8"),    # pad dampers [N s/m]: air_bearing.damping_ratio
+    ("g0", "f8"), ("n", "f8"),       # rear law gap [m], exponent [1]: air_bearing.rear_reference_gap_nm, rear_exponent
+    ("F_r0", "f8"),                  # rear law preload [N]: from k_r, g0, n
+    ("FH0", "f8"),                   # flying height [m]: air_bearing.flying_height_nm
+    ("delta", "f8"),                 # protrusion [m]: per run (tfc.protrusion_nm, sweep.protrusion_nm)
+    ("A_n", "f8"),                   # nominal area [m^2]: per run, tfc.half_*_um, contact.section_depth_sigma
+    ("k_sigma", "f8"),               # criterion [m]: per run, contact.k (or the calibration) times roughness sigma
+    ("c_c", "f8"),                   # contact damper [N s/m]: contact.damping_n_s_m
+    ("off_f", "f8"), ("off_r", "f8"),  # disk travel time to the front, rear pad [s]: disk speed of [dmw]
+    ("off_c", "f8"),                 # ... to the TFC point [s]: 0
+    ("dmw_t0", "f8"), ("dmw_dt", "f8"),  # DMW spline grid: start, step [s]: the DMW record's sample rate
+    ("tab_x0", "f8"), ("tab_h", "f8"),  # interface-table grid: start, step [m]: interface.nc
+    ("tab_n", "i8"),                 # interface-table pieces: interface.nc
+    ("tfc_x0", "f8"), ("tfc_h", "f8"),  # tabulated TFC-point law grid: start, step [m]: per run, the laws' gap range
+    ("dwell", "f8"),                 # minimum dwell in a contact mode [s]: solver.min_dwell_ns
+    ("t_win", "f8"),                 # start of the steady window [s]: per run, solver.transient_ms
+    ("h_stiff", "f8"),               # step cap over 1/omega of the interface spring [1]: solver.stiffness_step
+    ("y_s", "f8"),                   # summit mean height over the surface mean [m]: interface.nc or [roughness]
 ]), align=True)
 
 #: Parameters of the closed-form gap-power stiffening law at the TFC point (``Variants.gap_power``):

@@ -4,7 +4,7 @@ Equations of motion (docs/model.md, section "Slider dynamics"), state ``y = (z, 
 (:mod:`pipeline.model.state`) in SI units::
 
     m z''     = F_f + F_r + F_i
-    I theta'' = l_f F_f - l_r F_r - l_c F_i - h_cg Q
+    I theta'' = l_f F_f - l_r F_r - l_c F_i - friction_arm Q
 
 * front pad (``l_f`` ahead of the CG), linear:   ``F_f = -k_f (z + l_f theta - w_f) - c_f (...)'``
 * rear pad (``l_r`` behind): the scene's rear law (``air_bearing.rear_law``, :func:`call_rear_law`) on the
@@ -14,7 +14,7 @@ Equations of motion (docs/model.md, section "Slider dynamics"), state ``y = (z, 
   section "Separation datum"): ``F_i = -A_n p_a(d)`` always (adhesion effect), plus
   ``A_n p_c(d) - c_c d'`` while in contact (``d < k sigma``, the paper's criterion)
 * friction ``Q = A_n tau(d)`` in contact, along the disk's motion (leading to trailing edge) at the
-  air-bearing surface; its moment about the CG is ``-h_cg Q`` (it pitches the leading edge down).
+  air-bearing surface; its moment about the CG is ``-friction_arm Q`` (it pitches the leading edge down).
   With ``contact.friction_switching = "continuous"`` (docs/model.md, section "Switched and continuous
   friction") the friction table holds two tables side by side (8 columns): the solid friction stress
   (columns 0-3), in contact as above, and the lubricant shear ``tau_lub a_w(d)`` (4-7), at every ``d``.
@@ -22,7 +22,7 @@ Equations of motion (docs/model.md, section "Slider dynamics"), state ``y = (z, 
 * an air-bearing force at the TFC point (docs/model.md, section "Model variants"): the closed-form
   gap-power stiffening spring ``F_t = k_t [G(g_n) - G(g)]``, stiffness ``-dF_t/dg = k_t [(g0/g)^p - 1]``
   (``Variants.gap_power``, :func:`pipeline.physics.air_bearing.tfc_stiffening_force`), or any law
-  tabulated versus the gap (``Tables.tfc``, :func:`pipeline.model.slider.tfc_table`), or both.
+  tabulated versus the gap (``Tables.tfc``, :func:`pipeline.model.kernel_inputs.tfc_table`), or both.
 
 The closed-form laws are compiled from their one definition in :mod:`pipeline.physics.air_bearing`.
 
@@ -307,7 +307,7 @@ def _accelerations(p, pitch, vz, vtheta, F_f, F_r, F_i, Q):
     """``dy/dt`` (4 components) from the forces [N]; the pitch rows are zero when the pitch is locked."""
     if pitch is None:
         return vz, 0.0, (F_f + F_r + F_i) / p.m, 0.0
-    return vz, vtheta, (F_f + F_r + F_i) / p.m, (p.l_f * F_f - p.l_r * F_r - p.l_c * F_i - p.h_cg * Q) / p.I
+    return vz, vtheta, (F_f + F_r + F_i) / p.m, (p.l_f * F_f - p.l_r * F_r - p.l_c * F_i - p.friction_arm * Q) / p.I
 
 
 @_jit

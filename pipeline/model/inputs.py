@@ -32,7 +32,7 @@ import xarray as xr
 
 from ..io import KEY_ATTR, DatasetError, read_attrs, read_dataset
 from . import dmw_record, scene_inputs
-from . import slider as sl
+from . import assembly
 
 #: How many datasets (tables, records) one process keeps: a study's base inputs and its candidates'
 #: varied ones, an ensemble's records (8 by default) and a sweep's roughness sets.
@@ -179,10 +179,10 @@ class SimulationInputs:
             return None if s is None else (s.key or s.path or id(s.data))
         return ident(self.interface), ident(self.dmw), ident(self.bulge), self.k
 
-    def model(self, scene: Any, k: float | None = None, damping_ratio: float | None = None) -> sl.Model:
-        """The model of ``scene`` on these inputs (:func:`pipeline.model.slider.build_model`); ``k`` [1]
+    def model(self, scene: Any, k: float | None = None, damping_ratio: float | None = None) -> assembly.Model:
+        """The model of ``scene`` on these inputs (:func:`pipeline.model.assembly.build_model`); ``k`` [1]
         overrides :attr:`k`, ``damping_ratio`` [1] the scene's (sweeps)."""
-        return sl.build_model(scene, self.tables(), self.record(), self.k if k is None else k,
+        return assembly.build_model(scene, self.tables(), self.record(), self.k if k is None else k,
                               damping_ratio=damping_ratio, bulge=self.bulge_table())
 
 

@@ -9,7 +9,7 @@ parameter studies, the benchmarks and the tests) shares:
   "Contact criterion").
 
 The inputs themselves, read or in memory, are :class:`pipeline.model.inputs.SimulationInputs`; the model
-is :func:`pipeline.model.slider.build_model` of the scene and those inputs
+is :func:`pipeline.model.assembly.build_model` of the scene and those inputs
 (:meth:`pipeline.model.inputs.SimulationInputs.model`).
 """
 
@@ -21,7 +21,7 @@ import numpy as np
 import xarray as xr
 
 from ..physics.asperity_statistics import contact_probabilities, k_from_probability
-from .slider import TFC_POINT_LAWS
+from .assembly import TFC_POINT_LAWS
 
 #: Scene keys no simulation reads (other stages' settings, names): left out of the inputs keys of the
 #: stages that simulate and of the parameter studies' evaluation store.
@@ -36,7 +36,7 @@ def needs_interface(scene: Any) -> bool:
 
 def table_stages(scene: Any) -> tuple[str, ...]:
     """The stages whose datasets the scene's air-bearing laws at the TFC point read
-    (:data:`pipeline.model.slider.TFC_POINT_LAWS`, :attr:`pipeline.physics.air_bearing.TfcLaw.table`:
+    (:data:`pipeline.model.assembly.TFC_POINT_LAWS`, :attr:`pipeline.physics.air_bearing.TfcLaw.table`:
     ``bulge`` for ``air_bearing.bulge = "reynolds"``)."""
     a = scene["air_bearing"]
     laws = (registry[a[key]] for key, registry in TFC_POINT_LAWS.items())

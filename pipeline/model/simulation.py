@@ -2,8 +2,8 @@
 
 Every caller that turns runs into data (the ``simulate`` stage, the sweep's batches, the parameter
 studies' evaluations, the accuracy stage) calls :func:`simulate` instead of looping over
-:func:`pipeline.model.slider.run_model`, :func:`~pipeline.model.slider.histories` and
-:func:`~pipeline.model.slider.summarize` and building its own dataset. The variables are those of
+:func:`pipeline.model.running.run_model`, :func:`~pipeline.model.outcomes.histories` and
+:func:`~pipeline.model.outcomes.summarize` and building its own dataset. The variables are those of
 :mod:`pipeline.variables` (steady-window scalars :data:`~pipeline.variables.SCALARS`, time histories
 :data:`~pipeline.variables.HISTORIES`, the heater-stepping outputs :data:`~pipeline.variables.STEPPING`),
 in dataset units.
@@ -11,14 +11,14 @@ in dataset units.
 Protocols (scene key ``sweep.protocol``, docs/model.md, section "Heater stepping"):
 
 * ``"independent"``: each protrusion from its own start state (``solver.start``,
-  :func:`pipeline.model.slider.start`);
+  :func:`pipeline.model.running.start`);
 * ``"stepping"``: the protrusions form one *chain*, run in increasing order and then back down, each
   step from the end state (positions and velocities at the end of the run) of the step before, as the
   heater is stepped in the experiment; the first step starts by ``solver.start``. The top protrusion is
   run once and closes both passes. Each step replays the DMW record from its start, as an independent
   run does (the kernel's record is not periodic in time; only the slider's state carries over).
   Outputs per chain: the touchdown protrusion (first protrusion of the upward pass whose steady window
-  touches, :func:`pipeline.model.slider.touched`), the take-off protrusion (first protrusion of the
+  touches, :func:`pipeline.model.outcomes.touched`), the take-off protrusion (first protrusion of the
   downward pass whose steady window no longer touches) and their difference, the hysteresis.
 """
 
@@ -34,7 +34,7 @@ from ..config.grid import same_point
 from ..config.scene import PROTOCOLS
 from ..units import MS, NM
 from ..variables import HISTORIES, RUN, RUN_GRID_DIMS, STEPPING, coordinate, history, scalar
-from . import slider as sl
+from . import assembly, outcomes, running
 from .state import STEP_COUNTERS
 
 #: The passes of a stepping chain (values of the ``direction`` coordinate).
@@ -45,17 +45,17 @@ COUNTERS = ("steps", "rejected_steps", "contact_switches")
 
 #: The failures :func:`simulate` records as NaN with ``on_error="nan"`` (a failed integration, a
 #: model that cannot run at a protrusion, a floating-point trap).
-RUN_ERRORS = (sl.IntegrationError, ValueError, FloatingPointError)
+RUN_ERRORS = (running.IntegrationError, ValueError, FloatingPointError)
 
 
-def simulate(model: sl.Model, protrusions: Sequence[float], *, histories: Sequence[float] = (),
+def simulate(model: assembly.Model, protrusions: Sequence[float], *, histories: Sequence[float] = (),
              protocol: str = "independent", counters: bool = False, on_error: str = "raise",
              timings: dict[str, float] | None = None) -> xr.Dataset:
     """Run the model at ``protrusions`` [nm] and return their steady-window scalars (and histories).
 
     Parameters
     ----------
-    model : the assembled model (:func:`pipeline.model.slider.build_model`)
+    model : the assembled model (:func:`pipeline.model.assembly.build_model`)
     protrusions : TFC protrusions [nm]; with ``protocol="stepping"`` in increasing order
     histories : protrusions [nm] whose time histories are kept (those of ``protrusions`` that equal one
         of them to the grid tolerance, :func:`pipeline.config.grid.same_point`), as variables
@@ -67,7 +67,7 @@ def simulate(model: sl.Model, protrusions: Sequence[float], *, histories: Sequen
         protrusion's scalars are NaN, the regime its fill value; ``attrs["errors"]`` lists the
         failures as ``"<protrusion> nm: <message>"``, ``"; "``-separated)
     timings : when given, ``timings["kernel_seconds"]`` is increased by the wall time spent in
-        :func:`pipeline.model.slider.run_model` (kept out of the dataset: equal inputs, equal dataset)
+        :func:`pipeline.model.running.run_model` (kept out of the dataset: equal inputs, equal dataset)
 
     Returns
     -------
@@ -85,7 +85,7 @@ def simulate(model: sl.Model, protrusions: Sequence[float], *, histories: Sequen
             raise ValueError("on_error = 'nan' is for independent runs (a chain needs every step's end state)")
         return _stepping(model, prot, histories, counters, timings)
     rows: list[dict[str, float] | None] = []
-    kept: list[tuple[float, sl.Run, dict]] = []
+    kept: list[tuple[float, running.Run, dict]] = []
     info: list[np.ndarray] = []
     errors: list[str] = []
     for delta in prot:
@@ -133,15 +133,15 @@ def summary_of(ds: xr.Dataset) -> xr.Dataset:
     return ds.drop_vars(drop).drop_dims([d for d in ("hist_protrusion", "time") if d in ds.dims])
 
 
-def _run(model: sl.Model, delta_nm: float, y0: np.ndarray | None,
-         timings: dict[str, float] | None) -> tuple[sl.Run, dict, dict]:
+def _run(model: assembly.Model, delta_nm: float, y0: np.ndarray | None,
+         timings: dict[str, float] | None) -> tuple[running.Run, dict, dict]:
     """One protrusion [nm]: its run, histories and steady-window scalars (SI)."""
     t0 = time.perf_counter()
-    run = sl.run_model(model, delta_nm * NM, y0=y0)
+    run = running.run_model(model, delta_nm * NM, y0=y0)
     if timings is not None:
         timings["kernel_seconds"] = timings.get("kernel_seconds", 0.0) + time.perf_counter() - t0
-    hist = sl.histories(run)
-    return run, hist, sl.summarize(run, hist)
+    hist = outcomes.histories(run)
+    return run, hist, outcomes.summarize(run, hist)
 
 
 def _kept(delta: float, histories: Sequence[float]) -> bool:
@@ -164,17 +164,17 @@ def _scalars(rows: list[dict[str, float] | None], dims: tuple[str, ...],
     return out
 
 
-def _histories(kept: list[tuple[float, sl.Run, dict]]) -> dict[str, xr.Variable]:
+def _histories(kept: list[tuple[float, running.Run, dict]]) -> dict[str, xr.Variable]:
     return {"h_" + name: history(name, np.stack([k[2][name] for k in kept]), ("hist_protrusion", "time"))
             for name in kept[0][2] if name in HISTORIES}
 
 
-def _history_coords(kept: list[tuple[float, sl.Run, dict]]) -> dict[str, xr.Variable]:
+def _history_coords(kept: list[tuple[float, running.Run, dict]]) -> dict[str, xr.Variable]:
     return {"hist_protrusion": coordinate("hist_protrusion", np.array([k[0] for k in kept])),
             "time": coordinate("time", kept[0][1].time)}
 
 
-def _stepping(model: sl.Model, prot: np.ndarray, histories: Sequence[float], counters: bool,
+def _stepping(model: assembly.Model, prot: np.ndarray, histories: Sequence[float], counters: bool,
               timings: dict[str, float] | None) -> xr.Dataset:
     """One heater-stepping chain over ``prot`` [nm] (module docstring; docs/model.md, section
     "Heater stepping")."""
@@ -184,14 +184,14 @@ def _stepping(model: sl.Model, prot: np.ndarray, histories: Sequence[float], cou
     rows: dict[str, list] = {d: [None] * n for d in DIRECTIONS}
     info = np.zeros((n, len(DIRECTIONS), len(COUNTERS)), dtype=np.int64)
     touch = np.zeros((n, len(DIRECTIONS)), dtype=bool)
-    kept: list[tuple[float, sl.Run, dict]] = []
+    kept: list[tuple[float, running.Run, dict]] = []
     y0 = None  # the first step starts by solver.start
     order = [(i, 0) for i in range(n)] + [(i, 1) for i in range(n - 2, -1, -1)]
     for i, j in order:
         run, hist, rows[DIRECTIONS[j]][i] = _run(model, float(prot[i]), y0, timings)
         y0 = run.state[-1].copy()  # the end state: where the next heater step starts
         info[i, j] = run.info[STEP_COUNTERS]
-        touch[i, j] = sl.touched(run)
+        touch[i, j] = outcomes.touched(run)
         if j == 0 and _kept(prot[i], histories):
             kept.append((float(prot[i]), run, hist))
     # the top of the chain closes both passes: its one run is the downward pass's first step
@@ -219,7 +219,7 @@ def chain_protrusions(protrusions: np.ndarray, touched_up: np.ndarray,
     """Touchdown and take-off protrusions [nm] of a stepping chain (docs/model.md, section "Heater stepping").
 
     ``protrusions`` [nm] increasing; ``touched_up``/``touched_down``: whether each protrusion's steady
-    window touched (:func:`pipeline.model.slider.touched`) on the upward / downward pass. Touchdown: the
+    window touched (:func:`pipeline.model.outcomes.touched`) on the upward / downward pass. Touchdown: the
     first protrusion of the upward pass that touches (NaN if none); take-off: the first protrusion of
     the downward pass, from the top, that no longer touches (NaN when the top does not touch, or when
     the chain stays in contact down to its lowest protrusion).
@@ -234,7 +234,7 @@ def chain_protrusions(protrusions: np.ndarray, touched_up: np.ndarray,
     return td, to
 
 
-def model_attrs(model: sl.Model, k_source: str) -> dict[str, Any]:
+def model_attrs(model: assembly.Model, k_source: str) -> dict[str, Any]:
     """Global attributes describing the assembled model (stiffness roots, damping, k)."""
     info = model.info
     extra: dict[str, Any] = {}
@@ -263,7 +263,7 @@ def model_attrs(model: sl.Model, k_source: str) -> dict[str, Any]:
     }
 
 
-def run_values(model: sl.Model, k_source: str) -> dict[str, xr.Variable]:
+def run_values(model: assembly.Model, k_source: str) -> dict[str, xr.Variable]:
     """The numbers of :func:`model_attrs` as the 0-d variables of :data:`pipeline.variables.RUN`
     (dataset units), so that datasets of several runs combine with each run's own values.
 
@@ -290,7 +290,7 @@ GRID_ATTRS = {"k_sigma_nm": "k_sigma", "summit_offset_y_s_nm": "summit_offset", 
               "rear_damper_n_s_m": "rear_damper", "damping_ratio": "damping_ratio"}
 
 
-def grid_run_values(models: dict[tuple[str, float], sl.Model], labels: Sequence[str], damping: Sequence[float],
+def grid_run_values(models: dict[tuple[str, float], assembly.Model], labels: Sequence[str], damping: Sequence[float],
                     k_source: str) -> dict[str, xr.Variable]:
     """The run values (:func:`run_values`) of a sweep's grid of models, one model per roughness set and
     damping ratio [1] (``models[(label, damping)]``): those of :data:`pipeline.variables.RUN_GRID_DIMS` along

@@ -24,7 +24,7 @@ The contact law in the static balance follows the paper's criterion: on where ``
 
 Newton's method runs compiled on the kernel's forces (:mod:`pipeline.model.static_solver`, no GIL
 held), so the threads of a fan-out compute their starts in parallel; the per-protrusion tables it
-needs (the tabulated TFC-point force) are kept on the model (:func:`pipeline.model.slider.tfc_table`)
+needs (the tabulated TFC-point force) are kept on the model (:func:`pipeline.model.kernel_inputs.tfc_table`)
 and shared with the run at the same protrusion.
 """
 
@@ -74,7 +74,7 @@ def static_forces(run_parameters):
     :func:`pipeline.model.static_solver.newton`; ``R`` is the same forces from Python, for checks).
 
     ``run_parameters(mu) -> (p, tables, variants)`` gives the kernel's inputs at a protrusion
-    (:func:`pipeline.model.slider.run_parameters`). With the pitch locked the moment is replaced by
+    (:func:`pipeline.model.kernel_inputs.run_parameters`). With the pitch locked the moment is replaced by
     ``theta`` (it stays at zero).
     """
     cache: dict[float, tuple] = {}
@@ -120,7 +120,7 @@ def start_state(run_parameters, protrusion: float, rule: str, contact_start_z: f
     one again; before it a start continues the branch from the ladder's state below its protrusion (one
     step, one Newton solve, instead of :data:`STEPS` steps from zero protrusion). The fold is a function of the
     model alone, not of which protrusion asked first, so the starts do not depend on the order of the runs.
-    ``statics["bound"]``, when set (:func:`pipeline.model.slider.with_criterion`): an upper bound of the
+    ``statics["bound"]``, when set (:func:`pipeline.model.copies.with_criterion`): an upper bound of the
     fold, that of the same forces under a lower criterion; this model's own fold is then not searched.
     A protrusion at or past the bound starts on the contact branch; one below it continues the flying
     branch to the protrusion from the bounding model's ladder (``statics["bound_ladder"]``), which ends

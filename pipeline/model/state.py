@@ -14,7 +14,7 @@ State ``y`` (SI units), docs/model.md, section "Slider dynamics":
 Counters ``info`` of an integration (:func:`pipeline.model.dynamics.integrate`): :data:`STATUS` (one of
 the status codes below), :data:`ACCEPTED` steps, :data:`REJECTED` steps, contact :data:`SWITCHES`,
 :data:`RHS_CALLS` (right-hand-side evaluations), :data:`WINDOW_SWITCHES` (the contact mode's transitions at
-``t >= p.t_win``, the steady window: :func:`pipeline.model.slider.summarize` reports them per ms).
+``t >= p.t_win``, the steady window: :func:`pipeline.model.outcomes.summarize` reports them per ms).
 """
 
 from __future__ import annotations

@@ -23,7 +23,7 @@ from ..physics.equilibrium import _is_stable, jacobian, path_equilibria, relaxed
 from ..units import NM, URAD
 from ..variables import STATICS
 from . import dynamics as dyn
-from . import slider as sl
+from . import assembly, kernel_inputs
 from .compiled import kernel_jit
 from .start import SCALE, static_forces, static_inputs
 from .state import N_STATE
@@ -157,7 +157,7 @@ class PathForce:
         return self.solve(u)[0]
 
 
-def tfc_point_scales(model: sl.Model) -> tuple[float, float]:
+def tfc_point_scales(model: assembly.Model) -> tuple[float, float]:
     """``(k_b [N/m], m_b [kg])``: the air bearing's linear stiffness and the slider's mass at the TFC point.
 
     A vertical force at the TFC point (arm ``l_c`` behind the CG) moves it by ``a K^-1 a^T`` per newton,
@@ -174,7 +174,7 @@ def tfc_point_scales(model: sl.Model) -> tuple[float, float]:
     return k_b, m_b
 
 
-def dmw_energies(model: sl.Model, record: tuple[np.ndarray, float] | None) -> tuple[float, float]:
+def dmw_energies(model: assembly.Model, record: tuple[np.ndarray, float] | None) -> tuple[float, float]:
     """The DMW's energy scales [J] (docs/model.md, section "Statics map"):
     ``0.5 k_b sigma_w^2`` (the bearing's energy at the TFC point displaced by one DMW rms ``sigma_w``) and
     ``0.5 m_b sigma_v^2`` (the kinetic energy of the TFC point's mass moving at the DMW's rms rate
@@ -192,7 +192,7 @@ def dmw_energies(model: sl.Model, record: tuple[np.ndarray, float] | None) -> tu
     return 0.5 * k_b * sigma_w**2, 0.5 * m_b * sigma_v**2
 
 
-def states_at(model: sl.Model, protrusion: float, compiled: bool = True) -> list[dict]:
+def states_at(model: assembly.Model, protrusion: float, compiled: bool = True) -> list[dict]:
     """Every static state of ``model`` at ``protrusion`` [m], from the highest clearance down (module docstring).
 
     Each state: ``clearance`` [m], ``z`` [m], ``theta`` [rad], ``type`` (:data:`FLYING`, :data:`CONTACT`,
@@ -203,7 +203,7 @@ def states_at(model: sl.Model, protrusion: float, compiled: bool = True) -> list
     kernel's forces (:func:`_path`, the default), else by :func:`pipeline.physics.equilibrium.relaxed_path`
     from Python (the reference).
     """
-    R2, _, _ = static_forces(lambda mu: sl.run_parameters(model, mu))
+    R2, _, _ = static_forces(lambda mu: kernel_inputs.run_parameters(model, mu))
     pitch = model.pitch is not None
     l_c = model.slider.l_c
     a = np.array([1.0, -l_c]) if pitch else np.array([1.0, 0.0])
@@ -214,7 +214,7 @@ def states_at(model: sl.Model, protrusion: float, compiled: bool = True) -> list
     p = model.p
     k_sigma = model.k_sigma
     u_of_c = float(k_sigma + p["y_s"] + protrusion - p["FH0"])  # u = c + u_of_c (d = FH0 - delta + u - y_s)
-    p_, _, _, slots = static_inputs(lambda mu: sl.run_parameters(model, mu), protrusion)
+    p_, _, _, slots = static_inputs(lambda mu: kernel_inputs.run_parameters(model, mu), protrusion)
     f = PathForce(R, a, (dyn._packed(p_), slots) if compiled else None)
     lo = -DEPTH
     hi = max(FINE_TOP, -u_of_c + FINE_TOP)  # (u = 0: the nominal attitude's clearance)
@@ -256,7 +256,7 @@ def states_at(model: sl.Model, protrusion: float, compiled: bool = True) -> list
     return states
 
 
-def statics_map(model: sl.Model, protrusions, record: tuple[np.ndarray, float] | None = None) -> xr.Dataset:
+def statics_map(model: assembly.Model, protrusions, record: tuple[np.ndarray, float] | None = None) -> xr.Dataset:
     """The ``statics.nc`` dataset: :func:`states_at` at each protrusion [nm] on dims ``(protrusion, state)`` (states
     padded with NaN / the flags' fill to the largest count), the DMW energy scales (:func:`dmw_energies`) and
     the TFC-point scales (:func:`tfc_point_scales`); variables :data:`pipeline.variables.STATICS`."""

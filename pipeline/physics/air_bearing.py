@@ -29,7 +29,8 @@ class Slider:
     ----------
     m : mass [kg]; I : pitch inertia about the CG [kg m^2]
     l_f, l_r, l_c : arms of the front pad, rear pad, TFC point from the CG [m] (front ahead, others behind)
-    h_cg : height of the CG above the air-bearing surface [m] (friction moment arm)
+    friction_arm : the friction force's moment arm about the CG [m] (``slider.friction_arm``: the CG height
+        over the air-bearing surface, or the slider's thickness; :func:`pipeline.physics.geometry.friction_arm`)
     k_f, k_r : front and rear bearing stiffness [N/m]; c_f, c_r : their dampers [N s/m]
     g0 : rear reference gap [m]; n : rear exponent [1]
     """
@@ -39,7 +40,7 @@ class Slider:
     l_f: float
     l_r: float
     l_c: float
-    h_cg: float
+    friction_arm: float
     k_f: float
     k_r: float
     c_f: float
@@ -344,17 +345,17 @@ class TfcLaw:
         protrusion ``delta`` [m], given the numbers named by ``parameters``
     closed_form : name of the kernel's compiled closed form of the same law (``"gap-power"``:
         :func:`pipeline.model.forces._stiffening`), or ``None``: the model assembly tabulates ``force``
-        per protrusion and the kernel evaluates the table (:func:`pipeline.model.slider.tfc_table`)
+        per protrusion and the kernel evaluates the table (:func:`pipeline.model.kernel_inputs.tfc_table`)
     gap_range : lowest and highest gap of the table as fractions of ``FH0`` [1]: linear continuation
         below (the law's slope at the lowest gap), constant above
     points : knots of the table (uniform in the gap)
     doc : one line for the documentation
     table : name of the stage whose dataset the law reads (e.g. ``"bulge"``: a force solved once per
         scene and tabulated), or ``None``; such a law's ``force`` takes the table as the keyword
-        ``table`` (the model assembly binds it, :func:`pipeline.model.slider.build_model`)
+        ``table`` (the model assembly binds it, :func:`pipeline.model.assembly.build_model`)
     parameters : ``(keyword of force, "section.name")`` pairs: the scene value in SI units
         (:func:`pipeline.config.si.to_si`, e.g. ``"air_bearing.flying_height"`` [m]) the model assembly
-        passes as that keyword (:func:`pipeline.model.slider.law_parameters`); the law reads no scene
+        passes as that keyword (:func:`pipeline.model.assembly.law_parameters`); the law reads no scene
     """
 
     force: Callable[..., np.ndarray]

@@ -626,7 +626,7 @@ def reynolds_force(g: np.ndarray, delta: float, table: LiftTable) -> np.ndarray:
 
 
 #: The bulge's air bearing at the TFC point (``air_bearing.bulge``), laws summed with the other TFC-point
-#: laws by the model (:data:`pipeline.model.slider.TFC_POINT_LAWS`); ``"none"``: the model without it.
+#: laws by the model (:data:`pipeline.model.assembly.TFC_POINT_LAWS`); ``"none"``: the model without it.
 #: ``"reynolds"`` reads its table from the ``bulge`` stage's dataset (``table="bulge"``).
 BULGE_LAWS: dict[str, TfcLaw | None] = {
     "none": None,

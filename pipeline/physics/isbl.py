@@ -240,7 +240,7 @@ def isbl_tables(d: np.ndarray, p: Interface, *, quantities=QUANTITIES, nodes: in
             out["plastic_fraction"] = Q(d + asperity.X_PLASTIC * wc)
         # (The GW sum ignores the interaction of neighbouring summits, so at deep interference the
         # area fraction can exceed 1; the tables keep the model's value, the dynamic outputs clip the
-        # real area at the nominal area: pipeline.model.slider.histories.)
+        # real area at the nominal area: pipeline.model.outcomes.histories.)
         if "friction_stress" in want:
             out["friction_stress"] = eta * shear_strength(H) * area_fric
         if "real_area_fraction" in want:

@@ -105,7 +105,7 @@ import numpy as np
 import xarray as xr
 
 from ..analyses import plots
-from ..model import slider as sl
+from ..model import assembly, running
 from ..analyses import knob_study as knob_study
 from ..analyses.knob_study import HEADLINE, POINTS, REFERENCE, TABLE_KEYS, TOLERANCE, Result, cast
 from ..model import dmw_record, scene_inputs
@@ -223,7 +223,7 @@ def _evaluate(scene: Any, values: dict[str, float], cache: _RunCache, k: float |
     sc = _solver_config(scene, values)
     tables, t_tab = cache.table(sc)
     record, t_rec = cache.record(sc)
-    model, t_model = _timed(lambda: sl.build_model(sc, tables, record, k, bulge=cache.bulge), 1)
+    model, t_model = _timed(lambda: assembly.build_model(sc, tables, record, k, bulge=cache.bulge), 1)
     build = {"table": t_tab, "record": t_rec, "model": t_model}
     n_p = len(points)
     vals = np.full((n_p, len(HEADLINE)), np.nan)
@@ -235,7 +235,7 @@ def _evaluate(scene: Any, values: dict[str, float], cache: _RunCache, k: float |
         t0 = time.perf_counter()
         try:
             ds, sim[i] = _timed(lambda: simulate(model, [prot], counters=True), repeat)
-        except sl.IntegrationError as exc:
+        except running.IntegrationError as exc:
             sim[i] = time.perf_counter() - t0
             failed[i] = True
             msgs.append(str(exc))

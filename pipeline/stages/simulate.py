@@ -4,7 +4,7 @@
 protrusion and writes ``histories.nc``: time series (dims ``protrusion``, ``time``) of separation,
 clearance, forces, friction coefficient, mean pressure and shear stress; and ``summary.nc``: the
 steady-window scalars (dim ``protrusion``, the variables of ``sweep.nc``) defined in
-:mod:`pipeline.model.slider`. Only the scene's effects are simulated and written.
+:mod:`pipeline.model.outcomes`. Only the scene's effects are simulated and written.
 
 Inputs come from earlier stages' datasets in the same folder (``interface.nc``, ``dmw.nc``, ``bulge.nc``
 with the tabulated bulge bearing, and ``calibration.nc`` when the scene sets no ``contact.k``), made

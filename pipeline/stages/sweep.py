@@ -37,7 +37,7 @@ from typing import Any, Callable
 import numpy as np
 import xarray as xr
 
-from ..model import slider as sl
+from ..model import assembly
 from ..fanout import run_tasks
 from ..progress import Progress
 from ..io import file_hash, read_attrs, read_dataset, write_dataset
@@ -123,14 +123,14 @@ def part_problem(path: Path, key: str, batch: Batch) -> str | None:
     return None
 
 
-_MODELS: dict[tuple, sl.Model] = {}
+_MODELS: dict[tuple, assembly.Model] = {}
 _MODELS_LOCK = threading.Lock()
 
 
-def batch_model(scene: Any, inputs: SimulationInputs, damping: float) -> sl.Model:
+def batch_model(scene: Any, inputs: SimulationInputs, damping: float) -> assembly.Model:
     """The model of a batch, built once per process for each scene, inputs and damping ratio.
 
-    The batches of one roughness set and damping ratio share it (:func:`pipeline.model.slider.run_model`
+    The batches of one roughness set and damping ratio share it (:func:`pipeline.model.running.run_model`
     only reads a model): building it costs ~28 ms (the DMW record's spline, the modal solution), paid
     by every batch before. Keyed by the scene's content hash and the inputs' identity
     (:meth:`pipeline.model.inputs.SimulationInputs.identity`: their stage keys and k), so changed inputs

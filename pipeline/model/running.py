@@ -1,0 +1,90 @@
+"""Running the model at one protrusion: the start state (:func:`start`), the integration
+(:func:`run_model`) and its result (:class:`Run`)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import dynamics as dyn
+from .assembly import Model
+from .forces import separation_at
+from .kernel_inputs import interface_tables, run_parameters
+from .piecewise import disk_history, ppval
+from .start import start_state
+from .state import ACCEPTED, OK, REJECTED, STATUS, STATUS_TEXT, THETA, Z
+from ..units import NM
+
+
+@dataclass
+class Run:
+    """One integrated protrusion: states and contact flags sampled at ``time``.
+
+    ``d_extremes``: exact minimum and maximum of the separation [m] over the steady window, tracked by
+    the integrator (step ends and interior extrema), free of aliasing by the output grid.
+    ``p``: the parameters the kernel ran with (the model's record with this protrusion, ``A_n``,
+    ``k sigma``, ...: :data:`pipeline.model.dynamics.PARAMS`).
+    """
+
+    model: Model
+    protrusion: float
+    p: np.record
+    nominal_area: float
+    time: np.ndarray
+    state: np.ndarray
+    contact: np.ndarray
+    info: np.ndarray
+    d_extremes: tuple[float, float] = (np.nan, np.nan)
+    start: str = "given"
+
+
+class IntegrationError(RuntimeError):
+    """The integrator failed (too many steps, step underflow, or a non-finite state)."""
+
+
+def start(model: Model, protrusion: float) -> tuple[np.ndarray, str]:
+    """The start state of a run at ``protrusion`` [m] by the model's ``solver.start`` rule, and its note
+    (:func:`pipeline.model.start.start_state`), kept in the model's ``statics`` once found (a copy is
+    returned): the flying runs of a calibration and the realisations of an ensemble ask again."""
+    starts = model.statics.setdefault("starts", {})
+    key = (model.start, float(protrusion))
+    if key not in starts:
+        y_s, fh0 = model.p["y_s"], model.p["FH0"]
+        # (the fold is searched up to twice the flying height: past FH0 the TFC point is at the disk anyway)
+        starts[key] = start_state(lambda mu: run_parameters(model, mu), protrusion, model.start,
+                                  contact_start_z=protrusion + y_s - fh0, statics=model.statics, fold_max=2 * fh0)
+    y, note = starts[key]
+    return y.copy(), note
+
+
+def run_model(model: Model, protrusion: float, y0: np.ndarray | None = None, max_steps: int = 5_000_000) -> Run:
+    """Integrate the model at protrusion ``protrusion`` [m] from its start state (``solver.start``:
+    :func:`start`), or from ``y0`` when given (the previous heater step, a test)."""
+    p, tables, variants = run_parameters(model, protrusion)
+    An = p["A_n"]
+    n_out = int(round(model.duration / model.output_step)) + 1
+    t_out = np.minimum(np.arange(n_out) * model.output_step, model.duration)
+    start_note = "given"
+    if y0 is None:
+        y0, start_note = start(model, protrusion)
+    y0 = np.asarray(y0, float)
+    if model.meniscus is not None and y0.size == 4:  # the meniscus state starts at its equilibrium
+        y0 = np.append(y0, meniscus_equilibrium(model, p, y0))
+    Y, C, info, ext = dyn.integrate(y0, dyn.Grid(model.duration, t_out), p, tables, variants,
+                                    dyn.Solver(model.rtol, model.atol, model.max_step, max_steps))
+    if info[STATUS] != OK:
+        raise IntegrationError(f"integration failed at protrusion {protrusion / NM:.3g} nm: "
+                               f"{STATUS_TEXT[int(info[STATUS])]} (steps {info[ACCEPTED]}, rejected {info[REJECTED]})")
+    return Run(model=model, protrusion=protrusion, p=p, nominal_area=An, time=t_out, state=Y, contact=C, info=info,
+               d_extremes=(float(ext[0]), float(ext[1])), start=start_note)
+
+
+def meniscus_equilibrium(model: Model, p: np.record, y: np.ndarray) -> float:
+    """The meniscus state's equilibrium ``q = p_a(d)`` [Pa] at the state ``y`` (z [m], theta [rad], ...)
+    at ``t = 0``, the disk under the TFC point where the DMW record puts it (docs/model.md, section
+    "Meniscus formation"): the start value of ``q``."""
+    w = disk_history(model.dmw, p, np.zeros(1))[0][0] if model.dmw is not None else 0.0
+    d = separation_at(p, float(y[Z]), float(y[THETA]), w)
+    adhesion = interface_tables(model, p["delta"], p["A_n"]).adhesion
+    return float(ppval(adhesion, p.tab_x0, p.tab_h, np.array([d]))[0])
