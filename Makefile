@@ -73,7 +73,9 @@ test-fast: $(TEST_STAMP)
 test-slow: $(TEST_STAMP)
 	$(BIN)/python -m pytest -q -m slow tests
 
-## speed and memory: medians and ratios against baselines measured in the same run
+## speed and memory: medians and ratios against baselines measured in the same run; each row records the
+## load average and CPUs at its start and end, NOISY when it started above load 0.75 per CPU (1.5 on 2 cores).
+## BENCH_STUDY=0 make bench leaves out the identify and sensitivity rows (most of the time): under 15 min.
 bench: $(RUN_STAMP)
 	$(BIN)/python -m benchmarks.run --out benchmarks/results/bench.json
 

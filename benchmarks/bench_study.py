@@ -12,12 +12,12 @@
   the 76-protrusion paper grid (target 5 min on 2 cores).
 
 Both as fresh ``hdi`` processes on a local cluster of 2 workers, from the same inputs (dmw,
-interface) made once and not timed. ``BENCH_STUDY=0`` skips them (they dominate ``make bench``).
+interface) made once and not timed. ``BENCH_STUDY=0`` leaves this module out (benchmarks/run.py; the
+studies dominate ``make bench``).
 """
 
 from __future__ import annotations
 
-import os
 import shutil
 import tempfile
 from pathlib import Path
@@ -63,9 +63,6 @@ def study_stats(path: Path, workers: int) -> dict:
 
 
 def run(results: list[dict]) -> None:
-    if os.environ.get("BENCH_STUDY", "1") == "0":
-        print("bench_study skipped (BENCH_STUDY=0)")
-        return
     paper = str(ROOT / "configs" / "paper-2009.toml")
     ident = makefile_scene("IDENTIFY_SCENE")
     with tempfile.TemporaryDirectory() as tmp:

@@ -1,11 +1,15 @@
 """Timing helpers shared by the benchmark modules.
 
 Machines are shared and noisy: report medians of repeated runs and ratios against a baseline
-measured in the same run, never a single timing.
+measured in the same run, never a single timing. Every row also records the machine's 1-minute load
+average and CPU count at its start and its end (:func:`load_sample`), and a row that started above
+:data:`NOISY_LOAD_PER_CPU` x CPUs is flagged ``"noisy"`` (docs/performance.md, section
+"Tests and benchmarks").
 """
 
 from __future__ import annotations
 
+import os
 import re
 import statistics
 import subprocess
@@ -17,6 +21,49 @@ from typing import Any, Callable
 ROOT = Path(__file__).resolve().parents[1]
 #: What every ``hdi`` command runs before its stage: the CLI and the stage registry (every stage module).
 STARTUP = "import pipeline.cli, pipeline.runner; pipeline.runner.registry()"
+
+
+#: A row is noisy when the 1-minute load average at its start exceeds this many per CPU: 0.75, i.e. load 1.5
+#: on the project's 2 cores, where the bench's own process accounts for about 1 of it.
+NOISY_LOAD_PER_CPU = 0.75
+
+
+def load_sample() -> dict[str, float]:
+    """The machine's state now: 1-minute load average [runnable processes] and the CPUs this process may use."""
+    try:
+        cpus = len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        cpus = os.cpu_count() or 1
+    return {"load_1min": os.getloadavg()[0], "cpus": cpus}
+
+
+#: Where :func:`record` reads the load (tests replace it with a fake source).
+LOAD_SOURCE: Callable[[], dict[str, float]] = load_sample
+#: The sample at the start of the row being measured: set by :func:`row_start` (before each module,
+#: by benchmarks/run.py) and by :func:`record` after each row (one row's end is the next one's start).
+_row_start: dict[str, float] | None = None
+
+
+def row_start() -> None:
+    """Mark the start of the next row: sample the load now."""
+    global _row_start
+    _row_start = LOAD_SOURCE()
+
+
+def load_fields(start: dict[str, float], end: dict[str, float]) -> dict[str, Any]:
+    """The load fields of one row from its ``start`` and ``end`` samples (:func:`load_sample`).
+
+    ``noisy`` is decided at the start (the machine as the row found it): the end's load includes the
+    row's own processes (two workers raise it by 2 on 2 cores), so it is recorded to show a load that
+    rose during the row, not used to flag.
+    """
+    limit = NOISY_LOAD_PER_CPU * start["cpus"]
+    fields: dict[str, Any] = {"load_start": start["load_1min"], "load_end": end["load_1min"],
+                              "cpus": start["cpus"], "noisy": bool(start["load_1min"] > limit)}
+    if fields["noisy"]:
+        fields["noisy_reason"] = (f"1-minute load {start['load_1min']:.2f} at the start > {limit:g} "
+                                  f"({NOISY_LOAD_PER_CPU:g} x {start['cpus']:g} CPUs)")
+    return fields
 
 
 def timeit(fn: Callable[[], Any], repeat: int = 7, warmup: int = 1) -> list[float]:
@@ -33,16 +80,24 @@ def timeit(fn: Callable[[], Any], repeat: int = 7, warmup: int = 1) -> list[floa
 
 def record(results: list[dict], name: str, times: list[float], target_s: float | None = None,
            **extra: Any) -> dict:
-    """Append one benchmark result (median, min, max [s], pass/fail against ``target_s``)."""
+    """Append one benchmark result (median, min, max [s], pass/fail against ``target_s``) with the load at
+    its start and end (:func:`load_fields`; the start is the last :func:`row_start` or :func:`record`)."""
+    global _row_start
+    end = LOAD_SOURCE()
+    start = _row_start if _row_start is not None else end
     med = statistics.median(times)
     row = {"name": name, "median_s": med, "min_s": min(times), "max_s": max(times), "n": len(times)}
     if target_s is not None:
         row["target_s"] = target_s
         row["meets_target"] = bool(med < target_s)
     row.update(extra)
+    row.update(load_fields(start, end))
     results.append(row)
+    _row_start = end
     flag = "" if target_s is None else ("  OK" if med < target_s else f"  MISSES target {target_s:g} s")
-    print(f"{name:<55} median {med * 1e3:10.2f} ms{flag}", flush=True)
+    load = f"  load {row['load_start']:.2f}->{row['load_end']:.2f}/{row['cpus']:g}"
+    noisy = "  NOISY" if row["noisy"] else ""
+    print(f"{name:<55} median {med * 1e3:10.2f} ms{flag}{load}{noisy}", flush=True)
     return row
 
 
