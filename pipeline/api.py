@@ -4,10 +4,12 @@ The package's front door (README, "From Python"; runnable examples in ``docs/exa
 
     import pipeline as hdi
 
-    scene = hdi.load_scene("configs/paper-2009.toml", ["contact.k=0.5"])
+    scene = hdi.load_scene("configs/paper-2009.toml", ["contact.k=0.5"])  # or "contact.k=0.5", {"contact.k": 0.5}
+    scene = scene.replace(tfc={"protrusion_nm": 10.0})       # a scene is read-only: a varied, validated copy
     model = hdi.build_model(scene, "results/paper")          # its inputs made current in the folder
     ds = hdi.simulate(model, [10.0, 11.0], histories=[11.0])  # an xarray.Dataset
     hdi.run_stage("sweep", scene, "results/paper")           # as `hdi sweep ... --out results/paper`
+    hdi.run_stage("sweep", scene, "results/paper", scheduler=client)  # a distributed.Client's cluster
     sweep = hdi.open_dataset("results/paper", "sweep")
 
 Every function here is a call the stages and the ``hdi`` command make, not a second path to the
@@ -30,9 +32,14 @@ change (the command line's message); a file system that fails mid-run (a full di
 
 from __future__ import annotations
 
+import json
+import math
+import numbers
+import re
+import sys
 import tempfile
 from pathlib import Path
-from typing import Iterable, Mapping
+from typing import Any, Iterable, Mapping
 
 import xarray as xr
 
@@ -41,7 +48,7 @@ from collections.abc import MutableMapping
 
 from . import runner
 from .cli_checks import (OptionError, check_flag, check_options, check_out, check_path_option, check_protrusions,
-                         integration_line)
+                         check_stage_options, integration_line)
 from .config.loading import load_scene as _load_scene
 from .config.schema import SCHEMA, SceneError
 from .config.validation import Scene, check_value
@@ -57,41 +64,100 @@ __all__ = ["load_scene", "simulation_inputs", "build_model", "simulate", "histor
 #: A scene, or the path of its TOML file.
 SceneLike = Scene | str | Path
 
+#: What ``scheduler=`` takes: a name or address (``--scheduler``), a ``distributed.Client``, or ``None``.
+Scheduler = Any
 
-def load_scene(path: str | Path, overrides: Iterable[str] = ()) -> Scene:
+
+#: What :func:`load_scene` takes as ``overrides``.
+Overrides = Iterable[str] | str | Mapping[str, Any]
+
+#: A bare TOML key (written unquoted in an inline table).
+_BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")
+
+
+def _toml(value: Any, where: str) -> str:
+    """``value`` in TOML syntax, as a ``--set`` string writes it (floats by ``repr``: read back bit for bit)."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, numbers.Integral):
+        return str(int(value))
+    if isinstance(value, numbers.Real):  # (numpy's too: repr(np.float64(0.5)) is no TOML)
+        value = float(value)
+        if not math.isfinite(value):
+            return "nan" if math.isnan(value) else ("inf" if value > 0 else "-inf")
+        return repr(value)
+    if isinstance(value, (str, os.PathLike)):
+        return json.dumps(os.fspath(value))  # (a JSON string is a TOML basic string)
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_toml(v, where) for v in value) + "]"
+    if isinstance(value, Mapping):
+        return "{" + ", ".join(f"{k if _BARE_KEY.fullmatch(str(k)) else json.dumps(str(k))} = {_toml(v, where)}"
+                               for k, v in value.items()) + "}"
+    raise SceneError(f"load_scene: overrides {where} = {value!r}: expected a number, a string, a bool, a list or "
+                     f"a dict, got {type(value).__name__}")
+
+
+def _override_strings(overrides: Overrides) -> list[str]:
+    """``overrides`` as ``"section.key=value"`` strings: a list of them, one string, or a dict
+    (``{"contact.k": 0.5}`` and ``{"contact": {"k": 0.5}}``, mixed as one likes)."""
+    if isinstance(overrides, str):
+        return [overrides]
+    if isinstance(overrides, Mapping):
+        out = []
+        for name, value in overrides.items():
+            if isinstance(name, str) and "." in name:
+                out.append(f"{name}={_toml(value, repr(name))}")
+            elif isinstance(name, str) and isinstance(value, Mapping):
+                out += [f"{name}.{key}={_toml(v, repr(f'{name}.{key}'))}" for key, v in value.items()]
+            else:
+                raise SceneError(f"load_scene: overrides[{name!r}] = {value!r}: expected \"section.key\": value or "
+                                 f"\"section\": {{key: value}} (e.g. {{\"contact.k\": 0.5}} or {{\"contact\": {{\"k\": 0.5}}}})")
+        return out
+    if isinstance(overrides, bytes) or not isinstance(overrides, Iterable):
+        raise SceneError(f"load_scene: overrides = {overrides!r}: expected a list of \"section.key=value\" strings "
+                         "(e.g. [\"contact.k=0.5\"]), one such string, or a dict ({\"contact.k\": 0.5})")
+    out = list(overrides)
+    for i, text in enumerate(out):
+        if not isinstance(text, str):
+            raise SceneError(f"load_scene: overrides[{i}] = {text!r}: expected a \"section.key=value\" string, "
+                             f"got {type(text).__name__}")
+    return out
+
+
+def load_scene(path: str | Path, overrides: Overrides = ()) -> Scene:
     """Read, override and validate a scene file, as ``hdi STAGE PATH --set ...`` does.
 
     Parameters
     ----------
     path : the TOML scene file (e.g. ``configs/paper-2009.toml``)
-    overrides : ``"section.key=value"`` strings, values in TOML syntax (``"contact.k=0.5"``,
-        ``"sweep.protrusion_nm={start=9.5, stop=10.5, step=0.5}"``), applied in order; units are those of
-        the key names (``solver.duration_ms`` [ms])
+    overrides : the ``--set`` overrides, applied in order, in one of three forms:
+
+        * a list of ``"section.key=value"`` strings, values in TOML syntax (``["contact.k=0.5"]``,
+          ``["sweep.protrusion_nm={start=9.5, stop=10.5, step=0.5}"]``);
+        * one such string (``"contact.k=0.5"``);
+        * a dict, ``{"section.key": value}`` or ``{"section": {"key": value}}`` (both may be mixed:
+          ``{"contact.k": 0.5, "tfc": {"protrusion_nm": 9.0}}``), each value a number, string, bool,
+          list or dict, written as the ``--set`` string ``section.key=value`` (kept in
+          ``scene.overrides``; a float exactly as given).
+
+        Units are those of the key names (``solver.duration_ms`` [ms]).
 
     Returns
     -------
     pipeline.config.scene.Scene
-        The validated scene, every default filled in (``scene["tfc"]["protrusion_nm"]`` [nm]).
+        The validated scene, every default filled in (``scene["tfc"]["protrusion_nm"]`` [nm]); it is
+        read-only: ``scene.replace(contact={"k": 0.5})`` is a new scene, validated as ``--set`` is.
 
     Raises
     ------
     pipeline.config.scene.SceneError
         A missing file, bad TOML or an invalid key, naming the file, the key and what was expected; a
-        ``path`` that is no path (``123``) or ``overrides`` that are not a list of strings.
+        ``path`` that is no path (``123``) or ``overrides`` of none of the three forms.
     """
     if not isinstance(path, (str, os.PathLike)):
         raise SceneError(f"load_scene: path = {path!r}: expected the path of a scene file (str or pathlib.Path), "
                          f"got {type(path).__name__}")
-    # (a single string would be read character by character)
-    if isinstance(overrides, (str, bytes)) or not hasattr(overrides, "__iter__"):
-        raise SceneError(f"load_scene: overrides = {overrides!r}: expected a list of \"section.key=value\" strings "
-                         "(e.g. [\"contact.k=0.5\"])")
-    overrides = list(overrides)
-    for i, text in enumerate(overrides):
-        if not isinstance(text, str):
-            raise SceneError(f"load_scene: overrides[{i}] = {text!r}: expected a \"section.key=value\" string, "
-                             f"got {type(text).__name__}")
-    return _load_scene(path, overrides)
+    return _load_scene(path, _override_strings(overrides))
 
 
 def _scene(scene: SceneLike) -> Scene:
@@ -272,7 +338,24 @@ def open_dataset(results: str | Path, name: str) -> xr.Dataset:
     return read_dataset(Path(results) / file, stage=stage)
 
 
-def _build(target: str, scene: SceneLike, out: str | Path | None, force: bool, scheduler: str | None,
+def _client_address(scheduler: Any) -> str | None:
+    """The scheduler address of a ``distributed.Client`` (``None``: ``scheduler`` is no client).
+
+    Raises
+    ------
+    pipeline.cli_checks.OptionError
+        The client is closed.
+    """
+    distributed = sys.modules.get("distributed")  # (a client's module is imported; never import it here)
+    if distributed is None or not isinstance(scheduler, distributed.Client):
+        return None
+    if scheduler.status != "running":
+        raise OptionError(f"scheduler = {scheduler!r}: the client is {scheduler.status}; expected a running "
+                          "distributed.Client (or a scheduler address)")
+    return scheduler.scheduler.address
+
+
+def _build(target: str, scene: SceneLike, out: str | Path | None, force: bool, scheduler: Scheduler,
            workers: int | None, yes: bool) -> dict[str, tuple[Path, ...]]:
     """Make ``target`` (a stage, or ``"run"``: the main job) current, as ``hdi TARGET`` does."""
     scene = _scene(scene)
@@ -281,7 +364,13 @@ def _build(target: str, scene: SceneLike, out: str | Path | None, force: bool, s
         raise ValueError(f"stage = {target!r}: expected a stage name (str), got {type(target).__name__}")
     if target != "run" and target not in stages:
         raise ValueError(f"unknown stage {target!r}; expected one of {', '.join(stages)}")
-    scheduler = check_options(target, scene, out=out, scheduler=scheduler, workers=workers, yes=yes, force=force)
+    address = _client_address(scheduler)
+    if address is None:
+        scheduler = check_options(target, scene, out=out, scheduler=scheduler, workers=workers, yes=yes, force=force)
+    else:  # (a connected client's scheduler answers: only whether the stage fans out is checked)
+        check_stage_options(target, {"scheduler": address}, afm_files=False)
+        check_options(target, scene, out=out, workers=workers, yes=yes, force=force)
+        scheduler = address
     targets = runner.main_job(scene, stages) if target == "run" else [target]
     try:
         return runner.Runner(scene, results_dir(scene, out), stages, scheduler=scheduler,
@@ -291,7 +380,7 @@ def _build(target: str, scene: SceneLike, out: str | Path | None, force: bool, s
 
 
 def run_stage(stage: str, scene: SceneLike, out: str | Path | None = None, *, force: bool = False,
-              scheduler: str | None = None, workers: int | None = None, yes: bool = False) -> Path:
+              scheduler: Scheduler = None, workers: int | None = None, yes: bool = False) -> Path:
     """Make one stage current in a results folder, with everything upstream of it: ``hdi STAGE``.
 
     Parameters
@@ -301,7 +390,10 @@ def run_stage(stage: str, scene: SceneLike, out: str | Path | None = None, *, fo
     out : the results folder (``None``: ``results/<scene name>/``, relative to the working directory)
     force : recompute the stage even when its outputs are current (``--force``)
     scheduler, workers : the fan-out of sweep, calibrate, ensemble, identify and sensitivity (``--scheduler``,
-        ``--workers``; ``None``: local threads, one per core)
+        ``--workers``; ``None``: local threads, one per core). ``scheduler`` is ``"threads"``,
+        ``"processes"``, ``"synchronous"``, a dask scheduler's address (``"tcp://HOST:8786"``), or a running
+        ``distributed.Client``, whose scheduler runs the tasks (its address is used: a client of a
+        ``LocalCluster(processes=False)`` runs them in this process)
     yes : allow a big job beyond the limits of :mod:`pipeline.config.limits` (``--yes``)
 
     Returns
@@ -312,7 +404,7 @@ def run_stage(stage: str, scene: SceneLike, out: str | Path | None = None, *, fo
     return _build(stage, scene, out, force, scheduler, workers, yes)[stage][0]
 
 
-def run(scene: SceneLike, out: str | Path | None = None, *, force: bool = False, scheduler: str | None = None,
+def run(scene: SceneLike, out: str | Path | None = None, *, force: bool = False, scheduler: Scheduler = None,
         workers: int | None = None, yes: bool = False) -> Mapping[str, Path]:
     """Make the main job current (``hdi run``): the stages of the report, in order.
 

@@ -251,8 +251,8 @@ def _calls(scene, model, tmp: Path):
     return [
         (lambda: hdi.load_scene(123), SceneError, r"^load_scene: path = 123: expected the path of a scene file"),
         (lambda: hdi.load_scene(None), SceneError, r"^load_scene: path = None: expected the path"),
-        (lambda: hdi.load_scene(PAPER, "contact.k=0.5"), SceneError,
-         r"^load_scene: overrides = 'contact.k=0.5': expected a list of \"section.key=value\" strings"),
+        (lambda: hdi.load_scene(PAPER, b"contact.k=0.5"), SceneError,  # (one str is one override: test_api.py)
+         r"^load_scene: overrides = b'contact.k=0.5': expected a list of \"section.key=value\" strings"),
         (lambda: hdi.load_scene(PAPER, [0.5]), SceneError, r"^load_scene: overrides\[0\] = 0.5: expected a"),
         (lambda: hdi.load_scene(PAPER, None), SceneError, r"^load_scene: overrides = None: expected a list"),
         (lambda: hdi.build_model(123), SceneError, r"^scene = 123: expected a scene \(load_scene\) or the path"),

@@ -25,16 +25,59 @@ from .schema import FREE_LIMITS, SCHEMA, Key, SceneError, is_folder_name, strip_
 MIN_STEADY_SAMPLES = 10
 
 
+class FrozenSection(dict):
+    """A read-only ``dict``: a section of a :class:`Scene` (and the table of its sections).
+
+    Reading is a ``dict``'s (same speed, same JSON, ``isinstance(..., dict)``); every change raises a
+    ``TypeError`` that names the way to vary a scene, :meth:`Scene.replace`. ``dict(section)`` is a
+    mutable copy. Lists inside a section (``scene.effects``) stay lists.
+    """
+
+    __slots__ = ("_name",)
+
+    def __init__(self, items: Any = (), name: str | None = None) -> None:
+        super().__init__(items)
+        self._name = name
+
+    def _readonly(self, *args: Any, **kwargs: Any) -> None:
+        sec = self._name or "section"
+        raise TypeError(f"a loaded scene is read-only: scene[{sec!r}] cannot be changed in place; vary it with "
+                        f"scene.replace({sec}={{key: value}}), which returns a new scene validated like --set")
+
+    __setitem__ = __delitem__ = update = pop = popitem = clear = setdefault = __ior__ = _readonly  # type: ignore
+
+    def __reduce__(self) -> tuple:
+        # (pickled to dask workers and deep-copied: rebuilt whole, never item by item through __setitem__)
+        return (type(self), (dict(self), self._name))
+
+
+def _freeze(value: Any, name: str | None = None) -> Any:
+    """``value`` with every ``dict`` in it (at any depth) a :class:`FrozenSection`."""
+    if isinstance(value, dict):
+        return FrozenSection({k: _freeze(v, k if name is None else name) for k, v in value.items()}, name)
+    return value
+
+
+def _thaw(value: Any) -> Any:
+    """A mutable deep copy of a (frozen) configuration: plain ``dict``s, lists copied."""
+    if isinstance(value, dict):
+        return {k: _thaw(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_thaw(v) for v in value]
+    return copy.deepcopy(value)
+
+
 @dataclass
 class Scene:
-    """A validated scene.
+    """A validated scene: read-only (its sections are :class:`FrozenSection` s); vary it with
+    :meth:`replace`.
 
     Attributes
     ----------
     path
         The TOML file it came from (``None`` for scenes built in code).
     config
-        ``section -> key -> value`` with every default filled in.
+        ``section -> key -> value`` with every default filled in (read-only).
     overrides
         The ``--set`` strings applied, in order (kept for provenance).
     """
@@ -42,6 +85,9 @@ class Scene:
     path: Path | None
     config: dict[str, dict[str, Any]]
     overrides: list[str] = field(default_factory=list)
+
+    def __post_init__(self) -> None:
+        self.config = _freeze(self.config)
 
     @property
     def name(self) -> str:
@@ -65,12 +111,28 @@ class Scene:
         return hashlib.sha256(blob).hexdigest()
 
     def replace(self, **sections: dict[str, Any]) -> "Scene":
-        """A copy with some keys changed, validated again: ``scene.replace(tfc={"protrusion_nm": 9})``."""
-        cfg = copy.deepcopy(self.config)
+        """A copy with some keys changed, validated again as ``--set`` is: the way to vary a scene.
+
+        ``scene.replace(tfc={"protrusion_nm": 9.0}, contact={"k": 0.5})``: each keyword is a section, its
+        value a dict of that section's keys (values in the key's units, as the scene file takes them).
+
+        Raises
+        ------
+        SceneError
+            An unknown section or key, or a value the key does not allow, naming ``replace``, the
+            ``section.key``, the value and what was expected.
+        """
+        cfg = _thaw(self.config)
+        blame: dict[tuple[str, str], str] = {}
         for sec, keys in sections.items():
-            cfg.setdefault(sec, {}).update(keys)
+            if not isinstance(keys, dict):
+                raise SceneError(f"scene.replace({sec}={keys!r}): expected a dict of the section's keys "
+                                 f"(e.g. scene.replace(contact={{'k': 0.5}}))")
+            for key, value in keys.items():
+                blame[(sec, key)] = f"scene.replace({sec}={{{key!r}: {value!r}}})"
+            cfg.setdefault(sec, {}).update(_thaw(keys))
         raw = {s: {k: v for k, v in d.items() if v is not None} for s, d in cfg.items()}
-        return validate(raw, self.path, overrides=self.overrides, resolve_paths=False)
+        return validate(raw, self.path, overrides=self.overrides, resolve_paths=False, blame=blame)
 
     def to_toml_text(self) -> str:
         """The configuration as JSON text (stored in dataset provenance)."""
