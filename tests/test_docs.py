@@ -159,3 +159,15 @@ def test_no_page_sends_its_reader_to_notes_a_clone_lacks(page):
         text = text[:text.index(narrative.README_BEGIN)] + text[text.index(narrative.README_END):]
     found = sorted({m.group(0) for m in NOTES.finditer(text)})
     assert not found, f"{page.relative_to(ROOT)}: cites notes a clone does not have: " + ", ".join(found)
+
+
+def test_no_docstring_or_comment_of_the_package_cites_notes_a_clone_lacks():
+    """The package's own text (docstrings, comments, messages) states what the code does and where it is
+    documented, not the issue or lab note it came from: the history lives in docs/ and the commits."""
+    found = []
+    for path in sorted((ROOT / "pipeline").rglob("*.py")):
+        for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1):
+            hit = NOTES.search(line)
+            if hit:
+                found.append(f"{path.relative_to(ROOT)}:{number}: {hit.group(0)}")
+    assert not found, "cites notes a clone does not have:\n" + "\n".join(found)

@@ -53,7 +53,7 @@ gap-power law tabulated: force within 3e-8 of its range, stiffness 5e-8 relative
 run's separation within 1e-10 nm of the closed form's, tests/test_model_variants.py). The closed-form
 gap-power law keeps its compiled branch (bit-identical results).
 
-Internal state: the meniscus formation of issue 17 (docs/model.md, section "Meniscus formation") is a
+Internal state: the meniscus formation (docs/model.md, section "Meniscus formation") is a
 fifth state component (:data:`pipeline.model.state.MENISCUS`), the adhesion pressure ``q`` [Pa]
 relaxing towards the table's value, ``q' = (p_a(d) - q) / tau_m``, with the adhesion force
 ``-A_n q``. It is the slot ``Variants.meniscus`` (``tau_m`` [s], ``None``: off); the state length is

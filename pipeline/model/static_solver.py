@@ -6,8 +6,8 @@
 below ``tol scale`` (docs/model.md, section "Start state"). Here the same iteration runs in one
 compiled call on the kernel's right-hand side at zero velocity on the mean disk
 (:func:`pipeline.model.forces.rhs_slots` with ``w = 0``), so a start state costs no Python per force
-evaluation and the dask threads of a sweep or a calibration compute their starts in parallel
-(issue 26; before, the Python Newton held the GIL for about half of the calibration's CPU time).
+evaluation and the dask threads of a sweep or a calibration compute their starts in parallel (the
+Python Newton holds the GIL; docs/performance.md has the measurements).
 
 It returns the same :class:`pipeline.physics.equilibrium.Equilibrium` as the Python method: the
 state, the stiffness ``K = -dR/dy``, convergence, stability, iterations and the scaled residual.
