@@ -36,7 +36,7 @@ _inline = kernel_jit(__name__, inline="always")
 
 
 @_inline
-def _forces(y0, y1, p, R, y4, out, dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power, meniscus):
+def static_residual(y0, y1, p, R, y4, out, dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power, meniscus):
     """``R = (F_z [N], M_theta [N m])`` at the static state ``(y0, y1)`` (``M_theta`` replaced by ``theta``
     with the pitch locked): the right-hand side at zero velocity, ``t = 0``, in the contact mode the
     paper's criterion gives (``d < k sigma``)."""
@@ -64,8 +64,8 @@ def _jacobian(y, scale, p, J, R, Rp, y4, out, dmw, contact, adhesion, friction, 
             a0, b0 = y[0] + h, y[0] - h
         else:
             a1, b1 = y[1] + h, y[1] - h
-        _forces(a0, a1, p, Rp, y4, out, dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power, meniscus)
-        _forces(b0, b1, p, R, y4, out, dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power, meniscus)
+        static_residual(a0, a1, p, Rp, y4, out, dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power, meniscus)
+        static_residual(b0, b1, p, R, y4, out, dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power, meniscus)
         J[0, j] = (Rp[0] - R[0]) / (2 * h)
         J[1, j] = (Rp[1] - R[1]) / (2 * h)
 
@@ -112,7 +112,7 @@ def _newton(y_start, scale, max_step, tol, max_iter, params, dmw, contact, adhes
         it = k
         _jacobian(y, scale, p, J, R, Rp, y4, out, dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power,
                   meniscus)
-        _forces(y[0], y[1], p, R, y4, out, dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power,
+        static_residual(y[0], y[1], p, R, y4, out, dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power,
                 meniscus)
         rhs_[0] = -R[0]
         rhs_[1] = -R[1]
@@ -132,7 +132,7 @@ def _newton(y_start, scale, max_step, tol, max_iter, params, dmw, contact, adhes
     _jacobian(y, scale, p, J, R, Rp, y4, out, dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power,
               meniscus)
     K = -J
-    _forces(y[0], y[1], p, R, y4, out, dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power, meniscus)
+    static_residual(y[0], y[1], p, R, y4, out, dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power, meniscus)
     finite_K = np.all(np.isfinite(K))
     fscale = 1.0
     if finite_K:

@@ -19,7 +19,7 @@ from typing import Callable
 import numpy as np
 import xarray as xr
 
-from ..physics.equilibrium import _is_stable, jacobian, path_equilibria, relaxed_path
+from ..physics.equilibrium import is_stable, jacobian, path_equilibria, relaxed_path
 from ..units import NM, URAD
 from ..variables import STATICS
 from . import dynamics as dyn
@@ -27,7 +27,7 @@ from . import assembly, kernel_inputs
 from .compiled import kernel_jit
 from .start import SCALE, static_forces, static_inputs
 from .state import N_STATE
-from .static_solver import _forces
+from .static_solver import static_residual
 
 _jit = kernel_jit(__name__)
 
@@ -73,15 +73,15 @@ def _path(us, a0, a1, s_start, slope_start, s_scale, tol, max_iter, params, dmw,
         u = us[i]
         if i >= 2 and us[i - 1] != us[i - 2]:
             s = s_out[i - 1] + (s_out[i - 1] - s_out[i - 2]) * (u - us[i - 1]) / (us[i - 1] - us[i - 2])
-        _forces(u / a0 + s * t0, s, p, R, y4, out, dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power,
+        static_residual(u / a0 + s * t0, s, p, R, y4, out, dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power,
                 meniscus)
         g = R[0] * t0 + R[1]
         if not (slope != 0.0 and np.isfinite(slope)):
             h = 1e-3 * s_scale
-            _forces(u / a0 + (s + h) * t0, s + h, p, R, y4, out, dmw, contact, adhesion, friction, tfc, pitch,
+            static_residual(u / a0 + (s + h) * t0, s + h, p, R, y4, out, dmw, contact, adhesion, friction, tfc, pitch,
                     rear_law, gap_power, meniscus)
             slope = (R[0] * t0 + R[1] - g) / h
-            _forces(u / a0 + s * t0, s, p, R, y4, out, dmw, contact, adhesion, friction, tfc, pitch, rear_law,
+            static_residual(u / a0 + s * t0, s, p, R, y4, out, dmw, contact, adhesion, friction, tfc, pitch, rear_law,
                     gap_power, meniscus)
         for _ in range(max_iter):
             if not (np.isfinite(g) and np.isfinite(slope) and slope != 0.0):
@@ -89,7 +89,7 @@ def _path(us, a0, a1, s_start, slope_start, s_scale, tol, max_iter, params, dmw,
             ds = -g / slope
             if abs(ds) < tol_s:
                 break
-            _forces(u / a0 + (s + ds) * t0, s + ds, p, R, y4, out, dmw, contact, adhesion, friction, tfc, pitch,
+            static_residual(u / a0 + (s + ds) * t0, s + ds, p, R, y4, out, dmw, contact, adhesion, friction, tfc, pitch,
                     rear_law, gap_power, meniscus)
             gn = R[0] * t0 + R[1]
             if np.isfinite(gn) and gn != g:
@@ -243,7 +243,7 @@ def states_at(model: assembly.Model, protrusion: float, compiled: bool = True) -
         else:
             K = -jacobian(R, y, SCALE)
             if pitch:
-                stable = _is_stable(K)
+                stable = is_stable(K)
                 eig = np.sort(np.real(np.linalg.eigvals(D @ K @ D)))
             else:
                 stable, eig = bool(K[0, 0] > 0), np.array([K[0, 0], np.nan])

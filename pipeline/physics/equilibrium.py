@@ -82,7 +82,7 @@ def jacobian(forces: Callable[[np.ndarray], np.ndarray], y: np.ndarray, scale: n
     return J
 
 
-def _is_stable(K: np.ndarray) -> bool:
+def is_stable(K: np.ndarray) -> bool:
     return bool(np.all(np.real(np.linalg.eigvals(K)) > 0))
 
 
@@ -123,7 +123,7 @@ def newton(forces: Callable[[np.ndarray], np.ndarray], y0, *, scale=None, jac=No
     K = -jac(y)
     R = forces(y)
     fscale = np.max(np.abs(K) @ scale) if np.all(np.isfinite(K)) else 1.0
-    return Equilibrium(y, K, converged and bool(np.all(np.isfinite(R))), _is_stable(K) if np.all(np.isfinite(K))
+    return Equilibrium(y, K, converged and bool(np.all(np.isfinite(R))), is_stable(K) if np.all(np.isfinite(K))
                        else False, it, float(np.max(np.abs(R)) / fscale) if fscale > 0 else np.inf)
 
 
