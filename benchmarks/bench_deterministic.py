@@ -17,7 +17,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from .common import record
+from .common import record, record_failure
 
 ROOT = Path(__file__).resolve().parents[1]
 SCANS = sorted((ROOT / "tests" / "data" / "afm").glob("*.*"))
@@ -27,11 +27,12 @@ import json, resource, sys, time, warnings
 warnings.simplefilter("ignore")
 import numpy as np
 from pipeline.config.scene import load_scene
-from pipeline.stages.interface import build_tables, interface_parameters, needed_quantities, roughness_statistics
+from pipeline.model.interface_tables import build_tables, interface_parameters, needed_quantities, roughness_statistics
 from pipeline.model.deterministic_tables import deterministic_tables
-from pipeline.physics import isbl, surface as sf
+from pipeline.model.afm_scan import read_topography
+from pipeline.physics import isbl
 scan = sys.argv[1]
-n = max(sf.read_topography(scan).nb_grid_pts)
+n = max(read_topography(scan).nb_grid_pts)
 base = ["roughness.afm=['%s']" % scan, "solver.contact_grid_points=%d" % n]
 stat = load_scene(sys.argv[2], base)
 det = load_scene(sys.argv[2], base + ["interface.model='deterministic'"])
@@ -57,8 +58,7 @@ def run(results: list[dict]) -> None:
                              cwd=ROOT, capture_output=True, text=True)
         if out.returncode != 0:  # say which scan failed and why, and go on with the others
             last = (out.stderr.strip().splitlines() or ["(no message)"])[-1]
-            results.append({"name": f"deterministic interface tables, {scan.name}", "failed": last})
-            print(f"deterministic interface tables, {scan.name}: FAILED: {last}", flush=True)
+            record_failure(results, f"deterministic interface tables, {scan.name}", last)
             continue
         r = json.loads(out.stdout.strip().splitlines()[-1])
         record(results, f"deterministic interface tables, {scan.name} ({r['grid']}^2)", [r["t_det"]],

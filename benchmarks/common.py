@@ -66,6 +66,18 @@ def load_fields(start: dict[str, float], end: dict[str, float]) -> dict[str, Any
     return fields
 
 
+def record_failure(results: list[dict], name: str, message: str) -> dict:
+    """Append a row that could not be measured (``failed``: why), with the load at its start and end like
+    :func:`record`, so every row of bench.json says how busy the machine was."""
+    global _row_start
+    end = LOAD_SOURCE()
+    row = {"name": name, "failed": message, **load_fields(_row_start if _row_start is not None else end, end)}
+    results.append(row)
+    _row_start = end
+    print(f"{name}: FAILED: {message}", flush=True)
+    return row
+
+
 def timeit(fn: Callable[[], Any], repeat: int = 7, warmup: int = 1) -> list[float]:
     """Wall times [s] of ``repeat`` calls of ``fn`` after ``warmup`` untimed calls."""
     for _ in range(warmup):
