@@ -11,6 +11,7 @@ inside functions alike.
 from __future__ import annotations
 
 import ast
+from typing import Callable
 from pathlib import Path
 
 import pytest
@@ -176,20 +177,30 @@ FILE_READERS = {"open", "read_dataset", "read_attrs", "open_dataset", "open_mfda
 IO_READERS = {"read_dataset", "read_attrs"}
 
 
-def file_reads(source: str) -> list[tuple[str, int]]:
-    """``(what, line)`` of each call in ``source`` that reads a file (:data:`FILE_READERS`, ``np.load``,
-    ``path.read_text()``, ...) and each import of a reader of :mod:`pipeline.io`."""
+def _calls_and_imports(source: str, calls: set[str],
+                       imported: Callable[[ast.Import | ast.ImportFrom], list[str]]) -> list[tuple[str, int]]:
+    """``(what, line)`` of each call in ``source`` of a function named in ``calls`` (plain or attribute) and of
+    what ``imported`` reports for each ``import`` and ``from ... import``."""
     found = []
     for node in ast.walk(ast.parse(source)):
         if isinstance(node, ast.Call):
             f = node.func
             name = f.id if isinstance(f, ast.Name) else f.attr if isinstance(f, ast.Attribute) else None
-            if name in FILE_READERS:
+            if name in calls:
                 found.append((f"call {name}()", node.lineno))
-        elif isinstance(node, ast.ImportFrom) and node.module and node.module.split(".")[-1] == "io" \
-                and (node.level or node.module.startswith("pipeline")):
-            found += [(f"import {a.name} from io", node.lineno) for a in node.names if a.name in IO_READERS]
+        elif isinstance(node, ast.Import) or (isinstance(node, ast.ImportFrom) and node.module):
+            found += [(what, node.lineno) for what in imported(node)]
     return found
+
+
+def file_reads(source: str) -> list[tuple[str, int]]:
+    """``(what, line)`` of each call in ``source`` that reads a file (:data:`FILE_READERS`, ``np.load``,
+    ``path.read_text()``, ...) and each import of a reader of :mod:`pipeline.io`."""
+    def io_readers(node: ast.Import | ast.ImportFrom) -> list[str]:
+        if isinstance(node, ast.ImportFrom) and node.module.split(".")[-1] == "io" and (node.level or node.module.startswith("pipeline")):
+            return [f"import {a.name} from io" for a in node.names if a.name in IO_READERS]
+        return []
+    return _calls_and_imports(source, FILE_READERS, io_readers)
 
 
 #: Names by which SurfaceTopography reads a file: its readers' entry points (a call or an import) and its IO package.
@@ -199,21 +210,14 @@ TOPOGRAPHY_READERS = {"open_topography", "read_topography", "read_container", "o
 def topography_reads(source: str) -> list[tuple[str, int]]:
     """``(what, line)`` of each call of a SurfaceTopography file reader (:data:`TOPOGRAPHY_READERS`) and each
     import of one or of ``SurfaceTopography.IO``, in ``source``."""
-    found = []
-    for node in ast.walk(ast.parse(source)):
-        if isinstance(node, ast.Call):
-            f = node.func
-            name = f.id if isinstance(f, ast.Name) else f.attr if isinstance(f, ast.Attribute) else None
-            if name in TOPOGRAPHY_READERS:
-                found.append((f"call {name}()", node.lineno))
-        elif isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("SurfaceTopography"):
-            if node.module.startswith("SurfaceTopography.IO"):
-                found.append((f"import from {node.module}", node.lineno))
-            found += [(f"import {a.name}", node.lineno) for a in node.names if a.name in TOPOGRAPHY_READERS]
-        elif isinstance(node, ast.Import):
-            found += [(f"import {a.name}", node.lineno) for a in node.names
-                      if a.name.startswith("SurfaceTopography.IO")]
-    return found
+    def readers(node: ast.Import | ast.ImportFrom) -> list[str]:
+        if isinstance(node, ast.Import):
+            return [f"import {a.name}" for a in node.names if a.name.startswith("SurfaceTopography.IO")]
+        if not node.module.startswith("SurfaceTopography"):
+            return []
+        return ([f"import from {node.module}"] if node.module.startswith("SurfaceTopography.IO") else []) + \
+            [f"import {a.name}" for a in node.names if a.name in TOPOGRAPHY_READERS]
+    return _calls_and_imports(source, TOPOGRAPHY_READERS, readers)
 
 
 def _in(package: str) -> list[Path]:
