@@ -126,7 +126,7 @@ def test_the_report_draws_the_bulge_figure_when_the_law_is_tabulated(repo_root, 
     """``bulge.nc`` is made before the report (as an input of the sweep) exactly when the bulge law is tabulated,
     and ``bulge.png`` is drawn
     from it (with the cap of ``air_bearing.lift_cap_gap_nm`` when set)."""
-    from test_report import check_png
+    from report_data import check_png
 
     from pipeline.analyses import plots, report_figures
     from pipeline.analyses.report_settings import ReportSettings
@@ -154,7 +154,7 @@ def test_the_report_draws_the_bulge_figure_when_the_law_is_tabulated(repo_root, 
 
 def test_the_rough_stage_reads_only_what_it_declares(repo_root, tmp_path):
     """The rough law's table reads the roughness, the disk's share and the lubricant thickness, all declared."""
-    from test_stage_reads import declared, recording
+    from scene_recording import declared, recording
 
     scene = load_scene(repo_root / "configs" / "paper-2009-bulge.toml",
                        ['air_bearing.bulge="rough-reynolds"', "solver.bulge_cells_per_a=4", "solver.bulge_cells_per_b=2"])

@@ -21,7 +21,7 @@ from pipeline.model import forces as fo
 from pipeline.model import scene_inputs
 from pipeline.model import assembly, kernel_inputs
 from pipeline.physics import bulge_bearing as bb
-from test_stage_reads import declared, recording
+from scene_recording import declared, recording
 
 NM = 1e-9
 #: the bulge scene with the Reynolds table on a coarse grid (16 x 8 cells per semi-axis: its lift is within

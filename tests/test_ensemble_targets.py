@@ -74,7 +74,7 @@ def test_report_shows_each_target_over_the_realisations_with_its_spread(run3):
     # the bouncing band over the realisations: the steps above 0.5 counted, and its figure drawn
     probs = ens["bv_exceedance_probability"].sel(protrusion=[10.0, 10.2]).values
     assert f"; {int(np.sum(probs > 0.5))} of the 2 steps above 0.5 (figure `band.png`)." in text
-    from test_report import check_png
+    from report_data import check_png
     check_png(out / "figures" / "band.png")
     td, lo, hi = en.touchdown_protrusion(ens["min_clearance"])
     assert np.isfinite(td) and lo <= td <= hi

@@ -77,7 +77,7 @@ def test_a_stepping_sweep_gives_the_ensemble_and_the_report_its_upward_pass():
     from pipeline.model.simulation import simulate
     from pipeline.model import outcomes
     from pipeline.stages import ensemble
-    from test_dynamics import build, make_scene
+    from slider_scenes import build, make_scene
     scene = make_scene(["air_bearing", "pitch", "contact"], solver={"duration_ms": 0.3, "transient_ms": 0.1})
     prot = [9.0, 10.0, 11.0, 12.0, 13.0]
     chain = simulate(build(scene), prot, protocol="stepping")

@@ -11,7 +11,7 @@ from pipeline.model import forces as fo
 from pipeline.model import running
 from pipeline.model import state as st
 from pipeline.physics import air_bearing as ab
-from test_dynamics import build, make_scene
+from slider_scenes import build, make_scene
 
 NM = 1e-9
 

@@ -208,7 +208,7 @@ def test_a_second_signal_while_the_first_unwinds_does_not_cut_the_clean_up_short
         interrupts.answered()
 
 
-#: ``hdi report`` on the datasets of tests/test_report.py with no upstream stage; SIGTERM delivered
+#: ``hdi report`` on the datasets of tests/report_data.py with no upstream stage; SIGTERM delivered
 #: during the report's read of ``sweep.nc`` and swallowed there, as netCDF4's error check did.
 _SWALLOWED = """
 import dataclasses, os, signal, sys
@@ -236,7 +236,7 @@ sys.exit(cli.main(sys.argv[1:]))
 
 def test_sigterm_during_the_reports_netcdf_reads_never_ends_with_exit_0(tmp_path):
     """Before: the run went on to draw the report and exited 0 (2-3 of 10 trials with a real SIGTERM)."""
-    from test_report import write_dmw, write_histories, write_roughness, write_sweep
+    from report_data import write_dmw, write_histories, write_roughness, write_sweep
     out = tmp_path / "out"
     out.mkdir()
     for write in (write_sweep, write_histories, write_dmw, write_roughness):
@@ -533,7 +533,7 @@ sys.exit(cli.main(sys.argv[2:]))
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="the figure pool forks on Linux only")
 def test_sigkill_of_hdi_report_during_figure_drawing_leaves_no_worker(tmp_path):
-    from test_report import write_dmw, write_histories, write_roughness, write_sweep
+    from report_data import write_dmw, write_histories, write_roughness, write_sweep
     out, pids = tmp_path / "out", tmp_path / "pids"
     out.mkdir()
     pids.mkdir()

@@ -2,7 +2,7 @@
 where a run begins, not where it ends, wherever the system has one steady state: static, nominal and
 previous-heater-step starts reach the same steady window.
 
-Scenes are built in code (tests/test_dynamics.py's ``make_scene``) with every effect, at protrusions
+Scenes are built in code (tests/slider_scenes.py's ``make_scene``) with every effect, at protrusions
 where one steady state exists: 5 nm, below the take-off of the adhesion hysteresis (flying only), and
 11 nm, past the fold of the flying equilibria (contact only); between them the state depends on the
 history (tests/test_stepping.py).
@@ -19,7 +19,7 @@ from numpy.testing import assert_array_equal
 from pipeline.model import copies, kernel_inputs, outcomes, running
 from pipeline.model.simulation import simulate
 from pipeline.units import NM
-from test_dynamics import build, make_scene, synthetic_record
+from slider_scenes import build, make_scene, synthetic_record
 
 #: modal damping 0.05: the slower mode (120 kHz) decays as exp(-zeta omega t), 1/(zeta omega) = 26.5 us,
 #: so a 0.3 ms transient leaves exp(-11.3) ~ 1e-5 of the start's offset (< 1 nm) in the window

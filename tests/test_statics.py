@@ -21,7 +21,7 @@ from pipeline.physics.equilibrium import path_equilibria, relaxed_path
 from pipeline.units import NM, URAD
 from pipeline.variables import STATICS
 from pipeline.runner import ensure
-from test_dynamics import build, synthetic_record
+from slider_scenes import build, synthetic_record
 
 
 # ------------------------------------------------------------------------------------ analytic curves

@@ -1,7 +1,7 @@
 """Heater stepping (``sweep.protocol = "stepping"``; docs/model.md, section "Heater stepping";
 pipeline.model.simulation): each protrusion from the end state of the previous one, up then down.
 
-Scenes are built in code (tests/test_dynamics.py's ``make_scene``), without DMW so that the steady
+Scenes are built in code (tests/slider_scenes.py's ``make_scene``), without DMW so that the steady
 states are equilibria and the comparisons are at the solver's tolerance.
 """
 
@@ -20,7 +20,7 @@ from pipeline.model.simulation import chain_protrusions, histories_of, simulate,
 from pipeline.stages import sweep as sweep_stage
 from pipeline.units import NM
 from pipeline.model import state as st
-from test_dynamics import build, make_scene
+from slider_scenes import build, make_scene
 
 ROOT = Path(__file__).resolve().parents[1]
 SHORT = {"duration_ms": 0.3, "transient_ms": 0.1}
