@@ -18,7 +18,7 @@ from pipeline.model import interface_tables
 from pipeline.physics.material_bounds import PhysicsWarning, check_materials
 from pipeline.cli_checks import CONNECT_TIMEOUT_S, MAX_SCENES, check_grid, check_out, grid_size
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 PAPER = ROOT / "configs" / "paper-2009.toml"
 
 

@@ -91,7 +91,7 @@ def test_flying_scene_datum_without_interface_tables(paper):
     model = assembly.build_model(flying, None, None, None)
     assert model.p.y_s == pytest.approx(0.691e-9, abs=1e-12)
     assert model.p.y_s == roughness_statistics(paper)["y_s"]  # what interface.nc is made from
-    scan = Path(__file__).parent / "data" / "afm" / "di-3.di"
+    scan = Path(__file__).resolve().parents[1] / "data" / "afm" / "di-3.di"
     afm = flying.replace(roughness={"afm": [str(scan)]})
     with pytest.raises(ValueError, match="interface.nc"):
         assembly.build_model(afm, None, None, None)
