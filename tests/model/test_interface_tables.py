@@ -1,5 +1,5 @@
-"""The interface parameters of a scene (pipeline.model.interface_tables; docs/model.md, sections "Statistics"
-and "Single asperity"): the hardness derived from a fixed plasticity index, ``H = E'/psi sqrt(sigma_s/R)``,
+"""The interface parameters of a scene (pipeline.model.interface_tables; docs/model.md, section "Plasticity
+index"): the hardness derived from a fixed plasticity index, ``H = E'/psi sqrt(sigma_s/R)``,
 against the paper's numbers, with a warning when it is outside physical bounds."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""The flying-height modulation measures (pipeline.physics.fhm; docs/model.md, section "Corrections"): on a
+"""The flying-height modulation measures (pipeline.physics.fhm; docs/model.md, section "FHM and BV"): on a
 sine of amplitude ``a`` about its mean, peak-to-peak is ``2 a`` and 3 std is ``3 a / sqrt 2``, in % of FH0;
 an unknown measure is an error naming the known ones."""
 
