@@ -5,7 +5,7 @@ previous-heater-step starts reach the same steady window.
 Scenes are built in code (tests/slider_scenes.py's ``make_scene``) with every effect, at protrusions
 where one steady state exists: 5 nm, below the take-off of the adhesion hysteresis (flying only), and
 11 nm, past the fold of the flying equilibria (contact only); between them the state depends on the
-history (tests/test_stepping.py).
+history (tests/model/test_simulation.py).
 """
 
 from __future__ import annotations
