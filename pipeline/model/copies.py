@@ -42,7 +42,7 @@ def with_criterion(model: Model, k: float) -> Model:
     then go to the contact branch, and starts below it continue the flying branch to their protrusion,
     without a fold search of the copy's own (~0.2 s each): a bisection on k past the touchdown
     (:func:`pipeline.analyses.calibration.k_threshold`) runs many such copies. The start states are
-    those of a fresh model with ``k`` (tests/test_start.py).
+    those of a fresh model with ``k`` (tests/model/test_copies.py).
     """
     copy = replace(model, k=float(k))
     copy.tfc_tables = model.tfc_tables  # (the criterion changes no force law)

@@ -34,7 +34,7 @@ types. All kernels are cached on disk (:mod:`pipeline.model.compiled`).
 
 Adding an input: a field of :class:`Tables` or :class:`Variants` (which fixes its place in
 :data:`SLOTS`), then the same name at that place in the signatures of the compiled functions that
-take the slots (tests/test_dynamics.py checks the order of those that take them all).
+take the slots (tests/model/test_dynamics.py checks the order of those that take them all).
 
 Adding a variant
 ----------------
@@ -50,7 +50,7 @@ and stiffness ``-dF/dg`` (the step-size cap) from the same cubic, so the kernel,
 its compiled cache are untouched. A tabulated law costs one cubic evaluation, like an interface
 table, and is exact to the table's interpolation error (:func:`pipeline.model.kernel_inputs.tfc_table`; the
 gap-power law tabulated: force within 3e-8 of its range, stiffness 5e-8 relative above 1 nm, a 1-ms
-run's separation within 1e-10 nm of the closed form's, tests/test_model_variants.py). The closed-form
+run's separation within 1e-10 nm of the closed form's, tests/scenarios/test_model_variants.py). The closed-form
 gap-power law keeps its compiled branch (bit-identical results).
 
 Internal state: the meniscus formation (docs/model.md, section "Meniscus formation") is a
@@ -147,7 +147,7 @@ def with_values(p: np.record, **values: float) -> np.record:
     The copy is a new 0-d array filled from ``p`` (~15 us): ``np.array(p)[()]``, even with
     ``copy=True``, returns a record that shares ``p``'s memory (numpy 2.4), so every run of a model
     wrote its protrusion into the model's own record, and runs in concurrent threads read each
-    other's protrusion (tests/test_model_variants.py).
+    other's protrusion (tests/model/test_dynamics.py).
     """
     buf = np.empty((), p.dtype)
     buf[()] = p

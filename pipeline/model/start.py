@@ -16,7 +16,7 @@ adhesion basin. ``solver.start`` (:data:`STARTS`):
   branch and a start before it one continuation step from the branch's state below it;
 * ``"nominal"``: the nominal attitude (the model before the start state was part of it).
 
-Where one steady state exists the start decides the transient only (tests/test_start.py: static,
+Where one steady state exists the start decides the transient only (tests/model/test_start.py: static,
 nominal and previous-heater-step starts agree to 1e-6 nm at 5 and 11 nm); between the take-off and
 the fold of the adhesion hysteresis it decides which state a run reaches.
 

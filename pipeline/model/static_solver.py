@@ -14,8 +14,8 @@ state, the stiffness ``K = -dR/dy``, convergence, stability, iterations and the 
 Two details differ in arithmetic only: the 2x2 linear solve is written out (Gaussian elimination
 with partial pivoting, the LAPACK ``getrf``/``getrs`` steps), and stability is read from the trace
 and determinant of ``K`` (both eigenvalues of a real 2x2 matrix have positive real parts exactly when
-``tr K > 0`` and ``det K > 0``) instead of from its eigenvalues. tests/test_start.py checks that the
-compiled and the Python solves agree to the Newton tolerance.
+``tr K > 0`` and ``det K > 0``) instead of from its eigenvalues. tests/model/test_static_solver.py and
+tests/model/test_start.py check that the compiled and the Python solves agree to the Newton tolerance.
 
 The slots follow the kernel's convention (:data:`pipeline.model.dynamics.SLOTS`, last, one by one;
 the parameters and the gap-power record as one-element arrays).

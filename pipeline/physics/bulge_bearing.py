@@ -161,7 +161,7 @@ def rough_ph_lift(g, delta: float, p_pad: float, a: float, b: float, roughness: 
     (:meth:`pipeline.physics.gas_flow.RoughGap.couette_gap`), and ``F = p_pad pi a b int_0^1 [(1 - alpha(h)) c(h_pad) / c(h(u)) - 1] du`` with the closed fraction
     ``alpha`` (docs/model.md, section "Rough-gap bulge bearing"). Gauss-Legendre quadrature in
     ``s = sqrt(1 - u)`` (ellipsoid; ``u`` for the paraboloid) with ``nodes`` points. The limit a rough
-    Reynolds solve tends to as the bearing number grows (tests/test_bulge_rough.py).
+    Reynolds solve tends to as the bearing number grows (tests/scenarios/test_model_rough_bulge.py).
     """
     x, w = np.polynomial.legendre.leggauss(nodes)
     t, w = 0.5 * (x + 1.0), 0.5 * w  # on [0, 1]

@@ -26,7 +26,7 @@ substitution ``w = (b - a) u^2`` removes the ``w^1.5`` branch point at ``w = 0``
 Lennard-Jones range, whose law has a pole just ``eps`` beyond its upper end, is split into
 sub-ranges graded geometrically towards that end. The integrands are then analytic on every
 panel, well away from their singularities, and Gauss-Legendre converges exponentially;
-``tests/test_isbl.py`` checks the default against adaptive ``scipy.integrate.quad`` and the closed
+``tests/physics/test_isbl.py`` checks the default against adaptive ``scipy.integrate.quad`` and the closed
 forms, and that doubling the nodes changes nothing at the 1e-8 level. Integrals of a constant law against the
 Gaussian (meniscus adhesion, summit fractions) use the closed form (``scipy.special.ndtr``).
 

@@ -32,7 +32,7 @@ from pipeline.variables import declared
 
 from cf_check import cf_report
 
-AFM = Path(__file__).parent / "data" / "afm"
+AFM = Path(__file__).resolve().parents[1] / "data" / "afm"
 #: zeta(1/2) and Dirichlet beta(1/2) (Glasser & Zucker 1980): the square-lattice sum of 1/r.
 ZETA_HALF, BETA_HALF = -1.4603545088095868, 0.6676914571896092
 LATTICE = -4.0 * ZETA_HALF * BETA_HALF / np.pi  # = 1.2415: w - w_det = LATTICE P / (E' lambda)

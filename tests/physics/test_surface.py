@@ -1,7 +1,7 @@
 """Tests of pipeline.physics.surface against surfaces whose statistics are known exactly.
 
 The maps are SurfaceTopography topographies, taken to numbers by :mod:`pipeline.model.afm_scan`
-(``profile_moments``, ``summarise``); reading AFM files is tested in tests/test_afm_scan.py.
+(``profile_moments``, ``summarise``); reading AFM files is tested in tests/model/test_afm_scan.py.
 
 Analytic cases: sinusoids (moments in closed form, also for the finite-difference stencils), a
 paraboloid (one summit of known curvature), an egg-crate of two sinusoids (summit density and curvature

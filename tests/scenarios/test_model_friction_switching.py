@@ -21,7 +21,7 @@ from pipeline.model import assembly, kernel_inputs, outcomes, running
 from pipeline.model.interface_tables import build_tables, interface_parameters, roughness_statistics
 from pipeline.model.state import SWITCHES, THETA_RATE, WINDOW_SWITCHES, Z_RATE
 from pipeline.physics import isbl
-from pipeline.physics.friction import FRICTION_SWITCHING, friction_parts, lubricant_shear_stress
+from pipeline.physics.friction import FRICTION_SWITCHING, lubricant_shear_stress
 
 NM = 1e-9
 K = 0.978  # the paper's calibrated contact probability, the two-population scene's k (touchdown.k_choice)
@@ -31,21 +31,6 @@ IDENTIFIED = "configs/paper-2009-identified.toml"
 
 # ---------------------------------------------------------------------------------------------
 # the split of the tables and the scene's rules
-
-def test_friction_parts_split_or_sum_the_lubricant_shear():
-    solid = np.array([0.0, 1.0e6, 3.0e8])
-    lub = np.array([2.0e6, 0.5e6, 0.1e6])
-    switched, always = friction_parts("criterion", solid, lub)
-    np.testing.assert_array_equal(switched, solid + lub)  # (what build_model summed before the option)
-    assert always is None
-    switched, always = friction_parts("continuous", solid, lub)
-    np.testing.assert_array_equal(switched, solid)
-    np.testing.assert_array_equal(always, lub)
-    for how in FRICTION_SWITCHING:  # without the lubricant term both are the switched solid friction
-        switched, always = friction_parts(how, solid, None)
-        assert switched is solid and always is None
-    with pytest.raises(ValueError, match="contact.friction_switching = 'sometimes'"):
-        friction_parts("sometimes", solid, lub)
 
 
 def test_scene_key_default_and_rules(write_scene, repo_root):

@@ -118,25 +118,3 @@ def test_an_unknown_compiled_form_is_refused(monkeypatch):
     monkeypatch.setitem(ab.TFC_STIFFENING, "bogus", ab.TfcLaw(constant_lift, closed_form="bogus"))
     with pytest.raises(ValueError, match="air_bearing.tfc_stiffening = 'bogus': no compiled form 'bogus'"):
         assembly.build_model(make_scene(["air_bearing"], tfc_stiffening="bogus"), None, None, None)
-
-
-def test_touched_is_the_regime_and_calibration_rule():
-    # A flying run does not touch; the same run with k sigma above its exact minimum separation does,
-    # although no output sample is in contact (there is no contact effect): the rule reads the exact minimum.
-    scene = make_scene(["air_bearing", "pitch", "dmw"])
-    model = assembly.build_model(scene, None, record(scene), None)
-    run = running.run_model(model, 5 * NM)
-    lo = run.d_extremes[0]
-    assert not outcomes.touched(run) and not run.contact.any()
-    above = replace(run, model=replace(model, k=1.0, sigma=lo + 1e-3 * NM))
-    assert above.model.k_sigma > lo and outcomes.touched(above)
-
-
-def test_with_values_copies_the_record():
-    """with_values copies: the model's record is unchanged by a run's protrusion (it shared the record
-    before, so runs of one model in concurrent threads read each other's protrusion)."""
-    base = dyn.params(delta=1e-9, A_n=2e-12)
-    q = dyn.with_values(base, delta=5e-9)
-    assert base["delta"] == 1e-9 and q["delta"] == 5e-9
-    r = dyn.with_values(base, delta=7e-9)
-    assert q["delta"] == 5e-9 and r["delta"] == 7e-9

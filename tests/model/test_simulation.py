@@ -22,7 +22,7 @@ from pipeline.units import NM
 from pipeline.model import state as st
 from slider_scenes import build, make_scene
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SHORT = {"duration_ms": 0.3, "transient_ms": 0.1}
 ATOL_NM = 1e-4  # the scene's solver.atol_nm: the integrator's length tolerance
 

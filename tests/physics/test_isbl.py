@@ -137,7 +137,7 @@ def _ep_interface():
 
 def _paper_interface():
     from pipeline.config.scene import load_scene
-    scene = load_scene(Path(__file__).resolve().parent.parent / "configs" / "paper-2009.toml")
+    scene = load_scene(Path(__file__).resolve().parents[2] / "configs" / "paper-2009.toml")
     return interface_parameters(scene, roughness_statistics(scene))
 
 

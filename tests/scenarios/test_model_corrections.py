@@ -17,7 +17,6 @@ from pipeline.model import assembly, kernel_inputs, outcomes, running
 from pipeline.physics import air_bearing as ab
 from pipeline.physics import microwaviness as pdmw
 from pipeline.physics import friction
-from pipeline.physics.fhm import FHM_MEASURES, fhm
 from pipeline.config.scene import SceneError, load_scene, scene_from_dict
 from pipeline.model.interface_tables import build_tables, roughness_statistics
 from pipeline.model import scene_inputs
@@ -91,7 +90,7 @@ def test_flying_scene_datum_without_interface_tables(paper):
     model = assembly.build_model(flying, None, None, None)
     assert model.p.y_s == pytest.approx(0.691e-9, abs=1e-12)
     assert model.p.y_s == roughness_statistics(paper)["y_s"]  # what interface.nc is made from
-    scan = Path(__file__).parent / "data" / "afm" / "di-3.di"
+    scan = Path(__file__).resolve().parents[1] / "data" / "afm" / "di-3.di"
     afm = flying.replace(roughness={"afm": [str(scan)]})
     with pytest.raises(ValueError, match="interface.nc"):
         assembly.build_model(afm, None, None, None)
@@ -249,18 +248,6 @@ def test_friction_coefficient_law_gives_its_mu(paper):
         paper.replace(contact={"friction_law": "coulomb"})
     with pytest.raises(ValueError, match="unknown"):
         friction.friction_stress_table("coulomb", np.ones(2), np.ones(2))
-
-
-def test_fhm_measures(paper):
-    t = np.linspace(0.0, 1.0, 100001)
-    d = 1 * NM + 0.2 * NM * np.sin(2 * np.pi * 7 * t)
-    assert fhm(d, 11 * NM, "peak-to-peak") == pytest.approx(100 * 0.4 / 11, rel=1e-6)
-    assert fhm(d, 11 * NM, "3std") == pytest.approx(100 * 3 * 0.2 / np.sqrt(2) / 11, rel=1e-4)
-    assert set(FHM_MEASURES) == {"peak-to-peak", "3std"}
-    with pytest.raises(ValueError, match="peak-to-peak"):
-        fhm(d, 11 * NM, "rms")
-    with pytest.raises(SceneError, match="'peak-to-peak', '3std'"):
-        paper.replace(solver={"fhm_measure": "rms"})
 
 
 def test_scene_defaults_are_the_corrected_paper_values():

@@ -1,5 +1,6 @@
-"""Single-summit laws: Hertz / Kogut-Etsion contact (KE02), Lennard-Jones / meniscus adhesion,
-shear-strength friction (docs/model.md, section "Single asperity")."""
+"""Single-summit contact (pipeline.physics.asperity): Hertz / Kogut-Etsion contact (KE02) against hand values,
+its regime jumps and monotonicity (docs/model.md, section "Single asperity"). The single-summit adhesion and
+friction laws are tested in tests/physics/test_adhesion.py and tests/physics/test_friction.py."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ import warnings
 import numpy as np
 import pytest
 
-from pipeline.physics import adhesion, asperity, friction
+from pipeline.physics import asperity
 
 # Hand-computed case: R = 1 um, E' = 100 GPa, H = 2 GPa, nu = 0.3 (K = 0.454 + 0.41*0.3 = 0.577)
 R, E, H, NU = 1e-6, 100e9, 2e9, 0.3
@@ -94,43 +95,3 @@ def test_vectorised_shapes():
     w = np.linspace(-1e-9, 1e-7, 12).reshape(3, 4)
     assert asperity.contact_load(w, R, E, H, NU).shape == (3, 4)
     assert asperity.contact_area(w, R, E, H, NU).shape == (3, 4)
-
-
-# --- adhesion -------------------------------------------------------------------------------
-
-DG, EPS = 0.106, 0.3e-9
-
-
-def test_meniscus_force_hand_value():
-    # 2 pi R dgamma = 2 pi * 1e-6 * 0.106 = 6.660176e-7 N
-    assert adhesion.meniscus_force(R, DG) == pytest.approx(6.660176e-7, rel=1e-6)
-
-
-def test_lennard_jones_joins_meniscus_at_eps():
-    # (8/3) pi dgamma R (1 - 1/4) = 2 pi R dgamma at s = eps (docs/model.md, section "Single asperity": "joins continuously")
-    assert adhesion.lennard_jones_force(EPS, R, DG, EPS) == pytest.approx(
-        adhesion.meniscus_force(R, DG), rel=1e-14)
-
-
-def test_lennard_jones_hand_value_and_bound():
-    # s = 2 eps: (8/3) pi 0.106 * 1e-6 * (1/4 - 1/1024) = 8.880236e-7 * 0.2490234 = 2.211387e-7 N
-    assert adhesion.lennard_jones_force(2 * EPS, R, DG, EPS) == pytest.approx(
-        8 / 3 * np.pi * DG * R * (0.25 - 0.25 / 256), rel=1e-14)
-    assert adhesion.lennard_jones_force(2 * EPS, R, DG, EPS) == pytest.approx(2.211387e-7, rel=1e-6)
-    s = EPS * np.logspace(0, 3, 200)
-    F = adhesion.lennard_jones_force(s, R, DG, EPS)
-    assert np.all(F <= adhesion.meniscus_force(R, DG) * (1 + 1e-14))
-    assert np.all(np.diff(F) < 0)          # decays monotonically beyond s = eps
-    # gaps below eps are clamped (no s^-8 overflow)
-    assert adhesion.lennard_jones_force(0.0, R, DG, EPS) == pytest.approx(adhesion.meniscus_force(R, DG))
-
-
-# --- friction -------------------------------------------------------------------------------
-
-def test_shear_strength_and_friction_force():
-    # tau_y = H / (2.8 sqrt 3) = 2e9 / 4.849742 = 4.123930e8 Pa (docs/model.md, section "Single asperity")
-    assert friction.shear_strength(H) == pytest.approx(4.123930e8, rel=1e-6)
-    A = np.array([0.0, 1e-15])
-    np.testing.assert_allclose(friction.friction_force(A, H), [0.0, 4.123930e8 * 1e-15], rtol=1e-6)
-    with pytest.raises(ValueError, match="friction law"):
-        friction.friction_force(A, H, law="coulomb")

@@ -1,87 +1,14 @@
-"""Scene files: the paper scene, --set overrides, and one test per class of validation error.
-
-Every error must be a SceneError whose message names the file, the key and what was expected
-(docs/cli.md, "Scenes": "validated on load with a clear error for every bad field").
-"""
+"""Validating a scene (pipeline.config.validation): one test per class of error, each a SceneError whose
+message names the file, the ``section.key`` and what was expected (docs/cli.md, "Scenes": "validated on
+load with a clear error for every bad field"); a disabled effect's inputs are not required; ``replace``
+validates again and equals the same ``--set`` override."""
 
 from __future__ import annotations
 
-import re
-
 import pytest
 
-from pipeline.config.scene import EFFECTS, SceneError, load_scene, parse_override
+from pipeline.config.scene import SceneError, load_scene
 
-
-# --------------------------------------------------------------------------------------------
-# The paper scene
-# --------------------------------------------------------------------------------------------
-
-def test_paper_scene_loads(paper_scene, paper_config):
-    s = paper_scene
-    assert s.path == paper_config
-    assert s.name == "paper-2009"
-    assert s.effects == frozenset(EFFECTS)
-    # Values of docs/model.md, section "Parameters" / configs/paper-2009.toml
-    assert s["air_bearing"]["flying_height_nm"] == 11.0
-    assert s["tfc"]["half_length_um"] == 3.0 and s["tfc"]["half_width_um"] == 25.0
-    assert s["roughness"]["sigma_nm"] == 0.52
-    assert s["lubricant"]["thickness_nm"] == 0.75
-    assert s["materials"]["plasticity_index"] == 0.52
-    assert s["materials"]["hardness_gpa"] is None          # derived from psi (docs/model.md, section "Parameters")
-    assert s["contact"]["k"] is None                       # calibrated, not given
-    assert s["sweep"]["protrusion_nm"] == {"start": 0.0, "stop": 15.0, "step": 0.2}
-    # every schema key is filled in (defaults)
-    assert s["solver"]["quadrature_nodes"] == 24
-    assert re.fullmatch(r"[0-9a-f]{64}", s.hash)
-
-
-def test_hash_is_deterministic(paper_config):
-    assert load_scene(paper_config).hash == load_scene(paper_config).hash
-
-
-def test_set_override_changes_value_and_hash(paper_scene, paper_config):
-    s = load_scene(paper_config, ["tfc.protrusion_nm=9.0"])
-    assert s["tfc"]["protrusion_nm"] == 9.0
-    assert paper_scene["tfc"]["protrusion_nm"] == 11.0
-    assert s.hash != paper_scene.hash
-    assert s.overrides == ["tfc.protrusion_nm=9.0"]
-    # same override, same identity
-    assert load_scene(paper_config, ["tfc.protrusion_nm=9.0"]).hash == s.hash
-    # an override that restates the file's value changes nothing in the configuration
-    assert load_scene(paper_config, ["tfc.protrusion_nm=11.0"]).hash == paper_scene.hash
-
-
-def test_set_override_list_and_integer(paper_config):
-    s = load_scene(paper_config, ['scene.effects=["air_bearing", "contact"]', "solver.quadrature_nodes=48"])
-    assert s.effects == {"air_bearing", "contact"}
-    assert s["solver"]["quadrature_nodes"] == 48
-
-
-def test_set_override_is_validated(paper_config):
-    with pytest.raises(SceneError) as exc:
-        load_scene(paper_config, ["tfc.protrusion_nm=-3"])
-    msg = str(exc.value)
-    # blamed on the --set option that set it, not on the (valid) file
-    assert msg.startswith("--set tfc.protrusion_nm=-3: tfc.protrusion_nm") and ">= 0" in msg
-    assert str(paper_config) not in msg
-
-
-def test_parse_override_malformed():
-    with pytest.raises(SceneError, match="section.key=value"):
-        parse_override("protrusion_nm=9")
-
-
-def test_minimal_scene_takes_name_from_file(write_scene):
-    s = load_scene(write_scene("[tfc]\nprotrusion_nm = 5\n", name="tiny.toml"))
-    assert s.name == "tiny"
-    assert s["tfc"]["protrusion_nm"] == 5.0 and isinstance(s["tfc"]["protrusion_nm"], float)
-    assert s["air_bearing"]["flying_height_nm"] == 11.0
-
-
-# --------------------------------------------------------------------------------------------
-# One test per class of error: the message names the file, the key and what was expected
-# --------------------------------------------------------------------------------------------
 
 def _error(path, overrides=()):
     with pytest.raises(SceneError) as exc:
@@ -166,25 +93,6 @@ def test_dmw_record_not_required_without_dmw_effect(write_scene):
     # the README: a disabled effect's inputs are not required
     path = write_scene('[scene]\neffects = ["air_bearing"]\n[dmw]\nsource = "missing.csv"\n')
     assert load_scene(path).effects == {"air_bearing"}
-
-
-def test_existing_dmw_record_is_resolved(write_scene, tmp_path):
-    (tmp_path / "rec.csv").write_text("t,x\n0,0\n")
-    s = load_scene(write_scene('[dmw]\nsource = "rec.csv"\n'))
-    assert s["dmw"]["source"] == str((tmp_path / "rec.csv").resolve())
-
-
-def test_invalid_toml(write_scene):
-    path = write_scene("[tfc\nprotrusion_nm = 1\n")
-    msg = _error(path)
-    assert str(path) in msg
-    assert "not valid TOML" in msg and "line 1" in msg
-
-
-def test_missing_scene_file(tmp_path):
-    path = tmp_path / "nothere.toml"
-    msg = _error(path)
-    assert str(path) in msg and "scene file does not exist" in msg
 
 
 @pytest.mark.parametrize("grid, expected", [

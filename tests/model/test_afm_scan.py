@@ -14,7 +14,7 @@ from SurfaceTopography import open_topography
 from pipeline.model import afm_scan
 from pipeline.physics import surface as sf
 
-AFM = Path(__file__).resolve().parent / "data" / "afm"  # real scans, kept in the repository
+AFM = Path(__file__).resolve().parents[1] / "data" / "afm"  # real scans, kept in the repository
 
 
 # ---------------------------------------------------------------------------------------------------

@@ -432,3 +432,13 @@ def test_compiled_functions_take_the_slots_in_one_order():
         assert tuple(names[-len(dyn.SLOTS):]) == dyn.SLOTS, fn.py_func.__name__
     assert dyn.SLOTS == ("dmw", "contact", "adhesion", "friction", "tfc", "pitch", "rear_law", "gap_power",
                          "meniscus")
+
+
+def test_with_values_copies_the_record():
+    """with_values copies: the model's record is unchanged by a run's protrusion (it shared the record
+    before, so runs of one model in concurrent threads read each other's protrusion)."""
+    base = dyn.params(delta=1e-9, A_n=2e-12)
+    q = dyn.with_values(base, delta=5e-9)
+    assert base["delta"] == 1e-9 and q["delta"] == 5e-9
+    r = dyn.with_values(base, delta=7e-9)
+    assert q["delta"] == 5e-9 and r["delta"] == 7e-9

@@ -1,10 +1,11 @@
 """Two named deviations from the paper (docs/model.md, section "Deviations", items 18-19).
 
 (a) ``contact.area_model``: the interface stresses summed over the bulge's gap field,
-``F(d) = 2 pi a b int_0^1 p(d + delta u) (1 - u) du`` (:func:`pipeline.physics.geometry.ellipsoid_force`,
-:func:`~pipeline.physics.geometry.ellipsoid_table_integral`), checked against the two-dimensional
-footprint integral, closed forms (a cubic, an exponential, a step law: the flat section) and the limit
-``delta -> 0``; the model's per-protrusion tables feed the kernel and the histories alike.
+``F(d) = 2 pi a b int_0^1 p(d + delta u) (1 - u) du``: the model's per-protrusion tables feed the kernel and
+the histories alike, against the closed form of exponential laws. The integral itself
+(:func:`pipeline.physics.geometry.ellipsoid_force`, :func:`~pipeline.physics.geometry.ellipsoid_table_integral`)
+against the footprint integral, closed forms and the limit ``delta -> 0`` is tested in
+tests/physics/test_geometry.py.
 (b) ``slider.friction_arm``: the friction moment's arm ``T/2`` or ``T``.
 
 The interface is a synthetic one (exponential laws) written as the interface stage writes it; scenes
@@ -16,7 +17,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import xarray as xr
-from scipy.integrate import dblquad
 
 from pipeline.config.scene import SceneError, scene_from_dict
 from pipeline.model import dynamics as dyn
@@ -38,107 +38,7 @@ def closed_exponential(d: np.ndarray, delta: float, length: float) -> np.ndarray
     return np.exp(-np.asarray(d) / length) * (k - (-np.expm1(-k))) / k**2
 
 
-def table(values: np.ndarray, order: int = 3) -> np.ndarray:
-    return pw.piecewise_coefficients(values, H, order)
-
-
 GRID = np.arange(-3.0, 25.0 + 1e-9, 0.05) * NM
-
-
-# ------------------------------------------------------------------------------------------------
-# (a) the integral
-
-
-def test_one_dimensional_form_is_the_footprint_integral():
-    # the change of variables of ellipsoid_force's docstring against the plain double integral over the
-    # elliptical footprint of p(d + h(x, y)), h = delta (1 - sqrt(1 - (x/a)^2 - (y/b)^2))
-    delta, d = 7.0 * NM, 0.3 * NM
-
-    def law(gap):
-        return 50 * MPA * np.exp(-gap / L_C) + 3 * MPA / (1 + (gap / NM) ** 2)
-
-    def integrand(Y, X):  # on the unit disk, X = x/a, Y = y/b
-        return law(d + delta * (1 - np.sqrt(max(0.0, 1 - X * X - Y * Y))))
-
-    plain, err = dblquad(integrand, -1, 1, lambda X: -np.sqrt(1 - X * X), lambda X: np.sqrt(1 - X * X),
-                         epsabs=0, epsrel=1e-11)
-    plain *= A * B
-    assert g.ellipsoid_force(law, d, delta, A, B) == pytest.approx(plain, rel=1e-9)
-
-
-def test_table_integral_is_exact_for_a_cubic():
-    # a cubic law is its own not-a-knot spline: the integral of the table is the closed form
-    # sum_k c_k(d) / ((k + 1)(k + 2)), c_k(d) the coefficients of p(d + delta u) in u
-    coef = np.array([3.0, 2.0, -0.5, 0.1])  # p(x) = sum coef[j] (x/nm)^j [Pa]
-    delta = 7.3 * NM
-    I = g.ellipsoid_table_integral(table(np.polynomial.polynomial.polyval(GRID / NM, coef)), H, delta)
-    inside = GRID + delta <= GRID[-1]
-    for i in np.nonzero(inside)[0][::37]:
-        shifted = np.polynomial.Polynomial([GRID[i] / NM, delta / NM])  # x/nm as a polynomial in u
-        in_u = np.polynomial.Polynomial(coef)(shifted).coef
-        exact = sum(c / ((k + 1) * (k + 2)) for k, c in enumerate(in_u))
-        assert I[i] == pytest.approx(exact, rel=1e-12, abs=1e-12)
-
-
-@pytest.mark.parametrize("delta_nm", [0.03, 1.0, 11.0, 11.0000001])
-def test_exponential_law_converges_to_its_closed_form(delta_nm):
-    # p = P exp(-x/L): the integral of its spline table converges to the closed form as the spline does
-    # (halving the step divides the error by 5-25 over the separations the dynamics visits); partial
-    # pieces (delta not a multiple of the step) included
-    delta = delta_nm * NM
-    errors = []
-    for h in (0.1 * NM, 0.05 * NM, 0.025 * NM):
-        x = np.arange(-3.0 * NM, 20.0 * NM + h / 2, h)
-        I = g.ellipsoid_table_integral(pw.piecewise_coefficients(np.exp(-x / L_C), h, 3), h, delta)
-        inside = x + delta <= x[-1]
-        rel = np.abs(I[inside] / closed_exponential(x[inside], delta, L_C) - 1)
-        assert np.max(rel) < 5e-5  # (the largest at the ends of the table: the not-a-knot spline)
-        errors.append(np.max(rel[(x[inside] >= -2 * NM) & (x[inside] <= 5 * NM)]))  # away from the ends
-    assert errors[1] < 5e-7
-    assert errors[0] / errors[1] > 4 and errors[1] / errors[2] > 4
-
-
-def test_flat_bulge_limit():
-    # delta -> 0: the whole footprint at the apex gap, F = pi a b p(d) (I = p/2), approached linearly
-    p = 50 * MPA * np.exp(-GRID / L_C)
-    c = table(p)
-    assert g.ellipsoid_table_integral(c, H, 0.0) == pytest.approx(p / 2, rel=1e-12)
-    for delta in (1e-3 * H, 1e-5 * H):
-        I = g.ellipsoid_table_integral(c, H, delta)
-        # first order: I = p/2 + delta p'/6 + ... with p' = -p/L
-        assert np.allclose(I[:-1] / (p[:-1] / 2) - 1, -delta / (3 * L_C), rtol=1e-3, atol=1e-12)
-    assert g.ellipsoid_force(lambda x: 50 * MPA * np.exp(-x / L_C), 0.2 * NM, 0.0, A, B) == pytest.approx(
-        np.pi * A * B * 50 * MPA * np.exp(-0.2 * NM / L_C), rel=1e-14)
-
-
-def test_step_law_gives_the_flat_section():
-    # p = P0 below d0, 0 above: F = P0 x (section of the ellipsoid at depth d0 - d) = P0 A_n(s_n = d0 - d).
-    # Tabulated with linear interpolation the step is a ramp over one piece [d0, d0 + h]: F lies between
-    # the sections at depths d0 - d and d0 + h - d
-    P0, d0, delta = 100 * MPA, 2.0 * NM, 11.0 * NM
-    c = table(np.where(GRID <= d0 + 1e-15, P0, 0.0), order=1)
-    F = 2 * np.pi * A * B * g.ellipsoid_table_integral(c, H, delta)
-    below = (GRID < d0 - 1e-15) & (GRID > d0 - 15 * NM)
-    lo = P0 * g.nominal_area(delta, A, B, d0 - GRID[below])
-    hi = P0 * g.nominal_area(delta, A, B, d0 + H - GRID[below])
-    assert np.all(lo <= F[below] * (1 + 1e-12)) and np.all(F[below] <= hi * (1 + 1e-12))
-    # ... and the ramp's integral is the mean of the two to second order in h
-    assert F[below] == pytest.approx((lo + hi) / 2, rel=2e-3)
-    # the step itself, integrated by the one-dimensional form in closed form: int_0^u* (1 - u) du
-    for d in (1.0 * NM, -5.0 * NM, -10 * NM):
-        u = min((d0 - d) / delta, 1.0)
-        assert 2 * np.pi * A * B * P0 * (u - u * u / 2) == pytest.approx(
-            P0 * g.nominal_area(delta, A, B, d0 - d), rel=1e-14)
-
-
-def test_nothing_is_taken_beyond_the_table():
-    # a constant table: held beyond its top it would give p/2 at every node; the integral stops at the
-    # top, and what it leaves out is table_truncation's p (1 - u_top)^2 / 2
-    P, delta = 7 * MPA, 4.0 * NM
-    I = g.ellipsoid_table_integral(table(np.full(GRID.size, P)), H, delta)
-    cut = g.table_truncation(P, GRID, delta)
-    assert np.allclose(I + cut, P / 2, rtol=1e-12)
-    assert np.all(cut[GRID + delta <= GRID[-1]] == 0) and cut[-1] == P / 2
 
 
 # ------------------------------------------------------------------------------------------------

@@ -1,0 +1,32 @@
+"""The interface parameters of a scene (pipeline.model.interface_tables; docs/model.md, section "Plasticity
+index"): the hardness derived from a fixed plasticity index, ``H = E'/psi sqrt(sigma_s/R)``,
+against the paper's numbers, with a warning when it is outside physical bounds."""
+
+from __future__ import annotations
+
+import math
+import warnings
+from pathlib import Path
+
+import pytest
+
+from pipeline.config.scene import load_scene
+from pipeline.model import interface_tables
+from pipeline.physics.material_bounds import PhysicsWarning
+
+PAPER = Path(__file__).resolve().parents[2] / "configs" / "paper-2009.toml"
+
+
+def test_hardness_derived_from_a_fixed_psi_outside_physical_bounds_warns():
+    """The paper's psi = 0.52 with the statistics of the di-5 AFM scan (sigma_s = 1.53 nm,
+    R = 14.7 nm) implies H = E'/psi sqrt(sigma_s/R) = 58.5 GPa > 0.3 E'."""
+    scene = load_scene(PAPER)
+    stats = {"sigma": 1.6e-9, "sigma_s": 1.53e-9, "y_s": 0.5e-9, "R": 14.7e-9, "eta": 1e15, "alpha": 3.0}
+    with pytest.warns(PhysicsWarning, match=r"H = 58\.\d GPa \(derived from materials.plasticity_index = 0.52"):
+        p = interface_tables.interface_parameters(scene, stats)
+    assert p.E / 1e9 == pytest.approx(94.19, rel=1e-3)     # E' of the paper's materials (tests/physics/test_asperity_statistics.py)
+    assert p.H == pytest.approx(p.E / 0.52 * math.sqrt(1.53 / 14.7), rel=1e-12)
+    # the paper's own statistics give H = 1.68 GPa = 0.018 E': no warning
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", PhysicsWarning)
+        interface_tables.interface_parameters(scene, interface_tables.roughness_statistics(scene))
