@@ -27,7 +27,7 @@ from pipeline.physics import surface as sf
 from pipeline.config.scene import load_scene
 from pipeline.stages import sweep as sweep_stage
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 PAPER = ROOT / "configs" / "paper-2009.toml"
 
 #: A cheap scene: flying with DMW, three protrusions in two batches, 0.6 ms runs.

@@ -16,7 +16,7 @@ from pipeline.config.scene import load_scene
 from pipeline.stages import sweep
 from pipeline.variables import RUN
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 #: A quick scene: two protrusions, short runs, no DMW record, one history kept.
 QUICK = ['scene.effects=["air_bearing","pitch","contact"]', "solver.duration_ms=0.6", "solver.transient_ms=0.2",
          "sweep.protrusion_nm={start=9.5, stop=10.0, step=0.5}", "sweep.batch_size=2",

@@ -12,7 +12,7 @@ import pytest
 
 from pipeline.analyses import narrative
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
 #: ``[text](target)`` and ``![alt](target)``; the target up to the closing parenthesis or a title.
 LINK = re.compile(r"!?\[[^\]]*\]\(([^)\s]+)(?:\s+\"[^\"]*\")?\)")

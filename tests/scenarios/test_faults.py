@@ -21,7 +21,7 @@ from pipeline.config import limits
 from pipeline.config.scene import SceneError, load_scene
 from pipeline.io import DatasetError
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 PAPER = ROOT / "configs" / "paper-2009.toml"
 #: A flying scene of short runs (no contact law: no calibration, no interface tables).
 FLY = ['scene.effects=["air_bearing","pitch","dmw"]', "solver.duration_ms=0.6", "solver.transient_ms=0.2",
@@ -251,7 +251,7 @@ def _calls(scene, model, tmp: Path):
     return [
         (lambda: hdi.load_scene(123), SceneError, r"^load_scene: path = 123: expected the path of a scene file"),
         (lambda: hdi.load_scene(None), SceneError, r"^load_scene: path = None: expected the path"),
-        (lambda: hdi.load_scene(PAPER, b"contact.k=0.5"), SceneError,  # (one str is one override: test_api.py)
+        (lambda: hdi.load_scene(PAPER, b"contact.k=0.5"), SceneError,  # (one str is one override: core/test_api.py)
          r"^load_scene: overrides = b'contact.k=0.5': expected a list of \"section.key=value\" strings"),
         (lambda: hdi.load_scene(PAPER, [0.5]), SceneError, r"^load_scene: overrides\[0\] = 0.5: expected a"),
         (lambda: hdi.load_scene(PAPER, None), SceneError, r"^load_scene: overrides = None: expected a list"),

@@ -32,7 +32,7 @@ from pipeline.config.grid import roughness_sets
 from pipeline.config.scene import MAX_EXTENDS_DEPTH, SceneError, load_scene
 from pipeline.io import is_temporary, temporary_path, temporary_prefix
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 PAPER = ROOT / "configs" / "paper-2009.toml"
 
 

@@ -17,7 +17,7 @@ from pipeline.io import read_dataset
 from pipeline.model import dmw_record
 from pipeline.runner import build, ensure
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 PAPER = ROOT / "configs" / "paper-2009.toml"
 # short runs, k fixed (no calibration), a grid across this model's adhesive snap-in (~7.5 nm) and the
 # paper's checks; three realisations

@@ -12,7 +12,7 @@ from pipeline.config.scene import load_scene
 from pipeline.analyses import calibration
 from pipeline.runner import ensure
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 PAPER = ROOT / "configs" / "paper-2009.toml"
 SHORT = ["solver.duration_ms=1.0", "solver.transient_ms=0.3", "touchdown.curve_points=5"]
 # without adhesion there is no snap-in: a k exists that puts contact at 9.8 nm and not at 9.6 nm

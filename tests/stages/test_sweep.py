@@ -22,7 +22,7 @@ from pipeline.stages.simulate import model_inputs
 from pipeline.config.grid import roughness_label, roughness_sets, scene_label
 from pipeline.runner import ensure
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 PAPER = ROOT / "configs" / "paper-2009.toml"
 
 # A scene where the criterion decides touchdown: without adhesion there is no snap-in, so a k

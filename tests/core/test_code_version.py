@@ -11,7 +11,7 @@ from pipeline import code_version as cv
 from pipeline import runner
 from pipeline.config.scene import load_scene
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 PAPER = ROOT / "configs" / "paper-2009.toml"
 
 

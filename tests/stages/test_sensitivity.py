@@ -1,7 +1,7 @@
 """hdi sensitivity: Morris and Sobol indices through the evaluation path, checked on models with known indices.
 
 The stand-in batch function replaces the slider (the statistics are what is tested; the slider's own
-evaluation is tested in test_identify.py): the flying FHM is a linear model ``sum a_i x_i`` (exact
+evaluation is tested in stages/test_identify.py): the flying FHM is a linear model ``sum a_i x_i`` (exact
 indices: ``S1_i = ST_i = a_i^2 / sum a_j^2`` for equal ranges, Morris ``mu*_i = |a_i| (high - low)``,
 ``sigma_i = 0``) and the contact force at 11 nm is the Ishigami function (Ishigami & Homma 1990;
 ``S1 = (0.3139, 0.4424, 0)``, ``ST = (0.5576, 0.4424, 0.2437)``); the fourth parameter enters neither.

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1] / "pipeline"
+ROOT = Path(__file__).resolve().parents[2] / "pipeline"
 
 #: Rank of each module or package prefix (longest prefix wins).
 LAYERS = {

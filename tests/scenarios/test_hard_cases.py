@@ -1,4 +1,4 @@
-"""Hard cases of the whole chain (interface tables -> slider dynamics) beyond test_slider_hard_cases.py.
+"""Hard cases of the whole chain (interface tables -> slider dynamics) beyond scenarios/test_slider_hard_cases.py.
 
 Every case starts from configs/paper-2009.toml with contact.k = 0.445 and a short run (duration
 1.0 ms, transient 0.3 ms) at the scene's own solver (rtol 1e-6, atol 1e-4 nm, max_step 500 ns),

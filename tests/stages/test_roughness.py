@@ -21,7 +21,7 @@ from pipeline.model import roughness_statistics as rough_model
 from pipeline.stages import roughness as rg
 from pipeline.runner import ensure
 
-AFM = Path(__file__).resolve().parent / "data" / "afm"  # real scans, kept in the repository
+AFM = Path(__file__).resolve().parents[1] / "data" / "afm"  # real scans, kept in the repository
 
 
 def _open(path: Path) -> xr.Dataset:

@@ -2,8 +2,8 @@
 
 A scheduler address that is not a dask scheduler, SIGTERM, the umask of written datasets, interface
 coordinates ``.sel`` could not hit, unbounded sizes, and the smaller messages. (The time axis and the
-ensemble's CF-1.8 are in ``test_variables.py`` and ``test_ensemble.py``; the resumed sweep in
-``test_sweep.py``.)
+ensemble's CF-1.8 are in ``core/test_variables.py`` and ``scenarios/test_realisations.py``; the resumed sweep in
+``stages/test_sweep.py``.)
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ from pipeline.config.scene import load_scene
 from pipeline.cli_checks import OptionError, check_scheduler
 from pipeline.runner import ensure
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 PAPER = ROOT / "configs" / "paper-2009.toml"
 FLY = ['scene.effects=["air_bearing","pitch","dmw"]', "solver.duration_ms=0.6", "solver.transient_ms=0.2",
        "sweep.protrusion_nm={start=2.0, stop=2.4, step=0.2}", "sweep.batch_size=2"]

@@ -16,7 +16,7 @@ from pipeline.config.scene import load_scene
 from pipeline.stages import roughness, sweep
 from pipeline.runner import ensure
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 AFM = ROOT / "tests" / "data" / "afm"
 
 #: A small scene: 3 protrusions (one kept as history), short runs, fixed k (no calibration needed by
@@ -32,7 +32,7 @@ SMALL = [
 
 @pytest.fixture(scope="module")
 def datasets(tmp_path_factory) -> dict[str, Path]:
-    """Every dataset of a small run: stage -> file (accuracy.nc is checked in test_accuracy.py)."""
+    """Every dataset of a small run: stage -> file (accuracy.nc is checked in stages/test_accuracy.py)."""
     out = tmp_path_factory.mktemp("small")
     scene = load_scene(ROOT / "configs" / "paper-2009.toml", SMALL)
     paths = {

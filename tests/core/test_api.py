@@ -25,7 +25,7 @@ def flying(paper_config):
 
 def test_the_package_exports_the_api():
     assert {"load_scene", "build_model", "simulate", "open_dataset", "run_stage", "run"} <= set(dir(hdi))
-    # (the model's simulate behind the command line's checks of a protrusion: tests/test_faults.py)
+    # (the model's simulate behind the command line's checks of a protrusion: tests/scenarios/test_faults.py)
     assert hdi.simulate is __import__("pipeline.api", fromlist=["simulate"]).simulate
     with pytest.raises(AttributeError, match="no attribute 'nope'"):
         hdi.nope

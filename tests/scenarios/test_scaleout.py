@@ -19,7 +19,7 @@ import pytest
 
 from pipeline.io import read_dataset
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 PAPER = ROOT / "configs" / "paper-2009.toml"
 DASK = Path(sys.executable).with_name("dask")
 

@@ -13,7 +13,7 @@ from pipeline.model import dmw_record
 from pipeline.analyses import ensemble_rules as ensemble
 from pipeline.stages import sweep as sweep_stage
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 PAPER = ROOT / "configs" / "paper-2009.toml"
 # k fixed (no calibration); protrusions across the adhesive snap-in, where the realisations disagree
 SMALL = ["contact.k=0.978", "solver.duration_ms=0.6", "solver.transient_ms=0.2",

@@ -25,7 +25,7 @@ import xarray as xr
 from pipeline import cli, folder_lock, io, paths, runner
 from pipeline.config.scene import load_scene
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 PAPER = ROOT / "configs" / "paper-2009.toml"
 
 

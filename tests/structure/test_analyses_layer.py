@@ -14,7 +14,7 @@ from pipeline.config.scene import SCHEMA
 ABOVE = ("pipeline.stages", "pipeline.runner", "pipeline.cli", "pipeline.api")
 
 #: The one import edge not followed: the package's lazy re-export of the public API (imported on first
-#: use of one of its names, never when a module below imports the package; tests/test_layers.py
+#: use of one of its names, never when a module below imports the package; tests/structure/test_layers.py
 #: LAZY_ALLOWED, where a subprocess checks that ``import pipeline`` loads no submodule).
 LAZY_EDGES = {("pipeline", "pipeline.api")}
 

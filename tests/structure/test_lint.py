@@ -10,7 +10,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 #: What the project lints: the package, its tests, benchmarks and the docs' example scripts.
 LINTED = ("pipeline", "tests", "benchmarks", "docs")
 
