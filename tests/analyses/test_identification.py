@@ -1,5 +1,6 @@
-"""The profile intervals of the identification (pipeline/analyses/identification.py) on plain functions:
-a slice holds the other parameters at the optimum, a profile re-optimises them (issue 26, item 5)."""
+"""The identification (pipeline/analyses/identification.py) on plain functions: the profile intervals (a slice
+holds the other parameters at the optimum, a profile re-optimises them; issue 26, item 5), the interval's
+interpolated crossings, and the whole search on any evaluation callable (no stage, store or fan-out)."""
 
 from __future__ import annotations
 
@@ -107,3 +108,33 @@ def test_the_re_optimisation_spends_at_most_its_budget():
     ident = _identification(_quadratic)
     out = identification.identify(ident, PARAMS, np.zeros(2), _cfg(budget=3, points=13))
     assert out["profile_optimiser_evaluations"] == 6 and out["profile_optimised"].sum() == 2
+
+
+def test_interval_interpolates_crossings():
+    g = np.array([0.0, 1.0, 2.0, 3.0, 4.0])
+    m = np.array([3.0, 1.0, 0.0, 0.5, 2.0])
+    lo, hi = identification.interval(g, m, 1.0, 2.0)
+    assert lo == pytest.approx(1.0)
+    assert hi == pytest.approx(3.0 + 0.5 / 1.5)
+
+
+def test_the_identification_takes_any_evaluation_callable(paper_scene):
+    # the algorithm (analyses) on a plain function, no stage, store or fan-out: the FHM at 9 nm is ten times
+    # the first parameter, which the second does not touch; the target is 9 % within 1 %
+    scene = paper_scene.replace(identify={"targets": ["fhm_touchdown"]})
+    tlist = study.targets(scene)
+    params = [study.Parameter("dmw.rms_nm", 0.5, 1.5), study.Parameter("air_bearing.damping_ratio", 0.01, 0.2)]
+
+    def evaluate(points):
+        return [{"key": repr(tuple(x)), "params": list(map(float, x)), "protrusions": [9.0],
+                 "outputs": {"fhm_bv": [10.0 * float(x[0])]}} for x in points]
+
+    ident = identification.Identification(evaluate, tlist, 10.0)
+    out = identification.identify(ident, params, np.array([1.2, 0.05]),
+                                  {"generations": 5, "population": 5, "seed": 1, "profile_points": 5,
+                                   "profile_method": "optimised", "profile_evaluations": 40})
+    assert out["within"] and abs(10.0 * out["best"][0] - 9.0) <= 1.0
+    # the interval of the first parameter is where |10 x - 9| <= 1; the second is seen by no target
+    assert out["intervals"][0] == pytest.approx([0.8, 1.0], abs=1e-9)
+    assert np.isinf(out["gn_std"][1]) and np.all(np.isnan(out["correlation"][1]))
+    assert ident.roles[ident.keys[0]] == 0 and len(ident.records) == len(set(ident.keys))

@@ -2,7 +2,8 @@
 
 1. planted symbolic links inside a results folder (the lock, ``figures/``, ``.hdi/``, its run log, a
    dataset): refused in one line naming the link, the link's target untouched;
-2. a signal caught and lost inside a C library's error check: never an exit 0;
+2. a signal caught and lost inside a C library's error check: never an exit 0 (the interrupt checks
+   themselves: core/test_interrupts.py);
 3. forked figure workers outliving a killed ``hdi``;
 4. special files (a FIFO, ``/dev/zero``) as inputs, and file contents echoed in messages;
 5. a dataset another process holds open for writing: busy, never replaced;
@@ -171,43 +172,6 @@ def test_a_fifo_at_the_lock_name_is_refused_without_blocking(tmp_path):
                                             "lock file; remove it")
 
 
-# ------------------------------------------------------------------------------------ 2. signals
-def test_a_signal_swallowed_where_it_was_raised_is_raised_again_at_the_next_check():
-    from pipeline import interrupts
-    with interrupts.handling():
-        try:
-            os.kill(os.getpid(), signal.SIGTERM)
-            for _ in range(10_000):  # (the handler runs between two of these bytecodes)
-                pass
-        except BaseException:        # what a C library's error check did with it
-            pass
-        assert signal.getsignal(signal.SIGTERM) is interrupts._handler   # never left ignored
-        with pytest.raises(interrupts.Terminated):
-            interrupts.check()
-        assert interrupts.pending() == signal.SIGTERM
-        interrupts.answered()
-        interrupts.check()           # answered: nothing more to raise
-    assert signal.getsignal(signal.SIGTERM) is signal.SIG_DFL
-
-
-def test_a_second_signal_while_the_first_unwinds_does_not_cut_the_clean_up_short():
-    from pipeline import interrupts
-    cleaned = []
-    with interrupts.handling():
-        with pytest.raises(interrupts.Terminated):
-            try:
-                os.kill(os.getpid(), signal.SIGTERM)
-                for _ in range(10_000):
-                    pass
-            finally:
-                os.kill(os.getpid(), signal.SIGTERM)   # (a batch system's repeated cancel)
-                for _ in range(10_000):
-                    pass
-                cleaned.append(True)
-        assert cleaned == [True] and interrupts.pending() == signal.SIGTERM
-        interrupts.answered()
-
-
 #: ``hdi report`` on the datasets of tests/report_data.py with no upstream stage; SIGTERM delivered
 #: during the report's read of ``sweep.nc`` and swallowed there, as netCDF4's error check did.
 _SWALLOWED = """
@@ -295,7 +259,6 @@ def _kill_and_expect_no_worker(proc: subprocess.Popen, pids: Path, wait_s: float
                 os.kill(int(p.stem), signal.SIGKILL)
             except ProcessLookupError:
                 pass
-
 
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="the figure pool forks on Linux only")

@@ -1,7 +1,8 @@
 """What a new user trips over (issue 18): each test reproduces one probe that failed before.
 
-A scheduler address that is not a dask scheduler, SIGTERM, the umask of written datasets, interface
-coordinates ``.sel`` could not hit, unbounded sizes, and the smaller messages. (The time axis and the
+SIGTERM, the umask of written datasets, interface coordinates ``.sel`` could not hit, unbounded sizes, and
+the smaller messages. (A scheduler address that is not a dask scheduler: ``core/test_cli_checks.py``; the
+validity bits: ``core/test_validity.py``. The time axis and the
 ensemble's CF-1.8 are in ``core/test_variables.py`` and ``scenarios/test_realisations.py``; the resumed sweep in
 ``stages/test_sweep.py``.)
 """
@@ -10,12 +11,9 @@ from __future__ import annotations
 
 import os
 import signal
-import socket
 import subprocess
 import sys
-import threading
 import time
-from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path
 
 import numpy as np
@@ -24,96 +22,12 @@ import pytest
 from pipeline import cli, runner
 from pipeline.io import read_dataset, write_dataset
 from pipeline.config.scene import load_scene
-from pipeline.cli_checks import OptionError, check_scheduler
 from pipeline.runner import ensure
 
 ROOT = Path(__file__).resolve().parents[2]
 PAPER = ROOT / "configs" / "paper-2009.toml"
 FLY = ['scene.effects=["air_bearing","pitch","dmw"]', "solver.duration_ms=0.6", "solver.transient_ms=0.2",
        "sweep.protrusion_nm={start=2.0, stop=2.4, step=0.2}", "sweep.batch_size=2"]
-
-
-# ------------------------------------------------------------------------------ 2. --scheduler
-class _Quiet(BaseHTTPRequestHandler):
-    def do_GET(self):  # noqa: N802 (http.server's name)
-        self.send_response(200)
-        self.end_headers()
-        self.wfile.write(b"dashboard")
-
-    def log_message(self, *args):
-        pass
-
-
-@pytest.fixture
-def http_server():
-    """A plain HTTP server on loopback (what the dashboard port 8787 is)."""
-    server = ThreadingHTTPServer(("127.0.0.1", 0), _Quiet)
-    thread = threading.Thread(target=server.serve_forever, daemon=True)
-    thread.start()
-    yield f"tcp://127.0.0.1:{server.server_address[1]}"
-    server.shutdown()
-    server.server_close()
-
-
-@pytest.fixture
-def banner_server():
-    """A TCP service that speaks first with a banner (like SSH): dask read it as a frame length."""
-    srv = socket.create_server(("127.0.0.1", 0))
-    stop = threading.Event()
-
-    def serve():
-        srv.settimeout(0.2)
-        while not stop.is_set():
-            try:
-                conn, _ = srv.accept()
-            except socket.timeout:
-                continue
-            with conn:
-                conn.sendall(b"SSH-2.0-OpenSSH_9.6\r\n")
-                time.sleep(0.5)
-
-    thread = threading.Thread(target=serve, daemon=True)
-    thread.start()
-    yield f"tcp://127.0.0.1:{srv.getsockname()[1]}"
-    stop.set()
-    thread.join()
-    srv.close()
-
-
-def test_an_http_server_is_not_a_scheduler_in_one_line_within_the_timeout(http_server):
-    t0 = time.perf_counter()
-    with pytest.raises(OptionError, match=r"answers but is not a dask scheduler \(no dask handshake within "
-                                          r"1 s, as an HTTP server or dashboard does\)") as exc:
-        check_scheduler(http_server, timeout=1.0)
-    assert time.perf_counter() - t0 < 5 and "\n" not in str(exc.value)
-
-
-def test_a_service_sending_a_banner_is_not_a_scheduler(banner_server):
-    with pytest.raises(OptionError, match=r"not a dask scheduler \(it sent b'SSH-2.0-' instead of a dask handshake"):
-        check_scheduler(banner_server, timeout=1.0)
-
-
-def test_the_cli_says_so_in_one_line_and_writes_nothing(http_server, tmp_path, capsys):
-    args = ["sweep", str(PAPER), "--out", str(tmp_path / "out"), "--scheduler", http_server]
-    for s in FLY:
-        args += ["--set", s]
-    t0 = time.perf_counter()
-    assert cli.main(args) == 2
-    assert time.perf_counter() - t0 < 15  # (3 s handshake timeout; it hung for minutes)
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and err[0].startswith(f"hdi sweep: error: --scheduler {http_server}: ")
-    assert not (tmp_path / "out").exists()
-
-
-def test_a_scheduler_without_workers_is_reported_and_one_with_workers_passes():
-    from distributed import LocalCluster
-    with LocalCluster(n_workers=0, processes=False, protocol="tcp://", host="127.0.0.1",
-                      dashboard_address=None) as empty:
-        with pytest.raises(OptionError, match=r"the dask scheduler has no workers \(0.5 s waited\)"):
-            check_scheduler(empty.scheduler_address, timeout=3.0, worker_wait=0.5)
-    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, protocol="tcp://",
-                      host="127.0.0.1", dashboard_address=None) as cluster:
-        check_scheduler(cluster.scheduler_address, timeout=3.0, worker_wait=0.5)  # no error
 
 
 # ------------------------------------------------------------------------------ 5. the umask
@@ -305,27 +219,6 @@ def test_a_protrusion_far_beyond_the_flying_height_is_refused_even_with_yes(tmp_
     with pytest.raises(SceneError, match="sweep.protrusion_nm stop = 200 nm"):
         load_scene(PAPER, ["sweep.protrusion_nm={start=0.0, stop=200.0, step=0.2}"])
     load_scene(PAPER, ["tfc.protrusion_nm=111.0"])  # the limit itself is allowed
-
-
-
-# ------------------------------------------------------------------------------ 4. plausibility
-def test_validity_bits_of_a_run():
-    from pipeline.validity import Validity, check_run, describe
-    nm = 1e-9
-    ok = dict(fh0=11 * nm, arms=(3e-4, 4e-4), z=np.array([1.0, -2.0]) * nm, pitch=np.array([5e-6, -5e-6]),
-              d_min=-1 * nm, table_floor=-5 * nm, force=3e-3, load=7.9e-3)
-    assert check_run(**ok) == 0
-    # the rear pad: z - l_r theta = -2 nm - 4e-4 * 2.5e-5 = -12 nm, beyond FH0 = 11 nm
-    assert check_run(**{**ok, "pitch": np.array([0.0, 2.5e-5])}) == Validity.BEARING_RANGE
-    assert check_run(**{**ok, "pitch": np.array([0.0, 2.2e-5])}) == 0  # -10.8 nm
-    assert check_run(**{**ok, "d_min": -5.01 * nm}) == Validity.BELOW_TABLES
-    assert check_run(**{**ok, "d_min": -50 * nm, "table_floor": None}) == 0
-    assert check_run(**{**ok, "force": 0.8}) == Validity.FORCE_BEYOND_LOAD  # > 100 x 7.9 mN
-    assert check_run(**{**ok, "force": np.nan, "z": np.array([np.nan])}) == Validity.FORCE_BEYOND_LOAD | Validity.BEARING_RANGE
-    assert describe(np.array([0, np.nan, 0]), ["a", "b", "c"]) is None
-    line = describe(np.array([0, 1, 5, 1, 1]), ["a", "b", "c", "d", "e"], most=2)
-    assert line.startswith("4 of 5 scenes outside the model's validity b, c and 2 more: ")
-    assert "pitch" not in line and "interface forces beyond 100 x" in line and "flying height" in line
 
 
 def test_a_slider_shaken_beyond_its_flying_height_is_flagged_and_the_report_refuses_it(tmp_path, capsys):

@@ -1,4 +1,6 @@
-"""hdi identify: the twin experiment (targets made by the model itself), resuming, the written scene."""
+"""hdi identify: the twin experiment (targets made by the model itself), resuming, the written scene.
+(The study's parameters: analyses/test_study.py; the search on plain functions: analyses/test_identification.py;
+the evaluation store and keys: core/test_evaluations.py.)"""
 
 from __future__ import annotations
 
@@ -9,8 +11,8 @@ import xarray as xr
 from pipeline import evaluations
 from pipeline.analyses import identification, study
 from pipeline.model import scene_inputs
-from pipeline.model.inputs import SimulationInputs, Source, cached
-from pipeline.config.scene import SceneError, load_scene
+from pipeline.model.inputs import cached
+from pipeline.config.scene import load_scene
 from pipeline.physics import paper
 from pipeline.runner import ensure
 import twin
@@ -111,22 +113,6 @@ def test_twin_experiment_recovers_the_true_parameters_within_the_reported_interv
     np.testing.assert_array_equal(ds2["objective"].values, ds["objective"].values)
 
 
-def test_bad_parameter_key_names_the_field(paper_scene):
-    with pytest.raises(SceneError, match=r"identify.parameters\[0\].key = 'dmw.rms_um'"):
-        study.parse_parameters([{"key": "dmw.rms_um", "low": 0, "high": 1}], "f.toml", "identify.parameters")
-    with pytest.raises(SceneError, match="low < high"):
-        study.parse_parameters([{"key": "dmw.rms_nm", "low": 1, "high": 0}], "f.toml", "identify.parameters")
-    with pytest.raises(SceneError, match="index into a list"):
-        study.parse_parameters([{"key": "air_bearing.frequencies_khz[2]", "low": 1, "high": 2}], "f", "p")
-
-
-def test_list_element_parameter_sets_only_that_element(paper_scene):
-    p = study.parse_parameters([{"key": "air_bearing.frequencies_khz[1]", "low": 200, "high": 400}], "f", "p")
-    sc = study.with_values(paper_scene, p, [350.0])
-    assert sc["air_bearing"]["frequencies_khz"] == [120.0, 350.0]
-    assert study.scene_value(sc, p[0]) == 350.0
-
-
 def test_two_sided_fallback_k(paper_scene):
     # docs/model.md, "Contact criterion": the paper's 32.8 % is two-sided: k = 0.978 (a study takes k without
     # a calibration)
@@ -134,60 +120,11 @@ def test_two_sided_fallback_k(paper_scene):
     assert k == pytest.approx(0.978, abs=1e-3) and "two-sided" in source
 
 
-def test_interval_interpolates_crossings():
-    g = np.array([0.0, 1.0, 2.0, 3.0, 4.0])
-    m = np.array([3.0, 1.0, 0.0, 0.5, 2.0])
-    lo, hi = identification.interval(g, m, 1.0, 2.0)
-    assert lo == pytest.approx(1.0)
-    assert hi == pytest.approx(3.0 + 0.5 / 1.5)
-
-
-def test_store_ignores_a_line_cut_short_by_a_kill(tmp_path):
-    path = tmp_path / "identify.evals.jsonl"
-    store = evaluations.EvaluationStore(path)
-    store.put([("a", {"params": [1.0], "outputs": {}}), ("b", {"params": [2.0], "outputs": {}})])
-    with open(path, "a") as fh:
-        fh.write('{"key": "c", "params": [3.')  # the process died mid-write
-    again = evaluations.EvaluationStore(path)
-    assert list(again.records) == ["a", "b"] and again["b"]["params"] == [2.0]
-    again.put([("c", {"params": [3.0], "outputs": {}})])  # the rerun computes it again and appends it
-    assert evaluations.EvaluationStore(path)["c"]["params"] == [3.0]
-    assert path.read_text().count("\n\n") == 0  # no empty lines from whole appends
-
-
-def test_base_key_follows_what_an_evaluation_reads(paper_scene):
-    inputs = SimulationInputs(Source("interface", key="interface-key"), Source("dmw", key="dmw-key"))
-    key = evaluations.base_key(paper_scene, inputs)
-    # settings of other stages and names do not change an evaluation
-    assert evaluations.base_key(paper_scene.replace(sweep={"damping_ratio": [0.05]}, identify={"population": 5},
-                                              scene={"description": "x"}), inputs) == key
-    # a simulation key does; so does an input made from other data (e.g. a rescanned AFM file)
-    assert evaluations.base_key(paper_scene.replace(solver={"duration_ms": 0.9}), inputs) != key
-    assert evaluations.base_key(paper_scene, SimulationInputs(Source("interface", key="other"), inputs.dmw)) != key
-
-
 def test_candidate_inputs_are_cached_by_stage_key_alone():
     made = []
     first = cached("test", "key-1", lambda: made.append(1) or "tables")
     again = cached("test", "key-1", lambda: made.append(2) or "other")  # same key: not made again
     assert first == again == "tables" and made == [1]
-
-
-def test_parameter_units_are_cf_for_every_numeric_scene_key():
-    import cf_units  # (a declared test dependency: pyproject.toml's `test` extra)
-    from pipeline.config.scene import SCHEMA
-    for section, keys in SCHEMA.items():
-        for key, spec in keys.items():
-            if spec.kind in ("float", "floats"):
-                units = study.Parameter(f"{section}.{key}", 0.0, 1.0).units
-                cf_units.Unit(units)  # UDUNITS parses it
-    units = {name: study.Parameter(name, 0.0, 1.0).units for name in
-             ("lubricant.work_of_adhesion_j_m2", "contact.damping_n_s_m", "roughness.summit_density_per_um2",
-              "slider.density_kg_m3", "dmw.sample_rate_mhz", "contact.section_depth_sigma")}
-    assert units == {"lubricant.work_of_adhesion_j_m2": "J m-2", "contact.damping_n_s_m": "N s m-1",
-                     "roughness.summit_density_per_um2": "um-2", "slider.density_kg_m3": "kg m-3",
-                     "dmw.sample_rate_mhz": "MHz", "contact.section_depth_sigma": "1"}
-    assert study.Parameter("air_bearing.frequencies_khz[0]", 1.0, 2.0).var_name == "air_bearing__frequencies_khz_0"
 
 
 def test_a_profile_point_better_than_the_optimum_becomes_the_optimum(write_scene, paper_config, tmp_path):
@@ -354,28 +291,6 @@ def test_a_scene_whose_name_leaves_the_results_folder_is_refused(tmp_path, paper
     err = _fails(capsys, "dmw", name)
     assert "scene.name" in err and "not '.' or '..'" in err
     assert sorted(p.name for p in tmp_path.iterdir()) == [name]
-
-
-def test_the_identification_takes_any_evaluation_callable(paper_scene):
-    # the algorithm (analyses) on a plain function, no stage, store or fan-out: the FHM at 9 nm is ten times
-    # the first parameter, which the second does not touch; the target is 9 % within 1 %
-    scene = paper_scene.replace(identify={"targets": ["fhm_touchdown"]})
-    tlist = study.targets(scene)
-    params = [study.Parameter("dmw.rms_nm", 0.5, 1.5), study.Parameter("air_bearing.damping_ratio", 0.01, 0.2)]
-
-    def evaluate(points):
-        return [{"key": repr(tuple(x)), "params": list(map(float, x)), "protrusions": [9.0],
-                 "outputs": {"fhm_bv": [10.0 * float(x[0])]}} for x in points]
-
-    ident = identification.Identification(evaluate, tlist, 10.0)
-    out = identification.identify(ident, params, np.array([1.2, 0.05]),
-                                  {"generations": 5, "population": 5, "seed": 1, "profile_points": 5,
-                                   "profile_method": "optimised", "profile_evaluations": 40})
-    assert out["within"] and abs(10.0 * out["best"][0] - 9.0) <= 1.0
-    # the interval of the first parameter is where |10 x - 9| <= 1; the second is seen by no target
-    assert out["intervals"][0] == pytest.approx([0.8, 1.0], abs=1e-9)
-    assert np.isinf(out["gn_std"][1]) and np.all(np.isnan(out["correlation"][1]))
-    assert ident.roles[ident.keys[0]] == 0 and len(ident.records) == len(set(ident.keys))
 
 
 # ------------------------------------------- issue 34, 3: one best point, wherever the profiles found it
