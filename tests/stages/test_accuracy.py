@@ -130,13 +130,6 @@ def test_chosen_defaults_and_figure(result):
     assert fig.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
-def test_relative_error_definition():
-    nan, inf = np.nan, np.inf
-    err = knob_study.relative_error(np.array([1.1, 0.002, nan, nan, 1.0]), np.array([1.0, 0.0, nan, 2.0, nan]), 0.01)
-    np.testing.assert_allclose(err[:2], [0.1, 0.2])
-    assert np.isnan(err[2]) and err[3] == inf and err[4] == inf
-
-
 def test_accuracy_dataset_is_declared_and_cf_clean(result):
     """Every variable of accuracy.nc is declared in the variable schema with its units, and the CF-1.8
     compliance checker finds nothing (the knob settings, whose units differ per knob, name the variable
