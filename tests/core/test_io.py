@@ -90,7 +90,8 @@ def test_compression_follows_the_documented_sizes():
     (IsADirectoryError(errno.EISDIR, "Is a directory", "out/.tmp", None, "out/sweep.nc"),
      "out/sweep.nc: Is a directory; it is a folder where hdi writes a file: remove or rename it"),
     (OSError(errno.EACCES, "already says what to do; chmod it", "x.nc"), "x.nc: already says what to do; chmod it"),
-    (OSError(errno.EBADF, "Bad file descriptor"), "Bad file descriptor")])
+    (OSError(errno.EBADF, "Bad file descriptor"), "Bad file descriptor")],
+    ids=["full-disk", "folder-for-a-file", "own-advice", "no-path"])
 def test_an_os_error_is_one_line_with_the_path_and_what_to_do(exc, line):
     assert io.os_error_line(exc) == line
 
