@@ -30,7 +30,7 @@ export UV_PYTHON_DOWNLOADS := never
 export UV_COMPILE_BYTECODE := 1
 
 # The stages: one make target per module of pipeline/stages/ (the runner discovers the stages there and
-# each module is named after its stage, tests/test_registries.py): a new stage module is a new target
+# each module is named after its stage, tests/structure/test_registries.py): a new stage module is a new target
 STAGES := $(sort $(basename $(notdir $(filter-out %/__init__.py,$(wildcard pipeline/stages/*.py)))))
 
 .PHONY: setup run test test-fast test-slow bench sweep readme clean $(STAGES)

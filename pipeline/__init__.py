@@ -47,7 +47,7 @@ __all__ = [*API]
 def __getattr__(name: str):
     """A name of :data:`API`, from :mod:`pipeline.api` (imported now, on first use)."""
     if name in API:
-        from . import api  # (the one import of a layer above: tests/test_layers.py, UPWARD_ALLOWED)
+        from . import api  # (the one import of a layer above: tests/structure/test_layers.py, UPWARD_ALLOWED)
         return getattr(api, name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 

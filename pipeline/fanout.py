@@ -126,7 +126,7 @@ def split(items: Sequence[Any], scheduler: str | None = None, workers: int | Non
     """``items`` dealt round-robin into as many tasks as local workers (:func:`local_workers`), or as the
     cluster's threads (:func:`cluster_threads`) for a scheduler address, none empty: for work whose items
     share a set-up in a task (a model and its static starts). The split decides where items run, not
-    what they give (tests/test_fanout.py: a task's shared set-up gives each item what it gives alone)."""
+    what they give (tests/core/test_fanout.py: a task's shared set-up gives each item what it gives alone)."""
     local = scheduler is None or scheduler in LOCAL
     n = local_workers(workers, len(items)) if local else cluster_threads(scheduler)
     return [c for c in (tuple(items[i::n]) for i in range(n)) if c]

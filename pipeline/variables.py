@@ -10,7 +10,7 @@ produces it (absent without that effect), and for flag variables their values an
 Groups (:data:`GROUPS`) collect the variables of one kind; :data:`DATASETS` says which groups each
 dataset file may hold. Datasets (:mod:`pipeline.stages`), plots (:mod:`pipeline.analyses.plots`), the report's
 tables and the optimum finder (:mod:`pipeline.analyses.optimum`) read names, units and flags from here, and
-``tests/test_variables.py`` checks that every variable every stage writes is declared here with the
+``tests/core/test_variables.py`` checks that every variable every stage writes is declared here with the
 units it is written in.
 
 How the datasets meet CF-1.8 (:func:`pipeline.io.cf_encoding`, applied by :func:`pipeline.io.write_dataset`):

@@ -26,7 +26,7 @@ SI_NAMES = {("dmw", "sample_rate_hz"): "record_sample_rate"}
 class Group(Mapping):
     """One section in SI units (or, with an empty name, the scene as a group of sections): read-only,
     by attribute (``group.flying_height``) or item. Values are converted when read, from the scene's own
-    mapping, so a reader is seen reading exactly the keys it uses (tests/test_stage_reads.py)."""
+    mapping, so a reader is seen reading exactly the keys it uses (tests/structure/test_stage_reads.py)."""
 
     __slots__ = ("_section", "_values", "_convert")
 

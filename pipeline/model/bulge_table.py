@@ -142,7 +142,7 @@ def lift_at(ds: xr.Dataset, g, protrusion: float, g_min: float | None = None) ->
 
 #: The table's protrusion step [nm] and the protrusion it reaches at least [nm] (the ratio to the closed
 #: form is smooth in the protrusion: linear interpolation between rows 0.5 nm apart errs by < 1e-3,
-#: tests/test_bulge_stage.py).
+#: tests/stages/test_bulge.py).
 PROTRUSION_STEP_NM = 0.5
 PROTRUSION_STOP_NM = 15.0
 

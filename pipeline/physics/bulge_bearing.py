@@ -593,7 +593,7 @@ def table_lift(table: LiftTable, g, delta: float, g_min: float | None = None) ->
     protrusion); in the gap, a cubic Hermite interpolant of the row in ``ln g`` (held constant outside
     the table's gaps). Below ``g_min`` [m] (default: the table's smallest gap) the force is held and the
     stiffness is zero. The error of the protrusion interpolation is measured in
-    tests/test_bulge_stage.py (docs/model.md, section "Slip-corrected Reynolds equation").
+    tests/stages/test_bulge.py (docs/model.md, section "Slip-corrected Reynolds equation").
     """
     from scipy.interpolate import CubicHermiteSpline
 

@@ -1,0 +1,54 @@
+"""The plot panels of pipeline.analyses.plots on hand-made histories and sweeps: each draws on the axes it is given
+and returns them (the API's promise for composing figures), or on a new figure's without one, with its y label."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from pipeline.analyses import plots
+
+
+def _history(n=400):
+    t = np.arange(n) * 1.5e-6
+    c = (t > 2e-4).astype(float)
+    return xr.Dataset({"clearance": ("time", 0.5 - c + 0.1 * np.sin(t * 1e5), {"units": "nm"}),
+                       "in_contact": ("time", c), "contact_force": ("time", c * 1.5, {"units": "mN"}),
+                       "net_force": ("time", c - 1.0, {"units": "mN"})}, coords={"time": ("time", t)})
+
+
+def _sweep(realisations=0):
+    x = np.array([9.0, 9.5, 10.0])
+    if not realisations:
+        return xr.Dataset({"fhm_bv": ("protrusion", [12.0, 30.0, 25.0], {"units": "%"}),
+                           "regime": ("protrusion", [0, 1, 2])}, coords={"protrusion": x})
+    f = np.arange(x.size * realisations, dtype=float).reshape(x.size, realisations) + 1.0
+    return xr.Dataset({"fhm_bv": (("protrusion", "realisation"), f, {"units": "%"}),
+                       "fhm_bv_mean": ("protrusion", f.mean(1)), "fhm_bv_std": ("protrusion", f.std(1)),
+                       "touchdown_probability": ("protrusion", [0.0, 0.5, 1.0]),
+                       "bouncing_bv": (("protrusion", "realisation"), f),
+                       "bouncing_bv_spread": (("protrusion", "q"), np.stack([f.min(1), f.max(1)], 1)),
+                       "bouncing_bv_median": ("protrusion", np.median(f, 1)),
+                       "bv_exceedance_probability": ("protrusion", [0.0, 0.3, 1.0])},
+                      coords={"protrusion": x, "realisation": np.arange(realisations)})
+
+
+PANELS = [
+    (plots.plot_clearance, lambda: (_history(), 10.0, 2), {"transient_ms": 0.1}, "clearance [nm]"),
+    (plots.plot_forces, lambda: (_history(),), {}, "force [mN]"),
+    (plots.plot_fhm, lambda: (_sweep(),), {"touchdown_nm": 9.5}, "FHM / BV (peak-to-peak / FH0) [%]"),
+    (plots.plot_touchdown_probability, lambda: (_sweep(3),), {}, "touchdown probability [-]"),
+    (plots.plot_ensemble_fhm, lambda: (_sweep(3),), {}, "FHM / BV (peak-to-peak / FH0) [%]"),
+    (plots.plot_band, lambda: (_sweep(3),), {"band_nm": (9.5, 10.0)}, "bouncing BV (0 where flying) [%]"),
+    (plots.plot_band_probabilities, lambda: (_sweep(3),), {}, "probability / fraction [-]"),
+]
+
+
+@pytest.mark.parametrize("draw, args, kw, ylabel", PANELS, ids=lambda v: getattr(v, "__name__", ""))
+def test_a_panel_draws_on_the_axes_it_is_given_and_returns_them(draw, args, kw, ylabel):
+    fig, (mine, other) = plots.new_figure(2, 1)
+    assert draw(*args(), ax=mine, **kw) is mine
+    assert mine.get_ylabel() == ylabel and mine.lines and not other.lines and not other.get_ylabel()
+    fresh = draw(*args(), **kw)  # no axes given: a new figure's
+    assert fresh is not mine and fresh.figure is not fig and fresh.get_ylabel() == ylabel

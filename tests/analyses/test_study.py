@@ -1,0 +1,104 @@
+"""The study's definitions (pipeline/analyses/study.py): the graded bouncing-band target (docs/model.md, section
+"Identification": the mean over the band's steps of the bouncing BV, each step capped at the threshold, flying
+runs at 0), and the parameters of a study (bad keys named in one line, a list element set alone, CF units for
+every numeric scene key)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from pipeline.analyses import study
+from pipeline.config.scene import SceneError, load_scene
+
+PAPER = "configs/paper-2009.toml"
+BAND = (10.0, 10.2, 10.4, 10.6, 10.8)
+
+
+def _record(bv: np.ndarray, clearance: np.ndarray) -> dict:
+    """A record over the band's five steps; ``bv``, ``clearance`` of shape (5, realisations)."""
+    bv, clearance = np.atleast_2d(bv), np.atleast_2d(clearance)
+    return {"protrusions": list(BAND), "realisations": bv.shape[1],
+            "outputs": {"fhm_bv": bv.ravel().tolist(), "min_clearance": clearance.ravel().tolist()}}
+
+
+@pytest.fixture(scope="module")
+def band():
+    return next(t for t in study.targets(load_scene(PAPER)) if t.name == "bouncing")
+
+
+def test_band_steps_are_the_papers(band):
+    assert band.protrusions == BAND and band.target == 20.0
+
+
+def test_graded_value_on_one_record(band):
+    bv = np.array([25.0, 30.0, 10.0, 40.0, 5.0])
+    touch = np.array([-0.1, -0.1, -0.1, 0.2, -0.1])  # the fourth step flies: its 40 % is an FHM, no bounce
+    t = study.Table(_record(bv[:, None], touch[:, None]))
+    assert band.value(t) == pytest.approx((20 + 20 + 10 + 0 + 5) / 5)
+    assert band.residual(t, 10.0) == pytest.approx((20 - 11.0) / 2.0)
+    full = study.Table(_record(np.full((5, 1), 21.0), np.full((5, 1), -0.1)))
+    assert band.value(full) == 20.0 and band.residual(full, 10.0) == 0.0
+
+
+def test_graded_value_over_realisations_uses_each_steps_median(band):
+    # three realisations: step medians 22, 18, 0 (two of three fly), 30, 12
+    bv = np.array([[21, 22, 40], [10, 18, 19], [5, 30, 30], [29, 30, 35], [12, 12, 12]], float)
+    cl = np.array([[-1, -1, -1], [-1, -1, -1], [-1, 1, 1], [-1, -1, -1], [-1, -1, -1]], float)
+    ds = study.record_dataset(_record(bv, cl))
+    value, lo, hi = band.ensemble(ds)
+    assert value == pytest.approx((20 + 18 + 0 + 20 + 12) / 5)
+    assert lo <= value <= hi
+    assert band.ensemble_residual(ds, 10.0) == pytest.approx((20 - value) / 2.0)
+
+
+def test_graded_value_grows_with_any_step(band):
+    """The target an optimiser climbs: raising one step's BV below the threshold raises the value."""
+    base = np.array([20.0, 15.0, 10.0, 5.0, 1.0])
+    cl = np.full(5, -0.1)
+    v0 = band.value(study.Table(_record(base[:, None], cl[:, None])))
+    for j in range(5):
+        up = base.copy()
+        up[j] += 1.0
+        v1 = band.value(study.Table(_record(up[:, None], cl[:, None])))
+        assert (v1 > v0) == (base[j] < 20.0), j
+
+
+def test_unevaluated_step_is_missing(band):
+    bv = np.array([25.0, 30.0, np.nan, 40.0, 5.0])
+    cl = np.array([-0.1, -0.1, np.nan, -0.1, -0.1])
+    t = study.Table(_record(bv[:, None], cl[:, None]))
+    assert np.isnan(band.value(t)) and band.residual(t, 10.0) == 10.0
+
+
+def test_bad_parameter_key_names_the_field(paper_scene):
+    with pytest.raises(SceneError, match=r"identify.parameters\[0\].key = 'dmw.rms_um'"):
+        study.parse_parameters([{"key": "dmw.rms_um", "low": 0, "high": 1}], "f.toml", "identify.parameters")
+    with pytest.raises(SceneError, match="low < high"):
+        study.parse_parameters([{"key": "dmw.rms_nm", "low": 1, "high": 0}], "f.toml", "identify.parameters")
+    with pytest.raises(SceneError, match="index into a list"):
+        study.parse_parameters([{"key": "air_bearing.frequencies_khz[2]", "low": 1, "high": 2}], "f", "p")
+
+
+def test_list_element_parameter_sets_only_that_element(paper_scene):
+    p = study.parse_parameters([{"key": "air_bearing.frequencies_khz[1]", "low": 200, "high": 400}], "f", "p")
+    sc = study.with_values(paper_scene, p, [350.0])
+    assert sc["air_bearing"]["frequencies_khz"] == [120.0, 350.0]
+    assert study.scene_value(sc, p[0]) == 350.0
+
+
+def test_parameter_units_are_cf_for_every_numeric_scene_key():
+    import cf_units  # (a declared test dependency: pyproject.toml's `test` extra)
+    from pipeline.config.scene import SCHEMA
+    for section, keys in SCHEMA.items():
+        for key, spec in keys.items():
+            if spec.kind in ("float", "floats"):
+                units = study.Parameter(f"{section}.{key}", 0.0, 1.0).units
+                cf_units.Unit(units)  # UDUNITS parses it
+    units = {name: study.Parameter(name, 0.0, 1.0).units for name in
+             ("lubricant.work_of_adhesion_j_m2", "contact.damping_n_s_m", "roughness.summit_density_per_um2",
+              "slider.density_kg_m3", "dmw.sample_rate_mhz", "contact.section_depth_sigma")}
+    assert units == {"lubricant.work_of_adhesion_j_m2": "J m-2", "contact.damping_n_s_m": "N s m-1",
+                     "roughness.summit_density_per_um2": "um-2", "slider.density_kg_m3": "kg m-3",
+                     "dmw.sample_rate_mhz": "MHz", "contact.section_depth_sigma": "1"}
+    assert study.Parameter("air_bearing.frequencies_khz[0]", 1.0, 2.0).var_name == "air_bearing__frequencies_khz_0"

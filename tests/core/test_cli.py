@@ -1,0 +1,69 @@
+"""The ``hdi`` command (pipeline/cli.py) through :func:`pipeline.cli.main`: a stage run prints where its dataset
+is and exits 0, a second run recomputes nothing (the file is not rewritten); bad input is exit 2 with one line
+``hdi STAGE: error: ...`` naming the file and key; ``--help-keys`` prints a section of the schema; the help
+lists every stage of the registry and ``run``; argparse's own errors exit 2."""
+
+from __future__ import annotations
+
+import re
+
+import pytest
+
+from pipeline import cli, runner
+
+
+def test_a_stage_prints_its_dataset_and_a_second_run_recomputes_nothing(tmp_path, paper_config, capsys):
+    out = tmp_path / "out"
+    assert cli.main(["dmw", str(paper_config), "--out", str(out), "-q"]) == 0
+    printed = capsys.readouterr().out.splitlines()
+    assert printed == [f"{'dmw':>10}: {out / 'dmw.nc'}"]
+    first = (out / "dmw.nc").stat().st_mtime_ns
+    assert cli.main(["dmw", str(paper_config), "--out", str(out), "-q"]) == 0
+    assert (out / "dmw.nc").stat().st_mtime_ns == first
+    # an override that the stage reads makes it current again
+    assert cli.main(["dmw", str(paper_config), "--out", str(out), "-q", "--set", "dmw.seed=5"]) == 0
+    assert (out / "dmw.nc").stat().st_mtime_ns != first
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--set", "dmw.rms_um=0.3"], r"dmw\.rms_um: wrong unit 'um'; expected 'nm'"),   # a key in the wrong unit
+    (["--set", "dmw.rms_nm=-1"], r"--set dmw\.rms_nm=-1: dmw\.rms_nm = -1: expected a number >= 0"),
+    (["--set", "nonsense"], r"--set 'nonsense': expected section\.key=value")],
+    ids=["wrong-unit", "out-of-range", "no-equals-sign"])
+def test_bad_input_is_one_line_with_exit_2(tmp_path, paper_config, capsys, args, message):
+    assert cli.main(["dmw", str(paper_config), "--out", str(tmp_path / "out"), *args]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("hdi dmw: error: ")
+    assert re.search(message, err[0]), err[0]
+    assert not (tmp_path / "out" / "dmw.nc").exists()
+
+
+def test_a_missing_scene_file_and_two_scene_files_are_one_line(tmp_path, paper_config, capsys):
+    assert cli.main(["dmw", str(tmp_path / "missing.toml"), "--out", str(tmp_path)]) == 2
+    assert capsys.readouterr().err == f"hdi dmw: error: {tmp_path / 'missing.toml'}: scene file does not exist\n"
+    assert cli.main(["dmw", str(paper_config), str(paper_config)]) == 2
+    assert capsys.readouterr().err.startswith("hdi dmw: error: hdi dmw: expected one scene file, got ")
+
+
+def test_help_keys_prints_a_section_and_an_unknown_section_is_refused(capsys):
+    with pytest.raises(SystemExit) as done:
+        cli.main(["--help-keys", "dmw"])
+    assert done.value.code == 0
+    text = capsys.readouterr().out
+    assert "rms_nm" in text and "sample_rate_mhz" in text and "flying_height_nm" not in text
+    with pytest.raises(SystemExit) as done:
+        cli.main(["--help-keys", "nosuchsection"])
+    assert done.value.code == 2 and capsys.readouterr().err.startswith("hdi: error: ")
+
+
+def test_the_help_lists_every_stage_and_run_and_a_bad_stage_exits_2(capsys):
+    with pytest.raises(SystemExit) as done:
+        cli.main(["--help"])
+    assert done.value.code == 0
+    text = capsys.readouterr().out
+    for name in runner.registry():
+        assert f"\n  {name:<11} " in text, name
+    assert "\n  run         the main job: roughness dmw interface" in text
+    with pytest.raises(SystemExit) as done:
+        cli.main(["nosuchstage", "x.toml"])
+    assert done.value.code == 2 and "invalid choice: 'nosuchstage'" in capsys.readouterr().err

@@ -1,0 +1,430 @@
+"""The stage runner: content-hash dependencies, no stale results, atomic and locked folders.
+
+The first tests are the reproductions of issue 11 (each failed before the runner): an input file
+edited in place, a dataset of another scene, a part copied to another batch's name, a no-op run that
+rewrote everything. Then the runner's machinery on toy stages (cheap, exact call counts), orphaned temporary files, and the
+registry through which a new stage plugs in. (The folder's lock: core/test_folder_lock.py.)
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from pipeline import cli, runner
+from pipeline.io import DatasetError, read_dataset, var
+from pipeline.physics import microwaviness as phys_dmw
+from pipeline.physics import surface as sf
+from pipeline.config.scene import load_scene
+from pipeline.stages import sweep as sweep_stage
+
+ROOT = Path(__file__).resolve().parents[2]
+PAPER = ROOT / "configs" / "paper-2009.toml"
+
+#: A cheap scene: flying with DMW, three protrusions in two batches, 0.6 ms runs.
+FLY = ['scene.effects=["air_bearing","pitch","dmw"]', "solver.duration_ms=0.6", "solver.transient_ms=0.2",
+       "sweep.protrusion_nm={start=2.0, stop=2.4, step=0.2}", "sweep.batch_size=2"]
+
+
+def _identical_but_history(a: Path, b: Path) -> None:
+    da, db = read_dataset(a), read_dataset(b)
+    del da.attrs["history"], db.attrs["history"]
+    xr.testing.assert_identical(da, db)
+
+
+def _tree(folder: Path) -> dict[str, int]:
+    """Every file below ``folder`` with its modification time [ns]."""
+    return {str(p.relative_to(folder)): p.stat().st_mtime_ns for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+def _record(path: Path, scale: float = 1.0) -> np.ndarray:
+    """A measured DMW displacement record [nm] at 4 MS/s, 1 ms long, written as one CSV column."""
+    x = phys_dmw.synthesize(0.16, (1e4, 5e5), -2.0, 1e-3, 4e6, seed=5)
+    np.savetxt(path, scale * x)
+    return scale * x
+
+
+def _scan(path: Path, scale: float = 1.0) -> Path:
+    """A self-affine AFM height map [nm] (SurfaceTopography NetCDF), 128 x 128 over 4 um."""
+    from SurfaceTopography import Topography
+    from SurfaceTopography.Generation import fourier_synthesis
+    t = fourier_synthesis((128, 128), (4000.0, 4000.0), 0.8, rms_height=0.5, short_cutoff=120.0,
+                          long_cutoff=2000.0, unit="nm", rng=np.random.default_rng(3))
+    Topography(scale * t.heights(), (4000.0, 4000.0), periodic=True, unit="nm").to_netcdf(str(path))
+    return path
+
+
+# ------------------------------------------------------------------------- reproductions of issue 11
+def test_dmw_record_edited_in_place_recomputes_everything_downstream(tmp_path):
+    rec = tmp_path / "ldv.csv"
+    _record(rec)
+    scene = load_scene(PAPER, FLY + [f'dmw.source="{rec}"', "dmw.sample_rate_hz=4e6"])
+    out = tmp_path / "out"
+    path = sweep_stage.run_sweep(scene, out, scheduler="synchronous")
+    fhm1 = read_dataset(path).fhm_bv.values.copy()
+    rms1 = float(read_dataset(out / "dmw.nc").rms)
+    with_contact = scene.replace(scene={"effects": ["air_bearing", "pitch", "dmw", "contact"]})
+    cal_key = runner.Runner(with_contact, out).key("calibrate")
+
+    _record(rec, scale=2.0)                                    # same path, new bytes
+    assert runner.Runner(with_contact, out).key("calibrate") != cal_key   # the change reaches calibrate
+    path = sweep_stage.run_sweep(scene, out, scheduler="synchronous")
+    assert float(read_dataset(out / "dmw.nc").rms) == pytest.approx(2 * rms1, rel=1e-9)
+    # flying, the FHM follows the DMW amplitude (within 5 %: the bearing's rear law is mildly nonlinear);
+    # the stale result was the old FHM, off by a factor of 2
+    np.testing.assert_allclose(read_dataset(path).fhm_bv.values, 2 * fhm1, rtol=0.05)
+    fresh = sweep_stage.run_sweep(scene, tmp_path / "fresh", scheduler="synchronous")
+    _identical_but_history(path, fresh)
+
+
+def test_afm_scan_edited_in_place_reaches_interface_and_sweep_parts(tmp_path):
+    scan = _scan(tmp_path / "scan.nc")
+    scene = load_scene(PAPER, ['scene.effects=["air_bearing","pitch","contact"]', "contact.k=0.5",
+                               f'roughness.afm=["{scan}"]'] + FLY[1:])
+    out = tmp_path / "out"
+
+    def sigmas() -> list[float]:
+        rough = read_dataset(out / "roughness.nc").sigma.sel({"surface": "combined", "route": "spectral"})
+        # (the sweep's tables of the scene's own roughness set are interface.nc: no copy in sweep.parts)
+        assert not list((out / sweep_stage.PARTS).glob("interface-*"))
+        return [float(rough), float(read_dataset(out / "interface.nc").sigma)]
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", sf.SurfaceWarning)
+        runner.build(["interface", "sweep"], scene, out, scheduler="synchronous")
+        before = sigmas()
+        assert before == pytest.approx([before[0]] * 2, rel=1e-12)
+        _scan(scan, scale=2.0)                                 # same path, heights doubled
+        runner.build(["interface", "sweep"], scene, out, scheduler="synchronous")
+        assert sigmas() == pytest.approx([2 * before[0]] * 2, rel=1e-9)
+        runner.build(["sweep"], scene, tmp_path / "fresh", scheduler="synchronous")
+    _identical_but_history(out / "sweep.nc", tmp_path / "fresh" / "sweep.nc")
+
+
+def test_simulate_never_uses_a_calibration_of_other_inputs(tmp_path):
+    """`hdi simulate --set lubricant.work_of_adhesion_j_m2=0` with an older calibration.nc in the folder."""
+    base = ["solver.duration_ms=1.0", "solver.transient_ms=0.3", "touchdown.curve_points=2",
+            "sweep.protrusion_nm={start=9.0, stop=10.4, step=0.2}", "tfc.protrusion_nm=5.0"]
+    runner.build("calibrate", load_scene(PAPER, base), tmp_path)
+    old = read_dataset(tmp_path / "calibration.nc")
+    assert np.isnan(float(old.k_calibrated))                  # adhesive snap-in: no admissible k
+    rc = cli.main(["simulate", str(PAPER), "--out", str(tmp_path), "--set", "lubricant.work_of_adhesion_j_m2=0"]
+                  + [a for s in base for a in ("--set", s)])
+    assert rc == 0
+    new = read_dataset(tmp_path / "calibration.nc")
+    assert new.attrs[runner.KEY_ATTR] != old.attrs[runner.KEY_ATTR]
+    k = float(new.k_calibrated)
+    assert np.isfinite(k)                                     # without adhesion the procedure works
+    hist = read_dataset(tmp_path / "histories.nc")
+    assert hist.attrs["k"] == pytest.approx(k) and hist.attrs["k_source"] == "calibration (calibration.nc)"
+    assert json.loads(hist.attrs["upstream_keys"])["calibrate"] == new.attrs[runner.KEY_ATTR]
+
+
+def test_foreign_dataset_is_recomputed_not_used(tmp_path, paper_config):
+    other = load_scene(paper_config, ["lubricant.thickness_nm=1.0"])
+    runner.build("interface", other, tmp_path / "other")
+    shutil.copy(tmp_path / "other" / "interface.nc", tmp_path / "interface.nc")
+    runner.build("interface", load_scene(paper_config), tmp_path)
+    assert float(read_dataset(tmp_path / "interface.nc").lubricant_thickness) == 0.75
+    # a compute that reads an upstream dataset through Inputs refuses one of other inputs
+    inputs = runner.Inputs(out=tmp_path / "other", upstream={"interface": runner.Runner(
+        load_scene(paper_config), tmp_path).key("interface")})
+    with pytest.raises(DatasetError, match="made from other inputs.*inputs_key"):
+        inputs.dataset("interface.nc", stage="interface")
+
+
+def test_part_copied_to_another_batch_is_rejected_and_recomputed(tmp_path):
+    scene = load_scene(PAPER, FLY + ["sweep.batch_size=1"])
+    reference = sweep_stage.run_sweep(scene, tmp_path / "ref", scheduler="synchronous")
+    out = tmp_path / "out"
+    with pytest.raises(KeyboardInterrupt):
+        sweep_stage.run_sweep(scene, out, scheduler="synchronous", stop_after=1)
+    parts = out / sweep_stage.PARTS
+    shutil.copy(parts / "batch-00000.nc", parts / "batch-00001.nc")   # the wrong batch under batch 1's name
+    b1 = sweep_stage.plan(scene)[3][1]
+    assert "holds batch 0, not 1" in sweep_stage.part_problem(parts / "batch-00001.nc",
+                                                              read_dataset(parts / "batch-00000.nc").attrs[
+                                                                  runner.KEY_ATTR], b1)
+    done: list[str] = []
+    path = sweep_stage.run_sweep(scene, out, scheduler="synchronous", on_batch=done.append)
+    assert sorted(Path(p).name for p in done) == ["batch-00001.nc", "batch-00002.nc"]
+    _identical_but_history(reference, path)
+
+
+def test_noop_run_rewrites_nothing(tmp_path):
+    argv = ["run", str(PAPER), "--out", str(tmp_path), "--scheduler", "synchronous"]
+    for s in FLY + ["sweep.histories_nm=[2.0, 2.4]", "report.histories_nm=[2.0, 2.4]"]:
+        argv += ["--set", s]
+    assert cli.main(argv) == 0
+    made = _tree(tmp_path)
+    assert {"roughness.nc", "dmw.nc", "interface.nc", "sweep.nc", "sweep_histories.nc",
+            "figures/fig6_fhm.png", "report/comparison.md"} <= set(made)
+    assert not any(Path(p).name.startswith(".") and p.endswith(".tmp") for p in made)
+    assert cli.main(argv) == 0
+    assert _tree(tmp_path) == made
+    os.utime(tmp_path / "figures" / "fig6_fhm.png", ns=(1, 1))    # touched, not changed: still current
+    assert cli.main(argv) == 0
+    assert _tree(tmp_path) == {**made, "figures/fig6_fhm.png": 1}
+    (tmp_path / "report" / "summary.md").write_text("edited by hand\n")  # an output changed: its stage redone
+    assert cli.main(argv) == 0
+    after = _tree(tmp_path)
+    assert "edited by hand" not in (tmp_path / "report" / "summary.md").read_text()
+    assert after["figures/fig6_fhm.png"] != 1
+    assert {k: v for k, v in after.items() if not k.startswith(("figures/", "report/", ".hdi/"))} == \
+        {k: v for k, v in made.items() if not k.startswith(("figures/", "report/", ".hdi/"))}
+
+
+# ------------------------------------------------------------------------------ the machinery (toys)
+def _toy_stages(calls: list[str], tmp_path: Path) -> dict[str, runner.Stage]:
+    """Two stages: ``a`` reads dmw.rms_nm and a file; ``b`` reads ``a`` and tfc.protrusion_nm and also
+    writes a text output."""
+    data = tmp_path / "input.txt"
+
+    def compute_a(scene, inputs):
+        calls.append("a")
+        value = float(inputs.files["data"].read_text()) * scene["dmw"]["rms_nm"]
+        return xr.Dataset({"x": var(value, (), "nm", "toy value")})
+
+    def compute_b(scene, inputs):
+        calls.append("b")
+        a = inputs.dataset("a.nc", stage="a")
+        (inputs.staging / "notes").mkdir()
+        (inputs.staging / "notes" / "b.txt").write_text(f"{float(a.x):g}\n")
+        return {"b.nc": xr.Dataset({"y": var(float(a.x) + scene["tfc"]["protrusion_nm"], (), "nm", "toy")}),
+                "b_extra.nc": None}
+
+    return {
+        "a": runner.Stage("a", compute_a, outputs=("a.nc",), reads=("dmw.rms_nm",),
+                          files=lambda scene: {"data": data}),
+        "b": runner.Stage("b", compute_b, outputs=("b.nc", "b_extra.nc", "notes/b.txt"),
+                          reads=("tfc.protrusion_nm",), upstream=("a",)),
+    }
+
+
+def test_runner_recomputes_exactly_what_changed(tmp_path, paper_scene):
+    calls: list[str] = []
+    stages = _toy_stages(calls, tmp_path)
+    (tmp_path / "input.txt").write_text("2.0\n")
+    out = tmp_path / "out"
+
+    def build(scene, force=False):
+        calls.clear()
+        runner.Runner(scene, out, stages).build(["b"], force=force)
+        return list(calls)
+
+    assert build(paper_scene) == ["a", "b"]
+    assert float(read_dataset(out / "b.nc").y) == pytest.approx(2.0 * 0.266 + 11.0)  # tfc.protrusion_nm = 11
+    assert (out / "notes" / "b.txt").read_text() == "0.532\n"
+    assert build(paper_scene) == []                                           # nothing changed
+    assert build(paper_scene.replace(air_bearing={"damping_ratio": 0.07})) == []  # a key nobody reads
+    assert build(paper_scene.replace(tfc={"protrusion_nm": 3.0})) == ["b"]   # only b reads it
+    assert build(paper_scene.replace(tfc={"protrusion_nm": 3.0})) == []
+    (tmp_path / "input.txt").write_text("4.0\n")                              # a's file, edited in place
+    assert build(paper_scene.replace(tfc={"protrusion_nm": 3.0})) == ["a", "b"]  # ... propagates to b
+    assert float(read_dataset(out / "b.nc").y) == pytest.approx(4.0 * 0.266 + 3.0)
+    (out / "notes" / "b.txt").write_text("tampered\n")                         # a non-NetCDF output changed
+    assert build(paper_scene.replace(tfc={"protrusion_nm": 3.0})) == ["b"]
+    (out / "b_extra.nc").write_bytes(b"stale")                                 # not produced: not required ...
+    assert build(paper_scene.replace(tfc={"protrusion_nm": 3.0}), force=True) == ["b"]  # ... and removed
+    assert not (out / "b_extra.nc").exists()
+    assert build(paper_scene.replace(tfc={"protrusion_nm": 3.0}), force=True) == ["b"]  # force: target only
+    assert sorted(p.name for p in out.iterdir()) == [".hdi", "a.nc", "b.nc", "notes"]  # no lock, no temporaries
+    assert json.loads(read_dataset(out / "b.nc").attrs["upstream_keys"]) == {"a": read_dataset(out / "a.nc").attrs[
+        runner.KEY_ATTR]}
+
+
+def test_optional_stage_is_read_only_when_current(tmp_path, paper_scene):
+    """A stage ``r`` that reads ``a`` when it is current (as the report reads identify.nc) never builds
+    it, sees it only while its inputs are those of this scene, and is redone when that changes."""
+    calls: list[str] = []
+    stages = _toy_stages(calls, tmp_path)
+    seen: list[dict] = []
+
+    def compute_r(scene, inputs):
+        calls.append("r")
+        seen.append(dict(inputs.optional))
+        return xr.Dataset({"z": var(1.0, (), "1", "toy")})
+
+    stages["r"] = runner.Stage("r", compute_r, outputs=("r.nc",), reads=(), optional=("a",))
+    (tmp_path / "input.txt").write_text("2.0\n")
+    out = tmp_path / "out"
+
+    def build(scene, targets):
+        calls.clear()
+        runner.Runner(scene, out, stages).build(targets)
+        return list(calls)
+
+    assert build(paper_scene, ["r"]) == ["r"] and seen[-1] == {"a": None}     # not built by r
+    assert build(paper_scene, ["a"]) == ["a"]
+    assert build(paper_scene, ["r"]) == ["r"] and seen[-1] == {"a": read_dataset(out / "a.nc").attrs[runner.KEY_ATTR]}
+    assert build(paper_scene, ["r"]) == []
+    other = paper_scene.replace(dmw={"rms_nm": 0.1})                             # a.nc is now another scene's
+    assert build(other, ["r"]) == ["r"] and seen[-1] == {"a": None}
+
+
+def test_derived_inputs_key_on_the_value_not_the_keys(paper_scene):
+    """The interface tables depend on the deepest protrusion, max(tfc, sweep stop) (interface.STAGE
+    derived): a protrusion moved within the paper sweep (0-15 nm) changes neither the interface nor the
+    sweep key (it is excluded there); one beyond the sweep's stop deepens the tables and changes both."""
+    def keys(delta):
+        r = runner.Runner(paper_scene.replace(tfc={"protrusion_nm": delta}), "unused")
+        return r.key("interface"), r.key("sweep")
+
+    assert paper_scene["sweep"]["protrusion_nm"]["stop"] == 15.0
+    assert keys(5.0) == keys(11.0)
+    deeper = keys(16.0)
+    assert deeper[0] != keys(11.0)[0] and deeper[1] != keys(11.0)[1]
+
+
+def test_a_scene_that_extends_another_keys_on_its_values_not_on_the_base_path(tmp_path):
+    """``scene.extends`` (an absolute path) is not an input: a scene that only extends the paper scene
+    keys like the paper scene, wherever the files are; the 3x3 grid, which changes the sweep's sets
+    and damping ratios only, shares the paper's calibration and differs in its sweep."""
+    (tmp_path / "base").mkdir()
+    shutil.copy(PAPER, tmp_path / "base" / "paper-2009.toml")
+    (tmp_path / "child.toml").write_text('[scene]\nname = "paper-2009"\nextends = "base/paper-2009.toml"\n')
+    paper, child = load_scene(PAPER), load_scene(tmp_path / "child.toml")
+    assert child["scene"]["extends"] != paper["scene"]["extends"]
+    for stage in ("roughness", "dmw", "interface", "calibrate", "sweep", "report"):
+        assert runner.Runner(child, "a").key(stage) == runner.Runner(paper, "b").key(stage), stage
+    grid = load_scene(PAPER.parent / "sweep-3x3.toml")
+    assert runner.Runner(grid, "a").key("calibrate") == runner.Runner(paper, "a").key("calibrate")
+    assert runner.Runner(grid, "a").key("sweep") != runner.Runner(paper, "a").key("sweep")
+
+
+def test_failing_compute_writes_nothing_and_leaves_no_lock(tmp_path, paper_scene):
+    def broken(scene, inputs):
+        (inputs.staging / "half.txt").write_text("half")
+        raise RuntimeError("disk full")
+
+    stages = {"x": runner.Stage("x", broken, outputs=("x.nc", "half.txt"))}
+    with pytest.raises(RuntimeError, match="disk full"):
+        runner.Runner(paper_scene, tmp_path, stages).build(["x"])
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_compute_that_builds_in_its_own_folder_is_refused(tmp_path, paper_scene):
+    """Stages read their inputs through Inputs; building in one's own folder (the re-entrant runner
+    this replaced) is an error that says so, and leaves no lock behind."""
+    stages = {"a": runner.Stage("a", lambda scene, inputs: xr.Dataset({"v": var(1.0, (), "1", "v")}), outputs=("a.nc",))}
+
+    def nested(scene, inputs):
+        runner.Runner(scene, inputs.out, stages).build(["a"])
+        return xr.Dataset()
+
+    stages["x"] = runner.Stage("x", nested, outputs=("x.nc",))
+    with pytest.raises(RuntimeError, match="already holds the folder"):
+        runner.Runner(paper_scene, tmp_path, stages).build(["x"])
+    assert not (tmp_path / runner.LOCK_NAME).exists()
+    runner.Runner(paper_scene, tmp_path, stages).build(["a"])  # the folder is free again
+
+
+def test_undeclared_output_is_an_error(tmp_path, paper_scene):
+    stages = {"x": runner.Stage("x", lambda scene, inputs: {"y.nc": xr.Dataset()}, outputs=("x.nc",))}
+    with pytest.raises(RuntimeError, match="undeclared outputs"):
+        runner.Runner(paper_scene, tmp_path, stages).build(["x"])
+
+
+def test_missing_input_file_names_the_role(tmp_path, paper_scene):
+    stages = {"x": runner.Stage("x", lambda s, i: xr.Dataset(), outputs=("x.nc",),
+                                files=lambda scene: {"dmw.source": tmp_path / "gone.csv"})}
+    with pytest.raises(FileNotFoundError, match=r"x: input file .*gone\.csv \(dmw\.source\) does not exist"):
+        runner.Runner(paper_scene, tmp_path, stages).build(["x"])
+
+
+def test_orphaned_temporaries_are_cleaned(tmp_path, paper_config):
+    (tmp_path / sweep_stage.PARTS).mkdir()
+    orphans = [tmp_path / ".sweep.nc.hdi-0123456789ab.k2j3h4.tmp",      # (hdi's names, of another run)
+               tmp_path / sweep_stage.PARTS / ".batch-00003.nc.hdi-0123456789ab.x8y.tmp",
+               tmp_path / ".hdi-staging-abc" / "figures" / "fig6_fhm.png"]
+    for p in orphans:
+        p.parent.mkdir(parents=True, exist_ok=True)
+        p.write_bytes(b"half written by a killed run")
+    keep = tmp_path / "notes.tmp"                              # not one of ours: left alone
+    keep.write_text("mine")
+    runner.build("dmw", load_scene(paper_config), tmp_path)
+    assert not any(p.exists() for p in orphans) and not (tmp_path / ".hdi-staging-abc").exists()
+    assert keep.read_text() == "mine"
+
+
+# ------------------------------------------------------------------------------------------ registry
+def test_registry_holds_every_stage_and_the_main_job(paper_scene):
+    stages = runner.registry()
+    assert list(stages)[:11] == ["roughness", "dmw", "interface", "bulge", "calibrate", "simulate", "statics",
+                                 "sweep", "accuracy", "ensemble", "report"]
+    assert runner.main_job(paper_scene) == ["roughness", "dmw", "interface", "calibrate", "statics", "sweep",
+                                            "ensemble", "report"]
+    single = paper_scene.replace(report={"realisations": 1})  # (the report's checks on the scene's record alone)
+    assert runner.main_job(single) == ["roughness", "dmw", "interface", "calibrate", "statics", "sweep", "report"]
+    flying = paper_scene.replace(scene={"effects": ["air_bearing", "pitch", "dmw"]})
+    assert runner.main_job(flying) == ["roughness", "dmw", "interface", "statics", "sweep", "ensemble", "report"]
+    plan = runner.Runner(paper_scene, "unused", stages).plan(["report"])
+    assert plan.index("calibrate") < plan.index("sweep") < plan.index("report")
+    assert runner.Runner(paper_scene.replace(contact={"k": 0.5}), "unused", stages).plan(["sweep"]) == \
+        ["interface", "dmw", "sweep"]
+
+
+def test_a_new_stage_plugs_in_by_declaring_itself(tmp_path, paper_config, monkeypatch):
+    import pipeline.stages as package
+    plug = tmp_path / "plug"
+    plug.mkdir()
+    (plug / "toy_plugin.py").write_text(
+        "import xarray as xr\n"
+        "from pipeline.io import var\n"
+        "from pipeline.runner import Stage\n"
+        "def compute(scene, inputs):\n"
+        "    rms = float(inputs.dataset('dmw.nc', stage='dmw').rms)\n"
+        "    return xr.Dataset({'twice_rms': var(2 * rms, (), 'nm', 'twice the DMW rms')})\n"
+        "STAGE = Stage('toy', compute, outputs=('toy.nc',), reads=(), upstream=('dmw',), order=99,\n"
+        "              doc='a plugged-in stage')\n")
+    monkeypatch.setattr(package, "__path__", [*package.__path__, str(plug)])
+    monkeypatch.delitem(sys.modules, "pipeline.stages.toy_plugin", raising=False)
+    assert "toy" in runner.registry()
+    assert cli.main(["toy", str(paper_config), "--out", str(tmp_path / "out")]) == 0
+    assert float(read_dataset(tmp_path / "out" / "toy.nc").twice_rms) == pytest.approx(2 * 0.266, rel=1e-9)
+    sys.modules.pop("pipeline.stages.toy_plugin", None)
+
+
+@pytest.mark.slow
+def test_ctrl_c_prints_one_line(tmp_path):
+    """SIGINT to the whole process group (what a terminal's Ctrl-C does) during a 2-worker sweep: the
+    command says so in one line, the workers print no tracebacks, finished parts are kept."""
+    import signal
+    import time
+    cmd = [sys.executable, "-m", "pipeline.cli", "sweep", str(PAPER), "--out", str(tmp_path), "--workers", "2"]
+    for s in FLY[:3] + ["sweep.protrusion_nm={start=0.0, stop=6.0, step=0.2}", "sweep.batch_size=1"]:
+        cmd += ["--set", s]
+    proc = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    parts = tmp_path / sweep_stage.PARTS
+    deadline = time.time() + 180
+    while time.time() < deadline and len(list(parts.glob("batch-*.nc"))) < 2:
+        time.sleep(0.05)
+    os.killpg(proc.pid, signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err
+    assert err.strip().splitlines()[-1] == "hdi sweep: interrupted; finished work is kept, run again to resume"
+    assert len(err.strip().splitlines()) <= 8          # the stages' progress lines and that one line
+    assert len(list(parts.glob("batch-*.nc"))) >= 2 and not (tmp_path / runner.LOCK_NAME).exists()
+
+
+def test_excludes_apply_to_a_whole_section_read(paper_scene):
+    """A stage reading a section without some of its keys (the interface stage: ``lubricant`` without
+    the meniscus time and the lubricant shear stress, properties of the dynamics) is keyed without them:
+    before, ``excludes`` acted on ``"*"`` only, so such a stage recomputed for keys it does not read."""
+    from pipeline.runner import scene_part
+    part = scene_part(paper_scene, ("lubricant",), ("lubricant.meniscus_time_us",))
+    assert "meniscus_time_us" not in part["lubricant"] and "thickness_nm" in part["lubricant"]
+    assert scene_part(paper_scene.replace(lubricant={"meniscus_time_us": 40.0}), ("lubricant",),
+                      ("lubricant.meniscus_time_us",)) == part
