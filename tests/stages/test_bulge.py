@@ -25,7 +25,7 @@ from scene_recording import declared, recording
 
 NM = 1e-9
 #: the bulge scene with the Reynolds table on a coarse grid (16 x 8 cells per semi-axis: its lift is within
-#: 1e-3 of the default grid's, tests/test_bulge_bearing.py), flying only
+#: 1e-3 of the default grid's, tests/physics/test_bulge_bearing.py), flying only
 REYNOLDS = ['air_bearing.bulge="reynolds"', "solver.bulge_cells_per_a=16", "solver.bulge_cells_per_b=8",
             'scene.effects=["air_bearing","pitch"]']
 GRID = bb.ReynoldsGrid(cells_per_a=16, cells_per_b=8)

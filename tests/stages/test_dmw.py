@@ -9,12 +9,14 @@ the processing of a measured record is linear (twice the record, twice its rms).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
 from pipeline.io import read_dataset
 from pipeline.physics import microwaviness as dmw
-from pipeline.config.scene import scene_from_dict
+from pipeline.config.scene import load_scene, scene_from_dict
 from pipeline.model import dmw_record
 from pipeline.runner import ensure
 
@@ -147,3 +149,48 @@ def test_stage_reruns_when_record_changes(tmp_path):
     ensure("dmw", scene, tmp_path / "out")
     assert path.stat().st_mtime != 1
     assert float(read_dataset(path).rms) == pytest.approx(2 * rms1, rel=1e-9)    # processing is linear
+
+
+# The paper scene's record: Parseval, the band, the disk speed and the seed.
+
+
+def _dmw(scene, out):
+    ensure("dmw", scene, out)
+    return read_dataset(out / "dmw.nc", stage="dmw")
+
+
+@pytest.fixture(scope="module")
+def paper_dmw(tmp_path_factory, paper_config):
+    scene = load_scene(paper_config)
+    return scene, _dmw(scene, tmp_path_factory.mktemp("dmw"))
+
+
+def test_the_periodogram_holds_the_mean_square_inside_the_band(paper_dmw):
+    scene, ds = paper_dmw
+    f, p = ds["frequency"].values, ds["psd"].values
+    df = f[1] - f[0]
+    assert df == pytest.approx(1 / 2.1e-3) and f[-1] == pytest.approx(2e6)        # k / duration, to Nyquist
+    w = ds["displacement"].values
+    assert p.sum() * df == pytest.approx(np.mean(w * w), rel=1e-9)               # Parseval
+    lo, hi = (1e3 * b for b in scene["dmw"]["band_khz"])
+    assert (float(ds["band_low"]), float(ds["band_high"])) == (lo, hi) == (1e4, 5e5)
+    inside = (f >= ds["band_low"].attrs["realised"]) & (f <= ds["band_high"].attrs["realised"])
+    assert p[~inside].sum() < 1e-20 * p[inside].sum()
+    assert lo <= ds["band_low"].attrs["realised"] <= ds["band_high"].attrs["realised"] <= hi
+
+
+def test_the_disk_speed_is_two_pi_r_rpm_over_60(paper_dmw):
+    scene, ds = paper_dmw
+    r, rpm = scene["dmw"]["radius_mm"] * 1e-3, scene["dmw"]["rpm"]
+    assert (r, rpm) == (34.3e-3, 5425.0)
+    assert float(ds["disk_speed"]) == pytest.approx(2 * math.pi * r * rpm / 60, rel=1e-12)
+    assert round(float(ds["disk_speed"]), 2) == 19.49
+
+
+def test_the_seed_decides_the_record(paper_dmw, tmp_path):
+    scene, ds = paper_dmw
+    again = _dmw(scene, tmp_path / "again")
+    np.testing.assert_array_equal(again["displacement"].values, ds["displacement"].values)
+    other = _dmw(scene.replace(dmw={"seed": scene["dmw"]["seed"] + 1}), tmp_path / "other")
+    assert not np.allclose(other["displacement"].values, ds["displacement"].values)
+    assert float(other["rms"]) == pytest.approx(float(ds["rms"]), rel=1e-12)

@@ -57,7 +57,7 @@ def test_paper_tables_present_and_grid(paper_ds):
 
 
 def test_paper_scalars(paper_ds):
-    # Hand values (tests/test_statistics.py) for eta = 13.3 um^-2 (docs/model.md, section "Separation datum"): sigma_s = 0.431680 nm,
+    # Hand values (tests/physics/test_asperity_statistics.py) for eta = 13.3 um^-2 (docs/model.md, section "Separation datum"): sigma_s = 0.431680 nm,
     # y_s = 0.690889 nm, E' = 94.1915 GPa, H = 1.68308 GPa, psi_GW = 0.52 [paper], psi_KE = 0.573730
     assert float(paper_ds["sigma"]) == pytest.approx(0.52)
     assert float(paper_ds["sigma_s"]) == pytest.approx(0.431680, rel=1e-6)
