@@ -158,12 +158,14 @@ def combined_statistics(path: str | Path | xr.Dataset, route: str = "spectral") 
         raise ValueError(f"route {route!r}: expected one of {ROUTES}")
     names = ("sigma", "sigma_s", "y_s", "summit_radius", "summit_density", "bandwidth_alpha")
     ds = path if isinstance(path, xr.Dataset) else read_dataset(path, stage="roughness", variables=names)
+    # a dataset in memory is named by its source file when it has one, never by its (many-line) repr
+    where = ds.encoding.get("source", "the roughness dataset in memory") if ds is path else path
     if COMBINED not in ds["surface"].values:
-        raise DatasetError(f"{path}: no '{COMBINED}' surface")
+        raise DatasetError(f"{where}: no '{COMBINED}' surface")
     row = ds.sel(surface=COMBINED, route=route)
     keys = ("sigma_nm", "sigma_s_nm", "y_s_nm", "summit_radius_um", "summit_density_per_um2", "alpha")
     result = {k: float(row[n]) for k, n in zip(keys, names)}
     if not all(np.isfinite(result[k]) for k in ("sigma_nm", "summit_radius_um", "summit_density_per_um2")):
-        raise DatasetError(f"{path}: the {route!r} route has no combined statistics (the summit route cannot "
+        raise DatasetError(f"{where}: the {route!r} route has no combined statistics (the summit route cannot "
                            f"combine several scans); use route='spectral'")
     return result
