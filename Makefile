@@ -8,6 +8,8 @@ BIN    := $(VENV)/bin
 # (the bulge's air bearing, the meniscus-formation time, docs/results.md, "Reproducing the paper")
 SCENE  ?= configs/paper-2009-identified.toml
 ARGS   ?=
+# optional extras (pyproject.toml) that `make setup` adds to .venv: `make setup EXTRAS="units cluster"`
+EXTRAS ?=
 
 # The installer: uv at the version below, installed from PyPI by pip into .bootstrap/ (nothing needs
 # to be preinstalled but Python); it installs exactly the versions of uv.lock (--locked: a uv.lock
@@ -35,8 +37,15 @@ STAGES := $(sort $(basename $(notdir $(filter-out %/__init__.py,$(wildcard pipel
 
 .PHONY: setup run test test-fast test-slow bench sweep readme clean $(STAGES)
 
+## the environment alone; with EXTRAS, those extras added to it (each `--extra NAME` of uv sync; kept by
+## later targets, which sync --inexact)
 setup: $(RUN_STAMP)
+ifneq ($(strip $(EXTRAS)),)
+	$(call install,$(foreach e,$(EXTRAS),--extra $(e)),[$(subst $(SPACE),$(COMMA),$(strip $(EXTRAS)))])
+endif
 
+COMMA := ,
+SPACE := $(subst ,, )
 # $(1): uv sync options, $(2): the pip extra of the fallback
 define install
 	@if [ -x "$(UV)" ] || $(PYTHON) -m pip install --quiet --disable-pip-version-check --target $(BOOT) \

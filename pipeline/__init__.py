@@ -4,14 +4,15 @@ The API (:mod:`pipeline.api`; README, "From Python"), imported on first use of o
 
     import pipeline as hdi
 
-    scene = hdi.load_scene("configs/paper-2009.toml", {"contact.k": 0.5})  # a read-only Scene
+    scene = hdi.load_scene("paper-2009", {"contact.k": 0.5})  # a shipped scene (or a path): read-only
     scene = scene.replace(tfc={"protrusion_nm": 9.0})                    # a varied copy, validated
     model = hdi.build_model(scene, "results/paper")
     ds = hdi.simulate(model, [9.0, 10.0], histories=[10.0])
     hdi.run_stage("sweep", scene, "results/paper", scheduler="threads")  # or a distributed.Client
     sweep = hdi.open_dataset("results/paper", "sweep")
 
-* ``load_scene(path, overrides)``: read and validate a scene (overrides: ``--set`` strings, one string or a dict)
+* ``load_scene(path, overrides)``: read and validate a scene, a file or a shipped scene's name (overrides:
+  ``--set`` strings, one string or a dict)
 * ``simulation_inputs(scene, results)``: the tables, records and contact criterion one simulation reads
 * ``build_model(scene, results)``: the model the ``simulate`` and ``sweep`` stages run
 * ``simulate(model, protrusions)``: run it at protrusions [nm], an ``xarray.Dataset``

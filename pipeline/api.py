@@ -129,7 +129,9 @@ def load_scene(path: str | Path, overrides: Overrides = ()) -> Scene:
 
     Parameters
     ----------
-    path : the TOML scene file (e.g. ``configs/paper-2009.toml``)
+    path : the TOML scene file (e.g. ``configs/paper-2009.toml``), or the name of a scene shipped with the
+        package (``"paper-2009"``; a file that exists at the path given wins:
+        :func:`pipeline.config.loading.find_scene`)
     overrides : the ``--set`` overrides, applied in order, in one of three forms:
 
         * a list of ``"section.key=value"`` strings, values in TOML syntax (``["contact.k=0.5"]``,

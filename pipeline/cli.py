@@ -19,7 +19,7 @@ from pathlib import Path
 from . import __version__, interrupts, runner
 from .io import DatasetError, os_error_line, results_dir
 from .progress import interval_s
-from .config.loading import load_scene
+from .config.loading import find_scene, load_scene, shipped_scenes
 from .config.schema import SceneError, describe_keys
 from .folder_lock import folder_lock
 from .stages import roughness
@@ -61,7 +61,8 @@ def _parser(stages: dict[str, runner.Stage]) -> argparse.ArgumentParser:
                    help="print every scene key (or those of SECTION) with its default, type and unit, and exit")
     p.add_argument("stage", choices=[*stages, "run"], help="the stage to run (run = the whole main job)")
     p.add_argument("inputs", nargs="+", metavar="CONFIG",
-                   help="a scene file (TOML); for `roughness`, AFM files may be given instead")
+                   help="a scene file (TOML) or the name of a shipped scene (" + ", ".join(shipped_scenes())
+                        + "); for `roughness`, AFM files may be given instead")
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="SECTION.KEY=VALUE",
                    help="override a scene key (TOML value syntax); repeatable")
     p.add_argument("--out", type=Path, default=None, help="output folder (default results/<scene name>/)")
@@ -149,6 +150,17 @@ def main(argv: list[str] | None = None) -> int:
     return code
 
 
+def _names_a_scene(text: str) -> bool:
+    """Whether ``hdi roughness TEXT`` names a scene (a ``.toml`` file, or a shipped scene's name that is no
+    file here), not an AFM file."""
+    if text.endswith(".toml"):
+        return True
+    try:
+        return find_scene(text) != Path(text)
+    except SceneError:
+        return False
+
+
 def _how(terminated: bool) -> str:
     return "terminated (SIGTERM)" if terminated else "interrupted"
 
@@ -159,7 +171,7 @@ def _main(argv: list[str] | None = None) -> int:
     _logging(args.verbose, args.quiet)
     scene = None
     try:
-        if args.stage == "roughness" and not (len(args.inputs) == 1 and args.inputs[0].endswith(".toml")):
+        if args.stage == "roughness" and not (len(args.inputs) == 1 and _names_a_scene(args.inputs[0])):
             if args.out is None:
                 raise SceneError("hdi roughness FILE...: --out DIR is required when AFM files are given")
             check_options("roughness", None, **_given(args))

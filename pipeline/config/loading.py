@@ -1,5 +1,6 @@
-"""Loading a scene: read a TOML file, merge the base scenes it ``extends``, apply ``--set`` overrides and
-validate (:func:`pipeline.config.validation.validate`).
+"""Loading a scene: find its file (a path, or the name of a scene shipped with the package), read the
+TOML, merge the base scenes it ``extends``, apply ``--set`` overrides and validate
+(:func:`pipeline.config.validation.validate`).
 
 A base scene's relative file paths are made absolute from the base's own folder before the merge; an
 override names itself in the errors of the keys it set.
@@ -9,7 +10,9 @@ from __future__ import annotations
 
 import copy
 import json
+import os
 import re
+from importlib import resources
 from pathlib import Path
 from typing import Any, Iterable
 
@@ -36,13 +39,72 @@ def parse_override(text: str) -> tuple[str, str, Any]:
     return section, key, parsed
 
 
-def load_scene(path: str | Path, overrides: Iterable[str] = ()) -> Scene:
-    """Read, override and validate a scene file.
+#: The folder of the package that holds the shipped scenes (package data; in the repository
+#: ``pipeline/scenes`` is a link to ``configs/``, their one home).
+SCENES_FOLDER = "scenes"
+
+
+def shipped_scenes() -> dict[str, Path]:
+    """The scenes shipped with the package, by name (the file name without ``.toml``), sorted.
+
+    Found through :mod:`importlib.resources` in the installed package (a wheel's files, or the clone's
+    ``configs/`` in an editable install); each path resolved, so a base scene's ``extends`` is read
+    beside it.
+    """
+    folder = resources.files("pipeline").joinpath(SCENES_FOLDER)
+    if not folder.is_dir():
+        return {}
+    names = sorted(item.name[:-len(".toml")] for item in folder.iterdir() if item.name.endswith(".toml"))
+    return {name: Path(str(folder.joinpath(f"{name}.toml"))).resolve() for name in names}
+
+
+def _bare_name(text: str) -> bool:
+    """Whether ``text`` is a name and not a path: no folder separator, not ``.``/``..``, no ``~``."""
+    seps = {"/", os.sep, os.altsep} - {None}
+    return bool(text) and not any(sep in text for sep in seps) and text not in (".", "..") \
+        and not text.startswith("~")
+
+
+def find_scene(path: str | Path, folder: Path | None = None) -> Path:
+    """The scene file that ``path`` names: a file, else the shipped scene of that name.
+
+    Precedence (docs/cli.md, "Scenes by name"): a file that exists at ``path`` (relative to ``folder``,
+    else to the working directory) wins; a bare name (no folder separator) that is no file there is the
+    shipped scene of that name, with or without ``.toml`` (:func:`shipped_scenes`).
 
     Parameters
     ----------
     path
-        The TOML scene.
+        A path, or the name of a shipped scene (``"paper-2009"``).
+    folder
+        The folder a relative path is read from (a scene's own folder, for its ``extends``); ``None``:
+        the working directory.
+
+    Raises
+    ------
+    SceneError
+        When neither exists: naming the path tried and the shipped scenes.
+    """
+    text = os.fspath(path)
+    tried = Path(folder, text) if folder is not None else Path(text)
+    if tried.exists() or tried.is_symlink():
+        return tried  # (a folder or a broken link too: the reader says what it is)
+    shipped = shipped_scenes()
+    name = text[:-len(".toml")] if text.endswith(".toml") else text
+    if _bare_name(text) and name in shipped:
+        return shipped[name]
+    raise SceneError(f"{text}: scene file does not exist (looked for {tried.absolute()}); expected a scene "
+                     f"file or the name of a shipped scene: {', '.join(shipped) or '(none)'}")
+
+
+def load_scene(path: str | Path, overrides: Iterable[str] = ()) -> Scene:
+    """Find, read, override and validate a scene file.
+
+    Parameters
+    ----------
+    path
+        The TOML scene, or the name of a scene shipped with the package (``"paper-2009"``,
+        :func:`find_scene`).
     overrides
         ``section.key=value`` strings applied after reading (``--set`` on the command line).
 
@@ -51,7 +113,7 @@ def load_scene(path: str | Path, overrides: Iterable[str] = ()) -> Scene:
     SceneError
         For a missing or unreadable file, bad TOML, or any invalid field (see :func:`validate`).
     """
-    path = Path(path)
+    path = find_scene(path)
     raw = _read_raw(path)
     overrides = list(overrides)
     blame: dict[tuple[str, str], str] = {}
@@ -103,7 +165,10 @@ def _read_raw(path: Path, seen: tuple[Path, ...] = ()) -> dict[str, Any]:
         return raw
     if not isinstance(base_name, str):
         raise SceneError(f"{path}: scene.extends = {base_name!r}: expected a file name")
-    base_path = (path.parent / base_name).resolve()
+    try:  # (a file beside the scene, else a shipped scene of that name)
+        base_path = find_scene(base_name, path.parent).resolve()
+    except SceneError as exc:
+        raise SceneError(f"{path}: scene.extends: {exc}") from None
     if base_path in seen or base_path == path.resolve():
         raise SceneError(f"{path}: scene.extends = {base_name!r}: circular extension")
     if len(seen) + 1 >= MAX_EXTENDS_DEPTH:

@@ -1,12 +1,19 @@
 """Loading scene files (pipeline.config.loading): ``--set`` overrides change the value and the scene's hash
 (and a restated value changes neither), are validated and blamed on the option; a minimal file takes its
 name from the file and every default; relative record paths are taken from the scene's folder; a file
-that is missing or not TOML is one SceneError naming the file (docs/cli.md, "Scenes")."""
+that is missing or not TOML is one SceneError naming the file (docs/cli.md, "Scenes").
+Scenes by name (:func:`pipeline.config.loading.find_scene`): the scenes of configs/ ship with the package and
+load by name from any folder; a file that exists at the path given wins; a miss names the path tried and the
+shipped scenes (docs/cli.md, "Scenes by name")."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
+from pipeline.cli import main
+from pipeline.config.loading import find_scene, shipped_scenes
 from pipeline.config.scene import SceneError, load_scene, parse_override
 
 
@@ -72,3 +79,82 @@ def test_missing_scene_file(tmp_path):
     path = tmp_path / "nothere.toml"
     msg = _error(path)
     assert str(path) in msg and "scene file does not exist" in msg
+
+
+# Scenes by name
+
+
+def test_the_shipped_scenes_are_the_files_of_configs(repo_root):
+    shipped = shipped_scenes()
+    configs = sorted(repo_root.glob("configs/*.toml"))
+    assert list(shipped) == sorted(p.stem for p in configs) and "paper-2009" in shipped
+    # one home: in the clone the package's scenes are configs/ itself (pipeline/scenes links to it)
+    assert all(path == (repo_root / "configs" / f"{name}.toml").resolve() for name, path in shipped.items())
+
+
+@pytest.mark.parametrize("name", ["paper-2009", "paper-2009-identified", "sweep-3x3"])
+def test_a_name_loads_the_scene_its_file_does_from_any_folder(name, repo_root, tmp_path, monkeypatch):
+    by_path = load_scene(repo_root / "configs" / f"{name}.toml", ["contact.k=0.5"])
+    monkeypatch.chdir(tmp_path)
+    for given in (name, f"{name}.toml"):
+        by_name = load_scene(given, ["contact.k=0.5"])
+        assert by_name.hash == by_path.hash and by_name.path == by_path.path.resolve()
+        assert by_name.name == name  # (results/<name>/ as from the path)
+
+
+def test_a_file_that_exists_wins_over_the_shipped_scene(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "paper-2009.toml").write_text('[scene]\nname = "mine"\n[tfc]\nprotrusion_nm = 3.5\n')
+    mine = load_scene("paper-2009.toml")
+    assert mine.name == "mine" and mine["tfc"]["protrusion_nm"] == 3.5
+    assert load_scene("paper-2009").name == "paper-2009"  # (no file "paper-2009" here: the shipped one)
+    assert find_scene("paper-2009") == shipped_scenes()["paper-2009"]
+    assert find_scene("paper-2009.toml") == Path("paper-2009.toml")  # (the path as given)
+
+
+def test_extends_reads_beside_the_scene_then_the_shipped_one(tmp_path, monkeypatch, repo_root):
+    monkeypatch.chdir(tmp_path)
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "derived.toml").write_text('[scene]\nname = "derived"\nextends = "paper-2009-identified"\n'
+                                       '[tfc]\nprotrusion_nm = 3.5\n')
+    scene = load_scene(mine / "derived.toml")
+    identified = load_scene(repo_root / "configs" / "paper-2009-identified.toml")
+    assert scene["tfc"]["protrusion_nm"] == 3.5 and identified["tfc"]["protrusion_nm"] != 3.5
+    assert scene["lubricant"] == identified["lubricant"]  # the whole chain identified -> bulge -> paper
+    assert scene["air_bearing"]["bulge"] == "ph-limit"  # (set by the base's base)
+    # a base of that name beside the derived scene is the one read
+    (mine / "paper-2009-identified").write_text('[scene]\nname = "b"\n[tfc]\nprotrusion_nm = 2.0\n'
+                                                '[air_bearing]\nbulge = "none"\n')
+    (mine / "derived.toml").write_text('[scene]\nname = "derived"\nextends = "paper-2009-identified"\n')
+    assert load_scene(mine / "derived.toml")["tfc"]["protrusion_nm"] == 2.0
+
+
+@pytest.mark.parametrize("given, tried", [("nope", "nope"), ("nope.toml", "nope.toml"),
+                                          ("configs/paper-2009.toml", "configs/paper-2009.toml")])
+def test_a_miss_names_the_path_tried_and_the_shipped_scenes(given, tried, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)  # (outside the clone: configs/paper-2009.toml is a path, not a name)
+    with pytest.raises(SceneError) as info:
+        load_scene(given)
+    msg = str(info.value)
+    assert msg.startswith(f"{given}: scene file does not exist (looked for {tmp_path / tried})")
+    assert "\n" not in msg and all(name in msg for name in shipped_scenes())
+
+
+def test_a_missing_base_names_the_derived_scene(tmp_path):
+    (tmp_path / "d.toml").write_text('[scene]\nname = "d"\nextends = "nobase"\n')
+    with pytest.raises(SceneError) as info:
+        load_scene(tmp_path / "d.toml")
+    msg = str(info.value)
+    assert msg.startswith(f"{tmp_path / 'd.toml'}: scene.extends: nobase: scene file does not exist "
+                          f"(looked for {tmp_path / 'nobase'})") and "paper-2009-identified" in msg
+
+
+def test_the_command_line_takes_a_name(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    assert main(["dmw", "nope", "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "looked for" in err and "paper-2009-identified" in err
+    # `hdi roughness NAME`: a shipped scene's name is a scene, not an AFM file
+    assert main(["roughness", "paper-2009", "--out", str(tmp_path / "out"), "-q"]) == 0
+    assert (tmp_path / "out" / "roughness.nc").is_file() and list(tmp_path.iterdir()) == [tmp_path / "out"]
