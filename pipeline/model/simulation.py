@@ -25,7 +25,7 @@ Protocols (scene key ``sweep.protocol``, docs/model.md, section "Heater stepping
 from __future__ import annotations
 
 import time
-from typing import Any, Sequence
+from typing import Any, Callable, Sequence
 
 import numpy as np
 import xarray as xr
@@ -50,7 +50,7 @@ RUN_ERRORS = (running.IntegrationError, ValueError, FloatingPointError)
 
 def simulate(model: assembly.Model, protrusions: Sequence[float], *, histories: Sequence[float] = (),
              protocol: str = "independent", counters: bool = False, on_error: str = "raise",
-             timings: dict[str, float] | None = None) -> xr.Dataset:
+             timings: dict[str, float] | None = None, on_run: Callable[[], Any] | None = None) -> xr.Dataset:
     """Run the model at ``protrusions`` [nm] and return their steady-window scalars (and histories).
 
     Parameters
@@ -68,6 +68,8 @@ def simulate(model: assembly.Model, protrusions: Sequence[float], *, histories: 
         failures as ``"<protrusion> nm: <message>"``, ``"; "``-separated)
     timings : when given, ``timings["kernel_seconds"]`` is increased by the wall time spent in
         :func:`pipeline.model.running.run_model` (kept out of the dataset: equal inputs, equal dataset)
+    on_run : called after each run (a failed one too), :func:`run_count` times in all: the API counts
+        them on its progress display (output only; the dataset does not depend on it)
 
     Returns
     -------
@@ -83,7 +85,7 @@ def simulate(model: assembly.Model, protrusions: Sequence[float], *, histories: 
     if protocol == "stepping":
         if on_error != "raise":
             raise ValueError("on_error = 'nan' is for independent runs (a chain needs every step's end state)")
-        return _stepping(model, prot, histories, counters, timings)
+        return _stepping(model, prot, histories, counters, timings, on_run)
     rows: list[dict[str, float] | None] = []
     kept: list[tuple[float, running.Run, dict]] = []
     info: list[np.ndarray] = []
@@ -97,7 +99,11 @@ def simulate(model: assembly.Model, protrusions: Sequence[float], *, histories: 
             errors.append(f"{delta:g} nm: {exc}")
             rows.append(None)
             info.append(np.full(3, -1))
+            if on_run is not None:
+                on_run()
             continue
+        if on_run is not None:
+            on_run()
         rows.append(row)
         info.append(run.info[STEP_COUNTERS])
         if _kept(delta, histories):
@@ -174,8 +180,14 @@ def _history_coords(kept: list[tuple[float, running.Run, dict]]) -> dict[str, xr
             "time": coordinate("time", kept[0][1].time)}
 
 
+def run_count(protocol: str, n: int) -> int:
+    """Runs :func:`simulate` makes at ``n`` protrusions: ``n`` independent ones, or a stepping chain's
+    ``2 n - 1`` (up, then down from the top without running the top twice)."""
+    return max(2 * n - 1, 0) if protocol == "stepping" else n
+
+
 def _stepping(model: assembly.Model, prot: np.ndarray, histories: Sequence[float], counters: bool,
-              timings: dict[str, float] | None) -> xr.Dataset:
+              timings: dict[str, float] | None, on_run: Callable[[], Any] | None = None) -> xr.Dataset:
     """One heater-stepping chain over ``prot`` [nm] (module docstring; docs/model.md, section
     "Heater stepping")."""
     if prot.size == 0 or np.any(np.diff(prot) <= 0):
@@ -189,6 +201,8 @@ def _stepping(model: assembly.Model, prot: np.ndarray, histories: Sequence[float
     order = [(i, 0) for i in range(n)] + [(i, 1) for i in range(n - 2, -1, -1)]
     for i, j in order:
         run, hist, rows[DIRECTIONS[j]][i] = _run(model, float(prot[i]), y0, timings)
+        if on_run is not None:
+            on_run()
         y0 = run.state[-1].copy()  # the end state: where the next heater step starts
         info[i, j] = run.info[STEP_COUNTERS]
         touch[i, j] = outcomes.touched(run)
