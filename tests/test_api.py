@@ -127,7 +127,7 @@ def test_a_model_from_python_simulates_as_the_stages_do(flying, tmp_path):
     summary = hdi.run_stage("simulate", flying, tmp_path).parent / "summary.nc"
     assert hdi.open_dataset(tmp_path, summary.name)["fhm_bv"].values.tobytes() == mem["fhm_bv"][:1].values.tobytes()
     history = hdi.histories_of(mem).sel(protrusion=delta)
-    assert history["separation"].shape == (history.sizes["time"],) == (2401,)  # 0.6 ms at 0.25 us
+    assert history["separation"].shape == (history.sizes["elapsed_time"],) == (2401,)  # 0.6 ms at 0.25 us
     assert np.array_equal(history["separation"].values, hdi.open_dataset(tmp_path, "simulate")["separation"][0].values)
     sweep = hdi.open_dataset(hdi.run_stage("sweep", flying, tmp_path, scheduler="synchronous").parent, "sweep")
     assert sweep["fhm_bv"].sel(protrusion=4.5).values.ravel().tobytes() == mem["fhm_bv"][1:].values.tobytes()
@@ -161,9 +161,10 @@ def test_bad_input_raises_the_errors_the_command_line_reports(flying, paper_conf
 def _history(n=400):
     t = np.arange(n) * 1.5e-6
     c = (t > 2e-4).astype(float)
-    return xr.Dataset({"clearance": ("time", 0.5 - c + 0.1 * np.sin(t * 1e5), {"units": "nm"}),
-                       "in_contact": ("time", c), "contact_force": ("time", c * 1.5, {"units": "mN"}),
-                       "net_force": ("time", c - 1.0, {"units": "mN"})}, coords={"time": ("time", t)})
+    T = "elapsed_time"
+    return xr.Dataset({"clearance": (T, 0.5 - c + 0.1 * np.sin(t * 1e5), {"units": "nm"}),
+                       "in_contact": (T, c), "contact_force": (T, c * 1.5, {"units": "mN"}),
+                       "net_force": (T, c - 1.0, {"units": "mN"})}, coords={T: (T, t)})
 
 
 def _sweep(realisations=0):

@@ -33,7 +33,7 @@ import xarray as xr
 from ..config.grid import same_point
 from ..config.scene import PROTOCOLS
 from ..units import MS, NM
-from ..variables import HISTORIES, RUN, RUN_GRID_DIMS, STEPPING, coordinate, history, scalar
+from ..variables import HISTORIES, RUN, RUN_GRID_DIMS, STEPPING, TIME, coordinate, history, scalar
 from . import assembly, outcomes, running
 from .state import STEP_COUNTERS
 
@@ -125,18 +125,18 @@ def histories_of(ds: xr.Dataset) -> xr.Dataset:
     counters when kept (the histories must be those of every protrusion)."""
     names = [n for n in ds.data_vars if n.startswith("h_")]
     hp = ds["hist_protrusion"].values
-    data = {n[2:]: xr.Variable(("protrusion", "time"), ds[n].values, ds[n].attrs, ds[n].encoding)
+    data = {n[2:]: xr.Variable(("protrusion", TIME), ds[n].values, ds[n].attrs, ds[n].encoding)
             for n in names}
     for name in COUNTERS:
         if name in ds:
             data[name] = ds[name].variable
-    return xr.Dataset(data, coords={"protrusion": coordinate("protrusion", hp), "time": ds["time"].variable})
+    return xr.Dataset(data, coords={"protrusion": coordinate("protrusion", hp), TIME: ds[TIME].variable})
 
 
 def summary_of(ds: xr.Dataset) -> xr.Dataset:
     """The steady-window scalars of a :func:`simulate` result (``summary.nc``, a sweep's part)."""
     drop = [n for n in ds.data_vars if n.startswith("h_") or n in COUNTERS]
-    return ds.drop_vars(drop).drop_dims([d for d in ("hist_protrusion", "time") if d in ds.dims])
+    return ds.drop_vars(drop).drop_dims([d for d in ("hist_protrusion", TIME) if d in ds.dims])
 
 
 def _run(model: assembly.Model, delta_nm: float, y0: np.ndarray | None,
@@ -171,13 +171,13 @@ def _scalars(rows: list[dict[str, float] | None], dims: tuple[str, ...],
 
 
 def _histories(kept: list[tuple[float, running.Run, dict]]) -> dict[str, xr.Variable]:
-    return {"h_" + name: history(name, np.stack([k[2][name] for k in kept]), ("hist_protrusion", "time"))
+    return {"h_" + name: history(name, np.stack([k[2][name] for k in kept]), ("hist_protrusion", TIME))
             for name in kept[0][2] if name in HISTORIES}
 
 
 def _history_coords(kept: list[tuple[float, running.Run, dict]]) -> dict[str, xr.Variable]:
     return {"hist_protrusion": coordinate("hist_protrusion", np.array([k[0] for k in kept])),
-            "time": coordinate("time", kept[0][1].time)}
+            TIME: coordinate(TIME, kept[0][1].time)}
 
 
 def run_count(protocol: str, n: int) -> int:
