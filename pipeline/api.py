@@ -20,6 +20,12 @@ a stage is run by :class:`pipeline.runner.Runner` after the command line's check
 (:func:`pipeline.cli_checks.check_options`), a dataset is read by :func:`pipeline.io.read_dataset`. So a
 model built here simulates exactly as the ``simulate`` and ``sweep`` stages do.
 
+Progress (module docstring): each call that computes shows what ``hdi`` shows, without any logging set up
+by the caller: the stages' messages and, for long work, a ``tqdm.auto`` bar (a widget in a notebook, a bar
+on a terminal) or, elsewhere (a script's log), a progress line at the end and every 30 s
+(:mod:`pipeline.progress`); ``progress=False`` shows nothing. A caller whose own logging is configured
+(``logging.basicConfig``) gets the messages through it, once.
+
 Bad input raises the exception the command line turns into its one-line error, checked as the command
 line checks it (:mod:`pipeline.cli_checks`) before anything runs or is written:
 :class:`pipeline.config.scene.SceneError` (a scene, its path or an override), :class:`pipeline.io.DatasetError`
@@ -46,7 +52,7 @@ import xarray as xr
 import os
 from collections.abc import MutableMapping
 
-from . import runner
+from . import progress as _progress, runner
 from .cli_checks import (OptionError, check_flag, check_options, check_out, check_path_option, check_protrusions,
                          check_stage_options, integration_line)
 from .config.loading import load_scene as _load_scene
@@ -54,7 +60,7 @@ from .config.schema import SCHEMA, SceneError
 from .config.validation import Scene, check_value
 from .io import DatasetError, read_dataset, results_dir
 from .model.inputs import SimulationInputs
-from .model.simulation import histories_of as _histories_of, simulate as _simulate
+from .model.simulation import histories_of as _histories_of, run_count, simulate as _simulate
 from .model.assembly import Model
 from .model.running import IntegrationError
 
@@ -183,7 +189,7 @@ def _integration(exc: IntegrationError, scene: Scene | None) -> IntegrationError
 
 
 def simulation_inputs(scene: SceneLike, results: str | Path | None = None, *,
-                      k: float | None = None) -> SimulationInputs:
+                      k: float | None = None, progress: bool = True) -> SimulationInputs:
     """What one simulation of ``scene`` reads: interface tables, DMW record, bulge table and the contact
     criterion k [1], each only when the scene's effects need it.
 
@@ -196,6 +202,7 @@ def simulation_inputs(scene: SceneLike, results: str | Path | None = None, *,
     k : the contact criterion constant [1]; ``None``: the scene's ``contact.k``, else the calibration's
         (``hdi calibrate``, a fan-out of flying runs over the sweep's protrusions), else the scene's
         ``contact.fallback_probability`` (:func:`pipeline.model.scene_inputs.contact_k`)
+    progress : show the stages' messages and progress (module docstring); ``False``: none
 
     Returns
     -------
@@ -208,18 +215,21 @@ def simulation_inputs(scene: SceneLike, results: str | Path | None = None, *,
         ``results`` is no path, a file, or a folder that cannot be written (the runner locks it and
         keeps its datasets there, even when they are up to date).
     """
+    check_flag("progress =", progress)
     scene = _scene(scene)
     check_out(results, "results")
     k = _k(k)
-    if results is not None:
-        return runner.simulation_inputs(scene, results, calibration=True, k=k)
-    with tempfile.TemporaryDirectory(prefix="hdi-inputs-") as tmp:
-        sim = runner.simulation_inputs(scene, tmp, calibration=True, k=k)
-        # read now, before the folder goes (read_dataset loads each dataset fully into memory)
-        return SimulationInputs.of(sim.tables(), sim.record(), sim.bulge_table(), sim.k, sim.k_source)
+    with _progress.shown(progress):
+        if results is not None:
+            return runner.simulation_inputs(scene, results, calibration=True, k=k)
+        with tempfile.TemporaryDirectory(prefix="hdi-inputs-") as tmp:
+            sim = runner.simulation_inputs(scene, tmp, calibration=True, k=k)
+            # read now, before the folder goes (read_dataset loads each dataset fully into memory)
+            return SimulationInputs.of(sim.tables(), sim.record(), sim.bulge_table(), sim.k, sim.k_source)
 
 
-def build_model(scene: SceneLike, results: str | Path | None = None, *, k: float | None = None) -> Model:
+def build_model(scene: SceneLike, results: str | Path | None = None, *, k: float | None = None,
+                progress: bool = True) -> Model:
     """The model of ``scene`` with its inputs resolved: what the ``simulate`` and ``sweep`` stages run.
 
     Parameters
@@ -228,19 +238,22 @@ def build_model(scene: SceneLike, results: str | Path | None = None, *, k: float
     results : the results folder whose datasets the model reads, made current first (``None``: made in
         memory; :func:`simulation_inputs`)
     k : the contact criterion constant [1] (``None``: the scene's, else calibrated; :func:`simulation_inputs`)
+    progress : show the stages' messages and progress (module docstring); ``False``: none
 
     Returns
     -------
     pipeline.model.assembly.Model
         The assembled model in SI units (``model.k`` [1]); run it with :func:`simulate`.
     """
+    check_flag("progress =", progress)
     scene = _scene(scene)
-    return simulation_inputs(scene, results, k=k).model(scene)
+    with _progress.shown(progress):
+        return simulation_inputs(scene, results, k=k).model(scene)
 
 
 def simulate(model: Model, protrusions: Iterable[float], *, histories: Iterable[float] = (),
              protocol: str = "independent", counters: bool = False, on_error: str = "raise",
-             timings: MutableMapping[str, float] | None = None) -> xr.Dataset:
+             timings: MutableMapping[str, float] | None = None, progress: bool = True) -> xr.Dataset:
     """Run ``model`` at ``protrusions`` [nm]: :func:`pipeline.model.simulation.simulate`, the call of the
     ``simulate`` and ``sweep`` stages, after the command line's checks of a protrusion.
 
@@ -251,6 +264,8 @@ def simulate(model: Model, protrusions: Iterable[float], *, histories: Iterable[
         finite, >= 0 and at most the flying height + 100 nm (:func:`pipeline.cli_checks.check_protrusions`)
     histories, protocol, counters, on_error, timings : as :func:`pipeline.model.simulation.simulate`
         (``histories``: protrusions [nm] whose time histories are kept)
+    progress : count the runs as they finish, ``"simulate: k/N runs done, ..."`` (module docstring);
+        ``False``: nothing shown
 
     Returns
     -------
@@ -273,11 +288,14 @@ def simulate(model: Model, protrusions: Iterable[float], *, histories: Iterable[
         raise OptionError("protrusions = []: expected at least one protrusion [nm]")
     kept = check_protrusions(histories, fh0, "histories")
     check_flag("counters =", counters)
+    check_flag("progress =", progress)
     if timings is not None and not isinstance(timings, MutableMapping):
         raise ValueError(f"timings = {timings!r}: expected a dict (or None), got {type(timings).__name__}")
     try:
-        return _simulate(model, prot, histories=kept, protocol=protocol, counters=counters, on_error=on_error,
-                         timings=timings)
+        with _progress.shown(progress), _progress.Progress(run_count(protocol, len(prot)), unit="run",
+                                                           label="simulate") as shown:
+            return _simulate(model, prot, histories=kept, protocol=protocol, counters=counters, on_error=on_error,
+                             timings=timings, on_run=shown.update)
     except IntegrationError as exc:
         raise _integration(exc, model.scene) from None
 
@@ -358,8 +376,9 @@ def _client_address(scheduler: Any) -> str | None:
 
 
 def _build(target: str, scene: SceneLike, out: str | Path | None, force: bool, scheduler: Scheduler,
-           workers: int | None, yes: bool) -> dict[str, tuple[Path, ...]]:
+           workers: int | None, yes: bool, progress: bool) -> dict[str, tuple[Path, ...]]:
     """Make ``target`` (a stage, or ``"run"``: the main job) current, as ``hdi TARGET`` does."""
+    check_flag("progress =", progress)
     scene = _scene(scene)
     stages = runner.registry()
     if not isinstance(target, str):
@@ -375,14 +394,16 @@ def _build(target: str, scene: SceneLike, out: str | Path | None, force: bool, s
         scheduler = address
     targets = runner.main_job(scene, stages) if target == "run" else [target]
     try:
-        return runner.Runner(scene, results_dir(scene, out), stages, scheduler=scheduler,
-                             workers=workers).build(targets, force=force)
+        with _progress.shown(progress):
+            return runner.Runner(scene, results_dir(scene, out), stages, scheduler=scheduler,
+                                 workers=workers).build(targets, force=force)
     except IntegrationError as exc:
         raise _integration(exc, scene) from None
 
 
 def run_stage(stage: str, scene: SceneLike, out: str | Path | None = None, *, force: bool = False,
-              scheduler: Scheduler = None, workers: int | None = None, yes: bool = False) -> Path:
+              scheduler: Scheduler = None, workers: int | None = None, yes: bool = False,
+              progress: bool = True) -> Path:
     """Make one stage current in a results folder, with everything upstream of it: ``hdi STAGE``.
 
     Parameters
@@ -397,17 +418,19 @@ def run_stage(stage: str, scene: SceneLike, out: str | Path | None = None, *, fo
         ``distributed.Client``, whose scheduler runs the tasks (its address is used: a client of a
         ``LocalCluster(processes=False)`` runs them in this process)
     yes : allow a big job beyond the limits of :mod:`pipeline.config.limits` (``--yes``)
+    progress : show the stages' messages and progress as ``hdi`` does (module docstring); ``False``:
+        none (``hdi -q``)
 
     Returns
     -------
     pathlib.Path
         The stage's primary output (``sweep.nc`` for ``"sweep"``); :func:`open_dataset` reads it.
     """
-    return _build(stage, scene, out, force, scheduler, workers, yes)[stage][0]
+    return _build(stage, scene, out, force, scheduler, workers, yes, progress)[stage][0]
 
 
 def run(scene: SceneLike, out: str | Path | None = None, *, force: bool = False, scheduler: Scheduler = None,
-        workers: int | None = None, yes: bool = False) -> Mapping[str, Path]:
+        workers: int | None = None, yes: bool = False, progress: bool = True) -> Mapping[str, Path]:
     """Make the main job current (``hdi run``): the stages of the report, in order.
 
     Parameters are those of :func:`run_stage` (``force`` recomputes every stage of the main job).
@@ -417,4 +440,5 @@ def run(scene: SceneLike, out: str | Path | None = None, *, force: bool = False,
     dict of str to pathlib.Path
         Each stage's primary output.
     """
-    return {name: paths[0] for name, paths in _build("run", scene, out, force, scheduler, workers, yes).items()}
+    return {name: paths[0] for name, paths in _build("run", scene, out, force, scheduler, workers, yes,
+                                                                  progress).items()}

@@ -18,7 +18,7 @@ from pathlib import Path
 
 from . import __version__, interrupts, runner
 from .io import DatasetError, os_error_line, results_dir
-from .progress import interval_s
+from .progress import StderrHandler, interval_s
 from .config.loading import find_scene, load_scene, shipped_scenes
 from .config.schema import SceneError, describe_keys
 from .folder_lock import folder_lock
@@ -27,14 +27,6 @@ from .cli_checks import MAX_SCENES, check_options, integration_line, one_line_wa
 from .model.running import IntegrationError
 
 log = logging.getLogger("pipeline")
-
-
-class _Format(logging.Formatter):
-    """Progress as plain lines; warnings and errors say so."""
-
-    def format(self, record: logging.LogRecord) -> str:
-        text = super().format(record)
-        return text if record.levelno < logging.WARNING else f"{record.levelname.lower()}: {text}"
 
 
 class _HelpKeys(argparse.Action):
@@ -95,18 +87,6 @@ def _parser(stages: dict[str, runner.Stage]) -> argparse.ArgumentParser:
     return p
 
 
-class _Stderr(logging.StreamHandler):
-    """Writes to whatever ``sys.stderr`` is now (the CLI may be called repeatedly in one process)."""
-
-    @property
-    def stream(self):  # type: ignore[override]
-        return sys.stderr
-
-    @stream.setter
-    def stream(self, value) -> None:
-        pass
-
-
 def _given(args: argparse.Namespace) -> dict:
     """The options :func:`pipeline.cli_checks.check_options` checks."""
     return {name: getattr(args, name) for name in ("out", "scheduler", "workers", "yes", "readme", "channel",
@@ -123,10 +103,8 @@ def _logging(verbose: int = 0, quiet: bool = False) -> None:
     stderr; with ``quiet`` (``-q``) warnings and errors only; ``verbose`` 1 (``-v``) adds dask's own
     messages, 2 (``-vv``) the DEBUG ones."""
     one_line_warnings()
-    if not any(isinstance(h, _Stderr) for h in log.handlers):
-        handler = _Stderr()
-        handler.setFormatter(_Format("%(message)s"))
-        log.addHandler(handler)
+    if not any(isinstance(h, StderrHandler) for h in log.handlers):
+        log.addHandler(StderrHandler())
     log.setLevel(logging.WARNING if quiet else logging.DEBUG if verbose >= 2 else logging.INFO)
     if not verbose:  # keep the terminal quiet (dask's shutdown races log CommClosedError)
         for name in _DASK_LOGGERS:

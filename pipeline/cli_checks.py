@@ -32,7 +32,7 @@ import numpy as np
 from .config.grid import label, range_count, roughness_sets, same_point
 from .config.schema import SCHEMA
 from .io import is_read_only, os_error_line
-from .paths import special_kind
+from .paths import looked_for, special_kind
 from . import fanout, sizing
 from .fanout import CONNECT_TIMEOUT_S, LOCAL
 from .config import limits
@@ -155,7 +155,7 @@ def scheduler_address(given: str | None) -> tuple[str | None, str]:
         with open(given, encoding="utf-8") as f:
             identity = json.load(f)
     except FileNotFoundError:
-        raise OptionError(f"{where}: no such scheduler file (expected tcp://HOST:PORT, or the JSON file "
+        raise OptionError(f"{where}: no such scheduler file{looked_for(given)} (expected tcp://HOST:PORT, or the JSON file "
                           "`dask scheduler --scheduler-file FILE` writes)") from None
     except OSError as exc:
         raise OptionError(f"{where}: {os_error_line(exc)}") from None
@@ -376,7 +376,7 @@ def check_readme(readme: str | Path | None) -> None:
         raise OptionError(f"--readme {readme}: is {special_kind(path)}; expected the page whose generated "
                           "section the report rewrites (e.g. docs/results.md)")
     if not path.is_file():
-        raise OptionError(f"--readme {readme}: file does not exist; expected the page whose generated "
+        raise OptionError(f"--readme {readme}: file does not exist{looked_for(readme)}; expected the page whose generated "
                           "section the report rewrites (e.g. docs/results.md)")
     if is_read_only(path):
         raise OptionError(f"--readme {readme}: is read-only; make it writable (chmod u+w) for the report to "
@@ -397,7 +397,8 @@ def check_write_scene(path: str | Path | None, force: bool = False) -> None:
                           "(--force also recomputes the identification)")
     folder = path.parent
     if not folder.is_dir():
-        raise OptionError(f"--write-scene {path}: folder {folder} does not exist; expected an existing folder")
+        raise OptionError(f"--write-scene {path}: folder {folder} does not exist{looked_for(folder)}; expected an "
+                          "existing folder")
     try:  # (a read-only folder or mount: found now, not after the study)
         fd, tmp = tempfile.mkstemp(prefix=".hdi-write-test.", dir=folder)
         os.close(fd)

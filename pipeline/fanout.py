@@ -59,7 +59,7 @@ from pathlib import Path
 from typing import Any, Callable, Iterable, Iterator, Sequence
 
 from .code_version import code_key
-from .progress import Progress, env_seconds
+from .progress import Progress, end_line, env_seconds
 
 log = logging.getLogger(__name__)
 
@@ -250,6 +250,7 @@ def run_tasks(fn: Callable[..., Any], tasks: Iterable[tuple], *, scheduler: str 
             return time.perf_counter() - t0
         if scheduler == "threads":
             return _threads(fn, tasks, local_workers(workers, len(tasks)), done)
+        end_line()  # (a short batch on a cluster says its end too: nothing else shows it ran there)
         return _distributed(fn, tasks, scheduler, workers, done)
 
 
@@ -343,6 +344,8 @@ def _distributed(fn: Callable[..., Any], tasks: list[tuple], scheduler: str, wor
         if scheduler != "processes":  # (ours serves no dashboard pages: its HTTP port has dask's health routes only)
             announce(client, address)
         check_code(client, fn)
+        log.info("fan-out: %d tasks on %s", len(tasks), f"{n} local processes" if scheduler == "processes" else
+                 f"the dask scheduler {address} ({sum(client.nthreads().values())} worker threads)")
         client.run(_warm_worker)
         t0 = time.perf_counter()
         # (keys named after fn, as the dashboard and the workers' logs would name fn itself)

@@ -36,7 +36,8 @@ import numpy as np
 import xarray as xr
 
 from . import DISTRIBUTION, __version__, interrupts
-from .paths import refuse_links
+from .paths import looked_for, refuse_links
+from .variables import TIME
 
 try:  # (POSIX: the file size limit, ulimit -f)
     import resource
@@ -150,13 +151,8 @@ def check_cf(ds: xr.Dataset, where: str = "dataset") -> None:
         raise DatasetError(f"{where}: variables without units/long_name: {missing}")
 
 
-#: On disk, ``time`` (elapsed simulated time [s], not a date) is the coordinate ``elapsed_time`` in
-#: plain seconds: a coordinate named ``time`` is a calendar time to CF readers (the compliance checker
-#: then asks for units ``s since <date>``), and ``since`` in its units makes xarray's default
-#: ``open_dataset`` decode it to datetimes at microsecond resolution, merging 250 ns samples.
-#: :func:`read_dataset` renames it back to ``time``.
-TIME_ON_DISK = "elapsed_time"
-#: Units of ``time`` written before ``elapsed_time`` (still read back as seconds).
+#: Units of the elapsed time (:data:`pipeline.variables.TIME`) in files written when its coordinate was
+#: ``time`` (read back as seconds, under its one name).
 OLD_TIME_UNITS = "s since 1970-01-01 00:00:00"
 
 
@@ -164,16 +160,11 @@ def cf_encoding(ds: xr.Dataset) -> tuple[xr.Dataset, dict[str, dict[str, Any]]]:
     """A copy of ``ds`` and its NetCDF encoding, arranged for CF-1.8 (see :mod:`pipeline.variables`).
 
     Coordinates get no ``_FillValue``; labels (strings) lose ``units`` and are stored as character
-    arrays; 64-bit integers are stored as 32-bit (CF 2.2) when their values fit; ``time`` becomes
-    :data:`TIME_ON_DISK` in plain seconds; numeric variables are compressed and chunked
-    (:func:`compression`; lossless: the values read back bit for bit). Declared missing values already
+    arrays; 64-bit integers are stored as 32-bit (CF 2.2) when their values fit; numeric variables are
+    compressed and chunked (:func:`compression`; lossless: the values read back bit for bit). Declared missing values already
     in a variable's encoding (``regime``) are kept.
     """
     out = ds.copy()
-    if "time" in out.variables or "time" in out.dims:
-        out = out.rename({"time": TIME_ON_DISK})
-        for key in ("standard_name", "axis"):  # (a duration, not CF's calendar time)
-            out[TIME_ON_DISK].attrs.pop(key, None)
     encoding: dict[str, dict[str, Any]] = {}
     for name in list(out.variables):
         v = out[name]
@@ -200,7 +191,7 @@ ZLIB_LEVEL = 4
 #: (``sw.fhm_bv.sel(roughness=..., damping=...)``) decompresses only that slice's protrusion rows.
 POINT_DIMS = frozenset({"roughness", "damping", "realisation", "direction", "protrusion", "hist_protrusion"})
 #: Dimensions a chunk spans whole (a time history, a protrusion row of the sweep's scalars).
-ROW_DIMS = (TIME_ON_DISK, "protrusion")
+ROW_DIMS = (TIME, "protrusion")
 #: A variable smaller than this [B] is stored contiguous and uncompressed: HDF5 spends about 3 kB on the
 #: chunk index of every chunked variable, more than zlib saves on a few hundred doubles (measured on the
 #: datasets of ``make run``: compressing every variable made sweep.nc 105 kB instead of 50 kB).
@@ -482,7 +473,7 @@ def read_dataset(path: str | Path, *, stage: str | None = None, variables: Itera
     path = Path(path)
     if not path.is_file():
         hint = f" (run `hdi {stage}` first)" if stage else ""
-        raise DatasetError(f"{path}: dataset does not exist{hint}")
+        raise DatasetError(f"{path}: dataset does not exist{looked_for(path)}{hint}")
     if is_busy(path):
         raise DatasetBusy(path)
     try:
@@ -491,10 +482,10 @@ def read_dataset(path: str | Path, *, stage: str | None = None, variables: Itera
     except (OSError, ValueError) as exc:
         raise DatasetError(f"{path}: not a readable NetCDF dataset: {exc}") from None
     interrupts.check()  # (netCDF4's error checks can swallow a signal raised during the read)
-    if TIME_ON_DISK in ds.variables and "time" not in ds.variables:
-        ds = ds.rename({TIME_ON_DISK: "time"})
-    elif "time" in ds.variables and ds["time"].attrs.get("units") == OLD_TIME_UNITS:
-        ds["time"].attrs["units"] = "s"
+    if "time" in ds.variables and TIME not in ds.variables:  # (a file of the time before one name)
+        ds = ds.rename({"time": TIME})
+        if ds[TIME].attrs.get("units") == OLD_TIME_UNITS:
+            ds[TIME].attrs["units"] = "s"
     missing = [v for v in variables if v not in ds.variables]
     if missing:
         raise DatasetError(f"{path}: missing variables {missing}")

@@ -97,6 +97,13 @@ _KINDS = ((stat.S_ISFIFO, "a FIFO (named pipe)"), (stat.S_ISCHR, "a character de
           (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket"), (stat.S_ISDIR, "a folder"))
 
 
+def looked_for(path: str | Path) -> str:
+    """``" (looked for /abs/path)"``: where a relative ``path`` that was not found was looked for (from the
+    working directory), for a 'does not exist' message; ``""`` for an absolute path, which says it itself."""
+    p = Path(path).expanduser()
+    return "" if p.is_absolute() else f" (looked for {p.absolute()})"
+
+
 def special_kind(path: str | Path) -> str | None:
     """What ``path`` (a link followed) is when it exists but is not a regular file (``"a FIFO (named
     pipe)"``, ``"a character device"``, ...), else ``None``: reading a FIFO or ``/dev/zero`` never ends,

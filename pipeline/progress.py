@@ -6,16 +6,26 @@ phases: its search's generations, each round of profiles, the scoring, with the 
 ``hdi accuracy`` its runs). How a :class:`Progress` shows
 itself is chosen when it starts (:func:`display`):
 
-* ``"off"``: the ``pipeline`` logger does not show INFO (``hdi -q``, or a library caller that set up no
-  logging), or another :class:`Progress` is running in this context: the outer one owns the display
+* ``"off"``: the ``pipeline`` logger does not show INFO (``hdi -q``, or a library caller whose own
+  logging configuration leaves INFO out), the call asked for none (``progress=False`` of the API:
+  :func:`shown`), or another :class:`Progress` is running in this context: the outer one owns the display
   (the generations of ``hdi identify``, not each generation's fan-out);
-* ``"bar"``: stderr is an interactive terminal and ``CI`` is not set: a tqdm bar with its ETA; while it
+* ``"bar"``: stderr is an interactive terminal and ``CI`` is not set, or the code runs in a Jupyter
+  kernel: a ``tqdm.auto`` bar with its ETA (a widget in a notebook, text on a terminal); while it
   runs, the ``pipeline`` log lines (tqdm's logging redirect) and the warnings are written above it, not
   over it;
 * ``"lines"``: otherwise (a batch job's log, a pipe, a file): every :func:`interval_s` seconds (default
   :data:`INTERVAL_S`, environment variable ``HDI_PROGRESS_S``) one INFO line
   ``"<stage>: k/N <unit>s done, elapsed M:SS, ETA M:SS"``, and one at the end when the work took that
-  long (a shorter one says its end at DEBUG, ``hdi -vv``).
+  long (a shorter one says its end at DEBUG, ``hdi -vv``), and always at INFO within a call of the
+  Python API (:func:`shown`) and on a dask.distributed cluster (:attr:`Progress.end_line`), where a run
+  of seconds would otherwise say nothing.
+
+A Python caller (:mod:`pipeline.api`) sees what ``hdi`` shows without configuring logging: within
+:func:`shown`, when no handler would take the ``pipeline`` log records (neither the ``pipeline`` logger
+nor the root has one), one that writes INFO lines to stderr is attached for the call's duration
+(:class:`StderrHandler`, the command line's own); a caller who configured logging keeps their
+configuration, and nothing is written twice.
 
 Work in phases of different kinds (``hdi identify``: the search's generations, each round of profiles'
 evaluations, the scoring of the evaluations) counts each phase with a total of its own, fixed when the
@@ -45,7 +55,67 @@ log = logging.getLogger(__name__)
 INTERVAL_S = 30.0
 
 _LABEL: contextvars.ContextVar[str] = contextvars.ContextVar("hdi_progress_label", default="hdi")
-_ACTIVE: contextvars.ContextVar[bool] = contextvars.ContextVar("hdi_progress_active", default=False)
+#: The :class:`Progress` whose display runs in this context (it owns the display: :func:`display`).
+_ACTIVE: contextvars.ContextVar["Progress | None"] = contextvars.ContextVar("hdi_progress_active", default=None)
+#: Within :func:`shown`: ``True`` (an API call that shows its progress) or ``False`` (``progress=False``).
+_SHOWN: contextvars.ContextVar[bool | None] = contextvars.ContextVar("hdi_progress_shown", default=None)
+
+
+class LineFormat(logging.Formatter):
+    """Progress and stage messages as plain lines; warnings and errors say so (``warning: ...``)."""
+
+    def format(self, record: logging.LogRecord) -> str:
+        text = super().format(record)
+        return text if record.levelno < logging.WARNING else f"{record.levelname.lower()}: {text}"
+
+
+class StderrHandler(logging.StreamHandler):
+    """Writes to whatever ``sys.stderr`` is now (the command line may be called repeatedly in one process,
+    a notebook replaces ``sys.stderr`` per cell), as :class:`LineFormat` lines."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.setFormatter(LineFormat("%(message)s"))
+
+    @property
+    def stream(self):  # type: ignore[override]
+        return sys.stderr
+
+    @stream.setter
+    def stream(self, value) -> None:
+        pass
+
+
+@contextlib.contextmanager
+def shown(enabled: bool = True) -> Iterator[bool]:
+    """Within the block (one call of :mod:`pipeline.api`), progress and the stages' messages reach a
+    Python caller who configured no logging; ``enabled=False`` shows no progress at all (module docstring).
+
+    With ``enabled``, when no handler would take the ``pipeline`` log records (``hasHandlers()`` is false:
+    nothing configured), a :class:`StderrHandler` is attached to the ``pipeline`` logger and, if that
+    logger has no level of its own, its level set to INFO, both undone at the end of the block. Logging
+    that is configured (the command line's, ``logging.basicConfig``) is left as it is: no line twice. A
+    block inside another (``build_model`` calling ``simulation_inputs``) changes nothing. Yields whether
+    progress is shown.
+    """
+    if _SHOWN.get() is not None:  # (the outer call decided)
+        yield bool(_SHOWN.get())
+        return
+    logger = logging.getLogger("pipeline")
+    handler = StderrHandler() if enabled and not logger.hasHandlers() else None
+    level = logger.level
+    if handler is not None:
+        logger.addHandler(handler)
+        if level == logging.NOTSET:
+            logger.setLevel(logging.INFO)
+    token = _SHOWN.set(bool(enabled))
+    try:
+        yield bool(enabled)
+    finally:
+        _SHOWN.reset(token)
+        if handler is not None:
+            logger.removeHandler(handler)
+            logger.setLevel(level)
 
 
 @contextlib.contextmanager
@@ -83,11 +153,30 @@ def interval_s() -> float:
     return env_seconds("HDI_PROGRESS_S", INTERVAL_S)
 
 
+def end_line() -> None:
+    """The display running in this context (the :class:`Progress` that owns it: a fan-out's own, or the
+    work around it, such as the sweep's batches) says its end at INFO however short the work was
+    (:attr:`Progress.end_line`): a fan-out on a cluster calls it."""
+    owner = _ACTIVE.get()
+    if owner is not None:
+        owner.end_line = True
+
+
+def in_notebook() -> bool:
+    """Whether this process is a Jupyter kernel, where ``tqdm.auto`` draws a widget (the test
+    ``tqdm.autonotebook`` makes: a kernel's shell module is imported; not a Qt console or Spyder)."""
+    if "ipykernel.zmqshell" not in sys.modules:
+        return False
+    return not any(name == "QT_API" or name.startswith("SPYDER") for name in os.environ)
+
+
 def display() -> str:
     """How a :class:`Progress` starting now shows itself: ``"off"``, ``"bar"`` or ``"lines"`` (module
     docstring)."""
-    if _ACTIVE.get() or not logging.getLogger("pipeline").isEnabledFor(logging.INFO):
+    if _ACTIVE.get() is not None or _SHOWN.get() is False or not logging.getLogger("pipeline").isEnabledFor(logging.INFO):
         return "off"
+    if in_notebook():
+        return "bar"
     try:
         tty = sys.stderr.isatty()
     except (AttributeError, ValueError):  # (a closed or replaced stderr)
@@ -117,6 +206,9 @@ class Progress:
     timer : the clock [s] of the elapsed time and the ETA (default :func:`time.perf_counter`; a test's own)
     phase : the name of the first phase, where the work is in phases (:meth:`phase`)
 
+    The attribute ``end_line`` (default: within an API call, :func:`shown`) makes the ``"lines"``
+    display say the end at INFO however short the work was (a fan-out on a cluster sets it: :func:`end_line`).
+
     Work in phases (a total each, one elapsed clock): :meth:`phase`.
     """
 
@@ -138,6 +230,7 @@ class Progress:
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self._token: contextvars.Token | None = None
+        self.end_line = bool(_SHOWN.get())
 
     def __enter__(self) -> "Progress":
         return self.start()
@@ -151,9 +244,9 @@ class Progress:
         self._t0 = self._phase_t0 = self._now()
         if self.mode == "off":
             return self
-        self._token = _ACTIVE.set(True)
+        self._token = _ACTIVE.set(self)
         if self.mode == "bar":
-            from tqdm import tqdm
+            from tqdm.auto import tqdm  # (a widget in a notebook, text on a terminal)
             from tqdm.contrib.logging import logging_redirect_tqdm
             self._redirect = logging_redirect_tqdm(loggers=[logging.getLogger("pipeline")])
             self._redirect.__enter__()
@@ -234,8 +327,8 @@ class Progress:
 
     def _say_end(self) -> None:
         """The ``"lines"`` display's last line of the work (or of a phase): INFO when it took an interval
-        or more, else DEBUG."""
-        long = self._lines > 0 or self._now() - self._phase_t0 >= interval_s()
+        or more (or :attr:`end_line` is set), else DEBUG."""
+        long = self.end_line or self._lines > 0 or self._now() - self._phase_t0 >= interval_s()
         log.log(logging.INFO if long else logging.DEBUG, self.line())
 
     def close(self) -> None:

@@ -57,7 +57,7 @@ from .model.scene_inputs import simulation_inputs as wanted_inputs
 from .folder_lock import LOCK_NAME, STAGING_PREFIX, folder_lock
 from .io import (KEY_ATTR, DatasetBusy, DatasetError, RUN_ID, file_hash, read_attrs, read_dataset, temporary_path,
                  write_dataset)
-from .paths import append_text, refuse_links
+from .paths import append_text, looked_for, refuse_links
 
 log = logging.getLogger(__name__)
 
@@ -358,7 +358,7 @@ class Runner:
             files = {role: Path(p) for role, p in self.stage(name).files(self.scene).items()}
             for role, p in files.items():
                 if not p.is_file():
-                    raise FileNotFoundError(f"{name}: input file {p} ({role}) does not exist")
+                    raise FileNotFoundError(f"{name}: input file {p} ({role}) does not exist{looked_for(p)}")
             self._files[name] = files
         return self._files[name]
 

@@ -16,11 +16,15 @@ units it is written in.
 How the datasets meet CF-1.8 (:func:`pipeline.io.cf_encoding`, applied by :func:`pipeline.io.write_dataset`):
 
 * coordinates carry no ``_FillValue`` (CF 2.5.1);
-* ``time`` is an elapsed simulated time in seconds, not a date: on disk it is the coordinate
-  ``elapsed_time`` in plain ``s`` (:data:`pipeline.io.TIME_ON_DISK`), which CF and xarray read as a
-  number (a coordinate named ``time``, or units ``s since <date>``, is a calendar time to both, and
-  xarray's default decoding rounded it to microseconds); :func:`pipeline.io.read_dataset` renames it
-  back to ``time``;
+* the simulated time is an elapsed time in seconds, not a date: the coordinate :data:`TIME`
+  (``elapsed_time``) in plain ``s``, one name in memory (:func:`pipeline.model.simulation.simulate`) and
+  in the files, which CF and xarray read as a number (a coordinate named ``time``, or units
+  ``s since <date>``, is a calendar time to both: the compliance checker then asks for a reference date,
+  and xarray's default decoding rounded it to microseconds). For the same reason it has no ``axis``
+  (CF's ``T`` axis and ``standard_name = "time"`` are a calendar time's); :func:`pipeline.io.read_dataset`
+  reads a file written before with ``time`` as ``elapsed_time``;
+* ``axis`` where CF has one: ``separation`` of ``interface.nc``, the height of the TFC flat above the
+  mean of summit heights, is the vertical axis (``axis = "Z"``, ``positive = "up"``; ``ds.cf["Z"]``);
 * labels (string coordinates such as ``roughness`` or ``route``) have no units and are stored as
   character arrays (CF 2.2), which xarray decodes back to strings;
 * ``regime`` is a flag variable (:class:`Regime`) whose missing value (-1, a point not computed)
@@ -87,16 +91,18 @@ class Variable:
     ----------
     name : variable name in the datasets
     units : dataset units (UDUNITS; ``""`` for labels, which have none)
-    long_name : CF ``long_name``
+    long_name : CF ``long_name``: a few words, short enough for a plot's axis label (with the units)
     si_unit : SI value of one dataset unit (1e-9 for nm): dataset value = SI value / ``si_unit`` (dividing
         undoes the scene's ``x_nm * 1e-9`` exactly, multiplying by 1e9 would not)
     standard_name : CF standard name, where CF has one
-    dims : dimensions beyond the grid of the dataset (e.g. ``("time",)`` for histories)
+    dims : dimensions beyond the grid of the dataset (e.g. ``(TIME,)`` for histories)
     effect : scene effect producing the variable (``None``: always present)
     dtype : numpy dtype on disk
     flag_values, flag_meanings, flag_masks : for flag variables (values: one code; masks: bits)
     fill_value : declared missing value (``_FillValue``), for integer variables
     extra : further attributes (``rule``, ``formula``, ``axis``, ...)
+    description : the ``description`` attribute: the sentence that says what the variable is, where the
+        ``long_name`` cannot (``""``: the ``long_name`` says it all)
     """
 
     name: str
@@ -112,6 +118,12 @@ class Variable:
     flag_masks: tuple[int, ...] | None = None
     fill_value: int | None = None
     extra: tuple[tuple[str, str], ...] = ()
+    description: str = ""
+
+    @property
+    def sentence(self) -> str:
+        """What the variable is, in full: its :attr:`description`, else its ``long_name``."""
+        return self.description or self.long_name
 
     @property
     def si_factor(self) -> float:
@@ -121,6 +133,8 @@ class Variable:
     def attrs(self) -> dict[str, Any]:
         """CF attributes of the variable (``_FillValue`` goes into the encoding, not here)."""
         a: dict[str, Any] = {"long_name": self.long_name}
+        if self.description:
+            a["description"] = self.description
         if self.units:
             a["units"] = self.units
         if self.standard_name:
@@ -161,25 +175,26 @@ def _group(*items: Variable) -> dict[str, Variable]:
 
 
 V = Variable
-#: SI value of one dataset unit
+#: The elapsed simulated time [s]: its coordinate's name in memory and in the files (module docstring).
+TIME = "elapsed_time"
 
 #: Coordinates shared by the datasets.
 COORDINATES = _group(
     V("protrusion", "nm", "TFC protrusion", NM, dims=("protrusion",)),
     V("roughness", "", "roughness set label", dims=("roughness",), dtype="str"),
-    V("damping", "1", "modal damping ratio of the air bearing", dims=("damping",)),
-    V("time", "s", "elapsed simulated time", dims=("time",)),  # (on disk: elapsed_time, pipeline.io)
-    V("hist_protrusion", "nm", "protrusion of the kept histories", NM, dims=("hist_protrusion",)),
-    V("direction", "", "pass of a heater-stepping chain (up: increasing protrusion, down: decreasing)",
-      dims=("direction",), dtype="str"),
+    V("damping", "1", "damping ratio", dims=("damping",), description="modal damping ratio of the air bearing"),
+    V(TIME, "s", "elapsed time", dims=(TIME,), description="elapsed simulated time"),
+    V("hist_protrusion", "nm", "history protrusion", NM, dims=("hist_protrusion",), description="protrusion of the kept histories"),
+    V("direction", "", "stepping pass",
+      dims=("direction",), dtype="str", description="pass of a heater-stepping chain (up: increasing protrusion, down: decreasing)"),
     # the statistics each roughness set's interface model used (the given keys, or its AFM scans'), along
     # ``roughness``, so that runs combined on that dimension keep each set's own values
     # (:func:`pipeline.model.interface_tables.used_statistics`)
-    V("roughness_sigma", "nm", "combined rms roughness sigma of the roughness set", NM, dims=("roughness",)),
-    V("roughness_summit_radius", "um", "summit radius of the roughness set", UM, dims=("roughness",)),
-    V("roughness_summit_density", "um-2", "summit density of the roughness set", PER_UM2, dims=("roughness",)),
-    V("roughness_plasticity_index", "1", "plasticity index (Greenwood-Williamson form) of the roughness set",
-      dims=("roughness",)),
+    V("roughness_sigma", "nm", "set rms roughness", NM, dims=("roughness",), description="combined rms roughness sigma of the roughness set"),
+    V("roughness_summit_radius", "um", "set summit radius", UM, dims=("roughness",), description="summit radius of the roughness set"),
+    V("roughness_summit_density", "um-2", "set summit density", PER_UM2, dims=("roughness",), description="summit density of the roughness set"),
+    V("roughness_plasticity_index", "1", "set plasticity index",
+      dims=("roughness",), description="plasticity index (Greenwood-Williamson form) of the roughness set"),
 )
 
 #: Values of the whole run, one number each (0-d variables of ``summary.nc``, ``histories.nc``,
@@ -189,20 +204,20 @@ COORDINATES = _group(
 #: In ``sweep.nc`` and ``sweep_histories.nc`` those that depend on the grid carry its dimension
 #: (:data:`RUN_GRID_DIMS`); the others are one number for all the grid's models.
 RUN = _group(
-    V("k", "1", "contact criterion k: contact where the separation is below k sigma (NaN: no contact law)"),
-    V("k_source", "", "where k comes from (the scene, the calibration, a rule)", dtype="str"),
+    V("k", "1", "contact criterion k", description="contact criterion k: contact where the separation is below k sigma (NaN: no contact law)"),
+    V("k_source", "", "source of k", dtype="str", description="where k comes from (the scene, the calibration, a rule)"),
     V("k_sigma", "nm", "contact threshold k sigma", NM),
-    V("front_stiffness", "N m-1", "air-bearing stiffness of the front pad"),
-    V("rear_stiffness", "N m-1", "air-bearing stiffness of the rear pad"),
-    V("front_damper", "N s m-1", "air-bearing damping coefficient of the front pad"),
-    V("rear_damper", "N s m-1", "air-bearing damping coefficient of the rear pad"),
-    V("damping_ratio", "1", "modal damping ratio of the air bearing of the run's model"),
-    V("summit_offset", "nm", "mean of summit heights minus mean of surface heights y_s", NM),
+    V("front_stiffness", "N m-1", "front pad stiffness", description="air-bearing stiffness of the front pad"),
+    V("rear_stiffness", "N m-1", "rear pad stiffness", description="air-bearing stiffness of the rear pad"),
+    V("front_damper", "N s m-1", "front pad damping", description="air-bearing damping coefficient of the front pad"),
+    V("rear_damper", "N s m-1", "rear pad damping", description="air-bearing damping coefficient of the rear pad"),
+    V("damping_ratio", "1", "damping ratio", description="modal damping ratio of the air bearing of the run's model"),
+    V("summit_offset", "nm", "summit mean offset y_s", NM, description="mean of summit heights minus mean of surface heights y_s"),
     V("steady_window_start", "ms", "start of the steady window", MS),
-    V("steady_window_end", "ms", "end of the steady window (the simulated duration)", MS),
-    V("tfc_stiffness", "N m-1", "stiffness k_t of the TFC bulge's stiffening"),
-    V("tfc_stiffening_exponent", "1", "exponent q of the TFC bulge's stiffening"),
-    V("friction_law_coefficient", "1", "friction coefficient of the coefficient friction law"),
+    V("steady_window_end", "ms", "steady window end", MS, description="end of the steady window (the simulated duration)"),
+    V("tfc_stiffness", "N m-1", "TFC stiffening k_t", description="stiffness k_t of the TFC bulge's stiffening"),
+    V("tfc_stiffening_exponent", "1", "TFC stiffening exponent q", description="exponent q of the TFC bulge's stiffening"),
+    V("friction_law_coefficient", "1", "friction law coefficient", description="friction coefficient of the coefficient friction law"),
 )
 
 #: The run values (:data:`RUN`) that depend on the sweep's grid, and the dimension they take in ``sweep.nc``
@@ -213,213 +228,216 @@ RUN_GRID_DIMS: dict[str, str] = {"k_sigma": "roughness", "summit_offset": "rough
 
 #: Steady-window scalars of one scene (:func:`pipeline.model.outcomes.summarize`; ``summary.nc``, ``sweep.nc``).
 SCALARS = _group(
-    V("fhm_bv", "%", "flying-height modulation (flying) / bouncing vibration (contact), peak-to-peak over FH0"),
-    V("clearance", "nm", "mean clearance d - k sigma over the steady window", NM),
-    V("min_clearance", "nm", "minimum clearance over the steady window", NM),
-    V("interference", "nm", "mean interference -(d - k sigma) while in contact", NM, effect="contact"),
-    V("contact_force", "mN", "time-mean asperity contact force", MN, effect="contact"),
-    V("friction_force", "mN", "time-mean friction force", MN, effect="friction"),
-    V("adhesion_force", "mN", "time-mean adhesion force (attractive)", MN, effect="adhesion"),
-    V("net_force", "mN", "time-mean vertical interface force on the slider (contact + damping - adhesion)", MN),
-    V("friction_coefficient", "1", "friction coefficient: mean friction / mean contact force", effect="friction"),
-    V("mean_pressure", "MPa", "mean contact pressure over the real area while in contact", MPA, effect="contact"),
-    V("shear_stress", "MPa", "mean shear stress over the real area while in contact", MPA, effect="friction"),
-    V("real_area", "um2", "mean real contact area while in contact", UM2, effect="contact"),
-    V("nominal_area", "um2", "nominal contact area of the TFC bulge", UM2),
-    V("protrusion_radius", "um", "effective radius of the bulge in the sliding direction", UM),
-    V("contact_fraction", "1", "fraction of the steady window spent in contact", effect="contact"),
-    V("contact_switches_per_ms", "ms-1", "transitions of the contact criterion d < k sigma per unit time over the "
-      "steady window (counted by the integrator)", KHZ, effect="contact"),
-    V("regime", "1", "regime of the steady window", effect="contact", dtype="int8",
+    V("fhm_bv", "%", "FHM/BV", description="flying-height modulation (flying) / bouncing vibration (contact), peak-to-peak over FH0"),
+    V("clearance", "nm", "mean clearance", NM, description="mean clearance d - k sigma over the steady window"),
+    V("min_clearance", "nm", "minimum clearance", NM, description="minimum clearance over the steady window"),
+    V("interference", "nm", "mean interference", NM, effect="contact", description="mean interference -(d - k sigma) while in contact"),
+    V("contact_force", "mN", "mean contact force", MN, effect="contact", description="time-mean asperity contact force"),
+    V("friction_force", "mN", "mean friction force", MN, effect="friction", description="time-mean friction force"),
+    V("adhesion_force", "mN", "mean adhesion force", MN, effect="adhesion", description="time-mean adhesion force (attractive)"),
+    V("net_force", "mN", "mean interface force", MN, description="time-mean vertical interface force on the slider (contact + damping - adhesion)"),
+    V("friction_coefficient", "1", "friction coefficient", effect="friction", description="friction coefficient: mean friction / mean contact force"),
+    V("mean_pressure", "MPa", "mean contact pressure", MPA, effect="contact", description="mean contact pressure over the real area while in contact"),
+    V("shear_stress", "MPa", "mean shear stress", MPA, effect="friction", description="mean shear stress over the real area while in contact"),
+    V("real_area", "um2", "mean real contact area", UM2, effect="contact", description="mean real contact area while in contact"),
+    V("nominal_area", "um2", "nominal contact area", UM2, description="nominal contact area of the TFC bulge"),
+    V("protrusion_radius", "um", "bulge effective radius", UM, description="effective radius of the bulge in the sliding direction"),
+    V("contact_fraction", "1", "time fraction in contact", effect="contact", description="fraction of the steady window spent in contact"),
+    V("contact_switches_per_ms", "ms-1", "contact switch rate", KHZ, effect="contact", description="transitions of the contact criterion d < k sigma per unit time over the "
+      "steady window (counted by the integrator)"),
+    V("regime", "1", "regime", effect="contact", dtype="int8",
       flag_values=tuple(int(r) for r in Regime), flag_meanings=" ".join(r.name.lower() for r in Regime),
       fill_value=REGIME_FILL,
       extra=(("rule", "flying: no contact in the steady window; surfing: in contact >= 99 % of it; "
-                      "bouncing: otherwise"),)),
-    V("validity", "1", "steady window outside the model's validity (bits; 0: valid)", dtype="int8",
+                      "bouncing: otherwise"),), description="regime of the steady window"),
+    V("validity", "1", "validity flags", dtype="int8",
       flag_masks=tuple(int(v) for v in Validity), flag_meanings=" ".join(v.name.lower() for v in Validity),
       fill_value=REGIME_FILL,
       extra=(("rule", "bearing_range: a pad moved by more than FH0; below_tables: separation below the "
                       "interface tables; force_beyond_load: contact or adhesion force above 100 (k_f + k_r) FH0 "
-                      "(pipeline/validity.py)"),)),
+                      "(pipeline/validity.py)"),), description="steady window outside the model's validity (bits; 0: valid)"),
 )
 
 #: Time histories of one scene (:func:`pipeline.model.outcomes.histories`; ``histories.nc``,
 #: ``sweep_histories.nc``, and ``h_<name>`` in sweep part files).
 HISTORIES = _group(
-    V("separation", "nm", "separation d of the TFC surface from the mean of summit heights", NM, dims=("time",)),
-    V("clearance", "nm", "clearance d - k sigma", NM, dims=("time",)),
-    V("disk_displacement", "nm", "disk displacement (DMW) under the TFC point", NM, dims=("time",)),
-    V("contact_force", "mN", "asperity contact force", MN, dims=("time",), effect="contact"),
-    V("contact_damping_force", "mN", "contact damping force", MN, dims=("time",), effect="contact"),
-    V("friction_force", "mN", "friction force", MN, dims=("time",), effect="friction"),
-    V("adhesion_force", "mN", "adhesion force (attractive)", MN, dims=("time",), effect="adhesion"),
-    V("net_force", "mN", "vertical interface force on the slider (contact + damping - adhesion)", MN,
-      dims=("time",)),
-    V("friction_coefficient", "1", "friction coefficient F_friction / F_contact", dims=("time",), effect="friction"),
-    V("mean_pressure", "MPa", "mean contact pressure over the real area", MPA, dims=("time",), effect="contact"),
-    V("shear_stress", "MPa", "shear stress over the real area", MPA, dims=("time",), effect="friction"),
-    V("real_area", "um2", "real contact area", UM2, dims=("time",), effect="contact"),
-    V("in_contact", "1", "contact criterion d < k sigma satisfied (1) or not (0)", dims=("time",),
+    V("separation", "nm", "separation d", NM, dims=(TIME,), description="separation d of the TFC surface from the mean of summit heights"),
+    V("clearance", "nm", "clearance d - k sigma", NM, dims=(TIME,)),
+    V("disk_displacement", "nm", "disk displacement", NM, dims=(TIME,), description="disk displacement (DMW) under the TFC point"),
+    V("contact_force", "mN", "asperity contact force", MN, dims=(TIME,), effect="contact"),
+    V("contact_damping_force", "mN", "contact damping force", MN, dims=(TIME,), effect="contact"),
+    V("friction_force", "mN", "friction force", MN, dims=(TIME,), effect="friction"),
+    V("adhesion_force", "mN", "adhesion force (attractive)", MN, dims=(TIME,), effect="adhesion"),
+    V("net_force", "mN", "interface force", MN,
+      dims=(TIME,), description="vertical interface force on the slider (contact + damping - adhesion)"),
+    V("friction_coefficient", "1", "friction coefficient", dims=(TIME,), effect="friction", description="friction coefficient F_friction / F_contact"),
+    V("mean_pressure", "MPa", "mean contact pressure", MPA, dims=(TIME,), effect="contact", description="mean contact pressure over the real area"),
+    V("shear_stress", "MPa", "shear stress", MPA, dims=(TIME,), effect="friction", description="shear stress over the real area"),
+    V("real_area", "um2", "real contact area", UM2, dims=(TIME,), effect="contact"),
+    V("in_contact", "1", "in contact", dims=(TIME,),
       effect="contact", dtype="int8", flag_values=(0, 1), flag_meanings="not_in_contact in_contact",
-      fill_value=-1),
-    V("z", "nm", "vertical displacement of the centre of gravity (up positive)", NM, dims=("time",)),
-    V("pitch", "urad", "pitch angle (leading edge up positive)", URAD, dims=("time",)),  # 0 when locked
+      fill_value=-1, description="contact criterion d < k sigma satisfied (1) or not (0)"),
+    V("z", "nm", "slider displacement z", NM, dims=(TIME,), description="vertical displacement of the centre of gravity (up positive)"),
+    V("pitch", "urad", "pitch angle", URAD, dims=(TIME,), description="pitch angle (leading edge up positive)"),  # 0 when locked
     V("steps", "1", "accepted integrator steps", dtype="int64"),
     V("rejected_steps", "1", "rejected integrator steps", dtype="int64"),
-    V("contact_switches", "1", "contact on/off events located", dtype="int64"),
+    V("contact_switches", "1", "contact switches", dtype="int64", description="contact on/off events located"),
 )
 
 #: ``roughness.nc`` (:mod:`pipeline.stages.roughness`): on (surface, route) unless said otherwise.
 _SR = ("surface", "route")
 ROUGHNESS = _group(
-    V("surface", "", "surface (input file stem, 'explicit', or 'combined' = all surfaces combined)",
-      dims=("surface",), dtype="str"),
-    V("route", "", "route to the asperity statistics ('spectral': McCool/Nayak from profile moments, "
-                   "'summits': direct summit count)", dims=("route",), dtype="str"),
-    V("sigma", "nm", "rms roughness of the (detrended) surface heights", NM, dims=_SR),
-    V("sigma_s", "nm", "standard deviation of summit heights", NM, dims=_SR),
-    V("y_s", "nm", "mean of summit heights minus mean of surface heights", NM, dims=_SR),
-    V("summit_radius", "um", "mean summit radius of curvature", UM, dims=_SR),
-    V("summit_density", "um-2", "summit density (summits per nominal area)", PER_UM2, dims=_SR),
+    V("surface", "", "surface",
+      dims=("surface",), dtype="str", description="surface (input file stem, 'explicit', or 'combined' = all surfaces combined)"),
+    V("route", "", "statistics route", dims=("route",), dtype="str", description="route to the asperity statistics ('spectral': McCool/Nayak from profile moments, "
+                   "'summits': direct summit count)"),
+    V("sigma", "nm", "rms roughness", NM, dims=_SR, description="rms roughness of the (detrended) surface heights"),
+    V("sigma_s", "nm", "summit height std", NM, dims=_SR, description="standard deviation of summit heights"),
+    V("y_s", "nm", "summit mean offset y_s", NM, dims=_SR, description="mean of summit heights minus mean of surface heights"),
+    V("summit_radius", "um", "summit radius", UM, dims=_SR, description="mean summit radius of curvature"),
+    V("summit_density", "um-2", "summit density", PER_UM2, dims=_SR, description="summit density (summits per nominal area)"),
     V("bandwidth_alpha", "1", "Nayak bandwidth parameter", dims=_SR),
-    V("plasticity_index", "1", "plasticity index, Greenwood-Williamson form", dims=_SR),
-    V("plasticity_index_ke", "1", "plasticity index, CEB/Kogut-Etsion form", dims=_SR),
-    V("pixel_size", "nm", "lateral sampling interval of the scan (geometric mean of x and y)", NM,
-      dims=("surface",)),
-    V("m0", "nm2", "profile spectral moment m0 (height variance)", 1e-18, dims=("surface",)),
-    V("m2", "1", "profile spectral moment m2 (slope variance, mean of x and y profiles)", dims=("surface",)),
-    V("m4", "nm-2", "profile spectral moment m4 (curvature variance, mean of x and y profiles)", 1e18,
-      dims=("surface",)),
-    V("summit_count", "1", "number of summits counted (summit route)", dims=("surface",)),
+    V("plasticity_index", "1", "plasticity index (GW)", dims=_SR, description="plasticity index, Greenwood-Williamson form"),
+    V("plasticity_index_ke", "1", "plasticity index (CEB/KE)", dims=_SR, description="plasticity index, CEB/Kogut-Etsion form"),
+    V("pixel_size", "nm", "pixel size", NM,
+      dims=("surface",), description="lateral sampling interval of the scan (geometric mean of x and y)"),
+    V("m0", "nm2", "spectral moment m0", 1e-18, dims=("surface",), description="profile spectral moment m0 (height variance)"),
+    V("m2", "1", "spectral moment m2", dims=("surface",), description="profile spectral moment m2 (slope variance, mean of x and y profiles)"),
+    V("m4", "nm-2", "spectral moment m4", 1e18,
+      dims=("surface",), description="profile spectral moment m4 (curvature variance, mean of x and y profiles)"),
+    V("summit_count", "1", "summit count", dims=("surface",), description="number of summits counted (summit route)"),
 )
 
 #: ``dmw.nc`` (:mod:`pipeline.stages.dmw`).
 DMW = _group(
     V("frequency", "Hz", "frequency", dims=("frequency",)),
-    V("displacement", "nm", "disk dynamic microwaviness (vertical displacement under the slider)", NM,
-      dims=("time",)),
-    V("psd", "nm2 Hz-1", "one-sided power spectral density of the displacement", 1e-18, dims=("frequency",)),
+    V("displacement", "nm", "DMW displacement", NM,
+      dims=(TIME,), description="disk dynamic microwaviness (vertical displacement under the slider)"),
+    V("psd", "nm2 Hz-1", "displacement PSD", 1e-18, dims=("frequency",), description="one-sided power spectral density of the displacement"),
     V("rms", "nm", "rms of the displacement", NM),
     V("band_low", "Hz", "lower edge of the DMW band"),
     V("band_high", "Hz", "upper edge of the DMW band"),
-    V("sample_rate", "Hz", "sampling rate of the displacement"),
-    V("disk_speed", "m s-1", "disk surface speed under the slider"),
+    V("sample_rate", "Hz", "sampling rate", description="sampling rate of the displacement"),
+    V("disk_speed", "m s-1", "disk speed", description="disk surface speed under the slider"),
 )
 
 #: ``interface.nc`` (:mod:`pipeline.stages.interface`): tables versus separation and their inputs.
 _S = ("separation",)
 INTERFACE = _group(
-    V("separation", "nm", "separation of the TFC surface from the mean of summit heights", NM, dims=_S),
+    V("separation", "nm", "separation d", NM, dims=_S, extra=(("axis", "Z"), ("positive", "up")),
+      description="separation of the TFC surface from the mean of summit heights (the height of the TFC flat "
+                  "above the mean plane of summit heights: the vertical axis of the tables)"),
     V("sigma", "nm", "combined rms roughness", NM),
-    V("sigma_s", "nm", "standard deviation of summit heights", NM),
-    V("y_s", "nm", "mean of summit heights above the mean of surface heights", NM),
+    V("sigma_s", "nm", "summit height std", NM, description="standard deviation of summit heights"),
+    V("y_s", "nm", "summit mean offset y_s", NM, description="mean of summit heights above the mean of surface heights"),
     V("summit_radius", "um", "summit radius", UM),
     V("summit_density", "um-2", "summit density", PER_UM2),
     V("bandwidth_alpha", "1", "Nayak bandwidth parameter"),
     V("composite_modulus", "GPa", "composite modulus E'", GPA),
     V("hardness", "GPa", "hardness of the softer body", GPA),
-    V("critical_interference", "nm", "Kogut-Etsion critical interference w_c", NM),
-    V("shear_strength", "MPa", "shear strength tau_y = H/(2.8 sqrt 3)", MPA),
-    V("plasticity_index_gw", "1", "plasticity index, Greenwood-Williamson form"),
-    V("plasticity_index_ke", "1", "plasticity index, CEB/Kogut-Etsion form"),
+    V("critical_interference", "nm", "critical interference w_c", NM, description="Kogut-Etsion critical interference w_c"),
+    V("shear_strength", "MPa", "shear strength tau_y", MPA, description="shear strength tau_y = H/(2.8 sqrt 3)"),
+    V("plasticity_index_gw", "1", "plasticity index (GW)", description="plasticity index, Greenwood-Williamson form"),
+    V("plasticity_index_ke", "1", "plasticity index (CEB/KE)", description="plasticity index, CEB/Kogut-Etsion form"),
     V("lubricant_thickness", "nm", "lubricant thickness", NM),
-    V("work_of_adhesion", "J m-2", "work of adhesion (of the menisci around contacts with two populations)"),
-    V("bridge_work_of_adhesion", "J m-2", "work of adhesion of the bridges before solid contact"),
+    V("work_of_adhesion", "J m-2", "work of adhesion", description="work of adhesion (of the menisci around contacts with two populations)"),
+    V("bridge_work_of_adhesion", "J m-2", "bridge work of adhesion", description="work of adhesion of the bridges before solid contact"),
     V("intermolecular_distance", "nm", "intermolecular distance", NM),
-    V("contact_pressure", "MPa", "contact pressure per nominal area", MPA, dims=_S, effect="contact"),
-    V("elastic_fraction", "1", "fraction of summits in elastic contact", dims=_S, effect="contact"),
-    V("plastic_fraction", "1", "fraction of summits in fully plastic contact", dims=_S, effect="contact"),
-    V("friction_stress", "MPa", "friction stress per nominal area", MPA, dims=_S, effect="friction"),
-    V("real_area_fraction", "1", "real contact area per nominal area", dims=_S, effect="contact"),
-    V("adhesion_pressure", "MPa", "adhesion pressure per nominal area (positive: attractive)", MPA, dims=_S,
-      effect="adhesion"),
-    V("adhesion_pressure_bridges", "MPa", "adhesion pressure of the bridges before solid contact per nominal area "
-      "(Lennard-Jones and menisci of non-touching summits; positive: attractive)", MPA, dims=_S, effect="adhesion"),
-    V("adhesion_pressure_menisci", "MPa", "adhesion pressure of the menisci around solid contacts per nominal area "
-      "(positive: attractive)", MPA, dims=_S, effect="adhesion"),
-    V("wetted_area_fraction", "1", "summit surface inside the lubricant film and outside solid contact per "
-      "nominal area", dims=_S, effect="friction"),
-    V("contact_fraction", "1", "fraction of summits in contact", dims=_S, effect="contact"),
+    V("contact_pressure", "MPa", "contact pressure", MPA, dims=_S, effect="contact", description="contact pressure per nominal area"),
+    V("elastic_fraction", "1", "elastic summit fraction", dims=_S, effect="contact", description="fraction of summits in elastic contact"),
+    V("plastic_fraction", "1", "plastic summit fraction", dims=_S, effect="contact", description="fraction of summits in fully plastic contact"),
+    V("friction_stress", "MPa", "friction stress", MPA, dims=_S, effect="friction", description="friction stress per nominal area"),
+    V("real_area_fraction", "1", "real area fraction", dims=_S, effect="contact", description="real contact area per nominal area"),
+    V("adhesion_pressure", "MPa", "adhesion pressure", MPA, dims=_S,
+      effect="adhesion", description="adhesion pressure per nominal area (positive: attractive)"),
+    V("adhesion_pressure_bridges", "MPa", "bridge adhesion pressure", MPA, dims=_S, effect="adhesion", description="adhesion pressure of the bridges before solid contact per nominal area "
+      "(Lennard-Jones and menisci of non-touching summits; positive: attractive)"),
+    V("adhesion_pressure_menisci", "MPa", "meniscus adhesion pressure", MPA, dims=_S, effect="adhesion", description="adhesion pressure of the menisci around solid contacts per nominal area "
+      "(positive: attractive)"),
+    V("wetted_area_fraction", "1", "wetted area fraction", dims=_S, effect="friction", description="summit surface inside the lubricant film and outside solid contact per "
+      "nominal area"),
+    V("contact_fraction", "1", "summit fraction in contact", dims=_S, effect="contact", description="fraction of summits in contact"),
     # interface.model = "deterministic": contact_pressure, real_area_fraction and friction_stress carry the
     # leading dimension `model` (statistical, deterministic), plus the solved series of the FFT
     # boundary-element solution (pipeline.model.deterministic_tables)
-    V("model", "", "interface model of the tables", dims=("model",), dtype="str"),
-    V("solved_separation", "nm", "separation from the mean of summit heights of a deterministic solve "
-                                 "(mean interfacial separation minus y_s)", NM, dims=("solved",), effect="contact"),
-    V("solved_contact_pressure", "MPa", "contact pressure per nominal area of a deterministic solve", MPA,
-      dims=("solved",), effect="contact"),
-    V("solved_real_area_fraction", "1", "real contact area per nominal area of a deterministic solve",
-      dims=("solved",), effect="contact"),
-    V("solved_iterations", "1", "constrained conjugate-gradient iterations of a deterministic solve",
-      dims=("solved",), effect="contact", dtype="int32"),
-    V("contact_grid_points", "1", "grid points of the height map solved deterministically", effect="contact"),
-    V("contact_pixel_size", "nm", "pixel size of the height map solved deterministically", NM, effect="contact"),
-    V("contact_rms_slope", "1", "rms gradient of the height map solved deterministically", effect="contact"),
+    V("model", "", "interface model", dims=("model",), dtype="str", description="interface model of the tables"),
+    V("solved_separation", "nm", "solved separation", NM, dims=("solved",), effect="contact", description="separation from the mean of summit heights of a deterministic solve "
+                                 "(mean interfacial separation minus y_s)"),
+    V("solved_contact_pressure", "MPa", "solved contact pressure", MPA,
+      dims=("solved",), effect="contact", description="contact pressure per nominal area of a deterministic solve"),
+    V("solved_real_area_fraction", "1", "solved real area fraction",
+      dims=("solved",), effect="contact", description="real contact area per nominal area of a deterministic solve"),
+    V("solved_iterations", "1", "solver iterations",
+      dims=("solved",), effect="contact", dtype="int32", description="constrained conjugate-gradient iterations of a deterministic solve"),
+    V("contact_grid_points", "1", "solved grid points", effect="contact", description="grid points of the height map solved deterministically"),
+    V("contact_pixel_size", "nm", "solved pixel size", NM, effect="contact", description="pixel size of the height map solved deterministically"),
+    V("contact_rms_slope", "1", "solved rms slope", effect="contact", description="rms gradient of the height map solved deterministically"),
 )
 
 #: ``calibration.nc`` (:mod:`pipeline.stages.calibrate`).
 CALIBRATION = _group(
     V("k", "1", "contact criterion constant", dims=("k",)),
-    V("touchdown", "nm", "first protrusion of the sweep grid in contact", NM, dims=("k",)),
-    V("k_calibrated", "1", "calibrated contact criterion constant k (NaN: none admissible)"),
-    V("k_low", "1", "lower (exclusive) end of the admissible k interval"),
-    V("k_high", "1", "upper (inclusive) end of the admissible k interval"),
-    V("k_onset", "1", "smallest k giving contact at the touchdown protrusion"),
-    V("k_previous", "1", "smallest k giving contact at the previous step"),
-    V("contact_probability_one_sided", "1", "P(z > k sigma) of the calibrated k"),
-    V("contact_probability_two_sided", "1", "P(|z| > k sigma) of the calibrated k"),
-    V("sigma", "nm", "rms roughness of the criterion d < k sigma", NM),
+    V("touchdown", "nm", "touchdown protrusion", NM, dims=("k",), description="first protrusion of the sweep grid in contact"),
+    V("k_calibrated", "1", "calibrated k", description="calibrated contact criterion constant k (NaN: none admissible)"),
+    V("k_low", "1", "k interval low", description="lower (exclusive) end of the admissible k interval"),
+    V("k_high", "1", "k interval high", description="upper (inclusive) end of the admissible k interval"),
+    V("k_onset", "1", "onset k", description="smallest k giving contact at the touchdown protrusion"),
+    V("k_previous", "1", "previous-step k", description="smallest k giving contact at the previous step"),
+    V("contact_probability_one_sided", "1", "contact probability, 1-sided", description="P(z > k sigma) of the calibrated k"),
+    V("contact_probability_two_sided", "1", "contact probability, 2-sided", description="P(|z| > k sigma) of the calibrated k"),
+    V("sigma", "nm", "criterion rms roughness", NM, description="rms roughness of the criterion d < k sigma"),
     # the exact method (touchdown.method = "exact"): one flying run per protrusion of the grid
-    V("protrusion", "nm", "TFC protrusion of the sweep grid", NM, dims=("protrusion",)),
-    V("k_threshold", "1", "smallest k giving contact at the protrusion (-inf: contact for every k, adhesive "
-                          "snap-in)", dims=("protrusion",)),
-    V("min_separation", "nm", "minimum separation over the steady window with the contact law off (-inf: "
-                              "separation collapsed)", NM, dims=("protrusion",)),
+    V("protrusion", "nm", "TFC protrusion", NM, dims=("protrusion",), description="TFC protrusion of the sweep grid"),
+    V("k_threshold", "1", "threshold k", dims=("protrusion",), description="smallest k giving contact at the protrusion (-inf: contact for every k, adhesive "
+                          "snap-in)"),
+    V("min_separation", "nm", "minimum separation", NM, dims=("protrusion",), description="minimum separation over the steady window with the contact law off (-inf: "
+                              "separation collapsed)"),
 )
 
 #: ``accuracy.nc`` (:mod:`pipeline.stages.accuracy`): errors and costs per operating point, knob and level.
 _PKL = ("point", "knob", "level")
 ACCURACY = _group(
     V("point", "", "operating point", dims=("point",), dtype="str"),
-    V("protrusion", "nm", "TFC protrusion of the operating point", NM, dims=("point",)),
-    V("knob", "", "accuracy knob (scene key: its suffix is the unit, sample_rate_mhz is in [dmw])",
-      dims=("knob",), dtype="str"),
-    V("level", "1", "setting index within a knob, 0 = tightest", dims=("level",), dtype="int32"),
+    V("protrusion", "nm", "TFC protrusion", NM, dims=("point",), description="TFC protrusion of the operating point"),
+    V("knob", "", "accuracy knob",
+      dims=("knob",), dtype="str", description="accuracy knob (scene key: its suffix is the unit, sample_rate_mhz is in [dmw])"),
+    V("level", "1", "setting level", dims=("level",), dtype="int32", description="setting index within a knob, 0 = tightest"),
     V("output", "", "headline output", dims=("output",), dtype="str"),
-    V("configuration", "", "chosen: all chosen defaults together; scene: the scene's own settings",
-      dims=("configuration",), dtype="str"),
+    V("configuration", "", "configuration",
+      dims=("configuration",), dtype="str", description="chosen: all chosen defaults together; scene: the scene's own settings"),
     # the knobs differ in unit: the unit of each row is in setting_units (no common units attribute)
-    V("setting", "", "value of the knob at this level (unit: the knob's setting_units; NaN pads knobs with "
-                     "fewer settings)", dims=("knob", "level")),
-    V("setting_units", "", "unit of the knob's settings", dims=("knob",), dtype="str"),
-    V("knob_description", "", "what the knob sets", dims=("knob",), dtype="str"),
-    V("error", "1", "relative error of the headline output against the reference", dims=_PKL + ("output",)),
-    V("max_error", "1", "largest relative error over the headline outputs", dims=_PKL),
-    V("wall_time", "s", "wall time: setup_time + simulation_time", dims=_PKL),
-    V("simulation_time", "s", "median wall time of integration + steady-window statistics", dims=_PKL),
-    V("setup_time", "s", "wall time of building what the knob changes (tables, DMW record, model)",
-      dims=("knob", "level")),
-    V("steps", "1", "accepted integrator steps", dims=_PKL, dtype="int32"),
-    V("rejected_steps", "1", "rejected integrator steps", dims=_PKL, dtype="int32"),
-    V("contact_switches", "1", "contact mode switches", dims=_PKL, dtype="int32"),
-    V("failed", "1", "integration failed (1) or not (0)", dims=_PKL, dtype="int8", flag_values=(0, 1),
-      flag_meanings="ok failed"),
-    V("is_reference", "1", "this run is the reference configuration (1)", dims=("knob", "level"), dtype="int8"),
-    V("passes", "1", "every headline error below the tolerance at every point (1) or not (0)",
-      dims=("knob", "level"), dtype="int8"),
-    V("chosen_level", "1", "level of the chosen default (-1: no setting passes)", dims=("knob",), dtype="int32"),
-    V("chosen_setting", "", "chosen default of the knob (unit: setting_units)", dims=("knob",)),
-    V("combined_error", "1", "relative error of all settings of a configuration together",
-      dims=("configuration", "point", "output")),
-    V("combined_max_error", "1", "largest relative error over the headline outputs, configuration",
-      dims=("configuration", "point")),
-    V("combined_wall_time", "s", "wall time of the configuration: tables, record, model and simulation",
-      dims=("configuration", "point")),
-    V("combined_simulation_time", "s", "simulation time of the configuration", dims=("configuration", "point")),
+    V("setting", "", "knob setting", dims=("knob", "level"), description="value of the knob at this level (unit: the knob's setting_units; NaN pads knobs with "
+                     "fewer settings)"),
+    V("setting_units", "", "setting units", dims=("knob",), dtype="str", description="unit of the knob's settings"),
+    V("knob_description", "", "knob description", dims=("knob",), dtype="str", description="what the knob sets"),
+    V("error", "1", "relative error", dims=_PKL + ("output",), description="relative error of the headline output against the reference"),
+    V("max_error", "1", "largest relative error", dims=_PKL, description="largest relative error over the headline outputs"),
+    V("wall_time", "s", "wall time", dims=_PKL, description="wall time: setup_time + simulation_time"),
+    V("simulation_time", "s", "simulation time", dims=_PKL, description="median wall time of integration + steady-window statistics"),
+    V("setup_time", "s", "setup time",
+      dims=("knob", "level"), description="wall time of building what the knob changes (tables, DMW record, model)"),
+    V("steps", "1", "accepted steps", dims=_PKL, dtype="int32", description="accepted integrator steps"),
+    V("rejected_steps", "1", "rejected steps", dims=_PKL, dtype="int32", description="rejected integrator steps"),
+    V("contact_switches", "1", "contact switches", dims=_PKL, dtype="int32", description="contact mode switches"),
+    V("failed", "1", "failed", dims=_PKL, dtype="int8", flag_values=(0, 1),
+      flag_meanings="ok failed", description="integration failed (1) or not (0)"),
+    V("is_reference", "1", "is reference", dims=("knob", "level"), dtype="int8", description="this run is the reference configuration (1)"),
+    V("passes", "1", "passes",
+      dims=("knob", "level"), dtype="int8", description="every headline error below the tolerance at every point (1) or not (0)"),
+    V("chosen_level", "1", "chosen level", dims=("knob",), dtype="int32", description="level of the chosen default (-1: no setting passes)"),
+    V("chosen_setting", "", "chosen setting", dims=("knob",), description="chosen default of the knob (unit: setting_units)"),
+    V("combined_error", "1", "combined error",
+      dims=("configuration", "point", "output"), description="relative error of all settings of a configuration together"),
+    V("combined_max_error", "1", "combined largest error",
+      dims=("configuration", "point"), description="largest relative error over the headline outputs, configuration"),
+    V("combined_wall_time", "s", "combined wall time",
+      dims=("configuration", "point"), description="wall time of the configuration: tables, record, model and simulation"),
+    V("combined_simulation_time", "s", "combined simulation time", dims=("configuration", "point"), description="simulation time of the configuration"),
     # the headline outputs themselves (and their reference values) keep the units of SCALARS
-    *(V(n, v.units, v.long_name + " (at this setting)", v.si_unit, dims=_PKL) for n, v in SCALARS.items()),
-    *(V("reference_" + n, v.units, v.long_name + " (reference)", v.si_unit, dims=("point",))
+    *(V(n, v.units, v.long_name, v.si_unit, dims=_PKL, description=v.sentence + " (at this setting)")
       for n, v in SCALARS.items()),
+    *(V("reference_" + n, v.units, v.long_name + ", reference", v.si_unit, dims=("point",),
+        description=v.sentence + " (reference)") for n, v in SCALARS.items()),
 )
 
 #: Scalars whose ensemble mean and spread ``sweep.nc`` carries with ``[sweep] realisations`` > 1.
@@ -428,40 +446,41 @@ ENSEMBLE_OF = ("fhm_bv", "clearance", "min_clearance", "interference", "contact_
 
 #: ``sweep.nc`` of a DMW ensemble (:func:`pipeline.analyses.ensemble_rules.statistics`).
 ENSEMBLE = _group(
-    V("realisation", "1", "DMW realisation (0: the scene's own record)", dims=("realisation",), dtype="int32"),
-    V("dmw_seed", "1", "seed of the synthetic DMW record of the realisation", dims=("realisation",),
-      dtype="float64"),  # (32-bit seeds, exact in a double; CF-1.8 allows no int64 or unsigned int)
-    *(V(n + "_mean", SCALARS[n].units, "ensemble mean of " + SCALARS[n].long_name, SCALARS[n].si_unit,
-        effect=SCALARS[n].effect) for n in ENSEMBLE_OF),
-    *(V(n + "_std", SCALARS[n].units, "ensemble standard deviation (ddof 1) of " + SCALARS[n].long_name,
-        SCALARS[n].si_unit, effect=SCALARS[n].effect) for n in ENSEMBLE_OF),
-    V("touchdown_probability", "1", "fraction of DMW realisations in contact in the steady window",
-      effect="contact"),
+    V("realisation", "1", "DMW realisation", dims=("realisation",), dtype="int32", description="DMW realisation (0: the scene's own record)"),
+    V("dmw_seed", "1", "DMW seed", dims=("realisation",),
+      dtype="float64", description="seed of the synthetic DMW record of the realisation"),  # (32-bit seeds, exact in a double; CF-1.8 allows no int64 or unsigned int)
+    *(V(n + "_mean", SCALARS[n].units, SCALARS[n].long_name + ", ensemble mean", SCALARS[n].si_unit,
+        effect=SCALARS[n].effect, description="ensemble mean of " + SCALARS[n].sentence) for n in ENSEMBLE_OF),
+    *(V(n + "_std", SCALARS[n].units, SCALARS[n].long_name + ", ensemble std", SCALARS[n].si_unit,
+        effect=SCALARS[n].effect, description="ensemble standard deviation (ddof 1) of " + SCALARS[n].sentence)
+      for n in ENSEMBLE_OF),
+    V("touchdown_probability", "1", "touchdown probability",
+      effect="contact", description="fraction of DMW realisations in contact in the steady window"),
 )
 
 #: ``bulge.nc`` (:mod:`pipeline.model.bulge_table`): the bulge's air-bearing lift on protrusion x apex gap.
 _DG = ("protrusion", "apex_gap")
 BULGE = _group(
     V("protrusion", "nm", "TFC protrusion", NM, dims=("protrusion",)),
-    V("apex_gap", "nm", "gap between the bulge apex and the mean of the disk surface heights", NM,
-      dims=("apex_gap",)),
-    V("bulge_lift", "mN", "extra air-bearing lift of the TFC bulge at the TFC point (up positive)", MN, dims=_DG),
-    V("bulge_stiffness", "N m-1", "stiffness of the bulge lift, minus its derivative with respect to the apex gap",
-      dims=_DG),
-    V("bulge_lift_ph_limit", "mN", "bulge lift in the high-bearing-number limit p h = const", MN, dims=_DG),
-    V("bearing_number", "1", "bearing number 6 mu U a / (p_pad h_pad^2) of the pad gap h_pad = apex gap + "
-                             "protrusion", dims=_DG),
-    V("pad_pressure", "MPa", "air pressure under the trailing pad around the bulge", MPA),
+    V("apex_gap", "nm", "apex gap", NM,
+      dims=("apex_gap",), description="gap between the bulge apex and the mean of the disk surface heights"),
+    V("bulge_lift", "mN", "bulge lift", MN, dims=_DG, description="extra air-bearing lift of the TFC bulge at the TFC point (up positive)"),
+    V("bulge_stiffness", "N m-1", "bulge lift stiffness",
+      dims=_DG, description="stiffness of the bulge lift, minus its derivative with respect to the apex gap"),
+    V("bulge_lift_ph_limit", "mN", "bulge lift, p h = const", MN, dims=_DG, description="bulge lift in the high-bearing-number limit p h = const"),
+    V("bearing_number", "1", "bearing number", dims=_DG, description="bearing number 6 mu U a / (p_pad h_pad^2) of the pad gap h_pad = apex gap + "
+                             "protrusion"),
+    V("pad_pressure", "MPa", "trailing pad pressure", MPA, description="air pressure under the trailing pad around the bulge"),
 )
 
 #: Outputs of a heater-stepping chain (``sweep.protocol = "stepping"``, :mod:`pipeline.model.simulation`;
 #: docs/model.md, section "Heater stepping"), one value per chain.
 STEPPING = _group(
-    V("touchdown_protrusion", "nm", "first protrusion of the upward pass whose steady window touches", NM,
-      effect="contact"),
-    V("takeoff_protrusion", "nm", "first protrusion of the downward pass whose steady window no longer touches",
-      NM, effect="contact"),
-    V("hysteresis", "nm", "touchdown minus take-off protrusion of the heater-stepping chain", NM, effect="contact"),
+    V("touchdown_protrusion", "nm", "touchdown protrusion", NM,
+      effect="contact", description="first protrusion of the upward pass whose steady window touches"),
+    V("takeoff_protrusion", "nm", "take-off protrusion",
+      NM, effect="contact", description="first protrusion of the downward pass whose steady window no longer touches"),
+    V("hysteresis", "nm", "touchdown hysteresis", NM, effect="contact", description="touchdown minus take-off protrusion of the heater-stepping chain"),
 )
 
 #: ``statics.nc`` (:mod:`pipeline.stages.statics`, :mod:`pipeline.model.statics`): every static state of the slider
@@ -469,31 +488,31 @@ STEPPING = _group(
 _PS = ("protrusion", "state")
 STATICS = _group(
     V("protrusion", "nm", "TFC protrusion", NM, dims=("protrusion",)),
-    V("state", "1", "index of a static state at one protrusion, from the highest clearance down", dims=("state",),
-      dtype="int32"),
-    V("mode", "1", "index of an eigenvalue of the static stiffness, ascending", dims=("mode",), dtype="int32"),
-    V("clearance", "nm", "static clearance d - k sigma of the TFC point in the state", NM, dims=_PS),
-    V("z", "nm", "vertical displacement of the centre of gravity in the state (up positive)", NM, dims=_PS),
-    V("pitch", "urad", "pitch angle in the state (leading edge up positive)", URAD, dims=_PS),
-    V("state_type", "1", "where the state lies: above the contact criterion, below it, or on it (held there by "
-                         "the jump of the switched contact law)", dims=_PS, dtype="int8", flag_values=(0, 1, 2),
-      flag_meanings="flying contact criterion", fill_value=-1),
-    V("stable", "1", "whether the state is statically stable", dims=_PS, dtype="int8", flag_values=(0, 1),
-      flag_meanings="unstable stable", fill_value=-1),
-    V("barrier", "J", "energy barrier out of a stable state: the rise of the static potential along the relaxed path "
-                      "to the lower neighbouring unstable state", dims=_PS),
-    V("potential", "J", "static potential of the state along the relaxed path, from the deepest state", dims=_PS),
-    V("path_stiffness", "N m-1", "stiffness of the state at the TFC point with the pitch relaxed", dims=_PS),
-    V("stiffness_eigenvalue", "N m-1", "eigenvalue (real part) of the static stiffness in the coordinates "
-                                       "(z, l_c theta)", dims=(*_PS, "mode")),
-    V("state_count", "1", "number of static states at the protrusion", dims=("protrusion",), dtype="int32"),
-    V("stable_count", "1", "number of stable static states at the protrusion", dims=("protrusion",), dtype="int32"),
-    V("dmw_energy", "J", "DMW energy scale 0.5 k_b sigma_w^2: the air bearing's energy at the TFC point displaced "
+    V("state", "1", "static state", dims=("state",),
+      dtype="int32", description="index of a static state at one protrusion, from the highest clearance down"),
+    V("mode", "1", "stiffness mode", dims=("mode",), dtype="int32", description="index of an eigenvalue of the static stiffness, ascending"),
+    V("clearance", "nm", "static clearance", NM, dims=_PS, description="static clearance d - k sigma of the TFC point in the state"),
+    V("z", "nm", "static displacement z", NM, dims=_PS, description="vertical displacement of the centre of gravity in the state (up positive)"),
+    V("pitch", "urad", "static pitch", URAD, dims=_PS, description="pitch angle in the state (leading edge up positive)"),
+    V("state_type", "1", "state type", dims=_PS, dtype="int8", flag_values=(0, 1, 2),
+      flag_meanings="flying contact criterion", fill_value=-1, description="where the state lies: above the contact criterion, below it, or on it (held there by "
+                         "the jump of the switched contact law)"),
+    V("stable", "1", "stable", dims=_PS, dtype="int8", flag_values=(0, 1),
+      flag_meanings="unstable stable", fill_value=-1, description="whether the state is statically stable"),
+    V("barrier", "J", "energy barrier", dims=_PS, description="energy barrier out of a stable state: the rise of the static potential along the relaxed path "
+                      "to the lower neighbouring unstable state"),
+    V("potential", "J", "static potential", dims=_PS, description="static potential of the state along the relaxed path, from the deepest state"),
+    V("path_stiffness", "N m-1", "relaxed-path stiffness", dims=_PS, description="stiffness of the state at the TFC point with the pitch relaxed"),
+    V("stiffness_eigenvalue", "N m-1", "stiffness eigenvalue", dims=(*_PS, "mode"), description="eigenvalue (real part) of the static stiffness in the coordinates "
+                                       "(z, l_c theta)"),
+    V("state_count", "1", "static states", dims=("protrusion",), dtype="int32", description="number of static states at the protrusion"),
+    V("stable_count", "1", "stable states", dims=("protrusion",), dtype="int32", description="number of stable static states at the protrusion"),
+    V("dmw_energy", "J", "DMW energy scale", description="DMW energy scale 0.5 k_b sigma_w^2: the air bearing's energy at the TFC point displaced "
                          "by one DMW rms"),
-    V("dmw_kinetic_energy", "J", "DMW kinetic energy scale 0.5 m_b sigma_v^2: the TFC point's effective mass at "
+    V("dmw_kinetic_energy", "J", "DMW kinetic energy scale", description="DMW kinetic energy scale 0.5 m_b sigma_v^2: the TFC point's effective mass at "
                                  "the DMW's rms rate"),
-    V("bearing_stiffness_tfc", "N m-1", "linear air-bearing stiffness at the TFC point"),
-    V("effective_mass_tfc", "kg", "effective mass of the slider at the TFC point"),
+    V("bearing_stiffness_tfc", "N m-1", "bearing stiffness at TFC", description="linear air-bearing stiffness at the TFC point"),
+    V("effective_mass_tfc", "kg", "effective mass at TFC", description="effective mass of the slider at the TFC point"),
 )
 
 #: Groups by name.

@@ -81,13 +81,13 @@ def write_histories(out):
         "mean_pressure": np.where(contact > 0, 440 + 5 * wave, np.nan),
         "shear_stress": np.where(contact > 0, 312 + 1 * wave, np.nan),
     }
-    dims = ("protrusion", "roughness", "damping", "time")
+    dims = ("protrusion", "roughness", "damping", "elapsed_time")
     data = {n: xr.Variable(dims, v.reshape(shape), attrs=HISTORIES[n].attrs())
             for n, v in values.items()}
     coords = {"protrusion": ("protrusion", prot, {"units": "nm", "long_name": "TFC protrusion"}),
               "roughness": ("roughness", np.array(["scene"], dtype=object), {"units": "1", "long_name": "set"}),
               "damping": ("damping", [0.05], {"units": "1", "long_name": "damping ratio"}),
-              "time": ("time", t, {"units": "s", "long_name": "time"})}
+              "elapsed_time": ("elapsed_time", t, {"units": "s", "long_name": "elapsed time"})}
     write_dataset(xr.Dataset(data, coords=coords), out / "sweep_histories.nc", stage="sweep")
 
 
@@ -110,12 +110,12 @@ def write_dmw(out):
     f = np.fft.rfftfreq(n, 1 / fs)
     psd = np.abs(np.fft.rfft(w)) ** 2 / (fs * n)
     ds = xr.Dataset({
-        "displacement": ("time", w, {"units": "nm", "long_name": "DMW"}),
+        "displacement": ("elapsed_time", w, {"units": "nm", "long_name": "DMW"}),
         "psd": ("frequency", psd, {"units": "nm2 Hz-1", "long_name": "PSD"}),
         "rms": ((), float(np.std(w)), {"units": "nm", "long_name": "rms"}),
         "band_low": ((), 10e3, {"units": "Hz", "long_name": "band low"}),
         "band_high": ((), 500e3, {"units": "Hz", "long_name": "band high"}),
-    }, coords={"time": ("time", np.arange(n) / fs, {"units": "s", "long_name": "time"}),
+    }, coords={"elapsed_time": ("elapsed_time", np.arange(n) / fs, {"units": "s", "long_name": "elapsed time"}),
                "frequency": ("frequency", f, {"units": "Hz", "long_name": "frequency"})})
     write_dataset(ds, out / "dmw.nc", stage="dmw", extra_attrs={"dmw_source": "synthetic", "seed": 2})
 

@@ -40,7 +40,7 @@ def main(out: Path) -> dict:
     top.set_xlabel("time [ms]")
     plots.plot_fhm(sweep, ax=bottom)
     fig.savefig(out / "quickstart.png", dpi=100)
-    return {"fhm_bv_10nm": float(one["fhm_bv"][0]), "history_samples": int(history.sizes["time"]),
+    return {"fhm_bv_10nm": float(one["fhm_bv"][0]), "history_samples": int(history.sizes["elapsed_time"]),
             "protrusions": sweep["protrusion"].values.tolist(), "sweep_fhm_bv": sweep["fhm_bv"].values.tolist()}
 
 

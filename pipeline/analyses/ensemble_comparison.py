@@ -104,7 +104,7 @@ def ensemble_markdown(ens: xr.Dataset) -> str:
     for name in names:
         v = ens[f"value_{name}"]
         s = float(ens[f"single_{name}"])
-        rows.append([v.attrs["long_name"].replace(" over the DMW realisations", ""), v.attrs["paper"],
+        rows.append([v.attrs.get("description", v.attrs["long_name"]).replace(" over the DMW realisations", ""), v.attrs["paper"],
                      target_cell(ens, name), f"{number(s)}{_u(str(v.attrs.get('units', '')))}" if np.isfinite(s)
                      else "none"])
     x = ens["protrusion"].values

@@ -272,7 +272,7 @@ def _dataset(points, knobs, setting, error, values, sim_time, setup_time, wall, 
         "failed": ACC["failed"].data(failed, PKL),
         "is_reference": ACC["is_reference"].data(is_ref, ("knob", "level")),
         "passes": ACC["passes"].data(passes, ("knob", "level"),
-                                     long_name=f"every headline error below {tol:g} at every point (1) or not (0)"),
+                                     description=f"every headline error below {tol:g} at every point (1) or not (0)"),
         "chosen_level": ACC["chosen_level"].data([chosen_level[n] if chosen_level[n] is not None else -1
                                                   for n in names], K),
         "chosen_setting": ACC["chosen_setting"].data([kb.settings[chosen_level[kb.name]]

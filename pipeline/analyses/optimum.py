@@ -38,7 +38,7 @@ import xarray as xr
 
 from ..config.grid import TOL_NM
 from ..physics import paper
-from ..variables import SCALARS, Regime, regime_name
+from ..variables import SCALARS, TIME, Regime, regime_name
 
 FLYING, BOUNCING, SURFING = Regime.FLYING, Regime.BOUNCING, Regime.SURFING
 
@@ -109,7 +109,7 @@ def one_slice(ds: xr.Dataset) -> xr.Dataset:
     """
     if "protrusion" not in ds.dims:
         raise ValueError("the sweep has no 'protrusion' dimension")
-    extra = {d: n for d, n in ds.sizes.items() if d != "protrusion" and d != "time"}
+    extra = {d: n for d, n in ds.sizes.items() if d != "protrusion" and d != TIME}
     long = {d: n for d, n in extra.items() if n > 1}
     if long:
         raise ValueError(f"select one roughness/damping slice first: dimensions {long} have more than one value")

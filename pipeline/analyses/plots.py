@@ -31,7 +31,7 @@ from ..fanout import available_cores
 from ..io import temporary_path
 from ..paths import refuse_links
 from ..units import KHZ, S_IN_MS
-from ..variables import GROUPS, Regime, regime_name
+from ..variables import GROUPS, TIME, Regime, regime_name
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -261,7 +261,7 @@ def plot_clearance(h: xr.Dataset, delta: float, code: int | None = None, *, tran
         The axes drawn on (the time axis is not labelled: a figure labels its lowest panel).
     """
     ax = panel(ax, (7.5, 3.4))
-    t = h["time"].values * S_IN_MS
+    t = h[TIME].values * S_IN_MS
     name = "clearance" if "clearance" in h else "separation"
     y = h[name]
     _shade_transient(ax, transient_ms)
@@ -312,7 +312,7 @@ def plot_forces(h: xr.Dataset, *, transient_ms: float | None = None, ax: Axes | 
         The axes drawn on.
     """
     ax = panel(ax, (7.5, 4.6))
-    t = h["time"].values * S_IN_MS
+    t = h[TIME].values * S_IN_MS
     _shade_transient(ax, transient_ms)
     units = None
     for name, label, colour in FORCES:
@@ -337,7 +337,7 @@ def fig_stresses(h: xr.Dataset, delta: float, scene: str, path: Path, transient_
     names = [(n, q) for n, q in STRESSES if n in h]
     fig, axes = new_figure(max(len(names), 1), 1, size=(7.5, 2.2 * max(len(names), 1) + 0.8), sharex=True,
                            squeeze=False)
-    t = h["time"].values * S_IN_MS
+    t = h[TIME].values * S_IN_MS
     for i, (ax, (name, q)) in enumerate(zip(axes[:, 0], names)):
         _shade_transient(ax, transient_ms)
         y = h[name].values
@@ -854,7 +854,7 @@ def _roughness_table(rough: xr.Dataset, scene: str, path: Path, interface: xr.Da
 def fig_dmw(dmw: xr.Dataset, scene: str, path: Path) -> Path:
     """The DMW record (top) and its one-sided PSD, log-log, with the band edges (bottom)."""
     fig, (ax, ax2) = new_figure(2, 1, size=(7.5, 6.4))
-    t = dmw["time"].values * S_IN_MS
+    t = dmw[TIME].values * S_IN_MS
     w = dmw["displacement"]
     ax.plot(*envelope(t, w.values), lw=0.5, color=LINE_COLOURS[0])
     rms = float(dmw["rms"]) if "rms" in dmw else float(np.sqrt(np.mean(w.values ** 2)))

@@ -15,6 +15,7 @@ import xarray as xr
 
 from . import plots
 from ..physics import paper
+from ..variables import TIME
 from .report_settings import ReportSettings
 from .sweep_slices import TOL, attr_float, first_contact, regime_at, scalar
 
@@ -47,7 +48,7 @@ def history_slice(hist: xr.Dataset, labels: dict[str, Any], delta: float) -> xr.
     h = hist.sel(sel) if sel else hist
     j = int(np.argmin(np.abs(h["protrusion"].values - delta)))
     h = h.isel(protrusion=j)
-    for d in [d for d in h.dims if d != "time"]:
+    for d in [d for d in h.dims if d != TIME]:
         h = h.isel({d: 0})
     return h
 

@@ -187,16 +187,19 @@ def sobol(outputs: Outputs, params: Sequence[Parameter], c: Mapping[str, Any]) -
 
 
 # ------------------------------------------------------------------------------------------ dataset
-#: The indices of each method: name -> (method, long name, units: None for the output's own).
+#: The indices of each method: name -> (method, long name (a plot label), description, units: None for the
+#: output's own).
 INDEX_META = {
-    "mu_star": ("morris", "Morris mu*: mean absolute elementary effect, scaled to the parameter's whole range", None),
-    "mu_star_conf": ("morris", "half-width of the bootstrap confidence interval of mu*", None),
-    "sigma": ("morris", "Morris sigma: standard deviation of the elementary effects", None),
-    "mu": ("morris", "Morris mu: mean elementary effect", None),
-    "S1": ("sobol", "first-order Sobol index", "1"),
-    "S1_conf": ("sobol", "half-width of the bootstrap confidence interval of S1", "1"),
-    "ST": ("sobol", "total Sobol index", "1"),
-    "ST_conf": ("sobol", "half-width of the bootstrap confidence interval of ST", "1"),
+    "mu_star": ("morris", "Morris mu*", "Morris mu*: mean absolute elementary effect, scaled to the parameter's "
+                "whole range", None),
+    "mu_star_conf": ("morris", "mu* confidence half-width", "half-width of the bootstrap confidence interval of mu*",
+                     None),
+    "sigma": ("morris", "Morris sigma", "Morris sigma: standard deviation of the elementary effects", None),
+    "mu": ("morris", "Morris mu", "Morris mu: mean elementary effect", None),
+    "S1": ("sobol", "first-order Sobol index", "first-order Sobol index", "1"),
+    "S1_conf": ("sobol", "S1 confidence half-width", "half-width of the bootstrap confidence interval of S1", "1"),
+    "ST": ("sobol", "total Sobol index", "total Sobol index", "1"),
+    "ST_conf": ("sobol", "ST confidence half-width", "half-width of the bootstrap confidence interval of ST", "1"),
 }
 #: What a method's ``used``/``total`` count.
 UNITS_OF_USE = {"morris": "trajectories", "sobol": "Saltelli blocks (base samples)"}
@@ -237,30 +240,38 @@ def dataset(params: Sequence[Parameter], results: Mapping[str, tuple], errors: M
         run_dim = f"{method}_sample"
         S = (run_dim,)
         coords[run_dim] = var(np.arange(len(X)), S, "1", f"{method} sample index")
-        data[f"{method}_values"] = var(np.asarray(X, float), S + P, "", f"{method} samples: parameter values",
+        data[f"{method}_values"] = var(np.asarray(X, float), S + P, "", f"{method} parameter values",
+                                       description=f"{method} samples: parameter values",
                                        unit_variable="parameter_units")
         data[f"{method}_outputs"] = var(np.stack([np.asarray(Y[o], float) for o in outs], axis=1), S + O, "",
-                                        f"{method} samples: headline outputs (NaN: undefined)",
+                                        f"{method} outputs",
+                                        description=f"{method} samples: headline outputs (NaN: undefined)",
                                         unit_variable="output_units")
         errs = list(errors.get(method, [None] * len(X)))
         failed = [e for e in errs if e]
         data[f"{method}_failed"] = var(np.array([1 if e else 0 for e in errs], np.int8), S, "1",
-                                       f"the evaluation of the {method} sample failed (1) or ran (0)",
+                                       f"{method} sample failed",
+                                       description=f"the evaluation of the {method} sample failed (1) or ran (0)",
                                        flag_values=np.array([0, 1], np.int8), flag_meanings="ran failed",
                                        failed_evaluations=len(failed), first_failure=failed[0] if failed else "")
         data[f"{method}_used"] = var(np.array([idx[o].used for o in outs], np.int32), O, "1",
-                                     f"whole {UNITS_OF_USE[method]} the {method} indices use",
+                                     f"used by the {method} indices",
+                                     description=f"whole {UNITS_OF_USE[method]} the {method} indices use",
                                      out_of=int(idx[outs[0]].total))
         data[f"{method}_undefined_samples"] = var(np.array([idx[o].undefined for o in outs], np.int32), O, "1",
-                                                  f"{method} samples where the output is undefined")
+                                                  f"{method} undefined samples",
+                                                  description=f"{method} samples where the output is undefined")
         data[f"{method}_note"] = var(np.array([idx[o].note for o in outs], dtype=object), O, "",
-                                     f"which samples the {method} indices use; why undefined where they are")
-        for key, (m, text, u) in INDEX_META.items():
+                                     f"{method} note",
+                                     description=f"which samples the {method} indices use; why undefined where they "
+                                                 "are")
+        for key, (m, label, text, u) in INDEX_META.items():
             if m != method:
                 continue
             values = np.stack([idx[o].values[key] for o in outs])
             extra = {"unit_variable": "output_units"} if u is None else {}
-            data[key] = var(values, O + P, u or "", f"{text} of the output", confidence_level=level, **extra)
+            data[key] = var(values, O + P, u or "", label, description=f"{text} of the output",
+                            confidence_level=level, **extra)
     ds = xr.Dataset(data, coords=coords)
     total = sum(len(errors.get(m, [])) for m in results)
     n_failed = sum(1 for m in results for e in errors.get(m, []) if e)

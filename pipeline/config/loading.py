@@ -2,8 +2,9 @@
 TOML, merge the base scenes it ``extends``, apply ``--set`` overrides and validate
 (:func:`pipeline.config.validation.validate`).
 
-A base scene's relative file paths are made absolute from the base's own folder before the merge; an
-override names itself in the errors of the keys it set.
+A base scene's relative file paths are made absolute from the base's own folder before the merge, and a
+``--set`` override's from the working directory, where the user typed it (a scene file's own relative
+paths stay relative to the scene's folder); an override names itself in the errors of the keys it set.
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any, Iterable
 
-from ..paths import special_kind
+from ..paths import looked_for, special_kind
 from .schema import SCHEMA, SceneError
 from .validation import Scene, validate
 
@@ -106,7 +107,9 @@ def load_scene(path: str | Path, overrides: Iterable[str] = ()) -> Scene:
         The TOML scene, or the name of a scene shipped with the package (``"paper-2009"``,
         :func:`find_scene`).
     overrides
-        ``section.key=value`` strings applied after reading (``--set`` on the command line).
+        ``section.key=value`` strings applied after reading (``--set`` on the command line); a relative
+        file path in one (``roughness.afm``, ``dmw.source``, a set's ``afm``) is taken from the working
+        directory.
 
     Raises
     ------
@@ -123,6 +126,8 @@ def load_scene(path: str | Path, overrides: Iterable[str] = ()) -> Scene:
             raise SceneError(f"--set {text}: scene.extends cannot be set on the command line; write "
                              f"`extends = {json.dumps(str(value))}` in the [scene] section of a scene file "
                              f"(or give the base scene itself with --set for the keys that differ)")
+        # (a path typed on the command line means what it means there, not beside the scene file)
+        value = _anchor_paths({section: {key: value}}, Path.cwd())[section][key]
         raw.setdefault(section, {})
         if not isinstance(raw[section], dict):
             raise SceneError(f"{path}: --set {text!r}: [{section}] is not a table")
@@ -148,7 +153,7 @@ def _read_raw(path: Path, seen: tuple[Path, ...] = ()) -> dict[str, Any]:
     if special_kind(path) is not None:  # (reading a FIFO or a device never ends)
         raise SceneError(f"{path}: is {special_kind(path)}; expected a scene file (TOML)")
     if not path.is_file():
-        raise SceneError(f"{path}: scene file does not exist")
+        raise SceneError(f"{path}: scene file does not exist{looked_for(path)}")
     try:  # (utf-8-sig: a byte-order mark, as some Windows editors write, is not part of the TOML)
         raw = tomllib.loads(path.read_text(encoding="utf-8-sig"))
     except UnicodeDecodeError as exc:

@@ -57,7 +57,8 @@ class Key:
     length
         Required list length for ``floats``.
     path
-        The value names a file that must exist (relative paths are taken from the scene's folder).
+        The value names a file that must exist (relative paths are taken from the scene's folder; in a
+        ``--set`` override, from the working directory).
     doc
         One line with unit and source, shown in errors and ``hdi ... --help-keys``.
     """

@@ -23,7 +23,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from ..paths import special_kind
+from ..paths import looked_for, special_kind
 from ..physics import surface as sf
 
 #: Detrend modes accepted here; ``"plane"`` is SurfaceTopography's ``"height"`` (the rms-minimising plane).
@@ -175,7 +175,7 @@ def read_topography(path: str | Path, channel: str | int | None = None, detrend_
     if special_kind(path) is not None:  # (checked before opening: a FIFO or a device never ends)
         raise AFMError(f"{path}: is {special_kind(path)} (expected a regular file, {expect})")
     if not path.is_file():
-        raise AFMError(f"{path}: file does not exist (expected {expect})")
+        raise AFMError(f"{path}: file does not exist{looked_for(path)} (expected {expect})")
     if path.stat().st_size == 0:
         raise AFMError(f"{path}: file is empty (expected {expect})")
     try:

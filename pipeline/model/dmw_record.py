@@ -18,6 +18,7 @@ from ..io import read_dataset
 from ..config.si import to_si
 from ..physics import microwaviness as phys
 from ..units import MM
+from ..variables import TIME
 
 FILENAME = "dmw.nc"
 
@@ -113,12 +114,12 @@ def load(path: str | Path) -> tuple[np.ndarray, np.ndarray, float]:
 
 
 #: The variables of ``dmw.nc`` the dynamics reads.
-VARIABLES = ("displacement", "time", "sample_rate")
+VARIABLES = ("displacement", TIME, "sample_rate")
 
 
 def from_dataset(ds: Any) -> tuple[np.ndarray, np.ndarray, float]:
     """``(time [s], displacement [nm], sample rate [Hz])`` of a ``dmw.nc`` dataset in memory."""
-    return (np.asarray(ds["time"].values, dtype=float), np.asarray(ds["displacement"].values, dtype=float),
+    return (np.asarray(ds[TIME].values, dtype=float), np.asarray(ds["displacement"].values, dtype=float),
             float(ds["sample_rate"].values))
 
 

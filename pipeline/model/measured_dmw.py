@@ -21,7 +21,7 @@ import numpy as np
 
 from .. import interrupts
 from ..io import NETCDF_LOCK
-from ..paths import special_kind
+from ..paths import looked_for, special_kind
 from ..physics.microwaviness import TIME_JITTER_TOL, DMWError
 from ..units import LENGTH_UNITS, TIME_UNITS, VELOCITY_UNITS
 from ..units import MS
@@ -336,7 +336,7 @@ def _read_netcdf(path: Path, quantity: str, column: str | None,
         raise DMWError(f"{path}: not a readable NetCDF file ({exc}); expected NetCDF with a variable "
                        f"on a 'time' coordinate") from None
     interrupts.check()  # (netCDF4's error checks can swallow a signal raised during the read)
-    if "elapsed_time" in ds.variables and "time" not in ds.variables:  # a dmw.nc of this pipeline (io.TIME_ON_DISK)
+    if "elapsed_time" in ds.variables and "time" not in ds.variables:  # a dmw.nc of this pipeline (variables.TIME)
         ds = ds.rename({"elapsed_time": "time"})
     if column is not None:
         if column not in ds.data_vars:
@@ -431,7 +431,7 @@ def load_record(path: str | Path, quantity: str = "displacement", column: str | 
         raise DMWError(f"{path}: is {special_kind(path)}; expected a regular file, a CSV or NetCDF record "
                        "(dmw.source)")
     if not path.is_file():
-        raise DMWError(f"{path}: record file does not exist (dmw.source)")
+        raise DMWError(f"{path}: record file does not exist{looked_for(path)} (dmw.source)")
     reader = _read_netcdf if path.suffix.lower() in NETCDF_SUFFIXES else _read_csv
     x, rate, name, field_name, unit, notes = reader(path, quantity, column, sample_rate_hz)
     rec = Record(values=x, sample_rate_hz=float(rate), quantity=quantity, path=str(path), column=name,

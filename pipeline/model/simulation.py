@@ -25,7 +25,7 @@ Protocols (scene key ``sweep.protocol``, docs/model.md, section "Heater stepping
 from __future__ import annotations
 
 import time
-from typing import Any, Sequence
+from typing import Any, Callable, Sequence
 
 import numpy as np
 import xarray as xr
@@ -33,7 +33,7 @@ import xarray as xr
 from ..config.grid import same_point
 from ..config.scene import PROTOCOLS
 from ..units import MS, NM
-from ..variables import HISTORIES, RUN, RUN_GRID_DIMS, STEPPING, coordinate, history, scalar
+from ..variables import HISTORIES, RUN, RUN_GRID_DIMS, STEPPING, TIME, coordinate, history, scalar
 from . import assembly, outcomes, running
 from .state import STEP_COUNTERS
 
@@ -50,7 +50,7 @@ RUN_ERRORS = (running.IntegrationError, ValueError, FloatingPointError)
 
 def simulate(model: assembly.Model, protrusions: Sequence[float], *, histories: Sequence[float] = (),
              protocol: str = "independent", counters: bool = False, on_error: str = "raise",
-             timings: dict[str, float] | None = None) -> xr.Dataset:
+             timings: dict[str, float] | None = None, on_run: Callable[[], Any] | None = None) -> xr.Dataset:
     """Run the model at ``protrusions`` [nm] and return their steady-window scalars (and histories).
 
     Parameters
@@ -68,6 +68,8 @@ def simulate(model: assembly.Model, protrusions: Sequence[float], *, histories: 
         failures as ``"<protrusion> nm: <message>"``, ``"; "``-separated)
     timings : when given, ``timings["kernel_seconds"]`` is increased by the wall time spent in
         :func:`pipeline.model.running.run_model` (kept out of the dataset: equal inputs, equal dataset)
+    on_run : called after each run (a failed one too), :func:`run_count` times in all: the API counts
+        them on its progress display (output only; the dataset does not depend on it)
 
     Returns
     -------
@@ -83,7 +85,7 @@ def simulate(model: assembly.Model, protrusions: Sequence[float], *, histories: 
     if protocol == "stepping":
         if on_error != "raise":
             raise ValueError("on_error = 'nan' is for independent runs (a chain needs every step's end state)")
-        return _stepping(model, prot, histories, counters, timings)
+        return _stepping(model, prot, histories, counters, timings, on_run)
     rows: list[dict[str, float] | None] = []
     kept: list[tuple[float, running.Run, dict]] = []
     info: list[np.ndarray] = []
@@ -97,7 +99,11 @@ def simulate(model: assembly.Model, protrusions: Sequence[float], *, histories: 
             errors.append(f"{delta:g} nm: {exc}")
             rows.append(None)
             info.append(np.full(3, -1))
+            if on_run is not None:
+                on_run()
             continue
+        if on_run is not None:
+            on_run()
         rows.append(row)
         info.append(run.info[STEP_COUNTERS])
         if _kept(delta, histories):
@@ -119,18 +125,18 @@ def histories_of(ds: xr.Dataset) -> xr.Dataset:
     counters when kept (the histories must be those of every protrusion)."""
     names = [n for n in ds.data_vars if n.startswith("h_")]
     hp = ds["hist_protrusion"].values
-    data = {n[2:]: xr.Variable(("protrusion", "time"), ds[n].values, ds[n].attrs, ds[n].encoding)
+    data = {n[2:]: xr.Variable(("protrusion", TIME), ds[n].values, ds[n].attrs, ds[n].encoding)
             for n in names}
     for name in COUNTERS:
         if name in ds:
             data[name] = ds[name].variable
-    return xr.Dataset(data, coords={"protrusion": coordinate("protrusion", hp), "time": ds["time"].variable})
+    return xr.Dataset(data, coords={"protrusion": coordinate("protrusion", hp), TIME: ds[TIME].variable})
 
 
 def summary_of(ds: xr.Dataset) -> xr.Dataset:
     """The steady-window scalars of a :func:`simulate` result (``summary.nc``, a sweep's part)."""
     drop = [n for n in ds.data_vars if n.startswith("h_") or n in COUNTERS]
-    return ds.drop_vars(drop).drop_dims([d for d in ("hist_protrusion", "time") if d in ds.dims])
+    return ds.drop_vars(drop).drop_dims([d for d in ("hist_protrusion", TIME) if d in ds.dims])
 
 
 def _run(model: assembly.Model, delta_nm: float, y0: np.ndarray | None,
@@ -165,17 +171,23 @@ def _scalars(rows: list[dict[str, float] | None], dims: tuple[str, ...],
 
 
 def _histories(kept: list[tuple[float, running.Run, dict]]) -> dict[str, xr.Variable]:
-    return {"h_" + name: history(name, np.stack([k[2][name] for k in kept]), ("hist_protrusion", "time"))
+    return {"h_" + name: history(name, np.stack([k[2][name] for k in kept]), ("hist_protrusion", TIME))
             for name in kept[0][2] if name in HISTORIES}
 
 
 def _history_coords(kept: list[tuple[float, running.Run, dict]]) -> dict[str, xr.Variable]:
     return {"hist_protrusion": coordinate("hist_protrusion", np.array([k[0] for k in kept])),
-            "time": coordinate("time", kept[0][1].time)}
+            TIME: coordinate(TIME, kept[0][1].time)}
+
+
+def run_count(protocol: str, n: int) -> int:
+    """Runs :func:`simulate` makes at ``n`` protrusions: ``n`` independent ones, or a stepping chain's
+    ``2 n - 1`` (up, then down from the top without running the top twice)."""
+    return max(2 * n - 1, 0) if protocol == "stepping" else n
 
 
 def _stepping(model: assembly.Model, prot: np.ndarray, histories: Sequence[float], counters: bool,
-              timings: dict[str, float] | None) -> xr.Dataset:
+              timings: dict[str, float] | None, on_run: Callable[[], Any] | None = None) -> xr.Dataset:
     """One heater-stepping chain over ``prot`` [nm] (module docstring; docs/model.md, section
     "Heater stepping")."""
     if prot.size == 0 or np.any(np.diff(prot) <= 0):
@@ -189,6 +201,8 @@ def _stepping(model: assembly.Model, prot: np.ndarray, histories: Sequence[float
     order = [(i, 0) for i in range(n)] + [(i, 1) for i in range(n - 2, -1, -1)]
     for i, j in order:
         run, hist, rows[DIRECTIONS[j]][i] = _run(model, float(prot[i]), y0, timings)
+        if on_run is not None:
+            on_run()
         y0 = run.state[-1].copy()  # the end state: where the next heater step starts
         info[i, j] = run.info[STEP_COUNTERS]
         touch[i, j] = outcomes.touched(run)

@@ -64,7 +64,7 @@ from ..model.measured_dmw import load_record
 from ..physics import microwaviness as phys
 from ..runner import Inputs, Stage
 from ..units import MS
-from ..variables import DMW, coordinate
+from ..variables import DMW, TIME, coordinate
 
 log = logging.getLogger(__name__)
 
@@ -171,7 +171,7 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
     rms = float(np.sqrt(np.mean(w * w)))
     ds = xr.Dataset(
         {
-            "displacement": DMW["displacement"].data(w, ("time",)),
+            "displacement": DMW["displacement"].data(w, (TIME,)),
             "psd": DMW["psd"].data(p, ("frequency",),
                                    method="periodogram, rectangular window, no detrend (scipy.signal.periodogram)"),
             "rms": DMW["rms"].data(rms, ()),
@@ -180,7 +180,7 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
             "sample_rate": DMW["sample_rate"].data(fs, ()),
             "disk_speed": DMW["disk_speed"].data(s["disk_speed_m_s"], (), formula="2 pi radius rpm / 60"),
         },
-        coords={"time": coordinate("time", time), "frequency": DMW["frequency"].data(f, ("frequency",))},
+        coords={TIME: coordinate(TIME, time), "frequency": DMW["frequency"].data(f, ("frequency",))},
     )
     ds.attrs.update({"dmw_source": source, "dmw_enabled": int(enabled), "duration_s": dur, **attrs})
     if seed is not None:

@@ -104,6 +104,11 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
     return ds.assign(judged(ds, scene)).assign(run)
 
 
+#: The longest paper target's ``long_name`` [characters] that labels the target's variables of ``ensemble.nc``;
+#: a longer one (a sentence) is their ``description``, and the target's name their label.
+SHORT_TARGET = 28
+
+
 def judged(ds: xr.Dataset, scene: Any) -> dict[str, xr.Variable]:
     """The paper's targets judged over the realisations of ``ds``, for the report (which only formats them).
 
@@ -117,37 +122,45 @@ def judged(ds: xr.Dataset, scene: Any) -> dict[str, xr.Variable]:
     out: dict[str, xr.Variable] = {}
     for name, (v, lo, hi, single) in ensemble_summary(ds, tlist).items():
         t = next(t for t in tlist if t.name == name)
-        out[f"value_{name}"] = var(v, (), t.units, f"{t.long_name} over the DMW realisations", paper=t.paper,
-                                   spread=t.spread, protrusions_nm=np.asarray(t.protrusions, float))
-        out[f"spread_{name}"] = var(np.array([lo, hi]), ("bound",), t.units,
-                                    f"spread of the {t.long_name} over the DMW realisations ({t.spread})")
-        out[f"single_{name}"] = var(single, (), t.units, f"{t.long_name}, the scene's own record alone")
+        # (a short long_name for a plot's label, the target's sentence as the description)
+        label = t.long_name if len(t.long_name) <= SHORT_TARGET else name.replace("_", " ")
+        out[f"value_{name}"] = var(v, (), t.units, label, description=f"{t.long_name} over the DMW realisations",
+                                   paper=t.paper, spread=t.spread, protrusions_nm=np.asarray(t.protrusions, float))
+        out[f"spread_{name}"] = var(np.array([lo, hi]), ("bound",), t.units, f"{label}, spread",
+                                    description=f"spread of the {t.long_name} over the DMW realisations ({t.spread})")
+        out[f"single_{name}"] = var(single, (), t.units, f"{label}, own record",
+                                    description=f"{t.long_name}, the scene's own record alone")
     out["bound"] = var(np.array(["low", "high"], dtype=object), ("bound",), "", "lower/upper end of a spread")
     threshold = float(scene["identify"]["bouncing_min_percent"])
     if "nominal_area" in ds:
         mean, std = en.mean_std(ds["nominal_area"])
         unit = SCALARS["nominal_area"].units
-        out["nominal_area_mean"] = var(mean.values, ("protrusion",), unit, "ensemble mean of the nominal contact area")
-        out["nominal_area_std"] = var(std.values, ("protrusion",), unit,
-                                      "ensemble standard deviation (ddof 1) of the nominal contact area")
+        out["nominal_area_mean"] = var(mean.values, ("protrusion",), unit, "nominal contact area, mean",
+                                       description="ensemble mean of the nominal contact area")
+        out["nominal_area_std"] = var(std.values, ("protrusion",), unit, "nominal contact area, std",
+                                      description="ensemble standard deviation (ddof 1) of the nominal contact area")
     if "min_clearance" not in ds:  # (no contact law: nothing bounces, as nothing touches)
         return out
     bouncing = bouncing_bv(ds["fhm_bv"], ds["min_clearance"])  # (a flying FHM above it is no bounce)
     out["bv_exceedance_probability"] = var(en.exceedance_probability(bouncing, threshold).values, ("protrusion",),
-                                           "1", f"fraction of the DMW realisations in contact with BV above "
-                                                f"{threshold:g} %", threshold_percent=threshold)
+                                           "1", f"P(BV > {threshold:g} %)",
+                                           description=f"fraction of the DMW realisations in contact with BV above "
+                                                       f"{threshold:g} %", threshold_percent=threshold)
     # the band's statistics for the report's band.png (which reads them, and imports no model code)
     unit = SCALARS["fhm_bv"].units
     out["bouncing_bv"] = var(bouncing.transpose("protrusion", "realisation").values, ("protrusion", "realisation"),
-                             unit, "bouncing BV: FHM/BV of a run in contact in the steady window, 0 where it flew")
+                             unit, "bouncing BV",
+                             description="bouncing BV: FHM/BV of a run in contact in the steady window, 0 where it flew")
     for name, values, units, what in (("bouncing_bv", bouncing, unit, "bouncing BV"),
                                       ("contact_fraction", ds.get("contact_fraction"), "1", "contact fraction")):
         if values is None:
             continue
         med, lo, hi = en.median_spread(values.fillna(0.0) if name == "contact_fraction" else values)
-        out[f"{name}_median"] = var(med.values, ("protrusion",), units, f"median over the DMW realisations of the {what}")
+        out[f"{name}_median"] = var(med.values, ("protrusion",), units, f"{what}, median",
+                                    description=f"median over the DMW realisations of the {what}")
         out[f"{name}_spread"] = var(np.stack([lo.values, hi.values], axis=-1), ("protrusion", "bound"), units,
-                                    f"10-90 % range over the DMW realisations of the {what}")
+                                    f"{what}, 10-90 % range",
+                                    description=f"10-90 % range over the DMW realisations of the {what}")
     return out
 
 

@@ -98,34 +98,45 @@ def dataset(ident: Identification, params: Sequence[Parameter], out: dict[str, A
     E, P, T, B, K = ("evaluation",), ("parameter",), ("target",), ("bound",), ("point",)
     PU, TU = {"unit_variable": "parameter_units"}, {"unit_variable": "target_units"}
     data: dict[str, Any] = {
-        "parameter_value": var(pts, E + P, "", "value of each free parameter at each evaluation", **PU),
-        "best": var(out["best"], P, "", "identified value of each parameter: the best evaluation's "
+        "parameter_value": var(pts, E + P, "", "parameter value",
+                               description="value of each free parameter at each evaluation", **PU),
+        "best": var(out["best"], P, "", "identified value",
+                    description="identified value of each parameter: the best evaluation's "
                     "(best_evaluation, lowest objective)", **PU),
-        "reconstructed": var(x_base, P, "", "reconstructed (scene) value of each parameter", **PU),
+        "reconstructed": var(x_base, P, "", "reconstructed value",
+                             description="reconstructed (scene) value of each parameter", **PU),
         "search_bounds": var(np.array([[p.low, p.high] for p in params]), P + B, "",
                              "search bounds of each parameter", **PU),
-        "interval": var(out["intervals"], P + B, "", f"interval of each parameter ({out['method']})",
+        "interval": var(out["intervals"], P + B, "", "parameter interval",
+                        description=f"interval of each parameter ({out['method']})",
                         criterion=out["criterion"], method=out["method"], **PU),
-        "gauss_newton_std": var(out["gn_std"], P, "", "Gauss-Newton standard deviation of each parameter "
+        "gauss_newton_std": var(out["gn_std"], P, "", "Gauss-Newton std",
+                                description="Gauss-Newton standard deviation of each parameter "
                                 "(tolerances as 1 sigma)", **PU),
-        "profile": var(out["profile_value"], P + K, "", "values of each parameter along its profile "
+        "profile": var(out["profile_value"], P + K, "", "profile values",
+                       description="values of each parameter along its profile "
                        "(NaN past the end of its grid)", **PU),
         "profile_objective": var(out["profile_cost"], P + K, "1", "objective along each parameter's profile"),
         "profile_max_residual": var(out["profile_max"], P + K, "1",
-                                    "largest |residual| along each parameter's profile"),
+                                    "profile largest |residual|",
+                                    description="largest |residual| along each parameter's profile"),
     }
     if optimised:  # (a slice's others are the optimum's: nothing more to say)
         data.update({
-            "slice_interval": var(out["slice_intervals"], P + B, "", f"interval of each parameter from its slice "
-                                  f"({METHODS['slice']})", criterion=out["criterion"], method=METHODS["slice"], **PU),
-            "slice_objective": var(out["slice_cost"], P + K, "1", "objective along each parameter's slice (the "
+            "slice_interval": var(out["slice_intervals"], P + B, "", "slice interval",
+                                  description=f"interval of each parameter from its slice ({METHODS['slice']})",
+                                  criterion=out["criterion"], method=METHODS["slice"], **PU),
+            "slice_objective": var(out["slice_cost"], P + K, "1", "slice objective",
+                                   description="objective along each parameter's slice (the "
                                    "other parameters at the optimum)"),
             "profile_parameters": var(out["profile_points_x"], P + K + ("parameter_b",), "",
-                                      "every parameter (parameter_b) at each point of each parameter's profile "
+                                      "profile parameters",
+                                      description="every parameter (parameter_b) at each point of each parameter's profile "
                                       "(re-optimised where profile_optimised is 1; the profiled value on its own)",
                                       unit_variable="parameter_b_units"),
             "profile_optimised": var(out["profile_optimised"].astype(np.int8), P + K, "1",
-                                     "1 where the other parameters were re-optimised at the profile point, 0 where "
+                                     "re-optimised at point",
+                                     description="1 where the other parameters were re-optimised at the profile point, 0 where "
                                      "they are held at the optimum (past the walk's end or its budget)",
                                      flag_values=np.array([0, 1], np.int8), flag_meanings="held re_optimised"),
         })
@@ -134,7 +145,7 @@ def dataset(ident: Identification, params: Sequence[Parameter], out: dict[str, A
                     **TU),
         "tolerance": var(np.array([t.tolerance for t in tl], float), T, "", "tolerance of each target", **TU),
         "target_kind": var(np.array([t.kind for t in tl], dtype=object), T, "",
-                           "kind of each target: equal, above, below, touchdown"),
+                           "target kind", description="kind of each target: equal, above, below, touchdown"),
         "target_paper": var(np.array([t.paper for t in tl], dtype=object), T, "",
                             "each target as the paper states it"),
         "target_description": var(np.array([t.long_name for t in tl], dtype=object), T, "",
@@ -142,26 +153,31 @@ def dataset(ident: Identification, params: Sequence[Parameter], out: dict[str, A
         "value": var(vals, E + T, "", "value of each target at each evaluation", **TU),
     })
     if n_real > 1:  # (ensembles only: a single-record identify.nc has none)
-        data["spread"] = var(spr, E + T + B, "", "spread of each target over the DMW realisations "
+        data["spread"] = var(spr, E + T + B, "", "target spread",
+                             description="spread of each target over the DMW realisations "
                              "(target_spread says which)", **TU)
         data["target_spread"] = var(np.array([t.spread for t in tl], dtype=object), T, "",
                                     "what the spread of each target is")
     data.update({
-        "residual": var(res, E + T, "1", "residual of each target normalised by its tolerance "
+        "residual": var(res, E + T, "1", "normalised residual",
+                        description="residual of each target normalised by its tolerance "
                         "(inequality targets: zero on the admissible side)"),
-        "objective": var(objective, E, "1", "objective: sum of squared normalised residuals"),
+        "objective": var(objective, E, "1", "objective", description="objective: sum of squared normalised residuals"),
         "best_abs_residual": var(np.nanmin(np.abs(res), axis=0), T, "1",
-                                 "smallest |residual| of each target over all evaluations"),
+                                 "smallest |residual|",
+                                 description="smallest |residual| of each target over all evaluations"),
         "seconds": var(np.array([r["seconds"] for r in recs]), E, "s", "wall time of the evaluation"),
         "kernel_seconds": var(np.array([r["kernel_seconds"] for r in recs]), E, "s",
-                              "time in the integrator (run_model) of the evaluation"),
+                              "integrator time", description="time in the integrator (run_model) of the evaluation"),
         "role": var(np.array([ident.roles[k] for k in keys], np.int8), E, "1", "role of the evaluation",
                     flag_values=np.array(sorted(ROLES), np.int8),
                     flag_meanings=" ".join(ROLES[k] for k in sorted(ROLES))),
         "failed": var(np.array([r["error"] is not None for r in recs], np.int8), E, "1",
-                      "1 when a run of the evaluation failed (its message in the evaluation store)"),
+                      "failed",
+                      description="1 when a run of the evaluation failed (its message in the evaluation store)"),
         "correlation": var(out["correlation"], ("parameter", "parameter_b"), "1",
-                           "correlation of the parameters, Gauss-Newton (J^T J)^+ at the optimum"),
+                           "parameter correlation",
+                           description="correlation of the parameters, Gauss-Newton (J^T J)^+ at the optimum"),
     })
     names = np.array([p.name for p in params], dtype=object)
     units = np.array([p.units for p in params], dtype=object)

@@ -43,7 +43,7 @@ from ..progress import Progress
 from ..io import file_hash, read_attrs, read_dataset, write_dataset
 from ..paths import refuse_links
 from ..runner import KEY_ATTR, Inputs, Stage, ensure
-from ..variables import COORDINATES, ENSEMBLE, HISTORIES, SCALARS, STEPPING, coordinate
+from ..variables import COORDINATES, ENSEMBLE, HISTORIES, SCALARS, STEPPING, TIME, coordinate
 from ..model import dmw_record, scene_inputs
 from ..model.inputs import SimulationInputs, Source, for_stage
 from ..model.interface_tables import used_statistics
@@ -378,7 +378,7 @@ def assemble(scene: Any, out: Path, prot: np.ndarray, labels: list[str], damp: l
             if hist_prot is None:
                 hist_prot = np.array([h for h in scene["sweep"]["histories_nm"] or scene["report"]["histories_nm"]
                                       if np.any(same_point(prot, h))])
-                time = ds["time"].values
+                time = ds[TIME].values
             for name in ds.data_vars:
                 if name.startswith("h_"):
                     base = name[2:]
@@ -414,8 +414,8 @@ def assemble(scene: Any, out: Path, prot: np.ndarray, labels: list[str], damp: l
     if hist:
         hc = {name: c for name, c in coords.items() if name != "realisation"}  # (realisation 0 only)
         hc["protrusion"] = coordinate("protrusion", hist_prot)
-        hc["time"] = coordinate("time", time)
-        hds = xr.Dataset({name: HISTORIES[name].data(a, ("protrusion", "roughness", "damping", "time"))
+        hc[TIME] = coordinate(TIME, time)
+        hds = xr.Dataset({name: HISTORIES[name].data(a, ("protrusion", "roughness", "damping", TIME))
                           for name, a in hist.items()}, coords=hc).assign(run or {})
         hds.attrs.update(ds.attrs)
     return {"sweep.nc": ds, "sweep_histories.nc": hds}

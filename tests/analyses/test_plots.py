@@ -13,9 +13,10 @@ from pipeline.analyses import plots
 def _history(n=400):
     t = np.arange(n) * 1.5e-6
     c = (t > 2e-4).astype(float)
-    return xr.Dataset({"clearance": ("time", 0.5 - c + 0.1 * np.sin(t * 1e5), {"units": "nm"}),
-                       "in_contact": ("time", c), "contact_force": ("time", c * 1.5, {"units": "mN"}),
-                       "net_force": ("time", c - 1.0, {"units": "mN"})}, coords={"time": ("time", t)})
+    T = "elapsed_time"
+    return xr.Dataset({"clearance": (T, 0.5 - c + 0.1 * np.sin(t * 1e5), {"units": "nm"}),
+                       "in_contact": (T, c), "contact_force": (T, c * 1.5, {"units": "mN"}),
+                       "net_force": (T, c - 1.0, {"units": "mN"})}, coords={T: (T, t)})
 
 
 def _sweep(realisations=0):

@@ -23,8 +23,8 @@ def _sweep() -> xr.Dataset:
 def _histories(prots) -> xr.Dataset:
     t = np.arange(5) * 250e-9
     clearance = np.add.outer(np.asarray(prots, float), t * 0.0)          # each protrusion's own value
-    return xr.Dataset({"clearance": (("protrusion", "time"), clearance, {"units": "nm"})},
-                      coords={"protrusion": list(prots), "time": t})
+    return xr.Dataset({"clearance": (("protrusion", "elapsed_time"), clearance, {"units": "nm"})},
+                      coords={"protrusion": list(prots), "elapsed_time": t})
 
 
 def _data(**given) -> dict:
@@ -61,5 +61,5 @@ def test_a_history_slice_is_the_combinations_at_the_nearest_protrusion():
     hist = xr.concat([_histories(X), _histories(X) + 100.0],
                      dim=xr.DataArray([0.02, 0.05], dims="damping", name="damping"))
     h = rf.history_slice(hist, {"roughness": None, "damping": 0.049}, 9.25)
-    assert h["clearance"].dims == ("time",)
+    assert h["clearance"].dims == ("elapsed_time",)
     np.testing.assert_array_equal(h["clearance"].values, 109.2)                # damping 0.05, 9.2 nm

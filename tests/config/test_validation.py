@@ -5,6 +5,8 @@ validates again and equals the same ``--set`` override."""
 
 from __future__ import annotations
 
+import re
+
 import pytest
 
 from pipeline.config.scene import SceneError, load_scene
@@ -87,6 +89,28 @@ def test_missing_dmw_record(write_scene, tmp_path):
     assert "dmw.source" in msg and "'missing.csv'" in msg and "does not exist" in msg
     assert 'expected "synthetic" or a record file' in msg
     assert str(tmp_path / "missing.csv") in msg
+
+
+def test_set_paths_are_taken_from_the_working_directory(tmp_path, monkeypatch):
+    # issue 35, 5: --set 'roughness.afm=["../afm/x.mi"]' was taken from the scene file's folder
+    scenes, work = tmp_path / "scenes", tmp_path / "work"
+    (work / "afm").mkdir(parents=True)
+    scenes.mkdir()
+    (scenes / "rec.csv").write_text("t,x\n0,0\n")  # the scene's own record, beside it
+    (work / "rec.csv").write_text("t,x\n0,0\n")
+    scene = scenes / "scene.toml"
+    scene.write_text('[dmw]\nsource = "rec.csv"\n')
+    monkeypatch.chdir(work)
+    assert load_scene(scene)["dmw"]["source"] == str((scenes / "rec.csv").resolve())  # the file's own: its folder
+    got = load_scene(scene, ['dmw.source="rec.csv"'])
+    assert got["dmw"]["source"] == str((work / "rec.csv").resolve())  # typed here: from here
+    with pytest.raises(SceneError) as err:
+        load_scene(scene, ['roughness.afm=["afm/x.mi"]'])
+    msg = str(err.value)
+    assert "--set roughness.afm" in msg and "does not exist" in msg
+    assert str(work / "afm" / "x.mi") in msg and str(scenes / "afm") not in msg, msg  # where it looked
+    with pytest.raises(SceneError, match=re.escape(f"(looked for {work / 'nothere.toml'})")):
+        load_scene("nothere.toml")
 
 
 def test_dmw_record_not_required_without_dmw_effect(write_scene):

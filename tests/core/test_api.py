@@ -126,7 +126,7 @@ def test_a_model_from_python_simulates_as_the_stages_do(flying, tmp_path):
     summary = hdi.run_stage("simulate", flying, tmp_path).parent / "summary.nc"
     assert hdi.open_dataset(tmp_path, summary.name)["fhm_bv"].values.tobytes() == mem["fhm_bv"][:1].values.tobytes()
     history = hdi.histories_of(mem).sel(protrusion=delta)
-    assert history["separation"].shape == (history.sizes["time"],) == (2401,)  # 0.6 ms at 0.25 us
+    assert history["separation"].shape == (history.sizes["elapsed_time"],) == (2401,)  # 0.6 ms at 0.25 us
     assert np.array_equal(history["separation"].values, hdi.open_dataset(tmp_path, "simulate")["separation"][0].values)
     sweep = hdi.open_dataset(hdi.run_stage("sweep", flying, tmp_path, scheduler="synchronous").parent, "sweep")
     assert sweep["fhm_bv"].sel(protrusion=4.5).values.ravel().tobytes() == mem["fhm_bv"][1:].values.tobytes()

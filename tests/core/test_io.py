@@ -1,5 +1,5 @@
-"""The datasets on disk (pipeline/io.py): a dataset written with its units reads back bit for bit, ``time`` as
-``elapsed_time`` on disk and ``time`` again in memory; a variable without units or long_name is refused naming
+"""The datasets on disk (pipeline/io.py): a dataset written with its units reads back bit for bit, its time
+coordinate ``elapsed_time`` on disk and in memory alike; a variable without units or long_name is refused naming
 the file; a missing or unreadable dataset is one error naming the file (and the stage to run); temporary names
 are recognised as hdi's own and no other; chunks and compression follow the sizes documented in the module;
 an OSError is one line naming the path and what to do."""
@@ -14,23 +14,24 @@ import pytest
 import xarray as xr
 
 from pipeline import io
+from pipeline.variables import TIME
 
 
 def _history(n: int = 3000) -> xr.Dataset:
     t = np.arange(n) * 250e-9
-    return xr.Dataset({"clearance": io.var(np.sin(t * 1e4) + 1.5, "time", "nm", "TFC-point clearance")},
-                      coords={"time": io.var(t, "time", "s", "elapsed simulated time")})
+    return xr.Dataset({"clearance": io.var(np.sin(t * 1e4) + 1.5, TIME, "nm", "TFC-point clearance")},
+                      coords={TIME: io.var(t, TIME, "s", "elapsed simulated time")})
 
 
-def test_a_dataset_reads_back_bit_for_bit_with_time_renamed_on_disk(tmp_path):
+def test_a_dataset_reads_back_bit_for_bit_under_one_time_name(tmp_path):
     ds = _history()
     path = io.write_dataset(ds, tmp_path / "sub" / "histories.nc", stage="simulate", extra_attrs={"k": 0.978})
     assert path == tmp_path / "sub" / "histories.nc"
     with netCDF4.Dataset(path) as nc:
-        assert io.TIME_ON_DISK in nc.variables and "time" not in nc.variables
+        assert TIME in nc.variables and "time" not in nc.variables      # one name on disk and in memory
         assert nc.variables["clearance"].units == "nm"
     back = io.read_dataset(path, stage="simulate", variables=["clearance"])
-    np.testing.assert_array_equal(back["time"].values, ds["time"].values)
+    np.testing.assert_array_equal(back[TIME].values, ds[TIME].values)
     np.testing.assert_array_equal(back["clearance"].values, ds["clearance"].values)
     assert back.attrs["k"] == 0.978 and back["clearance"].attrs["long_name"] == "TFC-point clearance"
     attrs, values = io.read_attrs(path, ["clearance", "nothing"])
@@ -79,8 +80,8 @@ def test_compression_follows_the_documented_sizes():
     # a sweep's scalars: one protrusion row per roughness x damping point
     assert io.compression(("protrusion", "roughness", "damping"), (200, 8, 8), 8)["chunksizes"] == (200, 1, 1)
     # a kept history: the time axis whole per protrusion; halved along it while above CHUNK_MAX (4 MB)
-    assert io.compression(("hist_protrusion", io.TIME_ON_DISK), (3, 400_000), 8)["chunksizes"] == (1, 400_000)
-    big = io.compression(("hist_protrusion", io.TIME_ON_DISK), (2, 1_200_000), 8)["chunksizes"]
+    assert io.compression(("hist_protrusion", TIME), (3, 400_000), 8)["chunksizes"] == (1, 400_000)
+    big = io.compression(("hist_protrusion", TIME), (2, 1_200_000), 8)["chunksizes"]
     assert big == (1, 300_000) and big[1] * 8 <= io.CHUNK_MAX < 2 * big[1] * 8
 
 

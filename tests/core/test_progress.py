@@ -264,3 +264,64 @@ def test_a_bad_progress_interval_is_one_line(tmp_path, paper_config, monkeypatch
     err = capsys.readouterr().err.strip()
     assert err == "hdi identify: error: HDI_PROGRESS_S=soon: expected a number of seconds > 0"
     assert not (tmp_path / "out").exists()
+
+
+def test_a_short_fan_out_on_a_cluster_says_where_it_runs_and_its_end(monkeypatch, capsys, info_logging):
+    # issue 35, 5: on a cluster a batch under HDI_PROGRESS_S said nothing at all (no fan-out line, no count)
+    import operator
+    distributed = pytest.importorskip("distributed")
+    monkeypatch.delenv("CI", raising=False)
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None) as lc:
+        got = []
+        with progress.stage("demo"):
+            fanout.run_tasks(operator.neg, [(i,) for i in range(4)], scheduler=lc.scheduler_address,
+                             on_done=got.append)
+    assert sorted(got) == [-3, -2, -1, 0]
+    err = capsys.readouterr().err
+    assert re.search(r"^fan-out: 4 tasks on the dask scheduler \S+ \(2 worker threads\)$", err, re.M), err
+    assert _lines(err, "demo") == [(4, 4, "tasks", "")], err  # the end, though it took well under 30 s
+    # the same batch on local threads keeps its short end at DEBUG (the command line's -vv)
+    with progress.stage("demo"):
+        fanout.run_tasks(operator.neg, [(i,) for i in range(4)], scheduler="threads", workers=2)
+    err = capsys.readouterr().err
+    assert "fan-out: 4 tasks on 2 threads" in err and _lines(err, "demo") == []
+
+
+def test_the_end_line_goes_to_the_display_that_owns_it(monkeypatch, info_logging):
+    monkeypatch.delenv("CI", raising=False)
+    with progress.Progress(3, unit="batch", label="sweep") as outer:
+        assert outer.mode == "lines"  # (as in a log)
+        with progress.Progress(5) as inner:  # a fan-out inside: its display is the outer one's
+            progress.end_line()
+        assert inner.mode == "off" and outer.end_line and not inner.end_line
+    progress.end_line()  # (no display running: nothing to say)
+
+
+def test_an_api_call_shows_its_lines_without_logging_and_progress_false_shows_none(monkeypatch, capsys):
+    logger = logging.getLogger("pipeline")
+    monkeypatch.setattr(logging.getLogger(), "handlers", [])  # (a user's process: pytest's capture handler gone)
+    monkeypatch.setattr(logger, "handlers", [])
+    monkeypatch.setattr(logger, "level", logging.NOTSET)
+    monkeypatch.delenv("CI", raising=False)
+    assert progress.display() == "off"  # no logging configured: a bare library call shows nothing
+    with progress.shown(True):
+        assert logger.level == logging.INFO and len(logger.handlers) == 1
+        assert progress.display() == "lines"
+        with progress.shown(True):  # (a call inside a call: the outer one decided)
+            assert len(logger.handlers) == 1
+        with progress.Progress(2, unit="run", label="simulate") as p:
+            logging.getLogger("pipeline.demo").info("demo: computing")
+            p.update(2)
+    assert logger.handlers == [] and logger.level == logging.NOTSET  # (given back)
+    err = capsys.readouterr().err
+    assert err.splitlines()[0] == "demo: computing"
+    assert re.fullmatch(r"simulate: 2/2 runs done, elapsed 0:00, ETA 0:00", err.splitlines()[1]), err
+    with progress.shown(False):
+        assert progress.display() == "off" and logger.handlers == []
+        with progress.Progress(2, label="simulate") as p:
+            p.update(2)
+    assert capsys.readouterr().err == ""
+    # in a Jupyter kernel: a tqdm.auto bar (the widget), though stderr is no terminal
+    monkeypatch.setitem(sys.modules, "ipykernel.zmqshell", object())
+    with progress.shown(True):
+        assert progress.display() == "bar"

@@ -11,7 +11,8 @@ import xarray as xr
 
 from cf_check import cf_report
 from pipeline import variables as vs
-from pipeline.io import TIME_ON_DISK, read_dataset, write_dataset
+from pipeline.io import OLD_TIME_UNITS, read_dataset, write_dataset
+from pipeline.variables import TIME
 from pipeline.config.scene import load_scene
 from pipeline.stages import roughness, sweep
 from pipeline.runner import ensure
@@ -91,25 +92,25 @@ def test_time_is_plain_seconds_under_xarrays_default_decoding(datasets):
     """``time`` was stored as ``s since 1970-01-01``: the default ``xr.open_dataset`` decoded it to
     datetimes at 1 us, merging the 250 ns samples (8001 -> 2001) so that ``.sel`` hit several rows."""
     path = datasets["sweep_histories"]
-    n = read_dataset(path).sizes["time"]
+    n = read_dataset(path).sizes[TIME]
     with xr.open_dataset(path, engine="netcdf4") as raw:  # xarray's defaults, as a user opens it
-        t = raw[TIME_ON_DISK]
+        t = raw[TIME]
         assert t.dtype == np.float64 and t.attrs["units"] == "s"
         assert "since" not in t.attrs["units"] and "standard_name" not in t.attrs
         assert np.unique(t.values).size == n == t.size
         # the output step of the scene (solver.output_step_ns = 250) in seconds
         np.testing.assert_allclose(np.diff(t.values), 250e-9, rtol=1e-9)
-        row = raw["separation"].sel({TIME_ON_DISK: float(t[7])})
-        assert TIME_ON_DISK not in row.dims  # one sample, not several
+        row = raw["separation"].sel({TIME: float(t[7])})
+        assert TIME not in row.dims  # one sample, not several
     ds = read_dataset(path)
-    assert ds["time"].attrs["units"] == "s"
-    np.testing.assert_allclose(ds["time"].values, t.values, rtol=0, atol=0)
+    assert ds[TIME].attrs["units"] == "s"
+    np.testing.assert_allclose(ds[TIME].values, t.values, rtol=0, atol=0)
 
 
 def test_dmw_time_is_plain_seconds_and_a_dmw_dataset_reads_back_as_a_record(datasets):
     from pipeline.model.measured_dmw import load_record
     with xr.open_dataset(datasets["dmw"], engine="netcdf4") as raw:
-        t = raw[TIME_ON_DISK].values
+        t = raw[TIME].values
         assert t.dtype == np.float64 and np.unique(t).size == t.size
         rate = 1 / float(np.median(np.diff(t)))
     assert rate == pytest.approx(4e6, rel=1e-9)  # dmw.sample_rate_mhz = 4
@@ -204,3 +205,47 @@ def test_pint_quantify_works_on_every_dataset(datasets):
         q = ds.pint.quantify()
         metres = q["min_clearance"].pint.to("m").pint.magnitude
         np.testing.assert_allclose(metres, ds["min_clearance"].values * 1e-9, rtol=1e-15)
+
+
+def test_one_name_for_the_elapsed_time_in_memory_and_in_the_files(datasets, tmp_path):
+    """Issue 35, 5: ``xr.open_dataset`` gave ``elapsed_time``, ``hdi.open_dataset`` and ``simulate`` ``time``."""
+    assert TIME == "elapsed_time"
+    for dataset in ("dmw", "histories", "sweep_histories", "sweep-part"):
+        with xr.open_dataset(datasets[dataset], engine="netcdf4") as raw:
+            assert TIME in raw.dims and "time" not in raw.variables, dataset
+        assert TIME in read_dataset(datasets[dataset]).dims, dataset
+    # a file written before (coordinate ``time``, and before that in ``s since 1970-01-01``) reads under the one name
+    old = read_dataset(datasets["histories"]).rename({TIME: "time"})
+    for units in ("s", OLD_TIME_UNITS):
+        old["time"].attrs["units"] = units
+        old.to_netcdf(tmp_path / "old.nc", engine="netcdf4")
+        back = read_dataset(tmp_path / "old.nc")
+        assert TIME in back.dims and back[TIME].attrs["units"] == "s"
+        np.testing.assert_array_equal(back[TIME].values, old["time"].values)
+
+
+#: The longest ``long_name`` (a plot's axis label with its units; the sentence is the ``description``).
+LONG_NAME_MAX = 40
+
+
+def test_long_names_are_short_and_the_sentence_is_the_description(datasets):
+    """Issue 35, 5: long_names were whole sentences (up to 140 characters) that clipped plot labels."""
+    for group, variables in vs.GROUPS.items():
+        for name, v in variables.items():
+            assert 0 < len(v.long_name) <= LONG_NAME_MAX, (group, name, v.long_name)
+            assert v.description != v.long_name, (group, name)
+    assert vs.SCALARS["fhm_bv"].long_name == "FHM/BV"
+    assert vs.SCALARS["fhm_bv"].description.startswith("flying-height modulation (flying) / bouncing vibration")
+    for dataset, path in datasets.items():
+        ds = read_dataset(path)
+        for name in list(ds.coords) + list(ds.data_vars):
+            decl = vs.declared(dataset, name)
+            assert ds[name].attrs.get("description", "").startswith(decl.description), (dataset, name)
+
+
+def test_cf_xarray_finds_the_separation_axis(datasets):
+    import cf_xarray  # noqa: F401 (registers the .cf accessor)
+    with xr.open_dataset(datasets["interface"], engine="netcdf4") as raw:
+        assert raw.cf.axes == {"Z": ["separation"]}
+        assert raw.cf["Z"].attrs["positive"] == "up"
+        np.testing.assert_array_equal(raw.cf["Z"].values, raw["separation"].values)

@@ -57,6 +57,9 @@ def test_dataset_layout(result):
     assert ds["error"].attrs["units"] == "1" and ds["wall_time"].attrs["units"] == "s"
     assert ds["fhm_bv"].attrs["units"] == "%" and ds["reference_clearance"].attrs["units"] == "nm"
     check_cf(ds)  # units and long_name on every variable and coordinate
+    assert all(len(ds[v].attrs["long_name"]) <= 40 for v in ds.variables), \
+        [(v, ds[v].attrs["long_name"]) for v in ds.variables if len(ds[v].attrs["long_name"]) > 40]
+    assert ds["passes"].attrs["description"].startswith("every headline error below")
     assert ds.attrs["stage"] == "accuracy"
     # settings per knob, NaN-padded
     np.testing.assert_allclose(ds["setting"].sel(knob="rtol").values, KNOBS["rtol"])

@@ -35,11 +35,11 @@ def test_stage_writes_synthetic_dmw(tmp_path):
     path = ensure("dmw", scene, tmp_path)
     assert path == tmp_path / "dmw.nc"
     ds = read_dataset(path)
-    units = {"time": "s", "displacement": "nm", "frequency": "Hz", "psd": "nm2 Hz-1", "rms": "nm",
+    units = {"elapsed_time": "s", "displacement": "nm", "frequency": "Hz", "psd": "nm2 Hz-1", "rms": "nm",
              "band_low": "Hz", "band_high": "Hz", "sample_rate": "Hz", "disk_speed": "m s-1"}
     for name, u in units.items():
         assert ds[name].attrs["units"] == u and ds[name].attrs["long_name"]
-    assert ds.sizes["time"] == 8400 and ds.sizes["frequency"] == 4201      # 2.1 ms, see below
+    assert ds.sizes["elapsed_time"] == 8400 and ds.sizes["frequency"] == 4201      # 2.1 ms, see below
     assert float(ds.rms) == pytest.approx(0.5, rel=1e-12)
     assert rms(ds.displacement.values) == pytest.approx(0.5, rel=1e-12)
     assert float(ds.band_low) == 1e4 and float(ds.band_high) == 5e5
@@ -119,7 +119,7 @@ def test_effect_off_writes_zero_dmw_and_needs_no_record(tmp_path):
     ds = read_dataset(ensure("dmw", scene, tmp_path))
     assert ds.attrs["dmw_enabled"] == 0 and "not in scene" in ds.attrs["disabled"]
     assert float(ds.rms) == 0.0 and not np.any(ds.displacement.values)
-    assert ds.sizes["time"] == 8400
+    assert ds.sizes["elapsed_time"] == 8400
 
 
 def test_stage_skips_when_up_to_date(tmp_path):

@@ -78,6 +78,13 @@ def test_report_shows_each_target_over_the_realisations_with_its_spread(run3):
     check_png(out / "figures" / "band.png")
     td, lo, hi = en.touchdown_protrusion(ens["min_clearance"])
     assert np.isfinite(td) and lo <= td <= hi
+    # short long_names (issue 35, 5); the target's sentence is the description, which the report's table shows
+    for name, v in ens.variables.items():
+        assert len(v.attrs["long_name"]) <= 40, (name, v.attrs["long_name"])
+    band = ens["value_bouncing"]
+    assert band.attrs["long_name"] == "bouncing"  # (the target's name: its sentence is too long for a label)
+    assert band.attrs["description"].startswith("bouncing BV over (9.8, 10.2] nm")
+    assert f"| {band.attrs['description'].replace(' over the DMW realisations', '')} |" in text
     assert f"the touchdown protrusion over the realisations: {td:.4g} nm (10-90 %: {lo:.4g}-{hi:.4g})" in text
     assert f"| touchdown protrusion | 9.8 nm (none at 9.6 nm) | {td:.4g} nm (10-90 %: {lo:.4g}-{hi:.4g}) |" in text
     # the median FHM at 9 nm with its 10-90 % range, and the 11-nm interference as mean +- std

@@ -69,6 +69,8 @@ def test_twin_experiment_recovers_the_true_parameters_within_the_reported_interv
     for v in list(ds.data_vars) + list(ds.coords):
         a = ds[v].attrs
         assert "long_name" in a and ("units" in a or a.get("unit_variable") in ds or ds[v].dtype.kind in "OSU"), v
+        assert len(a["long_name"]) <= 40, (v, a["long_name"])  # a plot's label; the sentence: description
+    assert ds["best"].attrs["description"].startswith("identified value of each parameter")
     assert ds.sizes["evaluation"] == len(evaluations.EvaluationStore(out / "identify.evals.jsonl").records)
     # the reconstructed point (evaluation 0) is worse than the identified one
     assert float(ds["objective"][0]) > float(ds["objective"][ds.attrs["best_evaluation"]])

@@ -110,7 +110,10 @@ def test_indices_of_known_models_through_the_evaluation_path(write_scene, paper_
     assert np.all(ds["morris_used"].values == 20) and np.all(ds["sobol_used"].values == 1024)
     for v in list(ds.data_vars) + list(ds.coords):
         assert "long_name" in ds[v].attrs, v
+        assert len(ds[v].attrs["long_name"]) <= 40, (v, ds[v].attrs["long_name"])  # a label; sentence: description
         assert "units" in ds[v].attrs or "unit_variable" in ds[v].attrs or ds[v].dtype.kind in "OUS", v
+    assert ds["mu_star"].attrs["long_name"] == "Morris mu*"
+    assert ds["mu_star"].attrs["description"].startswith("Morris mu*: mean absolute elementary effect")
     from cf_check import cf_report  # sensitivity.nc fits the ecosystem like the other datasets
     failures, crashed = cf_report(nc)
     assert crashed == [] and failures[3] == [] and failures[2] == [], failures

@@ -38,8 +38,8 @@ def test_the_stage_writes_the_histories_and_the_summary_at_the_scenes_protrusion
     scene, out, hist, summ = air
     assert sorted(p.name for p in out.glob("*.nc")) == ["histories.nc", "summary.nc"]   # (no DMW: no dmw.nc)
     assert list(hist["protrusion"].values) == list(summ["protrusion"].values) == [5.0]
-    assert hist.sizes["time"] == 4001                                   # 1 ms at 250 ns, both ends
-    assert hist["time"].values[-1] == pytest.approx(1e-3)
+    assert hist.sizes["elapsed_time"] == 4001                                   # 1 ms at 250 ns, both ends
+    assert hist["elapsed_time"].values[-1] == pytest.approx(1e-3)
     assert (float(summ["steady_window_start"]), float(summ["steady_window_end"])) == (0.3, 1.0)
     assert str(summ["k_source"].values) == "no contact effect" and np.isnan(float(summ["k"]))
     for name in summ.data_vars:
@@ -70,7 +70,7 @@ def test_the_rest_state_is_the_one_statics_finds(air):
 def test_with_the_dmw_the_fhm_is_the_peak_to_peak_separation_over_fh0(tmp_path, paper_config):
     scene = _run(paper_config, WITH_DMW, tmp_path)
     hist, summ = read_dataset(tmp_path / "histories.nc"), read_dataset(tmp_path / "summary.nc")
-    t = hist["time"].values
+    t = hist["elapsed_time"].values
     window = (t >= 0.3e-3 - 1e-12) & (t <= 1e-3 + 1e-12)
     d = hist["separation"].values[0][window]
     sampled = 100.0 * np.ptp(d) / scene["air_bearing"]["flying_height_nm"]
