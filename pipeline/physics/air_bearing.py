@@ -141,7 +141,8 @@ def _bounce_first(root: dict) -> bool:
 #: Rules picking one root of the modal inversion (``air_bearing.stiffness_root``): the behaviour is a
 #: predicate on the root's ``info`` entry (``k_f``, ``k_r`` [N/m], ``mode1_pitch_like``).
 STIFFNESS_ROOTS: Registry[Variant] = Registry("air_bearing.stiffness_root", {
-    "stiff-rear": Variant(behaviour=_stiff_rear, summary="the root with k_r > k_f: the trailing pad the stiffest [recon]",
+    "stiff-rear": Variant(behaviour=_stiff_rear,
+                          summary="the root with k_r > k_f: the trailing pad the stiffest [recon]",
                           source='docs/model.md, section "Air bearing"'),
     "pitch-first": Variant(behaviour=_pitch_first, summary="the root whose lower mode is pitch-like (the first "
                                                            "reconstruction)",
@@ -375,9 +376,10 @@ class TfcLaw(Entry):
     table : name of the stage whose dataset the law reads (e.g. ``"bulge"``: a force solved once per
         scene and tabulated), or ``None``; such a law's ``force`` takes the table as the keyword
         ``table`` (the model assembly binds it, :func:`pipeline.model.assembly.build_model`)
-    parameters : (of :class:`~pipeline.physics.variants.Entry`) ``(keyword of force, "section.name")`` pairs: the scene value in SI units
-        (:func:`pipeline.config.si.to_si`, e.g. ``"air_bearing.flying_height"`` [m]) the model assembly
-        passes as that keyword (:func:`pipeline.model.assembly.law_parameters`); the law reads no scene
+    parameters : (an :class:`~pipeline.physics.variants.Entry` field) ``(keyword of force, "section.name")``
+        pairs: the scene value in SI units (:func:`pipeline.config.si.to_si`, e.g.
+        ``"air_bearing.flying_height"`` [m]) the model assembly passes as that keyword
+        (:func:`pipeline.model.assembly.law_parameters`); the law reads no scene
     """
 
     force: Callable[..., np.ndarray] | None

@@ -20,7 +20,7 @@ import pytest
 
 from pipeline import physics
 from pipeline.config.scene import SCHEMA, SceneError
-from pipeline.config.schema import describe_keys, variant_keys, variants_table, with_variants_table
+from pipeline.config.schema import describe_keys, scene_key, variant_keys, variants_table, with_variants_table
 from pipeline.config.si import to_si
 from pipeline.model import assembly, bulge_table, forces, kernel_inputs, outcomes, running, scene_inputs
 from pipeline.model.dmw_record import disk_speed_m_s
@@ -65,10 +65,11 @@ def test_every_entry_has_the_one_shape(key, name):
     assert entry.summary and "\n" not in entry.summary, "one line for --help-keys and docs/model.md"
     assert entry.source, "where the law is stated"
     assert hasattr(entry, "behaviour")
-    for keyword, scene_key in entry.parameters:  # the scene values it reads exist, with their SI name
-        section, _, stem = scene_key.partition(".")
-        assert keyword.isidentifier() and section in SCHEMA, scene_key
-        to_si(make_scene(FLYING))[section][stem]  # (a key the SI view does not have: KeyError)
+    for keyword, where in entry.parameters:  # the scene values it reads exist, by their SI name
+        section, _, stem = where.partition(".")
+        assert keyword.isidentifier() and section in SCHEMA, where
+        to_si(make_scene(FLYING))[section][stem]  # (a value the SI view does not have: KeyError)
+        assert scene_key(where).partition(".")[2] in SCHEMA[section]  # (the key a scene file writes)
 
 
 def _unknown(registry: Registry):
@@ -98,7 +99,8 @@ def test_a_registered_entry_is_at_once_a_choice_and_in_help_keys(monkeypatch):
 
 def test_docs_model_variants_table_is_the_generated_one():
     page = (ROOT / "docs" / "model.md").read_text(encoding="utf-8")
-    assert with_variants_table(page) == page, "docs/model.md's variants table differs from the registries: make variants"
+    assert with_variants_table(page) == page, \
+        "docs/model.md's variants table differs from the registries: run `make variants`"
     # every variant key and option is in it, the default marked once per key
     for key, registry in variant_keys().items():
         default = SCHEMA[key.partition(".")[0]][key.partition(".")[2]].default
@@ -121,11 +123,10 @@ def _scene(key, name, effects=FLYING, **sections):
     key's unit: ``contact.friction_coefficient``)."""
     section, _, stem = key.partition(".")
     values = {section: {stem: name}}
-    for _, scene_key in variant_keys()[key][name].parameters:
-        s, _, k = scene_key.partition(".")
-        named = [kk for kk in SCHEMA[s] if kk == k or kk.startswith(k + "_")]
-        if SCHEMA[s][named[0]].default is None:
-            values.setdefault(s, {})[named[0]] = 1.0
+    for _, where in variant_keys()[key][name].parameters:
+        s, _, k = scene_key(where).partition(".")
+        if SCHEMA[s][k].default is None:
+            values.setdefault(s, {})[k] = 1.0
     for s, v in sections.items():
         values[s] = {**values.get(s, {}), **v}
     return make_scene(effects, **values)
