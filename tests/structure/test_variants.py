@@ -104,6 +104,7 @@ def test_docs_model_variants_table_is_the_generated_one():
     # every variant key and option is in it, the default marked once per key
     for key, registry in variant_keys().items():
         default = SCHEMA[key.partition(".")[0]][key.partition(".")[2]].default
+        assert default in registry, key
         for name in registry:
             assert f"| `{key}` | `{name}`{' (default)' if name == default else ''} |" in page
 
