@@ -72,7 +72,8 @@ from .variants import Registry, Variant
 
 #: Profile codes of the compiled laws (floats, so a kernel can carry them in its parameter vector).
 PARABOLOID, ELLIPSOID = 0.0, 1.0
-#: Gap profiles under the bulge (``air_bearing.bulge_profile``): the behaviour is the profile's code.
+#: Gap profiles under the bulge (``air_bearing.bulge_profile``): the behaviour is the profile's code (the
+#: compiled law, :func:`ph_shape`, :func:`gap_profile` and :func:`rough_ph_lift` know these two).
 PROFILES: Registry[Variant] = Registry("air_bearing.bulge_profile", {
     "ellipsoid": Variant(behaviour=ELLIPSOID, summary="h = g + delta (1 - sqrt(1 - u)): the TFC bulge's ellipsoid",
                          source='docs/model.md, section "p h = const limit" [paper]'),
@@ -172,10 +173,13 @@ def rough_ph_lift(g, delta: float, p_pad: float, a: float, b: float, roughness: 
     x, w = np.polynomial.legendre.leggauss(nodes)
     t, w = 0.5 * (x + 1.0), 0.5 * w  # on [0, 1]
     g = np.asarray(g, dtype=float)[..., None]
-    if PROFILES.lookup(profile).behaviour == ELLIPSOID:  # u = 1 - s^2, du = 2 s ds, h = g + delta (1 - s)
+    code = PROFILES.lookup(profile).behaviour
+    if code == ELLIPSOID:  # u = 1 - s^2, du = 2 s ds, h = g + delta (1 - s)
         h, wu = g + delta * (1.0 - t), 2.0 * t * w
-    else:  # the paraboloid
+    elif code == PARABOLOID:
         h, wu = g + delta * t, w
+    else:
+        raise ValueError(f"air_bearing.bulge_profile = {profile!r}: no rough-gap quadrature for its code {code}")
     ratio = roughness.couette_gap(g + delta) / roughness.couette_gap(h)
     return p_pad * np.pi * a * b * ((roughness.air_fraction(h) * ratio - 1.0) * wu).sum(axis=-1)
 
@@ -260,10 +264,13 @@ def gap_profile(u: np.ndarray, g, delta, profile: str) -> np.ndarray:
     Ellipsoid ``h = g + delta (1 - sqrt(1 - u))``, paraboloid ``h = g + delta u`` (module docstring).
     """
     uc = np.minimum(u, 1.0)
-    if PROFILES.lookup(profile).behaviour == ELLIPSOID:
+    code = PROFILES.lookup(profile).behaviour
+    if code == ELLIPSOID:
         s = 1.0 - np.sqrt(1.0 - uc)
-    else:  # the paraboloid
+    elif code == PARABOLOID:
         s = uc
+    else:
+        raise ValueError(f"air_bearing.bulge_profile = {profile!r}: no gap shape for its code {code}")
     return g + delta * s
 
 
