@@ -35,7 +35,7 @@ export UV_COMPILE_BYTECODE := 1
 # each module is named after its stage, tests/structure/test_registries.py): a new stage module is a new target
 STAGES := $(sort $(basename $(notdir $(filter-out %/__init__.py,$(wildcard pipeline/stages/*.py)))))
 
-.PHONY: setup run test test-fast test-slow bench sweep readme clean $(STAGES)
+.PHONY: setup run test test-fast test-slow bench sweep readme variants clean $(STAGES)
 
 ## the environment alone; with EXTRAS, those extras added to it (each `--extra NAME` of uv sync; kept by
 ## later targets, which sync --inexact)
@@ -95,6 +95,10 @@ sweep: $(RUN_STAMP)
 ## rewrite the generated comparison section of docs/results.md and its figures from the last `make run`
 readme: $(RUN_STAMP)
 	$(BIN)/hdi report $(SCENE) --readme docs/results.md
+
+## rewrite the generated "Model variants" table of docs/model.md from the registries (tests/structure/test_variants.py)
+variants: $(RUN_STAMP)
+	$(BIN)/python -c "from pipeline.config.schema import write_variants_table; write_variants_table('docs/model.md')"
 
 ## one stage (and what it needs) on the scene: `make NAME` is `hdi NAME $(SCENE)` (sweep and identify: their own scenes)
 $(filter-out sweep identify,$(STAGES)): $(RUN_STAMP)

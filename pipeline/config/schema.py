@@ -13,15 +13,17 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, Callable
 
 from ..physics import paper
 from ..physics.air_bearing import REAR_LAWS, STIFFNESS_ROOTS, TFC_STIFFENING
-from ..physics.bulge_bearing import BULGE_LAWS, SLIP_MODELS
+from ..physics.bulge_bearing import BULGE_LAWS, PROFILES, SLIP_MODELS
 from ..physics.equilibrium import STARTS
 from ..physics.fhm import FHM_MEASURES
 from ..physics.friction import FRICTION_LAWS, FRICTION_SWITCHING
 from ..physics.geometry import AREA_MODELS, FRICTION_ARMS
+from ..physics.variants import Registry
 from ..units import SUFFIX_FACTORS
 from .limits import MAX_BOOTSTRAP, MAX_WORK_OF_ADHESION
 
@@ -59,6 +61,9 @@ class Key:
     path
         The value names a file that must exist (relative paths are taken from the scene's folder; in a
         ``--set`` override, from the working directory).
+    choices
+        The admissible values; a model variant's registry (:class:`pipeline.physics.variants.Registry`)
+        is read live, so a registered entry is a choice (and ``--help-keys`` shows its summary).
     doc
         One line with unit and source, shown in errors and ``hdi ... --help-keys``.
     """
@@ -68,7 +73,7 @@ class Key:
     check: tuple[Callable[[Any], bool], str] | None = None
     length: int | None = None
     path: bool = False
-    choices: tuple[str, ...] | None = None
+    choices: tuple[str, ...] | Registry | None = None
     doc: str = ""
 
 
@@ -162,10 +167,9 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "rear_arm_mm": Key("float", 0.40, _pos, doc="rear air-bearing centre behind the CG [mm] (recon)"),
         "tfc_from_trailing_edge_um": Key("float", paper.TFC_FROM_TRAILING_EDGE_UM, _nonneg,
                                          doc="TFC bulge centre from the trailing edge [um] (paper)"),
-        "friction_arm": Key("str", "cg", choices=tuple(FRICTION_ARMS),
-                            doc="moment arm of the friction force about the CG: 'cg' T/2, drag reacted through "
-                                "the CG (default, as the paper's 2-DOF model) or 'gimbal' T, reacted at the gimbal "
-                                "on the slider's back [paper-deviation] (docs/model.md, section 'Deviations')"),
+        "friction_arm": Key("str", "cg", choices=FRICTION_ARMS,
+                            doc="moment arm of the friction force about the CG [paper-deviation] (docs/model.md, "
+                                "section 'Deviations', item 19)"),
     },
     "air_bearing": {
         "flying_height_nm": Key("float", paper.FLYING_HEIGHT_NM, _pos, doc="nominal flying height FH0 [nm] (paper)"),
@@ -176,19 +180,16 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "rear_exponent": Key("float", 2.0, _pos, doc="rear bearing nonlinearity exponent n [1] (recon)"),
         "rear_reference_gap_nm": Key("float", None, _pos,
                                      doc="rear bearing reference gap g0 [nm] (recon; default FH0)"),
-        "stiffness_root": Key("str", "stiff-rear", choices=tuple(STIFFNESS_ROOTS),
-                              doc="root of the modal inversion: 'stiff-rear' k_r > k_f (docs/model.md, section 'Air bearing', recon), "
-                                  "'pitch-first' (first reconstruction), 'bounce-first'"),
-        "rear_law": Key("str", "power", choices=REAR_LAWS.keys(),  # (live: a registered law is a choice)
-                        doc="rear bearing law: 'power' F_r0[(g0/g)^n - 1] (recon), 'linear' k_r (g0 - g)"),
-        "tfc_stiffening": Key("str", "none", choices=TFC_STIFFENING.keys(),  # (live: a registered law is a choice)
-                              doc="air-bearing stiffening under the TFC bulge (docs/model.md, section 'Gap-power stiffening'): 'none' or "
-                                  "'gap-power', added stiffness k_t[(FH0/g)^p - 1] at the TFC gap g"),
-        "bulge": Key("str", "none", choices=BULGE_LAWS.keys(),
-                     doc="the air bearing of the TFC bulge itself: 'none', 'ph-limit' (p h = const under the bulge), "
-                         "'reynolds' (slip-corrected Reynolds equation, tabulated by the bulge stage) or "
-                         "'rough-reynolds' (its rough-gap form down to contact: Boltzmann flow rate, Patir-Cheng flow "
-                         "factors, closed area out of the film); docs/model.md, section 'Bulge air bearing'"),
+        "stiffness_root": Key("str", "stiff-rear", choices=STIFFNESS_ROOTS,
+                              doc="root of the modal inversion of the two frequencies (docs/model.md, section 'Air "
+                                  "bearing')"),
+        "rear_law": Key("str", "power", choices=REAR_LAWS,
+                        doc="rear bearing law (docs/model.md, section 'Slider dynamics')"),
+        "tfc_stiffening": Key("str", "none", choices=TFC_STIFFENING,
+                              doc="air-bearing stiffening under the TFC bulge at the TFC gap g (docs/model.md, "
+                                  "section 'Gap-power stiffening')"),
+        "bulge": Key("str", "none", choices=BULGE_LAWS,
+                     doc="the air bearing of the TFC bulge itself (docs/model.md, section 'Bulge air bearing')"),
         "disk_roughness_share": Key("float", 1.0, (lambda v: 0.5 <= v <= 1.0, "a share in [0.5, 1]"),
                                     doc="share of the combined roughness variance on the moving disk [1], for the "
                                         "shear flow factor of the 'rough-reynolds' bulge bearing (recon: 1, the polished "
@@ -201,13 +202,11 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "pad_pressure_mpa": Key("float", 1.0, (lambda v: 0.1 <= v <= 10.0, "a pressure in [0.1, 10] MPa"),
                                 doc="air pressure p_pad under the trailing pad around the bulge [MPa] (recon; "
                                     "about 0.3-3 MPa for a femto trailing pad)"),
-        "bulge_profile": Key("str", "ellipsoid", choices=("ellipsoid", "paraboloid"),
-                             doc="profile of the bulge under the bearing: 'ellipsoid' (the TFC geometry) or 'paraboloid'"),
-        "bulge_slip": Key("str", "first-order", choices=tuple(SLIP_MODELS),
-                          doc="rarefaction of the 'reynolds' bulge bearing: 'first-order' slip (Burgdorfer 1959), "
-                              "'second-order' (Hsia & Domoto 1983), 'none' or 'boltzmann' (Fukui & Kaneko 1990's fit; "
-                              "the 'rough-reynolds' law always uses it); docs/model.md, section "
-                              "'Slip-corrected Reynolds equation'"),
+        "bulge_profile": Key("str", "ellipsoid", choices=PROFILES,
+                             doc="profile of the bulge under its air bearing"),
+        "bulge_slip": Key("str", "first-order", choices=SLIP_MODELS,
+                          doc="rarefaction of the 'reynolds' bulge bearing (the 'rough-reynolds' law always uses "
+                              "'boltzmann'); docs/model.md, section 'Slip-corrected Reynolds equation'"),
         "tfc_stiffness_n_m": Key("float", 1.0e5, _nonneg,
                                  doc="stiffness scale k_t of the TFC stiffening spring [N/m] (recon, to be identified)"),
         "tfc_stiffening_exponent": Key("float", 1.5, (lambda v: 0 <= v <= 4, "a number in [0, 4]"),
@@ -280,20 +279,16 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "fallback_probability": Key("float", None, (lambda v: 0 < v < 1, "a probability in (0, 1)"),
                                     doc="when calibration finds no admissible k: use the k of this two-sided "
                                         "contact probability P(|z| > k sigma) = 2 Q(k) [1] (docs/model.md, section 'Contact criterion')"),
-        "friction_law": Key("str", "shear-strength", choices=tuple(FRICTION_LAWS),
-                            doc="friction law: 'shear-strength' tau_y = H/(2.8 sqrt 3) (docs/model.md, section 'ISBL interface') or "
-                                "'coefficient' Q = mu P (docs/model.md, section 'Friction')"),
+        "friction_law": Key("str", "shear-strength", choices=FRICTION_LAWS,
+                            doc="friction law (docs/model.md, section 'Friction')"),
         "friction_coefficient": Key("float", None, _nonneg,
                                     doc="friction coefficient mu of the 'coefficient' law [1] (paper: ~1.2)"),
         "friction_switching": Key("str", "criterion", choices=FRICTION_SWITCHING,
-                                  doc="how the friction is switched: 'criterion' the whole friction with the contact "
-                                      "criterion d < k sigma (paper, default) or 'continuous' the lubricant shear "
-                                      "on the wetted summits at every separation, the solid friction with the "
-                                      "contact force (docs/model.md, section 'Switched and continuous friction')"),
-        "area_model": Key("str", "flat-section", choices=tuple(AREA_MODELS),
-                          doc="interface forces: 'flat-section' stresses at the apex separation times A_n (paper, "
-                              "default) or 'integrated' the same stresses summed over the bulge's gap field "
-                              "[paper-deviation] (docs/model.md, section 'Deviations')"),
+                                  doc="how the friction is switched (docs/model.md, section 'Switched and continuous "
+                                      "friction')"),
+        "area_model": Key("str", "flat-section", choices=AREA_MODELS,
+                          doc="how the interface stresses become forces over the bulge [paper-deviation] "
+                              "(docs/model.md, section 'Deviations', item 18)"),
     },
     "dmw": {
         "source": Key("str", "synthetic", doc='"synthetic" or a measured record (CSV or NetCDF)'),
@@ -360,11 +355,9 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "bulge_cells_per_b": Key("int", 12, (lambda v: 2 <= v <= 512, "an integer in [2, 512]"),
                                  doc="Reynolds grid of the 'reynolds' bulge table: cells per semi-axis across sliding [1]"),
         "start": Key("str", "static", choices=STARTS,
-                     doc="start state of each run: 'static' (the model's static equilibrium; past the adhesion fold "
-                         "the contact branch) or 'nominal' (the nominal attitude, the model before the start state "
-                         "was part of it); docs/model.md, section 'Start state'"),
-        "fhm_measure": Key("str", "peak-to-peak", choices=tuple(FHM_MEASURES),
-                           doc="FHM/BV measure (docs/model.md, section 'Slider dynamics')"),
+                     doc="start state of each run (docs/model.md, section 'Start state')"),
+        "fhm_measure": Key("str", "peak-to-peak", choices=FHM_MEASURES,
+                           doc="FHM/BV measure (docs/model.md, section 'FHM and BV')"),
     },
     "sweep": {
         "protrusion_nm": Key("range", dict(zip(("start", "stop", "step"), paper.PROTRUSION_GRID_NM)),
@@ -485,8 +478,66 @@ def describe_keys(section: str | None = None) -> str:
                 default = f"({len(spec.default)} tables)"
             kind = spec.kind + (f"; one of {', '.join(spec.choices)}" if spec.choices else "")
             out.append(f"  {key} = {default}  ({kind})  {spec.doc}")
+            if isinstance(spec.choices, Registry):  # a model variant: each option with its summary
+                out.extend(f"      {name}: {entry.summary}" for name, entry in spec.choices.items())
         out.append("")
     return "\n".join(out)
+
+
+def variant_keys() -> dict[str, Registry]:
+    """The scene keys that choose a model variant, ``"section.key"`` -> its registry
+    (:class:`pipeline.physics.variants.Registry`), in the schema's order."""
+    return {f"{section}.{key}": spec.choices for section, keys in SCHEMA.items() for key, spec in keys.items()
+            if isinstance(spec.choices, Registry)}
+
+
+#: The markers of the generated variants table in docs/model.md (:func:`variants_table`).
+VARIANTS_BEGIN = ("<!-- BEGIN generated by `make variants` from the registries "
+                  "(pipeline.config.schema.variants_table) -->")
+VARIANTS_END = "<!-- END generated variants -->"
+
+
+def scene_key(si_name: str) -> str:
+    """The scene key, as a scene file names it, of a value of the SI view (:func:`pipeline.config.si.to_si`):
+    ``"air_bearing.flying_height"`` -> ``"air_bearing.flying_height_nm"`` (a key without a unit: itself).
+
+    Raises
+    ------
+    KeyError
+        For a name no key of the schema has.
+    """
+    section, _, stem = si_name.partition(".")
+    for key in SCHEMA.get(section, {}):
+        if strip_unit(key)[0] == stem:
+            return f"{section}.{key}"
+    raise KeyError(f"{si_name}: no scene key of that name (with or without a unit suffix)")
+
+
+def variants_table() -> str:
+    """The "Model variants" table of docs/model.md, generated from the registries: one row per option of
+    each variant key (:func:`variant_keys`), with the default marked, its summary, the scene values its
+    behaviour reads (``parameters``, in SI) and its source."""
+    rows = ["| scene key | option | what it does | reads | source |", "|---|---|---|---|---|"]
+    for where, registry in variant_keys().items():
+        section, _, key = where.partition(".")
+        default = SCHEMA[section][key].default
+        for name, entry in registry.items():
+            shown = f"`{name}` (default)" if name == default else f"`{name}`"
+            summary = entry.summary.replace("|", "\\|")
+            reads = ", ".join(f"`{scene_key(where)}`" for _, where in entry.parameters)
+            source = entry.source.replace("docs/model.md, ", "")  # (the table is in docs/model.md)
+            rows.append(f"| `{where}` | {shown} | {summary} | {reads} | {source} |")
+    return "\n".join(rows)
+
+
+def with_variants_table(page: str) -> str:
+    """``page`` (docs/model.md's text) with the generated variants table between :data:`VARIANTS_BEGIN` and
+    :data:`VARIANTS_END` (a ``ValueError`` naming the markers when they are missing)."""
+    if VARIANTS_BEGIN not in page or VARIANTS_END not in page:
+        raise ValueError(f"docs/model.md: the markers {VARIANTS_BEGIN!r} and {VARIANTS_END!r} are missing")
+    head, rest = page.split(VARIANTS_BEGIN, 1)
+    _, tail = rest.split(VARIANTS_END, 1)
+    return head + VARIANTS_BEGIN + "\n" + variants_table() + "\n" + VARIANTS_END + tail
 
 
 def unit_suffix(key: str) -> str | None:
@@ -501,3 +552,9 @@ def strip_unit(key: str) -> tuple[str, str | None]:
         if key.endswith("_" + suffix):
             return key[: -len(suffix) - 1], suffix
     return key, None
+
+
+def write_variants_table(page: Path | str) -> None:
+    """Rewrite the generated variants table of the page ``page`` (docs/model.md; ``make variants``)."""
+    page = Path(page)
+    page.write_text(with_variants_table(page.read_text(encoding="utf-8")), encoding="utf-8")

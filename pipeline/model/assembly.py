@@ -10,18 +10,21 @@ contact criterion and the solver tolerances. The per-protrusion inputs of a run 
 
 The separation ``d`` is measured to the mean of summit heights, ``y_s`` above the mean of surface
 heights to which ``FH0`` is measured (docs/model.md, section "Separation datum"; one home: :func:`pipeline.model.forces.separation_at`).
-Named model variants (scene keys, one registry each): ``air_bearing.stiffness_root``
-(:data:`pipeline.physics.air_bearing.STIFFNESS_ROOTS`), ``air_bearing.rear_law`` (``REAR_LAWS``),
-``air_bearing.tfc_stiffening`` (``TFC_STIFFENING``), ``contact.friction_law``
+Named model variants (scene keys, one registry each, all of one shape:
+:class:`pipeline.physics.variants.Registry`; the list: docs/model.md, section "Model variants"), e.g.
+``air_bearing.stiffness_root`` (:data:`pipeline.physics.air_bearing.STIFFNESS_ROOTS`), ``air_bearing.rear_law``
+(``REAR_LAWS``), ``air_bearing.tfc_stiffening`` (``TFC_STIFFENING``), ``contact.friction_law``
 (:data:`pipeline.physics.friction.FRICTION_LAWS`), ``solver.fhm_measure``
 (:data:`pipeline.physics.fhm.FHM_MEASURES`), and two deviations from the paper (docs/model.md, section
 "Deviations", items 18-19): ``contact.area_model`` (:data:`pipeline.physics.geometry.AREA_MODELS`: the
-interface stresses summed over the bulge's gap field, per-protrusion tables of
+interface stresses summed over the bulge's gap field by the entry's integral, per-protrusion tables of
 :func:`pipeline.model.kernel_inputs.interface_tables`) and ``slider.friction_arm``
-(:data:`pipeline.physics.geometry.FRICTION_ARMS`: the friction moment's arm).
+(:data:`pipeline.physics.geometry.FRICTION_ARMS`: the friction moment's arm). Each step looks its entry
+up (:meth:`pipeline.physics.variants.Registry.lookup`) and uses the entry's behaviour, with the scene
+values its ``parameters`` name (:func:`law_parameters`).
 
 Adding a variant. A friction law, an FHM measure, a stiffness root or an air-bearing force law at the
-TFC point is its function in its physics module plus one line in its registry; nothing here or in
+TFC point is its function in its physics module plus one entry in its registry; nothing here or in
 the kernel changes (a TFC-point law without a compiled closed form is tabulated per protrusion by
 :func:`pipeline.model.kernel_inputs.tfc_table` into the kernel's generic slot, :mod:`pipeline.model.dynamics`).
 A new scene key whose laws act at the TFC point (e.g. ``air_bearing.bulge``) adds its registry to
@@ -45,8 +48,9 @@ from ..config.si import to_si
 from ..physics import air_bearing as ab
 from ..physics import bulge_bearing as bb
 from ..physics.asperity_statistics import explicit_statistics
-from ..physics.friction import friction_parts, friction_stress_table, lubricant_shear_stress
+from ..physics.friction import FRICTION_LAWS, friction_parts, friction_stress_table, lubricant_shear_stress
 from ..physics.geometry import friction_arm
+from ..physics.variants import Entry
 from ..units import KHZ, MS, NM
 from ..variables import INTERFACE
 
@@ -57,8 +61,8 @@ MENISCUS_ATOL = 1e-6
 
 #: Scene keys of ``[air_bearing]`` whose named laws (:class:`pipeline.physics.air_bearing.TfcLaw`) act at
 #: the TFC point, each with its registry: the selected laws are summed in the kernel's TFC-point force.
-TFC_POINT_LAWS: Mapping[str, Mapping[str, ab.TfcLaw | None]] = {"tfc_stiffening": ab.TFC_STIFFENING,
-                                                               "bulge": bb.BULGE_LAWS}
+TFC_POINT_LAWS: Mapping[str, Mapping[str, ab.TfcLaw]] = {"tfc_stiffening": ab.TFC_STIFFENING,
+                                                        "bulge": bb.BULGE_LAWS}
 
 
 #: How a TFC-point law's table (:attr:`pipeline.physics.air_bearing.TfcLaw.table`) is read from its stage's
@@ -316,7 +320,8 @@ def friction_tables(scene: Any, interface: Any, stress: np.ndarray) -> tuple[np.
     si = to_si(scene)
     sc = si.contact
     pressure = interface["contact_pressure"].values * INTERFACE["contact_pressure"].si_unit
-    values = friction_stress_table(sc.friction_law, pressure, stress, sc.friction_coefficient)
+    law = FRICTION_LAWS.lookup(sc.friction_law)
+    values = friction_stress_table(sc.friction_law, pressure, stress, **law_parameters(scene, law))
     tau_lub, lub = si.lubricant.shear_stress, None
     if tau_lub > 0.0:
         if "wetted_area_fraction" not in interface:
@@ -390,8 +395,8 @@ def tfc_point_laws(scene: Any, fh0: float, tables: Mapping[str, Any] | None = No
     tables = tables or {}
     gap_power, tabulated = None, []
     for key, registry in TFC_POINT_LAWS.items():
-        law = registry[a[key]]
-        if law is None:
+        law = registry.lookup(a[key])
+        if law.force is None:  # ("none": the model without it)
             continue
         if law.closed_form == "gap-power":  # docs/model.md, section "Model variants"
             k_t, q = sa.tfc_stiffness, sa.tfc_stiffening_exponent
@@ -421,8 +426,9 @@ def capped_lift(g: np.ndarray, delta: float, *, force: Callable[..., np.ndarray]
     return force(np.maximum(np.asarray(g, dtype=float), gap), delta)
 
 
-def law_parameters(scene: Any, law: ab.TfcLaw) -> dict[str, Any]:
-    """The numbers a TFC-point law takes (:attr:`pipeline.physics.air_bearing.TfcLaw.parameters`), read from
-    the scene in SI units (:func:`pipeline.config.si.to_si`): keyword of its ``force`` -> value."""
+def law_parameters(scene: Any, law: Entry) -> dict[str, Any]:
+    """The numbers a registry entry's behaviour takes (:attr:`pipeline.physics.variants.Entry.parameters`: a
+    TFC-point law's force, a friction law), read from the scene in SI units (:func:`pipeline.config.si.to_si`):
+    keyword -> value."""
     si = to_si(scene)
     return {keyword: si[where.partition(".")[0]][where.partition(".")[2]] for keyword, where in law.parameters}

@@ -33,7 +33,9 @@ AIR_VISCOSITY = 1.81e-5
 AIR_MEAN_FREE_PATH = 65e-9
 AMBIENT_PRESSURE = 101325.0
 
-#: The models with a table (``air_bearing.bulge``; ``"none"`` has none).
+#: The bulge bearings (``air_bearing.bulge``, :data:`pipeline.physics.bulge_bearing.BULGE_LAWS`) this module
+#: tabulates (:func:`bulge_table`): the closed form, or a Reynolds solve (smooth or rough gap); ``"none"``
+#: has no table. A new law that reads the bulge table needs its solve here.
 MODELS = ("ph-limit", "reynolds", "rough-reynolds")
 
 
@@ -78,9 +80,10 @@ def bulge_table(*, model: str, p_pad: float, a: float, b: float, speed: float, g
     ``bulge_lift_ph_limit`` [mN], ``bearing_number`` [1], ``pad_pressure`` [MPa], and the settings as
     attributes (no timing: equal inputs give equal datasets).
     """
+    bb.BULGE_LAWS.lookup(model)  # (a name not registered: the registry's one line)
     if model not in MODELS:
-        raise ValueError(f"air_bearing.bulge = {model!r}: expected one of {list(MODELS)} for a table "
-                         "('none' needs no table)")
+        raise ValueError(f"air_bearing.bulge = {model!r}: no table of this law; expected one of {list(MODELS)} for a "
+                         "table ('none' needs no table)")
     gaps = np.asarray(gaps, dtype=float)
     protrusions = np.asarray(protrusions, dtype=float)
     if np.any(protrusions < 0):

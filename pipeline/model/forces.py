@@ -124,9 +124,7 @@ def rear_law_ref(name: str) -> RearLawRef:
     ValueError
         One line, for a name not in the registry or a law without a compiled form.
     """
-    law = ab.REAR_LAWS.get(name)
-    if law is None:
-        raise ValueError(f"air_bearing.rear_law = {name!r}: expected one of {sorted(ab.REAR_LAWS)}")
+    law = ab.REAR_LAWS.lookup(name)
     found = _CHECKED.get((name, law))
     if found is not None:
         return found

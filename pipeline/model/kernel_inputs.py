@@ -22,7 +22,7 @@ from . import dynamics as dyn
 from .assembly import Model
 from .piecewise import piecewise_coefficients, ppval
 from ..physics import air_bearing as ab
-from ..physics.geometry import ellipsoid_table_integral, nominal_area
+from ..physics.geometry import AREA_MODELS, nominal_area
 
 
 #: How many entries the integrated interface tables' cache keeps (:func:`interface_tables`): a run asks
@@ -117,18 +117,19 @@ def interface_tables(model: Model, protrusion: float, nominal: float) -> Interfa
     :data:`INTEGRATED_CACHE` protrusions' tables are kept on the model (the module's caching rule).
     """
     flat = InterfaceTables(model.contact, model.adhesion, model.friction, model.area)
-    if model.area_model == "flat-section":
+    integral = AREA_MODELS.lookup(model.area_model).behaviour  # (None: the flat section)
+    if integral is None:
         return flat
-    if model.area_model != "integrated":
-        raise ValueError(f"contact.area_model = {model.area_model!r}: expected 'flat-section' or 'integrated'")
     key = (float(protrusion), float(nominal))
-    return _cached(model.integrated, key, INTEGRATED_CACHE, lambda: _integrated_tables(model, flat, *key))
+    return _cached(model.integrated, key, INTEGRATED_CACHE, lambda: _integrated_tables(model, flat, integral, *key))
 
 
-def _integrated_tables(model: Model, flat: InterfaceTables, protrusion: float, nominal: float) -> InterfaceTables:
-    """The ``"integrated"`` tables of :func:`interface_tables` at ``protrusion`` [m], over ``A_n = nominal`` [m^2]."""
+def _integrated_tables(model: Model, flat: InterfaceTables, integral: Callable[..., np.ndarray], protrusion: float,
+                       nominal: float) -> InterfaceTables:
+    """The tables of :func:`interface_tables` summed over the bulge by the area model's ``integral``
+    (:data:`pipeline.physics.geometry.AREA_MODELS`) at ``protrusion`` [m], over ``A_n = nominal`` [m^2]."""
     if not nominal > 0:
-        raise ValueError(f"contact.area_model = 'integrated' needs a nominal area > 0 (got {nominal} m^2)")
+        raise ValueError(f"contact.area_model = {model.area_model!r} needs a nominal area > 0 (got {nominal} m^2)")
     h = float(model.p["tab_h"])
     order = model.scene["solver"]["interpolation_order"]
     scale = 2.0 * np.pi * model.half_length * model.half_width / nominal  # F / A_n = scale * I
@@ -148,8 +149,8 @@ def _integrated_tables(model: Model, flat: InterfaceTables, protrusion: float, n
         names[j:j + 1] = [n, n + "+"]
         tables[j:j + 1] = [getattr(flat, n)[:, :4], getattr(flat, n)[:, 4:]]
     # the tables at once (one grid): the integral, then the spline through its node values
-    integral = scale * ellipsoid_table_integral(np.stack(tables, axis=-1), h, protrusion)
-    splines = _splines(integral, h, order)
+    summed = scale * integral(np.stack(tables, axis=-1), h, protrusion)
+    splines = _splines(summed, h, order)
     for n in split:
         j = names.index(n)
         del names[j + 1]

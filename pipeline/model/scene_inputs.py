@@ -39,8 +39,8 @@ def table_stages(scene: Any) -> tuple[str, ...]:
     (:data:`pipeline.model.assembly.TFC_POINT_LAWS`, :attr:`pipeline.physics.air_bearing.TfcLaw.table`:
     ``bulge`` for ``air_bearing.bulge = "reynolds"``)."""
     a = scene["air_bearing"]
-    laws = (registry[a[key]] for key, registry in TFC_POINT_LAWS.items())
-    return tuple(dict.fromkeys(law.table for law in laws if law is not None and law.table))
+    laws = (registry.lookup(a[key]) for key, registry in TFC_POINT_LAWS.items())
+    return tuple(dict.fromkeys(law.table for law in laws if law.table))
 
 
 def simulation_inputs(scene: Any, calibration: bool = True) -> tuple[str, ...]:

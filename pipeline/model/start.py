@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..physics.equilibrium import STARTS, flying_ladder, static_equilibrium
+from ..physics.equilibrium import STARTS, flying_ladder
 from ..units import NM, URAD
 from . import dynamics as dyn
 from . import static_solver
@@ -110,7 +110,8 @@ def start_state(run_parameters, protrusion: float, rule: str, contact_start_z: f
                 statics: dict | None = None, fold_max: float | None = None, compiled: bool = True
                 ) -> tuple[np.ndarray, str]:
     """The start state ``(z, theta, z', theta')`` of a run at ``protrusion`` [m] by the rule ``rule``
-    (:data:`STARTS`), and a note saying which state it is.
+    (:data:`STARTS`: the entry's solver on the static forces, or none: the nominal attitude), and a note
+    saying which state it is.
 
     ``contact_start_z`` [m]: the z of the contact-branch start (the TFC point at zero separation).
     ``statics``: a dict owned by the model (one per model: the fold depends on every force and on
@@ -131,10 +132,9 @@ def start_state(run_parameters, protrusion: float, rule: str, contact_start_z: f
     :mod:`pipeline.model.static_solver`: no GIL held), else :func:`pipeline.physics.equilibrium.newton`
     on the same forces from Python (the reference, for checks).
     """
-    if rule == "nominal":
+    solver = STARTS.lookup(rule).behaviour
+    if solver is None:  # ("nominal")
         return np.zeros(4), "nominal attitude"
-    if rule != "static":
-        raise ValueError(f"solver.start = {rule!r}: expected one of {STARTS}")
     R, flying, solve = static_forces(run_parameters)
     solve = solve if compiled else None
     fold = ladder = None
@@ -152,9 +152,9 @@ def start_state(run_parameters, protrusion: float, rule: str, contact_start_z: f
                                   mu_tol=FOLD_TOL, solve=solve)
             statics["ladder"], statics["fold"] = found, found.fold
         fold, ladder = statics["fold"], statics.get("ladder")
-    st = static_equilibrium(R, protrusion, mu_start=0.0, y_start=np.zeros(2), scale=SCALE, accept=flying,
-                            contact_start=np.array([contact_start_z, 0.0]), contact_max_step=0.05 * SCALE,
-                            steps=STEPS, mu_tol=FOLD_TOL, fold=fold, solve=solve, ladder=ladder)
+    st = solver(R, protrusion, mu_start=0.0, y_start=np.zeros(2), scale=SCALE, accept=flying,
+                contact_start=np.array([contact_start_z, 0.0]), contact_max_step=0.05 * SCALE,
+                steps=STEPS, mu_tol=FOLD_TOL, fold=fold, solve=solve, ladder=ladder)
     if st.equilibrium is None:
         return np.zeros(4), f"nominal attitude ({st.message})"
     z, theta = st.equilibrium.y

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .variants import Entry, Registry, Variant
 
 
 @dataclass(frozen=True)
@@ -125,13 +126,30 @@ def node_position(shape: np.ndarray) -> float:
     return -shape[0] / shape[1] if shape[1] != 0 else np.inf
 
 
-#: Rules picking one root of the modal inversion (``air_bearing.stiffness_root``): name -> predicate on
-#: the root's ``info`` entry (``k_f``, ``k_r`` [N/m], ``mode1_pitch_like``).
-STIFFNESS_ROOTS = {
-    "stiff-rear": lambda r: r["k_r"] > r["k_f"],
-    "pitch-first": lambda r: bool(r["mode1_pitch_like"]),
-    "bounce-first": lambda r: not r["mode1_pitch_like"],
-}
+def _stiff_rear(root: dict) -> bool:
+    return root["k_r"] > root["k_f"]
+
+
+def _pitch_first(root: dict) -> bool:
+    return bool(root["mode1_pitch_like"])
+
+
+def _bounce_first(root: dict) -> bool:
+    return not root["mode1_pitch_like"]
+
+
+#: Rules picking one root of the modal inversion (``air_bearing.stiffness_root``): the behaviour is a
+#: predicate on the root's ``info`` entry (``k_f``, ``k_r`` [N/m], ``mode1_pitch_like``).
+STIFFNESS_ROOTS: Registry[Variant] = Registry("air_bearing.stiffness_root", {
+    "stiff-rear": Variant(behaviour=_stiff_rear,
+                          summary="the root with k_r > k_f: the trailing pad the stiffest [recon]",
+                          source='docs/model.md, section "Air bearing"'),
+    "pitch-first": Variant(behaviour=_pitch_first, summary="the root whose lower mode is pitch-like (the first "
+                                                           "reconstruction)",
+                           source='docs/model.md, section "Slider dynamics"'),
+    "bounce-first": Variant(behaviour=_bounce_first, summary="the root whose lower mode is bounce-like",
+                            source='docs/model.md, section "Slider dynamics"'),
+})
 
 
 def choose_stiffness(f1: float, f2: float, m: float, I: float, l_f: float, l_r: float, length: float,
@@ -157,8 +175,7 @@ def choose_stiffness(f1: float, f2: float, m: float, I: float, l_f: float, l_r: 
     -------
     k_f, k_r [N/m], info (both roots, their node positions [m], which one was taken and why)
     """
-    if root not in STIFFNESS_ROOTS:
-        raise ValueError(f"stiffness root {root!r} unknown; expected one of {list(STIFFNESS_ROOTS)}")
+    rule = STIFFNESS_ROOTS.lookup(root).behaviour
     info: dict = {"roots": [], "chosen": None}
     chosen = None
     for k_f, k_r in stiffness_roots(f1, f2, m, I, l_f, l_r):
@@ -168,7 +185,7 @@ def choose_stiffness(f1: float, f2: float, m: float, I: float, l_f: float, l_r: 
         entry = {"k_f": k_f, "k_r": k_r, "node_mode1": nodes[0], "node_mode2": nodes[1],
                  "mode1_pitch_like": first_pitch}
         info["roots"].append(entry)
-        if chosen is None and STIFFNESS_ROOTS[root](entry):
+        if chosen is None and rule(entry):
             chosen = (k_f, k_r)
     if chosen is None:
         raise ValueError(f"no stiffness root of {f1:g}/{f2:g} Hz satisfies the {root!r} rule; roots: {info['roots']}")
@@ -254,8 +271,9 @@ REAR_MIN_GAP = 1e-3
 
 
 @dataclass(frozen=True)
-class RearLaw:
-    """A rear-bearing law (``air_bearing.rear_law``).
+class RearLaw(Entry):
+    """A rear-bearing law (``air_bearing.rear_law``): a registry entry (:class:`pipeline.physics.variants.Entry`:
+    ``summary``, ``source``) that is its own behaviour.
 
     Attributes
     ----------
@@ -265,21 +283,25 @@ class RearLaw:
         compiles it (numba's nopython mode: numbers, ``math`` and numpy functions only) and inlines it
         into its right-hand side (:func:`pipeline.model.forces.call_rear_law`); Python calls it on floats or
         arrays. A law whose ``force`` is ``None`` or does not compile is refused when a model is built
-    doc : one line for the documentation
     min_gap : the kernel evaluates the law at ``max(g, min_gap g0)`` (a law singular at zero gap);
         ``None``: at ``g``
     """
 
     force: Callable[..., float] | None
-    doc: str
     min_gap: float | None = None
+
+    @property
+    def behaviour(self) -> "RearLaw":
+        """The law itself: the kernel compiles its ``force`` (:func:`pipeline.model.forces.rear_law_ref`)."""
+        return self
 
 
 #: Rear bearing laws (``air_bearing.rear_law``), docs/model.md, section "Slider dynamics".
-REAR_LAWS = {
-    "power": RearLaw(rear_power_law, "F_r = F_r0 [(g0/g)^n - 1], F_r0 = k_r g0 / n [recon]", REAR_MIN_GAP),
-    "linear": RearLaw(rear_linear_law, "F_r = k_r (g0 - g)"),
-}
+REAR_LAWS: Registry[RearLaw] = Registry("air_bearing.rear_law", {
+    "power": RearLaw(rear_power_law, REAR_MIN_GAP, summary="F_r = F_r0 [(g0/g)^n - 1], F_r0 = k_r g0 / n [recon]",
+                     source='docs/model.md, section "Slider dynamics"'),
+    "linear": RearLaw(rear_linear_law, summary="F_r = k_r (g0 - g)", source='docs/model.md, section "Slider dynamics"'),
+})
 
 #: Gap below which the stiffening law is continued linearly, as a fraction of ``g0`` [1]: the law is
 #: singular at zero gap (reached only in deep contact, where the contact force dominates).
@@ -335,44 +357,53 @@ def gap_power_force(g: np.ndarray, delta: float, g0: float, k_t: float, p: float
 
 
 @dataclass(frozen=True)
-class TfcLaw:
-    """An air-bearing force law at the TFC point: its force and how the kernel evaluates it.
+class TfcLaw(Entry):
+    """An air-bearing force law at the TFC point: its force and how the kernel evaluates it; a registry entry
+    (:class:`pipeline.physics.variants.Entry`: ``summary``, ``source``, ``parameters``) that is its own behaviour.
 
     Attributes
     ----------
     force : ``force(g, delta, **parameters) -> F``: force [N] (up positive, the lift of the air on the slider)
         at the gaps ``g`` [m] (an array, gap at the TFC point to the mean of surface heights) for the
-        protrusion ``delta`` [m], given the numbers named by ``parameters``
+        protrusion ``delta`` [m], given the numbers named by ``parameters``; ``None``: no law (the
+        option that leaves the model without one, ``"none"``)
     closed_form : name of the kernel's compiled closed form of the same law (``"gap-power"``:
         :func:`pipeline.model.forces._stiffening`), or ``None``: the model assembly tabulates ``force``
         per protrusion and the kernel evaluates the table (:func:`pipeline.model.kernel_inputs.tfc_table`)
     gap_range : lowest and highest gap of the table as fractions of ``FH0`` [1]: linear continuation
         below (the law's slope at the lowest gap), constant above
     points : knots of the table (uniform in the gap)
-    doc : one line for the documentation
     table : name of the stage whose dataset the law reads (e.g. ``"bulge"``: a force solved once per
         scene and tabulated), or ``None``; such a law's ``force`` takes the table as the keyword
         ``table`` (the model assembly binds it, :func:`pipeline.model.assembly.build_model`)
-    parameters : ``(keyword of force, "section.name")`` pairs: the scene value in SI units
-        (:func:`pipeline.config.si.to_si`, e.g. ``"air_bearing.flying_height"`` [m]) the model assembly
-        passes as that keyword (:func:`pipeline.model.assembly.law_parameters`); the law reads no scene
+    parameters : (an :class:`~pipeline.physics.variants.Entry` field) ``(keyword of force, "section.name")``
+        pairs: the scene value in SI units (:func:`pipeline.config.si.to_si`, e.g.
+        ``"air_bearing.flying_height"`` [m]) the model assembly passes as that keyword
+        (:func:`pipeline.model.assembly.law_parameters`); the law reads no scene
     """
 
-    force: Callable[..., np.ndarray]
+    force: Callable[..., np.ndarray] | None
     closed_form: str | None = None
     gap_range: tuple[float, float] = (TFC_MIN_GAP, 3.0)
     points: int = 4001
-    doc: str = ""
     table: str | None = None
-    parameters: tuple[tuple[str, str], ...] = ()
 
+    @property
+    def behaviour(self) -> "TfcLaw":
+        """The law itself (the model tabulates its ``force`` or runs its ``closed_form``)."""
+        return self
+
+
+#: The entry of an option that leaves the TFC-point law out (``"none"``: bit-identical to the model without it).
+NO_TFC_LAW = TfcLaw(None, summary="no law: the model without it", source='docs/model.md, section "Model variants"')
 
 #: Air-bearing force laws at the TFC point (``air_bearing.tfc_stiffening``): ``"none"`` = the model
 #: without one. A new law: its ``force`` function in a physics module and one line here (``TfcLaw(force)``).
-TFC_STIFFENING: dict[str, TfcLaw | None] = {
-    "none": None,
+TFC_STIFFENING: Registry[TfcLaw] = Registry("air_bearing.tfc_stiffening", {
+    "none": NO_TFC_LAW,
     "gap-power": TfcLaw(gap_power_force, closed_form="gap-power",
-                        doc="k(g) = k_t [(g0/g)^p - 1], force zero at the nominal gap",
+                        summary="k(g) = k_t [(g0/g)^p - 1], force zero at the nominal gap",
+                        source='docs/model.md, section "Gap-power stiffening" (Vakis, Hadjicostis & Polycarpou 2012)',
                         parameters=(("g0", "air_bearing.flying_height"), ("k_t", "air_bearing.tfc_stiffness"),
                                     ("p", "air_bearing.tfc_stiffening_exponent"))),
-}
+})

@@ -67,11 +67,19 @@ import numpy as np
 from numba import njit
 
 from . import gas_flow
-from .air_bearing import TfcLaw
+from .air_bearing import NO_TFC_LAW, TfcLaw
+from .variants import Registry, Variant
 
 #: Profile codes of the compiled laws (floats, so a kernel can carry them in its parameter vector).
 PARABOLOID, ELLIPSOID = 0.0, 1.0
-PROFILES = {"paraboloid": PARABOLOID, "ellipsoid": ELLIPSOID}
+#: Gap profiles under the bulge (``air_bearing.bulge_profile``): the behaviour is the profile's code (the
+#: compiled law, :func:`ph_shape`, :func:`gap_profile` and :func:`rough_ph_lift` know these two).
+PROFILES: Registry[Variant] = Registry("air_bearing.bulge_profile", {
+    "ellipsoid": Variant(behaviour=ELLIPSOID, summary="h = g + delta (1 - sqrt(1 - u)): the TFC bulge's ellipsoid",
+                         source='docs/model.md, section "p h = const limit" [paper]'),
+    "paraboloid": Variant(behaviour=PARABOLOID, summary="h = g + delta u: the ellipsoid's apex approximation",
+                          source='docs/model.md, section "p h = const limit"'),
+})
 
 #: Below this ``x = delta/(g + delta)`` the series replaces the closed form (cancellation); 8 terms
 #: leave a relative truncation error below ``x^8 < 1e-16``.
@@ -142,13 +150,12 @@ def ph_lift(g, delta, p_pad: float, a: float, b: float, profile: str = "ellipsoi
 
     ``profile`` is ``"ellipsoid"`` or ``"paraboloid"``; ``g_min`` [m] the gap floor (0: none, ``g > 0`` then).
     """
-    if profile not in PROFILES:
-        raise ValueError(f"bulge profile {profile!r} unknown; expected one of {list(PROFILES)}")
+    code = PROFILES.lookup(profile).behaviour
     gb, db = np.broadcast_arrays(np.asarray(g, dtype=float), np.asarray(delta, dtype=float))
     F = np.empty(gb.size)
     k = np.empty(gb.size)
     _ph_loop(np.ascontiguousarray(gb).ravel(), np.ascontiguousarray(db).ravel(), float(p_pad), float(a),
-             float(b), PROFILES[profile], float(g_min), F, k)
+             float(b), code, float(g_min), F, k)
     return F.reshape(gb.shape), k.reshape(gb.shape)
 
 
@@ -166,12 +173,13 @@ def rough_ph_lift(g, delta: float, p_pad: float, a: float, b: float, roughness: 
     x, w = np.polynomial.legendre.leggauss(nodes)
     t, w = 0.5 * (x + 1.0), 0.5 * w  # on [0, 1]
     g = np.asarray(g, dtype=float)[..., None]
-    if profile == "ellipsoid":  # u = 1 - s^2, du = 2 s ds, h = g + delta (1 - s)
+    code = PROFILES.lookup(profile).behaviour
+    if code == ELLIPSOID:  # u = 1 - s^2, du = 2 s ds, h = g + delta (1 - s)
         h, wu = g + delta * (1.0 - t), 2.0 * t * w
-    elif profile == "paraboloid":
+    elif code == PARABOLOID:
         h, wu = g + delta * t, w
     else:
-        raise ValueError(f"bulge profile {profile!r} unknown; expected one of {list(PROFILES)}")
+        raise ValueError(f"air_bearing.bulge_profile = {profile!r}: no rough-gap quadrature for its code {code}")
     ratio = roughness.couette_gap(g + delta) / roughness.couette_gap(h)
     return p_pad * np.pi * a * b * ((roughness.air_fraction(h) * ratio - 1.0) * wu).sum(axis=-1)
 
@@ -212,7 +220,19 @@ def ph_limit_force(g: np.ndarray, delta: float, p_pad: float, a: float, b: float
 #: * ``"boltzmann"``: the linearised-Boltzmann flow rate of Fukui & Kaneko (J. Tribol. 110 (1988) 253; the
 #:   fit of J. Tribol. 112 (1990) 78, :func:`pipeline.physics.gas_flow.poiseuille_factor`), not of the form
 #:   above (``None``); the rarefaction of the rough-gap law (docs/model.md, section "Rough-gap bulge bearing").
-SLIP_MODELS = {"first-order": (6.0, 0.0), "second-order": (6.0, 6.0), "none": (0.0, 0.0), "boltzmann": None}
+#:
+#: (``air_bearing.bulge_slip``) The behaviour is ``(c1, c2)`` of ``Q = 1 + c1 Kn + c2 Kn^2``, ``None`` for the
+#: Boltzmann flow rate.
+SLIP_MODELS: Registry[Variant] = Registry("air_bearing.bulge_slip", {
+    "first-order": Variant(behaviour=(6.0, 0.0), summary="Q = 1 + 6 Kn: first-order velocity slip",
+                           source='docs/model.md, section "Slip-corrected Reynolds equation" (Burgdorfer 1959)'),
+    "second-order": Variant(behaviour=(6.0, 6.0), summary="Q = 1 + 6 Kn + 6 Kn^2: second-order slip",
+                            source='docs/model.md, section "Slip-corrected Reynolds equation" (Hsia & Domoto 1983)'),
+    "none": Variant(behaviour=(0.0, 0.0), summary="Q = 1: continuum flow",
+                    source='docs/model.md, section "Slip-corrected Reynolds equation"'),
+    "boltzmann": Variant(summary="the linearised-Boltzmann Poiseuille flow rate (the fit of Fukui & Kaneko 1990)",
+                         source='docs/model.md, section "Rough-gap bulge bearing" (Fukui & Kaneko 1988, 1990)'),
+})
 
 
 @dataclass(frozen=True)
@@ -244,12 +264,13 @@ def gap_profile(u: np.ndarray, g, delta, profile: str) -> np.ndarray:
     Ellipsoid ``h = g + delta (1 - sqrt(1 - u))``, paraboloid ``h = g + delta u`` (module docstring).
     """
     uc = np.minimum(u, 1.0)
-    if profile == "ellipsoid":
+    code = PROFILES.lookup(profile).behaviour
+    if code == ELLIPSOID:
         s = 1.0 - np.sqrt(1.0 - uc)
-    elif profile == "paraboloid":
+    elif code == PARABOLOID:
         s = uc
     else:
-        raise ValueError(f"bulge profile {profile!r} unknown; expected one of {list(PROFILES)}")
+        raise ValueError(f"air_bearing.bulge_profile = {profile!r}: no gap shape for its code {code}")
     return g + delta * s
 
 
@@ -280,13 +301,14 @@ def _face_flux(PL, PR, H, Lam, Kn0, kappa, dx, slip, Hc=None, phi=None):
     (1969) 64; Patankar, Numerical Heat Transfer and Fluid Flow (1980), sec. 5.2).
     """
     Pf = 0.5 * (PL + PR)
-    if slip == "boltzmann":  # C = P H^3 Q(Kn), Kn = Kn0 / (P H): dC/dP = H^3 (Q - Kn dQ/dKn)
+    coefficients = SLIP_MODELS.lookup(slip).behaviour
+    if coefficients is None:  # Boltzmann: C = P H^3 Q(Kn), Kn = Kn0 / (P H): dC/dP = H^3 (Q - Kn dQ/dKn)
         kn = Kn0 / (Pf * H)
         q, dq = gas_flow.poiseuille_factor(kn)
         D = kappa * Pf * H**3 * q
         dD = kappa * H**3 * (q - kn * dq)
     else:
-        c1, c2 = SLIP_MODELS[slip]
+        c1, c2 = coefficients
         D = kappa * (Pf * H**3 + c1 * Kn0 * H**2 + c2 * Kn0**2 * H / Pf)
         dD = kappa * (H**3 - c2 * Kn0**2 * H / Pf**2)  # dD/dP_f
     if phi is not None:
@@ -364,8 +386,7 @@ def reynolds_solve(g, delta, *, p_pad: float, a: float, b: float, speed: float, 
     ``Lambda 2 (1 + margin_b)``; one unit is ``p_pad h_pad^3 p_pad b / (12 mu a)`` in ``p`` times volume
     per time, i.e. a mass flow after division by ``R T``); with ``fields`` also ``P``, ``X``, ``Y``.
     """
-    if slip not in SLIP_MODELS:
-        raise ValueError(f"slip model {slip!r} unknown; expected one of {list(SLIP_MODELS)}")
+    SLIP_MODELS.lookup(slip)  # (a name it has: one line naming the key)
     gb, db = np.broadcast_arrays(np.asarray(g, dtype=float), np.asarray(delta, dtype=float))
     shape = gb.shape
     gv, dv = gb.ravel(), db.ravel()
@@ -628,14 +649,17 @@ def reynolds_force(g: np.ndarray, delta: float, table: LiftTable) -> np.ndarray:
 #: The bulge's air bearing at the TFC point (``air_bearing.bulge``), laws summed with the other TFC-point
 #: laws by the model (:data:`pipeline.model.assembly.TFC_POINT_LAWS`); ``"none"``: the model without it.
 #: ``"reynolds"`` reads its table from the ``bulge`` stage's dataset (``table="bulge"``).
-BULGE_LAWS: dict[str, TfcLaw | None] = {
-    "none": None,
-    "ph-limit": TfcLaw(ph_limit_force, doc="p h = const under the bulge: F = p_pad pi a b [h_pad I(g, delta) - 1]",
+BULGE_LAWS: Registry[TfcLaw] = Registry("air_bearing.bulge", {
+    "none": NO_TFC_LAW,
+    "ph-limit": TfcLaw(ph_limit_force, summary="p h = const under the bulge: F = p_pad pi a b [h_pad I(g, delta) - 1]",
+                       source='docs/model.md, section "p h = const limit"',
                        parameters=(("p_pad", "air_bearing.pad_pressure"), ("a", "tfc.half_length"),
                                    ("b", "tfc.half_width"), ("profile", "air_bearing.bulge_profile"))),
     "reynolds": TfcLaw(reynolds_force, table="bulge",
-                       doc="steady compressible Reynolds equation with molecular slip on the footprint, tabulated"),
+                       summary="steady compressible Reynolds equation with molecular slip on the footprint, tabulated",
+                       source='docs/model.md, section "Slip-corrected Reynolds equation"'),
     "rough-reynolds": TfcLaw(reynolds_force, table="bulge",
-                             doc="Reynolds equation of the rough gap down to contact: Boltzmann flow rate, Patir-Cheng "
-                                 "flow factors, closed area out of the film, tabulated"),
-}
+                             summary="Reynolds equation of the rough gap down to contact: Boltzmann flow rate, "
+                                     "Patir-Cheng flow factors, closed area out of the film, tabulated",
+                             source='docs/model.md, section "Rough-gap bulge bearing"'),
+})

@@ -36,6 +36,7 @@ from typing import Callable
 import numpy as np
 
 from ..units import NM, URAD
+from .variants import Registry, Variant
 
 Forces = Callable[[np.ndarray, float], np.ndarray]
 
@@ -44,11 +45,6 @@ Forces = Callable[[np.ndarray, float], np.ndarray]
 #: :func:`newton` on the caller's ``forces`` (:func:`python_solve`); the model's static start passes a
 #: compiled one on the kernel's own forces (:mod:`pipeline.model.static_solver`).
 Solve = Callable[..., "Equilibrium"]
-
-#: Start rules of a run (``solver.start``, :mod:`pipeline.model.start`): its static equilibrium, or the
-#: nominal attitude.
-STARTS = ("static", "nominal")
-
 
 @dataclass(frozen=True)
 class Equilibrium:
@@ -448,3 +444,17 @@ def path_equilibria(f: Callable[[float], float], u_grid, breaks=(), *, xtol: flo
         barrier = float(min(rises)) if s.stable and rises else np.nan
         out.append(PathState(s.u, s.stable, s.switch, float(V[j]), barrier))
     return out
+
+
+#: Start rules of a run (``solver.start``, :func:`pipeline.model.start.start_state`): the behaviour is the
+#: solver of the start state on the model's static forces (:func:`static_equilibrium`), or ``None``: the
+#: nominal attitude ``z = theta = 0`` at rest.
+STARTS: Registry[Variant] = Registry("solver.start", {
+    "static": Variant(behaviour=static_equilibrium,
+                      summary="the model's static equilibrium, continued in the protrusion; past the adhesion fold "
+                              "the contact branch",
+                      source='docs/model.md, section "Start state"'),
+    "nominal": Variant(summary="the nominal attitude z = theta = 0 at rest (the model before the start state was "
+                               "part of it)",
+                       source='docs/model.md, section "Start state"'),
+})

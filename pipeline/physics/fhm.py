@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .variants import Registry, Variant
+
 
 def _peak_to_peak(d: np.ndarray) -> float:
     return float(np.ptp(d))
@@ -18,8 +20,13 @@ def _three_std(d: np.ndarray) -> float:
     return float(3.0 * np.std(d))
 
 
-#: FHM/BV measures: name -> spread [m] of separation samples [m].
-FHM_MEASURES = {"peak-to-peak": _peak_to_peak, "3std": _three_std}
+#: FHM/BV measures (``solver.fhm_measure``): the behaviour is the spread [m] of separation samples [m].
+FHM_MEASURES: Registry[Variant] = Registry("solver.fhm_measure", {
+    "peak-to-peak": Variant(behaviour=_peak_to_peak, summary="max(d) - min(d) over the steady window (the paper's)",
+                            source='docs/model.md, section "FHM and BV"'),
+    "3std": Variant(behaviour=_three_std, summary="3 x the standard deviation of d over the steady window",
+                    source='docs/model.md, section "FHM and BV"'),
+})
 
 
 def fhm(d: np.ndarray, fh0: float, measure: str = "peak-to-peak") -> float:
@@ -30,6 +37,4 @@ def fhm(d: np.ndarray, fh0: float, measure: str = "peak-to-peak") -> float:
     ValueError
         For a measure not in :data:`FHM_MEASURES` (the message lists them).
     """
-    if measure not in FHM_MEASURES:
-        raise ValueError(f"FHM measure {measure!r} unknown; expected one of {list(FHM_MEASURES)}")
-    return 100.0 * FHM_MEASURES[measure](np.asarray(d, dtype=float)) / fh0
+    return 100.0 * FHM_MEASURES.lookup(measure).behaviour(np.asarray(d, dtype=float)) / fh0

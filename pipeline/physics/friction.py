@@ -44,6 +44,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .variants import Registry, Variant
+
 
 def shear_strength(H: float) -> float:
     """Shear yield stress of the softer body ``tau_y = H / (2.8 sqrt(3))`` [Pa] [Tabor51].
@@ -69,23 +71,28 @@ def friction_force(area: np.ndarray, H: float, law: str = "shear-strength") -> n
     return shear_strength(H) * np.asarray(area, dtype=float)
 
 
-def _shear_strength_table(contact_pressure: np.ndarray, shear_strength_stress: np.ndarray, mu: float) -> np.ndarray:
+def _shear_strength_table(contact_pressure: np.ndarray, shear_strength_stress: np.ndarray) -> np.ndarray:
     return shear_strength_stress
 
 
-def _coefficient_table(contact_pressure: np.ndarray, shear_strength_stress: np.ndarray, mu: float) -> np.ndarray:
+def _coefficient_table(contact_pressure: np.ndarray, shear_strength_stress: np.ndarray, mu: float | None) -> np.ndarray:
     if mu is None or not mu >= 0.0:
         raise ValueError(f"the 'coefficient' friction law needs contact.friction_coefficient >= 0 (got {mu})")
     return mu * np.asarray(contact_pressure, dtype=float)
 
 
-#: Friction laws a scene may name (``contact.friction_law``): name -> function of the contact pressure
-#: table [Pa], the shear-strength friction-stress table of the ISBL integrals [Pa] and ``mu`` [1],
-#: returning the friction stress per nominal area [Pa] versus separation.
-FRICTION_LAWS = {
-    "shear-strength": _shear_strength_table,   # tau = eta int tau_y A phi dz (docs/model.md, section "Friction")
-    "coefficient": _coefficient_table,         # tau = mu p_c (docs/model.md, section "Friction")
-}
+#: Friction laws a scene may name (``contact.friction_law``): the behaviour is a function of the contact
+#: pressure table [Pa] and the shear-strength friction-stress table of the ISBL integrals [Pa], with the
+#: entry's ``parameters`` as keywords, returning the friction stress per nominal area [Pa] versus separation.
+FRICTION_LAWS: Registry[Variant] = Registry("contact.friction_law", {
+    "shear-strength": Variant(behaviour=_shear_strength_table,
+                              summary="tau = eta int tau_y A phi dz, tau_y = H / (2.8 sqrt 3): sliding at the shear "
+                                      "strength of the softer body",
+                              source='docs/model.md, section "Friction" [Tabor51, Bowden50]'),
+    "coefficient": Variant(behaviour=_coefficient_table, parameters=(("mu", "contact.friction_coefficient"),),
+                           summary="tau = mu p_c: a constant coefficient (Amontons) with contact.friction_coefficient",
+                           source='docs/model.md, section "Friction"'),
+})
 
 
 def lubricant_shear_stress(wetted_area_fraction: np.ndarray, tau_lub: float) -> np.ndarray:
@@ -109,25 +116,39 @@ def lubricant_shear_stress(wetted_area_fraction: np.ndarray, tau_lub: float) -> 
 
 
 def friction_stress_table(law: str, contact_pressure: np.ndarray, shear_strength_stress: np.ndarray,
-                          mu: float | None = None) -> np.ndarray:
+                          **parameters: float | None) -> np.ndarray:
     """Friction stress per nominal area [Pa] versus separation for the named law (:data:`FRICTION_LAWS`).
 
     Parameters
     ----------
-    law : ``"shear-strength"`` or ``"coefficient"``
+    law : a name of :data:`FRICTION_LAWS` (``"shear-strength"``, ``"coefficient"``)
     contact_pressure : contact pressure table ``p_c(d)`` [Pa]
     shear_strength_stress : the ISBL friction-stress table of the shear-strength law [Pa]
-    mu : friction coefficient [1] (``"coefficient"`` only)
+    parameters : the numbers the law's entry names (``mu``: friction coefficient [1] of ``"coefficient"``)
     """
-    if law not in FRICTION_LAWS:
-        raise ValueError(f"friction law {law!r} unknown; expected one of {list(FRICTION_LAWS)}")
-    return FRICTION_LAWS[law](contact_pressure, shear_strength_stress, mu)
+    return FRICTION_LAWS.lookup(law).behaviour(contact_pressure, shear_strength_stress, **parameters)
 
 
-#: How the friction is switched (``contact.friction_switching``; module docstring): ``"criterion"``
-#: the whole friction stress with the contact criterion (the paper's model, default), ``"continuous"``
-#: the lubricant shear at every separation, the solid friction with the contact force.
-FRICTION_SWITCHING = ("criterion", "continuous")
+def _switched(solid: np.ndarray, lubricant: np.ndarray) -> tuple[np.ndarray, None]:
+    return solid + lubricant, None
+
+
+def _continuous(solid: np.ndarray, lubricant: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    return solid, np.asarray(lubricant, dtype=float)
+
+
+#: How the friction is switched (``contact.friction_switching``; module docstring): the behaviour splits
+#: the solid and lubricant stress tables [Pa] into the part switched with the contact criterion and the
+#: part acting at every separation (:func:`friction_parts`).
+FRICTION_SWITCHING: Registry[Variant] = Registry("contact.friction_switching", {
+    "criterion": Variant(behaviour=_switched,
+                         summary="the whole friction stress with the contact criterion d < k sigma (the paper's model)",
+                         source='docs/model.md, section "Switched and continuous friction"'),
+    "continuous": Variant(behaviour=_continuous,
+                          summary="the lubricant shear on the wetted summits at every separation, the solid friction "
+                                  "with the contact force",
+                          source='docs/model.md, section "Switched and continuous friction" [VP11]'),
+})
 
 
 def friction_parts(switching: str, solid: np.ndarray, lubricant: np.ndarray | None
@@ -148,10 +169,7 @@ def friction_parts(switching: str, solid: np.ndarray, lubricant: np.ndarray | No
     lubricant : the lubricant-shear stress table (:func:`lubricant_shear_stress`) [Pa], ``None`` when the
         term is off (``lubricant.shear_stress_mpa = 0``)
     """
-    if switching not in FRICTION_SWITCHING:
-        raise ValueError(f"contact.friction_switching = {switching!r}: expected one of {list(FRICTION_SWITCHING)}")
+    rule = FRICTION_SWITCHING.lookup(switching).behaviour
     if lubricant is None:
         return solid, None
-    if switching == "criterion":
-        return solid + lubricant, None
-    return solid, np.asarray(lubricant, dtype=float)
+    return rule(solid, lubricant)

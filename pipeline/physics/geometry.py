@@ -20,17 +20,18 @@ from typing import Callable
 
 import numpy as np
 
-#: How the interface stresses become forces (scene key ``contact.area_model``): name -> what it does.
-AREA_MODELS = {
-    "flat-section": "stresses at the apex separation d times the flat section A_n (the paper's)",
-    "integrated": "stresses integrated over the ellipsoid's gap field d + delta (1 - sqrt(1 - r^2))",
-}
+from .variants import Registry, Variant
 
-#: The friction force's moment arm about the CG as a fraction of the slider thickness ``T`` [1]
-#: (scene key ``slider.friction_arm``): ``"cg"`` the drag reacted through the CG, a height ``T/2`` above
-#: the air-bearing surface (the default, a uniform block); ``"gimbal"`` reacted at the gimbal dimple on
-#: the slider's back, ``T`` above it, as a head-gimbal assembly does.
-FRICTION_ARMS = {"cg": 0.5, "gimbal": 1.0}
+#: The friction force's moment arm about the CG (scene key ``slider.friction_arm``): the behaviour is the
+#: arm as a fraction of the slider thickness ``T`` [1]: ``"cg"`` the drag reacted through the CG, a height
+#: ``T/2`` above the air-bearing surface (the default, a uniform block); ``"gimbal"`` reacted at the gimbal
+#: dimple on the slider's back, ``T`` above it, as a head-gimbal assembly does.
+FRICTION_ARMS: Registry[Variant] = Registry("slider.friction_arm", {
+    "cg": Variant(behaviour=0.5, summary="T/2: the drag reacted through the CG (the paper's 2-DOF model)",
+                  source='docs/model.md, section "Deviations", item 19'),
+    "gimbal": Variant(behaviour=1.0, summary="T: the drag reacted at the gimbal on the slider's back",
+                      source='docs/model.md, section "Deviations", item 19'),
+})
 
 
 def section_fraction(delta: np.ndarray, s_n: float) -> np.ndarray:
@@ -115,9 +116,7 @@ def friction_arm(thickness: float, arm: str) -> float:
     ValueError
         For a rule not in :data:`FRICTION_ARMS` (the message lists them).
     """
-    if arm not in FRICTION_ARMS:
-        raise ValueError(f"friction arm {arm!r} unknown; expected one of {list(FRICTION_ARMS)}")
-    return thickness * FRICTION_ARMS[arm]  # (x 0.5 is exact: the same bits as T / 2)
+    return thickness * FRICTION_ARMS.lookup(arm).behaviour  # (x 0.5 is exact: the same bits as T / 2)
 
 
 def ellipsoid_force(stress: Callable[[np.ndarray], np.ndarray], d: float, delta: float, a: float, b: float,
@@ -224,3 +223,18 @@ def table_truncation(top_value: float, x: np.ndarray, delta: float) -> np.ndarra
         return np.zeros_like(x)
     u_top = np.clip((x[-1] - x) / delta, 0.0, 1.0)
     return top_value * (1.0 - u_top) ** 2 / 2.0
+
+
+#: How the interface stresses become forces (scene key ``contact.area_model``): the behaviour is ``None``
+#: (the stresses at the apex separation times the flat section ``A_n``, the model's own tables) or the
+#: integral of the tables over the bulge's gap field, ``(coefficients, h, delta) -> integral`` as
+#: :func:`ellipsoid_table_integral` (the model tabulates it per protrusion,
+#: :func:`pipeline.model.kernel_inputs.interface_tables`).
+AREA_MODELS: Registry[Variant] = Registry("contact.area_model", {
+    "flat-section": Variant(summary="stresses at the apex separation d times the flat section A_n (the paper's)",
+                            source='docs/model.md, section "Nominal area" [paper]'),
+    "integrated": Variant(behaviour=ellipsoid_table_integral,
+                          summary="the same stresses integrated over the ellipsoid's gap field "
+                                  "d + delta (1 - sqrt(1 - r^2))",
+                          source='docs/model.md, section "Deviations", item 18'),
+})

@@ -48,7 +48,7 @@ def bounce_frequency(law: str) -> tuple[float, float]:
 
 
 def test_a_registered_rear_law_is_the_one_the_kernel_runs(monkeypatch):
-    monkeypatch.setitem(ab.REAR_LAWS, "twice-linear", ab.RearLaw(twice_linear, "F_r = 2 k_r (g0 - g) (a test)"))
+    monkeypatch.setitem(ab.REAR_LAWS, "twice-linear", ab.RearLaw(twice_linear, summary="F_r = 2 k_r (g0 - g) (a test)"))
     linear, linear_predicted = bounce_frequency("linear")
     twice, twice_predicted = bounce_frequency("twice-linear")
     assert linear == pytest.approx(linear_predicted, rel=1e-4)
@@ -58,8 +58,8 @@ def test_a_registered_rear_law_is_the_one_the_kernel_runs(monkeypatch):
 
 def test_a_rear_law_without_a_compiled_form_is_refused(monkeypatch):
     scene = make_scene(["air_bearing"], air_bearing={"rear_law": "linear"})
-    for name, law, message in (("none", ab.RearLaw(None, "no function"), "has no compiled form"),
-                               ("plain", ab.RearLaw(calls_plain_python, "calls Python"), "does not compile")):
+    for name, law, message in (("none", ab.RearLaw(None, summary="no function"), "has no compiled form"),
+                               ("plain", ab.RearLaw(calls_plain_python, summary="calls Python"), "does not compile")):
         monkeypatch.setitem(ab.REAR_LAWS, name, law)
         with pytest.raises(ValueError, match=f"air_bearing.rear_law = '{name}': .*{message}") as exc:
             build(scene.replace(air_bearing={"rear_law": name}))
