@@ -120,7 +120,7 @@ def run(results: list[dict]) -> None:
                     times[side].append(t)
                     digests[side].add(d)
             this, b = statistics.median(times["this"]), statistics.median(times["base"])
-            record(results, NAME.format(base=BASE, case=case), times["this"], base_median_s=b,
+            record(results, NAME.format(base=BASE, case=case), times["this"], base_median_s=b, times_s=times["this"],
                    base_times_s=times["base"], ratio_to_base=this / b, base_commit=BASE,
                    bit_identical=digests["this"] == digests["base"] and len(digests["this"]) == 1,
                    calls_per_round=CALLS[case], rounds=ROUNDS, processes_per_side=ALTERNATIONS)
