@@ -353,9 +353,8 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset | None]:
     attrs = {name: value for name, value in model_attrs(models[(labels[0], float(damp[0]))], sim.k_source).items()
              if name not in GRID_ATTRS or run[GRID_ATTRS[name]].size == 1}  # (several values: the variable has them)
     # each set's statistics as its interface model used them: its tables' (the scans'), or the given keys
-    stats = {label: used_statistics(set_scenes[label], None if interface_paths[label] is None
-                                    else read_dataset(interface_paths[label], stage="interface"))
-             for label in labels}
+    # (the tables as the batches read them: in this process's cache after a threaded batch phase)
+    stats = {label: used_statistics(set_scenes[label], batch_sim(label, 0).tables()) for label in labels}
     return grid.datasets(key, sim.k_source, attrs, seeds, run, statistics=stats)
 
 
