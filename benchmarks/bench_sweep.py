@@ -69,7 +69,8 @@ def sweep_wall(config: str, inputs: Path, *args: str, repeat: int = 3, compute: 
     """Wall times [s] of `hdi sweep` (process start, inputs, batches, assembly) in fresh folders.
 
     ``compute`` collects the batch phase alone (``compute_seconds`` of the sweep's entry in the run log,
-    ``.hdi/runs.jsonl``: timings are kept out of the datasets).
+    ``.hdi/runs.jsonl``: timings are kept out of the datasets): the fan-out's rounds, which hold the other
+    roughness sets' interface tables too (their tasks run beside the batches).
     """
     from pipeline.runner import last_run
     times = []

@@ -17,9 +17,13 @@ machine's load (the polling of ``callgrind_control`` adds ~0.05 M instructions, 
     PYTHONPATH=CHECKOUT valgrind --tool=callgrind --instr-atstart=no --callgrind-out-file=OUT.%p \
         python benchmarks/kernel_ab.py call OUT.pkl CASE N         (then: grep summary OUT.*.1)
 
+``starts OUT.pkl Y0.npz`` then ``graft OTHER.pkl Y0.npz`` (each under its own checkout): the other
+checkout's captured cases get this one's start states, so both kernels integrate the same problem.
+
 (CHECKOUT on ``PYTHONPATH``, the script run by its path: the checkout's ``pipeline`` wins over an
 editable install of another one.) ``time``: the median over ``R`` rounds of ``N`` calls of one case;
-two checkouts cannot share a process (one package name), so run A and B alternately.
+two checkouts cannot share a process (one package name), so run A and B alternately
+(``benchmarks/bench_kernel_ab.py`` does, against commit 87de7e7, in ``make bench``).
 """
 
 from __future__ import annotations
@@ -111,9 +115,41 @@ def call(path: Path, case: str, n: int) -> None:
     _callgrind("-d")
 
 
+def digest(result) -> str:
+    """SHA-256 of the bytes of the states, contact flags and extremes ``integrate`` returned (``result[0]``,
+    ``[1]``, ``[3]``; not the counters, which gained a slot after 87de7e7): equal digests, bit-identical results."""
+    import hashlib
+    import numpy as np
+    h = hashlib.sha256()
+    for i in (0, 1, 3):
+        h.update(np.ascontiguousarray(result[i]).tobytes())
+    return h.hexdigest()
+
+
+def starts(path: Path, out: Path) -> None:
+    """Save the start state ``y0`` of each captured case (``.npy`` files in a ``.npz``)."""
+    import numpy as np
+    np.savez(out, **{case: np.asarray(args[0]) for case, args in pickle.loads(path.read_bytes()).items()})
+
+
+def graft(path: Path, npz: Path) -> None:
+    """Give each captured case of ``path`` the start state saved by :func:`starts` (from another checkout), so
+    two kernels integrate the same problem: the start state is the model's (its static solution), not the
+    kernel's, and may differ in the last bits between checkouts (87de7e7's at ~1e-8 relative)."""
+    import numpy as np
+    cases, y0 = pickle.loads(path.read_bytes()), np.load(npz)
+    for case, args in cases.items():
+        if y0[case].shape != np.shape(args[0]):
+            raise ValueError(f"{npz}: start state of {case} has shape {y0[case].shape}, expected {np.shape(args[0])}")
+        cases[case] = (y0[case].copy(),) + tuple(args[1:])
+    path.write_bytes(pickle.dumps(cases))
+
+
 def timing(path: Path, case: str, n: int, rounds: int) -> None:
+    """The median over ``rounds`` rounds of ``n`` calls of one case [ms]; a second line ``digest HEX`` of the
+    results (:func:`digest`), for an A/B that checks the two kernels agree bit for bit."""
     integrate, args = _load(path, case)
-    integrate(*args)
+    first = integrate(*args)
     t = []
     for _ in range(rounds):
         t0 = time.perf_counter()
@@ -121,6 +157,7 @@ def timing(path: Path, case: str, n: int, rounds: int) -> None:
             integrate(*args)
         t.append((time.perf_counter() - t0) / n)
     print(f"{case} {statistics.median(t) * 1e3:.4f} ms (min {min(t) * 1e3:.4f})")
+    print(f"digest {digest(first)}")
 
 
 if __name__ == "__main__":
@@ -129,5 +166,9 @@ if __name__ == "__main__":
         capture(Path(sys.argv[2]))
     elif cmd == "call":
         call(Path(sys.argv[2]), sys.argv[3], int(sys.argv[4]))
+    elif cmd == "starts":
+        starts(Path(sys.argv[2]), Path(sys.argv[3]))
+    elif cmd == "graft":
+        graft(Path(sys.argv[2]), Path(sys.argv[3]))
     elif cmd == "time":
         timing(Path(sys.argv[2]), sys.argv[3], int(sys.argv[4]), int(sys.argv[5]))

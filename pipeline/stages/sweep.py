@@ -4,11 +4,10 @@ Each task runs a *batch* of scenes (``[sweep] batch_size`` protrusions of one ro
 and one damping ratio) and writes its own part file, atomically, into ``sweep.parts/``. The DMW
 record and the interface tables reach the workers by file path (``dmw.nc``, ``interface.nc`` or
 ``sweep.parts/interface-<label>/interface.nc``, and ``bulge.nc`` with the tabulated bulge bearing), not
-inside the task graph. When every batch is done
-the parts are assembled into ``sweep.nc`` (dims ``protrusion``, ``roughness``, ``damping``) and
-``sweep_histories.nc`` (time histories of the protrusions in ``histories_nm``): the parts computed by
-this call from memory (each batch returns its dataset with its path), the parts of an earlier run
-from their files.
+inside the task graph. The parts are assembled into ``sweep.nc`` (dims ``protrusion``, ``roughness``,
+``damping``) and ``sweep_histories.nc`` (time histories of the protrusions in ``histories_nm``) by an
+:class:`Assembler`: the parts computed by this call from memory as each batch returns its dataset with
+its path (while the other batches run), the parts of an earlier run from their files at the end.
 
 Resuming: a part is kept when it carries the sweep's inputs key (:mod:`pipeline.runner`: the scene,
 the bytes of every AFM scan of every roughness set, the DMW and calibration datasets), its own batch
@@ -17,15 +16,18 @@ sweep (Ctrl-C, kill, a lost worker) picks up where it stopped and gives a datase
 uninterrupted run (every batch is a deterministic function of its inputs; no timings or folder paths
 are stored in the datasets: the batch-phase wall time goes to the run log, ``.hdi/runs.jsonl``). A part
 copied to another batch's name, or made for other inputs, is recomputed. The interface tables of
-the other roughness sets are kept by the runner under their own inputs keys (:func:`prepare_inputs`).
+the other roughness sets are kept by the runner under their own inputs keys (:func:`table_jobs`).
 
 Execution: :func:`pipeline.fanout.run_tasks` (by default a pool of one thread per core in this
 process, the kernels releasing the GIL; ``scheduler="ADDRESS"`` attaches to a running
-dask.distributed cluster; ``scheduler="synchronous"`` runs the batches one after the other).
+dask.distributed cluster; ``scheduler="synchronous"`` runs the batches one after the other), in two
+rounds (:func:`sweep_task`): the other roughness sets' interface tables as tasks alongside the batches
+that do not read them, then the batches of those sets.
 """
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import json
 import logging
@@ -38,7 +40,7 @@ import numpy as np
 import xarray as xr
 
 from ..model import assembly
-from ..fanout import run_tasks
+from ..fanout import local_cluster, run_tasks
 from ..progress import Progress
 from ..io import file_hash, read_attrs, read_dataset, write_dataset
 from ..paths import refuse_links
@@ -173,27 +175,50 @@ def _progress(total: int, initial: int) -> Progress:
     return Progress(total, unit="batch", label="sweep", initial=initial).start()
 
 
-def prepare_inputs(scene: Any, out: Path, sets: dict[str, dict],
-                   force: bool = False) -> tuple[dict[str, str | None], str | None]:
-    """Interface tables per roughness set and the DMW record, as the paths of files the workers read.
+def table_jobs(scene: Any, out: Path, sets: dict[str, dict]) -> tuple[dict[str, str | None], dict[str, tuple]]:
+    """Where each roughness set's interface tables are read from, and the tables still to be made current.
 
     The scene's own set uses the interface stage's ``interface.nc`` (upstream of the sweep: current).
     Another set's tables are the interface stage of the scene with that ``[roughness]``, made current
     by the runner in ``sweep.parts/interface-<label>/`` (with its ``roughness.nc`` for an AFM set), so
-    they are recomputed only when their own inputs change. The records of realisations beyond the
-    first: :func:`realisation_inputs`.
+    they are recomputed only when their own inputs change: for those sets, the arguments of
+    :func:`make_tables` (the set's scene and folder), run as tasks of the fan-out.
+
+    Returns ``(paths, jobs)``: label -> path of its ``interface.nc`` (``None``: the set reads no tables);
+    label -> ``(scene, folder)``.
     """
     parts = refuse_links(out / PARTS)  # (its parts may be written by worker processes, which hold no folder)
     parts.mkdir(parents=True, exist_ok=True)
     interface_paths: dict[str, str | None] = {}
+    jobs: dict[str, tuple] = {}
     for label, table in sets.items():
         if not scene_inputs.needs_interface(scene.replace(roughness=dict(table))):
             interface_paths[label] = None
         elif table == dict(scene["roughness"]):
             interface_paths[label] = str(out / "interface.nc")
         else:
-            sub = scene.replace(roughness=dict(table))
-            interface_paths[label] = str(ensure("interface", sub, parts / f"interface-{label}", force=force))
+            folder = parts / f"interface-{label}"
+            interface_paths[label] = str(folder / "interface.nc")
+            jobs[label] = (scene.replace(roughness=dict(table)), str(folder))
+    return interface_paths, jobs
+
+
+def make_tables(scene: Any, folder: str, force: bool = False) -> str:
+    """Make a roughness set's interface tables current in ``folder`` (the runner's interface stage of the
+    set's ``scene``, under their own inputs key; executed as a task); returns the path of ``interface.nc``."""
+    return str(ensure("interface", scene, folder, force=force))
+
+
+def prepare_inputs(scene: Any, out: Path, sets: dict[str, dict],
+                   force: bool = False) -> tuple[dict[str, str | None], str | None]:
+    """Interface tables per roughness set and the DMW record, as the paths of files the workers read,
+    the tables made current here, one set after the other (:func:`table_jobs`; the sweep itself runs
+    them as tasks of its fan-out, :func:`compute`). The records of realisations beyond the first:
+    :func:`realisation_inputs`.
+    """
+    interface_paths, jobs = table_jobs(scene, out, sets)
+    for label, (sub, folder) in jobs.items():
+        interface_paths[label] = make_tables(sub, folder, force)
     dmw_path = str(out / "dmw.nc") if scene.has("dmw") else None
     return interface_paths, dmw_path
 
@@ -249,13 +274,15 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset | None]:
     out, key, opts = inputs.out, inputs.key, inputs.options
     prot, sets, damp, batches = plan(scene)
     sim = for_stage(scene, inputs)  # (k, the bulge table and the scene's own record and tables)
-    interface_paths, dmw_path = prepare_inputs(scene, out, sets, bool(opts.get("force")))
-    dmw_paths, seeds = realisation_inputs(scene, out, dmw_path, bool(opts.get("force")))
+    force = bool(opts.get("force"))
+    interface_paths, table_tasks = table_jobs(scene, out, sets)
+    dmw_path = str(out / "dmw.nc") if scene.has("dmw") else None
+    dmw_paths, seeds = realisation_inputs(scene, out, dmw_path, force)
     parts = out / PARTS
     hist_nm = tuple(scene["sweep"]["histories_nm"] or scene["report"]["histories_nm"])
     todo = []
     for b in batches:
-        why = "forced" if opts.get("force") else part_problem(_part_path(parts, b), key, b)
+        why = "forced" if force else part_problem(_part_path(parts, b), key, b)
         if why is not None:
             if why != "missing":
                 log.info("sweep: batch %d: part %s: recomputed", b.index, why)
@@ -266,18 +293,27 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset | None]:
     set_scenes = {label: scene if table == dict(scene["roughness"]) else scene.replace(roughness=dict(table))
                   for label, table in sets.items()}
     # time histories of the first realisation only (the scene's own record)
-    # each set's and realisation's inputs once (a file's key is read from it)
+    # each set's and realisation's inputs once (a file's key is read from it: a set's tables once made)
     batch_sim = functools.cache(lambda label, r: batch_inputs(sim, interface_paths[label], dmw_paths[r]))
-    tasks = [(set_scenes[b.label], b, batch_sim(b.label, b.realisation), str(_part_path(parts, b)), key,
-              hist_nm if b.realisation == 0 else ()) for b in todo]
+
+    def task(b: Batch) -> tuple:
+        return ("batch", set_scenes[b.label], b, batch_sim(b.label, b.realisation), str(_part_path(parts, b)), key,
+                hist_nm if b.realisation == 0 else ())
+
     bar = _progress(len(batches), len(batches) - len(todo))
     done = [0]
     stop_after, on_batch = opts.get("stop_after"), opts.get("on_batch")
-    computed: dict[str, xr.Dataset] = {}  # part path -> its dataset, for the parts run here
+    grid = Assembler(scene, prot, list(sets), damp, len(seeds))
+    by_path = {str(_part_path(parts, b)): b for b in todo}
 
-    def on_done(result: tuple[str, xr.Dataset]) -> None:
-        path, part = result
-        computed[path] = part
+    def on_done(result: tuple[str, Any]) -> None:
+        kind, value = result
+        if kind == "tables":
+            label, path = value
+            interface_paths[label] = path
+            return
+        path, part = value
+        grid.add(by_path[path], part)  # (in the calling thread, while the other batches run)
         done[0] += 1
         if on_batch is not None:
             on_batch(path)
@@ -286,14 +322,29 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset | None]:
         if stop_after is not None and done[0] >= stop_after:
             raise KeyboardInterrupt(f"stopped after {done[0]} batches (stop_after)")
 
-    try:
-        batch_seconds = run_tasks(run_batch, tasks, scheduler=opts.get("scheduler"), workers=opts.get("workers"),
-                                  on_done=on_done)
+    # Two rounds of one fan-out each: the other roughness sets' interface tables with the batches that do
+    # not read them (the tables first: a pool starts tasks in order), then the batches of those sets.
+    # A table is mostly Python and numpy holding the GIL, a batch mostly the kernel releasing it: the tables
+    # alternate with batches, so that two threads run a table and a batch rather than two tables.
+    tables = [("tables", label, sub, folder, force) for label, (sub, folder) in table_tasks.items()]
+    ready = [task(b) for b in todo if b.label not in table_tasks]
+    first = [t for pair in zip(tables, ready) for t in pair] + tables[len(ready):] + ready[len(tables):]
+    later = [b for b in todo if b.label in table_tasks]
+    workers = opts.get("workers")
+    batch_seconds = 0.0
+    try:  # (one process cluster for both rounds: its start-up is paid once)
+        with local_cluster(opts.get("scheduler"), workers) if first or later else \
+                contextlib.nullcontext(opts.get("scheduler")) as scheduler:
+            # (the second round's tasks are made once the tables exist: their inputs carry the tables' key)
+            for tasks in (first, lambda: [task(b) for b in later]):
+                tasks = tasks() if callable(tasks) else tasks
+                batch_seconds += run_tasks(sweep_task, tasks, scheduler=scheduler, workers=workers, on_done=on_done)
     finally:
         if bar is not None:
             bar.close()
-    log.info("sweep: batch phase %.2f s for %d batches", batch_seconds, len(todo))
+    log.info("sweep: batch phase %.2f s for %d batches and %d tables", batch_seconds, len(todo), len(table_tasks))
     inputs.record(compute_seconds=round(batch_seconds, 3), batches_run=len(todo), batches=len(batches))
+    add_kept_parts(grid, out, batches, key)
     # the run values of every set and damping ratio (the models the batches built, cached in this process)
     models = {(label, float(d)): batch_model(set_scenes[label], batch_sim(label, 0), float(d))
               for label in sets for d in damp}
@@ -302,11 +353,20 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset | None]:
     attrs = {name: value for name, value in model_attrs(models[(labels[0], float(damp[0]))], sim.k_source).items()
              if name not in GRID_ATTRS or run[GRID_ATTRS[name]].size == 1}  # (several values: the variable has them)
     # each set's statistics as its interface model used them: its tables' (the scans'), or the given keys
-    stats = {label: used_statistics(set_scenes[label], None if interface_paths[label] is None
-                                    else read_dataset(interface_paths[label], stage="interface"))
-             for label in labels}
-    return assemble(scene, out, prot, labels, damp, batches, key, sim.k_source, attrs, seeds, computed, run,
-                    statistics=stats)
+    # (the tables as the batches read them: in this process's cache after a threaded batch phase)
+    stats = {label: used_statistics(set_scenes[label], batch_sim(label, 0).tables()) for label in labels}
+    return grid.datasets(key, sim.k_source, attrs, seeds, run, statistics=stats)
+
+
+def sweep_task(kind: str, *args: Any) -> tuple[str, Any]:
+    """One task of the sweep's fan-out (executed on a worker): ``kind = "tables"`` with ``(label, scene,
+    folder, force)`` makes a roughness set's interface tables current (:func:`make_tables`; returns
+    ``("tables", (label, path))``), ``kind = "batch"`` runs :func:`run_batch` with ``args`` (returns
+    ``("batch", (part path, part))``)."""
+    if kind == "tables":
+        label, scene, folder, force = args
+        return kind, (label, make_tables(scene, folder, force))
+    return kind, run_batch(*args)
 
 
 def run_sweep(scene: Any, out: Path, scheduler: str | None = None, workers: int | None = None,
@@ -317,12 +377,140 @@ def run_sweep(scene: Any, out: Path, scheduler: str | None = None, workers: int 
                   stop_after=stop_after, on_batch=on_batch)
 
 
+class Assembler:
+    """``sweep.nc`` and ``sweep_histories.nc`` filled part by part: :meth:`add` as each batch's part arrives
+    (the sweep calls it from the fan-out's ``on_done``, so the filling overlaps the batches still running),
+    :meth:`datasets` once every part is in.
+
+    A part's values go to its batch's slots (disjoint), and the variables are ordered as they first appear
+    in batch order (not in the order the parts arrive), so the datasets do not depend on the order of
+    :meth:`add` calls: a 2-worker run gives the file of a 1-worker run.
+    """
+
+    def __init__(self, scene: Any, prot: np.ndarray, labels: list[str], damp: list[float], n_real: int = 1):
+        self.scene, self.prot, self.labels, self.damp, self.n_real = scene, prot, labels, damp, n_real
+        self.stepping = scene["sweep"]["protocol"] == "stepping"
+        # (stepping: the scalars per pass, before the realisation, whose statistics reduce the last axis)
+        self.shape = (len(prot), len(labels), len(damp)) + ((len(DIRECTIONS),) if self.stepping else ()) \
+            + ((n_real,) if n_real > 1 else ())
+        self.chain_shape = (len(labels), len(damp)) + ((n_real,) if n_real > 1 else ())
+        self.arrays: dict[str, np.ndarray] = {}
+        self.chains: dict[str, np.ndarray] = {}
+        self.hist: dict[str, np.ndarray] = {}
+        self.hist_prot: np.ndarray | None = None
+        self.time: np.ndarray | None = None
+        self._time_from: int | None = None  # (the batch whose time axis the histories use: the first in batch order)
+        self._first: dict[str, tuple[int, int]] = {}  # variable -> (batch index, position) of its first appearance
+        self.added: set[int] = set()
+
+    def _seen(self, name: str, batch: int, position: int) -> None:
+        at = (batch, position)
+        if name not in self._first or at < self._first[name]:
+            self._first[name] = at
+
+    def add(self, b: Batch, ds: xr.Dataset) -> None:
+        """Put the part ``ds`` of batch ``b`` into the arrays."""
+        r, d = self.labels.index(b.label), self.damp.index(b.damping)
+        real = (b.realisation,) if self.n_real > 1 else ()
+        for i, name in enumerate(ds.data_vars):
+            self._seen(name, b.index, i)
+            if name.startswith("h_"):
+                continue
+            if name in STEPPING:  # one value per chain
+                self.chains.setdefault(name, np.full(self.chain_shape, np.nan))[(r, d) + real] = ds[name].values
+                continue
+            if name not in self.arrays:  # NaN: not computed (regime: its declared _FillValue on disk)
+                self.arrays[name] = np.full(self.shape, np.nan)
+            at = (list(b.indices), r, d) + ((slice(None),) if self.stepping else ()) + real
+            self.arrays[name][at] = ds[name].values
+        if "hist_protrusion" in ds.coords:
+            if self.hist_prot is None:
+                sweep, report = self.scene["sweep"], self.scene["report"]
+                self.hist_prot = np.array([h for h in sweep["histories_nm"] or report["histories_nm"]
+                                           if np.any(same_point(self.prot, h))])
+            if self._time_from is None or b.index < self._time_from:
+                self.time, self._time_from = ds[TIME].values, b.index
+            for name in ds.data_vars:
+                if name.startswith("h_"):
+                    base = name[2:]
+                    if base not in self.hist:
+                        self.hist[base] = np.full((len(self.hist_prot), len(self.labels), len(self.damp),
+                                                   ds[TIME].size), np.nan)
+                    for i, hp in enumerate(ds["hist_protrusion"].values):
+                        j = int(np.argmin(np.abs(self.hist_prot - hp)))
+                        self.hist[base][j, r, d] = ds[name].values[i]
+        self.added.add(b.index)
+
+    def _ordered(self, values: dict[str, np.ndarray], prefix: str = "") -> dict[str, np.ndarray]:
+        """``values`` in the order their variables (``prefix + name``) first appear in batch order."""
+        return {name: values[name] for name in sorted(values, key=lambda n: self._first[prefix + n])}
+
+    def datasets(self, key: str, k_source: str, attrs: dict, seeds: list[int] | None = None,
+                 run: dict[str, xr.Variable] | None = None, *,
+                 statistics: dict[str, dict[str, Any]]) -> dict[str, xr.Dataset | None]:
+        """``sweep.nc`` and ``sweep_histories.nc`` from the parts added (arguments: :func:`assemble`)."""
+        scene, labels, damp, n_real, stepping = self.scene, self.labels, self.damp, self.n_real, self.stepping
+        coords = {"protrusion": coordinate("protrusion", self.prot), "roughness": coordinate("roughness", labels),
+                  "damping": coordinate("damping", damp)}
+        real = ("realisation",) if n_real > 1 else ()
+        dims = ("protrusion", "roughness", "damping") + (("direction",) if stepping else ()) + real
+        if stepping:
+            coords["direction"] = coordinate("direction", np.array(DIRECTIONS))
+        data = {name: SCALARS[name].data(a, dims) for name, a in self._ordered(self.arrays).items()}
+        data.update({name: STEPPING[name].data(a, ("roughness", "damping") + real)
+                     for name, a in self._ordered(self.chains).items()})
+        if n_real > 1:
+            coords["realisation"] = ENSEMBLE["realisation"].data(np.arange(n_real), ("realisation",))
+            data["dmw_seed"] = ENSEMBLE["dmw_seed"].data(np.array(seeds), ("realisation",))
+            data.update(ensemble.statistics(data))
+        sets = roughness_sets(scene)
+        coords.update(roughness_coordinates([statistics[label] for label in labels]))
+        ds = xr.Dataset(data, coords=coords).assign(run or {})
+        # one attribute for all sets: a label made from the values has '.', which CF's attribute names exclude
+        ds.attrs["roughness_sets"] = json.dumps({label: roughness_record(sets[label], statistics[label])
+                                                 for label in labels}, default=str)
+        ds.attrs.update(attrs)
+        ds.attrs["k_source"] = k_source
+        own = scene_label(scene)
+        if own in labels:  # (the report's default slice: the scene's own roughness)
+            ds.attrs["scene_roughness"] = own
+        hds = None
+        if self.hist:
+            hc = {name: c for name, c in coords.items() if name != "realisation"}  # (realisation 0 only)
+            hc["protrusion"] = coordinate("protrusion", self.hist_prot)
+            hc[TIME] = coordinate(TIME, self.time)
+            hds = xr.Dataset({name: HISTORIES[name].data(a, ("protrusion", "roughness", "damping", TIME))
+                              for name, a in self._ordered(self.hist, "h_").items()}, coords=hc).assign(run or {})
+            hds.attrs.update(ds.attrs)
+        return {"sweep.nc": ds, "sweep_histories.nc": hds}
+
+
+def add_kept_parts(grid: Assembler, out: Path, batches: list[Batch], key: str) -> None:
+    """Add to ``grid`` the part of every batch not added yet (those of an earlier run), read from its file
+    after :func:`part_problem` has accepted it.
+
+    Raises
+    ------
+    RuntimeError
+        When a part is missing or is not the part of its batch (:func:`part_problem`).
+    """
+    parts = out / PARTS
+    for b in batches:
+        if b.index in grid.added:
+            continue
+        path = _part_path(parts, b)
+        why = part_problem(path, key, b)
+        if why is not None:
+            raise RuntimeError(f"{path}: batch {b.index}: part {why}; run the sweep again")
+        grid.add(b, read_dataset(path))
+
+
 def assemble(scene: Any, out: Path, prot: np.ndarray, labels: list[str], damp: list[float], batches: list[Batch],
              key: str, k_source: str, attrs: dict, seeds: list[int] | None = None,
              computed: dict[str, xr.Dataset] | None = None,
              run: dict[str, xr.Variable] | None = None, *,
              statistics: dict[str, dict[str, Any]]) -> dict[str, xr.Dataset | None]:
-    """``sweep.nc`` (and ``sweep_histories.nc``) filled from the parts, in batch order.
+    """``sweep.nc`` (and ``sweep_histories.nc``) filled from the parts, in one go (:class:`Assembler`).
 
     ``computed``: the parts run by this call (path -> dataset, as written), used as they are; every
     other part is read from its file after :func:`part_problem` has accepted it. ``run``: the run's
@@ -340,85 +528,14 @@ def assemble(scene: Any, out: Path, prot: np.ndarray, labels: list[str], damp: l
     RuntimeError
         When a part is missing or is not the part of its batch (:func:`part_problem`).
     """
-    parts = out / PARTS
-    n_real = len(seeds) if seeds else 1
-    stepping = scene["sweep"]["protocol"] == "stepping"
-    # (stepping: the scalars per pass, before the realisation, whose statistics reduce the last axis)
-    shape = (len(prot), len(labels), len(damp)) + ((len(DIRECTIONS),) if stepping else ()) \
-        + ((n_real,) if n_real > 1 else ())
-    chain_shape = (len(labels), len(damp)) + ((n_real,) if n_real > 1 else ())
-    arrays: dict[str, np.ndarray] = {}
-    chains: dict[str, np.ndarray] = {}
-    hist: dict[str, np.ndarray] = {}
-    hist_prot: np.ndarray | None = None
-    time: np.ndarray | None = None
+    grid = Assembler(scene, prot, labels, damp, len(seeds) if seeds else 1)
     computed = computed or {}
     for b in batches:
-        path = _part_path(parts, b)
-        ds = computed.get(str(path))
-        if ds is None:
-            why = part_problem(path, key, b)
-            if why is not None:
-                raise RuntimeError(f"{path}: batch {b.index}: part {why}; run the sweep again")
-            ds = read_dataset(path)
-        r, d = labels.index(b.label), damp.index(b.damping)
-        for name in ds.data_vars:
-            if name.startswith("h_"):
-                continue
-            if name in STEPPING:  # one value per chain
-                chains.setdefault(name, np.full(chain_shape, np.nan))[(r, d) + ((b.realisation,) if n_real > 1 else ())] \
-                    = ds[name].values
-                continue
-            if name not in arrays:  # NaN: not computed (regime: its declared _FillValue on disk)
-                arrays[name] = np.full(shape, np.nan)
-            at = (list(b.indices), r, d) + ((slice(None),) if stepping else ()) \
-                + ((b.realisation,) if n_real > 1 else ())
-            arrays[name][at] = ds[name].values
-        if "hist_protrusion" in ds.coords:
-            if hist_prot is None:
-                hist_prot = np.array([h for h in scene["sweep"]["histories_nm"] or scene["report"]["histories_nm"]
-                                      if np.any(same_point(prot, h))])
-                time = ds[TIME].values
-            for name in ds.data_vars:
-                if name.startswith("h_"):
-                    base = name[2:]
-                    if base not in hist:
-                        hist[base] = np.full((len(hist_prot), len(labels), len(damp), len(time)), np.nan)
-                    for i, hp in enumerate(ds["hist_protrusion"].values):
-                        j = int(np.argmin(np.abs(hist_prot - hp)))
-                        hist[base][j, r, d] = ds[name].values[i]
-    coords = {"protrusion": coordinate("protrusion", prot), "roughness": coordinate("roughness", labels),
-              "damping": coordinate("damping", damp)}
-    real = ("realisation",) if n_real > 1 else ()
-    dims = ("protrusion", "roughness", "damping") + (("direction",) if stepping else ()) + real
-    if stepping:
-        coords["direction"] = coordinate("direction", np.array(DIRECTIONS))
-    data = {name: SCALARS[name].data(a, dims) for name, a in arrays.items()}
-    data.update({name: STEPPING[name].data(a, ("roughness", "damping") + real) for name, a in chains.items()})
-    if n_real > 1:
-        coords["realisation"] = ENSEMBLE["realisation"].data(np.arange(n_real), ("realisation",))
-        data["dmw_seed"] = ENSEMBLE["dmw_seed"].data(np.array(seeds), ("realisation",))
-        data.update(ensemble.statistics(data))
-    sets = roughness_sets(scene)
-    coords.update(roughness_coordinates([statistics[label] for label in labels]))
-    ds = xr.Dataset(data, coords=coords).assign(run or {})
-    # one attribute for all sets: a label made from the values has '.', which CF's attribute names exclude
-    ds.attrs["roughness_sets"] = json.dumps({label: roughness_record(sets[label], statistics[label])
-                                             for label in labels}, default=str)
-    ds.attrs.update(attrs)
-    ds.attrs["k_source"] = k_source
-    own = scene_label(scene)
-    if own in labels:  # (the report's default slice: the scene's own roughness)
-        ds.attrs["scene_roughness"] = own
-    hds = None
-    if hist:
-        hc = {name: c for name, c in coords.items() if name != "realisation"}  # (realisation 0 only)
-        hc["protrusion"] = coordinate("protrusion", hist_prot)
-        hc[TIME] = coordinate(TIME, time)
-        hds = xr.Dataset({name: HISTORIES[name].data(a, ("protrusion", "roughness", "damping", TIME))
-                          for name, a in hist.items()}, coords=hc).assign(run or {})
-        hds.attrs.update(ds.attrs)
-    return {"sweep.nc": ds, "sweep_histories.nc": hds}
+        ds = computed.get(str(_part_path(out / PARTS, b)))
+        if ds is not None:
+            grid.add(b, ds)
+    add_kept_parts(grid, out, batches, key)
+    return grid.datasets(key, k_source, attrs, seeds, run, statistics=statistics)
 
 
 def roughness_coordinates(statistics: list[dict[str, Any]]) -> dict[str, xr.Variable]:

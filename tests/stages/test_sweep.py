@@ -119,6 +119,60 @@ def test_two_workers_equal_synchronous_bit_for_bit(calibrated, tmp_path):
     xr.testing.assert_identical(_values(pa), _values(pb))
 
 
+#: Statistics for :meth:`sweep_stage.Assembler.datasets` where only the data variables are compared
+_STATS = {"sigma_nm": 0.5, "summit_radius_um": 5.0, "summit_density_per_um2": 13.3, "plasticity_index": 0.5}
+
+
+def test_other_sets_tables_are_fanned_out_and_the_result_does_not_depend_on_workers(calibrated, tmp_path,
+                                                                                  monkeypatch):
+    """Issue 36: another roughness set's interface tables are a task of the sweep's fan-out, in a first
+    round alternating with the batches that do not read them, that set's batches in a second round; the
+    parts are assembled as they arrive. 2 workers give the 1-worker datasets exactly, and sweep.nc holds
+    what the parts assembled in one go in batch order hold (the assembly before), variables in the same order."""
+    scene_, out = calibrated
+    scene = load_scene(PAPER, FAST + ['sweep.roughness=["scene", {label="rough", sigma_nm=0.8}]',
+                                      "sweep.histories_nm=[9.2, 10.0]"])
+    own = scene_label(scene)
+    rounds: list[list[tuple[str, str]]] = []
+    real = sweep_stage.run_tasks
+
+    def spy(fn, tasks, **kw):
+        tasks = list(tasks)
+        rounds.append([(t[0], t[1] if t[0] == "tables" else t[2].label) for t in tasks])
+        return real(fn, tasks, **kw)
+
+    monkeypatch.setattr(sweep_stage, "run_tasks", spy)
+    paths = {}
+    for n in (1, 2):
+        _copy_inputs(out, tmp_path / str(n))
+        paths[n] = sweep_stage.run_sweep(scene, tmp_path / str(n), workers=n)
+    batches = sweep_stage.plan(scene)[3]
+    per_set = len(batches) // 2
+    assert per_set == 3
+    expected = [[("tables", "rough"), ("batch", own), ("batch", own), ("batch", own)], [("batch", "rough")] * per_set]
+    assert rounds == expected * 2
+    assert (tmp_path / "2" / sweep_stage.PARTS / "interface-rough" / "interface.nc").is_file()
+    xr.testing.assert_identical(_values(paths[1]), _values(paths[2]))
+    h1, h2 = (read_dataset(p.parent / "sweep_histories.nc") for p in paths.values())
+    del h1.attrs["history"], h2.attrs["history"]
+    xr.testing.assert_identical(h1, h2)
+    # the parts assembled in one go, in batch order, and in reverse order
+    prot, sets, damp, _ = sweep_stage.plan(scene)
+    made = {}
+    for order in (batches, batches[::-1]):
+        grid = sweep_stage.Assembler(scene, prot, list(sets), damp)
+        for b in order:
+            grid.add(b, read_dataset(tmp_path / "1" / sweep_stage.PARTS / f"batch-{b.index:05d}.nc"))
+        made[order[0].index] = grid.datasets("k", "calibration", {}, statistics={label: _STATS for label in sets})
+    xr.testing.assert_identical(made[0]["sweep.nc"], made[batches[-1].index]["sweep.nc"])
+    xr.testing.assert_identical(made[0]["sweep_histories.nc"], made[batches[-1].index]["sweep_histories.nc"])
+    written = read_dataset(paths[1])
+    names = list(made[0]["sweep.nc"].data_vars)
+    assert names == [n for n in written.data_vars if n in names] and len(names) > 10
+    for name in names:
+        np.testing.assert_array_equal(made[0]["sweep.nc"][name].values, written[name].values)
+
+
 def test_resume_after_interrupt_gives_identical_dataset(calibrated, tmp_path):
     scene, out = calibrated
     full, resumed = tmp_path / "full", tmp_path / "resumed"

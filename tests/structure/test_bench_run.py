@@ -96,3 +96,37 @@ def test_main_does_not_run_a_left_out_module(monkeypatch: pytest.MonkeyPatch, tm
     assert imported == []
     data = json.loads(out.read_text())
     assert data["results"] == [] and data["meta"]["study"] is False
+
+
+def test_kernel_ab_row_outside_a_git_clone_says_so_with_its_load(fake_load, tmp_path: Path) -> None:
+    """Issue 36: the A/B against 87de7e7 needs the commit; a source tree without ``.git`` gets one row per case
+    saying why (``failed``: skipped, not a git clone), with the load fields like every row."""
+    from benchmarks import bench_kernel_ab as ab
+    why = ab.base_checkout(root=tmp_path)
+    assert isinstance(why, str) and why.startswith("not a git clone") and ab.BASE in why
+    fake_load([0.5, 0.6, 0.7])
+    rows: list[dict] = []
+    orig = ab.base_checkout
+    try:
+        ab.base_checkout = lambda: orig(root=tmp_path)
+        common.row_start()  # (as benchmarks/run.py does before each module)
+        ab.run(rows)
+    finally:
+        ab.base_checkout = orig
+    assert [r["name"] for r in rows] == [ab.NAME.format(base=ab.BASE, case=c) for c in ab.CALLS]
+    assert all(r["failed"].startswith("skipped: not a git clone") for r in rows)
+    assert [(r["load_start"], r["load_end"], r["cpus"]) for r in rows] == [(0.5, 0.6, 2), (0.6, 0.7, 2)]
+
+
+def test_kernel_ab_digest_tells_a_one_bit_difference() -> None:
+    """The A/B's check that both kernels give the same results: the digest of the bytes of the states, contact
+    flags and extremes (not the counters, which gained a slot after 87de7e7)."""
+    import numpy as np
+    from benchmarks.kernel_ab import digest
+    y, c, ext = np.linspace(0.0, 1.0, 12).reshape(4, 3), np.array([True, False, True, True]), np.array([1e-9, 2e-9])
+    ref = digest((y, c, np.array([0, 10, 1, 0, 60]), ext))
+    assert digest((y.copy(), c.copy(), np.array([0, 10, 1, 0, 60, 0]), ext.copy())) == ref
+    flipped = y.copy()
+    flipped.view(np.int64)[2, 1] ^= 1  # (the last bit of one value's mantissa)
+    assert digest((flipped, c, np.array([0, 10, 1, 0, 60]), ext)) != ref
+    assert digest((y, ~c, np.array([0, 10, 1, 0, 60]), ext)) != ref
