@@ -43,6 +43,13 @@ Method
    point itself misses a target, that range does not exist and the stage reports instead the range
    where the objective stays within 1 of its profile minimum (the 68 % profile interval if tolerances
    were one standard deviation) and says so. Crossings are interpolated linearly between profile points.
+   **Racing** (``identify.racing``, ensembles only; :class:`Racing`, :meth:`Identification.evaluate`): the
+   search's trials and the walks' polls run on the first 2 DMW records, then 4, then all, and stop at a
+   stage where the lower confidence bound of their objective (each residual lowered by its margin from
+   the record-to-record spread, own and paired with a reference on the same records) exceeds the best
+   point's (a poll: its walk's point's) or the smallest upper bound of the candidates racing with them
+   [MM94]_. Everything else (the best point, the slices, the Gauss-Newton points, the profile points)
+   runs on every record; docs/model.md, section "Identification", states the guarantee.
 3. **Correlation**: Gauss-Newton at the optimum, ``C = (J^T J)^+`` with ``J`` the central-difference
    Jacobian of the residuals in parameters scaled to their bounds (steps of 2 % of the range);
    ``corr_ij = C_ij / sqrt(C_ii C_jj)``. A direction with no curvature (a parameter no target sees)
@@ -52,6 +59,8 @@ References
 ----------
 .. [SP97] R. Storn, K. Price, "Differential evolution -- a simple and efficient heuristic for global
    optimization over continuous spaces", J. Global Optim. 11 (1997) 341-359.
+.. [MM94] O. Maron, A. W. Moore, "Hoeffding races: accelerating model selection search for classification
+   and function approximation", Advances in Neural Information Processing Systems 6 (1994) 59-66.
 """
 
 from __future__ import annotations
