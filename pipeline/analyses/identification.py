@@ -196,9 +196,10 @@ class Identification:
         self.depth: dict[str, int] = {}
         self.spreads: dict[str, np.ndarray] = {}
         #: racing: each point's key (by :func:`_point`), the paired spreads of whole evaluations against their
-        #: reference (:meth:`_race`) and the residuals of a whole evaluation's first records, by (key, records)
+        #: reference by role (:meth:`_race`: a poll and its walk's point are neighbours, a trial and the best
+        #: point are not) and the residuals of a whole evaluation's first records, by (key, records)
         self.by_point: dict[tuple, str] = {}
-        self.pair_spreads: list[np.ndarray] = []
+        self.pair_spreads: dict[int, list[np.ndarray]] = {}
         self._heads: dict[tuple[str, int], np.ndarray] = {}
         #: the key and objective of the best record so far (lowest objective, the first on a tie; a whole
         #: evaluation: with racing, one on every record)
@@ -292,10 +293,11 @@ class Identification:
                     alive[i] = False
                     low[i] = high[i] = _metric(np.abs(self.scores[key][1]), metric)
                     if refs[i] is not None and refs[i] != key and self.is_full(refs[i]):
-                        self.pair_spreads.append(input_spreads(record_inputs(self.records[key], self.tlist)
-                                                               - record_inputs(self.records[refs[i]], self.tlist)))
+                        self.pair_spreads.setdefault(role, []).append(
+                            input_spreads(record_inputs(self.records[key], self.tlist)
+                                          - record_inputs(self.records[refs[i]], self.tlist)))
                     continue
-                lo_t, hi_t = self._bounds(key, refs[i])
+                lo_t, hi_t = self._bounds(key, refs[i], role)
                 low[i], high[i] = _metric(lo_t, metric), _metric(hi_t, metric)
             # the smallest upper bound of each group: the point holding it is never stopped (its lower bound is
             # below it), so a point whose lower bound exceeds it will be beaten
@@ -305,11 +307,12 @@ class Identification:
                     alive[i] = False
         return recs
 
-    def _bounds(self, key: str, ref: str | None) -> tuple[np.ndarray, np.ndarray]:
+    def _bounds(self, key: str, ref: str | None, role: int) -> tuple[np.ndarray, np.ndarray]:
         """Per target, the lower and upper confidence bounds of ``|r|`` on the whole ensemble for the partial
         record ``key`` (docs/model.md, section "Identification"): from its own records (its residual, the
         margin of :meth:`Racing.margin` with the larger of its own and the pooled record-to-record spread) and,
-        with a whole evaluation ``ref`` and paired spreads pooled from earlier whole evaluations, from the same
+        with a whole evaluation ``ref`` and paired spreads pooled from earlier whole evaluations of the same
+        ``role`` against theirs, from the same
         records of ``ref`` (common random numbers: ``r(ref, all) + r(key, first n) - r(ref, first n)``, the
         margin with the spread of the records' differences, again the larger of its own and the pooled;
         where a one-sided target is on the wrong side in all three). The tighter of the two, per target."""
@@ -318,7 +321,7 @@ class Identification:
         res = np.abs(self.scores[key][1])
         e = self.racing.margin(np.fmax(record_spreads(rec, self.tlist), self.pooled_spread()), n)
         lo, hi = np.maximum(res - e, 0.0), np.where(np.isnan(res + e), np.inf, res + e)
-        pooled = self._pooled(self.pair_spreads)
+        pooled = self._pooled(self.pair_spreads.get(role, []))
         if ref is None or not self.is_full(ref) or not np.isfinite(pooled).any():
             return np.where(np.isfinite(lo), lo, 0.0), hi
         r_ref, r_ref_n = self.scores[ref][1], self._head_residuals(ref, n)
