@@ -14,6 +14,11 @@ is judged on its ensemble statistic (:attr:`pipeline.analyses.study.ObjectiveTer
 of :mod:`pipeline.analyses.ensemble_rules`): one DMW seed moves the touchdown by a 0.2-nm step, so a fit to
 one record fits that record's noise. ``identify.nc`` then also holds each target's spread over the
 realisations (``spread(evaluation, target, bound)``). One realisation is the single-record identification.
+With ``identify.racing`` (the default) the candidates race over the records
+(:class:`pipeline.analyses.identification.Racing`): the evaluator runs and stores an ensemble in parts
+(2, 4, then all records; :class:`pipeline.evaluations.Evaluator` ``stages``), and a candidate that has
+provably lost stops early; ``records`` in identify.nc says how many each ran on, the attributes
+``record_evaluations`` and ``simulations_run`` what the whole cost.
 
 Method (:mod:`pipeline.analyses.identification`, which holds the algorithm; this stage reads the
 scene, makes the evaluator, calls it and writes the outputs): a global search by differential evolution
