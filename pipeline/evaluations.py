@@ -30,7 +30,7 @@ from typing import Any, Callable, Iterable, Sequence
 
 import numpy as np
 
-from .analyses.study import Parameter, parse_parameters, with_values
+from .analyses.study import Parameter, head, parse_parameters, with_values
 from .code_version import code_key
 from .config.grid import label
 from .config.schema import SceneError
@@ -71,17 +71,22 @@ def base_key(scene: Any, inputs: SimulationInputs) -> str:
 
 
 def evaluation_key(base: str, params: Sequence[Parameter], values: Sequence[float],
-                   protrusions: Sequence[float], realisations: int = 1) -> str:
+                   protrusions: Sequence[float], realisations: int = 1,
+                   records: tuple[int, int] | None = None) -> str:
     """Identity of one evaluation (values rounded to 12 significant digits).
 
     ``realisations`` > 1 is part of the identity (the seeds follow from it and ``dmw.seed``, which the
     base or the values hold); one realisation keeps the key of the single-record evaluation, so a
-    store written before ensembles existed is still read back.
+    store written before ensembles existed is still read back. ``records = (a, b)``: a part of the
+    ensemble, its DMW records ``a`` to ``b - 1`` (a racing stage, :func:`evaluate`); None or all of them:
+    the whole evaluation's key.
     """
     what = {"base": base, "params": {p.name: float(f"{v:.12g}") for p, v in zip(params, values)},
             "protrusions": [float(label(float(x))) for x in protrusions]}
     if realisations > 1:
         what["realisations"] = int(realisations)
+    if records is not None and tuple(records) != (0, realisations):
+        what["records"] = [int(records[0]), int(records[1])]
     blob = json.dumps(what, sort_keys=True)
     return hashlib.sha256(blob.encode()).hexdigest()
 
@@ -174,7 +179,8 @@ def evaluate_realisations(scene: Any, protrusions: Sequence[float], inputs: Simu
 
 
 def evaluate(base: Any, params: Sequence[Parameter], values: Sequence[float], protrusions: Sequence[float],
-             inputs: SimulationInputs, realisations: int = 1) -> dict[str, Any]:
+             inputs: SimulationInputs, realisations: int = 1,
+             records: tuple[int, int] | None = None) -> dict[str, Any]:
     """Run one candidate at ``protrusions`` [nm]; returns its record (see :class:`EvaluationStore`).
 
     Outputs: :func:`run_protrusions`, one value per protrusion. With ``realisations`` > 1 the candidate
@@ -182,25 +188,34 @@ def evaluate(base: Any, params: Sequence[Parameter], values: Sequence[float], pr
     first, then :func:`seeded_record`); each output is then a list over protrusions of lists over the
     realisations, and the record holds ``realisations`` and ``seeds``. The contact criterion k is
     :func:`pipeline.model.scene_inputs.contact_k` of the candidate (no calibration).
+
+    ``records = (a, b)`` (with ``realisations`` > 1): only the DMW records ``a`` to ``b - 1`` of the
+    ensemble, a part of it (identification racing); the record then holds ``realisations = b - a``, their
+    ``seeds`` and ``first_record = a``. Each DMW record's run does not depend on the others of its task
+    (the static starts are on the mean disk), so the parts joined (:func:`join_parts`) are the whole.
     """
     t0 = time.perf_counter()
     kernel = 0.0
     errors: list[str] = []
     seeds: list[int] = []
     per_seed: list[dict[str, list[float]]] = []
+    a, b = (0, realisations) if records is None else (int(records[0]), int(records[1]))
+    part = (a, b) != (0, realisations)
+    count = b - a
     try:
         scene = with_values(base, params, values)
         sim = replace(candidate_inputs(scene, inputs), k=scene_inputs.contact_k(scene)[0])
-        sims = [sim]
+        sims = [sim] if a == 0 else []
         if realisations > 1:
-            seeds = dmw_record.realisation_seeds(scene["dmw"]["seed"], realisations)
-            sims += [sim.with_record(Source.memory("dmw", seeded_record(scene, seed))) for seed in seeds[1:]]
+            seeds = dmw_record.realisation_seeds(scene["dmw"]["seed"], realisations)[a:b]
+            sims += [sim.with_record(Source.memory("dmw", seeded_record(scene, seed)))
+                     for seed in (seeds[1:] if a == 0 else seeds)]
         models = [s.model(scene) for s in sims]
         copies.share_statics(models)  # (the static starts are on the mean disk: found once for all records)
     except (SceneError, ValueError, running.IntegrationError) as exc:
         errors.append(str(exc))
         models = []
-    for r, model in enumerate(models):
+    for r, model in enumerate(models, start=a):
         outputs, seconds, errs = run_protrusions(model, protrusions)
         kernel += seconds
         errors += [f"realisation {r}: {e}" for e in errs] if realisations > 1 else errs
@@ -211,19 +226,43 @@ def evaluate(base: Any, params: Sequence[Parameter], values: Sequence[float], pr
         names = sorted({n for o in per_seed for n in o}, key=lambda n: list(SCALARS).index(n))
         nan = [float("nan")] * len(protrusions)
         outputs = {n: [list(v) for v in zip(*(o.get(n, nan) for o in per_seed))] for n in names} \
-            if len(per_seed) == realisations else {}
+            if len(per_seed) == count else {}
     rec = {"params": [float(v) for v in values], "protrusions": [float(x) for x in protrusions],
            "outputs": outputs, "seconds": time.perf_counter() - t0, "kernel_seconds": kernel,
            "error": "; ".join(errors) if errors else None}
     if realisations > 1:
-        rec.update(realisations=int(realisations), seeds=seeds)
+        rec.update(realisations=int(count), seeds=seeds)
+    if part:
+        rec["first_record"] = a
+    return rec
+
+
+def join_parts(parts: Sequence[dict[str, Any]]) -> dict[str, Any]:
+    """One record of consecutive parts of an ensemble (:func:`evaluate` with ``records``, in record order):
+    the outputs joined along the realisations, the times added, the errors joined. A part without outputs
+    (a candidate that could not be built) leaves the joined record without outputs, as :func:`evaluate`
+    does."""
+    first = parts[0]
+    n = sum(int(p["realisations"]) for p in parts)
+    names = [k for k in first["outputs"]] if all(p["outputs"] for p in parts) else []
+    outputs = {k: [sum((list(p["outputs"][k][i]) for p in parts), []) for i in range(len(first["protrusions"]))]
+               for k in names}
+    errors = [p["error"] for p in parts if p["error"]]
+    rec = {"params": first["params"], "protrusions": first["protrusions"], "outputs": outputs,
+           "seconds": sum(p["seconds"] for p in parts), "kernel_seconds": sum(p["kernel_seconds"] for p in parts),
+           "error": "; ".join(errors) if errors else None, "realisations": n,
+           "seeds": sum((list(p["seeds"]) for p in parts), [])}
+    if first.get("first_record", 0):
+        rec["first_record"] = first["first_record"]
     return rec
 
 
 def evaluate_batch(base: Any, params: Sequence[Parameter], rows: Sequence[tuple[str, Sequence[float]]],
-                   protrusions: Sequence[float], inputs: SimulationInputs, realisations: int = 1) -> list[tuple[str, dict[str, Any]]]:
-    """One fan-out task: evaluate the candidates ``rows = [(key, values), ...]`` (executed on a worker)."""
-    return [(key, evaluate(base, params, values, protrusions, inputs, realisations)) for key, values in rows]
+                   protrusions: Sequence[float], inputs: SimulationInputs, realisations: int = 1,
+                   records: tuple[int, int] | None = None) -> list[tuple[str, dict[str, Any]]]:
+    """One fan-out task: evaluate the candidates ``rows = [(key, values), ...]`` (executed on a worker), on the
+    DMW records ``records`` of the ensemble (:func:`evaluate`; None: all)."""
+    return [(key, evaluate(base, params, values, protrusions, inputs, realisations, records)) for key, values in rows]
 
 
 class EvaluationStore:
@@ -282,18 +321,30 @@ class Evaluator:
     workers: int | None = None
     task: Callable[..., list] = evaluate_batch
     realisations: int = 1
+    #: the racing stages (:class:`pipeline.analyses.identification.Racing`): DMW record counts, the last
+    #: ``realisations``; an ensemble is then run and stored in the parts between them, and a call may ask
+    #: for its first records only (``upto``). Empty: whole evaluations only.
+    stages: tuple[int, ...] = ()
     batch_seconds: float = 0.0
     evaluated: int = 0
     kernel_seconds: float = 0.0
+    #: (candidate, DMW record) pairs computed by this evaluator (read back from the store: not counted)
+    record_evaluations: int = 0
 
     def __post_init__(self) -> None:
         self.base_hash = base_key(self.base, self.inputs)
 
-    def key(self, values: Sequence[float]) -> str:
-        return evaluation_key(self.base_hash, self.params, values, self.protrusions, self.realisations)
+    def key(self, values: Sequence[float], records: tuple[int, int] | None = None) -> str:
+        return evaluation_key(self.base_hash, self.params, values, self.protrusions, self.realisations, records)
 
-    def __call__(self, points: Iterable[Sequence[float]]) -> list[dict[str, Any]]:
-        """Records of ``points`` (each a vector of parameter values), evaluating only what the store lacks."""
+    def __call__(self, points: Iterable[Sequence[float]], upto: int | None = None) -> list[dict[str, Any]]:
+        """Records of ``points`` (each a vector of parameter values), evaluating only what the store lacks.
+
+        ``upto`` (with :attr:`stages`; one of them): each record on its first ``upto`` DMW records only,
+        made of the parts between the stages (those the store holds are read back). Every record's ``key``
+        is the whole evaluation's, whatever part of it is there."""
+        if self.stages:
+            return self._parts([[float(v) for v in x] for x in points], upto or self.realisations)
         pts = [[float(v) for v in x] for x in points]
         keys = [self.key(x) for x in pts]
         todo: dict[str, list[float]] = {}
@@ -310,8 +361,46 @@ class Evaluator:
             self.batch_seconds += run_tasks(self.task, tasks, scheduler=self.scheduler, workers=self.workers,
                                             on_done=self.store.put)
             self.evaluated += len(rows)
+            self.record_evaluations += len(rows) * self.realisations
             self.kernel_seconds += sum(self.store[k]["kernel_seconds"] for k in todo)
         return [self.store[k] for k in keys]
+
+    def _parts(self, pts: list[list[float]], upto: int) -> list[dict[str, Any]]:
+        """:meth:`__call__` with racing stages: the parts up to ``upto`` records, one fan-out for all."""
+        n = self.realisations
+        if upto not in self.stages:
+            raise ValueError(f"records {upto}: expected one of the racing stages {self.stages}")
+        bounds = [0, *[s for s in self.stages if s <= upto]]
+        segments = list(zip(bounds[:-1], bounds[1:]))
+        todo: dict[tuple[int, int], dict[str, list[float]]] = {seg: {} for seg in segments}
+        for x in pts:
+            if self.key(x) in self.store:  # (a whole evaluation, of the full method: its first records are the part)
+                continue
+            for seg in segments:
+                k = self.key(x, seg)
+                if k not in self.store:
+                    todo[seg][k] = x
+        tasks = []
+        for (a, b), rows in todo.items():
+            items = list(rows.items())
+            tasks += [(self.base, list(self.params), items[i:i + self.batch_size], list(self.protrusions), self.inputs,
+                       n, (a, b)) for i in range(0, len(items), self.batch_size)]
+        if tasks:
+            self.batch_seconds += run_tasks(self.task, tasks, scheduler=self.scheduler, workers=self.workers,
+                                            on_done=self.store.put)
+            for (a, b), rows in todo.items():
+                self.evaluated += len(rows)
+                self.record_evaluations += len(rows) * (b - a)
+                self.kernel_seconds += sum(self.store[k]["kernel_seconds"] for k in rows)
+        out = []
+        for x in pts:
+            whole = self.key(x)
+            if whole in self.store:
+                rec = head(self.store[whole], upto)
+            else:
+                rec = join_parts([self.store[self.key(x, seg)] for seg in segments])
+            out.append({**rec, "key": whole})
+        return out
 
 
 def setup(scene: Any, stage_inputs: Any, section: str, force: bool = False) -> tuple[list[Parameter], SimulationInputs, EvaluationStore]:

@@ -43,6 +43,13 @@ Method
    point itself misses a target, that range does not exist and the stage reports instead the range
    where the objective stays within 1 of its profile minimum (the 68 % profile interval if tolerances
    were one standard deviation) and says so. Crossings are interpolated linearly between profile points.
+   **Racing** (``identify.racing``, ensembles only; :class:`Racing`, :meth:`Identification.evaluate`): the
+   search's trials and the walks' polls run on the first 2 DMW records, then 4, then all, and stop at a
+   stage where the lower confidence bound of their objective (each residual lowered by its margin from
+   the record-to-record spread, own and paired with a reference on the same records) exceeds the best
+   point's (a poll: its walk's point's) or the smallest upper bound of the candidates racing with them
+   [MM94]_. Everything else (the best point, the slices, the Gauss-Newton points, the profile points)
+   runs on every record; docs/model.md, section "Identification", states the guarantee.
 3. **Correlation**: Gauss-Newton at the optimum, ``C = (J^T J)^+`` with ``J`` the central-difference
    Jacobian of the residuals in parameters scaled to their bounds (steps of 2 % of the range);
    ``corr_ij = C_ij / sqrt(C_ii C_jj)``. A direction with no curvature (a parameter no target sees)
@@ -52,15 +59,21 @@ References
 ----------
 .. [SP97] R. Storn, K. Price, "Differential evolution -- a simple and efficient heuristic for global
    optimization over continuous spaces", J. Global Optim. 11 (1997) 341-359.
+.. [MM94] O. Maron, A. W. Moore, "Hoeffding races: accelerating model selection search for classification
+   and function approximation", Advances in Neural Information Processing Systems 6 (1994) 59-66.
 """
 
 from __future__ import annotations
 
+import math
+import warnings
+from dataclasses import dataclass
 from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from .study import ObjectiveTerm, Parameter, cost, residuals
+from .study import (ObjectiveTerm, Parameter, cost, head, input_spreads, realisations_of, record_inputs,
+                    record_spreads, residuals)
 
 #: Role of an evaluation (``role`` variable of identify.nc).
 ROLES = {0: "reconstructed", 1: "optimiser", 2: "profile", 3: "gauss-newton", 4: "profile-optimiser"}
@@ -81,6 +94,74 @@ PROFILE_ROUNDS = 3
 PROFILE_GAIN = 1.0
 
 
+#: Asymptotic standard error of a sample median over that of a mean for Gaussian data, sqrt(pi / 2) [1]
+#: (Kenney & Keeping 1962): the racing bound takes every ensemble statistic to be as noisy as a median.
+MEDIAN_EFFICIENCY = math.sqrt(math.pi / 2.0)
+
+
+@dataclass(frozen=True)
+class Racing:
+    """Racing of the candidates over the DMW records (docs/model.md, section "Identification", "Racing").
+
+    A raced candidate runs on ``stages[0]`` records, then on the next stage's (the records nest: the first
+    ``m`` of ``n`` realisations are those of ``m``) while the lower confidence bound of its metric
+    (:func:`lower_bound`) does not exceed its bound (the best point's objective, or the current point of a
+    profile walk); the last stage is every record (``realisations``).
+
+    Attributes
+    ----------
+    stages : increasing DMW record counts, the last the ensemble's size
+    z : standard errors of each target's residual a candidate may lose by and still go on [1]
+    """
+
+    stages: tuple[int, ...]
+    z: float = 3.0
+
+    @classmethod
+    def doubling(cls, first: int, total: int, z: float) -> "Racing":
+        """Stages ``first, 2 first, 4 first, ...`` below ``total``, then ``total``."""
+        stages, m = [], first
+        while m < total:
+            stages.append(m)
+            m *= 2
+        return cls(tuple(stages) + (total,), z)
+
+    @property
+    def total(self) -> int:
+        """The ensemble's DMW records [1]."""
+        return self.stages[-1]
+
+    def margin(self, spread: np.ndarray, n: int) -> np.ndarray:
+        """The error bound of each target's residual on the first ``n`` records against all of them [1]:
+        ``z sqrt(pi/2) s sqrt((N - n) / (N n))`` with ``s`` the record-to-record spread in residual units
+        (:func:`pipeline.analyses.study.record_spreads`; infinite where unknown). The full ensemble's mean
+        of ``N`` records differs from that of its first ``n`` by ``(N - n)/N`` times the difference of the
+        means of the other ``N - n`` and of the first ``n``, of variance ``s^2 (N - n) / (N n)``; zero at
+        ``n = N``."""
+        N = self.total
+        s = np.where(np.isfinite(spread), spread, np.inf)
+        return self.z * MEDIAN_EFFICIENCY * s * math.sqrt(max(N - n, 0) / (N * n))
+
+
+def lower_bound(res: np.ndarray, margin: np.ndarray, metric: str) -> float:
+    """The lower confidence bound of a metric of the residuals ``res`` whose errors are at most ``margin``
+    (each residual's magnitude lowered by its margin, not below zero): of the objective (``"cost"``, the sum
+    of squares) or of the largest ``|r|`` (``"max"``)."""
+    low = np.maximum(np.abs(np.asarray(res, float)) - margin, 0.0)
+    low = np.where(np.isfinite(low), low, 0.0)  # (an unknown residual with an infinite margin: no bound)
+    return _metric(low, metric)
+
+
+def upper_bound(res: np.ndarray, margin: np.ndarray, metric: str) -> float:
+    """The upper confidence bound of the metric (:func:`lower_bound`): each ``|r|`` raised by its margin."""
+    high = np.abs(np.asarray(res, float)) + margin
+    return _metric(np.where(np.isnan(high), np.inf, high), metric)
+
+
+def _metric(r: np.ndarray, metric: str) -> float:
+    return float(np.max(r, initial=0.0)) if metric == "max" else float(np.sum(r**2))
+
+
 class Identification:
     """The state of one identification: the evaluation callable, every record it returned, and their scores.
 
@@ -89,24 +170,50 @@ class Identification:
     evaluate
         ``evaluate(points) -> records``: one evaluation record per row of ``points`` (shape
         ``(n, parameters)``), as :func:`pipeline.analyses.study.residuals` reads them, each with its
-        ``key`` (:class:`pipeline.evaluations.Evaluator` in ``hdi identify``).
+        ``key`` (:class:`pipeline.evaluations.Evaluator` in ``hdi identify``). With ``racing``:
+        ``evaluate(points, upto)``, each record on the first ``upto`` DMW records (a racing stage), the
+        key the whole evaluation's.
     tlist
         The targets (:func:`pipeline.analyses.study.targets`).
     missing
         The residual of a target a record cannot produce (``identify.missing_residual``).
+    racing
+        Race the candidates of the calls given a ``bound`` (:meth:`evaluate`) over the DMW records
+        (:class:`Racing`); None: every candidate on every record (the full method).
     """
 
-    def __init__(self, evaluate: Callable[[np.ndarray], list[dict[str, Any]]], tlist: Sequence[ObjectiveTerm],
-                 missing: float):
+    def __init__(self, evaluate: Callable[..., list[dict[str, Any]]], tlist: Sequence[ObjectiveTerm],
+                 missing: float, racing: Racing | None = None):
         self.evaluate_points, self.tlist, self.missing = evaluate, list(tlist), missing
-        #: every record asked for, by key, in request order; and the role of its first request
+        self.racing = racing
+        #: every record asked for, by key, in request order (the most records of each); and the role of its
+        #: first request
         self.records: dict[str, dict[str, Any]] = {}
         self.roles: dict[str, int] = {}
-        #: target values and residuals of every record, by key, scored once when it first comes back
+        #: target values and residuals of every record, by key, scored when it (or more of its records) comes back
         self.scores: dict[str, tuple[np.ndarray, np.ndarray]] = {}
-        #: the key and objective of the best record so far (lowest objective, the first on a tie)
+        #: DMW records of each key's record; the record-to-record spreads of the whole evaluations (racing)
+        self.depth: dict[str, int] = {}
+        self.spreads: dict[str, np.ndarray] = {}
+        #: racing: each point's key (by :func:`_point`), the paired spreads of whole evaluations against their
+        #: reference by role (:meth:`_race`: a poll and its walk's point are neighbours, a trial and the best
+        #: point are not) and the residuals of a whole evaluation's first records, by (key, records)
+        self.by_point: dict[tuple, str] = {}
+        self.pair_spreads: dict[int, list[np.ndarray]] = {}
+        self._heads: dict[tuple[str, int], np.ndarray] = {}
+        #: the key and objective of the best record so far (lowest objective, the first on a tie; a whole
+        #: evaluation: with racing, one on every record)
         self.best_key: str | None = None
         self.best_cost = float("inf")
+
+    def is_full(self, key: str) -> bool:
+        """The record of ``key`` holds every DMW record (always, without racing)."""
+        return self.racing is None or self.depth.get(key, 0) >= self.racing.total
+
+    @property
+    def record_evaluations(self) -> int:
+        """(candidate, DMW record) pairs of every record held [1]: the identification's cost."""
+        return int(sum(self.depth.values()))
 
     @property
     def keys(self) -> list[str]:
@@ -118,22 +225,140 @@ class Identification:
         """The request-order index (:attr:`keys`) of the best record so far."""
         return self.keys.index(self.best_key) if self.best_key is not None else -1
 
-    def evaluate(self, points: np.ndarray, role: int) -> tuple[list[dict], np.ndarray, np.ndarray]:
-        """Records, target values and residuals of ``points`` (shape (n, parameters))."""
-        recs = self.evaluate_points(points)
-        for r in recs:
-            if r["key"] not in self.roles:
-                self.roles[r["key"]] = role
-                self.records[r["key"]] = r
-                self.scores[r["key"]] = residuals(r, self.tlist, self.missing)
-                c = cost(self.scores[r["key"]][1])
-                if c < self.best_cost:  # (strictly: the first of equal objectives stays the best)
-                    self.best_key, self.best_cost = r["key"], c
+    def evaluate(self, points: np.ndarray, role: int, bound: Any = None, metric: str = "cost",
+                 groups: Any = None, refs: Any = None) -> tuple[list[dict], np.ndarray, np.ndarray]:
+        """Records, target values and residuals of ``points`` (shape (n, parameters)).
+
+        With :attr:`racing` and a ``bound`` (a number, or one per point; ``inf``: that point on every
+        record), the points are raced (docs/model.md, section "Identification"): each stage's records for
+        the points still running (one call of the evaluation callable per stage), and a point stops when
+        the :func:`lower_bound` of its ``metric`` (``"cost"``, ``"max"``) exceeds its bound or the smallest
+        :func:`upper_bound` of the points of its group (``groups``: a label per point, None: no groups),
+        a point that will beat it. ``refs``: a reference point per row (a whole evaluation held here, e.g.
+        the best point; NaN or None: none) against which each point's residuals are also bounded on the
+        same records (:meth:`_bounds`). A stopped point's record, values and residuals are those of its
+        partial ensemble."""
+        if self.racing is None or bound is None:
+            recs = self.evaluate_points(points) if self.racing is None else \
+                self.evaluate_points(points, self.racing.total)
+            self._take(recs, role)
+        else:
+            n = len(points)
+            ref_keys = [None] * n if refs is None else \
+                [self.by_point.get(_point(y)) if np.all(np.isfinite(y)) else None
+                 for y in np.broadcast_to(np.asarray(refs, float), (n, np.shape(points)[1]))]
+            recs = self._race(np.asarray(points, float), role, np.broadcast_to(np.asarray(bound, float), (n,)),
+                              metric, np.arange(n) if groups is None else np.broadcast_to(np.asarray(groups), (n,)),
+                              ref_keys)
+        recs = [self.records[r["key"]] for r in recs]
         vals, res = zip(*(self.scores[r["key"]] for r in recs)) if recs else ((), ())
         return recs, np.array(vals).reshape(len(recs), -1), np.array(res).reshape(len(recs), -1)
 
-    def costs(self, points: np.ndarray, role: int) -> np.ndarray:
-        return np.array([cost(r) for r in self.evaluate(points, role)[2]])
+    def _take(self, recs: list[dict[str, Any]], role: int) -> None:
+        """Keep and score the records that are new or hold more DMW records than before."""
+        for r in recs:
+            key, depth = r["key"], realisations_of(r)
+            if key not in self.roles:
+                self.roles[key] = role
+            if key in self.depth and depth <= self.depth[key]:
+                continue
+            self.records[key], self.depth[key] = r, depth  # (a known key keeps its place in request order)
+            self.by_point[_point(r["params"])] = key
+            self.scores[key] = residuals(r, self.tlist, self.missing)
+            if not self.is_full(key):
+                continue
+            if self.racing is not None:
+                self.spreads[key] = record_spreads(r, self.tlist)
+            c = cost(self.scores[key][1])
+            if c < self.best_cost:  # (strictly: the first of equal objectives stays the best)
+                self.best_key, self.best_cost = key, c
+
+    def _race(self, pts: np.ndarray, role: int, bound: np.ndarray, metric: str, groups: np.ndarray,
+              refs: list[str | None]) -> list[dict[str, Any]]:
+        """The records of :meth:`evaluate` with racing, in the order of ``pts``."""
+        assert self.racing is not None
+        recs: list[dict[str, Any]] = [{}] * len(pts)
+        alive = np.ones(len(pts), bool)
+        low, high = np.zeros(len(pts)), np.full(len(pts), np.inf)
+        for m in self.racing.stages:
+            idx = np.flatnonzero(alive)
+            if not idx.size:
+                break
+            got = self.evaluate_points(pts[idx], m)
+            self._take(got, role)
+            for i, r in zip(idx, got):
+                recs[i] = r
+                key = r["key"]
+                if self.is_full(key):  # (exact: both bounds are its metric)
+                    alive[i] = False
+                    low[i] = high[i] = _metric(np.abs(self.scores[key][1]), metric)
+                    if refs[i] is not None and refs[i] != key and self.is_full(refs[i]):
+                        self.pair_spreads.setdefault(role, []).append(
+                            input_spreads(record_inputs(self.records[key], self.tlist)
+                                          - record_inputs(self.records[refs[i]], self.tlist)))
+                    continue
+                lo_t, hi_t = self._bounds(key, refs[i], role)
+                low[i], high[i] = _metric(lo_t, metric), _metric(hi_t, metric)
+            # the smallest upper bound of each group: the point holding it is never stopped (its lower bound is
+            # below it), so a point whose lower bound exceeds it will be beaten
+            best_high = {g: np.min(high[groups == g]) for g in np.unique(groups[idx])}
+            for i in idx:  # (an infinite bound: that point on every record)
+                if alive[i] and np.isfinite(bound[i]) and low[i] > min(bound[i], best_high[groups[i]]):
+                    alive[i] = False
+        return recs
+
+    def _bounds(self, key: str, ref: str | None, role: int) -> tuple[np.ndarray, np.ndarray]:
+        """Per target, the lower and upper confidence bounds of ``|r|`` on the whole ensemble for the partial
+        record ``key`` (docs/model.md, section "Identification"): from its own records (its residual, the
+        margin of :meth:`Racing.margin` with the larger of its own and the pooled record-to-record spread) and,
+        with a whole evaluation ``ref`` and paired spreads pooled from earlier whole evaluations of the same
+        ``role`` against theirs, from the same
+        records of ``ref`` (common random numbers: ``r(ref, all) + r(key, first n) - r(ref, first n)``, the
+        margin with the spread of the records' differences, again the larger of its own and the pooled;
+        where a one-sided target is on the wrong side in all three). The tighter of the two, per target."""
+        assert self.racing is not None
+        n, rec = self.depth[key], self.records[key]
+        res = np.abs(self.scores[key][1])
+        e = self.racing.margin(np.fmax(record_spreads(rec, self.tlist), self.pooled_spread()), n)
+        lo, hi = np.maximum(res - e, 0.0), np.where(np.isnan(res + e), np.inf, res + e)
+        pooled = self._pooled(self.pair_spreads.get(role, []))
+        if ref is None or not self.is_full(ref) or not np.isfinite(pooled).any():
+            return np.where(np.isfinite(lo), lo, 0.0), hi
+        r_ref, r_ref_n = self.scores[ref][1], self._head_residuals(ref, n)
+        r_key = self.scores[key][1]
+        paired = r_key + r_ref - r_ref_n
+        own = input_spreads(record_inputs(rec, self.tlist) - record_inputs(self.records[ref], self.tlist)[:, :, :n])
+        e2 = self.racing.margin(np.fmax(own, pooled), n)
+        equal = np.array([t.kind == "equal" for t in self.tlist])
+        usable = np.isfinite(paired) & np.isfinite(e2) & (equal | ((r_key != 0) & (r_ref != 0) & (r_ref_n != 0)))
+        lo2 = np.where(usable, np.maximum(np.abs(paired) - e2, 0.0), 0.0)
+        hi2 = np.where(usable, np.abs(paired) + e2, np.inf)
+        return np.where(np.isfinite(lo), np.maximum(lo, lo2), lo2), np.minimum(hi, hi2)
+
+    def _head_residuals(self, key: str, n: int) -> np.ndarray:
+        """The residuals of the first ``n`` DMW records of the whole evaluation ``key`` (cached)."""
+        if (key, n) not in self._heads:
+            self._heads[key, n] = residuals(head(self.records[key], n), self.tlist, self.missing)[1]
+        return self._heads[key, n]
+
+    @staticmethod
+    def _pooled(spreads: Any) -> np.ndarray:
+        """The median of ``spreads`` (arrays over the targets), NaN where none is finite or there are none."""
+        if not len(spreads):
+            return np.full(0, np.nan)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # (an all-NaN column: NaN, the spread unknown)
+            return np.nanmedian(np.array(spreads, float), axis=0)
+
+    def pooled_spread(self) -> np.ndarray:
+        """Per target, the median record-to-record spread of the whole evaluations so far [1] (NaN before
+        the first): a floor under a partial ensemble's own spread, which two records estimate poorly."""
+        p = self._pooled(list(self.spreads.values()))
+        return p if p.size else np.full(len(self.tlist), np.nan)
+
+    def costs(self, points: np.ndarray, role: int, bound: Any = None, groups: Any = None,
+              refs: Any = None) -> np.ndarray:
+        return np.array([cost(r) for r in self.evaluate(points, role, bound, groups=groups, refs=refs)[2]])
 
 
 def interval(grid: np.ndarray, metric: np.ndarray, limit: float, centre: float) -> tuple[float, float]:
@@ -249,6 +474,7 @@ def _profile_rounds(ident: Identification, best: np.ndarray, best_res: np.ndarra
             progress.phase(f"profiles, round {rounds} of at most {PROFILE_ROUNDS}",
                            sum(len(g) for g in grids) + 2 * n + n * budget, unit="evaluation")
         slices, rows, r_round = _slices(ident, best, grids)
+        full = np.ones(len(rows), bool)  # (slice points run on every record)
         count(len(rows))
         profiles = slices
         # a point this much better ends the round (a round more follows around it): not after the last round
@@ -257,12 +483,14 @@ def _profile_rounds(ident: Identification, best: np.ndarray, best_res: np.ndarra
             J = _jacobian(ident, best, lo, hi)  # (first: it predicts the walks' first steps)
             count(2 * n)
             within = bool(np.all(np.abs(best_res) <= 1.0))
-            found, w_rows, w_res = _reoptimise(ident, best, c_best, within, slices, _valley_slopes(J, lo, hi),
-                                               lo, hi, budget, count, moved)
+            found, w_rows, w_res, w_full = _reoptimise(ident, best, c_best, within, slices,
+                                                       _valley_slopes(J, lo, hi), lo, hi, budget, count, moved)
             profiles = _merge(slices, found)
             spent += len(w_rows)
             rows, r_round = rows + w_rows, np.concatenate([r_round, w_res])
-        c_prof = np.sum(r_round**2, axis=1)
+            full = np.concatenate([full, w_full])
+        # (a raced point stopped early is no candidate for the optimum: its objective is a partial ensemble's)
+        c_prof = np.where(full, np.sum(r_round**2, axis=1), np.nan)
         j = int(np.nanargmin(c_prof)) if np.isfinite(c_prof).any() else -1
         last = j < 0 or not c_prof[j] < c_best - PROFILE_GAIN or rounds == PROFILE_ROUNDS
         if last and not budget:  # (a slice's Jacobian after its profiles, as before the re-optimised method)
@@ -282,7 +510,10 @@ def _global_search(ident: Identification, lo: np.ndarray, hi: np.ndarray, x_base
     inside = bool(np.all((x_base >= lo) & (x_base <= hi)))
 
     def objective(X: np.ndarray) -> np.ndarray:  # vectorized: X has shape (parameters, S)
-        return ident.costs(np.atleast_2d(X.T), 1)
+        # (racing: a trial goes on to more DMW records while it may still beat the best point; a stopped one
+        # competes with its parent by its partial ensemble's objective, which exceeds the best point's)
+        ref = ident.records[ident.best_key]["params"] if ident.best_key is not None else None
+        return ident.costs(np.atleast_2d(X.T), 1, bound=ident.best_cost, groups=0, refs=ref)
 
     from scipy.optimize import differential_evolution  # (here: its import is not paid by every hdi command)
 
@@ -441,6 +672,20 @@ class _Walk:
         new = {_point(p): p for p in self.asked if _point(p) not in self.seen}
         return list(new.values())
 
+    def bound(self, p: np.ndarray) -> float:
+        """The racing bound of a candidate ``p`` of this round (:meth:`Identification.evaluate`): a poll point
+        is taken only if its metric is below the current point's (at a new value: below the slice point's,
+        which the current point will be no worse than), so past that bound it may stop early; the predicted
+        point and the vertex run on every record (infinite bound)."""
+        if self.vertex is not None or (self.res is None and _point(p) == _point(self.x)):
+            return float("inf")
+        return self.metric(self.res if self.res is not None else self.slice[1])
+
+    def reference(self) -> np.ndarray:
+        """The whole evaluation a poll point is raced against on the same DMW records: the current point (at a
+        new value, the slice point)."""
+        return self.x if self.res is not None else self.slice[0]
+
     def update(self, pts: list[np.ndarray], res: np.ndarray) -> None:
         """Take the round's results (``res`` of the new points ``pts``): move to the best poll point if
         it is better (and poll again), else try the parabolas' vertex once, then the point is finished.
@@ -508,12 +753,13 @@ def _point(x: np.ndarray) -> tuple[float, ...]:
 
 def _reoptimise(ident: Identification, best: np.ndarray, c_best: float, within: bool, slices: list[dict],
                 slopes: np.ndarray, lo: np.ndarray, hi: np.ndarray, budget: int,
-                count: Callable[[int], None], moved: float = -np.inf) -> tuple[list[dict], list, np.ndarray]:
+                count: Callable[[int], None], moved: float = -np.inf) -> tuple[list[dict], list, np.ndarray, np.ndarray]:
     """The re-optimised profile points of every parameter: two walks (:class:`_Walk`) per parameter,
-    all advanced together, one fan-out per round (role 4), each parameter's walks spending at most
-    ``budget`` evaluations; all stop at once when a point's objective falls below ``moved`` (the
-    optimum moves there and the profiles are made again). Returns ``found`` (per parameter: value ->
-    (point, residuals)) and the rows and residuals evaluated.
+    all advanced together, one fan-out per round (role 4; with racing, one per racing stage, the poll
+    points raced against their walk's :meth:`_Walk.bound`), each parameter's walks spending at most
+    ``budget`` evaluations; all stop at once when a whole evaluation's objective falls below ``moved``
+    (the optimum moves there and the profiles are made again). Returns ``found`` (per parameter: value
+    -> (point, residuals)), the rows and residuals evaluated and whether each is a whole evaluation.
 
     The walks lower the metric of the interval criterion: where the optimum is within tolerance, the
     largest |r| (the profile of "some setting of the others keeps every target within tolerance"), and
@@ -535,6 +781,7 @@ def _reoptimise(ident: Identification, best: np.ndarray, c_best: float, within: 
     spent = np.zeros(len(best), int)
     rows: list[np.ndarray] = []
     results: list[np.ndarray] = []
+    whole: list[np.ndarray] = []
     while True:
         batch = []
         for w in walks:
@@ -549,11 +796,20 @@ def _reoptimise(ident: Identification, best: np.ndarray, c_best: float, within: 
         if not batch:
             break
         flat = [p for _, ps in batch for p in ps]
-        r = ident.evaluate(np.array(flat), 4)[2] if flat else np.zeros((0, len(ident.tlist)))
+        bounds = [w.bound(p) for w, ps in batch for p in ps]
+        walk_of = [k for k, (_, ps) in enumerate(batch) for _ in ps]  # (a walk's points race each other)
+        refs = [w.reference() for w, ps in batch for _ in ps]
+        if flat:
+            recs, _, r = ident.evaluate(np.array(flat), 4, bound=bounds, metric="max" if within else "cost",
+                                        groups=walk_of, refs=np.array(refs))
+            full = np.array([ident.is_full(x["key"]) for x in recs], bool)
+        else:
+            r, full = np.zeros((0, len(ident.tlist))), np.zeros(0, bool)
         count(len(flat))
         rows += flat
         results.append(r)
-        if np.nanmin(np.sum(r**2, axis=1), initial=np.inf) < moved:
+        whole.append(full)
+        if np.nanmin(np.where(full, np.sum(r**2, axis=1), np.inf), initial=np.inf) < moved:
             break
         k = 0
         for w, ps in batch:
@@ -562,7 +818,8 @@ def _reoptimise(ident: Identification, best: np.ndarray, c_best: float, within: 
     found = [{} for _ in slices]
     for w in walks:
         found[w.i].update(w.found)
-    return found, rows, np.concatenate(results) if results else np.zeros((0, len(ident.tlist)))
+    return found, rows, np.concatenate(results) if results else np.zeros((0, len(ident.tlist))), \
+        np.concatenate(whole) if whole else np.zeros(0, bool)
 
 
 def _valley_slopes(J: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:

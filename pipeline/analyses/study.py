@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import math
 import re
+import warnings
 from dataclasses import dataclass
 from typing import Any, Callable, Iterable, Sequence
 
@@ -430,7 +431,10 @@ def residuals(record: dict[str, Any], tlist: Sequence[ObjectiveTerm],
     if realisations_of(record) > 1:
         ds = record_dataset(record)
         vals = np.array([t.ensemble(ds)[0] if t.ensemble else np.nan for t in tlist], float)
-        res = np.array([t.ensemble_residual(ds, missing) for t in tlist], float)
+        # (the residual of the value just computed, not the ensemble statistic again: the same number, half
+        # the xarray work of scoring, which racing does at every stage)
+        res = np.array([t.ensemble_residual(ds, missing) if t.kind == "touchdown" else t._residual_of(v, missing)
+                        for t, v in zip(tlist, vals)], float)
         return vals, res
     table = Table(record)
     vals = np.array([t.value(table) for t in tlist], float)
@@ -447,6 +451,65 @@ def spreads(record: dict[str, Any], tlist: Sequence[ObjectiveTerm]) -> np.ndarra
         for j, t in enumerate(tlist):
             if t.ensemble:
                 out[j] = t.ensemble(ds)[1:]
+    return out
+
+
+def record_inputs(record: dict[str, Any], tlist: Sequence[ObjectiveTerm]) -> np.ndarray:
+    """Per target and DMW realisation of an ensemble record, what its residual is made of, in residual units
+    [1], shape ``(targets, 2, realisations)``: the single-record value (:attr:`ObjectiveTerm.value`) divided
+    by the tolerance (second row NaN); for ``touchdown``, the minimum clearances at the onset and the previous
+    protrusion divided by the tolerance. Unclipped: an inequality target's value varies on its admissible
+    side too. All NaN for a record without outputs."""
+    n = realisations_of(record)
+    out = np.full((len(tlist), 2, n), np.nan)
+    if not record["outputs"]:
+        return out
+    prot = np.asarray(record["protrusions"], float)
+    cols = {k: np.asarray(v, float).reshape(len(prot), n) for k, v in record["outputs"].items()}
+    tables = [Table({"protrusions": prot, "outputs": {k: c[:, r] for k, c in cols.items()}}) for r in range(n)]
+    for j, t in enumerate(tlist):
+        if t.kind == "touchdown":
+            for row, at in enumerate((t.protrusions[-1], t.protrusions[0])):
+                out[j, row] = [tb.value("min_clearance", at) for tb in tables]
+        else:
+            out[j, 0] = [t.value(tb) for tb in tables]
+        out[j] /= t.tolerance
+    return out
+
+
+def input_spreads(inputs: np.ndarray) -> np.ndarray:
+    """Per target, the record-to-record spread of :func:`record_inputs` (or of a difference of two) [1]: the
+    sample standard deviation (ddof 1) over the realisations, the two rows' added (touchdown); NaN where a
+    row in use has fewer than two finite values."""
+    out = np.zeros(inputs.shape[0])
+    for row in range(inputs.shape[1]):
+        v = inputs[:, row, :]
+        used = np.isfinite(v).any(axis=1) | (row == 0)
+        finite = np.isfinite(v).sum(axis=1)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            sd = np.nanstd(v, axis=1, ddof=1) if v.shape[1] > 1 else np.full(len(v), np.nan)
+        out += np.where(used, np.where(finite >= 2, sd, np.nan), 0.0)
+    return out
+
+
+def record_spreads(record: dict[str, Any], tlist: Sequence[ObjectiveTerm]) -> np.ndarray:
+    """Per target, the record-to-record spread of an ensemble record in residual units [1]
+    (:func:`input_spreads` of :func:`record_inputs`): the scale of the error of a partial ensemble's residual
+    (identification racing, docs/model.md, section "Identification"). NaN for one realisation."""
+    if realisations_of(record) < 2:
+        return np.full(len(tlist), np.nan)
+    return input_spreads(record_inputs(record, tlist))
+
+
+def head(record: dict[str, Any], m: int) -> dict[str, Any]:
+    """The first ``m`` DMW records of an ensemble record (its times scaled by the share of the records)."""
+    n = realisations_of(record)
+    if m >= n:
+        return record
+    out = {**record, "outputs": {k: [list(v[:m]) for v in col] for k, col in record["outputs"].items()},
+           "realisations": m, "seeds": list(record["seeds"][:m])}
+    out.update({k: record[k] * m / n for k in ("seconds", "kernel_seconds") if k in record})
     return out
 
 

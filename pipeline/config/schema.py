@@ -420,6 +420,16 @@ SCHEMA: dict[str, dict[str, Key]] = {
                                        "re-optimising the others (each point 1 + 2 x (parameters - 1) at least; "
                                        "6 parameters: <= 240 per profile round, four generations of the default "
                                        "population)"),
+        "racing": Key("bool", True,
+                      doc="race the candidates over the DMW records (with realisations > 1): each runs on "
+                          "racing_records records first, and more (doubling to all) only while its objective's "
+                          "lower confidence bound does not exceed the best point's; false: every candidate on "
+                          "every record (the full method); docs/model.md, section 'Identification'"),
+        "racing_records": Key("int", 2, (lambda v: v >= 2, "an integer >= 2"),
+                              doc="DMW records of a candidate's first racing stage (doubling to realisations)"),
+        "racing_z": Key("float", 3.0, _pos,
+                        doc="racing bound: standard errors of each target's residual (from the record-to-record "
+                            "spread) a candidate may lose by and still run on the next records [1]"),
     },
     # hdi sensitivity: [recon] parameters with bounds; Morris screening and Sobol indices (SALib)
     "sensitivity": {

@@ -14,6 +14,11 @@ is judged on its ensemble statistic (:attr:`pipeline.analyses.study.ObjectiveTer
 of :mod:`pipeline.analyses.ensemble_rules`): one DMW seed moves the touchdown by a 0.2-nm step, so a fit to
 one record fits that record's noise. ``identify.nc`` then also holds each target's spread over the
 realisations (``spread(evaluation, target, bound)``). One realisation is the single-record identification.
+With ``identify.racing`` (the default) the candidates race over the records
+(:class:`pipeline.analyses.identification.Racing`): the evaluator runs and stores an ensemble in parts
+(2, 4, then all records; :class:`pipeline.evaluations.Evaluator` ``stages``), and a candidate that has
+provably lost stops early; ``records`` in identify.nc says how many each ran on, the attributes
+``record_evaluations`` and ``simulations_run`` what the whole cost.
 
 Method (:mod:`pipeline.analyses.identification`, which holds the algorithm; this stage reads the
 scene, makes the evaluator, calls it and writes the outputs): a global search by differential evolution
@@ -58,7 +63,7 @@ from ..progress import Progress
 from ..io import read_dataset, temporary_path, var
 from ..paths import refuse_links
 from ..runner import Inputs, Stage
-from ..analyses.identification import (GN_STEP, METHODS, PROFILE_GAIN, PROFILE_STEP, ROLES, Identification,
+from ..analyses.identification import (GN_STEP, METHODS, PROFILE_GAIN, PROFILE_STEP, ROLES, Identification, Racing,
                                        identify)
 from ..analyses.study import Parameter, parse_parameters, scene_value, spreads, target_protrusions, targets
 from ..evaluations import Evaluator, evaluate_batch, setup, upstream
@@ -167,6 +172,9 @@ def dataset(ident: Identification, params: Sequence[Parameter], out: dict[str, A
                                  "smallest |residual|",
                                  description="smallest |residual| of each target over all evaluations"),
         "seconds": var(np.array([r["seconds"] for r in recs]), E, "s", "wall time of the evaluation"),
+        "records": var(np.array([ident.depth[k] for k in keys], np.int32), E, "1",
+                       "DMW records the evaluation ran on (fewer than realisations: stopped early by racing, its "
+                       "values and residuals those of its first records)"),
         "kernel_seconds": var(np.array([r["kernel_seconds"] for r in recs]), E, "s",
                               "integrator time", description="time in the integrator (run_model) of the evaluation"),
         "role": var(np.array([ident.roles[k] for k in keys], np.int8), E, "1", "role of the evaluation",
@@ -210,6 +218,10 @@ def dataset(ident: Identification, params: Sequence[Parameter], out: dict[str, A
                                  "stops past the first point outside the interval criterion",
             "profile_optimiser_evaluations": out["profile_optimiser_evaluations"]} if optimised else {}),
         "correlation_method": f"Gauss-Newton (J^T J)^+ at the optimum, central differences of {GN_STEP:g} x range",
+        "racing": _racing_text(ident.racing),
+        # the identification's cost: (candidate, DMW record) pairs, and runs (x protrusions), store reads included
+        "record_evaluations": ident.record_evaluations,
+        "simulations_run": ident.record_evaluations * len(ev.protrusions),
         "protrusions_nm": ev.protrusions,
         **({"realisations": n_real,
             "ensemble_rules": "targets judged over the DMW realisations (pipeline/analyses/ensemble_rules.py): touchdown "
@@ -218,6 +230,23 @@ def dataset(ident: Identification, params: Sequence[Parameter], out: dict[str, A
         # (this run's counts and fan-out time go to the run log, .hdi/runs.jsonl, not the dataset)
     })
     return ds
+
+
+def _racing_text(racing: Racing | None) -> str:
+    """What identify.nc says of the racing (docs/model.md, section "Identification")."""
+    if racing is None:
+        return "off: every candidate on every DMW record"
+    return (f"stages of {', '.join(str(m) for m in racing.stages)} DMW records; a candidate stops when the lower "
+            f"bound of its objective (each residual lowered by {racing.z:g} x sqrt(pi/2) x its record-to-record "
+            "spread x sqrt((N - n) / (N n))) exceeds the best point's (a profile poll: its walk's current point's); "
+            "the best point, slices, Gauss-Newton points and profile points on every record")
+
+
+def racing_of(cfg: dict[str, Any]) -> Racing | None:
+    """The racing of ``[identify]`` (None: off, or one DMW realisation, nothing to race over)."""
+    if not cfg["racing"] or cfg["realisations"] < 2:
+        return None
+    return Racing.doubling(min(cfg["racing_records"], cfg["realisations"]), cfg["realisations"], cfg["racing_z"])
 
 
 def write_identified_scene(scene: Any, params: Sequence[Parameter], ds: xr.Dataset, path: Path,
@@ -379,15 +408,18 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
     with Progress(cfg["generations"], unit="generation", phase="search") as shown:
         shown = shown if shown.mode != "off" else None
         with local_cluster(opts.get("scheduler"), workers) as address:
+            racing = racing_of(cfg)
             ev = Evaluator(scene, params, prots, base_inputs, store, cfg["batch_size"], address, workers,
-                           task=opts.get("task") or evaluate_batch, realisations=cfg["realisations"])
-            ident = Identification(ev, tlist, cfg["missing_residual"])
+                           task=opts.get("task") or evaluate_batch, realisations=cfg["realisations"],
+                           stages=racing.stages if racing else ())
+            ident = Identification(ev, tlist, cfg["missing_residual"], racing)
             result = identify(ident, params, x_base, cfg, progress=shown)
         ds = dataset(ident, params, result, x_base, ev, progress=shown)
     # (its file name: the scene is in the results folder, wherever that folder is)
     ds.attrs["identified_scene"] = identified_scene_path(scene, out).name
     figure(ds, params, scene.name, inputs.staging / "figures" / "identify.png")
     inputs.record(evaluations=int(ds.sizes["evaluation"]), evaluations_computed=ev.evaluated,
+                  record_evaluations=ident.record_evaluations, record_evaluations_computed=ev.record_evaluations,
                   batch_seconds=round(ev.batch_seconds, 3), kernel_seconds=round(ev.kernel_seconds, 3))
     i_best, i_centre = int(ds.attrs["best_evaluation"]), int(ds.attrs["profile_centre_evaluation"])
     if i_centre != i_best:
@@ -396,8 +428,9 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
                  "%.4g in the objective, %s; its intervals are read from the profiles made around the centre",
                  i_best, i_centre, gain, f"less than the {PROFILE_GAIN:g} that makes the profiles again"
                  if gain <= PROFILE_GAIN else "found after the last round of profiles could move the centre")
-    log.info("identify: %d evaluations (%d computed) in %.1f s of fan-out; kernel %.1f s; best objective %.4g "
-             "(evaluation %d); within tolerance: %s", ds.sizes["evaluation"], ev.evaluated, ev.batch_seconds,
+    log.info("identify: %d evaluations (%d computed; %d candidate x DMW record runs, %d computed) in %.1f s of "
+             "fan-out; kernel %.1f s; best objective %.4g (evaluation %d); within tolerance: %s",
+             ds.sizes["evaluation"], ev.evaluated, ident.record_evaluations, ev.record_evaluations, ev.batch_seconds,
              ev.kernel_seconds, ds.attrs["best_objective"], i_best, "yes" if result["within"] else "no")
     return ds
 

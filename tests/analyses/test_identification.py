@@ -1,13 +1,21 @@
 """The identification (pipeline/analyses/identification.py) on plain functions: the profile intervals (a slice
 holds the other parameters at the optimum, a profile re-optimises them; issue 26, item 5), the interval's
-interpolated crossings, and the whole search on any evaluation callable (no stage, store or fan-out)."""
+interpolated crossings, and the whole search on any evaluation callable (no stage, store or fan-out).
+Racing over the DMW records (docs/model.md, "Racing over the DMW records"): the bound, the evaluator's parts,
+and racing against the full method on a noisy stand-in and on the twin."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
+import xarray as xr
 
+from pipeline import evaluations
+from pipeline.analyses import ensemble_rules as en
 from pipeline.analyses import identification, study
+from pipeline.model.inputs import SimulationInputs, Source
 
 RHO = 0.9
 #: r = R x with R^T R = Sigma^-1 (unit variances, correlation RHO): the objective x^T Sigma^-1 x
@@ -138,3 +146,228 @@ def test_the_identification_takes_any_evaluation_callable(paper_scene):
     assert out["intervals"][0] == pytest.approx([0.8, 1.0], abs=1e-9)
     assert np.isinf(out["gn_std"][1]) and np.all(np.isnan(out["correlation"][1]))
     assert ident.roles[ident.keys[0]] == 0 and len(ident.records) == len(set(ident.keys))
+
+
+# ------------------------------------------------------------------------------------ the bound
+def test_margin_is_the_error_of_a_partial_mean_against_the_whole_ensemble():
+    race = identification.Racing.doubling(2, 8, 3.0)
+    assert race.stages == (2, 4, 8) and race.total == 8
+    assert identification.Racing.doubling(2, 6, 3.0).stages == (2, 4, 6)
+    # z sqrt(pi/2) s sqrt((N - n) / (N n)): n = 2 of 8, s = 1 -> 3 x 1.2533 x sqrt(6/16) = 2.3025
+    m = race.margin(np.array([1.0, 0.0, np.nan]), 2)
+    assert m[0] == pytest.approx(3.0 * math.sqrt(math.pi / 2) * math.sqrt(6.0 / 16.0), rel=1e-12)
+    assert m[0] == pytest.approx(2.3025, abs=1e-4)
+    assert m[1] == 0.0 and np.isinf(m[2])  # (an unknown spread: no bound)
+    assert np.all(race.margin(np.array([1.0, 5.0]), 8) == 0.0)  # every record: exact
+    # the variance it stands for, by simulation: the mean of 8 minus the mean of its first 2 (unit spread)
+    rng = np.random.default_rng(1)
+    x = rng.standard_normal((200_000, 8))
+    d = x.mean(axis=1) - x[:, :2].mean(axis=1)
+    assert np.std(d) == pytest.approx(math.sqrt(6.0 / 16.0), rel=0.01)
+
+
+def test_lower_bound_lowers_each_residual_by_its_margin():
+    res = np.array([3.0, -2.0, 0.5, 10.0])
+    margin = np.array([1.0, 1.0, 1.0, np.inf])
+    assert identification.lower_bound(res, margin, "cost") == pytest.approx(2.0**2 + 1.0**2)
+    assert identification.lower_bound(res, margin, "max") == pytest.approx(2.0)
+    assert identification.lower_bound(res, np.zeros(4), "cost") == pytest.approx(study.cost(res))
+
+
+# ------------------------------------------------------------------------- the evaluator's parts
+def _ensemble_task(base, params, rows, protrusions, inputs, realisations, records=None):
+    """A stand-in for the slider on an ensemble: record ``r``'s output is ``x0 + r`` at every protrusion."""
+    a, b = records or (0, realisations)
+    out = []
+    for key, x in rows:
+        rec = {"params": list(map(float, x)), "protrusions": list(map(float, protrusions)),
+               "outputs": {"fhm_bv": [[float(x[0]) + r for r in range(a, b)] for _ in protrusions]},
+               "seconds": 1.0 * (b - a), "kernel_seconds": 0.5 * (b - a), "error": None,
+               "realisations": b - a, "seeds": list(range(a, b))}
+        if (a, b) != (0, realisations):
+            rec["first_record"] = a
+        out.append((key, rec))
+    return out
+
+
+def test_the_evaluator_runs_an_ensemble_in_parts_and_joins_them(paper_scene, tmp_path):
+    inputs = SimulationInputs(Source("interface", key="i"), Source("dmw", key="d"))
+    params = [study.Parameter("dmw.rms_nm", 0.0, 1.0)]
+    store = evaluations.EvaluationStore(tmp_path / "s.jsonl")
+    ev = evaluations.Evaluator(paper_scene, params, [9.0], inputs, store, 2, "synchronous", task=_ensemble_task,
+                               realisations=8, stages=(2, 4, 8))
+    first = ev([[0.1], [0.2]], 2)
+    assert [r["realisations"] for r in first] == [2, 2] and ev.record_evaluations == 4
+    assert first[0]["outputs"]["fhm_bv"] == [[0.1, 1.1]] and first[0]["key"] == ev.key([0.1])
+    whole = ev([[0.1]], 8)[0]  # the first part is read back: 6 records more
+    assert ev.record_evaluations == 4 + 6 and whole["realisations"] == 8 and whole["key"] == ev.key([0.1])
+    assert whole["outputs"]["fhm_bv"] == [[0.1 + r for r in range(8)]] and whole["seeds"] == list(range(8))
+    assert whole["seconds"] == 8.0 and whole["error"] is None
+    with pytest.raises(ValueError, match="records 3: expected one of the racing stages"):
+        ev([[0.1]], 3)
+    # a whole evaluation of the full method in the store is read back, its first records as the part
+    store.put([(ev.key([0.3]), _ensemble_task(None, None, [("k", [0.3])], [9.0], None, 8)[0][1])])
+    part = ev([[0.3]], 4)[0]
+    assert part["outputs"]["fhm_bv"] == [[0.3, 1.3, 2.3, 3.3]] and part["seconds"] == 4.0
+    assert ev.record_evaluations == 10  # nothing computed
+    # the stages' parts of the real evaluation are the whole, bit for bit: tests/analyses below (twin)
+
+
+# ------------------------------------------------------------------- racing on a noisy stand-in
+RACE_RHO = 0.8
+#: r = RACE_R x with RACE_R^T RACE_R = Sigma^-1 (unit variances, correlation RACE_RHO), plus a record's noise
+RACE_R = np.linalg.cholesky(np.linalg.inv(np.array([[1.0, RACE_RHO], [RACE_RHO, 1.0]]))).T
+N_RECORDS = 8
+#: each DMW record's error of each residual, the same for every candidate (common random numbers); its
+#: spread NOISE in residual units
+NOISE = 0.1
+ERRORS = NOISE * np.random.default_rng(7).standard_normal((N_RECORDS, 3))
+
+
+def _record_values(x: np.ndarray) -> np.ndarray:
+    """The residuals of each record at ``x``, shape (records, 3): two correlated ones and one the optimum
+    misses by 2 (so the interval is where the objective stays within 1 of its profile minimum)."""
+    base = np.append(RACE_R @ x, 2.0)
+    # (an error that grows away from the optimum too: a record's noise is not the same everywhere)
+    return base[None, :] + ERRORS * (1.0 + 0.3 * np.abs(x).sum())
+
+
+def _mean_targets() -> list[study.ObjectiveTerm]:
+    def ensemble(k):
+        def f(ds: xr.Dataset) -> tuple[float, float, float]:
+            mu, sd = (float(v) for v in en.mean_std(study.at_protrusions(ds, f"r{k}", (9.0,)).isel(protrusion=0)))
+            return mu, mu - sd, mu + sd
+        return f
+    return [study.ObjectiveTerm(f"r{k}", f"residual {k}", "1", "equal", 0.0, 1.0, (9.0,),
+                                lambda t, k=k: t.value(f"r{k}", 9.0), "", ensemble(k)) for k in range(3)]
+
+
+def _stand_in(calls: list):
+    """The evaluation callable of an ensemble identification (``evaluate(points, upto)``), counting the
+    (candidate, record) pairs it is asked for in ``calls``."""
+    def evaluate(points, upto=N_RECORDS):
+        out = []
+        for x in points:
+            v = _record_values(np.asarray(x, float))[:upto]
+            calls.append(upto)
+            out.append({"key": repr(tuple(map(float, x))), "params": list(map(float, x)), "protrusions": [9.0],
+                        "outputs": {f"r{k}": [list(map(float, v[:, k]))] for k in range(3)},
+                        "realisations": upto, "seeds": list(range(upto))})
+        return out
+    return evaluate
+
+
+def _full_cost(x: np.ndarray) -> float:
+    return study.cost(_record_values(np.asarray(x, float)).mean(axis=0))
+
+
+CFG = {"generations": 4, "population": 5, "seed": 2, "profile_points": 7, "profile_method": "optimised",
+       "profile_evaluations": 20}
+
+
+def _run(racing):
+    calls: list[int] = []
+    ident = identification.Identification(_stand_in(calls), _mean_targets(), 10.0, racing)
+    out = identification.identify(ident, PARAMS, np.array([2.0, -1.0]), CFG)
+    return ident, out
+
+
+def test_racing_keeps_the_optimum_exact_and_stops_only_worse_candidates():
+    full_ident, full = _run(None)
+    race = identification.Racing.doubling(2, N_RECORDS, 3.0)
+    ident, out = _run(race)
+    # the best point ran on every record and its objective is the whole ensemble's
+    key = ident.best_key
+    assert ident.depth[key] == N_RECORDS and ident.best_cost == pytest.approx(_full_cost(out["best"]), rel=1e-12)
+    # a candidate stopped early is worse than the best point on the whole ensemble (the guarantee, here for
+    # every one of them), and its partial objective says so too
+    stopped = [k for k, d in ident.depth.items() if d < N_RECORDS]
+    assert len(stopped) >= 0.3 * len(ident.depth)
+    for k in stopped:
+        x = np.array(ident.records[k]["params"])
+        assert _full_cost(x) > ident.best_cost, (x, _full_cost(x), ident.best_cost)
+        assert study.cost(ident.scores[k][1]) > ident.best_cost
+    # the cost: (candidate, record) pairs; the full method runs every evaluation on all 8
+    assert full_ident.record_evaluations == N_RECORDS * len(full_ident.records)
+    assert ident.record_evaluations < 0.75 * full_ident.record_evaluations
+    # the same optimum and intervals as the full method, within their tolerance: each optimum inside the other's
+    # interval, the interval ends within one profile step (0.5) of each other; both hold the marginal
+    # 68 % interval of the whole ensemble's objective (+-1 around its minimum here, unit marginal variance)
+    step = (PARAMS[0].high - PARAMS[0].low) / (CFG["profile_points"] - 1)
+    for i in range(2):
+        assert full["intervals"][i, 0] <= out["best"][i] <= full["intervals"][i, 1]
+        assert out["intervals"][i, 0] <= full["best"][i] <= out["intervals"][i, 1]
+    np.testing.assert_allclose(out["intervals"], full["intervals"], atol=step)
+    assert np.abs(out["best"] - full["best"]).max() < 0.5 * step
+
+
+# --------------------------------------------------------------- racing against the full method on the twin
+TRUE = {"dmw.rms_nm": 0.14, "lubricant.work_of_adhesion_j_m2": 0.07}
+
+#: The twin (tests/twin.py) on 4 DMW records, its targets the ensemble's values at TRUE
+ENSEMBLE_TWIN = """
+targets = ["fhm_flying", "contact_force"]
+fhm_flying_tolerance_percent = 0.3
+contact_force_tolerance_mn = 0.05
+population = 4
+generations = 2
+profile_points = 5
+profile_evaluations = 8
+batch_size = 4
+realisations = 4
+"""
+
+
+@pytest.mark.slow  # (two identifications of the real slider on 4 DMW records: ~1 min on the shared 2 cores)
+def test_twin_racing_agrees_with_the_full_method_within_the_tolerance(write_scene, paper_config, tmp_path):
+    import twin
+    from pipeline.config.scene import load_scene
+    from pipeline.physics import paper
+    from pipeline.runner import ensure
+    path = write_scene(twin.scene_text(ENSEMBLE_TWIN).format(paper=paper_config))
+    scene = load_scene(path)
+    params = study.parse_parameters(scene["identify"]["parameters"], str(path), "identify.parameters")
+    tl = study.targets(scene)
+    inputs = evaluations.prepare_inputs(scene, tmp_path / "truth")
+    prots = study.target_protrusions(tl)
+    whole = evaluations.evaluate(scene, params, [TRUE[p.name] for p in params], prots, inputs, 4)
+    # the parts of an ensemble are the whole, bit for bit (the racing stages join them)
+    parts = [evaluations.evaluate(scene, params, [TRUE[p.name] for p in params], prots, inputs, 4, seg)
+             for seg in ((0, 2), (2, 4))]
+    joined = evaluations.join_parts(parts)
+    for k, v in whole["outputs"].items():
+        np.testing.assert_array_equal(np.array(joined["outputs"][k], float), np.array(v, float))
+    assert joined["seeds"] == whole["seeds"]
+    values, _ = study.residuals(whole, tl, 10.0)
+    sets = [f"identify.{paper.TARGETS[t.name].value.key}={float(v)!r}" for t, v in zip(tl, values)]
+    runs = {}
+    for racing in (True, False):
+        sc = load_scene(path, sets + [f"identify.racing={'true' if racing else 'false'}"])
+        out = tmp_path / f"racing-{racing}"
+        runs[racing] = xr.open_dataset(ensure("identify", sc, out, scheduler="synchronous"), engine="netcdf4").load()
+    race, full = runs[True], runs[False]
+    assert full.attrs["racing"].startswith("off") and race.attrs["racing"].startswith("stages of 2, 4 DMW records")
+    # the full method runs every evaluation on every record; racing stops some after 2
+    assert np.all(full["records"].values == 4)
+    assert full.attrs["record_evaluations"] == 4 * full.sizes["evaluation"]
+    assert full.attrs["simulations_run"] == full.attrs["record_evaluations"] * len(prots)
+    stopped = race["records"].values < 4
+    assert stopped.any() and race.attrs["record_evaluations"] == int(race["records"].sum())
+    assert race.attrs["record_evaluations"] < full.attrs["record_evaluations"]
+    # the best point ran on every record; every trial of the search stopped early has a partial objective above
+    # it (a profile poll within tolerance races on the largest |r| against its walk's point instead)
+    i_best = int(race.attrs["best_evaluation"])
+    assert race["records"][i_best] == 4
+    search = stopped & (race["role"].values == 1)
+    assert search.any() and np.all(race["objective"].values[search] > race.attrs["best_objective"])
+    # the same answer within the tolerance: both within tolerance, each optimum inside the other's interval and
+    # the truth inside both; the interval ends within one profile step of each other
+    assert race.attrs["within_tolerance"] == full.attrs["within_tolerance"] == 1
+    for p in params:
+        step = (p.high - p.low) / (scene["identify"]["profile_points"] - 1)
+        a, b = race.sel(parameter=p.name), full.sel(parameter=p.name)
+        lo_r, hi_r = a["interval"].values
+        lo_f, hi_f = b["interval"].values
+        assert lo_f <= float(a["best"]) <= hi_f and lo_r <= float(b["best"]) <= hi_r, (p.name, a["best"], b["best"])
+        assert lo_r <= TRUE[p.name] <= hi_r and lo_f <= TRUE[p.name] <= hi_f
+        np.testing.assert_allclose([lo_r, hi_r], [lo_f, hi_f], atol=step)
