@@ -173,8 +173,8 @@ def dataset(ident: Identification, params: Sequence[Parameter], out: dict[str, A
                                  description="smallest |residual| of each target over all evaluations"),
         "seconds": var(np.array([r["seconds"] for r in recs]), E, "s", "wall time of the evaluation"),
         "records": var(np.array([ident.depth[k] for k in keys], np.int32), E, "1",
-                       "DMW records the evaluation ran on (fewer than realisations: stopped early by racing, its "
-                       "values and residuals those of its first records)"),
+                       "DMW records run", description="DMW records the evaluation ran on (fewer than realisations: "
+                       "stopped early by racing, its values and residuals those of its first records)"),
         "kernel_seconds": var(np.array([r["kernel_seconds"] for r in recs]), E, "s",
                               "integrator time", description="time in the integrator (run_model) of the evaluation"),
         "role": var(np.array([ident.roles[k] for k in keys], np.int8), E, "1", "role of the evaluation",
