@@ -71,6 +71,8 @@ def kernel_jit(module: str, **options) -> Callable[[Callable], Callable]:
 
 #: The announced entry points: ``id(dispatcher)`` -> (what is compiled, rough compile time [s]).
 _NOTICES: dict[int, tuple[str, float]] = {}
+#: True in the background process of :func:`compile_ahead`: its compiles say nothing.
+_QUIET = False
 
 
 def announce(dispatcher: Any, what: str, seconds: float) -> None:
@@ -84,7 +86,7 @@ class _CompileNotice(event.Listener):
 
     def on_start(self, ev: event.Event) -> None:
         notice = _NOTICES.get(id(ev.data["dispatcher"]))
-        if notice is not None:
+        if notice is not None and not _QUIET:
             progress.compile_notice(*notice)
 
     def on_end(self, ev: event.Event) -> None:
@@ -157,5 +159,6 @@ def compile_from_file(path: str) -> None:
     with open(path, "rb") as f:
         module, name, sig = pickle.load(f)
     os.unlink(path)
-    _NOTICES.clear()  # (the process that started this one has said it)
+    global _QUIET
+    _QUIET = True  # (the process that started this one has said it)
     getattr(importlib.import_module(module), name).compile(sig)
