@@ -132,8 +132,10 @@ def compile_ahead(dispatcher: Any, args: tuple, what: str, seconds: float) -> No
         with os.fdopen(fd, "wb") as f:
             pickle.dump(key, f)
         code = f"from pipeline.model.compiled import compile_from_file; compile_from_file({path!r})"
+        # (silent: a failure there is only a cache miss, and this process then compiles and reports it;
+        # a Ctrl-C reaches it too, without a second traceback)
         _AHEAD[key] = subprocess.Popen([sys.executable, "-c", code], stdin=subprocess.DEVNULL,
-                                       stdout=subprocess.DEVNULL)
+                                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         progress.compile_notice(f"{what} in a background process", seconds)
 
 
