@@ -29,7 +29,7 @@ export UV_PYTHON_DOWNLOADS := never
 # worker, each test that starts one) then compiled ~300 modules again, 2-5 s of its start. Compiling the
 # whole environment at install (UV_COMPILE_BYTECODE) took 14.7 s for 6,489 files of which a run imports
 # ~300; so the make targets let Python write the .pyc of what they import, lazily (an empty value:
-# writing on), and the later processes, make's or not, start from them (docs/performance.md, "The first run").
+# writing on), and the later processes, make's or not, start from them (docs/performance.md, section "The first run").
 export UV_COMPILE_BYTECODE := 0
 export PYTHONDONTWRITEBYTECODE :=
 

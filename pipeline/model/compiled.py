@@ -8,7 +8,7 @@ are cached in a folder named by the code key of that module and of everything it
 (:func:`pipeline.code_version.code_key`). numba picks a function's cache folder when it is
 decorated, so :func:`kernel_jit` sets the folder around the decoration only.
 
-The first run (docs/performance.md, "The first run"). numba compiles a kernel entry point once per
+The first run (docs/performance.md, section "The first run"). numba compiles a kernel entry point once per
 signature (the scene's effects: which slots are ``None``, the rear law, the meniscus state) and then
 loads it from the cache. Compiling takes tens of seconds of CPU, nearly all numba's own front end
 (inlining, typing, lowering) under its one compiler lock, so threads cannot share it. Two things here:

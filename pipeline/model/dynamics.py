@@ -97,7 +97,7 @@ _jit = kernel_jit(__name__)
 _inline = kernel_jit(__name__, inline="always")
 
 #: What a compile of the kernel (:func:`_integrate`) says, and its rough duration [s]: 25-27 s of CPU for
-#: the main scene's effects on the project's 2-core machine (docs/performance.md, "The first run").
+#: the main scene's effects on the project's 2-core machine (docs/performance.md, section "The first run").
 KERNEL_NOTICE = "the dynamics kernel for this scene's effects"
 KERNEL_COMPILE_S = 25.0
 

@@ -70,7 +70,7 @@ def run_model(model: Model, protrusion: float, y0: np.ndarray | None = None, max
     solver = dyn.Solver(model.rtol, model.atol, model.max_step, max_steps)
     if y0 is None:
         # the first run of a model whose kernel is neither compiled nor cached: compile it in a background
-        # process while this one finds the start state (docs/performance.md, "The first run")
+        # process while this one finds the start state (docs/performance.md, section "The first run")
         dyn.compile_kernel_ahead(np.zeros(N_STATE), grid, p, tables, variants, solver)
         y0, start_note = start(model, protrusion)
     y0 = np.asarray(y0, float)
