@@ -39,7 +39,6 @@ from numba import njit
 from numba.core import event
 
 from .. import progress
-
 from ..code_version import code_key
 
 #: Options of every kernel function: cached on disk, releases the GIL, numpy's error model (a division

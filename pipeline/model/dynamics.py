@@ -259,7 +259,8 @@ def integrate(y0: np.ndarray, grid: Grid, p: np.record, tab: Tables, var: Varian
     return _integrate(*kernel_arguments(y0, grid, p, tab, var, solver))
 
 
-def kernel_arguments(y0: np.ndarray, grid: Grid, p: np.record, tab: Tables, var: Variants, solver: Solver) -> tuple:
+def kernel_arguments(y0: np.ndarray, grid: Grid, p: np.record, tab: Tables, var: Variants,
+                     solver: Solver) -> tuple:
     """The arguments :func:`integrate` hands the compiled :func:`_integrate` (their numba types are its
     signature: one compile per combination of the scene's effects)."""
     return (y0, grid.t_end, grid.t_out, _packed(p), solver.rtol, solver.atol, solver.h_max, solver.max_steps,
@@ -461,7 +462,6 @@ def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, cont
         # step growth 0.9 e^(-1/5) in [0.2, 5]; e < (0.9/5)^5 gives the cap without calling pow()
         h = h * (5.0 if e < 1.889568e-4 else max(0.2, 0.9 * e ** -0.2))
     return Y, C, info, ext
-
 
 
 compiled.announce(_integrate, KERNEL_NOTICE, KERNEL_COMPILE_S)
