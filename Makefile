@@ -26,10 +26,14 @@ TEST_STAMP := $(VENV)/.installed-test
 export MPLBACKEND := Agg
 export PYTHONHASHSEED := 0
 export UV_PYTHON_DOWNLOADS := never
-# uv installs without bytecode by default, and where PYTHONDONTWRITEBYTECODE is set (as on the machines this project is developed on)
-# Python never caches it: every fresh process (each `hdi` command, each dask process worker, each test
-# that starts one) then compiled ~300 modules again, 2-5 s of its start. Compiled once at install here.
-export UV_COMPILE_BYTECODE := 1
+# Bytecode: only for what runs. Where PYTHONDONTWRITEBYTECODE is set (as on the machines this project is
+# developed on) Python never caches it: every fresh process (each `hdi` command, each dask process
+# worker, each test that starts one) then compiled ~300 modules again, 2-5 s of its start. Compiling the
+# whole environment at install (UV_COMPILE_BYTECODE) took 14.7 s for 6,489 files of which a run imports
+# ~300; so the make targets let Python write the .pyc of what they import, lazily (an empty value:
+# writing on), and the later processes, make's or not, start from them (docs/performance.md, section "The first run").
+export UV_COMPILE_BYTECODE := 0
+export PYTHONDONTWRITEBYTECODE :=
 
 # The stages: one make target per module of pipeline/stages/ (the runner discovers the stages there and
 # each module is named after its stage, tests/structure/test_registries.py): a new stage module is a new target

@@ -348,3 +348,15 @@ class Progress:
         if self._token is not None:
             _ACTIVE.reset(self._token)
             self._token = None
+
+
+def compile_notice(what: str, seconds: float) -> None:
+    """Say that ``what`` is being compiled (numba; first run only) and roughly how long it takes,
+    ``seconds`` [s]: an INFO line of the ``pipeline`` logger, or, for a library caller that set up no
+    logging at all (a notebook), the same line on stderr, so a first call's long pause is explained."""
+    text = f"compiling {what} (first run only, ~{seconds:.0f} s)"
+    logger = logging.getLogger("pipeline")
+    if logger.hasHandlers():
+        log.info(text)
+    else:
+        print(text, file=sys.stderr, flush=True)

@@ -7,16 +7,38 @@ while the runner (which keys on the code) recomputes the results. So each kernel
 are cached in a folder named by the code key of that module and of everything it imports
 (:func:`pipeline.code_version.code_key`). numba picks a function's cache folder when it is
 decorated, so :func:`kernel_jit` sets the folder around the decoration only.
+
+The first run (docs/performance.md, section "The first run"). numba compiles a kernel entry point once per
+signature (the scene's effects: which slots are ``None``, the rear law, the meniscus state) and then
+loads it from the cache. Compiling takes tens of seconds of CPU, nearly all numba's own front end
+(inlining, typing, lowering) under its one compiler lock, so threads cannot share it. Two things here:
+
+* :func:`announce`: an entry point's compile says so, with roughly how long it takes
+  (:func:`pipeline.progress.compile_notice`, from numba's ``numba:compile`` event, which fires on a
+  compile, not on a cache load);
+* :func:`compile_ahead`: a process that is about to need an entry point it has neither compiled nor
+  cached (the dynamics kernel, at a model's first run) starts compiling it in a background process
+  (:func:`compile_from_file`), while it goes on with what comes first (the static starts, compiled in
+  this process), and :func:`wait_ahead` waits for it before the first call, which then loads the kernel
+  from the cache. On 2 cores the two compiles overlap. ``HDI_COMPILE_AHEAD=0`` turns it off (the
+  process compiles everything itself). Machine code and results are the same either way.
 """
 
 from __future__ import annotations
 
 import os
-from typing import Callable
+import pickle
+import subprocess
+import sys
+import tempfile
+import threading
+from typing import Any, Callable
 
 import numba
 from numba import njit
+from numba.core import event
 
+from .. import progress
 from ..code_version import code_key
 
 #: Options of every kernel function: cached on disk, releases the GIL, numpy's error model (a division
@@ -44,3 +66,100 @@ def kernel_jit(module: str, **options) -> Callable[[Callable], Callable]:
             numba.config.CACHE_DIR = saved
 
     return decorate
+
+
+#: The announced entry points: ``id(dispatcher)`` -> (what is compiled, rough compile time [s]).
+_NOTICES: dict[int, tuple[str, float]] = {}
+#: True in the background process of :func:`compile_ahead`: its compiles say nothing.
+_QUIET = False
+
+
+def announce(dispatcher: Any, what: str, seconds: float) -> None:
+    """Make a compile of the jitted ``dispatcher`` say that ``what`` is compiling and takes ~``seconds``
+    [s] (:func:`pipeline.progress.compile_notice`; a cache load says nothing)."""
+    _NOTICES[id(dispatcher)] = (what, seconds)
+
+
+class _CompileNotice(event.Listener):
+    """numba's ``numba:compile`` event (a compile after a cache miss) of an announced entry point."""
+
+    def on_start(self, ev: event.Event) -> None:
+        notice = _NOTICES.get(id(ev.data["dispatcher"]))
+        if notice is not None and not _QUIET:
+            progress.compile_notice(*notice)
+
+    def on_end(self, ev: event.Event) -> None:
+        pass
+
+
+event.register("numba:compile", _CompileNotice())
+
+
+def signature(dispatcher: Any, args: tuple) -> tuple:
+    """The numba types of ``args`` as ``dispatcher`` types them on a call (~1 ms: the parameter record)."""
+    return tuple(dispatcher.typeof_pyval(a) for a in args)
+
+
+def is_cached(dispatcher: Any, sig: tuple) -> bool:
+    """Whether the on-disk cache holds ``dispatcher`` compiled for the types ``sig`` (its index is read,
+    not the machine code; numba's cache internals, numba 0.68)."""
+    cache = dispatcher._cache
+    index = getattr(cache, "_cache_file", None)
+    if index is None:  # (not cached on disk at all)
+        return False
+    return cache._index_key(sig, dispatcher.targetctx.codegen()) in index._load_index()
+
+
+#: Background compiles under way: (module, name, signature) -> the process.
+_AHEAD: dict[tuple, subprocess.Popen] = {}
+_AHEAD_LOCK = threading.Lock()
+
+
+def compile_ahead(dispatcher: Any, args: tuple, what: str, seconds: float) -> None:
+    """Start compiling ``dispatcher`` (a jitted function of a kernel module) for the types of ``args`` in a
+    background process, unless this process has it, the cache has it, one is under way, or
+    ``HDI_COMPILE_AHEAD=0``; says so (:func:`pipeline.progress.compile_notice`). :func:`wait_ahead`
+    waits for it."""
+    if os.environ.get("HDI_COMPILE_AHEAD", "1") == "0":
+        return
+    sig = signature(dispatcher, args)
+    key = (dispatcher.py_func.__module__, dispatcher.py_func.__name__, sig)
+    with _AHEAD_LOCK:
+        if key in _AHEAD or sig in dispatcher.overloads or is_cached(dispatcher, sig):
+            return
+        fd, path = tempfile.mkstemp(prefix="hdi-compile-", suffix=".pkl")
+        with os.fdopen(fd, "wb") as f:
+            pickle.dump(key, f)
+        code = f"from pipeline.model.compiled import compile_from_file; compile_from_file({path!r})"
+        # (silent: a failure there is only a cache miss, and this process then compiles and reports it;
+        # a Ctrl-C reaches it too, without a second traceback)
+        _AHEAD[key] = subprocess.Popen([sys.executable, "-c", code], stdin=subprocess.DEVNULL,
+                                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        progress.compile_notice(f"{what} in a background process", seconds)
+
+
+def wait_ahead() -> None:
+    """Wait for the background compiles (:func:`compile_ahead`): the next call loads their machine code from
+    the cache. A failed one is only a cache miss: this process then compiles it itself."""
+    with _AHEAD_LOCK:
+        for key, proc in list(_AHEAD.items()):
+            proc.wait()
+            del _AHEAD[key]
+
+
+def pending() -> bool:
+    """Whether a background compile (:func:`compile_ahead`) was started and not waited for."""
+    return bool(_AHEAD)
+
+
+def compile_from_file(path: str) -> None:
+    """The background process of :func:`compile_ahead`: compile the function and signature pickled in
+    ``path`` (deleted) into the on-disk cache."""
+    import importlib
+
+    with open(path, "rb") as f:
+        module, name, sig = pickle.load(f)
+    os.unlink(path)
+    global _QUIET
+    _QUIET = True  # (the process that started this one has said it)
+    getattr(importlib.import_module(module), name).compile(sig)

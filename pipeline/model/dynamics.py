@@ -85,6 +85,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..units import NS
+from . import compiled
 from .compiled import kernel_jit
 from .forces import RearLawRef, rear_law_ref, rhs_slots, separation
 from .state import (ACCEPTED, MAX_STEPS, N_COUNTERS, NOT_FINITE, REJECTED, RHS_CALLS, STATUS, STEP_UNDERFLOW,
@@ -94,6 +95,11 @@ from .stepper import (error_norm, extrema_slots, inverse_mass_at_tfc, sample_out
 
 _jit = kernel_jit(__name__)
 _inline = kernel_jit(__name__, inline="always")
+
+#: What a compile of the kernel (:func:`_integrate`) says, and its rough duration [s]: 25-27 s of CPU for
+#: the main scene's effects on the project's 2-core machine (docs/performance.md, section "The first run").
+KERNEL_NOTICE = "the dynamics kernel for this scene's effects"
+KERNEL_COMPILE_S = 25.0
 
 #: The rear law of :class:`Variants` with ``rear_law=None`` (the scene's default, ``air_bearing.rear_law``).
 DEFAULT_REAR_LAW = "power"
@@ -248,8 +254,30 @@ def integrate(y0: np.ndarray, grid: Grid, p: np.record, tab: Tables, var: Varian
     one-element arrays (:func:`_packed`): numba's dispatcher types arrays, floats and ``None`` in C,
     but a record scalar and a named tuple through its Python ``typeof`` (docs/kernel.md).
     """
-    return _integrate(y0, grid.t_end, grid.t_out, _packed(p), solver.rtol, solver.atol, solver.h_max,
-                      solver.max_steps, *_slots(tab, var))
+    if compiled.pending():  # (a background compile of the kernel, :func:`compile_kernel_ahead`)
+        compiled.wait_ahead()
+    return _integrate(*kernel_arguments(y0, grid, p, tab, var, solver))
+
+
+def kernel_arguments(y0: np.ndarray, grid: Grid, p: np.record, tab: Tables, var: Variants,
+                     solver: Solver) -> tuple:
+    """The arguments :func:`integrate` hands the compiled :func:`_integrate` (their numba types are its
+    signature: one compile per combination of the scene's effects)."""
+    return (y0, grid.t_end, grid.t_out, _packed(p), solver.rtol, solver.atol, solver.h_max, solver.max_steps,
+            *_slots(tab, var))
+
+
+def compile_kernel_ahead(y0: np.ndarray, grid: Grid, p: np.record, tab: Tables, var: Variants,
+                         solver: Solver) -> None:
+    """Start compiling the kernel for these arguments' types in a background process if neither this process
+    nor the cache has it (:func:`pipeline.model.compiled.compile_ahead`): a model's first run calls this
+    before its static start, which compiles the static solver meanwhile. Only while this process has no
+    kernel yet (typing the arguments costs ~1 ms, a run's call no more than a pointer test); a later scene's
+    other effects compile in this process at their first call, as before."""
+    if _integrate.overloads or compiled.pending():
+        return
+    compiled.compile_ahead(_integrate, kernel_arguments(y0, grid, p, tab, var, solver), KERNEL_NOTICE,
+                           KERNEL_COMPILE_S)
 
 
 def rhs(t: float, y: np.ndarray, p: np.record, tab: Tables, var: Variants, in_contact: bool,
@@ -337,7 +365,8 @@ def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, cont
     m_eff_inv = inverse_mass_at_tfc(p, pitch)
     j = 0
     while j < n_out and t_out[j] <= t:
-        Y[j, :] = y
+        for i in range(ns):  # element by element: a slice assignment compiles numba's shape-error message (~3 s)
+            Y[j, i] = y[i]
         C[j] = in_contact
         j += 1
     steps = 0
@@ -434,3 +463,5 @@ def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, cont
         h = h * (5.0 if e < 1.889568e-4 else max(0.2, 0.9 * e ** -0.2))
     return Y, C, info, ext
 
+
+compiled.announce(_integrate, KERNEL_NOTICE, KERNEL_COMPILE_S)

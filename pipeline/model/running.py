@@ -13,7 +13,7 @@ from .forces import separation_at
 from .kernel_inputs import interface_tables, run_parameters
 from .piecewise import disk_history, ppval
 from .start import start_state
-from .state import ACCEPTED, OK, REJECTED, STATUS, STATUS_TEXT, THETA, Z
+from .state import ACCEPTED, N_STATE, OK, REJECTED, STATUS, STATUS_TEXT, THETA, Z
 from ..units import NM
 
 
@@ -66,13 +66,17 @@ def run_model(model: Model, protrusion: float, y0: np.ndarray | None = None, max
     n_out = int(round(model.duration / model.output_step)) + 1
     t_out = np.minimum(np.arange(n_out) * model.output_step, model.duration)
     start_note = "given"
+    grid = dyn.Grid(model.duration, t_out)
+    solver = dyn.Solver(model.rtol, model.atol, model.max_step, max_steps)
     if y0 is None:
+        # the first run of a model whose kernel is neither compiled nor cached: compile it in a background
+        # process while this one finds the start state (docs/performance.md, section "The first run")
+        dyn.compile_kernel_ahead(np.zeros(N_STATE), grid, p, tables, variants, solver)
         y0, start_note = start(model, protrusion)
     y0 = np.asarray(y0, float)
     if model.meniscus is not None and y0.size == 4:  # the meniscus state starts at its equilibrium
         y0 = np.append(y0, meniscus_equilibrium(model, p, y0))
-    Y, C, info, ext = dyn.integrate(y0, dyn.Grid(model.duration, t_out), p, tables, variants,
-                                    dyn.Solver(model.rtol, model.atol, model.max_step, max_steps))
+    Y, C, info, ext = dyn.integrate(y0, grid, p, tables, variants, solver)
     if info[STATUS] != OK:
         raise IntegrationError(f"integration failed at protrusion {protrusion / NM:.3g} nm: "
                                f"{STATUS_TEXT[int(info[STATUS])]} (steps {info[ACCEPTED]}, rejected {info[REJECTED]})")

@@ -27,7 +27,7 @@ import numpy as np
 
 from ..physics.equilibrium import Equilibrium
 from . import dynamics as dyn
-from .compiled import kernel_jit
+from .compiled import announce, kernel_jit
 from .forces import rhs_slots, separation_at
 from .state import N_STATE, THETA, THETA_RATE, Z, Z_RATE
 
@@ -163,3 +163,8 @@ def newton(y_start: np.ndarray, p: np.record, slots: tuple, *, scale: np.ndarray
     y, K, converged, stable, it, residual = _newton(np.asarray(y_start, dtype=float), scale, max_step, float(tol),
                                                      int(max_iter), dyn._packed(p), *slots)
     return Equilibrium(y, K, bool(converged), bool(stable), int(it), float(residual))
+
+
+# (6-7 s of CPU for the main scene's effects on the project's 2-core machine: docs/performance.md,
+# section "The first run")
+announce(_newton, "the static solver for this scene's effects", 6.0)

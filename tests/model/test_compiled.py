@@ -1,11 +1,18 @@
 """How the kernel's functions are compiled (pipeline.model.compiled): every kernel function is cached on
 disk, releases the GIL and uses numpy's error model (a division by zero is inf, not an exception); its
 cache folder is named by the code key of its module and everything that module imports, so an edited law
-inlined into the kernel gets a new folder; the decoration leaves numba's global cache folder as it was."""
+inlined into the kernel gets a new folder; the decoration leaves numba's global cache folder as it was.
+One signature per entry point for the main scene, whatever the stage runs; the background compile of a first
+run lands in the cache and is loaded, not compiled again; a compile says so, once."""
 
 from __future__ import annotations
 
+import json
 import os
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
 
 import numba
 import numpy as np
@@ -45,3 +52,119 @@ def test_kernel_jit_compiles_with_the_options_and_restores_the_cache_folder(monk
     with pytest.raises(TypeError):
         compiled.kernel_jit("pipeline.model.piecewise", nogil=False)(lambda x: x)  # options cannot be overridden
     assert numba.config.CACHE_DIR == str(tmp_path)
+
+
+ROOT = Path(__file__).resolve().parents[2]
+
+#: Runs the main scene's model (the calibrated k of `make run`) at a flying, a touchdown and a contact
+#: protrusion, a run from a given start (the heater steps) and the statics map, in one fresh process, and
+#: prints the kernel entry points' signature counts and whether the first run's background-compile
+#: signature is the one the kernel was called with.
+PLAN = """
+import json, sys
+import numpy as np
+import pipeline as hdi
+from pipeline.model import compiled, dynamics as dyn, running, static_solver, statics
+from pipeline.model.kernel_inputs import run_parameters
+from pipeline.model.state import N_STATE
+from pipeline.units import NM
+scene = hdi.load_scene("configs/paper-2009-identified.toml", ["solver.duration_ms=0.4", "solver.transient_ms=0.1"])
+model = hdi.build_model(scene, sys.argv[1], k=1.0736)
+hdi.simulate(model, [5.0, 9.8, 11.0])
+run = running.run_model(model, 11.0 * NM)
+running.run_model(model, 11.2 * NM, y0=run.state[-1])
+statics.statics_map(model, np.array([5.0, 11.0]) * NM)
+p, tables, variants = run_parameters(model, 5.0 * NM)
+ahead = compiled.signature(dyn._integrate, dyn.kernel_arguments(
+    np.zeros(N_STATE), dyn.Grid(1e-3, np.zeros(3)), p, tables, variants, dyn.Solver(1e-6, model.atol, 1e-7, 10)))
+print(json.dumps({"integrate": len(dyn._integrate.signatures), "newton": len(static_solver._newton.signatures),
+                  "ahead_is_called": [ahead] == list(dyn._integrate.signatures)}))
+"""
+
+
+def test_the_main_scene_compiles_one_signature_per_kernel_entry_point(tmp_path):
+    # a fresh process: the test session's other scenes add their own signatures to the dispatchers
+    out = subprocess.run([sys.executable, "-c", PLAN, str(tmp_path / "results")], cwd=ROOT, capture_output=True,
+                         text=True, timeout=600)
+    assert out.returncode == 0, out.stderr[-2000:]
+    plan = json.loads(out.stdout.strip().splitlines()[-1])
+    # flying, touchdown and contact runs, a given start and the statics map share one kernel and one static
+    # solver (a second signature would be a second compile of 25 s or 6 s of CPU in a first run)
+    assert plan == {"integrate": 1, "newton": 1, "ahead_is_called": True}
+
+
+#: A small cached kernel in its own module, compiled ahead in a fresh process with an empty cache.
+TINY = """
+import numba
+
+@numba.njit(cache=True)
+def tiny(x):
+    return 2.0 * x + 1.0
+"""
+
+AHEAD = """
+import sys
+from numba import typeof
+from pipeline.model import compiled
+from tiny_kernel import tiny
+compiled.announce(tiny, "the tiny kernel", 1.0)
+sig = (typeof(1.5),)
+before = compiled.is_cached(tiny, sig)
+compiled.compile_ahead(tiny, (1.5,), "the tiny kernel", 1.0)
+started = compiled.pending()
+compiled.wait_ahead()
+after = compiled.is_cached(tiny, sig)
+value = tiny(1.5)
+print(before, started, after, compiled.pending(), value, tiny.stats.cache_hits[sig], tiny.stats.cache_misses[sig])
+"""
+
+
+def _ahead(tmp_path: Path, **env: str) -> subprocess.CompletedProcess:
+    (tmp_path / "tiny_kernel.py").write_text(textwrap.dedent(TINY))
+    environ = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+    environ.update(NUMBA_CACHE_DIR=str(tmp_path / "cache"), PYTHONPATH=os.pathsep.join([str(tmp_path), str(ROOT)]),
+                   **env)
+    if "HDI_COMPILE_AHEAD" not in env:
+        environ.pop("HDI_COMPILE_AHEAD", None)
+    return subprocess.run([sys.executable, "-c", AHEAD], cwd=tmp_path, env=environ, capture_output=True, text=True,
+                          timeout=300)
+
+
+def test_a_kernel_compiled_ahead_is_loaded_from_the_cache_not_compiled_again(tmp_path):
+    out = _ahead(tmp_path)
+    assert out.returncode == 0, out.stderr[-2000:]
+    # not cached before; a background process started; cached after it; the call loads it (a cache hit,
+    # no miss: this process compiled nothing) and computes 2 * 1.5 + 1
+    assert out.stdout.split() == ["False", "True", "True", "False", "4.0", "1", "0"]
+    # said once, by this process (no logging set up: on stderr); the background process says nothing
+    assert out.stderr.count("compiling the tiny kernel") == 1
+    assert "compiling the tiny kernel in a background process (first run only, ~1 s)" in out.stderr
+
+
+def test_without_compile_ahead_the_process_compiles_and_says_so(tmp_path):
+    out = _ahead(tmp_path, HDI_COMPILE_AHEAD="0")
+    assert out.returncode == 0, out.stderr[-2000:]
+    # nothing started; the call compiles here (a miss, no hit), announced by numba's compile event
+    assert out.stdout.split() == ["False", "False", "False", "False", "4.0", "0", "1"]
+    assert out.stderr.strip().splitlines() == ["compiling the tiny kernel (first run only, ~1 s)"]
+
+
+def test_a_cached_kernel_starts_nothing_and_says_nothing(tmp_path):
+    assert _ahead(tmp_path).returncode == 0
+    out = _ahead(tmp_path)  # the same cache folder, now holding the kernel
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert out.stdout.split() == ["True", "False", "True", "False", "4.0", "1", "0"]
+    assert "compiling" not in out.stderr
+
+
+@pytest.mark.parametrize("handler", [True, False])
+def test_the_compile_notice_is_a_log_line_or_stderr(handler, caplog, capsys, monkeypatch):
+    import logging
+
+    from pipeline import progress
+    monkeypatch.setattr(logging.Logger, "hasHandlers", lambda self: handler)
+    with caplog.at_level(logging.INFO, logger="pipeline"):
+        progress.compile_notice("the dynamics kernel for this scene's effects", 25.4)
+    line = "compiling the dynamics kernel for this scene's effects (first run only, ~25 s)"
+    assert [r.getMessage() for r in caplog.records] == ([line] if handler else [])
+    assert capsys.readouterr().err == ("" if handler else line + "\n")
