@@ -6,7 +6,9 @@ into fresh virtual environments, one per extra, used from empty folders outside 
 * every script of docs/examples/, copied out of the clone, runs in the plain install (no extra);
 * ``hdi dmw paper-2009-identified`` finds the shipped scene by name;
 * each extra imports what the docs promise: ``units`` quantifies a dataset with pint (docs/datasets.md),
-  ``cluster`` serves dask's dashboard pages and writes a dask-jobqueue job script (docs/scaling.md).
+  ``cluster`` serves dask's dashboard pages and writes a dask-jobqueue job script (docs/scaling.md),
+  ``notebook`` lets tqdm draw the progress widget of a notebook (docs/cli.md) where the plain install falls
+  back to text with a warning.
 
 It needs uv (``.bootstrap/bin/uv``, which ``make test`` installs, or one on the PATH) and PyPI or uv's cache.
 """
@@ -30,7 +32,8 @@ EXAMPLES = ROOT / "docs" / "examples"
 #: What the wheel is built from (copied out, so the build's own folders never land in the clone)
 SOURCES = ("pyproject.toml", "README.md", "LICENSE", "pipeline", "configs")
 #: Per extra, the imports the docs name for it (docs/datasets.md, docs/scaling.md)
-EXTRAS = {"units": ("cf_xarray.units", "pint_xarray"), "cluster": ("bokeh", "dask_jobqueue")}
+EXTRAS = {"units": ("cf_xarray.units", "pint_xarray"), "cluster": ("bokeh", "dask_jobqueue"),
+          "notebook": ("ipywidgets",)}
 
 pytestmark = pytest.mark.slow
 
@@ -205,4 +208,33 @@ print(json.dumps({{"bokeh": bokeh.__version__, "script": script}}))
     major, minor = (int(x) for x in got["bokeh"].split(".")[:2])
     assert (major, minor) >= (3, 1)
     assert "#SBATCH --exclusive" in got["script"] and "--nworkers 16" in got["script"]
+    assert list(cwd.iterdir()) == []
+
+
+#: tqdm's notebook bar, the one ``tqdm.auto`` gives the API's progress in a Jupyter kernel
+#: (pipeline/progress.py): its widget, and the warnings tqdm gave while building it
+WIDGET = """
+import json, warnings
+with warnings.catch_warnings(record=True) as caught:
+    warnings.simplefilter("always")
+    from tqdm.notebook import tqdm
+    try:
+        bar = tqdm(total=2, desc="simulate")
+        bar.update(2)
+        bar.close()
+        import ipywidgets
+        widget = isinstance(bar.container, ipywidgets.HBox) and type(bar.container).__name__
+    except ImportError:  # (tqdm: "IProgress not found. Please update jupyter and ipywidgets.")
+        widget = None
+print(json.dumps({"widget": widget, "warnings": [str(w.message) for w in caught]}))
+"""
+
+
+def test_notebook_extra_gives_the_progress_widget(wheel, tmp_path):
+    plain = _install(wheel, None, tmp_path / "plain")
+    cwd = _empty(tmp_path / "cwd")
+    assert _python(plain, WIDGET, cwd)["widget"] is None  # (no ipywidgets: no widget, what the extra adds)
+    bin_dir = _install(wheel, "notebook", tmp_path / "notebook")
+    got = _python(bin_dir, WIDGET, cwd)
+    assert got["widget"] == "TqdmHBox" and not any("IProgress" in w for w in got["warnings"]), got
     assert list(cwd.iterdir()) == []
