@@ -10,6 +10,7 @@ import re
 import pytest
 
 from pipeline import cli, runner
+from pipeline.config.loading import shipped_scenes
 
 
 def test_a_stage_prints_its_dataset_and_a_second_run_recomputes_nothing(tmp_path, paper_config, capsys):
@@ -40,7 +41,9 @@ def test_bad_input_is_one_line_with_exit_2(tmp_path, paper_config, capsys, args,
 
 def test_a_missing_scene_file_and_two_scene_files_are_one_line(tmp_path, paper_config, capsys):
     assert cli.main(["dmw", str(tmp_path / "missing.toml"), "--out", str(tmp_path)]) == 2
-    assert capsys.readouterr().err == f"hdi dmw: error: {tmp_path / 'missing.toml'}: scene file does not exist\n"
+    err = capsys.readouterr().err  # one line: the path tried and the shipped scenes a name could mean
+    assert err.startswith(f"hdi dmw: error: {tmp_path / 'missing.toml'}: scene file does not exist")
+    assert err.count("\n") == 1 and err.endswith("shipped scene: " + ", ".join(shipped_scenes()) + "\n")
     assert cli.main(["dmw", str(paper_config), str(paper_config)]) == 2
     assert capsys.readouterr().err.startswith("hdi dmw: error: hdi dmw: expected one scene file, got ")
 
