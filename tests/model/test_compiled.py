@@ -163,6 +163,8 @@ def test_the_compile_notice_is_a_log_line_or_stderr(handler, caplog, capsys, mon
 
     from pipeline import progress
     monkeypatch.setattr(logging.Logger, "hasHandlers", lambda self: handler)
+    # (none left by an earlier test: `hdi`'s main attaches its stderr handler once per process)
+    monkeypatch.setattr(logging.getLogger("pipeline"), "handlers", [])
     with caplog.at_level(logging.INFO, logger="pipeline"):
         progress.compile_notice("the dynamics kernel for this scene's effects", 25.4)
     line = "compiling the dynamics kernel for this scene's effects (first run only, ~25 s)"

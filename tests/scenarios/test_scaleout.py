@@ -168,7 +168,7 @@ def test_sweep_on_a_remote_cluster_equals_the_local_run(cluster, tmp_path):
     # the batches really ran on the cluster's workers, both of them (4 tasks, 2 idle workers)
     from distributed import Client
     with Client(cluster, timeout="30s") as client:
-        done = client.run(lambda dask_worker: sum(1 for k in dask_worker.state.log if "run_batch" in str(k[0])))
+        done = client.run(lambda dask_worker: sum(1 for k in dask_worker.state.log if "sweep_task" in str(k[0])))
     assert len(done) == 2 and all(n > 0 for n in done.values()), done
 
 
@@ -198,11 +198,11 @@ def _ran(address: str, name: str) -> set[str]:
 def test_a_scheduler_file_or_dask_scheduler_address_names_the_cluster_and_its_dashboard_is_printed(running, tmp_path):
     # issue 26, 3: only tcp:// addresses were taken, and no dashboard link was shown
     sets = [a for s in SMALL for a in ("--set", s)]
-    before = _ran(running.address, "run_batch")
+    before = _ran(running.address, "sweep_task")
     dashboard = f"dask scheduler {running.address}: dashboard http://127.0.0.1:"
     viafile = _hdi("sweep", str(PAPER), *sets, "--scheduler", str(running.scheduler_file), "--out", "out", cwd=tmp_path)
     assert viafile.returncode == 0, viafile.stderr
-    assert len(_ran(running.address, "run_batch") - before) == 4  # the batches ran on the cluster
+    assert len(_ran(running.address, "sweep_task") - before) == 4  # the batches ran on the cluster
     assert [ln for ln in viafile.stderr.splitlines() if ln.startswith(dashboard)], viafile.stderr  # once, at INFO
     # without --scheduler, dask's DASK_SCHEDULER_ADDRESS is the cluster (checked and announced; up to date)
     viaenv = _hdi("sweep", str(PAPER), *sets, "--out", "out", cwd=tmp_path, DASK_SCHEDULER_ADDRESS=running.address)
