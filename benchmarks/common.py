@@ -4,7 +4,9 @@ Machines are shared and noisy: report medians of repeated runs and ratios agains
 measured in the same run, never a single timing. Every row also records the machine's 1-minute load
 average and CPU count at its start and its end (:func:`load_sample`), and a row that started above
 :data:`NOISY_LOAD_PER_CPU` x CPUs is flagged ``"noisy"`` (docs/performance.md, section
-"Tests and benchmarks").
+"Tests and benchmarks"). The load does not say how fast a CPU is on a shared host, so each module's start
+also times a fixed workload (:mod:`benchmarks.reference`) and its rows carry it (``ref_compiled_s``,
+``ref_python_s``): a row's time in those units compares across days.
 """
 
 from __future__ import annotations
@@ -37,17 +39,33 @@ def load_sample() -> dict[str, float]:
     return {"load_1min": os.getloadavg()[0], "cpus": cpus}
 
 
+def reference_sample() -> dict[str, float]:
+    """The machine's speed now: the fixed workloads of :func:`benchmarks.reference.machine_reference` [s]."""
+    from .reference import machine_reference
+    return machine_reference()
+
+
 #: Where :func:`record` reads the load (tests replace it with a fake source).
 LOAD_SOURCE: Callable[[], dict[str, float]] = load_sample
+#: Where :func:`row_start` times the reference workloads (tests replace it with a fake source).
+REFERENCE_SOURCE: Callable[[], dict[str, float]] = reference_sample
 #: The sample at the start of the row being measured: set by :func:`row_start` (before each module,
 #: by benchmarks/run.py) and by :func:`record` after each row (one row's end is the next one's start).
 _row_start: dict[str, float] | None = None
+#: The reference times of the current module's start (:func:`row_start`), recorded in each of its rows.
+_reference: dict[str, float] = {}
 
 
 def row_start() -> None:
-    """Mark the start of the next row: sample the load now."""
-    global _row_start
+    """Mark the start of the next row (a module's first): time the reference workloads, then sample the load."""
+    global _row_start, _reference
+    _reference = dict(REFERENCE_SOURCE())
     _row_start = LOAD_SOURCE()
+
+
+def current_reference() -> dict[str, float]:
+    """The reference times [s] of the current module's start (:func:`row_start`)."""
+    return dict(_reference)
 
 
 def load_fields(start: dict[str, float], end: dict[str, float]) -> dict[str, Any]:
@@ -71,7 +89,8 @@ def record_failure(results: list[dict], name: str, message: str) -> dict:
     :func:`record`, so every row of bench.json says how busy the machine was."""
     global _row_start
     end = LOAD_SOURCE()
-    row = {"name": name, "failed": message, **load_fields(_row_start if _row_start is not None else end, end)}
+    row = {"name": name, "failed": message, **load_fields(_row_start if _row_start is not None else end, end),
+           **_reference}
     results.append(row)
     _row_start = end
     print(f"{name}: FAILED: {message}", flush=True)
@@ -104,6 +123,9 @@ def record(results: list[dict], name: str, times: list[float], target_s: float |
         row["meets_target"] = bool(med < target_s)
     row.update(extra)
     row.update(load_fields(start, end))
+    row.update(_reference)
+    if _reference.get("ref_compiled_s"):
+        row["in_compiled_reference_units"] = med / _reference["ref_compiled_s"]
     results.append(row)
     _row_start = end
     flag = "" if target_s is None else ("  OK" if med < target_s else f"  MISSES target {target_s:g} s")

@@ -46,8 +46,10 @@ def main() -> None:
     if not study:
         print(f"BENCH_STUDY=0: leaving out {', '.join(STUDY_MODULES)}")
     for name in selected_modules([m.stem for m in here.glob("bench_*.py")], args.only, study):
-        print(f"== {name}", flush=True)
         common.row_start()
+        ref = common.current_reference()
+        print(f"== {name}  (reference: compiled {ref['ref_compiled_s'] * 1e3:.2f} ms, "
+              f"Python {ref['ref_python_s'] * 1e3:.2f} ms)", flush=True)
         importlib.import_module(f"benchmarks.{name}").run(results)
     args.out.parent.mkdir(parents=True, exist_ok=True)
     meta = {"date": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "machine": platform.machine(),

@@ -28,7 +28,9 @@ class FakeLoad:
 def fake_load(monkeypatch: pytest.MonkeyPatch):
     def use(loads: list[float], cpus: int = 2) -> None:
         monkeypatch.setattr(common, "LOAD_SOURCE", FakeLoad(loads, cpus))
+        monkeypatch.setattr(common, "REFERENCE_SOURCE", lambda: {"ref_compiled_s": 0.01, "ref_python_s": 0.02})
         monkeypatch.setattr(common, "_row_start", None)
+        monkeypatch.setattr(common, "_reference", {})
     return use
 
 
@@ -65,6 +67,35 @@ def test_threshold_scales_with_cpus_and_uses_the_start(fake_load) -> None:
     # the next row starts where the first ended (3.5 > 3.0): flagged
     second = common.record(results, "second", [0.01])
     assert (second["load_start"], second["load_end"], second["noisy"]) == (3.5, 3.1, True)
+
+
+def test_rows_carry_their_modules_reference(fake_load) -> None:
+    """Each row carries the reference times of its module's start and its median in compiled-reference units."""
+    fake_load([0.2, 0.3, 0.4])
+    common.row_start()
+    results: list[dict] = []
+    row = common.record(results, "kernel", [0.05, 0.04, 0.06])
+    assert (row["ref_compiled_s"], row["ref_python_s"]) == (0.01, 0.02)
+    assert row["in_compiled_reference_units"] == pytest.approx(5.0, rel=1e-12)
+    failed = common.record_failure(results, "broken", "why")
+    assert failed["ref_compiled_s"] == 0.01 and "in_compiled_reference_units" not in failed
+    assert common.current_reference() == {"ref_compiled_s": 0.01, "ref_python_s": 0.02}
+
+
+def test_reference_workloads_compute_the_same_oscillator() -> None:
+    """The compiled and the interpreted reference step the same Duffing oscillator the same way: the same x
+    after the same steps (so each times a fixed amount of work), and RK4 converges at order 4 on it."""
+    from benchmarks import reference
+    n = 2000
+    assert reference.duffing_rk4(n) == pytest.approx(reference.duffing_python(n), rel=1e-13, abs=1e-15)
+    # order 4: halving the step divides the error (against a 4x finer run) by ~16
+    t_end = 2.0
+    exact = reference.duffing_python(8000, h=t_end / 8000)
+    e1 = abs(reference.duffing_python(100, h=t_end / 100) - exact)
+    e2 = abs(reference.duffing_python(200, h=t_end / 200) - exact)
+    assert 12.0 < e1 / e2 < 20.0
+    ref = reference.machine_reference(repeat=1)
+    assert ref["ref_compiled_s"] > 0.0 and ref["ref_python_s"] > 0.0
 
 
 def test_load_sample_is_this_machine() -> None:
