@@ -45,7 +45,7 @@ MAX_EVALUATIONS = 50_000
 #: :func:`pipeline.model.running.run_model`): a run of ``solver.duration_ms`` needs at least
 #: duration / ``solver.max_step_ns`` of them, so a largest step below duration / MAX_STEPS can never finish.
 MAX_STEPS = 5_000_000
-#: Largest work of adhesion [J/m^2] of ``lubricant.work_of_adhesion_j_m2`` (and the bridges'): ten times the
+#: Largest work of adhesion [J/m^2] of ``lubricant.work_of_adhesion_j_m2`` (and the bridges'): 9.4 times the
 #: paper scene's 0.106 and above twice the surface energy of the carbon overcoats and lubricants of a disk
 #: interface (2 gamma ~ 0.05-0.3 J/m^2). Beyond it the adhesive pull takes the run nowhere the model
 #: describes: at 10 J/m^2 a 0.3-ms run of the paper scene at 9 nm did not finish in 5 minutes (1 J/m^2: 5 s),

@@ -448,7 +448,17 @@ class Assembler:
     def datasets(self, key: str, k_source: str, attrs: dict, seeds: list[int] | None = None,
                  run: dict[str, xr.Variable] | None = None, *,
                  statistics: dict[str, dict[str, Any]]) -> dict[str, xr.Dataset | None]:
-        """``sweep.nc`` and ``sweep_histories.nc`` from the parts added (arguments: :func:`assemble`)."""
+        """``sweep.nc`` and ``sweep_histories.nc`` from the parts added.
+
+        ``run``: the run's values (:func:`pipeline.model.simulation.grid_run_values`: 0-d, or along
+        ``roughness`` or ``damping``), written into both datasets. ``statistics``: each roughness set's
+        statistics as its interface model used them (label ->
+        :func:`pipeline.model.interface_tables.used_statistics`), which become coordinates along ``roughness``
+        (:func:`roughness_coordinates`) and, with the scans' hashes, the JSON attribute ``roughness_sets``
+        (:func:`roughness_record`). With more than one realisation the scalars gain a last dimension
+        ``realisation`` and the ensemble statistics of :func:`pipeline.analyses.ensemble_rules.statistics`
+        are added.
+        """
         scene, labels, damp, n_real, stepping = self.scene, self.labels, self.damp, self.n_real, self.stepping
         coords = {"protrusion": coordinate("protrusion", self.prot), "roughness": coordinate("roughness", labels),
                   "damping": coordinate("damping", damp)}
@@ -503,39 +513,6 @@ def add_kept_parts(grid: Assembler, out: Path, batches: list[Batch], key: str) -
         if why is not None:
             raise RuntimeError(f"{path}: batch {b.index}: part {why}; run the sweep again")
         grid.add(b, read_dataset(path))
-
-
-def assemble(scene: Any, out: Path, prot: np.ndarray, labels: list[str], damp: list[float], batches: list[Batch],
-             key: str, k_source: str, attrs: dict, seeds: list[int] | None = None,
-             computed: dict[str, xr.Dataset] | None = None,
-             run: dict[str, xr.Variable] | None = None, *,
-             statistics: dict[str, dict[str, Any]]) -> dict[str, xr.Dataset | None]:
-    """``sweep.nc`` (and ``sweep_histories.nc``) filled from the parts, in one go (:class:`Assembler`).
-
-    ``computed``: the parts run by this call (path -> dataset, as written), used as they are; every
-    other part is read from its file after :func:`part_problem` has accepted it. ``run``: the run's
-    values (:func:`pipeline.model.simulation.grid_run_values`: 0-d, or along ``roughness`` or ``damping``),
-    written into both datasets. ``statistics``: each roughness set's statistics as its interface model
-    used them (label -> :func:`pipeline.model.interface_tables.used_statistics`), which become coordinates
-    along ``roughness`` (:func:`roughness_coordinates`) and, with the scans' hashes, the JSON attribute
-    ``roughness_sets`` (:func:`roughness_record`).
-
-    With more than one realisation the scalars gain a last dimension ``realisation`` and the
-    ensemble statistics of :func:`pipeline.analyses.ensemble_rules.statistics` are added.
-
-    Raises
-    ------
-    RuntimeError
-        When a part is missing or is not the part of its batch (:func:`part_problem`).
-    """
-    grid = Assembler(scene, prot, labels, damp, len(seeds) if seeds else 1)
-    computed = computed or {}
-    for b in batches:
-        ds = computed.get(str(_part_path(out / PARTS, b)))
-        if ds is not None:
-            grid.add(b, ds)
-    add_kept_parts(grid, out, batches, key)
-    return grid.datasets(key, k_source, attrs, seeds, run, statistics=statistics)
 
 
 def roughness_coordinates(statistics: list[dict[str, Any]]) -> dict[str, xr.Variable]:
