@@ -60,7 +60,7 @@ from .config.schema import SCHEMA, SceneError
 from .config.validation import Scene, check_value
 from .io import DatasetError, read_dataset, results_dir
 from .model.inputs import SimulationInputs
-from .model.kernel_inputs import compile_kernel_ahead
+from .model.ahead import compile_kernel_ahead
 from .model.simulation import histories_of as _histories_of, run_count, simulate as _simulate
 from .model.assembly import Model
 from .model.running import IntegrationError

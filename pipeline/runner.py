@@ -54,7 +54,7 @@ from .fanout import shared_folder
 from .progress import stage as progress_stage
 from .model.inputs import SimulationInputs, from_folder
 from .model import compiled
-from .model.kernel_inputs import compile_kernel_ahead
+from .model.ahead import compile_kernel_ahead
 from .model.scene_inputs import simulation_inputs as wanted_inputs
 from .folder_lock import LOCK_NAME, STAGING_PREFIX, folder_lock
 from .io import (KEY_ATTR, DatasetBusy, DatasetError, RUN_ID, file_hash, read_attrs, read_dataset, temporary_path,
@@ -140,7 +140,7 @@ class Stage:
         Whether ``compute`` integrates the slider's dynamics (the numba kernel, directly or through a
         study's evaluations): when such a stage is to be computed, the runner starts compiling the scene's
         kernel in a background process before the build's first stage, if neither this process nor the
-        on-disk cache has it (:func:`pipeline.model.kernel_inputs.compile_kernel_ahead`).
+        on-disk cache has it (:func:`pipeline.model.ahead.compile_kernel_ahead`).
     lazy_imports
         Modules ``compute`` imports only when it runs (matplotlib's, ~0.7 s; several seconds in a fresh
         environment, which writes their bytecode then): imported early, while the process waits for the

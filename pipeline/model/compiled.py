@@ -22,12 +22,12 @@ loads it from the cache. Compiling takes tens of seconds of CPU, nearly all numb
   this process), and :func:`wait_ahead` waits for it before the first call, which then loads the kernel
   from the cache. On 2 cores the two compiles overlap. ``HDI_COMPILE_AHEAD=0`` turns it off (the
   process compiles everything itself). Machine code and results are the same either way;
-* :func:`while_waiting`: work that would come later (a later stage's imports) done by :func:`wait_ahead`
+* :func:`while_waiting`: work that would come later (a later stage's imports, its compiles) done by :func:`wait_ahead`
   while the background compile still runs, instead of idling.
 
 Who starts it: the stage runner, before the first stage of a build that computes a stage which simulates
 (:meth:`pipeline.runner.Runner.compile_ahead`, from the scene's stand-in arguments,
-:func:`pipeline.model.kernel_inputs.compile_kernel_ahead`); the Python API's ``build_model``; and a model's
+:func:`pipeline.model.ahead.compile_kernel_ahead`); the Python API's ``build_model``; and a model's
 first run, for a model whose kernel nothing started (:func:`pipeline.model.dynamics.compile_kernel_ahead`).
 """
 

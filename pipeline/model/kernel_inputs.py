@@ -2,7 +2,7 @@
 (:func:`run_parameters`), the interface tables by ``contact.area_model`` (:func:`interface_tables`) and
 the tabulated TFC-point force (:func:`tfc_table`); and, before any model exists, the kernel's arguments of a
 scene with stand-in numbers (:func:`stand_in_arguments`), whose types are the kernel's signature, so that a
-first run starts compiling the kernel ahead at its very start (:func:`compile_kernel_ahead`).
+first run starts compiling the kernel ahead at its very start (:func:`pipeline.model.ahead.compile_kernel_ahead`).
 
 Caching rule (one for every cache here): a per-protrusion input is a pure function of its key (the
 protrusion [m], with ``A_n`` [m^2] for the interface tables) and of the model's force laws; it is made
@@ -229,20 +229,3 @@ def stand_in_arguments(scene: Any) -> tuple[np.ndarray, dyn.Grid, np.record, dyn
     y0 = np.zeros(N_STATE)
     return y0, dyn.Grid(1.0, np.zeros(2)), dyn.params(), tab, var, dyn.Solver(1.0, y0.copy(), 1.0, 1)
 
-
-def compile_kernel_ahead(scene: Any) -> None:
-    """Start compiling the dynamics kernel for the scene's effects in a background process, unless this
-    process has a kernel already, the on-disk cache has this one, or ``HDI_COMPILE_AHEAD=0``
-    (:func:`pipeline.model.dynamics.compile_kernel_ahead` of :func:`stand_in_arguments`; docs/performance.md,
-    section "The first run"). The runner calls it before the first stage of a build that will run the
-    kernel, the Python API's ``build_model`` before it makes the model's inputs: the compile then overlaps
-    everything the process does before its first integration.
-
-    A scene whose stand-ins cannot be made (a rear law that does not compile) starts nothing: the model's
-    assembly reports it in its own words when it comes to it.
-    """
-    try:
-        args = stand_in_arguments(scene)
-    except ValueError:
-        return
-    dyn.compile_kernel_ahead(*args)

@@ -246,7 +246,7 @@ def test_runner_recomputes_exactly_what_changed(tmp_path, paper_scene):
 def test_the_kernel_compiles_ahead_when_a_stage_that_simulates_is_to_be_computed(tmp_path, paper_scene,
                                                                                    monkeypatch):
     """Before the first stage of a build, the runner starts the scene's kernel compile (a background process on
-    a first run, pipeline.model.kernel_inputs.compile_kernel_ahead) when a stage it will compute simulates, and
+    a first run, pipeline.model.ahead.compile_kernel_ahead) when a stage it will compute simulates, and
     has the lazy imports of the stages it will compute done while the process waits for it; never when every
     such stage is current, nor for a build without one."""
     calls: list[str] = []

@@ -59,12 +59,13 @@ ROOT = Path(__file__).resolve().parents[2]
 #: Runs the main scene's model (the calibrated k of `make run`) at a flying, a touchdown and a contact
 #: protrusion, a run from a given start (the heater steps) and the statics map, in one fresh process, and
 #: prints the kernel entry points' signature counts and whether the first run's background-compile
-#: signature (a model's, and the scene's stand-ins') is the one the kernel was called with.
+#: signature (a model's, and the scene's stand-ins') is the one the kernel was called with, and whether the
+#: entry points called from Python were called with the types a first run compiles them for while it waits.
 PLAN = """
 import json, sys
 import numpy as np
 import pipeline as hdi
-from pipeline.model import compiled, dynamics as dyn, kernel_inputs, running, static_solver, statics
+from pipeline.model import ahead as first_run, compiled, dynamics as dyn, kernel_inputs, running, static_solver, statics
 from pipeline.model.kernel_inputs import run_parameters
 from pipeline.model.state import N_STATE
 from pipeline.units import NM
@@ -78,9 +79,11 @@ p, tables, variants = run_parameters(model, 5.0 * NM)
 ahead = compiled.signature(dyn._integrate, dyn.kernel_arguments(
     np.zeros(N_STATE), dyn.Grid(1e-3, np.zeros(3)), p, tables, variants, dyn.Solver(1e-6, model.atol, 1e-7, 10)))
 stand_in = compiled.signature(dyn._integrate, dyn.kernel_arguments(*kernel_inputs.stand_in_arguments(scene)))
+entry_points = [compiled.signature(f, args) in f.signatures for f, args in first_run.python_entry_points(scene)]
 print(json.dumps({"integrate": len(dyn._integrate.signatures), "newton": len(static_solver._newton.signatures),
                   "ahead_is_called": [ahead] == list(dyn._integrate.signatures),
-                  "stand_in_is_called": [stand_in] == list(dyn._integrate.signatures)}))
+                  "stand_in_is_called": [stand_in] == list(dyn._integrate.signatures),
+                  "entry_points_are_called": entry_points}))
 """
 
 
@@ -92,8 +95,10 @@ def test_the_main_scene_compiles_one_signature_per_kernel_entry_point(tmp_path):
     plan = json.loads(out.stdout.strip().splitlines()[-1])
     # flying, touchdown and contact runs, a given start and the statics map share one kernel and one static
     # solver (a second signature would be a second compile of 25 s or 6 s of CPU in a first run)
-    # ... whose types the runner's compile ahead knows from the scene alone (its stand-in arguments)
-    assert plan == {"integrate": 1, "newton": 1, "ahead_is_called": True, "stand_in_is_called": True}
+    # ... whose types the runner's compile ahead knows from the scene alone (its stand-in arguments), and so
+    # are those of the entry points called from Python, which a first run compiles while it waits
+    assert plan == {"integrate": 1, "newton": 1, "ahead_is_called": True, "stand_in_is_called": True,
+                    "entry_points_are_called": [True, True, True]}
 
 
 #: A small cached kernel in its own module, compiled ahead in a fresh process with an empty cache.
