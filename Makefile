@@ -19,7 +19,7 @@ EXTRAS ?=
 # starts from it instead of pip's 3-5 s (docs/performance.md, section "The first run").
 UV_VERSION := 0.13.9
 BOOT   := .bootstrap
-BOOT_CACHE ?= $(or $(XDG_CACHE_HOME),$(HOME)/.cache)/hdi/uv-$(UV_VERSION)
+BOOT_CACHE ?= $(or $(XDG_CACHE_HOME),$(if $(HOME),$(HOME)/.cache,.cache))/hdi/uv-$(UV_VERSION)
 UV     ?= $(BOOT)/bin/uv
 # `make run` gets the pipeline's dependencies; `make test` adds the `test` extra (pytest, hypothesis,
 # compliance-checker, cf_units). --inexact: one does not uninstall what the other added.
