@@ -11,12 +11,15 @@ ARGS   ?=
 # optional extras (pyproject.toml) that `make setup` adds to .venv: `make setup EXTRAS="units cluster"`
 EXTRAS ?=
 
-# The installer: uv at the version below, installed from PyPI by pip into .bootstrap/ (nothing needs
-# to be preinstalled but Python); it installs exactly the versions of uv.lock (--locked: a uv.lock
-# behind pyproject.toml is an error; run `uv lock`). `make UV=uv ...` uses another uv. Without uv
-# (pip cannot install it) the targets fall back to pip, unlocked.
+# The installer: uv at the version below, installed from PyPI by pip (nothing needs to be preinstalled
+# but Python); it installs exactly the versions of uv.lock (--locked: a uv.lock behind pyproject.toml is
+# an error; run `uv lock`). `make UV=uv ...` uses another uv. Without uv (pip cannot install it) the
+# targets fall back to pip, unlocked. pip installs uv once per machine and version, into the user's
+# cache (BOOT_CACHE, beside uv's own package cache), and .bootstrap is a link to it: a second clone
+# starts from it instead of pip's 3-5 s (docs/performance.md, section "The first run").
 UV_VERSION := 0.13.9
 BOOT   := .bootstrap
+BOOT_CACHE ?= $(or $(XDG_CACHE_HOME),$(if $(HOME),$(HOME)/.cache,.cache))/hdi/uv-$(UV_VERSION)
 UV     ?= $(BOOT)/bin/uv
 # `make run` gets the pipeline's dependencies; `make test` adds the `test` extra (pytest, hypothesis,
 # compliance-checker, cf_units). --inexact: one does not uninstall what the other added.
@@ -50,10 +53,18 @@ endif
 
 COMMA := ,
 SPACE := $(subst ,, )
+# uv into BOOT_CACHE unless it is there (pip into a temporary folder renamed into place: two installs at
+# once both succeed), then .bootstrap linked to it
+define bootstrap
+{ [ -x "$(BOOT_CACHE)/bin/uv" ] || { mkdir -p "$(dir $(BOOT_CACHE))" && tmp=$$(mktemp -d "$(BOOT_CACHE).XXXXXX") && \
+  { $(PYTHON) -m pip install --quiet --disable-pip-version-check --no-deps --no-compile --target "$$tmp" \
+      "uv==$(UV_VERSION)" && { mv -T "$$tmp" "$(BOOT_CACHE)" 2>/dev/null || rm -rf "$$tmp"; } \
+    || { rm -rf "$$tmp"; false; }; }; }; } && rm -rf $(BOOT) && ln -s "$(BOOT_CACHE)" $(BOOT)
+endef
+
 # $(1): uv sync options, $(2): the pip extra of the fallback
 define install
-	@if [ -x "$(UV)" ] || $(PYTHON) -m pip install --quiet --disable-pip-version-check --target $(BOOT) \
-	        "uv==$(UV_VERSION)"; then \
+	@if [ -x "$(UV)" ] || $(bootstrap); then \
 	    "$(UV)" sync --locked --inexact --python $(PYTHON) $(1); \
 	else \
 	    echo "make: could not install uv; installing with pip instead (versions not locked)"; \

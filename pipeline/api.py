@@ -60,6 +60,7 @@ from .config.schema import SCHEMA, SceneError
 from .config.validation import Scene, check_value
 from .io import DatasetError, read_dataset, results_dir
 from .model.inputs import SimulationInputs
+from .model.ahead import compile_kernel_ahead
 from .model.simulation import histories_of as _histories_of, run_count, simulate as _simulate
 from .model.assembly import Model
 from .model.running import IntegrationError
@@ -248,6 +249,9 @@ def build_model(scene: SceneLike, results: str | Path | None = None, *, k: float
     check_flag("progress =", progress)
     scene = _scene(scene)
     with _progress.shown(progress):
+        # a first call (no kernel compiled or cached for the scene's effects): the kernel compiles in a
+        # background process while the inputs are made (docs/performance.md, section "The first run")
+        compile_kernel_ahead(scene)
         return simulation_inputs(scene, results, k=k).model(scene)
 
 

@@ -53,6 +53,8 @@ from .code_version import code_key
 from .fanout import shared_folder
 from .progress import stage as progress_stage
 from .model.inputs import SimulationInputs, from_folder
+from .model import compiled
+from .model.ahead import compile_kernel_ahead
 from .model.scene_inputs import simulation_inputs as wanted_inputs
 from .folder_lock import LOCK_NAME, STAGING_PREFIX, folder_lock
 from .io import (KEY_ATTR, DatasetBusy, DatasetError, RUN_ID, file_hash, read_attrs, read_dataset, temporary_path,
@@ -134,6 +136,15 @@ class Stage:
         ``finish(scene, out, options)``: run after the stage was asked for and is current (computed or
         not), for side effects outside the results folder (``report --readme``); ``options`` are those
         of :func:`build` and ``force``.
+    simulates
+        Whether ``compute`` integrates the slider's dynamics (the numba kernel, directly or through a
+        study's evaluations): when such a stage is to be computed, the runner starts compiling the scene's
+        kernel in a background process before the build's first stage, if neither this process nor the
+        on-disk cache has it (:func:`pipeline.model.ahead.compile_kernel_ahead`).
+    lazy_imports
+        Modules ``compute`` imports only when it runs (matplotlib's, ~0.7 s; several seconds in a fresh
+        environment, which writes their bytecode then): imported early, while the process waits for the
+        kernel's background compile, when the stage is to be computed (:func:`pipeline.model.compiled.while_waiting`).
     doc
         One line for ``hdi --help``.
     """
@@ -154,6 +165,8 @@ class Stage:
     check: Callable[[Scene], None] | None = None
     keeps: Callable[[Scene], tuple[str, ...]] = _constant(())
     finish: Callable[[Scene, Path, dict], None] | None = None
+    simulates: bool = False
+    lazy_imports: tuple[str, ...] = ()
     doc: str = ""
 
     def output_names(self, scene: Scene) -> tuple[str, ...]:
@@ -436,12 +449,35 @@ class Runner:
                 self.stage(name).check(self.scene)
         self.check_lengths(targets)
         with folder_lock(self.out):
+            self.compile_ahead(targets, force)
             for name in self.plan(targets):
                 self._make(name, force and name in targets)
             for name in targets:
                 if self.stage(name).finish is not None:
                     self.stage(name).finish(self.scene, self.out, {**self.options, "force": force})
         return {t: tuple(self.out / o for o in self.stage(t).output_names(self.scene)) for t in targets}
+
+    def compile_ahead(self, targets: Iterable[str], force: bool = False) -> None:
+        """Start compiling the scene's dynamics kernel in a background process when a stage this build
+        computes simulates (:attr:`Stage.simulates`), before the first stage runs: on a first run (no kernel
+        in the on-disk cache) the compile then overlaps the upstream stages and the static solver's compile
+        instead of starting at the first integration; the modules the stages to compute import lazily
+        (:attr:`Stage.lazy_imports`) are imported while the process waits for it (docs/performance.md,
+        section "The first run"). Nothing when every such stage is current."""
+        targets = list(targets)
+        todo = []
+        for name in self.plan(targets):
+            try:
+                if force and name in targets or self.stale_reason(name) is not None:
+                    todo.append(self.stage(name))
+            except (OSError, ValueError):  # (the build meets it again, and says it in its own words)
+                continue
+        if not any(st.simulates for st in todo):
+            return
+        compile_kernel_ahead(self.scene)
+        modules = tuple(dict.fromkeys(m for st in todo for m in st.lazy_imports))
+        if modules:
+            compiled.while_waiting(compiled.import_modules(modules))
 
     def written_paths(self, targets: Iterable[str]) -> list[str]:
         """The paths, relative to the results folder, a build of ``targets`` may write, each with the

@@ -21,11 +21,20 @@ loads it from the cache. Compiling takes tens of seconds of CPU, nearly all numb
   (:func:`compile_from_file`), while it goes on with what comes first (the static starts, compiled in
   this process), and :func:`wait_ahead` waits for it before the first call, which then loads the kernel
   from the cache. On 2 cores the two compiles overlap. ``HDI_COMPILE_AHEAD=0`` turns it off (the
-  process compiles everything itself). Machine code and results are the same either way.
+  process compiles everything itself). Machine code and results are the same either way;
+* :func:`while_waiting`: work that would come later (a later stage's imports, its compiles) done by :func:`wait_ahead`
+  while the background compile still runs, instead of idling.
+
+Who starts it: the stage runner, before the first stage of a build that computes a stage which simulates
+(:meth:`pipeline.runner.Runner.compile_ahead`, from the scene's stand-in arguments,
+:func:`pipeline.model.ahead.compile_kernel_ahead`); the Python API's ``build_model``; and a model's
+first run, for a model whose kernel nothing started (:func:`pipeline.model.dynamics.compile_kernel_ahead`).
 """
 
 from __future__ import annotations
 
+import importlib
+import logging
 import os
 import pickle
 import subprocess
@@ -40,6 +49,8 @@ from numba.core import event
 
 from .. import progress
 from ..code_version import code_key
+
+log = logging.getLogger(__name__)
 
 #: Options of every kernel function: cached on disk, releases the GIL, numpy's error model (a division
 #: by zero gives inf/nan, no exception path in the machine code).
@@ -113,6 +124,8 @@ def is_cached(dispatcher: Any, sig: tuple) -> bool:
 #: Background compiles under way: (module, name, signature) -> the process.
 _AHEAD: dict[tuple, subprocess.Popen] = {}
 _AHEAD_LOCK = threading.Lock()
+#: Work for :func:`wait_ahead` to do while a background compile runs (:func:`while_waiting`).
+_IDLE: list[Callable[[], None]] = []
 
 
 def compile_ahead(dispatcher: Any, args: tuple, what: str, seconds: float) -> None:
@@ -138,10 +151,36 @@ def compile_ahead(dispatcher: Any, args: tuple, what: str, seconds: float) -> No
         progress.compile_notice(f"{what} in a background process", seconds)
 
 
-def wait_ahead() -> None:
-    """Wait for the background compiles (:func:`compile_ahead`): the next call loads their machine code from
-    the cache. A failed one is only a cache miss: this process then compiles it itself."""
+def while_waiting(work: Callable[[], None]) -> None:
+    """Have :func:`wait_ahead` call ``work()`` (once) if a background compile is still running when this
+    process comes to wait for it: work the process would do later anyway (importing what a later stage
+    needs) done while it would otherwise idle. Dropped when no compile is under way, and when the compile
+    is over by the time of the wait. ``work`` must not change a result: it only comes earlier."""
     with _AHEAD_LOCK:
+        if _AHEAD:
+            _IDLE.append(work)
+
+
+def import_modules(names: tuple[str, ...]) -> Callable[[], None]:
+    """Work for :func:`while_waiting`: import the modules ``names`` (dotted names)."""
+    def work() -> None:
+        for name in names:
+            importlib.import_module(name)
+    return work
+
+
+def wait_ahead() -> None:
+    """Wait for the background compiles (:func:`compile_ahead`), doing the work of :func:`while_waiting`
+    meanwhile: the next call loads their machine code from the cache. A failed one is only a cache miss:
+    this process then compiles it itself."""
+    with _AHEAD_LOCK:
+        while _IDLE and any(proc.poll() is None for proc in _AHEAD.values()):
+            work = _IDLE.pop(0)
+            try:
+                work()
+            except Exception as exc:  # (only a head start: the stage does it again and reports it in its words)
+                log.debug("work while waiting for a compile failed: %s", exc)
+        _IDLE.clear()
         for key, proc in list(_AHEAD.items()):
             proc.wait()
             del _AHEAD[key]
@@ -155,8 +194,6 @@ def pending() -> bool:
 def compile_from_file(path: str) -> None:
     """The background process of :func:`compile_ahead`: compile the function and signature pickled in
     ``path`` (deleted) into the on-disk cache."""
-    import importlib
-
     with open(path, "rb") as f:
         module, name, sig = pickle.load(f)
     os.unlink(path)

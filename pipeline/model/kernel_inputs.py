@@ -1,6 +1,8 @@
 """The kernel's inputs of a model at one protrusion: its parameter record, tables and variants
 (:func:`run_parameters`), the interface tables by ``contact.area_model`` (:func:`interface_tables`) and
-the tabulated TFC-point force (:func:`tfc_table`).
+the tabulated TFC-point force (:func:`tfc_table`); and, before any model exists, the kernel's arguments of a
+scene with stand-in numbers (:func:`stand_in_arguments`), whose types are the kernel's signature, so that a
+first run starts compiling the kernel ahead at its very start (:func:`pipeline.model.ahead.compile_kernel_ahead`).
 
 Caching rule (one for every cache here): a per-protrusion input is a pure function of its key (the
 protrusion [m], with ``A_n`` [m^2] for the interface tables) and of the model's force laws; it is made
@@ -19,8 +21,12 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from . import dynamics as dyn
-from .assembly import Model
+from .assembly import TFC_POINT_LAWS, Model
+from .forces import rear_law_ref
 from .piecewise import piecewise_coefficients, ppval
+from .scene_inputs import needs_interface
+from .state import N_STATE
+from ..config.si import to_si
 from ..physics import air_bearing as ab
 from ..physics.geometry import AREA_MODELS, nominal_area
 
@@ -192,3 +198,34 @@ def kernel_slots(model: Model, p: np.record) -> tuple[dyn.Tables, dyn.Variants]:
 def _stiffening_potential(g: float, g0: float, q: float, g_min: float) -> float:
     """``G(max(g, g_min))`` [m] of the stiffening law (:func:`pipeline.physics.air_bearing.tfc_stiffening_force`)."""
     return ab.stiffening_potential(max(g, g_min), g0, q)
+
+
+def stand_in_arguments(scene: Any) -> tuple[np.ndarray, dyn.Grid, np.record, dyn.Tables, dyn.Variants, dyn.Solver]:
+    """The arguments of :func:`pipeline.model.dynamics.integrate` for a run of the scene's model, with stand-in
+    numbers of the real arguments' types, from the scene's keys alone (no interface table, DMW record or
+    bulge table yet).
+
+    Their numba types are the kernel's signature (:func:`pipeline.model.dynamics.kernel_arguments`): which
+    slots are ``None`` (the effects, :func:`kernel_slots`), the rear law (its compiled handle,
+    :func:`pipeline.model.forces.rear_law_ref`), the meniscus state, the tables as C-contiguous 2-D float64
+    arrays (what :func:`pipeline.model.piecewise.piecewise_coefficients` makes), the :data:`PARAMS
+    <pipeline.model.dynamics.PARAMS>` and :data:`GAP_POWER <pipeline.model.dynamics.GAP_POWER>` records;
+    none of the numbers. The rules mirror :func:`pipeline.model.assembly.build_model` and
+    :func:`kernel_slots`; tests/model/test_kernel_inputs.py checks that the signature equals the one of the
+    real model's first run for every shipped scene.
+    """
+    eff, si = scene.effects, to_si(scene)
+    cubic = np.zeros((1, 4))  # (one piece of a piecewise cubic; the real tables have the same type)
+    interface = needs_interface(scene)  # (build_model reads interface tables only then)
+    tables = {name: cubic if name in eff and interface else None for name in ("contact", "adhesion", "friction")}
+    laws = [registry.lookup(scene["air_bearing"][key]) for key, registry in TFC_POINT_LAWS.items()]
+    laws = [law for law in laws if law.force is not None]  # ("none": no law)
+    meniscus = si.lubricant.meniscus_time if si.lubricant.meniscus_time > 0.0 else None
+    tab = dyn.Tables(dmw=cubic if "dmw" in eff else None, tfc=cubic if any(law.closed_form is None for law in laws)
+                     else None, **tables)
+    var = dyn.Variants(pitch=True if "pitch" in eff else None, rear_law=rear_law_ref(si.air_bearing.rear_law),
+                       gap_power=dyn.params(dyn.GAP_POWER) if any(law.closed_form == "gap-power" for law in laws)
+                       else None, meniscus=meniscus)
+    y0 = np.zeros(N_STATE)
+    return y0, dyn.Grid(1.0, np.zeros(2)), dyn.params(), tab, var, dyn.Solver(1.0, y0.copy(), 1.0, 1)
+

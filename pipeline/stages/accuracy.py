@@ -308,7 +308,7 @@ def _upstream(scene: Any) -> tuple[str, ...]:
 
 
 STAGE = Stage(
-    "accuracy", compute, outputs=("accuracy.nc", "figures/work_precision.png"),
+    "accuracy", compute, simulates=True, outputs=("accuracy.nc", "figures/work_precision.png"),
     reads=("*",), excludes=scene_inputs.SIMULATION_EXCLUDES,
     upstream=_upstream,
     options=("points", "reference", "knobs", "only", "repeat", "tolerance", "combined_tolerance", "k"),

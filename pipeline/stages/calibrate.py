@@ -37,7 +37,7 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
 
 
 STAGE = Stage(
-    "calibrate", compute, outputs=("calibration.nc",),
+    "calibrate", compute, simulates=True, outputs=("calibration.nc",),
     # everything but the single protrusion, the report and the sweep (except its protrusion grid,
     # on which the touchdown curve is evaluated)
     reads=("*", "sweep.protrusion_nm"),

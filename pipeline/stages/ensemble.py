@@ -186,7 +186,7 @@ def _upstream(scene: Any) -> tuple[str, ...]:
 
 
 STAGE = Stage(
-    "ensemble", compute, outputs=("ensemble.nc",),
+    "ensemble", compute, simulates=True, outputs=("ensemble.nc",),
     reads=("*",),
     # (what a simulation reads, report.realisations and the targets' definitions in [identify]; not the
     # optimiser's settings)

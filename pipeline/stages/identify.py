@@ -461,7 +461,7 @@ def _finish(scene: Any, out: Path, options: dict[str, Any]) -> None:
 
 
 STAGE = Stage(
-    "identify", compute, outputs=("identify.nc", "figures/identify.png"),
+    "identify", compute, simulates=True, outputs=("identify.nc", "figures/identify.png"),
     reads=("*",), excludes=("sweep", "report", "sensitivity", "scene.name", "scene.description",
                             "identify.batch_size"),
     upstream=upstream, check=box_check("identify"), finish=_finish, order=80,

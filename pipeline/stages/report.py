@@ -75,6 +75,7 @@ import xarray as xr
 
 from ..analyses import narrative, report_figures, report_tables
 from ..analyses.paper_comparison import comparison_markdown, identification_markdown
+from ..analyses.plots import DRAWING_MODULES
 from ..analyses.report_figures import (BAND_FIGURE, BULGE_FIGURE, ENSEMBLE_FIGURE, FIGURES, INTERFACE_FIGURE,
                                       STATICS_FIGURE)
 from ..analyses.report_settings import ReportSettings, wants_ensemble
@@ -189,6 +190,7 @@ STAGE = Stage(
                                                       STATICS_FIGURE))
     + ("report/summary.csv", "report/summary.md", "report/comparison.md"),
     reads=("*",), upstream=_upstream, optional=("identify",), finish=_finish, order=60, main_job=True,
+    lazy_imports=DRAWING_MODULES,
     doc="the paper's figures, a summary table and the comparison with the paper")
 
 

@@ -93,7 +93,7 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
 
 
 STAGE = Stage(
-    "sensitivity", compute, outputs=("sensitivity.nc", "figures/sensitivity.png"),
+    "sensitivity", compute, simulates=True, outputs=("sensitivity.nc", "figures/sensitivity.png"),
     # (the [sweep] grid is the default protrusion grid of the evaluations: not excluded)
     reads=("*",), excludes=("report", "identify", "scene.name", "scene.description", "sensitivity.batch_size"),
     upstream=upstream, check=box_check("sensitivity"), order=85, keeps=lambda scene: ("sensitivity.evals.jsonl",),

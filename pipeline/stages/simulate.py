@@ -57,6 +57,6 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset]:
 
 
 STAGE = Stage(
-    "simulate", compute, outputs=("histories.nc", "summary.nc"),
+    "simulate", compute, simulates=True, outputs=("histories.nc", "summary.nc"),
     reads=("*",), excludes=scene_inputs.SIMULATION_EXCLUDES,
     upstream=scene_inputs.simulation_inputs, order=45, doc="one protrusion in time, histories.nc and summary.nc")

@@ -564,7 +564,7 @@ def _keeps(scene: Any) -> tuple[str, ...]:
 
 
 STAGE = Stage(
-    "sweep", compute, outputs=("sweep.nc", "sweep_histories.nc"),
+    "sweep", compute, simulates=True, outputs=("sweep.nc", "sweep_histories.nc"),
     reads=("*", "report.histories_nm"),
     # (the batch size changes how the work is cut, not the result: parts of another cut are rejected)
     excludes=("tfc.protrusion_nm", *(e for e in scene_inputs.SIMULATION_EXCLUDES if e != "sweep"), "sweep.batch_size"),

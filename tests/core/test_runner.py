@@ -8,6 +8,7 @@ registry through which a new stage plugs in. (The folder's lock: core/test_folde
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import shutil
@@ -240,6 +241,41 @@ def test_runner_recomputes_exactly_what_changed(tmp_path, paper_scene):
     assert sorted(p.name for p in out.iterdir()) == [".hdi", "a.nc", "b.nc", "notes"]  # no lock, no temporaries
     assert json.loads(read_dataset(out / "b.nc").attrs["upstream_keys"]) == {"a": read_dataset(out / "a.nc").attrs[
         runner.KEY_ATTR]}
+
+
+def test_the_kernel_compiles_ahead_when_a_stage_that_simulates_is_to_be_computed(tmp_path, paper_scene,
+                                                                                   monkeypatch):
+    """Before the first stage of a build, the runner starts the scene's kernel compile (a background process on
+    a first run, pipeline.model.ahead.compile_kernel_ahead) when a stage it will compute simulates, and
+    has the lazy imports of the stages it will compute done while the process waits for it; never when every
+    such stage is current, nor for a build without one."""
+    calls: list[str] = []
+    stages = _toy_stages(calls, tmp_path)
+    stages["b"] = dataclasses.replace(stages["b"], simulates=True, lazy_imports=("json", "csv"))
+    (tmp_path / "input.txt").write_text("2.0\n")
+    out = tmp_path / "out"
+    events: list = []
+    monkeypatch.setattr(runner, "compile_kernel_ahead", lambda scene: events.append(("compile", calls[:])))
+    monkeypatch.setattr(runner.compiled, "while_waiting", lambda work: events.append(("idle", calls[:])))
+    monkeypatch.setattr(runner.compiled, "import_modules", lambda names: names)
+
+    def build(targets, scene=paper_scene, force=False):
+        events.clear()
+        calls.clear()
+        runner.Runner(scene, out, stages).build(targets, force=force)
+        return events[:]
+
+    assert build(["a"]) == []                                      # no stage that simulates
+    # before a stage ran (no call yet), once; the lazy imports of the stages to compute
+    assert build(["b"]) == [("compile", []), ("idle", [])]
+    assert calls == ["b"]
+    assert build(["b"]) == []                                      # everything current
+    assert build(["b"], force=True) == [("compile", []), ("idle", [])]  # forced: computed, so compiled
+    assert build(["b"], scene=paper_scene.replace(tfc={"protrusion_nm": 3.0})) == [("compile", []), ("idle", [])]
+    stages["b"] = dataclasses.replace(stages["b"], lazy_imports=())
+    assert build(["b"], force=True) == [("compile", [])]           # nothing to import meanwhile
+    stages["b"] = dataclasses.replace(stages["b"], simulates=False)
+    assert build(["b"], force=True) == []
 
 
 def test_optional_stage_is_read_only_when_current(tmp_path, paper_scene):

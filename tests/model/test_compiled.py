@@ -59,12 +59,13 @@ ROOT = Path(__file__).resolve().parents[2]
 #: Runs the main scene's model (the calibrated k of `make run`) at a flying, a touchdown and a contact
 #: protrusion, a run from a given start (the heater steps) and the statics map, in one fresh process, and
 #: prints the kernel entry points' signature counts and whether the first run's background-compile
-#: signature is the one the kernel was called with.
+#: signature (a model's, and the scene's stand-ins') is the one the kernel was called with, and whether the
+#: entry points called from Python were called with the types a first run compiles them for while it waits.
 PLAN = """
 import json, sys
 import numpy as np
 import pipeline as hdi
-from pipeline.model import compiled, dynamics as dyn, running, static_solver, statics
+from pipeline.model import ahead as first_run, compiled, dynamics as dyn, kernel_inputs, running, static_solver, statics
 from pipeline.model.kernel_inputs import run_parameters
 from pipeline.model.state import N_STATE
 from pipeline.units import NM
@@ -77,8 +78,12 @@ statics.statics_map(model, np.array([5.0, 11.0]) * NM)
 p, tables, variants = run_parameters(model, 5.0 * NM)
 ahead = compiled.signature(dyn._integrate, dyn.kernel_arguments(
     np.zeros(N_STATE), dyn.Grid(1e-3, np.zeros(3)), p, tables, variants, dyn.Solver(1e-6, model.atol, 1e-7, 10)))
+stand_in = compiled.signature(dyn._integrate, dyn.kernel_arguments(*kernel_inputs.stand_in_arguments(scene)))
+entry_points = [compiled.signature(f, args) in f.signatures for f, args in first_run.python_entry_points(scene)]
 print(json.dumps({"integrate": len(dyn._integrate.signatures), "newton": len(static_solver._newton.signatures),
-                  "ahead_is_called": [ahead] == list(dyn._integrate.signatures)}))
+                  "ahead_is_called": [ahead] == list(dyn._integrate.signatures),
+                  "stand_in_is_called": [stand_in] == list(dyn._integrate.signatures),
+                  "entry_points_are_called": entry_points}))
 """
 
 
@@ -90,7 +95,10 @@ def test_the_main_scene_compiles_one_signature_per_kernel_entry_point(tmp_path):
     plan = json.loads(out.stdout.strip().splitlines()[-1])
     # flying, touchdown and contact runs, a given start and the statics map share one kernel and one static
     # solver (a second signature would be a second compile of 25 s or 6 s of CPU in a first run)
-    assert plan == {"integrate": 1, "newton": 1, "ahead_is_called": True}
+    # ... whose types the runner's compile ahead knows from the scene alone (its stand-in arguments), and so
+    # are those of the entry points called from Python, which a first run compiles while it waits
+    assert plan == {"integrate": 1, "newton": 1, "ahead_is_called": True, "stand_in_is_called": True,
+                    "entry_points_are_called": [True, True, True]}
 
 
 #: A small cached kernel in its own module, compiled ahead in a fresh process with an empty cache.
@@ -170,3 +178,38 @@ def test_the_compile_notice_is_a_log_line_or_stderr(handler, caplog, capsys, mon
     line = "compiling the dynamics kernel for this scene's effects (first run only, ~25 s)"
     assert [r.getMessage() for r in caplog.records] == ([line] if handler else [])
     assert capsys.readouterr().err == ("" if handler else line + "\n")
+
+
+class _Process:
+    """A background compile's process as wait_ahead sees it: running until waited for, or over."""
+
+    def __init__(self, running: bool):
+        self.running, self.waited = running, False
+
+    def poll(self):
+        return None if self.running else 0
+
+    def wait(self):
+        self.waited, self.running = True, False
+        return 0
+
+
+def test_work_while_waiting_runs_during_a_compile_and_only_then(monkeypatch):
+    done: list[str] = []
+    monkeypatch.setattr(compiled, "_IDLE", [])
+    monkeypatch.setattr(compiled, "_AHEAD", {})
+    compiled.while_waiting(lambda: done.append("dropped"))  # nothing under way: dropped
+    proc = _Process(running=True)
+    compiled._AHEAD["kernel"] = proc
+    compiled.while_waiting(lambda: done.append("first"))
+    compiled.while_waiting(lambda: 1 / 0)  # a failure is only a lost head start
+    compiled.while_waiting(compiled.import_modules(("json", "csv")))
+    compiled.while_waiting(lambda: done.append("second"))
+    compiled.wait_ahead()
+    # in order, before the wait; the process waited for, nothing left pending
+    assert done == ["first", "second"] and proc.waited and not compiled.pending() and compiled._IDLE == []
+    # a compile over before the wait: the work is not done (it would only delay the process)
+    compiled._AHEAD["kernel"] = _Process(running=False)
+    compiled.while_waiting(lambda: done.append("late"))
+    compiled.wait_ahead()
+    assert done == ["first", "second"] and compiled._IDLE == []

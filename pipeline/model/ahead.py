@@ -1,0 +1,74 @@
+"""What a first run compiles ahead, from the scene alone (docs/performance.md, section "The first run").
+
+A first run (no machine code in numba's on-disk cache) compiles the dynamics kernel, ~27 s of CPU, and
+waits for it: :func:`compile_kernel_ahead` starts that compile in a background process as soon as the
+scene is known (the runner, before a build's first stage; the Python API's ``build_model``), with the
+kernel's signature from the scene's stand-in arguments
+(:func:`pipeline.model.kernel_inputs.stand_in_arguments`). While the process then waits for it, it
+compiles the entry points that later stages call from Python (:func:`python_entry_points`: the statics
+map's path, the right-hand side of the static forces, the separation of a run's histories), which it
+would otherwise compile after the wait, on the first run's critical path
+(:func:`pipeline.model.compiled.while_waiting`). Machine code and results are the same either way.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from . import compiled
+from . import dynamics as dyn
+from .forces import separation_at
+from .kernel_inputs import stand_in_arguments
+from .start import static_inputs
+from .state import N_STATE, THETA, Z
+from .statics import TOL, _path
+from ..units import URAD
+
+
+def compile_kernel_ahead(scene: Any) -> None:
+    """Start compiling the dynamics kernel for the scene's effects in a background process, unless this
+    process has a kernel already, the on-disk cache has this one, or ``HDI_COMPILE_AHEAD=0``
+    (:func:`pipeline.model.dynamics.compile_kernel_ahead` of the scene's stand-in arguments); if it starts,
+    the Python entry points of :func:`python_entry_points` are compiled while the process waits for it.
+
+    A scene whose stand-ins cannot be made (a rear law that does not compile) starts nothing: the model's
+    assembly reports it in its own words when it comes to it.
+    """
+    try:
+        args = stand_in_arguments(scene)
+    except ValueError:
+        return
+    dyn.compile_kernel_ahead(*args)
+    compiled.while_waiting(lambda: compile_entry_points(python_entry_points(scene)))
+
+
+def python_entry_points(scene: Any) -> list[tuple[Any, tuple]]:
+    """The compiled functions the stages after the calibration call from Python, each with stand-in
+    arguments of the types of the scene's calls (``(dispatcher, args)``): the statics map's compiled path
+    (:func:`pipeline.model.statics._path`) and its right-hand side of the static forces
+    (:func:`pipeline.model.dynamics.rhs`: the slots of :func:`pipeline.model.start.static_inputs`), and the
+    separation of a run's histories (:func:`pipeline.model.forces.separation_at` on the columns of the
+    kernel's output: strided arrays). tests/model/test_compiled.py checks that the main scene's runs and
+    statics map compile exactly these signatures.
+    """
+    y0, grid, p, tab, var, solver = stand_in_arguments(scene)
+    p_static, tab_static, var_static, slots = static_inputs(lambda mu: (p, tab, var), 0.0)
+    packed = dyn._packed(p_static)
+    Y = np.zeros((2, N_STATE))  # (the kernel's output: the histories read its columns)
+    return [
+        (_path, (np.zeros(1), 1.0, 0.0, 0.0, 0.0, URAD, TOL, 30, packed, *slots)),
+        (dyn._rhs_python, (0.0, np.zeros(N_STATE), packed, False, np.zeros(N_STATE), *dyn._slots(tab_static,
+                                                                                                var_static))),
+        (separation_at, (p, Y[:, Z], Y[:, THETA], np.zeros(2))),
+    ]
+
+
+def compile_entry_points(entry_points: list[tuple[Any, tuple]]) -> None:
+    """Compile each ``(dispatcher, args)`` for the types of ``args`` in this process (loaded instead when the
+    on-disk cache has it; nothing when the process has it), without calling it."""
+    for dispatcher, args in entry_points:
+        sig = compiled.signature(dispatcher, args)
+        if sig not in dispatcher.overloads:
+            dispatcher.compile(sig)

@@ -1,0 +1,74 @@
+"""What a first run compiles ahead from the scene alone (pipeline.model.ahead): the kernel's background compile
+from the scene's stand-in arguments, and the Python entry points compiled while the process waits for it,
+only then; a scene whose stand-ins cannot be made starts nothing. (That the stand-ins' signatures are those
+of the real calls: tests/model/test_kernel_inputs.py and tests/model/test_compiled.py.)"""
+
+from __future__ import annotations
+
+import pytest
+
+from pipeline.config.loading import load_scene, shipped_scenes
+from pipeline.model import ahead, compiled
+from pipeline.model import dynamics as dyn
+from pipeline.model import kernel_inputs
+
+
+class _Running:
+    """A background compile's process that runs until waited for."""
+
+    def poll(self):
+        return None
+
+    def wait(self):
+        return 0
+
+
+@pytest.fixture
+def scene():
+    return load_scene(shipped_scenes()["paper-2009-identified"])
+
+
+def test_the_kernel_compiles_ahead_and_the_entry_points_while_waiting(scene, monkeypatch):
+    started: list = []
+    compiled_now: list = []
+    monkeypatch.setattr(compiled, "_AHEAD", {})
+    monkeypatch.setattr(compiled, "_IDLE", [])
+
+    def start(*args):  # (as dynamics.compile_kernel_ahead does when nothing has the kernel: a process runs)
+        started.append(compiled.signature(dyn._integrate, dyn.kernel_arguments(*args)))
+        compiled._AHEAD["kernel"] = _Running()
+
+    monkeypatch.setattr(ahead.dyn, "compile_kernel_ahead", start)
+    monkeypatch.setattr(ahead, "compile_entry_points", lambda eps: compiled_now.extend(f for f, _ in eps))
+    ahead.compile_kernel_ahead(scene)
+    # the kernel for the scene's stand-in arguments, started at once; the entry points not yet
+    assert started == [compiled.signature(dyn._integrate, dyn.kernel_arguments(
+        *kernel_inputs.stand_in_arguments(scene)))]
+    assert compiled_now == []
+    compiled.wait_ahead()  # the first integration waits: the entry points are compiled meanwhile
+    assert [f.py_func.__name__ for f in compiled_now] == ["_path", "_rhs_python", "separation_at"]
+    assert not compiled.pending()
+
+
+def test_nothing_to_wait_for_compiles_nothing_ahead(scene, monkeypatch):
+    # the kernel cached or compiled (or HDI_COMPILE_AHEAD=0): no process, so no work queued for a wait
+    compiled_now: list = []
+    monkeypatch.setattr(compiled, "_AHEAD", {})
+    monkeypatch.setattr(compiled, "_IDLE", [])
+    monkeypatch.setattr(ahead.dyn, "compile_kernel_ahead", lambda *args: None)
+    monkeypatch.setattr(ahead, "compile_entry_points", lambda eps: compiled_now.append(eps))
+    ahead.compile_kernel_ahead(scene)
+    compiled.wait_ahead()
+    assert compiled_now == [] and compiled._IDLE == []
+
+
+def test_a_scene_whose_stand_ins_fail_starts_nothing(scene, monkeypatch):
+    # (a rear law that does not compile: the model's assembly says so in its own words, later)
+    def fail(scene):
+        raise ValueError("air_bearing.rear_law = 'broken': its force does not compile")
+
+    started: list = []
+    monkeypatch.setattr(ahead, "stand_in_arguments", fail)
+    monkeypatch.setattr(ahead.dyn, "compile_kernel_ahead", lambda *args: started.append(args))
+    ahead.compile_kernel_ahead(scene)
+    assert started == []
