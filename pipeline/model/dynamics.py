@@ -90,8 +90,8 @@ from .compiled import kernel_jit
 from .forces import RearLawRef, rear_law_ref, rhs_slots, separation
 from .state import (ACCEPTED, MAX_STEPS, N_COUNTERS, NOT_FINITE, REJECTED, RHS_CALLS, STATUS, STEP_UNDERFLOW,
                     SWITCHES, WINDOW_SWITCHES, state_size)
-from .stepper import (error_norm, extrema_slots, inverse_mass_at_tfc, sample_outputs, step, stiffness_cap,
-                      switch_point, track_extremes)
+from .stepper import (error_norm, extrema_slots, first_wrong_side, inverse_mass_at_tfc, sample_outputs, step,
+                      step_points, stiffness_cap, switch_point, track_extremes)
 
 _jit = kernel_jit(__name__)
 _inline = kernel_jit(__name__, inline="always")
@@ -344,18 +344,20 @@ def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, cont
     err = np.empty(ns)
     tmp, k2, k3, k4, k5, k6 = np.empty(ns), np.empty(ns), np.empty(ns), np.empty(ns), np.empty(ns), np.empty(ns)
     ys = np.empty(ns)
-    buf = np.empty(extrema_slots(p, dmw, h_max))
+    n_max = extrema_slots(p, dmw, h_max)
+    buf = np.empty(n_max + 3)  # a step's interior points (extrema, 3 more near the threshold): stepper.step_points
+    dex = np.empty(n_max + 3)  # d at those points
     ev_y = np.empty(ns)
     ev_f = np.empty(ns)
     t = 0.0
+    d0, dd0 = separation(p, dmw, t, y)  # d and d' at the current step start (kept step to step)
     # The initial mode follows the criterion at t = 0.
     in_contact = False
     if has_contact:
-        in_contact = separation(p, dmw, t, y)[0] < p.k_sigma
+        in_contact = d0 < p.k_sigma
     rhs_slots(t, y, p, in_contact, k1, dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power,
               meniscus)
     info[RHS_CALLS] += 1
-    d0, dd0 = separation(p, dmw, t, y)  # d and d' at the current step start (kept step to step)
     if p.t_win <= 0.0:  # the window starts at t = 0: the initial d is one of its values (steps add their ends)
         ext[0] = d0
         ext[1] = d0
@@ -410,31 +412,42 @@ def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, cont
         # accepted step [t, t + h]
         h_acc = h
         switched = False
-        d1, dd1 = separation(p, dmw, t + h, ynew)
-        if has_contact and t_hold < 0.0:
-            # a contact switch in the step: redo the step exactly up to it (in the old mode); a redone
-            # (shorter) step is more accurate than the long step's interpolant and may show the
-            # crossing earlier, so the search repeats on the redone step
-            for _ in range(8):
-                hi = switch_point(p, dmw, in_contact, t, y, k1, ynew, k7, h_acc, d0, dd0, d1, dd1, ys, buf)
-                if hi < 0.0:
-                    break
-                if not switched:
-                    info[SWITCHES] += 1
-                switched = True
-                if hi >= 1.0:
-                    break  # the switch is at the end of the step
-                h_acc = hi * h_acc
-                step(t, y, k1, h_acc, p, in_contact, ev_y, ev_f, err, tmp, k2, k3, k4, k5, k6,
-                     dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power, meniscus)
-                info[RHS_CALLS] += 6
-                for i in range(ns):
-                    ynew[i] = ev_y[i]
-                    k7[i] = ev_f[i]
-                d1, dd1 = separation(p, dmw, t + h_acc, ynew)
+        search = has_contact and t_hold < 0.0
+        # A contact switch in the step: redo the step exactly up to it (in the old mode); a redone
+        # (shorter) step is more accurate than the long step's interpolant and may show the crossing
+        # earlier, so the search repeats on the redone step (up to 8 redos). One pass per (re)done step:
+        # d at its end, its interior points (the extrema of d, shared by the search and the window's
+        # extremes: one copy of each helper in the compiled kernel, docs/kernel.md, section "Compile time").
+        d1, dd1 = d0, dd0
+        n_ex = 0
+        for i_redo in range(9):
+            d1, dd1 = separation(p, dmw, t + h_acc, ynew)
+            n_ex = 0
+            n_pts = 0
+            if search or t + h_acc >= p.t_win:
+                n_ex, n_pts = step_points(p, dmw, search, t, h_acc, y, k1, ynew, k7, d0, dd0, d1, dd1, ys, buf,
+                                          dex, n_max)
+            if i_redo == 8 or not search:
+                break
+            hi = first_wrong_side(p, in_contact, d1, n_pts, buf, dex)
+            if hi < 0.0:
+                break
+            hi = switch_point(p, dmw, in_contact, t, y, k1, ynew, k7, h_acc, hi, ys)
+            if not switched:
+                info[SWITCHES] += 1
+            switched = True
+            if hi >= 1.0:
+                break  # the switch is at the end of the step
+            h_acc = hi * h_acc
+            step(t, y, k1, h_acc, p, in_contact, ev_y, ev_f, err, tmp, k2, k3, k4, k5, k6,
+                 dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power, meniscus)
+            info[RHS_CALLS] += 6
+            for i in range(ns):
+                ynew[i] = ev_y[i]
+                k7[i] = ev_f[i]
         t_new = t + h_acc
         if t_new >= p.t_win:
-            track_extremes(p, dmw, t, h_acc, y, k1, ynew, k7, d0, dd0, d1, dd1, ys, buf, ext)
+            track_extremes(p, t, h_acc, d1, n_ex, buf, dex, ext)
         j = sample_outputs(t, h_acc, y, k1, ynew, k7, in_contact, t_out, j, Y, C, ns)
         for i in range(ns):
             y[i] = ynew[i]

@@ -131,9 +131,9 @@ def _extrema(a, b, c):
 
 
 @_inline
-def d_extrema(p, dmw, t, h, y, k1, ynew, k7, d0, dd0, d1, dd1, buf):
-    """Interior extrema of ``d`` in the step ``[t, t + h]``: their step fractions in (0, 1) go into ``buf``;
-    returns how many.
+def d_extrema(p, dmw, t, h, y, k1, ynew, k7, d0, dd0, d1, dd1, buf, n_max):
+    """Interior extrema of ``d`` in the step ``[t, t + h]``: their step fractions in (0, 1) go into ``buf``
+    (at most ``n_max``, :func:`extrema_slots`); returns how many.
 
     Without a knot of the DMW spline inside the step, ``d`` is one cubic, the Hermite through its end
     values and slopes. Otherwise the step is split at the knots and on each piece ``d = const + s - w``
@@ -155,7 +155,7 @@ def d_extrema(p, dmw, t, h, y, k1, ynew, k7, d0, dd0, d1, dd1, buf):
             n_pieces = dmw.shape[0]
             ta = t
             i = i_a
-            while ta < t + h and n_b + 2 <= buf.shape[0]:
+            while ta < t + h and n_b + 2 <= n_max:
                 tb = min(t0 + (i + 1) * hd, t + h)
                 tha, L = (ta - t) / h, (tb - ta) / h
                 if L > 0.0:
@@ -191,48 +191,62 @@ def _interp_state(y0, f0, y1, f1, h, frac, out):
 
 
 @_inline
-def first_wrong_side(p, dmw, in_contact, t, y, k1, ynew, k7, h, d0, dd0, d1, dd1, ys, buf):
+def step_points(p, dmw, search, t, h, y, k1, ynew, k7, d0, dd0, d1, dd1, ys, buf, dex, n_max):
+    """The step's interior points where ``d`` is checked, and ``d`` [m] there: returns ``(n_ex, n_pts)``.
+
+    ``buf[:n_ex]``: the interior extrema of ``d`` (:func:`d_extrema`, ascending), for the event search and
+    the steady-window extremes alike; with ``search`` (the contact switch is looked for) and ``d`` passing
+    near the threshold, three more points, ``buf[n_ex:n_pts]`` = 1/4, 1/2, 3/4 (a grazing contact between
+    the extrema's closed form and the ends). ``dex[:n_pts]``: ``d`` at those points on the state
+    interpolant, each computed once for :func:`first_wrong_side` and :func:`track_extremes` (``buf``,
+    ``dex``: ``n_max + 3`` slots).
+    """
+    n_ex = d_extrema(p, dmw, t, h, y, k1, ynew, k7, d0, dd0, d1, dd1, buf, n_max)
+    ks = p.k_sigma
+    n_pts = n_ex
+    if search and min(abs(d0 - ks), abs(d1 - ks)) < 0.5 * h * max(abs(dd0), abs(dd1)):
+        n_pts = n_ex + 3
+    for i in range(n_ex, n_pts):
+        buf[i] = 0.25 * (i - n_ex + 1)
+    for i in range(n_pts):
+        frac = buf[i]
+        _interp_state(y, k1, ynew, k7, h, frac, ys)
+        dex[i] = separation(p, dmw, t + frac * h, ys)[0]
+    return n_ex, n_pts
+
+
+@_inline
+def first_wrong_side(p, in_contact, d1, n_pts, buf, dex):
     """Smallest fraction ``frac`` in (0, 1] of the step where the criterion disagrees with the mode, or -1.
 
-    Checks the step's end, the interior extrema of ``d`` (closed form, :func:`d_extrema`) and, when
-    ``d`` passes near the threshold, a few interior points; values are taken on the state
-    interpolant, the one outputs and the bisection use.
+    Checks the step's end (``d1`` [m]) and the points of :func:`step_points` (their fractions ``buf``,
+    ``d`` there ``dex`` [m]), values taken on the state interpolant, the one outputs and the bisection use.
     """
     ks = p.k_sigma
     best = 2.0
     if (d1 - ks < 0.0) != in_contact:
         best = 1.0
-    n_ex = d_extrema(p, dmw, t, h, y, k1, ynew, k7, d0, dd0, d1, dd1, buf)
-    near = min(abs(d0 - ks), abs(d1 - ks)) < 0.5 * h * max(abs(dd0), abs(dd1))
-    n_try = n_ex + (3 if near else 0)
-    for i_ex in range(n_try):
-        if i_ex < n_ex:
-            frac = buf[i_ex]
-        else:
-            frac = 0.25 * (i_ex - n_ex + 1)
-        if frac >= best:
-            continue
-        _interp_state(y, k1, ynew, k7, h, frac, ys)
-        if (separation(p, dmw, t + frac * h, ys)[0] - ks < 0.0) != in_contact:
+    for i in range(n_pts):
+        frac = buf[i]
+        if frac < best and (dex[i] - ks < 0.0) != in_contact:
             best = frac
     return best if best <= 1.0 else -1.0
 
 
-@_inline
-def switch_point(p, dmw, in_contact, t, y, k1, ynew, k7, h, d0, dd0, d1, dd1, ys, buf):
-    """The contact switch in the step ``[t, t + h]``: its step fraction in (0, 1], or -1 if the criterion
-    agrees with the mode over the whole step.
+@_jit
+def switch_point(p, dmw, in_contact, t, y, k1, ynew, k7, h, hi, ys):
+    """The contact switch in the step ``[t, t + h]``, given the first fraction ``hi`` in (0, 1] where the
+    criterion disagrees with the mode (:func:`first_wrong_side`): its step fraction, on the side where the
+    criterion disagrees.
 
-    The first point where the criterion disagrees (:func:`first_wrong_side`) is bisected on the
-    step's interpolant to 1e-16 s (``(hi - lo) h``); the returned fraction is on the
-    side where the criterion disagrees. :func:`pipeline.model.dynamics._integrate` redoes the step up to it (the call of
-    :func:`step` stays there: a call has an exception exit, past which numba cannot prune the
-    reference counts of an inlined helper's arrays). The bisection loop has one exit (a counter, no
-    ``break``) for the same reason (see :func:`pipeline.model.dynamics._integrate`).
+    Bisection on the step's interpolant to 1e-16 s (``(hi - lo) h``).
+    :func:`pipeline.model.dynamics._integrate` redoes the step up to it. Compiled on its own, not inlined:
+    it runs only at a switch, and its copy of the interpolant and of :func:`separation` would otherwise
+    be compiled into the kernel (docs/kernel.md, section "Compile time"). The bisection loop has one exit
+    (a counter, no ``break``): numba then prunes the reference counts of its array arguments.
     """
-    hi = first_wrong_side(p, dmw, in_contact, t, y, k1, ynew, k7, h, d0, dd0, d1, dd1, ys, buf)
     lo = 0.0
-    n = 60 if hi >= 0.0 else 0
+    n = 60
     while n > 0:  # (one exit: see the docstring)
         n -= 1
         mid = 0.5 * (lo + hi)
@@ -248,17 +262,16 @@ def switch_point(p, dmw, in_contact, t, y, k1, ynew, k7, h, d0, dd0, d1, dd1, ys
 
 
 @_inline
-def track_extremes(p, dmw, t, h, y, k1, ynew, k7, d0, dd0, d1, dd1, ys, buf, ext):
-    """Exact extremes of ``d`` over the steady window into ``ext``: at the step's end and at the interior
-    extrema of ``d`` on the step's cubic (peak-to-peak free of aliasing by the output grid)."""
+def track_extremes(p, t, h, d1, n_ex, buf, dex, ext):
+    """Exact extremes of ``d`` over the steady window into ``ext``: at the step's end (``d1`` [m]) and at the
+    interior extrema of ``d`` (:func:`step_points`: their fractions ``buf[:n_ex]``, ``d`` there ``dex`` [m])
+    that lie in the window (peak-to-peak free of aliasing by the output grid)."""
     ext[0] = min(ext[0], d1)
     ext[1] = max(ext[1], d1)
-    n_ex = d_extrema(p, dmw, t, h, y, k1, ynew, k7, d0, dd0, d1, dd1, buf)
     for i_ex in range(n_ex):
         frac = buf[i_ex]
         if t + frac * h >= p.t_win:
-            _interp_state(y, k1, ynew, k7, h, frac, ys)
-            de = separation(p, dmw, t + frac * h, ys)[0]
+            de = dex[i_ex]
             ext[0] = min(ext[0], de)
             ext[1] = max(ext[1], de)
 
