@@ -95,8 +95,9 @@ def measure(cache_dir: str | None = None) -> dict:
         env = dict(os.environ, NUMBA_CACHE_DIR=cache_dir or os.path.join(tmp, "numba"),
                    HDI_COMPILE_AHEAD="0")
         out = subprocess.run([sys.executable, "-m", "benchmarks.compile_time", "--child",
-                              os.path.join(tmp, "results")], cwd=ROOT, env=env, check=True,
-                             capture_output=True, text=True)
+                              os.path.join(tmp, "results")], cwd=ROOT, env=env, capture_output=True, text=True)
+    if out.returncode != 0:
+        raise RuntimeError(f"the compile failed: {out.stderr.strip()[-3000:]}")
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 

@@ -11,8 +11,8 @@ an accepted step (at its ends, or at an interior extremum of ``d``, so a grazing
 a step is not missed: :func:`first_wrong_side`) is located by bisection on the step's interpolant
 (:func:`switch_point`); the driver redoes the step exactly up to it.
 
-Interior extrema of ``d`` in a step (:func:`d_extrema`, for the event search and the exact
-steady-window extremes, :func:`track_extremes`) are those of ``d(t) = const + s(t) - w(t)``:
+Interior extrema of ``d`` in a step (:func:`knot_extrema`, :func:`cubic_extrema`, for the event search and
+the exact steady-window extremes, :func:`track_extremes`) are those of ``d(t) = const + s(t) - w(t)``:
 ``s = z - l_c theta`` on the state's Hermite cubic and ``w`` the DMW spline. Between two DMW knots
 both are cubics, so the step is split at the knots it contains and each piece's extrema come in
 closed form: exact for DMW content up to the Nyquist frequency, where a 500-ns step spans several
@@ -131,53 +131,72 @@ def _extrema(a, b, c):
 
 
 @_inline
-def d_extrema(p, dmw, t, h, y, k1, ynew, k7, d0, dd0, d1, dd1, buf, n_max):
-    """Interior extrema of ``d`` in the step ``[t, t + h]``: their step fractions in (0, 1) go into ``buf``
-    (at most ``n_max``, :func:`extrema_slots`); returns how many.
+def knots_in_step(p, dmw, t, h, y, k1, ynew, k7):
+    """Whether the step ``[t, t + h]`` contains a knot of the DMW spline, the piece ``i_a`` of ``t`` and the
+    coefficients ``A, B, C`` of ``s = z - l_c theta`` on the state's Hermite cubic (``A frac^3 + B frac^2 +
+    C frac + const`` [m]): what :func:`knot_extrema` needs. Without a knot ``d`` is one cubic over the step
+    (:func:`cubic_extrema`)."""
+    if dmw is None:
+        return False, 0, 0.0, 0.0, 0.0
+    # the arrays read before the branch (their last use unconditional: docs/kernel.md)
+    z0, th0, vz0, vth0 = y[Z], y[THETA], k1[Z], k1[THETA]
+    z1, th1, vz1, vth1 = ynew[Z], ynew[THETA], k7[Z], k7[THETA]
+    t0, hd = p.dmw_t0, p.dmw_dt
+    i_a = int((t - t0) / hd)
+    first_knot = t0 + (i_a + 1) * hd
+    if first_knot < t + h:
+        lc = p.l_c
+        A, B, C, E = _dcubic(z0 - lc * th0, vz0 - lc * vth0, z1 - lc * th1, vz1 - lc * vth1, h)
+        return True, i_a, A, B, C
+    return False, i_a, 0.0, 0.0, 0.0
 
-    Without a knot of the DMW spline inside the step, ``d`` is one cubic, the Hermite through its end
-    values and slopes. Otherwise the step is split at the knots and on each piece ``d = const + s - w``
-    (``s = z - l_c theta`` on the state's Hermite cubic, ``w`` the spline piece) is a cubic whose
-    Taylor coefficients at the piece's start give the extrema in closed form (module docstring).
+
+@_jit
+def knot_extrema(dmw, t, h, t0, hd, i_a, A, B, C, buf, n_max):
+    """Interior extrema of ``d`` in a step ``[t, t + h]`` [s] that contains knots of the DMW spline ``dmw``
+    (grid ``t0``, ``hd`` [s]; ``i_a``, ``A``, ``B``, ``C``: :func:`knots_in_step`): their step fractions in
+    (0, 1), ascending, into ``buf`` (at most ``n_max``, :func:`extrema_slots`); returns how many.
+
+    The step is split at the knots and on each piece ``d = const + s - w`` (``s = z - l_c theta`` on the
+    state's Hermite cubic, ``w`` the spline piece) is a cubic whose Taylor coefficients at the piece's start
+    give the extrema in closed form (module docstring). Compiled on its own, not inlined, and called from
+    the kernel's loop itself (no inlined helper's arrays live across the call: docs/kernel.md): its copy in
+    the kernel was a large part of the kernel's compile (docs/kernel.md, section "Compile time").
     """
     n_b = 0
-    if dmw is not None:
-        # the arrays read before the branch (their last use unconditional: docs/kernel.md)
-        z0, th0, vz0, vth0 = y[Z], y[THETA], k1[Z], k1[THETA]
-        z1, th1, vz1, vth1 = ynew[Z], ynew[THETA], k7[Z], k7[THETA]
-        t0, hd = p.dmw_t0, p.dmw_dt
-        i_a = int((t - t0) / hd)
-        first_knot = t0 + (i_a + 1) * hd
-        if first_knot < t + h:
-            lc = p.l_c
-            # s(frac) = A frac^3 + B frac^2 + C frac + E over the whole step
-            A, B, C, E = _dcubic(z0 - lc * th0, vz0 - lc * vth0, z1 - lc * th1, vz1 - lc * vth1, h)
-            n_pieces = dmw.shape[0]
-            ta = t
-            i = i_a
-            while ta < t + h and n_b + 2 <= n_max:
-                tb = min(t0 + (i + 1) * hd, t + h)
-                tha, L = (ta - t) / h, (tb - ta) / h
-                if L > 0.0:
-                    S1 = (3.0 * A * tha + 2.0 * B) * tha + C
-                    S2 = 6.0 * A * tha + 2.0 * B
-                    j = min(max(i, 0), n_pieces - 1)
-                    sg = ta - (t0 + j * hd)
-                    r0, r1, r2 = dmw[j, 0], dmw[j, 1], dmw[j, 2]
-                    W1 = (3.0 * r0 * sg + 2.0 * r1) * sg + r2
-                    W2 = 6.0 * r0 * sg + 2.0 * r1
-                    Lh = L * h
-                    n_ex, x1, x2 = _extrema((A * L ** 3 - r0 * Lh ** 3), 0.5 * (S2 * L * L - W2 * Lh * Lh),
-                                            S1 * L - W1 * Lh)
-                    if n_ex > 0:
-                        buf[n_b] = tha + x1 * L
-                        n_b += 1
-                    if n_ex > 1:
-                        buf[n_b] = tha + x2 * L
-                        n_b += 1
-                ta = tb
-                i += 1
-            return n_b
+    n_pieces = dmw.shape[0]
+    ta = t
+    i = i_a
+    while ta < t + h and n_b + 2 <= n_max:
+        tb = min(t0 + (i + 1) * hd, t + h)
+        tha, L = (ta - t) / h, (tb - ta) / h
+        if L > 0.0:
+            S1 = (3.0 * A * tha + 2.0 * B) * tha + C
+            S2 = 6.0 * A * tha + 2.0 * B
+            j = min(max(i, 0), n_pieces - 1)
+            sg = ta - (t0 + j * hd)
+            r0, r1, r2 = dmw[j, 0], dmw[j, 1], dmw[j, 2]
+            W1 = (3.0 * r0 * sg + 2.0 * r1) * sg + r2
+            W2 = 6.0 * r0 * sg + 2.0 * r1
+            Lh = L * h
+            n_ex, x1, x2 = _extrema((A * L ** 3 - r0 * Lh ** 3), 0.5 * (S2 * L * L - W2 * Lh * Lh),
+                                    S1 * L - W1 * Lh)
+            if n_ex > 0:
+                buf[n_b] = tha + x1 * L
+                n_b += 1
+            if n_ex > 1:
+                buf[n_b] = tha + x2 * L
+                n_b += 1
+        ta = tb
+        i += 1
+    return n_b
+
+
+@_inline
+def cubic_extrema(d0, dd0, d1, dd1, h, buf):
+    """Interior extrema of ``d`` in a step ``h`` [s] without a DMW knot inside, where ``d`` is one cubic, the
+    Hermite through its end values ``d0``, ``d1`` [m] and slopes ``dd0``, ``dd1`` [m/s]: their step fractions
+    into ``buf[0]``, ``buf[1]``; returns how many."""
     ca, cb, cc, ce = _dcubic(d0, dd0, d1, dd1, h)
     n_ex, buf[0], buf[1] = _extrema(ca, cb, cc)  # both slots always (unused ones ignored): no branch on buf
     return n_ex
@@ -191,17 +210,16 @@ def _interp_state(y0, f0, y1, f1, h, frac, out):
 
 
 @_inline
-def step_points(p, dmw, search, t, h, y, k1, ynew, k7, d0, dd0, d1, dd1, ys, buf, dex, n_max):
-    """The step's interior points where ``d`` is checked, and ``d`` [m] there: returns ``(n_ex, n_pts)``.
+def step_points(p, dmw, search, t, h, y, k1, ynew, k7, d0, dd0, d1, dd1, ys, buf, dex, n_ex):
+    """The step's interior points where ``d`` is checked, and ``d`` [m] there: returns ``n_pts``.
 
-    ``buf[:n_ex]``: the interior extrema of ``d`` (:func:`d_extrema`, ascending), for the event search and
-    the steady-window extremes alike; with ``search`` (the contact switch is looked for) and ``d`` passing
-    near the threshold, three more points, ``buf[n_ex:n_pts]`` = 1/4, 1/2, 3/4 (a grazing contact between
-    the extrema's closed form and the ends). ``dex[:n_pts]``: ``d`` at those points on the state
-    interpolant, each computed once for :func:`first_wrong_side` and :func:`track_extremes` (``buf``,
-    ``dex``: ``n_max + 3`` slots).
+    ``buf[:n_ex]``: the interior extrema of ``d`` (:func:`knot_extrema` or :func:`cubic_extrema`, ascending),
+    for the event search and the steady-window extremes alike; with ``search`` (the contact switch is looked
+    for) and ``d`` passing near the threshold, three more points, ``buf[n_ex:n_pts]`` = 1/4, 1/2, 3/4 (a
+    grazing contact between the closed-form extrema and the ends). ``dex[:n_pts]``: ``d`` at those points on
+    the state interpolant, each computed once for :func:`first_wrong_side` and :func:`track_extremes`
+    (``buf``, ``dex``: ``n_max + 3`` slots, :func:`extrema_slots`).
     """
-    n_ex = d_extrema(p, dmw, t, h, y, k1, ynew, k7, d0, dd0, d1, dd1, buf, n_max)
     ks = p.k_sigma
     n_pts = n_ex
     if search and min(abs(d0 - ks), abs(d1 - ks)) < 0.5 * h * max(abs(dd0), abs(dd1)):
@@ -212,7 +230,7 @@ def step_points(p, dmw, search, t, h, y, k1, ynew, k7, d0, dd0, d1, dd1, ys, buf
         frac = buf[i]
         _interp_state(y, k1, ynew, k7, h, frac, ys)
         dex[i] = separation(p, dmw, t + frac * h, ys)[0]
-    return n_ex, n_pts
+    return n_pts
 
 
 @_inline
