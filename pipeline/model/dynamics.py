@@ -96,10 +96,11 @@ from .stepper import (cubic_extrema, error_norm, extrema_slots, first_wrong_side
 _jit = kernel_jit(__name__)
 _inline = kernel_jit(__name__, inline="always")
 
-#: What a compile of the kernel (:func:`_integrate`) says, and its rough duration [s]: 25-27 s of CPU for
-#: the main scene's effects on the project's 2-core machine (docs/performance.md, section "The first run").
+#: What a compile of the kernel (:func:`_integrate`) says, and its rough duration [s]: 19 s of CPU for the main
+#: scene's effects on the project's 2-core machine at a load of 7, 29.7 s before its compile was cut
+#: (docs/kernel.md, section "Compile time").
 KERNEL_NOTICE = "the dynamics kernel for this scene's effects"
-KERNEL_COMPILE_S = 25.0
+KERNEL_COMPILE_S = 18.0
 
 #: The rear law of :class:`Variants` with ``rear_law=None`` (the scene's default, ``air_bearing.rear_law``).
 DEFAULT_REAR_LAW = "power"
@@ -325,8 +326,14 @@ def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, cont
     new variable whose reference-count pair numba removes only where it can prove it safe; so the
     helpers of this loop end an array's use unconditionally (no ``if cond: a[i] = x`` as its last use,
     no ``break`` out of a loop that reads it, state read before a branch) and call no compiled function
-    (:func:`pipeline.model.stepper.step` is called here, not in the event search). The measurements
+    that takes arrays: the separately compiled ones (:func:`pipeline.model.stepper.step`, the switch's
+    bisection :func:`pipeline.model.stepper.switch_point`, the knot-splitting extrema
+    :func:`pipeline.model.stepper.knot_extrema`) are called here, in the loop itself. The measurements
     and how to check a change (``_integrate.inspect_llvm()``): docs/kernel.md.
+
+    Compile time: what runs rarely or would be copied more than once is compiled on its own (the
+    bisection, the extrema across DMW knots), and a step's interior points are found and evaluated once
+    for the event search and the window's extremes (docs/kernel.md, section "Compile time").
     """
     p = params[0]
     gap_power = _unpacked(gap_power_)
