@@ -96,11 +96,11 @@ from .stepper import (cubic_extrema, error_norm, extrema_slots, first_wrong_side
 _jit = kernel_jit(__name__)
 _inline = kernel_jit(__name__, inline="always")
 
-#: What a compile of the kernel (:func:`_integrate`) says, and its rough duration [s]: 19 s of CPU for the main
-#: scene's effects on the project's 2-core machine at a load of 7, 29.7 s before its compile was cut
-#: (docs/kernel.md, section "Compile time").
+#: What a compile of the kernel (:func:`_integrate`) says, and its rough duration [s]: 15 s of CPU for the main
+#: scene's effects on the project's 2-core machine at a load of ~2.5 (29 s before its compile was cut), 19 s at
+#: a load of 7 (docs/kernel.md, section "Compile time").
 KERNEL_NOTICE = "the dynamics kernel for this scene's effects"
-KERNEL_COMPILE_S = 18.0
+KERNEL_COMPILE_S = 15.0
 
 #: The rear law of :class:`Variants` with ``rear_law=None`` (the scene's default, ``air_bearing.rear_law``).
 DEFAULT_REAR_LAW = "power"

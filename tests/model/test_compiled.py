@@ -102,7 +102,7 @@ def test_the_main_scene_compiles_one_signature_per_kernel_entry_point(tmp_path):
     assert out.returncode == 0, out.stderr[-2000:]
     plan = json.loads(out.stdout.strip().splitlines()[-1])
     # flying, touchdown and contact runs, a given start and the statics map share one kernel and one static
-    # solver (a second signature would be a second compile of 19 s or 6 s of CPU in a first run)
+    # solver (a second signature would be a second compile of 15 s or 6 s of CPU in a first run)
     assert {k: plan[k] for k in ("integrate", "newton", "ahead_is_called")} == {"integrate": 1, "newton": 1,
                                                                                "ahead_is_called": True}
 
