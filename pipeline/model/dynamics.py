@@ -90,16 +90,17 @@ from .compiled import kernel_jit
 from .forces import RearLawRef, rear_law_ref, rhs_slots, separation
 from .state import (ACCEPTED, MAX_STEPS, N_COUNTERS, NOT_FINITE, REJECTED, RHS_CALLS, STATUS, STEP_UNDERFLOW,
                     SWITCHES, WINDOW_SWITCHES, state_size)
-from .stepper import (error_norm, extrema_slots, inverse_mass_at_tfc, sample_outputs, step, stiffness_cap,
-                      switch_point, track_extremes)
+from .stepper import (cubic_extrema, error_norm, extrema_slots, first_wrong_side, inverse_mass_at_tfc, knot_extrema,
+                      knots_in_step, sample_outputs, step, step_points, stiffness_cap, switch_point, track_extremes)
 
 _jit = kernel_jit(__name__)
 _inline = kernel_jit(__name__, inline="always")
 
-#: What a compile of the kernel (:func:`_integrate`) says, and its rough duration [s]: 25-27 s of CPU for
-#: the main scene's effects on the project's 2-core machine (docs/performance.md, section "The first run").
+#: What a compile of the kernel (:func:`_integrate`) says, and its rough duration [s]: 15 s of CPU for the main
+#: scene's effects on the project's 2-core machine at a load of ~2.5 (29 s before its compile was cut), 19 s at
+#: a load of 7 (docs/kernel.md, section "Compile time").
 KERNEL_NOTICE = "the dynamics kernel for this scene's effects"
-KERNEL_COMPILE_S = 25.0
+KERNEL_COMPILE_S = 15.0
 
 #: The rear law of :class:`Variants` with ``rear_law=None`` (the scene's default, ``air_bearing.rear_law``).
 DEFAULT_REAR_LAW = "power"
@@ -325,8 +326,14 @@ def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, cont
     new variable whose reference-count pair numba removes only where it can prove it safe; so the
     helpers of this loop end an array's use unconditionally (no ``if cond: a[i] = x`` as its last use,
     no ``break`` out of a loop that reads it, state read before a branch) and call no compiled function
-    (:func:`pipeline.model.stepper.step` is called here, not in the event search). The measurements
+    that takes arrays: the separately compiled ones (:func:`pipeline.model.stepper.step`, the switch's
+    bisection :func:`pipeline.model.stepper.switch_point`, the knot-splitting extrema
+    :func:`pipeline.model.stepper.knot_extrema`) are called here, in the loop itself. The measurements
     and how to check a change (``_integrate.inspect_llvm()``): docs/kernel.md.
+
+    Compile time: what runs rarely or would be copied more than once is compiled on its own (the
+    bisection, the extrema across DMW knots), and a step's interior points are found and evaluated once
+    for the event search and the window's extremes (docs/kernel.md, section "Compile time").
     """
     p = params[0]
     gap_power = _unpacked(gap_power_)
@@ -344,18 +351,20 @@ def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, cont
     err = np.empty(ns)
     tmp, k2, k3, k4, k5, k6 = np.empty(ns), np.empty(ns), np.empty(ns), np.empty(ns), np.empty(ns), np.empty(ns)
     ys = np.empty(ns)
-    buf = np.empty(extrema_slots(p, dmw, h_max))
+    n_max = extrema_slots(p, dmw, h_max)
+    buf = np.empty(n_max + 3)  # a step's interior points (extrema, 3 more near the threshold): stepper.step_points
+    dex = np.empty(n_max + 3)  # d at those points
     ev_y = np.empty(ns)
     ev_f = np.empty(ns)
     t = 0.0
+    d0, dd0 = separation(p, dmw, t, y)  # d and d' at the current step start (kept step to step)
     # The initial mode follows the criterion at t = 0.
     in_contact = False
     if has_contact:
-        in_contact = separation(p, dmw, t, y)[0] < p.k_sigma
+        in_contact = d0 < p.k_sigma
     rhs_slots(t, y, p, in_contact, k1, dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power,
               meniscus)
     info[RHS_CALLS] += 1
-    d0, dd0 = separation(p, dmw, t, y)  # d and d' at the current step start (kept step to step)
     if p.t_win <= 0.0:  # the window starts at t = 0: the initial d is one of its values (steps add their ends)
         ext[0] = d0
         ext[1] = d0
@@ -410,31 +419,49 @@ def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, cont
         # accepted step [t, t + h]
         h_acc = h
         switched = False
-        d1, dd1 = separation(p, dmw, t + h, ynew)
-        if has_contact and t_hold < 0.0:
-            # a contact switch in the step: redo the step exactly up to it (in the old mode); a redone
-            # (shorter) step is more accurate than the long step's interpolant and may show the
-            # crossing earlier, so the search repeats on the redone step
-            for _ in range(8):
-                hi = switch_point(p, dmw, in_contact, t, y, k1, ynew, k7, h_acc, d0, dd0, d1, dd1, ys, buf)
-                if hi < 0.0:
-                    break
-                if not switched:
-                    info[SWITCHES] += 1
-                switched = True
-                if hi >= 1.0:
-                    break  # the switch is at the end of the step
-                h_acc = hi * h_acc
-                step(t, y, k1, h_acc, p, in_contact, ev_y, ev_f, err, tmp, k2, k3, k4, k5, k6,
-                     dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power, meniscus)
-                info[RHS_CALLS] += 6
-                for i in range(ns):
-                    ynew[i] = ev_y[i]
-                    k7[i] = ev_f[i]
-                d1, dd1 = separation(p, dmw, t + h_acc, ynew)
+        search = has_contact and t_hold < 0.0
+        # A contact switch in the step: redo the step exactly up to it (in the old mode); a redone
+        # (shorter) step is more accurate than the long step's interpolant and may show the crossing
+        # earlier, so the search repeats on the redone step (up to 8 redos). One pass per (re)done step:
+        # d at its end, its interior points (the extrema of d, shared by the search and the window's
+        # extremes: one copy of each helper in the compiled kernel, docs/kernel.md, section "Compile time").
+        d1, dd1 = d0, dd0
+        n_ex = 0
+        for i_redo in range(9):
+            d1, dd1 = separation(p, dmw, t + h_acc, ynew)
+            n_ex = 0
+            n_pts = 0
+            if search or t + h_acc >= p.t_win:
+                # the extrema of d (knot_extrema called here, not in an inlined helper: docs/kernel.md)
+                knots, i_a, s3, s2, s1 = knots_in_step(p, dmw, t, h_acc, y, k1, ynew, k7)
+                if dmw is not None:
+                    if knots:
+                        n_ex = knot_extrema(dmw, t, h_acc, p.dmw_t0, p.dmw_dt, i_a, s3, s2, s1, buf, n_max)
+                if not knots:
+                    n_ex = cubic_extrema(d0, dd0, d1, dd1, h_acc, buf)
+                n_pts = step_points(p, dmw, search, t, h_acc, y, k1, ynew, k7, d0, dd0, d1, dd1, ys, buf, dex,
+                                    n_ex)
+            if i_redo == 8 or not search:
+                break
+            hi = first_wrong_side(p, in_contact, d1, n_pts, buf, dex)
+            if hi < 0.0:
+                break
+            hi = switch_point(p, dmw, in_contact, t, y, k1, ynew, k7, h_acc, hi, ys)
+            if not switched:
+                info[SWITCHES] += 1
+            switched = True
+            if hi >= 1.0:
+                break  # the switch is at the end of the step
+            h_acc = hi * h_acc
+            step(t, y, k1, h_acc, p, in_contact, ev_y, ev_f, err, tmp, k2, k3, k4, k5, k6,
+                 dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power, meniscus)
+            info[RHS_CALLS] += 6
+            for i in range(ns):
+                ynew[i] = ev_y[i]
+                k7[i] = ev_f[i]
         t_new = t + h_acc
         if t_new >= p.t_win:
-            track_extremes(p, dmw, t, h_acc, y, k1, ynew, k7, d0, dd0, d1, dd1, ys, buf, ext)
+            track_extremes(p, t, h_acc, d1, n_ex, buf, dex, ext)
         j = sample_outputs(t, h_acc, y, k1, ynew, k7, in_contact, t_out, j, Y, C, ns)
         for i in range(ns):
             y[i] = ynew[i]

@@ -11,8 +11,8 @@ an accepted step (at its ends, or at an interior extremum of ``d``, so a grazing
 a step is not missed: :func:`first_wrong_side`) is located by bisection on the step's interpolant
 (:func:`switch_point`); the driver redoes the step exactly up to it.
 
-Interior extrema of ``d`` in a step (:func:`d_extrema`, for the event search and the exact
-steady-window extremes, :func:`track_extremes`) are those of ``d(t) = const + s(t) - w(t)``:
+Interior extrema of ``d`` in a step (:func:`knot_extrema`, :func:`cubic_extrema`, for the event search and
+the exact steady-window extremes, :func:`track_extremes`) are those of ``d(t) = const + s(t) - w(t)``:
 ``s = z - l_c theta`` on the state's Hermite cubic and ``w`` the DMW spline. Between two DMW knots
 both are cubics, so the step is split at the knots it contains and each piece's extrema come in
 closed form: exact for DMW content up to the Nyquist frequency, where a 500-ns step spans several
@@ -131,53 +131,72 @@ def _extrema(a, b, c):
 
 
 @_inline
-def d_extrema(p, dmw, t, h, y, k1, ynew, k7, d0, dd0, d1, dd1, buf):
-    """Interior extrema of ``d`` in the step ``[t, t + h]``: their step fractions in (0, 1) go into ``buf``;
-    returns how many.
+def knots_in_step(p, dmw, t, h, y, k1, ynew, k7):
+    """Whether the step ``[t, t + h]`` contains a knot of the DMW spline, the piece ``i_a`` of ``t`` and the
+    coefficients ``A, B, C`` of ``s = z - l_c theta`` on the state's Hermite cubic (``A frac^3 + B frac^2 +
+    C frac + const`` [m]): what :func:`knot_extrema` needs. Without a knot ``d`` is one cubic over the step
+    (:func:`cubic_extrema`)."""
+    if dmw is None:
+        return False, 0, 0.0, 0.0, 0.0
+    # the arrays read before the branch (their last use unconditional: docs/kernel.md)
+    z0, th0, vz0, vth0 = y[Z], y[THETA], k1[Z], k1[THETA]
+    z1, th1, vz1, vth1 = ynew[Z], ynew[THETA], k7[Z], k7[THETA]
+    t0, hd = p.dmw_t0, p.dmw_dt
+    i_a = int((t - t0) / hd)
+    first_knot = t0 + (i_a + 1) * hd
+    if first_knot < t + h:
+        lc = p.l_c
+        A, B, C, E = _dcubic(z0 - lc * th0, vz0 - lc * vth0, z1 - lc * th1, vz1 - lc * vth1, h)
+        return True, i_a, A, B, C
+    return False, i_a, 0.0, 0.0, 0.0
 
-    Without a knot of the DMW spline inside the step, ``d`` is one cubic, the Hermite through its end
-    values and slopes. Otherwise the step is split at the knots and on each piece ``d = const + s - w``
-    (``s = z - l_c theta`` on the state's Hermite cubic, ``w`` the spline piece) is a cubic whose
-    Taylor coefficients at the piece's start give the extrema in closed form (module docstring).
+
+@_jit
+def knot_extrema(dmw, t, h, t0, hd, i_a, A, B, C, buf, n_max):
+    """Interior extrema of ``d`` in a step ``[t, t + h]`` [s] that contains knots of the DMW spline ``dmw``
+    (grid ``t0``, ``hd`` [s]; ``i_a``, ``A``, ``B``, ``C``: :func:`knots_in_step`): their step fractions in
+    (0, 1), ascending, into ``buf`` (at most ``n_max``, :func:`extrema_slots`); returns how many.
+
+    The step is split at the knots and on each piece ``d = const + s - w`` (``s = z - l_c theta`` on the
+    state's Hermite cubic, ``w`` the spline piece) is a cubic whose Taylor coefficients at the piece's start
+    give the extrema in closed form (module docstring). Compiled on its own, not inlined, and called from
+    the kernel's loop itself (no inlined helper's arrays live across the call: docs/kernel.md): its copy in
+    the kernel was a large part of the kernel's compile (docs/kernel.md, section "Compile time").
     """
     n_b = 0
-    if dmw is not None:
-        # the arrays read before the branch (their last use unconditional: docs/kernel.md)
-        z0, th0, vz0, vth0 = y[Z], y[THETA], k1[Z], k1[THETA]
-        z1, th1, vz1, vth1 = ynew[Z], ynew[THETA], k7[Z], k7[THETA]
-        t0, hd = p.dmw_t0, p.dmw_dt
-        i_a = int((t - t0) / hd)
-        first_knot = t0 + (i_a + 1) * hd
-        if first_knot < t + h:
-            lc = p.l_c
-            # s(frac) = A frac^3 + B frac^2 + C frac + E over the whole step
-            A, B, C, E = _dcubic(z0 - lc * th0, vz0 - lc * vth0, z1 - lc * th1, vz1 - lc * vth1, h)
-            n_pieces = dmw.shape[0]
-            ta = t
-            i = i_a
-            while ta < t + h and n_b + 2 <= buf.shape[0]:
-                tb = min(t0 + (i + 1) * hd, t + h)
-                tha, L = (ta - t) / h, (tb - ta) / h
-                if L > 0.0:
-                    S1 = (3.0 * A * tha + 2.0 * B) * tha + C
-                    S2 = 6.0 * A * tha + 2.0 * B
-                    j = min(max(i, 0), n_pieces - 1)
-                    sg = ta - (t0 + j * hd)
-                    r0, r1, r2 = dmw[j, 0], dmw[j, 1], dmw[j, 2]
-                    W1 = (3.0 * r0 * sg + 2.0 * r1) * sg + r2
-                    W2 = 6.0 * r0 * sg + 2.0 * r1
-                    Lh = L * h
-                    n_ex, x1, x2 = _extrema((A * L ** 3 - r0 * Lh ** 3), 0.5 * (S2 * L * L - W2 * Lh * Lh),
-                                            S1 * L - W1 * Lh)
-                    if n_ex > 0:
-                        buf[n_b] = tha + x1 * L
-                        n_b += 1
-                    if n_ex > 1:
-                        buf[n_b] = tha + x2 * L
-                        n_b += 1
-                ta = tb
-                i += 1
-            return n_b
+    n_pieces = dmw.shape[0]
+    ta = t
+    i = i_a
+    while ta < t + h and n_b + 2 <= n_max:
+        tb = min(t0 + (i + 1) * hd, t + h)
+        tha, L = (ta - t) / h, (tb - ta) / h
+        if L > 0.0:
+            S1 = (3.0 * A * tha + 2.0 * B) * tha + C
+            S2 = 6.0 * A * tha + 2.0 * B
+            j = min(max(i, 0), n_pieces - 1)
+            sg = ta - (t0 + j * hd)
+            r0, r1, r2 = dmw[j, 0], dmw[j, 1], dmw[j, 2]
+            W1 = (3.0 * r0 * sg + 2.0 * r1) * sg + r2
+            W2 = 6.0 * r0 * sg + 2.0 * r1
+            Lh = L * h
+            n_ex, x1, x2 = _extrema((A * L ** 3 - r0 * Lh ** 3), 0.5 * (S2 * L * L - W2 * Lh * Lh),
+                                    S1 * L - W1 * Lh)
+            if n_ex > 0:
+                buf[n_b] = tha + x1 * L
+                n_b += 1
+            if n_ex > 1:
+                buf[n_b] = tha + x2 * L
+                n_b += 1
+        ta = tb
+        i += 1
+    return n_b
+
+
+@_inline
+def cubic_extrema(d0, dd0, d1, dd1, h, buf):
+    """Interior extrema of ``d`` in a step ``h`` [s] without a DMW knot inside, where ``d`` is one cubic, the
+    Hermite through its end values ``d0``, ``d1`` [m] and slopes ``dd0``, ``dd1`` [m/s]: their step fractions
+    into ``buf[0]``, ``buf[1]``; returns how many."""
     ca, cb, cc, ce = _dcubic(d0, dd0, d1, dd1, h)
     n_ex, buf[0], buf[1] = _extrema(ca, cb, cc)  # both slots always (unused ones ignored): no branch on buf
     return n_ex
@@ -191,48 +210,61 @@ def _interp_state(y0, f0, y1, f1, h, frac, out):
 
 
 @_inline
-def first_wrong_side(p, dmw, in_contact, t, y, k1, ynew, k7, h, d0, dd0, d1, dd1, ys, buf):
+def step_points(p, dmw, search, t, h, y, k1, ynew, k7, d0, dd0, d1, dd1, ys, buf, dex, n_ex):
+    """The step's interior points where ``d`` is checked, and ``d`` [m] there: returns ``n_pts``.
+
+    ``buf[:n_ex]``: the interior extrema of ``d`` (:func:`knot_extrema` or :func:`cubic_extrema`, ascending),
+    for the event search and the steady-window extremes alike; with ``search`` (the contact switch is looked
+    for) and ``d`` passing near the threshold, three more points, ``buf[n_ex:n_pts]`` = 1/4, 1/2, 3/4 (a
+    grazing contact between the closed-form extrema and the ends). ``dex[:n_pts]``: ``d`` at those points on
+    the state interpolant, each computed once for :func:`first_wrong_side` and :func:`track_extremes`
+    (``buf``, ``dex``: ``n_max + 3`` slots, :func:`extrema_slots`).
+    """
+    ks = p.k_sigma
+    n_pts = n_ex
+    if search and min(abs(d0 - ks), abs(d1 - ks)) < 0.5 * h * max(abs(dd0), abs(dd1)):
+        n_pts = n_ex + 3
+    for i in range(n_ex, n_pts):
+        buf[i] = 0.25 * (i - n_ex + 1)
+    for i in range(n_pts):
+        frac = buf[i]
+        _interp_state(y, k1, ynew, k7, h, frac, ys)
+        dex[i] = separation(p, dmw, t + frac * h, ys)[0]
+    return n_pts
+
+
+@_inline
+def first_wrong_side(p, in_contact, d1, n_pts, buf, dex):
     """Smallest fraction ``frac`` in (0, 1] of the step where the criterion disagrees with the mode, or -1.
 
-    Checks the step's end, the interior extrema of ``d`` (closed form, :func:`d_extrema`) and, when
-    ``d`` passes near the threshold, a few interior points; values are taken on the state
-    interpolant, the one outputs and the bisection use.
+    Checks the step's end (``d1`` [m]) and the points of :func:`step_points` (their fractions ``buf``,
+    ``d`` there ``dex`` [m]), values taken on the state interpolant, the one outputs and the bisection use.
     """
     ks = p.k_sigma
     best = 2.0
     if (d1 - ks < 0.0) != in_contact:
         best = 1.0
-    n_ex = d_extrema(p, dmw, t, h, y, k1, ynew, k7, d0, dd0, d1, dd1, buf)
-    near = min(abs(d0 - ks), abs(d1 - ks)) < 0.5 * h * max(abs(dd0), abs(dd1))
-    n_try = n_ex + (3 if near else 0)
-    for i_ex in range(n_try):
-        if i_ex < n_ex:
-            frac = buf[i_ex]
-        else:
-            frac = 0.25 * (i_ex - n_ex + 1)
-        if frac >= best:
-            continue
-        _interp_state(y, k1, ynew, k7, h, frac, ys)
-        if (separation(p, dmw, t + frac * h, ys)[0] - ks < 0.0) != in_contact:
+    for i in range(n_pts):
+        frac = buf[i]
+        if frac < best and (dex[i] - ks < 0.0) != in_contact:
             best = frac
     return best if best <= 1.0 else -1.0
 
 
-@_inline
-def switch_point(p, dmw, in_contact, t, y, k1, ynew, k7, h, d0, dd0, d1, dd1, ys, buf):
-    """The contact switch in the step ``[t, t + h]``: its step fraction in (0, 1], or -1 if the criterion
-    agrees with the mode over the whole step.
+@_jit
+def switch_point(p, dmw, in_contact, t, y, k1, ynew, k7, h, hi, ys):
+    """The contact switch in the step ``[t, t + h]``, given the first fraction ``hi`` in (0, 1] where the
+    criterion disagrees with the mode (:func:`first_wrong_side`): its step fraction, on the side where the
+    criterion disagrees.
 
-    The first point where the criterion disagrees (:func:`first_wrong_side`) is bisected on the
-    step's interpolant to 1e-16 s (``(hi - lo) h``); the returned fraction is on the
-    side where the criterion disagrees. :func:`pipeline.model.dynamics._integrate` redoes the step up to it (the call of
-    :func:`step` stays there: a call has an exception exit, past which numba cannot prune the
-    reference counts of an inlined helper's arrays). The bisection loop has one exit (a counter, no
-    ``break``) for the same reason (see :func:`pipeline.model.dynamics._integrate`).
+    Bisection on the step's interpolant to 1e-16 s (``(hi - lo) h``).
+    :func:`pipeline.model.dynamics._integrate` redoes the step up to it. Compiled on its own, not inlined:
+    it runs only at a switch, and its copy of the interpolant and of :func:`separation` would otherwise
+    be compiled into the kernel (docs/kernel.md, section "Compile time"). The bisection loop has one exit
+    (a counter, no ``break``): numba then prunes the reference counts of its array arguments.
     """
-    hi = first_wrong_side(p, dmw, in_contact, t, y, k1, ynew, k7, h, d0, dd0, d1, dd1, ys, buf)
     lo = 0.0
-    n = 60 if hi >= 0.0 else 0
+    n = 60
     while n > 0:  # (one exit: see the docstring)
         n -= 1
         mid = 0.5 * (lo + hi)
@@ -248,17 +280,16 @@ def switch_point(p, dmw, in_contact, t, y, k1, ynew, k7, h, d0, dd0, d1, dd1, ys
 
 
 @_inline
-def track_extremes(p, dmw, t, h, y, k1, ynew, k7, d0, dd0, d1, dd1, ys, buf, ext):
-    """Exact extremes of ``d`` over the steady window into ``ext``: at the step's end and at the interior
-    extrema of ``d`` on the step's cubic (peak-to-peak free of aliasing by the output grid)."""
+def track_extremes(p, t, h, d1, n_ex, buf, dex, ext):
+    """Exact extremes of ``d`` over the steady window into ``ext``: at the step's end (``d1`` [m]) and at the
+    interior extrema of ``d`` (:func:`step_points`: their fractions ``buf[:n_ex]``, ``d`` there ``dex`` [m])
+    that lie in the window (peak-to-peak free of aliasing by the output grid)."""
     ext[0] = min(ext[0], d1)
     ext[1] = max(ext[1], d1)
-    n_ex = d_extrema(p, dmw, t, h, y, k1, ynew, k7, d0, dd0, d1, dd1, buf)
     for i_ex in range(n_ex):
         frac = buf[i_ex]
         if t + frac * h >= p.t_win:
-            _interp_state(y, k1, ynew, k7, h, frac, ys)
-            de = separation(p, dmw, t + frac * h, ys)[0]
+            de = dex[i_ex]
             ext[0] = min(ext[0], de)
             ext[1] = max(ext[1], de)
 

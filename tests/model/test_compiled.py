@@ -62,8 +62,19 @@ ROOT = Path(__file__).resolve().parents[2]
 #: signature (a model's, and the scene's stand-ins') is the one the kernel was called with, and whether the
 #: entry points called from Python were called with the types a first run compiles them for while it waits.
 PLAN = """
-import json, sys
+import collections, json, sys
 import numpy as np
+from numba.core import event
+compiles = collections.Counter()  # numba's compile event: a compile, not a cache load
+
+class Count(event.Listener):
+    def on_start(self, ev):
+        compiles[ev.data["dispatcher"].py_func.__name__] += 1
+
+    def on_end(self, ev):
+        pass
+
+event.register("numba:compile", Count())
 import pipeline as hdi
 from pipeline.model import ahead as first_run, compiled, dynamics as dyn, kernel_inputs, running, static_solver, statics
 from pipeline.model.kernel_inputs import run_parameters
@@ -80,10 +91,12 @@ ahead = compiled.signature(dyn._integrate, dyn.kernel_arguments(
     np.zeros(N_STATE), dyn.Grid(1e-3, np.zeros(3)), p, tables, variants, dyn.Solver(1e-6, model.atol, 1e-7, 10)))
 stand_in = compiled.signature(dyn._integrate, dyn.kernel_arguments(*kernel_inputs.stand_in_arguments(scene)))
 entry_points = [compiled.signature(f, args) in f.signatures for f, args in first_run.python_entry_points(scene)]
+kernel = ("_integrate", "step", "switch_point", "knot_extrema", "rhs_slots", "_newton")
 print(json.dumps({"integrate": len(dyn._integrate.signatures), "newton": len(static_solver._newton.signatures),
                   "ahead_is_called": [ahead] == list(dyn._integrate.signatures),
                   "stand_in_is_called": [stand_in] == list(dyn._integrate.signatures),
-                  "entry_points_are_called": entry_points}))
+                  "entry_points_are_called": entry_points,
+                  "compiles": {name: compiles[name] for name in kernel}}))
 """
 
 
@@ -94,11 +107,27 @@ def test_the_main_scene_compiles_one_signature_per_kernel_entry_point(tmp_path):
     assert out.returncode == 0, out.stderr[-2000:]
     plan = json.loads(out.stdout.strip().splitlines()[-1])
     # flying, touchdown and contact runs, a given start and the statics map share one kernel and one static
-    # solver (a second signature would be a second compile of 25 s or 6 s of CPU in a first run)
+    # solver (a second signature would be a second compile of 15 s or 6 s of CPU in a first run)
     # ... whose types the runner's compile ahead knows from the scene alone (its stand-in arguments), and so
     # are those of the entry points called from Python, which a first run compiles while it waits
-    assert plan == {"integrate": 1, "newton": 1, "ahead_is_called": True, "stand_in_is_called": True,
-                    "entry_points_are_called": [True, True, True]}
+    assert {k: v for k, v in plan.items() if k != "compiles"} == {
+        "integrate": 1, "newton": 1, "ahead_is_called": True, "stand_in_is_called": True,
+        "entry_points_are_called": [True, True, True]}
+
+
+@pytest.mark.slow  # (the kernel and the static solver compiled from an empty cache: ~30 s of CPU)
+def test_the_main_scene_compiles_each_kernel_function_once(tmp_path):
+    # an empty cache, everything compiled in this process (no background compile): the kernel, its separately
+    # compiled helpers (the step, the switch's bisection, the extrema across DMW knots) and the static solver
+    # once each, the right-hand side twice: the kernel's slots and the static solver's (no DMW, no meniscus
+    # state; docs/kernel.md, section "Compile time")
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "numba"), HDI_COMPILE_AHEAD="0")
+    out = subprocess.run([sys.executable, "-c", PLAN, str(tmp_path / "results")], cwd=ROOT, capture_output=True,
+                         text=True, timeout=900, env=env)
+    assert out.returncode == 0, out.stderr[-2000:]
+    plan = json.loads(out.stdout.strip().splitlines()[-1])
+    assert plan["compiles"] == {"_integrate": 1, "step": 1, "switch_point": 1, "knot_extrema": 1, "rhs_slots": 2,
+                                "_newton": 1}
 
 
 #: A small cached kernel in its own module, compiled ahead in a fresh process with an empty cache.

@@ -500,7 +500,7 @@ def test_nyquist_dmw_run_is_finite_physical_and_converged_in_rtol(nyquist, kind,
 # cubic through d and d' at the step's ends, but d contains the DMW spline with knots every 250 ns
 # while steps are up to 500 ns, so peaks between knots were missed (flying at 5 nm, band
 # [10, 2000] kHz + 0.05 nm sine at fs/2 - one bin: minimum missed by 0.0099 nm, rtol/atol halving
-# moved fhm_bv by 0.59 %). Fixed in pipeline/model/stepper.py:d_extrema (then dynamics.py:_d_extrema): the step is split at the DMW
+# moved fhm_bv by 0.59 %). Fixed in pipeline/model/stepper.py:knot_extrema (then dynamics.py:_d_extrema): the step is split at the DMW
 # knots and each piece's extrema are taken in closed form (d is a cubic between two knots).
 @pytest.mark.parametrize("kind", ["sine", "band+sine"])
 def test_nyquist_dmw_exact_extremes_bound_the_samples_and_converge(nyquist, kind):
@@ -516,7 +516,7 @@ def test_nyquist_dmw_exact_extremes_bound_the_samples_and_converge(nyquist, kind
     assert_refines(model, 5 * NM, max_step=False)
 
 
-# Regression test (fixed by splitting the event search at the DMW knots, stepper.d_extrema):
+# Regression test (fixed by splitting the event search at the DMW knots, stepper.knot_extrema):
 # pipeline/model/stepper.py:first_wrong_side: the contact criterion is checked at the step end,
 # at the extrema of the step's Hermite cubic of d and at 3 interior points, but the DMW term of d
 # varies between its 250-ns knots inside a 500-ns step: excursions of d below k sigma driven by DMW

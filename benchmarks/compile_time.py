@@ -1,0 +1,121 @@
+"""numba's compile time of the dynamics kernel for the main scene, per compiled function (issue 36).
+
+In a fresh process whose ``NUMBA_CACHE_DIR`` is an empty temporary folder: build the model of
+``configs/paper-2009-identified.toml`` (the calibrated ``k`` of ``make run``, given: no calibration), type
+the kernel's arguments for one run as :func:`pipeline.model.dynamics.integrate` would
+(:func:`pipeline.model.dynamics.kernel_arguments`, :func:`pipeline.model.compiled.signature`), then compile
+``dynamics._integrate`` for them (``Dispatcher.compile(sig)``). Reported: the CPU of that compile
+(``time.process_time``), and per compiled function (numba's ``numba:compile`` event, which fires on a
+compile, not on a cache load) its exclusive CPU (``time.thread_time``, the nested compiles it triggers
+subtracted) and how many signatures it compiled. What the model's assembly compiles before is not counted.
+
+Run it from the repository (about 30 s)::
+
+    .venv/bin/python -m benchmarks.compile_time            # a table
+    .venv/bin/python -m benchmarks.compile_time --json     # one JSON line (benchmarks/bench_compile.py)
+
+``--keep-cache DIR`` compiles into ``DIR`` instead of a temporary folder (it must be empty for a
+compile to be measured). The number depends on the machine's load far less than a wall time does, but a
+busy machine still inflates it (shared caches, frequency): say the load with it (``uptime``).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+SCENE = ROOT / "configs" / "paper-2009-identified.toml"
+#: The contact constant of the main scene's calibration (as tests/model/test_compiled.py): given, so the
+#: model builds without running the calibration (which would compile the kernel itself).
+K = 1.0736
+#: The protrusion of the typed run [nm]: any gives the same types.
+PROTRUSION_NM = 5.0
+
+
+def _measure(results: str) -> dict:
+    """In this process (``NUMBA_CACHE_DIR`` already set): build the model, compile the kernel, return the
+    per-function CPU (see the module docstring)."""
+    import time
+
+    import numpy as np
+    from numba.core import event
+
+    import pipeline as hdi
+    from pipeline.model import dynamics as dyn
+    from pipeline.model.kernel_inputs import run_parameters
+    from pipeline.model.state import N_STATE
+    from pipeline.units import NM
+
+    scene = hdi.load_scene(str(SCENE))
+    model = hdi.build_model(scene, results, k=K, progress=False)
+    p, tables, variants = run_parameters(model, PROTRUSION_NM * NM)
+    args = dyn.kernel_arguments(np.zeros(N_STATE), dyn.Grid(1e-3, np.zeros(3)), p, tables, variants,
+                                dyn.Solver(1e-6, model.atol, 1e-7, 10))
+    sig = dyn.compiled.signature(dyn._integrate, args)
+
+    rows: dict[str, dict] = {}
+    stack: list[list] = []  # [name, start thread time, CPU of the nested compiles]
+
+    class Listener(event.Listener):
+        def on_start(self, ev: event.Event) -> None:
+            d = ev.data["dispatcher"]
+            stack.append([f"{d.py_func.__module__}.{d.py_func.__qualname__}", time.thread_time(), 0.0])
+
+        def on_end(self, ev: event.Event) -> None:
+            name, t0, nested = stack.pop()
+            total = time.thread_time() - t0
+            if stack:
+                stack[-1][2] += total
+            row = rows.setdefault(name, {"cpu_s": 0.0, "inclusive_s": 0.0, "compiles": 0})
+            row["cpu_s"] += total - nested
+            row["inclusive_s"] += total
+            row["compiles"] += 1
+
+    listener = Listener()
+    event.register("numba:compile", listener)
+    t0 = time.process_time()
+    try:
+        dyn._integrate.compile(sig)
+    finally:
+        event.unregister("numba:compile", listener)
+    total = time.process_time() - t0
+    functions = dict(sorted(rows.items(), key=lambda kv: -kv[1]["cpu_s"]))
+    return {"total_cpu_s": total, "functions": functions, "load_1min": os.getloadavg()[0]}
+
+
+def measure(cache_dir: str | None = None) -> dict:
+    """Run :func:`_measure` in a fresh interpreter with ``NUMBA_CACHE_DIR`` an empty folder (``cache_dir``
+    or a temporary one) and return its result."""
+    with tempfile.TemporaryDirectory(prefix="hdi-compile-time-") as tmp:
+        env = dict(os.environ, NUMBA_CACHE_DIR=cache_dir or os.path.join(tmp, "numba"),
+                   HDI_COMPILE_AHEAD="0")
+        out = subprocess.run([sys.executable, "-m", "benchmarks.compile_time", "--child",
+                              os.path.join(tmp, "results")], cwd=ROOT, env=env, capture_output=True, text=True)
+    if out.returncode != 0:
+        raise RuntimeError(f"the compile failed: {out.stderr.strip()[-3000:]}")
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def main(argv: list[str]) -> None:
+    if argv[:1] == ["--child"]:
+        print(json.dumps(_measure(argv[1])))
+        return
+    cache = argv[argv.index("--keep-cache") + 1] if "--keep-cache" in argv else None
+    result = measure(cache)
+    if "--json" in argv:
+        print(json.dumps(result))
+        return
+    print(f"{'function':<52} {'compiles':>8} {'CPU [s]':>8} {'incl. [s]':>9}")
+    for name, row in result["functions"].items():
+        print(f"{name:<52} {row['compiles']:>8} {row['cpu_s']:>8.2f} {row['inclusive_s']:>9.2f}")
+    print(f"{'dynamics._integrate.compile(sig), process CPU':<52} {'':>8} {result['total_cpu_s']:>8.2f}"
+          f"   (1-minute load {result['load_1min']:.2f})")
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
