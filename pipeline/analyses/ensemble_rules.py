@@ -23,7 +23,7 @@ statistic; a statistic with no value at all is NaN.
 
 Each rule is written once, on numpy arrays (the ``*_values`` functions: an ``axis`` instead of a dimension
 name); the xarray functions apply them over a named dimension. The identification scores thousands of
-partial ensembles in its calling process (docs/performance.md, "Identification"), so it calls the numpy
+partial ensembles in its calling process (docs/performance.md, the paragraphs on racing), so it calls the numpy
 forms directly, with the same numbers to the last bit (tests/analyses/test_ensemble_rules.py).
 """
 
