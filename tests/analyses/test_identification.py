@@ -365,6 +365,10 @@ def test_twin_racing_agrees_with_the_full_method_within_the_tolerance(write_scen
         np.testing.assert_array_equal(np.array(joined["outputs"][k], float), np.array(v, float))
     assert joined["seeds"] == whole["seeds"]
     values, _ = study.residuals(whole, tl, 10.0)
+    # the scoring on the record's arrays is the xarray rules' on its dataset, to the last bit, on the slider's record
+    import scoring_reference
+    for got, want in zip(study.score(whole, tl, 10.0), scoring_reference.xarray_score(whole, tl, 10.0)):
+        np.testing.assert_array_equal(got, want)
     sets = [f"identify.{paper.TARGETS[t.name].value.key}={float(v)!r}" for t, v in zip(tl, values)]
     runs = {}
     for racing in (True, False):

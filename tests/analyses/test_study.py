@@ -11,6 +11,8 @@ import pytest
 from pipeline.analyses import study
 from pipeline.config.scene import SceneError, load_scene
 
+import scoring_reference
+
 PAPER = "configs/paper-2009.toml"
 BAND = (10.0, 10.2, 10.4, 10.6, 10.8)
 
@@ -105,47 +107,6 @@ def test_parameter_units_are_cf_for_every_numeric_scene_key():
 
 
 # ------------------------------------------------ the scoring on the record's arrays against the xarray form
-def _xarray_statistic(t: study.ObjectiveTerm, ds) -> tuple[float, float, float]:
-    """A target's ensemble statistic on a dataset, by the xarray rules over named dimensions (the form the
-    identification scored with before it scored on the record's arrays)."""
-    import xarray as xr  # noqa: F401  (the dataset's package)
-    from pipeline.analyses import ensemble_rules as en
-    at = study.at_protrusions
-    if t.kind == "touchdown":
-        return en.touchdown_protrusion(at(ds, "min_clearance", np.sort(ds["protrusion"].values)))
-    if t.name == "fhm_flying":
-        m, lo, hi = en.median_spread(en.flying_mean(at(ds, "fhm_bv", t.protrusions), at(ds, "min_clearance",
-                                                                                            t.protrusions)))
-        return float(m), float(lo), float(hi)
-    if t.name == "bouncing":
-        bv = study.bouncing_bv(at(ds, "fhm_bv", t.protrusions), at(ds, "min_clearance", t.protrusions))
-        med, lo, hi = (v.values for v in en.median_spread(bv))
-        if not np.all(np.isfinite(med)):
-            return float("nan"), float("nan"), float("nan")
-        return tuple(float(np.mean(np.minimum(v, t.target))) for v in (med, lo, hi))
-    from pipeline.physics import paper
-    x = at(ds, paper.TARGETS[t.name].measure.output, t.protrusions).isel(protrusion=0)
-    if t.spread == study.SPREAD_QUANTILES:
-        m, lo, hi = en.median_spread(x)
-        return float(m), float(lo), float(hi)
-    mu, sd = (float(v) for v in en.mean_std(x))
-    return mu, mu - sd, mu + sd
-
-
-def _xarray_score(record: dict, tlist, missing: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    from pipeline.analyses import ensemble_rules as en
-    ds = study.record_dataset(record)
-    stats = np.array([_xarray_statistic(t, ds) for t in tlist], float)
-    res = []
-    for t, v in zip(tlist, stats[:, 0]):
-        if t.kind == "touchdown":
-            med = en.median_spread(study.at_protrusions(ds, "min_clearance", (t.protrusions[-1], t.protrusions[0])))[0]
-            res.append(t._touchdown_residual(float(med.values[0]), float(med.values[1]), missing))
-        else:
-            res.append(t._residual_of(v, missing))
-    return stats[:, 0], np.array(res), stats[:, 1:]
-
-
 def ensemble_record(tlist, n: int, seed: int) -> dict:
     """An evaluation record of ``n`` DMW realisations at the targets' protrusions: FHM/BV, minimum clearance
     (contact from about 9.8 nm, the band's steps mixed) and the light-contact outputs, with a failed run."""
@@ -172,7 +133,7 @@ def test_scoring_on_the_records_arrays_is_the_xarray_scoring_to_the_last_bit(pap
     for n, seed in ((2, 1), (4, 2), (8, 3), (8, 4)):
         record = ensemble_record(tlist, n, seed)
         vals, res, spread = study.score(record, tlist, 10.0)
-        x_vals, x_res, x_spread = _xarray_score(record, tlist, 10.0)
+        x_vals, x_res, x_spread = scoring_reference.xarray_score(record, tlist, 10.0)
         np.testing.assert_array_equal(vals, x_vals)
         np.testing.assert_array_equal(res, x_res)
         np.testing.assert_array_equal(spread, x_spread)
