@@ -246,7 +246,7 @@ class Ensemble:
             values = col.values if isinstance(col, xr.DataArray) else col
             near = np.abs(self.protrusions[None, :] - at[:, None]) < 1e-6
             hit = near.any(axis=1)
-            out[hit] = values[near.argmax(axis=1)[hit]]
+            out[hit] = np.reshape(values[near.argmax(axis=1)[hit]], (int(hit.sum()), self.realisations))
         return out
 
 
