@@ -34,7 +34,7 @@ from .analyses.study import Parameter, head, parse_parameters, with_values
 from .code_version import code_key
 from .config.grid import label
 from .config.schema import SceneError
-from .fanout import run_tasks
+from .fanout import LOCAL, local_workers, run_tasks
 from .paths import append_text, refuse_links
 from .model import dmw_record, scene_inputs
 from .model import assembly, copies, running
@@ -354,8 +354,8 @@ class Evaluator:
         rows = list(todo.items())
         # (the realisations only when > 1: a single-record task keeps the signature of the tests' stand-ins)
         extra = (self.realisations,) if self.realisations > 1 else ()
-        tasks = [(self.base, list(self.params), rows[i:i + self.batch_size], list(self.protrusions), self.inputs)
-                 + extra for i in range(0, len(rows), self.batch_size)]
+        tasks = [(self.base, list(self.params), chunk, list(self.protrusions), self.inputs) + extra
+                 for chunk in self._batches(rows)]
 
         if tasks:
             self.batch_seconds += run_tasks(self.task, tasks, scheduler=self.scheduler, workers=self.workers,
@@ -364,6 +364,21 @@ class Evaluator:
             self.record_evaluations += len(rows) * self.realisations
             self.kernel_seconds += sum(self.store[k]["kernel_seconds"] for k in todo)
         return [self.store[k] for k in keys]
+
+    def _batches(self, rows: list[tuple[str, list[float]]]) -> list[list[tuple[str, list[float]]]]:
+        """``rows`` in tasks of at most :attr:`batch_size` candidates; on the local fan-out (threads of this
+        process), as many tasks as a multiple of its workers, of near-equal size, so that a short batch (the
+        last racing stage's few candidates, a walk's round) keeps every core busy: a candidate's evaluation
+        does not depend on the task it runs in (the caches of a process are by key)."""
+        if not rows:
+            return []
+        n = -(-len(rows) // self.batch_size)
+        if self.scheduler is None or self.scheduler in LOCAL:
+            w = local_workers(self.workers, len(rows))
+            n = min(len(rows), w * -(-n // w))
+        size, extra = divmod(len(rows), n)
+        ends = np.cumsum([size + (i < extra) for i in range(n)])
+        return [rows[e - size - (i < extra):e] for i, e in enumerate(ends)]
 
     def _parts(self, pts: list[list[float]], upto: int) -> list[dict[str, Any]]:
         """:meth:`__call__` with racing stages: the parts up to ``upto`` records, one fan-out for all."""
@@ -382,9 +397,8 @@ class Evaluator:
                     todo[seg][k] = x
         tasks = []
         for (a, b), rows in todo.items():
-            items = list(rows.items())
-            tasks += [(self.base, list(self.params), items[i:i + self.batch_size], list(self.protrusions), self.inputs,
-                       n, (a, b)) for i in range(0, len(items), self.batch_size)]
+            tasks += [(self.base, list(self.params), chunk, list(self.protrusions), self.inputs, n, (a, b))
+                      for chunk in self._batches(list(rows.items()))]
         if tasks:
             self.batch_seconds += run_tasks(self.task, tasks, scheduler=self.scheduler, workers=self.workers,
                                             on_done=self.store.put)

@@ -20,6 +20,11 @@ works on xarray data with a ``realisation`` dimension (and, where it says so, ``
 
 Realisations without a value (NaN: a failed run, a contact quantity of a flying run) count in no
 statistic; a statistic with no value at all is NaN.
+
+Each rule is written once, on numpy arrays (the ``*_values`` functions: an ``axis`` instead of a dimension
+name); the xarray functions apply them over a named dimension. The identification scores thousands of
+partial ensembles in its calling process (docs/performance.md, the paragraphs on racing), so it calls the numpy
+forms directly, with the same numbers to the last bit (tests/analyses/test_ensemble_rules.py).
 """
 
 from __future__ import annotations
@@ -42,11 +47,22 @@ SPREAD = (0.1, 0.9)
 TOUCHDOWN_LEVEL = 0.5
 
 
+def touched_values(min_clearance: np.ndarray) -> np.ndarray:
+    """:func:`touched` on a numpy array: 1.0 in contact, 0.0 flying, NaN not evaluated (or not finite)."""
+    v = np.asarray(min_clearance, float)
+    ok = np.isfinite(v)
+    return np.where(ok, touched_in_summary(np.where(ok, v, np.nan)).astype(float), np.nan)
+
+
 def touched(min_clearance: xr.DataArray) -> xr.DataArray:
     """1.0 where the run is in contact in the steady window (exact minimum clearance < 0), 0.0 where it
     flies, NaN where it was not evaluated. ``min_clearance``: any unit (only its sign is read)."""
-    v = min_clearance.where(np.isfinite(min_clearance))
-    return xr.apply_ufunc(touched_in_summary, v).astype(float).where(v.notnull())
+    return xr.apply_ufunc(touched_values, min_clearance)
+
+
+def touchdown_probability_values(min_clearance: np.ndarray, axis: int = -1) -> np.ndarray:
+    """:func:`touchdown_probability` on a numpy array, over its ``axis`` of realisations."""
+    return reduce_values(touched_values(min_clearance), axis, np.nanmean)
 
 
 def touchdown_probability(min_clearance: xr.DataArray, dim: str = DIM) -> xr.DataArray:
@@ -62,11 +78,27 @@ def exceedance_probability(values: xr.DataArray, threshold: float, dim: str = DI
     return _nan_reduce(above, dim, np.nanmean)
 
 
+def mean_std_values(values: np.ndarray, axis: int = -1) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`mean_std` on a numpy array, over its ``axis``."""
+    return reduce_values(values, axis, np.nanmean), reduce_values(values, axis, _sample_std)
+
+
 def mean_std(values: xr.DataArray, dim: str = DIM) -> tuple[xr.DataArray, xr.DataArray]:
     """Mean and sample standard deviation (ddof = 1; NaN from fewer than two values) over ``dim``,
     in the unit of ``values``."""
-    return _nan_reduce(values, dim, np.nanmean), _nan_reduce(values, dim, lambda a, axis: np.nanstd(a, axis=axis,
-                                                                                                      ddof=1))
+    return _nan_reduce(values, dim, np.nanmean), _nan_reduce(values, dim, _sample_std)
+
+
+def _sample_std(a: np.ndarray, axis: int) -> np.ndarray:
+    return np.nanstd(a, axis=axis, ddof=1)
+
+
+def median_spread_values(values: np.ndarray, axis: int = -1,
+                         q: tuple[float, float] = SPREAD) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`median_spread` on a numpy array, over its ``axis``."""
+    lo, med, hi = (reduce_values(values, axis, lambda a, axis, p=p: np.nanquantile(a, p, axis=axis))
+                   for p in (q[0], 0.5, q[1]))
+    return med, lo, hi
 
 
 def median_spread(values: xr.DataArray, dim: str = DIM,
@@ -78,11 +110,32 @@ def median_spread(values: xr.DataArray, dim: str = DIM,
     return med, lo, hi
 
 
+def flying_mean_values(fhm: np.ndarray, min_clearance: np.ndarray, axis: int = 0) -> np.ndarray:
+    """:func:`flying_mean` on numpy arrays of one shape, over their ``axis`` of protrusions."""
+    fhm = np.asarray(fhm, float)
+    flying = touched_values(min_clearance) == 0.0
+    return reduce_values(np.where(flying & ~np.isnan(fhm), fhm, np.nan), axis, np.nanmean)
+
+
 def flying_mean(fhm: xr.DataArray, min_clearance: xr.DataArray, dim: str = PROTRUSION) -> xr.DataArray:
     """Mean of ``fhm`` over the protrusions (``dim``) where the run flies and has a value, per remaining
     index (one value per realisation); NaN for a realisation that flies nowhere. Unit of ``fhm``."""
     flying = touched(min_clearance) == 0.0
     return _nan_reduce(fhm.where(flying & fhm.notnull()), dim, np.nanmean)
+
+
+def crossing_values(x: np.ndarray, y: np.ndarray, level: float) -> float:
+    """:func:`crossing` of the curve ``y`` over the coordinates ``x`` (1-D numpy arrays, any order)."""
+    order = np.argsort(np.asarray(x, float), kind="stable")
+    x, y = np.asarray(x, float)[order], np.asarray(y, float)[order]
+    ok = np.isfinite(y)
+    x, y = x[ok], y[ok]
+    hit = np.flatnonzero(y >= level)
+    if hit.size == 0 or hit[0] == 0:
+        return float("nan")
+    i = int(hit[0])
+    f = (level - y[i - 1]) / (y[i] - y[i - 1])
+    return float(x[i - 1] + f * (x[i] - x[i - 1]))
 
 
 def crossing(curve: xr.DataArray, level: float, dim: str = PROTRUSION) -> float:
@@ -93,17 +146,15 @@ def crossing(curve: xr.DataArray, level: float, dim: str = PROTRUSION) -> float:
     NaN when the curve never reaches the level, or already reaches it at its first point (the
     crossing lies below the evaluated range, not on it).
     """
-    c = curve.sortby(dim)
-    y = np.asarray(c.values, float)
-    x = np.asarray(c[dim].values, float)
-    ok = np.isfinite(y)
-    x, y = x[ok], y[ok]
-    hit = np.flatnonzero(y >= level)
-    if hit.size == 0 or hit[0] == 0:
-        return float("nan")
-    i = int(hit[0])
-    f = (level - y[i - 1]) / (y[i] - y[i - 1])
-    return float(x[i - 1] + f * (x[i] - x[i - 1]))
+    return crossing_values(curve[dim].values, curve.values, level)
+
+
+def touchdown_protrusion_values(protrusions: np.ndarray, min_clearance: np.ndarray) -> tuple[float, float, float]:
+    """:func:`touchdown_protrusion` on numpy arrays: ``min_clearance`` of shape (protrusion, realisation) at
+    the ``protrusions`` [nm]."""
+    p = touchdown_probability_values(min_clearance, axis=-1)
+    return (crossing_values(protrusions, p, TOUCHDOWN_LEVEL), crossing_values(protrusions, p, SPREAD[0]),
+            crossing_values(protrusions, p, SPREAD[1]))
 
 
 def touchdown_protrusion(min_clearance: xr.DataArray, dim: str = DIM) -> tuple[float, float, float]:
@@ -116,11 +167,17 @@ def touchdown_protrusion(min_clearance: xr.DataArray, dim: str = DIM) -> tuple[f
     return (crossing(p, TOUCHDOWN_LEVEL), crossing(p, SPREAD[0]), crossing(p, SPREAD[1]))
 
 
-def _nan_reduce(values: xr.DataArray, dim: str, fn) -> xr.DataArray:
-    """``fn(array, axis)`` over ``dim`` with the all-NaN warnings silenced (NaN is the documented result)."""
+def reduce_values(values: np.ndarray, axis: int, fn) -> np.ndarray:
+    """``fn(array, axis=-1)`` over ``axis`` of ``values`` (moved last, as :func:`xarray.apply_ufunc` moves a
+    core dimension) with the all-NaN warnings silenced (NaN is the documented result)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        return xr.apply_ufunc(lambda a: fn(np.asarray(a, float), axis=-1), values, input_core_dims=[[dim]])
+        return fn(np.moveaxis(np.asarray(values, float), axis, -1), axis=-1)
+
+
+def _nan_reduce(values: xr.DataArray, dim: str, fn) -> xr.DataArray:
+    """``fn(array, axis)`` over ``dim`` with the all-NaN warnings silenced (NaN is the documented result)."""
+    return xr.apply_ufunc(lambda a: reduce_values(a, -1, fn), values, input_core_dims=[[dim]])
 
 
 def statistics(data: dict[str, xr.Variable]) -> dict[str, xr.Variable]:

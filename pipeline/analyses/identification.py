@@ -73,7 +73,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from .study import (ObjectiveTerm, Parameter, cost, head, input_spreads, realisations_of, record_inputs,
-                    record_spreads, residuals)
+                    residuals, score)
 
 #: Role of an evaluation (``role`` variable of identify.nc).
 ROLES = {0: "reconstructed", 1: "optimiser", 2: "profile", 3: "gauss-newton", 4: "profile-optimiser"}
@@ -190,8 +190,13 @@ class Identification:
         #: first request
         self.records: dict[str, dict[str, Any]] = {}
         self.roles: dict[str, int] = {}
-        #: target values and residuals of every record, by key, scored when it (or more of its records) comes back
+        #: target values and residuals of every record, by key, scored when it (or more of its records) comes back,
+        #: and the ensemble spread of each target's value (``(targets, 2)``, identify.nc's ``spread``)
         self.scores: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+        self.value_spreads: dict[str, np.ndarray] = {}
+        #: what each record's residuals are made of, per DMW record (:func:`record_inputs`), by key: made once
+        #: per record held (racing bounds every candidate against the same reference at every stage)
+        self._inputs: dict[str, np.ndarray] = {}
         #: DMW records of each key's record; the record-to-record spreads of the whole evaluations (racing)
         self.depth: dict[str, int] = {}
         self.spreads: dict[str, np.ndarray] = {}
@@ -264,11 +269,15 @@ class Identification:
                 continue
             self.records[key], self.depth[key] = r, depth  # (a known key keeps its place in request order)
             self.by_point[_point(r["params"])] = key
-            self.scores[key] = residuals(r, self.tlist, self.missing)
+            vals, res, spread = score(r, self.tlist, self.missing)
+            self.scores[key], self.value_spreads[key] = (vals, res), spread
+            self._inputs.pop(key, None)
             if not self.is_full(key):
                 continue
-            if self.racing is not None:
-                self.spreads[key] = record_spreads(r, self.tlist)
+            if self.racing is not None and depth > 1:
+                self.spreads[key] = input_spreads(self.inputs_of(key))
+            elif self.racing is not None:
+                self.spreads[key] = np.full(len(self.tlist), np.nan)
             c = cost(self.scores[key][1])
             if c < self.best_cost:  # (strictly: the first of equal objectives stays the best)
                 self.best_key, self.best_cost = key, c
@@ -294,8 +303,7 @@ class Identification:
                     low[i] = high[i] = _metric(np.abs(self.scores[key][1]), metric)
                     if refs[i] is not None and refs[i] != key and self.is_full(refs[i]):
                         self.pair_spreads.setdefault(role, []).append(
-                            input_spreads(record_inputs(self.records[key], self.tlist)
-                                          - record_inputs(self.records[refs[i]], self.tlist)))
+                            input_spreads(self.inputs_of(key) - self.inputs_of(refs[i])))
                     continue
                 lo_t, hi_t = self._bounds(key, refs[i], role)
                 low[i], high[i] = _metric(lo_t, metric), _metric(hi_t, metric)
@@ -319,7 +327,8 @@ class Identification:
         assert self.racing is not None
         n, rec = self.depth[key], self.records[key]
         res = np.abs(self.scores[key][1])
-        e = self.racing.margin(np.fmax(record_spreads(rec, self.tlist), self.pooled_spread()), n)
+        own_spread = input_spreads(self.inputs_of(key)) if realisations_of(rec) > 1 else np.full(len(res), np.nan)
+        e = self.racing.margin(np.fmax(own_spread, self.pooled_spread()), n)
         lo, hi = np.maximum(res - e, 0.0), np.where(np.isnan(res + e), np.inf, res + e)
         pooled = self._pooled(self.pair_spreads.get(role, []))
         if ref is None or not self.is_full(ref) or not np.isfinite(pooled).any():
@@ -327,13 +336,19 @@ class Identification:
         r_ref, r_ref_n = self.scores[ref][1], self._head_residuals(ref, n)
         r_key = self.scores[key][1]
         paired = r_key + r_ref - r_ref_n
-        own = input_spreads(record_inputs(rec, self.tlist) - record_inputs(self.records[ref], self.tlist)[:, :, :n])
+        own = input_spreads(self.inputs_of(key) - self.inputs_of(ref)[:, :, :n])
         e2 = self.racing.margin(np.fmax(own, pooled), n)
         equal = np.array([t.kind == "equal" for t in self.tlist])
         usable = np.isfinite(paired) & np.isfinite(e2) & (equal | ((r_key != 0) & (r_ref != 0) & (r_ref_n != 0)))
         lo2 = np.where(usable, np.maximum(np.abs(paired) - e2, 0.0), 0.0)
         hi2 = np.where(usable, np.abs(paired) + e2, np.inf)
         return np.where(np.isfinite(lo), np.maximum(lo, lo2), lo2), np.minimum(hi, hi2)
+
+    def inputs_of(self, key: str) -> np.ndarray:
+        """:func:`pipeline.analyses.study.record_inputs` of the record held for ``key`` (made once per record)."""
+        if key not in self._inputs:
+            self._inputs[key] = record_inputs(self.records[key], self.tlist)
+        return self._inputs[key]
 
     def _head_residuals(self, key: str, n: int) -> np.ndarray:
         """The residuals of the first ``n`` DMW records of the whole evaluation ``key`` (cached)."""

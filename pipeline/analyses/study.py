@@ -203,19 +203,58 @@ def record_dataset(record: dict[str, Any]) -> xr.Dataset:
     return xr.Dataset(data, coords={"protrusion": prot, en.DIM: np.arange(n)})
 
 
-def at_protrusions(ds: xr.Dataset, name: str, at: Iterable[float]) -> xr.DataArray:
+class Ensemble:
+    """A candidate's outputs over its DMW realisations as numpy arrays: what the targets' ensemble statistics
+    read (:attr:`ObjectiveTerm.ensemble`), from an evaluation record (:meth:`of_record`, without building a
+    dataset: the identification scores every racing stage of every candidate) or from a dataset of dims
+    ``(protrusion, realisation)`` (:meth:`of`: :func:`record_dataset`, ``ensemble.nc``).
+
+    Attributes
+    ----------
+    protrusions : the evaluated protrusions [nm]
+    realisations : the number of DMW realisations [1]
+    """
+
+    def __init__(self, protrusions: np.ndarray, realisations: int, columns: Any):
+        self.protrusions = np.asarray(protrusions, float)
+        self.realisations = int(realisations)
+        self._columns = columns  # name -> array (protrusion, realisation), dataset units; a mapping or a Dataset
+
+    @classmethod
+    def of_record(cls, record: dict[str, Any]) -> "Ensemble":
+        """The outputs of an evaluation record (the arrays :func:`record_dataset` holds)."""
+        prot = np.asarray(record["protrusions"], float)
+        n = realisations_of(record)
+        return cls(prot, n, {name: np.asarray(v, float).reshape(len(prot), n)
+                             for name, v in record["outputs"].items()})
+
+    @classmethod
+    def of(cls, data: Any) -> "Ensemble":
+        """``data`` itself if an :class:`Ensemble`, else one over a dataset of dims ``(protrusion,
+        realisation)`` (its variables read when asked for)."""
+        if isinstance(data, Ensemble):
+            return data
+        return cls(data["protrusion"].values, data.sizes.get(en.DIM, 1), data)
+
+    def at(self, name: str, at: Iterable[float]) -> np.ndarray:
+        """``name`` at the protrusions ``at`` [nm], shape ``(len(at), realisations)``; NaN where not
+        evaluated or absent (the first evaluated protrusion within 1e-6 nm of each)."""
+        at = np.asarray(list(at), float)
+        out = np.full((at.size, self.realisations), np.nan)
+        if name in self._columns:
+            col = self._columns[name]
+            values = col.values if isinstance(col, xr.DataArray) else col
+            near = np.abs(self.protrusions[None, :] - at[:, None]) < 1e-6
+            hit = near.any(axis=1)
+            out[hit] = np.reshape(values[near.argmax(axis=1)[hit]], (int(hit.sum()), self.realisations))
+        return out
+
+
+def at_protrusions(ds: Any, name: str, at: Iterable[float]) -> xr.DataArray:
     """``ds[name]`` at the protrusions ``at`` [nm] (dims ``(protrusion, realisation)``; NaN where not
-    evaluated or absent)."""
+    evaluated or absent); ``ds``: a dataset of dims ``(protrusion, realisation)`` or an :class:`Ensemble`."""
     at = np.asarray(list(at), float)
-    n = ds.sizes.get(en.DIM, 1)
-    out = np.full((at.size, n), np.nan)
-    if name in ds:
-        x = ds["protrusion"].values
-        for i, p in enumerate(at):
-            j = np.flatnonzero(np.abs(x - p) < 1e-6)
-            if j.size:
-                out[i] = ds[name].values[j[0]]
-    return xr.DataArray(out, dims=("protrusion", en.DIM), coords={"protrusion": at})
+    return xr.DataArray(Ensemble.of(ds).at(name, at), dims=("protrusion", en.DIM), coords={"protrusion": at})
 
 
 #: How a target's ensemble spread is given: the 10-90 % range of the realisations (medians, the
@@ -230,9 +269,9 @@ class ObjectiveTerm:
 
     ``kind``: ``"equal"`` (residual (v - target)/tol), ``"above"`` (zero when v >= target, else
     (target - v)/tol), ``"below"`` (zero when v <= target), ``"touchdown"`` (see :func:`targets`).
-    ``ensemble``: the value over DMW realisations and its spread, ``(value, low, high)`` of a
-    :func:`record_dataset`; ``spread``: what ``low``/``high`` are (:data:`SPREAD_QUANTILES`,
-    :data:`SPREAD_STD`).
+    ``ensemble``: the value over DMW realisations and its spread, ``(value, low, high)`` of an
+    :class:`Ensemble` (or of a dataset :meth:`Ensemble.of` reads); ``spread``: what ``low``/``high`` are
+    (:data:`SPREAD_QUANTILES`, :data:`SPREAD_STD`).
     """
 
     name: str
@@ -244,7 +283,7 @@ class ObjectiveTerm:
     protrusions: tuple[float, ...]
     value: Callable[[Table], float]
     paper: str
-    ensemble: Callable[[xr.Dataset], tuple[float, float, float]] | None = None
+    ensemble: Callable[[Any], tuple[float, float, float]] | None = None
     spread: str = SPREAD_QUANTILES
 
     def residual(self, table: Table, missing: float) -> float:
@@ -254,8 +293,9 @@ class ObjectiveTerm:
             return self._touchdown_residual(lo_on, lo_prev, missing)
         return self._residual_of(self.value(table), missing)
 
-    def ensemble_residual(self, ds: xr.Dataset, missing: float) -> float:
-        """The residual judged over the realisations of ``ds`` (:func:`record_dataset`).
+    def ensemble_residual(self, ds: Any, missing: float) -> float:
+        """The residual judged over the realisations of ``ds`` (an :class:`Ensemble`, or a dataset
+        :meth:`Ensemble.of` reads: :func:`record_dataset`).
 
         Touchdown: the residual of :meth:`residual` on the *median* minimum clearance over the
         realisations, which is below zero exactly when more than half of them touch (touchdown
@@ -263,7 +303,7 @@ class ObjectiveTerm:
         """
         if self.kind == "touchdown":
             onset, prev = self.protrusions[-1], self.protrusions[0]
-            med = en.median_spread(at_protrusions(ds, "min_clearance", (onset, prev)))[0].values
+            med = en.median_spread_values(Ensemble.of(ds).at("min_clearance", (onset, prev)))[0]
             return self._touchdown_residual(float(med[0]), float(med[1]), missing)
         return self._residual_of(self.ensemble(ds)[0] if self.ensemble else float("nan"), missing)
 
@@ -294,15 +334,16 @@ def _key(scene: Any, key: str) -> Any:
     return scene[section or "identify"][name]
 
 
-def _median(values: xr.DataArray) -> tuple[float, float, float]:
-    m, lo, hi = en.median_spread(values)
+def _median(values: np.ndarray) -> tuple[float, float, float]:
+    """Median and 10-90 % range of 1-D ``values`` over the realisations."""
+    m, lo, hi = en.median_spread_values(values)
     return float(m), float(lo), float(hi)
 
 
 #: What a measurement gives :class:`ObjectiveTerm`: its protrusions [nm], the value of a candidate's
-#: :class:`Table`, the ensemble statistic of a :func:`record_dataset`, the spread's meaning and the
-#: template fields of its protrusions.
-_Measured = tuple[tuple[float, ...], Callable[[Table], float], Callable[[xr.Dataset], tuple[float, float, float]],
+#: :class:`Table`, the ensemble statistic of an :class:`Ensemble` (or a dataset), the spread's meaning and
+#: the template fields of its protrusions.
+_Measured = tuple[tuple[float, ...], Callable[[Table], float], Callable[[Any], tuple[float, float, float]],
                   str, dict[str, float]]
 
 
@@ -311,8 +352,10 @@ def _touchdown(m: paper.Measure, scene: Any, value: float) -> _Measured:
     protrusion in contact, over realisations where the touchdown probability crosses 0.5."""
     prots = tuple(_key(scene, k) for k in m.where)
 
-    def ensemble(ds: xr.Dataset) -> tuple[float, float, float]:
-        return en.touchdown_protrusion(at_protrusions(ds, m.output, np.sort(ds["protrusion"].values)))
+    def ensemble(ds: Any) -> tuple[float, float, float]:
+        e = Ensemble.of(ds)
+        order = np.sort(e.protrusions)
+        return en.touchdown_protrusion_values(order, e.at(m.output, order))
 
     return prots, lambda t: t.touchdown(), ensemble, SPREAD_QUANTILES, {"lo": prots[0], "hi": prots[-1]}
 
@@ -321,8 +364,9 @@ def _flying_mean(m: paper.Measure, scene: Any, value: float) -> _Measured:
     """The mean of ``m.output`` over the flying points of the range ``m.where`` (every ``m.step``)."""
     fr = _grid(*_key(scene, m.where), _key(scene, m.step))
 
-    def ensemble(ds: xr.Dataset) -> tuple[float, float, float]:
-        return _median(en.flying_mean(at_protrusions(ds, m.output, fr), at_protrusions(ds, "min_clearance", fr)))
+    def ensemble(ds: Any) -> tuple[float, float, float]:
+        e = Ensemble.of(ds)
+        return _median(en.flying_mean_values(e.at(m.output, fr), e.at("min_clearance", fr), axis=0))
 
     return fr, lambda t: t.flying_mean(m.output, fr), ensemble, SPREAD_QUANTILES, {"lo": fr[0], "hi": fr[-1]}
 
@@ -337,9 +381,9 @@ def _band(m: paper.Measure, scene: Any, cap: float) -> _Measured:
         v = bouncing_bv(t.values(m.output, band), t.values("min_clearance", band))
         return float(np.mean(np.minimum(v, cap))) if v.size and np.all(np.isfinite(v)) else float("nan")
 
-    def ensemble(ds: xr.Dataset) -> tuple[float, float, float]:
-        bv = bouncing_bv(at_protrusions(ds, m.output, band), at_protrusions(ds, "min_clearance", band))
-        med, lo, hi = (v.values for v in en.median_spread(bv))
+    def ensemble(ds: Any) -> tuple[float, float, float]:
+        e = Ensemble.of(ds)
+        med, lo, hi = en.median_spread_values(bouncing_bv(e.at(m.output, band), e.at("min_clearance", band)))
         if not (med.size and np.all(np.isfinite(med))):
             return float("nan"), float("nan"), float("nan")
         return tuple(float(np.mean(np.minimum(v, cap))) for v in (med, lo, hi))
@@ -352,11 +396,11 @@ def _at(m: paper.Measure, scene: Any, value: float) -> _Measured:
     (± 1 standard deviation), by ``m.statistic``."""
     at = _key(scene, m.where)
 
-    def median(ds: xr.Dataset) -> tuple[float, float, float]:
-        return _median(at_protrusions(ds, m.output, (at,)).isel(protrusion=0))
+    def median(ds: Any) -> tuple[float, float, float]:
+        return _median(Ensemble.of(ds).at(m.output, (at,))[0])
 
-    def mean(ds: xr.Dataset) -> tuple[float, float, float]:
-        mu, sd = (float(v) for v in en.mean_std(at_protrusions(ds, m.output, (at,)).isel(protrusion=0)))
+    def mean(ds: Any) -> tuple[float, float, float]:
+        mu, sd = (float(v) for v in en.mean_std_values(Ensemble.of(ds).at(m.output, (at,))[0]))
         return mu, mu - sd, mu + sd
 
     ensemble, spread = (mean, SPREAD_STD) if m.statistic == "mean" else (median, SPREAD_QUANTILES)
@@ -428,18 +472,27 @@ def residuals(record: dict[str, Any], tlist: Sequence[ObjectiveTerm],
               missing: float) -> tuple[np.ndarray, np.ndarray]:
     """Values and normalised residuals of the targets for one evaluation record (over its realisations
     for an ensemble record: :attr:`ObjectiveTerm.ensemble`, :meth:`ObjectiveTerm.ensemble_residual`)."""
+    return score(record, tlist, missing)[:2]
+
+
+def score(record: dict[str, Any], tlist: Sequence[ObjectiveTerm],
+          missing: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`residuals` and :func:`spreads` of one evaluation record at once: values, normalised residuals
+    and the ``(low, high)`` spread of each target, each ensemble statistic computed once, on the record's
+    arrays (:class:`Ensemble`, no dataset)."""
     if realisations_of(record) > 1:
-        ds = record_dataset(record)
-        vals = np.array([t.ensemble(ds)[0] if t.ensemble else np.nan for t in tlist], float)
-        # (the residual of the value just computed, not the ensemble statistic again: the same number, half
-        # the xarray work of scoring, which racing does at every stage)
-        res = np.array([t.ensemble_residual(ds, missing) if t.kind == "touchdown" else t._residual_of(v, missing)
+        ens = Ensemble.of_record(record)
+        stats = np.array([t.ensemble(ens) if t.ensemble else (np.nan, np.nan, np.nan) for t in tlist],
+                         float).reshape(len(tlist), 3)
+        vals = stats[:, 0].copy()
+        # (the residual of the value just computed, not the ensemble statistic again)
+        res = np.array([t.ensemble_residual(ens, missing) if t.kind == "touchdown" else t._residual_of(v, missing)
                         for t, v in zip(tlist, vals)], float)
-        return vals, res
+        return vals, res, stats[:, 1:].copy()
     table = Table(record)
     vals = np.array([t.value(table) for t in tlist], float)
     res = np.array([t.residual(table, missing) for t in tlist], float)
-    return vals, res
+    return vals, res, np.full((len(tlist), 2), np.nan)
 
 
 def spreads(record: dict[str, Any], tlist: Sequence[ObjectiveTerm]) -> np.ndarray:
@@ -447,10 +500,10 @@ def spreads(record: dict[str, Any], tlist: Sequence[ObjectiveTerm]) -> np.ndarra
     ``(targets, 2)``; NaN for a single-record evaluation."""
     out = np.full((len(tlist), 2), np.nan)
     if realisations_of(record) > 1:
-        ds = record_dataset(record)
+        ens = Ensemble.of_record(record)
         for j, t in enumerate(tlist):
             if t.ensemble:
-                out[j] = t.ensemble(ds)[1:]
+                out[j] = t.ensemble(ens)[1:]
     return out
 
 
@@ -520,7 +573,8 @@ def ensemble_summary(ds: xr.Dataset, tlist: Sequence[ObjectiveTerm]) -> dict[str
     outputs = {name: np.asarray(ds[name].values, float)[:, 0] for name in ds.data_vars
                if ds[name].dims == ("protrusion", en.DIM)}
     single = Table({"protrusions": ds["protrusion"].values, "outputs": outputs})
-    return {t.name: ((t.ensemble(ds) if t.ensemble else (np.nan, np.nan, np.nan)) + (t.value(single),))
+    ens = Ensemble.of(ds)
+    return {t.name: ((t.ensemble(ens) if t.ensemble else (np.nan, np.nan, np.nan)) + (t.value(single),))
             for t in tlist}
 
 

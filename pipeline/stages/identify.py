@@ -65,7 +65,7 @@ from ..paths import refuse_links
 from ..runner import Inputs, Stage
 from ..analyses.identification import (GN_STEP, METHODS, PROFILE_GAIN, PROFILE_STEP, ROLES, Identification, Racing,
                                        identify)
-from ..analyses.study import Parameter, parse_parameters, scene_value, spreads, target_protrusions, targets
+from ..analyses.study import Parameter, parse_parameters, scene_value, target_protrusions, targets
 from ..evaluations import Evaluator, evaluate_batch, setup, upstream
 
 log = logging.getLogger(__name__)
@@ -91,9 +91,9 @@ def dataset(ident: Identification, params: Sequence[Parameter], out: dict[str, A
     spr = np.full((len(keys), len(tl), 2), np.nan)
     if progress is not None:
         progress.phase("scoring", len(recs), unit="evaluation")
-    for i, r in enumerate(recs):  # (ensembles: the spread of each target over the realisations)
+    for i, k in enumerate(keys):  # (ensembles: the spread of each target over the realisations, scored with it)
         if n_real > 1:
-            spr[i] = spreads(r, tl)
+            spr[i] = ident.value_spreads[k]
         if progress is not None:
             progress.update()
     pts = np.array([r["params"] for r in recs], float)

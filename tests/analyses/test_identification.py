@@ -213,6 +213,32 @@ def test_the_evaluator_runs_an_ensemble_in_parts_and_joins_them(paper_scene, tmp
     # the stages' parts of the real evaluation are the whole, bit for bit: tests/analyses below (twin)
 
 
+def test_a_point_evaluated_already_is_not_run_again(paper_scene, tmp_path):
+    # a racing identification on the evaluator: the (candidate, record) pairs computed are counted once, whatever
+    # asks for the point again (a walk's poll met by another walk, a slice point, a resumed run)
+    inputs = SimulationInputs(Source("interface", key="i"), Source("dmw", key="d"))
+    params = [study.Parameter("dmw.rms_nm", 0.0, 1.0)]
+    store = evaluations.EvaluationStore(tmp_path / "s.jsonl")
+    ev = evaluations.Evaluator(paper_scene, params, [9.0], inputs, store, 2, "synchronous", task=_ensemble_task,
+                               realisations=8, stages=(2, 4, 8))
+    targets = [study.ObjectiveTerm("fhm", "fhm", "%", "equal", 0.0, 1.0, (9.0,), lambda t: t.value("fhm_bv", 9.0),
+                                   "", lambda e: study._median(study.Ensemble.of(e).at("fhm_bv", (9.0,))[0]))]
+    ident = identification.Identification(ev, targets, 10.0, identification.Racing.doubling(2, 8, 3.0))
+    pts = np.array([[0.1], [20.0], [30.0]])
+    ident.evaluate(pts[:1], 0)  # the best point, on every record: objective (0.1 + 3.5)^2
+    _, _, r = ident.evaluate(pts, 1, bound=ident.best_cost, refs=pts[0])
+    # 20 and 30 stop after their first 2 records (residuals 20.5 and 30.5, less a margin of 5.6 from the best
+    # point's spread of the records, 2.45, are above its 3.6); 0.1 is the best point, held
+    assert [ident.depth[k] for k in ident.keys] == [8, 2, 2]
+    assert ev.record_evaluations == 8 + 2 + 2 and ident.record_evaluations == 12
+    assert r[:, 0] == pytest.approx([3.6, 20.5, 30.5])
+    # asked again, on every record: only their records 2-7 run; a third time, nothing
+    ident.evaluate(pts, 4)
+    assert ev.record_evaluations == 8 + 8 + 8 and [ident.depth[k] for k in ident.keys] == [8, 8, 8]
+    ident.evaluate(pts[::-1], 2, bound=0.0, refs=pts[0])
+    assert ev.record_evaluations == 24 and ident.record_evaluations == 24
+
+
 # ------------------------------------------------------------------- racing on a noisy stand-in
 RACE_RHO = 0.8
 #: r = RACE_R x with RACE_R^T RACE_R = Sigma^-1 (unit variances, correlation RACE_RHO), plus a record's noise
@@ -339,6 +365,10 @@ def test_twin_racing_agrees_with_the_full_method_within_the_tolerance(write_scen
         np.testing.assert_array_equal(np.array(joined["outputs"][k], float), np.array(v, float))
     assert joined["seeds"] == whole["seeds"]
     values, _ = study.residuals(whole, tl, 10.0)
+    # the scoring on the record's arrays is the xarray rules' on its dataset, to the last bit, on the slider's record
+    import scoring_reference
+    for got, want in zip(study.score(whole, tl, 10.0), scoring_reference.xarray_score(whole, tl, 10.0)):
+        np.testing.assert_array_equal(got, want)
     sets = [f"identify.{paper.TARGETS[t.name].value.key}={float(v)!r}" for t, v in zip(tl, values)]
     runs = {}
     for racing in (True, False):

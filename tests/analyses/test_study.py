@@ -11,6 +11,8 @@ import pytest
 from pipeline.analyses import study
 from pipeline.config.scene import SceneError, load_scene
 
+import scoring_reference
+
 PAPER = "configs/paper-2009.toml"
 BAND = (10.0, 10.2, 10.4, 10.6, 10.8)
 
@@ -102,3 +104,42 @@ def test_parameter_units_are_cf_for_every_numeric_scene_key():
                      "roughness.summit_density_per_um2": "um-2", "slider.density_kg_m3": "kg m-3",
                      "dmw.sample_rate_mhz": "MHz", "contact.section_depth_sigma": "1"}
     assert study.Parameter("air_bearing.frequencies_khz[0]", 1.0, 2.0).var_name == "air_bearing__frequencies_khz_0"
+
+
+# ------------------------------------------------ the scoring on the record's arrays against the xarray form
+def ensemble_record(tlist, n: int, seed: int) -> dict:
+    """An evaluation record of ``n`` DMW realisations at the targets' protrusions: FHM/BV, minimum clearance
+    (contact from about 9.8 nm, the band's steps mixed) and the light-contact outputs, with a failed run."""
+    rng = np.random.default_rng(seed)
+    prots = study.target_protrusions(tlist)
+    k = len(prots)
+    p = np.array(prots)[:, None]
+    outputs = {"fhm_bv": 5.0 + 20.0 * rng.random((k, n)) + (p > 9.7) * 10.0,
+               "min_clearance": (9.75 - p) + 0.15 * rng.standard_normal((k, n)),
+               "interference": 0.3 + 0.05 * rng.standard_normal((k, n)),
+               "contact_force": 1.0 + 0.2 * rng.standard_normal((k, n)),
+               "real_area": 0.5 + 0.1 * rng.random((k, n)), "mean_pressure": 300 + 40 * rng.random((k, n)),
+               "friction_coefficient": 0.3 + 0.1 * rng.random((k, n)),
+               "net_force": -0.1 + 0.1 * rng.standard_normal((k, n))}
+    for v in outputs.values():
+        v[3, n - 1] = np.nan  # (a failed run of the last realisation)
+    return {"protrusions": prots, "realisations": n, "outputs": {name: v.tolist() for name, v in outputs.items()}}
+
+
+def test_scoring_on_the_records_arrays_is_the_xarray_scoring_to_the_last_bit(paper_scene):
+    # every paper target, ensembles of 2, 4 and 8 records (racing's stages), a failed run among them
+    tlist = study.targets(paper_scene)
+    assert {t.kind for t in tlist} == {"touchdown", "equal", "above", "below"}
+    for n, seed in ((2, 1), (4, 2), (8, 3), (8, 4)):
+        record = ensemble_record(tlist, n, seed)
+        vals, res, spread = study.score(record, tlist, 10.0)
+        x_vals, x_res, x_spread = scoring_reference.xarray_score(record, tlist, 10.0)
+        np.testing.assert_array_equal(vals, x_vals)
+        np.testing.assert_array_equal(res, x_res)
+        np.testing.assert_array_equal(spread, x_spread)
+        np.testing.assert_array_equal(study.spreads(record, tlist), x_spread)
+        assert np.isfinite(vals).sum() >= len(tlist) - 1, vals  # (the statistics are numbers, not NaN throughout)
+        # the same statistics on the record's dataset (ensemble.nc's form)
+        ds = study.record_dataset(record)
+        for t in tlist:
+            np.testing.assert_array_equal(t.ensemble(ds), t.ensemble(study.Ensemble.of_record(record)))

@@ -29,3 +29,32 @@ def test_base_key_follows_what_an_evaluation_reads(paper_scene):
     # a simulation key does; so does an input made from other data (e.g. a rescanned AFM file)
     assert evaluations.base_key(paper_scene.replace(solver={"duration_ms": 0.9}), inputs) != key
     assert evaluations.base_key(paper_scene, SimulationInputs(Source("interface", key="other"), inputs.dmw)) != key
+
+
+def _counting_task(base, params, rows, protrusions, inputs):
+    """A stand-in batch: each candidate's output is its first value; the task's size is recorded in it."""
+    return [(key, {"params": list(map(float, x)), "protrusions": list(map(float, protrusions)),
+                   "outputs": {"fhm_bv": [float(x[0])] * len(protrusions)}, "seconds": 0.0, "kernel_seconds": 0.0,
+                   "error": None, "task_size": len(rows)}) for key, x in rows]
+
+
+def test_a_short_batch_is_split_over_the_local_workers_and_gives_the_same_records(paper_scene, tmp_path):
+    from pipeline.analyses import study
+    params = [study.Parameter("dmw.rms_nm", 0.0, 1.0)]
+    inputs = SimulationInputs(Source("interface", key="i"), Source("dmw", key="d"))
+    points = [[0.1 * k] for k in range(1, 14)]
+    sizes = {}
+    for workers in (1, 2, 3):
+        store = evaluations.EvaluationStore(tmp_path / f"w{workers}.jsonl")
+        ev = evaluations.Evaluator(paper_scene, params, [9.0], inputs, store, 6, None, workers, task=_counting_task)
+        # 3 candidates (the last racing stage's few): one task of 3 on one worker, 2 + 1 on two, 1 + 1 + 1 on three
+        recs = ev(points[:3])
+        sizes[workers, 3] = sorted(r["task_size"] for r in recs)
+        assert [r["outputs"]["fhm_bv"] for r in recs] == [[0.1], [0.2], [0.30000000000000004]]
+        # 13: never more than batch_size (6) a task, as many tasks as a multiple of the workers, near-equal
+        recs = ev(points)
+        sizes[workers, 13] = sorted(r["task_size"] for r in recs[3:])
+        assert ev.evaluated == 13 and [r["params"] for r in recs] == points
+    assert sizes[1, 3] == [3, 3, 3] and sizes[2, 3] == [1, 2, 2] and sizes[3, 3] == [1, 1, 1]
+    # 10 new points: ceil(10 / 6) = 2 tasks of 5 on one or two workers; on three, 3 tasks (4, 3, 3)
+    assert sizes[1, 13] == sizes[2, 13] == [5] * 10 and sizes[3, 13] == [3] * 6 + [4] * 4
