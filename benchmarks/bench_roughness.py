@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from benchmarks.common import record, timeit
+from pipeline.model import afm_scan
 from pipeline.physics import surface as sf
 
 SCAN = Path(__file__).resolve().parents[1] / "tests/data/afm/di-5.di"
@@ -32,15 +33,15 @@ def run(results: list[dict]) -> None:
     with tempfile.TemporaryDirectory() as tmp, warnings.catch_warnings():
         warnings.simplefilter("ignore", sf.SurfaceWarning)  # route disagreement is reported, not timed
         path = SCAN if SCAN.is_file() else _synthetic(Path(tmp))
-        topo = sf.read_topography(path)
+        topo = afm_scan.read_topography(path)
         heights = np.asarray(topo.heights())
         px = tuple(float(p) for p in topo.pixel_size)
         extra = {"file": path.name, "grid": list(topo.nb_grid_pts)}
         record(results, "roughness: read + detrend + both routes (512x512)",
-               timeit(lambda: sf.summarise_file(path), repeat=5), target_s=2.0, **extra)
-        record(results, "roughness: read + detrend (512x512)", timeit(lambda: sf.read_topography(path), repeat=5),
+               timeit(lambda: afm_scan.summarise_file(path), repeat=5), target_s=2.0, **extra)
+        record(results, "roughness: read + detrend (512x512)", timeit(lambda: afm_scan.read_topography(path), repeat=5),
                **extra)
-        record(results, "roughness: spectral moments (512x512)", timeit(lambda: sf.profile_moments(topo), repeat=5),
+        record(results, "roughness: spectral moments (512x512)", timeit(lambda: afm_scan.profile_moments(topo), repeat=5),
                **extra)
         record(results, "roughness: summit count (512x512)",
                timeit(lambda: sf.summit_statistics(heights, px), repeat=5), **extra)

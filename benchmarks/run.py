@@ -4,7 +4,9 @@ Each module defines ``run(results: list[dict]) -> None`` and appends rows with
 :func:`benchmarks.common.record` (which adds the load at each row's start and end, and flags noisy rows).
 Usage: ``python -m benchmarks.run --out benchmarks/results/bench.json`` (optionally ``--only NAME`` to run
 modules whose name contains NAME). ``BENCH_STUDY=0`` leaves out the study modules (:data:`STUDY_MODULES`:
-identify and sensitivity at their budgets, most of the bench's time).
+identify and sensitivity at their budgets, most of the bench's time). A module that raises does not lose
+the others' rows: it gets a ``failed`` row (:func:`benchmarks.common.record_failure`, with the error), the
+rest run, the file is written, and the command exits with status 1.
 """
 
 from __future__ import annotations
@@ -14,7 +16,9 @@ import importlib
 import json
 import os
 import platform
+import sys
 import time
+import traceback
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -42,6 +46,7 @@ def main() -> None:
     args = p.parse_args()
     here = Path(__file__).parent
     results: list[dict] = []
+    failed: list[str] = []
     study = study_enabled()
     if not study:
         print(f"BENCH_STUDY=0: leaving out {', '.join(STUDY_MODULES)}")
@@ -50,7 +55,12 @@ def main() -> None:
         ref = common.current_reference()
         print(f"== {name}  (reference: compiled {ref['ref_compiled_s'] * 1e3:.2f} ms, "
               f"Python {ref['ref_python_s'] * 1e3:.2f} ms)", flush=True)
-        importlib.import_module(f"benchmarks.{name}").run(results)
+        try:
+            importlib.import_module(f"benchmarks.{name}").run(results)
+        except Exception as exc:  # (a broken module must not lose the rows measured before and after it)
+            traceback.print_exc()
+            failed.append(name)
+            common.record_failure(results, f"{name}: the module raised", f"{type(exc).__name__}: {exc}")
     args.out.parent.mkdir(parents=True, exist_ok=True)
     meta = {"date": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "machine": platform.machine(),
             "python": platform.python_version(), "cpus": os.cpu_count(), "study": study,
@@ -63,6 +73,9 @@ def main() -> None:
         print(f"{len(noisy)} of {len(results)} rows NOISY (load above {common.NOISY_LOAD_PER_CPU:g} per CPU at "
               "their start): upper bounds, measure again on a quiet machine")
     print(f"results written to {args.out}")
+    if failed:
+        print(f"{len(failed)} module(s) failed: {', '.join(failed)}", file=sys.stderr)
+        sys.exit(1)
 
 
 if __name__ == "__main__":

@@ -161,3 +161,73 @@ def test_kernel_ab_digest_tells_a_one_bit_difference() -> None:
     flipped.view(np.int64)[2, 1] ^= 1  # (the last bit of one value's mantissa)
     assert digest((flipped, c, np.array([0, 10, 1, 0, 60]), ext)) != ref
     assert digest((y, ~c, np.array([0, 10, 1, 0, 60]), ext)) != ref
+
+
+def test_a_module_that_raises_loses_no_rows(monkeypatch: pytest.MonkeyPatch, tmp_path: Path, fake_load) -> None:
+    """A broken bench module gets a ``failed`` row with its error; the modules before and after it keep their
+    rows, the file is written, and the command exits with status 1."""
+    fake_load([0.1] * 20)
+
+    class Good:
+        @staticmethod
+        def run(results: list[dict]) -> None:
+            common.record(results, "good row", [0.01])
+
+    class Broken:
+        @staticmethod
+        def run(results: list[dict]) -> None:
+            raise AttributeError("module 'x' has no attribute 'y'")
+
+    modules = {"benchmarks.bench_aaa": Good, "benchmarks.bench_bbb": Broken, "benchmarks.bench_ccc": Good}
+    monkeypatch.setattr(run.importlib, "import_module", lambda name: modules[name])
+    monkeypatch.setattr(run, "selected_modules", lambda names, only=None, study=True: ["bench_aaa", "bench_bbb",
+                                                                                        "bench_ccc"])
+    out = tmp_path / "b.json"
+    monkeypatch.setattr(sys, "argv", ["run", "--out", str(out)])
+    with pytest.raises(SystemExit) as exit_:
+        run.main()
+    assert exit_.value.code == 1
+    rows = json.loads(out.read_text())["results"]
+    assert [r["name"] for r in rows] == ["good row", "bench_bbb: the module raised", "good row"]
+    assert rows[1]["failed"] == "AttributeError: module 'x' has no attribute 'y'"
+
+
+def _pipeline_attributes(path: Path) -> list[tuple[str, str, int]]:
+    """``(module, attribute, line)`` of every ``name.attr`` in a bench module where ``name`` is bound to a
+    ``pipeline`` module by an import (``from pipeline.x import y as name``, ``import pipeline.x as name``)."""
+    import ast
+    import importlib
+    tree = ast.parse(path.read_text())
+    bound: dict[str, str] = {}
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("pipeline"):
+            for a in node.names:
+                full = f"{node.module}.{a.name}"
+                try:  # (only names that are modules: functions and classes are checked by the import itself)
+                    importlib.import_module(full)
+                except ImportError:
+                    continue
+                bound[a.asname or a.name] = full
+        elif isinstance(node, ast.Import):
+            for a in node.names:
+                if a.name.startswith("pipeline") and a.asname:
+                    bound[a.asname] = a.name
+    return [(bound[n.value.id], n.attr, n.lineno) for n in ast.walk(tree)
+            if isinstance(n, ast.Attribute) and isinstance(n.value, ast.Name) and n.value.id in bound]
+
+
+def test_every_pipeline_name_a_bench_module_uses_exists() -> None:
+    """The bench is not part of the suite's runs, so a renamed or moved function broke it silently
+    (``surface.read_topography`` after it moved to ``pipeline.model.afm_scan``): every bench module imports, and
+    every attribute it takes from a pipeline module exists there."""
+    import importlib
+    here = Path(run.__file__).parent
+    missing, seen = [], 0
+    for path in sorted(here.glob("*.py")):
+        importlib.import_module(f"benchmarks.{path.stem}")
+        for module, attr, line in _pipeline_attributes(path):
+            seen += 1
+            if not hasattr(importlib.import_module(module), attr):
+                missing.append(f"{path.name}:{line}: {module}.{attr}")
+    assert not missing, missing
+    assert seen > 20  # (the check reads the bench's uses: assembly.build_model, running.run_model, ...)
