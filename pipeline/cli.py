@@ -11,7 +11,6 @@ from __future__ import annotations
 import argparse
 import logging
 import os
-import signal
 import sys
 import traceback
 from pathlib import Path
@@ -111,7 +110,7 @@ def _logging(verbose: int = 0, quiet: bool = False) -> None:
             logging.getLogger(name).setLevel(logging.CRITICAL)
 
 
-#: SIGTERM unwound like Ctrl-C (:mod:`pipeline.interrupts`).
+#: SIGTERM and SIGHUP unwound like Ctrl-C (:mod:`pipeline.interrupts`).
 Terminated = interrupts.Terminated
 
 
@@ -122,7 +121,7 @@ def main(argv: list[str] | None = None) -> int:
     if signum is not None:  # (recorded, never raised to the top: swallowed where it was raised)
         interrupts.answered()
         if code == 0:
-            print(f"hdi: {_how(signum == signal.SIGTERM)}; finished work is kept, run again to resume",
+            print(f"hdi: {interrupts.describe(signum)}; finished work is kept, run again to resume",
                   file=sys.stderr)
             code = interrupts.exit_code(signum)
     return code
@@ -137,10 +136,6 @@ def _names_a_scene(text: str) -> bool:
         return find_scene(text) != Path(text)
     except SceneError:
         return False
-
-
-def _how(terminated: bool) -> str:
-    return "terminated (SIGTERM)" if terminated else "interrupted"
 
 
 def _main(argv: list[str] | None = None) -> int:
@@ -197,9 +192,10 @@ def _main(argv: list[str] | None = None) -> int:
         return 2
     except KeyboardInterrupt as exc:
         interrupts.answered()
-        print(f"hdi {args.stage}: {_how(isinstance(exc, Terminated))}; finished work is kept, run again to resume",
+        signum = interrupts.signal_of(exc)
+        print(f"hdi {args.stage}: {interrupts.describe(signum)}; finished work is kept, run again to resume",
               file=sys.stderr)
-        return interrupts.exit_code(signal.SIGTERM if isinstance(exc, Terminated) else signal.SIGINT)
+        return interrupts.exit_code(signum)
 
 
 def entry() -> None:  # pragma: no cover (the console script; tests call main)

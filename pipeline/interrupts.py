@@ -1,14 +1,17 @@
-"""SIGTERM and Ctrl-C that cannot be lost: recorded when they arrive, raised, and raised again at safe points.
+"""SIGTERM, SIGHUP and Ctrl-C that cannot be lost: recorded when they arrive, raised, and raised again at safe points.
 
 Python runs a signal handler between two bytecodes of the main thread, wherever it is; an exception the
 handler raises inside a C library's callback or error check (netCDF4 reading a variable) can be caught
 there and dropped, and the run then went on to exit 0. So the handler of :func:`handling` first
-*records* the signal, then raises it (:class:`Terminated` for SIGTERM, ``KeyboardInterrupt`` for
-SIGINT); :func:`check`, called after every call that may swallow it (each dataset read and write, each
+*records* the signal, then raises it (:class:`Terminated` for SIGTERM and SIGHUP, ``KeyboardInterrupt``
+for SIGINT); :func:`check`, called after every call that may swallow it (each dataset read and write, each
 stage, the figure pool) and by the command before it reports success, raises a recorded signal again
 until the command has answered it (:func:`answered`). A signal never leaves SIGTERM ignored: a second
 one while the first unwinds (the clean-up of the folder lock and staging folder) is recorded and not
 raised, so it cannot cut that clean-up short; one after the first was swallowed raises again.
+
+SIGHUP (the terminal closed, an ssh session dropped) is answered like SIGTERM, but only where it would have
+killed the process: a command started under ``nohup`` (or by a shell that ignores it) keeps ignoring it.
 """
 
 from __future__ import annotations
@@ -22,18 +25,39 @@ from typing import Iterator
 
 
 class Terminated(KeyboardInterrupt):
-    """SIGTERM (``timeout``, ``kill``, SLURM's ``scancel`` and requeue) arrived: unwound like Ctrl-C, so
-    the folder lock and the staging folder are removed and finished work is kept."""
+    """SIGTERM (``timeout``, ``kill``, SLURM's ``scancel`` and requeue) or SIGHUP (the terminal closed)
+    arrived: unwound like Ctrl-C, so the folder lock and the staging folder are removed and finished work is
+    kept. ``signum``: which of the two."""
+
+    def __init__(self, signum: int = signal.SIGTERM) -> None:
+        super().__init__()
+        self.signum = int(signum)
 
 
 #: The signals received and not yet answered by the command (:func:`answered`), oldest first.
 _PENDING: list[int] = []
-#: The signals :func:`handling` answers.
-SIGNALS = (signal.SIGTERM, signal.SIGINT)
+#: SIGHUP where the platform has it (not on Windows).
+SIGHUP: int | None = getattr(signal, "SIGHUP", None)
+#: The signals :func:`handling` answers (SIGHUP only where it is not ignored already).
+SIGNALS = (signal.SIGTERM, signal.SIGINT) + ((SIGHUP,) if SIGHUP is not None else ())
+#: What the command's last line says of each signal.
+_WORDS = {int(signal.SIGTERM): "terminated (SIGTERM)", int(signal.SIGINT): "interrupted"}
+if SIGHUP is not None:
+    _WORDS[int(SIGHUP)] = "hung up (SIGHUP: the terminal closed)"
 
 
 def _exception(signum: int) -> KeyboardInterrupt:
-    return Terminated() if signum == signal.SIGTERM else KeyboardInterrupt()
+    return KeyboardInterrupt() if signum == signal.SIGINT else Terminated(signum)
+
+
+def signal_of(exc: KeyboardInterrupt) -> int:
+    """The signal an interrupt stands for: its own for :class:`Terminated`, SIGINT for Ctrl-C."""
+    return exc.signum if isinstance(exc, Terminated) else int(signal.SIGINT)
+
+
+def describe(signum: int) -> str:
+    """How the command's last line names the signal ``signum`` (``interrupted``, ``terminated (SIGTERM)``, ...)."""
+    return _WORDS.get(int(signum), f"ended by signal {int(signum)}")
 
 
 def _unwinding() -> bool:
@@ -73,12 +97,14 @@ def exit_code(signum: int) -> int:
 
 @contextlib.contextmanager
 def handling() -> Iterator[None]:
-    """Answer SIGTERM and SIGINT with the recording handler within the block (in the main thread; another
-    thread cannot set handlers, and the block then does nothing), the previous handlers restored after."""
+    """Answer SIGTERM, SIGINT and SIGHUP with the recording handler within the block (in the main thread;
+    another thread cannot set handlers, and the block then does nothing), the previous handlers restored
+    after. SIGHUP only if its handler is the default (under ``nohup`` it is ignored, and stays so)."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    previous = {s: signal.signal(s, _handler) for s in SIGNALS}
+    previous = {s: signal.signal(s, _handler) for s in SIGNALS
+                if s != SIGHUP or signal.getsignal(s) is signal.SIG_DFL}
     try:
         yield
     finally:
@@ -87,10 +113,13 @@ def handling() -> Iterator[None]:
 
 
 def default_in_child(parent: int | None = None) -> None:
-    """In a forked worker: SIGTERM back to its default (the parent's handler would unwind the worker's
-    copy of the parent), Ctrl-C ignored (it reaches the whole process group; the parent answers it),
-    and with ``parent`` (its process id) the worker dies with it (:func:`die_with_parent`)."""
+    """In a forked worker: SIGTERM (and SIGHUP, if the parent answers it) back to its default (the parent's
+    handler would unwind the worker's copy of the parent), Ctrl-C ignored (it reaches the whole process
+    group; the parent answers it), and with ``parent`` (its process id) the worker dies with it
+    (:func:`die_with_parent`)."""
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    if SIGHUP is not None and signal.getsignal(SIGHUP) is _handler:
+        signal.signal(SIGHUP, signal.SIG_DFL)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     _PENDING.clear()
     if parent is not None:

@@ -44,3 +44,50 @@ def test_a_second_signal_while_the_first_unwinds_does_not_cut_the_clean_up_short
                 cleaned.append(True)
         assert cleaned == [True] and interrupts.pending() == signal.SIGTERM
         interrupts.answered()
+
+
+def test_sighup_unwinds_like_sigterm_and_names_itself():
+    """A closed terminal (SIGHUP) is answered like SIGTERM: Terminated carrying the signal, exit status 129."""
+    from pipeline import interrupts
+    with interrupts.handling():
+        assert signal.getsignal(signal.SIGHUP) is interrupts._handler
+        with pytest.raises(interrupts.Terminated) as caught:
+            os.kill(os.getpid(), signal.SIGHUP)
+            for _ in range(10_000):
+                pass
+        assert interrupts.signal_of(caught.value) == signal.SIGHUP and interrupts.pending() == signal.SIGHUP
+        interrupts.answered()
+    assert signal.getsignal(signal.SIGHUP) is signal.SIG_DFL
+    assert interrupts.exit_code(signal.SIGHUP) == 129
+    assert interrupts.describe(signal.SIGHUP).startswith("hung up (SIGHUP")
+    assert interrupts.describe(signal.SIGTERM) == "terminated (SIGTERM)"
+    assert interrupts.signal_of(KeyboardInterrupt()) == signal.SIGINT
+    assert interrupts.signal_of(interrupts.Terminated()) == signal.SIGTERM
+
+
+def test_a_command_under_nohup_keeps_ignoring_sighup():
+    """``nohup hdi ...`` starts with SIGHUP ignored: the handler is not installed over that, and the
+    disposition is the same after the block."""
+    from pipeline import interrupts
+    old = signal.signal(signal.SIGHUP, signal.SIG_IGN)
+    try:
+        with interrupts.handling():
+            assert signal.getsignal(signal.SIGHUP) is signal.SIG_IGN
+            assert signal.getsignal(signal.SIGTERM) is interrupts._handler
+        assert signal.getsignal(signal.SIGHUP) is signal.SIG_IGN
+    finally:
+        signal.signal(signal.SIGHUP, old)
+
+
+def test_a_forked_worker_gets_the_default_sighup_back(monkeypatch):
+    """A worker forked inside the block must not unwind its copy of the parent on SIGHUP: its default again."""
+    from pipeline import interrupts
+    monkeypatch.setattr(interrupts, "die_with_parent", lambda parent: None)
+    old_int = signal.getsignal(signal.SIGINT)
+    try:
+        with interrupts.handling():
+            interrupts.default_in_child()
+            assert signal.getsignal(signal.SIGHUP) is signal.SIG_DFL
+            assert signal.getsignal(signal.SIGTERM) is signal.SIG_DFL
+    finally:
+        signal.signal(signal.SIGINT, old_int)

@@ -46,8 +46,12 @@ def test_datasets_are_created_with_the_umask_like_any_file(tmp_path, umask, mode
 
 
 # ------------------------------------------------------------------------------ 6. SIGTERM
-def test_sigterm_removes_the_lock_and_the_staging_folder_like_ctrl_c(tmp_path):
-    """What ``timeout``, SLURM's scancel and a requeue send: the lock used to stay, refusing the rerun."""
+@pytest.mark.parametrize("signum, code, words", [
+    (signal.SIGTERM, 143, "terminated (SIGTERM)"),
+    (signal.SIGHUP, 129, "hung up (SIGHUP: the terminal closed)")])
+def test_sigterm_removes_the_lock_and_the_staging_folder_like_ctrl_c(tmp_path, signum, code, words):
+    """What ``timeout``, SLURM's scancel and a requeue send (SIGTERM), and a closed terminal or a dropped ssh
+    session (SIGHUP): the lock used to stay, refusing the rerun; SIGHUP killed the command outright."""
     from pipeline.stages import sweep as sweep_stage
     cmd = [sys.executable, "-m", "pipeline.cli", "sweep", str(PAPER), "--out", str(tmp_path), "--workers", "2"]
     for s in FLY[:3] + ["sweep.protrusion_nm={start=0.0, stop=6.0, step=0.2}", "sweep.batch_size=1"]:
@@ -58,11 +62,11 @@ def test_sigterm_removes_the_lock_and_the_staging_folder_like_ctrl_c(tmp_path):
     while time.time() < deadline and len(list(parts.glob("batch-*.nc"))) < 2:
         time.sleep(0.05)
     assert (tmp_path / runner.LOCK_NAME).exists() and list(tmp_path.glob(runner.STAGING_PREFIX + "*"))
-    proc.send_signal(signal.SIGTERM)
+    proc.send_signal(signum)
     _, err = proc.communicate(timeout=120)
-    assert proc.returncode == 143, err
+    assert proc.returncode == code, err
     assert "Traceback" not in err
-    assert err.strip().splitlines()[-1] == "hdi sweep: terminated (SIGTERM); finished work is kept, run again to resume"
+    assert err.strip().splitlines()[-1] == f"hdi sweep: {words}; finished work is kept, run again to resume"
     assert not (tmp_path / runner.LOCK_NAME).exists()
     assert not list(tmp_path.glob(runner.STAGING_PREFIX + "*"))
     assert len(list(parts.glob("batch-*.nc"))) >= 2
