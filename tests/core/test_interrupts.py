@@ -49,6 +49,14 @@ def test_a_second_signal_while_the_first_unwinds_does_not_cut_the_clean_up_short
 def test_sighup_unwinds_like_sigterm_and_names_itself():
     """A closed terminal (SIGHUP) is answered like SIGTERM: Terminated carrying the signal, exit status 129."""
     from pipeline import interrupts
+    old = signal.signal(signal.SIGHUP, signal.SIG_DFL)  # (as from a terminal: a session under nohup ignores it)
+    try:
+        _sighup_unwinds(interrupts)
+    finally:
+        signal.signal(signal.SIGHUP, old)
+
+
+def _sighup_unwinds(interrupts) -> None:
     with interrupts.handling():
         assert signal.getsignal(signal.SIGHUP) is interrupts._handler
         with pytest.raises(interrupts.Terminated) as caught:
@@ -84,6 +92,7 @@ def test_a_forked_worker_gets_the_default_sighup_back(monkeypatch):
     from pipeline import interrupts
     monkeypatch.setattr(interrupts, "die_with_parent", lambda parent: None)
     old_int = signal.getsignal(signal.SIGINT)
+    old_hup = signal.signal(signal.SIGHUP, signal.SIG_DFL)
     try:
         with interrupts.handling():
             interrupts.default_in_child()
@@ -91,3 +100,4 @@ def test_a_forked_worker_gets_the_default_sighup_back(monkeypatch):
             assert signal.getsignal(signal.SIGTERM) is signal.SIG_DFL
     finally:
         signal.signal(signal.SIGINT, old_int)
+        signal.signal(signal.SIGHUP, old_hup)

@@ -56,7 +56,9 @@ def test_sigterm_removes_the_lock_and_the_staging_folder_like_ctrl_c(tmp_path, s
     cmd = [sys.executable, "-m", "pipeline.cli", "sweep", str(PAPER), "--out", str(tmp_path), "--workers", "2"]
     for s in FLY[:3] + ["sweep.protrusion_nm={start=0.0, stop=6.0, step=0.2}", "sweep.batch_size=1"]:
         cmd += ["--set", s]
-    proc = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    # (SIGHUP's default in the child, as from a terminal: a test session run under nohup passes it ignored)
+    proc = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGHUP, signal.SIG_DFL))
     parts = tmp_path / sweep_stage.PARTS
     deadline = time.time() + 180
     while time.time() < deadline and len(list(parts.glob("batch-*.nc"))) < 2:
