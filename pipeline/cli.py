@@ -110,10 +110,6 @@ def _logging(verbose: int = 0, quiet: bool = False) -> None:
             logging.getLogger(name).setLevel(logging.CRITICAL)
 
 
-#: SIGTERM and SIGHUP unwound like Ctrl-C (:mod:`pipeline.interrupts`).
-Terminated = interrupts.Terminated
-
-
 def main(argv: list[str] | None = None) -> int:
     with interrupts.handling():
         code = _main(argv)
