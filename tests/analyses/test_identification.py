@@ -190,12 +190,18 @@ def _ensemble_task(base, params, rows, protrusions, inputs, realisations, record
     return out
 
 
-def test_the_evaluator_runs_an_ensemble_in_parts_and_joins_them(paper_scene, tmp_path):
+def _racing_evaluator(paper_scene, tmp_path):
+    """An evaluator of 8 records in racing stages of 2, 4, 8 over one parameter (``dmw.rms_nm``) at 9 nm, on
+    :func:`_ensemble_task` (no simulation), and its store."""
     inputs = SimulationInputs(Source("interface", key="i"), Source("dmw", key="d"))
     params = [study.Parameter("dmw.rms_nm", 0.0, 1.0)]
     store = evaluations.EvaluationStore(tmp_path / "s.jsonl")
-    ev = evaluations.Evaluator(paper_scene, params, [9.0], inputs, store, 2, "synchronous", task=_ensemble_task,
-                               realisations=8, stages=(2, 4, 8))
+    return evaluations.Evaluator(paper_scene, params, [9.0], inputs, store, 2, "synchronous", task=_ensemble_task,
+                                 realisations=8, stages=(2, 4, 8)), store
+
+
+def test_the_evaluator_runs_an_ensemble_in_parts_and_joins_them(paper_scene, tmp_path):
+    ev, store = _racing_evaluator(paper_scene, tmp_path)
     first = ev([[0.1], [0.2]], 2)
     assert [r["realisations"] for r in first] == [2, 2] and ev.record_evaluations == 4
     assert first[0]["outputs"]["fhm_bv"] == [[0.1, 1.1]] and first[0]["key"] == ev.key([0.1])
@@ -216,11 +222,7 @@ def test_the_evaluator_runs_an_ensemble_in_parts_and_joins_them(paper_scene, tmp
 def test_a_point_evaluated_already_is_not_run_again(paper_scene, tmp_path):
     # a racing identification on the evaluator: the (candidate, record) pairs computed are counted once, whatever
     # asks for the point again (a walk's poll met by another walk, a slice point, a resumed run)
-    inputs = SimulationInputs(Source("interface", key="i"), Source("dmw", key="d"))
-    params = [study.Parameter("dmw.rms_nm", 0.0, 1.0)]
-    store = evaluations.EvaluationStore(tmp_path / "s.jsonl")
-    ev = evaluations.Evaluator(paper_scene, params, [9.0], inputs, store, 2, "synchronous", task=_ensemble_task,
-                               realisations=8, stages=(2, 4, 8))
+    ev, store = _racing_evaluator(paper_scene, tmp_path)
     targets = [study.ObjectiveTerm("fhm", "fhm", "%", "equal", 0.0, 1.0, (9.0,), lambda t: t.value("fhm_bv", 9.0),
                                    "", lambda e: study._median(study.Ensemble.of(e).at("fhm_bv", (9.0,))[0]))]
     ident = identification.Identification(ev, targets, 10.0, identification.Racing.doubling(2, 8, 3.0))
