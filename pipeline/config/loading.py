@@ -41,7 +41,7 @@ def parse_override(text: str) -> tuple[str, str, Any]:
 
 
 #: The folder of the package that holds the shipped scenes (package data; in the repository
-#: ``pipeline/scenes`` is a link to ``configs/``, their one home).
+#: ``pipeline/scenes/`` holds a link per scene of ``configs/``, their one home).
 SCENES_FOLDER = "scenes"
 
 

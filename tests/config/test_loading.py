@@ -8,6 +8,7 @@ shipped scenes (docs/cli.md, "Scenes by name")."""
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import pytest
@@ -88,8 +89,12 @@ def test_the_shipped_scenes_are_the_files_of_configs(repo_root):
     shipped = shipped_scenes()
     configs = sorted(repo_root.glob("configs/*.toml"))
     assert list(shipped) == sorted(p.stem for p in configs) and "paper-2009" in shipped
-    # one home: in the clone the package's scenes are configs/ itself (pipeline/scenes links to it)
+    # one home: in the clone the package's scenes are the files of configs/ (pipeline/scenes/ holds a link to each,
+    # relative, so that a clone anywhere keeps them; a scene added to configs/ without its link is not shipped)
     assert all(path == (repo_root / "configs" / f"{name}.toml").resolve() for name, path in shipped.items())
+    links = sorted((repo_root / "pipeline" / "scenes").iterdir())
+    assert [p.name for p in links] == [p.name for p in configs]
+    assert all(p.is_symlink() and os.readlink(p) == f"../../configs/{p.name}" for p in links)
 
 
 @pytest.mark.parametrize("name", ["paper-2009", "paper-2009-identified", "sweep-3x3"])

@@ -67,7 +67,7 @@ def wheel(tmp_path_factory) -> Path:
     ignore = shutil.ignore_patterns("__pycache__", "*.egg-info", "build")
     for name in SOURCES:
         item = ROOT / name
-        if item.is_dir():  # (symlinks=True: pipeline/scenes stays the link to ../configs)
+        if item.is_dir():  # (symlinks=True: pipeline/scenes/ keeps its links to ../../configs/)
             shutil.copytree(item, src / name, symlinks=True, ignore=ignore)
         else:
             shutil.copy2(item, src / name)
@@ -102,9 +102,20 @@ def _empty(folder: Path) -> Path:
 
 def test_the_wheel_ships_every_scene(wheel):
     with zipfile.ZipFile(wheel) as whl:
-        shipped = {Path(n).name: whl.read(n) for n in whl.namelist() if n.startswith("pipeline/scenes/")}
+        # (the files, not the folder's own entry: uv's wheels list folders too)
+        shipped = {Path(n).name: whl.read(n) for n in whl.namelist()
+                   if n.startswith("pipeline/scenes/") and not n.endswith("/")}
     assert shipped == {p.name: p.read_bytes() for p in (ROOT / "configs").glob("*.toml")}
     assert "paper-2009.toml" in shipped
+
+
+def test_the_wheel_ships_the_license(wheel):
+    with zipfile.ZipFile(wheel) as whl:
+        (meta,) = [n for n in whl.namelist() if n.endswith(".dist-info/METADATA")]
+        head = whl.read(meta).decode().split("\n\n")[0].splitlines()
+        (licence,) = [n for n in whl.namelist() if n.endswith(".dist-info/licenses/LICENSE")]
+        assert whl.read(licence) == (ROOT / "LICENSE").read_bytes()
+    assert "License-Expression: BSD-3-Clause" in head and "License-File: LICENSE" in head
 
 
 SCENES_JSON = """

@@ -30,7 +30,9 @@ def test_version_is_one(repo_root, capsys):
 def test_license_and_citation_ship(repo_root):
     meta = tomllib.loads((repo_root / "pyproject.toml").read_text())["project"]
     text = (repo_root / "LICENSE").read_text()
-    assert meta["license"]["text"] == "BSD-3-Clause" and text.startswith("BSD 3-Clause License")
+    # (an SPDX expression and the file it names: PEP 639, which the build backend writes into the wheel's metadata)
+    assert meta["license"] == "BSD-3-Clause" and meta["license-files"] == ["LICENSE"]
+    assert text.startswith("BSD 3-Clause License")
     assert "Neither the name of the copyright holder" in text  # the third clause
     cff = (repo_root / "CITATION.cff").read_text()
     assert "cff-version: 1.2.0" in cff and "license: BSD-3-Clause" in cff
