@@ -23,6 +23,7 @@ from .config.schema import SceneError, describe_keys
 from .folder_lock import folder_lock
 from .stages import roughness
 from .cli_checks import MAX_SCENES, check_options, integration_line, one_line_warnings
+from .model import compiled
 from .model.running import IntegrationError
 
 log = logging.getLogger("pipeline")
@@ -194,8 +195,12 @@ def _main(argv: list[str] | None = None) -> int:
         return interrupts.exit_code(signum)
 
 
-def entry() -> None:  # pragma: no cover (the console script; tests call main)
-    """The ``hdi`` console script: :func:`main`, then a fast exit with its code.
+def entry(early: tuple | None = None) -> None:  # pragma: no cover (the console script; tests call main)
+    """The ``hdi`` console script (:func:`pipeline.launch.entry`): :func:`main`, then a fast exit with its code.
+
+    ``early``: the first run's kernel compile the console script started before importing this module
+    (:func:`pipeline.model.first_run.start`), handed to the runner's compile-ahead
+    (:func:`pipeline.model.compiled.adopt_early`) and stopped at the end if nothing adopted it.
 
     Interpreter shutdown after a command costs ~0.3 s (numba's LLVM and the netCDF4/HDF5 teardown,
     measured on the 2-core machine: 2.0 s against 1.7 s for import + first simulation) and does
@@ -204,7 +209,9 @@ def entry() -> None:  # pragma: no cover (the console script; tests call main)
     are flushed the process ends with ``os._exit``. An exception still exits the normal way, with
     its traceback.
     """
+    compiled.adopt_early(early)
     code = main()
+    compiled.stop_early()
     logging.shutdown()
     try:
         sys.stdout.flush()

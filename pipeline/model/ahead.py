@@ -13,6 +13,8 @@ would otherwise compile after the wait, on the first run's critical path
 
 from __future__ import annotations
 
+import os
+import pickle
 from typing import Any
 
 import numpy as np
@@ -24,6 +26,7 @@ from .kernel_inputs import stand_in_arguments
 from .start import static_inputs
 from .state import N_STATE, THETA, Z
 from .statics import TOL, _path
+from ..config.loading import load_scene
 from ..units import URAD
 
 
@@ -42,6 +45,24 @@ def compile_kernel_ahead(scene: Any) -> None:
         return
     dyn.compile_kernel_ahead(*args)
     compiled.while_waiting(lambda: compile_entry_points(python_entry_points(scene)))
+
+
+def compile_scene_kernel(scene_path: str, overrides: list[str], key_path: str) -> None:
+    """The process :func:`pipeline.model.first_run.start` starts: load the scene (``scene_path`` with the
+    ``--set`` strings ``overrides``), write the kernel's key ``(module, name, signature)`` for its stand-in
+    arguments to ``key_path`` (whole, by a rename: the waiting process reads it to adopt this compile,
+    :func:`pipeline.model.compiled.adopt_early`) and compile the kernel into the on-disk cache. A scene
+    that does not load or has no stand-ins (the command line reports it) compiles nothing."""
+    try:
+        args = dyn.kernel_arguments(*stand_in_arguments(load_scene(scene_path, overrides)))
+    except (ValueError, OSError):  # (SceneError is a ValueError)
+        return
+    sig = compiled.signature(dyn._integrate, args)
+    tmp = f"{key_path}.{os.getpid()}.tmp"
+    with open(tmp, "wb") as f:
+        pickle.dump((dyn._integrate.py_func.__module__, dyn._integrate.py_func.__name__, sig), f)
+    os.replace(tmp, key_path)
+    compiled.compile_quietly(dyn._integrate, sig)
 
 
 def python_entry_points(scene: Any) -> list[tuple[Any, tuple]]:

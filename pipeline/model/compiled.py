@@ -29,10 +29,13 @@ Who starts it: the stage runner, before the first stage of a build that computes
 (:meth:`pipeline.runner.Runner.compile_ahead`, from the scene's stand-in arguments,
 :func:`pipeline.model.ahead.compile_kernel_ahead`); the Python API's ``build_model``; and a model's
 first run, for a model whose kernel nothing started (:func:`pipeline.model.dynamics.compile_kernel_ahead`).
+On a first run of the ``hdi`` console script, the kernel's compile starts even before the command line's
+imports (:mod:`pipeline.model.first_run`), and the runner adopts it (:func:`adopt_early`).
 """
 
 from __future__ import annotations
 
+import contextlib
 import importlib
 import logging
 import os
@@ -41,14 +44,15 @@ import subprocess
 import sys
 import tempfile
 import threading
+import time
 from typing import Any, Callable
 
 import numba
 from numba import njit
 from numba.core import event
 
+from . import first_run
 from .. import progress
-from ..code_version import code_key
 
 log = logging.getLogger(__name__)
 
@@ -58,9 +62,9 @@ OPTIONS = dict(cache=True, nogil=True, error_model="numpy")
 
 
 def cache_folder(module: str) -> str:
-    """The numba cache folder of the kernel module ``module`` (a dotted name): named by its code key."""
-    base = numba.config.CACHE_DIR or os.path.join(os.path.dirname(__file__), "__pycache__")
-    return os.path.join(base, f"numba-{code_key(module)[:16]}")
+    """The numba cache folder of the kernel module ``module`` (a dotted name): named by its code key
+    (:func:`pipeline.model.first_run.cache_folder` under numba's cache folder)."""
+    return first_run.cache_folder(module, numba.config.CACHE_DIR)
 
 
 def kernel_jit(module: str, **options) -> Callable[[Callable], Callable]:
@@ -126,19 +130,89 @@ _AHEAD: dict[tuple, subprocess.Popen] = {}
 _AHEAD_LOCK = threading.Lock()
 #: Work for :func:`wait_ahead` to do while a background compile runs (:func:`while_waiting`).
 _IDLE: list[Callable[[], None]] = []
+#: The console script's first-run compile (:func:`adopt_early`): (process, the file of its key), until
+#: :func:`compile_ahead` adopts or stops it.
+_EARLY: list[tuple[subprocess.Popen, str]] = []
+#: How often :func:`compile_ahead` looks for the early process's key while it is still loading the scene [s].
+EARLY_POLL_S = 0.02
+
+
+def adopt_early(early: tuple[subprocess.Popen, str] | None) -> None:
+    """Hand this process the kernel compile the console script started before its imports
+    (:func:`pipeline.model.first_run.start`: the process and the file it writes its ``(module, name,
+    signature)`` key to): :func:`compile_ahead` waits for it instead of starting one, if it compiles the
+    signature asked for; otherwise stops it. None: nothing started."""
+    if early is not None:
+        with _AHEAD_LOCK:
+            _EARLY.append(early)
+
+
+def _read_key(path: str) -> tuple | None:
+    """The key an early process wrote to ``path`` (None: not written, or unreadable)."""
+    try:
+        with open(path, "rb") as f:
+            return pickle.load(f)
+    except (OSError, EOFError, pickle.UnpicklingError):
+        return None
+
+
+def _adopt(key: tuple) -> subprocess.Popen | None:
+    """The early process if it compiles ``key`` (its key file read, waiting while it loads the scene), else
+    None, having stopped it (its work would only compete with this process's own compile)."""
+    if not _EARLY:
+        return None
+    proc, path = _EARLY.pop()
+    got = _read_key(path)
+    while got is None and proc.poll() is None:
+        time.sleep(EARLY_POLL_S)
+        got = _read_key(path)
+    got = got if got is not None else _read_key(path)  # (written just before it ended)
+    with contextlib.suppress(OSError):
+        os.unlink(path)
+    if got == key:
+        return proc
+    _stop(proc)
+    return None
+
+
+def _stop(proc: subprocess.Popen) -> None:
+    """End a background compile whose machine code nobody will ask for (numba writes a cache entry whole, by
+    a rename: an ended compile leaves none, never a torn one)."""
+    if proc.poll() is None:
+        proc.terminate()
+        proc.wait()
+
+
+def stop_early() -> None:
+    """Stop an early compile nothing adopted (a command that did not simulate): called at the command's
+    end, so no process outlives it."""
+    with _AHEAD_LOCK:
+        while _EARLY:
+            proc, path = _EARLY.pop()
+            _stop(proc)
+            with contextlib.suppress(OSError):
+                os.unlink(path)
 
 
 def compile_ahead(dispatcher: Any, args: tuple, what: str, seconds: float) -> None:
     """Start compiling ``dispatcher`` (a jitted function of a kernel module) for the types of ``args`` in a
     background process, unless this process has it, the cache has it, one is under way, or
     ``HDI_COMPILE_AHEAD=0``; says so (:func:`pipeline.progress.compile_notice`). :func:`wait_ahead`
-    waits for it."""
+    waits for it. The kernel's compile the console script started before its imports (:func:`adopt_early`)
+    is that process when it compiles the same signature, and is stopped otherwise."""
     if os.environ.get("HDI_COMPILE_AHEAD", "1") == "0":
         return
     sig = signature(dispatcher, args)
     key = (dispatcher.py_func.__module__, dispatcher.py_func.__name__, sig)
     with _AHEAD_LOCK:
+        early = _adopt(key) if key[:2] == first_run.KERNEL else None
         if key in _AHEAD or sig in dispatcher.overloads or is_cached(dispatcher, sig):
+            if early is not None:  # (done, or done elsewhere: nothing left for it to do)
+                _stop(early)
+            return
+        if early is not None:  # (the console script's, started before its imports: the same compile)
+            _AHEAD[key] = early
+            progress.compile_notice(f"{what} in a background process", seconds)
             return
         fd, path = tempfile.mkstemp(prefix="hdi-compile-", suffix=".pkl")
         with os.fdopen(fd, "wb") as f:
@@ -197,6 +271,12 @@ def compile_from_file(path: str) -> None:
     with open(path, "rb") as f:
         module, name, sig = pickle.load(f)
     os.unlink(path)
+    compile_quietly(getattr(importlib.import_module(module), name), sig)
+
+
+def compile_quietly(dispatcher: Any, sig: tuple) -> None:
+    """Compile ``dispatcher`` for ``sig`` into the on-disk cache (loaded instead if it is there), saying
+    nothing: the body of a background compile, whose starter has said it."""
     global _QUIET
-    _QUIET = True  # (the process that started this one has said it)
-    getattr(importlib.import_module(module), name).compile(sig)
+    _QUIET = True
+    dispatcher.compile(sig)

@@ -1,0 +1,94 @@
+"""The first run's kernel compile, started by the ``hdi`` console script before its own imports.
+
+A fresh clone's first ``hdi run`` spends its first seconds importing (and writing the bytecode of) the
+pipeline, xarray, dask and scipy, ~3-6 s, before the runner knows the scene's kernel and starts its
+background compile (:func:`pipeline.model.ahead.compile_kernel_ahead`); the compile, ~12 s of CPU, is
+then the first run's critical path (docs/performance.md, section "The first run"). The console script
+(:mod:`pipeline.launch`) therefore starts that compile at once, in a process of its own
+(:func:`start`), when the command line names a scene and numba's on-disk cache holds no kernel at all
+(:func:`kernel_cached`: a first run; a later scene with other effects is compiled as before). That
+process loads the scene, writes the kernel's signature to a file and compiles it into the cache
+(:func:`compile_scene_kernel`). The runner's compile-ahead then adopts it instead of starting its own,
+when the signatures agree (:func:`pipeline.model.compiled.adopt_early`); otherwise it is stopped.
+
+This module is imported by the console script before anything heavy: the standard library and
+:mod:`pipeline.code_version` only (numba, numpy and the scene are imported by the process it starts).
+"""
+
+from __future__ import annotations
+
+import glob
+import os
+import subprocess
+import sys
+import tempfile
+from typing import Sequence
+
+from ..code_version import code_key
+
+#: The kernel's module and entry point (:func:`pipeline.model.dynamics._integrate`).
+KERNEL = ("pipeline.model.dynamics", "_integrate")
+#: The options of ``hdi`` that take a value, other than ``--set`` (:func:`scene_arguments` skips them).
+_VALUED = ("--out", "--scheduler", "--workers", "--channel", "--detrend", "--write-scene", "--readme")
+
+
+def cache_folder(module: str, cache_dir: str | None = None) -> str:
+    """The numba cache folder of the kernel module ``module`` (a dotted name), named by its code key, under
+    ``cache_dir`` (numba's ``NUMBA_CACHE_DIR``; default: ``pipeline/model/__pycache__``)."""
+    base = cache_dir or os.path.join(os.path.dirname(__file__), "__pycache__")
+    return os.path.join(base, f"numba-{code_key(module)[:16]}")
+
+
+def kernel_cached() -> bool:
+    """Whether numba's on-disk cache holds the kernel's index for any signature (the code as it is now):
+    False on a first run. numba writes an index ``<module>.<function>-<line>.<python>.nbi`` per function in
+    a folder of the cache folder (numba 0.68)."""
+    module, name = KERNEL
+    folder = cache_folder(module, os.environ.get("NUMBA_CACHE_DIR") or None)
+    return bool(glob.glob(os.path.join(glob.escape(folder), "*", f"{module.rsplit('.', 1)[1]}.{name}-*.nbi")))
+
+
+def scene_arguments(argv: Sequence[str]) -> tuple[str, list[str]] | None:
+    """The scene and the ``--set`` overrides of ``hdi STAGE SCENE [options]`` (the stage and the scene
+    first, as the README writes it), or None when ``argv`` is not of that form: a help or version request,
+    an option before the stage, the AFM files of ``hdi roughness``, more than one input. Only a head start:
+    what this misses is compiled as before, and what it misreads is stopped (:func:`start`)."""
+    if len(argv) < 2 or argv[0].startswith("-") or argv[1].startswith("-"):
+        return None
+    if argv[0] == "roughness" and not argv[1].endswith(".toml"):
+        return None
+    overrides: list[str] = []
+    rest = list(argv[2:])
+    while rest:
+        arg = rest.pop(0)
+        if arg in ("-h", "--help", "--version") or arg.startswith("--help-keys"):
+            return None
+        if arg == "--set" and rest:
+            overrides.append(rest.pop(0))
+        elif arg.startswith("--set="):
+            overrides.append(arg[len("--set="):])
+        elif arg in _VALUED:
+            rest = rest[1:]
+        elif not arg.startswith("-"):  # (a second input: the command line reports it)
+            return None
+    return argv[1], overrides
+
+
+def start(argv: Sequence[str]) -> tuple[subprocess.Popen, str] | None:
+    """Start compiling the kernel of the scene ``argv`` names (:func:`scene_arguments`) in a background
+    process, on a first run only (:func:`kernel_cached`) and unless ``HDI_COMPILE_AHEAD=0``; returns the
+    process and the file its signature is written to (for :func:`pipeline.model.compiled.adopt_early`), or
+    None. The process says nothing: a scene it cannot load is the command line's to report."""
+    if os.environ.get("HDI_COMPILE_AHEAD", "1") == "0":
+        return None
+    found = scene_arguments(argv)
+    if found is None or kernel_cached():
+        return None
+    fd, key_path = tempfile.mkstemp(prefix="hdi-kernel-", suffix=".pkl")
+    os.close(fd)
+    os.unlink(key_path)  # (the process writes it whole, by a rename: its existence says the key is there)
+    code = ("from pipeline.model.ahead import compile_scene_kernel; "
+            f"compile_scene_kernel({found[0]!r}, {found[1]!r}, {key_path!r})")
+    proc = subprocess.Popen([sys.executable, "-c", code], stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL)
+    return proc, key_path
