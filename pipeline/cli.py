@@ -210,8 +210,10 @@ def entry(early: tuple | None = None) -> None:  # pragma: no cover (the console 
     its traceback.
     """
     compiled.adopt_early(early)
-    code = main()
-    compiled.stop_early()
+    try:
+        code = main()
+    finally:  # (an exception's traceback still ends the early compile nothing adopted)
+        compiled.stop_early()
     logging.shutdown()
     try:
         sys.stdout.flush()
