@@ -408,12 +408,11 @@ realisations = 4
 """
 
 
-@pytest.mark.slow  # (two identifications of the real slider on 4 DMW records: ~1 min on the shared 2 cores)
-def test_twin_racing_agrees_with_the_full_method_within_the_tolerance(write_scene, paper_config, tmp_path):
+def _ensemble_twin(write_scene, paper_config, tmp_path):
+    """The twin on 4 DMW records (:data:`ENSEMBLE_TWIN`): its scene's path, the scene, its free parameters, its
+    targets, the protrusions they need, their inputs and the truth's whole evaluation (at :data:`TRUE`)."""
     import twin
     from pipeline.config.scene import load_scene
-    from pipeline.physics import paper
-    from pipeline.runner import ensure
     path = write_scene(twin.scene_text(ENSEMBLE_TWIN).format(paper=paper_config))
     scene = load_scene(path)
     params = study.parse_parameters(scene["identify"]["parameters"], str(path), "identify.parameters")
@@ -421,6 +420,21 @@ def test_twin_racing_agrees_with_the_full_method_within_the_tolerance(write_scen
     inputs = evaluations.prepare_inputs(scene, tmp_path / "truth")
     prots = study.target_protrusions(tl)
     whole = evaluations.evaluate(scene, params, [TRUE[p.name] for p in params], prots, inputs, 4)
+    return path, scene, params, tl, prots, inputs, whole
+
+
+def _twin_targets(tl, whole) -> list[str]:
+    """The ``--set`` options that make the truth's ensemble values the twin's targets."""
+    from pipeline.physics import paper
+    values, _ = study.residuals(whole, tl, 10.0)
+    return [f"identify.{paper.TARGETS[t.name].value.key}={float(v)!r}" for t, v in zip(tl, values)]
+
+
+@pytest.mark.slow  # (two identifications of the real slider on 4 DMW records: ~1 min on the shared 2 cores)
+def test_twin_racing_agrees_with_the_full_method_within_the_tolerance(write_scene, paper_config, tmp_path):
+    from pipeline.config.scene import load_scene
+    from pipeline.runner import ensure
+    path, scene, params, tl, prots, inputs, whole = _ensemble_twin(write_scene, paper_config, tmp_path)
     # the parts of an ensemble are the whole, bit for bit (the racing stages join them)
     parts = [evaluations.evaluate(scene, params, [TRUE[p.name] for p in params], prots, inputs, 4, seg)
              for seg in ((0, 2), (2, 4))]
@@ -428,12 +442,11 @@ def test_twin_racing_agrees_with_the_full_method_within_the_tolerance(write_scen
     for k, v in whole["outputs"].items():
         np.testing.assert_array_equal(np.array(joined["outputs"][k], float), np.array(v, float))
     assert joined["seeds"] == whole["seeds"]
-    values, _ = study.residuals(whole, tl, 10.0)
     # the scoring on the record's arrays is the xarray rules' on its dataset, to the last bit, on the slider's record
     import scoring_reference
     for got, want in zip(study.score(whole, tl, 10.0), scoring_reference.xarray_score(whole, tl, 10.0)):
         np.testing.assert_array_equal(got, want)
-    sets = [f"identify.{paper.TARGETS[t.name].value.key}={float(v)!r}" for t, v in zip(tl, values)]
+    sets = _twin_targets(tl, whole)
     runs = {}
     for racing in (True, False):
         sc = load_scene(path, sets + [f"identify.racing={'true' if racing else 'false'}"])
@@ -465,3 +478,38 @@ def test_twin_racing_agrees_with_the_full_method_within_the_tolerance(write_scen
         assert lo_f <= float(a["best"]) <= hi_f and lo_r <= float(b["best"]) <= hi_r, (p.name, a["best"], b["best"])
         assert lo_r <= TRUE[p.name] <= hi_r and lo_f <= TRUE[p.name] <= hi_f
         np.testing.assert_allclose([lo_r, hi_r], [lo_f, hi_f], atol=step)
+
+
+@pytest.mark.slow  # (two identifications of the real slider on 4 DMW records: ~1 min on the shared 2 cores)
+def test_twin_polish_agrees_with_the_method_without_it_within_the_tolerance(write_scene, paper_config, tmp_path):
+    # one generation of 4 x 2 candidates, racing on: the search stops short of the truth, the polish takes it the
+    # rest of the way before the profiles
+    from pipeline.config.scene import load_scene
+    from pipeline.runner import ensure
+    path, scene, params, tl, prots, inputs, whole = _ensemble_twin(write_scene, paper_config, tmp_path)
+    sets = _twin_targets(tl, whole) + ["identify.generations=1"]
+    runs = {}
+    for polish in (True, False):
+        sc = load_scene(path, sets + [f"identify.polish={'true' if polish else 'false'}"])
+        out = tmp_path / f"polish-{polish}"
+        runs[polish] = xr.open_dataset(ensure("identify", sc, out, scheduler="synchronous"), engine="netcdf4").load()
+    on, off = runs[True], runs[False]
+    assert "polish" not in off.attrs and not np.any(off["role"].values == 5)
+    assert on.attrs["polish_objective"] < on.attrs["polish_start_objective"] and on.attrs["polish_moves"] >= 1
+    assert int(np.sum(on["role"].values == 5)) <= on.attrs["polish_evaluations"] <= \
+        identification.POLISH_EVALUATIONS * len(params)
+    # the profiles' rounds and the pairs: fewer with the polish where the search stopped short (1 round and 230
+    # (candidate, record) pairs against 2 and 276 when written)
+    assert on.attrs["profile_rounds"] == 1 < off.attrs["profile_rounds"]
+    assert on.attrs["record_evaluations"] < off.attrs["record_evaluations"]
+    # the same answer within the tolerance: both within tolerance, each optimum inside the other's interval and
+    # the truth inside both; the interval ends within one profile step of each other
+    assert on.attrs["within_tolerance"] == off.attrs["within_tolerance"] == 1
+    for p in params:
+        step = (p.high - p.low) / (scene["identify"]["profile_points"] - 1)
+        a, b = on.sel(parameter=p.name), off.sel(parameter=p.name)
+        lo_a, hi_a = a["interval"].values
+        lo_b, hi_b = b["interval"].values
+        assert lo_b <= float(a["best"]) <= hi_b and lo_a <= float(b["best"]) <= hi_a, (p.name, a["best"], b["best"])
+        assert lo_a <= TRUE[p.name] <= hi_a and lo_b <= TRUE[p.name] <= hi_b
+        np.testing.assert_allclose([lo_a, hi_a], [lo_b, hi_b], atol=step)
