@@ -102,7 +102,7 @@ PROFILE_GAIN = 1.0
 #: Budget of the polish of the search's optimum (``identify.polish``, step 1b of the module docstring), in
 #: evaluations per free parameter [1]: the polish also stops, before it, after its poll at the first
 #: step at or below :data:`PROFILE_STEP` that finds nothing better.
-POLISH_EVALUATIONS = 20
+POLISH_EVALUATIONS = 40
 
 
 #: Asymptotic standard error of a sample median over that of a mean for Gaussian data, sqrt(pi / 2) [1]

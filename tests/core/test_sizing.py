@@ -43,10 +43,10 @@ def test_the_studies_evaluations_follow_their_formulas(paper_scene):
     n_par = len(i["parameters"])
     assert (i["population"], i["generations"], n_par, i["profile_points"], i["profile_evaluations"],
             i["realisations"]) == (10, 20, 6, 11, 40, 8)
-    # (population x parameters x (generations + 1) + (profile points + re-optimisations + the polish's 20) x
+    # (population x parameters x (generations + 1) + (profile points + re-optimisations + the polish's 40) x
     # parameters) x realisations
-    assert POLISH_EVALUATIONS == 20
-    assert _sizes(paper_scene, "identify")["identify evaluations"][0] == (10 * 6 * 21 + (11 + 40 + 20) * 6) * 8 == 13488
+    assert POLISH_EVALUATIONS == 40
+    assert _sizes(paper_scene, "identify")["identify evaluations"][0] == (10 * 6 * 21 + (11 + 40 + 40) * 6) * 8 == 14448
     sliced = paper_scene.replace(identify={"profile_method": "slice", "polish": False})
     assert _sizes(sliced, "identify")["identify evaluations"][0] == (10 * 6 * 21 + 11 * 6) * 8
     # Morris r (k + 1) plus Saltelli N (k + 2), at each of the sweep's 76 protrusions
