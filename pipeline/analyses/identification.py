@@ -99,7 +99,7 @@ GN_STEP = 0.02
 #: within the optimum's own interval) becomes the optimum and the profiles are made again around it.
 PROFILE_ROUNDS = 3
 PROFILE_GAIN = 1.0
-#: Budget of the polish of the search's optimum (``identify.polish``, step 1b of the module docstring), in
+#: Budget of the polish of the search's optimum (``identify.polish``, step 1 of the module docstring), in
 #: evaluations per free parameter [1]: the polish also stops, before it, after its poll at the first
 #: step at or below :data:`PROFILE_STEP` that finds nothing better.
 POLISH_EVALUATIONS = 40
@@ -563,7 +563,7 @@ def _global_search(ident: Identification, lo: np.ndarray, hi: np.ndarray, x_base
 
 def _polish(ident: Identification, lo: np.ndarray, hi: np.ndarray, first: float, budget: int,
             progress: Any | None) -> dict[str, Any]:
-    """Step 1b: a compass search over every parameter from the best point so far (module docstring).
+    """The polish of step 1: a compass search over every parameter from the best point so far (module docstring).
 
     Each poll moves every parameter by +- ``step`` of its range (:func:`_compass`; one fan-out, role 5,
     raced against the current point: ``bound`` its objective, ``refs`` the point, the poll one group). A
@@ -574,9 +574,10 @@ def _polish(ident: Identification, lo: np.ndarray, hi: np.ndarray, first: float,
     poll at the first step at or below :data:`PROFILE_STEP`, or before a poll that would spend more than
     ``budget`` evaluations in all. No gradients: the objective is noisy and partly piecewise constant.
 
-    Returns what it did: ``evaluations`` (points asked for not held on every record before), ``polls`` (polls and vertices evaluated),
-    ``moves`` (of them, those that found a better point), ``first_step`` and ``last_step`` (of its first
-    and last poll, fractions of each range), ``start_objective`` and ``objective`` (the best point's before and after)."""
+    Returns what it did: ``evaluations`` (points asked for that were not held on every record before),
+    ``polls`` (polls and vertices evaluated), ``moves`` (of them, those that found a better point),
+    ``first_step`` and ``last_step`` (of its first and last poll, fractions of each range [1]),
+    ``start_objective`` and ``objective`` (the best point's before and after [1])."""
     x = np.array(ident.records[ident.best_key]["params"], float)
     c_start = c = ident.best_cost
     step, spent, polls, moves = float(first), 0, 0, 0
@@ -618,8 +619,8 @@ def _polish(ident: Identification, lo: np.ndarray, hi: np.ndarray, first: float,
         step /= 2.0
     if progress is not None:  # (the budget's rest unspent)
         progress.update(0, total=spent)
-    return {"evaluations": spent, "polls": polls, "moves": moves, "first_step": float(first), "last_step": last_step,
-            "start_objective": float(c_start), "objective": float(c)}
+    return {"evaluations": spent, "polls": polls, "moves": moves, "first_step": float(first),
+            "last_step": last_step, "start_objective": float(c_start), "objective": float(c)}
 
 
 def _grid(low: float, high: float, m: int, centre: float) -> np.ndarray:
