@@ -13,6 +13,7 @@ from typing import Any
 from .config.grid import TOL_NM, range_count
 from .config.limits import (check_physical, MAX_EVALUATIONS, MAX_HISTORY_SAMPLES, MAX_KEPT_HISTORY_SAMPLES,
                             MAX_RECORD_SAMPLES, MAX_SCENES, MAX_TABLE_ROWS, LimitError)
+from .analyses.identification import POLISH_EVALUATIONS
 from .model import interface_tables
 from .model.dmw_record import settings as dmw_settings
 from .model.measured_dmw import record_samples
@@ -83,10 +84,12 @@ def sizes(scene: Any, stage: str) -> list[tuple[str, int, int]]:
         i = scene["identify"]
         n_par = len(i["parameters"])
         reopt = i["profile_evaluations"] if i["profile_method"] == "optimised" else 0
-        n = (i["population"] * n_par * (i["generations"] + 1) + (i["profile_points"] + reopt) * n_par) \
+        polish = POLISH_EVALUATIONS if i["polish"] else 0
+        n = (i["population"] * n_par * (i["generations"] + 1) + (i["profile_points"] + reopt + polish) * n_par) \
             * i["realisations"]
         out.append(("identify evaluations (population x parameters x (generations + 1) + (profile_points + "
-                    "profile_evaluations of an optimised profile) x parameters, x realisations)", n, MAX_EVALUATIONS))
+                    "profile_evaluations of an optimised profile + the polish's budget) x parameters, x "
+                    "realisations)", n, MAX_EVALUATIONS))
     if stage == "sensitivity":
         s = scene["sensitivity"]
         n_par = len(s["parameters"])

@@ -13,6 +13,13 @@ Method
    fan-out of batches, ``updating="deferred"``, seeded). The objective is noisy and partly discrete
    (a contact flag switches; a run snaps into contact or not), so no gradient polish (``polish=False``):
    L-BFGS-B on a piecewise-constant residual stops where it starts.
+   **Polish** (``identify.polish``, :func:`_polish`): a compass search over every parameter from the
+   search's best point, so that the profiles start at an optimum the search may have stopped short of.
+   Polls of +- a step of each parameter's range (the profile grid's spacing first), raced against the
+   current point like a walk's (step 2); a poll holding a better whole evaluation moves there and polls
+   again, one that does not tries the vertex of the parabolas through it and halves the step; it ends
+   after the poll at the first step at or below :data:`PROFILE_STEP` or at its budget
+   (:data:`POLISH_EVALUATIONS` per parameter). Role ``polish``.
 2. **Profiles**: first a *slice* of each parameter across its bounds (``profile_points`` and the
    optimum's value), the others held at the optimum. A slice is narrower than the profile where
    parameters correlate (it is the conditional, not the marginal, range), so with
@@ -44,10 +51,10 @@ Method
    where the objective stays within 1 of its profile minimum (the 68 % profile interval if tolerances
    were one standard deviation) and says so. Crossings are interpolated linearly between profile points.
    **Racing** (``identify.racing``, ensembles only; :class:`Racing`, :meth:`Identification.evaluate`): the
-   search's trials and the walks' polls run on the first 2 DMW records, then 4, then all, and stop at a
-   stage where the lower confidence bound of their objective (each residual lowered by its margin from
-   the record-to-record spread, own and paired with a reference on the same records) exceeds the best
-   point's (a poll: its walk's point's) or the smallest upper bound of the candidates racing with them
+   search's trials and the polish's and the walks' polls run on the first 2 DMW records, then 4, then all,
+   and stop at a stage where the lower confidence bound of their objective (each residual lowered by its
+   margin from the record-to-record spread, own and paired with a reference on the same records) exceeds
+   the best point's (a walk's poll: its walk's point's) or the smallest upper bound of the candidates racing with them
    [MM94]_. Everything else (the best point, the slices, the Gauss-Newton points, the profile points)
    runs on every record; docs/model.md, section "Identification", states the guarantee.
 3. **Correlation**: Gauss-Newton at the optimum, ``C = (J^T J)^+`` with ``J`` the central-difference
@@ -76,7 +83,7 @@ from .study import (ObjectiveTerm, Parameter, cost, head, input_spreads, realisa
                     residuals, score)
 
 #: Role of an evaluation (``role`` variable of identify.nc).
-ROLES = {0: "reconstructed", 1: "optimiser", 2: "profile", 3: "gauss-newton", 4: "profile-optimiser"}
+ROLES = {0: "reconstructed", 1: "optimiser", 2: "profile", 3: "gauss-newton", 4: "profile-optimiser", 5: "polish"}
 #: The interval methods (``identify.profile_method``) and what identify.nc and the report call them.
 METHODS = {"optimised": "profile, other parameters re-optimised",
            "slice": "slice, other parameters held at the optimum"}
@@ -92,6 +99,10 @@ GN_STEP = 0.02
 #: within the optimum's own interval) becomes the optimum and the profiles are made again around it.
 PROFILE_ROUNDS = 3
 PROFILE_GAIN = 1.0
+#: Budget of the polish of the search's optimum (``identify.polish``, step 1 of the module docstring), in
+#: evaluations per free parameter [1]: the polish also stops, before it, after its poll at the first
+#: step at or below :data:`PROFILE_STEP` that finds nothing better.
+POLISH_EVALUATIONS = 40
 
 
 #: Asymptotic standard error of a sample median over that of a mean for Gaussian data, sqrt(pi / 2) [1]
@@ -404,14 +415,16 @@ def identify(ident: Identification, params: Sequence[Parameter], x_base: np.ndar
     """Run the three steps of the module docstring from the reconstructed point ``x_base``.
 
     ``cfg``: ``generations``, ``population``, ``seed``, ``profile_points``, ``profile_method``
-    (a key of :data:`METHODS`) and ``profile_evaluations`` (``[identify]``). Returns the best point,
+    (a key of :data:`METHODS`), ``profile_evaluations`` and ``polish`` (``[identify]``). Returns the best point,
     its residuals, whether it is within tolerance, the intervals, their criterion and method, the
-    profiles (with the slices they started from), the correlation and the optimiser's report (arrays,
-    for ``identify.nc``); the records are in ``ident``.
+    profiles (with the slices they started from), the correlation, the optimiser's report (arrays,
+    for ``identify.nc``) and the polish's (``polish``: :func:`_polish`'s dict, None when off); the records
+    are in ``ident``.
 
     ``progress``: how the work shows itself, a started :class:`pipeline.progress.Progress` (in ``hdi
     identify``; default None: nothing shown), counted in phases (:meth:`~pipeline.progress.Progress.phase`),
-    each with a total fixed when it starts: the search's generations (``cfg["generations"]``), then each
+    each with a total fixed when it starts: the search's generations (``cfg["generations"]``), the
+    polish's budget (an upper bound, lowered when it ends), then each
     round of profiles its evaluations (the slices, the Gauss-Newton points and the re-optimisation's
     budget, an upper bound lowered when the round ends), each step noted with the best objective so far.
     It only watches: the results are the same with or without it.
@@ -426,6 +439,8 @@ def identify(ident: Identification, params: Sequence[Parameter], x_base: np.ndar
         progress.phase("search", cfg["generations"], unit="generation")
     ident.evaluate(x_base[None, :], 0)
     result = _global_search(ident, lo, hi, x_base, cfg, progress)
+    polished = _polish(ident, lo, hi, 1.0 / (cfg["profile_points"] - 1), POLISH_EVALUATIONS * n, progress) \
+        if cfg["polish"] else None
     # the profiles' first centre: the best of everything evaluated so far (the reconstruction included)
     centre = np.array(ident.records[ident.best_key]["params"], float)
     centre_res = ident.scores[ident.best_key][1]
@@ -454,7 +469,7 @@ def identify(ident: Identification, params: Sequence[Parameter], x_base: np.ndar
             "criterion": criterion, "method": METHODS["optimised" if optimised else "slice"], **arrays,
             "correlation": corr, "gn_std": gn_std, "de_message": str(result.message),
             "de_generations": int(result.nit), "de_evaluations": int(result.nfev), "profile_rounds": rounds,
-            "profile_optimiser_evaluations": spent}
+            "profile_optimiser_evaluations": spent, "polish": polished}
 
 
 def _note(ident: Identification) -> str:
@@ -544,6 +559,68 @@ def _global_search(ident: Identification, lo: np.ndarray, hi: np.ndarray, x_base
     if progress is not None:  # (converged before the last generation)
         progress.update(0, total=progress.done)
     return result
+
+
+def _polish(ident: Identification, lo: np.ndarray, hi: np.ndarray, first: float, budget: int,
+            progress: Any | None) -> dict[str, Any]:
+    """The polish of step 1: a compass search over every parameter from the best point so far (module docstring).
+
+    Each poll moves every parameter by +- ``step`` of its range (:func:`_compass`; one fan-out, role 5,
+    raced against the current point: ``bound`` its objective, ``refs`` the point, the poll one group). A
+    poll that holds a whole evaluation better than the current point (:attr:`Identification.best_cost`,
+    strictly) moves there and polls again at the same step; after one that does not, the vertex of the
+    parabolas through the poll (:func:`_vertex`) is tried once (raced the same way), and the step halves.
+    It starts at ``first`` (the profile grid's spacing, a fraction of each range) and stops after the
+    poll at the first step at or below :data:`PROFILE_STEP`, or before a poll that would spend more than
+    ``budget`` evaluations in all. No gradients: the objective is noisy and partly piecewise constant.
+
+    Returns what it did: ``evaluations`` (points asked for that were not held on every record before),
+    ``polls`` (polls and vertices evaluated), ``moves`` (of them, those that found a better point),
+    ``first_step`` and ``last_step`` (of its first and last poll, fractions of each range [1]),
+    ``start_objective`` and ``objective`` (the best point's before and after [1])."""
+    x = np.array(ident.records[ident.best_key]["params"], float)
+    c_start = c = ident.best_cost
+    step, spent, polls, moves = float(first), 0, 0, 0
+    if progress is not None:
+        progress.phase("polish", budget, unit="evaluation")
+
+    def new(points: list[np.ndarray]) -> int:
+        """How many of ``points`` are not held on every record yet (a poll after a move meets the point it
+        left): what a poll spends of the budget."""
+        keys = [ident.by_point.get(_point(p)) for p in points]
+        return sum(k is None or not ident.is_full(k) for k in keys)
+
+    def run(points: list[np.ndarray]) -> np.ndarray:
+        """Race ``points`` against the current point; their objectives (a stopped one's partial)."""
+        nonlocal spent, polls
+        k = new(points)
+        _, _, r = ident.evaluate(np.array(points), 5, bound=c, metric="cost", groups=0, refs=x)
+        spent, polls = spent + k, polls + 1
+        if progress is not None:
+            progress.update(k, note=_note(ident))
+        return np.sum(r**2, axis=1)
+
+    last_step = float("nan")
+    while True:
+        points, offsets = _compass(x, step, lo, hi)
+        if not points or spent + new(points) > budget:
+            break
+        costs, last_step = run(points), step
+        if ident.best_cost < c:  # (the poll held a whole evaluation better than the current point)
+            x, c, moves = np.array(ident.records[ident.best_key]["params"], float), ident.best_cost, moves + 1
+            continue
+        vertex = _vertex(x, c, offsets, costs, lo, hi)
+        if vertex is not None and spent + new([vertex]) <= budget:
+            run([vertex])
+            if ident.best_cost < c:
+                x, c, moves = np.array(ident.records[ident.best_key]["params"], float), ident.best_cost, moves + 1
+        if step <= PROFILE_STEP:
+            break
+        step /= 2.0
+    if progress is not None:  # (the budget's rest unspent)
+        progress.update(0, total=spent)
+    return {"evaluations": spent, "polls": polls, "moves": moves, "first_step": float(first),
+            "last_step": last_step, "start_objective": float(c_start), "objective": float(c)}
 
 
 def _grid(low: float, high: float, m: int, centre: float) -> np.ndarray:
@@ -673,17 +750,8 @@ class _Walk:
         if self.vertex is not None:
             self.asked = [self.vertex]
         else:
-            self.asked = [self.x] if self.res is None else []
-            self.polls = []
-            for j in range(len(self.x)):
-                if j == self.i:
-                    continue
-                for sign in (1.0, -1.0):
-                    p = self.x.copy()
-                    p[j] = np.clip(p[j] + sign * PROFILE_STEP * (self.hi[j] - self.lo[j]), self.lo[j], self.hi[j])
-                    if p[j] != self.x[j]:
-                        self.asked.append(p)
-                        self.polls.append((j, p[j] - self.x[j]))
+            poll, self.polls = _compass(self.x, PROFILE_STEP, self.lo, self.hi, skip=self.i)
+            self.asked = ([self.x] if self.res is None else []) + poll
         new = {_point(p): p for p in self.asked if _point(p) not in self.seen}
         return list(new.values())
 
@@ -729,20 +797,8 @@ class _Walk:
                 self._finish()
 
     def _vertex(self, c: np.ndarray) -> np.ndarray | None:
-        """The point at the vertex of the parabola through each coordinate's two poll points (metrics
-        ``c``) and the current point, where it curves upward (at most one step off), or None."""
-        c0, step = self.metric(self.res), {}
-        for (j, d), cj in zip(self.polls, c):
-            step.setdefault(j, {})[np.sign(d)] = (abs(d), cj)
-        x = self.x.copy()
-        for j, s in step.items():
-            if len(s) == 2 and np.isclose(s[1.0][0], s[-1.0][0]) and np.isfinite(s[1.0][1] + s[-1.0][1]):
-                h, (cp, cm) = s[1.0][0], (s[1.0][1], s[-1.0][1])
-                curve = cm - 2.0 * c0 + cp
-                if curve > 0:
-                    x[j] += float(np.clip(h * (cm - cp) / (2.0 * curve), -h, h))
-        x = np.clip(x, self.lo, self.hi)
-        return None if np.array_equal(x, self.x) else x
+        """:func:`_vertex` of this walk's poll (metrics ``c``) around its current point."""
+        return _vertex(self.x, self.metric(self.res), self.polls, c, self.lo, self.hi)
 
     def _finish(self) -> None:
         """The current point is re-optimised: keep it; go on to the next value unless it is outside."""
@@ -758,6 +814,43 @@ class _Walk:
         if self.res is not None:
             self.found[self.value] = (self.x, self.res)
         self.done = True
+
+
+def _compass(x: np.ndarray, step: float, lo: np.ndarray, hi: np.ndarray,
+             skip: int = -1) -> tuple[list[np.ndarray], list[tuple[int, float]]]:
+    """The compass poll around ``x``: each coordinate but ``skip`` moved by +- ``step`` of its range [1],
+    kept inside the bounds (a move the bound cancels is left out). Returns the points and each one's
+    (coordinate, offset) [parameter units]."""
+    points, polls = [], []
+    for j in range(len(x)):
+        if j == skip:
+            continue
+        for sign in (1.0, -1.0):
+            p = x.copy()
+            p[j] = np.clip(p[j] + sign * step * (hi[j] - lo[j]), lo[j], hi[j])
+            if p[j] != x[j]:
+                points.append(p)
+                polls.append((j, p[j] - x[j]))
+    return points, polls
+
+
+def _vertex(x: np.ndarray, c0: float, polls: list[tuple[int, float]], c: np.ndarray, lo: np.ndarray,
+            hi: np.ndarray) -> np.ndarray | None:
+    """The point at the vertex of the parabola through each coordinate's two poll points (``polls`` of
+    :func:`_compass`, metrics ``c``) and ``x`` (metric ``c0``), where it curves upward (at most one step
+    off), or None (no coordinate moves)."""
+    step: dict[int, dict[float, tuple[float, float]]] = {}
+    for (j, d), cj in zip(polls, c):
+        step.setdefault(j, {})[np.sign(d)] = (abs(d), cj)
+    v = x.copy()
+    for j, s in step.items():
+        if len(s) == 2 and np.isclose(s[1.0][0], s[-1.0][0]) and np.isfinite(s[1.0][1] + s[-1.0][1]):
+            h, (cp, cm) = s[1.0][0], (s[1.0][1], s[-1.0][1])
+            curve = cm - 2.0 * c0 + cp
+            if curve > 0:
+                v[j] += float(np.clip(h * (cm - cp) / (2.0 * curve), -h, h))
+    v = np.clip(v, lo, hi)
+    return None if np.array_equal(v, x) else v
 
 
 def _point(x: np.ndarray) -> tuple[float, ...]:

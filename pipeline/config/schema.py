@@ -420,6 +420,13 @@ SCHEMA: dict[str, dict[str, Key]] = {
                                        "re-optimising the others (each point 1 + 2 x (parameters - 1) at least; "
                                        "6 parameters: <= 240 per profile round, four generations of the default "
                                        "population)"),
+        "polish": Key("bool", True,
+                      doc="polish the global search's optimum before the profiles: a compass search over every "
+                          "parameter (steps from the profile grid's spacing, halved down to the profile walks' step; "
+                          "a fixed budget of evaluations per parameter, raced), so that the profiles start from an optimum "
+                          "and are made once rather than again around the better points they find; false: the "
+                          "profiles start at the search's optimum, as before; docs/model.md, section "
+                          "'Identification'"),
         "racing": Key("bool", True,
                       doc="race the candidates over the DMW records (with realisations > 1): each runs on "
                           "racing_records records first, and more (doubling to all) only while its objective's "

@@ -193,7 +193,7 @@ STAGE = Stage(
     excludes=("tfc.protrusion_nm", "sweep", "sensitivity", "scene.name", "scene.description", "report.histories_nm",
               "identify.parameters", "identify.population", "identify.generations", "identify.seed",
               "identify.batch_size", "identify.profile_points", "identify.profile_method",
-              "identify.profile_evaluations", "identify.realisations", "identify.racing", "identify.racing_records",
+              "identify.profile_evaluations", "identify.polish", "identify.realisations", "identify.racing", "identify.racing_records",
               "identify.racing_z"),
     upstream=_upstream, applies=applies, order=57, main_job=True,
     doc="the paper's checks over report.realisations DMW realisations (ensemble.nc, for the report)")

@@ -63,8 +63,8 @@ from ..progress import Progress
 from ..io import read_dataset, temporary_path, var
 from ..paths import refuse_links
 from ..runner import Inputs, Stage
-from ..analyses.identification import (GN_STEP, METHODS, PROFILE_GAIN, PROFILE_STEP, ROLES, Identification, Racing,
-                                       identify)
+from ..analyses.identification import (GN_STEP, METHODS, POLISH_EVALUATIONS, PROFILE_GAIN, PROFILE_STEP, ROLES,
+                                       Identification, Racing, identify)
 from ..analyses.study import Parameter, parse_parameters, scene_value, target_protrusions, targets
 from ..evaluations import Evaluator, evaluate_batch, setup, upstream
 
@@ -217,6 +217,7 @@ def dataset(ident: Identification, params: Sequence[Parameter], out: dict[str, A
                                  "or the secant of the last two points, walked outward from the optimum; each walk "
                                  "stops past the first point outside the interval criterion",
             "profile_optimiser_evaluations": out["profile_optimiser_evaluations"]} if optimised else {}),
+        **_polish_attrs(out["polish"], len(params)),
         "correlation_method": f"Gauss-Newton (J^T J)^+ at the optimum, central differences of {GN_STEP:g} x range",
         "racing": _racing_text(ident.racing),
         # the identification's cost: (candidate, DMW record) pairs, and runs (x protrusions), store reads included
@@ -230,6 +231,20 @@ def dataset(ident: Identification, params: Sequence[Parameter], out: dict[str, A
         # (this run's counts and fan-out time go to the run log, .hdi/runs.jsonl, not the dataset)
     })
     return ds
+
+
+def _polish_attrs(polish: dict[str, Any] | None, n: int) -> dict[str, Any]:
+    """What identify.nc says of the polish of the search's optimum (none when ``identify.polish`` is off:
+    the dataset of before)."""
+    if polish is None:
+        return {}
+    return {"polish": f"compass search over every parameter from the search's best point (steps from "
+                      f"{polish['first_step']:g} x range, halved after a poll and its parabola vertex found "
+                      f"nothing better, down to the first at or below {PROFILE_STEP:g}; at most "
+                      f"{POLISH_EVALUATIONS * n} evaluations), polls raced against the current point",
+            "polish_evaluations": polish["evaluations"], "polish_polls": polish["polls"],
+            "polish_moves": polish["moves"], "polish_last_step": polish["last_step"],
+            "polish_start_objective": polish["start_objective"], "polish_objective": polish["objective"]}
 
 
 def _racing_text(racing: Racing | None) -> str:

@@ -9,6 +9,7 @@ from __future__ import annotations
 import pytest
 
 from pipeline import sizing
+from pipeline.analyses.identification import POLISH_EVALUATIONS
 from pipeline.config.limits import MAX_HISTORY_SAMPLES, MAX_SCENES, LimitError
 from pipeline.model.interface_tables import separation_labels
 
@@ -42,9 +43,11 @@ def test_the_studies_evaluations_follow_their_formulas(paper_scene):
     n_par = len(i["parameters"])
     assert (i["population"], i["generations"], n_par, i["profile_points"], i["profile_evaluations"],
             i["realisations"]) == (10, 20, 6, 11, 40, 8)
-    # (population x parameters x (generations + 1) + (profile points + re-optimisations) x parameters) x realisations
-    assert _sizes(paper_scene, "identify")["identify evaluations"][0] == (10 * 6 * 21 + (11 + 40) * 6) * 8 == 12528
-    sliced = paper_scene.replace(identify={"profile_method": "slice"})
+    # (population x parameters x (generations + 1) + (profile points + re-optimisations + the polish's 40) x
+    # parameters) x realisations
+    assert POLISH_EVALUATIONS == 40
+    assert _sizes(paper_scene, "identify")["identify evaluations"][0] == (10 * 6 * 21 + (11 + 40 + 40) * 6) * 8 == 14448
+    sliced = paper_scene.replace(identify={"profile_method": "slice", "polish": False})
     assert _sizes(sliced, "identify")["identify evaluations"][0] == (10 * 6 * 21 + 11 * 6) * 8
     # Morris r (k + 1) plus Saltelli N (k + 2), at each of the sweep's 76 protrusions
     s = paper_scene["sensitivity"]
