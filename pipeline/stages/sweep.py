@@ -7,7 +7,10 @@ record and the interface tables reach the workers by file path (``dmw.nc``, ``in
 inside the task graph. The parts are assembled into ``sweep.nc`` (dims ``protrusion``, ``roughness``,
 ``damping``) and ``sweep_histories.nc`` (time histories of the protrusions in ``histories_nm``) by an
 :class:`Assembler`: the parts computed by this call from memory as each batch returns its dataset with
-its path (while the other batches run), the parts of an earlier run from their files at the end.
+its path (while the other batches run), the parts of an earlier run from their files at the end. A part
+file holds its batch's variables stacked by dimensions (:func:`pack_part`: two or three NetCDF variables
+instead of ~35, each of which cost ~1 ms to write under the process's NetCDF lock) and is read back as the
+batch's dataset itself (:func:`read_part`).
 
 Resuming: a part is kept when it carries the sweep's inputs key (:mod:`pipeline.runner`: the scene,
 the bytes of every AFM scan of every roughness set, the DMW and calibration datasets), its own batch
@@ -45,7 +48,8 @@ from ..progress import Progress
 from ..io import file_hash, read_attrs, read_dataset, write_dataset
 from ..paths import refuse_links
 from ..runner import KEY_ATTR, Inputs, Stage, ensure
-from ..variables import COORDINATES, ENSEMBLE, HISTORIES, SCALARS, STEPPING, TIME, coordinate
+from ..variables import (COORDINATES, ENSEMBLE, HISTORIES, PART_STACK, PART_STACKS, SCALARS, STEPPING, TIME,
+                         coordinate, is_part_stack)
 from ..model import dmw_record, scene_inputs
 from ..model.inputs import SimulationInputs, Source, for_stage
 from ..model.interface_tables import used_statistics
@@ -165,8 +169,98 @@ def run_batch(scene: Any, batch: Batch, inputs: SimulationInputs, part_path: str
     ds = simulate(model, batch.protrusions, histories=history_nm, protocol=scene["sweep"]["protocol"])
     ds.attrs.update({KEY_ATTR: key, "roughness_label": batch.label, "damping_ratio": batch.damping,
                      "batch": batch.index, "realisation": batch.realisation})
-    write_dataset(ds, part_path, scene, stage="sweep-part")
+    write_dataset(pack_part(ds), part_path, scene, stage="sweep-part")
     return part_path, ds
+
+
+#: Global attribute of a part file: its variables as :func:`unpack_part` restores them (JSON).
+LAYOUT_ATTR = "part_layout"
+
+
+def _stack_name(dims: tuple[str, ...]) -> str:
+    """The stacked variable of a part that holds its variables of dimensions ``dims``."""
+    return PART_STACK + "".join("__" + d for d in dims)
+
+
+def pack_part(ds: xr.Dataset) -> xr.Dataset:
+    """A part (a :func:`pipeline.model.simulation.simulate` dataset) as written to its file: the data
+    variables of equal dimensions stacked into one float64 variable along a new first dimension
+    (``stack__protrusion``: the scalars, ``stack__hist_protrusion__elapsed_time``: the kept histories),
+    with the names and units of its rows as coordinates.
+
+    Why: writing a NetCDF variable costs ~1 ms of Python and HDF5 whatever its size (33 variables: ~50 ms
+    per part, under the process's NetCDF lock, holding the GIL most of it), which the threads of a sweep
+    cannot share. Float64 holds every value of the parts exactly (float32 and int8 flags included), and
+    the global attribute :data:`LAYOUT_ATTR` keeps each variable's name, dtype, attributes and encoding in
+    order, so :func:`unpack_part` gives back ``ds`` itself (tests/stages/test_sweep.py).
+    """
+    groups: dict[tuple[str, ...], list[str]] = {}
+    for name, v in ds.data_vars.items():
+        groups.setdefault(v.dims, []).append(name)
+    layout = []
+    data: dict[str, xr.Variable] = {}
+    coords = {name: c.variable for name, c in ds.coords.items()}
+    for dims, names in groups.items():
+        stack = _stack_name(dims)
+        row = f"{stack}_variable"
+        data[stack] = PART_STACKS[PART_STACK].data(np.stack([ds[n].values.astype(np.float64) for n in names]),
+                                                   (row, *dims), unit_variable=f"{stack}_units")
+        coords[row] = PART_STACKS[PART_STACK + "_variable"].data(names, (row,))
+        coords[f"{stack}_units"] = PART_STACKS[PART_STACK + "_units"].data(
+            [ds[n].attrs.get("units", "") for n in names], (row,))
+    for name, v in ds.data_vars.items():
+        enc = {k: np.dtype(val).str if k == "dtype" else _json_value(val) for k, val in v.encoding.items()
+               if k in ("_FillValue", "dtype")}
+        layout.append([name, v.dtype.str, {k: _json_value(a) for k, a in v.attrs.items()}, enc])
+    out = xr.Dataset(data, coords=coords)
+    out.attrs = dict(ds.attrs)
+    out.attrs[LAYOUT_ATTR] = json.dumps(layout)
+    return out
+
+
+def _json_value(value: Any) -> Any:
+    """An attribute's (or encoding's) value for JSON: an array or numpy scalar as its values and dtype
+    (restored by :func:`_attr_value`)."""
+    if isinstance(value, (np.ndarray, np.generic)):
+        return {"array": np.asarray(value).tolist(), "dtype": np.asarray(value).dtype.str,
+                "scalar": isinstance(value, np.generic)}
+    return value
+
+
+def _attr_value(value: Any) -> Any:
+    """The attribute value :func:`_json_value` wrote."""
+    if isinstance(value, dict) and set(value) == {"array", "dtype", "scalar"}:
+        array = np.array(value["array"], dtype=np.dtype(value["dtype"]))
+        return array[()] if value["scalar"] else array
+    return value
+
+
+def unpack_part(ds: xr.Dataset) -> xr.Dataset:
+    """The part :func:`pack_part` wrote (a part file read back): its variables, in their order, with their
+    dtypes, attributes and declared missing values; a dataset without :data:`LAYOUT_ATTR` as it is."""
+    if LAYOUT_ATTR not in ds.attrs:
+        return ds
+    rows: dict[str, tuple[str, int]] = {}
+    for name in ds.data_vars:
+        if is_part_stack(name):
+            for i, row in enumerate(ds[f"{name}_variable"].values):
+                rows[str(row)] = (name, i)
+    data = {}
+    for name, dtype, attrs, enc in json.loads(ds.attrs[LAYOUT_ATTR]):
+        attrs = {k: _attr_value(a) for k, a in attrs.items()}
+        stack, i = rows[name]
+        values = ds[stack].values[i].astype(np.dtype(dtype))
+        encoding = {k: np.dtype(val) if k == "dtype" else _attr_value(val) for k, val in enc.items()}
+        data[name] = xr.Variable(ds[stack].dims[1:], values, attrs=attrs, encoding=encoding)
+    stacked = [n for n in ds.variables if is_part_stack(n.removesuffix("_variable").removesuffix("_units"))]
+    out = xr.Dataset(data, coords={n: c.variable for n, c in ds.coords.items() if n not in stacked})
+    out.attrs = {k: v for k, v in ds.attrs.items() if k != LAYOUT_ATTR}
+    return out
+
+
+def read_part(path: str | Path) -> xr.Dataset:
+    """A part file as the batch's :func:`run_batch` made it (:func:`unpack_part` of the file)."""
+    return unpack_part(read_dataset(path))
 
 
 def _progress(total: int, initial: int) -> Progress:
@@ -512,7 +606,7 @@ def add_kept_parts(grid: Assembler, out: Path, batches: list[Batch], key: str) -
         why = part_problem(path, key, b)
         if why is not None:
             raise RuntimeError(f"{path}: batch {b.index}: part {why}; run the sweep again")
-        grid.add(b, read_dataset(path))
+        grid.add(b, read_part(path))
 
 
 def roughness_coordinates(statistics: list[dict[str, Any]]) -> dict[str, xr.Variable]:
