@@ -37,13 +37,13 @@ import logging
 import threading
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, Callable, Iterable
 
 import numpy as np
 import xarray as xr
 
 from ..model import assembly
-from ..fanout import local_cluster, run_tasks
+from ..fanout import local_cluster, local_workers, run_tasks
 from ..progress import Progress
 from ..io import file_hash, read_attrs, read_dataset, write_dataset
 from ..paths import refuse_links
@@ -194,21 +194,22 @@ def pack_part(ds: xr.Dataset) -> xr.Dataset:
     the global attribute :data:`LAYOUT_ATTR` keeps each variable's name, dtype, attributes and encoding in
     order, so :func:`unpack_part` gives back ``ds`` itself (tests/stages/test_sweep.py).
     """
+    variables = {name: ds.variables[name] for name in ds.data_vars}  # (Variables: no DataArray made per name)
     groups: dict[tuple[str, ...], list[str]] = {}
-    for name, v in ds.data_vars.items():
+    for name, v in variables.items():
         groups.setdefault(v.dims, []).append(name)
-    layout = []
     data: dict[str, xr.Variable] = {}
-    coords = {name: c.variable for name, c in ds.coords.items()}
+    coords = {name: ds.variables[name] for name in ds.coords}
     for dims, names in groups.items():
         stack = _stack_name(dims)
         row = f"{stack}_variable"
-        data[stack] = PART_STACKS[PART_STACK].data(np.stack([ds[n].values.astype(np.float64) for n in names]),
+        data[stack] = PART_STACKS[PART_STACK].data(np.stack([variables[n].values.astype(np.float64) for n in names]),
                                                    (row, *dims), unit_variable=f"{stack}_units")
         coords[row] = PART_STACKS[PART_STACK + "_variable"].data(names, (row,))
         coords[f"{stack}_units"] = PART_STACKS[PART_STACK + "_units"].data(
-            [ds[n].attrs.get("units", "") for n in names], (row,))
-    for name, v in ds.data_vars.items():
+            [variables[n].attrs.get("units", "") for n in names], (row,))
+    layout = []
+    for name, v in variables.items():
         enc = {k: np.dtype(val).str if k == "dtype" else _json_value(val) for k, val in v.encoding.items()
                if k in ("_FillValue", "dtype")}
         layout.append([name, v.dtype.str, {k: _json_value(a) for k, a in v.attrs.items()}, enc])
@@ -240,20 +241,20 @@ def unpack_part(ds: xr.Dataset) -> xr.Dataset:
     dtypes, attributes and declared missing values; a dataset without :data:`LAYOUT_ATTR` as it is."""
     if LAYOUT_ATTR not in ds.attrs:
         return ds
-    rows: dict[str, tuple[str, int]] = {}
+    rows: dict[str, tuple[xr.Variable, int]] = {}
     for name in ds.data_vars:
         if is_part_stack(name):
-            for i, row in enumerate(ds[f"{name}_variable"].values):
-                rows[str(row)] = (name, i)
+            for i, row in enumerate(ds.variables[f"{name}_variable"].values):
+                rows[str(row)] = (ds.variables[name], i)
     data = {}
     for name, dtype, attrs, enc in json.loads(ds.attrs[LAYOUT_ATTR]):
-        attrs = {k: _attr_value(a) for k, a in attrs.items()}
         stack, i = rows[name]
-        values = ds[stack].values[i].astype(np.dtype(dtype))
-        encoding = {k: np.dtype(val) if k == "dtype" else _attr_value(val) for k, val in enc.items()}
-        data[name] = xr.Variable(ds[stack].dims[1:], values, attrs=attrs, encoding=encoding)
+        data[name] = xr.Variable(stack.dims[1:], stack.values[i].astype(np.dtype(dtype)),
+                                 attrs={k: _attr_value(a) for k, a in attrs.items()},
+                                 encoding={k: np.dtype(val) if k == "dtype" else _attr_value(val)
+                                           for k, val in enc.items()})
     stacked = [n for n in ds.variables if is_part_stack(n.removesuffix("_variable").removesuffix("_units"))]
-    out = xr.Dataset(data, coords={n: c.variable for n, c in ds.coords.items() if n not in stacked})
+    out = xr.Dataset(data, coords={n: ds.variables[n] for n in ds.coords if n not in stacked})
     out.attrs = {k: v for k, v in ds.attrs.items() if k != LAYOUT_ATTR}
     return out
 
@@ -421,10 +422,14 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset | None]:
     # A table is mostly Python and numpy holding the GIL, a batch mostly the kernel releasing it: the tables
     # alternate with batches, so that two threads run a table and a batch rather than two tables.
     tables = [("tables", label, sub, folder, force) for label, (sub, folder) in table_tasks.items()]
-    ready = [task(b) for b in todo if b.label not in table_tasks]
-    first = [t for pair in zip(tables, ready) for t in pair] + tables[len(ready):] + ready[len(tables):]
-    later = [b for b in todo if b.label in table_tasks]
     workers = opts.get("workers")
+    # (one worker runs them in batch order: the order matters only to several)
+    where = opts.get("scheduler")
+    serial = where == "synchronous" or (where is None and local_workers(workers, max(len(todo), 1)) == 1)
+    order = list if serial else costliest_first
+    ready = [task(b) for b in order(b for b in todo if b.label not in table_tasks)]
+    first = [t for pair in zip(tables, ready) for t in pair] + tables[len(ready):] + ready[len(tables):]
+    later = order(b for b in todo if b.label in table_tasks)
     batch_seconds = 0.0
     try:  # (one process cluster for both rounds: its start-up is paid once)
         with local_cluster(opts.get("scheduler"), workers) if first or later else \
@@ -450,6 +455,17 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset | None]:
     # (the tables as the batches read them: in this process's cache after a threaded batch phase)
     stats = {label: used_statistics(set_scenes[label], batch_sim(label, 0).tables()) for label in labels}
     return grid.datasets(key, sim.k_source, attrs, seeds, run, statistics=stats)
+
+
+def costliest_first(batches: Iterable[Batch]) -> list[Batch]:
+    """``batches`` in the order a fan-out round starts them: those reaching the highest protrusion first.
+
+    A run in contact costs the kernel ~3x a flying one (docs/performance.md), and contact comes with the
+    protrusion, so the batches of the top of the grid are the longest. Started first, they leave short
+    batches for the end of the round, where one worker would otherwise wait for the other's long one
+    (twice per sweep: each round ends with all its tasks). The order of the parts does not change the
+    datasets (:class:`Assembler`)."""
+    return sorted(batches, key=lambda b: -max(b.protrusions, default=0.0))
 
 
 def sweep_task(kind: str, *args: Any) -> tuple[str, Any]:

@@ -202,6 +202,18 @@ def test_a_part_file_gives_back_its_batch_bit_for_bit(calibrated, tmp_path, prot
     assert sweep_stage.part_problem(path, "key", batch) is None
 
 
+def test_several_workers_start_the_batches_of_the_highest_protrusions_first(calibrated):
+    """The batches reaching the top of the grid (in contact: the longest) start first, ties in batch order,
+    so a round ends with short batches; every batch is started once."""
+    scene, _ = calibrated
+    batches = sweep_stage.plan(scene.replace(sweep={"damping_ratio": [0.02, 0.05]}))[3]
+    order = sweep_stage.costliest_first(batches)
+    assert sorted(b.index for b in order) == [b.index for b in batches]
+    tops = [max(b.protrusions) for b in order]
+    assert tops == sorted(tops, reverse=True) and tops[0] == pytest.approx(10.4) and tops[-1] < tops[0]
+    assert [b.index for b in order[:2]] == [b.index for b in batches if max(b.protrusions) == tops[0]]
+
+
 def test_resume_after_interrupt_gives_identical_dataset(calibrated, tmp_path):
     scene, out = calibrated
     full, resumed = tmp_path / "full", tmp_path / "resumed"
