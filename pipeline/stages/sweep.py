@@ -522,33 +522,34 @@ class Assembler:
         """Put the part ``ds`` of batch ``b`` into the arrays."""
         r, d = self.labels.index(b.label), self.damp.index(b.damping)
         real = (b.realisation,) if self.n_real > 1 else ()
+        values = {name: ds.variables[name].values for name in ds.variables}  # (no DataArray per name: main thread)
         for i, name in enumerate(ds.data_vars):
             self._seen(name, b.index, i)
             if name.startswith("h_"):
                 continue
             if name in STEPPING:  # one value per chain
-                self.chains.setdefault(name, np.full(self.chain_shape, np.nan))[(r, d) + real] = ds[name].values
+                self.chains.setdefault(name, np.full(self.chain_shape, np.nan))[(r, d) + real] = values[name]
                 continue
             if name not in self.arrays:  # NaN: not computed (regime: its declared _FillValue on disk)
                 self.arrays[name] = np.full(self.shape, np.nan)
             at = (list(b.indices), r, d) + ((slice(None),) if self.stepping else ()) + real
-            self.arrays[name][at] = ds[name].values
+            self.arrays[name][at] = values[name]
         if "hist_protrusion" in ds.coords:
             if self.hist_prot is None:
                 sweep, report = self.scene["sweep"], self.scene["report"]
                 self.hist_prot = np.array([h for h in sweep["histories_nm"] or report["histories_nm"]
                                            if np.any(same_point(self.prot, h))])
             if self._time_from is None or b.index < self._time_from:
-                self.time, self._time_from = ds[TIME].values, b.index
+                self.time, self._time_from = values[TIME], b.index
             for name in ds.data_vars:
                 if name.startswith("h_"):
                     base = name[2:]
                     if base not in self.hist:
                         self.hist[base] = np.full((len(self.hist_prot), len(self.labels), len(self.damp),
-                                                   ds[TIME].size), np.nan)
-                    for i, hp in enumerate(ds["hist_protrusion"].values):
+                                                   values[TIME].size), np.nan)
+                    for i, hp in enumerate(values["hist_protrusion"]):
                         j = int(np.argmin(np.abs(self.hist_prot - hp)))
-                        self.hist[base][j, r, d] = ds[name].values[i]
+                        self.hist[base][j, r, d] = values[name][i]
         self.added.add(b.index)
 
     def _ordered(self, values: dict[str, np.ndarray], prefix: str = "") -> dict[str, np.ndarray]:
