@@ -528,7 +528,6 @@ PART_STACKS = _group(
 )
 
 
-
 def is_part_stack(name: str) -> bool:
     """Whether ``name`` is a stacked variable of a sweep part file (``stack``, ``stack__protrusion``, ...)."""
     return name == PART_STACK or name.startswith(PART_STACK + "__")
