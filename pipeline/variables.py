@@ -515,6 +515,24 @@ STATICS = _group(
     V("effective_mass_tfc", "kg", "effective mass at TFC", description="effective mass of the slider at the TFC point"),
 )
 
+#: A sweep part file's stacked variables (:func:`pipeline.stages.sweep.pack_part`): ``stack__<dims>`` holds the
+#: part's variables of dimensions ``<dims>`` along ``stack__<dims>_variable`` (their names), with their units
+#: in ``stack__<dims>_units``; :func:`declared` reads ``stack__...`` names as these three.
+PART_STACK = "stack"
+PART_STACKS = _group(
+    V(PART_STACK, "", "part variables",
+      description="the part's variables of the dimensions after the first, stacked along the first (float64; "
+                  "each variable's own dtype, attributes and missing value in the global attribute part_layout)"),
+    V(PART_STACK + "_variable", "", "names of a stack's rows", dtype="str"),
+    V(PART_STACK + "_units", "", "units of a stack's rows", dtype="str"),
+)
+
+
+def is_part_stack(name: str) -> bool:
+    """Whether ``name`` is a stacked variable of a sweep part file (``stack``, ``stack__protrusion``, ...)."""
+    return name == PART_STACK or name.startswith(PART_STACK + "__")
+
+
 #: Groups by name.
 GROUPS: dict[str, dict[str, Variable]] = {
     "coordinates": COORDINATES, "scalars": SCALARS, "histories": HISTORIES, "roughness": ROUGHNESS,
@@ -557,11 +575,15 @@ def lookup(name: str, groups: Iterable[str] = ("coordinates", "scalars", "histor
 def declared(dataset: str, name: str) -> Variable:
     """The declaration of variable ``name`` of the dataset file ``<dataset>.nc``.
 
-    Sweep part files prefix history variables with ``h_``.
+    Sweep part files prefix history variables with ``h_``; their stacks (:data:`PART_STACKS`) are named
+    ``stack__<dims>`` (``stack`` for 0-d variables).
     """
     groups = DATASETS[dataset]
     if dataset == "sweep-part" and name.startswith("h_"):
         return lookup(name[2:], ("histories",))
+    if dataset == "sweep-part" and is_part_stack(name.removesuffix("_variable").removesuffix("_units")):
+        suffix = next((s for s in ("_variable", "_units") if name.endswith(s)), "")
+        return PART_STACKS[PART_STACK + suffix]
     return lookup(name, groups)
 
 

@@ -7,7 +7,10 @@ record and the interface tables reach the workers by file path (``dmw.nc``, ``in
 inside the task graph. The parts are assembled into ``sweep.nc`` (dims ``protrusion``, ``roughness``,
 ``damping``) and ``sweep_histories.nc`` (time histories of the protrusions in ``histories_nm``) by an
 :class:`Assembler`: the parts computed by this call from memory as each batch returns its dataset with
-its path (while the other batches run), the parts of an earlier run from their files at the end.
+its path (while the other batches run), the parts of an earlier run from their files at the end. A part
+file holds its batch's variables stacked by dimensions (:func:`pack_part`: two or three NetCDF variables
+instead of ~35, each of which cost ~1 ms to write under the process's NetCDF lock) and is read back as the
+batch's dataset itself (:func:`read_part`).
 
 Resuming: a part is kept when it carries the sweep's inputs key (:mod:`pipeline.runner`: the scene,
 the bytes of every AFM scan of every roughness set, the DMW and calibration datasets), its own batch
@@ -34,18 +37,19 @@ import logging
 import threading
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, Callable, Iterable
 
 import numpy as np
 import xarray as xr
 
 from ..model import assembly
-from ..fanout import local_cluster, run_tasks
+from ..fanout import local_cluster, local_workers, run_tasks
 from ..progress import Progress
 from ..io import file_hash, read_attrs, read_dataset, write_dataset
 from ..paths import refuse_links
 from ..runner import KEY_ATTR, Inputs, Stage, ensure
-from ..variables import COORDINATES, ENSEMBLE, HISTORIES, SCALARS, STEPPING, TIME, coordinate
+from ..variables import (COORDINATES, ENSEMBLE, HISTORIES, PART_STACK, PART_STACKS, SCALARS, STEPPING, TIME,
+                         coordinate, is_part_stack)
 from ..model import dmw_record, scene_inputs
 from ..model.inputs import SimulationInputs, Source, for_stage
 from ..model.interface_tables import used_statistics
@@ -165,8 +169,99 @@ def run_batch(scene: Any, batch: Batch, inputs: SimulationInputs, part_path: str
     ds = simulate(model, batch.protrusions, histories=history_nm, protocol=scene["sweep"]["protocol"])
     ds.attrs.update({KEY_ATTR: key, "roughness_label": batch.label, "damping_ratio": batch.damping,
                      "batch": batch.index, "realisation": batch.realisation})
-    write_dataset(ds, part_path, scene, stage="sweep-part")
+    write_dataset(pack_part(ds), part_path, scene, stage="sweep-part")
     return part_path, ds
+
+
+#: Global attribute of a part file: its variables as :func:`unpack_part` restores them (JSON).
+LAYOUT_ATTR = "part_layout"
+
+
+def _stack_name(dims: tuple[str, ...]) -> str:
+    """The stacked variable of a part that holds its variables of dimensions ``dims``."""
+    return PART_STACK + "".join("__" + d for d in dims)
+
+
+def pack_part(ds: xr.Dataset) -> xr.Dataset:
+    """A part (a :func:`pipeline.model.simulation.simulate` dataset) as written to its file: the data
+    variables of equal dimensions stacked into one float64 variable along a new first dimension
+    (``stack__protrusion``: the scalars, ``stack__hist_protrusion__elapsed_time``: the kept histories),
+    with the names and units of its rows as coordinates.
+
+    Why: writing a NetCDF variable costs ~1 ms of Python and HDF5 whatever its size (33 variables: ~50 ms
+    per part, under the process's NetCDF lock, holding the GIL most of it), which the threads of a sweep
+    cannot share. Float64 holds every value of the parts exactly (float32 and int8 flags included), and
+    the global attribute :data:`LAYOUT_ATTR` keeps each variable's name, dtype, attributes and encoding in
+    order, so :func:`unpack_part` gives back ``ds`` itself (tests/stages/test_sweep.py).
+    """
+    variables = {name: ds.variables[name] for name in ds.data_vars}  # (Variables: no DataArray made per name)
+    groups: dict[tuple[str, ...], list[str]] = {}
+    for name, v in variables.items():
+        groups.setdefault(v.dims, []).append(name)
+    data: dict[str, xr.Variable] = {}
+    coords = {name: ds.variables[name] for name in ds.coords}
+    for dims, names in groups.items():
+        stack = _stack_name(dims)
+        row = f"{stack}_variable"
+        data[stack] = PART_STACKS[PART_STACK].data(np.stack([variables[n].values.astype(np.float64) for n in names]),
+                                                   (row, *dims), unit_variable=f"{stack}_units")
+        coords[row] = PART_STACKS[PART_STACK + "_variable"].data(names, (row,))
+        coords[f"{stack}_units"] = PART_STACKS[PART_STACK + "_units"].data(
+            [variables[n].attrs.get("units", "") for n in names], (row,))
+    layout = []
+    for name, v in variables.items():
+        enc = {k: np.dtype(val).str if k == "dtype" else _json_value(val) for k, val in v.encoding.items()
+               if k in ("_FillValue", "dtype")}
+        layout.append([name, v.dtype.str, {k: _json_value(a) for k, a in v.attrs.items()}, enc])
+    out = xr.Dataset(data, coords=coords)
+    out.attrs = dict(ds.attrs)
+    out.attrs[LAYOUT_ATTR] = json.dumps(layout)
+    return out
+
+
+def _json_value(value: Any) -> Any:
+    """An attribute's (or encoding's) value for JSON: an array or numpy scalar as its values and dtype
+    (restored by :func:`_attr_value`)."""
+    if isinstance(value, (np.ndarray, np.generic)):
+        return {"array": np.asarray(value).tolist(), "dtype": np.asarray(value).dtype.str,
+                "scalar": isinstance(value, np.generic)}
+    return value
+
+
+def _attr_value(value: Any) -> Any:
+    """The attribute value :func:`_json_value` wrote."""
+    if isinstance(value, dict) and set(value) == {"array", "dtype", "scalar"}:
+        array = np.array(value["array"], dtype=np.dtype(value["dtype"]))
+        return array[()] if value["scalar"] else array
+    return value
+
+
+def unpack_part(ds: xr.Dataset) -> xr.Dataset:
+    """The part :func:`pack_part` wrote (a part file read back): its variables, in their order, with their
+    dtypes, attributes and declared missing values; a dataset without :data:`LAYOUT_ATTR` as it is."""
+    if LAYOUT_ATTR not in ds.attrs:
+        return ds
+    rows: dict[str, tuple[xr.Variable, int]] = {}
+    for name in ds.data_vars:
+        if is_part_stack(name):
+            for i, row in enumerate(ds.variables[f"{name}_variable"].values):
+                rows[str(row)] = (ds.variables[name], i)
+    data = {}
+    for name, dtype, attrs, enc in json.loads(ds.attrs[LAYOUT_ATTR]):
+        stack, i = rows[name]
+        data[name] = xr.Variable(stack.dims[1:], stack.values[i].astype(np.dtype(dtype)),
+                                 attrs={k: _attr_value(a) for k, a in attrs.items()},
+                                 encoding={k: np.dtype(val) if k == "dtype" else _attr_value(val)
+                                           for k, val in enc.items()})
+    stacked = [n for n in ds.variables if is_part_stack(n.removesuffix("_variable").removesuffix("_units"))]
+    out = xr.Dataset(data, coords={n: ds.variables[n] for n in ds.coords if n not in stacked})
+    out.attrs = {k: v for k, v in ds.attrs.items() if k != LAYOUT_ATTR}
+    return out
+
+
+def read_part(path: str | Path) -> xr.Dataset:
+    """A part file as the batch's :func:`run_batch` made it (:func:`unpack_part` of the file)."""
+    return unpack_part(read_dataset(path))
 
 
 def _progress(total: int, initial: int) -> Progress:
@@ -327,10 +422,14 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset | None]:
     # A table is mostly Python and numpy holding the GIL, a batch mostly the kernel releasing it: the tables
     # alternate with batches, so that two threads run a table and a batch rather than two tables.
     tables = [("tables", label, sub, folder, force) for label, (sub, folder) in table_tasks.items()]
-    ready = [task(b) for b in todo if b.label not in table_tasks]
-    first = [t for pair in zip(tables, ready) for t in pair] + tables[len(ready):] + ready[len(tables):]
-    later = [b for b in todo if b.label in table_tasks]
     workers = opts.get("workers")
+    # (one worker runs them in batch order: the order matters only to several)
+    where = opts.get("scheduler")
+    serial = where == "synchronous" or (where is None and local_workers(workers, max(len(todo), 1)) == 1)
+    order = list if serial else costliest_first
+    ready = [task(b) for b in order(b for b in todo if b.label not in table_tasks)]
+    first = [t for pair in zip(tables, ready) for t in pair] + tables[len(ready):] + ready[len(tables):]
+    later = order(b for b in todo if b.label in table_tasks)
     batch_seconds = 0.0
     try:  # (one process cluster for both rounds: its start-up is paid once)
         with local_cluster(opts.get("scheduler"), workers) if first or later else \
@@ -356,6 +455,17 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset | None]:
     # (the tables as the batches read them: in this process's cache after a threaded batch phase)
     stats = {label: used_statistics(set_scenes[label], batch_sim(label, 0).tables()) for label in labels}
     return grid.datasets(key, sim.k_source, attrs, seeds, run, statistics=stats)
+
+
+def costliest_first(batches: Iterable[Batch]) -> list[Batch]:
+    """``batches`` in the order a fan-out round starts them: those reaching the highest protrusion first.
+
+    A run in contact costs the kernel ~3x a flying one (docs/performance.md), and contact comes with the
+    protrusion, so the batches of the top of the grid are the longest. Started first, they leave short
+    batches for the end of the round, where one worker would otherwise wait for the other's long one
+    (twice per sweep: each round ends with all its tasks). The order of the parts does not change the
+    datasets (:class:`Assembler`)."""
+    return sorted(batches, key=lambda b: -max(b.protrusions, default=0.0))
 
 
 def sweep_task(kind: str, *args: Any) -> tuple[str, Any]:
@@ -412,33 +522,34 @@ class Assembler:
         """Put the part ``ds`` of batch ``b`` into the arrays."""
         r, d = self.labels.index(b.label), self.damp.index(b.damping)
         real = (b.realisation,) if self.n_real > 1 else ()
+        values = {name: ds.variables[name].values for name in ds.variables}  # (no DataArray per name: main thread)
         for i, name in enumerate(ds.data_vars):
             self._seen(name, b.index, i)
             if name.startswith("h_"):
                 continue
             if name in STEPPING:  # one value per chain
-                self.chains.setdefault(name, np.full(self.chain_shape, np.nan))[(r, d) + real] = ds[name].values
+                self.chains.setdefault(name, np.full(self.chain_shape, np.nan))[(r, d) + real] = values[name]
                 continue
             if name not in self.arrays:  # NaN: not computed (regime: its declared _FillValue on disk)
                 self.arrays[name] = np.full(self.shape, np.nan)
             at = (list(b.indices), r, d) + ((slice(None),) if self.stepping else ()) + real
-            self.arrays[name][at] = ds[name].values
+            self.arrays[name][at] = values[name]
         if "hist_protrusion" in ds.coords:
             if self.hist_prot is None:
                 sweep, report = self.scene["sweep"], self.scene["report"]
                 self.hist_prot = np.array([h for h in sweep["histories_nm"] or report["histories_nm"]
                                            if np.any(same_point(self.prot, h))])
             if self._time_from is None or b.index < self._time_from:
-                self.time, self._time_from = ds[TIME].values, b.index
+                self.time, self._time_from = values[TIME], b.index
             for name in ds.data_vars:
                 if name.startswith("h_"):
                     base = name[2:]
                     if base not in self.hist:
                         self.hist[base] = np.full((len(self.hist_prot), len(self.labels), len(self.damp),
-                                                   ds[TIME].size), np.nan)
-                    for i, hp in enumerate(ds["hist_protrusion"].values):
+                                                   values[TIME].size), np.nan)
+                    for i, hp in enumerate(values["hist_protrusion"]):
                         j = int(np.argmin(np.abs(self.hist_prot - hp)))
-                        self.hist[base][j, r, d] = ds[name].values[i]
+                        self.hist[base][j, r, d] = values[name][i]
         self.added.add(b.index)
 
     def _ordered(self, values: dict[str, np.ndarray], prefix: str = "") -> dict[str, np.ndarray]:
@@ -512,7 +623,7 @@ def add_kept_parts(grid: Assembler, out: Path, batches: list[Batch], key: str) -
         why = part_problem(path, key, b)
         if why is not None:
             raise RuntimeError(f"{path}: batch {b.index}: part {why}; run the sweep again")
-        grid.add(b, read_dataset(path))
+        grid.add(b, read_part(path))
 
 
 def roughness_coordinates(statistics: list[dict[str, Any]]) -> dict[str, xr.Variable]:

@@ -19,6 +19,7 @@ from pipeline.config.scene import SceneError, load_scene
 from pipeline.analyses import calibration
 from pipeline.stages import sweep as sweep_stage
 from pipeline.stages.simulate import model_inputs
+from pipeline.model.inputs import from_folder
 from pipeline.config.grid import roughness_label, roughness_sets, scene_label
 from pipeline.runner import ensure
 
@@ -162,7 +163,7 @@ def test_other_sets_tables_are_fanned_out_and_the_result_does_not_depend_on_work
     for order in (batches, batches[::-1]):
         grid = sweep_stage.Assembler(scene, prot, list(sets), damp)
         for b in order:
-            grid.add(b, read_dataset(tmp_path / "1" / sweep_stage.PARTS / f"batch-{b.index:05d}.nc"))
+            grid.add(b, sweep_stage.read_part(tmp_path / "1" / sweep_stage.PARTS / f"batch-{b.index:05d}.nc"))
         made[order[0].index] = grid.datasets("k", "calibration", {}, statistics={label: _STATS for label in sets})
     xr.testing.assert_identical(made[0]["sweep.nc"], made[batches[-1].index]["sweep.nc"])
     xr.testing.assert_identical(made[0]["sweep_histories.nc"], made[batches[-1].index]["sweep_histories.nc"])
@@ -171,6 +172,46 @@ def test_other_sets_tables_are_fanned_out_and_the_result_does_not_depend_on_work
     assert names == [n for n in written.data_vars if n in names] and len(names) > 10
     for name in names:
         np.testing.assert_array_equal(made[0]["sweep.nc"][name].values, written[name].values)
+
+
+@pytest.mark.parametrize("protocol", ["independent", "stepping"])
+def test_a_part_file_gives_back_its_batch_bit_for_bit(calibrated, tmp_path, protocol):
+    """A part is written with its variables stacked by dimensions (a few NetCDF variables instead of one per
+    quantity) and read back as the dataset its batch computed: the same variables in the same order, the
+    same values to the last bit (float32 and int8 flags through float64), dtypes, attributes and missing
+    values; the file is a dataset of declared variables (tests/core/test_variables.py)."""
+    scene, out = calibrated
+    scene = scene.replace(sweep={"protocol": protocol})
+    batch = sweep_stage.plan(scene)[3][0]
+    sim = from_folder(scene, out)
+    path = tmp_path / "batch-00000.nc"
+    _, ds = sweep_stage.run_batch(scene, batch, sim, str(path), "key", (9.0, 10.0))
+    assert "h_separation" in ds and len(ds.data_vars) > 20
+    on_disk = read_dataset(path)
+    assert len(on_disk.data_vars) == len({v.dims for v in ds.data_vars.values()}) <= 3
+    back = sweep_stage.read_part(path)
+    assert list(back.data_vars) == list(ds.data_vars) and list(back.coords) == list(ds.coords)
+    xr.testing.assert_identical(back.drop_attrs(), ds.drop_attrs())
+    for name, v in ds.variables.items():
+        assert back[name].dtype == v.dtype, name
+        if v.dtype.kind in "fiub":  # (to the bit: NaN payloads too)
+            assert back[name].values.tobytes() == v.values.tobytes(), name
+        assert back[name].encoding.get("_FillValue") == v.encoding.get("_FillValue"), name
+    for key, value in ds.attrs.items():
+        assert back.attrs[key] == value, key
+    assert sweep_stage.part_problem(path, "key", batch) is None
+
+
+def test_several_workers_start_the_batches_of_the_highest_protrusions_first(calibrated):
+    """The batches reaching the top of the grid (in contact: the longest) start first, ties in batch order,
+    so a round ends with short batches; every batch is started once."""
+    scene, _ = calibrated
+    batches = sweep_stage.plan(scene.replace(sweep={"damping_ratio": [0.02, 0.05]}))[3]
+    order = sweep_stage.costliest_first(batches)
+    assert sorted(b.index for b in order) == [b.index for b in batches]
+    tops = [max(b.protrusions) for b in order]
+    assert tops == sorted(tops, reverse=True) and tops[0] == pytest.approx(10.4) and tops[-1] < tops[0]
+    assert [b.index for b in order[:2]] == [b.index for b in batches if max(b.protrusions) == tops[0]]
 
 
 def test_resume_after_interrupt_gives_identical_dataset(calibrated, tmp_path):
