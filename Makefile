@@ -62,8 +62,11 @@ define bootstrap
     || { rm -rf "$$tmp"; false; }; }; }; } && rm -rf $(BOOT) && ln -s "$(BOOT_CACHE)" $(BOOT)
 endef
 
-# $(1): uv sync options, $(2): the pip extra of the fallback
+# $(1): uv sync options, $(2): the pip extra of the fallback. (First the metadata setuptools left in the
+# clone when it built the editable install: the clone's root is on the path of uv_build's editable install,
+# so a stale hdi_dynamics.egg-info there would answer for the distribution: its version, its `hdi` entry point.)
 define install
+	@rm -rf hdi_dynamics.egg-info
 	@if [ -x "$(UV)" ] || $(bootstrap); then \
 	    "$(UV)" sync --locked --inexact --python $(PYTHON) $(1); \
 	else \

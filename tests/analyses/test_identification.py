@@ -467,17 +467,22 @@ def test_twin_racing_agrees_with_the_full_method_within_the_tolerance(write_scen
     assert race["records"][i_best] == 4
     search = stopped & (race["role"].values == 1)
     assert search.any() and np.all(race["objective"].values[search] > race.attrs["best_objective"])
-    # the same answer within the tolerance: both within tolerance, each optimum inside the other's interval and
-    # the truth inside both; the interval ends within one profile step of each other
-    assert race.attrs["within_tolerance"] == full.attrs["within_tolerance"] == 1
+    _same_answer(race, full, params, scene)
+
+
+def _same_answer(one: xr.Dataset, other: xr.Dataset, params, scene) -> None:
+    """Two identifications of the twin give the same answer within the tolerance: both within tolerance, each
+    optimum inside the other's interval and the truth inside both; the interval ends within one profile step
+    of each other."""
+    assert one.attrs["within_tolerance"] == other.attrs["within_tolerance"] == 1
     for p in params:
         step = (p.high - p.low) / (scene["identify"]["profile_points"] - 1)
-        a, b = race.sel(parameter=p.name), full.sel(parameter=p.name)
-        lo_r, hi_r = a["interval"].values
-        lo_f, hi_f = b["interval"].values
-        assert lo_f <= float(a["best"]) <= hi_f and lo_r <= float(b["best"]) <= hi_r, (p.name, a["best"], b["best"])
-        assert lo_r <= TRUE[p.name] <= hi_r and lo_f <= TRUE[p.name] <= hi_f
-        np.testing.assert_allclose([lo_r, hi_r], [lo_f, hi_f], atol=step)
+        a, b = one.sel(parameter=p.name), other.sel(parameter=p.name)
+        lo_a, hi_a = a["interval"].values
+        lo_b, hi_b = b["interval"].values
+        assert lo_b <= float(a["best"]) <= hi_b and lo_a <= float(b["best"]) <= hi_a, (p.name, a["best"], b["best"])
+        assert lo_a <= TRUE[p.name] <= hi_a and lo_b <= TRUE[p.name] <= hi_b
+        np.testing.assert_allclose([lo_a, hi_a], [lo_b, hi_b], atol=step)
 
 
 @pytest.mark.slow  # (two identifications of the real slider on 4 DMW records: ~1 min on the shared 2 cores)
@@ -502,14 +507,4 @@ def test_twin_polish_agrees_with_the_method_without_it_within_the_tolerance(writ
     # (candidate, record) pairs against 2 and 276 when written)
     assert on.attrs["profile_rounds"] == 1 < off.attrs["profile_rounds"]
     assert on.attrs["record_evaluations"] < off.attrs["record_evaluations"]
-    # the same answer within the tolerance: both within tolerance, each optimum inside the other's interval and
-    # the truth inside both; the interval ends within one profile step of each other
-    assert on.attrs["within_tolerance"] == off.attrs["within_tolerance"] == 1
-    for p in params:
-        step = (p.high - p.low) / (scene["identify"]["profile_points"] - 1)
-        a, b = on.sel(parameter=p.name), off.sel(parameter=p.name)
-        lo_a, hi_a = a["interval"].values
-        lo_b, hi_b = b["interval"].values
-        assert lo_b <= float(a["best"]) <= hi_b and lo_a <= float(b["best"]) <= hi_a, (p.name, a["best"], b["best"])
-        assert lo_a <= TRUE[p.name] <= hi_a and lo_b <= TRUE[p.name] <= hi_b
-        np.testing.assert_allclose([lo_a, hi_a], [lo_b, hi_b], atol=step)
+    _same_answer(on, off, params, scene)

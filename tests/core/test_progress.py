@@ -13,6 +13,7 @@ import pytest
 
 from pipeline import cli, fanout, progress
 from pipeline.config.scene import load_scene
+from pipeline.analyses.identification import POLISH_EVALUATIONS
 from pipeline.stages import identify
 import twin
 
@@ -209,12 +210,19 @@ def test_hdi_identify_in_a_log_counts_generations_with_the_best_cost_and_q_and_v
         assert counts == sorted(counts) and len(set(counts)) >= 4 and counts[-1] == 4, counts
         costs = [float(note.removeprefix("best objective ")) for k, _, note in gens if k > 0]
         assert costs and costs == sorted(costs, reverse=True)  # the best so far only improves
-        # then each round of profiles counts its evaluations, with a total fixed when it starts (2 parameters
-        # x (3 profile points + the optimum) + 2 x 2 Jacobian points + 2 x the re-optimisation's budget of 40),
-        # lowered to what was spent when the round ends; then the scoring of every evaluation
+        # then the polish of the search's optimum counts its evaluations (a total of its budget, 2 parameters x
+        # POLISH_EVALUATIONS, lowered to what it spent when it ends); then each round of profiles counts its
+        # evaluations, with a total fixed when it starts (2 parameters x (3 profile points + the optimum) + 2 x 2
+        # Jacobian points + 2 x the re-optimisation's budget of 40), lowered to what was spent when the round
+        # ends; then the scoring of every evaluation
         phases = list(dict.fromkeys(phase for phase, *_ in lines))
-        assert phases[0] == "search" and phases[1] == "profiles, round 1 of at most 3", phases
-        assert set(phases) <= {"search", "scoring", *(f"profiles, round {r} of at most 3" for r in (1, 2, 3))}, phases
+        assert phases[:3] == ["search", "polish", "profiles, round 1 of at most 3"], phases
+        assert set(phases) <= {"search", "polish", "scoring",
+                               *(f"profiles, round {r} of at most 3" for r in (1, 2, 3))}, phases
+        budget = 2 * POLISH_EVALUATIONS
+        polish = [(k, n) for ph, k, n, unit, _, _ in lines if ph == "polish"]
+        assert all(unit == "evaluations" for ph, _, _, unit, _, _ in lines if ph == "polish")
+        assert {n for _, n in polish[:-1]} <= {budget} and polish[-1][0] == polish[-1][1] <= budget, polish
         for phase in (ph for ph in phases if ph.startswith("profiles")):
             evals = [(k, n) for ph, k, n, unit, _, _ in lines if ph == phase]
             assert all(unit == "evaluations" for ph, _, _, unit, _, _ in lines if ph == phase)

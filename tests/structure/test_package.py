@@ -70,7 +70,7 @@ def test_distribution_name_and_one_version_source(repo_root):
     assert meta["name"] == DISTRIBUTION == "hdi-dynamics"
     dist = distribution(DISTRIBUTION)
     assert dist.version == __version__
-    assert any(ep.name == "hdi" and ep.value == "pipeline.cli:entry" for ep in dist.entry_points)
+    assert any(ep.name == "hdi" and ep.value == "pipeline.launch:entry" for ep in dist.entry_points)
     init = (repo_root / "pipeline" / "__init__.py").read_text()
     assert not re.search(r"__version__\s*=\s*[\"']\d+\.\d+", init)  # no literal version in the package
 
