@@ -432,8 +432,6 @@ def _twin_targets(tl, whole) -> list[str]:
 
 @pytest.mark.slow  # (two identifications of the real slider on 4 DMW records: ~1 min on the shared 2 cores)
 def test_twin_racing_agrees_with_the_full_method_within_the_tolerance(write_scene, paper_config, tmp_path):
-    from pipeline.config.scene import load_scene
-    from pipeline.runner import ensure
     path, scene, params, tl, prots, inputs, whole = _ensemble_twin(write_scene, paper_config, tmp_path)
     # the parts of an ensemble are the whole, bit for bit (the racing stages join them)
     parts = [evaluations.evaluate(scene, params, [TRUE[p.name] for p in params], prots, inputs, 4, seg)
@@ -447,12 +445,7 @@ def test_twin_racing_agrees_with_the_full_method_within_the_tolerance(write_scen
     for got, want in zip(study.score(whole, tl, 10.0), scoring_reference.xarray_score(whole, tl, 10.0)):
         np.testing.assert_array_equal(got, want)
     sets = _twin_targets(tl, whole)
-    runs = {}
-    for racing in (True, False):
-        sc = load_scene(path, sets + [f"identify.racing={'true' if racing else 'false'}"])
-        out = tmp_path / f"racing-{racing}"
-        runs[racing] = xr.open_dataset(ensure("identify", sc, out, scheduler="synchronous"), engine="netcdf4").load()
-    race, full = runs[True], runs[False]
+    race, full = _identified_with_and_without(path, sets, "racing", tmp_path)
     assert full.attrs["racing"].startswith("off") and race.attrs["racing"].startswith("stages of 2, 4 DMW records")
     # the full method runs every evaluation on every record; racing stops some after 2
     assert np.all(full["records"].values == 4)
@@ -468,6 +461,19 @@ def test_twin_racing_agrees_with_the_full_method_within_the_tolerance(write_scen
     search = stopped & (race["role"].values == 1)
     assert search.any() and np.all(race["objective"].values[search] > race.attrs["best_objective"])
     _same_answer(race, full, params, scene)
+
+
+def _identified_with_and_without(path, sets: list[str], option: str, tmp_path) -> tuple[xr.Dataset, xr.Dataset]:
+    """identify.nc of the twin scene ``path`` (with the ``--set`` strings ``sets``) with ``identify.<option>``
+    on, then off, each in a folder of its own."""
+    from pipeline.config.scene import load_scene
+    from pipeline.runner import ensure
+    runs = []
+    for on in ("true", "false"):
+        sc = load_scene(path, sets + [f"identify.{option}={on}"])
+        out = ensure("identify", sc, tmp_path / f"{option}-{on}", scheduler="synchronous")
+        runs.append(xr.open_dataset(out, engine="netcdf4").load())
+    return runs[0], runs[1]
 
 
 def _same_answer(one: xr.Dataset, other: xr.Dataset, params, scene) -> None:
@@ -489,16 +495,9 @@ def _same_answer(one: xr.Dataset, other: xr.Dataset, params, scene) -> None:
 def test_twin_polish_agrees_with_the_method_without_it_within_the_tolerance(write_scene, paper_config, tmp_path):
     # one generation of 4 x 2 candidates, racing on: the search stops short of the truth, the polish takes it the
     # rest of the way before the profiles
-    from pipeline.config.scene import load_scene
-    from pipeline.runner import ensure
     path, scene, params, tl, prots, inputs, whole = _ensemble_twin(write_scene, paper_config, tmp_path)
     sets = _twin_targets(tl, whole) + ["identify.generations=1"]
-    runs = {}
-    for polish in (True, False):
-        sc = load_scene(path, sets + [f"identify.polish={'true' if polish else 'false'}"])
-        out = tmp_path / f"polish-{polish}"
-        runs[polish] = xr.open_dataset(ensure("identify", sc, out, scheduler="synchronous"), engine="netcdf4").load()
-    on, off = runs[True], runs[False]
+    on, off = _identified_with_and_without(path, sets, "polish", tmp_path)
     assert "polish" not in off.attrs and not np.any(off["role"].values == 5)
     assert on.attrs["polish_objective"] < on.attrs["polish_start_objective"] and on.attrs["polish_moves"] >= 1
     assert int(np.sum(on["role"].values == 5)) <= on.attrs["polish_evaluations"] <= \
