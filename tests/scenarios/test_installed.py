@@ -155,7 +155,10 @@ def test_every_example_runs_from_an_empty_folder_on_the_installed_wheel(wheel, t
     for script in sorted(EXAMPLES.glob("*.py")):
         shutil.copy2(script, scripts / script.name)
         out = tmp_path / "out" / script.stem
-        text = _run([str(bin_dir / "python"), str(scripts / script.name), str(out)], cwd, env=env)
+        # (the folder as the argument, or for one script as HDI_EXAMPLES_OUT: the two ways each script's usage names)
+        by_env = script.stem == "ensemble"
+        args = [str(bin_dir / "python"), str(scripts / script.name)] + ([] if by_env else [str(out)])
+        text = _run(args, cwd, env={**env, "HDI_EXAMPLES_OUT": str(out)} if by_env else env)
         results[script.stem] = json.loads(text.strip().splitlines()[-1])
         assert list(cwd.iterdir()) == []  # (it wrote only into the folder it was given)
     assert set(results) == {"quickstart", "ensemble", "open_mfdataset"}
@@ -164,10 +167,17 @@ def test_every_example_runs_from_an_empty_folder_on_the_installed_wheel(wheel, t
     assert quick["protrusions"] == [9.5, 10.0, 10.5] and quick["sweep_fhm_bv"][1] == quick["fhm_bv_10nm"]
     assert all(0.01 < v < 100.0 for v in quick["sweep_fhm_bv"])  # BV [%] in light contact
     assert (tmp_path / "out" / "quickstart" / "quickstart.png").stat().st_size > 10_000
+    assert (tmp_path / "out" / "quickstart" / "sweep.nc").is_file()
     ens = results["ensemble"]
-    assert ens["realisations"] == 3 and all(len(set(row)) == 3 for row in ens["fhm_bv"])
+    assert ens["realisations"] == 3 and len(ens["fhm_bv"]) == len(ens["protrusions"]) == 3
+    for row, mean in zip(ens["fhm_bv"], ens["fhm_bv_mean"]):
+        assert len(set(row)) == 3  # three records, three outcomes
+        assert 0.01 < min(row) <= mean <= max(row) < 100.0
     assert all(0.0 <= p <= 1.0 for p in ens["touchdown_probability"])
-    low, high = results["open_mfdataset"]["fhm_bv"]
+    assert (tmp_path / "out" / "ensemble" / "ensemble.png").is_file()
+    mf = results["open_mfdataset"]
+    assert mf["dims"] == {"rms": 2, "protrusion": 3, "roughness": 1, "damping": 1} and mf["units"] == "%"
+    low, high = mf["fhm_bv"]
     assert all(0.01 < a < b < 100.0 for a, b in zip(low, high))  # a larger DMW, a larger BV
 
 
