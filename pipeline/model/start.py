@@ -75,7 +75,9 @@ def static_forces(run_parameters):
 
     ``run_parameters(mu) -> (p, tables, variants)`` gives the kernel's inputs at a protrusion
     (:func:`pipeline.model.kernel_inputs.run_parameters`). With the pitch locked the moment is replaced by
-    ``theta`` (it stays at zero).
+    ``-theta`` (theta stays at zero): a restoring stand-in of positive stiffness, so a state's stability
+    is its heave's (:func:`pipeline.physics.equilibrium.is_stable`; ``+theta`` made every locked state
+    unstable, and the start fell back to the nominal attitude).
     """
     cache: dict[float, tuple] = {}
     out = np.empty(N_STATE)
@@ -92,7 +94,7 @@ def static_forces(run_parameters):
         y4[Z], y4[THETA] = y[0], y[1]  # (y: the static state (z, theta))
         in_contact = bool(separation_at(p, y4[Z], y4[THETA], 0.0) < p["k_sigma"])
         dyn.rhs(0.0, y4, p, tables, variants, in_contact, out)
-        moment = p["I"] * out[THETA_RATE] if variants.pitch is not None else y[1]
+        moment = p["I"] * out[THETA_RATE] if variants.pitch is not None else -y[1]
         return np.array([p["m"] * out[Z_RATE], moment])
 
     def flying(y: np.ndarray) -> bool:

@@ -37,9 +37,10 @@ _inline = kernel_jit(__name__, inline="always")
 
 @_inline
 def static_residual(y0, y1, p, R, y4, out, dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power, meniscus):
-    """``R = (F_z [N], M_theta [N m])`` at the static state ``(y0, y1)`` (``M_theta`` replaced by ``theta``
-    with the pitch locked): the right-hand side at zero velocity, ``t = 0``, in the contact mode the
-    paper's criterion gives (``d < k sigma``)."""
+    """``R = (F_z [N], M_theta [N m])`` at the static state ``(y0, y1)`` (``M_theta`` replaced by ``-theta``
+    with the pitch locked: a restoring stand-in, zero at ``theta = 0`` with a positive stiffness, so the
+    stability test of ``K = -dR/dy`` reads the heave alone): the right-hand side at zero velocity, ``t = 0``,
+    in the contact mode the paper's criterion gives (``d < k sigma``)."""
     y4[Z] = y0
     y4[THETA] = y1
     in_contact = separation_at(p, y0, y1, 0.0) < p.k_sigma
@@ -47,7 +48,7 @@ def static_residual(y0, y1, p, R, y4, out, dmw, contact, adhesion, friction, tfc
               meniscus)
     R[0] = p.m * out[Z_RATE]
     if pitch is None:
-        R[1] = y1
+        R[1] = -y1
     else:
         R[1] = p.I * out[THETA_RATE]
 

@@ -112,3 +112,28 @@ def test_a_start_from_the_ladder_is_the_start_continued_from_zero_protrusion():
         from_zero = eq.static_equilibrium(R, delta, steps=6, **kw)
         assert from_ladder.kind == from_zero.kind == ("flying" if delta < ladder.fold else "contact"), delta / NM
         assert np.all(np.abs(from_ladder.equilibrium.y - from_zero.equilibrium.y) <= NEWTON_TOL), delta / NM
+
+
+@pytest.mark.parametrize("delta", [5.0, 11.0])  # flying; in steady contact
+def test_a_pitch_locked_start_is_the_static_equilibrium_of_its_heave(delta):
+    # with the pitch locked the moment's stand-in is -theta (positive stiffness): the start is the heave's
+    # static equilibrium, flying before the fold and on the contact branch past it, not the nominal attitude
+    # (+theta made every locked state unstable); the compiled and the Python Newton agree
+    model = build(make_scene(("air_bearing", "adhesion", "contact", "friction"), solver=SOLVER))
+    got = {}
+    for compiled in (True, False):
+        m = replace(model)
+        got[compiled] = start_state(lambda mu, m=m: kernel_inputs.run_parameters(m, mu), delta * NM, "static",
+                                    delta * NM + m.p["y_s"] - m.p["FH0"], statics=m.statics,
+                                    fold_max=2 * m.p["FH0"], compiled=compiled)
+    (y, note), (y_py, note_py) = got[True], got[False]
+    assert note.startswith("static flying equilibrium" if delta == 5.0 else "static contact equilibrium"), note
+    assert note_py.split("(")[0] == note.split("(")[0]
+    assert y[1] == 0.0 and y_py[1] == 0.0 and np.all(y[2:] == 0.0)  # theta locked at zero, at rest
+    assert abs(y[0] - y_py[0]) <= NEWTON_TOL[0]
+    R, _, _ = static_forces(lambda mu: kernel_inputs.run_parameters(model, mu))
+    e = eq.newton(lambda yy: R(yy, delta * NM), y[:2], scale=SCALE)
+    assert e.converged and e.stable and abs(e.y[0] - y[0]) <= NEWTON_TOL[0]
+    assert e.stiffness[0, 0] > 0.0 and e.stiffness[1, 1] == pytest.approx(1.0)  # the heave's stiffness; the stand-in's
+    # the net static force there is zero to the Newton tolerance times the heave stiffness
+    assert abs(R(y[:2], delta * NM)[0]) <= 10 * e.stiffness[0, 0] * NEWTON_TOL[0]
