@@ -331,17 +331,13 @@ def inverse_mass_at_tfc(p, pitch):
     return 1.0 / p.m + (p.l_c ** 2 / p.I if pitch is not None else 0.0)
 
 
-@_jit
+@_inline
 def stiffness_cap(p, in_contact, d, h_max, m_eff_inv, contact, adhesion, tfc, gap_power, meniscus):
     """Largest step [s] after a step ending at separation ``d`` [m]: ``p.h_stiff`` over the angular
     frequency of the local interface spring (``h_max`` without one).
 
     A stiff contact would otherwise run the explicit method at its stability limit, where the step
     controller is erratic (Hairer & Wanner, Solving ODEs II, IV.2).
-
-    Compiled on its own, called once per accepted step from :func:`pipeline.model.dynamics._integrate`'s
-    loop itself: its inlined copy of the TFC and interface forces cost the kernel's compile ~0.7 s of CPU
-    (docs/kernel.md, section "Compile time").
     """
     if adhesion is None and contact is None and gap_power is None and tfc is None:
         return h_max

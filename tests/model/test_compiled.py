@@ -91,7 +91,7 @@ ahead = compiled.signature(dyn._integrate, dyn.kernel_arguments(
     np.zeros(N_STATE), dyn.Grid(1e-3, np.zeros(3)), p, tables, variants, dyn.Solver(1e-6, model.atol, 1e-7, 10)))
 stand_in = compiled.signature(dyn._integrate, dyn.kernel_arguments(*kernel_inputs.stand_in_arguments(scene)))
 entry_points = [compiled.signature(f, args) in f.signatures for f, args in first_run.python_entry_points(scene)]
-kernel = ("_integrate", "step", "switch_point", "knot_extrema", "stiffness_cap", "rhs_slots", "_newton")
+kernel = ("_integrate", "step", "switch_point", "knot_extrema", "rhs_slots", "_newton")
 print(json.dumps({"integrate": len(dyn._integrate.signatures), "newton": len(static_solver._newton.signatures),
                   "ahead_is_called": [ahead] == list(dyn._integrate.signatures),
                   "stand_in_is_called": [stand_in] == list(dyn._integrate.signatures),
@@ -118,8 +118,7 @@ def test_the_main_scene_compiles_one_signature_per_kernel_entry_point(tmp_path):
 @pytest.mark.slow  # (the kernel and the static solver compiled from an empty cache: ~30 s of CPU)
 def test_the_main_scene_compiles_each_kernel_function_once(tmp_path):
     # an empty cache, everything compiled in this process (no background compile): the kernel, its separately
-    # compiled helpers (the step, the switch's bisection, the extrema across DMW knots, the step's stiffness
-    # cap) and the static solver
+    # compiled helpers (the step, the switch's bisection, the extrema across DMW knots) and the static solver
     # once each, the right-hand side twice: the kernel's slots and the static solver's (no DMW, no meniscus
     # state; docs/kernel.md, section "Compile time")
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "numba"), HDI_COMPILE_AHEAD="0")
@@ -127,8 +126,8 @@ def test_the_main_scene_compiles_each_kernel_function_once(tmp_path):
                          text=True, timeout=900, env=env)
     assert out.returncode == 0, out.stderr[-2000:]
     plan = json.loads(out.stdout.strip().splitlines()[-1])
-    assert plan["compiles"] == {"_integrate": 1, "step": 1, "switch_point": 1, "knot_extrema": 1,
-                                "stiffness_cap": 1, "rhs_slots": 2, "_newton": 1}
+    assert plan["compiles"] == {"_integrate": 1, "step": 1, "switch_point": 1, "knot_extrema": 1, "rhs_slots": 2,
+                                "_newton": 1}
 
 
 #: A small cached kernel in its own module, compiled ahead in a fresh process with an empty cache.

@@ -413,7 +413,7 @@ def test_kernel_cache_folder_is_keyed_by_the_code_the_kernel_inlines():
     assert kernel <= found and "pipeline.physics.air_bearing" in cv.modules("pipeline.model.dynamics")
     for module, functions in ((dyn, (dyn._integrate, dyn._rhs_python)),
                               (forces, (forces.rhs_slots, forces.separation_at, forces._stiffening_potential)),
-                              (stepper, (stepper.step, stepper.knot_extrema, stepper.switch_point, stepper.stiffness_cap)),
+                              (stepper, (stepper.step, stepper.knot_extrema, stepper.switch_point)),
                               (piecewise, (piecewise.ppval,)),
                               (state, (state.state_size,))):
         folder = f"numba-{cv.code_key(module.__name__)[:16]}"
