@@ -29,10 +29,10 @@ from ..config.loading import load_scene
 from ..units import URAD
 
 #: What the first run's early compile process (:func:`compile_scene_kernel`) does not import: the command
-#: line's process imports them anyway, and in a fresh clone (their bytecode written for the first time) they
-#: cost ~3.5 s of CPU before the kernel's compile could start (docs/performance.md, section "The first run,
-#: traced"). The modules on its path import them where they are used; tests/model/test_first_run.py checks
-#: it for every shipped scene.
+#: line's process imports them anyway, and in a fresh clone (their bytecode written for the first time)
+#: they cost it 2.5-4.5 s of CPU before the kernel's compile could start (docs/performance.md, section
+#: "The first run, traced"). The modules on its path import them where they are used;
+#: tests/model/test_first_run.py checks it for every shipped scene.
 NOT_IMPORTED_EARLY = ("xarray", "pandas", "scipy.interpolate", "scipy.special")
 
 

@@ -64,15 +64,16 @@ TFC_POINT_LAWS: Mapping[str, Mapping[str, ab.TfcLaw]] = {"tfc_stiffening": ab.TF
                                                         "bulge": bb.BULGE_LAWS}
 
 
-#: How a TFC-point law's table (:attr:`pipeline.physics.air_bearing.TfcLaw.table`) is read from its stage's
-#: dataset into the SI object its ``force`` takes.
 def _bulge_table(ds: Any) -> Any:
     """:func:`pipeline.model.bulge_table.from_dataset`, imported when a table is read (it imports xarray,
-    which the first run's early compile process does not import: :data:`pipeline.model.ahead.NOT_IMPORTED_EARLY`)."""
+    which the first run's early compile process does not import:
+    :data:`pipeline.model.ahead.NOT_IMPORTED_EARLY`)."""
     from .bulge_table import from_dataset
     return from_dataset(ds)
 
 
+#: How a TFC-point law's table (:attr:`pipeline.physics.air_bearing.TfcLaw.table`) is read from its stage's
+#: dataset into the SI object its ``force`` takes.
 TABLE_READERS: Mapping[str, Callable[[Any], Any]] = {"bulge": _bulge_table}
 
 

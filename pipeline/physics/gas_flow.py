@@ -124,7 +124,7 @@ def poiseuille_factor(kn) -> tuple[np.ndarray, np.ndarray]:
 def mean_gap(H) -> np.ndarray:
     """Mean local gap ``h_T / sigma = H Phi(H) + phi(H)`` [1] of a Gaussian rough gap at ``H = h / sigma``
     (local gap ``max(h - z, 0)``, ``z`` Gaussian; Patir & Cheng 1978). ``-> H`` above ``H ~ 3``, ``0.399`` at 0."""
-    from scipy.special import ndtr  # (here: the scene's schema imports this module; pipeline.model.ahead.NOT_IMPORTED_EARLY)
+    from scipy.special import ndtr  # (here: the schema imports this module; model.ahead.NOT_IMPORTED_EARLY)
     H = np.asarray(H, dtype=float)
     return H * ndtr(H) + np.exp(-0.5 * H * H) / np.sqrt(2.0 * np.pi)
 
