@@ -24,6 +24,7 @@ from .folder_lock import folder_lock
 from .stages import roughness
 from .cli_checks import MAX_SCENES, check_options, integration_line, one_line_warnings
 from .model import compiled
+from .model.first_run import Early
 from .model.running import IntegrationError
 
 log = logging.getLogger("pipeline")
@@ -195,7 +196,7 @@ def _main(argv: list[str] | None = None) -> int:
         return interrupts.exit_code(signum)
 
 
-def entry(early: tuple | None = None) -> None:  # pragma: no cover (the console script; tests call main)
+def entry(early: Early | None = None) -> None:  # pragma: no cover (the console script; tests call main)
     """The ``hdi`` console script (:func:`pipeline.launch.entry`): :func:`main`, then a fast exit with its code.
 
     ``early``: the first run's kernel compile the console script started before importing this module

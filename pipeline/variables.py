@@ -35,13 +35,15 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from enum import IntEnum
-from typing import Any, Iterable
+from typing import TYPE_CHECKING, Any, Iterable
 
 import numpy as np
-import xarray as xr
 from .units import GPA, KHZ, MN, MPA, MS, NM, PER_UM2, UM, UM2, URAD
 
 from .validity import Validity
+
+if TYPE_CHECKING:
+    import xarray as xr
 
 
 class Regime(IntEnum):
@@ -150,6 +152,7 @@ class Variable:
 
     def data(self, values: Any, dims: Iterable[str], **attrs: Any) -> xr.Variable:
         """A variable from values already in dataset units (NaN -> fill value for flags)."""
+        import xarray as xr  # (here: pipeline.model.ahead.NOT_IMPORTED_EARLY)
         values = np.asarray(values)
         if self.fill_value is not None:  # NaN (not computed, or a decoded fill) -> the declared fill
             values = np.where(np.isfinite(values.astype(float)), values, self.fill_value)

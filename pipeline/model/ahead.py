@@ -25,9 +25,15 @@ from .forces import separation_at
 from .kernel_inputs import stand_in_arguments
 from .start import static_inputs
 from .state import N_STATE, THETA, Z
-from .statics import TOL, _path
 from ..config.loading import load_scene
 from ..units import URAD
+
+#: What the first run's early compile process (:func:`compile_scene_kernel`) does not import: the command
+#: line's process imports them anyway, and in a fresh clone (their bytecode written for the first time)
+#: they cost it 2.5-4.5 s of CPU before the kernel's compile could start (docs/performance.md, section
+#: "The first run, traced"). The modules on its path import them where they are used;
+#: tests/model/test_first_run.py checks it for every shipped scene.
+NOT_IMPORTED_EARLY = ("xarray", "pandas", "scipy.interpolate", "scipy.special")
 
 
 def compile_kernel_ahead(scene: Any) -> None:
@@ -74,6 +80,7 @@ def python_entry_points(scene: Any) -> list[tuple[Any, tuple]]:
     kernel's output: strided arrays). tests/model/test_compiled.py checks that the main scene's runs and
     statics map compile exactly these signatures.
     """
+    from .statics import TOL, _path  # (here: xarray, NOT_IMPORTED_EARLY)
     y0, grid, p, tab, var, solver = stand_in_arguments(scene)
     p_static, tab_static, var_static, slots = static_inputs(lambda mu: (p, tab, var), 0.0)
     packed = dyn._packed(p_static)

@@ -40,7 +40,6 @@ from typing import Any, Callable, Mapping
 import numpy as np
 
 from . import dynamics as dyn
-from .bulge_table import from_dataset
 from .dmw_record import disk_speed_m_s
 from .forces import RearLawRef, rear_law_ref
 from .piecewise import disk_coefficients, piecewise_coefficients
@@ -65,9 +64,17 @@ TFC_POINT_LAWS: Mapping[str, Mapping[str, ab.TfcLaw]] = {"tfc_stiffening": ab.TF
                                                         "bulge": bb.BULGE_LAWS}
 
 
+def _bulge_table(ds: Any) -> Any:
+    """:func:`pipeline.model.bulge_table.from_dataset`, imported when a table is read (it imports xarray,
+    which the first run's early compile process does not import:
+    :data:`pipeline.model.ahead.NOT_IMPORTED_EARLY`)."""
+    from .bulge_table import from_dataset
+    return from_dataset(ds)
+
+
 #: How a TFC-point law's table (:attr:`pipeline.physics.air_bearing.TfcLaw.table`) is read from its stage's
 #: dataset into the SI object its ``force`` takes.
-TABLE_READERS: Mapping[str, Callable[[Any], Any]] = {"bulge": from_dataset}
+TABLE_READERS: Mapping[str, Callable[[Any], Any]] = {"bulge": _bulge_table}
 
 
 @dataclass

@@ -35,7 +35,6 @@ imports (:mod:`pipeline.model.first_run`), and the runner adopts it (:func:`adop
 
 from __future__ import annotations
 
-import contextlib
 import importlib
 import logging
 import os
@@ -130,21 +129,22 @@ _AHEAD: dict[tuple, subprocess.Popen] = {}
 _AHEAD_LOCK = threading.Lock()
 #: Work for :func:`wait_ahead` to do while a background compile runs (:func:`while_waiting`).
 _IDLE: list[Callable[[], None]] = []
-#: The console script's first-run compile (:func:`adopt_early`): (process, the file of its key), until
-#: :func:`compile_ahead` adopts or stops it.
-_EARLY: list[tuple[subprocess.Popen, str]] = []
+#: The console script's first-run compile (:func:`adopt_early`), until :func:`compile_ahead` adopts or
+#: stops it, or :func:`stop_early` stops it: one at most.
+_EARLY: first_run.Early | None = None
 #: How often :func:`compile_ahead` looks for the early process's key while it is still loading the scene [s].
 EARLY_POLL_S = 0.02
 
 
-def adopt_early(early: tuple[subprocess.Popen, str] | None) -> None:
+def adopt_early(early: first_run.Early | None) -> None:
     """Hand this process the kernel compile the console script started before its imports
-    (:func:`pipeline.model.first_run.start`: the process and the file it writes its ``(module, name,
-    signature)`` key to): :func:`compile_ahead` waits for it instead of starting one, if it compiles the
-    signature asked for; otherwise stops it. None: nothing started."""
+    (:func:`pipeline.model.first_run.start`: the process and the private folder it writes its ``(module,
+    name, signature)`` key to): :func:`compile_ahead` waits for it instead of starting one, if it compiles
+    the signature asked for; otherwise stops it. None: nothing started."""
+    global _EARLY
     if early is not None:
         with _AHEAD_LOCK:
-            _EARLY.append(early)
+            _EARLY = early
 
 
 def _read_key(path: str) -> tuple | None:
@@ -158,21 +158,21 @@ def _read_key(path: str) -> tuple | None:
 
 def _adopt(key: tuple) -> subprocess.Popen | None:
     """The early process if it compiles ``key`` (its key file read, waiting while it loads the scene), else
-    None, having stopped it (its work would only compete with this process's own compile)."""
-    if not _EARLY:
+    None, having stopped it (its work would only compete with this process's own compile). Either way its
+    folder is removed and it is no longer :data:`_EARLY`."""
+    global _EARLY
+    if _EARLY is None:
         return None
-    proc, path = _EARLY.pop()
-    got = _read_key(path)
-    while got is None and proc.poll() is None:
+    early, _EARLY = _EARLY, None
+    got = _read_key(early.key_path)
+    while got is None and early.proc.poll() is None:
         time.sleep(EARLY_POLL_S)
-        got = _read_key(path)
-    got = got if got is not None else _read_key(path)  # (written just before it ended)
-    with contextlib.suppress(OSError):
-        os.unlink(path)
-    if got == key:
-        return proc
-    _stop(proc)
-    return None
+        got = _read_key(early.key_path)
+    got = got if got is not None else _read_key(early.key_path)  # (written just before it ended)
+    if got != key:
+        _stop(early.proc)
+    early.discard()  # (read, or the process ended: nothing writes there any more)
+    return early.proc if got == key else None
 
 
 def _stop(proc: subprocess.Popen) -> None:
@@ -184,14 +184,14 @@ def _stop(proc: subprocess.Popen) -> None:
 
 
 def stop_early() -> None:
-    """Stop an early compile nothing adopted (a command that did not simulate): called at the command's
-    end, so no process outlives it."""
+    """Stop an early compile nothing adopted (a command that did not simulate) and remove its folder: called
+    at the command's end, so no process outlives it."""
+    global _EARLY
     with _AHEAD_LOCK:
-        while _EARLY:
-            proc, path = _EARLY.pop()
-            _stop(proc)
-            with contextlib.suppress(OSError):
-                os.unlink(path)
+        if _EARLY is not None:
+            early, _EARLY = _EARLY, None
+            _stop(early.proc)
+            early.discard()
 
 
 def compile_ahead(dispatcher: Any, args: tuple, what: str, seconds: float) -> None:

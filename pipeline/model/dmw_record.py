@@ -14,7 +14,6 @@ from typing import Any
 
 import numpy as np
 
-from ..io import read_dataset
 from ..config.si import to_si
 from ..physics import microwaviness as phys
 from ..units import MM
@@ -110,6 +109,7 @@ def load(path: str | Path) -> tuple[np.ndarray, np.ndarray, float]:
     path = Path(path)
     if path.is_dir():
         path = path / FILENAME
+    from ..io import read_dataset  # (here: xarray, pipeline.model.ahead.NOT_IMPORTED_EARLY)
     return from_dataset(read_dataset(path, stage="dmw", variables=VARIABLES))
 
 

@@ -19,10 +19,11 @@ from __future__ import annotations
 
 import glob
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
-from typing import Sequence
+from typing import NamedTuple, Sequence
 
 from ..code_version import code_key
 
@@ -30,6 +31,26 @@ from ..code_version import code_key
 KERNEL = ("pipeline.model.dynamics", "_integrate")
 #: The options of ``hdi`` that take a value, other than ``--set`` (:func:`scene_arguments` skips them).
 _VALUED = ("--out", "--scheduler", "--workers", "--channel", "--detrend", "--write-scene", "--readme")
+#: The file, in the early process's private folder, its kernel's key is written to.
+KEY_FILE = "key.pkl"
+
+
+class Early(NamedTuple):
+    """The kernel compile :func:`start` started: the process, and the private folder (``mkdtemp``: no other
+    process can take its name) where that process writes its kernel's key, :attr:`key_path`."""
+
+    proc: subprocess.Popen
+    folder: str
+
+    @property
+    def key_path(self) -> str:
+        """The file the process writes its ``(module, name, signature)`` key to, whole, by a rename."""
+        return os.path.join(self.folder, KEY_FILE)
+
+    def discard(self) -> None:
+        """Remove the private folder (with a half-written key of a stopped process): once the process is
+        adopted or stopped."""
+        shutil.rmtree(self.folder, ignore_errors=True)
 
 
 def cache_folder(module: str, cache_dir: str | None = None) -> str:
@@ -74,21 +95,26 @@ def scene_arguments(argv: Sequence[str]) -> tuple[str, list[str]] | None:
     return argv[1], overrides
 
 
-def start(argv: Sequence[str]) -> tuple[subprocess.Popen, str] | None:
+def start(argv: Sequence[str]) -> Early | None:
     """Start compiling the kernel of the scene ``argv`` names (:func:`scene_arguments`) in a background
     process, on a first run only (:func:`kernel_cached`) and unless ``HDI_COMPILE_AHEAD=0``; returns the
-    process and the file its signature is written to (for :func:`pipeline.model.compiled.adopt_early`), or
-    None. The process says nothing: a scene it cannot load is the command line's to report."""
+    process and its private folder, where it writes its signature (for
+    :func:`pipeline.model.compiled.adopt_early`, which removes the folder), or None. The process says
+    nothing: a scene it cannot load is the command line's to report."""
     if os.environ.get("HDI_COMPILE_AHEAD", "1") == "0":
         return None
     found = scene_arguments(argv)
     if found is None or kernel_cached():
         return None
-    fd, key_path = tempfile.mkstemp(prefix="hdi-kernel-", suffix=".pkl")
-    os.close(fd)
-    os.unlink(key_path)  # (the process writes it whole, by a rename: its existence says the key is there)
+    # (the key file does not exist until the process has written it whole, by a rename in this folder)
+    folder = tempfile.mkdtemp(prefix="hdi-kernel-")
+    key_path = os.path.join(folder, KEY_FILE)
     code = ("from pipeline.model.ahead import compile_scene_kernel; "
             f"compile_scene_kernel({found[0]!r}, {found[1]!r}, {key_path!r})")
-    proc = subprocess.Popen([sys.executable, "-c", code], stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                            stderr=subprocess.DEVNULL)
-    return proc, key_path
+    try:
+        proc = subprocess.Popen([sys.executable, "-c", code], stdin=subprocess.DEVNULL,
+                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    except BaseException:
+        shutil.rmtree(folder, ignore_errors=True)
+        raise
+    return Early(proc, folder)

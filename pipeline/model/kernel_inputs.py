@@ -18,7 +18,6 @@ from __future__ import annotations
 from typing import Any, Callable, NamedTuple
 
 import numpy as np
-from scipy.interpolate import CubicSpline
 
 from . import dynamics as dyn
 from .assembly import TFC_POINT_LAWS, Model
@@ -173,6 +172,7 @@ def _splines(values: np.ndarray, h: float, order: int) -> list[np.ndarray]:
     columns in one solve for ``order`` 3: a third of the cost of one solve per column)."""
     if order != 3:
         return [piecewise_coefficients(values[:, j], h, order) for j in range(values.shape[1])]
+    from scipy.interpolate import CubicSpline  # (here: pipeline.model.ahead.NOT_IMPORTED_EARLY)
     c = CubicSpline(h * np.arange(values.shape[0]), values, axis=0).c  # (4, pieces, columns)
     return [np.ascontiguousarray(c[:, :, j].T) for j in range(values.shape[1])]
 

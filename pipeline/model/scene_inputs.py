@@ -15,13 +15,15 @@ is :func:`pipeline.model.assembly.build_model` of the scene and those inputs
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import xarray as xr
 
 from ..physics.asperity_statistics import contact_probabilities, k_from_probability
 from .assembly import TFC_POINT_LAWS
+
+if TYPE_CHECKING:
+    import xarray as xr
 
 #: Scene keys no simulation reads (other stages' settings, names): left out of the inputs keys of the
 #: stages that simulate and of the parameter studies' evaluation store.

@@ -58,7 +58,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.special import ndtr
 
 #: Fukui & Kaneko's (1990) fit of the Poiseuille flow-rate coefficient, ``Q_P = c0 D + c1 + c2/D + c3/D^2``
 #: on ``D >= 5``, ``0.15 <= D < 5`` and ``D < 0.15`` (fitted down to 0.01): ``(lower bound of D, (c0, c1, c2, c3))``.
@@ -125,6 +124,7 @@ def poiseuille_factor(kn) -> tuple[np.ndarray, np.ndarray]:
 def mean_gap(H) -> np.ndarray:
     """Mean local gap ``h_T / sigma = H Phi(H) + phi(H)`` [1] of a Gaussian rough gap at ``H = h / sigma``
     (local gap ``max(h - z, 0)``, ``z`` Gaussian; Patir & Cheng 1978). ``-> H`` above ``H ~ 3``, ``0.399`` at 0."""
+    from scipy.special import ndtr  # (here: the schema imports this module; model.ahead.NOT_IMPORTED_EARLY)
     H = np.asarray(H, dtype=float)
     return H * ndtr(H) + np.exp(-0.5 * H * H) / np.sqrt(2.0 * np.pi)
 
@@ -153,6 +153,7 @@ def shear_flow_factor(H, disk_share: float = 1.0) -> np.ndarray:
 def closed_fraction(h, sigma: float, wet_gap: float) -> np.ndarray:
     """Area fraction ``Phi((t_w - h) / sigma)`` [1] of a Gaussian rough gap whose local gap is below the wetting
     gap ``t_w = wet_gap`` [m] (solid or lubricant contact: no air there), at the nominal gaps ``h`` [m]."""
+    from scipy.special import ndtr  # (as in mean_gap)
     return ndtr((wet_gap - np.asarray(h, dtype=float)) / sigma)
 
 

@@ -14,7 +14,7 @@ from types import SimpleNamespace
 
 import pytest
 
-from pipeline.model import compiled, first_run
+from pipeline.model import ahead, compiled, first_run
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -46,20 +46,24 @@ class _Dispatcher:
         return type(value).__name__
 
 
-def _early(tmp_path: Path, key: tuple | None, seconds: float = 30.0) -> tuple[subprocess.Popen, str]:
-    """A process standing in for the console script's compile: it writes ``key`` (unless None), then runs."""
-    path = tmp_path / "key.pkl"
+def _early(tmp_path: Path, key: tuple | None, seconds: float = 30.0) -> first_run.Early:
+    """A process standing in for the console script's compile: its key written (unless None) in its folder,
+    with a leftover of its temporary write beside it, then it runs."""
+    folder = tmp_path / "early"
+    folder.mkdir()
+    (folder / "key.pkl.123.tmp").write_bytes(b"")
+    early = first_run.Early(subprocess.Popen([sys.executable, "-c", f"import time; time.sleep({seconds})"]),
+                            str(folder))
     if key is not None:
-        path.write_bytes(pickle.dumps(key))
-    proc = subprocess.Popen([sys.executable, "-c", f"import time; time.sleep({seconds})"])
-    return proc, str(path)
+        Path(early.key_path).write_bytes(pickle.dumps(key))
+    return early
 
 
 @pytest.fixture
 def clean(monkeypatch):
     monkeypatch.setattr(compiled, "_AHEAD", {})
     monkeypatch.setattr(compiled, "_IDLE", [])
-    monkeypatch.setattr(compiled, "_EARLY", [])
+    monkeypatch.setattr(compiled, "_EARLY", None)
     monkeypatch.setattr(compiled, "is_cached", lambda dispatcher, sig: False)
     monkeypatch.delenv("HDI_COMPILE_AHEAD", raising=False)
 
@@ -69,40 +73,64 @@ def test_the_runner_adopts_the_early_compile_of_the_same_signature(tmp_path, cle
     monkeypatch.setattr(compiled.progress, "compile_notice", lambda what, seconds: said.append((what, seconds)))
     args = (1.5, 2)
     key = (*first_run.KERNEL, compiled.signature(_Dispatcher, args))
-    proc, path = _early(tmp_path, key, seconds=0.5)
-    compiled.adopt_early((proc, path))
+    early = _early(tmp_path, key, seconds=0.5)
+    compiled.adopt_early(early)
+    compiled.adopt_early(None)  # (nothing started: the one handed over stays)
     compiled.compile_ahead(_Dispatcher, args, "the kernel", 1.0)
     # no process of its own: the early one is the compile under way, and it is said once
-    assert compiled._AHEAD == {key: proc} and compiled._EARLY == []
+    proc = early.proc
+    assert compiled._AHEAD == {key: proc} and compiled._EARLY is None
     assert said == [("the kernel in a background process", 1.0)]
-    assert not os.path.exists(path)
+    assert not os.path.exists(early.folder)
     compiled.wait_ahead()
     assert proc.returncode == 0 and not compiled.pending()
 
 
 def test_an_early_compile_of_another_signature_is_stopped(tmp_path, clean, monkeypatch):
     started: list = []
-    proc, path = _early(tmp_path, (*first_run.KERNEL, ("float64",)))
+    early = _early(tmp_path, (*first_run.KERNEL, ("float64",)))
     monkeypatch.setattr(compiled.subprocess, "Popen", lambda *a, **k: started.append(a) or "own")
-    compiled.adopt_early((proc, path))
+    compiled.adopt_early(early)
     compiled.compile_ahead(_Dispatcher, (1.5, 2), "the kernel", 1.0)
     # the early process compiles what nobody asks for: ended (SIGTERM), and this process starts its own
-    assert proc.returncode == -15 and len(started) == 1 and list(compiled._AHEAD.values()) == ["own"]
+    assert early.proc.returncode == -15 and len(started) == 1 and list(compiled._AHEAD.values()) == ["own"]
+    assert not os.path.exists(early.folder) and compiled._EARLY is None
 
 
 def test_an_early_compile_that_loaded_no_scene_is_not_waited_for(tmp_path, clean, monkeypatch):
-    proc, path = _early(tmp_path, None, seconds=0.2)  # (it ends without a key: the scene did not load)
+    early = _early(tmp_path, None, seconds=0.2)  # (it ends without a key: the scene did not load)
     monkeypatch.setattr(compiled.subprocess, "Popen", lambda *a, **k: "own")
-    compiled.adopt_early((proc, path))
+    compiled.adopt_early(early)
     compiled.compile_ahead(_Dispatcher, (1.5, 2), "the kernel", 1.0)
-    assert proc.returncode == 0 and list(compiled._AHEAD.values()) == ["own"]
+    assert early.proc.returncode == 0 and list(compiled._AHEAD.values()) == ["own"]
+    assert not os.path.exists(early.folder)
 
 
 def test_an_early_compile_nothing_adopted_ends_with_the_command(tmp_path, clean):
-    proc, path = _early(tmp_path, (*first_run.KERNEL, ("float64",)))
-    compiled.adopt_early((proc, path))
+    early = _early(tmp_path, (*first_run.KERNEL, ("float64",)))
+    compiled.adopt_early(early)
     compiled.stop_early()
-    assert proc.returncode == -15 and compiled._EARLY == [] and not os.path.exists(path)
+    assert early.proc.returncode == -15 and compiled._EARLY is None and not os.path.exists(early.folder)
+    compiled.stop_early()  # (nothing left: nothing to do)
+
+
+def test_the_early_compile_writes_its_key_in_a_private_folder_of_its_own(tmp_path, monkeypatch):
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "numba"))  # (empty: a first run)
+    monkeypatch.setenv("TMPDIR", str(tmp_path))
+    monkeypatch.setattr(first_run.tempfile, "tempdir", None)  # (TMPDIR read again)
+    monkeypatch.delenv("HDI_COMPILE_AHEAD", raising=False)
+    commands: list = []
+    monkeypatch.setattr(first_run.subprocess, "Popen", lambda cmd, **k: commands.append(cmd) or "proc")
+    early = first_run.start(["run", "paper-2009", "--set", "contact.k=0.5"])
+    # a new folder only this user may enter (mkdtemp: no other process can have taken its name), empty
+    # until the process writes its key there, and the process is told that path
+    folder = Path(early.folder)
+    assert early.proc == "proc" and folder.parent == tmp_path and folder.name.startswith("hdi-kernel-")
+    assert folder.stat().st_mode & 0o777 == 0o700 and list(folder.iterdir()) == []
+    assert early.key_path == str(folder / first_run.KEY_FILE)
+    assert commands[0][-1].endswith(f"compile_scene_kernel('paper-2009', ['contact.k=0.5'], {early.key_path!r})")
+    early.discard()
+    assert not folder.exists()
 
 
 def test_no_early_compile_when_the_kernel_is_cached_or_ahead_is_off(tmp_path, monkeypatch):
@@ -117,6 +145,32 @@ def test_no_early_compile_when_the_kernel_is_cached_or_ahead_is_off(tmp_path, mo
     folder.mkdir(parents=True)
     (folder / f"dynamics.{name}-319.py311.nbi").write_bytes(b"")
     assert first_run.kernel_cached() and first_run.start(["run", "paper-2009"]) is None
+
+
+#: The early compile process's work for every shipped scene, its compile left out: which heavy packages it imported
+EARLY_IMPORTS = """
+import pickle, sys
+from pipeline.model import ahead, compiled
+from pipeline.config.loading import shipped_scenes
+compiled.compile_quietly = lambda dispatcher, sig: None
+keys = 0
+for name, path in shipped_scenes().items():
+    key_path = sys.argv[1] + "/" + name + ".pkl"
+    ahead.compile_scene_kernel(str(path), [], key_path)
+    keys += pickle.load(open(key_path, "rb"))[:2] == ("pipeline.model.dynamics", "_integrate")
+print(keys, len(shipped_scenes()), [m for m in ahead.NOT_IMPORTED_EARLY if m in sys.modules])
+"""
+
+
+def test_the_early_compile_process_imports_none_of_what_only_the_command_line_needs(tmp_path):
+    # xarray, pandas, scipy's interpolate and special: ~3.5 s of CPU in a fresh clone before its compile starts
+    done = subprocess.run([sys.executable, "-c", EARLY_IMPORTS, str(tmp_path)], capture_output=True, text=True,
+                          timeout=300, cwd=ROOT)
+    assert done.returncode == 0, done.stderr[-3000:]
+    keys, scenes, imported = done.stdout.split(" ", 2)
+    assert int(scenes) >= 8 and keys == scenes  # (every shipped scene's key written: its stand-ins were made)
+    assert imported.strip() == "[]"
+    assert set(ahead.NOT_IMPORTED_EARLY) >= {"xarray", "scipy.interpolate"}
 
 
 #: A console script that says which background compiles its run waited for (the first statement of each one's code)
