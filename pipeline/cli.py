@@ -201,7 +201,8 @@ def entry(early: Early | None = None) -> None:  # pragma: no cover (the console 
 
     ``early``: the first run's kernel compile the console script started before importing this module
     (:func:`pipeline.model.first_run.start`), handed to the runner's compile-ahead
-    (:func:`pipeline.model.compiled.adopt_early`) and stopped at the end if nothing adopted it.
+    (:func:`pipeline.model.compiled.adopt_early`) and stopped at the end if nothing adopted it; so is a
+    background compile nothing waited for (an interrupted command: :func:`pipeline.model.compiled.stop_ahead`).
 
     Interpreter shutdown after a command costs ~0.3 s (numba's LLVM and the netCDF4/HDF5 teardown,
     measured on the 2-core machine: 2.0 s against 1.7 s for import + first simulation) and does
@@ -213,8 +214,9 @@ def entry(early: Early | None = None) -> None:  # pragma: no cover (the console 
     compiled.adopt_early(early)
     try:
         code = main()
-    finally:  # (an exception's traceback still ends the early compile nothing adopted)
+    finally:  # (an exception's traceback still ends the compiles nothing adopted or waited for)
         compiled.stop_early()
+        compiled.stop_ahead()
     logging.shutdown()
     try:
         sys.stdout.flush()

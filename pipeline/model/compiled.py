@@ -194,6 +194,20 @@ def stop_early() -> None:
             early.discard()
 
 
+def stop_ahead() -> None:
+    """Stop the background compiles nobody waited for (:func:`compile_ahead` without :func:`wait_ahead`: the
+    command was interrupted or failed before its first integration, or read every result back): called at
+    the command's end, so none outlives it. SIGTERM from ``timeout`` or ``kill`` reaches the command's
+    process alone (Ctrl-C reaches its whole process group), and a compile left running held a core for up to
+    its ~12 s of CPU after the command had answered the signal. Its partial work is lost; a rerun compiles
+    again."""
+    with _AHEAD_LOCK:
+        for key, proc in list(_AHEAD.items()):
+            _stop(proc)
+            del _AHEAD[key]
+        _IDLE.clear()
+
+
 def compile_ahead(dispatcher: Any, args: tuple, what: str, seconds: float) -> None:
     """Start compiling ``dispatcher`` (a jitted function of a kernel module) for the types of ``args`` in a
     background process, unless this process has it, the cache has it, one is under way, or

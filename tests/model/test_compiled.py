@@ -242,3 +242,18 @@ def test_work_while_waiting_runs_during_a_compile_and_only_then(monkeypatch):
     compiled.while_waiting(lambda: done.append("late"))
     compiled.wait_ahead()
     assert done == ["first", "second"] and compiled._IDLE == []
+
+
+def test_a_background_compile_nothing_waited_for_ends_with_the_command(monkeypatch):
+    # an interrupted command (SIGTERM reaches its process alone) must not leave its compile running
+    monkeypatch.setattr(compiled, "_IDLE", [])
+    monkeypatch.setattr(compiled, "_AHEAD", {})
+    running = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    over = subprocess.Popen([sys.executable, "-c", "pass"])
+    over.wait()
+    compiled._AHEAD.update({"kernel": running, "other": over})
+    compiled.while_waiting(lambda: None)
+    compiled.stop_ahead()
+    assert running.returncode == -15 and over.returncode == 0  # (ended by SIGTERM; one already over untouched)
+    assert not compiled.pending() and compiled._IDLE == []
+    compiled.stop_ahead()  # (nothing left: nothing to do)
