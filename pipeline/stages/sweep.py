@@ -400,6 +400,25 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset | None]:
     stop_after, on_batch = opts.get("stop_after"), opts.get("on_batch")
     grid = Assembler(scene, prot, list(sets), damp, len(seeds))
     by_path = {str(_part_path(parts, b)): b for b in todo}
+    labels = list(sets)
+
+    def grid_values() -> tuple[dict[str, xr.Variable], dict[str, Any], dict[str, dict[str, Any]]]:
+        """The run values, attributes and each set's statistics of the datasets (every set's batches run)."""
+        # the run values of every set and damping ratio (the models the batches built, cached in this process)
+        models = {(label, float(d)): batch_model(set_scenes[label], batch_sim(label, 0), float(d))
+                  for label in sets for d in damp}
+        run = grid_run_values(models, labels, damp, sim.k_source)
+        attrs = {name: value for name, value in model_attrs(models[(labels[0], float(damp[0]))], sim.k_source).items()
+                 if name not in GRID_ATTRS or run[GRID_ATTRS[name]].size == 1}  # (several values: the variable has them)
+        # each set's statistics as its interface model used them: its tables' (the scans'), or the given keys
+        # (the tables as the batches read them: in this process's cache after a threaded batch phase)
+        stats = {label: used_statistics(set_scenes[label], batch_sim(label, 0).tables()) for label in labels}
+        return run, attrs, stats
+
+    # sweep_histories.nc is complete once the batches that keep histories are in: written then, while the
+    # other batches run, rather than after the last (its compression is most of the command's final write)
+    hist_batches = history_batches(batches, hist_nm)
+    early = [not hist_batches or not hist_batches <= {b.index for b in todo}]  # (kept parts come in at the end)
 
     def on_done(result: tuple[str, Any]) -> None:
         kind, value = result
@@ -410,6 +429,10 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset | None]:
         path, part = value
         grid.add(by_path[path], part)  # (in the calling thread, while the other batches run)
         done[0] += 1
+        if not early[0] and hist_batches <= grid.added:
+            early[0] = True
+            run, attrs, stats = grid_values()
+            inputs.write_early("sweep_histories.nc", grid.histories(sim.k_source, attrs, run, statistics=stats))
         if on_batch is not None:
             on_batch(path)
         if bar is not None:
@@ -444,17 +467,17 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset | None]:
     log.info("sweep: batch phase %.2f s for %d batches and %d tables", batch_seconds, len(todo), len(table_tasks))
     inputs.record(compute_seconds=round(batch_seconds, 3), batches_run=len(todo), batches=len(batches))
     add_kept_parts(grid, out, batches, key)
-    # the run values of every set and damping ratio (the models the batches built, cached in this process)
-    models = {(label, float(d)): batch_model(set_scenes[label], batch_sim(label, 0), float(d))
-              for label in sets for d in damp}
-    labels = list(sets)
-    run = grid_run_values(models, labels, damp, sim.k_source)
-    attrs = {name: value for name, value in model_attrs(models[(labels[0], float(damp[0]))], sim.k_source).items()
-             if name not in GRID_ATTRS or run[GRID_ATTRS[name]].size == 1}  # (several values: the variable has them)
-    # each set's statistics as its interface model used them: its tables' (the scans'), or the given keys
-    # (the tables as the batches read them: in this process's cache after a threaded batch phase)
-    stats = {label: used_statistics(set_scenes[label], batch_sim(label, 0).tables()) for label in labels}
+    run, attrs, stats = grid_values()
     return grid.datasets(key, sim.k_source, attrs, seeds, run, statistics=stats)
+
+
+def history_batches(batches: Iterable[Batch], histories_nm: Iterable[float]) -> set[int]:
+    """The indices of the batches whose parts keep time histories: those of the first realisation with a
+    protrusion of ``histories_nm`` [nm] (the grid's point rule, :func:`pipeline.config.grid.same_point`, as
+    :func:`pipeline.model.simulation.simulate` keeps them)."""
+    hist = list(histories_nm)
+    return {b.index for b in batches
+            if b.realisation == 0 and any(np.any(same_point(np.asarray(b.protrusions), h)) for h in hist)}
 
 
 def costliest_first(batches: Iterable[Batch]) -> list[Batch]:
@@ -512,6 +535,7 @@ class Assembler:
         self._time_from: int | None = None  # (the batch whose time axis the histories use: the first in batch order)
         self._first: dict[str, tuple[int, int]] = {}  # variable -> (batch index, position) of its first appearance
         self.added: set[int] = set()
+        self._histories: xr.Dataset | None = None  # (made by :meth:`histories`, until a part with histories comes)
 
     def _seen(self, name: str, batch: int, position: int) -> None:
         at = (batch, position)
@@ -535,6 +559,7 @@ class Assembler:
             at = (list(b.indices), r, d) + ((slice(None),) if self.stepping else ()) + real
             self.arrays[name][at] = values[name]
         if "hist_protrusion" in ds.coords:
+            self._histories = None
             if self.hist_prot is None:
                 sweep, report = self.scene["sweep"], self.scene["report"]
                 self.hist_prot = np.array([h for h in sweep["histories_nm"] or report["histories_nm"]
@@ -570,40 +595,61 @@ class Assembler:
         ``realisation`` and the ensemble statistics of :func:`pipeline.analyses.ensemble_rules.statistics`
         are added.
         """
-        scene, labels, damp, n_real, stepping = self.scene, self.labels, self.damp, self.n_real, self.stepping
-        coords = {"protrusion": coordinate("protrusion", self.prot), "roughness": coordinate("roughness", labels),
-                  "damping": coordinate("damping", damp)}
+        n_real, stepping = self.n_real, self.stepping
+        coords = self._coords(statistics)
         real = ("realisation",) if n_real > 1 else ()
         dims = ("protrusion", "roughness", "damping") + (("direction",) if stepping else ()) + real
-        if stepping:
-            coords["direction"] = coordinate("direction", np.array(DIRECTIONS))
         data = {name: SCALARS[name].data(a, dims) for name, a in self._ordered(self.arrays).items()}
         data.update({name: STEPPING[name].data(a, ("roughness", "damping") + real)
                      for name, a in self._ordered(self.chains).items()})
         if n_real > 1:
-            coords["realisation"] = ENSEMBLE["realisation"].data(np.arange(n_real), ("realisation",))
             data["dmw_seed"] = ENSEMBLE["dmw_seed"].data(np.array(seeds), ("realisation",))
             data.update(ensemble.statistics(data))
-        sets = roughness_sets(scene)
-        coords.update(roughness_coordinates([statistics[label] for label in labels]))
         ds = xr.Dataset(data, coords=coords).assign(run or {})
+        ds.attrs.update(self._attrs(k_source, attrs, statistics))
+        return {"sweep.nc": ds, "sweep_histories.nc": self.histories(k_source, attrs, run, statistics=statistics)}
+
+    def _coords(self, statistics: dict[str, dict[str, Any]]) -> dict[str, xr.Variable]:
+        """The coordinates of ``sweep.nc`` (those of the sets' statistics included; see :meth:`datasets`)."""
+        coords = {"protrusion": coordinate("protrusion", self.prot),
+                  "roughness": coordinate("roughness", self.labels), "damping": coordinate("damping", self.damp)}
+        if self.stepping:
+            coords["direction"] = coordinate("direction", np.array(DIRECTIONS))
+        if self.n_real > 1:
+            coords["realisation"] = ENSEMBLE["realisation"].data(np.arange(self.n_real), ("realisation",))
+        coords.update(roughness_coordinates([statistics[label] for label in self.labels]))
+        return coords
+
+    def _attrs(self, k_source: str, attrs: dict, statistics: dict[str, dict[str, Any]]) -> dict[str, Any]:
+        """The global attributes of both datasets (see :meth:`datasets`)."""
+        sets = roughness_sets(self.scene)
         # one attribute for all sets: a label made from the values has '.', which CF's attribute names exclude
-        ds.attrs["roughness_sets"] = json.dumps({label: roughness_record(sets[label], statistics[label])
-                                                 for label in labels}, default=str)
-        ds.attrs.update(attrs)
-        ds.attrs["k_source"] = k_source
-        own = scene_label(scene)
-        if own in labels:  # (the report's default slice: the scene's own roughness)
-            ds.attrs["scene_roughness"] = own
-        hds = None
-        if self.hist:
-            hc = {name: c for name, c in coords.items() if name != "realisation"}  # (realisation 0 only)
+        out = {"roughness_sets": json.dumps({label: roughness_record(sets[label], statistics[label])
+                                             for label in self.labels}, default=str)}
+        out.update(attrs)
+        out["k_source"] = k_source
+        own = scene_label(self.scene)
+        if own in self.labels:  # (the report's default slice: the scene's own roughness)
+            out["scene_roughness"] = own
+        return out
+
+    def histories(self, k_source: str, attrs: dict, run: dict[str, xr.Variable] | None = None, *,
+                  statistics: dict[str, dict[str, Any]]) -> xr.Dataset | None:
+        """``sweep_histories.nc`` from the parts added (arguments: :meth:`datasets`; ``None``: no part kept
+        histories). Made once: the same object until a part with histories is added, so that the sweep can
+        have it written while the other batches run (:meth:`pipeline.runner.Inputs.write_early`) and return
+        it with ``sweep.nc``."""
+        if not self.hist:
+            return None
+        if self._histories is None:
+            hc = {name: c for name, c in self._coords(statistics).items() if name != "realisation"}  # (realisation 0)
             hc["protrusion"] = coordinate("protrusion", self.hist_prot)
             hc[TIME] = coordinate(TIME, self.time)
             hds = xr.Dataset({name: HISTORIES[name].data(a, ("protrusion", "roughness", "damping", TIME))
                               for name, a in self._ordered(self.hist, "h_").items()}, coords=hc).assign(run or {})
-            hds.attrs.update(ds.attrs)
-        return {"sweep.nc": ds, "sweep_histories.nc": hds}
+            hds.attrs.update(self._attrs(k_source, attrs, statistics))
+            self._histories = hds
+        return self._histories
 
 
 def add_kept_parts(grid: Assembler, out: Path, batches: list[Batch], key: str) -> None:

@@ -21,6 +21,7 @@ from pipeline.stages import sweep as sweep_stage
 from pipeline.stages.simulate import model_inputs
 from pipeline.model.inputs import from_folder
 from pipeline.config.grid import roughness_label, roughness_sets, scene_label
+from pipeline import runner
 from pipeline.runner import ensure
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -212,6 +213,49 @@ def test_several_workers_start_the_batches_of_the_highest_protrusions_first(cali
     tops = [max(b.protrusions) for b in order]
     assert tops == sorted(tops, reverse=True) and tops[0] == pytest.approx(10.4) and tops[-1] < tops[0]
     assert [b.index for b in order[:2]] == [b.index for b in batches if max(b.protrusions) == tops[0]]
+
+
+def test_the_batches_that_keep_histories_are_those_of_the_first_realisation_at_a_history_point(calibrated):
+    scene, _ = calibrated
+    batches = sweep_stage.plan(scene.replace(sweep={"damping_ratio": [0.02, 0.05], "realisations": 2}))[3]
+    # 9.0-10.4 nm in batches of 3: (9.0, 9.2, 9.4), (9.6, 9.8, 10.0), (10.2, 10.4) per damping and realisation
+    assert [b.protrusions for b in batches[:3]] == [(9.0, 9.2, 9.4), (9.6, 9.8, 10.0), (10.2, 10.4)]
+    assert sweep_stage.history_batches(batches, (9.2 + 1e-12, 10.4)) == {0, 2, 3, 5}
+    assert sweep_stage.history_batches(batches, (5.0, 11.0)) == set()
+
+
+def test_the_histories_are_written_while_batches_run_and_equal_those_written_at_the_end(calibrated, tmp_path,
+                                                                                      monkeypatch):
+    """Issue 36: ``sweep_histories.nc`` is written once the batches that keep histories are in (here the first
+    of three, in batch order), not after the last batch; the files equal those of a sweep that writes both
+    datasets at the end, whatever the workers."""
+    _, out = calibrated
+    scene = load_scene(PAPER, FAST + ["sweep.histories_nm=[9.2]"])
+    done: list[str] = []
+    written_after: list[int] = []
+    write_early = runner.Inputs.write_early
+
+    def spy(self, name, ds):
+        written_after.append(len(done))
+        write_early(self, name, ds)
+        assert self.early[name][1].is_file() and not (self.out / name).exists()
+
+    folders = {name: tmp_path / name for name in ("end", "sync", "two")}
+    for folder in folders.values():
+        _copy_inputs(out, folder)
+    with monkeypatch.context() as m:
+        m.setattr(runner.Inputs, "write_early", lambda self, name, ds: None)
+        sweep_stage.run_sweep(scene, folders["end"], scheduler="synchronous")
+    monkeypatch.setattr(runner.Inputs, "write_early", spy)
+    sweep_stage.run_sweep(scene, folders["sync"], scheduler="synchronous", on_batch=done.append)
+    assert written_after == [0] and len(done) == 3  # (as the first part came in: two batches still to run)
+    sweep_stage.run_sweep(scene, folders["two"], workers=2)
+    assert len(written_after) == 2
+    for name in ("sweep.nc", "sweep_histories.nc"):
+        end = _values(folders["end"] / name)
+        assert end.sizes.get("elapsed_time", 0) > 0 or name == "sweep.nc"
+        for folder in ("sync", "two"):
+            xr.testing.assert_identical(end, _values(folders[folder] / name))
 
 
 def test_resume_after_interrupt_gives_identical_dataset(calibrated, tmp_path):
