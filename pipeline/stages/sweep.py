@@ -46,7 +46,7 @@ import numpy as np
 import xarray as xr
 
 from ..model import assembly
-from ..fanout import local_cluster, local_workers, run_tasks
+from ..fanout import LOCAL, local_cluster, local_workers, run_tasks
 from ..progress import Progress
 from ..io import file_hash, read_attrs, read_dataset, write_dataset
 from ..paths import refuse_links
@@ -418,8 +418,10 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset | None]:
         stats = {label: used_statistics(set_scenes[label], batch_sim(label, 0).tables()) for label in labels}
         return run, attrs, stats
 
-    # sweep_histories.nc is complete once the batches that keep histories are in: written then, while the
-    # other batches run, rather than after the last (its compression is most of the command's final write)
+    # sweep_histories.nc is complete once the batches that keep histories are in; it is written as soon as a
+    # worker also has no batch left to start (fewer batches to finish than local workers), so that its
+    # compression (most of the command's final write) fills that worker's idle end of the fan-out instead of
+    # following the last batch, without taking a core from a batch earlier (measured: docs/performance.md)
     hist_batches = history_batches(batches, hist_nm)
     early = [not hist_batches or not hist_batches <= {b.index for b in todo}]  # (kept parts come in at the end)
 
@@ -432,14 +434,14 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset | None]:
         path, part = value
         grid.add(by_path[path], part)  # (in the calling thread, while the other batches run)
         done[0] += 1
-        if not early[0] and hist_batches <= grid.added:
-            early[0] = True
-            run, attrs, stats = grid_values()
-            inputs.write_early("sweep_histories.nc", grid.histories(sim.k_source, attrs, run, statistics=stats))
         if on_batch is not None:
             on_batch(path)
         if bar is not None:
             bar.update(1)
+        if not early[0] and hist_batches <= grid.added and len(todo) - done[0] < slots:
+            early[0] = True
+            run, attrs, stats = grid_values()
+            inputs.write_early("sweep_histories.nc", grid.histories(sim.k_source, attrs, run, statistics=stats))
         if stop_after is not None and done[0] >= stop_after:
             raise KeyboardInterrupt(f"stopped after {done[0]} batches (stop_after)")
 
@@ -453,6 +455,8 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset | None]:
     where = opts.get("scheduler")
     serial = where == "synchronous" or (where is None and local_workers(workers, max(len(todo), 1)) == 1)
     order = list if serial else costliest_first
+    # (a cluster of other machines leaves this process's cores idle: the histories are written at once)
+    slots = 1 if serial else local_workers(workers, max(len(todo), 1)) if where in LOCAL + (None,) else len(todo) + 1
     ready = [task(b) for b in order(b for b in todo if b.label not in table_tasks)]
     first = [t for pair in zip(tables, ready) for t in pair] + tables[len(ready):] + ready[len(tables):]
     later = order(b for b in todo if b.label in table_tasks)

@@ -224,38 +224,42 @@ def test_the_batches_that_keep_histories_are_those_of_the_first_realisation_at_a
     assert sweep_stage.history_batches(batches, (5.0, 11.0)) == set()
 
 
-def test_the_histories_are_written_while_batches_run_and_equal_those_written_at_the_end(calibrated, tmp_path,
-                                                                                      monkeypatch):
-    """Issue 36: ``sweep_histories.nc`` is written once the batches that keep histories are in (here the first
-    of three, in batch order), not after the last batch; the files equal those of a sweep that writes both
-    datasets at the end, whatever the workers."""
+def test_the_histories_are_written_once_a_worker_is_idle_and_equal_those_written_at_the_end(calibrated, tmp_path,
+                                                                                           monkeypatch):
+    """Issue 36: ``sweep_histories.nc`` is written inside the fan-out, once the batches that keep histories are
+    in and a worker has no batch left to start (fewer batches to finish than workers): one worker writes it in
+    the last part's turn, two while the last batch runs. The files equal those of a sweep that writes both
+    datasets at the end."""
     _, out = calibrated
-    scene = load_scene(PAPER, FAST + ["sweep.histories_nm=[9.2]"])
+    scene = load_scene(PAPER, FAST + ["sweep.histories_nm=[9.2, 10.4]"])  # (batches 0 and 2 of 3 keep histories)
     done: list[str] = []
-    written_after: list[int] = []
+    at_write: list[list[str]] = []
     write_early = runner.Inputs.write_early
 
     def spy(self, name, ds):
-        written_after.append(len(done))
+        at_write.append(list(done))
         write_early(self, name, ds)
         assert self.early[name][1].is_file() and not (self.out / name).exists()
 
-    folders = {name: tmp_path / name for name in ("end", "sync", "two")}
+    folders = {name: tmp_path / name for name in ("end", "one", "two")}
     for folder in folders.values():
         _copy_inputs(out, folder)
     with monkeypatch.context() as m:
         m.setattr(runner.Inputs, "write_early", lambda self, name, ds: None)
         sweep_stage.run_sweep(scene, folders["end"], scheduler="synchronous")
     monkeypatch.setattr(runner.Inputs, "write_early", spy)
-    sweep_stage.run_sweep(scene, folders["sync"], scheduler="synchronous", on_batch=done.append)
-    assert written_after == [0] and len(done) == 3  # (as the first part came in: two batches still to run)
-    sweep_stage.run_sweep(scene, folders["two"], workers=2)
-    assert len(written_after) == 2
+    sweep_stage.run_sweep(scene, folders["one"], workers=1, on_batch=done.append)
+    assert [len(d) for d in at_write] == [3]
+    done.clear()
+    sweep_stage.run_sweep(scene, folders["two"], workers=2, on_batch=done.append)
+    parts = folders["two"] / sweep_stage.PARTS
+    assert len(at_write) == 2 and len(at_write[1]) >= 3 - 1  # (at most one batch still to finish)
+    assert {str(parts / "batch-00000.nc"), str(parts / "batch-00002.nc")} <= set(at_write[1])
     for name in ("sweep.nc", "sweep_histories.nc"):
         end = _values(folders["end"] / name)
-        assert end.sizes.get("elapsed_time", 0) > 0 or name == "sweep.nc"
-        for folder in ("sync", "two"):
+        for folder in ("one", "two"):
             xr.testing.assert_identical(end, _values(folders[folder] / name))
+    assert _values(folders["end"] / "sweep_histories.nc").sizes["protrusion"] == 2
 
 
 def test_resume_after_interrupt_gives_identical_dataset(calibrated, tmp_path):
