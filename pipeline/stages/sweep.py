@@ -8,9 +8,9 @@ inside the task graph. The parts are assembled into ``sweep.nc`` (dims ``protrus
 ``damping``) and ``sweep_histories.nc`` (time histories of the protrusions in ``histories_nm``) by an
 :class:`Assembler`: the parts computed by this call from memory as each batch returns its dataset with
 its path (while the other batches run), the parts of an earlier run from their files at the end;
-``sweep_histories.nc`` is handed to the runner as soon as the batches that keep histories are in
-(:func:`history_batches`, :meth:`pipeline.runner.Inputs.write_early`), so that its write overlaps the last
-batches instead of ending the command. A part
+``sweep_histories.nc`` is handed to the runner once the batches that keep histories are in
+(:func:`history_batches`) and a worker has no batch left to start (:meth:`pipeline.runner.Inputs.write_early`),
+so that its write fills that worker's idle end of the fan-out instead of ending the command. A part
 file holds its batch's variables stacked by dimensions (:func:`pack_part`: two or three NetCDF variables
 instead of ~35, each of which cost ~1 ms to write under the process's NetCDF lock) and is read back as the
 batch's dataset itself (:func:`read_part`).
