@@ -342,6 +342,20 @@ def write_dataset(ds: xr.Dataset, path: str | Path, scene: Any = None, *, stage:
     return path
 
 
+def move_dataset(written: str | Path, path: str | Path) -> Path:
+    """Put a dataset :func:`write_dataset` wrote to ``written`` (a staging copy, on the same file system) in
+    place at ``path`` by a rename, with the checks of :func:`write_dataset`: no link on the way, ``path`` not a
+    folder, not held open by another process. Returns ``path``."""
+    path = refuse_links(Path(path))
+    path.parent.mkdir(parents=True, exist_ok=True)
+    if path.is_dir():
+        raise IsADirectoryError(errno.EISDIR, os.strerror(errno.EISDIR), str(path))
+    if is_busy(path):
+        raise DatasetBusy(path)
+    os.replace(written, path)
+    return path
+
+
 def is_read_only(path: str | Path) -> bool:
     """Whether a file is read-only: no write permission bit at all (what ``chmod a-w`` leaves, which
     root could still write over), or not writable by this process."""

@@ -9,7 +9,10 @@ declaring itself (no list to edit). A declaration says
 * what it writes (``outputs``, paths relative to the results folder);
 * how it computes: a pure ``compute(scene, inputs) -> xr.Dataset | {output: xr.Dataset | None}``
   that reads only what it declared (through :class:`Inputs`) and writes nothing itself, except
-  non-NetCDF outputs (figures, tables) which it writes under ``inputs.staging``.
+  non-NetCDF outputs (figures, tables) which it writes under ``inputs.staging``. A dataset complete
+  before the computation ends (the sweep's histories, while the last batches run) may be handed to
+  :meth:`Inputs.write_early`: the runner writes it then, into the staging folder, and moves it into place
+  with the others (the stage still returns it).
 
 The runner gives each stage an *inputs key*: the SHA-256 of the scene keys it reads, the bytes of
 the files it reads, the keys of its upstream stages (so a change propagates downstream), the options
@@ -57,8 +60,8 @@ from .model import compiled
 from .model.ahead import compile_kernel_ahead
 from .model.scene_inputs import simulation_inputs as wanted_inputs
 from .folder_lock import LOCK_NAME, STAGING_PREFIX, folder_lock
-from .io import (KEY_ATTR, DatasetBusy, DatasetError, RUN_ID, file_hash, read_attrs, read_dataset, temporary_path,
-                 write_dataset)
+from .io import (KEY_ATTR, DatasetBusy, DatasetError, RUN_ID, file_hash, move_dataset, read_attrs, read_dataset,
+                 temporary_path, write_dataset)
 from .paths import append_text, looked_for, refuse_links
 
 log = logging.getLogger(__name__)
@@ -198,6 +201,10 @@ class Inputs:
         the stage was forced (it then also remakes what it keeps between runs, like sweep parts).
     staging
         Folder for non-NetCDF outputs (their declared relative paths below it).
+    writer
+        Set by the runner: writes an output dataset now (:meth:`write_early`); ``None``: no early writes.
+    early
+        The datasets written early: output name -> (the dataset, its file in the staging folder).
     """
 
     out: Path
@@ -208,6 +215,8 @@ class Inputs:
     options: dict[str, Any] = field(default_factory=dict)
     staging: Path | None = None
     metrics: dict[str, Any] = field(default_factory=dict)
+    writer: Callable[[str, xr.Dataset], Path] | None = field(default=None, repr=False)
+    early: dict[str, tuple[xr.Dataset, Path]] = field(default_factory=dict, repr=False)
 
     @classmethod
     def folder(cls, out: str | Path, **options: Any) -> "Inputs":
@@ -237,6 +246,24 @@ class Inputs:
     def record(self, **metrics: Any) -> None:
         """Numbers about this run (timings, counts) for the run log, never for the datasets."""
         self.metrics.update(metrics)
+
+    def write_early(self, name: str, ds: xr.Dataset) -> None:
+        """Write the output dataset ``name``, complete before the computation ends, now: into the staging
+        folder, with the provenance the runner gives it (:meth:`Runner._write`, which then moves it into
+        place instead of writing it, when the stage returns this very ``ds`` for ``name``). The stage still
+        returns ``ds``; a dataset changed after this call must not be returned as the same object. The first
+        dataset output is written at the end all the same: it carries the list of outputs produced.
+
+        Why: the write (compression of a large dataset) then overlaps work still running, such as the
+        sweep's last batches, instead of adding to the command's serial end (docs/performance.md, section
+        "The grid's serial part"). Nothing happens without a runner (:meth:`folder`), and a failed early
+        write is left to the normal write at the end, which reports it."""
+        if self.writer is None:
+            return
+        try:
+            self.early[name] = (ds, self.writer(name, ds))
+        except (OSError, RuntimeError) as exc:  # (the write at the end meets it again and names the output)
+            log.debug("%s: early write failed (%s); written at the end", name, exc)
 
 
 # --------------------------------------------------------------------------------------- registry
@@ -494,7 +521,7 @@ class Runner:
                 folder, _, base = o.rpartition("/")
                 tmp = f"{folder}/.{base}{probe}" if folder else f".{base}{probe}"
                 paths.append(tmp)
-                if o in outputs and not o.endswith(".nc"):  # (drawn in the staging folder, then moved)
+                if o in outputs:  # (drawn, or a dataset written early, in the staging folder, then moved)
                     paths.append(f"{staging}/{tmp}")
         return paths
 
@@ -556,6 +583,7 @@ class Runner:
                             upstream={u: self.key(u) for u in st.upstream_names(self.scene)},
                             optional=self.optional(name), options={**self.options, "force": force},
                             staging=staging)
+            inputs.writer = lambda output, ds: self._write_one(st, key, inputs, output, ds, staging / output)
             with shared_folder(inputs.out), progress_stage(name):  # (its progress lines carry its name)
                 result = st.compute(self.scene, inputs)
             interrupts.check()  # (a signal a library swallowed during the computation: nothing is written)
@@ -592,7 +620,6 @@ class Runner:
         others = [o for o in outputs if not o.endswith(".nc")]
         produced = [o for o in outputs if (result.get(o) is not None if o.endswith(".nc")
                                            else (staging / o).is_file())]
-        attrs = {KEY_ATTR: key, "upstream_keys": json.dumps(inputs.upstream, sort_keys=True)}
         first = True
         for o in outputs:
             if not o.endswith(".nc"):
@@ -602,12 +629,14 @@ class Runner:
                 # not produced this time: no stale file of an older run
                 refuse_links(self.out / o).unlink(missing_ok=True)
                 continue
-            extra = dict(attrs)
-            if first:
-                extra[OUTPUTS_ATTR] = json.dumps(produced)
+            early = inputs.early.get(o)
+            if first:  # (the list of outputs goes into the first dataset: known only now)
+                self._write_one(st, key, inputs, o, ds, self.out / o, {OUTPUTS_ATTR: json.dumps(produced)})
                 first = False
-            write_dataset(ds, self.out / o, self.scene, stage=st.name,
-                          inputs={p: self._hash(p) for p in inputs.files.values()}, extra_attrs=extra)
+            elif early is not None and early[0] is ds:  # (written while the stage computed: moved into place)
+                move_dataset(early[1], self.out / o)
+            else:
+                self._write_one(st, key, inputs, o, ds, self.out / o)
         hashes = {}
         for o in others:
             target = refuse_links(self.out / o)
@@ -626,6 +655,17 @@ class Runner:
             tmp.write_text(json.dumps({"key": key, "outputs": produced, "hashes": hashes}, indent=1))
             os.replace(tmp, manifest)
         return produced
+
+    def _write_one(self, st: Stage, key: str, inputs: Inputs, name: str, ds: xr.Dataset, path: Path,
+                   extra: dict[str, str] | None = None) -> Path:
+        """Write the output dataset ``name`` of stage ``st`` to ``path`` with the runner's attributes (the
+        inputs key, the upstream keys, ``extra``) and provenance (the hashes of the declared input files)."""
+        if name not in st.output_names(self.scene) or not name.endswith(".nc"):
+            raise ValueError(f"stage {st.name} wrote {name!r} early; its dataset outputs are "
+                             f"{[o for o in st.output_names(self.scene) if o.endswith('.nc')]}")
+        attrs = {KEY_ATTR: key, "upstream_keys": json.dumps(inputs.upstream, sort_keys=True), **(extra or {})}
+        return write_dataset(ds, path, self.scene, stage=st.name,
+                             inputs={p: self._hash(p) for p in inputs.files.values()}, extra_attrs=attrs)
 
     def _log_run(self, name: str, key: str, written: list[str], seconds: float, metrics: dict) -> None:
         """Append the run's timings to ``.hdi/runs.jsonl`` (kept out of the datasets) when it has metrics."""

@@ -7,7 +7,10 @@ record and the interface tables reach the workers by file path (``dmw.nc``, ``in
 inside the task graph. The parts are assembled into ``sweep.nc`` (dims ``protrusion``, ``roughness``,
 ``damping``) and ``sweep_histories.nc`` (time histories of the protrusions in ``histories_nm``) by an
 :class:`Assembler`: the parts computed by this call from memory as each batch returns its dataset with
-its path (while the other batches run), the parts of an earlier run from their files at the end. A part
+its path (while the other batches run), the parts of an earlier run from their files at the end;
+``sweep_histories.nc`` is handed to the runner once the batches that keep histories are in
+(:func:`history_batches`) and a worker has no batch left to start (:meth:`pipeline.runner.Inputs.write_early`),
+so that its write fills that worker's idle end of the fan-out instead of ending the command. A part
 file holds its batch's variables stacked by dimensions (:func:`pack_part`: two or three NetCDF variables
 instead of ~35, each of which cost ~1 ms to write under the process's NetCDF lock) and is read back as the
 batch's dataset itself (:func:`read_part`).
@@ -43,7 +46,7 @@ import numpy as np
 import xarray as xr
 
 from ..model import assembly
-from ..fanout import local_cluster, local_workers, run_tasks
+from ..fanout import LOCAL, local_cluster, local_workers, run_tasks
 from ..progress import Progress
 from ..io import file_hash, read_attrs, read_dataset, write_dataset
 from ..paths import refuse_links
@@ -400,6 +403,27 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset | None]:
     stop_after, on_batch = opts.get("stop_after"), opts.get("on_batch")
     grid = Assembler(scene, prot, list(sets), damp, len(seeds))
     by_path = {str(_part_path(parts, b)): b for b in todo}
+    labels = list(sets)
+
+    def grid_values() -> tuple[dict[str, xr.Variable], dict[str, Any], dict[str, dict[str, Any]]]:
+        """The run values, attributes and each set's statistics of the datasets (every set's batches run)."""
+        # the run values of every set and damping ratio (the models the batches built, cached in this process)
+        models = {(label, float(d)): batch_model(set_scenes[label], batch_sim(label, 0), float(d))
+                  for label in sets for d in damp}
+        run = grid_run_values(models, labels, damp, sim.k_source)
+        attrs = {name: value for name, value in model_attrs(models[(labels[0], float(damp[0]))], sim.k_source).items()
+                 if name not in GRID_ATTRS or run[GRID_ATTRS[name]].size == 1}  # (several values: the variable has them)
+        # each set's statistics as its interface model used them: its tables' (the scans'), or the given keys
+        # (the tables as the batches read them: in this process's cache after a threaded batch phase)
+        stats = {label: used_statistics(set_scenes[label], batch_sim(label, 0).tables()) for label in labels}
+        return run, attrs, stats
+
+    # sweep_histories.nc is complete once the batches that keep histories are in; it is written as soon as a
+    # worker also has no batch left to start (fewer batches to finish than local workers), so that its
+    # compression (most of the command's final write) fills that worker's idle end of the fan-out instead of
+    # following the last batch, without taking a core from a batch earlier (measured: docs/performance.md)
+    hist_batches = history_batches(batches, hist_nm)
+    early = [not hist_batches or not hist_batches <= {b.index for b in todo}]  # (kept parts come in at the end)
 
     def on_done(result: tuple[str, Any]) -> None:
         kind, value = result
@@ -414,6 +438,10 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset | None]:
             on_batch(path)
         if bar is not None:
             bar.update(1)
+        if not early[0] and hist_batches <= grid.added and len(todo) - done[0] < slots:
+            early[0] = True
+            run, attrs, stats = grid_values()
+            inputs.write_early("sweep_histories.nc", grid.histories(sim.k_source, attrs, run, statistics=stats))
         if stop_after is not None and done[0] >= stop_after:
             raise KeyboardInterrupt(f"stopped after {done[0]} batches (stop_after)")
 
@@ -427,6 +455,8 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset | None]:
     where = opts.get("scheduler")
     serial = where == "synchronous" or (where is None and local_workers(workers, max(len(todo), 1)) == 1)
     order = list if serial else costliest_first
+    # (a cluster of other machines leaves this process's cores idle: the histories are written at once)
+    slots = 1 if serial else local_workers(workers, max(len(todo), 1)) if where in LOCAL + (None,) else len(todo) + 1
     ready = [task(b) for b in order(b for b in todo if b.label not in table_tasks)]
     first = [t for pair in zip(tables, ready) for t in pair] + tables[len(ready):] + ready[len(tables):]
     later = order(b for b in todo if b.label in table_tasks)
@@ -444,17 +474,17 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset | None]:
     log.info("sweep: batch phase %.2f s for %d batches and %d tables", batch_seconds, len(todo), len(table_tasks))
     inputs.record(compute_seconds=round(batch_seconds, 3), batches_run=len(todo), batches=len(batches))
     add_kept_parts(grid, out, batches, key)
-    # the run values of every set and damping ratio (the models the batches built, cached in this process)
-    models = {(label, float(d)): batch_model(set_scenes[label], batch_sim(label, 0), float(d))
-              for label in sets for d in damp}
-    labels = list(sets)
-    run = grid_run_values(models, labels, damp, sim.k_source)
-    attrs = {name: value for name, value in model_attrs(models[(labels[0], float(damp[0]))], sim.k_source).items()
-             if name not in GRID_ATTRS or run[GRID_ATTRS[name]].size == 1}  # (several values: the variable has them)
-    # each set's statistics as its interface model used them: its tables' (the scans'), or the given keys
-    # (the tables as the batches read them: in this process's cache after a threaded batch phase)
-    stats = {label: used_statistics(set_scenes[label], batch_sim(label, 0).tables()) for label in labels}
+    run, attrs, stats = grid_values()
     return grid.datasets(key, sim.k_source, attrs, seeds, run, statistics=stats)
+
+
+def history_batches(batches: Iterable[Batch], histories_nm: Iterable[float]) -> set[int]:
+    """The indices of the batches whose parts keep time histories: those of the first realisation with a
+    protrusion of ``histories_nm`` [nm] (the grid's point rule, :func:`pipeline.config.grid.same_point`, as
+    :func:`pipeline.model.simulation.simulate` keeps them)."""
+    hist = list(histories_nm)
+    return {b.index for b in batches
+            if b.realisation == 0 and any(np.any(same_point(np.asarray(b.protrusions), h)) for h in hist)}
 
 
 def costliest_first(batches: Iterable[Batch]) -> list[Batch]:
@@ -512,6 +542,7 @@ class Assembler:
         self._time_from: int | None = None  # (the batch whose time axis the histories use: the first in batch order)
         self._first: dict[str, tuple[int, int]] = {}  # variable -> (batch index, position) of its first appearance
         self.added: set[int] = set()
+        self._histories: xr.Dataset | None = None  # (made by :meth:`histories`, until a part with histories comes)
 
     def _seen(self, name: str, batch: int, position: int) -> None:
         at = (batch, position)
@@ -535,6 +566,7 @@ class Assembler:
             at = (list(b.indices), r, d) + ((slice(None),) if self.stepping else ()) + real
             self.arrays[name][at] = values[name]
         if "hist_protrusion" in ds.coords:
+            self._histories = None
             if self.hist_prot is None:
                 sweep, report = self.scene["sweep"], self.scene["report"]
                 self.hist_prot = np.array([h for h in sweep["histories_nm"] or report["histories_nm"]
@@ -570,40 +602,61 @@ class Assembler:
         ``realisation`` and the ensemble statistics of :func:`pipeline.analyses.ensemble_rules.statistics`
         are added.
         """
-        scene, labels, damp, n_real, stepping = self.scene, self.labels, self.damp, self.n_real, self.stepping
-        coords = {"protrusion": coordinate("protrusion", self.prot), "roughness": coordinate("roughness", labels),
-                  "damping": coordinate("damping", damp)}
+        n_real, stepping = self.n_real, self.stepping
+        coords = self._coords(statistics)
         real = ("realisation",) if n_real > 1 else ()
         dims = ("protrusion", "roughness", "damping") + (("direction",) if stepping else ()) + real
-        if stepping:
-            coords["direction"] = coordinate("direction", np.array(DIRECTIONS))
         data = {name: SCALARS[name].data(a, dims) for name, a in self._ordered(self.arrays).items()}
         data.update({name: STEPPING[name].data(a, ("roughness", "damping") + real)
                      for name, a in self._ordered(self.chains).items()})
         if n_real > 1:
-            coords["realisation"] = ENSEMBLE["realisation"].data(np.arange(n_real), ("realisation",))
             data["dmw_seed"] = ENSEMBLE["dmw_seed"].data(np.array(seeds), ("realisation",))
             data.update(ensemble.statistics(data))
-        sets = roughness_sets(scene)
-        coords.update(roughness_coordinates([statistics[label] for label in labels]))
         ds = xr.Dataset(data, coords=coords).assign(run or {})
+        ds.attrs.update(self._attrs(k_source, attrs, statistics))
+        return {"sweep.nc": ds, "sweep_histories.nc": self.histories(k_source, attrs, run, statistics=statistics)}
+
+    def _coords(self, statistics: dict[str, dict[str, Any]]) -> dict[str, xr.Variable]:
+        """The coordinates of ``sweep.nc`` (those of the sets' statistics included; see :meth:`datasets`)."""
+        coords = {"protrusion": coordinate("protrusion", self.prot),
+                  "roughness": coordinate("roughness", self.labels), "damping": coordinate("damping", self.damp)}
+        if self.stepping:
+            coords["direction"] = coordinate("direction", np.array(DIRECTIONS))
+        if self.n_real > 1:
+            coords["realisation"] = ENSEMBLE["realisation"].data(np.arange(self.n_real), ("realisation",))
+        coords.update(roughness_coordinates([statistics[label] for label in self.labels]))
+        return coords
+
+    def _attrs(self, k_source: str, attrs: dict, statistics: dict[str, dict[str, Any]]) -> dict[str, Any]:
+        """The global attributes of both datasets (see :meth:`datasets`)."""
+        sets = roughness_sets(self.scene)
         # one attribute for all sets: a label made from the values has '.', which CF's attribute names exclude
-        ds.attrs["roughness_sets"] = json.dumps({label: roughness_record(sets[label], statistics[label])
-                                                 for label in labels}, default=str)
-        ds.attrs.update(attrs)
-        ds.attrs["k_source"] = k_source
-        own = scene_label(scene)
-        if own in labels:  # (the report's default slice: the scene's own roughness)
-            ds.attrs["scene_roughness"] = own
-        hds = None
-        if self.hist:
-            hc = {name: c for name, c in coords.items() if name != "realisation"}  # (realisation 0 only)
+        out = {"roughness_sets": json.dumps({label: roughness_record(sets[label], statistics[label])
+                                             for label in self.labels}, default=str)}
+        out.update(attrs)
+        out["k_source"] = k_source
+        own = scene_label(self.scene)
+        if own in self.labels:  # (the report's default slice: the scene's own roughness)
+            out["scene_roughness"] = own
+        return out
+
+    def histories(self, k_source: str, attrs: dict, run: dict[str, xr.Variable] | None = None, *,
+                  statistics: dict[str, dict[str, Any]]) -> xr.Dataset | None:
+        """``sweep_histories.nc`` from the parts added (arguments: :meth:`datasets`; ``None``: no part kept
+        histories). Made once: the same object until a part with histories is added, so that the sweep can
+        have it written while the other batches run (:meth:`pipeline.runner.Inputs.write_early`) and return
+        it with ``sweep.nc``."""
+        if not self.hist:
+            return None
+        if self._histories is None:
+            hc = {name: c for name, c in self._coords(statistics).items() if name != "realisation"}  # (realisation 0)
             hc["protrusion"] = coordinate("protrusion", self.hist_prot)
             hc[TIME] = coordinate(TIME, self.time)
             hds = xr.Dataset({name: HISTORIES[name].data(a, ("protrusion", "roughness", "damping", TIME))
                               for name, a in self._ordered(self.hist, "h_").items()}, coords=hc).assign(run or {})
-            hds.attrs.update(ds.attrs)
-        return {"sweep.nc": ds, "sweep_histories.nc": hds}
+            hds.attrs.update(self._attrs(k_source, attrs, statistics))
+            self._histories = hds
+        return self._histories
 
 
 def add_kept_parts(grid: Assembler, out: Path, batches: list[Batch], key: str) -> None:

@@ -364,6 +364,60 @@ def test_a_compute_that_builds_in_its_own_folder_is_refused(tmp_path, paper_scen
     runner.Runner(paper_scene, tmp_path, stages).build(["a"])  # the folder is free again
 
 
+def _early_stage(seen: dict, *, same: bool = True, fail: bool = False) -> dict[str, runner.Stage]:
+    """A stage of two dataset outputs whose second, ``late.nc``, is written early (:meth:`Inputs.write_early`);
+    ``seen`` records what was in the folders while it computed. ``same``: the early dataset is returned;
+    ``fail``: the computation fails after the early write."""
+    def compute(scene, inputs):
+        late = xr.Dataset({"h": var(np.linspace(0.0, 1.0, 5000), ("t",), "nm", "a history")})
+        inputs.write_early("late.nc", late)
+        seen["staged"] = sorted(p.name for p in inputs.staging.iterdir())
+        seen["out"] = sorted(p.name for p in inputs.out.iterdir() if p.suffix == ".nc")
+        if fail:
+            raise RuntimeError("disk full")
+        return {"first.nc": xr.Dataset({"v": var(2.0, (), "1", "v")}), "late.nc": late if same else late.copy()}
+    return {"x": runner.Stage("x", compute, outputs=("first.nc", "late.nc"), reads=("dmw.rms_nm",))}
+
+
+def test_a_dataset_written_early_is_moved_into_place_as_the_end_would_write_it(tmp_path, paper_scene):
+    """Issue 36: a dataset complete before the stage ends (the sweep's histories) is written then, into the
+    staging folder, and moved into place at the end with the runner's attributes; the first output (with the
+    list of outputs) and a dataset returned as another object are written at the end as before."""
+    seen: dict = {}
+    runner.Runner(paper_scene, tmp_path / "early", _early_stage(seen)).build(["x"])
+    assert seen == {"staged": ["late.nc"], "out": []}  # (nothing in the results folder before the end)
+    assert sorted(p.name for p in (tmp_path / "early").iterdir() if p.suffix == ".nc") == ["first.nc", "late.nc"]
+    runner.Runner(paper_scene, tmp_path / "end", _early_stage({}, same=False)).build(["x"])
+    key = runner.Runner(paper_scene, tmp_path / "early", _early_stage({})).key("x")
+    for name in ("first.nc", "late.nc"):
+        early, end = read_dataset(tmp_path / "early" / name), read_dataset(tmp_path / "end" / name)
+        assert early.attrs[runner.KEY_ATTR] == end.attrs[runner.KEY_ATTR] == key
+        for ds in (early, end):
+            del ds.attrs["history"]
+        xr.testing.assert_identical(early, end)
+    assert json.loads(read_dataset(tmp_path / "early" / "first.nc").attrs[runner.OUTPUTS_ATTR]) == ["first.nc", "late.nc"]
+    assert runner.OUTPUTS_ATTR not in read_dataset(tmp_path / "early" / "late.nc").attrs
+    assert not [p for p in (tmp_path / "early").iterdir() if p.name.startswith(runner.STAGING_PREFIX)]
+
+
+def test_a_dataset_written_early_is_not_kept_when_the_stage_fails(tmp_path, paper_scene):
+    seen: dict = {}
+    with pytest.raises(RuntimeError, match="disk full"):
+        runner.Runner(paper_scene, tmp_path, _early_stage(seen, fail=True)).build(["x"])
+    assert seen["staged"] == ["late.nc"]
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_an_early_write_of_an_undeclared_output_is_an_error(tmp_path, paper_scene):
+    def compute(scene, inputs):
+        inputs.write_early("other.nc", xr.Dataset())
+    stages = {"x": runner.Stage("x", compute, outputs=("x.nc",))}
+    with pytest.raises(ValueError, match=r"stage x wrote 'other.nc' early; its dataset outputs are \['x.nc'\]"):
+        runner.Runner(paper_scene, tmp_path, stages).build(["x"])
+    assert runner.Inputs.folder(tmp_path).write_early("x.nc", xr.Dataset()) is None  # (no runner: nothing)
+    assert not (tmp_path / "x.nc").exists()
+
+
 def test_undeclared_output_is_an_error(tmp_path, paper_scene):
     stages = {"x": runner.Stage("x", lambda scene, inputs: {"y.nc": xr.Dataset()}, outputs=("x.nc",))}
     with pytest.raises(RuntimeError, match="undeclared outputs"):

@@ -21,6 +21,7 @@ from pipeline.stages import sweep as sweep_stage
 from pipeline.stages.simulate import model_inputs
 from pipeline.model.inputs import from_folder
 from pipeline.config.grid import roughness_label, roughness_sets, scene_label
+from pipeline import runner
 from pipeline.runner import ensure
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -212,6 +213,53 @@ def test_several_workers_start_the_batches_of_the_highest_protrusions_first(cali
     tops = [max(b.protrusions) for b in order]
     assert tops == sorted(tops, reverse=True) and tops[0] == pytest.approx(10.4) and tops[-1] < tops[0]
     assert [b.index for b in order[:2]] == [b.index for b in batches if max(b.protrusions) == tops[0]]
+
+
+def test_the_batches_that_keep_histories_are_those_of_the_first_realisation_at_a_history_point(calibrated):
+    scene, _ = calibrated
+    batches = sweep_stage.plan(scene.replace(sweep={"damping_ratio": [0.02, 0.05], "realisations": 2}))[3]
+    # 9.0-10.4 nm in batches of 3: (9.0, 9.2, 9.4), (9.6, 9.8, 10.0), (10.2, 10.4) per damping and realisation
+    assert [b.protrusions for b in batches[:3]] == [(9.0, 9.2, 9.4), (9.6, 9.8, 10.0), (10.2, 10.4)]
+    assert sweep_stage.history_batches(batches, (9.2 + 1e-12, 10.4)) == {0, 2, 3, 5}
+    assert sweep_stage.history_batches(batches, (5.0, 11.0)) == set()
+
+
+def test_the_histories_are_written_once_a_worker_is_idle_and_equal_those_written_at_the_end(calibrated, tmp_path,
+                                                                                           monkeypatch):
+    """Issue 36: ``sweep_histories.nc`` is written inside the fan-out, once the batches that keep histories are
+    in and a worker has no batch left to start (fewer batches to finish than workers): one worker writes it in
+    the last part's turn, two while the last batch runs. The files equal those of a sweep that writes both
+    datasets at the end."""
+    _, out = calibrated
+    scene = load_scene(PAPER, FAST + ["sweep.histories_nm=[9.2, 10.4]"])  # (batches 0 and 2 of 3 keep histories)
+    done: list[str] = []
+    at_write: list[list[str]] = []
+    write_early = runner.Inputs.write_early
+
+    def spy(self, name, ds):
+        at_write.append(list(done))
+        write_early(self, name, ds)
+        assert self.early[name][1].is_file() and not (self.out / name).exists()
+
+    folders = {name: tmp_path / name for name in ("end", "one", "two")}
+    for folder in folders.values():
+        _copy_inputs(out, folder)
+    with monkeypatch.context() as m:
+        m.setattr(runner.Inputs, "write_early", lambda self, name, ds: None)
+        sweep_stage.run_sweep(scene, folders["end"], scheduler="synchronous")
+    monkeypatch.setattr(runner.Inputs, "write_early", spy)
+    sweep_stage.run_sweep(scene, folders["one"], workers=1, on_batch=done.append)
+    assert [len(d) for d in at_write] == [3]
+    done.clear()
+    sweep_stage.run_sweep(scene, folders["two"], workers=2, on_batch=done.append)
+    parts = folders["two"] / sweep_stage.PARTS
+    assert len(at_write) == 2 and len(at_write[1]) >= 3 - 1  # (at most one batch still to finish)
+    assert {str(parts / "batch-00000.nc"), str(parts / "batch-00002.nc")} <= set(at_write[1])
+    for name in ("sweep.nc", "sweep_histories.nc"):
+        end = _values(folders["end"] / name)
+        for folder in ("one", "two"):
+            xr.testing.assert_identical(end, _values(folders[folder] / name))
+    assert _values(folders["end"] / "sweep_histories.nc").sizes["protrusion"] == 2
 
 
 def test_resume_after_interrupt_gives_identical_dataset(calibrated, tmp_path):
