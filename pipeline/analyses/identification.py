@@ -79,6 +79,7 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
+from ..config.limits import POLISH_EVALUATIONS  # (the polish's budget, step 1 of the module docstring)
 from .study import (ObjectiveTerm, Parameter, cost, head, input_spreads, realisations_of, record_inputs,
                     residuals, score)
 
@@ -99,10 +100,6 @@ GN_STEP = 0.02
 #: within the optimum's own interval) becomes the optimum and the profiles are made again around it.
 PROFILE_ROUNDS = 3
 PROFILE_GAIN = 1.0
-#: Budget of the polish of the search's optimum (``identify.polish``, step 1 of the module docstring), in
-#: evaluations per free parameter [1]: the polish also stops, before it, after its poll at the first
-#: step at or below :data:`PROFILE_STEP` that finds nothing better.
-POLISH_EVALUATIONS = 40
 
 
 #: Asymptotic standard error of a sample median over that of a mean for Gaussian data, sqrt(pi / 2) [1]
