@@ -713,8 +713,10 @@ class _Walk:
         self.path = [start]  # the finished points, the optimum first
         self.found: dict[float, tuple[np.ndarray, np.ndarray]] = {}
         self.k, self.done = -1, False
-        #: residuals of every point this walk knows (a poll after a move meets the point it left: not asked again)
+        #: residuals of every point this walk knows (a poll after a move meets the point it left: not asked again),
+        #: and those of them stopped early by racing (partial ensembles: never the walk's point)
         self.seen: dict[tuple, np.ndarray] = {}
+        self.partial: set[tuple] = set()
         self.asked: list[np.ndarray] = []  # this round's points, known ones included
         self.polls: list[tuple[int, float]] = []  # (coordinate, offset) of each poll point
         self._next()
@@ -753,12 +755,12 @@ class _Walk:
         return list(new.values())
 
     def bound(self, p: np.ndarray) -> float:
-        """The racing bound of a candidate ``p`` of this round (:meth:`Identification.evaluate`): a poll point
-        is taken only if its metric is below the current point's (at a new value: below the slice point's,
-        which the current point will be no worse than), so past that bound it may stop early; the predicted
-        point and the vertex run on every record (infinite bound)."""
-        if self.vertex is not None or (self.res is None and _point(p) == _point(self.x)):
-            return float("inf")
+        """The racing bound of a candidate ``p`` of this round (:meth:`Identification.evaluate`): a point is
+        taken only if its metric is below the current point's (at a new value: below the slice point's,
+        which the current point will be no worse than), so past that bound it may stop early. So for every
+        point of a round: the polls, the predicted point (at a new value it competes with the slice point)
+        and the vertex (it competes with the current point); one stopped early is not taken
+        (:meth:`update`)."""
         return self.metric(self.res if self.res is not None else self.slice[1])
 
     def reference(self) -> np.ndarray:
@@ -766,27 +768,36 @@ class _Walk:
         new value, the slice point)."""
         return self.x if self.res is not None else self.slice[0]
 
-    def update(self, pts: list[np.ndarray], res: np.ndarray) -> None:
-        """Take the round's results (``res`` of the new points ``pts``): move to the best poll point if
-        it is better (and poll again), else try the parabolas' vertex once, then the point is finished.
-        At a new value the slice point (the others at the optimum) competes with the prediction, so a
-        profile point is never worse than the slice's."""
+    def update(self, pts: list[np.ndarray], res: np.ndarray, full: Sequence[bool] | None = None) -> None:
+        """Take the round's results (``res`` of the new points ``pts``; ``full``: whether each ran on every
+        DMW record, default all): move to the best poll point if it is better (and poll again), else try the
+        parabolas' vertex once, then the point is finished. At a new value the slice point (the others at
+        the optimum) competes with the prediction, so a profile point is never worse than the slice's. A
+        point stopped early by racing is never taken (its residuals are a partial ensemble's: it lost to
+        its bound, the point it would replace), so every profile point is a whole evaluation."""
+        whole = [True] * len(pts) if full is None else [bool(f) for f in full]
         self.seen.update((_point(p), r) for p, r in zip(pts, res))
+        self.partial.difference_update(_point(p) for p, f in zip(pts, whole) if f)
+        self.partial.update(_point(p) for p, f in zip(pts, whole) if not f)
         pts = self.asked
         res = [self.seen[_point(p)] for p in pts]
+        part = np.array([_point(p) in self.partial for p in pts], bool)
         if self.vertex is not None:
-            if self.metric(res[0]) < self.metric(self.res):
+            if not part[0] and self.metric(res[0]) < self.metric(self.res):
                 self.x, self.res = self.vertex, res[0]
             self._finish()
             return
         moved = False
         if self.res is None:
-            self.res, pts, res = res[0], pts[1:], res[1:]
-            if self.metric(self.slice[1]) < self.metric(self.res):
+            if not part[0]:
+                self.res = res[0]
+            if part[0] or self.metric(self.slice[1]) < self.metric(self.res):
                 self.x, self.res, moved = self.slice[0], self.slice[1], True
+            pts, res, part = pts[1:], res[1:], part[1:]
         c = np.array([self.metric(r) for r in res])
-        j = int(np.nanargmin(c)) if np.isfinite(c).any() else -1
-        if j >= 0 and c[j] < self.metric(self.res):
+        taken = np.where(part, np.inf, c)  # (the parabolas below take a stopped poll's partial metric)
+        j = int(np.nanargmin(taken)) if np.isfinite(taken).any() else -1
+        if j >= 0 and taken[j] < self.metric(self.res):
             self.x, self.res = pts[j], res[j]
         elif not moved:  # (after a move to the slice point the poll was around another point: poll again)
             self.vertex = self._vertex(c)
@@ -918,7 +929,7 @@ def _reoptimise(ident: Identification, best: np.ndarray, c_best: float, within: 
             break
         k = 0
         for w, ps in batch:
-            w.update(ps, r[k:k + len(ps)])
+            w.update(ps, r[k:k + len(ps)], full[k:k + len(ps)])
             k += len(ps)
     found = [{} for _ in slices]
     for w in walks:
