@@ -51,12 +51,14 @@ Method
    where the objective stays within 1 of its profile minimum (the 68 % profile interval if tolerances
    were one standard deviation) and says so. Crossings are interpolated linearly between profile points.
    **Racing** (``identify.racing``, ensembles only; :class:`Racing`, :meth:`Identification.evaluate`): the
-   search's trials and the polish's and the walks' polls run on the first 2 DMW records, then 4, then all,
-   and stop at a stage where the lower confidence bound of their objective (each residual lowered by its
-   margin from the record-to-record spread, own and paired with a reference on the same records) exceeds
-   the best point's (a walk's poll: its walk's point's) or the smallest upper bound of the candidates racing with them
-   [MM94]_. Everything else (the best point, the slices, the Gauss-Newton points, the profile points)
-   runs on every record; docs/model.md, section "Identification", states the guarantee.
+   search's trials, the polish's polls and every point a walk asks for run on the first 2 DMW records, then
+   4, then all, and stop at a stage where the lower confidence bound of their objective (each residual
+   lowered by its margin from the record-to-record spread, own and paired with a reference on the same
+   records) exceeds the best point's (a walk's point: its current point's, at a new value the slice
+   point's) or the smallest upper bound of the candidates racing with them [MM94]_; a walk never takes a
+   point stopped early. Everything else (the best point, the slices, the Gauss-Newton points) runs on every
+   record, and so every profile point is a whole evaluation; docs/model.md, section "Identification",
+   states the guarantee.
 3. **Correlation**: Gauss-Newton at the optimum, ``C = (J^T J)^+`` with ``J`` the central-difference
    Jacobian of the residuals in parameters scaled to their bounds (steps of 2 % of the range);
    ``corr_ij = C_ij / sqrt(C_ii C_jj)``. A direction with no curvature (a parameter no target sees)
