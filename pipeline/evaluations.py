@@ -14,8 +14,8 @@ targets and residuals, is :mod:`pipeline.analyses.study`):
   (:data:`pipeline.variables.SCALARS`), with k by the one rule
   :func:`pipeline.model.scene_inputs.contact_k` without a calibration (:func:`evaluate`);
 * a racing part of a candidate (its DMW records ``a`` to ``b - 1``) finds in its worker process what an
-  earlier part of the same candidate made (:class:`Candidates`): its validated scene, its input keys and
-  its static starts, which are those of the mean disk and so the same for every record;
+  earlier part of the same candidate made (:class:`Candidates`): its validated scene, its inputs and their
+  keys, and its static starts, which are those of the mean disk and so the same for every record;
 * candidates are fanned out in batches (:func:`evaluate_batch`, via :func:`pipeline.fanout.run_tasks`);
   every finished evaluation is appended to a JSON-lines store (:class:`EvaluationStore`) keyed by the
   hash of the base scene and its inputs, the parameter values and the protrusions, so an interrupted
@@ -219,8 +219,7 @@ def evaluate(base: Any, params: Sequence[Parameter], values: Sequence[float], pr
     count = b - a
     try:
         cand = _CANDIDATES.get(base, inputs, params, values)
-        scene = cand.scene
-        sim = replace(candidate_inputs(scene, inputs, cand.key), k=cand.k)
+        scene, sim = cand.scene, cand.inputs(inputs)
         sims = [sim] if a == 0 else []
         if realisations > 1:
             seeds = dmw_record.realisation_seeds(scene["dmw"]["seed"], realisations)[a:b]
@@ -259,14 +258,24 @@ def evaluate(base: Any, params: Sequence[Parameter], values: Sequence[float], pr
 class _Candidate:
     """What :func:`evaluate` keeps of a candidate between the racing parts of its ensemble
     (:class:`Candidates`): its validated scene, the stage keys of its inputs (``key``:
-    ``Runner(scene, ".").key``, which computes each once), its contact criterion ``k`` [1], the dmw keys
-    of its seeded records (:func:`seeded_key`) and its models' ``statics`` (the static starts)."""
+    ``Runner(scene, ".").key``, which computes each once), its contact criterion ``k`` [1], its inputs
+    (:func:`candidate_inputs` with ``k``: its own interface tables and DMW record where its keys are not
+    the base's, so that they are not made again when the process's dataset cache,
+    :func:`pipeline.model.inputs.cached`, dropped them between two parts), the dmw keys of its seeded
+    records (:func:`seeded_key`) and its models' ``statics`` (the static starts)."""
 
     scene: Any
     key: Callable[[str], str]
     k: float
     statics: dict = field(default_factory=dict)
     records: dict[int, str] = field(default_factory=dict)
+    sim: SimulationInputs | None = None
+
+    def inputs(self, base: SimulationInputs) -> SimulationInputs:
+        """The candidate's inputs on the base inputs ``base`` (the entry's: :class:`Candidates`), made once."""
+        if self.sim is None:
+            self.sim = replace(candidate_inputs(self.scene, base, self.key), k=self.k)
+        return self.sim
 
     def record_key(self, seed: int) -> str:
         if seed not in self.records:
@@ -281,8 +290,10 @@ class Candidates:
     mean disk (:func:`pipeline.model.copies.share_statics`: the flying branch, its fold and the start
     states, ``Model.statics``) are found once per candidate, not once per part. All are functions of the
     candidate alone (the starts do not depend on the order of the runs, :func:`pipeline.model.start.start_state`),
-    so the results are the same, bit for bit. No dataset is kept here (the DMW records and tables stay in
-    :func:`pipeline.model.inputs.cached`, under the kept keys).
+    so the results are the same, bit for bit. Of the datasets only the candidate's own inputs are kept
+    (:meth:`_Candidate.inputs`: in a racing fan-out of 24 candidates the process's dataset cache of 32 held
+    their records and tables for one part, not the next, and the interface tables, ~45 ms, were made again
+    for every part); the seeded DMW records (~0.1 ms each) stay in that cache under the kept keys.
 
     Entries are keyed by the base scene and inputs objects (held by the entry, so their ``id`` is not
     reused while it lives: the tasks of a study in one process share them) and the parameters' names
@@ -321,8 +332,9 @@ class Candidates:
 
 
 #: Candidates a worker process keeps (:class:`Candidates`): more than one racing fan-out holds (the
-#: default budget's generation is 60 candidates, a round of profile walks up to ~130 points); a few kB each.
-CANDIDATES_KEPT = 512
+#: default budget's generation is 60 candidates, a round of profile walks up to ~130 points); up to ~130 kB
+#: each (the bulge scene's own interface tables, 56 kB, and DMW record, 67 kB), ~32 MB in all.
+CANDIDATES_KEPT = 256
 _CANDIDATES = Candidates(CANDIDATES_KEPT)
 
 
