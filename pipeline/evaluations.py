@@ -13,6 +13,9 @@ targets and residuals, is :mod:`pipeline.analyses.study`):
   steady-window outputs of :func:`pipeline.model.outcomes.summarize` in dataset units
   (:data:`pipeline.variables.SCALARS`), with k by the one rule
   :func:`pipeline.model.scene_inputs.contact_k` without a calibration (:func:`evaluate`);
+* a racing part of a candidate (its DMW records ``a`` to ``b - 1``) finds in its worker process what an
+  earlier part of the same candidate made (:class:`Candidates`): its validated scene, its inputs and their
+  keys, and its static starts, which are those of the mean disk and so the same for every record;
 * candidates are fanned out in batches (:func:`evaluate_batch`, via :func:`pipeline.fanout.run_tasks`);
   every finished evaluation is appended to a JSON-lines store (:class:`EvaluationStore`) keyed by the
   hash of the base scene and its inputs, the parameter values and the protrusions, so an interrupted
@@ -23,8 +26,10 @@ from __future__ import annotations
 
 import hashlib
 import json
+import threading
 import time
-from dataclasses import dataclass, replace
+from collections import OrderedDict
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Callable, Iterable, Sequence
 
@@ -91,10 +96,12 @@ def evaluation_key(base: str, params: Sequence[Parameter], values: Sequence[floa
     return hashlib.sha256(blob.encode()).hexdigest()
 
 
-def candidate_inputs(scene: Any, inputs: SimulationInputs) -> SimulationInputs:
+def candidate_inputs(scene: Any, inputs: SimulationInputs,
+                     key: Callable[[str], str] | None = None) -> SimulationInputs:
     """A candidate's interface tables, DMW record and bulge table: the base files where the candidate's
-    stage keys are the base's, else rebuilt (once per process and key). k is not resolved (:func:`evaluate`)."""
-    key = Runner(scene, ".").key  # (one runner: its file hashes and upstream keys computed once)
+    stage keys are the base's, else rebuilt (once per process and key). k is not resolved (:func:`evaluate`).
+    ``key``: the stage keys of ``scene`` (``Runner(scene, ".").key``, made here when None)."""
+    key = key or Runner(scene, ".").key  # (one runner: its file hashes and upstream keys computed once)
     interface = record = bulge = None
     if scene_inputs.needs_interface(scene):
         def tables() -> Any:  # (AFM statistics once per process, not an AFM analysis per candidate)
@@ -123,9 +130,10 @@ def _input(base: Source | None, stage: str, key: str, make: Callable[[], Any]) -
     return Source.memory(stage, cached(stage, key, make), key)
 
 
-def seeded_record(scene: Any, seed: int) -> tuple[np.ndarray, float]:
+def seeded_record(scene: Any, seed: int, key: str | None = None) -> tuple[np.ndarray, float]:
     """The scene's synthetic DMW record with ``dmw.seed = seed`` (a realisation of an ensemble), made
-    once per process: ``(displacement [nm], sample rate [Hz])``.
+    once per process: ``(displacement [nm], sample rate [Hz])``. ``key``: its dmw stage key
+    (:func:`seeded_key`, computed here when None).
 
     Raises
     ------
@@ -138,9 +146,16 @@ def seeded_record(scene: Any, seed: int) -> tuple[np.ndarray, float]:
     if scene["dmw"]["source"] != "synthetic":
         raise ValueError(f"{where}: DMW realisations need dmw.source = \"synthetic\" (a measured record has one "
                          f"realisation); got dmw.source = {scene['dmw']['source']!r}")
-    sub = scene.replace(dmw={"seed": int(seed)})
-    s = dmw_record.settings(sub)
-    return cached("dmw", Runner(sub, ".").key("dmw"), lambda: (dmw_record.synthetic_record(s), s["sample_rate_hz"]))
+
+    def make() -> tuple[np.ndarray, float]:
+        s = dmw_record.settings(scene.replace(dmw={"seed": int(seed)}))
+        return dmw_record.synthetic_record(s), s["sample_rate_hz"]
+    return cached("dmw", key or seeded_key(scene, seed), make)
+
+
+def seeded_key(scene: Any, seed: int) -> str:
+    """The dmw stage key of ``scene`` with ``dmw.seed = seed`` (:func:`seeded_record`'s identity)."""
+    return Runner(scene.replace(dmw={"seed": int(seed)}), ".").key("dmw")
 
 
 def run_protrusions(model: assembly.Model, protrusions: Sequence[float]) -> tuple[dict[str, list[float]], float, list[str]]:
@@ -203,15 +218,17 @@ def evaluate(base: Any, params: Sequence[Parameter], values: Sequence[float], pr
     part = (a, b) != (0, realisations)
     count = b - a
     try:
-        scene = with_values(base, params, values)
-        sim = replace(candidate_inputs(scene, inputs), k=scene_inputs.contact_k(scene)[0])
+        cand = _CANDIDATES.get(base, inputs, params, values)
+        scene, sim = cand.scene, cand.inputs(inputs)
         sims = [sim] if a == 0 else []
         if realisations > 1:
             seeds = dmw_record.realisation_seeds(scene["dmw"]["seed"], realisations)[a:b]
-            sims += [sim.with_record(Source.memory("dmw", seeded_record(scene, seed)))
+            sims += [sim.with_record(Source.memory("dmw", seeded_record(scene, seed, cand.record_key(seed))))
                      for seed in (seeds[1:] if a == 0 else seeds)]
         models = [s.model(scene) for s in sims]
-        copies.share_statics(models)  # (the static starts are on the mean disk: found once for all records)
+        # (the static starts are on the mean disk: found once for all records, and for all parts of the ensemble)
+        models[0].statics = cand.statics
+        copies.share_statics(models)
     except (SceneError, ValueError, running.IntegrationError) as exc:
         errors.append(str(exc))
         models = []
@@ -235,6 +252,90 @@ def evaluate(base: Any, params: Sequence[Parameter], values: Sequence[float], pr
     if part:
         rec["first_record"] = a
     return rec
+
+
+@dataclass
+class _Candidate:
+    """What :func:`evaluate` keeps of a candidate between the racing parts of its ensemble
+    (:class:`Candidates`): its validated scene, the stage keys of its inputs (``key``:
+    ``Runner(scene, ".").key``, which computes each once), its contact criterion ``k`` [1], its inputs
+    (:func:`candidate_inputs` with ``k``: its own interface tables and DMW record where its keys are not
+    the base's, so that they are not made again when the process's dataset cache,
+    :func:`pipeline.model.inputs.cached`, dropped them between two parts), the dmw keys of its seeded
+    records (:func:`seeded_key`) and its models' ``statics`` (the static starts)."""
+
+    scene: Any
+    key: Callable[[str], str]
+    k: float
+    statics: dict = field(default_factory=dict)
+    records: dict[int, str] = field(default_factory=dict)
+    sim: SimulationInputs | None = None
+
+    def inputs(self, base: SimulationInputs) -> SimulationInputs:
+        """The candidate's inputs on the base inputs ``base`` (the entry's: :class:`Candidates`), made once."""
+        if self.sim is None:
+            self.sim = replace(candidate_inputs(self.scene, base, self.key), k=self.k)
+        return self.sim
+
+    def record_key(self, seed: int) -> str:
+        if seed not in self.records:
+            self.records[seed] = seeded_key(self.scene, seed)
+        return self.records[seed]
+
+
+class Candidates:
+    """The candidates a worker process evaluated last (:func:`evaluate`), kept between the racing parts of
+    their ensemble (:class:`_Candidate`). A part runs other DMW records of the same candidate, so its scene
+    is not validated again, its input keys are not hashed again, and the static equilibria, those of the
+    mean disk (:func:`pipeline.model.copies.share_statics`: the flying branch, its fold and the start
+    states, ``Model.statics``) are found once per candidate, not once per part. All are functions of the
+    candidate alone (the starts do not depend on the order of the runs, :func:`pipeline.model.start.start_state`),
+    so the results are the same, bit for bit. Of the datasets only the candidate's own inputs are kept
+    (:meth:`_Candidate.inputs`: in a racing fan-out of 24 candidates the process's dataset cache of 32 held
+    their records and tables for one part, not the next, and the interface tables, ~45 ms, were made again
+    for every part); the seeded DMW records (~0.1 ms each) stay in that cache under the kept keys.
+
+    Entries are keyed by the base scene and inputs objects (held by the entry, so their ``id`` is not
+    reused while it lives: the tasks of a study in one process share them) and the parameters' names
+    and values; at most ``size`` entries, the least recently used dropped first. Thread-safe: two
+    threads that make one candidate at once keep one of the two (the same numbers).
+    """
+
+    def __init__(self, size: int):
+        self.size = size
+        self._entries: OrderedDict[tuple, tuple[Any, Any, _Candidate]] = OrderedDict()
+        self._lock = threading.Lock()
+
+    def get(self, base: Any, inputs: Any, params: Sequence[Parameter], values: Sequence[float]) -> _Candidate:
+        """The candidate ``values`` of ``params`` on ``base`` and ``inputs``: the kept one, else made
+        (:func:`pipeline.analyses.study.with_values`, :func:`pipeline.model.scene_inputs.contact_k`; their
+        errors are raised, nothing kept)."""
+        key = (id(base), id(inputs), tuple(p.name for p in params), tuple(float(v) for v in values))
+        with self._lock:
+            hit = self._entries.get(key)
+            if hit is not None and hit[0] is base and hit[1] is inputs:
+                self._entries.move_to_end(key)
+                return hit[2]
+        scene = with_values(base, params, values)
+        made = _Candidate(scene, Runner(scene, ".").key, scene_inputs.contact_k(scene)[0])
+        with self._lock:
+            self._entries[key] = (base, inputs, made)
+            self._entries.move_to_end(key)
+            while len(self._entries) > self.size:
+                self._entries.popitem(last=False)
+        return made
+
+    def clear(self) -> None:
+        """Forget every candidate."""
+        with self._lock:
+            self._entries.clear()
+
+
+#: Candidates a worker process keeps (:class:`Candidates`): more than one racing fan-out holds (the
+#: default budget's generation is 60 candidates, a round of profile walks up to ~130 points); up to ~130 kB
+#: each (the bulge scene's own interface tables, 56 kB, and DMW record, 67 kB), ~32 MB in all.
+CANDIDATES_KEPT = 256
+_CANDIDATES = Candidates(CANDIDATES_KEPT)
 
 
 def join_parts(parts: Sequence[dict[str, Any]]) -> dict[str, Any]:

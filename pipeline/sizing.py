@@ -12,8 +12,7 @@ from typing import Any
 
 from .config.grid import TOL_NM, range_count
 from .config.limits import (check_physical, MAX_EVALUATIONS, MAX_HISTORY_SAMPLES, MAX_KEPT_HISTORY_SAMPLES,
-                            MAX_RECORD_SAMPLES, MAX_SCENES, MAX_TABLE_ROWS, LimitError)
-from .analyses.identification import POLISH_EVALUATIONS
+                            MAX_RECORD_SAMPLES, MAX_SCENES, MAX_TABLE_ROWS, POLISH_EVALUATIONS, LimitError)
 from .model import interface_tables
 from .model.dmw_record import settings as dmw_settings
 from .model.measured_dmw import record_samples

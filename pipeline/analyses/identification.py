@@ -51,12 +51,14 @@ Method
    where the objective stays within 1 of its profile minimum (the 68 % profile interval if tolerances
    were one standard deviation) and says so. Crossings are interpolated linearly between profile points.
    **Racing** (``identify.racing``, ensembles only; :class:`Racing`, :meth:`Identification.evaluate`): the
-   search's trials and the polish's and the walks' polls run on the first 2 DMW records, then 4, then all,
-   and stop at a stage where the lower confidence bound of their objective (each residual lowered by its
-   margin from the record-to-record spread, own and paired with a reference on the same records) exceeds
-   the best point's (a walk's poll: its walk's point's) or the smallest upper bound of the candidates racing with them
-   [MM94]_. Everything else (the best point, the slices, the Gauss-Newton points, the profile points)
-   runs on every record; docs/model.md, section "Identification", states the guarantee.
+   search's trials, the polish's polls and every point a walk asks for run on the first 2 DMW records, then
+   4, then all, and stop at a stage where the lower confidence bound of their objective (each residual
+   lowered by its margin from the record-to-record spread, own and paired with a reference on the same
+   records) exceeds the best point's (a walk's point: its current point's, at a new value the slice
+   point's) or the smallest upper bound of the candidates racing with them [MM94]_; a walk never takes a
+   point stopped early. Everything else (the best point, the slices, the Gauss-Newton points) runs on every
+   record, and so every profile point is a whole evaluation; docs/model.md, section "Identification",
+   states the guarantee.
 3. **Correlation**: Gauss-Newton at the optimum, ``C = (J^T J)^+`` with ``J`` the central-difference
    Jacobian of the residuals in parameters scaled to their bounds (steps of 2 % of the range);
    ``corr_ij = C_ij / sqrt(C_ii C_jj)``. A direction with no curvature (a parameter no target sees)
@@ -79,6 +81,7 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
+from ..config.limits import POLISH_EVALUATIONS  # (the polish's budget, step 1 of the module docstring)
 from .study import (ObjectiveTerm, Parameter, cost, head, input_spreads, realisations_of, record_inputs,
                     residuals, score)
 
@@ -99,10 +102,6 @@ GN_STEP = 0.02
 #: within the optimum's own interval) becomes the optimum and the profiles are made again around it.
 PROFILE_ROUNDS = 3
 PROFILE_GAIN = 1.0
-#: Budget of the polish of the search's optimum (``identify.polish``, step 1 of the module docstring), in
-#: evaluations per free parameter [1]: the polish also stops, before it, after its poll at the first
-#: step at or below :data:`PROFILE_STEP` that finds nothing better.
-POLISH_EVALUATIONS = 40
 
 
 #: Asymptotic standard error of a sample median over that of a mean for Gaussian data, sqrt(pi / 2) [1]
@@ -716,8 +715,10 @@ class _Walk:
         self.path = [start]  # the finished points, the optimum first
         self.found: dict[float, tuple[np.ndarray, np.ndarray]] = {}
         self.k, self.done = -1, False
-        #: residuals of every point this walk knows (a poll after a move meets the point it left: not asked again)
+        #: residuals of every point this walk knows (a poll after a move meets the point it left: not asked again),
+        #: and those of them stopped early by racing (partial ensembles: never the walk's point)
         self.seen: dict[tuple, np.ndarray] = {}
+        self.partial: set[tuple] = set()
         self.asked: list[np.ndarray] = []  # this round's points, known ones included
         self.polls: list[tuple[int, float]] = []  # (coordinate, offset) of each poll point
         self._next()
@@ -756,12 +757,12 @@ class _Walk:
         return list(new.values())
 
     def bound(self, p: np.ndarray) -> float:
-        """The racing bound of a candidate ``p`` of this round (:meth:`Identification.evaluate`): a poll point
-        is taken only if its metric is below the current point's (at a new value: below the slice point's,
-        which the current point will be no worse than), so past that bound it may stop early; the predicted
-        point and the vertex run on every record (infinite bound)."""
-        if self.vertex is not None or (self.res is None and _point(p) == _point(self.x)):
-            return float("inf")
+        """The racing bound of a candidate ``p`` of this round (:meth:`Identification.evaluate`): a point is
+        taken only if its metric is below the current point's (at a new value: below the slice point's,
+        which the current point will be no worse than), so past that bound it may stop early. So for every
+        point of a round: the polls, the predicted point (at a new value it competes with the slice point)
+        and the vertex (it competes with the current point); one stopped early is not taken
+        (:meth:`update`)."""
         return self.metric(self.res if self.res is not None else self.slice[1])
 
     def reference(self) -> np.ndarray:
@@ -769,27 +770,36 @@ class _Walk:
         new value, the slice point)."""
         return self.x if self.res is not None else self.slice[0]
 
-    def update(self, pts: list[np.ndarray], res: np.ndarray) -> None:
-        """Take the round's results (``res`` of the new points ``pts``): move to the best poll point if
-        it is better (and poll again), else try the parabolas' vertex once, then the point is finished.
-        At a new value the slice point (the others at the optimum) competes with the prediction, so a
-        profile point is never worse than the slice's."""
+    def update(self, pts: list[np.ndarray], res: np.ndarray, full: Sequence[bool] | None = None) -> None:
+        """Take the round's results (``res`` of the new points ``pts``; ``full``: whether each ran on every
+        DMW record, default all): move to the best poll point if it is better (and poll again), else try the
+        parabolas' vertex once, then the point is finished. At a new value the slice point (the others at
+        the optimum) competes with the prediction, so a profile point is never worse than the slice's. A
+        point stopped early by racing is never taken (its residuals are a partial ensemble's: it lost to
+        its bound, the point it would replace), so every profile point is a whole evaluation."""
+        whole = [True] * len(pts) if full is None else [bool(f) for f in full]
         self.seen.update((_point(p), r) for p, r in zip(pts, res))
+        self.partial.difference_update(_point(p) for p, f in zip(pts, whole) if f)
+        self.partial.update(_point(p) for p, f in zip(pts, whole) if not f)
         pts = self.asked
         res = [self.seen[_point(p)] for p in pts]
+        part = np.array([_point(p) in self.partial for p in pts], bool)
         if self.vertex is not None:
-            if self.metric(res[0]) < self.metric(self.res):
+            if not part[0] and self.metric(res[0]) < self.metric(self.res):
                 self.x, self.res = self.vertex, res[0]
             self._finish()
             return
         moved = False
         if self.res is None:
-            self.res, pts, res = res[0], pts[1:], res[1:]
-            if self.metric(self.slice[1]) < self.metric(self.res):
+            if not part[0]:
+                self.res = res[0]
+            if part[0] or self.metric(self.slice[1]) < self.metric(self.res):
                 self.x, self.res, moved = self.slice[0], self.slice[1], True
+            pts, res, part = pts[1:], res[1:], part[1:]
         c = np.array([self.metric(r) for r in res])
-        j = int(np.nanargmin(c)) if np.isfinite(c).any() else -1
-        if j >= 0 and c[j] < self.metric(self.res):
+        taken = np.where(part, np.inf, c)  # (the parabolas below take a stopped poll's partial metric)
+        j = int(np.nanargmin(taken)) if np.isfinite(taken).any() else -1
+        if j >= 0 and taken[j] < self.metric(self.res):
             self.x, self.res = pts[j], res[j]
         elif not moved:  # (after a move to the slice point the poll was around another point: poll again)
             self.vertex = self._vertex(c)
@@ -921,7 +931,7 @@ def _reoptimise(ident: Identification, best: np.ndarray, c_best: float, within: 
             break
         k = 0
         for w, ps in batch:
-            w.update(ps, r[k:k + len(ps)])
+            w.update(ps, r[k:k + len(ps)], full[k:k + len(ps)])
             k += len(ps)
     found = [{} for _ in slices]
     for w in walks:

@@ -51,6 +51,12 @@ MAX_STEPS = 5_000_000
 #: describes: at 10 J/m^2 a 0.3-ms run of the paper scene at 9 nm did not finish in 5 minutes (1 J/m^2: 5 s),
 #: and 1e99 overflowed the integrator with a traceback.
 MAX_WORK_OF_ADHESION = 1.0
+#: Budget of the identification's polish of the search's optimum (``identify.polish``), in evaluations per free
+#: parameter [1] (:func:`pipeline.analyses.identification._polish`; docs/model.md, section "Identification"): it
+#: also stops before it, after its poll at the first step at or below the profile walks' step that finds
+#: nothing better. Here, beside the other budgets, so that the sizes of a scene's work are checked
+#: (:mod:`pipeline.sizing`) without importing the identification.
+POLISH_EVALUATIONS = 40
 #: Largest ``sensitivity.bootstrap``: resamples of the confidence intervals (default 200; the
 #: resampling error of an interval's end falls as 1/sqrt(B), so 1e5 is far below any use; 1e9 took 15 GiB).
 MAX_BOOTSTRAP = 100_000

@@ -58,12 +58,13 @@ import xarray as xr
 
 from ..analyses import plots
 from ..analyses.feasibility import box_check
+from ..config.limits import POLISH_EVALUATIONS
 from ..fanout import local_cluster
 from ..progress import Progress
 from ..io import read_dataset, temporary_path, var
 from ..paths import refuse_links
 from ..runner import Inputs, Stage
-from ..analyses.identification import (GN_STEP, METHODS, POLISH_EVALUATIONS, PROFILE_GAIN, PROFILE_STEP, ROLES,
+from ..analyses.identification import (GN_STEP, METHODS, PROFILE_GAIN, PROFILE_STEP, ROLES,
                                        Identification, Racing, identify)
 from ..analyses.study import Parameter, parse_parameters, scene_value, target_protrusions, targets
 from ..evaluations import Evaluator, evaluate_batch, setup, upstream
@@ -241,7 +242,10 @@ def _polish_attrs(polish: dict[str, Any] | None, n: int) -> dict[str, Any]:
     return {"polish": f"compass search over every parameter from the search's best point (steps from "
                       f"{polish['first_step']:g} x range, halved after a poll and its parabola vertex found "
                       f"nothing better, down to the first at or below {PROFILE_STEP:g}; at most "
-                      f"{POLISH_EVALUATIONS * n} evaluations), polls raced against the current point",
+                      f"{POLISH_EVALUATIONS * n} evaluations), polls raced against the current point; units: "
+                      "polish_evaluations, polish_polls and polish_moves are counts [1], polish_last_step a fraction "
+                      "of each parameter's search range [1], polish_start_objective and polish_objective the "
+                      "objective, a sum of squared tolerance-normalised residuals [1]",
             "polish_evaluations": polish["evaluations"], "polish_polls": polish["polls"],
             "polish_moves": polish["moves"], "polish_last_step": polish["last_step"],
             "polish_start_objective": polish["start_objective"], "polish_objective": polish["objective"]}

@@ -391,6 +391,42 @@ def test_a_compass_poll_keeps_inside_the_bounds_and_skips_the_profiled_parameter
                                                       np.array([1.0, 1.0])), [0.3, 0.0])
 
 
+def test_a_profile_walk_races_every_point_and_takes_none_stopped_early():
+    """A walk's predicted point (against the slice point), polls and vertex (against the current point) are all
+    raced, and one stopped early (a partial ensemble) is never taken, however low its partial metric: every
+    profile point is a whole evaluation."""
+    lo, hi = np.zeros(3), np.ones(3)
+    metric = study.cost
+    start, slice_point, slice_res = np.full(3, 0.5), np.array([0.6, 0.5, 0.5]), np.array([2.0])
+
+    def slice_at(v: float) -> tuple[np.ndarray, np.ndarray]:
+        x = slice_point.copy()
+        x[0] = v
+        return x, slice_res
+
+    w = identification._Walk(0, np.array([0.6, 0.8]), start, np.array([1.0, 1.0, 0.0]), lo, hi, metric, 100.0, slice_at)
+    pts = w.candidates()  # the prediction (0.6, 0.6, 0.5), then the poll around it
+    np.testing.assert_allclose(pts[0], [0.6, 0.6, 0.5])
+    assert len(pts) == 5 and [w.bound(x) for x in pts] == [4.0] * 5  # (the slice point's objective)
+    np.testing.assert_array_equal(w.reference(), slice_point)
+    # the prediction and the second poll stopped early with partial objectives far below the rest
+    res = np.array([[0.1], [1.0], [0.05], [1.5], [1.9]])
+    w.update(pts, res, [False, True, False, True, True])
+    np.testing.assert_array_equal(w.x, pts[1])  # (the best whole point: not the prediction, not the partial poll)
+    np.testing.assert_array_equal(w.res, [1.0])
+    new = w.candidates()
+    assert len(new) == 3 and all(w.bound(x) == 1.0 for x in new)  # (the prediction is known: not asked again)
+    w.update(new, np.array([[1.2], [1.3], [1.4]]), [True, True, True])
+    vertex = w.candidates()  # nothing better: the parabolas' vertex, raced against the current point
+    assert len(vertex) == 1 and w.bound(vertex[0]) == 1.0
+    np.testing.assert_array_equal(w.reference(), pts[1])
+    w.update(vertex, np.array([[0.0]]), [False])
+    point, r = w.found[0.6]
+    np.testing.assert_array_equal(point, pts[1])
+    np.testing.assert_array_equal(r, [1.0])
+    assert w.value == 0.8 and not w.done
+
+
 # --------------------------------------------------------------- racing against the full method on the twin
 TRUE = {"dmw.rms_nm": 0.14, "lubricant.work_of_adhesion_j_m2": 0.07}
 

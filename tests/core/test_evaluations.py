@@ -58,3 +58,45 @@ def test_a_short_batch_is_split_over_the_local_workers_and_gives_the_same_record
     assert sizes[1, 3] == [3, 3, 3] and sizes[2, 3] == [1, 2, 2] and sizes[3, 3] == [1, 1, 1]
     # 10 new points: ceil(10 / 6) = 2 tasks of 5 on one or two workers; on three, 3 tasks (4, 3, 3)
     assert sizes[1, 13] == sizes[2, 13] == [5] * 10 and sizes[3, 13] == [3] * 6 + [4] * 4
+
+
+def test_a_candidate_kept_between_its_racing_parts_gives_the_records_of_a_fresh_one(write_scene, paper_config,
+                                                                                    tmp_path, monkeypatch):
+    """The racing parts of one candidate share its static starts (:class:`evaluations.Candidates`): the flying
+    branch is found once for all parts, and every output is the one a fresh candidate per part gives."""
+    import numpy as np
+    import twin
+    from pipeline.analyses import study
+    from pipeline.config.scene import load_scene
+    from pipeline.model import start
+    path = write_scene(twin.scene_text('targets = ["fhm_flying", "contact_force"]\nrealisations = 4\n')
+                       .format(paper=paper_config))
+    scene = load_scene(path)
+    params = study.parse_parameters(scene["identify"]["parameters"], str(path), "identify.parameters")
+    prots = [5.0, 10.0]
+    inputs = evaluations.prepare_inputs(scene, tmp_path / "base")
+    ladders = []
+    real = start.flying_ladder
+    monkeypatch.setattr(start, "flying_ladder", lambda *a, **k: ladders.append(1) or real(*a, **k))
+    x, parts = [0.14, 0.07], ((0, 1), (1, 2), (2, 4))
+
+    def run(fresh: bool) -> list[dict]:
+        out = []
+        for seg in parts:
+            if fresh or not out:
+                evaluations._CANDIDATES.clear()
+            out.append(evaluations.evaluate(scene, params, x, prots, inputs, 4, seg))
+        return out
+
+    kept = run(fresh=False)
+    assert len(ladders) == 1  # (one candidate: its fold once, whatever part asks)
+    fresh = run(fresh=True)
+    assert len(ladders) == 1 + len(parts)
+    for a, b in zip(kept, fresh):
+        assert a["error"] is None and b["error"] is None and a["seeds"] == b["seeds"]
+        assert a["outputs"].keys() == b["outputs"].keys()
+        for k in a["outputs"]:
+            np.testing.assert_array_equal(np.array(a["outputs"][k], float), np.array(b["outputs"][k], float))
+    # a kept candidate is one of these base objects: another base with the same values is another candidate
+    other = load_scene(path)
+    assert evaluations._CANDIDATES.get(other, inputs, params, x) is not evaluations._CANDIDATES.get(scene, inputs, params, x)

@@ -13,7 +13,7 @@ import pytest
 
 from pipeline import cli, fanout, progress
 from pipeline.config.scene import load_scene
-from pipeline.analyses.identification import POLISH_EVALUATIONS
+from pipeline.config.limits import POLISH_EVALUATIONS
 from pipeline.stages import identify
 import twin
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 import pytest
 
 from pipeline import sizing
-from pipeline.analyses.identification import POLISH_EVALUATIONS
+from pipeline.config.limits import POLISH_EVALUATIONS
 from pipeline.config.limits import MAX_HISTORY_SAMPLES, MAX_SCENES, LimitError
 from pipeline.model.interface_tables import separation_labels
 
