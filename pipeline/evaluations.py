@@ -358,6 +358,20 @@ def join_parts(parts: Sequence[dict[str, Any]]) -> dict[str, Any]:
     return rec
 
 
+def join_records(records: Sequence[dict[str, Any]], first: int | None) -> dict[str, Any]:
+    """One part of an ensemble from its single-record parts (:func:`evaluate` with ``records = (r, r + 1)``, in
+    record order): the record :func:`evaluate` gives for the part as a whole, but for the times. ``first``: the
+    part's first record (None: the part is the whole ensemble, whose record does not name it). A candidate that
+    could not be built gives its error once, as there (each record's run says it)."""
+    rec = join_parts(records)
+    errors = list(dict.fromkeys(r["error"] for r in records if r["error"]))
+    rec["error"] = "; ".join(errors) if errors else None
+    rec.pop("first_record", None)
+    if first is not None:
+        rec["first_record"] = int(first)
+    return rec
+
+
 def evaluate_batch(base: Any, params: Sequence[Parameter], rows: Sequence[tuple[str, Sequence[float]]],
                    protrusions: Sequence[float], inputs: SimulationInputs, realisations: int = 1,
                    records: tuple[int, int] | None = None) -> list[tuple[str, dict[str, Any]]]:
@@ -481,6 +495,39 @@ class Evaluator:
         ends = np.cumsum([size + (i < extra) for i in range(n)])
         return [rows[e - size - (i < extra):e] for i, e in enumerate(ends)]
 
+    def _threads(self, units: int) -> int:
+        """The threads of this process that ``units`` (candidate, DMW record) runs would share: the local
+        fan-out's workers on threads (None, or ``"threads"``), else 1 (one process, or other processes, where
+        a task carries the base scene and inputs and a candidate is not kept between tasks)."""
+        if self.scheduler not in (None, "threads") or units < 2:
+            return 1
+        return local_workers(self.workers, units)
+
+    def _record_tasks(self, todo: dict[tuple[int, int], dict[str, list[float]]]
+                      ) -> tuple[list[tuple], Callable[[list], None], Callable[[], None]]:
+        """The racing parts ``todo`` (part -> {key: values}) as one task per (candidate, DMW record), for the
+        threads of this process: ``(tasks, on_done, finish)``; ``finish()`` stores each part, its records joined
+        (:func:`join_records`). A part's records do not depend on the task they run in (the candidate is kept
+        between them, :class:`Candidates`), so the parts stored are those of :meth:`_batches`'s tasks, bit for
+        bit; but a lone candidate's part (a walk's poll, the last racing stage's survivor) no longer runs on one
+        thread while the other idles. Record-major order: two threads start two candidates, not one twice."""
+        n = self.realisations
+        units = sorted(((r, a, b, key, x) for (a, b), rows in todo.items() for key, x in rows.items()
+                        for r in range(a, b)), key=lambda u: u[0])
+        tasks = [(self.base, list(self.params), [(key, x)], list(self.protrusions), self.inputs, n, (r, r + 1))
+                 for r, a, b, key, x in units]
+        pieces: dict[str, list[dict[str, Any]]] = {key: [] for (a, b), rows in todo.items() for key in rows}
+
+        def on_done(result: list) -> None:
+            for key, rec in result:
+                pieces[key].append(rec)
+
+        def finish() -> None:
+            for (a, b), rows in todo.items():
+                self.store.put([(key, join_records(sorted(pieces[key], key=lambda r: r["first_record"]),
+                                                   a if (a, b) != (0, n) else None)) for key in rows])
+        return tasks, on_done, finish
+
     def _parts(self, pts: list[list[float]], upto: int) -> list[dict[str, Any]]:
         """:meth:`__call__` with racing stages: the parts up to ``upto`` records, one fan-out for all."""
         n = self.realisations
@@ -496,13 +543,19 @@ class Evaluator:
                 k = self.key(x, seg)
                 if k not in self.store:
                     todo[seg][k] = x
-        tasks = []
-        for (a, b), rows in todo.items():
-            tasks += [(self.base, list(self.params), chunk, list(self.protrusions), self.inputs, n, (a, b))
-                      for chunk in self._batches(list(rows.items()))]
+        units = sum((len(rows) * (b - a) for (a, b), rows in todo.items()), 0)
+        if self._threads(units) > 1:
+            tasks, on_done, finish = self._record_tasks(todo)
+        else:
+            tasks = []
+            for (a, b), rows in todo.items():
+                tasks += [(self.base, list(self.params), chunk, list(self.protrusions), self.inputs, n, (a, b))
+                          for chunk in self._batches(list(rows.items()))]
+            on_done, finish = self.store.put, (lambda: None)
         if tasks:
             self.batch_seconds += run_tasks(self.task, tasks, scheduler=self.scheduler, workers=self.workers,
-                                            on_done=self.store.put)
+                                            on_done=on_done)
+            finish()
             for (a, b), rows in todo.items():
                 self.evaluated += len(rows)
                 self.record_evaluations += len(rows) * (b - a)

@@ -3,6 +3,8 @@ kill, and an evaluation's base key follows exactly the scene keys and inputs an 
 
 from __future__ import annotations
 
+import json
+
 from pipeline import evaluations
 from pipeline.model.inputs import SimulationInputs, Source
 
@@ -100,3 +102,50 @@ def test_a_candidate_kept_between_its_racing_parts_gives_the_records_of_a_fresh_
     # a kept candidate is one of these base objects: another base with the same values is another candidate
     other = load_scene(path)
     assert evaluations._CANDIDATES.get(other, inputs, params, x) is not evaluations._CANDIDATES.get(scene, inputs, params, x)
+
+
+def test_racing_parts_on_threads_run_a_task_per_record_and_store_the_parts_of_one_task(write_scene, paper_config,
+                                                                                        tmp_path):
+    """On the local threads a racing part runs one task per (candidate, DMW record), record-major, so that a
+    lone candidate (a walk's poll, the last stage's survivor) keeps both threads busy; the parts stored are
+    those of one task per part (one worker), but for the times."""
+    import numpy as np
+    import threading
+    import twin
+    from pipeline.analyses import study
+    from pipeline.config.scene import load_scene
+    path = write_scene(twin.scene_text('targets = ["fhm_flying", "contact_force"]\nrealisations = 4\n')
+                       .format(paper=paper_config))
+    scene = load_scene(path)
+    params = study.parse_parameters(scene["identify"]["parameters"], str(path), "identify.parameters")
+    inputs = evaluations.prepare_inputs(scene, tmp_path / "base")
+    calls: list[tuple] = []
+    lock = threading.Lock()
+
+    def task(*args):
+        with lock:
+            calls.append((len(args[2]), args[6], tuple(args[2][0][1])))
+        return evaluations.evaluate_batch(*args)
+
+    got = {}
+    for workers in (1, 2):
+        evaluations._CANDIDATES.clear()
+        calls.clear()
+        store = evaluations.EvaluationStore(tmp_path / f"w{workers}.jsonl")
+        ev = evaluations.Evaluator(scene, params, [5.0, 10.0], inputs, store, 4, None, workers, task=task,
+                                   realisations=4, stages=(1, 2, 4))
+        ev([[0.14, 0.07], [0.16, 0.05]], 1)
+        ev([[0.14, 0.07]], 4)  # (a lone candidate's last two parts)
+        keys = [ev.key([0.14, 0.07], seg) for seg in ((0, 1), (1, 2), (2, 4))] + [ev.key([0.16, 0.05], (0, 1))]
+        got[workers] = [store[k] for k in keys]
+        if workers == 1:  # tasks of up to batch_size (4) candidates, one part each
+            assert sorted(c[:2] for c in calls) == [(1, (1, 2)), (1, (2, 4)), (2, (0, 1))]
+        else:  # one per record, the records in order, the two candidates of the first stage side by side
+            assert [c[1] for c in calls[:2]] == [(0, 1), (0, 1)]
+            assert {c[2] for c in calls[:2]} == {(0.14, 0.07), (0.16, 0.05)}
+            assert sorted(c[1] for c in calls[2:]) == [(1, 2), (2, 3), (3, 4)]
+    for one, two in zip(got[1], got[2]):  # (as JSON: a NaN output equals itself)
+        assert json.dumps({k: v for k, v in one.items() if "seconds" not in k}, sort_keys=True) == \
+            json.dumps({k: v for k, v in two.items() if "seconds" not in k}, sort_keys=True)
+    assert got[2][2]["realisations"] == 2 and got[2][2]["first_record"] == 2 and len(got[2][2]["seeds"]) == 2
+    assert np.all(np.isfinite(np.array(got[2][2]["outputs"]["fhm_bv"], float)))
