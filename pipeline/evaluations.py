@@ -341,14 +341,14 @@ _CANDIDATES = Candidates(CANDIDATES_KEPT)
 def join_parts(parts: Sequence[dict[str, Any]]) -> dict[str, Any]:
     """One record of consecutive parts of an ensemble (:func:`evaluate` with ``records``, in record order):
     the outputs joined along the realisations, the times added, the errors joined. A part without outputs
-    (a candidate that could not be built) leaves the joined record without outputs, as :func:`evaluate`
-    does."""
+    (a candidate that could not be built) leaves the joined record without outputs, and its error once (each
+    part says it alike; a record's run error names its realisation), as :func:`evaluate` does."""
     first = parts[0]
     n = sum(int(p["realisations"]) for p in parts)
     names = [k for k in first["outputs"]] if all(p["outputs"] for p in parts) else []
     outputs = {k: [sum((list(p["outputs"][k][i]) for p in parts), []) for i in range(len(first["protrusions"]))]
                for k in names}
-    errors = [p["error"] for p in parts if p["error"]]
+    errors = list(dict.fromkeys(p["error"] for p in parts if p["error"]))
     rec = {"params": first["params"], "protrusions": first["protrusions"], "outputs": outputs,
            "seconds": sum(p["seconds"] for p in parts), "kernel_seconds": sum(p["kernel_seconds"] for p in parts),
            "error": "; ".join(errors) if errors else None, "realisations": n,
@@ -361,11 +361,9 @@ def join_parts(parts: Sequence[dict[str, Any]]) -> dict[str, Any]:
 def join_records(records: Sequence[dict[str, Any]], first: int | None) -> dict[str, Any]:
     """One part of an ensemble from its single-record parts (:func:`evaluate` with ``records = (r, r + 1)``, in
     record order): the record :func:`evaluate` gives for the part as a whole, but for the times. ``first``: the
-    part's first record (None: the part is the whole ensemble, whose record does not name it). A candidate that
-    could not be built gives its error once, as there (each record's run says it)."""
+    part's first record (None: the part is the whole ensemble, whose record does not name it: the rule
+    :func:`join_parts` cannot apply, not knowing whether its parts make the whole)."""
     rec = join_parts(records)
-    errors = list(dict.fromkeys(r["error"] for r in records if r["error"]))
-    rec["error"] = "; ".join(errors) if errors else None
     rec.pop("first_record", None)
     if first is not None:
         rec["first_record"] = int(first)

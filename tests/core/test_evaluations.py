@@ -149,3 +149,20 @@ def test_racing_parts_on_threads_run_a_task_per_record_and_store_the_parts_of_on
             json.dumps({k: v for k, v in two.items() if "seconds" not in k}, sort_keys=True)
     assert got[2][2]["realisations"] == 2 and got[2][2]["first_record"] == 2 and len(got[2][2]["seeds"]) == 2
     assert np.all(np.isfinite(np.array(got[2][2]["outputs"]["fhm_bv"], float)))
+
+
+def test_joined_parts_state_a_candidate_s_build_error_once_and_every_record_s_own():
+    def part(a, b, error, outputs):
+        return {"params": [0.1], "protrusions": [9.0], "outputs": outputs, "seconds": 1.0, "kernel_seconds": 0.5,
+                "error": error, "realisations": b - a, "seeds": list(range(a, b)), "first_record": a}
+    bad = "dmw.rms_nm = 9: above its bound"
+    joined = evaluations.join_parts([part(0, 2, bad, {}), part(2, 4, bad, {}), part(4, 8, bad, {})])
+    assert joined["error"] == bad and joined["outputs"] == {} and joined["realisations"] == 8
+    ok = {"fhm_bv": [[1.0, 2.0]]}
+    joined = evaluations.join_parts([part(0, 2, "realisation 1: no start", ok), part(2, 4, None, ok),
+                                     part(4, 6, "realisation 5: no start", ok)])
+    assert joined["error"] == "realisation 1: no start; realisation 5: no start"
+    assert joined["outputs"]["fhm_bv"] == [[1.0, 2.0] * 3] and joined["seeds"] == list(range(6))
+    # a part starting at 0 names its first record; join_parts leaves that to the caller, which knows the whole
+    assert "first_record" not in joined and evaluations.join_records([part(0, 1, None, ok)], 0)["first_record"] == 0
+    assert "first_record" not in evaluations.join_records([part(0, 1, None, ok)], None)
