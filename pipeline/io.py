@@ -35,7 +35,7 @@ from typing import Any, Iterable, Mapping
 import numpy as np
 import xarray as xr
 
-from . import DISTRIBUTION, __version__, interrupts
+from . import DISTRIBUTION, __version__, duck_arrays, interrupts
 from .paths import looked_for, refuse_links
 from .variables import TIME
 
@@ -43,6 +43,9 @@ try:  # (POSIX: the file size limit, ulimit -f)
     import resource
 except ImportError:  # pragma: no cover
     resource = None  # type: ignore[assignment]
+
+# xarray's duck-array checks answered without importing dask.array and pint (~0.35 s a process)
+duck_arrays.defer()
 
 ENGINE = "netcdf4"
 #: Serialises NetCDF I/O between threads of one process (pipeline.fanout runs tasks on threads):

@@ -22,7 +22,7 @@ ROOT = Path(__file__).resolve().parents[2] / "pipeline"
 LAYERS = {
     "pipeline": 0, "pipeline.units": 0, "pipeline.code_version": 0, "pipeline.io": 0,
     "pipeline.variables": 0, "pipeline.fanout": 0, "pipeline.progress": 0, "pipeline.validity": 0,
-    "pipeline.interrupts": 0, "pipeline.paths": 0, "pipeline.folder_lock": 0,
+    "pipeline.interrupts": 0, "pipeline.paths": 0, "pipeline.folder_lock": 0, "pipeline.duck_arrays": 0,
     "pipeline.physics": 1,
     "pipeline.config": 2,
     "pipeline.model": 3,

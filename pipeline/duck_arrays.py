@@ -1,0 +1,66 @@
+"""xarray's duck-array checks without importing dask.array or pint for them.
+
+xarray asks, on the first Variable or index it makes, whether the data is a dask array or a pint
+quantity (``isinstance(data, array_type("dask"))``), and to answer it imports ``dask.array`` (~0.2 s)
+and ``pint`` (~0.15 s), in every process, although hdi's own datasets hold neither (its fan-out uses
+dask's scheduler, not its arrays). An object of a module's type cannot exist before that module is
+imported, so until it is the answer is "no" without importing anything: :func:`defer` puts a stand-in
+into xarray's cache of those modules that answers so while the module is absent from ``sys.modules``
+and hands over to xarray's own entry the first time it is present (a user's ``import dask.array`` or
+``import pint_xarray``, ``open_mfdataset``'s chunks). The answers are xarray's in every case; only the
+imports are deferred. Measured in docs/performance.md, section "xarray's duck-array imports".
+
+The cache is xarray's private ``xarray.namedarray.pycompat._cached_duck_array_modules``: where a later
+xarray has no such cache or entry type, :func:`defer` does nothing and xarray imports as before
+(tests/core/test_duck_arrays.py says which case this xarray is).
+"""
+
+from __future__ import annotations
+
+import sys
+from typing import Any
+
+#: xarray's name of a duck-array module -> the module whose import makes its type exist.
+DEFERRED = {"dask": "dask.array", "pint": "pint"}
+
+
+def defer() -> bool:
+    """Put the stand-ins of :data:`DEFERRED` into xarray's duck-array cache (the module docstring), for the
+    modules xarray has not looked up yet and that are not imported; True if xarray has the cache."""
+    try:
+        from xarray.namedarray import pycompat
+        cache, real = pycompat._cached_duck_array_modules, pycompat.DuckArrayModule
+    except (ImportError, AttributeError):  # pragma: no cover (another xarray: its imports as they are)
+        return False
+    if not isinstance(cache, dict):  # pragma: no cover
+        return False
+    for name, module in DEFERRED.items():
+        if name not in cache and module not in sys.modules:
+            cache[name] = _Deferred(name, module, cache, real)
+    return True
+
+
+class _Deferred:
+    """xarray's ``DuckArrayModule`` of ``name`` before ``module`` is imported: ``type`` is empty (no object
+    of it can exist yet); once ``module`` is in ``sys.modules``, or any other attribute is asked for,
+    xarray's own entry is made, put in the cache in this one's place, and answers."""
+
+    def __init__(self, name: str, module: str, cache: dict, real: type) -> None:
+        self._name, self._module, self._cache, self._real = name, module, cache, real
+
+    def _resolve(self) -> Any:
+        entry = self._real(self._name)
+        if self._cache.get(self._name) is self:
+            self._cache[self._name] = entry
+        return entry
+
+    @property
+    def type(self) -> tuple:
+        if self._module not in sys.modules:
+            return ()
+        return self._resolve().type
+
+    def __getattr__(self, attr: str) -> Any:  # (module, version, available: xarray's, imported now)
+        if attr.startswith("_"):
+            raise AttributeError(attr)
+        return getattr(self._resolve(), attr)
