@@ -3,7 +3,8 @@
 Every caller that turns runs into data (the ``simulate`` stage, the sweep's batches, the parameter
 studies' evaluations, the accuracy stage) calls :func:`simulate` instead of looping over
 :func:`pipeline.model.running.run_model`, :func:`~pipeline.model.outcomes.histories` and
-:func:`~pipeline.model.outcomes.summarize` and building its own dataset. The variables are those of
+:func:`~pipeline.model.outcomes.summarize` and building its own dataset (the parameter studies' evaluations
+call :func:`scalars`, the same numbers without the dataset). The variables are those of
 :mod:`pipeline.variables` (steady-window scalars :data:`~pipeline.variables.SCALARS`, time histories
 :data:`~pipeline.variables.HISTORIES`, the heater-stepping outputs :data:`~pipeline.variables.STEPPING`),
 in dataset units.
