@@ -15,7 +15,9 @@ targets and residuals, is :mod:`pipeline.analyses.study`):
   :func:`pipeline.model.scene_inputs.contact_k` without a calibration (:func:`evaluate`);
 * a racing part of a candidate (its DMW records ``a`` to ``b - 1``) finds in its worker process what an
   earlier part of the same candidate made (:class:`Candidates`): its validated scene, its inputs and their
-  keys, and its static starts, which are those of the mean disk and so the same for every record;
+  keys, its model (each record's is :func:`pipeline.model.assembly.with_record` of it), its static starts,
+  which are those of the mean disk and so the same for every record, and, for the candidates run last,
+  its tabulated TFC-point forces;
 * candidates are fanned out in batches (:func:`evaluate_batch`, via :func:`pipeline.fanout.run_tasks`);
   every finished evaluation is appended to a JSON-lines store (:class:`EvaluationStore`) keyed by the
   hash of the base scene and its inputs, the parameter values and the protrusions, so an interrupted
@@ -46,8 +48,9 @@ from .model import assembly, copies, running
 from .model.bulge_table import scene_table
 from .model.inputs import SimulationInputs, Source, cached, for_stage
 from .model.interface_tables import build_tables, roughness_statistics
-from .model.simulation import simulate
+from .model.simulation import scalars
 from .runner import Runner, scene_part, simulation_inputs
+from .units import NM
 from .variables import SCALARS
 
 
@@ -148,7 +151,9 @@ def seeded_record(scene: Any, seed: int, key: str | None = None) -> tuple[np.nda
                          f"realisation); got dmw.source = {scene['dmw']['source']!r}")
 
     def make() -> tuple[np.ndarray, float]:
-        s = dmw_record.settings(scene.replace(dmw={"seed": int(seed)}))
+        # (the scene's settings with the seed: those of the scene with dmw.seed = seed, without validating
+        # that scene again, ~1 ms a record; realisation seeds are in the key's range by construction)
+        s = {**dmw_record.settings(scene), "seed": int(seed)}
         return dmw_record.synthetic_record(s), s["sample_rate_hz"]
     return cached("dmw", key or seeded_key(scene, seed), make)
 
@@ -161,16 +166,16 @@ def seeded_key(scene: Any, seed: int) -> str:
 def run_protrusions(model: assembly.Model, protrusions: Sequence[float]) -> tuple[dict[str, list[float]], float, list[str]]:
     """Steady-window summaries of ``model`` at ``protrusions`` [nm], in dataset units (``fhm_bv`` [%],
     ``min_clearance`` [nm], ``contact_force`` [mN], ...), one value per protrusion, NaN where the run
-    failed or the quantity does not exist (no contact), by :func:`pipeline.model.simulation.simulate`.
+    failed or the quantity does not exist (no contact), by :func:`pipeline.model.simulation.scalars` (:func:`~pipeline.model.simulation.simulate`'s numbers).
     Returns ``(outputs, kernel seconds [s], errors)``."""
     timings = {"kernel_seconds": 0.0}
-    ds = simulate(model, protrusions, on_error="nan", timings=timings)
-    errors = [ds.attrs["errors"]] if "errors" in ds.attrs else []
+    # (the dataset's numbers, without the dataset: simulation.scalars)
+    values, failed = scalars(model, protrusions, timings=timings)
+    errors = ["; ".join(failed)] if failed else []
     outputs: dict[str, list[float]] = {}
-    for name, v in ds.data_vars.items():
+    for name, v in values.items():
         fill = SCALARS[name].fill_value  # (a failed protrusion's regime: its fill value, NaN here)
-        outputs[name] = [float("nan") if fill is not None and x == fill else float(x)
-                         for x in v.values.astype(float)]
+        outputs[name] = [float("nan") if fill is not None and x == fill else float(x) for x in v.astype(float)]
     return outputs, timings["kernel_seconds"], errors
 
 
@@ -220,14 +225,17 @@ def evaluate(base: Any, params: Sequence[Parameter], values: Sequence[float], pr
     try:
         cand = _CANDIDATES.get(base, inputs, params, values)
         scene, sim = cand.scene, cand.inputs(inputs)
-        sims = [sim] if a == 0 else []
+        records = [sim.record()] if a == 0 else []
         if realisations > 1:
             seeds = dmw_record.realisation_seeds(scene["dmw"]["seed"], realisations)[a:b]
-            sims += [sim.with_record(Source.memory("dmw", seeded_record(scene, seed, cand.record_key(seed))))
-                     for seed in (seeds[1:] if a == 0 else seeds)]
-        models = [s.model(scene) for s in sims]
-        # (the static starts are on the mean disk: found once for all records, and for all parts of the ensemble)
+            records += [seeded_record(scene, seed, cand.record_key(seed)) for seed in (seeds[1:] if a == 0 else seeds)]
+        # (the candidate's model once, each record's disk on it: assembly.with_record, the same models)
+        template = cand.template()
+        models = [assembly.with_record(template, record) for record in records]
+        # (the static starts are on the mean disk: found once for all records, and for all parts of the
+        # ensemble; the tabulated TFC force at the protrusions too, for the candidates run last)
         models[0].statics = cand.statics
+        models[0].tfc_tables = dict(cand.tfc_tables)
         copies.share_statics(models)
     except (SceneError, ValueError, running.IntegrationError) as exc:
         errors.append(str(exc))
@@ -237,6 +245,8 @@ def evaluate(base: Any, params: Sequence[Parameter], values: Sequence[float], pr
         kernel += seconds
         errors += [f"realisation {r}: {e}" for e in errs] if realisations > 1 else errs
         per_seed.append(outputs)
+    if models:
+        _CANDIDATES.keep_tables(cand, models[0].tfc_tables, protrusions)
     if realisations == 1:
         outputs = per_seed[0] if per_seed else {}
     else:
@@ -262,7 +272,10 @@ class _Candidate:
     (:func:`candidate_inputs` with ``k``: its own interface tables and DMW record where its keys are not
     the base's, so that they are not made again when the process's dataset cache,
     :func:`pipeline.model.inputs.cached`, dropped them between two parts), the dmw keys of its seeded
-    records (:func:`seeded_key`) and its models' ``statics`` (the static starts)."""
+    records (:func:`seeded_key`), its models' ``statics`` (the static starts), its model without a DMW
+    record (``model``: :meth:`template`) and, while it is among the last :data:`TABLES_KEPT` candidates
+    run, its tabulated TFC-point forces at the study's protrusions (``tfc_tables``, ~1.7 MB:
+    :meth:`Candidates.keep_tables`)."""
 
     scene: Any
     key: Callable[[str], str]
@@ -270,12 +283,24 @@ class _Candidate:
     statics: dict = field(default_factory=dict)
     records: dict[int, str] = field(default_factory=dict)
     sim: SimulationInputs | None = None
+    model: assembly.Model | None = None
+    tfc_tables: dict = field(default_factory=dict)
 
     def inputs(self, base: SimulationInputs) -> SimulationInputs:
         """The candidate's inputs on the base inputs ``base`` (the entry's: :class:`Candidates`), made once."""
         if self.sim is None:
             self.sim = replace(candidate_inputs(self.scene, base, self.key), k=self.k)
         return self.sim
+
+    def template(self) -> assembly.Model:
+        """The candidate's model on its inputs (:meth:`inputs`, made first), without its DMW record: each
+        record's model is :func:`pipeline.model.assembly.with_record` of it (its interface tables, laws and
+        tolerances made once, not once per record, ~7 ms). Made once."""
+        if self.model is None:
+            model = self.sim.model(self.scene)
+            model.dmw = None  # (each record's own: with_record; the template itself is never run)
+            self.model = model
+        return self.model
 
     def record_key(self, seed: int) -> str:
         if seed not in self.records:
@@ -304,6 +329,8 @@ class Candidates:
     def __init__(self, size: int):
         self.size = size
         self._entries: OrderedDict[tuple, tuple[Any, Any, _Candidate]] = OrderedDict()
+        #: the candidates whose TFC tables are kept (:meth:`keep_tables`), by ``id``, the last run last
+        self._tables: OrderedDict[int, _Candidate] = OrderedDict()
         self._lock = threading.Lock()
 
     def get(self, base: Any, inputs: Any, params: Sequence[Parameter], values: Sequence[float]) -> _Candidate:
@@ -329,12 +356,32 @@ class Candidates:
         """Forget every candidate."""
         with self._lock:
             self._entries.clear()
+            self._tables.clear()
+
+    def keep_tables(self, cand: _Candidate, tables: dict, protrusions: Sequence[float]) -> None:
+        """Keep on ``cand`` the tabulated TFC-point forces ``tables`` (a model's ``tfc_tables``,
+        :func:`pipeline.model.kernel_inputs.tfc_table`) at ``protrusions`` [nm], for its next records, and
+        drop those of the candidates run before the last :data:`TABLES_KEPT`. A table is a function of the
+        candidate's laws and the protrusion alone, so a record's run with a kept table is the same, bit for bit;
+        each costs ~0.4 ms a run to make (a 4001-knot spline), 128 kB to keep."""
+        keys = [float(float(x) * NM) for x in protrusions]  # (the key of a run's table: its protrusion [m])
+        kept = {k: tables[k] for k in keys if k in tables}
+        with self._lock:
+            cand.tfc_tables = {**cand.tfc_tables, **kept}  # (a new dict: a task may be reading the old one)
+            self._tables[id(cand)] = cand
+            self._tables.move_to_end(id(cand))
+            while len(self._tables) > TABLES_KEPT:
+                self._tables.popitem(last=False)[1].tfc_tables = {}
 
 
 #: Candidates a worker process keeps (:class:`Candidates`): more than one racing fan-out holds (the
 #: default budget's generation is 60 candidates, a round of profile walks up to ~130 points); up to ~130 kB
 #: each (the bulge scene's own interface tables, 56 kB, and DMW record, 67 kB), ~32 MB in all.
 CANDIDATES_KEPT = 256
+#: Candidates whose tabulated TFC-point forces are kept (:meth:`Candidates.keep_tables`): the local threads
+#: run a racing stage's records in blocks of as many candidates as threads (:meth:`Evaluator._record_tasks`),
+#: so a candidate's next record comes within a few candidates; ~1.7 MB each for the bulge scene's 13 protrusions.
+TABLES_KEPT = 16
 _CANDIDATES = Candidates(CANDIDATES_KEPT)
 
 
@@ -508,10 +555,17 @@ class Evaluator:
         (:func:`join_records`). A part's records do not depend on the task they run in (the candidate is kept
         between them, :class:`Candidates`), so the parts stored are those of :meth:`_batches`'s tasks, bit for
         bit; but a lone candidate's part (a walk's poll, the last racing stage's survivor) no longer runs on one
-        thread while the other idles. Record-major order: two threads start two candidates, not one twice."""
+        thread while the other idles. Record-major order within blocks of as many candidates as threads: two
+        threads start two candidates, not one twice, and a candidate's next record follows within a block, while
+        its TFC tables are kept (:data:`TABLES_KEPT`)."""
         n = self.realisations
+        threads = self._threads(sum(len(rows) * (b - a) for (a, b), rows in todo.items()))
+        block: dict[tuple[float, ...], int] = {}  # (a candidate's block: its first appearance, by threads)
+        for rows in todo.values():
+            for x in rows.values():
+                block.setdefault(tuple(x), len(block) // threads)
         units = sorted(((r, a, b, key, x) for (a, b), rows in todo.items() for key, x in rows.items()
-                        for r in range(a, b)), key=lambda u: u[0])
+                        for r in range(a, b)), key=lambda u: (block[tuple(u[4])], u[0]))
         tasks = [(self.base, list(self.params), [(key, x)], list(self.protrusions), self.inputs, n, (r, r + 1))
                  for r, a, b, key, x in units]
         pieces: dict[str, list[dict[str, Any]]] = {key: [] for (a, b), rows in todo.items() for key in rows}

@@ -153,20 +153,30 @@ class Variable:
     def data(self, values: Any, dims: Iterable[str], **attrs: Any) -> xr.Variable:
         """A variable from values already in dataset units (NaN -> fill value for flags)."""
         import xarray as xr  # (here: pipeline.model.ahead.NOT_IMPORTED_EARLY)
-        values = np.asarray(values)
-        if self.fill_value is not None:  # NaN (not computed, or a decoded fill) -> the declared fill
-            values = np.where(np.isfinite(values.astype(float)), values, self.fill_value)
+        values = self.stored(values)
         if self.dtype == "str":
-            return xr.Variable(tuple(dims), values.astype(object), attrs={**self.attrs(), **attrs})
-        return xr.Variable(tuple(dims), values.astype(self.dtype), attrs={**self.attrs(), **attrs},
-                           encoding=self.encoding())
+            return xr.Variable(tuple(dims), values, attrs={**self.attrs(), **attrs})
+        return xr.Variable(tuple(dims), values, attrs={**self.attrs(), **attrs}, encoding=self.encoding())
 
     def from_si(self, values: Any, dims: Iterable[str], **attrs: Any) -> xr.Variable:
         """A variable from SI values (divided by ``si_unit``; flags and labels unscaled)."""
+        return self.data(self.scaled(values), dims, **attrs)
+
+    def stored(self, values: Any) -> np.ndarray:
+        """The array :meth:`data` holds for ``values`` in dataset units: NaN -> the fill value for flags,
+        cast to :attr:`dtype` (``object`` for labels)."""
         values = np.asarray(values)
+        if self.fill_value is not None:  # NaN (not computed, or a decoded fill) -> the declared fill
+            values = np.where(np.isfinite(values.astype(float)), values, self.fill_value)
+        return values.astype(object) if self.dtype == "str" else values.astype(self.dtype)
+
+    def scaled(self, values_si: Any) -> np.ndarray:
+        """SI values in dataset units, as :meth:`from_si` takes them (divided by ``si_unit``; flags and
+        labels unscaled); :meth:`stored` gives the array a variable then holds."""
+        values = np.asarray(values_si)
         if values.dtype.kind in "fiub" and self.si_unit != 1.0:
             values = values / self.si_unit
-        return self.data(values, dims, **attrs)
+        return values
 
     def encoding(self) -> dict[str, Any]:
         """NetCDF encoding of the variable: its declared missing value."""

@@ -230,6 +230,19 @@ def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float]
                  start=s_sol.start, meniscus=meniscus, area_model=sc.area_model)
 
 
+def with_record(model: Model, dmw: tuple[np.ndarray, float] | None) -> Model:
+    """The model of the same scene on another DMW record ``dmw`` (as :func:`build_model` takes it): the
+    model :func:`build_model` gives with that record, bit for bit, its one record-dependent step
+    (:func:`disk_record`) made again and the others' results shared (the interface tables, the laws, the
+    tolerances: read only). The realisations of a parameter study's candidate (~2 ms instead of ~9 ms:
+    docs/performance.md, section "The Python of a pair"). The copy has its own caches (``statics``,
+    ``integrated``, ``tfc_tables``: :mod:`pipeline.model.copies` shares them)."""
+    p = dyn.with_values(model.p)
+    info = dict(model.info)  # (disk_record sets the disk speed again, in its place)
+    coefficients = disk_record(model.scene, p, dmw, info)
+    return replace(model, p=p, dmw=coefficients, info=info)
+
+
 def kernel_record(slider: ab.Slider, si: Any) -> np.record:
     """Step 1: the kernel's parameter record (:data:`pipeline.model.dynamics.PARAMS`) with the fields the
     scene fixes: the rigid body and its air bearing (:func:`slider_from_scene`), the flying height, the

@@ -25,12 +25,12 @@ Steady-window definitions (over ``transient_ms <= t <= duration_ms``, sampled ev
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
 from .forces import separation_at
-from .kernel_inputs import interface_tables
+from .kernel_inputs import InterfaceTables, interface_tables
 from .piecewise import disk_history, ppval
 from .running import Run
 from .state import MENISCUS, THETA, THETA_RATE, WINDOW_SWITCHES, Z, Z_RATE
@@ -45,22 +45,33 @@ FLYING, BOUNCING, SURFING = Regime.FLYING, Regime.BOUNCING, Regime.SURFING
 SURFING_FRACTION = 0.99
 
 
-def histories(run: Run) -> dict[str, np.ndarray]:
+def histories(run: Run, steady: bool = False) -> dict[str, np.ndarray]:
     """Time series of a run [SI]: separation, clearance, forces, friction coefficient, stresses.
 
     Only the quantities of the scene's effects are returned (no adhesion history without the
-    adhesion effect, and so on).
+    adhesion effect, and so on). ``steady``: at the steady window's samples only (:func:`steady_window`),
+    and only the series :func:`summarize` reads (not the ratios ``mean_pressure``,
+    ``friction_coefficient``, ``shear_stress``): each sample's value is computed alone, so these are
+    the full histories' values at those samples, bit for bit, for a third less work (the parameter
+    studies keep no history: docs/performance.md, section "The Python of a pair").
     """
     m, p = run.model, run.p
-    Y, t = run.state, run.time
-    w = np.zeros_like(t)
-    wdot = np.zeros_like(t)
+    Y, t, c = run.state, run.time, run.contact
+    if steady:
+        win = steady_window(run)
+        first = int(np.argmax(win)) if win.any() else win.size
+        # (the output times never decrease, so the window is the samples from the first on: views, where
+        # a boolean selection copied the whole state, ~0.1 ms; the same values, the same layouts)
+        sel = slice(first, None) if win[first:].all() else win
+        Y, t, c = Y[sel], t[sel], c[sel]
     if m.dmw is not None:
         w, wdot = disk_history(m.dmw, p, t)
+    else:
+        w, wdot = np.zeros_like(t), np.zeros_like(t)
     d = separation_at(p, Y[:, Z], Y[:, THETA], w)
     out: dict[str, np.ndarray] = {"separation": d, "disk_displacement": w, "z": Y[:, Z], "pitch": Y[:, THETA]}
     out["clearance"] = d - m.k_sigma
-    x0, h, An = p.tab_x0, p.tab_h, run.nominal_area
+    x0, h, An = p["tab_x0"], p["tab_h"], run.nominal_area  # (item access: a record's attribute is ~10x slower)
     tabs = interface_tables(m, run.protrusion, An)  # (those the kernel ran with: contact.area_model)
     net = np.zeros_like(t)
     if tabs.adhesion is not None:  # (the meniscus state q is the adhesion pressure when it is on)
@@ -69,33 +80,34 @@ def histories(run: Run) -> dict[str, np.ndarray]:
             out["adhesion_force"] += An * ppval(np.ascontiguousarray(tabs.adhesion[:, 4:]), x0, h, d)
         net -= out["adhesion_force"]
     if m.contact is not None:
-        c = run.contact
+        dc = d[c] if c.any() else None  # (the separation at the samples in contact, for every table)
 
         def on_contact(table: np.ndarray, upper: float = np.inf) -> np.ndarray:
             """``A_n`` times a table at the samples in contact (its laws are off elsewhere: 0)."""
             v = np.zeros_like(t)
-            if c.any():
-                v[c] = An * np.clip(ppval(table, x0, h, d[c]), 0.0, upper)
+            if dc is not None:
+                v[c] = An * np.clip(ppval(table, x0, h, dc), 0.0, upper)
             return v
 
         out["in_contact"] = c
         fc = on_contact(tabs.contact)
         ddot = Y[:, Z_RATE] - m.slider.l_c * Y[:, THETA_RATE] - wdot
         out["contact_force"] = fc
-        out["contact_damping_force"] = np.where(c, -p.c_c * ddot, 0.0)
+        out["contact_damping_force"] = np.where(c, -p["c_c"] * ddot, 0.0)
         net += fc + out["contact_damping_force"]
         # (clipped to [0, A_n] (flat section; the footprint when integrated): the spline through the
         # capped table may overshoot by ~1e-6 at the cap)
         area = on_contact(tabs.area, tabs.area_cap)
         out["real_area"] = area
+        if steady:  # (the ratios below are histories of their own: summarize takes ratios of sums)
+            if tabs.friction is not None:
+                out["friction_force"] = _friction(tabs, on_contact, An, x0, h, d)
+            out["net_force"] = net
+            return out
         with np.errstate(invalid="ignore", divide="ignore"):
             out["mean_pressure"] = np.where(c & (area > 0), fc / np.where(area > 0, area, 1.0), np.nan)
             if tabs.friction is not None:
-                two = tabs.friction.shape[1] == 8  # the continuous lubricant shear beside (forces.py)
-                ff = on_contact(np.ascontiguousarray(tabs.friction[:, :4]) if two else tabs.friction)
-                if two:  # ... at every sample
-                    ff = ff + An * np.maximum(ppval(np.ascontiguousarray(tabs.friction[:, 4:]), x0, h, d), 0.0)
-                out["friction_force"] = ff
+                ff = out["friction_force"] = _friction(tabs, on_contact, An, x0, h, d)
                 out["friction_coefficient"] = np.where(c & (fc > 0), ff / np.where(fc > 0, fc, 1.0), np.nan)
                 out["shear_stress"] = np.where(c & (area > 0), ff / np.where(area > 0, area, 1.0), np.nan)
     if m.adhesion is not None or m.contact is not None:
@@ -103,18 +115,37 @@ def histories(run: Run) -> dict[str, np.ndarray]:
     return out
 
 
+def _friction(tabs: InterfaceTables, on_contact: Callable[[np.ndarray], np.ndarray], An: float, x0: float, h: float, d: np.ndarray) -> np.ndarray:
+    """The friction force history [N] of :func:`histories`: the friction table in contact, and the
+    continuous lubricant shear beside at every sample when the table holds two (forces.py)."""
+    two = tabs.friction.shape[1] == 8
+    ff = on_contact(np.ascontiguousarray(tabs.friction[:, :4]) if two else tabs.friction)
+    if two:
+        ff = ff + An * np.maximum(ppval(np.ascontiguousarray(tabs.friction[:, 4:]), x0, h, d), 0.0)
+    return ff
+
+
+def steady_window(run: Run) -> np.ndarray:
+    """The output samples of a run's steady window, ``transient <= t`` (a boolean mask over ``run.time``)."""
+    return run.time >= run.model.transient - 1e-15
+
+
 def summarize(run: Run, hist: dict[str, np.ndarray] | None = None) -> dict[str, float]:
-    """Steady-window scalars of a run (SI units; definitions in the module docstring)."""
+    """Steady-window scalars of a run (SI units; definitions in the module docstring), from its
+    histories ``hist`` (:func:`histories`), or, when None, from those of the steady window alone
+    (``histories(run, steady=True)``: the same numbers, bit for bit)."""
     m = run.model
-    hist = histories(run) if hist is None else hist
-    win = run.time >= m.transient - 1e-15
+    if hist is None:
+        hist, win = histories(run, steady=True), slice(None)
+    else:
+        win = steady_window(run)
     d = hist["separation"][win]
     c = hist["clearance"][win]
     lo, hi = run.d_extremes
     exact = np.isfinite(lo) and np.isfinite(hi)
     # peak-to-peak of the exact extremes (between samples too) when the kernel found them
     exact_pp = m.fhm_measure == "peak-to-peak" and exact
-    fhm_bv = float(fhm(np.array([lo, hi]) if exact_pp else d, m.p.FH0, m.fhm_measure))
+    fhm_bv = float(fhm(np.array([lo, hi]) if exact_pp else d, m.p["FH0"], m.fhm_measure))
     out = {
         "fhm_bv": fhm_bv,
         "clearance": float(np.mean(c)),
@@ -138,13 +169,14 @@ def summarize(run: Run, hist: dict[str, np.ndarray] | None = None) -> dict[str, 
         out["contact_force"] = float(np.mean(fc))
         out["interference"] = float(np.mean(-c[inc])) if inc.any() else np.nan
         out["real_area"] = float(np.mean(area[inc])) if inc.any() else np.nan
-        out["mean_pressure"] = float(fc.sum() / area.sum()) if area.sum() > 0 else np.nan
+        fc_sum, area_sum = fc.sum(), area.sum()
+        out["mean_pressure"] = float(fc_sum / area_sum) if area_sum > 0 else np.nan
         if "friction_force" in hist:
             ff = hist["friction_force"][win]
             out["friction_force"] = float(np.mean(ff))
-            out["friction_coefficient"] = float(ff.sum() / fc.sum()) if fc.sum() > 0 else np.nan
+            out["friction_coefficient"] = float(ff.sum() / fc_sum) if fc_sum > 0 else np.nan
             # (the friction in contact: the continuous lubricant shear also acts out of contact)
-            out["shear_stress"] = float(np.where(inc, ff, 0.0).sum() / area.sum()) if area.sum() > 0 else np.nan
+            out["shear_stress"] = float(np.where(inc, ff, 0.0).sum() / area_sum) if area_sum > 0 else np.nan
     out["validity"] = int(_validity(run, hist, win))
     return out
 
@@ -165,7 +197,7 @@ def touched(run: Run) -> bool:
     falls between samples but not past the integrator's exact extremes). The one rule of the regime
     (:func:`summarize`) and of the calibration; from a summary, ``min_clearance < 0`` says the same
     whenever the kernel tracked the extremes."""
-    win = run.time >= run.model.transient - 1e-15
+    win = steady_window(run)
     return bool(run.contact[win].any() or run.d_extremes[0] < run.model.k_sigma)
 
 
@@ -176,7 +208,7 @@ def touched_in_summary(min_clearance: Any) -> Any:
         return np.asarray(min_clearance) < 0
 
 
-def _validity(run: Run, hist: dict[str, np.ndarray], win: np.ndarray) -> int:
+def _validity(run: Run, hist: dict[str, np.ndarray], win: np.ndarray | slice) -> int:
     """The :class:`pipeline.validity.Validity` bits of a run's steady window."""
     m, s = run.model, run.model.slider
     fh0 = float(m.p["FH0"])

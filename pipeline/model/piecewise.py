@@ -13,6 +13,9 @@ disk under the TFC point, the front pad and the rear pad.
 
 from __future__ import annotations
 
+import functools
+from typing import Any
+
 import numpy as np
 
 from .compiled import kernel_jit
@@ -35,10 +38,70 @@ def piecewise_coefficients(y: np.ndarray, h: float, order: int) -> np.ndarray:
         c[:, 3] = y[:-1]
         return c
     if order == 3:
-        from scipy.interpolate import CubicSpline
-        x = h * np.arange(y.size)
-        return np.ascontiguousarray(CubicSpline(x, y).c.T)
+        if y.size < 4 or y.ndim != 1:  # (the spline's special cases: scipy's own)
+            from scipy.interpolate import CubicSpline
+            return np.ascontiguousarray(CubicSpline(h * np.arange(y.size), y).c.T)
+        return _not_a_knot(y, h)
     raise ValueError(f"interpolation order {order}: expected 1 or 3")
+
+
+def _not_a_knot(y: np.ndarray, h: float) -> np.ndarray:
+    """The coefficients of ``scipy.interpolate.CubicSpline(h * np.arange(n), y).c.T`` for a 1-D ``y`` of
+    ``n >= 4`` finite values, bit for bit: the same operations in the same order (the end rows of the
+    not-a-knot condition, LAPACK's tridiagonal ``gtsv`` for the slopes, then the Hermite coefficients),
+    without the checks and wrapper objects of scipy's general path, which cost twice the arithmetic on the
+    4001-knot tables of a run (docs/performance.md, section "The Python of a pair"). The grid's bands
+    are made once per ``(n, h)`` (:func:`_spline_grid`). tests/model/test_piecewise.py compares it with
+    scipy's on random data and on the tables of the shipped scenes."""
+    if not np.all(np.isfinite(y)):
+        raise ValueError("`y` must contain only finite values.")
+    dx, upper, diagonal, lower, d0, d1 = _spline_grid(y.size, float(h))
+    slope = np.diff(y) / dx
+    b = np.empty(y.size)
+    b[1:-1] = 3 * (dx[1:] * slope[:-1] + dx[:-1] * slope[1:])
+    b[0] = ((dx[0] + 2 * d0) * dx[1] * slope[0] + dx[0] ** 2 * slope[1]) / d0
+    b[-1] = (dx[-1] ** 2 * slope[-2] + (2 * d1 + dx[-1]) * dx[-2] * slope[-1]) / d1
+    _, _, _, s, info = _gtsv()(lower.copy(), diagonal.copy(), upper.copy(), b.reshape(-1, 1), True, True, True, True)
+    if info != 0:
+        from numpy.linalg import LinAlgError
+        raise LinAlgError("singular matrix") if info > 0 else ValueError(f"gtsv: illegal argument {-info}")
+    s = s.reshape(-1)
+    t = (s[:-1] + s[1:] - 2 * slope) / dx
+    c = np.empty((y.size - 1, 4))
+    c[:, 0] = t / dx
+    c[:, 1] = (slope - s[:-1]) / dx - t
+    c[:, 2] = s[:-1]
+    c[:, 3] = y[:-1]
+    return c
+
+
+@functools.lru_cache(maxsize=16)
+def _spline_grid(n: int, h: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float, float]:
+    """The knots' steps ``dx`` [grid unit] of ``h * np.arange(n)`` (not all exactly ``h``: rounding) and the
+    bands of :func:`_not_a_knot`'s tridiagonal system (upper, diagonal, lower) with the not-a-knot end rows,
+    as scipy's ``CubicSpline`` builds them; ``d0 = x[2] - x[0]``, ``d1 = x[-1] - x[-3]``. Read only."""
+    x = h * np.arange(n)
+    dx = np.diff(x)
+    if np.any(dx <= 0):
+        raise ValueError(f"spline grid step {h}: expected > 0")
+    band = np.zeros((3, n))
+    band[1, 1:-1] = 2 * (dx[:-1] + dx[1:])
+    band[0, 2:] = dx[:-1]
+    band[-1, :-2] = dx[1:]
+    band[1, 0] = dx[1]
+    band[0, 1] = x[2] - x[0]
+    band[1, -1] = dx[-2]
+    band[-1, -2] = x[-1] - x[-3]
+    for a in (dx, band):
+        a.flags.writeable = False
+    return dx, band[0, 1:], band[1, :], band[2, :-1], x[2] - x[0], x[-1] - x[-3]
+
+
+@functools.lru_cache(maxsize=1)
+def _gtsv() -> Any:
+    """LAPACK's ``dgtsv`` (scipy's, imported on first use: :data:`pipeline.model.ahead.NOT_IMPORTED_EARLY`)."""
+    from scipy.linalg.lapack import dgtsv
+    return dgtsv
 
 
 @_inline

@@ -3,7 +3,8 @@
 Every caller that turns runs into data (the ``simulate`` stage, the sweep's batches, the parameter
 studies' evaluations, the accuracy stage) calls :func:`simulate` instead of looping over
 :func:`pipeline.model.running.run_model`, :func:`~pipeline.model.outcomes.histories` and
-:func:`~pipeline.model.outcomes.summarize` and building its own dataset. The variables are those of
+:func:`~pipeline.model.outcomes.summarize` and building its own dataset (the parameter studies' evaluations
+call :func:`scalars`, the same numbers without the dataset). The variables are those of
 :mod:`pipeline.variables` (steady-window scalars :data:`~pipeline.variables.SCALARS`, time histories
 :data:`~pipeline.variables.HISTORIES`, the heater-stepping outputs :data:`~pipeline.variables.STEPPING`),
 in dataset units.
@@ -33,7 +34,7 @@ import xarray as xr
 from ..config.grid import same_point
 from ..config.scene import PROTOCOLS
 from ..units import MS, NM
-from ..variables import HISTORIES, RUN, RUN_GRID_DIMS, STEPPING, TIME, coordinate, history, scalar
+from ..variables import HISTORIES, RUN, RUN_GRID_DIMS, SCALARS, STEPPING, TIME, coordinate, history, scalar
 from . import assembly, outcomes, running
 from .state import STEP_COUNTERS
 
@@ -86,13 +87,42 @@ def simulate(model: assembly.Model, protrusions: Sequence[float], *, histories: 
         if on_error != "raise":
             raise ValueError("on_error = 'nan' is for independent runs (a chain needs every step's end state)")
         return _stepping(model, prot, histories, counters, timings, on_run)
+    rows, info, kept, errors = _independent(model, prot, histories, on_error, timings, on_run)
+    ds = xr.Dataset(_scalars(rows, ("protrusion",)), coords={"protrusion": coordinate("protrusion", prot)})
+    if counters:
+        for name, values in zip(COUNTERS, np.stack(info).T):
+            ds[name] = HISTORIES[name].data(values, ("protrusion",))
+    if kept:
+        ds = ds.assign(_histories(kept)).assign_coords(_history_coords(kept))
+    if errors:
+        ds.attrs["errors"] = "; ".join(errors)
+    return ds
+
+
+def scalars(model: assembly.Model, protrusions: Sequence[float],
+            timings: dict[str, float] | None = None) -> tuple[dict[str, np.ndarray], list[str]]:
+    """The steady-window scalars of independent runs at ``protrusions`` [nm] as ``simulate(model, protrusions,
+    on_error="nan", timings=timings)`` holds them, without the dataset (the parameter studies' path, one
+    per (candidate, DMW record): docs/performance.md, section "The Python of a pair"): name -> the
+    variable's values (dataset units and dtype, a failed protrusion's flags their fill value), and the
+    failures as ``"<protrusion> nm: <message>"`` (the dataset's ``errors`` attribute, split)."""
+    rows, _, _, errors = _independent(model, np.asarray(protrusions, dtype=float), (), "nan", timings, None)
+    return {name: SCALARS[name].stored(SCALARS[name].scaled(values)) for name, values in _columns(rows).items()}, errors
+
+
+def _independent(model: assembly.Model, prot: np.ndarray, histories: Sequence[float], on_error: str,
+                 timings: dict[str, float] | None, on_run: Callable[[], Any] | None
+                 ) -> tuple[list[dict[str, float] | None], list[np.ndarray], list[tuple[float, running.Run, dict]], list[str]]:
+    """The independent runs of :func:`simulate` at ``prot`` [nm]: their steady-window scalars (SI; None: a
+    failed run), counters, kept histories ``(protrusion [nm], run, histories)`` and failures."""
     rows: list[dict[str, float] | None] = []
     kept: list[tuple[float, running.Run, dict]] = []
     info: list[np.ndarray] = []
     errors: list[str] = []
     for delta in prot:
+        keep = _kept(delta, histories)
         try:
-            run, hist, row = _run(model, float(delta), None, timings)
+            run, hist, row = _run(model, float(delta), None, timings, keep)
         except RUN_ERRORS as exc:
             if on_error == "raise":
                 raise
@@ -106,17 +136,9 @@ def simulate(model: assembly.Model, protrusions: Sequence[float], *, histories: 
             on_run()
         rows.append(row)
         info.append(run.info[STEP_COUNTERS])
-        if _kept(delta, histories):
+        if keep:
             kept.append((float(delta), run, hist))
-    ds = xr.Dataset(_scalars(rows, ("protrusion",)), coords={"protrusion": coordinate("protrusion", prot)})
-    if counters:
-        for name, values in zip(COUNTERS, np.stack(info).T):
-            ds[name] = HISTORIES[name].data(values, ("protrusion",))
-    if kept:
-        ds = ds.assign(_histories(kept)).assign_coords(_history_coords(kept))
-    if errors:
-        ds.attrs["errors"] = "; ".join(errors)
-    return ds
+    return rows, info, kept, errors
 
 
 def histories_of(ds: xr.Dataset) -> xr.Dataset:
@@ -140,13 +162,14 @@ def summary_of(ds: xr.Dataset) -> xr.Dataset:
 
 
 def _run(model: assembly.Model, delta_nm: float, y0: np.ndarray | None,
-         timings: dict[str, float] | None) -> tuple[running.Run, dict, dict]:
-    """One protrusion [nm]: its run, histories and steady-window scalars (SI)."""
+         timings: dict[str, float] | None, keep: bool = True) -> tuple[running.Run, dict | None, dict]:
+    """One protrusion [nm]: its run, histories (``keep``; else None: the scalars from the steady window's
+    alone, the same numbers) and steady-window scalars (SI)."""
     t0 = time.perf_counter()
     run = running.run_model(model, delta_nm * NM, y0=y0)
     if timings is not None:
         timings["kernel_seconds"] = timings.get("kernel_seconds", 0.0) + time.perf_counter() - t0
-    hist = outcomes.histories(run)
+    hist = outcomes.histories(run) if keep else None
     return run, hist, outcomes.summarize(run, hist)
 
 
@@ -158,16 +181,19 @@ def _kept(delta: float, histories: Sequence[float]) -> bool:
 def _scalars(rows: list[dict[str, float] | None], dims: tuple[str, ...],
              shape: tuple[int, ...] | None = None) -> dict[str, xr.Variable]:
     """Scalar variables from per-protrusion summaries (SI; ``None``: a failed run, NaN)."""
+    return {name: scalar(name, values if shape is None else values.reshape(shape), dims)
+            for name, values in _columns(rows).items()}
+
+
+def _columns(rows: list[dict[str, float] | None]) -> dict[str, np.ndarray]:
+    """Per-protrusion summaries (SI; ``None``: a failed run) as one array per quantity, NaN where a
+    summary lacks it, in the order the quantities first appear."""
     names: list[str] = []
     for r in rows:
         for name in r or ():
             if name not in names:
                 names.append(name)
-    out = {}
-    for name in names:
-        values = np.array([r[name] if r is not None and name in r else np.nan for r in rows])
-        out[name] = scalar(name, values if shape is None else values.reshape(shape), dims)
-    return out
+    return {name: np.array([r[name] if r is not None and name in r else np.nan for r in rows]) for name in names}
 
 
 def _histories(kept: list[tuple[float, running.Run, dict]]) -> dict[str, xr.Variable]:
@@ -200,13 +226,14 @@ def _stepping(model: assembly.Model, prot: np.ndarray, histories: Sequence[float
     y0 = None  # the first step starts by solver.start
     order = [(i, 0) for i in range(n)] + [(i, 1) for i in range(n - 2, -1, -1)]
     for i, j in order:
-        run, hist, rows[DIRECTIONS[j]][i] = _run(model, float(prot[i]), y0, timings)
+        keep = j == 0 and _kept(prot[i], histories)
+        run, hist, rows[DIRECTIONS[j]][i] = _run(model, float(prot[i]), y0, timings, keep)
         if on_run is not None:
             on_run()
         y0 = run.state[-1].copy()  # the end state: where the next heater step starts
         info[i, j] = run.info[STEP_COUNTERS]
         touch[i, j] = outcomes.touched(run)
-        if j == 0 and _kept(prot[i], histories):
+        if keep:
             kept.append((float(prot[i]), run, hist))
     # the top of the chain closes both passes: its one run is the downward pass's first step
     rows["down"][n - 1], info[n - 1, 1], touch[n - 1, 1] = rows["up"][n - 1], info[n - 1, 0], touch[n - 1, 0]

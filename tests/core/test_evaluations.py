@@ -166,3 +166,60 @@ def test_joined_parts_state_a_candidate_s_build_error_once_and_every_record_s_ow
     # a part starting at 0 names its first record; join_parts leaves that to the caller, which knows the whole
     assert "first_record" not in joined and evaluations.join_records([part(0, 1, None, ok)], 0)["first_record"] == 0
     assert "first_record" not in evaluations.join_records([part(0, 1, None, ok)], None)
+
+
+def test_a_candidate_s_tfc_tables_are_made_once_for_its_records_and_give_the_same_outputs(write_scene, paper_config,
+                                                                                           tmp_path, monkeypatch):
+    """A candidate's records share its model (``assembly.with_record``) and, while it is among the last
+    ``TABLES_KEPT`` candidates, its tabulated TFC-point forces (the bulge's law, one 4001-knot table per
+    protrusion): made once for its records, not once per record, and every output is a fresh candidate's."""
+    import numpy as np
+    import twin
+    from pipeline.analyses import study
+    from pipeline.config.scene import load_scene
+    from pipeline.model import kernel_inputs
+    text = twin.scene_text('targets = ["fhm_flying"]\nrealisations = 3\n') + '\n[air_bearing]\nbulge = "ph-limit"\n'
+    scene = load_scene(write_scene(text.format(paper=paper_config)))
+    params = study.parse_parameters(scene["identify"]["parameters"], "twin", "identify.parameters")
+    inputs = evaluations.prepare_inputs(scene, tmp_path / "base")
+    made = []
+    real = kernel_inputs._tfc_table
+    monkeypatch.setattr(kernel_inputs, "_tfc_table", lambda *a: made.append(a[2]) or real(*a))
+    prots, x, y = [5.0, 10.0], [0.14, 0.07], [0.2, 0.05]
+
+    def records(fresh: bool, point: list[float]) -> tuple[list[dict], list[int]]:
+        out, counts = [], []
+        for r in range(3):
+            if fresh or r == 0:
+                evaluations._CANDIDATES.clear()
+            n = len(made)
+            out.append(evaluations.evaluate(scene, params, point, prots, inputs, 3, (r, r + 1)))
+            counts.append(len(made) - n)
+        return out, counts
+
+    kept, counts = records(False, x)
+    # (the first record: the static starts' continuation ladder and the runs; the next ones none)
+    assert counts[0] >= len(prots) and counts[1:] == [0, 0]
+    fresh, again = records(True, x)
+    assert again == [counts[0]] * 3
+    for a, b in zip(kept, fresh):
+        assert a["error"] is None and json.dumps(a["outputs"]) == json.dumps(b["outputs"])
+    assert np.all(np.isfinite(np.array(kept[0]["outputs"]["fhm_bv"], float)))
+    # the tables of the candidates run before the last TABLES_KEPT are dropped
+    monkeypatch.setattr(evaluations, "TABLES_KEPT", 1)
+    first = evaluations._CANDIDATES.get(scene, inputs, params, x)
+    assert len(first.tfc_tables) == len(prots)
+    evaluations.evaluate(scene, params, y, prots, inputs, 3, (0, 1))
+    assert first.tfc_tables == {} and len(evaluations._CANDIDATES.get(scene, inputs, params, y).tfc_tables) == 2
+
+
+def test_racing_records_on_threads_run_in_blocks_of_as_many_candidates_as_threads(paper_scene, tmp_path):
+    """One task per (candidate, record) on the threads: record-major within blocks of as many candidates as
+    threads, so that two threads start two candidates and a candidate's next record comes within its block."""
+    store = evaluations.EvaluationStore(tmp_path / "s.jsonl")
+    ev = evaluations.Evaluator(paper_scene, [], [5.0], SimulationInputs(None, None, None), store, 4, None, 2,
+                               realisations=4, stages=(2, 4))
+    todo = {(0, 2): {"a": [1.0], "b": [2.0], "c": [3.0]}, (2, 4): {"a2": [1.0]}}
+    tasks, _, _ = ev._record_tasks(todo)
+    order = [(t[2][0][1][0], t[6][0]) for t in tasks]
+    assert order == [(1.0, 0), (2.0, 0), (1.0, 1), (2.0, 1), (1.0, 2), (1.0, 3), (3.0, 0), (3.0, 1)]

@@ -92,3 +92,26 @@ def test_capped_lift_is_held_below_the_cap_gap():
     capped = assembly.capped_lift(g, 10 * NM, force=lift, gap=1.0 * NM)
     np.testing.assert_array_equal(capped[:3], lift(1.0 * NM, 10 * NM))
     assert capped[3] == lift(2.0 * NM, 10 * NM)
+
+
+def test_a_model_on_another_record_is_the_model_built_with_it():
+    """``with_record`` (a study candidate's realisations) gives, field by field, the model ``build_model``
+    gives with that record, and leaves the model it copies as it was."""
+    import dataclasses
+    from slider_scenes import ALL, build, make_scene, synthetic_record
+    scene = make_scene(ALL, contact={"damping_n_s_m": 0.02})
+    other = synthetic_record(scene.replace(dmw={"seed": 7, "rms_nm": 0.3}))
+    first = build(scene)
+    before = first.dmw.copy()
+    moved, built = assembly.with_record(first, other), build(scene, other)
+    assert not np.array_equal(moved.dmw, before)
+    for f in dataclasses.fields(assembly.Model):
+        a, b = getattr(moved, f.name), getattr(built, f.name)
+        if isinstance(a, np.void):
+            assert a.tobytes() == b.tobytes(), f.name
+        elif isinstance(a, np.ndarray) or isinstance(a, float):
+            assert np.array_equal(a, b, equal_nan=True), f.name
+        else:
+            assert a == b, f.name
+    np.testing.assert_array_equal(first.dmw, before)
+    assert moved.p is not first.p and moved.statics is not first.statics

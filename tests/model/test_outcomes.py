@@ -5,6 +5,10 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+import numpy as np
+import pytest
+
+import slider_scenes
 from pipeline.model import assembly, outcomes, running
 from pipeline.units import NM
 from variant_scenes import make_scene, record
@@ -20,3 +24,37 @@ def test_touched_is_the_regime_and_calibration_rule():
     assert not outcomes.touched(run) and not run.contact.any()
     above = replace(run, model=replace(model, k=1.0, sigma=lo + 1e-3 * NM))
     assert above.model.k_sigma > lo and outcomes.touched(above)
+
+
+#: Scenes of :func:`test_the_steady_window_alone_gives_the_summary_bit_for_bit`: every series summarize reads
+#: (the meniscus state, two adhesion tables, the continuous lubricant shear, contact damping, the integrated area).
+VARIANTS = {
+    "all effects": {},
+    "meniscus, two populations": {"lubricant": {"meniscus_time_us": 20.0, "bridge_work_of_adhesion_j_m2": 0.005},
+                                  "interface": {"adhesion": "two-population"}},
+    "continuous friction, damped, integrated": {
+        "lubricant": {"shear_stress_mpa": 2.0},
+        "contact": {"friction_switching": "continuous", "damping_n_s_m": 0.02, "area_model": "integrated"}},
+}
+
+
+@pytest.mark.parametrize("variant", list(VARIANTS))
+def test_the_steady_window_alone_gives_the_summary_bit_for_bit(variant):
+    """``summarize(run)`` computes the histories of the steady window's samples only (the parameter studies'
+    path); every scalar is the one of the full histories, bit for bit, flying, bouncing and in steady contact."""
+    extra = dict(VARIANTS[variant])
+    scene = slider_scenes.make_scene(slider_scenes.ALL, contact=extra.pop("contact", None), **extra)
+    model = slider_scenes.build(scene)
+    regimes = set()
+    for delta in (4.0, 9.5, 10.5, 12.0):
+        run = running.run_model(model, delta * NM)
+        full = outcomes.histories(run)
+        whole, steady = outcomes.summarize(run, full), outcomes.summarize(run)
+        regimes.add(whole.get("regime"))
+        assert list(whole) == list(steady)
+        for name in whole:
+            assert np.array_equal(whole[name], steady[name], equal_nan=True), (variant, delta, name)
+        win = outcomes.steady_window(run)
+        for name, series in outcomes.histories(run, steady=True).items():
+            assert np.array_equal(series, full[name][win], equal_nan=True), (variant, delta, name)
+    assert {outcomes.FLYING, outcomes.SURFING} <= regimes  # (the test spans flying and contact)

@@ -155,3 +155,27 @@ def test_stepping_sweep_runs_one_batch_per_chain_and_resumes(tmp_path):
     touched = outcomes.touched_in_summary(a["min_clearance"].sel(direction="up").values)
     first = prot[np.argmax(touched, axis=0)]
     np.testing.assert_array_equal(a["touchdown_protrusion"].values, first)
+
+
+def test_scalars_are_the_numbers_of_the_dataset(monkeypatch):
+    """``scalars`` (the parameter studies' path) gives the numbers ``simulate(..., on_error="nan")`` puts in its
+    dataset, in its units and dtypes, a failed protrusion's regime its fill value, and the same failures."""
+    from pipeline.model import simulation
+    from pipeline.variables import SCALARS
+    model = build(make_scene(["air_bearing", "pitch", "dmw", "adhesion", "contact", "friction"]))
+    real = running.run_model
+
+    def failing(m, delta, **kwargs):  # (one protrusion fails as an integration may)
+        if abs(delta - 7.0 * NM) < 1e-3 * NM:
+            raise running.IntegrationError("a stand-in failure")
+        return real(m, delta, **kwargs)
+    monkeypatch.setattr(running, "run_model", failing)
+    prots = [5.0, 7.0, 12.0]
+    ds = simulate(model, prots, on_error="nan")
+    values, errors = simulation.scalars(model, prots)
+    assert list(values) == list(ds.data_vars) and "regime" in values
+    for name, v in values.items():
+        assert v.dtype == ds[name].dtype, name
+        np.testing.assert_array_equal(v, ds[name].values, err_msg=name)
+    assert values["regime"][1] == SCALARS["regime"].fill_value and np.isnan(values["fhm_bv"][1])
+    assert errors == ["7 nm: a stand-in failure"] and ds.attrs["errors"] == errors[0]
