@@ -19,7 +19,8 @@ closed form: exact for DMW content up to the Nyquist frequency, where a 500-ns s
 250-ns knots (one cubic through the step's ends would miss the peaks in between).
 
 The inlined helpers here end an array's use unconditionally and call no compiled function, so that
-numba can prune the reference counts of their array arguments (docs/kernel.md).
+numba can prune the reference counts of their array arguments (docs/kernel.md). The step, and the step's cap
+:func:`stiffness_cap`, are compiled without reference counts (:data:`pipeline.model.compiled.BORROWING`).
 """
 
 from __future__ import annotations
@@ -333,13 +334,16 @@ def inverse_mass_at_tfc(p, pitch):
     return 1.0 / p.m + (p.l_c ** 2 / p.I if pitch is not None else 0.0)
 
 
-@_inline
+@_jit_borrowing
 def stiffness_cap(p, in_contact, d, h_max, m_eff_inv, contact, adhesion, tfc, gap_power, meniscus):
     """Largest step [s] after a step ending at separation ``d`` [m]: ``p.h_stiff`` over the angular
     frequency of the local interface spring (``h_max`` without one).
 
     A stiff contact would otherwise run the explicit method at its stability limit, where the step
-    controller is erratic (Hairer & Wanner, Solving ODEs II, IV.2).
+    controller is erratic (Hairer & Wanner, Solving ODEs II, IV.2). Compiled on its own without reference
+    counts (:data:`pipeline.model.compiled.BORROWING`), called once per accepted step from the kernel's loop:
+    inlined there, its tables kept a reference-count pair each (docs/kernel.md, section "The step without
+    reference counts").
     """
     if adhesion is None and contact is None and gap_power is None and tfc is None:
         return h_max
