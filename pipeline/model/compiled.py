@@ -59,6 +59,17 @@ log = logging.getLogger(__name__)
 #: by zero gives inf/nan, no exception path in the machine code).
 OPTIONS = dict(cache=True, nogil=True, error_model="numpy")
 
+#: The further option of a kernel function that only reads and writes arrays it is given (allocates none,
+#: returns none: the step, the right-hand side, the step's cap): compiled without numba's reference counting
+#: (``_nrt=False``), since its caller holds every array for the whole call. numba otherwise keeps a
+#: reference-count pair per array variable past each call's exception exit (41 increments per step with
+#: the interface tables; docs/kernel.md, section "The step without reference counts"). An allocation in such
+#: a function does not compile (numba: "Only accept returning of array passed into the function as argument"),
+#: nor in a compiled function it calls, which numba compiles for it without reference counts too (unless
+#: that function sets the option itself); such a function must not call one that returns a new array, whose
+#: memory would never be freed.
+BORROWING = dict(_nrt=False)
+
 
 def cache_folder(module: str) -> str:
     """The numba cache folder of the kernel module ``module`` (a dotted name): named by its code key

@@ -50,12 +50,13 @@ from numba.core.errors import NumbaError, NumbaWarning
 from numba.extending import NativeValue, models, overload, register_model, typeof_impl, unbox
 
 from ..physics import air_bearing as ab
-from .compiled import kernel_jit
+from .compiled import BORROWING, kernel_jit
 from .piecewise import _ppat, _ppat_at, _ppindex, _ppslope_at, _ppval, disk, disk3
 from .state import MENISCUS, THETA, THETA_RATE, Z, Z_RATE
 
 _jit = kernel_jit(__name__)
 _inline = kernel_jit(__name__, inline="always")
+_jit_borrowing = kernel_jit(__name__, **BORROWING)  # (no reference counts: pipeline.model.compiled.BORROWING)
 
 # the air-bearing laws at the TFC point, compiled from their one definition in pipeline.physics.air_bearing
 _stiffening_potential = _inline(ab.stiffening_potential)
@@ -308,13 +309,14 @@ def _accelerations(p, pitch, vz, vtheta, F_f, F_r, F_i, Q):
     return vz, vtheta, (F_f + F_r + F_i) / p.m, (p.l_f * F_f - p.l_r * F_r - p.l_c * F_i - p.friction_arm * Q) / p.I
 
 
-@_jit
+@_jit_borrowing
 def rhs_slots(t, y, p, in_contact, out, dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power,
               meniscus):
     """Write ``dy/dt`` into ``out`` at the time ``t`` [s] and state ``y`` in the contact mode ``in_contact``
     (the equations of the module docstring); the slots one by one, in the order of
     :data:`pipeline.model.dynamics.SLOTS`. What the stepper calls (the Python entry:
-    :func:`pipeline.model.dynamics.rhs`)."""
+    :func:`pipeline.model.dynamics.rhs`). Compiled without reference counts
+    (:data:`pipeline.model.compiled.BORROWING`): it allocates nothing."""
     z, theta, vz, vtheta = y[Z], y[THETA], y[Z_RATE], y[THETA_RATE]
     wc, vc, wf, vf, wr, vr = disk3(p, dmw, t)
     lf = p.l_f

@@ -19,19 +19,21 @@ closed form: exact for DMW content up to the Nyquist frequency, where a 500-ns s
 250-ns knots (one cubic through the step's ends would miss the peaks in between).
 
 The inlined helpers here end an array's use unconditionally and call no compiled function, so that
-numba can prune the reference counts of their array arguments (docs/kernel.md).
+numba can prune the reference counts of their array arguments (docs/kernel.md). The step, and the step's cap
+:func:`stiffness_cap`, are compiled without reference counts (:data:`pipeline.model.compiled.BORROWING`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from .compiled import kernel_jit
+from .compiled import BORROWING, kernel_jit
 from .forces import interface_stiffness, rhs_slots, separation, tfc_air_force
 from .state import N_STATE, THETA, Z, state_size
 
 _jit = kernel_jit(__name__)
 _inline = kernel_jit(__name__, inline="always")
+_jit_borrowing = kernel_jit(__name__, **BORROWING)  # (no reference counts: pipeline.model.compiled.BORROWING)
 
 # Dormand-Prince 5(4) tableau (Hairer, Norsett & Wanner, Table II.5.2)
 A21 = 1 / 5
@@ -43,13 +45,14 @@ B1, B3, B4, B5, B6 = 35 / 384, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84
 E1, E3, E4, E5, E6, E7 = (71 / 57600, -71 / 16695, 71 / 1920, -17253 / 339200, 22 / 525, -1 / 40)
 
 
-@_jit
+@_jit_borrowing
 def step(t, y, k1, h, p, in_contact, ynew, k7, err, tmp, k2, k3, k4, k5, k6,
          dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power, meniscus):
     """One Dormand-Prince step: ``ynew``, its derivative ``k7`` and the error estimate ``err``
     (``tmp``, ``k2``...``k6``: work arrays, passed one by one: an array taken out of a tuple or a
     2-D array costs reference-count updates per use, docs/kernel.md); the slots as in
-    :data:`pipeline.model.dynamics.SLOTS`."""
+    :data:`pipeline.model.dynamics.SLOTS`. Compiled without reference counts, as the right-hand side it calls
+    (:data:`pipeline.model.compiled.BORROWING`): it allocates nothing."""
     ns = state_size(meniscus)
     for i in range(ns):
         tmp[i] = y[i] + h * A21 * k1[i]
@@ -331,13 +334,16 @@ def inverse_mass_at_tfc(p, pitch):
     return 1.0 / p.m + (p.l_c ** 2 / p.I if pitch is not None else 0.0)
 
 
-@_inline
+@_jit_borrowing
 def stiffness_cap(p, in_contact, d, h_max, m_eff_inv, contact, adhesion, tfc, gap_power, meniscus):
     """Largest step [s] after a step ending at separation ``d`` [m]: ``p.h_stiff`` over the angular
     frequency of the local interface spring (``h_max`` without one).
 
     A stiff contact would otherwise run the explicit method at its stability limit, where the step
-    controller is erratic (Hairer & Wanner, Solving ODEs II, IV.2).
+    controller is erratic (Hairer & Wanner, Solving ODEs II, IV.2). Compiled on its own without reference
+    counts (:data:`pipeline.model.compiled.BORROWING`), called once per accepted step from the kernel's loop:
+    inlined there, its tables kept a reference-count pair each (docs/kernel.md, section "The step without
+    reference counts").
     """
     if adhesion is None and contact is None and gap_power is None and tfc is None:
         return h_max

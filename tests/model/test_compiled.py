@@ -2,6 +2,8 @@
 disk, releases the GIL and uses numpy's error model (a division by zero is inf, not an exception); its
 cache folder is named by the code key of its module and everything that module imports, so an edited law
 inlined into the kernel gets a new folder; the decoration leaves numba's global cache folder as it was.
+A function compiled without reference counts (compiled.BORROWING: the step, the right-hand side) keeps none
+and cannot allocate.
 One signature per entry point for the main scene, whatever the stage runs; the background compile of a first
 run lands in the cache and is loaded, not compiled again; a compile says so, once."""
 
@@ -54,6 +56,61 @@ def test_kernel_jit_compiles_with_the_options_and_restores_the_cache_folder(monk
     assert numba.config.CACHE_DIR == str(tmp_path)
 
 
+def _reference_count_calls(dispatcher) -> int:
+    """The calls of numba's reference counting (``NRT_incref``, ``NRT_decref``) in the optimised LLVM of
+    ``dispatcher``'s one compiled signature (compiled in this process: cached code cannot be inspected)."""
+    (llvm,) = dispatcher.inspect_llvm().values()
+    return llvm.count("call void @NRT_incref(") + llvm.count("call void @NRT_decref(")
+
+
+def test_a_borrowing_function_keeps_no_reference_counts_and_refuses_an_allocation(monkeypatch, tmp_path):
+    # the pattern numba cannot prune (docs/kernel.md, section "Reference counts of the inlined helpers"): an
+    # inlined helper whose array argument's last use is conditional, then a compiled call (its exception exit)
+    monkeypatch.setattr(numba.config, "CACHE_DIR", str(tmp_path))
+    module = "pipeline.model.piecewise"
+    helper = compiled.kernel_jit(module)(lambda a, i: a[i] * 2.0)
+
+    @compiled.kernel_jit(module, inline="always")
+    def scaled(table, x, out, flag):
+        if flag:
+            x = x * table[0]
+        out[0] = x
+        return x
+
+    def body(name):
+        def fn(table, x, out, flag):
+            y = scaled(table, x, out, flag)
+            out[1] = helper(out, 0) + y
+        fn.__name__ = fn.__qualname__ = name  # (two functions: numba's cache index does not key on the options)
+        return fn
+
+    counted = compiled.kernel_jit(module)(body("counted"))
+    borrowing = compiled.kernel_jit(module, **compiled.BORROWING)(body("borrowing"))
+    results = []
+    for fn in (counted, borrowing):
+        out = np.zeros(2)
+        fn(np.array([3.0]), 2.0, out, True)
+        results.append(out)
+    # the same numbers (2 * 3 = 6, then 2 * 6 + 6 = 18); the reference counts of the arrays gone
+    assert results[0].tolist() == results[1].tolist() == [6.0, 18.0]
+    assert _reference_count_calls(counted) >= 2 and _reference_count_calls(borrowing) == 0
+
+    # an allocation does not compile there (it would never be freed), in the function or in one it calls
+    def allocates(out):
+        buf = np.empty(1)
+        buf[0] = 1.0
+        out[0] = buf[0]
+
+    make = compiled.kernel_jit(module)(lambda n: np.zeros(n))
+
+    def calls_an_allocation(out):
+        out[0] = make(1)[0]
+
+    for fn in (allocates, calls_an_allocation):
+        with pytest.raises(numba.core.errors.TypingError, match="returning of array passed into the function"):
+            compiled.kernel_jit(module, **compiled.BORROWING)(fn)(np.zeros(1))
+
+
 ROOT = Path(__file__).resolve().parents[2]
 
 #: Runs the main scene's model (the calibrated k of `make run`) at a flying, a touchdown and a contact
@@ -91,8 +148,16 @@ ahead = compiled.signature(dyn._integrate, dyn.kernel_arguments(
     np.zeros(N_STATE), dyn.Grid(1e-3, np.zeros(3)), p, tables, variants, dyn.Solver(1e-6, model.atol, 1e-7, 10)))
 stand_in = compiled.signature(dyn._integrate, dyn.kernel_arguments(*kernel_inputs.stand_in_arguments(scene)))
 entry_points = [compiled.signature(f, args) in f.signatures for f, args in first_run.python_entry_points(scene)]
-kernel = ("_integrate", "step", "switch_point", "knot_extrema", "rhs_slots", "_newton")
-print(json.dumps({"integrate": len(dyn._integrate.signatures), "newton": len(static_solver._newton.signatures),
+kernel = ("_integrate", "step", "switch_point", "knot_extrema", "stiffness_cap", "rhs_slots", "_newton")
+from pipeline.model import forces, stepper
+
+def increments(f):  # NRT_incref calls in its LLVM, where this process compiled it (cached code: not inspectable)
+    return sum(ir.count("call void @NRT_incref(") for ir in f.inspect_llvm().values()) if compiles[
+        f.py_func.__name__] else None
+
+print(json.dumps({"increments": {"step": increments(stepper.step), "rhs_slots": increments(forces.rhs_slots),
+                                 "stiffness_cap": increments(stepper.stiffness_cap)},
+"integrate": len(dyn._integrate.signatures), "newton": len(static_solver._newton.signatures),
                   "ahead_is_called": [ahead] == list(dyn._integrate.signatures),
                   "stand_in_is_called": [stand_in] == list(dyn._integrate.signatures),
                   "entry_points_are_called": entry_points,
@@ -110,7 +175,7 @@ def test_the_main_scene_compiles_one_signature_per_kernel_entry_point(tmp_path):
     # solver (a second signature would be a second compile of 15 s or 6 s of CPU in a first run)
     # ... whose types the runner's compile ahead knows from the scene alone (its stand-in arguments), and so
     # are those of the entry points called from Python, which a first run compiles while it waits
-    assert {k: v for k, v in plan.items() if k != "compiles"} == {
+    assert {k: v for k, v in plan.items() if k not in ("compiles", "increments")} == {
         "integrate": 1, "newton": 1, "ahead_is_called": True, "stand_in_is_called": True,
         "entry_points_are_called": [True, True, True]}
 
@@ -118,16 +183,19 @@ def test_the_main_scene_compiles_one_signature_per_kernel_entry_point(tmp_path):
 @pytest.mark.slow  # (the kernel and the static solver compiled from an empty cache: ~30 s of CPU)
 def test_the_main_scene_compiles_each_kernel_function_once(tmp_path):
     # an empty cache, everything compiled in this process (no background compile): the kernel, its separately
-    # compiled helpers (the step, the switch's bisection, the extrema across DMW knots) and the static solver
-    # once each, the right-hand side twice: the kernel's slots and the static solver's (no DMW, no meniscus
-    # state; docs/kernel.md, section "Compile time")
+    # compiled helpers (the step, the switch's bisection, the extrema across DMW knots, the step's cap from the
+    # interface stiffness) and the static solver once each, the right-hand side twice: the kernel's slots and
+    # the static solver's (no DMW, no meniscus state; docs/kernel.md, section "Compile time")
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "numba"), HDI_COMPILE_AHEAD="0")
     out = subprocess.run([sys.executable, "-c", PLAN, str(tmp_path / "results")], cwd=ROOT, capture_output=True,
                          text=True, timeout=900, env=env)
     assert out.returncode == 0, out.stderr[-2000:]
     plan = json.loads(out.stdout.strip().splitlines()[-1])
-    assert plan["compiles"] == {"_integrate": 1, "step": 1, "switch_point": 1, "knot_extrema": 1, "rhs_slots": 2,
-                                "_newton": 1}
+    assert plan["compiles"] == {"_integrate": 1, "step": 1, "switch_point": 1, "knot_extrema": 1, "stiffness_cap": 1,
+                                "rhs_slots": 2, "_newton": 1}
+    # the step, the right-hand side (both signatures; inside the step too) and the step's cap without reference
+    # counts (pipeline.model.compiled.BORROWING; 15, 4 and 2 increments before, docs/kernel.md)
+    assert plan["increments"] == {"step": 0, "rhs_slots": 0, "stiffness_cap": 0}
 
 
 #: A small cached kernel in its own module, compiled ahead in a fresh process with an empty cache.
