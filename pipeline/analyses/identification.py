@@ -56,7 +56,9 @@ Method
    lowered by its margin from the record-to-record spread, own and paired with a reference on the same
    records) exceeds the best point's (a walk's point: its current point's, at a new value the slice
    point's) or the smallest upper bound of the candidates racing with them [MM94]_; a walk never takes a
-   point stopped early. Everything else (the best point, the slices, the Gauss-Newton points) runs on every
+   point stopped early. With ``identify.racing_records = 1`` the stages are 1, 2, 4, all: a one-record part is
+   scored as a partial ensemble (:func:`pipeline.analyses.study.is_ensemble`) and bounded by the pooled
+   spreads alone (no stop before the first whole evaluation). Everything else (the best point, the slices, the Gauss-Newton points) runs on every
    record, and so every profile point is a whole evaluation; docs/model.md, section "Identification",
    states the guarantee.
 3. **Correlation**: Gauss-Newton at the optimum, ``C = (J^T J)^+`` with ``J`` the central-difference
@@ -116,7 +118,9 @@ class Racing:
     A raced candidate runs on ``stages[0]`` records, then on the next stage's (the records nest: the first
     ``m`` of ``n`` realisations are those of ``m``) while the lower confidence bound of its metric
     (:func:`lower_bound`) does not exceed its bound (the best point's objective, or the current point of a
-    profile walk); the last stage is every record (``realisations``).
+    profile walk); the last stage is every record (``realisations``). A first stage of one record
+    (``identify.racing_records = 1``) has no record-to-record spread of its own: its margin is the pooled
+    spreads' alone (:meth:`Identification.pooled_spread`), infinite before the first whole evaluation.
 
     Attributes
     ----------
@@ -333,7 +337,9 @@ class Identification:
         ``role`` against theirs, from the same
         records of ``ref`` (common random numbers: ``r(ref, all) + r(key, first n) - r(ref, first n)``, the
         margin with the spread of the records' differences, again the larger of its own and the pooled;
-        where a one-sided target is on the wrong side in all three). The tighter of the two, per target."""
+        where a one-sided target is on the wrong side in all three). The tighter of the two, per target. On one
+        record (a first stage of ``racing_records = 1``) the own spreads are unknown (NaN) and the pooled ones
+        alone count; with none pooled yet the margin is infinite: no bound."""
         assert self.racing is not None
         n, rec = self.depth[key], self.records[key]
         res = np.abs(self.scores[key][1])

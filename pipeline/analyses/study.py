@@ -468,6 +468,14 @@ def realisations_of(record: dict[str, Any]) -> int:
     return int(record.get("realisations", 1))
 
 
+def is_ensemble(record: dict[str, Any]) -> bool:
+    """An evaluation record of an ensemble over DMW records, or a part of one: it names its ``realisations``
+    (:func:`pipeline.evaluations.evaluate` with ``realisations`` > 1, its racing parts, :func:`head`), even a
+    part of one record (a first racing stage of ``identify.racing_records = 1``). A scene's record alone (one
+    realisation, no racing) does not, and is scored by the single-record rules."""
+    return "realisations" in record
+
+
 def residuals(record: dict[str, Any], tlist: Sequence[ObjectiveTerm],
               missing: float) -> tuple[np.ndarray, np.ndarray]:
     """Values and normalised residuals of the targets for one evaluation record (over its realisations
@@ -479,8 +487,10 @@ def score(record: dict[str, Any], tlist: Sequence[ObjectiveTerm],
           missing: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """:func:`residuals` and :func:`spreads` of one evaluation record at once: values, normalised residuals
     and the ``(low, high)`` spread of each target, each ensemble statistic computed once, on the record's
-    arrays (:class:`Ensemble`, no dataset)."""
-    if realisations_of(record) > 1:
+    arrays (:class:`Ensemble`, no dataset). An ensemble's part of one DMW record (:func:`is_ensemble`) is scored
+    by the ensemble's rules too, as a partial ensemble (its medians of one value, its touchdown from the median
+    minimum clearance), so that its residuals are those the racing bound compares with the whole ensemble's."""
+    if is_ensemble(record):
         ens = Ensemble.of_record(record)
         stats = np.array([t.ensemble(ens) if t.ensemble else (np.nan, np.nan, np.nan) for t in tlist],
                          float).reshape(len(tlist), 3)
@@ -497,9 +507,9 @@ def score(record: dict[str, Any], tlist: Sequence[ObjectiveTerm],
 
 def spreads(record: dict[str, Any], tlist: Sequence[ObjectiveTerm]) -> np.ndarray:
     """``(low, high)`` of each target's ensemble value (:attr:`ObjectiveTerm.spread` says which), shape
-    ``(targets, 2)``; NaN for a single-record evaluation."""
+    ``(targets, 2)``; NaN for a single-record evaluation (a scene's record alone: :func:`is_ensemble`)."""
     out = np.full((len(tlist), 2), np.nan)
-    if realisations_of(record) > 1:
+    if is_ensemble(record):
         ens = Ensemble.of_record(record)
         for j, t in enumerate(tlist):
             if t.ensemble:

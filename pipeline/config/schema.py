@@ -432,8 +432,10 @@ SCHEMA: dict[str, dict[str, Key]] = {
                           "racing_records records first, and more (doubling to all) only while its objective's "
                           "lower confidence bound does not exceed the best point's; false: every candidate on "
                           "every record (the full method); docs/model.md, section 'Identification'"),
-        "racing_records": Key("int", 2, (lambda v: v >= 2, "an integer >= 2"),
-                              doc="DMW records of a candidate's first racing stage (doubling to realisations)"),
+        "racing_records": Key("int", 2, (lambda v: v >= 1, "an integer >= 1"),
+                              doc="DMW records of a candidate's first racing stage (doubling to realisations); 1: "
+                                  "a first stage of one record, bounded by the pooled record-to-record spreads "
+                                  "alone; docs/model.md, section 'Identification'"),
         "racing_z": Key("float", 3.0, _pos,
                         doc="racing bound: standard errors of each target's residual (from the record-to-record "
                             "spread) a candidate may lose by and still run on the next records [1]"),

@@ -7,6 +7,7 @@ and racing against the full method on a noisy stand-in and on the twin."""
 from __future__ import annotations
 
 import math
+from typing import Sequence
 
 import numpy as np
 import pytest
@@ -334,6 +335,40 @@ def test_racing_keeps_the_optimum_exact_and_stops_only_worse_candidates():
     assert np.abs(out["best"] - full["best"]).max() < 0.5 * step
 
 
+def test_a_first_stage_of_one_record_is_bounded_by_the_pooled_spreads_alone():
+    """``racing_records = 1``: stages 1, 2, 4, 8. The margin at one record, by simulation: the error of one normal
+    record against the median of 8 is within the margin's unit (sd 0.96 against sqrt(pi/2) sqrt(7/8) = 1.17), so
+    z = 3 holds it at least as often as at two records. One record has no spread of its own: before any whole
+    evaluation the margin is infinite (no candidate stops on its first record), after it the pooled spreads bound it;
+    on the noisy stand-in it keeps the optimum and the intervals of stages 2, 4, 8 and runs fewer pairs."""
+    race = identification.Racing.doubling(1, N_RECORDS, 3.0)
+    assert race.stages == (1, 2, 4, 8)
+    unit = race.margin(np.array([1.0]), 1)[0] / 3.0
+    assert unit == pytest.approx(math.sqrt(math.pi / 2) * math.sqrt(7.0 / 8.0), rel=1e-12)
+    x = np.random.default_rng(3).standard_normal((200_000, N_RECORDS))
+    d = np.median(x, axis=1) - x[:, 0]
+    assert np.std(d) == pytest.approx(0.958, abs=0.01) and np.std(d) < unit
+    assert np.mean(np.abs(d) > 3.0 * unit) < 2 * (1 - 0.99865)  # (two-sided, z = 3: 0.0007 here)
+    # no whole evaluation yet: one record bounds nothing, so every point, however bad, runs on (own spread at 2)
+    calls: list[int] = []
+    ident = identification.Identification(_stand_in(calls), _mean_targets(), 10.0, race)
+    ident.evaluate(np.array([[5.0, 5.0], [4.0, -4.0]]), 1, bound=0.0)
+    assert calls[:2] == [1, 1] and all(d >= 2 for d in ident.depth.values())
+    # after whole evaluations: the search's worst trials stop on their first record, worse than the best point
+    full_ident, full = _run(identification.Racing.doubling(2, N_RECORDS, 3.0))
+    ident, out = _run(race)
+    one = [k for k, d in ident.depth.items() if d == 1]
+    assert len(one) >= 0.3 * len(ident.depth)
+    for k in one:
+        assert _full_cost(np.array(ident.records[k]["params"])) > ident.best_cost
+    assert ident.depth[ident.best_key] == N_RECORDS
+    assert ident.best_cost == pytest.approx(_full_cost(out["best"]), rel=1e-12)
+    # (575 pairs against 600 when written)
+    assert ident.record_evaluations < full_ident.record_evaluations
+    step = (PARAMS[0].high - PARAMS[0].low) / (CFG["profile_points"] - 1)
+    _agree_within_tolerance(out, full, step, np.zeros(2))
+
+
 def _agree_within_tolerance(a: dict, b: dict, step: float, truth: np.ndarray) -> None:
     """Two identifications give the same answer within their tolerance: each optimum inside the other's interval,
     ``truth`` inside both, the interval ends within one profile ``step`` of each other."""
@@ -502,14 +537,21 @@ def test_twin_racing_agrees_with_the_full_method_within_the_tolerance(write_scen
 def _identified_with_and_without(path, sets: list[str], option: str, tmp_path) -> tuple[xr.Dataset, xr.Dataset]:
     """identify.nc of the twin scene ``path`` (with the ``--set`` strings ``sets``) with ``identify.<option>``
     on, then off, each in a folder of its own."""
+    on, off = _identified_by(path, sets, option, ("true", "false"), tmp_path)
+    return on, off
+
+
+def _identified_by(path, sets: list[str], option: str, values: Sequence[str], tmp_path) -> list[xr.Dataset]:
+    """identify.nc of the twin scene ``path`` (with the ``--set`` strings ``sets``) for each of ``values`` of
+    ``identify.<option>``, each in a folder of its own."""
     from pipeline.config.scene import load_scene
     from pipeline.runner import ensure
     runs = []
-    for on in ("true", "false"):
-        sc = load_scene(path, sets + [f"identify.{option}={on}"])
-        out = ensure("identify", sc, tmp_path / f"{option}-{on}", scheduler="synchronous")
+    for v in values:
+        sc = load_scene(path, sets + [f"identify.{option}={v}"])
+        out = ensure("identify", sc, tmp_path / f"{option}-{v}", scheduler="synchronous")
         runs.append(xr.open_dataset(out, engine="netcdf4").load())
-    return runs[0], runs[1]
+    return runs
 
 
 def _same_answer(one: xr.Dataset, other: xr.Dataset, params, scene) -> None:
@@ -543,3 +585,27 @@ def test_twin_polish_agrees_with_the_method_without_it_within_the_tolerance(writ
     assert on.attrs["profile_rounds"] == 1 < off.attrs["profile_rounds"]
     assert on.attrs["record_evaluations"] < off.attrs["record_evaluations"]
     _same_answer(on, off, params, scene)
+
+
+@pytest.mark.slow  # (two identifications of the real slider on 4 DMW records: ~1 min on the shared 2 cores)
+def test_twin_one_record_first_stage_agrees_with_the_two_record_one_within_the_tolerance(write_scene, paper_config,
+                                                                                          tmp_path):
+    # racing stages of 1, 2, 4 records against 2, 4: a candidate's first record alone is a partial ensemble,
+    # bounded by the pooled record-to-record spreads of the whole evaluations (its own is unknown)
+    path, scene, params, tl, prots, inputs, whole = _ensemble_twin(write_scene, paper_config, tmp_path)
+    one, two = _identified_by(path, _twin_targets(tl, whole), "racing_records", ("1", "2"), tmp_path)
+    assert one.attrs["racing"].startswith("stages of 1, 2, 4 DMW records")
+    assert two.attrs["racing"].startswith("stages of 2, 4 DMW records")
+    # some candidates stopped after their first record, and the pairs are the records held
+    records = one["records"].values
+    assert np.any(records == 1) and not np.any(two["records"].values == 1)
+    assert one.attrs["record_evaluations"] == int(records.sum())
+    # the best point ran on every record; a search trial stopped on one record has a partial objective above it
+    assert records[int(one.attrs["best_evaluation"])] == 4
+    first = (records == 1) & (one["role"].values == 1)
+    assert first.any() and np.all(one["objective"].values[first] > one.attrs["best_objective"])
+    # fewer (candidate, record) pairs (229 against 248 when written, the same best point)
+    assert one.attrs["record_evaluations"] < two.attrs["record_evaluations"]
+    # the same answer within the tolerance: each optimum inside the other's interval, the truth inside both, the
+    # interval ends within one profile step
+    _same_answer(one, two, params, scene)

@@ -143,3 +143,32 @@ def test_scoring_on_the_records_arrays_is_the_xarray_scoring_to_the_last_bit(pap
         ds = study.record_dataset(record)
         for t in tlist:
             np.testing.assert_array_equal(t.ensemble(ds), t.ensemble(study.Ensemble.of_record(record)))
+
+
+def test_a_one_record_part_of_an_ensemble_is_scored_by_the_ensemble_rules(paper_scene):
+    """A first racing stage of one DMW record (``identify.racing_records = 1``) is a partial ensemble: scored by the
+    ensemble's statistics of one value (the xarray rules' to the last bit), not by the rules of a scene's record
+    alone, which it differs from where the two rules differ: the touchdown value (the crossing of a touchdown
+    probability of 0 or 1 at 0.5, halfway between the last flying and the first touching protrusion, against the
+    first touching protrusion) and the spreads (its one value, against none)."""
+    tlist = study.targets(paper_scene)
+    whole = {**ensemble_record(tlist, 8, 5), "seeds": list(range(8))}
+    part = study.head(whole, 1)
+    assert study.is_ensemble(part) and study.realisations_of(part) == 1
+    vals, res, spread = study.score(part, tlist, 10.0)
+    for got, want in zip((vals, res, spread), scoring_reference.xarray_score(part, tlist, 10.0)):
+        np.testing.assert_array_equal(got, want)
+    # the same realisation as a scene's record alone (no realisations named): the single-record rules
+    single = {"protrusions": part["protrusions"],
+              "outputs": {k: [row[0] for row in v] for k, v in part["outputs"].items()}}
+    assert not study.is_ensemble(single)
+    s_vals, s_res, s_spread = study.score(single, tlist, 10.0)
+    assert np.all(np.isnan(s_spread)) and np.isfinite(spread).any()
+    i = [t.kind for t in tlist].index("touchdown")
+    prots = np.sort(part["protrusions"])
+    first = int(np.searchsorted(prots, s_vals[i]))
+    assert 0 < first and prots[first] == s_vals[i]
+    assert vals[i] == pytest.approx(0.5 * (prots[first - 1] + prots[first]), abs=1e-12)
+    # every residual is the same number by either rule (a statistic of one value is that value)
+    np.testing.assert_allclose(res, s_res, rtol=1e-12, atol=1e-12)
+    np.testing.assert_array_equal(np.delete(vals, i), np.delete(s_vals, i))

@@ -64,6 +64,9 @@ def test_checks_refuse_what_their_expectation_excludes():
     assert check_text == "a positive number" and flying(1e-3) and not flying(0.0) and not flying(-1.0)
     thickness, check_text = SCHEMA["lubricant"]["thickness_nm"].check
     assert check_text == "a number >= 0" and thickness(0.0) and not thickness(-1e-9)
+    # a first racing stage of one DMW record is allowed (docs/model.md, "Identification"), none is not
+    records, check_text = SCHEMA["identify"]["racing_records"].check
+    assert check_text == "an integer >= 1" and records(1) and not records(0)
 
 
 def test_identify_keys_are_generated_from_the_targets():

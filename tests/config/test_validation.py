@@ -153,3 +153,10 @@ def test_replace_revalidates_and_matches_override(paper_scene, paper_config):
     assert r.hash == load_scene(paper_config, ["tfc.protrusion_nm=9.0"]).hash
     with pytest.raises(SceneError, match=r"tfc\.protrusion_nm = -1\.0: expected a number >= 0"):
         paper_scene.replace(tfc={"protrusion_nm": -1.0})
+
+
+def test_no_racing_records(write_scene):
+    path = write_scene("[identify]\nracing_records = 0\n")
+    msg = _error(path)
+    assert str(path) in msg and "identify.racing_records" in msg and "0" in msg
+    assert "expected an integer >= 1" in msg
