@@ -14,7 +14,6 @@ disk under the TFC point, the front pad and the rear pad.
 from __future__ import annotations
 
 import functools
-from typing import Any
 
 import numpy as np
 
@@ -61,7 +60,8 @@ def _not_a_knot(y: np.ndarray, h: float) -> np.ndarray:
     b[1:-1] = 3 * (dx[1:] * slope[:-1] + dx[:-1] * slope[1:])
     b[0] = ((dx[0] + 2 * d0) * dx[1] * slope[0] + dx[0] ** 2 * slope[1]) / d0
     b[-1] = (dx[-1] ** 2 * slope[-2] + (2 * d1 + dx[-1]) * dx[-2] * slope[-1]) / d1
-    _, _, _, s, info = _gtsv()(lower.copy(), diagonal.copy(), upper.copy(), b.reshape(-1, 1), True, True, True, True)
+    from scipy.linalg.lapack import dgtsv  # (here: pipeline.model.ahead.NOT_IMPORTED_EARLY)
+    _, _, _, s, info = dgtsv(lower.copy(), diagonal.copy(), upper.copy(), b.reshape(-1, 1), True, True, True, True)
     if info != 0:
         from numpy.linalg import LinAlgError
         raise LinAlgError("singular matrix") if info > 0 else ValueError(f"gtsv: illegal argument {-info}")
@@ -95,13 +95,6 @@ def _spline_grid(n: int, h: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, 
     for a in (dx, band):
         a.flags.writeable = False
     return dx, band[0, 1:], band[1, :], band[2, :-1], x[2] - x[0], x[-1] - x[-3]
-
-
-@functools.lru_cache(maxsize=1)
-def _gtsv() -> Any:
-    """LAPACK's ``dgtsv`` (scipy's, imported on first use: :data:`pipeline.model.ahead.NOT_IMPORTED_EARLY`)."""
-    from scipy.linalg.lapack import dgtsv
-    return dgtsv
 
 
 @_inline
