@@ -9,8 +9,10 @@ recomputes the report only.
 
 The imports are read from the source text (``from .x import a``, ``from .. import units``,
 ``from pipeline.x import ...``, ``import pipeline.x``), not by parsing it: the whole package parses in
-0.2 s, which every ``hdi`` command would pay, where the text scan takes ~11 ms a stage (0.11 s for
-all ten, once per process). The scan is
+0.2 s, which every ``hdi`` command would pay. The scan of a text is kept per process, keyed by the text
+itself (a file edited while the process runs is scanned again, whatever its size and time), and the files
+are found with plain string paths: the keys of the eight stages of ``hdi run`` take ~60 ms (0.35 s when
+each stage scanned its modules again; docs/performance.md, section "The head of a command"). The scan is
 conservative: an import written in a docstring counts too (a key that changes too often costs a
 recomputation; one that changes too rarely returns a wrong result).
 
@@ -25,6 +27,7 @@ from __future__ import annotations
 
 import hashlib
 import importlib.util
+import os
 import re
 from functools import lru_cache
 from pathlib import Path
@@ -47,34 +50,49 @@ def _patterns(package: str) -> tuple[re.Pattern, re.Pattern]:
 
 def module_file(name: str, root: Path = ROOT, package: str = PACKAGE) -> Path | None:
     """The source file of module ``name`` of ``package`` (rooted at ``root``), or ``None``."""
+    path = _module_path(name, str(root), package)
+    return None if path is None else Path(path)
+
+
+def _module_path(name: str, root: str, package: str) -> str | None:
+    """:func:`module_file` as a string (no ``Path`` made: the keys of a command ask this ~4,000 times)."""
     if name != package and not name.startswith(package + "."):
         return None
-    parts = name.split(".")[1:]
-    base = root.joinpath(*parts)
-    for path in (base.with_suffix(".py"), base / "__init__.py"):
-        if path.is_file():
+    base = os.path.join(root, *name.split(".")[1:])
+    for path in (base + ".py", os.path.join(base, "__init__.py")):
+        if os.path.isfile(path):
             return path
     return None
 
 
-def imports(name: str, root: Path = ROOT, package: str = PACKAGE) -> set[str]:
-    """The modules of ``package`` that module ``name`` imports (its source text, see module docstring)."""
-    path = module_file(name, root, package)
-    if path is None:
-        return set()
-    text = path.read_text(encoding="utf-8")
-    here = name if path.name == "__init__.py" else name.rpartition(".")[0]
-    found: set[str] = set()
+@lru_cache(maxsize=1024)
+def _scan(text: str, here: str, package: str) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """The modules a source ``text`` (of a module whose package is ``here``) may import: the bases of its
+    ``from`` imports and the names they import as submodules, then its ``import package.x``; unchecked
+    against the files. A function of the text alone, so kept per text: the stages' keys share most modules."""
     from_, import_ = _patterns(package)
+    bases, subs = [], []
     for where, names in from_.findall(text):
         base = importlib.util.resolve_name(where, here) if where.startswith(".") else where
-        found.add(base)
+        bases.append(base)
         for item in names.strip("()").replace("\n", " ").split(","):
             sub = item.split(" as ")[0].strip()
-            if sub and sub != "*" and module_file(f"{base}.{sub}", root, package) is not None:
-                found.add(f"{base}.{sub}")  # (``from .. import units``: a module, not a name)
-    found.update(import_.findall(text))
-    return {m for m in found if module_file(m, root, package) is not None}
+            if sub and sub != "*":
+                subs.append(f"{base}.{sub}")  # (``from .. import units``: a module if its file exists)
+    return tuple(bases) + tuple(import_.findall(text)), tuple(subs)
+
+
+def imports(name: str, root: Path = ROOT, package: str = PACKAGE) -> set[str]:
+    """The modules of ``package`` that module ``name`` imports (its source text, see module docstring)."""
+    path = _module_path(name, str(root), package)
+    if path is None:
+        return set()
+    with open(path, encoding="utf-8") as fh:
+        text = fh.read()
+    here = name if os.path.basename(path) == "__init__.py" else name.rpartition(".")[0]
+    named, maybe = _scan(text, here, package)
+    root_ = str(root)
+    return {m for m in (*named, *maybe) if _module_path(m, root_, package) is not None}
 
 
 def modules(name: str, root: Path = ROOT, package: str = PACKAGE) -> tuple[str, ...]:
@@ -84,7 +102,7 @@ def modules(name: str, root: Path = ROOT, package: str = PACKAGE) -> tuple[str, 
     todo = [name]
     while todo:
         mod = todo.pop()
-        if mod in seen or mod in ORCHESTRATION or module_file(mod, root, package) is None:
+        if mod in seen or mod in ORCHESTRATION or _module_path(mod, str(root), package) is None:
             continue
         seen.add(mod)
         todo.extend(imports(mod, root, package) - seen)

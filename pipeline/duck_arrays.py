@@ -1,4 +1,4 @@
-"""xarray's duck-array checks without importing dask.array or pint for them.
+"""xarray's duck-array checks without importing dask, dask.array or pint for them.
 
 xarray asks, on the first Variable or index it makes, whether the data is a dask array or a pint
 quantity (``isinstance(data, array_type("dask"))``), and to answer it imports ``dask.array`` (~0.2 s)
@@ -10,6 +10,13 @@ and hands over to xarray's own entry the first time it is present (a user's ``im
 ``import pint_xarray``, ``open_mfdataset``'s chunks). The answers are xarray's in every case; only the
 imports are deferred. Measured in docs/performance.md, section "xarray's duck-array imports".
 
+xarray also asks, for every index it makes, whether the data is a dask collection
+(``xarray.namedarray.utils.is_dask_collection``), and imports dask itself to let dask answer (~0.1-0.3 s with
+what dask imports: jinja2, importlib_metadata, multiprocessing, ...). dask's own answer is "no" for any object
+without a ``__dask_graph__`` attribute (the dask collection protocol), whether dask is imported or not, so
+:func:`defer` puts in front of xarray's function one that answers so for such objects and asks xarray's for
+the rest (:func:`_dask_collection_check`).
+
 The cache is xarray's private ``xarray.namedarray.pycompat._cached_duck_array_modules``: where a later
 xarray has no such cache or entry type, :func:`defer` does nothing and xarray imports as before
 (tests/core/test_duck_arrays.py says which case this xarray is).
@@ -17,8 +24,10 @@ xarray has no such cache or entry type, :func:`defer` does nothing and xarray im
 
 from __future__ import annotations
 
+import functools
+import importlib
 import sys
-from typing import Any
+from typing import Any, Callable
 
 #: xarray's name of a duck-array module -> the module whose import makes its type exist.
 DEFERRED = {"dask": "dask.array", "pint": "pint"}
@@ -37,7 +46,41 @@ def defer() -> bool:
     for name, module in DEFERRED.items():
         if name not in cache and module not in sys.modules:
             cache[name] = _Deferred(name, module, cache, real)
+    _defer_dask_collection_check()
     return True
+
+
+#: Modules of xarray that hold its ``is_dask_collection`` under that name (the first defines it, the
+#: second re-exports it).
+DASK_CHECK_HOMES = ("xarray.namedarray.utils", "xarray.core.utils")
+
+
+def _dask_collection_check(xarray_check: Callable[[object], bool]) -> Callable[[object], bool]:
+    """xarray's ``is_dask_collection`` answered without importing dask for an object that has no
+    ``__dask_graph__`` (the first condition of dask's own ``dask.base.is_dask_collection``: such an object is
+    no dask collection, whatever else dask would check); any other object goes to ``xarray_check``."""
+
+    @functools.wraps(xarray_check)
+    def is_dask_collection(x: object) -> bool:
+        if not hasattr(x, "__dask_graph__"):
+            return False
+        return xarray_check(x)
+
+    is_dask_collection.__wrapped_by_hdi__ = True  # type: ignore[attr-defined]
+    return is_dask_collection
+
+
+def _defer_dask_collection_check() -> None:
+    """Put :func:`_dask_collection_check` in place of xarray's ``is_dask_collection`` in
+    :data:`DASK_CHECK_HOMES` (once; a module whose attribute is not xarray's function is left alone)."""
+    homes = [sys.modules.get(name) or importlib.import_module(name) for name in DASK_CHECK_HOMES]
+    original = getattr(homes[0], "is_dask_collection", None)
+    if original is None or getattr(original, "__wrapped_by_hdi__", False):
+        return
+    wrapped = _dask_collection_check(original)
+    for home in homes:
+        if getattr(home, "is_dask_collection", None) is original:
+            home.is_dask_collection = wrapped
 
 
 class _Deferred:

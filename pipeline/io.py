@@ -159,13 +159,14 @@ def check_cf(ds: xr.Dataset, where: str = "dataset") -> None:
 OLD_TIME_UNITS = "s since 1970-01-01 00:00:00"
 
 
-def cf_encoding(ds: xr.Dataset) -> tuple[xr.Dataset, dict[str, dict[str, Any]]]:
+def cf_encoding(ds: xr.Dataset, compress: bool = True) -> tuple[xr.Dataset, dict[str, dict[str, Any]]]:
     """A copy of ``ds`` and its NetCDF encoding, arranged for CF-1.8 (see :mod:`pipeline.variables`).
 
     Coordinates get no ``_FillValue``; labels (strings) lose ``units`` and are stored as character
     arrays; 64-bit integers are stored as 32-bit (CF 2.2) when their values fit; numeric variables are
-    compressed and chunked (:func:`compression`; lossless: the values read back bit for bit). Declared missing values already
-    in a variable's encoding (``regime``) are kept.
+    compressed and chunked (:func:`compression`; lossless: the values read back bit for bit), unless
+    ``compress`` is false (then stored contiguous). Declared missing values already in a variable's
+    encoding (``regime``) are kept.
     """
     out = ds.copy()
     encoding: dict[str, dict[str, Any]] = {}
@@ -180,7 +181,7 @@ def cf_encoding(ds: xr.Dataset) -> tuple[xr.Dataset, dict[str, dict[str, Any]]]:
             enc.pop("_FillValue", None)
         elif v.dtype == "int64" and (v.size == 0 or (abs(v.values).max() < 2**31)):
             enc["dtype"] = "int32"
-        if v.dtype.kind not in "OUS":
+        if compress and v.dtype.kind not in "OUS":
             enc.update(compression(v.dims, v.shape, v.dtype.itemsize))
         encoding[name] = enc
     return out, encoding
@@ -296,7 +297,7 @@ def provenance(scene: Any = None, *, stage: str,
 
 def write_dataset(ds: xr.Dataset, path: str | Path, scene: Any = None, *, stage: str,
                   inputs: Iterable[str | Path] | Mapping[str | Path, str] = (),
-                  extra_attrs: dict[str, Any] | None = None) -> Path:
+                  extra_attrs: dict[str, Any] | None = None, compress: bool = True) -> Path:
     """Write ``ds`` to ``path`` atomically with provenance.
 
     Parameters
@@ -309,6 +310,9 @@ def write_dataset(ds: xr.Dataset, path: str | Path, scene: Any = None, *, stage:
         See :func:`provenance`.
     extra_attrs
         More global attributes (stage-specific).
+    compress
+        Compress the numeric variables (:func:`cf_encoding`); false for a working file that is read back
+        once and written where time counts more than space (a sweep's parts).
 
     Returns
     -------
@@ -318,7 +322,7 @@ def write_dataset(ds: xr.Dataset, path: str | Path, scene: Any = None, *, stage:
     path = refuse_links(Path(path))  # (a planted link in a results folder: not written through)
     check_cf(ds, str(path))
     path.parent.mkdir(parents=True, exist_ok=True)
-    out, encoding = cf_encoding(ds)
+    out, encoding = cf_encoding(ds, compress)
     attrs = dict(ds.attrs)
     attrs.update(provenance(scene, stage=stage, inputs=inputs))
     if extra_attrs:

@@ -172,7 +172,9 @@ def run_batch(scene: Any, batch: Batch, inputs: SimulationInputs, part_path: str
     ds = simulate(model, batch.protrusions, histories=history_nm, protocol=scene["sweep"]["protocol"])
     ds.attrs.update({KEY_ATTR: key, "roughness_label": batch.label, "damping_ratio": batch.damping,
                      "batch": batch.index, "realisation": batch.realisation})
-    write_dataset(pack_part(ds), part_path, scene, stage="sweep-part")
+    # (uncompressed: a part is read back once, if ever, and its zlib ran under the process's NetCDF lock,
+    # where the other worker's part waited for it; docs/performance.md, section "The head of a command")
+    write_dataset(pack_part(ds), part_path, scene, stage="sweep-part", compress=False)
     return part_path, ds
 
 

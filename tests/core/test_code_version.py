@@ -50,6 +50,21 @@ def test_an_edited_module_changes_the_key_of_the_modules_that_import_it(package)
     assert after["pkg.b"] == before["pkg.b"]                 # b imports sub, not sub.d
 
 
+def test_an_import_edited_in_at_the_same_size_and_time_is_followed(package):
+    """The import scan is kept per source text, not per file: an edit that keeps the file's size and
+    modification time (a same-length line, the time set back) still changes what the module imports."""
+    import os
+    e = package / "e.py"
+    e.write_text("x = 100  # nothing imported here\n")
+    assert cv.modules("pkg.e", package, "pkg") == ("pkg.e",)
+    stat = e.stat()
+    e.write_text("from pkg import unused  # now it\n")
+    os.utime(e, ns=(stat.st_atime_ns, stat.st_mtime_ns))
+    assert e.stat().st_size == stat.st_size and e.stat().st_mtime_ns == stat.st_mtime_ns
+    assert cv.modules("pkg.e", package, "pkg") == ("pkg", "pkg.a", "pkg.b", "pkg.c", "pkg.e", "pkg.sub",
+                                                   "pkg.sub.d", "pkg.unused")
+
+
 def test_each_stage_is_keyed_on_the_code_it_runs():
     """The simulating stages on the integrator and the friction law, the report on its figures, the
     roughness stage on neither; the runner's own code on none (orchestration)."""
