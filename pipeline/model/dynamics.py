@@ -328,14 +328,15 @@ def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, cont
     no ``break`` out of a loop that reads it, state read before a branch) and call no compiled function
     that takes arrays: the separately compiled ones (:func:`pipeline.model.stepper.step`, the switch's
     bisection :func:`pipeline.model.stepper.switch_point`, the knot-splitting extrema
-    :func:`pipeline.model.stepper.knot_extrema`, the step's cap :func:`pipeline.model.stepper.stiffness_cap`)
-    are called here, in the loop itself. The step and the cap are compiled without reference counts
+    :func:`pipeline.model.stepper.knot_extrema`, the step's cap :func:`pipeline.model.stepper.stiffness_cap`,
+    the separation :func:`pipeline.model.forces.separation`) are called here, in the loop itself. The step,
+    the cap and the separation are compiled without reference counts
     (:data:`pipeline.model.compiled.BORROWING`): the loop keeps none. The measurements and how to check a
     change (``_integrate.inspect_llvm()``): docs/kernel.md.
 
     Compile time: what runs rarely or would be copied more than once is compiled on its own (the
-    bisection, the extrema across DMW knots), and a step's interior points are found and evaluated once
-    for the event search and the window's extremes (docs/kernel.md, section "Compile time").
+    bisection, the extrema across DMW knots, the separation), and a step's interior points are found and
+    evaluated once for the event search and the window's extremes (docs/kernel.md, section "Compile time").
     """
     p = params[0]
     gap_power = _unpacked(gap_power_)

@@ -258,9 +258,9 @@ def switch_point(p, dmw, in_contact, t, y, k1, ynew, k7, h, hi, ys):
 
     Bisection on the step's interpolant to 1e-16 s (``(hi - lo) h``).
     :func:`pipeline.model.dynamics._integrate` redoes the step up to it. Compiled on its own, not inlined:
-    it runs only at a switch, and its copy of the interpolant and of :func:`separation` would otherwise
-    be compiled into the kernel (docs/kernel.md, section "Compile time"). The bisection loop has one exit
-    (a counter, no ``break``): numba then prunes the reference counts of its array arguments.
+    it runs only at a switch, and its copy of the interpolant would otherwise be compiled into the kernel
+    (docs/kernel.md, section "Compile time"); it calls the compiled :func:`separation`. The bisection loop
+    has one exit (a counter, no ``break``): numba then prunes the reference counts of its array arguments.
     """
     lo = 0.0
     n = 60
