@@ -91,7 +91,8 @@ from .forces import RearLawRef, rear_law_ref, rhs_slots, separation
 from .state import (ACCEPTED, MAX_STEPS, N_COUNTERS, NOT_FINITE, REJECTED, RHS_CALLS, STATUS, STEP_UNDERFLOW,
                     SWITCHES, WINDOW_SWITCHES, state_size)
 from .stepper import (cubic_extrema, error_norm, extrema_slots, first_wrong_side, interp_state, inverse_mass_at_tfc,
-                      knot_extrema, knots_in_step, sample_outputs, step, step_points, stiffness_cap, switch_point, track_extremes)
+                      knot_extrema, knots_in_step, sample_outputs, step, step_points, stiffness_cap, switch_point,
+                      track_extremes)
 
 _jit = kernel_jit(__name__)
 _inline = kernel_jit(__name__, inline="always")
