@@ -60,8 +60,8 @@ log = logging.getLogger(__name__)
 OPTIONS = dict(cache=True, nogil=True, error_model="numpy")
 
 #: The further option of a kernel function that only reads and writes arrays it is given (allocates none,
-#: returns none: the step, the right-hand side, the step's cap): compiled without numba's reference counting
-#: (``_nrt=False``), since its caller holds every array for the whole call. numba otherwise keeps a
+#: returns none: the step, the right-hand side, the step's cap, the separation): compiled without numba's
+#: reference counting (``_nrt=False``), since its caller holds every array for the whole call. numba otherwise keeps a
 #: reference-count pair per array variable past each call's exception exit (41 increments per step with
 #: the interface tables; docs/kernel.md, section "The step without reference counts"). An allocation in such
 #: a function does not compile (numba: "Only accept returning of array passed into the function as argument"),

@@ -90,8 +90,9 @@ from .compiled import kernel_jit
 from .forces import RearLawRef, rear_law_ref, rhs_slots, separation
 from .state import (ACCEPTED, MAX_STEPS, N_COUNTERS, NOT_FINITE, REJECTED, RHS_CALLS, STATUS, STEP_UNDERFLOW,
                     SWITCHES, WINDOW_SWITCHES, state_size)
-from .stepper import (cubic_extrema, error_norm, extrema_slots, first_wrong_side, inverse_mass_at_tfc, knot_extrema,
-                      knots_in_step, sample_outputs, step, step_points, stiffness_cap, switch_point, track_extremes)
+from .stepper import (cubic_extrema, error_norm, extrema_slots, first_wrong_side, interp_state, inverse_mass_at_tfc,
+                      knot_extrema, knots_in_step, sample_outputs, step, step_points, stiffness_cap, switch_point,
+                      track_extremes)
 
 _jit = kernel_jit(__name__)
 _inline = kernel_jit(__name__, inline="always")
@@ -328,14 +329,15 @@ def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, cont
     no ``break`` out of a loop that reads it, state read before a branch) and call no compiled function
     that takes arrays: the separately compiled ones (:func:`pipeline.model.stepper.step`, the switch's
     bisection :func:`pipeline.model.stepper.switch_point`, the knot-splitting extrema
-    :func:`pipeline.model.stepper.knot_extrema`, the step's cap :func:`pipeline.model.stepper.stiffness_cap`)
-    are called here, in the loop itself. The step and the cap are compiled without reference counts
+    :func:`pipeline.model.stepper.knot_extrema`, the step's cap :func:`pipeline.model.stepper.stiffness_cap`,
+    the separation :func:`pipeline.model.forces.separation`) are called here, in the loop itself. The step,
+    the cap and the separation are compiled without reference counts
     (:data:`pipeline.model.compiled.BORROWING`): the loop keeps none. The measurements and how to check a
     change (``_integrate.inspect_llvm()``): docs/kernel.md.
 
     Compile time: what runs rarely or would be copied more than once is compiled on its own (the
-    bisection, the extrema across DMW knots), and a step's interior points are found and evaluated once
-    for the event search and the window's extremes (docs/kernel.md, section "Compile time").
+    bisection, the extrema across DMW knots, the separation), and a step's interior points are found and
+    evaluated once for the event search and the window's extremes (docs/kernel.md, section "Compile time").
     """
     p = params[0]
     gap_power = _unpacked(gap_power_)
@@ -441,8 +443,11 @@ def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, cont
                         n_ex = knot_extrema(dmw, t, h_acc, p.dmw_t0, p.dmw_dt, i_a, s3, s2, s1, buf, n_max)
                 if not knots:
                     n_ex = cubic_extrema(d0, dd0, d1, dd1, h_acc, buf)
-                n_pts = step_points(p, dmw, search, t, h_acc, y, k1, ynew, k7, d0, dd0, d1, dd1, ys, buf, dex,
-                                    n_ex)
+                n_pts = step_points(p, search, h_acc, d0, dd0, d1, dd1, buf, n_ex)
+                for i in range(n_pts):  # d at them (separation called here: docs/kernel.md, "Compile time")
+                    frac = buf[i]
+                    interp_state(y, k1, ynew, k7, h_acc, frac, ys)
+                    dex[i] = separation(p, dmw, t + frac * h_acc, ys)[0]
             if i_redo == 8 or not search:
                 break
             hi = first_wrong_side(p, in_contact, d1, n_pts, buf, dex)

@@ -193,12 +193,14 @@ def separation_at(p, z, theta, w):
     return gap_at(p, z, theta, w) - p.y_s
 
 
-@_inline
+@_jit_borrowing
 def separation(p, dmw, t, y):
     """TFC separation ``d`` [m] and its rate [m/s] (docs/model.md, section "Separation datum").
 
-    The state is read before the DMW lookup's branches: ``y``'s last use is then unconditional, so
-    numba prunes the reference-count pair of the inlined argument (docs/kernel.md).
+    Compiled once, on its own and without reference counts (:data:`pipeline.model.compiled.BORROWING`: it
+    reads ``y`` and allocates nothing), and called from the kernel's loop itself, never from an inlined
+    helper: inlined, it was compiled again at each of its four call sites (docs/kernel.md, section "Compile
+    time"). The state is read before the DMW lookup's branches.
     """
     z, theta, vz, vtheta = y[Z], y[THETA], y[Z_RATE], y[THETA_RATE]
     wc, vc = disk(p, dmw, t)

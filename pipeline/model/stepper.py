@@ -206,22 +206,22 @@ def cubic_extrema(d0, dd0, d1, dd1, h, buf):
 
 
 @_inline
-def _interp_state(y0, f0, y1, f1, h, frac, out):
+def interp_state(y0, f0, y1, f1, h, frac, out):
     """The slider's state (not the meniscus state) at ``t0 + frac h`` into ``out`` (:func:`_hermite`)."""
     for i in range(N_STATE):
         out[i] = _hermite(y0, f0, y1, f1, h, frac, i)
 
 
 @_inline
-def step_points(p, dmw, search, t, h, y, k1, ynew, k7, d0, dd0, d1, dd1, ys, buf, dex, n_ex):
-    """The step's interior points where ``d`` is checked, and ``d`` [m] there: returns ``n_pts``.
+def step_points(p, search, h, d0, dd0, d1, dd1, buf, n_ex):
+    """The step's interior points where ``d`` is checked: returns ``n_pts``.
 
     ``buf[:n_ex]``: the interior extrema of ``d`` (:func:`knot_extrema` or :func:`cubic_extrema`, ascending),
     for the event search and the steady-window extremes alike; with ``search`` (the contact switch is looked
     for) and ``d`` passing near the threshold, three more points, ``buf[n_ex:n_pts]`` = 1/4, 1/2, 3/4 (a
-    grazing contact between the closed-form extrema and the ends). ``dex[:n_pts]``: ``d`` at those points on
-    the state interpolant, each computed once for :func:`first_wrong_side` and :func:`track_extremes`
-    (``buf``, ``dex``: ``n_max + 3`` slots, :func:`extrema_slots`).
+    grazing contact between the closed-form extrema and the ends). ``d`` at each (on the state interpolant,
+    :func:`interp_state`, then :func:`separation`) is computed once by the kernel's loop for
+    :func:`first_wrong_side` and :func:`track_extremes` (``buf``: ``n_max + 3`` slots, :func:`extrema_slots`).
     """
     ks = p.k_sigma
     n_pts = n_ex
@@ -229,10 +229,6 @@ def step_points(p, dmw, search, t, h, y, k1, ynew, k7, d0, dd0, d1, dd1, ys, buf
         n_pts = n_ex + 3
     for i in range(n_ex, n_pts):
         buf[i] = 0.25 * (i - n_ex + 1)
-    for i in range(n_pts):
-        frac = buf[i]
-        _interp_state(y, k1, ynew, k7, h, frac, ys)
-        dex[i] = separation(p, dmw, t + frac * h, ys)[0]
     return n_pts
 
 
@@ -262,16 +258,16 @@ def switch_point(p, dmw, in_contact, t, y, k1, ynew, k7, h, hi, ys):
 
     Bisection on the step's interpolant to 1e-16 s (``(hi - lo) h``).
     :func:`pipeline.model.dynamics._integrate` redoes the step up to it. Compiled on its own, not inlined:
-    it runs only at a switch, and its copy of the interpolant and of :func:`separation` would otherwise
-    be compiled into the kernel (docs/kernel.md, section "Compile time"). The bisection loop has one exit
-    (a counter, no ``break``): numba then prunes the reference counts of its array arguments.
+    it runs only at a switch, and its copy of the interpolant would otherwise be compiled into the kernel
+    (docs/kernel.md, section "Compile time"); it calls the compiled :func:`separation`. The bisection loop
+    has one exit (a counter, no ``break``): numba then prunes the reference counts of its array arguments.
     """
     lo = 0.0
     n = 60
     while n > 0:  # (one exit: see the docstring)
         n -= 1
         mid = 0.5 * (lo + hi)
-        _interp_state(y, k1, ynew, k7, h, mid, ys)
+        interp_state(y, k1, ynew, k7, h, mid, ys)
         g = separation(p, dmw, t + mid * h, ys)[0] - p.k_sigma
         if (g < 0.0) != in_contact:
             hi = mid

@@ -148,7 +148,8 @@ ahead = compiled.signature(dyn._integrate, dyn.kernel_arguments(
     np.zeros(N_STATE), dyn.Grid(1e-3, np.zeros(3)), p, tables, variants, dyn.Solver(1e-6, model.atol, 1e-7, 10)))
 stand_in = compiled.signature(dyn._integrate, dyn.kernel_arguments(*kernel_inputs.stand_in_arguments(scene)))
 entry_points = [compiled.signature(f, args) in f.signatures for f, args in first_run.python_entry_points(scene)]
-kernel = ("_integrate", "step", "switch_point", "knot_extrema", "stiffness_cap", "rhs_slots", "_newton")
+kernel = ("_integrate", "step", "switch_point", "knot_extrema", "stiffness_cap", "separation", "rhs_slots",
+          "_newton")
 from pipeline.model import forces, stepper
 
 def increments(f):  # NRT_incref calls in its LLVM, where this process compiled it (cached code: not inspectable)
@@ -156,7 +157,8 @@ def increments(f):  # NRT_incref calls in its LLVM, where this process compiled 
         f.py_func.__name__] else None
 
 print(json.dumps({"increments": {"step": increments(stepper.step), "rhs_slots": increments(forces.rhs_slots),
-                                 "stiffness_cap": increments(stepper.stiffness_cap)},
+                                 "stiffness_cap": increments(stepper.stiffness_cap),
+                                 "separation": increments(forces.separation), "_integrate": increments(dyn._integrate)},
 "integrate": len(dyn._integrate.signatures), "newton": len(static_solver._newton.signatures),
                   "ahead_is_called": [ahead] == list(dyn._integrate.signatures),
                   "stand_in_is_called": [stand_in] == list(dyn._integrate.signatures),
@@ -184,18 +186,20 @@ def test_the_main_scene_compiles_one_signature_per_kernel_entry_point(tmp_path):
 def test_the_main_scene_compiles_each_kernel_function_once(tmp_path):
     # an empty cache, everything compiled in this process (no background compile): the kernel, its separately
     # compiled helpers (the step, the switch's bisection, the extrema across DMW knots, the step's cap from the
-    # interface stiffness) and the static solver once each, the right-hand side twice: the kernel's slots and
-    # the static solver's (no DMW, no meniscus state; docs/kernel.md, section "Compile time")
+    # interface stiffness, the separation) and the static solver once each, the right-hand side twice: the
+    # kernel's slots and the static solver's (no DMW, no meniscus state; docs/kernel.md, section "Compile time")
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "numba"), HDI_COMPILE_AHEAD="0")
     out = subprocess.run([sys.executable, "-c", PLAN, str(tmp_path / "results")], cwd=ROOT, capture_output=True,
                          text=True, timeout=900, env=env)
     assert out.returncode == 0, out.stderr[-2000:]
     plan = json.loads(out.stdout.strip().splitlines()[-1])
     assert plan["compiles"] == {"_integrate": 1, "step": 1, "switch_point": 1, "knot_extrema": 1, "stiffness_cap": 1,
-                                "rhs_slots": 2, "_newton": 1}
-    # the step, the right-hand side (both signatures; inside the step too) and the step's cap without reference
-    # counts (pipeline.model.compiled.BORROWING; 15, 4 and 2 increments before, docs/kernel.md)
-    assert plan["increments"] == {"step": 0, "rhs_slots": 0, "stiffness_cap": 0}
+                                "separation": 1, "rhs_slots": 2, "_newton": 1}
+    # the step, the right-hand side (both signatures; inside the step too), the step's cap and the separation
+    # without reference counts (pipeline.model.compiled.BORROWING; 15, 4 and 2 increments before, docs/kernel.md);
+    # the kernel's own 8 are its allocations and returns, as many as with the separation inlined (commit 87f72a2):
+    # calling it from the loop added none
+    assert plan["increments"] == {"step": 0, "rhs_slots": 0, "stiffness_cap": 0, "separation": 0, "_integrate": 8}
 
 
 #: A small cached kernel in its own module, compiled ahead in a fresh process with an empty cache.
