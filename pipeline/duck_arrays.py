@@ -18,7 +18,8 @@ without a ``__dask_graph__`` attribute (the dask collection protocol), whether d
 the rest (:func:`_dask_collection_check`).
 
 The cache is xarray's private ``xarray.namedarray.pycompat._cached_duck_array_modules``: where a later
-xarray has no such cache or entry type, :func:`defer` does nothing and xarray imports as before
+xarray has no such cache or entry type, :func:`defer` leaves it, and where it has no
+``xarray.namedarray.utils.is_dask_collection``, that check; xarray then imports as before
 (tests/core/test_duck_arrays.py says which case this xarray is).
 """
 
@@ -35,7 +36,10 @@ DEFERRED = {"dask": "dask.array", "pint": "pint"}
 
 def defer() -> bool:
     """Put the stand-ins of :data:`DEFERRED` into xarray's duck-array cache (the module docstring), for the
-    modules xarray has not looked up yet and that are not imported; True if xarray has the cache."""
+    modules xarray has not looked up yet and that are not imported, and the dask-collection check in front of
+    xarray's (:func:`_defer_dask_collection_check`, which does not depend on that cache); True if xarray has
+    the cache."""
+    _defer_dask_collection_check()
     try:
         from xarray.namedarray import pycompat
         cache, real = pycompat._cached_duck_array_modules, pycompat.DuckArrayModule
@@ -46,7 +50,6 @@ def defer() -> bool:
     for name, module in DEFERRED.items():
         if name not in cache and module not in sys.modules:
             cache[name] = _Deferred(name, module, cache, real)
-    _defer_dask_collection_check()
     return True
 
 
@@ -72,9 +75,15 @@ def _dask_collection_check(xarray_check: Callable[[object], bool]) -> Callable[[
 
 def _defer_dask_collection_check() -> None:
     """Put :func:`_dask_collection_check` in place of xarray's ``is_dask_collection`` in
-    :data:`DASK_CHECK_HOMES` (once; a module whose attribute is not xarray's function is left alone)."""
-    homes = [sys.modules.get(name) or importlib.import_module(name) for name in DASK_CHECK_HOMES]
-    original = getattr(homes[0], "is_dask_collection", None)
+    :data:`DASK_CHECK_HOMES` (once; a module whose attribute is not xarray's function is left alone, and an
+    xarray without the first home, or without the function there, keeps its own check)."""
+    homes = []
+    for name in DASK_CHECK_HOMES:
+        try:
+            homes.append(importlib.import_module(name))
+        except ImportError:  # pragma: no cover (another xarray's layout)
+            continue
+    original = getattr(homes[0], "is_dask_collection", None) if homes else None
     if original is None or getattr(original, "__wrapped_by_hdi__", False):
         return
     wrapped = _dask_collection_check(original)

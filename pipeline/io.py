@@ -44,7 +44,7 @@ try:  # (POSIX: the file size limit, ulimit -f)
 except ImportError:  # pragma: no cover
     resource = None  # type: ignore[assignment]
 
-# xarray's duck-array checks answered without importing dask.array and pint (~0.35 s a process)
+# xarray's duck-array and dask-collection checks answered without importing dask and pint (~0.5 s a process)
 duck_arrays.defer()
 
 ENGINE = "netcdf4"

@@ -55,6 +55,9 @@ def test_the_steady_window_alone_gives_the_summary_bit_for_bit(variant):
         for name in whole:
             assert np.array_equal(whole[name], steady[name], equal_nan=True), (variant, delta, name)
         win = outcomes.steady_window(run)
+        # the window's rule, transient <= t, on the output times
+        assert np.array_equal(np.arange(run.time.size)[win], np.flatnonzero(run.time >= model.transient - 1e-15))
+        assert 0 < run.time[win].size < run.time.size
         for name, series in outcomes.histories(run, steady=True).items():
             assert np.array_equal(series, full[name][win], equal_nan=True), (variant, delta, name)
     assert {outcomes.FLYING, outcomes.SURFING} <= regimes  # (the test spans flying and contact)
