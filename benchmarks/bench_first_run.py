@@ -14,8 +14,14 @@ into install, compile and run. Target (issue 36): under 30 s on 2 cores (it was 
 5. compile = first run - warm run: numba's compilation of the kernels (in part in a background process,
    :func:`pipeline.model.compiled.compile_ahead`) and the interpreter's first compilation of the bytecode
    of what the run imports (the make targets write it lazily; uv compiles none at install).
+6. a notebook's first call (target: under 10 s): in the same clone, between the first and the warm run, a
+   fresh process runs ``build_model`` of ``make run``'s scene on its results folder (its inputs current) and
+   ``simulate(model, [9.0])`` with an empty numba cache (``NUMBA_CACHE_DIR`` a new empty folder each time),
+   :data:`NOTEBOOK_REPEAT` times: the kernel's compile in the background process the API starts, and the
+   waiting process's own compiles (docs/performance.md, section "A notebook's first call, shared").
 
-One measurement each (a fresh clone is the point; about 2 minutes). ``BENCH_FIRST_RUN=0`` skips it.
+One measurement each of 1-4 (a fresh clone is the point; about 2 minutes), 3 of 6 (~30 s).
+``BENCH_FIRST_RUN=0`` skips it.
 """
 
 from __future__ import annotations
@@ -29,11 +35,49 @@ from pathlib import Path
 
 from benchmarks.common import ROOT, record
 
+#: The scene of ``make run`` (the Makefile's ``SCENE``).
+SCENE = "configs/paper-2009-identified.toml"
+
 
 def _timed(cmd: list[str], cwd: Path, env: dict[str, str]) -> float:
     t0 = time.perf_counter()
     subprocess.run(cmd, cwd=cwd, env=env, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
     return time.perf_counter() - t0
+
+
+#: How often the notebook's first call is measured (each with an empty numba cache, ~8-12 s).
+NOTEBOOK_REPEAT = 3
+#: The notebook's first call, in a fresh process started in the clone: argv[1] the scene, argv[2] its results
+#: folder. Prints the seconds from the process's first line to the dataset.
+NOTEBOOK = """
+import sys, time
+t0 = time.perf_counter()
+import pipeline as hdi
+model = hdi.build_model(sys.argv[1], sys.argv[2], progress=False)
+ds = hdi.simulate(model, [9.0], progress=False)
+assert ds.sizes["protrusion"] == 1
+print(time.perf_counter() - t0)
+"""
+
+
+def notebook_first_calls(clone: Path, env: dict[str, str], scene: str, repeat: int = NOTEBOOK_REPEAT
+                         ) -> tuple[list[float], list[float]]:
+    """Wall times [s] of a notebook's first ``build_model`` + ``simulate`` in ``clone`` (module docstring,
+    step 6): the process's own count, and the whole process's (interpreter start and exit included)."""
+    folders = [f for f in (clone / "results").iterdir() if f.is_dir()]
+    if len(folders) != 1:
+        raise RuntimeError(f"{clone / 'results'}: expected the one results folder of `make run`, found "
+                           f"{sorted(f.name for f in folders)}")
+    inside, whole = [], []
+    python = str(clone / ".venv" / "bin" / "python")
+    for _ in range(repeat):
+        with tempfile.TemporaryDirectory(prefix="hdi-numba-") as cache:
+            t0 = time.perf_counter()
+            out = subprocess.run([python, "-c", NOTEBOOK, scene, str(folders[0])], cwd=clone,
+                                 env={**env, "NUMBA_CACHE_DIR": cache}, check=True, capture_output=True, text=True)
+            whole.append(time.perf_counter() - t0)
+        inside.append(float(out.stdout.strip().splitlines()[-1]))
+    return inside, whole
 
 
 def run(results: list[dict]) -> None:
@@ -50,6 +94,7 @@ def run(results: list[dict]) -> None:
             env["BOOT_CACHE"] = str(Path(tmp) / "uv-bootstrap")
         install = _timed(["make", "setup"], clone, env)
         first = _timed(["make", "run"], clone, env)
+        notebook, notebook_process = notebook_first_calls(clone, env, SCENE)
         # the same command again, everything recomputed (the same scene: another scene's effects would be
         # another kernel signature, compiled in the "warm" run)
         warm = _timed(["make", "run", "ARGS=--force"], clone, env)
@@ -62,3 +107,6 @@ def run(results: list[dict]) -> None:
            first_run_s=round(first, 1), uv_cache="empty" if cold else "reused")
     print(f"  install {install:.1f} s, first make run {first:.1f} s = compile {first - warm:.1f} s + run "
           f"{warm:.1f} s ({cache})", flush=True)
+    record(results, "a notebook's first build_model + simulate (make run's scene and results, one protrusion), "
+           "empty numba cache, fresh process", notebook, target_s=10.0, scene=SCENE,
+           process_s=[round(t, 2) for t in notebook_process])

@@ -4,15 +4,19 @@ A first run (no machine code in numba's on-disk cache) compiles the dynamics ker
 waits for it: :func:`compile_kernel_ahead` starts that compile in a background process as soon as the
 scene is known (the runner, before a build's first stage; the Python API's ``build_model``), with the
 kernel's signature from the scene's stand-in arguments
-(:func:`pipeline.model.kernel_inputs.stand_in_arguments`). While the process then waits for it, it
-compiles the entry points that later stages call from Python (:func:`python_entry_points`: the statics
-map's path, the right-hand side of the static forces, the separation of a run's histories), which it
-would otherwise compile after the wait, on the first run's critical path
-(:func:`pipeline.model.compiled.while_waiting`). Machine code and results are the same either way.
+(:func:`pipeline.model.kernel_inputs.stand_in_arguments`), and compiles at once, into the on-disk cache,
+the kernel's leaf callees, which the background compile asks for last and then loads instead of compiling
+(:func:`pipeline.model.dynamics.leaf_calls`: the two processes share the kernel's compile). While the
+process then waits for it, it compiles the entry points that later stages call from Python
+(:func:`python_entry_points`: the statics map's path, the right-hand side of the static forces, the
+separation of a run's histories, the DMW's disk history), which it would otherwise compile after the wait,
+on the first run's critical path (:func:`pipeline.model.compiled.while_waiting`). Machine code and results
+are the same either way.
 """
 
 from __future__ import annotations
 
+import logging
 import os
 import pickle
 from typing import Any
@@ -22,11 +26,14 @@ import numpy as np
 from . import compiled
 from . import dynamics as dyn
 from .forces import separation_at
+from .piecewise import disk_history
 from .kernel_inputs import stand_in_arguments
 from .start import static_inputs
 from .state import N_STATE, THETA, Z
 from ..config.loading import load_scene
 from ..units import URAD
+
+log = logging.getLogger(__name__)
 
 #: What the first run's early compile process (:func:`compile_scene_kernel`) does not import: the command
 #: line's process imports them anyway, and in a fresh clone (their bytecode written for the first time)
@@ -39,8 +46,11 @@ NOT_IMPORTED_EARLY = ("xarray", "pandas", "scipy.interpolate", "scipy.special")
 def compile_kernel_ahead(scene: Any) -> None:
     """Start compiling the dynamics kernel for the scene's effects in a background process, unless this
     process has a kernel already, the on-disk cache has this one, or ``HDI_COMPILE_AHEAD=0``
-    (:func:`pipeline.model.dynamics.compile_kernel_ahead` of the scene's stand-in arguments); if it starts,
-    the Python entry points of :func:`python_entry_points` are compiled while the process waits for it.
+    (:func:`pipeline.model.dynamics.compile_kernel_ahead` of the scene's stand-in arguments). If one is under
+    way, the kernel's leaf callees are compiled into the on-disk cache here at once
+    (:func:`pipeline.model.dynamics.leaf_calls`): the background compile asks for them last, 3-5 s into it,
+    and loads them instead of compiling them; and the Python entry points of :func:`python_entry_points`
+    are compiled while the process waits for it.
 
     A scene whose stand-ins cannot be made (a rear law that does not compile) starts nothing: the model's
     assembly reports it in its own words when it comes to it.
@@ -50,6 +60,15 @@ def compile_kernel_ahead(scene: Any) -> None:
     except ValueError:
         return
     dyn.compile_kernel_ahead(*args)
+    if not compiled.pending():
+        return
+    # now, not while waiting: by the first wait this process may still be compiling its static solver (3-5 s),
+    # and the background compile would have compiled the leaves itself (docs/performance.md, section "A
+    # notebook's first call, shared")
+    try:
+        compile_entry_points(dyn.leaf_calls(dyn.kernel_arguments(*args)))
+    except Exception as exc:  # (only a head start: the background compile compiles what is not cached)
+        log.debug("the kernel's leaf callees did not compile ahead: %s", exc)
     compiled.while_waiting(lambda: compile_entry_points(python_entry_points(scene)))
 
 
@@ -77,20 +96,24 @@ def python_entry_points(scene: Any) -> list[tuple[Any, tuple]]:
     (:func:`pipeline.model.statics._path`) and its right-hand side of the static forces
     (:func:`pipeline.model.dynamics.rhs`: the slots of :func:`pipeline.model.start.static_inputs`), and the
     separation of a run's histories (:func:`pipeline.model.forces.separation_at` on the columns of the
-    kernel's output: strided arrays). tests/model/test_compiled.py checks that the main scene's runs and
-    statics map compile exactly these signatures.
+    kernel's output: strided arrays), and with a DMW record its history at a run's output times
+    (:func:`pipeline.model.piecewise.disk_history`). tests/model/test_compiled.py checks that the main
+    scene's runs and statics map compile exactly these signatures.
     """
     from .statics import TOL, _path  # (here: xarray, NOT_IMPORTED_EARLY)
     y0, grid, p, tab, var, solver = stand_in_arguments(scene)
     p_static, tab_static, var_static, slots = static_inputs(lambda mu: (p, tab, var), 0.0)
     packed = dyn._packed(p_static)
     Y = np.zeros((2, N_STATE))  # (the kernel's output: the histories read its columns)
-    return [
+    points = [
         (_path, (np.zeros(1), 1.0, 0.0, 0.0, 0.0, URAD, TOL, 30, packed, *slots)),
         (dyn._rhs_python, (0.0, np.zeros(N_STATE), packed, False, np.zeros(N_STATE), *dyn._slots(tab_static,
                                                                                                 var_static))),
         (separation_at, (p, Y[:, Z], Y[:, THETA], np.zeros(2))),
     ]
+    if tab.dmw is not None:  # (the disk under the TFC point at a run's output times)
+        points.append((disk_history, (tab.dmw, p, np.zeros(2))))
+    return points
 
 
 def compile_entry_points(entry_points: list[tuple[Any, tuple]]) -> None:

@@ -282,6 +282,31 @@ def compile_kernel_ahead(y0: np.ndarray, grid: Grid, p: np.record, tab: Tables, 
                            KERNEL_COMPILE_S)
 
 
+def leaf_calls(kernel_args: tuple) -> list[tuple[object, tuple]]:
+    """The kernel's separately compiled functions that call no other compiled function and that its compile
+    asks for last, 3-5 s into it (docs/kernel.md, section "Compile time"): the step's cap
+    :func:`pipeline.model.stepper.stiffness_cap` and, with a DMW record, the extrema across its knots
+    :func:`pipeline.model.stepper.knot_extrema`; each with stand-in arguments of the types :func:`_integrate`
+    calls it with for ``kernel_args`` (:func:`kernel_arguments`): ``(dispatcher, args)``, the last asked for
+    first. (The switch's bisection :func:`pipeline.model.stepper.switch_point` calls the separation, which
+    the background compile compiles first: compiled here too, it would be compiled twice.)
+
+    The process that starts the kernel's background compile compiles these into the on-disk cache at once,
+    and the background compile then loads them instead of compiling them
+    (:func:`pipeline.model.ahead.compile_kernel_ahead`). Machine code and results are the same either way;
+    tests/model/test_compiled.py checks that these are the signatures the kernel's compile asks for.
+    """
+    (_, _, _, params, _, _, _, _, dmw, contact, adhesion, _, tfc, _, _, gap_power_, meniscus) = kernel_args
+    p = params[0]  # (the record, typed as the kernel types ``params[0]``)
+    gap_power = None if gap_power_ is None else gap_power_[0]
+    v = np.zeros(1)  # (the kernel's work arrays: C-contiguous float64)
+    calls: list[tuple[object, tuple]] = [
+        (stiffness_cap, (p, False, 0.0, 0.0, 0.0, contact, adhesion, tfc, gap_power, meniscus))]
+    if dmw is not None:  # (the kernel's call is pruned without a DMW record)
+        calls.append((knot_extrema, (dmw, 0.0, 0.0, 0.0, 0.0, 0, 0.0, 0.0, 0.0, v, 0)))
+    return calls
+
+
 def rhs(t: float, y: np.ndarray, p: np.record, tab: Tables, var: Variants, in_contact: bool,
         out: np.ndarray) -> None:
     """Write ``dy/dt`` at the time ``t`` [s] and state ``y`` into ``out``, in the contact mode

@@ -41,12 +41,14 @@ def test_the_kernel_compiles_ahead_and_the_entry_points_while_waiting(scene, mon
     monkeypatch.setattr(ahead.dyn, "compile_kernel_ahead", start)
     monkeypatch.setattr(ahead, "compile_entry_points", lambda eps: compiled_now.extend(f for f, _ in eps))
     ahead.compile_kernel_ahead(scene)
-    # the kernel for the scene's stand-in arguments, started at once; the entry points not yet
+    # the kernel for the scene's stand-in arguments, started at once, and its leaf callees compiled at once, the
+    # last it asks for first (the background compile then loads them); the entry points not yet
     assert started == [compiled.signature(dyn._integrate, dyn.kernel_arguments(
         *kernel_inputs.stand_in_arguments(scene)))]
-    assert compiled_now == []
+    assert [f.py_func.__name__ for f in compiled_now] == ["stiffness_cap", "knot_extrema"]
     compiled.wait_ahead()  # the first integration waits: the entry points are compiled meanwhile
-    assert [f.py_func.__name__ for f in compiled_now] == ["_path", "_rhs_python", "separation_at"]
+    assert [f.py_func.__name__ for f in compiled_now[2:]] == ["_path", "_rhs_python", "separation_at",
+                                                              "disk_history"]
     assert not compiled.pending()
 
 
@@ -60,6 +62,25 @@ def test_nothing_to_wait_for_compiles_nothing_ahead(scene, monkeypatch):
     ahead.compile_kernel_ahead(scene)
     compiled.wait_ahead()
     assert compiled_now == [] and compiled._IDLE == []
+
+
+def test_a_leaf_that_fails_to_compile_ahead_is_only_a_lost_head_start(scene, monkeypatch):
+    # (the background compile compiles it itself; the entry points are still queued for the wait)
+    queued: list = []
+    monkeypatch.setattr(compiled, "_AHEAD", {"kernel": _Running()})
+    monkeypatch.setattr(compiled, "_IDLE", [])
+    monkeypatch.setattr(ahead.dyn, "compile_kernel_ahead", lambda *args: None)
+
+    def compile_entry_points(eps):
+        if eps[0][0] is ahead.dyn.stiffness_cap:
+            raise RuntimeError("numba: a typing error")
+        queued.append(eps)
+
+    monkeypatch.setattr(ahead, "compile_entry_points", compile_entry_points)
+    ahead.compile_kernel_ahead(scene)
+    assert queued == [] and len(compiled._IDLE) == 1
+    compiled.wait_ahead()
+    assert [f.py_func.__name__ for f, _ in queued[0]] == ["_path", "_rhs_python", "separation_at", "disk_history"]
 
 
 def test_a_scene_whose_stand_ins_fail_starts_nothing(scene, monkeypatch):

@@ -231,3 +231,19 @@ def test_every_pipeline_name_a_bench_module_uses_exists() -> None:
                 missing.append(f"{path.name}:{line}: {module}.{attr}")
     assert not missing, missing
     assert seen > 20  # (the check reads the bench's uses: assembly.build_model, running.run_model, ...)
+
+
+def test_notebook_row_runs_make_runs_scene_on_its_one_results_folder(tmp_path: Path) -> None:
+    """The first-run bench's notebook row builds the model of `make run`'s scene (the Makefile's SCENE) from
+    the one folder `make run` wrote; anything else in results/ is named in the error, before any process."""
+    import re
+
+    from benchmarks import bench_first_run as fr
+
+    makefile = (Path(__file__).resolve().parents[2] / "Makefile").read_text()
+    assert re.search(r"^SCENE\s*\?=\s*(\S+)", makefile, re.M).group(1) == fr.SCENE
+    (tmp_path / "results" / "paper").mkdir(parents=True)
+    (tmp_path / "results" / "other").mkdir()
+    with pytest.raises(RuntimeError, match=r"results: expected the one results folder of `make run`, found "
+                                           r"\['other', 'paper'\]"):
+        fr.notebook_first_calls(tmp_path, {}, fr.SCENE)
