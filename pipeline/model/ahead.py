@@ -6,7 +6,8 @@ scene is known (the runner, before a build's first stage; the Python API's ``bui
 kernel's signature from the scene's stand-in arguments
 (:func:`pipeline.model.kernel_inputs.stand_in_arguments`), and compiles at once, into the on-disk cache,
 the kernel's leaf callees, which the background compile asks for last and then loads instead of compiling
-(:func:`pipeline.model.dynamics.leaf_calls`: the two processes share the kernel's compile). While the
+(:func:`pipeline.model.dynamics.leaf_calls`: the two processes share the kernel's compile; not for the
+console script's early compile, which is ahead). While the
 process then waits for it, it compiles the entry points that later stages call from Python
 (:func:`python_entry_points`: the statics map's path, the right-hand side of the static forces, the
 separation of a run's histories, the DMW's disk history), which it would otherwise compile after the wait,
@@ -46,11 +47,11 @@ NOT_IMPORTED_EARLY = ("xarray", "pandas", "scipy.interpolate", "scipy.special")
 def compile_kernel_ahead(scene: Any) -> None:
     """Start compiling the dynamics kernel for the scene's effects in a background process, unless this
     process has a kernel already, the on-disk cache has this one, or ``HDI_COMPILE_AHEAD=0``
-    (:func:`pipeline.model.dynamics.compile_kernel_ahead` of the scene's stand-in arguments). If one is under
-    way, the kernel's leaf callees are compiled into the on-disk cache here at once
+    (:func:`pipeline.model.dynamics.compile_kernel_ahead` of the scene's stand-in arguments). If this call
+    started it, the kernel's leaf callees are compiled into the on-disk cache here at once
     (:func:`pipeline.model.dynamics.leaf_calls`): the background compile asks for them last, 3-5 s into it,
-    and loads them instead of compiling them; and the Python entry points of :func:`python_entry_points`
-    are compiled while the process waits for it.
+    and loads them instead of compiling them. If a compile is under way (started or adopted), the Python
+    entry points of :func:`python_entry_points` are compiled while the process waits for it.
 
     A scene whose stand-ins cannot be made (a rear law that does not compile) starts nothing: the model's
     assembly reports it in its own words when it comes to it.
@@ -59,16 +60,16 @@ def compile_kernel_ahead(scene: Any) -> None:
         args = stand_in_arguments(scene)
     except ValueError:
         return
-    dyn.compile_kernel_ahead(*args)
-    if not compiled.pending():
-        return
-    # now, not while waiting: by the first wait this process may still be compiling its static solver (3-5 s),
-    # and the background compile would have compiled the leaves itself (docs/performance.md, section "A
-    # notebook's first call, shared")
-    try:
-        compile_entry_points(dyn.leaf_calls(dyn.kernel_arguments(*args)))
-    except Exception as exc:  # (only a head start: the background compile compiles what is not cached)
-        log.debug("the kernel's leaf callees did not compile ahead: %s", exc)
+    if dyn.compile_kernel_ahead(*args):
+        # now, not while waiting: by its first wait this process may still be compiling its static solver
+        # (3-5 s), and the background compile would have compiled the leaves itself. Not when the compile is
+        # the console script's, adopted: started ~1 s before the command's imports, it is ahead, and the
+        # command has its upstream stages to compute (docs/performance.md, section "A notebook's first call,
+        # shared")
+        try:
+            compile_entry_points(dyn.leaf_calls(dyn.kernel_arguments(*args)))
+        except Exception as exc:  # (only a head start: the background compile compiles what is not cached)
+            log.debug("the kernel's leaf callees did not compile ahead: %s", exc)
     compiled.while_waiting(lambda: compile_entry_points(python_entry_points(scene)))
 
 

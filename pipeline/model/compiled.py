@@ -219,14 +219,15 @@ def stop_ahead() -> None:
         _IDLE.clear()
 
 
-def compile_ahead(dispatcher: Any, args: tuple, what: str, seconds: float) -> None:
+def compile_ahead(dispatcher: Any, args: tuple, what: str, seconds: float) -> bool:
     """Start compiling ``dispatcher`` (a jitted function of a kernel module) for the types of ``args`` in a
     background process, unless this process has it, the cache has it, one is under way, or
     ``HDI_COMPILE_AHEAD=0``; says so (:func:`pipeline.progress.compile_notice`). :func:`wait_ahead`
     waits for it. The kernel's compile the console script started before its imports (:func:`adopt_early`)
-    is that process when it compiles the same signature, and is stopped otherwise."""
+    is that process when it compiles the same signature, and is stopped otherwise. Returns whether this
+    call started a process (not: adopted the console script's, or started none)."""
     if os.environ.get("HDI_COMPILE_AHEAD", "1") == "0":
-        return
+        return False
     sig = signature(dispatcher, args)
     key = (dispatcher.py_func.__module__, dispatcher.py_func.__name__, sig)
     with _AHEAD_LOCK:
@@ -234,11 +235,11 @@ def compile_ahead(dispatcher: Any, args: tuple, what: str, seconds: float) -> No
         if key in _AHEAD or sig in dispatcher.overloads or is_cached(dispatcher, sig):
             if early is not None:  # (done, or done elsewhere: nothing left for it to do)
                 _stop(early)
-            return
+            return False
         if early is not None:  # (the console script's, started before its imports: the same compile)
             _AHEAD[key] = early
             progress.compile_notice(f"{what} in a background process", seconds)
-            return
+            return False
         fd, path = tempfile.mkstemp(prefix="hdi-compile-", suffix=".pkl")
         with os.fdopen(fd, "wb") as f:
             pickle.dump(key, f)
@@ -248,6 +249,7 @@ def compile_ahead(dispatcher: Any, args: tuple, what: str, seconds: float) -> No
         _AHEAD[key] = subprocess.Popen([sys.executable, "-c", code], stdin=subprocess.DEVNULL,
                                        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         progress.compile_notice(f"{what} in a background process", seconds)
+        return True
 
 
 def while_waiting(work: Callable[[], None]) -> None:

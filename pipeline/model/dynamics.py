@@ -270,16 +270,17 @@ def kernel_arguments(y0: np.ndarray, grid: Grid, p: np.record, tab: Tables, var:
 
 
 def compile_kernel_ahead(y0: np.ndarray, grid: Grid, p: np.record, tab: Tables, var: Variants,
-                         solver: Solver) -> None:
+                         solver: Solver) -> bool:
     """Start compiling the kernel for these arguments' types in a background process if neither this process
     nor the cache has it (:func:`pipeline.model.compiled.compile_ahead`): a model's first run calls this
     before its static start, which compiles the static solver meanwhile. Only while this process has no
     kernel yet (typing the arguments costs ~1 ms, a run's call no more than a pointer test); a later scene's
-    other effects compile in this process at their first call, as before."""
+    other effects compile in this process at their first call, as before. Returns whether this call started
+    the process (:func:`pipeline.model.compiled.compile_ahead`)."""
     if _integrate.overloads or compiled.pending():
-        return
-    compiled.compile_ahead(_integrate, kernel_arguments(y0, grid, p, tab, var, solver), KERNEL_NOTICE,
-                           KERNEL_COMPILE_S)
+        return False
+    return compiled.compile_ahead(_integrate, kernel_arguments(y0, grid, p, tab, var, solver), KERNEL_NOTICE,
+                                  KERNEL_COMPILE_S)
 
 
 def leaf_calls(kernel_args: tuple) -> list[tuple[object, tuple]]:
@@ -291,8 +292,9 @@ def leaf_calls(kernel_args: tuple) -> list[tuple[object, tuple]]:
     first. (The switch's bisection :func:`pipeline.model.stepper.switch_point` calls the separation, which
     the background compile compiles first: compiled here too, it would be compiled twice.)
 
-    The process that starts the kernel's background compile compiles these into the on-disk cache at once,
-    and the background compile then loads them instead of compiling them
+    The process that starts the kernel's background compile compiles these into the on-disk cache at once
+    (not when it adopts the console script's early compile), and the background compile then loads them
+    instead of compiling them
     (:func:`pipeline.model.ahead.compile_kernel_ahead`). Machine code and results are the same either way;
     tests/model/test_compiled.py checks that these are the signatures the kernel's compile asks for.
     """

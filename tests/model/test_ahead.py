@@ -37,6 +37,7 @@ def test_the_kernel_compiles_ahead_and_the_entry_points_while_waiting(scene, mon
     def start(*args):  # (as dynamics.compile_kernel_ahead does when nothing has the kernel: a process runs)
         started.append(compiled.signature(dyn._integrate, dyn.kernel_arguments(*args)))
         compiled._AHEAD["kernel"] = _Running()
+        return True
 
     monkeypatch.setattr(ahead.dyn, "compile_kernel_ahead", start)
     monkeypatch.setattr(ahead, "compile_entry_points", lambda eps: compiled_now.extend(f for f, _ in eps))
@@ -69,7 +70,7 @@ def test_a_leaf_that_fails_to_compile_ahead_is_only_a_lost_head_start(scene, mon
     queued: list = []
     monkeypatch.setattr(compiled, "_AHEAD", {"kernel": _Running()})
     monkeypatch.setattr(compiled, "_IDLE", [])
-    monkeypatch.setattr(ahead.dyn, "compile_kernel_ahead", lambda *args: None)
+    monkeypatch.setattr(ahead.dyn, "compile_kernel_ahead", lambda *args: True)
 
     def compile_entry_points(eps):
         if eps[0][0] is ahead.dyn.stiffness_cap:
@@ -81,6 +82,20 @@ def test_a_leaf_that_fails_to_compile_ahead_is_only_a_lost_head_start(scene, mon
     assert queued == [] and len(compiled._IDLE) == 1
     compiled.wait_ahead()
     assert [f.py_func.__name__ for f, _ in queued[0]] == ["_path", "_rhs_python", "separation_at", "disk_history"]
+
+
+def test_an_adopted_early_compile_is_left_its_leaves(scene, monkeypatch):
+    # the console script's compile, started before the command's imports, is ahead: this process compiles
+    # only the entry points, while it waits
+    compiled_now: list = []
+    monkeypatch.setattr(compiled, "_AHEAD", {"kernel": _Running()})
+    monkeypatch.setattr(compiled, "_IDLE", [])
+    monkeypatch.setattr(ahead.dyn, "compile_kernel_ahead", lambda *args: False)
+    monkeypatch.setattr(ahead, "compile_entry_points", lambda eps: compiled_now.extend(f for f, _ in eps))
+    ahead.compile_kernel_ahead(scene)
+    assert compiled_now == []
+    compiled.wait_ahead()
+    assert [f.py_func.__name__ for f in compiled_now] == ["_path", "_rhs_python", "separation_at", "disk_history"]
 
 
 def test_a_scene_whose_stand_ins_fail_starts_nothing(scene, monkeypatch):

@@ -76,8 +76,8 @@ def test_the_runner_adopts_the_early_compile_of_the_same_signature(tmp_path, cle
     early = _early(tmp_path, key, seconds=0.5)
     compiled.adopt_early(early)
     compiled.adopt_early(None)  # (nothing started: the one handed over stays)
-    compiled.compile_ahead(_Dispatcher, args, "the kernel", 1.0)
-    # no process of its own: the early one is the compile under way, and it is said once
+    # no process of its own (so it says it started none): the early one is the compile under way, said once
+    assert compiled.compile_ahead(_Dispatcher, args, "the kernel", 1.0) is False
     proc = early.proc
     assert compiled._AHEAD == {key: proc} and compiled._EARLY is None
     assert said == [("the kernel in a background process", 1.0)]
@@ -91,7 +91,7 @@ def test_an_early_compile_of_another_signature_is_stopped(tmp_path, clean, monke
     early = _early(tmp_path, (*first_run.KERNEL, ("float64",)))
     monkeypatch.setattr(compiled.subprocess, "Popen", lambda *a, **k: started.append(a) or "own")
     compiled.adopt_early(early)
-    compiled.compile_ahead(_Dispatcher, (1.5, 2), "the kernel", 1.0)
+    assert compiled.compile_ahead(_Dispatcher, (1.5, 2), "the kernel", 1.0) is True
     # the early process compiles what nobody asks for: ended (SIGTERM), and this process starts its own
     assert early.proc.returncode == -15 and len(started) == 1 and list(compiled._AHEAD.values()) == ["own"]
     assert not os.path.exists(early.folder) and compiled._EARLY is None
