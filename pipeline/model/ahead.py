@@ -7,12 +7,11 @@ kernel's signature from the scene's stand-in arguments
 (:func:`pipeline.model.kernel_inputs.stand_in_arguments`), and compiles at once, into the on-disk cache,
 the kernel's leaf callees, which the background compile asks for last and then loads instead of compiling
 (:func:`pipeline.model.dynamics.leaf_calls`: the two processes share the kernel's compile; not for the
-console script's early compile, which is ahead). While the
-process then waits for it, it compiles the entry points that later stages call from Python
-(:func:`python_entry_points`: the statics map's path, the right-hand side of the static forces, the
-separation of a run's histories, the DMW's disk history), which it would otherwise compile after the wait,
-on the first run's critical path (:func:`pipeline.model.compiled.while_waiting`). Machine code and results
-are the same either way.
+console script's early compile, which is ahead). While the process then waits for it, it compiles the
+entry points that later stages call from Python (:func:`python_entry_points`: the statics map's path, the
+right-hand side of the static forces, the separation of a run's histories, the DMW's disk history), which
+it would otherwise compile after the wait, on the first run's critical path
+(:func:`pipeline.model.compiled.while_waiting`). Machine code and results are the same either way.
 """
 
 from __future__ import annotations
@@ -27,8 +26,8 @@ import numpy as np
 from . import compiled
 from . import dynamics as dyn
 from .forces import separation_at
-from .piecewise import disk_history
 from .kernel_inputs import stand_in_arguments
+from .piecewise import disk_history
 from .start import static_inputs
 from .state import N_STATE, THETA, Z
 from ..config.loading import load_scene

@@ -294,9 +294,9 @@ def leaf_calls(kernel_args: tuple) -> list[tuple[object, tuple]]:
 
     The process that starts the kernel's background compile compiles these into the on-disk cache at once
     (not when it adopts the console script's early compile), and the background compile then loads them
-    instead of compiling them
-    (:func:`pipeline.model.ahead.compile_kernel_ahead`). Machine code and results are the same either way;
-    tests/model/test_compiled.py checks that these are the signatures the kernel's compile asks for.
+    instead of compiling them (:func:`pipeline.model.ahead.compile_kernel_ahead`). Machine code and results
+    are the same either way; tests/model/test_compiled.py checks that these are the signatures the kernel's
+    compile asks for.
     """
     (_, _, _, params, _, _, _, _, dmw, contact, adhesion, _, tfc, _, _, gap_power_, meniscus) = kernel_args
     p = params[0]  # (the record, typed as the kernel types ``params[0]``)
