@@ -69,7 +69,9 @@ def compile_kernel_ahead(scene: Any) -> None:
             compile_entry_points(dyn.leaf_calls(dyn.kernel_arguments(*args)))
         except Exception as exc:  # (only a head start: the background compile compiles what is not cached)
             log.debug("the kernel's leaf callees did not compile ahead: %s", exc)
-    compiled.while_waiting(lambda: compile_entry_points(python_entry_points(scene)))
+    # (one by one, and only while the background compile runs: after it, the caller waits for them, and each
+    # is compiled anyway where it is first called)
+    compiled.while_waiting(lambda: compile_entry_points(python_entry_points(scene), while_compiling=True))
 
 
 def compile_scene_kernel(scene_path: str, overrides: list[str], key_path: str) -> None:
@@ -116,10 +118,14 @@ def python_entry_points(scene: Any) -> list[tuple[Any, tuple]]:
     return points
 
 
-def compile_entry_points(entry_points: list[tuple[Any, tuple]]) -> None:
+def compile_entry_points(entry_points: list[tuple[Any, tuple]], while_compiling: bool = False) -> None:
     """Compile each ``(dispatcher, args)`` for the types of ``args`` in this process (loaded instead when the
-    on-disk cache has it; nothing when the process has it), without calling it."""
+    on-disk cache has it; nothing when the process has it), without calling it; with ``while_compiling``,
+    only while a background compile runs (:func:`pipeline.model.compiled.running`): the rest is compiled
+    where it is first called, if it is."""
     for dispatcher, args in entry_points:
+        if while_compiling and not compiled.running():
+            return
         sig = compiled.signature(dispatcher, args)
         if sig not in dispatcher.overloads:
             dispatcher.compile(sig)

@@ -275,7 +275,7 @@ def wait_ahead() -> None:
     meanwhile: the next call loads their machine code from the cache. A failed one is only a cache miss:
     this process then compiles it itself."""
     with _AHEAD_LOCK:
-        while _IDLE and any(proc.poll() is None for proc in _AHEAD.values()):
+        while _IDLE and running():
             work = _IDLE.pop(0)
             try:
                 work()
@@ -290,6 +290,13 @@ def wait_ahead() -> None:
 def pending() -> bool:
     """Whether a background compile (:func:`compile_ahead`) was started and not waited for."""
     return bool(_AHEAD)
+
+
+def running() -> bool:
+    """Whether a background compile (:func:`compile_ahead`) is still running: work done while waiting stops
+    when none is, since from then on it delays the caller. Takes no lock: the work :func:`wait_ahead` runs
+    under it asks."""
+    return any(proc.poll() is None for proc in _AHEAD.values())
 
 
 def compile_from_file(path: str) -> None:

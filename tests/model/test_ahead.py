@@ -40,7 +40,7 @@ def test_the_kernel_compiles_ahead_and_the_entry_points_while_waiting(scene, mon
         return True
 
     monkeypatch.setattr(ahead.dyn, "compile_kernel_ahead", start)
-    monkeypatch.setattr(ahead, "compile_entry_points", lambda eps: compiled_now.extend(f for f, _ in eps))
+    monkeypatch.setattr(ahead, "compile_entry_points", lambda eps, **kw: compiled_now.extend(f for f, _ in eps))
     ahead.compile_kernel_ahead(scene)
     # the kernel for the scene's stand-in arguments, started at once, and its leaf callees compiled at once, the
     # last it asks for first (the background compile then loads them); the entry points not yet
@@ -59,7 +59,7 @@ def test_nothing_to_wait_for_compiles_nothing_ahead(scene, monkeypatch):
     monkeypatch.setattr(compiled, "_AHEAD", {})
     monkeypatch.setattr(compiled, "_IDLE", [])
     monkeypatch.setattr(ahead.dyn, "compile_kernel_ahead", lambda *args: None)
-    monkeypatch.setattr(ahead, "compile_entry_points", lambda eps: compiled_now.append(eps))
+    monkeypatch.setattr(ahead, "compile_entry_points", lambda eps, **kw: compiled_now.append(eps))
     ahead.compile_kernel_ahead(scene)
     compiled.wait_ahead()
     assert compiled_now == [] and compiled._IDLE == []
@@ -72,7 +72,7 @@ def test_a_leaf_that_fails_to_compile_ahead_is_only_a_lost_head_start(scene, mon
     monkeypatch.setattr(compiled, "_IDLE", [])
     monkeypatch.setattr(ahead.dyn, "compile_kernel_ahead", lambda *args: True)
 
-    def compile_entry_points(eps):
+    def compile_entry_points(eps, **kw):
         if eps[0][0] is ahead.dyn.stiffness_cap:
             raise RuntimeError("numba: a typing error")
         queued.append(eps)
@@ -91,11 +91,42 @@ def test_an_adopted_early_compile_is_left_its_leaves(scene, monkeypatch):
     monkeypatch.setattr(compiled, "_AHEAD", {"kernel": _Running()})
     monkeypatch.setattr(compiled, "_IDLE", [])
     monkeypatch.setattr(ahead.dyn, "compile_kernel_ahead", lambda *args: False)
-    monkeypatch.setattr(ahead, "compile_entry_points", lambda eps: compiled_now.extend(f for f, _ in eps))
+    monkeypatch.setattr(ahead, "compile_entry_points", lambda eps, **kw: compiled_now.extend(f for f, _ in eps))
     ahead.compile_kernel_ahead(scene)
     assert compiled_now == []
     compiled.wait_ahead()
     assert [f.py_func.__name__ for f in compiled_now] == ["_path", "_rhs_python", "separation_at", "disk_history"]
+
+
+class _Dispatcher:
+    """A compiled function's dispatcher that records its compiles (types: the arguments' Python types)."""
+
+    def __init__(self, name: str, log: list):
+        self.name, self.log, self.overloads = name, log, {}
+
+    def typeof_pyval(self, value):
+        return type(value).__name__
+
+    def compile(self, sig):
+        self.log.append(self.name)
+        self.overloads[sig] = None
+
+
+def test_entry_points_compile_while_the_background_compile_runs_and_no_longer(monkeypatch):
+    # once the kernel is compiled, the caller would wait for the rest: each is compiled where it is first called
+    log: list = []
+    done_after = 2
+
+    class Compiling:
+        def poll(self):
+            return None if len(log) < done_after else 0
+
+    monkeypatch.setattr(compiled, "_AHEAD", {"kernel": Compiling()})
+    points = [(_Dispatcher(name, log), (1.0,)) for name in ("a", "b", "c")]
+    ahead.compile_entry_points(points, while_compiling=True)
+    assert log == ["a", "b"]
+    ahead.compile_entry_points(points)  # (not only while compiling: all, those compiled already skipped)
+    assert log == ["a", "b", "c"]
 
 
 def test_a_scene_whose_stand_ins_fail_starts_nothing(scene, monkeypatch):
