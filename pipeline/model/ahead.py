@@ -94,28 +94,29 @@ def compile_scene_kernel(scene_path: str, overrides: list[str], key_path: str) -
 
 def python_entry_points(scene: Any) -> list[tuple[Any, tuple]]:
     """The compiled functions the stages after the calibration call from Python, each with stand-in
-    arguments of the types of the scene's calls (``(dispatcher, args)``): the statics map's compiled path
-    (:func:`pipeline.model.statics._path`) and its right-hand side of the static forces
-    (:func:`pipeline.model.dynamics.rhs`: the slots of :func:`pipeline.model.start.static_inputs`), and the
-    separation of a run's histories (:func:`pipeline.model.forces.separation_at` on the columns of the
-    kernel's output: strided arrays), and with a DMW record its history at a run's output times
-    (:func:`pipeline.model.piecewise.disk_history`). tests/model/test_compiled.py checks that the main
-    scene's runs and statics map compile exactly these signatures.
+    arguments of the types of the scene's calls (``(dispatcher, args)``), in this order: what every run's
+    summary calls, the separation of its histories (:func:`pipeline.model.forces.separation_at` on the
+    columns of the kernel's output: strided arrays) and with a DMW record the disk's history at its output
+    times (:func:`pipeline.model.piecewise.disk_history`); then what only the statics map calls, its
+    compiled path (:func:`pipeline.model.statics._path`) and its right-hand side of the static forces
+    (:func:`pipeline.model.dynamics.rhs`: the slots of :func:`pipeline.model.start.static_inputs`).
+    tests/model/test_compiled.py checks that the main scene's runs and statics map compile exactly these
+    signatures.
     """
     from .statics import TOL, _path  # (here: xarray, NOT_IMPORTED_EARLY)
     y0, grid, p, tab, var, solver = stand_in_arguments(scene)
     p_static, tab_static, var_static, slots = static_inputs(lambda mu: (p, tab, var), 0.0)
     packed = dyn._packed(p_static)
     Y = np.zeros((2, N_STATE))  # (the kernel's output: the histories read its columns)
-    points = [
+    # what every run's summary calls first (the histories), then what only the statics map calls
+    points = [(separation_at, (p, Y[:, Z], Y[:, THETA], np.zeros(2)))]
+    if tab.dmw is not None:  # (the disk under the TFC point at a run's output times)
+        points.append((disk_history, (tab.dmw, p, np.zeros(2))))
+    return points + [
         (_path, (np.zeros(1), 1.0, 0.0, 0.0, 0.0, URAD, TOL, 30, packed, *slots)),
         (dyn._rhs_python, (0.0, np.zeros(N_STATE), packed, False, np.zeros(N_STATE), *dyn._slots(tab_static,
                                                                                                 var_static))),
-        (separation_at, (p, Y[:, Z], Y[:, THETA], np.zeros(2))),
     ]
-    if tab.dmw is not None:  # (the disk under the TFC point at a run's output times)
-        points.append((disk_history, (tab.dmw, p, np.zeros(2))))
-    return points
 
 
 def compile_entry_points(entry_points: list[tuple[Any, tuple]], while_compiling: bool = False) -> None:
