@@ -66,7 +66,7 @@ def compile_kernel_ahead(scene: Any) -> None:
         # command has its upstream stages to compute (docs/performance.md, section "A notebook's first call,
         # shared")
         try:
-            compile_entry_points(dyn.leaf_calls(dyn.kernel_arguments(*args)))
+            compile_entry_points(dyn.leaf_calls(*args))
         except Exception as exc:  # (only a head start: the background compile compiles what is not cached)
             log.debug("the kernel's leaf callees did not compile ahead: %s", exc)
     # (one by one, and only while the background compile runs: after it, the caller waits for them, and each

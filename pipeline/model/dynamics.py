@@ -80,7 +80,7 @@ shows in the data (docs/model.md, section "Switched and continuous friction").
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -283,14 +283,15 @@ def compile_kernel_ahead(y0: np.ndarray, grid: Grid, p: np.record, tab: Tables, 
                                   KERNEL_COMPILE_S)
 
 
-def leaf_calls(kernel_args: tuple) -> list[tuple[object, tuple]]:
+def leaf_calls(y0: np.ndarray, grid: Grid, p: np.record, tab: Tables, var: Variants,
+               solver: Solver) -> list[tuple[Any, tuple]]:
     """The kernel's separately compiled functions that call no other compiled function and that its compile
     asks for last, 3-5 s into it (docs/kernel.md, section "Compile time"): the step's cap
     :func:`pipeline.model.stepper.stiffness_cap` and, with a DMW record, the extrema across its knots
     :func:`pipeline.model.stepper.knot_extrema`; each with stand-in arguments of the types :func:`_integrate`
-    calls it with for ``kernel_args`` (:func:`kernel_arguments`): ``(dispatcher, args)``, the last asked for
-    first. (The switch's bisection :func:`pipeline.model.stepper.switch_point` calls the separation, which
-    the background compile compiles first: compiled here too, it would be compiled twice.)
+    calls it with for the arguments of :func:`integrate` (``(dispatcher, args)``), the last asked for first.
+    (The switch's bisection :func:`pipeline.model.stepper.switch_point` calls the separation, which the
+    background compile compiles first: compiled here too, it would be compiled twice.)
 
     The process that starts the kernel's background compile compiles these into the on-disk cache at once
     (not when it adopts the console script's early compile), and the background compile then loads them
@@ -298,14 +299,13 @@ def leaf_calls(kernel_args: tuple) -> list[tuple[object, tuple]]:
     are the same either way; tests/model/test_compiled.py checks that these are the signatures the kernel's
     compile asks for.
     """
-    (_, _, _, params, _, _, _, _, dmw, contact, adhesion, _, tfc, _, _, gap_power_, meniscus) = kernel_args
-    p = params[0]  # (the record, typed as the kernel types ``params[0]``)
-    gap_power = None if gap_power_ is None else gap_power_[0]
-    v = np.zeros(1)  # (the kernel's work arrays: C-contiguous float64)
-    calls: list[tuple[object, tuple]] = [
-        (stiffness_cap, (p, False, 0.0, 0.0, 0.0, contact, adhesion, tfc, gap_power, meniscus))]
-    if dmw is not None:  # (the kernel's call is pruned without a DMW record)
-        calls.append((knot_extrema, (dmw, 0.0, 0.0, 0.0, 0.0, 0, 0.0, 0.0, 0.0, v, 0)))
+    # (the kernel's own values: ``p`` and ``var.gap_power`` are the records it unpacks, its work arrays
+    # C-contiguous float64, its flags bool, its counts int)
+    v = np.zeros(1)
+    calls: list[tuple[Any, tuple]] = [
+        (stiffness_cap, (p, False, 0.0, 0.0, 0.0, tab.contact, tab.adhesion, tab.tfc, var.gap_power, var.meniscus))]
+    if tab.dmw is not None:  # (the kernel's call is pruned without a DMW record)
+        calls.append((knot_extrema, (tab.dmw, 0.0, 0.0, 0.0, 0.0, 0, 0.0, 0.0, 0.0, v, 0)))
     return calls
 
 

@@ -149,7 +149,7 @@ ahead = compiled.signature(dyn._integrate, dyn.kernel_arguments(
 stand_in = compiled.signature(dyn._integrate, dyn.kernel_arguments(*kernel_inputs.stand_in_arguments(scene)))
 entry_points = [compiled.signature(f, args) in f.signatures for f, args in first_run.python_entry_points(scene)]
 leaves = {f.py_func.__name__: [compiled.signature(f, args)] == list(f.signatures)
-          for f, args in dyn.leaf_calls(dyn.kernel_arguments(*kernel_inputs.stand_in_arguments(scene)))}
+          for f, args in dyn.leaf_calls(*kernel_inputs.stand_in_arguments(scene))}
 kernel = ("_integrate", "step", "switch_point", "knot_extrema", "stiffness_cap", "separation", "rhs_slots",
           "_newton")
 from pipeline.model import forces, stepper

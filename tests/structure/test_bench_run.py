@@ -247,3 +247,12 @@ def test_notebook_row_runs_make_runs_scene_on_its_one_results_folder(tmp_path: P
     with pytest.raises(RuntimeError, match=r"results: expected the one results folder of `make run`, found "
                                            r"\['other', 'paper'\]"):
         fr.notebook_first_calls(tmp_path, {}, fr.SCENE)
+
+
+def test_the_perfect_batch_bound_is_amdahls() -> None:
+    """2 workers over 1 with the batch phase exactly halved: a command all batch gives 2, one without a batch
+    phase 1; the quiet 684-scene grid (4.97 s, batch 3.83 s, docs/performance.md) 1.63."""
+    from benchmarks.bench_sweep import perfect_batch_bound
+
+    assert perfect_batch_bound(4.0, 4.0) == 2.0 and perfect_batch_bound(4.0, 0.0) == 1.0
+    assert perfect_batch_bound(4.97, 3.83) == pytest.approx(1.63, abs=5e-3)
