@@ -40,7 +40,6 @@ import logging
 import os
 import pickle
 import subprocess
-import sys
 import tempfile
 import threading
 import time
@@ -246,8 +245,7 @@ def compile_ahead(dispatcher: Any, args: tuple, what: str, seconds: float) -> bo
         code = f"from pipeline.model.compiled import compile_from_file; compile_from_file({path!r})"
         # (silent: a failure there is only a cache miss, and this process then compiles and reports it;
         # a Ctrl-C reaches it too, without a second traceback)
-        _AHEAD[key] = subprocess.Popen([sys.executable, "-c", code], stdin=subprocess.DEVNULL,
-                                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        _AHEAD[key] = first_run.background_process(code)
         progress.compile_notice(f"{what} in a background process", seconds)
         return True
 

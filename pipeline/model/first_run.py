@@ -53,6 +53,17 @@ class Early(NamedTuple):
         shutil.rmtree(self.folder, ignore_errors=True)
 
 
+def background_process(call: str) -> subprocess.Popen:
+    """Start a silent Python process that runs ``call`` (statements importing what they use), then ends at
+    once (``os._exit``) without the interpreter's teardown of numba, llvmlite and the rest, 0.34-0.40 s after
+    a kernel's compile (docs/performance.md, section "The background compile's exit"): the process that
+    waits for it (:func:`pipeline.model.compiled.wait_ahead`) waits for its exit. ``call``'s own files (numba's
+    cache entries) are written and closed when it returns; an exception still ends the process the usual way
+    (exit code 1, its traceback to the null device: a failed compile is only a cache miss)."""
+    return subprocess.Popen([sys.executable, "-c", f"{call}\nimport os\nos._exit(0)"], stdin=subprocess.DEVNULL,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+
+
 def cache_folder(module: str, cache_dir: str | None = None) -> str:
     """The numba cache folder of the kernel module ``module`` (a dotted name), named by its code key, under
     ``cache_dir`` (numba's ``NUMBA_CACHE_DIR``; default: ``pipeline/model/__pycache__``)."""
@@ -112,8 +123,7 @@ def start(argv: Sequence[str]) -> Early | None:
     code = ("from pipeline.model.ahead import compile_scene_kernel; "
             f"compile_scene_kernel({found[0]!r}, {found[1]!r}, {key_path!r})")
     try:
-        proc = subprocess.Popen([sys.executable, "-c", code], stdin=subprocess.DEVNULL,
-                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        proc = background_process(code)
     except BaseException:
         shutil.rmtree(folder, ignore_errors=True)
         raise
