@@ -256,10 +256,9 @@ def check_workers_attached(address: str, timeout: float = CONNECT_TIMEOUT_S,
     (workers submitted as batch jobs may still be starting); its dashboard link is logged
     (:func:`pipeline.fanout.announce`). ``named``: how an error names the scheduler."""
     import logging
-    from distributed import Client
     named = named or f"--scheduler {address}"
     try:
-        with Client(address, timeout=timeout) as client:
+        with fanout.new_client(address, timeout) as client:
             fanout.announce(client, address)
             if client.scheduler_info().get("workers"):
                 return

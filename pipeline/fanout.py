@@ -132,13 +132,33 @@ def split(items: Sequence[Any], scheduler: str | None = None, workers: int | Non
     return [c for c in (tuple(items[i::n]) for i in range(n)) if c]
 
 
+def new_client(address: str, timeout: float) -> Any:
+    """A ``distributed.Client`` of the scheduler at ``address`` (``timeout`` [s] to connect), the process's
+    default client while it is open, as dask makes it. A Client sets dask's global ``scheduler`` option in its
+    constructor and resets it when it closes; one whose constructor fails (no answer, or a server that is no
+    dask scheduler) never closes, so the option is put back here: left set, every later dask-aware call in
+    the process asked for a client that does not exist (xarray's ``to_netcdf``: "Requested dask.distributed
+    scheduler but no Client active")."""
+    import dask
+    from distributed import Client
+    missing = object()
+    before = dask.config.config.get("scheduler", missing)
+    try:
+        return Client(address, timeout=timeout)
+    except BaseException:
+        if before is missing:
+            dask.config.config.pop("scheduler", None)
+        else:
+            dask.config.config["scheduler"] = before
+        raise
+
+
 @contextlib.contextmanager
 def connect(address: str, timeout: float | None = None) -> Iterator[Any]:
     """A ``distributed.Client`` of the scheduler at ``address``; one that does not answer within ``timeout``
     [s] (default :data:`CONNECT_TIMEOUT_S`) is :class:`ClusterError`."""
-    from distributed import Client
     try:
-        client = Client(address, timeout=CONNECT_TIMEOUT_S if timeout is None else timeout)
+        client = new_client(address, CONNECT_TIMEOUT_S if timeout is None else timeout)
     except (OSError, TimeoutError) as exc:
         raise ClusterError(f"dask scheduler {address}: did not answer ({exc}); start it again, or run locally "
                            "(--scheduler threads)") from None

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import sys
 from pathlib import Path
 
 import pytest
@@ -13,6 +14,20 @@ from pipeline.config.scene import load_scene
 REPO = Path(__file__).resolve().parent.parent
 PAPER_CONFIG = REPO / "configs" / "paper-2009.toml"
 os.environ.pop("DASK_SCHEDULER_ADDRESS", None)  # (hdi honours it: a developer's cluster must not get the suite's runs)
+
+
+@pytest.fixture(autouse=True)
+def _dask_default_scheduler_left_alone():
+    """A test that leaves dask's default scheduler changed (a ``distributed.Client`` made the default and not
+    closed, or one that failed in its constructor) fails here, not the later test whose xarray write it
+    breaks ("Requested dask.distributed scheduler but no Client active"). Only where dask is imported."""
+    config = sys.modules.get("dask.config")
+    before = config.get("scheduler", None) if config is not None else None
+    yield
+    config = sys.modules.get("dask.config")
+    if config is not None and config.get("scheduler", None) != before:
+        pytest.fail(f"the test left dask's default scheduler set to {config.get('scheduler', None)!r} "
+                    f"(it was {before!r})")
 
 
 @pytest.fixture(scope="session")
