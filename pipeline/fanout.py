@@ -135,10 +135,10 @@ def split(items: Sequence[Any], scheduler: str | None = None, workers: int | Non
 def new_client(address: str, timeout: float) -> Any:
     """A ``distributed.Client`` of the scheduler at ``address`` (``timeout`` [s] to connect), the process's
     default client while it is open, as dask makes it. A Client sets dask's global ``scheduler`` option in its
-    constructor and resets it when it closes; one whose constructor fails (no answer, or a server that is no
-    dask scheduler) never closes, so the option is put back here: left set, every later dask-aware call in
-    the process asked for a client that does not exist (xarray's ``to_netcdf``: "Requested dask.distributed
-    scheduler but no Client active")."""
+    constructor and resets it when it closes; one whose constructor fails after that never closes (seen with a
+    server that answers with a dask-like handshake but is no scheduler), so the option is put back here: left
+    set, a later dask-aware call in the process asked for a client that does not exist (xarray's
+    ``to_netcdf``: "Requested dask.distributed scheduler but no Client active")."""
     import dask
     from distributed import Client
     missing = object()
