@@ -53,6 +53,7 @@ import signal
 import socket
 import threading
 import time
+import traceback
 import uuid
 from concurrent.futures import FIRST_COMPLETED, CancelledError, ThreadPoolExecutor, wait
 from pathlib import Path
@@ -133,24 +134,37 @@ def split(items: Sequence[Any], scheduler: str | None = None, workers: int | Non
 
 
 def new_client(address: str, timeout: float) -> Any:
-    """A ``distributed.Client`` of the scheduler at ``address`` (``timeout`` [s] to connect), the process's
-    default client while it is open, as dask makes it. A Client sets dask's global ``scheduler`` option in its
-    constructor and resets it when it closes; one whose constructor fails after that never closes (seen with a
-    server that answers with a dask-like handshake but is no scheduler), so the option is put back here: left
-    set, a later dask-aware call in the process asked for a client that does not exist (xarray's
-    ``to_netcdf``: "Requested dask.distributed scheduler but no Client active")."""
-    import dask
+    """A ``distributed.Client`` of the scheduler at ``address`` (``timeout`` [s] to connect), never the
+    process's default client: its user makes it current where it submits (:func:`connect`).
+
+    A default Client sets dask's global ``scheduler`` option in its constructor and resets it only when it
+    closes; one whose constructor failed after that (seen with a server that answers with a dask-like
+    handshake but is no scheduler) left it set, and a later dask-aware call in the process asked for a
+    client that does not exist (xarray's ``to_netcdf``: "Requested dask.distributed scheduler but no Client
+    active"). A constructor that fails is closed here (:func:`_close_unfinished`)."""
     from distributed import Client
-    missing = object()
-    before = dask.config.config.get("scheduler", missing)
     try:
-        return Client(address, timeout=timeout)
-    except BaseException:
-        if before is missing:
-            dask.config.config.pop("scheduler", None)
-        else:
-            dask.config.config["scheduler"] = before
+        return Client(address, timeout=timeout, set_as_default=False)
+    except BaseException as exc:
+        _close_unfinished(exc, Client)
         raise
+
+
+def _close_unfinished(exc: BaseException, cls: type) -> None:
+    """Close the half-built ``cls`` instance whose constructor raised ``exc`` and clear the traceback's
+    frames. Left to the garbage collector (the exception's frames keep it alive, and a caller's exception
+    keeps those through ``__context__``), its ``__del__`` closed it at an arbitrary later moment: inside the
+    next Client's event-loop start, where it deadlocked (a failed connection then a new Client in one
+    process)."""
+    tb = exc.__traceback__
+    while tb is not None:
+        unfinished = tb.tb_frame.f_locals.get("self")
+        if isinstance(unfinished, cls):
+            with contextlib.suppress(Exception):
+                unfinished.close()
+            break
+        tb = tb.tb_next
+    traceback.clear_frames(exc.__traceback__)
 
 
 @contextlib.contextmanager
@@ -165,7 +179,9 @@ def connect(address: str, timeout: float | None = None) -> Iterator[Any]:
     except Exception as exc:  # noqa: BLE001 (fail closed: garbage after a dask-like handshake, e.g. struct.error)
         raise ClusterError(f"dask scheduler {address}: answers, but not as a dask scheduler ({type(exc).__name__}); "
                            "give the scheduler's address, or run locally (--scheduler threads)") from None
-    with client:
+    # (current in this thread only: the fan-out's ``distributed.wait`` looks for it there, and the process's
+    # default client and dask's ``scheduler`` option stay the user's)
+    with client, client.as_current():
         yield client
 
 

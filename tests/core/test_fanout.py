@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import threading
 import time
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
@@ -68,6 +69,27 @@ def test_a_cluster_split_follows_its_threads():
         assert fanout.cluster_threads(cluster.scheduler_address) == 6
         chunks = split(list(range(20)), cluster.scheduler_address)
     assert len(chunks) == 6 and sorted(x for c in chunks for x in c) == list(range(20))
+
+
+def test_the_fan_outs_client_is_current_only_inside_its_connection_and_never_the_process_default():
+    """A user's process (a notebook with its own client) keeps its default client while a study runs on a
+    cluster: the fan-out's client is current in the connecting thread only (its ``distributed.wait`` looks
+    for it there), never registered as the process's default, and dask's ``scheduler`` option is as before
+    once the connection ends (``as_current`` sets it for the connection's span)."""
+    import dask
+    import distributed
+    from distributed import LocalCluster
+    before = dask.config.get("scheduler", None)
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None) as cluster:
+        with fanout.connect(cluster.scheduler_address) as client:
+            assert distributed.default_client() is client
+            with ThreadPoolExecutor(1) as other:  # (another thread of the process: the user's)
+                with pytest.raises(ValueError, match="No clients found"):
+                    other.submit(distributed.default_client).result()
+        assert client.status == "closed"
+        with pytest.raises(ValueError, match="No clients found"):
+            distributed.default_client()
+    assert dask.config.get("scheduler", None) == before
 
 
 def test_an_error_in_on_done_cancels_what_has_not_started():

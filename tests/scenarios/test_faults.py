@@ -199,6 +199,28 @@ def test_a_server_imitating_the_dask_handshake_fails_closed_in_one_line(fake_das
     assert dask.config.get("scheduler", None) == before
 
 
+def _open_clients() -> list:
+    """The ``distributed.Client`` objects alive in this process and not closed."""
+    import gc
+    from distributed import Client
+    return [c for c in gc.get_objects() if issubclass(type(c), Client) and c.status != "closed"]  # (type: no proxy)
+
+
+def test_a_failed_connection_leaves_no_half_built_client_for_the_garbage_collector(fake_dask_server):
+    """A Client whose constructor failed stayed alive through the error's frames (the caller's ClusterError
+    holds it as ``__context__``, as ``pytest.raises`` holds that) and was closed by the garbage collector at
+    an arbitrary moment: inside the next Client's event-loop start, where it deadlocked (this file's
+    handshake test, run alone, hung). It is closed where it failed, and the frames let go of it."""
+    assert _open_clients() == []
+    with pytest.raises(fanout.ClusterError) as exc:
+        fanout.cluster_threads(fake_dask_server)
+    assert exc.value.__context__ is not None  # (the constructor's error, and its frames, are still held)
+    assert _open_clients() == []
+    with pytest.raises(OptionError):
+        check_scheduler(fake_dask_server, timeout=1.0, worker_wait=1.0)
+    assert _open_clients() == []
+
+
 # ------------------------------------------------------------------------------ a failed integration
 def test_a_failed_integration_is_one_line_naming_the_scene_the_protrusion_and_what_to_change(tmp_path, capsys,
                                                                                             monkeypatch):
