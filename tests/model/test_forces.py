@@ -47,6 +47,7 @@ def bounce_frequency(law: str) -> tuple[float, float]:
     return measured, np.sqrt((s.k_f + k) / s.m) / (2 * np.pi)
 
 
+@pytest.mark.slow  # (compiles a kernel variant of its own: 14-26 s with an empty numba cache)
 def test_a_registered_rear_law_is_the_one_the_kernel_runs(monkeypatch):
     monkeypatch.setitem(ab.REAR_LAWS, "twice-linear", ab.RearLaw(twice_linear, summary="F_r = 2 k_r (g0 - g) (a test)"))
     linear, linear_predicted = bounce_frequency("linear")

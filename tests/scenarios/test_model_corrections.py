@@ -184,6 +184,7 @@ def test_stiffening_leaves_the_modal_stiffness_at_the_nominal_gap(paper):
         assert abs(dv[2] * model.slider.m / amp) < 3e5 * 1.5 * amp / (2 * 11 * NM) * 1.01
 
 
+@pytest.mark.slow  # (compiles a kernel variant of its own: 14-26 s with an empty numba cache)
 def test_stiffening_off_is_bit_identical(paper):
     # "none" ignores the stiffening keys, and k_t = 0 adds an exact zero: identical runs
     base = paper.replace(scene={"effects": NO_ADHESION})

@@ -30,6 +30,7 @@ def constant_lift(g: np.ndarray, delta: float) -> np.ndarray:
     return np.full_like(g, LIFT)
 
 
+@pytest.mark.slow  # (compiles a kernel variant of its own: 14-26 s with an empty numba cache)
 def test_a_new_tfc_law_is_its_function_and_one_registry_line(monkeypatch):
     # the whole change a new variant needs: its law (above) and one line in its registry
     monkeypatch.setitem(ab.TFC_STIFFENING, "constant-lift", ab.TfcLaw(constant_lift))
@@ -62,6 +63,7 @@ def test_a_new_tfc_law_is_its_function_and_one_registry_line(monkeypatch):
     assert d[-1] - d_nominal[-1] == pytest.approx(z - s.l_c * theta, rel=1e-6)
 
 
+@pytest.mark.slow  # (compiles a kernel variant of its own: 14-26 s with an empty numba cache)
 def test_tabulated_law_reproduces_the_compiled_gap_power_law(monkeypatch):
     # The gap-power law registered a second time without its compiled form goes through the table:
     # force and stiffness at the TFC point and the whole run agree with the closed form.
