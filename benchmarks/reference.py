@@ -20,7 +20,9 @@ from __future__ import annotations
 
 import math
 import statistics
+import threading
 import time
+from typing import Callable
 
 from numba import njit
 from numba.extending import register_jitable
@@ -71,3 +73,33 @@ def machine_reference(repeat: int = 5) -> dict[str, float]:
     duffing_rk4(10)
     return {"ref_compiled_s": _median_time(duffing_rk4, COMPILED_STEPS, repeat),
             "ref_python_s": _median_time(duffing_python, PYTHON_STEPS, repeat)}
+
+
+#: :func:`duffing_python` compiled without the GIL, like the dynamics kernel, for :func:`two_core_speedup`.
+duffing_rk4_nogil = njit(cache=True, nogil=True)(duffing_python)
+
+
+def _reference_work() -> None:
+    duffing_rk4_nogil(30 * COMPILED_STEPS)  # (~0.3 s on the project's 2-core machine)
+
+
+def two_core_speedup(work: Callable[[], object] = _reference_work, repeat: int = 3) -> float:
+    """What two cores give this host now on GIL-free work [1]: ``2 x t_alone / t_both``, the median over
+    ``repeat`` alternations of ``work()`` alone in one thread (``t_alone`` [s]) and two ``work()`` at once in
+    two threads (``t_both`` [s], wall time). 2 on two free cores; less where the host's second core is busy
+    with other tenants' work or both share one core's resources. It is the ceiling of any 2-over-1 speed-up
+    measured beside it (``bench_sweep``: docs/performance.md, section "The host's two cores")."""
+    work()  # (compiled or loaded from the cache, untimed)
+    ratios = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        work()
+        alone = time.perf_counter() - t0
+        threads = [threading.Thread(target=work) for _ in range(2)]
+        t0 = time.perf_counter()
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+        ratios.append(2 * alone / (time.perf_counter() - t0))
+    return statistics.median(ratios)

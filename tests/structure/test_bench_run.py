@@ -256,3 +256,23 @@ def test_the_perfect_batch_bound_is_amdahls() -> None:
 
     assert perfect_batch_bound(4.0, 4.0) == 2.0 and perfect_batch_bound(4.0, 0.0) == 1.0
     assert perfect_batch_bound(4.97, 3.83) == pytest.approx(1.63, abs=5e-3)
+    assert perfect_batch_bound(4.0, 4.0, speedup=1.5) == 1.5  # (all batch: the host's own speed-up)
+    assert perfect_batch_bound(4.97, 3.83, speedup=1.8) == pytest.approx(4.97 / (1.14 + 3.83 / 1.8))
+
+
+def test_the_hosts_two_core_speedup_is_2_for_parallel_work_and_1_for_serialised_work() -> None:
+    """The ceiling measured beside the grid's pairs: two sleeps at once take the time of one (2), two calls
+    that take turns on a lock the time of two (1)."""
+    import threading
+    import time
+
+    from benchmarks.reference import two_core_speedup
+
+    assert two_core_speedup(lambda: time.sleep(0.05)) == pytest.approx(2.0, abs=0.15)
+    lock = threading.Lock()
+
+    def serialised() -> None:
+        with lock:
+            time.sleep(0.05)
+
+    assert two_core_speedup(serialised) == pytest.approx(1.0, abs=0.1)
