@@ -131,7 +131,7 @@ def run(results: list[dict]) -> None:
         # (docs/performance.md), which a block of 1-worker runs then a block of 2-worker runs would read as
         # a speed-up; the pairs' own ratios are recorded beside the ratio of the medians
         # and beside each pair, what the host's two cores give GIL-free compiled work right now: the ceiling
-        # of any 2-over-1 measured in those seconds (docs/performance.md, section "The host's two cores")
+        # of any 2-over-1 measured in those seconds (docs/performance.md, section "The whole `make bench` again, and the host's two cores")
         host: list[float] = []
         for _ in range(GRID_PAIRS):
             host.append(two_core_speedup())
