@@ -7,8 +7,9 @@ Rows and targets:
 2. the same sweep per scheduler (synchronous, threads, a process LocalCluster): batch phase and
    whole command -- the measurement behind the local default of :mod:`pipeline.fanout`;
 3. 2 workers over 1 on the 684-scene grid (configs/sweep-3x3.toml), whole command, target >= 1.6 (issue
-   26; before the static starts were compiled: 9.5 s / 7.9 s, 1.2x); beside each pair, the host's own 2-over-1 on GIL-free
-   compiled work (:func:`benchmarks.reference.two_core_speedup`), the ceiling of any speed-up measured then;
+   26; before the static starts were compiled: 9.5 s / 7.9 s, 1.2x); beside each pair, the host's own
+   2-over-1 on GIL-free compiled work (:func:`benchmarks.reference.two_core_speedup`), the ceiling of any
+   speed-up measured then;
 4. an ensemble of 32 DMW realisations over the paper grid (2432 scenes), whole command, target < 60 s, and
    the same on 1 worker: the 2-over-1 of the whole command where the head (interpreter, imports, the
    kernel's load, the first read: ~1-1.5 s) is under a tenth of it, beside row 3's, where it is a quarter.
@@ -131,7 +132,8 @@ def run(results: list[dict]) -> None:
         # (docs/performance.md), which a block of 1-worker runs then a block of 2-worker runs would read as
         # a speed-up; the pairs' own ratios are recorded beside the ratio of the medians
         # and beside each pair, what the host's two cores give GIL-free compiled work right now: the ceiling
-        # of any 2-over-1 measured in those seconds (docs/performance.md, section "The whole `make bench` again, and the host's two cores")
+        # of any 2-over-1 measured in those seconds (docs/performance.md, section "The whole `make bench`
+        # again, and the host's two cores")
         host: list[float] = []
         for _ in range(GRID_PAIRS):
             host.append(two_core_speedup())

@@ -88,7 +88,8 @@ def two_core_speedup(work: Callable[[], object] = _reference_work, repeat: int =
     ``repeat`` alternations of ``work()`` alone in one thread (``t_alone`` [s]) and two ``work()`` at once in
     two threads (``t_both`` [s], wall time). 2 on two free cores; less where the host's second core is busy
     with other tenants' work or both share one core's resources. It is the ceiling of any 2-over-1 speed-up
-    measured beside it (``bench_sweep``: docs/performance.md, section "The whole `make bench` again, and the host's two cores")."""
+    measured beside it (``bench_sweep``; docs/performance.md, section "The whole `make bench` again, and the
+    host's two cores")."""
     work()  # (compiled or loaded from the cache, untimed)
     ratios = []
     for _ in range(repeat):
