@@ -87,9 +87,10 @@ def two_core_speedup(work: Callable[[], object] = _reference_work, repeat: int =
     """What two cores give this host now on GIL-free work [1]: ``2 x t_alone / t_both``, the median over
     ``repeat`` alternations of ``work()`` alone in one thread (``t_alone`` [s]) and two ``work()`` at once in
     two threads (``t_both`` [s], wall time). 2 on two free cores; less where the host's second core is busy
-    with other tenants' work or both share one core's resources. It is the ceiling of any 2-over-1 speed-up
-    measured beside it (``bench_sweep``; docs/performance.md, section "The whole `make bench` again, and the
-    host's two cores")."""
+    with other tenants' work or both share one core's resources. A snapshot of a few seconds: the host's
+    capacity moves within seconds, so it flags a 2-over-1 measured beside it rather than bounds it
+    (``bench_sweep.host_limited``; docs/performance.md, section "The whole `make bench` again, and the host's
+    two cores")."""
     work()  # (compiled or loaded from the cache, untimed)
     ratios = []
     for _ in range(repeat):
