@@ -53,7 +53,6 @@ import signal
 import socket
 import threading
 import time
-import traceback
 import uuid
 from concurrent.futures import FIRST_COMPLETED, CancelledError, ThreadPoolExecutor, wait
 from pathlib import Path
@@ -135,36 +134,23 @@ def split(items: Sequence[Any], scheduler: str | None = None, workers: int | Non
 
 def new_client(address: str, timeout: float) -> Any:
     """A ``distributed.Client`` of the scheduler at ``address`` (``timeout`` [s] to connect), never the
-    process's default client: its user makes it current where it submits (:func:`connect`).
+    process's default client: its user makes it current where it submits (:func:`connect`), so a default
+    client of the user's process and dask's ``scheduler`` option stay as they were.
 
-    A default Client sets dask's global ``scheduler`` option in its constructor and resets it only when it
-    closes; one whose constructor failed after that (seen with a server that answers with a dask-like
-    handshake but is no scheduler) left it set, and a later dask-aware call in the process asked for a
-    client that does not exist (xarray's ``to_netcdf``: "Requested dask.distributed scheduler but no Client
-    active"). A constructor that fails is closed here (:func:`_close_unfinished`)."""
+    A Client whose constructor fails is closed here. Left alone, the failed constructor's frames kept it
+    alive (and a caller's exception keeps those through ``__context__``), and the garbage collector ran its
+    ``__del__`` at an arbitrary later moment: inside the next Client's event-loop start, where it deadlocked
+    (a failed connection, then a new Client in the same process). The object is made first and initialised
+    second so that this function holds it when ``__init__`` raises."""
     from distributed import Client
+    client = Client.__new__(Client)
     try:
-        return Client(address, timeout=timeout, set_as_default=False)
-    except BaseException as exc:
-        _close_unfinished(exc, Client)
+        client.__init__(address, timeout=timeout, set_as_default=False)
+    except BaseException:
+        with contextlib.suppress(Exception):  # (the constructor's error is the one to report)
+            client.close()
         raise
-
-
-def _close_unfinished(exc: BaseException, cls: type) -> None:
-    """Close the half-built ``cls`` instance whose constructor raised ``exc`` and clear the traceback's
-    frames. Left to the garbage collector (the exception's frames keep it alive, and a caller's exception
-    keeps those through ``__context__``), its ``__del__`` closed it at an arbitrary later moment: inside the
-    next Client's event-loop start, where it deadlocked (a failed connection then a new Client in one
-    process)."""
-    tb = exc.__traceback__
-    while tb is not None:
-        unfinished = tb.tb_frame.f_locals.get("self")
-        if isinstance(unfinished, cls):
-            with contextlib.suppress(Exception):
-                unfinished.close()
-            break
-        tb = tb.tb_next
-    traceback.clear_frames(exc.__traceback__)
+    return client
 
 
 @contextlib.contextmanager

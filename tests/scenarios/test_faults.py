@@ -210,7 +210,7 @@ def test_a_failed_connection_leaves_no_half_built_client_for_the_garbage_collect
     """A Client whose constructor failed stayed alive through the error's frames (the caller's ClusterError
     holds it as ``__context__``, as ``pytest.raises`` holds that) and was closed by the garbage collector at
     an arbitrary moment: inside the next Client's event-loop start, where it deadlocked (this file's
-    handshake test, run alone, hung). It is closed where it failed, and the frames let go of it."""
+    handshake test, run alone, hung). It is closed where it failed."""
     assert _open_clients() == []
     with pytest.raises(fanout.ClusterError) as exc:
         fanout.cluster_threads(fake_dask_server)
