@@ -110,9 +110,11 @@ def timeit(fn: Callable[[], Any], repeat: int = 7, warmup: int = 1) -> list[floa
 
 
 def record(results: list[dict], name: str, times: list[float], target_s: float | None = None,
-           **extra: Any) -> dict:
+           noisy_reason: str | None = None, **extra: Any) -> dict:
     """Append one benchmark result (median, min, max [s], pass/fail against ``target_s``) with the load at
-    its start and end (:func:`load_fields`; the start is the last :func:`row_start` or :func:`record`)."""
+    its start and end (:func:`load_fields`; the start is the last :func:`row_start` or :func:`record`).
+    ``noisy_reason``: a reason of the row's own to flag it noisy beside the load's (e.g. the host's two cores
+    measured busy next to a 2-over-1 row: ``bench_sweep.host_limited``)."""
     global _row_start
     end = LOAD_SOURCE()
     start = _row_start if _row_start is not None else end
@@ -123,6 +125,9 @@ def record(results: list[dict], name: str, times: list[float], target_s: float |
         row["meets_target"] = bool(med < target_s)
     row.update(extra)
     row.update(load_fields(start, end))
+    if noisy_reason:
+        row["noisy_reason"] = "; ".join(filter(None, (row.get("noisy_reason"), noisy_reason)))
+        row["noisy"] = True
     row.update(_reference)
     if _reference.get("ref_compiled_s"):
         row["in_compiled_reference_units"] = med / _reference["ref_compiled_s"]

@@ -71,7 +71,8 @@ def main() -> None:
     noisy = [r["name"] for r in results if r.get("noisy")]
     if noisy:
         print(f"{len(noisy)} of {len(results)} rows NOISY (load above {common.NOISY_LOAD_PER_CPU:g} per CPU at "
-              "their start): upper bounds, measure again on a quiet machine")
+              "their start, or their own noisy_reason in the results file): upper bounds, measure again on a "
+              "quiet machine")
     print(f"results written to {args.out}")
     if failed:
         print(f"{len(failed)} module(s) failed: {', '.join(failed)}", file=sys.stderr)

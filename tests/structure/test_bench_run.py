@@ -57,6 +57,19 @@ def test_row_above_threshold_is_flagged(fake_load, capsys: pytest.CaptureFixture
     assert "NOISY" in capsys.readouterr().out
 
 
+def test_a_row_with_a_reason_of_its_own_is_flagged_at_any_load(fake_load, capsys: pytest.CaptureFixture[str]) -> None:
+    # a quiet start (0.2 < 1.5) and a reason of the row's own (the host's two cores busy): flagged, both reasons
+    # kept when the load flags it too
+    fake_load([0.2, 0.3, 1.6, 1.6])
+    common.row_start()
+    row = common.record([], "grid row", [0.01], noisy_reason="host busy")
+    assert row["noisy"] is True and row["noisy_reason"] == "host busy"
+    assert "NOISY" in capsys.readouterr().out
+    common.record([], "quiet row", [0.01])
+    both = common.record([], "busy grid row", [0.01], noisy_reason="host busy")
+    assert both["noisy_reason"].startswith("1-minute load 1.60") and both["noisy_reason"].endswith("; host busy")
+
+
 def test_threshold_scales_with_cpus_and_uses_the_start(fake_load) -> None:
     # 4 CPUs: limit 3.0, so 2.9 at the start is quiet, even though the row's own load raised the end to 3.5
     fake_load([2.9, 3.5, 3.1], cpus=4)
@@ -257,7 +270,7 @@ def test_the_perfect_batch_bound_is_amdahls() -> None:
     assert perfect_batch_bound(4.0, 4.0) == 2.0 and perfect_batch_bound(4.0, 0.0) == 1.0
     assert perfect_batch_bound(4.97, 3.83) == pytest.approx(1.63, abs=5e-3)
     assert perfect_batch_bound(4.0, 4.0, speedup=1.5) == 1.5  # (all batch: the host's own speed-up)
-    assert perfect_batch_bound(4.97, 3.83, speedup=1.8) == pytest.approx(4.97 / (1.14 + 3.83 / 1.8))
+    assert perfect_batch_bound(4.97, 3.83, speedup=1.0) == 1.0  # (a host that gives no second core: no gain)
 
 
 def test_a_grid_row_beside_a_host_without_two_free_cores_is_flagged() -> None:
