@@ -135,7 +135,8 @@ def split(items: Sequence[Any], scheduler: str | None = None, workers: int | Non
 def new_client(address: str, timeout: float) -> Any:
     """A ``distributed.Client`` of the scheduler at ``address`` (``timeout`` [s] to connect), never the
     process's default client: its user makes it current where it submits (:func:`connect`), so a default
-    client of the user's process and dask's ``scheduler`` option stay as they were.
+    client of the user's process stays the default, and dask's ``scheduler`` option is set only for that span
+    (distributed's ``as_current`` sets it for the whole process and puts it back).
 
     A Client whose constructor fails is closed here. Left alone, the failed constructor's frames kept it
     alive (and a caller's exception keeps those through ``__context__``), and the garbage collector ran its
@@ -165,8 +166,8 @@ def connect(address: str, timeout: float | None = None) -> Iterator[Any]:
     except Exception as exc:  # noqa: BLE001 (fail closed: garbage after a dask-like handshake, e.g. struct.error)
         raise ClusterError(f"dask scheduler {address}: answers, but not as a dask scheduler ({type(exc).__name__}); "
                            "give the scheduler's address, or run locally (--scheduler threads)") from None
-    # (current in this thread only: the fan-out's ``distributed.wait`` looks for it there, and the process's
-    # default client and dask's ``scheduler`` option stay the user's)
+    # (current in this thread only: the fan-out's ``distributed.wait`` looks for it there; the process's
+    # default client stays the user's)
     with client, client.as_current():
         yield client
 
