@@ -18,6 +18,7 @@ from typing import Any, Iterable
 from ..paths import special_kind
 from ..units import MHZ_IN_KHZ, MS, NS
 from .limits import MAX_INTEGER, MAX_MAGNITUDE, MAX_STEPS, LimitError, check_physical
+from ..physics.friction import FRICTION_LAWS
 from .schema import FREE_LIMITS, SCHEMA, Key, SceneError, is_folder_name, strip_unit
 
 #: Fewest output samples of a run's steady window (after ``solver.transient_ms``) a scene may ask for:
@@ -386,6 +387,9 @@ def _cross_checks(config: dict[str, dict[str, Any]], where: str) -> None:
     if c["friction_law"] == "coefficient" and c["friction_coefficient"] is None:
         raise SceneError(f"{where}: contact.friction_law = 'coefficient' needs contact.friction_coefficient "
                          "(a number >= 0, the paper's mu is ~1.2)")
+    if FRICTION_LAWS.lookup(c["friction_law"]).summit is not None and config["interface"]["model"] != "statistical":
+        raise SceneError(f"{where}: contact.friction_law = {c['friction_law']!r} is a per-summit law of the statistical "
+                         f"tables: it needs interface.model = 'statistical' (it is {config['interface']['model']!r})")
     lub, two = config["lubricant"], config["interface"]["adhesion"] == "two-population"
     if two and lub["bridge_work_of_adhesion_j_m2"] is None:
         raise SceneError(f"{where}: interface.adhesion = 'two-population' needs lubricant.bridge_work_of_adhesion_j_m2 "

@@ -334,13 +334,20 @@ def flat_tables(scene: Any, p: np.record, interface: Any | None) -> dict[str, np
 
 def friction_tables(scene: Any, interface: Any, stress: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
     """The friction stress [Pa] of the named law (``contact.friction_law``) on the interface's friction
-    stress ``stress`` [Pa], switched with the contact criterion, and the part acting at every separation
+    stress ``stress`` [Pa] (the integral of the law's per-summit form, or of the shear-strength law for a law
+    without one: ``interface.nc``'s ``friction_stress_law`` says which), switched with the contact criterion, and the part acting at every separation
     (``contact.friction_switching``, the lubricant shear of ``lubricant.shear_stress_mpa``; ``None``:
     none; docs/model.md, sections "Lubricant friction", "Switched and continuous friction")."""
     si = to_si(scene)
     sc = si.contact
     pressure = interface["contact_pressure"].values * INTERFACE["contact_pressure"].si_unit
     law = FRICTION_LAWS.lookup(sc.friction_law)
+    built = interface.attrs.get("friction_stress_law", "shear-strength")
+    if built != (sc.friction_law if law.summit is not None else "shear-strength"):
+        raise ValueError(f"the interface tables' friction_stress integrates the {built!r} law, but "
+                         f"contact.friction_law = {sc.friction_law!r} reads "
+                         f"{'its own per-summit' if law.summit is not None else 'the shear-strength'} table; "
+                         "re-run `hdi interface`")
     values = friction_stress_table(sc.friction_law, pressure, stress, **law_parameters(scene, law))
     tau_lub, lub = si.lubricant.shear_stress, None
     if tau_lub > 0.0:

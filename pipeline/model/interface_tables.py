@@ -24,7 +24,7 @@ import xarray as xr
 
 from ..physics import isbl
 from ..physics.asperity import critical_interference
-from ..physics.friction import shear_strength
+from ..physics.friction import FRICTION_LAWS, shear_strength
 from ..physics.material_bounds import check_materials
 from ..physics.asperity_statistics import (composite_modulus, explicit_statistics, hardness_from_plasticity_gw,
                                   plasticity_index_gw, plasticity_index_ke)
@@ -110,7 +110,16 @@ def interface_parameters(scene: Any, stats: dict[str, float]) -> isbl.Interface:
     check_materials(E, H, stats["sigma_s"], stats["R"], derived="plasticity_index" if m.hardness else "hardness")
     return isbl.Interface(sigma_s=stats["sigma_s"], eta=stats["eta"], R=stats["R"], E=E, H=H, nu=nu,
                           t=lub.thickness, dgamma=lub.work_of_adhesion, eps=lub.intermolecular_distance,
-                          dgamma_bridge=lub.bridge_work_of_adhesion)
+                          dgamma_bridge=lub.bridge_work_of_adhesion, friction_law=summit_friction_law(scene))
+
+
+def summit_friction_law(scene: Any) -> str:
+    """The friction law whose per-summit form the scene's ``friction_stress`` table integrates: the scene's
+    ``contact.friction_law`` when it has one (:attr:`pipeline.physics.friction.FrictionLaw.summit`, e.g.
+    ``"kogut-etsion"``), else ``"shear-strength"`` (the table the other laws read, ``eta int tau_y A phi dz``).
+    The interface stage keys on this (its ``derived``), not on the law's name."""
+    law = scene["contact"]["friction_law"]
+    return law if FRICTION_LAWS.lookup(law).summit is not None else "shear-strength"
 
 
 def needed_quantities(effects: frozenset[str], lubricant_shear: bool = False) -> tuple[str, ...]:
@@ -196,6 +205,7 @@ def build_tables(scene: Any, stats: dict[str, float]) -> xr.Dataset:
         "quadrature": f"composite Gauss-Legendre, {sol['quadrature_panels']} panels x "
                       f"{sol['quadrature_nodes']} nodes per population range, |z| <= {isbl.TAIL} sigma_s",
         "quantities": " ".join(wanted) if wanted else "none (flying-only scene: no interface tables)",
+        **({"friction_stress_law": p.friction_law} if p.friction_law != "shear-strength" else {}),
         "references": "Greenwood & Williamson 1966; Kogut & Etsion 2002; Stanley, Etsion & Bogy 1990; "
                       "Vakis, Lee & Polycarpou 2009",
     })

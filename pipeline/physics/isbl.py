@@ -30,6 +30,13 @@ panel, well away from their singularities, and Gauss-Legendre converges exponent
 forms, and that doubling the nodes changes nothing at the 1e-8 level. Integrals of a constant law against the
 Gaussian (meniscus adhesion, summit fractions) use the closed form (``scipy.special.ndtr``).
 
+Friction of the summits
+-----------------------
+The friction column is ``tau_y A`` per summit (the table the ``"shear-strength"`` and ``"coefficient"`` laws
+read), or, for a friction law defined per summit (``Interface.friction_law``, e.g. ``"kogut-etsion"``: the
+largest tangential load at sliding inception, :mod:`pipeline.physics.friction`), that law's ``Q(w)``
+integrated by the same quadrature, its panels split at the law's own breaks too (``_summit_integral``).
+
 Two adhesion populations
 ------------------------
 The adhesion is written as two parts (docs/model.md, section "Two adhesion populations"): the
@@ -74,7 +81,7 @@ from scipy.special import ndtr
 
 from . import asperity
 from .adhesion import lennard_jones_force, meniscus_force
-from .friction import shear_strength
+from .friction import FRICTION_LAWS, SummitLaw, shear_strength
 
 #: Half-width of the integration window in summit standard deviations.
 TAIL = 12.0
@@ -103,6 +110,9 @@ class Interface:
     dgamma_bridge : work of adhesion of the bridges before solid contact [J/m^2] (Lennard-Jones of the
         non-wetted summits, menisci of the wetted non-touching ones); ``None``: ``dgamma`` (the
         paper's ISBL, one population)
+    friction_law : the friction law whose per-summit form the ``friction_stress`` table integrates (a name
+        of :data:`pipeline.physics.friction.FRICTION_LAWS`); a law without one (``"shear-strength"``,
+        ``"coefficient"``) gets the shear-strength table ``eta int tau_y A phi dz``
     """
 
     sigma_s: float
@@ -115,6 +125,7 @@ class Interface:
     dgamma: float
     eps: float
     dgamma_bridge: float | None = None
+    friction_law: str = "shear-strength"
 
     @property
     def w_c(self) -> float:
@@ -132,6 +143,7 @@ class Interface:
                 continue
             if not (np.isfinite(v) and v >= 0):
                 raise ValueError(f"Interface.{name} = {v!r}: expected a finite number >= 0")
+        FRICTION_LAWS.lookup(self.friction_law)  # (one line naming the names registered)
 
 
 def _panels(a: np.ndarray, b: np.ndarray, nodes: int, panels: int, square: bool = False):
@@ -175,7 +187,8 @@ def isbl_tables(d: np.ndarray, p: Interface, *, quantities=QUANTITIES, nodes: in
     dict
         ``contact_pressure`` [Pa]: ``eta int P phi dz``; ``adhesion_pressure`` [Pa] (positive =
         attractive); ``friction_stress`` [Pa]: ``eta int tau_y A phi dz`` over elastic and
-        elastic-plastic summits; ``real_area_fraction`` [1]: ``eta int A phi dz``;
+        elastic-plastic summits, or ``eta int Q phi dz`` of the per-summit law of ``p.friction_law``
+        (module docstring, "Friction of the summits"); ``real_area_fraction`` [1]: ``eta int A phi dz``;
         ``contact_fraction`` [1]: fraction of summits in contact ``P(z > d)``;
         ``wetted_area_fraction`` [1]: summit surface inside the lubricant film and outside the solid
         contacts per nominal area (module docstring); when contact is computed,
@@ -242,7 +255,11 @@ def isbl_tables(d: np.ndarray, p: Interface, *, quantities=QUANTITIES, nodes: in
         # area fraction can exceed 1; the tables keep the model's value, the dynamic outputs clip the
         # real area at the nominal area: pipeline.model.outcomes.histories.)
         if "friction_stress" in want:
-            out["friction_stress"] = eta * shear_strength(H) * area_fric
+            summit = FRICTION_LAWS.lookup(p.friction_law).summit
+            if summit is None:
+                out["friction_stress"] = eta * shear_strength(H) * area_fric
+            else:
+                out["friction_stress"] = eta * _summit_integral(d, p, summit, nodes, panels)
         if "real_area_fraction" in want:
             out["real_area_fraction"] = eta * area_all
 
@@ -286,6 +303,29 @@ def isbl_tables(d: np.ndarray, p: Interface, *, quantities=QUANTITIES, nodes: in
     if "contact_fraction" in want:
         out["contact_fraction"] = Q(d)
     return out
+
+
+def _summit_integral(d: np.ndarray, p: Interface, law: SummitLaw, nodes: int, panels: int) -> np.ndarray:
+    """``int Q(z - d) phi(z) dz`` [N] over the elastic and elastic-plastic summits (``0 < w <= 110 w_c``)
+    for a per-summit friction law ``Q`` (:class:`pipeline.physics.friction.SummitLaw`), at every ``d`` [m].
+
+    The same composite Gauss-Legendre as the contact integrals, the range split at the breaks of the
+    contact law (``x = w / w_c = 0, 1, 6, 110``) and at the law's own (``law.breaks()``), so each panel holds
+    one smooth branch; the elastic range maps ``w = w_c u^2`` as for Hertz (the laws there go as ``w^e``
+    with ``e`` near 1 or 1.5).
+    """
+    s, wc = p.sigma_s, p.w_c
+    zmax = TAIL * s
+    x = sorted({0.0, asperity.X_ELASTIC, asperity.X_MID, asperity.X_PLASTIC}
+               | {float(b) for b in law.breaks() if 0.0 < b < asperity.X_PLASTIC})
+    total = np.zeros_like(d)
+    for k, (lo, hi) in enumerate(zip(x[:-1], x[1:])):
+        a, b = np.clip(d + lo * wc, -zmax, zmax), np.clip(d + hi * wc, -zmax, zmax)
+        z, wt = _panels(a, b, nodes, panels, square=(k == 0))
+        # (each node strictly inside its segment: the law's branch there, whatever its value at the ends)
+        w = np.clip(z - d[:, None], lo * wc, hi * wc)
+        total += (law.force(w, p.R, p.E, p.H, p.nu) * wt * _gauss(z, s)).sum(axis=1)
+    return total
 
 
 def separation_grid(d_min: float, d_max: float, step: float) -> np.ndarray:

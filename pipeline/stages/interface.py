@@ -18,7 +18,8 @@ from typing import Any
 import xarray as xr
 
 from ..io import read_dataset
-from ..model.interface_tables import build_tables, deepest_protrusion_nm, lubricant_shear_on, roughness_statistics
+from ..model.interface_tables import (build_tables, deepest_protrusion_nm, lubricant_shear_on, roughness_statistics,
+                                     summit_friction_law)
 from ..runner import Inputs, Stage
 
 
@@ -31,16 +32,25 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
     return build_tables(scene, roughness_statistics(scene, rough))
 
 
+def _friction_table(scene: Any) -> dict[str, str]:
+    """The per-summit friction law the friction column integrates, when it is not the shear-strength law's
+    (:func:`pipeline.model.interface_tables.summit_friction_law`): absent otherwise, so the key of a scene
+    whose tables read the shear-strength column is what it was before the per-summit laws existed."""
+    law = summit_friction_law(scene)
+    return {} if law == "shear-strength" else {"friction_stress_law": law}
+
+
 STAGE = Stage(
     "interface", compute, outputs=("interface.nc",),
     reads=("roughness", "materials", "lubricant", "solver.table_step_nm", "solver.table_min_sigma",
            "solver.table_max_nm", "solver.quadrature_nodes", "solver.quadrature_panels", "scene.effects",
            "air_bearing.flying_height_nm", "interface.model", "interface.adhesion", "solver.contact_grid_points"),
     # properties of the dynamics, not of the tables (the lubricant shear stress scales wetted_area_fraction,
-    # which the tables hold when the term is on: `derived`)
-    excludes=("lubricant.meniscus_time_us", "lubricant.shear_stress_mpa"),
+    # which the tables hold when the term is on: `derived`; the friction law changes the friction column only
+    # when it is a per-summit law: `derived` names that law)
+    excludes=("lubricant.meniscus_time_us", "lubricant.shear_stress_mpa", "contact.friction_law"),
     derived=lambda scene: {"deepest_protrusion_nm": deepest_protrusion_nm(scene),
-                           "lubricant_shear": lubricant_shear_on(scene)},
+                           "lubricant_shear": lubricant_shear_on(scene), **_friction_table(scene)},
     upstream=lambda scene: ("roughness",) if scene["roughness"]["afm"] else (),
     order=30, main_job=True, doc="ISBL tables versus separation, interface.nc")
 

@@ -160,3 +160,9 @@ def test_no_racing_records(write_scene):
     msg = _error(path)
     assert str(path) in msg and "identify.racing_records" in msg and "0" in msg
     assert "expected an integer >= 1" in msg
+
+
+def test_per_summit_friction_laws_need_the_statistical_tables(write_scene):
+    path = write_scene('[contact]\nfriction_law = "kogut-etsion"\n[interface]\nmodel = "deterministic"\n')
+    msg = _error(path)
+    assert str(path) in msg and "contact.friction_law = 'kogut-etsion'" in msg and "interface.model = 'statistical'" in msg

@@ -115,3 +115,29 @@ def test_a_model_on_another_record_is_the_model_built_with_it():
             assert a == b, f.name
     np.testing.assert_array_equal(first.dmw, before)
     assert moved.p is not first.p and moved.statics is not first.statics
+
+
+def test_a_per_summit_friction_law_reads_its_own_friction_column():
+    """``contact.friction_law = "kogut-etsion"``: the model's friction table is the interface tables' friction
+    column as that law integrated it; tables integrated for another law are refused in one line."""
+    from pipeline.model.interface_tables import build_tables, roughness_statistics
+    from pipeline.model.piecewise import piecewise_coefficients
+    from slider_scenes import ALL, K, make_scene
+    scene = make_scene(ALL, contact={"friction_law": "kogut-etsion"})
+    plain = make_scene(ALL)
+    tables = build_tables(scene, roughness_statistics(scene))
+    model = assembly.build_model(scene, tables, None if "dmw" not in scene.effects else _record(scene), K)
+    values = tables["friction_stress"].values * 1e6  # [MPa] -> [Pa]
+    order = scene["solver"]["interpolation_order"]
+    np.testing.assert_array_equal(model.friction, piecewise_coefficients(values, model.p.tab_h, order))
+    with pytest.raises(ValueError, match="integrates the 'shear-strength' law, but contact.friction_law = "
+                                         "'kogut-etsion' reads its own per-summit table; re-run `hdi interface`"):
+        assembly.build_model(scene, build_tables(plain, roughness_statistics(plain)), _record(scene), K)
+    with pytest.raises(ValueError, match="integrates the 'kogut-etsion' law, but contact.friction_law = "
+                                         "'shear-strength' reads the shear-strength table"):
+        assembly.build_model(plain, tables, _record(plain), K)
+
+
+def _record(scene):
+    from slider_scenes import synthetic_record
+    return synthetic_record(scene)

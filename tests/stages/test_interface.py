@@ -240,3 +240,24 @@ def test_wetted_area_only_with_the_lubricant_shear_and_keyed_on_it_alone(tmp_pat
     again = _run(paper_config, out, "lubricant.shear_stress_mpa=25")
     assert (out / "interface.nc").stat().st_mtime_ns == stamp
     np.testing.assert_array_equal(again["wetted_area_fraction"].values, with_term["wetted_area_fraction"].values)
+
+
+def test_friction_column_of_a_per_summit_law_and_keyed_on_that_law_alone(tmp_path, paper_config):
+    """A per-summit friction law (contact.friction_law = "kogut-etsion") makes the friction column its own
+    integral, says so in the attributes and recomputes the tables; switching between the laws that read the
+    shear-strength column ("shear-strength", "coefficient") leaves them as they are."""
+    out = tmp_path / "law"
+    plain = _run(paper_config, out)
+    assert "friction_stress_law" not in plain.attrs
+    stamp = (out / "interface.nc").stat().st_mtime_ns
+    _run(paper_config, out, 'contact.friction_law="coefficient"', "contact.friction_coefficient=1.2")
+    assert (out / "interface.nc").stat().st_mtime_ns == stamp
+    ke = _run(paper_config, out, 'contact.friction_law="kogut-etsion"')
+    assert ke.attrs["friction_stress_law"] == "kogut-etsion"
+    for name in TABLES:  # only the friction column changes
+        same = np.array_equal(ke[name].values, plain[name].values)
+        assert same == (name != "friction_stress"), name
+    assert np.all(ke["friction_stress"].values >= 0)
+    back = _run(paper_config, out)
+    assert "friction_stress_law" not in back.attrs
+    np.testing.assert_array_equal(back["friction_stress"].values, plain["friction_stress"].values)

@@ -23,8 +23,9 @@ from scene_recording import declared, recording
 #: cut rather than what it computes (each sweep part is checked against its batch, so parts of another
 #: batch size are recomputed, not mixed).
 DERIVED = {
-    # deepest_protrusion_nm; lubricant_shear (whether the term is on, not its stress)
-    "interface": {"tfc.protrusion_nm", "sweep.protrusion_nm", "lubricant.shear_stress_mpa"},
+    # deepest_protrusion_nm; lubricant_shear (whether the term is on, not its stress); friction_stress_law
+    # (the per-summit friction law the friction column integrates, if the scene's law is one)
+    "interface": {"tfc.protrusion_nm", "sweep.protrusion_nm", "lubricant.shear_stress_mpa", "contact.friction_law"},
     "sweep": {"sweep.batch_size"},
 }
 
