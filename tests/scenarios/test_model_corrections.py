@@ -18,7 +18,7 @@ from pipeline.physics import air_bearing as ab
 from pipeline.physics import microwaviness as pdmw
 from pipeline.physics import friction
 from pipeline.config.scene import SceneError, load_scene, scene_from_dict
-from pipeline.model.interface_tables import build_tables, roughness_statistics
+from pipeline.model.interface_tables import build_tables, interface_parameters, roughness_statistics
 from pipeline.model import scene_inputs
 from pipeline.model.simulation import model_attrs
 from pipeline.model import state as st
@@ -249,6 +249,23 @@ def test_friction_coefficient_law_gives_its_mu(paper):
         paper.replace(contact={"friction_law": "coulomb"})
     with pytest.raises(ValueError, match="contact.friction_law = 'coulomb': expected one of"):
         friction.friction_stress_table("coulomb", np.ones(2), np.ones(2))
+
+
+@pytest.mark.parametrize("law, ratio", [("kogut-etsion", (0.96, 1.0)), ("brizmer-kligerman-etsion", (1.9, 2.0))])
+def test_static_friction_laws_in_steady_contact(paper, law, ratio):
+    # The per-summit static-friction laws through the dynamics (docs/model.md, section "Static friction of the
+    # summits"): in steady contact the shear stress F_friction / A_real is about tau_y (KE) or twice it
+    # (BKE, full stick), and it does not rise with protrusion (11.4 against 10.6 nm).
+    scene = paper.replace(contact={"friction_law": law})
+    model, _ = build(scene)
+    tau_y = friction.shear_strength(interface_parameters(scene, roughness_statistics(scene)).H)
+    shear = []
+    for delta in (10.6, 11.4):
+        s = outcomes.summarize(running.run_model(model, delta * NM))
+        assert s["contact_fraction"] > 0.99
+        shear.append(s["shear_stress"] / tau_y)  # (SI)
+    assert all(ratio[0] < r < ratio[1] for r in shear), shear
+    assert shear[1] <= shear[0]
 
 
 def test_scene_defaults_are_the_corrected_paper_values():
