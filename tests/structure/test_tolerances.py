@@ -2,7 +2,7 @@
 
 A relative tolerance below :data:`TIGHT` (``rtol=`` / ``rel=`` of ``numpy.testing.assert_allclose``,
 ``numpy.isclose``, ``numpy.allclose``, ``math.isclose`` or ``pytest.approx``; ``assert_allclose``
-without ``rtol``, whose default is 1e-7; an exact ``rtol=0`` with no ``atol``) holds on every host only
+without ``rtol`` nor ``atol``, whose default is 1e-7; an exact ``rtol=0`` with no ``atol``) holds on every host only
 when the numbers it compares are bit-identical (the same operations in the same order) or when it follows
 a stated error bound (the conditioning of the quantity times the rounding of the operations that made
 it). Such a comparison carries the marker ``# tol: <why>`` on one of the lines of its statement or on
@@ -26,9 +26,10 @@ TIGHT = 1e-6
 #: The marker of a justified tolerance; the justification follows it on the same comment.
 MARKER = re.compile(r"#\s*tol:\s*\S+")
 #: The calls whose relative tolerance is read, with its keyword and its default (``None``: no default
-#: that could be tight).
+#: that could be tight); ``math.isclose`` is read as :data:`MATH_ISCLOSE`.
 CALLS = {"assert_allclose": ("rtol", 1e-7), "isclose": ("rtol", None), "allclose": ("rtol", None),
          "approx": ("rel", None)}
+MATH_ISCLOSE = ("rel_tol", 1e-9)
 
 
 def _number(node: ast.AST) -> float | None:
@@ -58,14 +59,16 @@ def tight_calls(tree: ast.AST) -> list[tuple[ast.Call, float]]:
         if not isinstance(node, ast.Call) or _name(node) not in CALLS:
             continue
         key, default = CALLS[_name(node)]
+        if isinstance(node.func, ast.Attribute) and getattr(node.func.value, "id", "") == "math":
+            key, default = MATH_ISCLOSE
         kw = {k.arg: k.value for k in node.keywords if k.arg}
         if key in kw:
             rtol = _number(kw[key])
             if rtol is None:
                 continue
-            if rtol == 0.0 and any(_number(kw[a]) != 0.0 for a in ("atol", "abs") if a in kw):
+            if rtol == 0.0 and any(_number(kw[a]) != 0.0 for a in ("atol", "abs", "abs_tol") if a in kw):
                 continue  # an absolute tolerance alone: its bound is in the numbers' own unit, not judged here
-        elif default is not None:
+        elif default is not None and not {"atol", "abs_tol"} & set(kw):  # (with an atol, the default rtol is not the bound)
             rtol = default
         else:
             continue
@@ -125,6 +128,8 @@ def test_the_check_finds_a_tight_tolerance_without_its_reason():
         "    assert a == pytest.approx(b)\n"                          # default 1e-6
         "    # a comment that is no reason\n"
         "    assert a == pytest.approx(b, rel=1e-10)\n"               # 16: found
+        "    assert math.isclose(a, b)\n"                              # 17: found (default 1e-9)
+        "    np.testing.assert_allclose(a, b, atol=1e-3)\n"            # an absolute bound
     )
     lines = [line.split(":")[1] for line in unjustified(source, "t.py")]
-    assert lines == ["3", "4", "5", "6", "16"]
+    assert lines == ["3", "4", "5", "6", "16", "17"]
