@@ -23,6 +23,7 @@ def test_exact_for_its_polynomials(order, f):
     c = pw.piecewise_coefficients(f(_grid(21, h, x0)), h, order)
     assert c.shape == (20, 4) and c.flags.c_contiguous
     x = np.linspace(x0, x0 + 2.0, 97)
+    # tol: a polynomial of degree <= order is the spline itself: the solve's rounding (condition ~ 3)
     np.testing.assert_allclose(pw.ppval(c, x0, h, x), f(x), rtol=1e-12, atol=1e-12)
 
 
@@ -42,6 +43,7 @@ def test_linear_below_constant_above():
     y = np.array([1.0, 3.0, 4.0, 4.5])
     c = pw.piecewise_coefficients(y, h, 1)
     # below: the first piece continued (slope 4); above: the last value
+    # tol: linear pieces of exact binary data, exact or an ulp
     np.testing.assert_allclose(pw.ppval(c, 0.0, h, np.array([-1.0, -0.25, 1.5, 2.0, 100.0])),
                                [1.0 - 4.0, 1.0 - 1.0, 4.5, 4.5, 4.5], rtol=1e-14)
     value, slope = pw._ppval(c, 0.0, h, 10.0)

@@ -130,6 +130,7 @@ def test_in_contact_both_switchings_give_the_same_friction(models, below_nm):
     az0, at0, _ = _accelerations(crit, d, True)
     az1, at1, _ = _accelerations(cont, d, True)
     assert az1 == az0
+    # tol: the spline sum's rounding (2048 eps of the table's largest value, above) in one moment: measured 2e-16
     assert at1 == pytest.approx(at0, rel=1e-9)
 
 
@@ -144,6 +145,7 @@ def test_the_jump_at_the_criterion_is_the_solid_friction_alone(models):
     tau_solid, tau_all = (pw.ppval(m.friction[:, :4].copy(), p.tab_x0, p.tab_h, np.array([d]))[0]
                           for m in (solid, crit))
     moment = -p["friction_arm"] * p["A_n"] / p["I"]  # (the contact force's moment is in every jump alike)
+    # tol: the spline sum's rounding (2048 eps of the table's largest value, above) in one moment
     assert jump["continuous"] == pytest.approx(jump["solid"], rel=1e-9)
     assert jump["criterion"] - jump["continuous"] == pytest.approx(moment * (tau_all - tau_solid), rel=1e-6)
 
@@ -201,6 +203,7 @@ def test_the_count_is_the_criterions_transitions_in_a_fine_history():
     assert np.count_nonzero(np.diff(clearance < 0)) == n
     ds = hdi.simulate(model, [10.0])
     assert ds["contact_switches_per_ms"].attrs["units"] == "ms-1"
+    # tol: a count over the 0.5-ms window, one rounding
     assert float(ds["contact_switches_per_ms"][0]) == pytest.approx(n / 0.5, rel=1e-12)  # 0.5-ms window
 
 
@@ -255,6 +258,8 @@ def test_ensembles_carry_the_switch_rate_mean_and_spread():
     rate = np.array([[0.0, 30.0, 60.0], [900.0, 500.0, 100.0]])  # [1/ms], (protrusion, realisation)
     out = statistics({"contact_switches_per_ms": SCALARS["contact_switches_per_ms"].data(rate, ("protrusion",
                                                                                                "realisation"))})
+    # tol: a mean of exact integers, a few roundings
     np.testing.assert_allclose(out["contact_switches_per_ms_mean"].values, [30.0, 500.0])
+    # tol: a std of exact integers, a few roundings and a sqrt
     np.testing.assert_allclose(out["contact_switches_per_ms_std"].values, [30.0, 400.0])
     assert out["contact_switches_per_ms_mean"].attrs["units"] == "ms-1"
