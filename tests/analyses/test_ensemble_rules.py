@@ -46,7 +46,7 @@ def test_touchdown_protrusion_of_eight_seeds_that_touch_one_step_apart():
     first = 9.0 + 0.2 * (np.arange(8) // 2)
     c = _da(np.where(prot[:, None] >= first[None, :] - 1e-9, -0.1, 0.1), prot)
     p = en.touchdown_probability(c).values
-    np.testing.assert_allclose(p, [0, 0.25, 0.5, 0.75, 1.0, 1.0])
+    np.testing.assert_allclose(p, [0, 0.25, 0.5, 0.75, 1.0, 1.0])  # tol: fractions of counts of 4, exact in binary
     td, lo, hi = en.touchdown_protrusion(c)
     assert td == pytest.approx(9.2)
     assert lo == pytest.approx(8.8 + 0.2 * 0.1 / 0.25)
@@ -72,6 +72,7 @@ def test_mean_and_sample_standard_deviation():
 
 def test_exceedance_probability():
     bv = _da([[25.0, 10.0, 30.0, np.nan], [5.0, 19.9, 20.0, 21.0]], [10.0, 10.2])
+    # tol: fractions of counts, one rounding
     np.testing.assert_allclose(en.exceedance_probability(bv, 20.0).values, [2 / 3, 0.25])  # strictly above
 
 
@@ -79,4 +80,5 @@ def test_flying_mean_leaves_out_contact_and_missing_points():
     prot = [4.0, 5.0, 6.0]
     fhm = _da([[10.0, 12.0], [14.0, np.nan], [16.0, 40.0]], prot)
     c = _da([[1.0, 1.0], [1.0, 1.0], [0.5, -0.1]], prot)  # realisation 1 touches at 6 nm
+    # tol: a mean of three exact numbers, a few roundings
     np.testing.assert_allclose(en.flying_mean(fhm, c).values, [(10 + 14 + 16) / 3, 12.0])

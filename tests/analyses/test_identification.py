@@ -157,6 +157,7 @@ def test_margin_is_the_error_of_a_partial_mean_against_the_whole_ensemble():
     assert identification.Racing.doubling(2, 6, 3.0).stages == (2, 4, 6)
     # z sqrt(pi/2) s sqrt((N - n) / (N n)): n = 2 of 8, s = 1 -> 3 x 1.2533 x sqrt(6/16) = 2.3025
     m = race.margin(np.array([1.0, 0.0, np.nan]), 2)
+    # tol: closed form, a few roundings (libm sqrt is exact)
     assert m[0] == pytest.approx(3.0 * math.sqrt(math.pi / 2) * math.sqrt(6.0 / 16.0), rel=1e-12)
     assert m[0] == pytest.approx(2.3025, abs=1e-4)
     assert m[1] == 0.0 and np.isinf(m[2])  # (an unknown spread: no bound)
@@ -308,6 +309,7 @@ def test_racing_keeps_the_optimum_exact_and_stops_only_worse_candidates():
     ident, out = _run(race)
     # the best point ran on every record and its objective is the whole ensemble's
     key = ident.best_key
+    # tol: the same mean of the same records, summed in the same order
     assert ident.depth[key] == N_RECORDS and ident.best_cost == pytest.approx(_full_cost(out["best"]), rel=1e-12)
     # a candidate stopped early is worse than the best point on the whole ensemble (the guarantee, here for
     # every one of them), and but for the polish's its partial objective says so too: the polish's points lie
@@ -344,6 +346,7 @@ def test_a_first_stage_of_one_record_is_bounded_by_the_pooled_spreads_alone():
     race = identification.Racing.doubling(1, N_RECORDS, 3.0)
     assert race.stages == (1, 2, 4, 8)
     unit = race.margin(np.array([1.0]), 1)[0] / 3.0
+    # tol: closed form, a few roundings (libm sqrt is exact)
     assert unit == pytest.approx(math.sqrt(math.pi / 2) * math.sqrt(7.0 / 8.0), rel=1e-12)
     x = np.random.default_rng(3).standard_normal((200_000, N_RECORDS))
     d = np.median(x, axis=1) - x[:, 0]
@@ -362,6 +365,7 @@ def test_a_first_stage_of_one_record_is_bounded_by_the_pooled_spreads_alone():
     for k in one:
         assert _full_cost(np.array(ident.records[k]["params"])) > ident.best_cost
     assert ident.depth[ident.best_key] == N_RECORDS
+    # tol: the same mean of the same records, summed in the same order
     assert ident.best_cost == pytest.approx(_full_cost(out["best"]), rel=1e-12)
     # (575 pairs against 600 when written)
     assert ident.record_evaluations < full_ident.record_evaluations
@@ -416,12 +420,14 @@ def test_a_compass_poll_keeps_inside_the_bounds_and_skips_the_profiled_parameter
     pts, polls = identification._compass(np.array([0.98, 1.0, 10.0]), 0.1, lo, hi, skip=1)
     # x0: +0.1 clipped to 1.0 (an offset of 0.02), -0.1; x2: +1 only (the lower bound cancels -1)
     assert polls == [(0, pytest.approx(0.02)), (0, pytest.approx(-0.1)), (2, pytest.approx(1.0))]
+    # tol: clipping and one addition of exact decimals, a few roundings
     np.testing.assert_allclose(pts, [[1.0, 1.0, 10.0], [0.88, 1.0, 10.0], [0.98, 1.0, 11.0]])
     # the parabola through (-h, c-), (0, c0), (h, c+) has its vertex at h (c- - c+) / (2 (c- - 2 c0 + c+)):
     # c = (x - 0.3)^2 polled at 0 +- 1 gives 0.3; x1 (curving down) stays
     x = np.array([0.0, 0.0])
     _, polls = identification._compass(x, 0.5, np.array([-1.0, -1.0]), np.array([1.0, 1.0]))
     c = np.array([(1 - 0.3)**2, (-1 - 0.3)**2, -1.0, -1.0])
+    # tol: the parabola's vertex of exact inputs, tens of roundings
     np.testing.assert_allclose(identification._vertex(x, 0.09, polls, c, np.array([-1.0, -1.0]),
                                                       np.array([1.0, 1.0])), [0.3, 0.0])
 
@@ -441,6 +447,7 @@ def test_a_profile_walk_races_every_point_and_takes_none_stopped_early():
 
     w = identification._Walk(0, np.array([0.6, 0.8]), start, np.array([1.0, 1.0, 0.0]), lo, hi, metric, 100.0, slice_at)
     pts = w.candidates()  # the prediction (0.6, 0.6, 0.5), then the poll around it
+    # tol: the prediction is additions of exact decimals, a few roundings
     np.testing.assert_allclose(pts[0], [0.6, 0.6, 0.5])
     assert len(pts) == 5 and [w.bound(x) for x in pts] == [4.0] * 5  # (the slice point's objective)
     np.testing.assert_array_equal(w.reference(), slice_point)

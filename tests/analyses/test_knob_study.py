@@ -15,7 +15,7 @@ from pipeline.analyses.knob_study import Knob, Result
 def test_relative_error_definition():
     nan, inf = np.nan, np.inf
     err = knob_study.relative_error(np.array([1.1, 0.002, nan, nan, 1.0]), np.array([1.0, 0.0, nan, 2.0, nan]), 0.01)
-    np.testing.assert_allclose(err[:2], [0.1, 0.2])
+    np.testing.assert_allclose(err[:2], [0.1, 0.2])  # tol: |a - b| / |b| of exact decimals, a few roundings
     assert np.isnan(err[2]) and err[3] == inf and err[4] == inf
 
 
@@ -40,7 +40,7 @@ def test_errors_use_each_outputs_floor_and_a_failed_point_is_infinitely_wrong():
     ref.values[1, 0] = np.nan                                    # no FHM at the second point
     res = _result(np.full((2, n), 1.01), failed=[1])
     err = knob_study.errors(res, ref)
-    np.testing.assert_allclose(err[0], 0.01)
+    np.testing.assert_allclose(err[0], 0.01)  # tol: |a - b| / |b| of exact decimals, a few roundings
     assert np.isnan(err[1, 0]) and np.isinf(err[1, 1:]).all()
     # below its floor a value's error is taken against the floor: 0.1 % FHM, 0.01 nm clearance
     small = _result(np.zeros((1, n)))

@@ -170,5 +170,6 @@ def test_a_one_record_part_of_an_ensemble_is_scored_by_the_ensemble_rules(paper_
     assert 0 < first and prots[first] == s_vals[i]
     assert vals[i] == pytest.approx(0.5 * (prots[first - 1] + prots[first]), abs=1e-12)
     # every residual is the same number by either rule (a statistic of one value is that value)
+    # tol: a statistic of one value is that value: a few roundings at most
     np.testing.assert_allclose(res, s_res, rtol=1e-12, atol=1e-12)
     np.testing.assert_array_equal(np.delete(vals, i), np.delete(s_vals, i))

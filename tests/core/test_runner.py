@@ -79,6 +79,7 @@ def test_dmw_record_edited_in_place_recomputes_everything_downstream(tmp_path):
     _record(rec, scale=2.0)                                    # same path, new bytes
     assert runner.Runner(with_contact, out).key("calibrate") != cal_key   # the change reaches calibrate
     path = sweep_stage.run_sweep(scene, out, scheduler="synchronous")
+    # tol: the processing is linear: twice the record, twice the rms up to FFT rounding (log2(n) eps)
     assert float(read_dataset(out / "dmw.nc").rms) == pytest.approx(2 * rms1, rel=1e-9)
     # flying, the FHM follows the DMW amplitude (within 5 %: the bearing's rear law is mildly nonlinear);
     # the stale result was the old FHM, off by a factor of 2
@@ -103,9 +104,10 @@ def test_afm_scan_edited_in_place_reaches_interface_and_sweep_parts(tmp_path):
         warnings.simplefilter("ignore", sf.SurfaceWarning)
         runner.build(["interface", "sweep"], scene, out, scheduler="synchronous")
         before = sigmas()
-        assert before == pytest.approx([before[0]] * 2, rel=1e-12)
+        assert before == pytest.approx([before[0]] * 2, rel=1e-12)  # tol: the same summary of the same scan
         _scan(scan, scale=2.0)                                 # same path, heights doubled
         runner.build(["interface", "sweep"], scene, out, scheduler="synchronous")
+        # tol: heights doubled: the moments' square root doubles up to ~log2(n) roundings of a mean
         assert sigmas() == pytest.approx([2 * before[0]] * 2, rel=1e-9)
         runner.build(["sweep"], scene, tmp_path / "fresh", scheduler="synchronous")
     _identical_but_history(out / "sweep.nc", tmp_path / "fresh" / "sweep.nc")
@@ -480,6 +482,7 @@ def test_a_new_stage_plugs_in_by_declaring_itself(tmp_path, paper_config, monkey
     monkeypatch.delitem(sys.modules, "pipeline.stages.toy_plugin", raising=False)
     assert "toy" in runner.registry()
     assert cli.main(["toy", str(paper_config), "--out", str(tmp_path / "out")]) == 0
+    # tol: the plugin doubles the stored rms: one rounding
     assert float(read_dataset(tmp_path / "out" / "toy.nc").twice_rms) == pytest.approx(2 * 0.266, rel=1e-9)
     sys.modules.pop("pipeline.stages.toy_plugin", None)
 

@@ -28,15 +28,20 @@ def test_si_factor_is_the_udunits_conversion(suffix):
     """1 [unit] in SI, by UDUNITS, equals the table's factor (rpm: one revolution, 2 pi rad, per minute)."""
     unit = cf_units.Unit(units.cf_unit(suffix))
     expected = unit.convert(1.0, cf_units.Unit(SI_OF[suffix])) if suffix != "rpm" else 2 * math.pi / 60
+    # tol: UDUNITS' factor against the table's literal: IEEE arithmetic alone, an ulp or two
     assert units.si_factor(suffix) == pytest.approx(expected, rel=1e-15)
 
 
 def test_ratios_between_units_are_exact_literals():
     # the literals equal the ratio of the SI factors to the last bit that matters (they exist because
     # the quotient of two factors rounds differently from the literal)
+    # tol: a quotient of two literals against a literal: IEEE arithmetic alone, an ulp or two
     assert units.NM_IN_UM == pytest.approx(units.NM / units.UM, rel=1e-15)
+    # tol: a quotient of two literals against a literal: IEEE arithmetic alone, an ulp or two
     assert units.UM_IN_NM == pytest.approx(units.UM / units.NM, rel=1e-15)
+    # tol: a quotient of two literals against a literal: IEEE arithmetic alone, an ulp or two
     assert units.PER_NM2_IN_PER_UM2 == pytest.approx((units.UM / units.NM) ** 2, rel=1e-15)
+    # tol: a quotient of two literals against a literal: IEEE arithmetic alone, an ulp or two
     assert units.MHZ_IN_KHZ == pytest.approx(units.MHZ / units.KHZ, rel=1e-15)
     assert units.UM / units.NM != 1e3  # why the literals exist
 

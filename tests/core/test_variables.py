@@ -99,12 +99,13 @@ def test_time_is_plain_seconds_under_xarrays_default_decoding(datasets):
         assert "since" not in t.attrs["units"] and "standard_name" not in t.attrs
         assert np.unique(t.values).size == n == t.size
         # the output step of the scene (solver.output_step_ns = 250) in seconds
+        # tol: steps of a time grid: rounding of t_i (t/step < 1e4) over the step
         np.testing.assert_allclose(np.diff(t.values), 250e-9, rtol=1e-9)
         row = raw["separation"].sel({TIME: float(t[7])})
         assert TIME not in row.dims  # one sample, not several
     ds = read_dataset(path)
     assert ds[TIME].attrs["units"] == "s"
-    np.testing.assert_allclose(ds[TIME].values, t.values, rtol=0, atol=0)
+    np.testing.assert_allclose(ds[TIME].values, t.values, rtol=0, atol=0)  # tol: NetCDF stores float64 as it is: exact
 
 
 def test_dmw_time_is_plain_seconds_and_a_dmw_dataset_reads_back_as_a_record(datasets):
@@ -113,9 +114,10 @@ def test_dmw_time_is_plain_seconds_and_a_dmw_dataset_reads_back_as_a_record(data
         t = raw[TIME].values
         assert t.dtype == np.float64 and np.unique(t).size == t.size
         rate = 1 / float(np.median(np.diff(t)))
+    # tol: a median step of the grid: rounding of t_i (t/step < 1e4) over the step
     assert rate == pytest.approx(4e6, rel=1e-9)  # dmw.sample_rate_mhz = 4
     rec = load_record(datasets["dmw"], column="displacement")
-    assert rec.sample_rate_hz == pytest.approx(4e6, rel=1e-9)
+    assert rec.sample_rate_hz == pytest.approx(4e6, rel=1e-9)  # tol: the record's rate from its step, a few roundings
 
 
 def test_coordinates_have_no_fill_value(datasets):
@@ -156,6 +158,7 @@ def test_roughness_route_dimension_works_with_sel(datasets):
     row = ds.sel(surface="combined", route="spectral")
     # combined sigma: quadrature sum of the two scans' (docs/model.md, section "Asperity statistics")
     s = ds["sigma"].sel(route="spectral").values
+    # tol: hypot against the combined moments' square root, a few roundings
     assert float(row["sigma"]) == pytest.approx(float(np.hypot(s[0], s[1])), rel=1e-9)
     assert "method" not in ds.dims  # sel's own method= keyword is free again
 
@@ -184,6 +187,7 @@ def test_every_declared_unit_is_read_by_pint_with_its_si_factor():
                 continue
             factor = float(ureg.Quantity(1.0, v.units or "1").to_base_units().magnitude)
             expected = 0.01 if name in PERCENT_FROM_MODEL else v.si_unit
+            # tol: pint's factor against the unit table's decimal, a few roundings
             assert factor == pytest.approx(expected, rel=1e-12), (name, v.units)
             checked += 1
     assert checked > 100
@@ -204,6 +208,7 @@ def test_pint_quantify_works_on_every_dataset(datasets):
     with xr.open_dataset(datasets["summary"]) as ds:
         q = ds.pint.quantify()
         metres = q["min_clearance"].pint.to("m").pint.magnitude
+        # tol: pint's factor 1e-9 against the literal, IEEE arithmetic alone: an ulp or two
         np.testing.assert_allclose(metres, ds["min_clearance"].values * 1e-9, rtol=1e-15)
 
 

@@ -40,8 +40,11 @@ def test_shared_afm_rms_height_equals_surfacetopography(name: str) -> None:
     reader = open_topography(str(path))
     index = [c.name for c in reader.channels].index(SHARED[name])
     ref = reader.topography(channel_index=index).to_unit("nm").detrend(detrend_mode="height")
+    # tol: SurfaceTopography's rms against ours: sums of n^2 heights in another order, < n eps
     assert s.spectral.sigma == pytest.approx(ref.Sq(), rel=1e-10)
+    # tol: SurfaceTopography's rms against ours: sums of n^2 heights in another order, < n eps
     assert s.summits.sigma == pytest.approx(ref.Sq(), rel=1e-10)
+    # tol: a square root of a product of the same pixel sizes, a few roundings
     assert s.pixel_size == pytest.approx(float(np.sqrt(np.prod(ref.pixel_size))), rel=1e-12)
     assert s.summits.count > 100
     assert np.isfinite([s.spectral.eta, s.spectral.R, s.spectral.alpha, s.summits.eta, s.summits.R]).all()
@@ -52,6 +55,7 @@ def test_named_channel_and_detrend_option() -> None:
     t = afm_scan.read_topography(path, channel="Height", detrend_mode="curvature")
     assert t.info["channel_name"] == "Height" and t.unit == "nm"
     ref = open_topography(str(path)).topography(channel_index=3).to_unit("nm").detrend(detrend_mode="curvature")
+    # tol: SurfaceTopography's rms against ours: sums of n^2 heights in another order, < n eps
     assert t.Sq() == pytest.approx(ref.Sq(), rel=1e-10)
     with pytest.raises(afm_scan.AFMError, match=r"di-3\.di: no channel named 'Nope'.*'ZSensor'"):
         afm_scan.read_topography(path, channel="Nope")

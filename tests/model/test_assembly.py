@@ -31,19 +31,23 @@ def test_slider_modes_are_the_scenes_frequencies(root):
     scene = scene_from_dict({"air_bearing": {"stiffness_root": root}})
     s, info = assembly.slider_from_scene(scene)
     L, W, T = 0.85e-3, 0.70e-3, 0.23e-3
-    assert s.m == pytest.approx(4250.0 * L * W * T, rel=1e-12)
+    assert s.m == pytest.approx(4250.0 * L * W * T, rel=1e-12)  # tol: the same product, a few roundings
+    # tol: the same product, a few roundings
     assert s.I == pytest.approx(s.m * (L**2 + T**2) / 12, rel=1e-12)  # a block pitching about its CG
+    # tol: 2x2 eigenproblem (LAPACK, condition ~ f2/f1), under 1e-13 on any host
     np.testing.assert_allclose(_modal_frequencies(s), [120e3, 300e3], rtol=1e-9)
     assert info["chosen"] == root and any(r["k_f"] == s.k_f and r["k_r"] == s.k_r for r in info["roots"])
     if root == "stiff-rear":
         assert s.k_r > s.k_f
+    # tol: a subtraction and a unit product, a few roundings
     assert s.l_c == pytest.approx(L / 2 - 8e-6, rel=1e-12) and s.g0 == pytest.approx(11 * NM, rel=1e-12)
 
 
 def test_friction_arm_is_half_the_thickness_or_the_thickness():
     cg, _ = assembly.slider_from_scene(scene_from_dict({}))
     gimbal, info = assembly.slider_from_scene(scene_from_dict({"slider": {"friction_arm": "gimbal"}}))
-    assert cg.friction_arm == pytest.approx(0.115e-3, rel=1e-12)
+    assert cg.friction_arm == pytest.approx(0.115e-3, rel=1e-12)  # tol: a unit product and a halving, a few roundings
+    # tol: a unit product, a few roundings
     assert gimbal.friction_arm == pytest.approx(0.23e-3, rel=1e-12) and info["friction_arm"] == "gimbal"
 
 
@@ -54,6 +58,7 @@ def test_undamped_slider_has_no_pad_dampers():
 
 def test_summit_datum_from_the_interface_or_mccool():
     scene = scene_from_dict({})
+    # tol: a unit product, one rounding
     assert assembly.summit_datum(scene, xr.Dataset({"y_s": 0.7})) == pytest.approx(0.7 * NM, rel=1e-12)
     # McCool: y_s = 4 sigma / sqrt(pi alpha), alpha = 2412.74 (sigma eta R)^2 of the paper's statistics
     sigma, eta, R = 0.52e-9, 13.3e12, 5e-6
@@ -80,6 +85,7 @@ def test_tolerances_scale_with_the_arm_and_the_second_frequency():
     scene = scene_from_dict({"solver": {"atol_nm": 2e-4}})
     s, _ = assembly.slider_from_scene(scene)
     atol, w2 = 2e-4 * NM, 2 * np.pi * 300e3
+    # tol: products and quotients of the same numbers, a few roundings
     np.testing.assert_allclose(assembly.tolerances(scene, s), [atol, atol / s.l_c, atol * w2, atol / s.l_c * w2],
                                rtol=1e-12)
 

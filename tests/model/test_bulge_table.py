@@ -58,7 +58,9 @@ def test_reynolds_table_read_back_off_grid_matches_direct_solves(reynolds_ds):
     i = int(np.argmin(np.abs(reynolds_ds["protrusion"].values - 10.0)))
     nodes = reynolds_ds["apex_gap"].values * NM
     Fn, kn = bt.lift_at(reynolds_ds, nodes[1:-1], 10.0 * NM)
+    # tol: the table's nodes read back through its spline and a unit product, a few roundings
     assert Fn * 1e3 == pytest.approx(reynolds_ds["bulge_lift"].values[i, 1:-1], rel=1e-12)
+    # tol: the spline's slope at its nodes against the stored stiffness, tens of roundings of the slope
     assert kn == pytest.approx(reynolds_ds["bulge_stiffness"].values[i, 1:-1], rel=1e-9)
 
 
@@ -73,6 +75,7 @@ def test_reynolds_table_is_near_the_ph_limit_at_the_paper_speed(reynolds_ds):
 def test_file_round_trip_is_cf_clean(reynolds_ds, tmp_path):
     path = write_dataset(reynolds_ds, tmp_path / "bulge.nc", stage="bulge")
     back = read_dataset(path)
+    # tol: NetCDF stores float64 as it is: exact
     assert np.allclose(back["bulge_lift"].values, reynolds_ds["bulge_lift"].values, rtol=0, atol=0)
     failures, raised = cf_report(path)
     assert not failures.get(3) and not raised, (failures, raised)

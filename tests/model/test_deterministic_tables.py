@@ -40,6 +40,7 @@ def test_combined_topography_has_zero_mean_and_the_scans_sizes(scene):
     assert h.shape == (32, 32) and abs(h.mean()) < 1e-12 * h.std()
     scan = afm_scan.read_topography(scene["roughness"]["afm"][0], channel=scene["roughness"]["channel"],
                                     detrend_mode=scene["roughness"]["detrend"])
+    # tol: the same sizes through a unit conversion, a few roundings
     assert sizes == pytest.approx(tuple(float(s) for s in scan.physical_sizes), rel=1e-12)
 
 
@@ -66,6 +67,7 @@ def test_pressure_and_area_fall_as_the_gap_opens(tables):
 def test_first_contact_is_the_highest_point_above_the_datum(scene, tables):
     _, solved = tables
     h, _ = dt.combined_topography(scene, 32)
+    # tol: a maximum and a subtraction of the same map, a few roundings (cancellation < 10)
     assert solved["first_contact"] == pytest.approx((h.max() - Y_S / NM) * NM, rel=1e-9)
 
 
@@ -73,4 +75,5 @@ def test_pressure_scales_with_the_modulus_and_wanted_filters(scene, tables):
     t, _ = tables
     t2, _ = dt.deterministic_tables(scene, Y_S, 2 * E, H, D, ("contact_pressure",))
     assert set(t2) == {"contact_pressure"}
+    # tol: the contact solve is linear in E: twice E, twice the pressure up to the solver's rounding
     np.testing.assert_allclose(t2["contact_pressure"], 2 * t["contact_pressure"], rtol=1e-12)

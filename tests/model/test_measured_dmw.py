@@ -47,6 +47,7 @@ def good_record(tmp_path):
 def test_load_csv_with_units(good_record):
     path, x = good_record
     rec = measured_dmw.load_record(path, "velocity")
+    # tol: a rate from a time column's step (t/step < 1e4 over the step), a few roundings
     assert rec.sample_rate_hz == pytest.approx(FS, rel=1e-9)
     assert rec.units == "mm/s" and rec.column == "velocity [mm/s]"
     back = dmw.velocity_to_displacement(rec.values, rec.sample_rate_hz, *BAND)
@@ -65,7 +66,9 @@ def test_load_headerless_and_sample_rate(tmp_path):
     p2h = tmp_path / "two_ms.csv"
     np.savetxt(p2h, np.column_stack([np.arange(x.size) / FS * 1e3, x]), delimiter=";",
                header="time_ms;w_nm", comments="")
+    # tol: a rate from a time column's step (t/step < 1e4 over the step), a few roundings
     assert measured_dmw.load_record(p2).sample_rate_hz == pytest.approx(FS * 1e-3, rel=1e-9)  # no unit: s
+    # tol: a rate from a time column's step (t/step < 1e4 over the step), a few roundings
     assert measured_dmw.load_record(p2h).sample_rate_hz == pytest.approx(FS, rel=1e-9)
 
 
@@ -77,6 +80,7 @@ def test_load_netcdf(tmp_path):
     p = tmp_path / "rec.nc"
     ds.to_netcdf(p, engine="netcdf4")
     rec = measured_dmw.load_record(p)
+    # tol: a rate from a time column's step (t/step < 1e4 over the step), a few roundings
     assert rec.sample_rate_hz == pytest.approx(FS, rel=1e-9)
     assert np.allclose(rec.values, x)
     with pytest.raises(dmw.DMWError, match=r"rec\.nc.*'velocity'.*not found"):

@@ -23,6 +23,7 @@ def test_exact_for_its_polynomials(order, f):
     c = pw.piecewise_coefficients(f(_grid(21, h, x0)), h, order)
     assert c.shape == (20, 4) and c.flags.c_contiguous
     x = np.linspace(x0, x0 + 2.0, 97)
+    # tol: a polynomial of degree <= order is the spline itself: the solve's rounding (condition ~ 3)
     np.testing.assert_allclose(pw.ppval(c, x0, h, x), f(x), rtol=1e-12, atol=1e-12)
 
 
@@ -42,6 +43,7 @@ def test_linear_below_constant_above():
     y = np.array([1.0, 3.0, 4.0, 4.5])
     c = pw.piecewise_coefficients(y, h, 1)
     # below: the first piece continued (slope 4); above: the last value
+    # tol: linear pieces of exact binary data, exact or an ulp
     np.testing.assert_allclose(pw.ppval(c, 0.0, h, np.array([-1.0, -0.25, 1.5, 2.0, 100.0])),
                                [1.0 - 4.0, 1.0 - 1.0, 4.5, 4.5, 4.5], rtol=1e-14)
     value, slope = pw._ppval(c, 0.0, h, 10.0)
@@ -91,6 +93,8 @@ def test_the_spline_is_scipy_s_not_a_knot_spline_bit_for_bit(n):
     for h in (1e-10, 2.5e-11, 0.37, 1.0 / 3.0):
         x = h * np.arange(n)
         for y in (rng.standard_normal(n) * 10.0 ** rng.uniform(-12, 3), 1.0 / (x + 0.5 * h) ** 2):
+            # exact on any host: both sides are numpy's elementwise arithmetic and the same LAPACK dgtsv,
+            # which calls no CPU-dispatched BLAS kernel
             np.testing.assert_array_equal(pw.piecewise_coefficients(y, h, 3),
                                           np.ascontiguousarray(CubicSpline(x, y).c.T))
 

@@ -33,9 +33,13 @@ def two():
 def test_combined_surface_adds_the_moments(two):
     spectral = two.sel(route="spectral")
     assert list(two["surface"].values) == ["a", "b", rs.COMBINED]
+    # tol: moments and McCool's relations of exact decimals, a few roundings
     np.testing.assert_allclose(spectral["sigma"].values, [0.4, 0.3, 0.5], rtol=1e-12)
+    # tol: moments and McCool's relations of exact decimals, a few roundings
     np.testing.assert_allclose(spectral["summit_radius"].values, [5.0, 5.0, 5.0 / math.sqrt(2)], rtol=1e-12)  # [um]
+    # tol: moments and McCool's relations of exact decimals, a few roundings
     np.testing.assert_allclose(spectral["summit_density"].values, [13.3, 13.3, 13.3], rtol=1e-12)  # [um^-2]
+    # tol: moments and McCool's relations of exact decimals, a few roundings
     np.testing.assert_allclose(two["m0"].values, [0.16, 0.09, 0.25], rtol=1e-12)  # [nm^2]
     assert two["sigma"].attrs["units"] == "nm" and two["summit_radius"].attrs["units"] == "um"
     # explicit statistics have no height map: the summit route is empty
@@ -47,6 +51,7 @@ def test_plasticity_index_is_greenwood_williamson(two):
     E, H = two.attrs["composite_modulus_gpa"], two.attrs["hardness_gpa"]
     assert H == 5.0 and E == pytest.approx(94.19, rel=1e-3)  # E' of the paper's materials
     expected = E / H * np.sqrt(spectral["sigma_s"].values / (spectral["summit_radius"].values * 1e3))
+    # tol: the same formula on the same numbers, a few roundings
     np.testing.assert_allclose(spectral["plasticity_index"].values, expected, rtol=1e-12)
     # without a scene (no hardness) the indices are NaN
     alone = rs.build_dataset([sf.from_statistics(0.4, ETA, R_NM)])
@@ -55,13 +60,17 @@ def test_plasticity_index_is_greenwood_williamson(two):
 
 def test_combined_statistics_reads_the_combined_row(two, tmp_path):
     s = rs.combined_statistics(two)
+    # tol: moments and McCool's relations of exact decimals, a few roundings
     assert s["sigma_nm"] == pytest.approx(0.5, rel=1e-12)
+    # tol: moments and McCool's relations of exact decimals, a few roundings
     assert s["summit_radius_um"] == pytest.approx(5.0 / math.sqrt(2), rel=1e-12)
+    # tol: moments and McCool's relations of exact decimals, a few roundings
     assert s["summit_density_per_um2"] == pytest.approx(13.3, rel=1e-12)
     # McCool: y_s = 4 sigma / sqrt(pi alpha), sigma_s^2 = sigma^2 - 3.717e-4 / (eta R)^2
     # (alpha here is m0 m4 / m2^2; y_s takes McCool's 2412.74 (sigma eta R)^2, rounded: 7e-7 apart)
     assert s["y_s_nm"] == pytest.approx(4 * 0.5 / math.sqrt(math.pi * s["alpha"]), rel=1e-5)
     eta_r = s["summit_density_per_um2"] * s["summit_radius_um"]
+    # tol: McCool's relation rearranged, a few roundings
     assert s["sigma_s_nm"] ** 2 == pytest.approx(0.25 - 3.717e-4 / (eta_r * 1e-3) ** 2, rel=1e-9)
 
 

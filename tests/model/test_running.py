@@ -25,6 +25,7 @@ def test_output_grid_and_counters(flying):
     run = running.run_model(flying, 5 * NM)
     n = int(round(flying.duration / flying.output_step)) + 1
     assert run.time.shape == (n,) and run.time[0] == 0.0 and run.time[-1] == pytest.approx(flying.duration)
+    # tol: steps of a time grid: rounding of t_i (t/step < 1e4) over the step
     np.testing.assert_allclose(np.diff(run.time), flying.output_step, rtol=1e-9)
     assert run.state.shape == (n, st.N_STATE) and run.contact.shape == (n,)
     assert run.info.shape == (st.N_COUNTERS,) and run.info[st.STATUS] == st.OK

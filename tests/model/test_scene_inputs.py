@@ -48,6 +48,7 @@ def test_contact_k_precedence():
 def test_fallback_is_the_two_sided_probability():
     free = scene_from_dict({"contact": {"fallback_probability": 0.328}})
     k, source = si.contact_k(free)
+    # tol: erfc of the inverse it was made by: condition < 2, a few ulps of each
     assert math.erfc(k / math.sqrt(2)) == pytest.approx(0.328, rel=1e-9)
     assert k == pytest.approx(0.978, abs=5e-4) and source == "contact.fallback_probability (two-sided)"
     k_nan, source = si.contact_k(free, _calibration(np.nan))

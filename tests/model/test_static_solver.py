@@ -59,6 +59,7 @@ def test_the_compiled_solve_of_two_equations():
     for _ in range(200):
         J, b = rng.normal(size=(2, 2)) * 10.0 ** rng.integers(-6, 6, size=2), rng.normal(size=2)
         assert static_solver._solve2(J, b, x)
+        # tol: the 200 seeded systems' componentwise condition is at most 4e3: < 10 eps x 4e3 either solve
         np.testing.assert_allclose(x, np.linalg.solve(J, b), rtol=1e-9)
     assert static_solver._solve2(np.array([[0.0, 1.0], [2.0, 0.0]]), np.array([1.0, 4.0]), x)  # needs the pivot
     np.testing.assert_array_equal(x, [2.0, 1.0])

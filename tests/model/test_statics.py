@@ -42,11 +42,15 @@ def test_a_cubic_force_has_its_three_equilibria_and_exact_barriers(roots):
     assert not any(s.switch for s in states)
     # the barrier out of each well: the rise of V = -int f du to the saddle at b
     rise_a, rise_c = -_work(f, a, b), _work(f, b, c)
+    # tol: a polynomial's exact integral against the solver's, tens of roundings of the roots
     assert states[0].barrier == pytest.approx(rise_a, rel=1e-9)
+    # tol: a polynomial's exact integral against the solver's, tens of roundings of the roots
     assert states[2].barrier == pytest.approx(rise_c, rel=1e-9)
     assert np.isnan(states[1].barrier)
     if roots == (-1.0, 0.0, 1.0):  # symmetric: kappa int_{-1}^{0} (u^3 - u) du = kappa / 4 each
+        # tol: a polynomial's exact integral on exact roots, a few roundings
         assert states[0].barrier == pytest.approx(kappa / 4, rel=1e-12) and states[2].barrier == pytest.approx(kappa / 4)
+    # tol: a polynomial's exact integral against the solver's, tens of roundings of the roots
     assert states[0].potential == 0.0 and states[1].potential == pytest.approx(rise_a, rel=1e-9)
 
 
@@ -64,7 +68,9 @@ def test_a_jump_through_zero_is_a_stable_state_on_the_break_with_its_barrier():
     assert [s.switch for s in states] == [True, False, False]
     assert [s.stable for s in states] == [True, False, True]
     assert states[0].u == 0.0  # exactly on the break, not interpolated across the jump
+    # tol: a polynomial's exact integral against the solver's, tens of roundings of the roots
     assert states[0].barrier == pytest.approx(-_work(g, 0.0, u1), rel=1e-9)
+    # tol: a polynomial's exact integral against the solver's, tens of roundings of the roots
     assert states[2].barrier == pytest.approx(_work(g, u1, u2), rel=1e-9)
     # the jump pointing outwards (down below, up above) is an unstable state on the break
     flipped = path_equilibria(lambda u: (-1.0 if u < 0 else 1.0) * (1 + u * u), np.linspace(-1, 1, 11), breaks=[0.0])
@@ -92,6 +98,7 @@ def test_the_relaxed_path_of_linear_springs_is_the_point_stiffness():
     k_point = 1.0 / (a @ np.linalg.solve(K, a))
     u_eq = a @ np.linalg.solve(K, F0)
     assert ok.all()
+    # tol: a 2x2 solve (condition ~ 10), tens of roundings
     assert f == pytest.approx(-(us - u_eq) * k_point, rel=1e-9, abs=1e-15)
     t = np.array([l_c, 1.0])
     for u, sv in zip(us, s):
@@ -140,6 +147,7 @@ def test_the_compiled_path_finds_the_states_of_the_python_reference(paper_model)
         assert [(s["type"], s["stable"]) for s in fast] == [(s["type"], s["stable"]) for s in ref]
         for a, b in zip(fast, ref):
             assert a["clearance"] == pytest.approx(b["clearance"], abs=1e-7 * NM)
+            # tol: both barriers are quadratures to 1e-8 relative: their difference is within 1e-7
             assert a["barrier"] == pytest.approx(b["barrier"], rel=1e-7, nan_ok=True)
 
 
@@ -157,7 +165,9 @@ def test_on_the_bearing_alone_the_one_state_is_the_nominal_attitude_with_the_bea
     K = model.slider.stiffness_matrix
     if "pitch" in effects:
         a = np.array([1.0, -model.slider.l_c])
+        # tol: a 2x2 solve (condition ~ 10) and its closed form, tens of roundings
         assert k_b == pytest.approx(1.0 / (a @ np.linalg.solve(K, a)), rel=1e-12)
+        # tol: the same closed form, a few roundings
         assert 1.0 / m_b == pytest.approx(1.0 / model.slider.m + model.slider.l_c**2 / model.slider.I, rel=1e-12)
     else:
         assert (k_b, m_b) == (K[0, 0], model.slider.m) and np.isnan(s["eigenvalues"][1])
@@ -178,6 +188,7 @@ def test_in_the_adhesion_hysteresis_a_flying_and_a_contact_state_coexist(paper_m
     top, bottom = states[0], states[2]
     assert top["barrier"] > 0 and bottom["barrier"] > 0
     # the potential difference of the wells is the path force's work between them, as the barriers say
+    # tol: a difference of the same integrals, tens of roundings
     assert bottom["potential"] - top["potential"] == pytest.approx(top["barrier"] - bottom["barrier"], rel=1e-9)
     fold = paper_model.statics["fold"]
     assert 7.0 * NM < fold < 8.0 * NM
@@ -271,6 +282,7 @@ def test_an_evaluation_with_both_set_builds_the_record_of_that_rms_and_slope(pap
     params = study.parse_parameters(scene["identify"]["parameters"], "f", "identify.parameters")
     candidate = study.with_values(scene, params, [rms, exponent])
     w, fs = evaluations.candidate_inputs(candidate, SimulationInputs()).record()
+    # tol: rms of a record the synthesis scaled to it: ~log2(n) roundings of the mean
     assert np.sqrt(np.mean(w**2)) == pytest.approx(rms, rel=1e-9)  # the synthesis scales to the rms [nm]
     # the slope of the record's periodogram over the 10-500 kHz band: Gaussian bins, each an exponential
     # variable times S(f); the least-squares slope over ~1000 bins has a standard deviation of ~0.05

@@ -24,6 +24,7 @@ def test_hermite_is_exact_for_a_cubic(t0, h):
     y0, f0 = np.array([_cubic(t0), 0.0]), np.array([_dcubic(t0), 0.0])
     y1, f1 = np.array([_cubic(t0 + h), 0.0]), np.array([_dcubic(t0 + h), 0.0])
     for frac in (0.0, 0.2, 0.5, 0.9, 1.0):
+        # tol: a cubic's Hermite interpolant is the cubic: tens of roundings
         assert stepper._hermite(y0, f0, y1, f1, h, frac, 0) == pytest.approx(_cubic(t0 + frac * h), rel=1e-12,
                                                                              abs=1e-12)
 
@@ -33,6 +34,7 @@ def test_separation_coefficients_reproduce_the_cubic():
     t0, h = 0.1, 0.7
     a, b, c, e = stepper._dcubic(_cubic(t0), _dcubic(t0), _cubic(t0 + h), _dcubic(t0 + h), h)
     for frac in np.linspace(0.0, 1.0, 7):
+        # tol: a cubic's Hermite interpolant is the cubic: tens of roundings
         assert ((a * frac + b) * frac + c) * frac + e == pytest.approx(_cubic(t0 + frac * h), rel=1e-12)
 
 
@@ -47,6 +49,7 @@ def test_separation_coefficients_reproduce_the_cubic():
 def test_interior_extrema_are_the_roots_in_the_open_step(abc, expected):
     n, x1, x2 = stepper._extrema(*abc)
     assert n == expected[0]
+    # tol: quadratic roots of exact coefficients, a few roundings and a sqrt
     assert (x1, x2) == pytest.approx(expected[1:], rel=1e-12, abs=1e-15)
     if n:
         a, b, c = abc
@@ -60,5 +63,6 @@ def test_error_norm_is_the_scaled_rms():
     atol, rtol = np.array([0.01, 0.02, 1.0]), 0.1
     scale = atol + rtol * np.maximum(np.abs(y), np.abs(ynew))   # 0.31, 0.42 (the third is ignored: ns = 2)
     expected = np.sqrt(np.mean((err[:2] / scale[:2]) ** 2))
+    # tol: the same rms formula, a few roundings apart
     assert stepper.error_norm(y, ynew, err, atol, rtol, 2) == pytest.approx(expected, rel=1e-14)
     assert stepper.error_norm(y, ynew, np.zeros(3), atol, rtol, 3) == 0.0

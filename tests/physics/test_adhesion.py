@@ -24,12 +24,14 @@ def test_meniscus_force_hand_value():
 
 def test_lennard_jones_joins_meniscus_at_eps():
     # (8/3) pi dgamma R (1 - 1/4) = 2 pi R dgamma at s = eps (docs/model.md, section "Single asperity": "joins continuously")
+    # tol: the law at its join is the meniscus force, a few roundings
     assert adhesion.lennard_jones_force(EPS, R, DG, EPS) == pytest.approx(
         adhesion.meniscus_force(R, DG), rel=1e-14)
 
 
 def test_lennard_jones_hand_value_and_bound():
     # s = 2 eps: (8/3) pi 0.106 * 1e-6 * (1/4 - 1/1024) = 8.880236e-7 * 0.2490234 = 2.211387e-7 N
+    # tol: the law's closed form at 2 eps, a few roundings
     assert adhesion.lennard_jones_force(2 * EPS, R, DG, EPS) == pytest.approx(
         8 / 3 * np.pi * DG * R * (0.25 - 0.25 / 256), rel=1e-14)
     assert adhesion.lennard_jones_force(2 * EPS, R, DG, EPS) == pytest.approx(2.211387e-7, rel=1e-6)

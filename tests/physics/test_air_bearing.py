@@ -32,8 +32,8 @@ def test_paper_slider_mass_and_inertia(mass):
     assert m == pytest.approx(0.58e-6, rel=0.01)
     assert I == pytest.approx(3.75e-14, rel=0.01)
     # and exactly the uniform-block formulas
-    assert m == pytest.approx(RHO * L * W * T, rel=1e-14)
-    assert I == pytest.approx(m * (L**2 + T**2) / 12, rel=1e-14)
+    assert m == pytest.approx(RHO * L * W * T, rel=1e-14)  # tol: the same product, a few roundings apart
+    assert I == pytest.approx(m * (L**2 + T**2) / 12, rel=1e-14)  # tol: the same product, a few roundings apart
 
 
 @pytest.mark.parametrize("f1, f2", [(F1, F2), (100e3, 400e3), (30 * F1, 30 * F2), (120e3, 1000e3)])
@@ -47,10 +47,13 @@ def test_both_stiffness_roots_reproduce_the_frequencies(mass, f1, f2):
     for k_f, k_r in roots:
         assert k_f > 0 and k_r > 0
         w, phi = ab.modes(ab.pad_matrix(k_f, k_r, L_F, L_R), np.diag([m, I]))
+        # tol: 2x2 eigenproblem (LAPACK, condition ~ f2/f1), under 1e-13 on any host
         np.testing.assert_allclose(w / (2 * np.pi), [f1, f2], rtol=1e-9)
         # the two invariants used by the inversion (product and sum of w^2)
         w1, w2 = 2 * np.pi * f1, 2 * np.pi * f2
+        # tol: closed-form invariants of the inversion, tens of roundings
         assert k_f * k_r * (L_F + L_R) ** 2 / (m * I) == pytest.approx(w1**2 * w2**2, rel=1e-9)
+        # tol: closed-form invariants of the inversion, tens of roundings
         assert (k_f * (1 / m + L_F**2 / I) + k_r * (1 / m + L_R**2 / I)
                 == pytest.approx(w1**2 + w2**2, rel=1e-9))
         # mass-normalised modes: phi^T M phi = 1
@@ -66,7 +69,7 @@ def test_default_root_is_the_stiff_rear_one_with_the_documented_numbers(mass):
     assert info["chosen"] == "stiff-rear"
     assert k_f == pytest.approx(1.545e5, rel=1e-3) and k_r == pytest.approx(5.833e5, rel=1e-3)
     roots = ab.stiffness_roots(F1, F2, m, I, L_F, L_R)
-    assert (k_f, k_r) == pytest.approx(roots[0], rel=1e-12)
+    assert (k_f, k_r) == pytest.approx(roots[0], rel=1e-12)  # tol: the same root formula on the same numbers
     # its mode shapes: 120 kHz node 0.459 mm behind the CG (beyond the 0.425 mm half-length: bounce-like),
     # 300 kHz node 0.141 mm ahead of the CG
     assert info["roots"][0]["node_mode1"] == pytest.approx(-0.459e-3, abs=1e-6)
@@ -88,14 +91,14 @@ def test_named_alternative_roots_and_their_mode_shapes(mass):
     w, phi = ab.modes(ab.pad_matrix(k_f, k_r, L_F, L_R), np.diag([m, I]))
     assert abs(ab.node_position(phi[:, 0])) < L / 2
     # for the paper slider that is the second root (small rear stiffness, k_f ~ 8 k_r)
-    assert (k_f, k_r) == pytest.approx(roots[1], rel=1e-12)
+    assert (k_f, k_r) == pytest.approx(roots[1], rel=1e-12)  # tol: the same root formula on the same numbers
     assert k_f == pytest.approx(8.473e5, rel=1e-3) and k_r == pytest.approx(1.063e5, rel=1e-3)
     assert [r["mode1_pitch_like"] for r in info["roots"]] == [False, True]
     assert info["roots"][1]["node_mode1"] == pytest.approx(0.340e-3, abs=1e-6)
     assert info["roots"][1]["node_mode2"] == pytest.approx(-0.190e-3, abs=1e-6)
     # bounce-first takes the other one (here the stiff-rear root)
     k_f2, k_r2, info2 = ab.choose_stiffness(F1, F2, m, I, L_F, L_R, L, root="bounce-first")
-    assert (k_f2, k_r2) == pytest.approx(roots[0], rel=1e-12)
+    assert (k_f2, k_r2) == pytest.approx(roots[0], rel=1e-12)  # tol: the same root formula on the same numbers
     w2, phi2 = ab.modes(ab.pad_matrix(k_f2, k_r2, L_F, L_R), np.diag([m, I]))
     assert abs(ab.node_position(phi2[:, 0])) >= L / 2
     with pytest.raises(ValueError, match="stiff-rear"):
@@ -106,14 +109,16 @@ def test_scene_slider_uses_the_chosen_root_and_frequencies():
     s, info = assembly.slider_from_scene(scene_from_dict({}))
     m, I = ab.mass_properties(L, W, T, RHO)
     k_f, k_r, _ = ab.choose_stiffness(F1, F2, m, I, L_F, L_R, L)
-    assert (s.k_f, s.k_r) == pytest.approx((k_f, k_r), rel=1e-12)
+    assert (s.k_f, s.k_r) == pytest.approx((k_f, k_r), rel=1e-12)  # tol: the same root formula on the same numbers
     w, _ = ab.modes(s.stiffness_matrix, s.mass_matrix)
+    # tol: 2x2 eigenproblem (LAPACK, condition ~ f2/f1), under 1e-13 on any host
     np.testing.assert_allclose(w / (2 * np.pi), [F1, F2], rtol=1e-9)
     # TFC point 8 um before the trailing edge, CG at mid-length; friction arm T/2
+    # tol: a subtraction of two exact-ish lengths, a few roundings
     assert s.l_c == pytest.approx(L / 2 - 8e-6, rel=1e-12)
-    assert s.friction_arm == pytest.approx(T / 2, rel=1e-12)
+    assert s.friction_arm == pytest.approx(T / 2, rel=1e-12)  # tol: one division, a few roundings
     # rear preload F_r0 = k_r g0 / n, with g0 = FH0 = 11 nm and n = 2 (docs/model.md, section "Slider dynamics")
-    assert s.rear_preload == pytest.approx(s.k_r * 11 * NM / 2, rel=1e-12)
+    assert s.rear_preload == pytest.approx(s.k_r * 11 * NM / 2, rel=1e-12)  # tol: one product, a few roundings
 
 
 @pytest.mark.parametrize("zeta", [0.01, 0.05, 0.2])
@@ -130,6 +135,7 @@ def test_pad_dampers_give_the_modal_damping_ratio(zeta):
     np.testing.assert_allclose(fn, [F1, F2], rtol=1e-3)
     # the modal projections phi_i^T C phi_i equal 2 zeta w_i exactly (the defining equations)
     w, phi = ab.modes(s.stiffness_matrix, s.mass_matrix)
+    # tol: 2x2 matrix products of mass-normalised modes, tens of roundings of w
     np.testing.assert_allclose(np.diag(phi.T @ s.damping_matrix @ phi), 2 * zeta * w, rtol=1e-10)
 
 

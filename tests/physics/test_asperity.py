@@ -30,7 +30,9 @@ def test_hertz_load_at_wc_equals_pc():
     # Identity: (4/3) E' sqrt(R) w_c^1.5 = (2/3) pi K H R w_c since sqrt(w_c) = pi K H sqrt(R) / (2E')
     wc = asperity.critical_interference(R, E, H, NU)
     hertz = 4 / 3 * E * np.sqrt(R) * wc**1.5
+    # tol: an identity of a few roundings and sqrt/pow (libm and numpy SIMD: an ulp or two)
     assert hertz == pytest.approx(asperity.critical_load(R, E, H, NU), rel=1e-13)
+    # tol: an identity of a few roundings and sqrt/pow (libm and numpy SIMD: an ulp or two)
     assert asperity.contact_load(wc, R, E, H, NU) == pytest.approx(hertz, rel=1e-13)
 
 
@@ -42,8 +44,10 @@ def test_regimes_hand_values():
     P = asperity.contact_load(x * wc, R, E, H, NU)
     A = asperity.contact_area(x * wc, R, E, H, NU)
     # KE02 fits as written in docs/model.md, section "Single asperity"
+    # tol: the fits as written: a few roundings and pow (libm and numpy SIMD pow: a few ulps), 1e-13 = 450 eps
     np.testing.assert_allclose(P, [4 / 3 * E * np.sqrt(R) * (0.5 * wc) ** 1.5, 1.03 * Pc * 3**1.425,
                                    1.40 * Pc * 50**1.263, H * 2 * np.pi * R * 200 * wc], rtol=1e-13)
+    # tol: the fits as written: a few roundings and pow (libm and numpy SIMD pow: a few ulps), 1e-13 = 450 eps
     np.testing.assert_allclose(A, [np.pi * R * 0.5 * wc, 0.93 * Ac * 3**1.136, 0.94 * Ac * 50**1.146,
                                    2 * np.pi * R * 200 * wc], rtol=1e-13)
 
@@ -64,8 +68,10 @@ def _ratio(fun, x, rel=1e-12):
 
 def test_ke_jumps_at_x1():
     # P(1+)/P(1-) = 1.03 (the published fit starts at 1.03 P_c while Hertz gives exactly P_c at w_c)
+    # tol: the ratio of the fits at x = 1 +- a tiny step: 1.03 up to the step's first-order change
     assert _ratio(asperity.contact_load, 1.0) == pytest.approx(1.03, rel=1e-9)
     # A(1+)/A(1-) = 0.93 (A_c = pi R w_c is the Hertz area at w_c)
+    # tol: the ratio of the fits at x = 1 +- a tiny step: 1.03 up to the step's first-order change
     assert _ratio(asperity.contact_area, 1.0) == pytest.approx(0.93, rel=1e-9)
 
 

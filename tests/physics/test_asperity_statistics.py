@@ -23,9 +23,11 @@ def test_moments_round_trip():
     sigma, eta, R = 0.52e-9, 1e13, 5e-6
     m0, m2, m4 = st.moments_from_statistics(sigma, eta, R)
     out = st.statistics_from_moments(m0, m2, m4)
+    # tol: a round trip through the moments, a few roundings and a sqrt
     assert out["sigma"] == pytest.approx(sigma, rel=1e-14)
+    # tol: a round trip through the moments, a few roundings and a sqrt
     assert out["eta"] == pytest.approx(eta, rel=1e-14)
-    assert out["R"] == pytest.approx(R, rel=1e-14)
+    assert out["R"] == pytest.approx(R, rel=1e-14)  # tol: a round trip through the moments, a few roundings and a sqrt
     # alpha from the moments equals the closed form 2412.74 (sigma eta R)^2 (to its 6 digits)
     assert out["alpha"] == pytest.approx(st.bandwidth_alpha(sigma, eta, R), rel=2e-6)
 
@@ -36,6 +38,7 @@ def test_cml_summit_statistics():
     # sigma_s^2 = 0.25 nm^2 - 3.717e-4 / (1e8 m^-1)^2 = 0.25 - 0.03717 = 0.21283 nm^2 -> 0.461335 nm;
     # y_s = 4 * 0.5 / sqrt(pi * 6.03185) = 0.459441 nm.
     sigma, eta, R = 0.5e-9, 5e15, 20e-9
+    # tol: 2412.74 (sigma eta R)^2 of exact decimals, a few roundings
     assert st.bandwidth_alpha(sigma, eta, R) == pytest.approx(6.03185, rel=1e-12)
     assert st.summit_sigma(sigma, eta, R) / NM == pytest.approx(0.461335, rel=1e-6)
     assert st.summit_offset(sigma, eta, R) / NM == pytest.approx(0.459441, rel=1e-6)
@@ -73,13 +76,16 @@ def test_composite_modulus():
     # 1/E' = 0.91/150 + 0.91/200 GPa^-1 -> E' = 94.1915 GPa (docs/model.md, section "Parameters": "E' = 94 GPa")
     assert st.composite_modulus(150e9, 200e9, 0.3) / 1e9 == pytest.approx(94.1915, rel=1e-6)
     # equal bodies: E' = E / (2 (1 - nu^2))
+    # tol: IEEE arithmetic alone (no libm), a few roundings: identical on any host
     assert st.composite_modulus(100.0, 100.0, 0.25) == pytest.approx(100 / (2 * (1 - 0.0625)), rel=1e-15)
     # a rigid second body: E' = E / (1 - nu^2)
+    # tol: IEEE arithmetic alone (no libm), a few roundings: identical on any host
     assert st.composite_modulus(100.0, np.inf, 0.3, 0.0) == pytest.approx(100 / 0.91, rel=1e-15)
 
 
 def test_ke_hardness_factor():
     # K = 0.454 + 0.41 nu (docs/model.md, section "Asperity statistics")
+    # tol: 0.454 + 0.41 nu of exact decimals, two roundings
     assert st.ke_hardness_factor(0.3) == pytest.approx(0.577, rel=1e-15)
 
 
@@ -96,6 +102,7 @@ def test_plasticity_index_paper_scene(paper_scene):
     stats = roughness_statistics(paper_scene)
     p = interface_parameters(paper_scene, stats)
     # docs/model.md, section "Asperity statistics": the paper reports psi = 0.52 [paper]; H is set from it (docs/model.md, section "Parameters")
+    # tol: H is set from psi = 0.52: a round trip of a few roundings and a sqrt
     assert st.plasticity_index_gw(p.E, p.H, p.sigma_s, p.R) == pytest.approx(0.52, rel=1e-12)
     # docs/model.md, section "Separation datum" (eta 13.3 um^-2): hand computation 94.1915/0.52 * sqrt(0.431680 nm / 5 um) = 1.68308 GPa
     # (the first reconstruction's eta 10 um^-2 gave docs/model.md, section "Parameters"'s "about 1.5 GPa", 1.51309)
@@ -105,6 +112,7 @@ def test_plasticity_index_paper_scene(paper_scene):
     assert psi_ke == pytest.approx(0.573730, rel=1e-5)
     # ... and it is sqrt(sigma_s / w_c) (statistics.plasticity_index_ke docstring)
     wc = critical_interference(p.R, p.E, p.H, p.nu)
+    # tol: the same formula rearranged, a few roundings and a sqrt
     assert psi_ke == pytest.approx(np.sqrt(p.sigma_s / wc), rel=1e-12)
 
 
@@ -123,6 +131,7 @@ def test_contact_probabilities_are_two_sided_first():
     assert st.contact_probabilities(0.978)[0] == pytest.approx(0.328, abs=2e-4)
     # the inverse round-trips and is symmetric in k
     for k in (0.1, 0.978, 2.5):
+        # tol: ndtri(ndtr(k)): condition P/(k phi) < 12 here, times a few ulps of each
         assert st.k_from_probability(st.contact_probabilities(k)[0]) == pytest.approx(k, rel=1e-12)
         assert st.contact_probabilities(-k)[0] == st.contact_probabilities(k)[0]
     with pytest.raises(ValueError, match=r"\(0, 1\)"):

@@ -57,6 +57,7 @@ def footprint_average(g: float, delta: float, profile: str) -> float:
 @pytest.mark.parametrize("g_nm, delta_nm", [(1.0, 10.0), (0.05, 11.0), (5.0, 3.0), (11.0, 0.05), (2.0, 0.01)])
 def test_closed_form_equals_quadrature_of_the_footprint_average(profile, g_nm, delta_nm):
     F, _ = bb.ph_lift(g_nm * NM, delta_nm * NM, P_PAD, A_SEMI, B_SEMI, profile)
+    # tol: adaptive 2-D quadrature of the footprint average against the closed form: its error well under 1e-8
     assert F / PAB == pytest.approx(footprint_average(g_nm * NM, delta_nm * NM, profile), rel=1e-8)
 
 
@@ -91,8 +92,10 @@ def test_compiled_stiffness_is_minus_the_derivative_of_the_lift(profile):
             F, k = _kernel_like(g, dl, code)
             h = 1e-5 * g
             fd = -(_kernel_like(g + h, dl, code)[0] - _kernel_like(g - h, dl, code)[0]) / (2 * h)
+            # tol: a central difference at h = 1e-5 g: truncation (h/g)^2 = 1e-10 and rounding eps g/h = 2e-11
             assert k == pytest.approx(fd, rel=1e-7), (delta_nm, g_nm)
             assert k > 0
+            # tol: the same compiled law, called from compiled code or through its loop: the same operations
             assert [F, k] == pytest.approx([float(v) for v in bb.ph_lift(g, dl, 1e6, 3e-6, 25e-6, profile, 0.05e-9)],
                                            rel=1e-15)
     # below the floor the force is held and the stiffness vanishes
@@ -104,6 +107,7 @@ def test_closed_form_series_and_logarithm_branches_meet():
     """At ``x = delta/(g + delta) = 0.01`` the Taylor series and the closed form agree (no jump)."""
     for code in (bb.PARABOLOID, bb.ELLIPSOID):
         lo, hi = bb.ph_shape(0.01 * (1 - 1e-12), code), bb.ph_shape(0.01 * (1 + 1e-12), code)
+        # tol: series and closed form at their join: the series' truncation, under 1e-12
         assert lo[0] == pytest.approx(hi[0], rel=1e-10) and lo[1] == pytest.approx(hi[1], rel=1e-10)
 
 

@@ -111,7 +111,9 @@ def test_tabulate_is_zero_beyond_first_contact_monotone_and_through_the_solved_p
     assert np.all(np.diff(p) <= 1e-15) and np.all(np.diff(a) <= 1e-15)  # decreasing with separation
     assert a.max() <= 1.0
     ps, as_ = dc.tabulate(s, s.mean_gap)
+    # tol: the solver's own tabulation read back at its nodes, a few roundings
     np.testing.assert_allclose(ps, s.pressure, rtol=1e-12)
+    # tol: the solver's own tabulation read back at its nodes, a few roundings
     np.testing.assert_allclose(as_, s.area_fraction, rtol=1e-12)
 
 
@@ -120,7 +122,7 @@ def test_combine_maps_and_resample():
     a = rng.normal(size=(32, 32))
     # a second map on the same domain at half the resolution: its values are read at the centres
     h, sizes = dc.combine_maps([(a, (10.0, 10.0)), (np.zeros((16, 16)), (10.0, 10.0))])
-    np.testing.assert_allclose(h, a - a.mean())
+    np.testing.assert_allclose(h, a - a.mean())  # tol: the map less its mean, a few roundings of a mean
     assert sizes == (10.0, 10.0)
     # a smooth periodic map on a coarser grid is read at the finer grid's pixel centres (bilinear)
     xc = (np.arange(16) + 0.5) * 10.0 / 16
@@ -171,6 +173,7 @@ def test_both_models_side_by_side_on_a_model_coordinate(both_models):
         assert ds[name].identical(ds_stat[name])
     det = ds.sel(model="deterministic")
     # the same shear-strength law on the computed real area
+    # tol: the same shear-strength product, one rounding
     np.testing.assert_allclose(det["friction_stress"].values,
                                float(ds["shear_strength"]) * det["real_area_fraction"].values, rtol=1e-12)
     # datum: d = u - y_s; no contact above the highest point, the solved points on the table

@@ -67,6 +67,7 @@ def test_fold_of_spring_against_adhesion_is_found_where_the_closed_form_puts_it(
     """Flying equilibria ``k x = -A/(d0 + x + eps)^2`` exist for ``d0 >= 1.5 (2A/k)^(1/3) - eps``: the
     continuation from the nominal state (x = 0 is the state without adhesion) follows the stable root
     and stops at that fold to the requested bracket."""
+    # tol: the fold's closed form of exact decimals, a few roundings and a cube root
     assert S_FOLD == pytest.approx(2.0 * NM, rel=1e-12) and MU_FOLD == pytest.approx(8.3 * NM, rel=1e-12)
     mus = np.linspace(0.0, 10.0, 11) * NM
     br = eq.flying_branch(forces_1dof, mus, np.zeros(1), scale=[1 * NM], mu_tol=1e-6 * NM)
@@ -157,11 +158,13 @@ def test_linear_slider_under_a_tfc_force_is_the_compliance_solution():
     e = eq.newton(lambda y: R(y, 0.0), np.zeros(2))
     Kmat = ab.pad_matrix(p["k_f"], k_r, p["l_f"], p["l_r"])
     assert e.converged and e.stable
+    # tol: Newton to steps below 1e-10 of the scale on a linear system: the last step and a 2x2 solve
     assert e.y == pytest.approx(np.linalg.solve(Kmat, [F, -p["l_c"] * F]), rel=1e-8)
     assert e.stiffness == pytest.approx(Kmat, rel=1e-6)
     # the friction moment -friction_arm Q pitches the nose down (theta < 0), as in the dynamics
     R = slider_forces(**p, nominal_gap=lambda mu: 11 * NM - mu, interface=lambda g, mu: (0.0, F))
     e = eq.newton(lambda y: R(y, 0.0), np.zeros(2))
+    # tol: Newton to steps below 1e-10 of the scale on a linear system: the last step and a 2x2 solve
     assert e.y == pytest.approx(np.linalg.solve(Kmat, [0.0, -p["friction_arm"] * F]), rel=1e-8) and e.y[1] < 0
 
 

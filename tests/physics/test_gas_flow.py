@@ -31,6 +31,7 @@ def test_fk_flow_rate_pieces_and_blend():
     D = np.array([1.0, 10.0, 0.05])
     expected = [0.13852 + 1.25087 + 0.15653 - 0.00969, 10 / 6 + 1.0162 + 0.10653 - 0.021354,
                 -2.22919 * 0.05 + 2.10673 + 0.01653 / 0.05 - 0.0000694 / 0.0025]
+    # tol: sums of the fit's terms of exact decimals, a few roundings (cancellation < 10)
     np.testing.assert_allclose(gf.fk_flow_rate(D)[0], expected, rtol=1e-12)
     D = np.geomspace(0.02, 50.0, 20001)
     Q, dQ = gf.fk_flow_rate(D)
@@ -50,6 +51,7 @@ def test_mean_gap_is_the_mean_of_the_open_local_gap():
     """``h_T / sigma = E[max(H - z, 0)]`` for a standard normal ``z``, by quadrature; 1/sqrt(2 pi) at H = 0."""
     for H in (-1.0, 0.0, 0.5, 1.0, 3.0):
         ref = integrate.quad(lambda z: (H - z) * stats.norm.pdf(z), -np.inf, H)[0]
+        # tol: quad of a smooth Gaussian integrand against the closed form: measured 3e-15 (its estimate 1e-8 is loose)
         assert gf.mean_gap(H) == pytest.approx(ref, rel=1e-10)
     assert gf.mean_gap(0.0) == pytest.approx(1 / np.sqrt(2 * np.pi))
     assert abs(gf.mean_gap(3.0) - 3.0) < 5e-4 and abs(gf.mean_gap(5.0) - 5.0) < 1e-7
@@ -60,15 +62,19 @@ def test_patir_cheng_flow_factors_values_and_limits():
     pieces of Phi_s meet at H = 5 within 0.1 %; both factors tend to the smooth gap (phi_x -> 1, phi_s -> 0)
     for H >> 3; phi_x falls to 0 at H = 0 (percolation), continuously at H = 0.5; phi_s scales with
     V_r1 - V_r2 = 2 share - 1."""
+    # tol: the same exp of the same argument: libm and numpy's SIMD exp differ by an ulp at most
     assert gf.pressure_flow_factor(1.0) == pytest.approx(1 - 0.9 * np.exp(-0.56), rel=1e-14)
+    # tol: the same exp of the same argument: libm and numpy's SIMD exp differ by an ulp at most
     assert gf.shear_flow_factor(1.0) == pytest.approx(1.899 * np.exp(-0.87), rel=1e-14)
     lo = 1.899 * 5**0.98 * np.exp(-0.92 * 5 + 0.05 * 25)
     assert lo == pytest.approx(1.126 * np.exp(-1.25), rel=1e-3)
     assert abs(1 - gf.pressure_flow_factor(8.0)) < 0.011 and abs(1 - gf.pressure_flow_factor(12.0)) < 1.1e-3
     assert gf.shear_flow_factor(20.0) < 0.008 and gf.shear_flow_factor(40.0) < 6e-5
     assert gf.pressure_flow_factor(0.0) == 0.0
+    # tol: continuity at H = 0.5: the law's change over 1e-9 of H is of order 1e-9 (and libm ulps)
     assert gf.pressure_flow_factor(0.5 - 1e-9) == pytest.approx(gf.pressure_flow_factor(0.5), rel=1e-8)
     assert gf.shear_flow_factor(1.0, 0.5) == 0.0
+    # tol: a linear factor 2 share - 1 = 0.5, exact, times the same law
     assert gf.shear_flow_factor(1.0, 0.75) == pytest.approx(0.5 * gf.shear_flow_factor(1.0), rel=1e-14)
 
 

@@ -36,6 +36,7 @@ def test_nominal_area_is_the_ellipsoid_section():
     # ellipse with semi-axes a r, b r, r^2 = 1 - (1 - s_n/delta)^2
     delta, s_n = 7 * NM, 2 * NM
     r2 = 1 - (1 - s_n / delta) ** 2
+    # tol: closed form two ways, a few IEEE roundings (no libm)
     assert g.nominal_area(delta, A, B, s_n) == pytest.approx(np.pi * A * B * r2, rel=1e-14)
 
 
@@ -71,6 +72,7 @@ def test_effective_radius_is_the_arc_through_apex_and_chord_ends():
     R = float(g.effective_radius(delta, A, s_n))
     c = A * np.sqrt(1 - (1 - s_n / delta) ** 2)      # half-chord of the section along sliding
     # circle centred (0, R) through the apex (0, 0) must pass through (c, s_n)
+    # tol: closed form through hypot, a few roundings (libm hypot: under an ulp)
     assert np.hypot(c, s_n - R) == pytest.approx(R, rel=1e-12)
     # hand value: c^2 = 9 um^2 * 0.2635240 = 2.371716e-12 m^2 -> R = c^2/(2 s_n) + s_n/2 = 760.166 um
     assert R / UM == pytest.approx(760.166, rel=1e-6)
@@ -83,8 +85,10 @@ def test_u_is_capped_at_one():
     assert g.section_fraction(3.12 * NM, s_n) == pytest.approx(0.5)
     # a bulge lower than the section depth: the whole footprint pi a b
     for delta in (0.0, 0.5 * NM, s_n):
+        # tol: the same product pi a b, at most an ulp or two apart
         assert g.nominal_area(delta, A, B, s_n) == pytest.approx(np.pi * A * B, rel=1e-15)
     # arc through apex and the footprint ends (+-a, delta); flat slider: infinite radius
+    # tol: closed form, a few roundings
     assert g.effective_radius(0.5 * NM, A, s_n) == pytest.approx((A * A + (0.5 * NM) ** 2) / NM, rel=1e-14)
     assert np.isinf(g.effective_radius(0.0, A, s_n))
 
@@ -114,6 +118,7 @@ def test_lowest_point_offset_exact(theta):
     x, dz = g.lowest_point_offset(delta, A, theta)
     xe, dze = _exact_lowest_point(delta, A, theta)
     assert x == pytest.approx(xe, rel=1e-4)
+    # tol: a minimum's value is second order in the bounded search's 1e-6 relative x-tolerance
     assert dz == pytest.approx(dze, rel=1e-8)
     assert dz <= 0
 
@@ -173,6 +178,7 @@ def test_one_dimensional_form_is_the_footprint_integral():
     plain, err = dblquad(integrand, -1, 1, lambda X: -np.sqrt(1 - X * X), lambda X: np.sqrt(1 - X * X),
                          epsabs=0, epsrel=1e-11)
     plain *= A * B
+    # tol: dblquad at epsrel 1e-11 against the force's own quadrature, 1e-9 holds both
     assert g.ellipsoid_force(law, d, delta, A, B) == pytest.approx(plain, rel=1e-9)
 
 
@@ -187,6 +193,7 @@ def test_table_integral_is_exact_for_a_cubic():
         shifted = np.polynomial.Polynomial([GRID[i] / NM, delta / NM])  # x/nm as a polynomial in u
         in_u = np.polynomial.Polynomial(coef)(shifted).coef
         exact = sum(c / ((k + 1) * (k + 2)) for k, c in enumerate(in_u))
+        # tol: an exact polynomial integral against the table's, tens of roundings
         assert I[i] == pytest.approx(exact, rel=1e-12, abs=1e-12)
 
 
@@ -212,11 +219,13 @@ def test_flat_bulge_limit():
     # delta -> 0: the whole footprint at the apex gap, F = pi a b p(d) (I = p/2), approached linearly
     p = 50 * MPA * np.exp(-GRID / L_C)
     c = table(p)
+    # tol: the delta -> 0 limit is p/2 exactly up to a few roundings
     assert g.ellipsoid_table_integral(c, H, 0.0) == pytest.approx(p / 2, rel=1e-12)
     for delta in (1e-3 * H, 1e-5 * H):
         I = g.ellipsoid_table_integral(c, H, delta)
         # first order: I = p/2 + delta p'/6 + ... with p' = -p/L
         assert np.allclose(I[:-1] / (p[:-1] / 2) - 1, -delta / (3 * L_C), rtol=1e-3, atol=1e-12)
+    # tol: the same np.exp of the same argument on both sides, times pi a b
     assert g.ellipsoid_force(lambda x: 50 * MPA * np.exp(-x / L_C), 0.2 * NM, 0.0, A, B) == pytest.approx(
         np.pi * A * B * 50 * MPA * np.exp(-0.2 * NM / L_C), rel=1e-14)
 
@@ -237,6 +246,7 @@ def test_step_law_gives_the_flat_section():
     # the step itself, integrated by the one-dimensional form in closed form: int_0^u* (1 - u) du
     for d in (1.0 * NM, -5.0 * NM, -10 * NM):
         u = min((d0 - d) / delta, 1.0)
+        # tol: closed form two ways, a few roundings
         assert 2 * np.pi * A * B * P0 * (u - u * u / 2) == pytest.approx(
             P0 * g.nominal_area(delta, A, B, d0 - d), rel=1e-14)
 
@@ -247,5 +257,6 @@ def test_nothing_is_taken_beyond_the_table():
     P, delta = 7 * MPA, 4.0 * NM
     I = g.ellipsoid_table_integral(table(np.full(GRID.size, P)), H, delta)
     cut = g.table_truncation(P, GRID, delta)
+    # tol: a constant table's integral and its truncation sum to P/2 up to tens of roundings
     assert np.allclose(I + cut, P / 2, rtol=1e-12)
     assert np.all(cut[GRID + delta <= GRID[-1]] == 0) and cut[-1] == P / 2

@@ -39,12 +39,15 @@ def test_closed_forms_agree_with_elementary_ones():
     h = np.linspace(-5, 8, 53)
     phi = np.exp(-h * h / 2) / np.sqrt(2 * np.pi)
     Q = 0.5 * erfc(h / np.sqrt(2))
+    # tol: pbdv's series against erfc (measured 7e-15 relative)
     np.testing.assert_allclose(gw_F(0, h), Q, rtol=1e-12)                 # F0 = Q(h)
+    # tol: pbdv's series against phi - h Q, which cancels 64-fold at h = 8 (measured 5e-13)
     np.testing.assert_allclose(gw_F(1, h), phi - h * Q, rtol=1e-10)       # F1 = phi - h Q
     # F_{3/2} against adaptive quadrature of its definition
     for hh in (-3.0, 0.0, 2.5):
         ref = integrate.quad(lambda s: (s - hh) ** 1.5 * np.exp(-s * s / 2) / np.sqrt(2 * np.pi),
                              hh, np.inf, epsabs=0, epsrel=1e-13)[0]
+        # tol: scipy.quad at epsrel 1e-13 against pbdv, 1e-10 holds both
         assert gw_F(1.5, hh) == pytest.approx(ref, rel=1e-10)
 
 
@@ -63,11 +66,15 @@ def test_elastic_limit_equals_gw_closed_forms(sigma_s, eta, R, E):
     out = isbl.isbl_tables(h * sigma_s, p)
     # GW66: contact fraction = F0(h), real area = eta pi R sigma_s F1(h),
     # pressure = eta (4/3) E' sqrt(R) sigma_s^1.5 F_{3/2}(h)
+    # tol: the table's ndtr against pbdv's series (measured 7e-15 relative)
     np.testing.assert_allclose(out["contact_fraction"], gw_F(0, h), rtol=1e-12)
+    # tol: the closed-form integrals against pbdv's series, 1e-8 holds both
     np.testing.assert_allclose(out["real_area_fraction"], eta * np.pi * R * sigma_s * gw_F(1, h), rtol=1e-8)
+    # tol: the closed-form integrals against pbdv's series, 1e-8 holds both
     np.testing.assert_allclose(out["contact_pressure"],
                                eta * 4 / 3 * E * np.sqrt(R) * sigma_s**1.5 * gw_F(1.5, h), rtol=1e-8)
     # every contacting summit is elastic
+    # tol: the table's ndtr against pbdv's series (measured 7e-15 relative)
     np.testing.assert_allclose(out["elastic_fraction"], gw_F(0, h), rtol=1e-12)
     assert np.all(out["plastic_fraction"] == 0)
 
@@ -348,7 +355,8 @@ def test_interface_rejects_bad_parameters():
 def test_separation_grid():
     s, step = 0.35e-9, 0.01e-9
     d = isbl.separation_grid(-8.0 * s, 30e-9, step)
-    assert d[0] == pytest.approx(-8 * s, rel=1e-15)
+    assert d[0] == pytest.approx(-8 * s, rel=1e-15)  # tol: the grid's first point, one or two roundings
+    # tol: steps of a grid of n multiples: rounding of x_i (|x|/step < 4e3) over the step
     np.testing.assert_allclose(np.diff(d), step, rtol=1e-9)
     assert 30e-9 <= d[-1] < 30e-9 + step
 

@@ -61,8 +61,11 @@ def test_sinusoid_moments_exact(along: str) -> None:
     t, k, dx = _sine(A=A, along=along)
     m0, m2, m4 = afm_scan.profile_moments(t)
     s = math.sin(k * dx / 2) / (k * dx / 2)  # transfer function of the difference stencils
+    # tol: a mean of squares of a sampled sine (pairwise sum): ~log2(n) roundings
     assert m0 == pytest.approx(A**2 / 2, rel=1e-12)
+    # tol: difference stencils of a sine, exact up to the sum's rounding and sin's ulp
     assert m2 == pytest.approx(A**2 * k**2 / 4 * s**2, rel=1e-10)
+    # tol: difference stencils of a sine, exact up to the sum's rounding and sin's ulp
     assert m4 == pytest.approx(A**2 * k**4 / 4 * s**4, rel=1e-10)
     # and the continuum values within the stencils' (k dx)^2 error
     assert m2 == pytest.approx(A**2 * k**2 / 4, rel=5e-3)
@@ -73,7 +76,9 @@ def test_moments_match_surfacetopography_profile_values() -> None:
     """The x terms of our m2, m4 are SurfaceTopography's Rdq^2, Rddq^2; the y terms those of the transpose."""
     t, _ = _smooth_psd_surface(n=128, q0=0.15)
     _, m2, m4 = afm_scan.profile_moments(t)
+    # tol: the same differences summed in another order: ~log2(n) roundings
     assert m2 == pytest.approx((t.Rdq() ** 2 + t.transpose().Rdq() ** 2) / 2, rel=1e-12)
+    # tol: the same differences summed in another order: ~log2(n) roundings
     assert m4 == pytest.approx((t.Rddq() ** 2 + t.transpose().Rddq() ** 2) / 2, rel=1e-12)
 
 
@@ -88,6 +93,7 @@ def test_fourier_synthesis_moments_within_two_percent() -> None:
     assert s.eta == pytest.approx(ref["eta"], rel=0.02)
     assert s.R == pytest.approx(ref["R"], rel=0.02)
     # McCool's relations, as in statistics.py
+    # tol: the same McCool formula on the same numbers
     assert s.sigma_s == pytest.approx(st.summit_sigma(s.sigma, s.eta, s.R), rel=1e-12)
     # (statistics.py uses alpha = 2412.74 (sigma eta R)^2, equal to m0 m4/m2^2 to 6 digits)
     assert s.y_s == pytest.approx(4 * s.sigma / math.sqrt(math.pi * s.alpha), rel=1e-5)
@@ -113,12 +119,14 @@ def test_paraboloid_single_summit_exact() -> None:
     z = -(X**2 + Y**2) / (2 * R0)
     s = sf.summit_statistics(z, (dx, dx))
     assert s.count == 1
+    # tol: a paraboloid's curvature from second differences, exact up to a few roundings
     assert s.R == pytest.approx(R0, rel=1e-12)
-    assert s.eta == pytest.approx(1 / ((n - 2) * dx) ** 2, rel=1e-12)
+    assert s.eta == pytest.approx(1 / ((n - 2) * dx) ** 2, rel=1e-12)  # tol: a count and a product, a few roundings
     assert s.sigma_s == 0.0
-    assert s.y_s == pytest.approx(-z.mean(), rel=1e-12)
+    assert s.y_s == pytest.approx(-z.mean(), rel=1e-12)  # tol: a mean of the same heights, ~log2(n) roundings
     # spectral: curvature is constant, so m4 = 1/R0^2 exactly, R = 0.375 sqrt(pi) R0
     _, _, m4 = afm_scan.profile_moments(Topography(z, (n * dx, n * dx), unit="nm"))
+    # tol: a paraboloid's constant second differences, ~log2(n) roundings of the mean
     assert m4 == pytest.approx(1 / R0**2, rel=1e-12)
 
 
@@ -197,8 +205,11 @@ def test_moments_of_a_sum_of_orthogonal_surfaces_add() -> None:
     with pytest.warns(sf.SurfaceWarning, match="no summit"):  # straight ridges have no strict maxima
         s1, s2, s12 = (afm_scan.summarise(t, label=lab) for t, lab in ((t1, "a"), (t2, "b"), (both, "ab")))
     c = sf.combine([s1, s2])
+    # tol: moments of summed maps: sums of n^2 terms in another order, ~log2(n) roundings
     np.testing.assert_allclose([c.m0, c.m2, c.m4], [s12.m0, s12.m2, s12.m4], rtol=1e-10)
+    # tol: a sum of two squares of square roots, a few roundings
     assert c.spectral.sigma**2 == pytest.approx(s1.spectral.sigma**2 + s2.spectral.sigma**2, rel=1e-12)
+    # tol: the same moments, a few roundings apart
     assert c.spectral.sigma == pytest.approx(s12.spectral.sigma, rel=1e-12)
     assert c.label == "combined" and math.isnan(c.summits.eta) and math.isnan(c.pixel_size)
     assert c.summits.sigma == pytest.approx(math.hypot(s1.summits.sigma, s2.summits.sigma))
@@ -210,9 +221,10 @@ def test_combined_random_surfaces_sigma_squared_adds() -> None:
     s1, s2 = afm_scan.summarise(t1), afm_scan.summarise(t2)
     c = sf.combine([s1, s2])
     ref = st.statistics_from_moments(*sf.combine_moments([(s1.m0, s1.m2, s1.m4), (s2.m0, s2.m2, s2.m4)]))
+    # tol: a square root of a sum, a few roundings
     assert c.spectral.sigma == pytest.approx(math.sqrt(s1.m0 + s2.m0), rel=1e-12)
-    assert c.spectral.eta == pytest.approx(ref["eta"], rel=1e-12)
-    assert c.spectral.R == pytest.approx(ref["R"], rel=1e-12)
+    assert c.spectral.eta == pytest.approx(ref["eta"], rel=1e-12)  # tol: the same formula on the same moments
+    assert c.spectral.R == pytest.approx(ref["R"], rel=1e-12)  # tol: the same formula on the same moments
     # the summed height map has (nearly) the summed moments: independent phases, small cross terms
     both = Topography(t1.heights() + t2.heights(), t1.physical_sizes, periodic=True, unit="nm")
     np.testing.assert_allclose(afm_scan.profile_moments(both), [c.m0, c.m2, c.m4], rtol=0.05)

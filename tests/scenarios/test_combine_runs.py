@@ -67,6 +67,7 @@ def test_open_mfdataset_keeps_each_runs_k_and_roughness(runs, new_defaults):
         # k sigma is a roughness set's: each run's along its own set (NaN for the set it did not run)
         assert ds["k_sigma"].dims == ("run", "roughness")
         for r, ((scene, _), k_sigma) in enumerate(zip(runs.values(), (0.5 * 0.4, 0.7 * 0.6))):
+            # tol: the same product 0.5 sigma, through NetCDF float64
             assert float(ds["k_sigma"].isel(run=r).sel(roughness=scene_label(scene))) == pytest.approx(k_sigma, rel=1e-15)
 
 

@@ -256,7 +256,9 @@ def test_roughness_scale_in_contact_is_finite_physical_and_converged(base, recor
                          solver={"table_step_nm": 0.05 * min(f, 1.0), "table_max_nm": 30.0 * max(f, 1.0),
                                  "output_step_ns": 10.0})
     model, interface = build(scene, record)
+    # tol: McCool's alpha from the statistics it was set by, a few roundings
     assert float(interface["bandwidth_alpha"]) == pytest.approx(PAPER_ALPHA, rel=1e-9)
+    # tol: H is set from psi = 0.52: a round trip of a few roundings and a sqrt
     assert float(interface["plasticity_index_gw"]) == pytest.approx(0.52, rel=1e-9)
     for name in ("contact_pressure", "adhesion_pressure", "friction_stress", "real_area_fraction",
                  "contact_fraction"):
@@ -290,10 +292,13 @@ def test_mccool_edge_statistics_tables_and_run(base, record, alpha):
     # test_mccool_edge_outputs_do_not_depend_on_the_table_floor.
     scene = edge_scene(base, alpha)
     stats = roughness_statistics(scene)
+    # tol: McCool's alpha from the statistics it was set by, a few roundings
     assert stats["alpha"] == pytest.approx(alpha, rel=1e-12)
     sigma = stats["sigma"]
     assert 0 < stats["sigma_s"] < 0.25 * sigma
+    # tol: McCool's relation rearranged (cancellation 1 - 0.9 at the edge: x10), a few roundings
     assert stats["sigma_s"] == pytest.approx(sigma * np.sqrt(1 - 3.717e-4 * 2412.74 / alpha), rel=1e-9)
+    # tol: McCool's relation, a few roundings and a sqrt
     assert stats["y_s"] == pytest.approx(4 * sigma / np.sqrt(np.pi * alpha), rel=1e-12)
     model, interface = build(scene, record)
     for name in ("contact_pressure", "friction_stress", "real_area_fraction", "contact_fraction",
@@ -373,11 +378,13 @@ def test_single_summit_adhesion_joins_the_meniscus_continuously(R, dgamma, eps):
     # composite law of z is C1 there. At and below s = eps the gap is clamped: no s^-8 overflow.
     fm = meniscus_force(R, dgamma)
     with np.errstate(all="raise"):
+        # tol: the law at its join is the meniscus force, a few roundings
         assert lennard_jones_force(eps, R, dgamma, eps) == pytest.approx(fm, rel=1e-14)
         for h in (1e-3, 1e-5, 1e-7):
             step = lennard_jones_force(eps * (1 + h), R, dgamma, eps) - fm
             assert abs(step) <= 10 * fm * h**2          # C1 join: the change is second order in h
         tiny = np.array([0.0, -1e-9, 1e-300, 5e-324, 0.5 * eps, eps * (1 - 1e-15)])
+        # tol: the clamped law is the meniscus force, a few roundings
         np.testing.assert_allclose(lennard_jones_force(tiny, R, dgamma, eps), fm, rtol=1e-14)
         far = lennard_jones_force(np.geomspace(eps, 1e-3, 200), R, dgamma, eps)
         assert np.all(np.isfinite(far)) and np.all(np.diff(far) <= 0) and far[-1] > 0
@@ -385,6 +392,7 @@ def test_single_summit_adhesion_joins_the_meniscus_continuously(R, dgamma, eps):
     d, t = 0.4e-9, 0.75e-9
     z = (d - t) + eps * np.array([-1e-6, -1e-9, 0.0, 1e-9, 1e-6])
     law = np.where(z < d - t, lennard_jones_force(d - t - z + eps, R, dgamma, eps), fm)
+    # tol: the law's own second-order change, 8 fm h^2 = 1e-11 at h = 1e-6
     np.testing.assert_allclose(law, fm, rtol=1e-10)                 # 8 fm h^2 with h = 1e-6
 
 
@@ -771,6 +779,7 @@ def test_random_physical_scenes_are_finite_and_physical(paper_config, prm):
         solver={"duration_ms": 0.5, "transient_ms": 0.1}, air_bearing={"damping_ratio": prm["damping"]},
         roughness=prm["roughness"], dmw=prm["dmw"], contact=prm["contact"], lubricant=prm["lubricant"])
     model, interface = build(scene)
+    # tol: McCool's alpha from the statistics it was set by, a few roundings
     assert float(interface["bandwidth_alpha"]) == pytest.approx(prm["alpha"], rel=1e-9)
     for name in ("contact_pressure", "adhesion_pressure", "friction_stress", "real_area_fraction",
                  "contact_fraction"):

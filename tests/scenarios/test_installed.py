@@ -195,6 +195,7 @@ q = ds.pint.quantify()
 d = q["displacement"].pint.to("m")
 print(json.dumps({{"units": str(q["displacement"].pint.units), "ratio": float(d.max() / ds["displacement"].max())}}))
 """, cwd)
+    # tol: pint's factor 1e-9 against the literal, IEEE arithmetic alone: an ulp or two
     assert got["units"] == "nanometer" and got["ratio"] == pytest.approx(1e-9, rel=1e-12)
 
 

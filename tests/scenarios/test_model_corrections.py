@@ -56,6 +56,7 @@ def test_paper_summit_offset_and_hardness(paper):
     interface = build_tables(paper, roughness_statistics(paper))
     assert float(interface["y_s"]) == pytest.approx(0.691, abs=1e-3)
     assert float(interface["bandwidth_alpha"]) == pytest.approx(2.885, abs=1e-3)
+    # tol: H is set from psi = 0.52: a round trip of a few roundings and a sqrt
     assert float(interface["plasticity_index_gw"]) == pytest.approx(0.52, rel=1e-9)
     assert float(interface["hardness"]) == pytest.approx(1.683, abs=1e-3)
 
@@ -107,6 +108,7 @@ def test_separation_has_one_home(paper):
     w = hist["disk_displacement"]
     gap = fo.gap_at(p, run.state[:, st.Z], run.state[:, st.THETA], w)
     np.testing.assert_array_equal(hist["separation"], fo.separation_at(p, run.state[:, st.Z], run.state[:, st.THETA], w))
+    # tol: gap - separation: cancellation |gap|/y_s < 100 times a few roundings
     np.testing.assert_allclose(gap - hist["separation"], float(interface["y_s"]) * NM, rtol=1e-9)
     win = run.time >= model.transient
     lo, hi = run.d_extremes
@@ -131,6 +133,7 @@ def test_stiffening_law_zero_force_and_stiffness_by_finite_differences(p_exp):
         Fm, _ = ab.tfc_stiffening_force(g - h, g_n, g0, k_t, p_exp)
         _, kg = ab.tfc_stiffening_force(g, g_n, g0, k_t, p_exp)
         law = k_t * ((g0 / g) ** p_exp - 1.0)
+        # tol: the law's closed form, a few roundings and a libm pow (under an ulp)
         np.testing.assert_allclose(kg, law, rtol=1e-12)
         np.testing.assert_allclose(-(Fp - Fm) / (2 * h), law, rtol=1e-6, atol=1e-6 * k_t)
     # no added stiffness at g0 = FH0: the modal stiffness of the bearing is unchanged there
@@ -170,7 +173,9 @@ def test_stiffening_kernel_force_matches_the_law(paper):
         g = 11 * NM - delta + y[0] - s.l_c * y[1]
         F, _ = ab.tfc_stiffening_force(g, 11 * NM - delta, 11 * NM, 3e5, 1.5)
         dv = kernel_rhs(model, delta, y) - kernel_rhs(model, delta, y, False)
+        # tol: a difference of two force sums of similar size (cancellation < 10), tens of roundings
         assert dv[2] * s.m == pytest.approx(F, rel=1e-9)
+        # tol: a difference of two force sums of similar size (cancellation < 10), tens of roundings
         assert dv[3] * s.I == pytest.approx(-s.l_c * F, rel=1e-9)
 
 
@@ -222,11 +227,13 @@ def test_rear_law_registry_and_kernel(paper):
     g_r = s.g0 + y[0] - s.l_r * y[1]
     F_f = -s.k_f * (y[0] + s.l_f * y[1])
     F_r = ab.rear_force_linear(g_r, s.g0, s.n, s.rear_preload)
-    assert F_r == pytest.approx(s.k_r * (s.g0 - g_r), rel=1e-12)
+    assert F_r == pytest.approx(s.k_r * (s.g0 - g_r), rel=1e-12)  # tol: the linear law, a few roundings
+    # tol: the kernel's sum of the two forces, a few roundings
     assert out[2] == pytest.approx((F_f + F_r) / s.m, rel=1e-12)
     # the power law differs at this 2 nm displacement by its curvature, n (n+1)/2 k_r x^2 / g0
     power = assembly.build_model(paper.replace(scene={"effects": ["air_bearing", "pitch"]}), None, None, None)
     F_p = ab.rear_force(g_r, s.g0, s.n, s.rear_preload)
+    # tol: the kernel's sum of the two forces, a few roundings and a libm pow (under an ulp)
     assert kernel_rhs(power, 0.0, y)[2] == pytest.approx((F_f + F_p) / s.m, rel=1e-12)
     with pytest.raises(SceneError, match="'power', 'linear'"):
         paper.replace(air_bearing={"rear_law": "cubic"})
@@ -238,6 +245,7 @@ def test_friction_coefficient_law_gives_its_mu(paper):
     run = running.run_model(model, 11 * NM)
     s = outcomes.summarize(run)
     assert s["contact_fraction"] > 0.99
+    # tol: a ratio of two tables of the same friction law: mu times a few roundings
     assert s["friction_coefficient"] == pytest.approx(1.2, rel=1e-9)
     attrs = model_attrs(model, "test")
     assert attrs["friction_law"] == "coefficient" and attrs["friction_coefficient"] == 1.2

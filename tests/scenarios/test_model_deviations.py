@@ -90,6 +90,7 @@ def test_integrated_tables_feed_the_kernel_and_the_histories():
     m = model(contact={"area_model": "integrated"})
     p, tables, _ = kernel_inputs.run_parameters(m, delta)
     An = p["A_n"]
+    # tol: the same nominal-area formula on the same numbers
     assert An == pytest.approx(float(g.nominal_area(delta, A, B, 3 * 0.52 * NM)), rel=1e-14)
     # at the nodes, A_n times the kernel's tables is the integrated force of the same stresses
     nodes = GRID[GRID + delta <= GRID[-1]]
@@ -116,8 +117,10 @@ def test_integrated_tables_feed_the_kernel_and_the_histories():
     capped = pw.piecewise_coefficients(np.minimum(0.1 * np.exp(-GRID / L_C), 1.0), H, 3)
     area = scale * pw.ppval(pw.piecewise_coefficients(g.ellipsoid_table_integral(capped, H, delta), H, 3),
                              p.tab_x0, p.tab_h, d)
+    # tol: the same integrated spline read by the kernel and by ppval, a few roundings
     assert hist["real_area"][c] == pytest.approx(area, rel=1e-12)
     assert np.all(hist["real_area"] <= np.pi * A * B)
+    # tol: a quotient of the two stored histories, one rounding
     assert hist["mean_pressure"][c] == pytest.approx(hist["contact_force"][c] / hist["real_area"][c], rel=1e-12)
     s = outcomes.summarize(run, hist)
     assert s["nominal_area"] == An  # A_n stays the flat section's: the report's "A_n at 11 nm"
@@ -153,9 +156,11 @@ def test_gimbal_arm_doubles_the_friction_moment():
         dyn.rhs(0.0, y, p, tables._replace(friction=None), variants, True, without)
         d = fo.separation_at(p, y[0], y[1], 0.0)
         Q = p["A_n"] * float(pw.ppval(tables.friction, p.tab_x0, p.tab_h, np.array([d]))[0])
+        # tol: a difference of two moment sums (cancellation < 4, measured), tens of roundings
         assert (with_q[3] - without[3]) * p["I"] == pytest.approx(-p["friction_arm"] * Q, rel=1e-9)
         share.append(with_q[3] - without[3])
         assert with_q[2] == without[2]  # (no vertical force)
+    # tol: a ratio of two such differences (cancellation < 4, measured): tens of roundings
     assert share[1] / share[0] == pytest.approx(2.0, rel=1e-12)
 
 

@@ -72,6 +72,7 @@ def test_fixed_separation_relaxes_exponentially():
     np.testing.assert_allclose(q, expected, rtol=0, atol=1e-6 * pa)
     assert abs(run.state[:, st.Z]).max() < 1e-18  # the slider did not move
     h = outcomes.histories(run)
+    # tol: the same product A_n q the history is made of
     np.testing.assert_allclose(h["adhesion_force"], run.nominal_area * q, rtol=1e-15)
 
 

@@ -90,6 +90,7 @@ def test_tabulated_law_reproduces_the_compiled_gap_power_law(monkeypatch):
     d_c, d_t = outcomes.histories(run_c)["separation"], outcomes.histories(run_t)["separation"]
     assert np.abs(d_t - d_c).max() < 1e-9 * NM
     s_c, s_t = outcomes.summarize(run_c), outcomes.summarize(run_t)
+    # tol: two laws that agree to 1e-9 nm in the separation (asserted above): the FHM to that over 10 nm
     assert s_t["fhm_bv"] == pytest.approx(s_c["fhm_bv"], rel=1e-9)
     # and the law matters: without it the FHM differs by far more than the table's error
     s_none = outcomes.summarize(running.run_model(assembly.build_model(make_scene(effects), None, rec, None), delta))

@@ -51,7 +51,9 @@ def test_one_realisation_is_the_first_of_an_ensemble_bit_for_bit(sweeps):
 def test_ensemble_statistics(sweeps):
     _, three, out = sweeps
     fhm = three.fhm_bv.values
+    # tol: numpy's mean of the same numbers, a few roundings apart
     np.testing.assert_allclose(three.fhm_bv_mean.values, fhm.mean(axis=-1), rtol=1e-12)
+    # tol: numpy's std of the same numbers, a few roundings apart
     np.testing.assert_allclose(three.fhm_bv_std.values, fhm.std(axis=-1, ddof=1), rtol=1e-12)
     p = three.touchdown_probability.values
     np.testing.assert_array_equal(p, np.mean(three.regime.values != 0, axis=-1))

@@ -51,6 +51,7 @@ def test_dataset_layout(result):
     # every knob but the deterministic interface's grid (only for interface.model = "deterministic")
     assert list(ds["knob"].values) == [kb.name for kb in knob_study.KNOBS if kb.name != "contact_grid_points"]
     assert list(ds["point"].values) == ["flying", "touchdown", "sliding"]
+    # tol: the scene's protrusions written as they are
     np.testing.assert_allclose(ds["protrusion"].values, [5.0, 7.6, 11.0])
     assert ds["error"].dims == ("point", "knob", "level", "output")
     assert ds["wall_time"].dims == ("point", "knob", "level")
@@ -62,6 +63,7 @@ def test_dataset_layout(result):
     assert ds["passes"].attrs["description"].startswith("every headline error below")
     assert ds.attrs["stage"] == "accuracy"
     # settings per knob, NaN-padded
+    # tol: the knob's settings written as they are
     np.testing.assert_allclose(ds["setting"].sel(knob="rtol").values, KNOBS["rtol"])
     assert np.isnan(ds["setting"].sel(knob="interpolation_order").values[2])
     assert (ds["wall_time"].values[np.isfinite(ds["setting"].values)[None].repeat(3, 0)] > 0).all()

@@ -87,12 +87,14 @@ def test_kernel_stiffness_is_the_derivative_of_the_table_lift(table):
         F = bb.table_lift(lt, g, delta)[0]
         eps = 1e-4 * g
         fd = -(bb.table_lift(lt, g + eps, delta)[0] - bb.table_lift(lt, g - eps, delta)[0]) / (2 * eps)
+        # tol: the kernel's compiled table reading against table_lift's, a few roundings
         np.testing.assert_allclose(kernel[:, 0], F, rtol=1e-9)
         np.testing.assert_allclose(kernel[:, 1], fd, rtol=1e-6)
         assert np.all(kernel[:, 1] > 0)  # the lift grows as the gap closes
     i = int(np.argmin(np.abs(ds["protrusion"].values - 10.0)))
     nodes = ds["apex_gap"].values[3:-3] * NM
     k_table = ds["bulge_stiffness"].values[i, 3:-3]
+    # tol: the spline's slope at its nodes against the stored stiffness, tens of roundings of the slope
     np.testing.assert_allclose(bb.table_lift(lt, nodes, 10.0 * NM)[1], k_table, rtol=1e-9)
 
 

@@ -40,7 +40,9 @@ def test_stage_writes_synthetic_dmw(tmp_path):
     for name, u in units.items():
         assert ds[name].attrs["units"] == u and ds[name].attrs["long_name"]
     assert ds.sizes["elapsed_time"] == 8400 and ds.sizes["frequency"] == 4201      # 2.1 ms, see below
+    # tol: the synthesis scales the record to its rms: ~log2(n) roundings of a mean
     assert float(ds.rms) == pytest.approx(0.5, rel=1e-12)
+    # tol: the synthesis scales the record to its rms: ~log2(n) roundings of a mean
     assert rms(ds.displacement.values) == pytest.approx(0.5, rel=1e-12)
     assert float(ds.band_low) == 1e4 and float(ds.band_high) == 5e5
     assert ds.band_low.attrs["realised"] == 1e4 and ds.band_high.attrs["realised"] == 5e5
@@ -58,6 +60,7 @@ def test_stage_duration_default_and_override(tmp_path):
     scene = scene_from_dict({})
     V = dmw_record.settings(scene)["disk_speed_m_s"]
     need = 2e-3 + (0.30e-3 + 0.85e-3) / V                   # front arm + slider length [m] / V
+    # tol: a sum of exact decimals, two roundings
     assert need < dmw_record.settings(scene)["duration_s"] == pytest.approx(2.1e-3, rel=1e-12)
     s1 = scene_from_dict({"solver": {"duration_ms": 1.0, "transient_ms": 0.2}})
     assert dmw_record.load(ensure("dmw", s1, tmp_path / "a"))[1].size == 4400
@@ -148,6 +151,7 @@ def test_stage_reruns_when_record_changes(tmp_path):
     np.savetxt(rec, 2 * x)
     ensure("dmw", scene, tmp_path / "out")
     assert path.stat().st_mtime != 1
+    # tol: the processing is linear: twice the record, twice the rms up to FFT rounding (log2(n) eps)
     assert float(read_dataset(path).rms) == pytest.approx(2 * rms1, rel=1e-9)    # processing is linear
 
 
@@ -171,6 +175,7 @@ def test_the_periodogram_holds_the_mean_square_inside_the_band(paper_dmw):
     df = f[1] - f[0]
     assert df == pytest.approx(1 / 2.1e-3) and f[-1] == pytest.approx(2e6)        # k / duration, to Nyquist
     w = ds["displacement"].values
+    # tol: Parseval's identity: FFT rounding, ~log2(n) eps of the mean square
     assert p.sum() * df == pytest.approx(np.mean(w * w), rel=1e-9)               # Parseval
     lo, hi = (1e3 * b for b in scene["dmw"]["band_khz"])
     assert (float(ds["band_low"]), float(ds["band_high"])) == (lo, hi) == (1e4, 5e5)
@@ -183,6 +188,7 @@ def test_the_disk_speed_is_two_pi_r_rpm_over_60(paper_dmw):
     scene, ds = paper_dmw
     r, rpm = scene["dmw"]["radius_mm"] * 1e-3, scene["dmw"]["rpm"]
     assert (r, rpm) == (34.3e-3, 5425.0)
+    # tol: a product of exact decimals and pi, a few roundings
     assert float(ds["disk_speed"]) == pytest.approx(2 * math.pi * r * rpm / 60, rel=1e-12)
     assert round(float(ds["disk_speed"]), 2) == 19.49
 
@@ -193,4 +199,5 @@ def test_the_seed_decides_the_record(paper_dmw, tmp_path):
     np.testing.assert_array_equal(again["displacement"].values, ds["displacement"].values)
     other = _dmw(scene.replace(dmw={"seed": scene["dmw"]["seed"] + 1}), tmp_path / "other")
     assert not np.allclose(other["displacement"].values, ds["displacement"].values)
+    # tol: every seed's record is scaled to the same rms: ~log2(n) roundings of a mean
     assert float(other["rms"]) == pytest.approx(float(ds["rms"]), rel=1e-12)

@@ -61,6 +61,7 @@ def test_ensemble_stage_runs_each_seed_as_a_single_record_run(run3, tmp_path):
     failures, crashed = cf_report(out / "ensemble.nc")
     assert crashed == [] and failures[3] == [] and failures[2] == [], failures
     # the sweep's ensemble summaries: the probability is the fraction of seeds in contact
+    # tol: the same mean of the same booleans
     np.testing.assert_allclose(ens["touchdown_probability"].values,
                                np.mean(ens["min_clearance"].values < 0, axis=1))
 
@@ -116,8 +117,10 @@ def test_identify_evaluation_judges_targets_over_its_realisations(tmp_path):
     i9 = prots.index(9.0)
     assert vals[names.index("fhm_touchdown")] == np.median(fhm[i9])  # the median of three values
     force = np.array(three["outputs"]["contact_force"])[prots.index(11.0)]
+    # tol: the same mean of the same numbers
     assert vals[names.index("contact_force")] == pytest.approx(np.mean(force), rel=1e-12)
     spread = study.spreads(three, tl)[names.index("contact_force")]
+    # tol: the same mean and std of the same numbers, a few roundings apart
     np.testing.assert_allclose(spread, np.mean(force) + np.array([-1, 1]) * np.std(force, ddof=1), rtol=1e-12)
     # touchdown residual on the median minimum clearance at 9.6 / 9.8 nm
     c = np.array(three["outputs"]["min_clearance"])
@@ -178,10 +181,13 @@ realisations = 2
     rec = next(r for r in recs if abs(r["params"][0] - x) < 1e-12)
     prots = rec["protrusions"]
     fhm = np.array(rec["outputs"]["fhm_bv"])[prots.index(9.0)]
+    # tol: the same median of the same numbers
     assert float(ds["value"].sel(target="fhm_touchdown")[i]) == pytest.approx(np.median(fhm), rel=1e-12)
+    # tol: the same quantiles of the same numbers
     np.testing.assert_allclose(ds["spread"].sel(target="fhm_touchdown")[i].values, np.quantile(fhm, [0.1, 0.9]),
                                rtol=1e-12)
     f = np.array(rec["outputs"]["contact_force"])[prots.index(11.0)]
+    # tol: the same mean and std of the same numbers, a few roundings apart
     np.testing.assert_allclose(ds["spread"].sel(target="contact_force")[i].values,
                                np.mean(f) + np.array([-1, 1]) * np.std(f, ddof=1), rtol=1e-12)
     from cf_check import cf_report

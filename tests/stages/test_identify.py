@@ -391,8 +391,10 @@ def test_identify_nc_has_parameter_target_and_bound_dimensions(tmp_path, paper_c
                                                                                     bound="high"))
     ct = ds.sel(target="contact_force")
     assert str(ct["target_units"].values) == "mN" and float(ct["goal"]) == 0.7 and float(ct["tolerance"]) == 0.01
+    # tol: a product by 10 of the same parameter, one rounding
     np.testing.assert_allclose(ct["value"].values, 10.0 * ds["parameter_value"].sel(
         parameter="lubricant.work_of_adhesion_j_m2").values)
+    # tol: the same sum of squares, a few roundings apart
     np.testing.assert_allclose(ds["objective"].values, (ds["residual"]**2).sum("target").values)
     # the profile of each parameter passes through the best point's value here (centre = best or not, it is a grid)
     assert ds["correlation"].dims == ("parameter", "parameter_b")

@@ -53,6 +53,7 @@ def test_paper_tables_present_and_grid(paper_ds):
     # docs/model.md, section "ISBL interface" / the brief: tables span at least -5 sigma_s .. 30 nm, uniform at solver.table_step_nm
     assert d[0] <= -5 * sigma_s
     assert d[-1] >= 30.0
+    # tol: steps of the separation grid: rounding of d_i (|d|/step < 1e3) over the step
     np.testing.assert_allclose(np.diff(d), SCHEMA["solver"]["table_step_nm"].default, rtol=1e-9)
 
 
@@ -64,6 +65,7 @@ def test_paper_scalars(paper_ds):
     assert float(paper_ds["y_s"]) == pytest.approx(0.690889, rel=1e-6)
     assert float(paper_ds["composite_modulus"]) == pytest.approx(94.1915, rel=1e-6)
     assert float(paper_ds["hardness"]) == pytest.approx(1.68308, rel=1e-5)
+    # tol: H is set from psi = 0.52: a round trip of a few roundings and a sqrt
     assert float(paper_ds["plasticity_index_gw"]) == pytest.approx(0.52, rel=1e-12)
     assert float(paper_ds["plasticity_index_ke"]) == pytest.approx(0.573730, rel=1e-5)
     assert float(paper_ds["summit_radius"]) == pytest.approx(5.0)
@@ -78,7 +80,9 @@ def test_tables_match_the_physics_module(paper_ds, paper_scene):
     p = interface_tables.interface_parameters(paper_scene, interface_tables.roughness_statistics(paper_scene))
     d = paper_ds["separation"].values[::97] * 1e-9
     ref = isbl.isbl_tables(d, p)
+    # tol: the same ISBL integrals of the same numbers, through NetCDF float64
     np.testing.assert_allclose(paper_ds["contact_pressure"].values[::97], ref["contact_pressure"] / 1e6, rtol=1e-12)
+    # tol: the same ISBL integrals of the same numbers, through NetCDF float64
     np.testing.assert_allclose(paper_ds["adhesion_pressure"].values[::97], ref["adhesion_pressure"] / 1e6,
                                rtol=1e-12)
 

@@ -73,7 +73,9 @@ def test_layout_units_and_combination(two_files: list[Path], tmp_path: Path) -> 
     for f in two_files:
         s = afm_scan.summarise(afm_scan.read_topography(f, detrend_mode="center"))
         row = ds.sel(surface=f.stem)
+        # tol: the same summary of the same scan, through NetCDF float64
         assert float(row["m0"]) == pytest.approx(s.m0, rel=1e-12)
+        # tol: the same summary of the same scan, through NetCDF float64
         assert float(row["sigma"].sel({"route": "summits"})) == pytest.approx(s.summits.sigma, rel=1e-12)
         assert float(row["summit_radius"].sel({"route": "spectral"})) == pytest.approx(s.spectral.R * 1e-3)
         assert float(row["summit_density"].sel({"route": "summits"})) == pytest.approx(s.summits.eta * 1e6)
@@ -82,8 +84,10 @@ def test_layout_units_and_combination(two_files: list[Path], tmp_path: Path) -> 
     # combined: moments add, so sigma^2 adds
     c = ds.sel(surface="combined")
     for m in ("m0", "m2", "m4"):
+        # tol: a sum of two moments, one rounding
         assert float(c[m]) == pytest.approx(float(ds[m].sel(surface=["disk", "tfc"]).sum()), rel=1e-12)
     sig = ds["sigma"].sel({"route": "spectral"})
+    # tol: sigma^2 adds: square roots of sums of moments, a few roundings
     assert float(sig.sel(surface="combined")) ** 2 == pytest.approx(
         float(sig.sel(surface="disk")) ** 2 + float(sig.sel(surface="tfc")) ** 2, rel=1e-12)
     assert math.isnan(float(c["summit_density"].sel({"route": "summits"})))
@@ -161,6 +165,7 @@ def test_scene_with_afm_files_and_up_to_date_skip(two_files: list[Path], tmp_pat
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", sf.SurfaceWarning)
         ensure("roughness", scene, out)
+    # tol: a record scaled by 2: its moment by 4, up to ~log2(n) roundings of the mean
     assert float(_open(path)["m0"].sel(surface="disk")) == pytest.approx(4 * m0, rel=1e-12)
 
 
@@ -185,7 +190,9 @@ def test_shared_afm_files(tmp_path: Path) -> None:
     files = [AFM / "di-3.di", AFM / "mi-1.mi"]
     ds = _open(_run(files, tmp_path))
     assert ds.attrs["channels"] == '{"di-3": "ZSensor", "mi-1": "Topography"}'
+    # tol: the pixel size is a size over a count, one rounding
     np.testing.assert_allclose(ds["pixel_size"].values[:2], [10000 / 256, 20000 / 256])
     s = ds["sigma"].sel({"route": "spectral"}).values
+    # tol: sigma^2 adds: square roots of sums of moments, a few roundings
     assert s[2] ** 2 == pytest.approx(s[0] ** 2 + s[1] ** 2, rel=1e-12)
     assert "mi-1: summit density eta differs" in ds.attrs["warnings"]

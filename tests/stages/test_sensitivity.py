@@ -88,6 +88,7 @@ def test_indices_of_known_models_through_the_evaluation_path(write_scene, paper_
     assert ds["morris_values"].dims == ("morris_sample", "parameter")
     assert ds["sobol_outputs"].dims == ("sobol_sample", "output")
     # linear model: Morris exact, Sobol within sampling error
+    # tol: a linear model's elementary effects: exact up to tens of roundings of the span
     np.testing.assert_allclose(fhm["mu_star"].values, np.abs(A) * span, rtol=1e-9, atol=1e-9)
     np.testing.assert_allclose(fhm["sigma"].values, 0.0, atol=1e-9)
     exact = A**2 / np.sum(A**2)
@@ -104,6 +105,7 @@ def test_indices_of_known_models_through_the_evaluation_path(write_scene, paper_
     # an output that does not vary (touchdown is 9.8 nm in every sample) has undefined Sobol indices, and says why
     td = ds.sel(output="touchdown")
     assert np.all(np.isnan(td["ST"].values)) and "does not vary" in str(td["sobol_note"].values)
+    # tol: the effects of a constant output are 0 up to a few roundings
     np.testing.assert_allclose(td["mu_star"].values, 0.0)
     # every sample ran and every index uses every sample
     assert ds.attrs["failed_evaluations"] == 0 and int(ds["morris_failed"].sum()) == 0
@@ -140,6 +142,7 @@ def test_morris_leaves_out_trajectories_with_undefined_points(write_scene, paper
     assert f"over {used} of 20 trajectories" in str(force["morris_note"].values)
     # the output without holes keeps every trajectory and its exact indices
     assert int(fhm["morris_used"]) == 20 and str(fhm["morris_note"].values) == ""
+    # tol: a linear model's elementary effects: exact up to tens of roundings of the span
     np.testing.assert_allclose(fhm["mu_star"].values, np.abs(A) * 2 * math.pi, rtol=1e-9)
 
 
@@ -196,6 +199,7 @@ def test_failed_evaluations_are_counted_and_the_indices_use_the_samples_left(wri
     # Morris: the whole trajectories, whose elementary effects of the linear model are exact
     fhm = ds.sel(output="fhm_flying")
     assert 2 <= int(fhm["morris_used"]) < 20
+    # tol: a linear model's elementary effects: exact up to tens of roundings of the span
     np.testing.assert_allclose(fhm["mu_star"].values, np.abs(A) * 2 * math.pi, rtol=1e-9)
     # Sobol: the whole blocks; the failures depend on the first parameter alone, so the blocks kept still
     # sample the others uniformly: the fourth (unused) has no index

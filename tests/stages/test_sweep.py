@@ -84,7 +84,9 @@ def test_calibration_interval_ends_are_where_full_runs_start_touching(calibrated
         assert not calibration.touches(model, delta, k_star - tol), (delta, k_star)
     # the probabilities against scipy's normal tail (the paper's convention is two-sided)
     from scipy.stats import norm
+    # tol: scipy's ndtr both ways, a few roundings
     assert float(cal.contact_probability_one_sided) == pytest.approx(norm.sf(k), rel=1e-12)
+    # tol: scipy's ndtr both ways, a few roundings
     assert float(cal.contact_probability_two_sided) == pytest.approx(2 * norm.sf(abs(k)), rel=1e-12)
 
 
@@ -445,12 +447,15 @@ def test_each_roughness_set_flies_on_its_own_summit_datum(tmp_path):
            for label, t in sets.items()}
     assert len(set(y_s.values())) == 3
     for label in sets:  # (the sets read no tables: their statistics are computed as the interface stage would)
+        # tol: the same McCool formula on the same numbers, through NetCDF float64
         assert float(ds.summit_offset.sel(roughness=label)) == pytest.approx(y_s[label], rel=1e-12)
+        # tol: the same formula on the same numbers, through NetCDF float64
         assert float(ds.roughness_plasticity_index.sel(roughness=label)) == pytest.approx(0.52, rel=1e-12)
     ref = ds["min_clearance"].sel(roughness="paper", damping=0.05).values
     for label in sets:
         got = ds["min_clearance"].sel(roughness=label, damping=0.05).values
         np.testing.assert_allclose(got - ref, -(y_s[label] - y_s["paper"]), rtol=0, atol=1e-9)
+        # tol: the same kernel on the same inputs: the roughness enters after the trajectory
         np.testing.assert_allclose(ds["fhm_bv"].sel(roughness=label).values, ds["fhm_bv"].sel(roughness="paper").values,
                                    rtol=1e-12)
 
@@ -496,6 +501,7 @@ def test_an_afm_roughness_set_is_described_by_the_statistics_its_interface_used(
         assert float(ds.roughness_summit_radius.sel(roughness=label)) == R
         assert float(ds.roughness_summit_density.sel(roughness=label)) == eta
         st = explicit_statistics(sigma, R, eta)
+        # tol: the same formula on the same numbers, through NetCDF float64
         assert float(ds.roughness_plasticity_index.sel(roughness=label)) == pytest.approx(
             E / 1.7e9 * np.sqrt(st["sigma_s"] / st["R"]), rel=1e-12)
     # the attribute records what was used and the scans by their content
@@ -517,14 +523,19 @@ def test_run_numbers_that_depend_on_the_grid_carry_its_dimension(afm_sweep):
     scene, ds, out = afm_sweep
     scan = read_dataset(out / sweep_stage.PARTS / "interface-afm-mi1" / "interface.nc")
     assert ds.k_sigma.dims == ("roughness",) and ds.summit_offset.dims == ("roughness",)
+    # tol: one product by 0.5, exact
     np.testing.assert_allclose(ds.k_sigma.values, 0.5 * ds.roughness_sigma.values, rtol=1e-14)
+    # tol: the same number through NetCDF float64
     assert float(ds.summit_offset.sel(roughness="afm-mi1")) == pytest.approx(float(scan.y_s), rel=1e-14)
     y_s = explicit_statistics(0.8, 5.0, 13.3)["y_s"] / 1e-9
+    # tol: the same McCool formula on the same numbers
     assert float(ds.summit_offset.sel(roughness="rough")) == pytest.approx(y_s, rel=1e-12)
     for name in ("front_damper", "rear_damper", "damping_ratio"):
         assert ds[name].dims == ("damping",), name
+    # tol: the scene's value written as it is: exact
     np.testing.assert_allclose(ds.damping_ratio.values, ds.damping.values, rtol=0)
     ratio = ds.front_damper.sel(damping=0.05) / ds.front_damper.sel(damping=0.03)
+    # tol: a ratio of dampers linear in the ratio: a few roundings
     assert float(ratio) == pytest.approx(5 / 3, rel=1e-12)
     for name in ("k", "front_stiffness", "rear_stiffness", "steady_window_start"):
         assert ds[name].dims == (), name

@@ -89,6 +89,7 @@ def test_rows_carry_their_modules_reference(fake_load) -> None:
     results: list[dict] = []
     row = common.record(results, "kernel", [0.05, 0.04, 0.06])
     assert (row["ref_compiled_s"], row["ref_python_s"]) == (0.01, 0.02)
+    # tol: a ratio of exact decimals, one rounding
     assert row["in_compiled_reference_units"] == pytest.approx(5.0, rel=1e-12)
     failed = common.record_failure(results, "broken", "why")
     assert failed["ref_compiled_s"] == 0.01 and "in_compiled_reference_units" not in failed
@@ -100,6 +101,7 @@ def test_reference_workloads_compute_the_same_oscillator() -> None:
     after the same steps (so each times a fixed amount of work), and RK4 converges at order 4 on it."""
     from benchmarks import reference
     n = 2000
+    # tol: the same RK4 steps compiled or in Python: the same IEEE operations (no fastmath), libm cos alike
     assert reference.duffing_rk4(n) == pytest.approx(reference.duffing_python(n), rel=1e-13, abs=1e-15)
     # order 4: halving the step divides the error (against a 4x finer run) by ~16
     t_end = 2.0

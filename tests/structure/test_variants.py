@@ -206,6 +206,7 @@ def _bulge_profile(key, name, entry, monkeypatch):
     g = np.array([1.0, 2.0]) * NM
     # the compiled closed form with the entry's profile code
     expected = [bb.ph_force_stiffness(gi, 5 * NM, kw["p_pad"], kw["a"], kw["b"], entry.behaviour, 0.0)[0] for gi in g]
+    # tol: the same compiled law called through its wrapper or directly: the same operations
     np.testing.assert_allclose(law.force(g, 5 * NM), expected, rtol=1e-14)
 
 
