@@ -57,11 +57,15 @@ def _ke(x):
 def test_ke_sliding_inception_at_the_critical_load_and_its_limits():
     (c, e), (a2, a1, a0) = friction.KE_SLIDING_FITS
     # at the critical interference (the elastic branch's end) Q_max = c L_c: mu = c there (P = L_c)
+    # tol: a power of 1.0 and two products: a few roundings, no libm difference (1 ** e is exact)
     assert _ke(1.0) == pytest.approx(c * LC, rel=1e-12)
+    # tol: the Hertz load at w_c is L_c within the roundings of w_c^1.5 and the KE02 constants (~10 eps)
     assert _ke(1.0) / asperity.contact_load(WC, R, E, H, NU) == pytest.approx(c, rel=1e-12)
     # light load: Q_max ~ x^e (the ratio of two small interferences)
+    # tol: two pow calls (a few ulps each, on any libm) and a division
     assert _ke(1e-3) / _ke(1e-4) == pytest.approx(10.0**e, rel=1e-12)
     # just past w_c the elastic-plastic branch: a2 + a1 + a0, within 10 % of the elastic one (as the KE02 fits)
+    # tol: the quadratic moves by ~(2 a2 + a1) 1e-12 relative between x = 1 and 1 + 1e-12, below 1e-9
     assert _ke(1.0 + 1e-12) == pytest.approx((a2 + a1 + a0) * LC, rel=1e-9)
     assert abs(_ke(1.0 + 1e-12) / _ke(1.0) - 1.0) < 0.1
     # the limiting preload: the branch's root (x = 12.26), above which the summit sustains no tangential load
@@ -88,9 +92,11 @@ def test_ke_friction_coefficient_falls_with_load():
 def test_bke_friction_coefficient_limits_and_value_at_the_critical_load():
     a, e = friction.BKE_STICK_FIT
     # at the critical load: a coth(a) = 0.27 / tanh(0.27) = 1.024183
+    # tol: the same operations (1 ** e exact, one tanh, one division) on the same numbers
     assert friction.bke_friction_coefficient(1.0) == pytest.approx(a / np.tanh(a), rel=1e-14)
     assert friction.bke_friction_coefficient(1.0) == pytest.approx(1.024183, rel=1e-6)
     # heavy load: the asymptote a; light load: P*^(-e) (coth y ~ 1/y)
+    # tol: tanh(a 1e12^e) is 1 to the last bit (its argument is ~4e3): a / 1 within one rounding
     assert friction.bke_friction_coefficient(1e12) == pytest.approx(a, rel=1e-12)
     assert friction.bke_friction_coefficient(1e-10) * 1e-10**e == pytest.approx(1.0, rel=1e-6)
     P = np.geomspace(1e-6, 1e4, 1001)
@@ -103,6 +109,7 @@ def test_bke_full_stick_per_summit():
     x = np.array([0.3, 1.0, 5.0, 100.0])
     P = asperity.contact_load(x * WC, R, E, H, NU)
     Q = friction.bke_full_stick(x * WC, R, E, H, NU)
+    # tol: the same operations on the same numbers (a division and a product more at most: 2 eps)
     np.testing.assert_allclose(Q, friction.bke_friction_coefficient(P / LC) * P, rtol=1e-14)
     assert Q[1] == pytest.approx(1.024183 * LC, rel=1e-6)  # at w_c, P = L_c
     x = np.geomspace(1e-4, 110.0, 3001)

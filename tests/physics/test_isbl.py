@@ -388,6 +388,8 @@ def test_elastic_kogut_etsion_equals_its_gw_closed_form():
     h = np.array([-2.0, -0.5, 0.0, 0.7, 2.0, 4.0])
     ours = isbl.isbl_tables(h * p.sigma_s, p, quantities=("friction_stress",))["friction_stress"]
     ref = p.eta * c * Lc * (p.sigma_s / p.w_c) ** e * gw_F(e, h)
+    # tol: the Gauss-Legendre quadrature's error against the closed form's special functions (the module's
+    # convergence test: 1e-8 level), not rounding
     np.testing.assert_allclose(ours, ref, rtol=1e-7)
 
 
