@@ -226,7 +226,11 @@ def test_hdi_identify_in_a_log_counts_generations_with_the_best_cost_and_q_and_v
         for phase in (ph for ph in phases if ph.startswith("profiles")):
             evals = [(k, n) for ph, k, n, unit, _, _ in lines if ph == phase]
             assert all(unit == "evaluations" for ph, _, _, unit, _, _ in lines if ph == phase)
-            assert {n for _, n in evals[:-1]} <= {2 * 4 + 4 + 2 * 40}, evals  # (stable while it runs)
+            # stable while it runs; the total lowered when the round ends may show on a progress line printed
+            # between the lowering and the end line (a loaded host's timer thread), never before a line of the budget
+            lowered = [i for i, (_, n) in enumerate(evals) if n != 2 * 4 + 4 + 2 * 40]
+            assert {evals[i][1] for i in lowered} <= {evals[-1][1]}, evals
+            assert lowered == list(range(len(evals) - len(lowered), len(evals))), evals
             assert evals[-1][0] == evals[-1][1] <= 2 * 4 + 4 + 2 * 40, evals
             assert [k for k, _ in evals] == sorted(k for k, _ in evals)
         # one clock: the elapsed time never goes back from one phase to the next
