@@ -239,6 +239,12 @@ RUN = _group(
 RUN_GRID_DIMS: dict[str, str] = {"k_sigma": "roughness", "summit_offset": "roughness",
                                  "front_damper": "damping", "rear_damper": "damping", "damping_ratio": "damping"}
 
+#: The run values of :data:`RUN_GRID_DIMS` that are their dimension's coordinate: along the grid they are not a
+#: variable of their own (``sweep.nc``'s coordinate ``damping`` holds the modal damping ratio of each model;
+#: :func:`pipeline.model.simulation.grid_run_values` checks that they agree); a single run (``summary.nc``) keeps
+#: them as 0-d variables.
+RUN_GRID_COORDS: frozenset[str] = frozenset({"damping_ratio"})
+
 #: Steady-window scalars of one scene (:func:`pipeline.model.outcomes.summarize`; ``summary.nc``, ``sweep.nc``).
 SCALARS = _group(
     V("fhm_bv", "%", "FHM/BV", description="flying-height modulation (flying) / bouncing vibration (contact), peak-to-peak over FH0"),

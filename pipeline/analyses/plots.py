@@ -296,7 +296,7 @@ FORCES = (("contact_force", "contact", LINE_COLOURS[0]), ("friction_force", "fri
 
 def fig_forces(h: xr.Dataset, delta: float, scene: str, path: Path, transient_ms: float | None = None) -> Path:
     """Contact, friction, adhesion and net force histories at one protrusion (paper Fig. 4)."""
-    fig, ax = new_figure(size=(7.5, 4.6))
+    fig, ax = new_figure(size=(9.0, 4.6))   # (the legend beside the axes)
     plot_forces(h, transient_ms=transient_ms, ax=ax)
     fig.suptitle(title(f"Fig. 4: interface forces in light contact, protrusion {delta:g} nm", scene), fontsize=11)
     return save(fig, path)
@@ -328,7 +328,8 @@ def plot_forces(h: xr.Dataset, *, transient_ms: float | None = None, ax: Axes | 
     ax.set_xlabel(axis_label("time", "ms"))
     ax.set_ylabel(axis_label("force", units or "mN"))
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8, loc="best", framealpha=0.9)
+    # beside the axes: inside, wherever it goes it covers a force (adhesion, the largest, runs along the top)
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, framealpha=0.9)
     return ax
 
 
@@ -1035,9 +1036,23 @@ def _state_series(st: xr.Dataset) -> list[tuple[tuple[int, int], int, np.ndarray
     return out
 
 
-def plot_statics_states(st: xr.Dataset, *, ax: Axes | None = None) -> Axes:
+def plot_statics_states(st: xr.Dataset, *, near_criterion: bool = False, ax: Axes | None = None) -> Axes:
     """The clearance [nm] of every static state versus TFC protrusion [nm] (``statics.nc``): stable states solid,
-    unstable dashed, by where they lie (above the contact criterion, below it, on it); the criterion at 0."""
+    unstable dashed, by where they lie (above the contact criterion, below it, on it); the criterion at 0.
+
+    Parameters
+    ----------
+    st : the statics map (``statics.nc``: ``clearance`` [nm], ``state_type``, ``stable`` on protrusion [nm])
+    near_criterion : draw only the protrusions from 1 nm before the first state within 2.5 nm of the criterion
+        and clearances up to 3 nm (the fold and the unstable branch); ``False``: every protrusion and every
+        clearance of the map
+    ax : the axes to draw on (``None``: a new figure's)
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn on.
+    """
     ax = panel(ax, (8.5, 3.6))
     x = st["protrusion"].values
     for (kind, stable), rank, y in _state_series(st):
@@ -1046,11 +1061,12 @@ def plot_statics_states(st: xr.Dataset, *, ax: Axes | None = None) -> Axes:
                 marker="o", ms=3, mfc=colour if stable else "white",
                 label=label if rank == 0 else None)
     ax.axhline(0.0, color="k", lw=0.7, ls=":", label="contact criterion (d = k sigma)")
-    lo, hi = _statics_window(st)
+    lo, hi = _statics_window(st) if near_criterion else (float(x[0]) - 0.1, float(x[-1]) + 0.1)
     ax.set_xlim(lo, hi)
     shown = st["clearance"].where((st["protrusion"] >= lo) & (st["protrusion"] <= hi)).values
     if np.isfinite(shown).any():
-        ax.set_ylim(min(-0.3, float(np.nanmin(shown)) - 0.2), min(float(np.nanmax(shown)), 3.0) + 0.2)
+        top = float(np.nanmax(shown))
+        ax.set_ylim(min(-0.3, float(np.nanmin(shown)) - 0.2), (min(top, 3.0) if near_criterion else top) + 0.2)
     ax.set_ylabel(var_label(st["clearance"], "static clearance"))
     ax.legend(fontsize=7.5, loc="upper right", framealpha=0.9)
     return ax
@@ -1095,10 +1111,13 @@ def plot_statics_barriers(st: xr.Dataset, *, ax: Axes | None = None) -> Axes:
 
 
 def fig_statics(st: xr.Dataset, scene: str, path: Path) -> Path:
-    """The statics map (``statics.nc``): :func:`plot_statics_states` (top) and :func:`plot_statics_barriers`
-    (bottom) versus protrusion [nm]."""
-    fig, (ax, ax2) = new_figure(2, 1, size=(8.5, 6.8), sharex=True)
+    """The statics map (``statics.nc``): :func:`plot_statics_states` over every protrusion [nm] (top) and near
+    the contact criterion (middle), :func:`plot_statics_barriers` (bottom, on the middle one's protrusions)."""
+    fig, (ax, ax1, ax2) = new_figure(3, 1, size=(8.5, 9.6))
     plot_statics_states(st, ax=ax)
+    ax.set_title("every static state", fontsize=10)
+    plot_statics_states(st, near_criterion=True, ax=ax1)
+    ax1.set_title("near the contact criterion", fontsize=10)
     plot_statics_barriers(st, ax=ax2)
     fig.suptitle(title("Static states of the slider: clearance, stability and barriers", scene), fontsize=11)
     return save(fig, path)

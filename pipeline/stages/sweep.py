@@ -51,8 +51,8 @@ from ..progress import Progress
 from ..io import file_hash, read_attrs, read_dataset, write_dataset
 from ..paths import refuse_links
 from ..runner import KEY_ATTR, Inputs, Stage, ensure
-from ..variables import (COORDINATES, ENSEMBLE, HISTORIES, PART_STACK, PART_STACKS, SCALARS, STEPPING, TIME,
-                         coordinate, is_part_stack)
+from ..variables import (COORDINATES, ENSEMBLE, HISTORIES, PART_STACK, PART_STACKS, RUN_GRID_DIMS, SCALARS, STEPPING,
+                         TIME, coordinate, is_part_stack)
 from ..model import dmw_record, scene_inputs
 from ..model.inputs import SimulationInputs, Source, for_stage
 from ..model.interface_tables import used_statistics
@@ -413,8 +413,9 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset | None]:
         models = {(label, float(d)): batch_model(set_scenes[label], batch_sim(label, 0), float(d))
                   for label in sets for d in damp}
         run = grid_run_values(models, labels, damp, sim.k_source)
+        sizes = {"roughness": len(labels), "damping": len(damp)}
         attrs = {name: value for name, value in model_attrs(models[(labels[0], float(damp[0]))], sim.k_source).items()
-                 if name not in GRID_ATTRS or run[GRID_ATTRS[name]].size == 1}  # (several values: the variable has them)
+                 if name not in GRID_ATTRS or sizes[RUN_GRID_DIMS[GRID_ATTRS[name]]] == 1}  # (several: the variable has them)
         # each set's statistics as its interface model used them: its tables' (the scans'), or the given keys
         # (the tables as the batches read them: in this process's cache after a threaded batch phase)
         stats = {label: used_statistics(set_scenes[label], batch_sim(label, 0).tables()) for label in labels}
