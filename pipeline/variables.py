@@ -198,6 +198,9 @@ COORDINATES = _group(
     V("damping", "1", "damping ratio", dims=("damping",), description="modal damping ratio of the air bearing"),
     V(TIME, "s", "elapsed time", dims=(TIME,), description="elapsed simulated time"),
     V("hist_protrusion", "nm", "history protrusion", NM, dims=("hist_protrusion",), description="protrusion of the kept histories"),
+    # with a scene's heater actuation only (pipeline/config/heater_power.py): the heater power of each protrusion
+    V("heater_power", "mW", "heater power", dims=("protrusion",),
+      description="heater power that gives the protrusion (the scene's tfc.actuation_*; docs/model.md, section 'Heater power')"),
     V("direction", "", "stepping pass",
       dims=("direction",), dtype="str", description="pass of a heater-stepping chain (up: increasing protrusion, down: decreasing)"),
     # the statistics each roughness set's interface model used (the given keys, or its AFM scans'), along
@@ -572,7 +575,7 @@ DATASETS: dict[str, tuple[str, ...]] = {
     "sweep-part": ("coordinates", "scalars", "histories", "stepping"),
     "accuracy": ("accuracy",),
     "bulge": ("bulge",),
-    "statics": ("statics",),
+    "statics": ("statics", "coordinates"),
 }
 
 

@@ -92,6 +92,28 @@ def panel(ax: Axes | None, size: tuple[float, float] = (7.5, 4.8)) -> Axes:
     return ax if ax is not None else new_figure(size=size)[1]
 
 
+def heater_power_axis(ax: Axes, ds: xr.Dataset) -> Any | None:
+    """A top axis of heater power [mW] over an axis of protrusion [nm], where ``ds`` has the coordinate
+    ``heater_power`` on ``protrusion`` (a scene with an actuation, pipeline/config/heater_power.py): its
+    ticks read the dataset's own pairs (linear between them, as the actuation is), so the figure states
+    both axes of the user's drive. ``None`` (nothing drawn) without that coordinate."""
+    if "heater_power" not in ds.coords or ds["heater_power"].dims != ("protrusion",) or ds.sizes["protrusion"] < 2:
+        return None
+    x, p = ds["protrusion"].values.astype(float), ds["heater_power"].values.astype(float)
+    order = np.argsort(x)
+    x, p = x[order], p[order]
+
+    def along(u: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:  # linear, extended by the end rows
+        u = np.asarray(u, float)
+        lo = b[0] + (u - a[0]) * (b[1] - b[0]) / (a[1] - a[0])
+        hi = b[-1] + (u - a[-1]) * (b[-1] - b[-2]) / (a[-1] - a[-2])
+        return np.where(u < a[0], lo, np.where(u > a[-1], hi, np.interp(u, a, b)))
+
+    top = ax.secondary_xaxis("top", functions=(lambda u: along(u, x, p), lambda u: along(u, p, x)))
+    top.set_xlabel(var_label(ds["heater_power"], "heater power"), fontsize=9)
+    return top
+
+
 def envelope(x: np.ndarray, y: np.ndarray, bins: int = 2000) -> tuple[np.ndarray, np.ndarray]:
     """A long trace thinned for drawing: the minimum and the maximum of each of ``bins`` equal index
     ranges, in order (NaN ignored), so every peak stays visible at any resolution a PNG has.
@@ -444,6 +466,7 @@ def plot_fhm(combos: xr.Dataset | Sequence[tuple[dict[str, Any], xr.Dataset]], *
         ax.axvline(first_contact, color="#9467bd", lw=1.2, ls="-.", label=f"first contact here: {first_contact:g} nm")
     ax.set_xlabel(axis_label("TFC protrusion δ", "nm"))
     ax.set_ylabel(axis_label("FHM / BV (peak-to-peak / FH0)", "%"))
+    heater_power_axis(ax, first)
     ax.grid(alpha=0.3, which="both")
     shade_note = "regimes shaded for " + _combo_label(combos[0][0]) if len(combos) > 1 else None
     ax.legend(fontsize=7.5, loc="upper left", bbox_to_anchor=(1.01, 1.0), framealpha=0.9, title=shade_note,
@@ -510,6 +533,7 @@ def plot_touchdown_probability(sweep: xr.Dataset, *, touchdown_nm: float | None 
     ax.set_ylim(-0.03, 1.03)
     ax.set_ylabel(var_label(p, "touchdown probability"))
     touchdown_lines((ax,), touchdown_nm, previous_nm, lw=1.2)
+    heater_power_axis(ax, ds)
     ax.legend(fontsize=7.5, loc="upper left", framealpha=0.9)
     what = ", ".join(f"{d} {ds[d].values.item()}" for d in sel)
     ax.set_title(f"first grid combination ({what})" if what else "", fontsize=9)
@@ -624,6 +648,7 @@ def plot_band(ens: xr.Dataset, *, band_nm: Sequence[float] = (), threshold: floa
     ax.axhline(threshold, color="k", lw=0.8, ls="--", label=f"paper: BV > {threshold:g} %")
     ax.set_ylabel(axis_label("bouncing BV (0 where flying)", bv.attrs.get("units", "%")))
     touchdown_lines((ax,), touchdown_nm, previous_nm, lw=1.0)
+    heater_power_axis(ax, ens)
     ax.legend(fontsize=7.5, loc="upper left", framealpha=0.9)
     if len(band_nm):  # around the band: from 2 nm below it (the flying FHM targets far below add nothing here)
         ax.set_xlim(max(float(np.min(x)), min(band_nm) - 2.0) - 0.1, float(np.max(x)) + 0.1)
@@ -1068,6 +1093,7 @@ def plot_statics_states(st: xr.Dataset, *, near_criterion: bool = False, ax: Axe
         top = float(np.nanmax(shown))
         ax.set_ylim(min(-0.3, float(np.nanmin(shown)) - 0.2), (min(top, 3.0) if near_criterion else top) + 0.2)
     ax.set_ylabel(var_label(st["clearance"], "static clearance"))
+    heater_power_axis(ax, st)
     ax.legend(fontsize=7.5, loc="upper right", framealpha=0.9)
     return ax
 

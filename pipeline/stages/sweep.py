@@ -58,6 +58,7 @@ from ..model.inputs import SimulationInputs, Source, for_stage
 from ..model.interface_tables import used_statistics
 from ..model.simulation import DIRECTIONS, GRID_ATTRS, grid_run_values, model_attrs, simulate
 from ..analyses import ensemble_rules as ensemble
+from ..config.heater_power import power_coordinates
 from ..config.grid import damping_grid, protrusion_grid, roughness_sets, same_point, scene_label
 
 log = logging.getLogger(__name__)
@@ -628,6 +629,7 @@ class Assembler:
         if self.n_real > 1:
             coords["realisation"] = ENSEMBLE["realisation"].data(np.arange(self.n_real), ("realisation",))
         coords.update(roughness_coordinates([statistics[label] for label in self.labels]))
+        coords.update(power_coordinates(self.scene, self.prot))
         return coords
 
     def _attrs(self, k_source: str, attrs: dict, statistics: dict[str, dict[str, Any]]) -> dict[str, Any]:
@@ -654,6 +656,7 @@ class Assembler:
         if self._histories is None:
             hc = {name: c for name, c in self._coords(statistics).items() if name != "realisation"}  # (realisation 0)
             hc["protrusion"] = coordinate("protrusion", self.hist_prot)
+            hc.update(power_coordinates(self.scene, self.hist_prot))
             hc[TIME] = coordinate(TIME, self.time)
             hds = xr.Dataset({name: HISTORIES[name].data(a, ("protrusion", "roughness", "damping", TIME))
                               for name, a in self._ordered(self.hist, "h_").items()}, coords=hc).assign(run or {})

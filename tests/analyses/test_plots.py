@@ -92,3 +92,17 @@ def test_the_forces_legend_lies_beside_the_axes_not_on_a_curve():
     fig.canvas.draw()
     legend = ax.get_legend().get_window_extent()
     assert legend.x0 >= ax.get_window_extent().x1              # right of the plotting area: covers no force
+
+
+def test_a_dataset_with_heater_power_gets_a_top_axis_in_mw_and_one_without_none():
+    sweep = _sweep()
+    assert plots.heater_power_axis(plots.plot_fhm(sweep), sweep) is None
+    assert not plots.plot_fhm(sweep).child_axes
+    powered = sweep.assign_coords(heater_power=("protrusion", sweep["protrusion"].values / 0.125, {"units": "mW"}))
+    ax = plots.plot_fhm(powered)
+    (top,) = ax.child_axes
+    assert top.get_xlabel() == "heater power [mW]"
+    forward, inverse = top._functions        # (matplotlib keeps the pair it was given; no public getter)
+    np.testing.assert_allclose(forward(np.array([9.0, 9.5, 10.0])), [72.0, 76.0, 80.0], rtol=1e-12)  # 0.125 nm/mW
+    np.testing.assert_allclose(forward(np.array([8.0, 11.0])), [64.0, 88.0], rtol=1e-12)   # beyond: the end rows
+    np.testing.assert_allclose(inverse(forward(np.linspace(8.0, 11.0, 13))), np.linspace(8.0, 11.0, 13), rtol=1e-12)

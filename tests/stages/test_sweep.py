@@ -551,3 +551,23 @@ def test_the_reports_title_of_a_scan_set_states_its_statistics(afm_sweep):
     assert titles[0] == f"roughness `{scene_label(scene)}`, damping ratio 0.05"  # (the default first)
     assert "roughness `afm-mi1` (sigma 3.43 nm, R 2.23 um, eta 11.4 um^-2), damping ratio 0.03" in titles
     assert "roughness `rough` (sigma 0.8 nm, R 5 um, eta 13.3 um^-2), damping ratio 0.05" in titles
+
+
+def test_with_an_actuation_the_sweep_carries_the_heater_power_beside_the_protrusion(tmp_path):
+    """``heater_power`` [mW] on the ``protrusion`` dimension of both datasets (protrusion / efficiency), the
+    numbers of every variable those of the same sweep without it, which has no such coordinate."""
+    base = ['scene.effects=["air_bearing","pitch","contact"]', "contact.k=0.5", "solver.duration_ms=0.3",
+            "solver.transient_ms=0.1", "sweep.protrusion_nm={start=9.0, stop=10.0, step=0.5}",
+            "report.histories_nm=[9.5]"]
+    plain = read_dataset(ensure("sweep", load_scene(PAPER, base), tmp_path / "plain"))
+    scene = load_scene(PAPER, base + ["tfc.actuation_nm_per_mw=0.125"])
+    out = tmp_path / "heater"
+    powered = read_dataset(ensure("sweep", scene, out))
+    assert "heater_power" not in plain.variables
+    hp = powered["heater_power"]
+    assert hp.dims == ("protrusion",) and "heater_power" in powered.coords and hp.attrs["units"] == "mW"
+    np.testing.assert_allclose(hp.values, [72.0, 76.0, 80.0], rtol=1e-14)
+    hist = read_dataset(out / "sweep_histories.nc")
+    np.testing.assert_allclose(hist["heater_power"].values, [76.0], rtol=1e-14)
+    assert hist["heater_power"].dims == ("protrusion",)
+    xr.testing.assert_identical(powered.drop_vars("heater_power").drop_attrs(), plain.drop_attrs())
