@@ -4,7 +4,7 @@
 The DMW is the disk's vertical displacement under the slider versus time, ``w(t)`` [nm]. The paper
 measured it with a laser Doppler vibrometer (LDV) at mid-diameter, 5425 rpm, high-passed at 10 kHz,
 content up to 500 kHz, 4 MS/s, averaged over 100 revolutions, velocity integrated to displacement
-[VLP09]_ (docs/model.md, section "DMW").
+[VLP09] (docs/model.md, section "DMW").
 
 Conventions
 -----------
@@ -97,7 +97,7 @@ def synthesize(rms_nm: float, band_hz: tuple[float, float], exponent: float, dur
                sample_rate_hz: float, seed: int, *, amplitudes: str = "gaussian") -> np.ndarray:
     """A Gaussian, band-limited, power-law DMW record [nm] with exactly the prescribed rms.
 
-    Spectral representation [SD91]_: the ``rfft`` coefficient of bin ``k`` is
+    Spectral representation [SD91]: the ``rfft`` coefficient of bin ``k`` is
     ``c_k = A_k (g1 + i g2) / sqrt(2)`` with ``g1, g2`` standard normal and ``A_k = f_k^(exponent/2)``
     inside the band (:func:`band_bins`), zero outside; the record is ``irfft(c)``, rescaled to
     ``rms_nm``. Complex-normal coefficients (Rayleigh amplitude, uniform phase) make the record an
@@ -213,9 +213,9 @@ def velocity_to_displacement(v: np.ndarray, sample_rate_hz: float, highpass_hz: 
                              lowpass_hz: float | None = None) -> np.ndarray:
     """Displacement [nm] from an LDV velocity record [nm/s]: high-pass, integrate, remove drift.
 
-    One zero-phase step in the discrete Fourier domain [Bra11]_: ``X(f) = V(f) / (i 2 pi f)`` for
+    One zero-phase step in the discrete Fourier domain [Bra11]: ``X(f) = V(f) / (i 2 pi f)`` for
     ``highpass_hz <= f (<= lowpass_hz)``, ``X = 0`` elsewhere, ``x = irfft(X)``. This is the paper's
-    chain (high-pass at 10 kHz, integrate velocity to displacement [VLP09]_) with a brick-wall filter:
+    chain (high-pass at 10 kHz, integrate velocity to displacement [VLP09]) with a brick-wall filter:
     the mean velocity (LDV offset), whose integral is a linear drift, and all content below the
     high-pass (the integral's low-frequency wander, runout) are removed in the same step, so no
     separate drift removal is needed and in-band content is integrated exactly (no trapezoid error,
@@ -276,14 +276,14 @@ def process_displacement(x: np.ndarray, sample_rate_hz: float, highpass_hz: floa
 def spectrum(x: np.ndarray, sample_rate_hz: float, nperseg: int | None = None) -> tuple[np.ndarray, np.ndarray]:
     """One-sided power spectral density of a record.
 
-    Default: the periodogram with a rectangular window and no detrending [PW93]_,
+    Default: the periodogram with a rectangular window and no detrending [PW93],
     ``psd_k = c_k |X_k|^2 / (fs N)`` with ``X = rfft(x)`` and ``c_k = 2`` except at 0 Hz and (even
     ``N``) at Nyquist, where ``c_k = 1``: resolution ``1/duration``, no leakage for a periodic record
     such as the synthetic one, and Parseval exact, ``sum(psd) * df == mean(x**2)`` (for zero-mean
     ``x``). It equals scipy's ``periodogram(..., window="boxcar", detrend=False, scaling="density")``
     (tested to 1e-12); it is written out with numpy because importing scipy.signal costs more than
     the whole synthesis. With ``nperseg``: Welch's average of Hann-windowed, half-overlapping segments
-    [PW93]_ (``scipy.signal.welch``; smoother, for measured records; leaks by the Hann sidelobes).
+    [PW93] (``scipy.signal.welch``; smoother, for measured records; leaks by the Hann sidelobes).
 
     Parameters
     ----------
