@@ -94,7 +94,23 @@ class Actuation:
 
 
 def within(x: float | np.ndarray, rows: tuple[float, ...]) -> bool:
-    """Whether every value of ``x`` lies within ``rows[0]``-``rows[-1]`` (a table's column, same unit)."""
+    """Whether every value of ``x`` lies within ``rows[0]``-``rows[-1]`` (a table's column, same unit).
+
+    Parameters
+    ----------
+    x : values [W] or [m], in the unit of ``rows``
+    rows : one column of an actuation table (:attr:`Actuation.power` [W] or :attr:`Actuation.protrusion` [m]),
+        increasing
+
+    Returns
+    -------
+    bool
+        Whether no value lies outside the column's first and last rows [-] (an empty ``x``: ``True``).
+
+    References
+    ----------
+    [JB07] (module docstring): the table is not extrapolated beyond its rows.
+    """
     x = np.asarray(x, dtype=float)
     return not x.size or bool(x.min() >= rows[0] and x.max() <= rows[-1])
 
@@ -116,7 +132,7 @@ def linear(efficiency: float) -> Actuation:
     Returns
     -------
     Actuation
-        The actuation; its conversions are exact inverses up to rounding.
+        The actuation (powers [W], protrusions [m]); its conversions are exact inverses up to rounding.
 
     Raises
     ------
@@ -144,7 +160,7 @@ def tabulated(power: list[float] | np.ndarray, protrusion: list[float] | np.ndar
     Returns
     -------
     Actuation
-        The tabulated actuation.
+        The tabulated actuation (powers [W], protrusions [m]).
 
     Raises
     ------

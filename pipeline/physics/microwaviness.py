@@ -59,7 +59,22 @@ class DMWError(ValueError):
 # --------------------------------------------------------------------------------------------------
 
 def n_samples(duration_s: float, sample_rate_hz: float) -> int:
-    """Number of samples of a record of ``duration_s`` [s] at ``sample_rate_hz`` [Hz] (rounded)."""
+    """Number of samples of a record of ``duration_s`` [s] at ``sample_rate_hz`` [Hz] (rounded).
+
+    Parameters
+    ----------
+    duration_s : record length [s]
+    sample_rate_hz : sampling rate [Hz]
+
+    Returns
+    -------
+    int
+        The number of samples [-].
+
+    References
+    ----------
+    docs/model.md, section "DMW" (the record's grid).
+    """
     return int(round(duration_s * sample_rate_hz))
 
 
@@ -82,6 +97,15 @@ def band_bins(n: int, sample_rate_hz: float, band_hz: tuple[float, float]) -> tu
     ------
     ValueError
         When no bin lies in the band (record shorter than about ``1/(hi - lo)``).
+
+    Returns
+    -------
+    (int, int)
+        The bin indices [-].
+
+    References
+    ----------
+    [SD91] (the band of the spectral representation); docs/model.md, section "DMW".
     """
     lo, hi = band_hz
     df = sample_rate_hz / n
@@ -122,6 +146,11 @@ def synthesize(rms_nm: float, band_hz: tuple[float, float], exponent: float, dur
     -------
     numpy.ndarray
         ``w`` [nm], ``round(duration_s * fs)`` samples at times ``i / fs``; zero mean, rms ``rms_nm``.
+
+    References
+    ----------
+    [SD91] M. Shinozuka, G. Deodatis, Appl. Mech. Rev. 44 (1991) 191-204 (module docstring); docs/model.md,
+    section "DMW".
     """
     if not (rms_nm >= 0 and math.isfinite(rms_nm)):
         raise ValueError(f"rms_nm = {rms_nm!r}: expected a finite number >= 0")
@@ -170,6 +199,10 @@ def displacement_to_velocity(x: np.ndarray, sample_rate_hz: float) -> np.ndarray
     -------
     numpy.ndarray
         velocity [nm/s]. The Nyquist bin (no defined sign of derivative) is set to zero.
+
+    References
+    ----------
+    [VLP09] (the paper's LDV processing: high-pass at 10 kHz, velocity integrated); docs/model.md, section "DMW".
     """
     x = np.asarray(x, dtype=float)
     n = x.size
@@ -232,6 +265,11 @@ def velocity_to_displacement(v: np.ndarray, sample_rate_hz: float, highpass_hz: 
     -------
     numpy.ndarray
         displacement [nm], same length, zero mean.
+
+    References
+    ----------
+    [VLP09] (the paper's chain), [Bra11] (module docstring: the Fourier-domain integration); docs/model.md,
+    section "DMW".
     """
     v = _check_filter_args(v, sample_rate_hz, highpass_hz, lowpass_hz)
     n = v.size
@@ -263,6 +301,10 @@ def process_displacement(x: np.ndarray, sample_rate_hz: float, highpass_hz: floa
     -------
     numpy.ndarray
         displacement [nm], same length, zero mean.
+
+    References
+    ----------
+    [VLP09] (the paper's LDV processing: high-pass at 10 kHz, velocity integrated); docs/model.md, section "DMW".
     """
     from scipy import signal
     x = _check_filter_args(x, sample_rate_hz, highpass_hz, lowpass_hz)
@@ -293,8 +335,15 @@ def spectrum(x: np.ndarray, sample_rate_hz: float, nperseg: int | None = None) -
 
     Returns
     -------
-    frequency : [Hz]
-    psd : [nm^2/Hz]
+    frequency : numpy.ndarray
+        Bin frequencies [Hz].
+    psd : numpy.ndarray
+        One-sided PSD [nm^2/Hz].
+
+    References
+    ----------
+    [PW93] D. B. Percival, A. T. Walden, Spectral Analysis for Physical Applications (1993); docs/model.md,
+    section "DMW".
     """
     x = np.asarray(x, dtype=float)
     if nperseg is None:
@@ -314,10 +363,27 @@ def power_law_fit(frequency: np.ndarray, psd: np.ndarray, band_hz: tuple[float, 
     For Gaussian coefficients each periodogram bin is ``S(f)`` times an exponential variable, whose
     logarithm has a constant mean: the slope is unbiased, ``C`` is low by ``exp(-0.577)``.
 
+    Parameters
+    ----------
+    frequency : bin frequencies [Hz] (:func:`spectrum`)
+    psd : one-sided PSD [nm^2/Hz] at those bins
+    band_hz : ``(lo, hi)`` of the fit [Hz]
+
     Returns
     -------
-    exponent : [1]
-    prefactor : C [nm^2/Hz / Hz^exponent]
+    exponent : float
+        The spectral exponent [1].
+    prefactor : float
+        C [nm^2/Hz / Hz^exponent].
+
+    Raises
+    ------
+    ValueError
+        For fewer than 2 positive bins in the band.
+
+    References
+    ----------
+    [PW93] (the periodogram's exponential statistics); docs/model.md, section "DMW".
     """
     lo, hi = band_hz
     sel = (frequency >= lo * (1 - EDGE_TOL)) & (frequency <= hi * (1 + EDGE_TOL)) & (psd > 0)
@@ -335,10 +401,22 @@ def resample(x: np.ndarray, sample_rate_hz: float, new_rate_hz: float) -> tuple[
     transients); otherwise cubic-spline interpolation (accurate when the content is well below both
     Nyquist frequencies, as after the band filter). The output has ``floor(n * new / old)`` samples.
 
+    Parameters
+    ----------
+    x : the record [nm] (or any unit), uniformly sampled
+    sample_rate_hz : its sampling rate [Hz]
+    new_rate_hz : the rate wanted [Hz]
+
     Returns
     -------
-    y : resampled record (same units)
-    method : a description for provenance
+    y : numpy.ndarray
+        The resampled record [nm] (the unit of ``x``).
+    method : str
+        A description for provenance [-].
+
+    References
+    ----------
+    [PW93] (band-limited resampling); ``scipy.signal.resample_poly``; docs/model.md, section "DMW".
     """
     x = np.asarray(x, dtype=float)
     ratio = new_rate_hz / sample_rate_hz
