@@ -38,7 +38,7 @@ from enum import IntEnum
 from typing import TYPE_CHECKING, Any, Iterable
 
 import numpy as np
-from .units import GPA, KHZ, MN, MPA, MS, NM, PER_UM2, UM, UM2, URAD
+from .units import GPA, KHZ, MN, MPA, MS, MW, NM, PER_UM2, UM, UM2, URAD
 
 from .validity import Validity
 
@@ -199,7 +199,7 @@ COORDINATES = _group(
     V(TIME, "s", "elapsed time", dims=(TIME,), description="elapsed simulated time"),
     V("hist_protrusion", "nm", "history protrusion", NM, dims=("hist_protrusion",), description="protrusion of the kept histories"),
     # with a scene's heater actuation only (pipeline/config/heater_power.py): the heater power of each protrusion
-    V("heater_power", "mW", "heater power", dims=("protrusion",),
+    V("heater_power", "mW", "heater power", MW, dims=("protrusion",),
       description="heater power that gives the protrusion (the scene's tfc.actuation_*; docs/model.md, section 'Heater power')"),
     V("direction", "", "stepping pass",
       dims=("direction",), dtype="str", description="pass of a heater-stepping chain (up: increasing protrusion, down: decreasing)"),
