@@ -100,8 +100,11 @@ def heater_power_axis(ax: Axes, ds: xr.Dataset) -> Any | None:
     if "heater_power" not in ds.coords or ds["heater_power"].dims != ("protrusion",) or ds.sizes["protrusion"] < 2:
         return None
     x, p = ds["protrusion"].values.astype(float), ds["heater_power"].values.astype(float)
-    order = np.argsort(x)
-    x, p = x[order], p[order]
+    known = np.isfinite(p)  # (NaN: a protrusion beyond an actuation table)
+    if known.sum() < 2:
+        return None
+    order = np.argsort(x[known])
+    x, p = x[known][order], p[known][order]
 
     def along(u: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:  # linear, extended by the end rows
         u = np.asarray(u, float)

@@ -72,15 +72,19 @@ def actuation(config: Mapping[str, Mapping[str, Any]]) -> heater.Actuation | Non
 
 
 def power_mw(config: Mapping[str, Mapping[str, Any]], protrusion_nm: Any) -> np.ndarray | None:
-    """The heater power [mW] at protrusions [nm] (``None`` without an actuation).
-
-    Raises
-    ------
-    ValueError
-        A protrusion outside the actuation table's rows.
-    """
+    """The heater power [mW] at protrusions [nm] (``None`` without an actuation); NaN at a protrusion outside
+    an actuation table's rows (the table covers the sweep's grid, checked at load; an ensemble's target
+    protrusion may lie beyond it, and its results are kept)."""
     act = actuation(config)
-    return None if act is None else act.power_of(np.asarray(protrusion_nm, dtype=float) * NM) / MW
+    if act is None:
+        return None
+    d = np.asarray(protrusion_nm, dtype=float) * NM
+    if act.efficiency is not None:
+        return act.power_of(d) / MW
+    inside = (d >= act.protrusion[0]) & (d <= act.protrusion[-1])
+    out = np.full(d.shape, np.nan)
+    out[inside] = act.power_of(d[inside]) / MW
+    return out
 
 
 def power_coordinates(config: Mapping[str, Mapping[str, Any]], protrusion_nm: Any,

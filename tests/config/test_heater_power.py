@@ -36,6 +36,8 @@ def test_a_touchdown_in_mw_through_a_table_is_interpolated_between_its_rows(pape
     scene = load_scene(paper_config, TABLE + ["touchdown.onset_mw=84.0", "touchdown.previous_mw=80.0"])
     assert scene["touchdown"]["onset_nm"] == pytest.approx(9.7, abs=1e-9) and scene["touchdown"]["previous_nm"] == 9.0
     np.testing.assert_allclose(heater_power.power_mw(scene, [2.5, 9.0, 16.0]), [20.0, 80.0, 120.0], rtol=1e-14)
+    # beyond the table (an ensemble's target protrusion outside the sweep): no power, the rest kept
+    np.testing.assert_allclose(heater_power.power_mw(scene, [9.0, 17.0]), [80.0, np.nan], rtol=1e-14)
 
 
 @pytest.mark.parametrize("override, message", [
