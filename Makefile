@@ -42,7 +42,7 @@ export PYTHONDONTWRITEBYTECODE :=
 # each module is named after its stage, tests/structure/test_registries.py): a new stage module is a new target
 STAGES := $(sort $(basename $(notdir $(filter-out %/__init__.py,$(wildcard pipeline/stages/*.py)))))
 
-.PHONY: setup run test test-fast test-slow bench sweep readme variants clean $(STAGES)
+.PHONY: setup run test test-fast test-slow bench sweep readme variants docs clean $(STAGES)
 
 ## the environment alone; with EXTRAS, those extras added to it (each `--extra NAME` of uv sync; kept by
 ## later targets, which sync --inexact)
@@ -121,6 +121,13 @@ variants: $(RUN_STAMP)
 ## one stage (and what it needs) on the scene: `make NAME` is `hdi NAME $(SCENE)` (sweep and identify: their own scenes)
 $(filter-out sweep identify,$(STAGES)): $(RUN_STAMP)
 	$(BIN)/hdi $@ $(SCENE) $(ARGS)
+
+## the API reference (docs/api/: the Python API, every physics law, the gallery of docs/examples/ and
+## docs/experiments/) as HTML in build/docs/ (git-ignored); warnings are errors. `make test` builds it too
+## (tests/structure/test_api_reference.py)
+docs: $(TEST_STAMP)
+	$(BIN)/sphinx-build -b html -W --keep-going -q docs/api build/docs
+	@echo "make docs: build/docs/index.html"
 
 ## parameter studies: identify the free [recon] parameters from the paper's targets (their sensitivity:
 ## `make sensitivity`, a stage target above)

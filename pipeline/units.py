@@ -24,6 +24,10 @@ MPA = 1e6
 GPA = 1e9
 # forces [N]
 MN = 1e-3
+# powers [W]: one milliwatt (a heater's power)
+MW = 1e-3
+# actuation efficiency [m W-1]: one nm of protrusion per mW of heater power
+NM_PER_MW = 1e-6
 # times [s]
 NS = 1e-9
 US = 1e-6
@@ -63,6 +67,7 @@ SUFFIX_FACTORS: dict[str, float] = {
     "khz": KHZ, "hz": 1.0, "mhz": MHZ,
     "ms": MS, "us": US, "ns": NS, "s": 1.0,
     "j_m2": 1.0, "n_s_m": 1.0, "n_m": 1.0, "kg_m3": 1.0, "kg": 1.0, "n": 1.0, "mn": MN,
+    "mw": MW, "nm_per_mw": NM_PER_MW,
     "per_um2": PER_UM2, "per_m2": 1.0, "rpm": RPM, "sigma": 1.0,
 }
 
@@ -75,6 +80,7 @@ SUFFIX_UNITS: dict[str, str] = {
     "khz": "kHz", "hz": "Hz", "mhz": "MHz",
     "ms": "ms", "us": "us", "ns": "ns", "s": "s",
     "j_m2": "J m-2", "n_s_m": "N s m-1", "n_m": "N m-1", "kg_m3": "kg m-3", "kg": "kg", "n": "N", "mn": "mN",
+    "mw": "mW", "nm_per_mw": "nm mW-1",
     "per_um2": "um-2", "per_m2": "m-2", "rpm": "min-1", "sigma": "1",
 }
 

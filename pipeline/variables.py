@@ -38,7 +38,7 @@ from enum import IntEnum
 from typing import TYPE_CHECKING, Any, Iterable
 
 import numpy as np
-from .units import GPA, KHZ, MN, MPA, MS, NM, PER_UM2, UM, UM2, URAD
+from .units import GPA, KHZ, MN, MPA, MS, MW, NM, PER_UM2, UM, UM2, URAD
 
 from .validity import Validity
 
@@ -198,6 +198,9 @@ COORDINATES = _group(
     V("damping", "1", "damping ratio", dims=("damping",), description="modal damping ratio of the air bearing"),
     V(TIME, "s", "elapsed time", dims=(TIME,), description="elapsed simulated time"),
     V("hist_protrusion", "nm", "history protrusion", NM, dims=("hist_protrusion",), description="protrusion of the kept histories"),
+    # with a scene's heater actuation only (pipeline/config/heater_power.py): the heater power of each protrusion
+    V("heater_power", "mW", "heater power", MW, dims=("protrusion",),
+      description="heater power that gives the protrusion (the scene's tfc.actuation_*; docs/model.md, section 'Heater power')"),
     V("direction", "", "stepping pass",
       dims=("direction",), dtype="str", description="pass of a heater-stepping chain (up: increasing protrusion, down: decreasing)"),
     # the statistics each roughness set's interface model used (the given keys, or its AFM scans'), along
@@ -238,6 +241,12 @@ RUN = _group(
 #: the roughness set's, the pad dampers (and the modal damping ratio itself) the damping ratio's.
 RUN_GRID_DIMS: dict[str, str] = {"k_sigma": "roughness", "summit_offset": "roughness",
                                  "front_damper": "damping", "rear_damper": "damping", "damping_ratio": "damping"}
+
+#: The run values of :data:`RUN_GRID_DIMS` that are their dimension's coordinate: along the grid they are not a
+#: variable of their own (``sweep.nc``'s coordinate ``damping`` holds the modal damping ratio of each model;
+#: :func:`pipeline.model.simulation.grid_run_values` checks that they agree); a single run (``summary.nc``) keeps
+#: them as 0-d variables.
+RUN_GRID_COORDS: frozenset[str] = frozenset({"damping_ratio"})
 
 #: Steady-window scalars of one scene (:func:`pipeline.model.outcomes.summarize`; ``summary.nc``, ``sweep.nc``).
 SCALARS = _group(
@@ -566,7 +575,7 @@ DATASETS: dict[str, tuple[str, ...]] = {
     "sweep-part": ("coordinates", "scalars", "histories", "stepping"),
     "accuracy": ("accuracy",),
     "bulge": ("bulge",),
-    "statics": ("statics",),
+    "statics": ("statics", "coordinates"),
 }
 
 

@@ -92,6 +92,31 @@ def panel(ax: Axes | None, size: tuple[float, float] = (7.5, 4.8)) -> Axes:
     return ax if ax is not None else new_figure(size=size)[1]
 
 
+def heater_power_axis(ax: Axes, ds: xr.Dataset) -> Any | None:
+    """A top axis of heater power [mW] over an axis of protrusion [nm], where ``ds`` has the coordinate
+    ``heater_power`` on ``protrusion`` (a scene with an actuation, pipeline/config/heater_power.py): its
+    ticks read the dataset's own pairs (linear between them, as the actuation is), so the figure states
+    both axes of the user's drive. ``None`` (nothing drawn) without that coordinate."""
+    if "heater_power" not in ds.coords or ds["heater_power"].dims != ("protrusion",) or ds.sizes["protrusion"] < 2:
+        return None
+    x, p = ds["protrusion"].values.astype(float), ds["heater_power"].values.astype(float)
+    known = np.isfinite(p)  # (NaN: a protrusion beyond an actuation table)
+    if known.sum() < 2:
+        return None
+    order = np.argsort(x[known])
+    x, p = x[known][order], p[known][order]
+
+    def along(u: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:  # linear, extended by the end rows
+        u = np.asarray(u, float)
+        lo = b[0] + (u - a[0]) * (b[1] - b[0]) / (a[1] - a[0])
+        hi = b[-1] + (u - a[-1]) * (b[-1] - b[-2]) / (a[-1] - a[-2])
+        return np.where(u < a[0], lo, np.where(u > a[-1], hi, np.interp(u, a, b)))
+
+    top = ax.secondary_xaxis("top", functions=(lambda u: along(u, x, p), lambda u: along(u, p, x)))
+    top.set_xlabel(var_label(ds["heater_power"], "heater power"), fontsize=9)
+    return top
+
+
 def envelope(x: np.ndarray, y: np.ndarray, bins: int = 2000) -> tuple[np.ndarray, np.ndarray]:
     """A long trace thinned for drawing: the minimum and the maximum of each of ``bins`` equal index
     ranges, in order (NaN ignored), so every peak stays visible at any resolution a PNG has.
@@ -296,7 +321,7 @@ FORCES = (("contact_force", "contact", LINE_COLOURS[0]), ("friction_force", "fri
 
 def fig_forces(h: xr.Dataset, delta: float, scene: str, path: Path, transient_ms: float | None = None) -> Path:
     """Contact, friction, adhesion and net force histories at one protrusion (paper Fig. 4)."""
-    fig, ax = new_figure(size=(7.5, 4.6))
+    fig, ax = new_figure(size=(9.0, 4.6))   # (the legend beside the axes)
     plot_forces(h, transient_ms=transient_ms, ax=ax)
     fig.suptitle(title(f"Fig. 4: interface forces in light contact, protrusion {delta:g} nm", scene), fontsize=11)
     return save(fig, path)
@@ -328,7 +353,8 @@ def plot_forces(h: xr.Dataset, *, transient_ms: float | None = None, ax: Axes | 
     ax.set_xlabel(axis_label("time", "ms"))
     ax.set_ylabel(axis_label("force", units or "mN"))
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8, loc="best", framealpha=0.9)
+    # beside the axes: inside, wherever it goes it covers a force (adhesion, the largest, runs along the top)
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, framealpha=0.9)
     return ax
 
 
@@ -443,6 +469,7 @@ def plot_fhm(combos: xr.Dataset | Sequence[tuple[dict[str, Any], xr.Dataset]], *
         ax.axvline(first_contact, color="#9467bd", lw=1.2, ls="-.", label=f"first contact here: {first_contact:g} nm")
     ax.set_xlabel(axis_label("TFC protrusion δ", "nm"))
     ax.set_ylabel(axis_label("FHM / BV (peak-to-peak / FH0)", "%"))
+    heater_power_axis(ax, first)
     ax.grid(alpha=0.3, which="both")
     shade_note = "regimes shaded for " + _combo_label(combos[0][0]) if len(combos) > 1 else None
     ax.legend(fontsize=7.5, loc="upper left", bbox_to_anchor=(1.01, 1.0), framealpha=0.9, title=shade_note,
@@ -509,6 +536,7 @@ def plot_touchdown_probability(sweep: xr.Dataset, *, touchdown_nm: float | None 
     ax.set_ylim(-0.03, 1.03)
     ax.set_ylabel(var_label(p, "touchdown probability"))
     touchdown_lines((ax,), touchdown_nm, previous_nm, lw=1.2)
+    heater_power_axis(ax, ds)
     ax.legend(fontsize=7.5, loc="upper left", framealpha=0.9)
     what = ", ".join(f"{d} {ds[d].values.item()}" for d in sel)
     ax.set_title(f"first grid combination ({what})" if what else "", fontsize=9)
@@ -623,6 +651,7 @@ def plot_band(ens: xr.Dataset, *, band_nm: Sequence[float] = (), threshold: floa
     ax.axhline(threshold, color="k", lw=0.8, ls="--", label=f"paper: BV > {threshold:g} %")
     ax.set_ylabel(axis_label("bouncing BV (0 where flying)", bv.attrs.get("units", "%")))
     touchdown_lines((ax,), touchdown_nm, previous_nm, lw=1.0)
+    heater_power_axis(ax, ens)
     ax.legend(fontsize=7.5, loc="upper left", framealpha=0.9)
     if len(band_nm):  # around the band: from 2 nm below it (the flying FHM targets far below add nothing here)
         ax.set_xlim(max(float(np.min(x)), min(band_nm) - 2.0) - 0.1, float(np.max(x)) + 0.1)
@@ -1035,9 +1064,23 @@ def _state_series(st: xr.Dataset) -> list[tuple[tuple[int, int], int, np.ndarray
     return out
 
 
-def plot_statics_states(st: xr.Dataset, *, ax: Axes | None = None) -> Axes:
+def plot_statics_states(st: xr.Dataset, *, near_criterion: bool = False, ax: Axes | None = None) -> Axes:
     """The clearance [nm] of every static state versus TFC protrusion [nm] (``statics.nc``): stable states solid,
-    unstable dashed, by where they lie (above the contact criterion, below it, on it); the criterion at 0."""
+    unstable dashed, by where they lie (above the contact criterion, below it, on it); the criterion at 0.
+
+    Parameters
+    ----------
+    st : the statics map (``statics.nc``: ``clearance`` [nm], ``state_type``, ``stable`` on protrusion [nm])
+    near_criterion : draw only the protrusions from 1 nm before the first state within 2.5 nm of the criterion
+        and clearances up to 3 nm (the fold and the unstable branch); ``False``: every protrusion and every
+        clearance of the map
+    ax : the axes to draw on (``None``: a new figure's)
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn on.
+    """
     ax = panel(ax, (8.5, 3.6))
     x = st["protrusion"].values
     for (kind, stable), rank, y in _state_series(st):
@@ -1046,12 +1089,14 @@ def plot_statics_states(st: xr.Dataset, *, ax: Axes | None = None) -> Axes:
                 marker="o", ms=3, mfc=colour if stable else "white",
                 label=label if rank == 0 else None)
     ax.axhline(0.0, color="k", lw=0.7, ls=":", label="contact criterion (d = k sigma)")
-    lo, hi = _statics_window(st)
+    lo, hi = _statics_window(st) if near_criterion else (float(x[0]) - 0.1, float(x[-1]) + 0.1)
     ax.set_xlim(lo, hi)
     shown = st["clearance"].where((st["protrusion"] >= lo) & (st["protrusion"] <= hi)).values
     if np.isfinite(shown).any():
-        ax.set_ylim(min(-0.3, float(np.nanmin(shown)) - 0.2), min(float(np.nanmax(shown)), 3.0) + 0.2)
+        top = float(np.nanmax(shown))
+        ax.set_ylim(min(-0.3, float(np.nanmin(shown)) - 0.2), (min(top, 3.0) if near_criterion else top) + 0.2)
     ax.set_ylabel(var_label(st["clearance"], "static clearance"))
+    heater_power_axis(ax, st)
     ax.legend(fontsize=7.5, loc="upper right", framealpha=0.9)
     return ax
 
@@ -1095,10 +1140,13 @@ def plot_statics_barriers(st: xr.Dataset, *, ax: Axes | None = None) -> Axes:
 
 
 def fig_statics(st: xr.Dataset, scene: str, path: Path) -> Path:
-    """The statics map (``statics.nc``): :func:`plot_statics_states` (top) and :func:`plot_statics_barriers`
-    (bottom) versus protrusion [nm]."""
-    fig, (ax, ax2) = new_figure(2, 1, size=(8.5, 6.8), sharex=True)
+    """The statics map (``statics.nc``): :func:`plot_statics_states` over every protrusion [nm] (top) and near
+    the contact criterion (middle), :func:`plot_statics_barriers` (bottom, on the middle one's protrusions)."""
+    fig, (ax, ax1, ax2) = new_figure(3, 1, size=(8.5, 9.6))
     plot_statics_states(st, ax=ax)
+    ax.set_title("every static state", fontsize=10)
+    plot_statics_states(st, near_criterion=True, ax=ax1)
+    ax1.set_title("near the contact criterion", fontsize=10)
     plot_statics_barriers(st, ax=ax2)
     fig.suptitle(title("Static states of the slider: clearance, stability and barriers", scene), fontsize=11)
     return save(fig, path)

@@ -15,40 +15,17 @@ from typing import Any
 
 import numpy as np
 
+from .labels import DECIMALS, TOL_NM, label, range_count, range_grid, same_point
 from .schema import SCHEMA, SceneError
 from .validation import check_value
 
-
-#: Protrusion labels [nm] are rounded to this many decimals, so a label computed twice is the same
-#: float; two protrusions closer than :data:`TOL_NM` are the same grid point (one home of the rule).
-DECIMALS = 9
-TOL_NM = 10.0 ** -DECIMALS
-
-
-def label(x: Any) -> Any:
-    """A protrusion [nm] (or array of them) rounded as the grid's labels are."""
-    return np.round(x, DECIMALS)
-
-
-def same_point(a: Any, b: Any) -> Any:
-    """Whether protrusions ``a`` and ``b`` [nm] are the same grid point (elementwise for arrays)."""
-    return np.abs(np.asarray(a) - b) < TOL_NM
+__all__ = ["DECIMALS", "TOL_NM", "damping_grid", "label", "protrusion_grid", "range_count", "range_grid",
+           "roughness_label", "roughness_sets", "same_point", "scene_label"]
 
 
 def protrusion_grid(scene: Any) -> np.ndarray:
     """Protrusions [nm] of ``[sweep] protrusion_nm``, rounded to 1e-9 nm so labels are exact."""
     return range_grid(scene["sweep"]["protrusion_nm"])
-
-
-def range_count(g: dict[str, float]) -> int:
-    """Number of points of a range table ``{start, stop, step}`` (``stop`` included when on the grid,
-    to 1e-9 of a step), without building them (a grid of millions is refused by its count)."""
-    return int(np.floor((g["stop"] - g["start"]) / g["step"] + TOL_NM)) + 1
-
-
-def range_grid(g: dict[str, float]) -> np.ndarray:
-    """Points [nm] of a range table ``{start, stop, step}`` (:func:`range_count` of them), rounded to 1e-9."""
-    return label(g["start"] + g["step"] * np.arange(range_count(g)))
 
 
 def damping_grid(scene: Any) -> list[float]:

@@ -216,6 +216,15 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "half_length_um": Key("float", paper.TFC_HALF_LENGTH_UM, _pos, doc="ellipsoid semi-axis along sliding a [um] (paper)"),
         "half_width_um": Key("float", paper.TFC_HALF_WIDTH_UM, _pos, doc="ellipsoid semi-axis across b [um] (paper)"),
         "protrusion_nm": Key("float", paper.LIGHT_CONTACT_NM, _nonneg, doc="TFC protrusion delta [nm]"),
+        "actuation_nm_per_mw": Key("float", None, _pos,
+                                   doc="heater actuation efficiency [nm/mW]: protrusion = efficiency x heater power; "
+                                       "datasets then carry heater_power [mW] beside protrusion (docs/model.md, "
+                                       "section 'Heater power'); off by default"),
+        "actuation_power_mw": Key("floats", None, doc="heater powers [mW] of an actuation table, strictly increasing "
+                                                      "(with actuation_protrusion_nm; instead of actuation_nm_per_mw)"),
+        "actuation_protrusion_nm": Key("floats", None,
+                                       doc="protrusions [nm] at the actuation table's powers, strictly increasing; "
+                                           "interpolated linearly, not extrapolated"),
     },
     "roughness": {
         "sigma_nm": Key("float", 0.52, _pos, doc="combined rms roughness sigma [nm] (recon)"),
@@ -311,6 +320,10 @@ SCHEMA: dict[str, dict[str, Key]] = {
     "touchdown": {
         "onset_nm": Key("float", paper.TOUCHDOWN_NM, _nonneg, doc="measured touchdown protrusion [nm] (paper)"),
         "previous_nm": Key("float", paper.PREVIOUS_STEP_NM, _nonneg, doc="previous actuation step, no contact [nm] (paper)"),
+        "onset_mw": Key("float", None, _nonneg, doc="measured touchdown as a heater power [mW] (with previous_mw); "
+                                                    "sets onset_nm through the scene's [tfc] actuation"),
+        "previous_mw": Key("float", None, _nonneg, doc="the heater power of the previous step, no contact [mW]; "
+                                                       "sets previous_nm through the scene's [tfc] actuation"),
         "k_range": Key("floats", [-3.0, 3.0], (lambda v: v[0] < v[1], "lo < hi"), length=2,
                        doc="physically meaningful k searched by the calibration [1] (contact probability "
                            "0.1 % to 99.9 %)"),

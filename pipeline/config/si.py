@@ -20,7 +20,8 @@ from .schema import strip_unit
 
 
 #: SI names of keys that would collide with another key of their section once the suffix is dropped.
-SI_NAMES = {("dmw", "sample_rate_hz"): "record_sample_rate"}
+SI_NAMES = {("dmw", "sample_rate_hz"): "record_sample_rate", ("touchdown", "onset_mw"): "onset_power",
+            ("touchdown", "previous_mw"): "previous_power"}
 
 
 class Group(Mapping):

@@ -17,6 +17,7 @@ from typing import Any, Iterable
 
 from ..paths import special_kind
 from ..units import MHZ_IN_KHZ, MS, NS
+from .heater_power import TOUCHDOWN_POWER_KEYS, resolve_touchdown
 from .limits import MAX_INTEGER, MAX_MAGNITUDE, MAX_STEPS, LimitError, check_physical
 from ..physics.friction import FRICTION_LAWS
 from .schema import FREE_LIMITS, SCHEMA, Key, SceneError, is_folder_name, strip_unit
@@ -132,6 +133,9 @@ class Scene:
             for key, value in keys.items():
                 blame[(sec, key)] = f"scene.replace({sec}={{{key!r}: {value!r}}})"
             cfg.setdefault(sec, {}).update(_thaw(keys))
+        for mw, nm in TOUCHDOWN_POWER_KEYS.items():  # (a touchdown in nm set from mW is set again from mW)
+            if cfg["touchdown"].get(mw) is not None and nm not in sections.get("touchdown", {}):
+                cfg["touchdown"].pop(nm, None)
         raw = {s: {k: v for k, v in d.items() if v is not None} for s, d in cfg.items()}
         return validate(raw, self.path, overrides=self.overrides, resolve_paths=False, blame=blame)
 
@@ -326,6 +330,10 @@ def validate(raw: dict[str, Any], path: Path | None = None, *, overrides: Iterab
                              "scene.name = a name of letters, digits, '.', '_' or '-', not '.' or '..' "
                              "(set scene.name in the file, or rename the file)")
         config["scene"]["name"] = path.stem
+    try:  # (the touchdown in mW becomes the touchdown in nm that every stage reads)
+        resolve_touchdown(config, raw.get("touchdown", {}), where)
+    except ValueError as exc:
+        raise SceneError(str(exc)) from None
     _cross_checks(config, where)
     try:  # (a protrusion far beyond the flying height: no --yes makes it physical)
         check_physical(Scene(path, config), where)

@@ -34,7 +34,7 @@ import xarray as xr
 from ..config.grid import same_point
 from ..config.scene import PROTOCOLS
 from ..units import MS, NM
-from ..variables import HISTORIES, RUN, RUN_GRID_DIMS, SCALARS, STEPPING, TIME, coordinate, history, scalar
+from ..variables import HISTORIES, RUN, RUN_GRID_COORDS, RUN_GRID_DIMS, SCALARS, STEPPING, TIME, coordinate, history, scalar
 from . import assembly, outcomes, running
 from .state import STEP_COUNTERS
 
@@ -335,7 +335,9 @@ def grid_run_values(models: dict[tuple[str, float], assembly.Model], labels: Seq
                     k_source: str) -> dict[str, xr.Variable]:
     """The run values (:func:`run_values`) of a sweep's grid of models, one model per roughness set and
     damping ratio [1] (``models[(label, damping)]``): those of :data:`pipeline.variables.RUN_GRID_DIMS` along
-    ``roughness`` or ``damping`` (in the order of ``labels`` and ``damping``), the others 0-d.
+    ``roughness`` or ``damping`` (in the order of ``labels`` and ``damping``), the others 0-d. Those of
+    :data:`pipeline.variables.RUN_GRID_COORDS` are the grid's coordinate (the damping ratios themselves) and
+    are left out.
 
     Raises
     ------
@@ -360,6 +362,11 @@ def grid_run_values(models: dict[tuple[str, float], assembly.Model], labels: Seq
             continue
         along = [values[(label, damping[0])] for label in labels] if dim == "roughness" \
             else [values[(labels[0], d)] for d in damping]
-        out[name] = xr.Variable((dim,), np.array([float(v[name].values) for v in along]), attrs=var.attrs,
-                                encoding=var.encoding)
+        series = np.array([float(v[name].values) for v in along])
+        if name in RUN_GRID_COORDS:
+            coord = np.asarray(labels if dim == "roughness" else damping, dtype=float)
+            if not np.array_equal(series, coord):
+                raise ValueError(f"run value {name!r} ({series}) is not the grid's {dim!r} coordinate ({coord})")
+            continue
+        out[name] = xr.Variable((dim,), series, attrs=var.attrs, encoding=var.encoding)
     return out

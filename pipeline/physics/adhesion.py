@@ -22,6 +22,16 @@ def meniscus_force(R: float, dgamma: float) -> float:
     ----------
     R : summit radius [m]
     dgamma : work of adhesion [J/m^2]
+
+    Returns
+    -------
+    float
+        The meniscus force [N] (attractive, positive).
+
+    References
+    ----------
+    [Stanley90] H. M. Stanley, I. Etsion, D. B. Bogy, J. Tribol. 112 (1990) 98-104 (module docstring;
+    docs/model.md, section "Adhesion").
     """
     return 2.0 * np.pi * R * dgamma
 
@@ -40,6 +50,16 @@ def lennard_jones_force(s: np.ndarray, R: float, dgamma: float, eps: float) -> n
     R : summit radius [m]
     dgamma : work of adhesion [J/m^2]
     eps : intermolecular distance [m]
+
+    Returns
+    -------
+    numpy.ndarray
+        The force [N] at each gap (attractive, positive), the shape of ``s``.
+
+    References
+    ----------
+    [Israelachvili] J. N. Israelachvili, Intermolecular and Surface Forces, 3rd ed. (2011), ch. 13;
+    [Stanley90] (module docstring); docs/model.md, section "Adhesion".
     """
     r = eps / np.maximum(np.asarray(s, dtype=float), eps)
     r2 = r * r

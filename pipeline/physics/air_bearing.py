@@ -71,7 +71,24 @@ class Slider:
 
 
 def pad_matrix(a_f: float, a_r: float, l_f: float, l_r: float) -> np.ndarray:
-    """``[[a_f + a_r, a_f l_f - a_r l_r], [., a_f l_f^2 + a_r l_r^2]]`` for pads at ``+l_f`` and ``-l_r``."""
+    """``[[a_f + a_r, a_f l_f - a_r l_r], [., a_f l_f^2 + a_r l_r^2]]`` for pads at ``+l_f`` and ``-l_r``.
+
+    Parameters
+    ----------
+    a_f, a_r : front and rear pad coefficients: stiffnesses [N/m] or dampers [N s/m]
+    l_f, l_r : arms of the front pad ahead of and the rear pad behind the CG [m]
+
+    Returns
+    -------
+    numpy.ndarray
+        The 2 x 2 matrix on ``(z, theta)``: ``[N/m, N/rad; N, N m/rad]`` for stiffnesses (``N s/m``, ... for
+        dampers).
+
+    References
+    ----------
+    [Meirovitch] L. Meirovitch, Fundamentals of Vibrations (2001), ch. 7; [Zeng01]; docs/model.md, section
+    "Air bearing".
+    """
     return np.array([[a_f + a_r, a_f * l_f - a_r * l_r],
                      [a_f * l_f - a_r * l_r, a_f * l_f**2 + a_r * l_r**2]])
 
@@ -81,6 +98,20 @@ def mass_properties(length: float, width: float, thickness: float, density: floa
 
     ``m = rho L W T``, ``I = m (L^2 + T^2) / 12`` (pitch about the width axis). The paper's femto
     slider (0.85 x 0.70 x 0.23 mm, 4250 kg/m^3) gives 0.58 mg and 3.75e-14 kg m^2 (docs/model.md, section "Parameters").
+
+    Parameters
+    ----------
+    length, width, thickness : the block's sides L, W, T [m]
+    density : rho [kg/m^3]
+
+    Returns
+    -------
+    (float, float)
+        The mass m [kg] and the pitch inertia I [kg m^2].
+
+    References
+    ----------
+    [VLP09] (the femto slider); docs/model.md, section "Parameters".
     """
     m = density * length * width * thickness
     return m, m * (length**2 + thickness**2) / 12.0
@@ -98,6 +129,22 @@ def stiffness_roots(f1: float, f2: float, m: float, I: float, l_f: float, l_r: f
     ------
     ValueError
         When no real positive pair exists (the frequencies are too far apart for this geometry).
+
+    Parameters
+    ----------
+    f1, f2 : the natural frequencies [Hz], ``f1 < f2``
+    m : slider mass [kg]; I : pitch inertia about the CG [kg m^2]
+    l_f, l_r : front and rear pad arms about the CG [m]
+
+    Returns
+    -------
+    list of (float, float)
+        The ``(k_f, k_r)`` pairs [N/m], the larger rear stiffness first.
+
+    References
+    ----------
+    [Meirovitch] L. Meirovitch, Fundamentals of Vibrations (2001), ch. 7; [Zeng01]; docs/model.md, section
+    "Air bearing".
     """
     w1, w2 = 2 * np.pi * f1, 2 * np.pi * f2
     P = w1**2 * w2**2 * m * I / (l_f + l_r) ** 2
@@ -115,14 +162,46 @@ def stiffness_roots(f1: float, f2: float, m: float, I: float, l_f: float, l_r: f
 
 
 def modes(K: np.ndarray, M: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Natural angular frequencies [rad/s] (ascending) and mass-normalised mode shapes (columns)."""
+    """Natural angular frequencies [rad/s] (ascending) and mass-normalised mode shapes (columns).
+
+    Parameters
+    ----------
+    K : stiffness matrix on ``(z, theta)`` (:func:`pad_matrix`) [N/m, N/rad; N, N m/rad]
+    M : mass matrix ``diag(m, I)`` [kg, kg m^2]
+
+    Returns
+    -------
+    (numpy.ndarray, numpy.ndarray)
+        The angular frequencies [rad/s], ascending, and the mass-normalised mode shapes (columns
+        ``(z, theta)``) [kg^-1/2].
+
+    References
+    ----------
+    [Meirovitch] L. Meirovitch, Fundamentals of Vibrations (2001), ch. 7; [Zeng01]; docs/model.md, section
+    "Air bearing".
+    """
     from scipy.linalg import eigh
     w2, phi = eigh(K, M)
     return np.sqrt(w2), phi
 
 
 def node_position(shape: np.ndarray) -> float:
-    """Position ahead of the CG [m] that does not move in a mode ``(z, theta)`` (``inf`` for pure bounce)."""
+    """Position ahead of the CG [m] that does not move in a mode ``(z, theta)`` (``inf`` for pure bounce).
+
+    Parameters
+    ----------
+    shape : a mode shape ``(z, theta)`` [m, rad]
+
+    Returns
+    -------
+    float
+        The node's position ahead of the CG [m] (``-z / theta``; ``inf`` where ``theta = 0``).
+
+    References
+    ----------
+    [Meirovitch] L. Meirovitch, Fundamentals of Vibrations (2001), ch. 7; [Zeng01]; docs/model.md, section
+    "Air bearing".
+    """
     return -shape[0] / shape[1] if shape[1] != 0 else np.inf
 
 
@@ -171,9 +250,25 @@ def choose_stiffness(f1: float, f2: float, m: float, I: float, l_f: float, l_r: 
     * pitch-first: ``k_f = 8.47e5``, ``k_r = 1.06e5`` N/m; 120 kHz node at +0.340 mm (pitch about the
       leading pad), 300 kHz node at -0.190 mm.
 
+    Parameters
+    ----------
+    f1, f2 : the natural frequencies [Hz], ``f1 < f2``
+    m : slider mass [kg]; I : pitch inertia about the CG [kg m^2]
+    l_f, l_r : front and rear pad arms about the CG [m]
+    length : slider length L [m] (a mode's node on the slider: pitch-like)
+    root : the rule, a name of :data:`STIFFNESS_ROOTS`
+
     Returns
     -------
-    k_f, k_r [N/m], info (both roots, their node positions [m], which one was taken and why)
+    k_f, k_r : float
+        The front and rear pad stiffnesses [N/m].
+    info : dict
+        Both roots, their node positions [m], which one was taken and why.
+
+    References
+    ----------
+    [Meirovitch] (two-DOF modal analysis), [Zeng01] (lumped air-bearing springs); docs/model.md, section "Air
+    bearing".
     """
     rule = STIFFNESS_ROOTS.lookup(root).behaviour
     info: dict = {"roots": [], "chosen": None}
@@ -200,6 +295,23 @@ def pad_damping(k_f: float, k_r: float, m: float, I: float, l_f: float, l_r: flo
     equations ``phi_i^T C phi_i = 2 zeta w_i`` for ``(c_f, c_r)``. The small off-diagonal modal
     term that pad dampers also produce is kept (not a proportional damping); the exact damping
     ratios of the resulting system are reported by :func:`damping_ratios`.
+
+    Parameters
+    ----------
+    k_f, k_r : pad stiffnesses [N/m]
+    m : slider mass [kg]; I : pitch inertia [kg m^2]
+    l_f, l_r : pad arms about the CG [m]
+    zeta : the modal damping ratio [1]
+
+    Returns
+    -------
+    (float, float)
+        The front and rear dampers c_f, c_r [N s/m].
+
+    References
+    ----------
+    [Meirovitch] L. Meirovitch, Fundamentals of Vibrations (2001), ch. 7; [Zeng01]; docs/model.md, section
+    "Air bearing".
     """
     w, phi = modes(pad_matrix(k_f, k_r, l_f, l_r), np.diag([m, I]))
     A = np.empty((2, 2))
@@ -218,6 +330,20 @@ def damping_ratios(s: Slider) -> tuple[np.ndarray, np.ndarray]:
 
     From the eigenvalues ``lambda = -zeta w +- i w sqrt(1 - zeta^2)`` of the first-order system of
     the linearised slider; the damped frequencies are ``w sqrt(1 - zeta^2) / 2 pi``.
+
+    Parameters
+    ----------
+    s : the slider (its mass, inertia, pad stiffnesses, dampers and arms, SI)
+
+    Returns
+    -------
+    (numpy.ndarray, numpy.ndarray)
+        The natural frequencies [Hz] and the damping ratios [1] of the two modes, ascending.
+
+    References
+    ----------
+    [Meirovitch] L. Meirovitch, Fundamentals of Vibrations (2001), ch. 7; [Zeng01]; docs/model.md, section
+    "Air bearing".
     """
     M, K, C = s.mass_matrix, s.stiffness_matrix, s.damping_matrix
     Minv = np.linalg.inv(M)
@@ -239,6 +365,23 @@ def rear_power_law(g, g0: float, n: float, F0: float, k_r: float):
     The arguments of every rear law (:class:`RearLaw`); ``k_r`` is not used (this law's stiffness at
     ``g0`` is ``n F0 / g0``). ``n = 2`` squares rather than calling ``pow()``, the costliest call of the
     kernel's right-hand side.
+
+    Parameters
+    ----------
+    g : rear gap [m]
+    g0 : reference gap [m] (FH0)
+    n : exponent [1]
+    F0 : force scale [N]
+    k_r : rear stiffness [N/m] (not used)
+
+    Returns
+    -------
+    float or numpy.ndarray
+        The rear force [N] (up positive), the shape of ``g``.
+
+    References
+    ----------
+    [VLP09] (the 2-DOF slider on front and rear bearing springs); docs/model.md, section "Air bearing" ([recon]).
     """
     ratio = g0 / g
     law = ratio * ratio if n == 2.0 else ratio**n
@@ -247,7 +390,24 @@ def rear_power_law(g, g0: float, n: float, F0: float, k_r: float):
 
 def rear_linear_law(g, g0: float, n: float, F0: float, k_r: float):
     """Linear rear bearing force ``k_r (g0 - g)`` [N] on gap ``g`` [m], stiffness ``k_r`` [N/m] (docs/model.md,
-    section "Slider dynamics"); the arguments of every rear law (:class:`RearLaw`), ``n`` and ``F0`` not used."""
+    section "Slider dynamics"); the arguments of every rear law (:class:`RearLaw`), ``n`` and ``F0`` not used.
+
+    Parameters
+    ----------
+    g : rear gap [m]
+    g0 : reference gap [m] (FH0)
+    n, F0 : not used (the arguments of every rear law)
+    k_r : rear stiffness [N/m]
+
+    Returns
+    -------
+    float or numpy.ndarray
+        The rear force [N] (up positive), the shape of ``g``.
+
+    References
+    ----------
+    [VLP09] (the 2-DOF slider on front and rear bearing springs); docs/model.md, section "Air bearing" ([recon]).
+    """
     return k_r * (g0 - g)
 
 
@@ -255,13 +415,46 @@ def rear_force(g: np.ndarray, g0: float, n: float, F0: float) -> np.ndarray:
     """Nonlinear rear bearing force [N] (positive: pushes the slider up) on gap ``g`` [m].
 
     ``F_r = F0 [(g0/g)^n - 1]`` (:func:`rear_power_law`); zero at ``g = g0``, stiffness ``n F0 / g0`` there.
+
+    Parameters
+    ----------
+    g : rear gap [m]
+    g0 : reference gap [m]
+    n : exponent [1]
+    F0 : force scale [N]
+
+    Returns
+    -------
+    numpy.ndarray
+        The rear force [N], the shape of ``g``.
+
+    References
+    ----------
+    [VLP09] (the 2-DOF slider on front and rear bearing springs); docs/model.md, section "Air bearing" ([recon]).
     """
     return rear_power_law(np.asarray(g, dtype=float), g0, n, F0, n * F0 / g0)
 
 
 def rear_force_linear(g: np.ndarray, g0: float, n: float, F0: float) -> np.ndarray:
     """Linear rear bearing force [N] ``F_r = k_r (g0 - g)`` with ``k_r = n F0 / g0`` [N/m] on gap ``g`` [m]:
-    the tangent of :func:`rear_force` at ``g0`` (same modal stiffness, no nonlinearity)."""
+    the tangent of :func:`rear_force` at ``g0`` (same modal stiffness, no nonlinearity).
+
+    Parameters
+    ----------
+    g : rear gap [m]
+    g0 : reference gap [m]
+    n : exponent [1] of the power law whose tangent this is
+    F0 : force scale [N] of that law
+
+    Returns
+    -------
+    numpy.ndarray
+        The rear force [N], the shape of ``g``.
+
+    References
+    ----------
+    [VLP09] (the 2-DOF slider on front and rear bearing springs); docs/model.md, section "Air bearing" ([recon]).
+    """
     return rear_linear_law(np.asarray(g, dtype=float), g0, n, F0, n * F0 / g0)
 
 
@@ -310,12 +503,45 @@ TFC_MIN_GAP = 0.02
 
 def stiffening_potential(s, g0: float, q: float):
     """``G(s) = g0^q s^(1-q) / (1-q) - s`` (``g0 ln s - s`` for ``q = 1``) [m] of the TFC stiffening law,
-    gap ``s`` [m] (see :func:`tfc_stiffening_force`): ``-dG/ds`` is the stiffness over ``k_t``."""
+    gap ``s`` [m] (see :func:`tfc_stiffening_force`): ``-dG/ds`` is the stiffness over ``k_t``.
+
+    Parameters
+    ----------
+    s : gap [m]
+    g0 : reference gap [m] (FH0)
+    q : exponent [1]
+
+    Returns
+    -------
+    float or numpy.ndarray
+        G(s) [m], the shape of ``s``.
+
+    References
+    ----------
+    [VHP12] (the bearing's stiffening as the TFC clearance closes); docs/model.md, section "Gap-power stiffening".
+    """
     return g0 * np.log(s) - s if q == 1.0 else g0**q * s ** (1.0 - q) / (1.0 - q) - s
 
 
 def stiffening_stiffness(g, g0: float, k_t: float, q: float):
-    """Added stiffness ``k_t [(g0/g)^q - 1]`` [N/m] of the TFC stiffening law at gap ``g`` [m] (docs/model.md, section "Gap-power stiffening")."""
+    """Added stiffness ``k_t [(g0/g)^q - 1]`` [N/m] of the TFC stiffening law at gap ``g`` [m] (docs/model.md, section "Gap-power stiffening").
+
+    Parameters
+    ----------
+    g : gap at the TFC point [m]
+    g0 : reference gap [m] (FH0)
+    k_t : stiffness scale [N/m]
+    q : exponent [1]
+
+    Returns
+    -------
+    float or numpy.ndarray
+        The added stiffness [N/m], the shape of ``g``.
+
+    References
+    ----------
+    [VHP12] (the bearing's stiffening as the TFC clearance closes); docs/model.md, section "Gap-power stiffening".
+    """
     return k_t * ((g0 / g) ** q - 1.0)
 
 
@@ -336,6 +562,15 @@ def tfc_stiffening_force(g: np.ndarray, g_n: float, g0: float, k_t: float, p: fl
     g : gap at the TFC point to the mean of surface heights [m]
     g_n : nominal gap ``FH0 - delta`` [m]; g0 : reference gap ``FH0`` [m]
     k_t : stiffness scale [N/m]; p : exponent [1]
+
+    Returns
+    -------
+    (numpy.ndarray, numpy.ndarray)
+        The force [N] (up positive) and the stiffness [N/m], the shape of ``g``.
+
+    References
+    ----------
+    [VHP12] (the bearing's stiffening as the TFC clearance closes); docs/model.md, section "Gap-power stiffening".
     """
     g = np.asarray(g, dtype=float)
     gm = TFC_MIN_GAP * g0
@@ -352,7 +587,25 @@ def tfc_stiffening_force(g: np.ndarray, g_n: float, g0: float, k_t: float, p: fl
 def gap_power_force(g: np.ndarray, delta: float, g0: float, k_t: float, p: float) -> np.ndarray:
     """Force [N] of the ``"gap-power"`` stiffening law at the gaps ``g`` [m] for the protrusion ``delta`` [m]:
     :func:`tfc_stiffening_force` with the reference gap ``g0 = FH0`` [m], nominal gap ``FH0 - delta``,
-    stiffness scale ``k_t`` [N/m] and exponent ``p`` [1]."""
+    stiffness scale ``k_t`` [N/m] and exponent ``p`` [1].
+
+    Parameters
+    ----------
+    g : gaps at the TFC point [m]
+    delta : protrusion [m]
+    g0 : reference gap FH0 [m]
+    k_t : stiffness scale [N/m]
+    p : exponent [1]
+
+    Returns
+    -------
+    numpy.ndarray
+        The force [N] (up positive), the shape of ``g``.
+
+    References
+    ----------
+    [VHP12] (the bearing's stiffening as the TFC clearance closes); docs/model.md, section "Gap-power stiffening".
+    """
     return tfc_stiffening_force(g, g0 - delta, g0, k_t, p)[0]
 
 

@@ -37,6 +37,10 @@ def moments_from_statistics(sigma: float, eta: float, R: float) -> tuple[float, 
     Returns
     -------
     m0 [m^2], m2 [1], m4 [m^-2]
+
+    References
+    ----------
+    [McCool86] J. I. McCool, Wear 107 (1986) 37-60; [Nayak71]; docs/model.md, section "Asperity statistics".
     """
     m4 = np.pi * (0.375 / R) ** 2
     m2 = m4 / (6.0 * np.pi * np.sqrt(3.0) * eta)
@@ -57,6 +61,10 @@ def statistics_from_moments(m0: float, m2: float, m4: float) -> dict[str, float]
     Returns
     -------
     dict with ``sigma`` [m], ``eta`` [m^-2], ``R`` [m], ``alpha`` [1]
+
+    References
+    ----------
+    [McCool86] J. I. McCool, Wear 107 (1986) 37-60; [Nayak71]; docs/model.md, section "Asperity statistics".
     """
     eta = m4 / (6.0 * np.pi * np.sqrt(3.0) * m2)
     R = 0.375 * np.sqrt(np.pi / m4)
@@ -71,6 +79,15 @@ def bandwidth_alpha(sigma: float, eta: float, R: float) -> float:
     sigma : rms height [m]
     eta : summit density [m^-2]
     R : summit radius [m]
+
+    Returns
+    -------
+    float
+        The bandwidth alpha [1].
+
+    References
+    ----------
+    [McCool86] J. I. McCool, Wear 107 (1986) 37-60; [Nayak71]; docs/model.md, section "Asperity statistics".
     """
     return 2412.74 * (sigma * eta * R) ** 2
 
@@ -85,6 +102,21 @@ def summit_sigma(sigma: float, eta: float, R: float) -> float:
     ValueError
         When ``alpha <= 0.8968`` (the summit-height variance would be negative): the surface is
         outside the validity of McCool's relations.
+
+    Parameters
+    ----------
+    sigma : rms height of the combined surface [m]
+    eta : summit density [m^-2]
+    R : summit radius [m]
+
+    Returns
+    -------
+    float
+        The summit-height standard deviation sigma_s [m].
+
+    References
+    ----------
+    [McCool86] J. I. McCool, Wear 107 (1986) 37-60; [Nayak71]; docs/model.md, section "Asperity statistics".
     """
     alpha = bandwidth_alpha(sigma, eta, R)
     radicand = sigma**2 - 3.717e-4 / (eta * R) ** 2
@@ -99,6 +131,21 @@ def summit_offset(sigma: float, eta: float, R: float) -> float:
     """Distance between the mean of surface heights and the mean of summit heights ``y_s`` [m].
 
     ``y_s = 4 sigma / sqrt(pi alpha)`` [McCool86].
+
+    Parameters
+    ----------
+    sigma : rms height of the combined surface [m]
+    eta : summit density [m^-2]
+    R : summit radius [m]
+
+    Returns
+    -------
+    float
+        The summit offset y_s [m] (the mean of summit heights lies y_s above the mean of surface heights).
+
+    References
+    ----------
+    [McCool86] J. I. McCool, Wear 107 (1986) 37-60; [Nayak71]; docs/model.md, section "Asperity statistics".
     """
     return float(4.0 * sigma / np.sqrt(np.pi * bandwidth_alpha(sigma, eta, R)))
 
@@ -107,13 +154,43 @@ def composite_modulus(E1: float, E2: float, nu1: float, nu2: float | None = None
     """Composite (Hertz) modulus ``1/E' = (1-nu1^2)/E1 + (1-nu2^2)/E2`` [any pressure unit].
 
     docs/model.md, section "Asperity statistics" (Johnson, Contact Mechanics, 1985, eq. 4.22).
+
+    Parameters
+    ----------
+    E1, E2 : Young's moduli of the two bodies [Pa] (any pressure unit, the same for both)
+    nu1 : Poisson ratio of the first body [1]
+    nu2 : Poisson ratio of the second body [1] (``None``: ``nu1``)
+
+    Returns
+    -------
+    float
+        The composite modulus E' [Pa] (the unit of ``E1``, ``E2``).
+
+    References
+    ----------
+    [Johnson85] K. L. Johnson, Contact Mechanics (1985), eq. 4.22; docs/model.md, section "Asperity statistics".
     """
     nu2 = nu1 if nu2 is None else nu2
     return 1.0 / ((1 - nu1**2) / E1 + (1 - nu2**2) / E2)
 
 
 def ke_hardness_factor(nu: float) -> float:
-    """Hardness coefficient ``K = 0.454 + 0.41 nu`` [1] (Chang-Etsion-Bogy 1987; Kogut-Etsion 2002)."""
+    """Hardness coefficient ``K = 0.454 + 0.41 nu`` [1] (Chang-Etsion-Bogy 1987; Kogut-Etsion 2002).
+
+    Parameters
+    ----------
+    nu : Poisson ratio of the softer body [1]
+
+    Returns
+    -------
+    float
+        The factor K [1].
+
+    References
+    ----------
+    [CEB87] W. R. Chang, I. Etsion, D. B. Bogy, J. Tribol. 109 (1987) 257-263; [KE02]; docs/model.md,
+    section "Single asperity".
+    """
     return 0.454 + 0.41 * nu
 
 
@@ -126,6 +203,16 @@ def plasticity_index_gw(E: float, H: float, sigma_s: float, R: float) -> float:
     H : hardness [Pa]
     sigma_s : summit-height standard deviation [m]
     R : summit radius [m]
+
+    Returns
+    -------
+    float
+        The plasticity index psi [1].
+
+    References
+    ----------
+    [GW66] J. A. Greenwood, J. B. P. Williamson, Proc. R. Soc. Lond. A 295 (1966) 300-319; docs/model.md,
+    section "Plasticity index".
     """
     return E / H * np.sqrt(sigma_s / R)
 
@@ -134,12 +221,47 @@ def plasticity_index_ke(E: float, H: float, sigma_s: float, R: float, nu: float)
     """CEB / Kogut-Etsion plasticity index ``psi = (2E'/(pi K H)) sqrt(sigma_s/R)`` [KE03] [1].
 
     Equals ``sqrt(sigma_s / w_c)`` with the critical interference ``w_c`` of Kogut-Etsion 2002.
+
+    Parameters
+    ----------
+    E : composite modulus E' [Pa]
+    H : hardness [Pa]
+    sigma_s : summit-height standard deviation [m]
+    R : summit radius [m]
+    nu : Poisson ratio [1]
+
+    Returns
+    -------
+    float
+        The plasticity index psi [1].
+
+    References
+    ----------
+    [KE03] L. Kogut, I. Etsion, Tribol. Trans. 46 (2003) 383-390; [CEB87]; docs/model.md, section
+    "Plasticity index".
     """
     return 2.0 * E / (np.pi * ke_hardness_factor(nu) * H) * np.sqrt(sigma_s / R)
 
 
 def hardness_from_plasticity_gw(psi: float, E: float, sigma_s: float, R: float) -> float:
-    """Hardness [Pa] that gives the GW plasticity index ``psi`` (inverse of :func:`plasticity_index_gw`)."""
+    """Hardness [Pa] that gives the GW plasticity index ``psi`` (inverse of :func:`plasticity_index_gw`).
+
+    Parameters
+    ----------
+    psi : GW plasticity index [1]
+    E : composite modulus E' [Pa]
+    sigma_s : summit-height standard deviation [m]
+    R : summit radius [m]
+
+    Returns
+    -------
+    float
+        The hardness H [Pa].
+
+    References
+    ----------
+    [GW66]; docs/model.md, section "Plasticity index" (the paper's psi = 0.52 sets H).
+    """
     return E / psi * np.sqrt(sigma_s / R)
 
 
@@ -149,6 +271,19 @@ def contact_probabilities(k: float) -> tuple[float, float]:
     ``z`` Gaussian with rms ``sigma``, ``Q`` the standard normal tail. The two-sided value comes
     first: it is the paper's convention (docs/model.md, section "Contact criterion": its "3 sigma = 0.3 %" is ``2 Q(3) = 0.27 %``,
     so its 32.8 % means ``k = 0.978``).
+
+    Parameters
+    ----------
+    k : the contact criterion constant [1] (contact where ``d < k sigma``)
+
+    Returns
+    -------
+    (float, float)
+        The two-sided and the one-sided contact probability [1].
+
+    References
+    ----------
+    [VLP09] (the calibrated 32.8 %, "3 sigma = 0.3 %"); docs/model.md, section "Contact criterion".
     """
     # Q(k) = erfc(k / sqrt 2) / 2 (= scipy.stats.norm.sf, without its ~1 s import on every run)
     return float(math.erfc(abs(k) / math.sqrt(2.0))), float(0.5 * math.erfc(k / math.sqrt(2.0)))
@@ -158,6 +293,24 @@ def k_from_probability(probability: float) -> float:
     """Criterion constant ``k >= 0`` [1] whose two-sided contact probability ``2 Q(k)`` is ``probability``.
 
     The inverse of the first value of :func:`contact_probabilities` (docs/model.md, section "Contact criterion"); 0.328 gives 0.978.
+
+    Parameters
+    ----------
+    probability : two-sided contact probability [1], in (0, 1)
+
+    Returns
+    -------
+    float
+        The criterion constant k [1], >= 0.
+
+    Raises
+    ------
+    ValueError
+        For a probability outside (0, 1).
+
+    References
+    ----------
+    [VLP09] (the calibrated 32.8 %); docs/model.md, section "Contact criterion".
     """
     if not 0.0 < probability < 1.0:
         raise ValueError(f"contact probability {probability}: expected a number in (0, 1)")
@@ -168,7 +321,28 @@ def k_from_probability(probability: float) -> float:
 def explicit_statistics(sigma_nm: float, summit_radius_um: float, summit_density_per_um2: float) -> dict[str, float]:
     """Summit statistics [SI] of a surface given by ``sigma`` [nm], ``R`` [um] and ``eta`` [um^-2] (the
     scene's ``[roughness]`` keys): ``sigma``, ``sigma_s``, ``y_s``, ``R`` [m], ``eta`` [m^-2], ``alpha`` [1]
-    by McCool's relations (:func:`summit_sigma`, :func:`summit_offset`, :func:`bandwidth_alpha`; docs/model.md, section "Asperity statistics")."""
+    by McCool's relations (:func:`summit_sigma`, :func:`summit_offset`, :func:`bandwidth_alpha`; docs/model.md, section "Asperity statistics").
+
+    Parameters
+    ----------
+    sigma_nm : combined rms roughness [nm]
+    summit_radius_um : summit radius [um]
+    summit_density_per_um2 : summit density [um^-2]
+
+    Returns
+    -------
+    dict
+        ``sigma``, ``sigma_s``, ``y_s``, ``R`` [m], ``eta`` [m^-2], ``alpha`` [1].
+
+    Raises
+    ------
+    ValueError
+        Where McCool's relations do not hold (:func:`summit_sigma`).
+
+    References
+    ----------
+    [McCool86]; docs/model.md, section "Asperity statistics".
+    """
     sigma, R, eta = sigma_nm * NM, summit_radius_um * UM, summit_density_per_um2 / UM2
     return {"sigma": sigma, "sigma_s": summit_sigma(sigma, eta, R), "y_s": summit_offset(sigma, eta, R),
             "R": R, "eta": eta, "alpha": bandwidth_alpha(sigma, eta, R)}

@@ -149,6 +149,25 @@ def ph_lift(g, delta, p_pad: float, a: float, b: float, profile: str = "ellipsoi
     """Vectorised :func:`ph_force_stiffness`: lift [N] and stiffness ``-dF/dg`` [N/m] on broadcast ``g, delta`` [m].
 
     ``profile`` is ``"ellipsoid"`` or ``"paraboloid"``; ``g_min`` [m] the gap floor (0: none, ``g > 0`` then).
+
+    Parameters
+    ----------
+    g : apex gaps [m]
+    delta : protrusions [m], broadcast with ``g``
+    p_pad : pad pressure [Pa]
+    a, b : the footprint's semi-axes along and across the sliding direction [m]
+    profile : a name of :data:`PROFILES`
+    g_min : the gap floor [m]
+
+    Returns
+    -------
+    (numpy.ndarray, numpy.ndarray)
+        The lift [N] and the stiffness [N/m], the broadcast shape.
+
+    References
+    ----------
+    [Gross62] W. A. Gross, Gas Film Lubrication (1962) (the high-bearing-number limit p h = const); docs/model.md,
+    section "Bulge air bearing".
     """
     code = PROFILES.lookup(profile).behaviour
     gb, db = np.broadcast_arrays(np.asarray(g, dtype=float), np.asarray(delta, dtype=float))
@@ -169,6 +188,26 @@ def rough_ph_lift(g, delta: float, p_pad: float, a: float, b: float, roughness: 
     ``alpha`` (docs/model.md, section "Rough-gap bulge bearing"). Gauss-Legendre quadrature in
     ``s = sqrt(1 - u)`` (ellipsoid; ``u`` for the paraboloid) with ``nodes`` points. The limit a rough
     Reynolds solve tends to as the bearing number grows (tests/scenarios/test_model_rough_bulge.py).
+
+    Parameters
+    ----------
+    g : apex gaps [m]
+    delta : protrusion [m]
+    p_pad : pad pressure [Pa]
+    a, b : the footprint's semi-axes [m]
+    roughness : the gap's roughness (rms [m], the disk's share, the wetting gap [m])
+    profile : a name of :data:`PROFILES`
+    nodes : quadrature nodes [-]
+
+    Returns
+    -------
+    numpy.ndarray
+        The lift [N], the shape of ``g``.
+
+    References
+    ----------
+    [Gross62] (the limit), [PC78]/[PC79] (the rough gap's flow factors); docs/model.md, section "Rough-gap
+    bulge bearing".
     """
     x, w = np.polynomial.legendre.leggauss(nodes)
     t, w = 0.5 * (x + 1.0), 0.5 * w  # on [0, 1]
@@ -187,7 +226,26 @@ def rough_ph_lift(g, delta: float, p_pad: float, a: float, b: float, roughness: 
 def ph_limit_force(g: np.ndarray, delta: float, p_pad: float, a: float, b: float, profile: str) -> np.ndarray:
     """Lift [N] of the bulge's air bearing in the p h = const limit at the TFC gaps ``g`` [m] for the
     protrusion ``delta`` [m] (:func:`ph_lift`): pad pressure ``p_pad`` [Pa], the bulge's semi-axes ``a``,
-    ``b`` [m] and its ``profile`` (docs/model.md, section "Bulge air bearing"). Zero at zero protrusion."""
+    ``b`` [m] and its ``profile`` (docs/model.md, section "Bulge air bearing"). Zero at zero protrusion.
+
+    Parameters
+    ----------
+    g : TFC gaps [m]
+    delta : protrusion [m]
+    p_pad : pad pressure [Pa]
+    a, b : the footprint's semi-axes [m]
+    profile : a name of :data:`PROFILES`
+
+    Returns
+    -------
+    numpy.ndarray
+        The lift [N], the shape of ``g``.
+
+    References
+    ----------
+    [Gross62] W. A. Gross, Gas Film Lubrication (1962) (the high-bearing-number limit p h = const); docs/model.md,
+    section "Bulge air bearing".
+    """
     return ph_lift(g, delta, p_pad, a, b, profile)[0]
 
 
@@ -262,6 +320,22 @@ def gap_profile(u: np.ndarray, g, delta, profile: str) -> np.ndarray:
     """Gap ``h`` [m] at the level ``u = (x/a)^2 + (y/b)^2`` of the footprint (``h_pad = g + delta`` outside).
 
     Ellipsoid ``h = g + delta (1 - sqrt(1 - u))``, paraboloid ``h = g + delta u`` (module docstring).
+
+    Parameters
+    ----------
+    u : footprint levels ``(x/a)^2 + (y/b)^2`` [1]
+    g : apex gap [m]
+    delta : protrusion [m]
+    profile : a name of :data:`PROFILES`
+
+    Returns
+    -------
+    numpy.ndarray
+        The gap h [m], the broadcast shape.
+
+    References
+    ----------
+    [VLP09] (the ellipsoidal bulge); docs/model.md, section "Bulge air bearing".
     """
     uc = np.minimum(u, 1.0)
     code = PROFILES.lookup(profile).behaviour
@@ -378,13 +452,20 @@ def reynolds_solve(g, delta, *, p_pad: float, a: float, b: float, speed: float, 
 
     Returns
     -------
-    dict with ``lift`` [N] (shape of the broadcast inputs), ``bearing_number`` and ``knudsen_pad`` [1]
-    (``Lambda``, ``Kn0`` of each case), ``iterations`` (Newton), and the mass flows through the upstream,
-    downstream and lateral boundaries of the full domain ``inflow``, ``outflow``, ``side_flow`` and
-    ``outflow + side_flow - inflow`` as ``net_flow`` (scaled [1]: the flux ``Lambda P H - C grad P``
-    integrated over ``Y`` or ``X``; the pad's Couette inflow over the width ``2 (1 + margin_b)`` is
-    ``Lambda 2 (1 + margin_b)``; one unit is ``p_pad h_pad^3 p_pad b / (12 mu a)`` in ``p`` times volume
-    per time, i.e. a mass flow after division by ``R T``); with ``fields`` also ``P``, ``X``, ``Y``.
+    dict
+        ``lift`` [N] (shape of the broadcast inputs), ``bearing_number`` and ``knudsen_pad`` [1]
+        (``Lambda``, ``Kn0`` of each case), ``iterations`` (Newton), and the mass flows through the upstream,
+        downstream and lateral boundaries of the full domain ``inflow``, ``outflow``, ``side_flow`` and
+        ``outflow + side_flow - inflow`` as ``net_flow`` (scaled [1]: the flux ``Lambda P H - C grad P``
+        integrated over ``Y`` or ``X``; the pad's Couette inflow over the width ``2 (1 + margin_b)`` is
+        ``Lambda 2 (1 + margin_b)``; one unit is ``p_pad h_pad^3 p_pad b / (12 mu a)`` in ``p`` times volume
+        per time, i.e. a mass flow after division by ``R T``); with ``fields`` also ``P``, ``X``, ``Y``.
+
+    References
+    ----------
+    [Burgdorfer59] (first-order slip), [HsiaDomoto83] (second-order), [FK88]/[FK90] (the Boltzmann flow rate),
+    [PC78]/[PC79] (average flow over a rough gap); docs/model.md, sections "Slip-corrected Reynolds equation" and
+    "Rough-gap bulge bearing".
     """
     SLIP_MODELS.lookup(slip)  # (a name it has: one line naming the key)
     gb, db = np.broadcast_arrays(np.asarray(g, dtype=float), np.asarray(delta, dtype=float))
@@ -523,9 +604,16 @@ def reynolds_table(gaps, protrusions, *, p_pad: float, a: float, b: float, speed
 
     Returns
     -------
-    dict with ``lift``, ``stiffness``, ``lift_ph``, ``stiffness_ph`` (``n_delta x n_gap``) [N], [N/m],
-    ``ratio`` = ``lift / lift_ph`` [1] (NaN at ``delta = 0``), ``bearing_number`` [1] and ``iterations``
-    (``n_delta x n_gap``).
+    dict
+        ``lift``, ``stiffness``, ``lift_ph``, ``stiffness_ph`` (``n_delta x n_gap``) [N], [N/m],
+        ``ratio`` = ``lift / lift_ph`` [1] (NaN at ``delta = 0``), ``bearing_number`` [1] and ``iterations``
+        (``n_delta x n_gap``).
+
+    References
+    ----------
+    [Burgdorfer59] (first-order slip), [HsiaDomoto83] (second-order), [FK88]/[FK90] (the Boltzmann flow rate),
+    [PC78]/[PC79] (average flow over a rough gap); docs/model.md, sections "Slip-corrected Reynolds equation" and
+    "Rough-gap bulge bearing".
     """
     from scipy.interpolate import CubicSpline
 
@@ -589,7 +677,31 @@ class LiftTable:
 
 def lift_table(gaps, protrusions, lift, *, p_pad: float, a: float, b: float, profile: str = "ellipsoid") -> LiftTable:
     """A :class:`LiftTable` from a tabulated lift [N] (``n_protrusion x n_gap``) on ``gaps`` [m] (increasing,
-    > 0) and ``protrusions`` [m] (>= 0; rows at zero protrusion, where the lift is zero, are dropped)."""
+    > 0) and ``protrusions`` [m] (>= 0; rows at zero protrusion, where the lift is zero, are dropped).
+
+    Parameters
+    ----------
+    gaps : apex gaps [m], increasing, > 0
+    protrusions : protrusions [m], >= 0
+    lift : the tabulated lift [N], ``n_protrusion x n_gap``
+    p_pad : pad pressure [Pa]
+    a, b : the footprint's semi-axes [m]
+    profile : a name of :data:`PROFILES`
+
+    Returns
+    -------
+    LiftTable
+        The table: its gaps [m], protrusions [m] and the ratio to the closed form [1] with its slope.
+
+    Raises
+    ------
+    ValueError
+        Fewer than 2 rows of positive protrusion or 4 gaps, or a lift of another shape.
+
+    References
+    ----------
+    docs/model.md, section "Slip-corrected Reynolds equation" (the ratio to the closed form).
+    """
     from scipy.interpolate import CubicSpline
 
     gaps, protrusions = np.asarray(gaps, dtype=float), np.asarray(protrusions, dtype=float)
@@ -615,6 +727,22 @@ def table_lift(table: LiftTable, g, delta: float, g_min: float | None = None) ->
     the table's gaps). Below ``g_min`` [m] (default: the table's smallest gap) the force is held and the
     stiffness is zero. The error of the protrusion interpolation is measured in
     tests/stages/test_bulge.py (docs/model.md, section "Slip-corrected Reynolds equation").
+
+    Parameters
+    ----------
+    table : the lift table (:func:`lift_table`)
+    g : apex gaps [m]
+    delta : protrusion [m]
+    g_min : the gap floor [m] (``None``: the table's smallest gap)
+
+    Returns
+    -------
+    (numpy.ndarray, numpy.ndarray)
+        The lift [N] and the stiffness [N/m], the shape of ``g``.
+
+    References
+    ----------
+    docs/model.md, section "Slip-corrected Reynolds equation"; [Gross62] (the closed form).
     """
     from scipy.interpolate import CubicHermiteSpline
 
@@ -642,7 +770,24 @@ def reynolds_force(g: np.ndarray, delta: float, table: LiftTable) -> np.ndarray:
     ``air_bearing.bulge_slip``) at the TFC gaps ``g`` [m] for the protrusion ``delta`` [m]
     (:func:`table_lift`; docs/model.md, section "Slip-corrected Reynolds equation"). Zero at zero
     protrusion. The table holds everything (the runner keeps it current). The same reader serves the
-    rough-gap law ``"rough-reynolds"`` (docs/model.md, section "Rough-gap bulge bearing")."""
+    rough-gap law ``"rough-reynolds"`` (docs/model.md, section "Rough-gap bulge bearing").
+
+    Parameters
+    ----------
+    g : TFC gaps [m]
+    delta : protrusion [m]
+    table : the scene's lift table (:func:`lift_table`)
+
+    Returns
+    -------
+    numpy.ndarray
+        The lift [N], the shape of ``g``.
+
+    References
+    ----------
+    [Burgdorfer59] (first-order slip), [FK88]/[FK90] and [PC78]/[PC79] (the rough gap); docs/model.md,
+    sections "Slip-corrected Reynolds equation" and "Rough-gap bulge bearing".
+    """
     return table_lift(table, g, delta)[0]
 
 

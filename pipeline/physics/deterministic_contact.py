@@ -88,6 +88,16 @@ def rms_slope(heights: np.ndarray, physical_sizes: tuple[float, float]) -> float
     ----------
     heights : 2-D map [nm]
     physical_sizes : lateral sizes ``(Lx, Ly)`` [nm]
+
+    Returns
+    -------
+    float
+        The rms slope h'_rms [1].
+
+    References
+    ----------
+    [PK99], [SK97], [PR16] (the FFT boundary-element solver, ContactMechanics), [Hyun04];
+    docs/deterministic_interface.md.
     """
     h = np.asarray(heights, float)
     dx, dy = (s / n for s, n in zip(physical_sizes, h.shape))
@@ -106,6 +116,16 @@ def resample(heights: np.ndarray, max_points: int | None) -> np.ndarray:
     ----------
     heights : 2-D map [any length unit]
     max_points : largest number of grid points per side (``None``: the map as it is)
+
+    Returns
+    -------
+    numpy.ndarray
+        The map [unit of ``heights``], at most ``max_points`` per side.
+
+    References
+    ----------
+    [PK99], [SK97], [PR16] (the FFT boundary-element solver, ContactMechanics), [Hyun04];
+    docs/deterministic_interface.md.
     """
     h = np.asarray(heights, float)
     if max_points is None or max(h.shape) <= max_points:
@@ -128,6 +148,21 @@ def combine_maps(maps: list[tuple[np.ndarray, tuple[float, float]]]) -> tuple[np
     Parameters
     ----------
     maps : ``(heights [nm], (Lx, Ly) [nm])`` per scan, heights of shape ``(nx, ny)``
+
+    Returns
+    -------
+    (numpy.ndarray, (float, float))
+        The summed heights [nm] on the first map's grid and that map's sizes ``(Lx, Ly)`` [nm].
+
+    Raises
+    ------
+    ValueError
+        For no map.
+
+    References
+    ----------
+    [PK99], [SK97], [PR16] (the FFT boundary-element solver, ContactMechanics), [Hyun04];
+    docs/deterministic_interface.md.
     """
     if not maps:
         raise ValueError("combine_maps: expected at least one height map")
@@ -196,6 +231,11 @@ def contact_at_load(heights: np.ndarray, physical_sizes: tuple[float, float], pr
     -------
     dict with ``mean_gap`` [nm] (from the map's mean plane), ``area_fraction`` [1], ``pressure``
     [units of E'] (the solved total force over the nominal area) and ``iterations``.
+
+    References
+    ----------
+    [PK99], [SK97], [PR16] (the FFT boundary-element solver, ContactMechanics), [Hyun04];
+    docs/deterministic_interface.md.
     """
     h = np.asarray(heights, float)
     sub = _substrate(h.shape, physical_sizes, True)
@@ -227,7 +267,13 @@ def contact_series(heights: np.ndarray, physical_sizes: tuple[float, float], *, 
 
     Returns
     -------
-    ContactSeries (pressures in units of E')
+    ContactSeries
+        The solved loads: mean gaps [nm], pressures [units of E'], area fractions [1], iterations [-].
+
+    References
+    ----------
+    [PK99], [SK97], [PR16] (the FFT boundary-element solver, ContactMechanics), [Hyun04];
+    docs/deterministic_interface.md.
     """
     h = np.asarray(heights, float)
     slope = rms_slope(h, physical_sizes)
@@ -272,6 +318,11 @@ def tabulate(series: ContactSeries, gap: np.ndarray) -> tuple[np.ndarray, np.nda
     Returns
     -------
     pressure [units of E'], area fraction [1], each of the shape of ``gap``
+
+    References
+    ----------
+    [PK99], [SK97], [PR16] (the FFT boundary-element solver, ContactMechanics), [Hyun04];
+    docs/deterministic_interface.md.
     """
     from scipy.interpolate import PchipInterpolator
     g = np.asarray(gap, float)
@@ -301,6 +352,10 @@ def hertz_check(radius: float, indentation: float, size: float, points: int) -> 
     Returns
     -------
     dict with ``load`` [units of E' nm^2] and ``contact_radius`` [nm] (from the contact area)
+
+    References
+    ----------
+    [Johnson85] (the Hertz load and contact radius the solver must give); docs/deterministic_interface.md.
     """
     x = (np.arange(points) - points / 2 + 0.5) * size / points
     X, Y = np.meshgrid(x, x, indexing="ij")

@@ -67,7 +67,24 @@ class Equilibrium:
 
 
 def jacobian(forces: Callable[[np.ndarray], np.ndarray], y: np.ndarray, scale: np.ndarray) -> np.ndarray:
-    """``dR/dy`` by central differences with steps ``1e-6 scale`` (``scale``: typical size of each state)."""
+    """``dR/dy`` by central differences with steps ``1e-6 scale`` (``scale``: typical size of each state).
+
+    Parameters
+    ----------
+    forces : ``R(y)`` [N, N m]
+    y : the state (``z`` [m], ``theta`` [rad])
+    scale : typical size of each state component [m, rad]
+
+    Returns
+    -------
+    numpy.ndarray
+        ``dR/dy`` ([N/m, N/rad; N m/m, N m/rad]), ``len(y) x len(y)``.
+
+    References
+    ----------
+    [VLP09] (the slider's static flying attitude); docs/model.md,
+    section "Start state".
+    """
     y = np.asarray(y, dtype=float)
     J = np.empty((y.size, y.size))
     for j in range(y.size):
@@ -79,6 +96,22 @@ def jacobian(forces: Callable[[np.ndarray], np.ndarray], y: np.ndarray, scale: n
 
 
 def is_stable(K: np.ndarray) -> bool:
+    """Whether a static state of stiffness ``K = -dR/dy`` is stable: every eigenvalue has a positive real part.
+
+    Parameters
+    ----------
+    K : the stiffness matrix ([N/m, N], [N m/m, N m/rad])
+
+    Returns
+    -------
+    bool
+        Stable [-].
+
+    References
+    ----------
+    [VLP09] (the slider's static flying attitude); docs/model.md,
+    section "Start state".
+    """
     return bool(np.all(np.real(np.linalg.eigvals(K)) > 0))
 
 
@@ -94,6 +127,16 @@ def newton(forces: Callable[[np.ndarray], np.ndarray], y0, *, scale=None, jac=No
     jac : ``dR/dy`` callable (default: central differences)
     max_step : largest update of each component (default ``scale``): a trust bound that keeps Newton on
         the branch it starts from near a fold
+
+    Returns
+    -------
+    Equilibrium
+        The state ``y`` [m, rad], its stiffness [N/m, ...], whether it converged and is stable.
+
+    References
+    ----------
+    [VLP09] (the slider's static flying attitude); docs/model.md,
+    section "Start state".
     """
     y = np.array(y0, dtype=float)
     scale = np.asarray(scale if scale is not None else [NM, URAD][: y.size], dtype=float)
@@ -124,7 +167,23 @@ def newton(forces: Callable[[np.ndarray], np.ndarray], y0, *, scale=None, jac=No
 
 
 def python_solve(forces: Forces, scale=None) -> Solve:
-    """The :data:`Solve` of :func:`newton` on ``forces(y, mu)`` with the state scale ``scale``."""
+    """The :data:`Solve` of :func:`newton` on ``forces(y, mu)`` with the state scale ``scale``.
+
+    Parameters
+    ----------
+    forces : ``R(y, mu)`` [N, N m]
+    scale : typical size of each state component [m, rad] (default as :func:`newton`)
+
+    Returns
+    -------
+    Solve
+        ``solve(mu, y0, ...) -> Equilibrium`` (states in [m, rad]).
+
+    References
+    ----------
+    [VLP09] (the slider's static flying attitude); docs/model.md,
+    section "Start state".
+    """
     def solve(mu: float, y0, max_step=None, max_iter: int = 50, tol: float = 1e-10) -> Equilibrium:
         return newton(lambda y: forces(y, mu), y0, scale=scale, tol=tol, max_iter=max_iter, max_step=max_step)
     return solve
@@ -147,7 +206,22 @@ class Branch:
     last: Equilibrium | None = None
 
     def state_at(self, mu: float) -> np.ndarray | None:
-        """The state at ``mu`` (a value the branch reached), or ``None``."""
+        """The state at ``mu`` (a value the branch reached), or ``None``.
+
+        Parameters
+        ----------
+        mu : the parameter (a protrusion [m])
+
+        Returns
+        -------
+        numpy.ndarray or None
+            The state (``z`` [m], ``theta`` [rad]), or ``None`` where the branch has none.
+
+        References
+        ----------
+        [Ono17] (the static unstable region of a TFC slider near contact); docs/model.md, sections "Start state"
+        and "Statics map".
+        """
         for m, s in zip(self.mu, self.states):
             if np.isclose(m, mu, rtol=0, atol=1e-12 * max(1.0, abs(mu))):
                 return s
@@ -170,6 +244,16 @@ def flying_branch(forces: Forces, mu_values, y0=None, *, scale=None, accept: Cal
     y0 : state at ``mu_values[0]`` (default zeros: the nominal attitude) or a start for Newton there
     scale : as :func:`newton`; mu_tol : fold bracket (default ``1e-6`` of the range)
     solve : the Newton solve (:data:`Solve`; default :func:`newton` on ``forces``)
+
+    Returns
+    -------
+    Branch
+        The states [m, rad] at the values of ``mu_values`` it reached and its fold [m] (NaN: none).
+
+    References
+    ----------
+    [Ono17] (the static unstable region of a TFC slider near contact); docs/model.md, sections "Start state"
+    and "Statics map".
     """
     mus = np.asarray(mu_values, dtype=float)
     if mus.ndim != 1 or mus.size < 1 or np.any(np.diff(mus) <= 0):
@@ -255,6 +339,26 @@ def static_equilibrium(forces: Forces, mu: float, *, mu_start: float = 0.0, y_st
     (:func:`flying_ladder`): its fold is then ``fold``, and a ``mu`` before it is continued from the
     ladder's last state at or below ``mu`` in one step (the same state to the Newton tolerance as the
     continuation from ``mu_start``: the branch is smooth and both converge to its one state at ``mu``).
+
+    Parameters
+    ----------
+    forces : ``R(y, mu)`` [N, N m]
+    mu : the parameter (a protrusion [m])
+    mu_start, y_start : where the flying branch starts ([m]; [m, rad])
+    scale : as :func:`newton`; accept : which stable states are flying
+    contact_start, contact_max_step : the contact branch's Newton start [m, rad] and step bound
+    steps, mu_tol : the continuation's steps and fold bracket [m]
+    fold, solve, ladder : as above
+
+    Returns
+    -------
+    StaticState
+        The state [m, rad], its kind (flying, contact or none) and its equilibrium.
+
+    References
+    ----------
+    [Ono17] (the static unstable region of a TFC slider near contact); docs/model.md, sections "Start state"
+    and "Statics map".
     """
     solve = solve or python_solve(forces, scale)
     if ladder is not None:
@@ -286,7 +390,26 @@ def flying_ladder(forces: Forces, mu_max: float, *, mu_start: float = 0.0, y_sta
     steps of at most ``step`` (:func:`flying_branch`): its states at those steps (the *ladder*) and where
     it ends (``fold``, bracketed to ``mu_tol``; NaN: not before ``mu_max``). One continuation answers
     :func:`static_equilibrium` at every ``mu``: past the fold there is no flying state, and before it the
-    branch is continued from the ladder's state below ``mu`` (argument ``ladder``), at most one step."""
+    branch is continued from the ladder's state below ``mu`` (argument ``ladder``), at most one step.
+
+    Parameters
+    ----------
+    forces : ``R(y, mu)`` [N, N m]
+    mu_max : the largest parameter [m]
+    mu_start, y_start : where the branch starts ([m]; [m, rad])
+    scale, accept, solve : as :func:`flying_branch`
+    step : the largest step [m]; mu_tol : the fold bracket [m]
+
+    Returns
+    -------
+    Branch
+        The ladder's states [m, rad] and its fold [m] (NaN: not before ``mu_max``).
+
+    References
+    ----------
+    [Ono17] (the static unstable region of a TFC slider near contact); docs/model.md, sections "Start state"
+    and "Statics map".
+    """
     n = max(1, int(np.ceil((mu_max - mu_start) / step)))
     return flying_branch(forces, np.linspace(mu_start, mu_max, n + 1), y_start, scale=scale, accept=accept,
                          mu_tol=mu_tol, solve=solve)
@@ -296,7 +419,22 @@ def branch_fold(forces: Forces, mu_max: float, *, mu_start: float = 0.0, y_start
                 accept: Callable[[np.ndarray], bool] | None = None, step: float, mu_tol: float | None = None,
                 solve: Solve | None = None) -> float:
     """Where the stable flying branch continued from ``y_start`` at ``mu_start`` ends (NaN: not before
-    ``mu_max``): the fold of :func:`flying_ladder` (same arguments)."""
+    ``mu_max``): the fold of :func:`flying_ladder` (same arguments).
+
+    Parameters
+    ----------
+    forces, mu_max, mu_start, y_start, scale, accept, step, mu_tol, solve : as :func:`flying_ladder`
+
+    Returns
+    -------
+    float
+        The fold [m] (the unit of ``mu``), NaN for none before ``mu_max``.
+
+    References
+    ----------
+    [Ono17] (the static unstable region of a TFC slider near contact); docs/model.md, sections "Start state"
+    and "Statics map".
+    """
     return flying_ladder(forces, mu_max, mu_start=mu_start, y_start=y_start, scale=scale, accept=accept, step=step,
                          mu_tol=mu_tol, solve=solve).fold
 
@@ -353,7 +491,16 @@ def relaxed_path(forces: Callable[[np.ndarray], np.ndarray], a, u_values, s0: fl
 
     Returns
     -------
-    f : the path force at each ``u``; s : the relaxed coordinate ``y_1``; converged : the solve met its tolerance
+    f : numpy.ndarray
+        The path force [N] at each ``u``.
+    s : numpy.ndarray
+        The relaxed coordinate ``y_1`` [rad] (the unit of ``y_1``) at each ``u``.
+    converged : numpy.ndarray
+        Whether the solve met its tolerance [-], at each ``u``.
+
+    References
+    ----------
+    [HJJ00] (the drag method and where it fails); docs/model.md, section "Statics map".
     """
     a = np.asarray(a, dtype=float)
     us = np.asarray(u_values, dtype=float)
@@ -406,6 +553,15 @@ def path_equilibria(f: Callable[[float], float], u_grid, breaks=(), *, xtol: flo
     f_many : ``f`` at an increasing array of points, in one call (default: ``f`` at each): the samples
     xtol : Brent's absolute tolerance on ``u``; epsilon : the offset either side of a break (default ``1e-6`` of the
         smallest grid step)
+
+    Returns
+    -------
+    list of PathState
+        The states in order of ``u``: position [m] (the unit of ``u``), stability, potential [J] and barrier [J].
+
+    References
+    ----------
+    [HJJ00] (reaction paths), [Filippov88] (the switch states); docs/model.md, section "Statics map".
     """
     from scipy.integrate import quad
     from scipy.optimize import brentq

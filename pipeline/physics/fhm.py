@@ -32,9 +32,24 @@ FHM_MEASURES: Registry[Variant] = Registry("solver.fhm_measure", {
 def fhm(d: np.ndarray, fh0: float, measure: str = "peak-to-peak") -> float:
     """FHM / BV [%] of separation samples ``d`` [m]: the named spread over ``fh0`` [m], times 100.
 
+    Parameters
+    ----------
+    d : separation samples over the steady window [m]
+    fh0 : the nominal flying height FH0 [m]
+    measure : the spread, a name of :data:`FHM_MEASURES` (``"peak-to-peak"``, the paper's; ``"3-std"``)
+
+    Returns
+    -------
+    float
+        FHM (flying) or BV (in contact) [%]: ``100 spread(d) / FH0``.
+
     Raises
     ------
     ValueError
         For a measure not in :data:`FHM_MEASURES` (the message lists them).
+
+    References
+    ----------
+    [VLP09] (the peak-to-peak FHM over FH0 of the paper's Fig. 6); docs/model.md, section "FHM and BV".
     """
     return 100.0 * FHM_MEASURES.lookup(measure).behaviour(np.asarray(d, dtype=float)) / fh0

@@ -71,6 +71,16 @@ def shear_strength(H: float) -> float:
     Parameters
     ----------
     H : hardness [Pa]
+
+    Returns
+    -------
+    float
+        The shear strength tau_y [Pa].
+
+    References
+    ----------
+    [Tabor51] D. Tabor, The Hardness of Metals (1951) (H ~ 2.8 Y, von Mises tau_y = Y / sqrt 3);
+    docs/model.md, section "Friction".
     """
     return H / (2.8 * np.sqrt(3.0))
 
@@ -83,6 +93,21 @@ def friction_force(area: np.ndarray, H: float, law: str = "shear-strength") -> n
     area : real contact area of the summit [m^2]
     H : hardness [Pa]
     law : must be ``"shear-strength"`` (the coefficient law needs the summit's load, not its area)
+
+    Returns
+    -------
+    numpy.ndarray
+        The friction force Q [N] of each summit, the shape of ``area``.
+
+    Raises
+    ------
+    ValueError
+        For any law but ``"shear-strength"``.
+
+    References
+    ----------
+    [Bowden50] F. P. Bowden, D. Tabor (1950) (friction as the shear of the real area), [Tabor51];
+    docs/model.md, section "Friction".
     """
     if law != "shear-strength":
         raise ValueError(f"friction law {law!r}: the per-summit area form exists only for 'shear-strength'")
@@ -250,6 +275,20 @@ def lubricant_shear_stress(wetted_area_fraction: np.ndarray, tau_lub: float) -> 
     wetted_area_fraction : summit surface inside the film and outside solid contact per nominal area
         ``a_w(d)`` [1] (:func:`pipeline.physics.isbl.isbl_tables`)
     tau_lub : limiting shear stress of the lubricant [Pa] (``lubricant.shear_stress_mpa``, recon)
+
+    Returns
+    -------
+    numpy.ndarray
+        The lubricant friction stress per nominal area [Pa], the shape of ``wetted_area_fraction``.
+
+    Raises
+    ------
+    ValueError
+        For a negative or non-finite ``tau_lub``.
+
+    References
+    ----------
+    [VP11], [VEP11] (module docstring); docs/model.md, section "Lubricant friction".
     """
     if not (np.isfinite(tau_lub) and tau_lub >= 0.0):
         raise ValueError(f"lubricant shear stress {tau_lub!r} Pa: expected a finite number >= 0")
@@ -267,6 +306,21 @@ def friction_stress_table(law: str, contact_pressure: np.ndarray, shear_strength
     shear_strength_stress : the ISBL friction-stress table [Pa]: of the law's per-summit form
         (:attr:`FrictionLaw.summit`) or, for a law without one, of the shear-strength law
     parameters : the numbers the law's entry names (``mu``: friction coefficient [1] of ``"coefficient"``)
+
+    Returns
+    -------
+    numpy.ndarray
+        The friction stress per nominal area [Pa] at each separation of the tables.
+
+    Raises
+    ------
+    ValueError
+        For a law not in :data:`FRICTION_LAWS` (the message lists them).
+
+    References
+    ----------
+    [Bowden50], [Tabor51] (``"shear-strength"``); [VLP09] (the paper's coefficient mu ~ 1.2,
+    ``"coefficient"``); docs/model.md, section "Friction".
     """
     return FRICTION_LAWS.lookup(law).behaviour(contact_pressure, shear_strength_stress, **parameters)
 
@@ -310,6 +364,21 @@ def friction_parts(switching: str, solid: np.ndarray, lubricant: np.ndarray | No
     solid : the friction-law stress table (:func:`friction_stress_table`) [Pa]
     lubricant : the lubricant-shear stress table (:func:`lubricant_shear_stress`) [Pa], ``None`` when the
         term is off (``lubricant.shear_stress_mpa = 0``)
+
+    Returns
+    -------
+    (numpy.ndarray, numpy.ndarray or None)
+        The switched part [Pa] and the continuous part [Pa] (``None``: none).
+
+    Raises
+    ------
+    ValueError
+        For a rule not in :data:`FRICTION_SWITCHING`.
+
+    References
+    ----------
+    [VLP09] (the paper's switched contact forces), [VP11] (the lubricant on the wetted summits);
+    docs/model.md, section "Switched and continuous friction".
     """
     rule = FRICTION_SWITCHING.lookup(switching).behaviour
     if lubricant is None:

@@ -91,6 +91,20 @@ def fk_flow_rate(D) -> tuple[np.ndarray, np.ndarray]:
     The fit's pieces differ by up to 0.3 % at their joins (D = 5 and 0.15); a jump would stall Newton's
     method, so within ``|ln(D / D_join)| < FK_BLEND`` the two pieces are blended with a cubic smoothstep
     weight in ``ln D`` (continuous value and slope; elsewhere the published pieces exactly).
+
+    Parameters
+    ----------
+    D : inverse Knudsen numbers [1], > 0
+
+    Returns
+    -------
+    (numpy.ndarray, numpy.ndarray)
+        ``Q_P`` [1] and ``dQ_P/dD`` [1], the shape of ``D``.
+
+    References
+    ----------
+    [FK88] S. Fukui, R. Kaneko, J. Tribol. 110 (1988) 253-262; [FK90] J. Tribol. 112 (1990) 78-83 (the fit);
+    docs/model.md, section "Rough-gap bulge bearing".
     """
     D = np.asarray(D, dtype=float)
     (j_hi, c_hi), (j_lo, c_mid), (_, c_lo) = FK_FIT
@@ -112,7 +126,22 @@ def fk_flow_rate(D) -> tuple[np.ndarray, np.ndarray]:
 def poiseuille_factor(kn) -> tuple[np.ndarray, np.ndarray]:
     """The Boltzmann Poiseuille flow factor ``Q = 6 Q_P(D) / D`` [1] (flow rate over the continuum no-slip
     value) at the Knudsen numbers ``kn = lambda / h`` (> 0), and ``dQ/dKn``; ``D = sqrt(pi) / (2 Kn)``
-    (Fukui & Kaneko 1988, 1990; module docstring)."""
+    (Fukui & Kaneko 1988, 1990; module docstring).
+
+    Parameters
+    ----------
+    kn : Knudsen numbers lambda / h [1], > 0
+
+    Returns
+    -------
+    (numpy.ndarray, numpy.ndarray)
+        ``Q`` [1] and ``dQ/dKn`` [1], the shape of ``kn``.
+
+    References
+    ----------
+    [FK88] S. Fukui, R. Kaneko, J. Tribol. 110 (1988) 253-262; [FK90] J. Tribol. 112 (1990) 78-83 (the fit);
+    docs/model.md, section "Rough-gap bulge bearing".
+    """
     kn = np.asarray(kn, dtype=float)
     D = 0.5 * np.sqrt(np.pi) / kn
     Qp, dQp = fk_flow_rate(D)
@@ -123,7 +152,22 @@ def poiseuille_factor(kn) -> tuple[np.ndarray, np.ndarray]:
 
 def mean_gap(H) -> np.ndarray:
     """Mean local gap ``h_T / sigma = H Phi(H) + phi(H)`` [1] of a Gaussian rough gap at ``H = h / sigma``
-    (local gap ``max(h - z, 0)``, ``z`` Gaussian; Patir & Cheng 1978). ``-> H`` above ``H ~ 3``, ``0.399`` at 0."""
+    (local gap ``max(h - z, 0)``, ``z`` Gaussian; Patir & Cheng 1978). ``-> H`` above ``H ~ 3``, ``0.399`` at 0.
+
+    Parameters
+    ----------
+    H : nominal gap over the rms roughness, h / sigma [1]
+
+    Returns
+    -------
+    numpy.ndarray
+        The mean local gap over sigma, h_T / sigma [1], the shape of ``H``.
+
+    References
+    ----------
+    [PC78] N. Patir, H. S. Cheng, J. Lubr. Technol. 100 (1978) 12-17; [PC79] (the shear flow factor);
+    docs/model.md, section "Rough-gap bulge bearing".
+    """
     from scipy.special import ndtr  # (here: the schema imports this module; model.ahead.NOT_IMPORTED_EARLY)
     H = np.asarray(H, dtype=float)
     return H * ndtr(H) + np.exp(-0.5 * H * H) / np.sqrt(2.0 * np.pi)
@@ -131,7 +175,22 @@ def mean_gap(H) -> np.ndarray:
 
 def pressure_flow_factor(H) -> np.ndarray:
     """Patir & Cheng's (1978) pressure flow factor ``phi_x = 1 - 0.90 exp(-0.56 H)`` [1] of isotropic roughness
-    at ``H = h / sigma``, for ``H >= 0.5``; below, linear to 0 at ``H = 0`` (percolation, module docstring)."""
+    at ``H = h / sigma``, for ``H >= 0.5``; below, linear to 0 at ``H = 0`` (percolation, module docstring).
+
+    Parameters
+    ----------
+    H : nominal gap over the rms roughness, h / sigma [1]
+
+    Returns
+    -------
+    numpy.ndarray
+        The pressure flow factor phi_x [1], the shape of ``H``.
+
+    References
+    ----------
+    [PC78] N. Patir, H. S. Cheng, J. Lubr. Technol. 100 (1978) 12-17; [PC79] (the shear flow factor);
+    docs/model.md, section "Rough-gap bulge bearing".
+    """
     H = np.asarray(H, dtype=float)
     C, r = PC_PRESSURE
     fit = 1.0 - C * np.exp(-r * np.maximum(H, PC_MIN_H))
@@ -141,7 +200,23 @@ def pressure_flow_factor(H) -> np.ndarray:
 def shear_flow_factor(H, disk_share: float = 1.0) -> np.ndarray:
     """Patir & Cheng's (1979) shear flow factor ``phi_s = (V_r1 - V_r2) Phi_s(H)`` [1] of isotropic roughness at
     ``H = h / sigma`` (>= 0), ``V_r1 = disk_share`` the moving disk's share of the roughness variance,
-    ``V_r2 = 1 - disk_share`` the slider's (module docstring)."""
+    ``V_r2 = 1 - disk_share`` the slider's (module docstring).
+
+    Parameters
+    ----------
+    H : nominal gap over the rms roughness, h / sigma [1]
+    disk_share : the disk's share of the roughness variance V_r1 [1], in [0, 1]
+
+    Returns
+    -------
+    numpy.ndarray
+        The shear flow factor phi_s [1], the shape of ``H``.
+
+    References
+    ----------
+    [PC79] N. Patir, H. S. Cheng, J. Lubr. Technol. 101 (1979) 220-229; docs/model.md, section "Rough-gap
+    bulge bearing".
+    """
     H = np.maximum(np.asarray(H, dtype=float), 0.0)
     A1, a1, a2, a3, A2 = PC_SHEAR
     Hl = np.minimum(H, 5.0)  # (the piece used up to 5; its exp would overflow at large H)
@@ -152,7 +227,24 @@ def shear_flow_factor(H, disk_share: float = 1.0) -> np.ndarray:
 
 def closed_fraction(h, sigma: float, wet_gap: float) -> np.ndarray:
     """Area fraction ``Phi((t_w - h) / sigma)`` [1] of a Gaussian rough gap whose local gap is below the wetting
-    gap ``t_w = wet_gap`` [m] (solid or lubricant contact: no air there), at the nominal gaps ``h`` [m]."""
+    gap ``t_w = wet_gap`` [m] (solid or lubricant contact: no air there), at the nominal gaps ``h`` [m].
+
+    Parameters
+    ----------
+    h : nominal gaps [m]
+    sigma : rms roughness of the gap [m]
+    wet_gap : the wetting gap t_w [m]
+
+    Returns
+    -------
+    numpy.ndarray
+        The closed area fraction alpha [1], the shape of ``h``.
+
+    References
+    ----------
+    [PC78] N. Patir, H. S. Cheng, J. Lubr. Technol. 100 (1978) 12-17; [PC79] (the shear flow factor);
+    docs/model.md, section "Rough-gap bulge bearing".
+    """
     from scipy.special import ndtr  # (as in mean_gap)
     return ndtr((wet_gap - np.asarray(h, dtype=float)) / sigma)
 
@@ -179,14 +271,59 @@ class RoughGap:
                              f"{self.sigma}, {self.disk_share}, {self.wet_gap}")
 
     def couette_gap(self, h) -> np.ndarray:
-        """``h_T + sigma phi_s`` [m]: the gap the moving disk fills at the nominal gaps ``h`` [m]."""
+        """``h_T + sigma phi_s`` [m]: the gap the moving disk fills at the nominal gaps ``h`` [m].
+
+        Parameters
+        ----------
+        h : nominal gaps [m]
+
+        Returns
+        -------
+        numpy.ndarray
+            The Couette gap [m], the shape of ``h``.
+
+        References
+        ----------
+        [PC78] N. Patir, H. S. Cheng, J. Lubr. Technol. 100 (1978) 12-17; [PC79] (the shear flow factor);
+        docs/model.md, section "Rough-gap bulge bearing".
+        """
         H = np.asarray(h, dtype=float) / self.sigma
         return self.sigma * (mean_gap(H) + shear_flow_factor(H, self.disk_share))
 
     def pressure_factor(self, h) -> np.ndarray:
-        """``phi_x`` [1] at the nominal gaps ``h`` [m] (:func:`pressure_flow_factor`)."""
+        """``phi_x`` [1] at the nominal gaps ``h`` [m] (:func:`pressure_flow_factor`).
+
+        Parameters
+        ----------
+        h : nominal gaps [m]
+
+        Returns
+        -------
+        numpy.ndarray
+            ``phi_x`` [1], the shape of ``h``.
+
+        References
+        ----------
+        [PC78] N. Patir, H. S. Cheng, J. Lubr. Technol. 100 (1978) 12-17; [PC79] (the shear flow factor);
+        docs/model.md, section "Rough-gap bulge bearing".
+        """
         return pressure_flow_factor(np.asarray(h, dtype=float) / self.sigma)
 
     def air_fraction(self, h) -> np.ndarray:
-        """``1 - alpha`` [1]: the area fraction where the air acts (:func:`closed_fraction`)."""
+        """``1 - alpha`` [1]: the area fraction where the air acts (:func:`closed_fraction`).
+
+        Parameters
+        ----------
+        h : nominal gaps [m]
+
+        Returns
+        -------
+        numpy.ndarray
+            The air's area fraction [1], the shape of ``h``.
+
+        References
+        ----------
+        [PC78] N. Patir, H. S. Cheng, J. Lubr. Technol. 100 (1978) 12-17; [PC79] (the shear flow factor);
+        docs/model.md, section "Rough-gap bulge bearing".
+        """
         return 1.0 - closed_fraction(h, self.sigma, self.wet_gap)

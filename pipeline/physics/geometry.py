@@ -35,7 +35,22 @@ FRICTION_ARMS: Registry[Variant] = Registry("slider.friction_arm", {
 
 
 def section_fraction(delta: np.ndarray, s_n: float) -> np.ndarray:
-    """``u = s_n / delta`` capped at 1 [1] (``1`` when ``delta = 0``: the whole footprint)."""
+    """``u = s_n / delta`` capped at 1 [1] (``1`` when ``delta = 0``: the whole footprint).
+
+    Parameters
+    ----------
+    delta : protrusion [m]
+    s_n : section depth [m]
+
+    Returns
+    -------
+    numpy.ndarray
+        ``u`` [1], the shape of ``delta``.
+
+    References
+    ----------
+    [VLP09] (the bulge as half an ellipsoid, 3 x 25 um, A_n = 62 um^2); docs/model.md, section "Nominal area".
+    """
     delta = np.asarray(delta, dtype=float)
     with np.errstate(divide="ignore"):
         return np.where(delta > 0, np.minimum(s_n / np.where(delta > 0, delta, 1.0), 1.0), 1.0)
@@ -53,6 +68,15 @@ def nominal_area(delta: np.ndarray, a: float, b: float, s_n: float) -> np.ndarra
     delta : protrusion [m]
     a, b : semi-axes along and across the sliding direction [m]
     s_n : section depth [m]
+
+    Returns
+    -------
+    numpy.ndarray
+        The nominal area A_n [m^2], the shape of ``delta``.
+
+    References
+    ----------
+    [VLP09] (the bulge as half an ellipsoid, 3 x 25 um, A_n = 62 um^2); docs/model.md, section "Nominal area".
     """
     u = section_fraction(delta, s_n)
     return np.pi * a * b * (2.0 * u - u * u)
@@ -71,6 +95,15 @@ def effective_radius(delta: np.ndarray, a: float, s_n: float) -> np.ndarray:
     delta : protrusion [m]
     a : semi-axis along the sliding direction [m]
     s_n : section depth [m]
+
+    Returns
+    -------
+    numpy.ndarray
+        The effective radius [m] (``inf`` where ``delta = 0``), the shape of ``delta``.
+
+    References
+    ----------
+    [VLP09] (the bulge as half an ellipsoid, 3 x 25 um, A_n = 62 um^2); docs/model.md, section "Nominal area".
     """
     delta = np.asarray(delta, dtype=float)
     u = section_fraction(delta, s_n)
@@ -98,6 +131,10 @@ def lowest_point_offset(delta: float, a: float, theta: float) -> tuple[float, fl
     -------
     (x_shift [m], dz [m]) : shift of the lowest point along sliding, and its height change
         relative to the apex in the pitched frame (``<= 0``: the lowest point is lower).
+
+    References
+    ----------
+    [VLP09] (the bulge as half an ellipsoid, 3 x 25 um, A_n = 62 um^2); docs/model.md, section "Nominal area".
     """
     if delta <= 0:
         return 0.0, 0.0
@@ -115,6 +152,20 @@ def friction_arm(thickness: float, arm: str) -> float:
     ------
     ValueError
         For a rule not in :data:`FRICTION_ARMS` (the message lists them).
+
+    Parameters
+    ----------
+    thickness : slider thickness T [m]
+    arm : a name of :data:`FRICTION_ARMS`
+
+    Returns
+    -------
+    float
+        The moment arm [m].
+
+    References
+    ----------
+    [VLP09] (the friction moment about the CG); docs/model.md, section "Slider dynamics".
     """
     return thickness * FRICTION_ARMS.lookup(arm).behaviour  # (x 0.5 is exact: the same bits as T / 2)
 
@@ -142,6 +193,15 @@ def ellipsoid_force(stress: Callable[[np.ndarray], np.ndarray], d: float, delta:
     stress : the law, vectorised over gaps [m]
     d : apex separation [m]; delta : protrusion [m] (>= 0); a, b : semi-axes [m]
     nodes : Gauss-Legendre nodes on ``u`` in [0, 1]
+
+    Returns
+    -------
+    float
+        The force [N] over the bulge's footprint.
+
+    References
+    ----------
+    docs/model.md, section "Deviations", item 18 (the bulge's gap field); [VLP09] (the ellipsoid).
     """
     if delta <= 0:
         return float(np.pi * a * b * np.asarray(stress(np.array([d])), float)[0])
@@ -182,7 +242,13 @@ def ellipsoid_table_integral(c: np.ndarray, h: float, delta: float) -> np.ndarra
 
     Returns
     -------
-    I at the ``n + 1`` nodes, shape ``(n + 1,)`` or ``(n + 1, q)`` (for ``delta = 0`` the limit ``p(d_i) / 2``)
+    numpy.ndarray
+        I [unit of p, e.g. Pa] at the ``n + 1`` nodes, shape ``(n + 1,)`` or ``(n + 1, q)`` (for ``delta = 0``
+        the limit ``p(d_i) / 2``)
+
+    References
+    ----------
+    docs/model.md, section "Deviations", item 18; :func:`ellipsoid_force` (the same integral by quadrature).
     """
     c = np.asarray(c, dtype=float)
     n = c.shape[0]
@@ -217,7 +283,23 @@ def table_truncation(top_value: float, x: np.ndarray, delta: float) -> np.ndarra
     """What :func:`ellipsoid_table_integral` leaves out at the nodes ``x`` [m] of a table whose last value
     is ``top_value`` [unit of p], were the table held at that value beyond its top (the kernel's
     continuation): ``top_value (1 - u_top)^2 / 2``, ``u_top = min(1, (x_n - x)/delta)`` (0 where
-    ``x + delta <= x_n``). A bound of what is left out when ``|p|`` does not grow beyond the top."""
+    ``x + delta <= x_n``). A bound of what is left out when ``|p|`` does not grow beyond the top.
+
+    Parameters
+    ----------
+    top_value : the table's last value [unit of p, e.g. Pa]
+    x : the table's nodes [m], increasing (``x[-1]`` its top)
+    delta : protrusion [m]
+
+    Returns
+    -------
+    numpy.ndarray
+        What is left out at each node [unit of p], the shape of ``x``.
+
+    References
+    ----------
+    docs/model.md, section "Deviations", item 18.
+    """
     x = np.asarray(x, dtype=float)
     if delta <= 0:
         return np.zeros_like(x)

@@ -195,6 +195,11 @@ def isbl_tables(d: np.ndarray, p: Interface, *, quantities=QUANTITIES, nodes: in
         ``elastic_fraction``/``plastic_fraction`` [1] of summits in those regimes; with the adhesion,
         its two parts ``adhesion_pressure_bridges`` and ``adhesion_pressure_menisci`` [Pa] (module
         docstring, "Two adhesion populations"), whose sum is ``adhesion_pressure``.
+
+    References
+    ----------
+    [GW66] (the summit statistics), [KE02] (the single-summit laws), [Stanley90] (the sub-boundary
+    adhesion); docs/model.md, sections "ISBL interface", "Two adhesion populations" and "References".
     """
     unknown = set(quantities) - set(QUANTITIES)
     if unknown:
@@ -332,6 +337,21 @@ def separation_grid(d_min: float, d_max: float, step: float) -> np.ndarray:
     """Uniform separation grid [m] from ``d_min`` [m] to at least ``d_max`` [m] with spacing ``step`` [m].
 
     The dynamics interpolates the tables on this grid in O(1) (uniform spacing).
+
+    Parameters
+    ----------
+    d_min : the grid's first separation [m]
+    d_max : the separation the grid reaches or passes [m]
+    step : the spacing [m], positive
+
+    Returns
+    -------
+    numpy.ndarray
+        The separations [m], ``d_min + step i`` for ``i = 0 .. ceil((d_max - d_min) / step)``.
+
+    References
+    ----------
+    docs/model.md, section "Interface tables" (the grid ``solver.table_step_nm``).
     """
     n = int(np.ceil((d_max - d_min) / step)) + 1
     return d_min + step * np.arange(n)

@@ -36,6 +36,11 @@ def check_materials(E: float, H: float, sigma_s: float, R: float, *, derived: st
     E, H, sigma_s, R : as :func:`pipeline.physics.asperity_statistics.plasticity_index_gw` [Pa, Pa, m, m]
     derived : ``"hardness"`` (H from the scene's plasticity index) or ``"plasticity_index"`` (psi from the
         scene's hardness): which one was computed, named in the warning
+
+    References
+    ----------
+    [Tabor51] (H ~ 3Y, the bound on H/E'); [GW66] (the plasticity index); docs/model.md, section
+    "Plasticity index".
     """
     psi = float(plasticity_index_gw(E, H, sigma_s, R))
     lo, hi = HARDNESS_RATIO_BOUNDS

@@ -4,7 +4,7 @@
 The DMW is the disk's vertical displacement under the slider versus time, ``w(t)`` [nm]. The paper
 measured it with a laser Doppler vibrometer (LDV) at mid-diameter, 5425 rpm, high-passed at 10 kHz,
 content up to 500 kHz, 4 MS/s, averaged over 100 revolutions, velocity integrated to displacement
-[VLP09]_ (docs/model.md, section "DMW").
+[VLP09] (docs/model.md, section "DMW").
 
 Conventions
 -----------
@@ -59,7 +59,22 @@ class DMWError(ValueError):
 # --------------------------------------------------------------------------------------------------
 
 def n_samples(duration_s: float, sample_rate_hz: float) -> int:
-    """Number of samples of a record of ``duration_s`` [s] at ``sample_rate_hz`` [Hz] (rounded)."""
+    """Number of samples of a record of ``duration_s`` [s] at ``sample_rate_hz`` [Hz] (rounded).
+
+    Parameters
+    ----------
+    duration_s : record length [s]
+    sample_rate_hz : sampling rate [Hz]
+
+    Returns
+    -------
+    int
+        The number of samples [-].
+
+    References
+    ----------
+    docs/model.md, section "DMW" (the record's grid).
+    """
     return int(round(duration_s * sample_rate_hz))
 
 
@@ -82,6 +97,15 @@ def band_bins(n: int, sample_rate_hz: float, band_hz: tuple[float, float]) -> tu
     ------
     ValueError
         When no bin lies in the band (record shorter than about ``1/(hi - lo)``).
+
+    Returns
+    -------
+    (int, int)
+        The bin indices [-].
+
+    References
+    ----------
+    [SD91] (the band of the spectral representation); docs/model.md, section "DMW".
     """
     lo, hi = band_hz
     df = sample_rate_hz / n
@@ -97,7 +121,7 @@ def synthesize(rms_nm: float, band_hz: tuple[float, float], exponent: float, dur
                sample_rate_hz: float, seed: int, *, amplitudes: str = "gaussian") -> np.ndarray:
     """A Gaussian, band-limited, power-law DMW record [nm] with exactly the prescribed rms.
 
-    Spectral representation [SD91]_: the ``rfft`` coefficient of bin ``k`` is
+    Spectral representation [SD91]: the ``rfft`` coefficient of bin ``k`` is
     ``c_k = A_k (g1 + i g2) / sqrt(2)`` with ``g1, g2`` standard normal and ``A_k = f_k^(exponent/2)``
     inside the band (:func:`band_bins`), zero outside; the record is ``irfft(c)``, rescaled to
     ``rms_nm``. Complex-normal coefficients (Rayleigh amplitude, uniform phase) make the record an
@@ -122,6 +146,11 @@ def synthesize(rms_nm: float, band_hz: tuple[float, float], exponent: float, dur
     -------
     numpy.ndarray
         ``w`` [nm], ``round(duration_s * fs)`` samples at times ``i / fs``; zero mean, rms ``rms_nm``.
+
+    References
+    ----------
+    [SD91] M. Shinozuka, G. Deodatis, Appl. Mech. Rev. 44 (1991) 191-204 (module docstring); docs/model.md,
+    section "DMW".
     """
     if not (rms_nm >= 0 and math.isfinite(rms_nm)):
         raise ValueError(f"rms_nm = {rms_nm!r}: expected a finite number >= 0")
@@ -170,6 +199,10 @@ def displacement_to_velocity(x: np.ndarray, sample_rate_hz: float) -> np.ndarray
     -------
     numpy.ndarray
         velocity [nm/s]. The Nyquist bin (no defined sign of derivative) is set to zero.
+
+    References
+    ----------
+    [VLP09] (the paper's LDV processing: high-pass at 10 kHz, velocity integrated); docs/model.md, section "DMW".
     """
     x = np.asarray(x, dtype=float)
     n = x.size
@@ -213,9 +246,9 @@ def velocity_to_displacement(v: np.ndarray, sample_rate_hz: float, highpass_hz: 
                              lowpass_hz: float | None = None) -> np.ndarray:
     """Displacement [nm] from an LDV velocity record [nm/s]: high-pass, integrate, remove drift.
 
-    One zero-phase step in the discrete Fourier domain [Bra11]_: ``X(f) = V(f) / (i 2 pi f)`` for
+    One zero-phase step in the discrete Fourier domain [Bra11]: ``X(f) = V(f) / (i 2 pi f)`` for
     ``highpass_hz <= f (<= lowpass_hz)``, ``X = 0`` elsewhere, ``x = irfft(X)``. This is the paper's
-    chain (high-pass at 10 kHz, integrate velocity to displacement [VLP09]_) with a brick-wall filter:
+    chain (high-pass at 10 kHz, integrate velocity to displacement [VLP09]) with a brick-wall filter:
     the mean velocity (LDV offset), whose integral is a linear drift, and all content below the
     high-pass (the integral's low-frequency wander, runout) are removed in the same step, so no
     separate drift removal is needed and in-band content is integrated exactly (no trapezoid error,
@@ -232,6 +265,11 @@ def velocity_to_displacement(v: np.ndarray, sample_rate_hz: float, highpass_hz: 
     -------
     numpy.ndarray
         displacement [nm], same length, zero mean.
+
+    References
+    ----------
+    [VLP09] (the paper's chain), [Bra11] (module docstring: the Fourier-domain integration); docs/model.md,
+    section "DMW".
     """
     v = _check_filter_args(v, sample_rate_hz, highpass_hz, lowpass_hz)
     n = v.size
@@ -263,6 +301,10 @@ def process_displacement(x: np.ndarray, sample_rate_hz: float, highpass_hz: floa
     -------
     numpy.ndarray
         displacement [nm], same length, zero mean.
+
+    References
+    ----------
+    [VLP09] (the paper's LDV processing: high-pass at 10 kHz, velocity integrated); docs/model.md, section "DMW".
     """
     from scipy import signal
     x = _check_filter_args(x, sample_rate_hz, highpass_hz, lowpass_hz)
@@ -276,14 +318,14 @@ def process_displacement(x: np.ndarray, sample_rate_hz: float, highpass_hz: floa
 def spectrum(x: np.ndarray, sample_rate_hz: float, nperseg: int | None = None) -> tuple[np.ndarray, np.ndarray]:
     """One-sided power spectral density of a record.
 
-    Default: the periodogram with a rectangular window and no detrending [PW93]_,
+    Default: the periodogram with a rectangular window and no detrending [PW93],
     ``psd_k = c_k |X_k|^2 / (fs N)`` with ``X = rfft(x)`` and ``c_k = 2`` except at 0 Hz and (even
     ``N``) at Nyquist, where ``c_k = 1``: resolution ``1/duration``, no leakage for a periodic record
     such as the synthetic one, and Parseval exact, ``sum(psd) * df == mean(x**2)`` (for zero-mean
     ``x``). It equals scipy's ``periodogram(..., window="boxcar", detrend=False, scaling="density")``
     (tested to 1e-12); it is written out with numpy because importing scipy.signal costs more than
     the whole synthesis. With ``nperseg``: Welch's average of Hann-windowed, half-overlapping segments
-    [PW93]_ (``scipy.signal.welch``; smoother, for measured records; leaks by the Hann sidelobes).
+    [PW93] (``scipy.signal.welch``; smoother, for measured records; leaks by the Hann sidelobes).
 
     Parameters
     ----------
@@ -293,8 +335,15 @@ def spectrum(x: np.ndarray, sample_rate_hz: float, nperseg: int | None = None) -
 
     Returns
     -------
-    frequency : [Hz]
-    psd : [nm^2/Hz]
+    frequency : numpy.ndarray
+        Bin frequencies [Hz].
+    psd : numpy.ndarray
+        One-sided PSD [nm^2/Hz].
+
+    References
+    ----------
+    [PW93] D. B. Percival, A. T. Walden, Spectral Analysis for Physical Applications (1993); docs/model.md,
+    section "DMW".
     """
     x = np.asarray(x, dtype=float)
     if nperseg is None:
@@ -314,10 +363,27 @@ def power_law_fit(frequency: np.ndarray, psd: np.ndarray, band_hz: tuple[float, 
     For Gaussian coefficients each periodogram bin is ``S(f)`` times an exponential variable, whose
     logarithm has a constant mean: the slope is unbiased, ``C`` is low by ``exp(-0.577)``.
 
+    Parameters
+    ----------
+    frequency : bin frequencies [Hz] (:func:`spectrum`)
+    psd : one-sided PSD [nm^2/Hz] at those bins
+    band_hz : ``(lo, hi)`` of the fit [Hz]
+
     Returns
     -------
-    exponent : [1]
-    prefactor : C [nm^2/Hz / Hz^exponent]
+    exponent : float
+        The spectral exponent [1].
+    prefactor : float
+        C [nm^2/Hz / Hz^exponent].
+
+    Raises
+    ------
+    ValueError
+        For fewer than 2 positive bins in the band.
+
+    References
+    ----------
+    [PW93] (the periodogram's exponential statistics); docs/model.md, section "DMW".
     """
     lo, hi = band_hz
     sel = (frequency >= lo * (1 - EDGE_TOL)) & (frequency <= hi * (1 + EDGE_TOL)) & (psd > 0)
@@ -335,10 +401,22 @@ def resample(x: np.ndarray, sample_rate_hz: float, new_rate_hz: float) -> tuple[
     transients); otherwise cubic-spline interpolation (accurate when the content is well below both
     Nyquist frequencies, as after the band filter). The output has ``floor(n * new / old)`` samples.
 
+    Parameters
+    ----------
+    x : the record [nm] (or any unit), uniformly sampled
+    sample_rate_hz : its sampling rate [Hz]
+    new_rate_hz : the rate wanted [Hz]
+
     Returns
     -------
-    y : resampled record (same units)
-    method : a description for provenance
+    y : numpy.ndarray
+        The resampled record [nm] (the unit of ``x``).
+    method : str
+        A description for provenance [-].
+
+    References
+    ----------
+    [PW93] (band-limited resampling); ``scipy.signal.resample_poly``; docs/model.md, section "DMW".
     """
     x = np.asarray(x, dtype=float)
     ratio = new_rate_hz / sample_rate_hz

@@ -182,7 +182,18 @@ class Target:
     settings: tuple[Setting, ...] = ()
 
     def keys(self) -> tuple[Setting, ...]:
-        """The ``[identify]`` keys of the target, in schema order: its value, where it is measured, its tolerance."""
+        """The ``[identify]`` keys of the target, in schema order: its value, where it is measured, its tolerance.
+
+        Returns
+        -------
+        tuple of Setting
+            The settings [-], each with its key (whose suffix names its unit, ``_nm``, ``_percent``), default
+            and check.
+
+        References
+        ----------
+        [VLP09] (the published values); docs/model.md, section "Paper targets".
+        """
         return ((self.value,) if isinstance(self.value, Setting) else ()) + self.settings + (self.tolerance,)
 
 

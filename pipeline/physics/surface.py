@@ -142,8 +142,14 @@ def spectral_statistics(m0: float, m2: float, m4: float) -> RouteStatistics:
 
     Returns
     -------
-    RouteStatistics in nm units. ``sigma_s`` is NaN (with a :class:`SurfaceWarning` saying why) when
-    ``alpha <= 0.8968``.
+    RouteStatistics
+        In nm units: ``sigma``, ``sigma_s``, ``y_s``, ``R`` [nm], ``eta`` [nm^-2], ``alpha`` [1]. ``sigma_s`` is
+        NaN (with a :class:`SurfaceWarning` saying why) when ``alpha <= 0.8968``.
+
+    References
+    ----------
+    [Nayak71] P. R. Nayak, J. Lubr. Technol. 93 (1971) 398-407; [McCool86]; docs/model.md, section
+    "Spectral route".
     """
     stats, msgs = _spectral(m0, m2, m4)
     for msg in msgs:
@@ -164,8 +170,13 @@ def summit_mask(heights: np.ndarray) -> np.ndarray:
 
     Returns
     -------
-    Boolean array of shape ``(nx - 2, ny - 2)`` over the interior pixels (border pixels, whose
-    neighbourhood is incomplete, are never summits).
+    numpy.ndarray
+        Booleans [-] of shape ``(nx - 2, ny - 2)`` over the interior pixels (border pixels, whose
+        neighbourhood is incomplete, are never summits).
+
+    References
+    ----------
+    [GW66] (summits as local maxima); docs/model.md, section "Summit route".
     """
     h = np.asarray(heights, dtype=float)
     nx, ny = h.shape
@@ -190,7 +201,12 @@ def mean_curvature(heights: np.ndarray, pixel_size: tuple[float, float]) -> np.n
 
     Returns
     -------
-    Array of shape ``(nx - 2, ny - 2)`` [nm^-1]
+    numpy.ndarray
+        The mean curvature [nm^-1], shape ``(nx - 2, ny - 2)``.
+
+    References
+    ----------
+    [GW66] (summit radius as the inverse curvature); docs/model.md, section "Summit route".
     """
     h = np.asarray(heights, dtype=float)
     dx, dy = pixel_size
@@ -216,7 +232,13 @@ def summit_statistics(heights: np.ndarray, pixel_size: tuple[float, float]) -> R
 
     Returns
     -------
-    RouteStatistics in nm units (NaN except ``sigma`` and ``count`` when there is no summit).
+    RouteStatistics
+        In nm units: ``sigma``, ``sigma_s``, ``y_s``, ``R`` [nm], ``eta`` [nm^-2], ``alpha`` [1], ``count`` [-]
+        (NaN except ``sigma`` and ``count`` when there is no summit).
+
+    References
+    ----------
+    [GW66]; [McCool86] (alpha); docs/model.md, section "Summit route".
     """
     h = np.asarray(heights, dtype=float)
     dx, dy = (float(p) for p in pixel_size)
@@ -247,6 +269,15 @@ def compare_routes(spectral: RouteStatistics, summits: RouteStatistics, pixel_si
     spectral, summits : the two routes' statistics (nm units)
     pixel_size : sampling interval [nm] (quoted in the message)
     label : surface name (quoted in the message)
+
+    Returns
+    -------
+    list of str
+        One message [-] per statistic that differs by more than a factor 2 (empty: none).
+
+    References
+    ----------
+    docs/model.md, sections "Spectral route" and "Summit route" (why the routes differ on measured scans).
     """
     msgs = []
     for name, a, b, unit, fac in (("summit density eta", spectral.eta, summits.eta, "um^-2", PER_NM2_IN_PER_UM2),
@@ -279,7 +310,13 @@ def summarise_sampled(m0: float, m2: float, m4: float, heights: np.ndarray, pixe
 
     Returns
     -------
-    SurfaceSummary; every message in ``warnings`` is also issued as a :class:`SurfaceWarning`.
+    SurfaceSummary
+        Both routes' statistics in nm units ([nm], [nm^-2], [1]); every message in ``warnings`` is also
+        issued as a :class:`SurfaceWarning`.
+
+    References
+    ----------
+    [Nayak71], [McCool86] (spectral route), [GW66] (summit route); docs/model.md, section "Asperity statistics".
     """
     px, py = (float(p) for p in pixel_size)
     spectral, msgs = _spectral(m0, m2, m4)
@@ -303,6 +340,16 @@ def from_statistics(sigma: float, eta: float, R: float, label: str = "explicit")
     sigma : rms height [nm]
     eta : summit density [nm^-2]
     R : summit radius [nm]
+    label : surface name
+
+    Returns
+    -------
+    SurfaceSummary
+        The spectral route's statistics in nm units ([nm], [nm^-2], [1]); no summit route.
+
+    References
+    ----------
+    [McCool86]; docs/model.md, section "Asperity statistics".
     """
     m0, m2, m4 = st.moments_from_statistics(sigma, eta, R)
     spectral, msgs = _spectral(m0, m2, m4)
@@ -319,6 +366,15 @@ def combine_moments(moments: Iterable[tuple[float, float, float]]) -> tuple[floa
     Parameters
     ----------
     moments : ``(m0 [nm^2], m2 [1], m4 [nm^-2])`` per surface
+
+    Returns
+    -------
+    (float, float, float)
+        The summed moments m0 [nm^2], m2 [1], m4 [nm^-2].
+
+    References
+    ----------
+    [McCool86]; docs/model.md, section "Combined surface".
     """
     m = np.sum(np.asarray(list(moments), dtype=float).reshape(-1, 3), axis=0)
     return float(m[0]), float(m[1]), float(m[2])
@@ -331,6 +387,25 @@ def combine(summaries: Sequence[SurfaceSummary], label: str = "combined") -> Sur
     surfaces live on different grids, so no combined height map exists; a single surface is copied,
     several give only ``sigma`` (quadrature sum of the summit-route sigmas) and NaN otherwise.
     ``pixel_size`` is the single surface's, or NaN for several.
+
+    Parameters
+    ----------
+    summaries : the surfaces (:func:`summarise_sampled`, :func:`from_statistics`), in nm units
+    label : the combined surface's name
+
+    Returns
+    -------
+    SurfaceSummary
+        The combined surface's statistics in nm units ([nm], [nm^-2], [1]).
+
+    Raises
+    ------
+    ValueError
+        For no surface.
+
+    References
+    ----------
+    [McCool86] (moments of independent surfaces add); docs/model.md, section "Combined surface".
     """
     if not summaries:
         raise ValueError("combine: expected at least one surface")

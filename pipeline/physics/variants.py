@@ -80,10 +80,24 @@ class Registry(dict, Generic[E]):
     def lookup(self, name: str) -> E:
         """The entry named ``name``.
 
+        Parameters
+        ----------
+        name : the scene key's value (``air_bearing.rear_law = "power"``: ``"power"``)
+
+        Returns
+        -------
+        Entry
+            The registered entry [-]: its summary, source and (a :class:`Variant`) behaviour.
+
         Raises
         ------
         ValueError
             For a name not registered: ``"<key> = 'name': expected one of [...]"``.
+
+        References
+        ----------
+        docs/architecture.md, section "Where to add things" (a model variant's registry); each entry's own
+        ``source``.
         """
         try:
             return self[name]

@@ -35,6 +35,7 @@ from ..analyses.report_settings import wants_ensemble
 from ..analyses.study import bouncing_bv, ensemble_summary, target_protrusions, targets
 from ..analyses.sweep_slices import combinations, first_contact, split_ensemble
 from ..config.grid import label
+from ..config.heater_power import power_coordinates
 from ..evaluations import evaluate_realisations
 from ..fanout import run_tasks, split
 from ..io import var
@@ -99,6 +100,7 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
                   "window_nm": WINDOW_NM, "errors": "; ".join(errors) or "none",
                   "protrusions_note": "the paper targets' protrusions ([identify]) and the sweep's grid within "
                                       f"{WINDOW_NM:g} nm of its first contact"})
+    ds = ds.assign_coords(power_coordinates(scene, ds["protrusion"].values))
     run = {"k": RUN["k"].data(sim.k if sim.k is not None and np.isfinite(sim.k) else np.nan, ()),
            "k_source": RUN["k_source"].data(np.array(sim.k_source, dtype=object), ())}
     return ds.assign(judged(ds, scene)).assign(run)

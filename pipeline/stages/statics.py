@@ -19,6 +19,7 @@ from typing import Any
 import xarray as xr
 
 from ..config.grid import protrusion_grid
+from ..config.heater_power import power_coordinates
 from ..io import read_dataset
 from ..model import scene_inputs
 from ..model.inputs import for_stage
@@ -35,6 +36,7 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
     model = sim.model(scene)
     ds = statics_map(model, protrusion_grid(scene), sim.record())
     ds.attrs.update(model_attrs(model, sim.k_source))
+    ds = ds.assign_coords(power_coordinates(scene, ds["protrusion"].values))
     multi = ds["protrusion"].values[ds["stable_count"].values > 1]
     log.info("statics: %s", f"more than one stable state at {', '.join(f'{p:g}' for p in multi)} nm" if multi.size
              else "one stable state at every protrusion")

@@ -51,13 +51,14 @@ from ..progress import Progress
 from ..io import file_hash, read_attrs, read_dataset, write_dataset
 from ..paths import refuse_links
 from ..runner import KEY_ATTR, Inputs, Stage, ensure
-from ..variables import (COORDINATES, ENSEMBLE, HISTORIES, PART_STACK, PART_STACKS, SCALARS, STEPPING, TIME,
-                         coordinate, is_part_stack)
+from ..variables import (COORDINATES, ENSEMBLE, HISTORIES, PART_STACK, PART_STACKS, RUN_GRID_DIMS, SCALARS, STEPPING,
+                         TIME, coordinate, is_part_stack)
 from ..model import dmw_record, scene_inputs
 from ..model.inputs import SimulationInputs, Source, for_stage
 from ..model.interface_tables import used_statistics
 from ..model.simulation import DIRECTIONS, GRID_ATTRS, grid_run_values, model_attrs, simulate
 from ..analyses import ensemble_rules as ensemble
+from ..config.heater_power import power_coordinates
 from ..config.grid import damping_grid, protrusion_grid, roughness_sets, same_point, scene_label
 
 log = logging.getLogger(__name__)
@@ -413,8 +414,9 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset | None]:
         models = {(label, float(d)): batch_model(set_scenes[label], batch_sim(label, 0), float(d))
                   for label in sets for d in damp}
         run = grid_run_values(models, labels, damp, sim.k_source)
+        sizes = {"roughness": len(labels), "damping": len(damp)}
         attrs = {name: value for name, value in model_attrs(models[(labels[0], float(damp[0]))], sim.k_source).items()
-                 if name not in GRID_ATTRS or run[GRID_ATTRS[name]].size == 1}  # (several values: the variable has them)
+                 if name not in GRID_ATTRS or sizes[RUN_GRID_DIMS[GRID_ATTRS[name]]] == 1}  # (several: the variable has them)
         # each set's statistics as its interface model used them: its tables' (the scans'), or the given keys
         # (the tables as the batches read them: in this process's cache after a threaded batch phase)
         stats = {label: used_statistics(set_scenes[label], batch_sim(label, 0).tables()) for label in labels}
@@ -627,6 +629,7 @@ class Assembler:
         if self.n_real > 1:
             coords["realisation"] = ENSEMBLE["realisation"].data(np.arange(self.n_real), ("realisation",))
         coords.update(roughness_coordinates([statistics[label] for label in self.labels]))
+        coords.update(power_coordinates(self.scene, self.prot))
         return coords
 
     def _attrs(self, k_source: str, attrs: dict, statistics: dict[str, dict[str, Any]]) -> dict[str, Any]:
@@ -653,6 +656,7 @@ class Assembler:
         if self._histories is None:
             hc = {name: c for name, c in self._coords(statistics).items() if name != "realisation"}  # (realisation 0)
             hc["protrusion"] = coordinate("protrusion", self.hist_prot)
+            hc.update(power_coordinates(self.scene, self.hist_prot))
             hc[TIME] = coordinate(TIME, self.time)
             hds = xr.Dataset({name: HISTORIES[name].data(a, ("protrusion", "roughness", "damping", TIME))
                               for name, a in self._ordered(self.hist, "h_").items()}, coords=hc).assign(run or {})

@@ -53,3 +53,56 @@ def test_a_panel_draws_on_the_axes_it_is_given_and_returns_them(draw, args, kw, 
     assert mine.get_ylabel() == ylabel and mine.lines and not other.lines and not other.get_ylabel()
     fresh = draw(*args(), **kw)  # no axes given: a new figure's
     assert fresh is not mine and fresh.figure is not fig and fresh.get_ylabel() == ylabel
+
+
+def _statics():
+    """A statics map on 0-15 nm: one flying state from 11 nm down to 1.5 nm at 9.6 nm, a contact state from
+    7.2 nm on (clearance -0.1 to -0.7 nm), an unstable one between them (state slot 2)."""
+    x = np.round(np.arange(0.0, 15.01, 0.2), 1)
+    c = np.full((x.size, 3), np.nan)
+    kind, stable = np.zeros((x.size, 3), int), np.zeros((x.size, 3), int)
+    flying = x <= 9.6
+    c[flying, 0] = 11.0 - 9.5 / 9.6 * x[flying]
+    stable[:, 0] = 1
+    contact = x >= 7.2
+    c[contact, 1] = -0.1 - 0.6 * (x[contact] - 7.2) / 7.8
+    kind[:, 1], stable[:, 1] = 1, 1
+    both = flying & contact
+    c[both, 2] = 0.1 + (x[both] - 7.2) * 0.4
+    return xr.Dataset({"clearance": (("protrusion", "state"), c, {"units": "nm"}),
+                       "state_type": (("protrusion", "state"), kind), "stable": (("protrusion", "state"), stable),
+                       "barrier": (("protrusion", "state"), np.where(np.isfinite(c), 1e-13, np.nan), {"units": "J"})},
+                      coords={"protrusion": ("protrusion", x, {"units": "nm"})})
+
+
+def test_the_statics_panel_shows_every_protrusion_and_clearance_of_the_map_and_near_criterion_the_fold():
+    st = _statics()
+    ax = plots.plot_statics_states(st)
+    lo, hi = ax.get_xlim()
+    assert lo <= 0.0 and hi >= 15.0                           # the stage's whole range, not from ~6 nm on
+    bottom, top = ax.get_ylim()
+    assert top >= 11.0 and bottom <= -0.7                     # the flying branch up to 11 nm, the contact one
+    near = plots.plot_statics_states(st, near_criterion=True)
+    assert near.get_xlim()[0] == pytest.approx(7.2 - 1.0 - 0.1) and near.get_ylim()[1] == pytest.approx(3.2)
+
+
+def test_the_forces_legend_lies_beside_the_axes_not_on_a_curve():
+    ax = plots.plot_forces(_history())
+    fig = ax.figure
+    fig.canvas.draw()
+    legend = ax.get_legend().get_window_extent()
+    assert legend.x0 >= ax.get_window_extent().x1              # right of the plotting area: covers no force
+
+
+def test_a_dataset_with_heater_power_gets_a_top_axis_in_mw_and_one_without_none():
+    sweep = _sweep()
+    assert plots.heater_power_axis(plots.plot_fhm(sweep), sweep) is None
+    assert not plots.plot_fhm(sweep).child_axes
+    powered = sweep.assign_coords(heater_power=("protrusion", sweep["protrusion"].values / 0.125, {"units": "mW"}))
+    ax = plots.plot_fhm(powered)
+    (top,) = ax.child_axes
+    assert top.get_xlabel() == "heater power [mW]"
+    forward, inverse = top._functions        # (matplotlib keeps the pair it was given; no public getter)
+    np.testing.assert_allclose(forward(np.array([9.0, 9.5, 10.0])), [72.0, 76.0, 80.0], rtol=1e-12)  # 0.125 nm/mW
+    np.testing.assert_allclose(forward(np.array([8.0, 11.0])), [64.0, 88.0], rtol=1e-12)   # beyond: the end rows
+    np.testing.assert_allclose(inverse(forward(np.linspace(8.0, 11.0, 13))), np.linspace(8.0, 11.0, 13), rtol=1e-12)

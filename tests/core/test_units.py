@@ -13,7 +13,7 @@ from pipeline.config.scene import SCHEMA, unit_suffix
 #: The SI unit each suffix converts to (UDUNITS spelling).
 SI_OF = {"nm": "m", "um": "m", "mm": "m", "m": "m", "gpa": "Pa", "mpa": "Pa", "pa": "Pa", "khz": "Hz", "hz": "Hz",
          "mhz": "Hz", "ms": "s", "us": "s", "ns": "s", "s": "s", "j_m2": "J m-2", "n_s_m": "N s m-1", "n_m": "N m-1",
-         "kg_m3": "kg m-3", "kg": "kg", "n": "N", "mn": "N", "per_um2": "m-2", "per_m2": "m-2", "rpm": "rad s-1",
+         "kg_m3": "kg m-3", "kg": "kg", "n": "N", "mn": "N", "mw": "W", "nm_per_mw": "m W-1", "per_um2": "m-2", "per_m2": "m-2", "rpm": "rad s-1",
          "sigma": "1"}
 
 

@@ -530,10 +530,11 @@ def test_run_numbers_that_depend_on_the_grid_carry_its_dimension(afm_sweep):
     y_s = explicit_statistics(0.8, 5.0, 13.3)["y_s"] / 1e-9
     # tol: the same McCool formula on the same numbers
     assert float(ds.summit_offset.sel(roughness="rough")) == pytest.approx(y_s, rel=1e-12)
-    for name in ("front_damper", "rear_damper", "damping_ratio"):
+    for name in ("front_damper", "rear_damper"):
         assert ds[name].dims == ("damping",), name
-    # tol: the scene's value written as it is: exact
-    np.testing.assert_allclose(ds.damping_ratio.values, ds.damping.values, rtol=0)
+    # the modal damping ratio of each model is the coordinate `damping` itself, not a second variable
+    assert "damping_ratio" not in ds.variables and "damping_ratio" not in ds.attrs
+    assert ds.damping.values.tolist() == [0.03, 0.05]
     ratio = ds.front_damper.sel(damping=0.05) / ds.front_damper.sel(damping=0.03)
     # tol: a ratio of dampers linear in the ratio: a few roundings
     assert float(ratio) == pytest.approx(5 / 3, rel=1e-12)
@@ -560,3 +561,23 @@ def test_the_reports_title_of_a_scan_set_states_its_statistics(afm_sweep):
     assert titles[0] == f"roughness `{scene_label(scene)}`, damping ratio 0.05"  # (the default first)
     assert "roughness `afm-mi1` (sigma 3.43 nm, R 2.23 um, eta 11.4 um^-2), damping ratio 0.03" in titles
     assert "roughness `rough` (sigma 0.8 nm, R 5 um, eta 13.3 um^-2), damping ratio 0.05" in titles
+
+
+def test_with_an_actuation_the_sweep_carries_the_heater_power_beside_the_protrusion(tmp_path):
+    """``heater_power`` [mW] on the ``protrusion`` dimension of both datasets (protrusion / efficiency), the
+    numbers of every variable those of the same sweep without it, which has no such coordinate."""
+    base = ['scene.effects=["air_bearing","pitch","contact"]', "contact.k=0.5", "solver.duration_ms=0.3",
+            "solver.transient_ms=0.1", "sweep.protrusion_nm={start=9.0, stop=10.0, step=0.5}",
+            "report.histories_nm=[9.5]"]
+    plain = read_dataset(ensure("sweep", load_scene(PAPER, base), tmp_path / "plain"))
+    scene = load_scene(PAPER, base + ["tfc.actuation_nm_per_mw=0.125"])
+    out = tmp_path / "heater"
+    powered = read_dataset(ensure("sweep", scene, out))
+    assert "heater_power" not in plain.variables
+    hp = powered["heater_power"]
+    assert hp.dims == ("protrusion",) and "heater_power" in powered.coords and hp.attrs["units"] == "mW"
+    np.testing.assert_allclose(hp.values, [72.0, 76.0, 80.0], rtol=1e-14)
+    hist = read_dataset(out / "sweep_histories.nc")
+    np.testing.assert_allclose(hist["heater_power"].values, [76.0], rtol=1e-14)
+    assert hist["heater_power"].dims == ("protrusion",)
+    xr.testing.assert_identical(powered.drop_vars("heater_power").drop_attrs(), plain.drop_attrs())

@@ -171,3 +171,26 @@ def test_no_docstring_or_comment_of_the_package_cites_notes_a_clone_lacks():
             if hit:
                 found.append(f"{path.relative_to(ROOT)}:{number}: {hit.group(0)}")
     assert not found, "cites notes a clone does not have:\n" + "\n".join(found)
+
+
+def test_the_readmes_commands_call_the_uv_that_make_installs():
+    """uv is not on a new user's PATH: the README's commands name ``.bootstrap/bin/uv`` (the Makefile's), or
+    say that a bare ``uv`` needs one on the PATH."""
+    blocks = re.findall(r"^```sh\n(.*?)^```", (ROOT / "README.md").read_text(encoding="utf-8"), re.S | re.M)
+    lines = [line.split("#", 1)[0] for block in blocks for line in block.splitlines()]  # (not the comments)
+    commands = [line for line in lines if re.search(r"(^|[\s;&|(])\S*uv\s", line)]
+    assert commands, "the README shows no uv command"
+    for line in commands:
+        bare = re.findall(r"(?:^|[\s;&|(])(\S*)uv\s", line)
+        assert all(prefix.endswith(".bootstrap/bin/") for prefix in bare), line
+
+
+def test_the_two_shipped_k_are_explained_in_one_section_that_the_scene_and_the_results_link():
+    section = "The two k of the shipped scenes"
+    model = (ROOT / "docs" / "model.md").read_text(encoding="utf-8")
+    assert f"### {section}" in model
+    text = model.split(f"### {section}", 1)[1].split("\n## ", 1)[0]
+    for number in ("0.978", "1.0736", "(-0.8407, 2.9879]", "28.3 %", "32.8 %"):
+        assert number in text, number
+    assert section in (ROOT / "configs" / "paper-2009.toml").read_text(encoding="utf-8")
+    assert f"model.md#{slug(section)}" in (ROOT / "docs" / "results.md").read_text(encoding="utf-8")
