@@ -224,7 +224,7 @@ def simulation_inputs(scene: SceneLike, results: str | Path | None = None, *,
         if results is not None:
             return runner.simulation_inputs(scene, results, calibration=True, k=k)
         with tempfile.TemporaryDirectory(prefix="hdi-inputs-") as tmp:
-            sim = runner.simulation_inputs(scene, tmp, calibration=True, k=k)
+            sim = runner.simulation_inputs(scene, tmp, calibration=True, k=k, in_memory=True)
             # read now, before the folder goes (read_dataset loads each dataset fully into memory)
             return SimulationInputs.of(sim.tables(), sim.record(), sim.bulge_table(), sim.k, sim.k_source)
 

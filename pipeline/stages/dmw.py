@@ -59,7 +59,8 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from ..model.dmw_record import FILENAME, settings, synthetic_record
+from ..config.si import to_si
+from ..model.dmw_record import FILENAME, check_length, front_pad_lead_s, settings, synthetic_record
 from ..model.measured_dmw import load_record
 from ..physics import microwaviness as phys
 from ..runner import Inputs, Stage
@@ -69,11 +70,17 @@ from ..variables import DMW, TIME, coordinate
 log = logging.getLogger(__name__)
 
 
-def _measured(s: dict[str, Any]) -> tuple[np.ndarray, dict[str, Any]]:
-    """Load, process, resample and cut a measured record; raise before anything is written."""
+def _measured(s: dict[str, Any], need: tuple[float, float]) -> tuple[np.ndarray, dict[str, Any]]:
+    """Load, process, resample and cut a measured record; raise before anything is written.
+
+    ``need``: ``(simulated duration, front-pad lead)`` [s], the record's length rule
+    (:func:`pipeline.model.dmw_record.check_length`), checked at the record's own rate and after resampling.
+    """
     fs, (lo, hi), dur = s["sample_rate_hz"], s["band_hz"], s["duration_s"]
-    rec = load_record(s["source"], s["quantity"], s["column"], s["record_rate_hz"], min_duration_s=dur)
+    rec = load_record(s["source"], s["quantity"], s["column"], s["record_rate_hz"], unit=s["unit"],
+                      min_duration_s=dur if s["duration_set"] else None)
     where = f"{rec.path}: {rec.field}"
+    check_length(rec.values.size, rec.sample_rate_hz, *need, where)
     if hi > rec.sample_rate_hz / 2:
         raise phys.DMWError(f"{where}: sampled at {rec.sample_rate_hz:g} Hz, whose Nyquist frequency is "
                             f"below the band's upper edge {hi:g} Hz (dmw.band_khz); expected a record "
@@ -90,8 +97,11 @@ def _measured(s: dict[str, Any]) -> tuple[np.ndarray, dict[str, Any]]:
     x, how = phys.resample(x, rec.sample_rate_hz, fs)
     if how != "none":
         steps.append(f"resampled {rec.sample_rate_hz:g} -> {fs:g} Hz by {how}")
+    check_length(x.size, fs, *need, f"{where} (resampled to {fs:g} Hz)")
     n = phys.n_samples(dur, fs)
-    if x.size < n:  # resampling may lose the last sample or two of a record just long enough
+    if not s["duration_set"]:  # (the default length, or the whole record when it is shorter and long enough)
+        n = min(n, x.size)
+    elif x.size < n:  # resampling may lose the last sample or two of a record just long enough
         raise phys.DMWError(f"{where}: after resampling to {fs:g} Hz the record has {x.size} samples; "
                             f"expected at least {n} for dmw.duration_ms = {dur / MS:g}")
     if x.size > n:
@@ -117,7 +127,7 @@ def _measured(s: dict[str, Any]) -> tuple[np.ndarray, dict[str, Any]]:
     }
     rms = attrs["record_rms_nm"]
     if s["rms_nm"] > 0 and not (0.5 <= rms / s["rms_nm"] <= 2.0):
-        log.warning("%s: measured DMW rms %.3g nm differs from dmw.rms_nm = %.3g nm; the record is used "
+        log.warning("dmw: %s: measured DMW rms %.3g nm differs from dmw.rms_nm = %.3g nm; the record is used "
                     "as measured (check its units)", rec.path, rms, s["rms_nm"])
     return x, attrs
 
@@ -142,6 +152,9 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
     n = phys.n_samples(dur, fs)
     seed = None
     enabled = "dmw" in scene.effects
+    need = (float(to_si(scene).solver.duration), front_pad_lead_s(scene))
+    if enabled and s["duration_set"]:  # (a record of the length asked for: long enough for the simulation?)
+        check_length(n, fs, *need, f"dmw.duration_ms = {scene['dmw']['duration_ms']:g}")
     if not enabled:
         w = np.zeros(n)
         attrs = {"dmw_quantity": "displacement", "processing": "none (effect off)",
@@ -159,8 +172,9 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
                  "periodic": f"yes (period {dur:g} s = the record length)"}
         source = "synthetic"
     else:
-        w, attrs = _measured(s)
+        w, attrs = _measured(s, need)
         source = s["source"]
+        n, dur = w.size, w.size / fs
     time = np.arange(n) / fs
     f, p = phys.spectrum(w, fs)
     try:
@@ -190,7 +204,9 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
 
 STAGE = Stage(
     "dmw", compute, outputs=(FILENAME,),
-    # the default record length depends on the slider's size (default_duration)
-    reads=("dmw", "solver.duration_ms", "scene.effects", "slider.length_mm", "slider.front_arm_mm"),
+    # the default record length depends on the slider's size (default_duration), the length a record must
+    # have on where the TFC point lies (front_pad_lead_s)
+    reads=("dmw", "solver.duration_ms", "scene.effects", "slider.length_mm", "slider.front_arm_mm",
+           "slider.tfc_from_trailing_edge_um"),
     files=_files, order=20, main_job=True,
     doc="the disk's dynamic microwaviness, synthesised or measured, dmw.nc")

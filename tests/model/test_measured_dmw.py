@@ -57,15 +57,23 @@ def test_load_headerless_and_sample_rate(tmp_path):
     x = dmw.synthesize(0.5, BAND, -2.0, T, FS, seed=9)
     p1 = tmp_path / "one.csv"
     np.savetxt(p1, x)
-    rec = measured_dmw.load_record(p1, sample_rate_hz=FS)
+    # a record that states no unit is refused unless dmw.unit gives it (no silent "assumed nm")
+    with pytest.raises(dmw.DMWError, match=r"one\.csv: column 0: no unit stated; .*or set dmw\.unit"):
+        measured_dmw.load_record(p1, sample_rate_hz=FS)
+    rec = measured_dmw.load_record(p1, sample_rate_hz=FS, unit="nm")
     assert rec.sample_rate_hz == FS and np.allclose(rec.values, x)
-    assert rec.units == "nm" and "assumed nm" in rec.notes[0]
+    assert rec.units == "nm" and "nm from dmw.unit" in rec.notes[0]
+    um = measured_dmw.load_record(p1, sample_rate_hz=FS, unit="um")  # [um] -> [nm]
+    assert np.allclose(um.values, 1e3 * x) and um.units == "um"
     p2 = tmp_path / "two.txt"
     np.savetxt(p2, np.column_stack([np.arange(x.size) / FS * 1e3, x]))    # whitespace-separated
     p2h = tmp_path / "two_ms.csv"
     np.savetxt(p2h, np.column_stack([np.arange(x.size) / FS * 1e3, x]), delimiter=";",
                header="time_ms;w_nm", comments="")
-    assert measured_dmw.load_record(p2).sample_rate_hz == pytest.approx(FS * 1e-3, rel=1e-9)  # no unit: s
+    assert measured_dmw.load_record(p2, unit="nm").sample_rate_hz == pytest.approx(FS * 1e-3, rel=1e-9)  # time: s
+    # a unit stated in the record and another in dmw.unit: refused
+    with pytest.raises(dmw.DMWError, match=r"two_ms\.csv: column 'w_nm': the record states 'nm' but dmw\.unit = 'um'"):
+        measured_dmw.load_record(p2h, unit="um")
     assert measured_dmw.load_record(p2h).sample_rate_hz == pytest.approx(FS, rel=1e-9)
 
 
@@ -83,6 +91,30 @@ def test_load_netcdf(tmp_path):
         measured_dmw.load_record(p, column="velocity")
     with pytest.raises(dmw.DMWError, match=r"rec\.nc.*variable 'w'.*length units"):
         measured_dmw.load_record(p, quantity="velocity")
+
+
+def test_load_netcdf_on_a_sample_dimension_with_a_sample_rate(tmp_path):
+    """A NetCDF record without a time coordinate, on a dimension 'sample': read at dmw.sample_rate_hz (was
+    refused, "dimensions ('sample',); expected ('time',)"); without the rate, or with a unit stated nowhere,
+    refused in one line."""
+    import xarray as xr
+    x = dmw.synthesize(0.5, BAND, -2.0, T, FS, seed=9)
+    p = tmp_path / "samples.nc"
+    xr.Dataset({"displacement": ("sample", x, {"units": "nm"})}).to_netcdf(p, engine="netcdf4")
+    rec = measured_dmw.load_record(p, sample_rate_hz=FS)
+    assert rec.sample_rate_hz == FS and rec.units == "nm" and np.array_equal(rec.values, x)
+    with pytest.raises(dmw.DMWError, match=r"samples\.nc: no 'time' coordinate and no sample rate; .*dmw\.sample_rate_hz"):
+        measured_dmw.load_record(p)
+    bare = tmp_path / "bare.nc"
+    xr.Dataset({"w": ("sample", x)}).to_netcdf(bare, engine="netcdf4")
+    with pytest.raises(dmw.DMWError, match=r"bare\.nc: variable 'w': no unit stated; .*set dmw\.unit"):
+        measured_dmw.load_record(bare, sample_rate_hz=FS)
+    assert np.array_equal(measured_dmw.load_record(bare, sample_rate_hz=FS, unit="um").values, 1e3 * x)
+    two = tmp_path / "two.nc"
+    xr.Dataset({"w": (("run", "sample"), np.vstack([x, x]), {"units": "nm"})}).to_netcdf(two, engine="netcdf4")
+    with pytest.raises(dmw.DMWError, match=r"two\.nc: variable 'w': dimensions \('run', 'sample'\); expected one "
+                                           r"dimension"):
+        measured_dmw.load_record(two, sample_rate_hz=FS, column="w")
 
 
 def _errors(tmp_path: Path) -> dict[str, tuple[Path, dict, str]]:
