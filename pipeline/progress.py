@@ -357,11 +357,14 @@ class Progress:
             self._token = None
 
 
-def compile_notice(what: str, seconds: float) -> None:
-    """Say that ``what`` is being compiled (numba; first run only) and roughly how long it takes,
-    ``seconds`` [s]: an INFO line of the ``pipeline`` logger, or, for a library caller that set up no
-    logging at all (a notebook), the same line on stderr, so a first call's long pause is explained."""
-    text = f"compiling {what} (first run only, ~{seconds:.0f} s)"
+def compile_notice(what: str, seconds: float | None = None) -> None:
+    """Say that ``what`` is being compiled (numba; first run only), or, with ``seconds`` [s] (measured here,
+    on this machine), that it was compiled in that time: an INFO line of the ``pipeline`` logger, or, for a
+    library caller that set up no logging at all (a notebook), the same line on stderr, so a first call's
+    long pause is explained. No time is promised before it is measured (a compile's time depends on the
+    machine and its load: 12 s to over a minute)."""
+    text = (f"compiling {what} (first run only)" if seconds is None
+            else f"compiled {what} in {seconds:.1f} s (first run only: cached for the next runs)")
     logger = logging.getLogger("pipeline")
     if logger.hasHandlers():
         log.info(text)
