@@ -346,7 +346,7 @@ def test_the_api_refuses_a_folder_it_cannot_write_even_when_up_to_date(api_model
                     raise PermissionError(13, "Permission denied")
                 return real(*args, dir=dir, **kw)
             monkeypatch.setattr(tempfile, "mkstemp", refuse)
-        with pytest.raises(OptionError, match=rf"^results {folder}: not writable: Permission denied$"):
+        with pytest.raises(OptionError, match=rf"^results = '{folder}': not writable: Permission denied$"):
             hdi.build_model(scene, folder)
     finally:
         os.chmod(folder, 0o755)
