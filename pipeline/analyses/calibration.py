@@ -420,9 +420,10 @@ def calibrate(scene: Any, inputs: SimulationInputs, scheduler: str | None = None
         simulations = 2 * len(todo) + sum(v[3] for v in found.values())
         how = ("exact: k* = minimum separation / sigma of one flying run (contact law off) per protrusion; "
                "bisection only where the transient dips below the steady window")
-        if collapsed:
-            log.info("calibrate: the flying run (contact law off) collapses from %g nm of the grid on (%s): "
-                     "contact there for every k", collapsed[0], found[collapsed[0]][2])
+        if collapsed:  # (a warning where it decides the touchdown: at or below touchdown.onset_nm)
+            (log.warning if collapsed[0] <= td["onset_nm"] else log.info)(
+                "calibrate: the flying run (contact law off) collapses from %g nm of the grid on (%s): contact "
+                "there for every k", collapsed[0], found[collapsed[0]][2])
     elif method == "bisection":
         k_on, st_on, n_on = k_threshold(model, td["onset_nm"], k_range, tol)
         k_prev, st_prev, n_prev = k_threshold(model, td["previous_nm"], k_range, tol)

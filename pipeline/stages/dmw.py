@@ -26,8 +26,12 @@ a measured one).
 
 Record length: ``dmw.duration_ms`` when given; otherwise ``solver.duration_ms`` plus the disk's
 travel time over the slider (the dynamics reads the record ahead of ``t`` for the front pad), rounded
-up to whole periods of the band's lower edge: 2.1 ms (8400 samples) in the paper scene. See
-:func:`default_duration`.
+up to whole periods of the band's lower edge: 2.1 ms (8400 samples) in the paper scene
+(:func:`~pipeline.model.dmw_record.default_duration`); a measured record shorter than that is used whole.
+Whatever its length, a record must hold what the simulation reads (:func:`~pipeline.model.dmw_record.needed_samples`:
+the simulated duration, the front pad's lead and 3 samples, 8151 samples for the paper scene's 2 ms),
+checked here before anything is written, in the one message of :func:`~pipeline.model.dmw_record.check_length`.
+The formats of a measured record: docs/my-drive.md, section "The DMW record".
 
 Synthetic: :func:`pipeline.physics.microwaviness.synthesize` with ``rms_nm``, ``band_khz``, ``exponent``,
 ``seed``, ``sample_rate_mhz`` and that duration.
@@ -47,7 +51,8 @@ drawing no random numbers. A downstream stage that reads it therefore gets exact
 it forgets to check the effect, and a scene with the effect off never needs a record file.
 
 Up to date (:mod:`pipeline.runner`): the stage reads ``[dmw]``, ``solver.duration_ms``, the effects,
-the slider's length and front arm (the default record length) and the bytes of a measured record;
+the slider's length, front arm and TFC position (the default record length, the length a record must
+have) and the bytes of a measured record;
 ``dmw.nc`` is recomputed only when one of them changed (``force=True`` recomputes).
 """
 
