@@ -552,7 +552,7 @@ def check_options(stage: str, scene: Any, *, out: str | Path | None = None, sche
         check_grid(scene, yes)
     if scene is not None:
         try:
-            sizing.check_sizes(scene, stage, yes, where=str(scene.path or "scene"))
+            sizing.check_sizes(scene, stage, yes, where=str(scene.path or "scene"), lift=switch("yes"))
         except limits.LimitError as exc:
             raise OptionError(str(exc)) from None
     if scene is not None and stage in ("report", "run"):

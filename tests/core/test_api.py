@@ -212,3 +212,14 @@ def test_run_stage_errors_name_the_python_arguments(flying, tmp_path):
         check_options("sweep", flying, out=afile)
     with pytest.raises(OptionError, match=r"^--workers: not used by `hdi dmw`"):
         check_options("dmw", flying, workers=2)
+
+
+def test_a_big_job_from_python_asks_for_yes_true(paper_config, tmp_path):
+    """A job beyond a size limit asks for the argument yes=True from Python, --yes on the command line."""
+    from pipeline.cli_checks import check_options
+    big = hdi.load_scene(paper_config, ["sweep.protrusion_nm={start=0.0, stop=15.0, step=0.0001}"])
+    with pytest.raises(OptionError, match=r"exceed [\d,]+; pass yes=True to run them anyway$"):
+        hdi.run_stage("sweep", big, tmp_path / "o")
+    with pytest.raises(OptionError, match=r"exceed [\d,]+; pass --yes to run them anyway$"):
+        check_options("sweep", big, out=tmp_path / "o")
+    assert not (tmp_path / "o").exists()
