@@ -31,7 +31,9 @@ line checks it (:mod:`pipeline.cli_checks`) before anything runs or is written:
 :class:`pipeline.config.scene.SceneError` (a scene, its path or an override), :class:`pipeline.io.DatasetError`
 (a missing or foreign dataset), :class:`pipeline.cli_checks.OptionError` (an option or argument of the wrong
 type or range: ``workers="2"``, a results folder that is a file or cannot be written, a negative or NaN
-protrusion), ``ValueError``; all are ``ValueError``. A run whose integration fails raises
+protrusion, a protrusion given twice, a history not among the protrusions), ``ValueError``; all are
+``ValueError``, and each names the argument of the call (``out = '...': is a file``, ``workers = 'two'``,
+``yes=True``), not the command line's option (:func:`pipeline.cli_checks.python_call`). A run whose integration fails raises
 :class:`pipeline.model.running.IntegrationError` in one line naming the scene, the protrusion and what to
 change (the command line's message); a file system that fails mid-run (a full disk) raises ``OSError``.
 """
