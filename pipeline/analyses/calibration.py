@@ -301,7 +301,8 @@ OWN_DRIVE_KEYS = {
     "disk": ("dmw.source", "dmw.rpm", "dmw.radius_mm"),
     "roughness": ("roughness.afm", "roughness.sigma_nm", "roughness.summit_radius_um",
                   "roughness.summit_density_per_um2"),
-    "slider": tuple(f"slider.{key}" for key in SCHEMA["slider"])
+    "slider": tuple(f"slider.{key}" for key in ("length_mm", "width_mm", "thickness_mm", "density_kg_m3",
+                                                 "front_arm_mm", "rear_arm_mm", "tfc_from_trailing_edge_um"))
     + ("air_bearing.frequencies_khz", "air_bearing.flying_height_nm"),
 }
 
