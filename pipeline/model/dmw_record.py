@@ -118,10 +118,11 @@ def needed_samples(duration_s: float, lead_s: float, sample_rate_hz: float) -> i
     return math.ceil((duration_s + max(lead_s, 0.0)) * sample_rate_hz * (1 - 1e-12)) + END_SAMPLES
 
 
-def check_length(samples: int, sample_rate_hz: float, duration_s: float, lead_s: float, where: str) -> None:
+def check_length(samples: int, sample_rate_hz: float, duration_s: float, lead_s: float, where: str,
+                 remedy: str = "give a longer record") -> None:
     """Refuse a DMW record of ``samples`` at ``sample_rate_hz`` [Hz] shorter than :func:`needed_samples`, in
     one line: ``where`` (the file and what holds the record), its length, the length needed and how it is
-    made up, and what to change.
+    made up, and what to change (``remedy``, or a shorter ``solver.duration_ms``).
 
     Raises
     ------
@@ -136,7 +137,7 @@ def check_length(samples: int, sample_rate_hz: float, duration_s: float, lead_s:
         f"{where}: {samples} samples at {sample_rate_hz:.6g} Hz ({samples / sample_rate_hz / MS:.6g} ms); the "
         f"simulation needs at least {need} ({need / sample_rate_hz / MS:.6g} ms): solver.duration_ms = "
         f"{duration_s / MS:g} plus {max(lead_s, 0.0) / MS:.4g} ms, the disk's travel from the front pad to the TFC "
-        f"point, plus {END_SAMPLES} samples; give a longer record"
+        f"point, plus {END_SAMPLES} samples; {remedy}"
         + (f", or solver.duration_ms <= {math.floor(longest / MS * 1e4) / 1e4:g}" if longest > 0 else ""))
 
 

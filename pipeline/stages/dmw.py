@@ -159,7 +159,8 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
     enabled = "dmw" in scene.effects
     need = (float(to_si(scene).solver.duration), front_pad_lead_s(scene))
     if enabled and s["duration_set"]:  # (a record of the length asked for: long enough for the simulation?)
-        check_length(n, fs, *need, f"dmw.duration_ms = {scene['dmw']['duration_ms']:g}")
+        check_length(n, fs, *need, f"dmw.duration_ms = {scene['dmw']['duration_ms']:g}",
+                     "set dmw.duration_ms to at least that, or leave it out (the default length is enough)")
     if not enabled:
         w = np.zeros(n)
         attrs = {"dmw_quantity": "displacement", "processing": "none (effect off)",

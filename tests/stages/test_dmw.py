@@ -136,7 +136,8 @@ def test_one_rule_for_the_length_of_a_record_checked_before_anything_is_written(
     for source in ("synthetic", str(just)):
         out = tmp_path / ("c" if source == "synthetic" else "d")
         with pytest.raises(dmw.DMWError, match=r"^dmw\.duration_ms = 2: 8000 samples at 4e\+06 Hz \(2 ms\); the "
-                                               r"simulation needs at least 8151 \(2\.03775 ms\)"):
+                                               r"simulation needs at least 8151 \(2\.03775 ms\).*; set dmw\.duration_ms "
+                                               r"to at least that, or leave it out"):
             ensure("dmw", scene_from_dict({"dmw": {"source": source, "duration_ms": 2.0}}), out)
         assert not (out / "dmw.nc").exists()
 
