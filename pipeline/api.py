@@ -31,7 +31,9 @@ line checks it (:mod:`pipeline.cli_checks`) before anything runs or is written:
 :class:`pipeline.config.scene.SceneError` (a scene, its path or an override), :class:`pipeline.io.DatasetError`
 (a missing or foreign dataset), :class:`pipeline.cli_checks.OptionError` (an option or argument of the wrong
 type or range: ``workers="2"``, a results folder that is a file or cannot be written, a negative or NaN
-protrusion), ``ValueError``; all are ``ValueError``. A run whose integration fails raises
+protrusion, a protrusion given twice, a history not among the protrusions), ``ValueError``; all are
+``ValueError``, and each names the argument of the call (``out = '...': is a file``, ``workers = 'two'``,
+``yes=True``), not the command line's option (:func:`pipeline.cli_checks.python_call`). A run whose integration fails raises
 :class:`pipeline.model.running.IntegrationError` in one line naming the scene, the protrusion and what to
 change (the command line's message); a file system that fails mid-run (a full disk) raises ``OSError``.
 """
@@ -54,7 +56,8 @@ from collections.abc import MutableMapping
 
 from . import progress as _progress, runner
 from .cli_checks import (OptionError, check_flag, check_options, check_out, check_path_option, check_protrusions,
-                         check_stage_options, integration_line)
+                         check_stage_options, integration_line, python_call)
+from .config.grid import same_point
 from .config.loading import load_scene as _load_scene
 from .config.schema import SCHEMA, SceneError
 from .config.validation import Scene, check_value
@@ -224,7 +227,7 @@ def simulation_inputs(scene: SceneLike, results: str | Path | None = None, *,
         if results is not None:
             return runner.simulation_inputs(scene, results, calibration=True, k=k)
         with tempfile.TemporaryDirectory(prefix="hdi-inputs-") as tmp:
-            sim = runner.simulation_inputs(scene, tmp, calibration=True, k=k)
+            sim = runner.simulation_inputs(scene, tmp, calibration=True, k=k, in_memory=True)
             # read now, before the folder goes (read_dataset loads each dataset fully into memory)
             return SimulationInputs.of(sim.tables(), sim.record(), sim.bulge_table(), sim.k, sim.k_source)
 
@@ -257,7 +260,8 @@ def build_model(scene: SceneLike, results: str | Path | None = None, *, k: float
 
 def simulate(model: Model, protrusions: Iterable[float], *, histories: Iterable[float] = (),
              protocol: str = "independent", counters: bool = False, on_error: str = "raise",
-             timings: MutableMapping[str, float] | None = None, progress: bool = True) -> xr.Dataset:
+             timings: MutableMapping[str, float] | None = None, progress: bool = True,
+             workers: None = None) -> xr.Dataset:
     """Run ``model`` at ``protrusions`` [nm]: :func:`pipeline.model.simulation.simulate`, the call of the
     ``simulate`` and ``sweep`` stages, after the command line's checks of a protrusion.
 
@@ -266,10 +270,15 @@ def simulate(model: Model, protrusions: Iterable[float], *, histories: Iterable[
     model : the model of :func:`build_model`
     protrusions : TFC protrusions [nm], a list (``[9.0]`` for one), each as ``tfc.protrusion_nm`` allows:
         finite, >= 0 and at most the flying height + 100 nm (:func:`pipeline.cli_checks.check_protrusions`)
+        (each once: a protrusion given twice is refused)
     histories, protocol, counters, on_error, timings : as :func:`pipeline.model.simulation.simulate`
-        (``histories``: protrusions [nm] whose time histories are kept)
+        (``histories``: protrusions [nm] among ``protrusions`` whose time histories are kept, on the
+        dimension ``hist_protrusion`` of the result: :func:`histories_of`)
     progress : count the runs as they finish, ``"simulate: k/N runs done, ..."`` (module docstring);
         ``False``: nothing shown
+    workers : not taken (``None`` only): the runs go one after another in this process, as ``hdi simulate``
+        runs them; a fan-out over local workers or a cluster is a stage's, ``run_stage("sweep", scene, out,
+        workers=2)`` over ``sweep.protrusion_nm``
 
     Returns
     -------
@@ -279,8 +288,9 @@ def simulate(model: Model, protrusions: Iterable[float], *, histories: Iterable[
     Raises
     ------
     pipeline.cli_checks.OptionError
-        A protrusion that is no number, NaN, negative or beyond the flying height + 100 nm, or a
-        protrusion list that is a single number; ``ValueError`` for the other arguments.
+        A protrusion that is no number, NaN, negative or beyond the flying height + 100 nm, given twice, or a
+        protrusion list that is a single number; a history protrusion not among ``protrusions``; ``workers``
+        given; ``ValueError`` for the other arguments.
     pipeline.model.running.IntegrationError
         A run failed (``on_error="raise"``), in one line naming the scene, the protrusion and what to change.
     """
@@ -290,7 +300,20 @@ def simulate(model: Model, protrusions: Iterable[float], *, histories: Iterable[
     prot = check_protrusions(protrusions, fh0, "protrusions")
     if not prot:
         raise OptionError("protrusions = []: expected at least one protrusion [nm]")
+    # (to the grid tolerance the runs match histories with: pipeline.config.grid.same_point)
+    twice = sorted({p for i, p in enumerate(prot) if any(same_point(p, q) for q in prot[:i])})
+    if twice:
+        raise OptionError(f"protrusions: {', '.join(f'{p:g}' for p in twice)} nm given more than once; expected each "
+                          "protrusion once (the result is indexed by protrusion)")
     kept = check_protrusions(histories, fh0, "histories")
+    off = [h for h in kept if not any(same_point(h, p) for p in prot)]
+    if off:
+        raise OptionError(f"histories: {', '.join(f'{h:g}' for h in off)} nm not among the protrusions "
+                          f"({', '.join(f'{p:g}' for p in prot)} nm); expected protrusions that are simulated")
+    if workers is not None:
+        raise OptionError(f"workers = {workers!r}: simulate runs its protrusions one after another in this process "
+                          "(as `hdi simulate`); fan them out with run_stage(\"sweep\", scene, out, workers=...) over "
+                          "sweep.protrusion_nm")
     check_flag("counters =", counters)
     check_flag("progress =", progress)
     if timings is not None and not isinstance(timings, MutableMapping):
@@ -390,12 +413,14 @@ def _build(target: str, scene: SceneLike, out: str | Path | None, force: bool, s
     if target != "run" and target not in stages:
         raise ValueError(f"unknown stage {target!r}; expected one of {', '.join(stages)}")
     address = _client_address(scheduler)
-    if address is None:
-        scheduler = check_options(target, scene, out=out, scheduler=scheduler, workers=workers, yes=yes, force=force)
-    else:  # (a connected client's scheduler answers: only whether the stage fans out is checked)
-        check_stage_options(target, {"scheduler": address}, afm_files=False)
-        check_options(target, scene, out=out, workers=workers, yes=yes, force=force)
-        scheduler = address
+    with python_call():  # (the messages name this call's arguments, not the command line's options)
+        if address is None:
+            scheduler = check_options(target, scene, out=out, scheduler=scheduler, workers=workers, yes=yes,
+                                      force=force)
+        else:  # (a connected client's scheduler answers: only whether the stage fans out is checked)
+            check_stage_options(target, {"scheduler": address}, afm_files=False)
+            check_options(target, scene, out=out, workers=workers, yes=yes, force=force)
+            scheduler = address
     targets = runner.main_job(scene, stages) if target == "run" else [target]
     try:
         with _progress.shown(progress):

@@ -16,6 +16,8 @@ stage computes: :mod:`pipeline.code_version` leaves this module out of the stage
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import json
 import math
 import os
@@ -24,7 +26,7 @@ import struct
 import tempfile
 import warnings
 from pathlib import Path
-from typing import Any
+from typing import Any, Iterator
 from urllib.parse import urlsplit
 
 import numpy as np
@@ -65,31 +67,73 @@ OPTION_STAGES: dict[str, tuple[str, ...]] = {
     "channel": ("roughness FILE...",),
     "detrend": ("roughness FILE...",),
 }
-_FLAG = {"scheduler": "--scheduler", "workers": "--workers", "yes": "--yes", "readme": "--readme",
-         "write_scene": "--write-scene", "channel": "--channel", "detrend": "--detrend"}
 _SCENE_KEY = {"channel": "roughness.channel", "detrend": "roughness.detrend"}
+
+#: Within :func:`python_call`: the checks name the arguments of a Python call (``out = '...'``), not the
+#: command line's options (``--out ...``).
+_PYTHON: contextvars.ContextVar[bool] = contextvars.ContextVar("hdi_python_call", default=False)
+
+
+@contextlib.contextmanager
+def python_call() -> Iterator[None]:
+    """Within the block (a call of :mod:`pipeline.api`), every message of these checks names the Python
+    argument (``workers = 'two'``, ``yes=True``, stage ``'dmw'``) where the command line names its option
+    (``--workers two``, ``--yes``, ```hdi dmw```): :func:`flag`, :func:`given`, :func:`switch`."""
+    token = _PYTHON.set(True)
+    try:
+        yield
+    finally:
+        _PYTHON.reset(token)
+
+
+def flag(name: str) -> str:
+    """How a message names the option ``name`` (``"write_scene"``): ``--write-scene``, or in a Python call the
+    argument ``write_scene``."""
+    return name if _PYTHON.get() else "--" + name.replace("_", "-")
+
+
+def given(name: str, value: Any, text: bool = False) -> str:
+    """The option ``name`` with its ``value`` in a message: ``--out results/x`` (``text``: the value's repr,
+    ``--workers 'two'``), or in a Python call ``out = 'results/x'``."""
+    if _PYTHON.get():
+        return f"{name} = {value!r}"
+    return f"{flag(name)} {value!r}" if text else f"{flag(name)} {value}"
+
+
+def switch(name: str) -> str:
+    """How a message asks for the switch ``name``: ``--yes``, or in a Python call ``yes=True``."""
+    return f"{name}=True" if _PYTHON.get() else flag(name)
+
+
+def command(stage: str) -> str:
+    """How a message names a stage's command: ```hdi sweep```, or in a Python call the stage ``'sweep'``."""
+    return f"stage {stage!r}" if _PYTHON.get() else f"`hdi {stage}`"
 
 
 def check_workers(workers: int | None) -> None:
     """``--workers`` is absent or a positive integer (from Python: an ``int``, not ``"2"`` or ``2.0``)."""
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)):
-        raise OptionError(f"--workers {workers!r}: expected a positive integer number of local workers (1 or more), "
-                          f"got {type(workers).__name__}")
+        raise OptionError(f"{given('workers', workers, text=True)}: expected a positive integer number of local "
+                          f"workers (1 or more), got {type(workers).__name__}")
     if workers is not None and workers < 1:
-        raise OptionError(f"--workers {workers}: expected a positive number of local workers (1 or more)")
+        raise OptionError(f"{given('workers', workers)}: expected a positive number of local workers (1 or more)")
 
 
 def check_flag(option: str, value: Any) -> None:
-    """A switch given from Python (``option``: how an error names it, ``--force``, ``--yes``) is ``True`` or
-    ``False`` (``"no"`` is truthy)."""
+    """A switch given from Python (``option``: how an error names it, ``--force``, ``--yes``, or in a Python
+    call ``force``, ``progress``) is ``True`` or ``False`` (``"no"`` is truthy)."""
     if not isinstance(value, bool):
-        raise OptionError(f"{option} {value!r}: expected True or False, got {type(value).__name__}")
+        name = option.rstrip(" =")
+        shown = f"{name} = {value!r}" if not name.startswith("--") else f"{option} {value!r}"
+        raise OptionError(f"{shown}: expected True or False, got {type(value).__name__}")
 
 
 def check_path_option(value: Any, option: str) -> None:
-    """An option naming a file or folder is absent or a path (``str`` or ``os.PathLike``), not ``123``."""
+    """An option naming a file or folder (``option``: ``--out``, or a Python argument ``results``) is absent
+    or a path (``str`` or ``os.PathLike``), not ``123``."""
     if value is not None and not isinstance(value, (str, os.PathLike)):
-        raise OptionError(f"{option} {value!r}: expected a path (str or pathlib.Path), got {type(value).__name__}")
+        shown = f"{option} {value!r}" if option.startswith("--") else f"{option} = {value!r}"
+        raise OptionError(f"{shown}: expected a path (str or pathlib.Path), got {type(value).__name__}")
 
 
 def check_protrusions(values: Any, flying_height_nm: float, what: str = "protrusions") -> list[float]:
@@ -129,6 +173,9 @@ def check_protrusions(values: Any, flying_height_nm: float, what: str = "protrus
 SCHEDULER_ENV = "DASK_SCHEDULER_ADDRESS"
 
 
+given_option = given  # (scheduler_address's argument is named ``given``)
+
+
 def scheduler_address(given: str | None) -> tuple[str | None, str]:
     """The scheduler a run uses and how an error names it: ``--scheduler`` (a local fan-out, an address,
     or a scheduler file), else :data:`SCHEDULER_ENV`, else ``None`` (local threads).
@@ -138,13 +185,13 @@ def scheduler_address(given: str | None) -> tuple[str | None, str]:
     dask would cost every local run ~0.5 s).
     """
     if given is not None and not isinstance(given, (str, os.PathLike)):
-        raise OptionError(f"--scheduler {given!r}: expected an address (tcp://HOST:PORT), a scheduler file or one of "
-                          f"{', '.join(LOCAL)}, got {type(given).__name__}")
+        raise OptionError(f"{given_option('scheduler', given, text=True)}: expected an address (tcp://HOST:PORT), a "
+                          f"scheduler file or one of {', '.join(LOCAL)}, got {type(given).__name__}")
     given = os.fspath(given) if given is not None else None
     if given is None:
         env = os.environ.get(SCHEDULER_ENV, "").strip()
         return (env, f"{SCHEDULER_ENV}={env}") if env else (None, "")
-    where = f"--scheduler {given}"
+    where = given_option("scheduler", given)
     if given not in LOCAL and "://" not in given and special_kind(given) is not None:
         # (checked before opening: reading a FIFO waits for a writer forever)
         raise OptionError(f"{where}: is {special_kind(given)}; expected the JSON file `dask scheduler "
@@ -172,8 +219,8 @@ def scheduler_address(given: str | None) -> tuple[str | None, str]:
 def _leave(named: str) -> str:
     """How to run locally instead, for an error about the scheduler ``named``."""
     if named.startswith(SCHEDULER_ENV):
-        return f"or unset {SCHEDULER_ENV} (or give --scheduler threads) to run locally"
-    return "or leave --scheduler out to use a local cluster"
+        return f"or unset {SCHEDULER_ENV} (or give {given('scheduler', 'threads')}) to run locally"
+    return f"or leave {flag('scheduler')} out to use a local cluster"
 
 
 def check_scheduler(address: str | None, timeout: float = CONNECT_TIMEOUT_S,
@@ -256,7 +303,7 @@ def check_workers_attached(address: str, timeout: float = CONNECT_TIMEOUT_S,
     (workers submitted as batch jobs may still be starting); its dashboard link is logged
     (:func:`pipeline.fanout.announce`). ``named``: how an error names the scheduler."""
     import logging
-    named = named or f"--scheduler {address}"
+    named = named or given("scheduler", address)
     try:
         with fanout.new_client(address, timeout) as client:
             fanout.announce(client, address)
@@ -312,11 +359,12 @@ def integration_line(exc: BaseException, scene: Any = None) -> str:
     return f"{where}{text}" + (f"; {hint}" if hint else "")
 
 
-def check_out(out: str | Path | None, option: str = "--out") -> None:
-    """``--out`` (``option``: how an error names it) is a folder that exists or can be created, and that we
-    can write in."""
+def check_out(out: str | Path | None, option: str | None = None) -> None:
+    """``--out`` (``option``: how an error names it; default :func:`flag` of ``out``) is a folder that exists
+    or can be created, and that we can write in."""
     if out is None:
         return
+    option = flag("out") if option is None else option
     check_path_option(out, option)
     path = Path(out)
     probe = path
@@ -326,7 +374,7 @@ def check_out(out: str | Path | None, option: str = "--out") -> None:
         probe = probe.parent
     if probe.exists() and not probe.is_dir():
         what = "is a file" if probe == path else f"cannot be created: {probe} is a file"
-        raise OptionError(f"{option} {out}: {what}; expected a folder")
+        raise OptionError(f"{_named(option, out)}: {what}; expected a folder")
     check_name_lengths(path, probe, option)
     try:  # os.access alone misses read-only mounts and says yes to root everywhere
         fd, tmp = tempfile.mkstemp(prefix=".hdi-write-test.", dir=probe)
@@ -334,7 +382,12 @@ def check_out(out: str | Path | None, option: str = "--out") -> None:
         os.unlink(tmp)
     except OSError as exc:
         where = "" if probe == path else f" (cannot create it in {probe})"
-        raise OptionError(f"{option} {out}: not writable{where}: {exc.strerror or exc}") from None
+        raise OptionError(f"{_named(option, out)}: not writable{where}: {exc.strerror or exc}") from None
+
+
+def _named(option: str, value: Any) -> str:
+    """An option and its path in a message: ``--out results/x``, or a Python argument ``results = 'results/x'``."""
+    return f"{option} {value}" if option.startswith("--") else f"{option} = {os.fspath(value)!r}"
 
 
 def _exists(path: Path) -> bool:
@@ -356,7 +409,7 @@ def check_name_lengths(path: Path, existing: Path, option: str) -> None:
     for part in path.parts[len(existing.parts):] if path != existing else ():
         size = len(os.fsencode(part))
         if limit and size > limit:
-            raise OptionError(f"{option} {path}: the name {part[:20]}... is {size} bytes, longer than the "
+            raise OptionError(f"{_named(option, path)}: the name {part[:20]}... is {size} bytes, longer than the "
                               f"{limit} bytes its file system allows; choose a shorter name")
 
 
@@ -421,7 +474,7 @@ def check_grid(scene: Any, yes: bool = False, limit: int = MAX_SCENES) -> None:
         g = scene["sweep"]["protrusion_nm"]
         raise OptionError(f"sweep.protrusion_nm = {{start={g['start']:g}, stop={g['stop']:g}, step={g['step']:g}}}: "
                           f"{total:,} scenes ({n_prot:,} protrusions x {n_sets} roughness sets x {n_damp} damping "
-                          f"ratios) exceed {limit:,}; pass --yes to run them anyway")
+                          f"ratios) exceed {limit:,}; pass {switch('yes')} to run them anyway")
 
 
 def check_sweep_histories(scene: Any) -> None:
@@ -467,7 +520,7 @@ def check_stage_options(stage: str, given: dict[str, Any], afm_files: bool = Fal
         used = (stage == "roughness" and afm_files) if name in ("channel", "detrend") else stage in users
         if not used:
             hint = f" (for a scene, use --set {_SCENE_KEY[name]}=...)" if name in _SCENE_KEY else ""
-            raise OptionError(f"{_FLAG[name]}: not used by `hdi {stage}`; only by {', '.join(users)}{hint}")
+            raise OptionError(f"{flag(name)}: not used by {command(stage)}; only by {', '.join(users)}{hint}")
 
 
 def check_options(stage: str, scene: Any, *, out: str | Path | None = None, scheduler: str | None = None,
@@ -488,10 +541,10 @@ def check_options(stage: str, scene: Any, *, out: str | Path | None = None, sche
     check_stage_options(stage, {"scheduler": scheduler, "workers": workers, "yes": yes, **given},
                         afm_files=scene is None)
     check_workers(workers)
-    check_flag("--yes", yes)
-    check_flag("--force", force)
+    check_flag(flag("yes"), yes)
+    check_flag(flag("force"), force)
     for name in ("readme", "write_scene"):
-        check_path_option(given.get(name), _FLAG[name])
+        check_path_option(given.get(name), flag(name))
     check_out(out)
     check_readme(given.get("readme"))
     check_write_scene(given.get("write_scene"), force)
@@ -499,7 +552,7 @@ def check_options(stage: str, scene: Any, *, out: str | Path | None = None, sche
         check_grid(scene, yes)
     if scene is not None:
         try:
-            sizing.check_sizes(scene, stage, yes, where=str(scene.path or "scene"))
+            sizing.check_sizes(scene, stage, yes, where=str(scene.path or "scene"), lift=switch("yes"))
         except limits.LimitError as exc:
             raise OptionError(str(exc)) from None
     if scene is not None and stage in ("report", "run"):

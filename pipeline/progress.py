@@ -54,7 +54,8 @@ log = logging.getLogger(__name__)
 #: Seconds between two progress lines when stderr is not a terminal; ``HDI_PROGRESS_S`` overrides it.
 INTERVAL_S = 30.0
 
-_LABEL: contextvars.ContextVar[str] = contextvars.ContextVar("hdi_progress_label", default="hdi")
+_LABEL_DEFAULT = "hdi"
+_LABEL: contextvars.ContextVar[str] = contextvars.ContextVar("hdi_progress_label", default=_LABEL_DEFAULT)
 #: The :class:`Progress` whose display runs in this context (it owns the display: :func:`display`).
 _ACTIVE: contextvars.ContextVar["Progress | None"] = contextvars.ContextVar("hdi_progress_active", default=None)
 #: Within :func:`shown`: ``True`` (an API call that shows its progress) or ``False`` (``progress=False``).
@@ -62,11 +63,17 @@ _SHOWN: contextvars.ContextVar[bool | None] = contextvars.ContextVar("hdi_progre
 
 
 class LineFormat(logging.Formatter):
-    """Progress and stage messages as plain lines; warnings and errors say so (``warning: ...``)."""
+    """Progress and stage messages as plain lines; warnings and errors say so and name the stage that
+    gives them (``warning: dmw: ...``: the stage of :func:`stage`, unless the message starts with it)."""
 
     def format(self, record: logging.LogRecord) -> str:
         text = super().format(record)
-        return text if record.levelno < logging.WARNING else f"{record.levelname.lower()}: {text}"
+        if record.levelno < logging.WARNING:
+            return text
+        name = _LABEL.get()
+        if name != _LABEL_DEFAULT and not text.startswith(f"{name}:"):
+            text = f"{name}: {text}"
+        return f"{record.levelname.lower()}: {text}"
 
 
 class StderrHandler(logging.StreamHandler):
@@ -350,11 +357,14 @@ class Progress:
             self._token = None
 
 
-def compile_notice(what: str, seconds: float) -> None:
-    """Say that ``what`` is being compiled (numba; first run only) and roughly how long it takes,
-    ``seconds`` [s]: an INFO line of the ``pipeline`` logger, or, for a library caller that set up no
-    logging at all (a notebook), the same line on stderr, so a first call's long pause is explained."""
-    text = f"compiling {what} (first run only, ~{seconds:.0f} s)"
+def compile_notice(what: str, seconds: float | None = None) -> None:
+    """Say that ``what`` is being compiled (numba; first run only), or, with ``seconds`` [s] (measured here,
+    on this machine), that it was compiled in that time: an INFO line of the ``pipeline`` logger, or, for a
+    library caller that set up no logging at all (a notebook), the same line on stderr, so a first call's
+    long pause is explained. No time is promised before it is measured (a compile's time depends on the
+    machine and its load: 12 s to over a minute)."""
+    text = (f"compiling {what} (first run only)" if seconds is None
+            else f"compiled {what} in {seconds:.1f} s (first run only: cached for the next runs)")
     logger = logging.getLogger("pipeline")
     if logger.hasHandlers():
         log.info(text)

@@ -355,9 +355,12 @@ class Runner:
     """Makes stages of one scene current in one results folder (see the module docstring)."""
 
     def __init__(self, scene: Scene, out: str | Path, stages: Mapping[str, Stage] | None = None,
-                 **options: Any):
+                 in_memory: bool = False, **options: Any):
         self.scene = scene
         self.out = Path(out)
+        #: ``out`` is a temporary folder whose datasets are read into memory and removed (the Python API's
+        #: ``results=None``): the log says what is computed, and claims no file
+        self.in_memory = in_memory
         self.stages = dict(registry() if stages is None else stages)
         self.options = options
         self._keys: dict[str, str] = {}
@@ -573,7 +576,7 @@ class Runner:
             return
         st = self.stage(name)
         self._check_outputs(st)
-        log.info("%s: computing (%s)", name, reason)
+        log.info("%s: computing (%s)", name, "in memory" if self.in_memory else reason)
         t0 = time.perf_counter()
         staging = Path(tempfile.mkdtemp(prefix=STAGING_PREFIX, dir=self.out.absolute()))
         try:
@@ -591,7 +594,11 @@ class Runner:
         finally:
             shutil.rmtree(staging, ignore_errors=True)
         seconds = time.perf_counter() - t0
-        log.info("%s: wrote %s (%.1f s)", name, ", ".join(written) or "nothing", seconds)
+        if self.in_memory:
+            log.info("%s: computed in memory, no file kept: %s (%.1f s)", name,
+                     st.doc.rsplit(", ", 1)[0] if st.doc else "its datasets", seconds)
+        else:
+            log.info("%s: wrote %s (%.1f s)", name, ", ".join(written) or "nothing", seconds)
         self._log_run(name, key, written, seconds, inputs.metrics)
         self._done.add(name)
 
@@ -690,15 +697,16 @@ def ensure(name: str, scene: Scene, out: str | Path, **options: Any) -> Path:
 
 
 def simulation_inputs(scene: Scene, out: str | Path, calibration: bool = False,
-                      k: float | None = None) -> SimulationInputs:
+                      k: float | None = None, in_memory: bool = False) -> SimulationInputs:
     """What one simulation of ``scene`` reads, its upstream stages made current in ``out`` first
     (:func:`pipeline.model.scene_inputs.simulation_inputs`; scripts, benchmarks, tests, :mod:`pipeline.api`:
     a stage reads through :func:`pipeline.model.inputs.for_stage`). ``calibration``: also calibrate and
     resolve k; ``k``: an explicit k [1] instead, resolved without a calibration (the ``option k`` of
-    :func:`pipeline.model.scene_inputs.contact_k`)."""
+    :func:`pipeline.model.scene_inputs.contact_k`); ``in_memory``: ``out`` is a temporary folder
+    (:attr:`Runner.in_memory`)."""
     wanted = wanted_inputs(scene, calibration and k is None)
     if wanted:
-        build(wanted, scene, out)
+        build(wanted, scene, out, in_memory=in_memory)
     return from_folder(scene, out, calibration=calibration or k is not None, k=k)
 
 

@@ -100,11 +100,12 @@ def sizes(scene: Any, stage: str) -> list[tuple[str, int, int]]:
     return out
 
 
-def check_sizes(scene: Any, stage: str, yes: bool = False, where: str = "scene") -> None:
-    """Refuse the first size beyond its limit, unless ``yes`` (and, always, :func:`check_physical`)."""
+def check_sizes(scene: Any, stage: str, yes: bool = False, where: str = "scene", lift: str = "--yes") -> None:
+    """Refuse the first size beyond its limit, unless ``yes`` (and, always, :func:`check_physical`); ``lift``:
+    how the message asks for ``yes`` (``--yes``, or a Python call's ``yes=True``)."""
     check_physical(scene, where)
     if yes:
         return
     for what, size, limit in sizes(scene, stage):
         if size > limit:
-            raise LimitError(f"{where}: {size:,} {what} exceed {limit:,}; pass --yes to run them anyway")
+            raise LimitError(f"{where}: {size:,} {what} exceed {limit:,}; pass {lift} to run them anyway")

@@ -10,6 +10,14 @@ margin to both conditions (the width is the uncertainty the 0.2 nm actuation ste
 interval is empty within ``touchdown.k_range`` (default [-3, 3], contact probabilities 0.1 % to
 99.9 %), no k is written (``k_calibrated = NaN``) and the outcome says why.
 
+The touchdown is the scene's (``touchdown.onset_nm``, ``touchdown.previous_nm``); at their defaults, the
+paper's measurement. Which one k is fitted to is logged and written (``touchdown_fitted``), with a warning
+(``touchdown_warning``) when it is the paper's while the disk, the roughness or the slider differ from the
+paper's (:func:`touchdown_provenance`, :data:`OWN_DRIVE_KEYS`). A chosen k below the physical bound
+:data:`pipeline.physics.asperity_statistics.K_PHYSICAL_MIN` (0: one-sided contact probability above 0.5) is
+refused before any dataset is written (:func:`check_physical`, :class:`CalibrationError`), in one line naming
+the touchdown keys to set or ``contact.k`` to fix.
+
 ``touchdown.method`` chooses how ``k*`` is found:
 
 * ``"exact"`` (default): before its first contact the trajectory does not depend on k (the contact
@@ -50,10 +58,11 @@ import numpy as np
 import xarray as xr
 
 from ..config.grid import label, protrusion_grid
+from ..config.schema import SCHEMA
 from ..fanout import run_tasks, split
 from ..model import assembly, copies, outcomes, running
 from ..model.inputs import SimulationInputs
-from ..physics.asperity_statistics import contact_probabilities, k_from_probability
+from ..physics.asperity_statistics import K_PHYSICAL_MIN, contact_probabilities, k_from_probability, unphysical_k
 from ..units import NM
 from ..variables import CALIBRATION
 
@@ -285,6 +294,94 @@ def choose_k(k_low: float, k_high: float, rule: str, probability: float | None) 
                f"(touchdown.k_choice = 'paper')")
 
 
+#: The keys that describe one's own drive, by the part of it they describe. Where a scene gives one of them
+#: another value than the paper scene's (the schema's default, :data:`pipeline.config.schema.SCHEMA`), the
+#: drive is not the paper's, and neither is its touchdown (:func:`touchdown_provenance`).
+OWN_DRIVE_KEYS = {
+    "disk": ("dmw.source", "dmw.rpm", "dmw.radius_mm"),
+    "roughness": ("roughness.afm", "roughness.sigma_nm", "roughness.summit_radius_um",
+                  "roughness.summit_density_per_um2"),
+    "slider": tuple(f"slider.{key}" for key in ("length_mm", "width_mm", "thickness_mm", "density_kg_m3",
+                                                 "front_arm_mm", "rear_arm_mm", "tfc_from_trailing_edge_um"))
+    + ("air_bearing.frequencies_khz", "air_bearing.flying_height_nm"),
+}
+
+
+class CalibrationError(ValueError):
+    """The calibrated k is not physical (:func:`pipeline.physics.asperity_statistics.unphysical_k`); the one
+    line names the touchdown it was fitted to and the keys to set."""
+
+
+def differing_from_paper(scene: Any) -> dict[str, list[str]]:
+    """The keys of :data:`OWN_DRIVE_KEYS` the scene sets to another value than the paper scene's, by part
+    (``{"disk": ["dmw.source = 'my.csv'"]}``; parts that are the paper's are left out)."""
+    out: dict[str, list[str]] = {}
+    for part, keys in OWN_DRIVE_KEYS.items():
+        for name in keys:
+            section, key = name.split(".")
+            value, default = scene[section][key], SCHEMA[section][key].default
+            if value != default and not (isinstance(value, (list, tuple)) and list(value) == default):
+                out.setdefault(part, []).append(f"{name} = {value!r}")
+    return out
+
+
+def papers_touchdown(scene: Any) -> bool:
+    """Whether the scene's touchdown (``touchdown.onset_nm``, ``touchdown.previous_nm``) is the paper's
+    measurement, the keys' defaults (9.8 nm, none at 9.6 nm)."""
+    td, sch = scene["touchdown"], SCHEMA["touchdown"]
+    return td["onset_nm"] == sch["onset_nm"].default and td["previous_nm"] == sch["previous_nm"].default
+
+
+def touchdown_provenance(scene: Any) -> tuple[str, str]:
+    """Which touchdown the calibration fits k to, in words, and a warning (``""``: none).
+
+    The touchdown is the scene's ``touchdown.onset_nm`` (contact) and ``touchdown.previous_nm`` (none);
+    at their defaults it is the paper's measurement (9.8 nm, none at 9.6 nm). The warning is given when it
+    is the paper's while the disk, the roughness or the slider are not (:func:`differing_from_paper`): k
+    then moves this drive's touchdown to the paper's, whatever this drive's is.
+    """
+    onset, prev = scene["touchdown"]["onset_nm"], scene["touchdown"]["previous_nm"]
+    paper_td = papers_touchdown(scene)
+    words = (f"contact at touchdown.onset_nm = {onset:g} nm, none at touchdown.previous_nm = {prev:g} nm: "
+             + ("the paper's measured touchdown (the keys' defaults)" if paper_td else "this scene's own touchdown"))
+    differ = differing_from_paper(scene)
+    if not paper_td or not differ:
+        return words, ""
+    parts = ", ".join(f"the {part} ({', '.join(keys)})" for part, keys in differ.items())
+    return words, (f"k is fitted to the paper's touchdown ({onset:g} nm, none at {prev:g} nm) while {parts} "
+                   f"{'differ' if len(differ) > 1 else 'differs'} from the paper's: set touchdown.onset_nm and "
+                   f"touchdown.previous_nm to the touchdown measured on this drive (docs/my-drive.md), or fix contact.k")
+
+
+def check_physical(k: float, interval: tuple[float, float], scene: Any) -> None:
+    """Refuse a calibrated ``k`` [1] that is not physical (below
+    :data:`pipeline.physics.asperity_statistics.K_PHYSICAL_MIN`): one line naming the touchdown it was fitted
+    to, the admissible ``interval`` ``(lo, hi]`` and the keys to set.
+
+    Raises
+    ------
+    CalibrationError
+        ``k`` is below the bound.
+    """
+    why = unphysical_k(k)
+    if why is None:
+        return
+    lo, hi = interval
+    onset, prev = scene["touchdown"]["onset_nm"], scene["touchdown"]["previous_nm"]
+    if papers_touchdown(scene):
+        differ = differing_from_paper(scene)
+        what = ("the paper's measured touchdown" + (" on another drive (" + ", ".join(
+            k for keys in differ.values() for k in keys) + ")" if differ else ""))
+    else:
+        what = "this scene's touchdown"
+    fix = (f"[{max(lo, K_PHYSICAL_MIN):.4f}, {hi:.4f}] is the physical part of the admissible interval"
+           if hi >= K_PHYSICAL_MIN else f"k >= {K_PHYSICAL_MIN:g}")
+    raise CalibrationError(f"calibrate: the calibrated {why}; it was fitted to {what} (contact at "
+                           f"touchdown.onset_nm = {onset:g} nm, none at touchdown.previous_nm = {prev:g} nm; admissible "
+                           f"k ({lo:.4f}, {hi:.4f}]): set touchdown.onset_nm and touchdown.previous_nm to the "
+                           f"touchdown measured on this drive, or fix contact.k ({fix})")
+
+
 def calibrate(scene: Any, inputs: SimulationInputs, scheduler: str | None = None,
               workers: int | None = None) -> xr.Dataset:
     """Run the calibration of a scene; returns ``calibration.nc``'s dataset.
@@ -324,8 +421,10 @@ def calibrate(scene: Any, inputs: SimulationInputs, scheduler: str | None = None
         simulations = 2 * len(todo) + sum(v[3] for v in found.values())
         how = ("exact: k* = minimum separation / sigma of one flying run (contact law off) per protrusion; "
                "bisection only where the transient dips below the steady window")
-        if collapsed:
-            log.info("flying run collapsed at %g nm: %s", collapsed[0], found[collapsed[0]][2])
+        if collapsed:  # (a warning where it decides the touchdown: at or below touchdown.onset_nm)
+            (log.warning if collapsed[0] <= td["onset_nm"] else log.info)(
+                "calibrate: the flying run (contact law off) collapses from %g nm of the grid on (%s): contact "
+                "there for every k", collapsed[0], found[collapsed[0]][2])
     elif method == "bisection":
         k_on, st_on, n_on = k_threshold(model, td["onset_nm"], k_range, tol)
         k_prev, st_prev, n_prev = k_threshold(model, td["previous_nm"], k_range, tol)
@@ -335,13 +434,18 @@ def calibrate(scene: Any, inputs: SimulationInputs, scheduler: str | None = None
         how = "bisection on k for each protrusion; touchdown curve by bisection over the grid"
     else:  # the scene schema admits only METHODS
         raise ValueError(f"touchdown.method = {method!r}: expected one of {METHODS}")
-    log.info("k*(%.2f nm) = %.4f (%s), k*(%.2f nm) = %.4f (%s)", td["onset_nm"], k_on, st_on,
+    fitted, warning = touchdown_provenance(scene)
+    log.info("calibrate: k is fitted to the touchdown (%s)", fitted)
+    if warning:
+        log.warning("calibrate: %s", warning)
+    log.info("calibrate: k*(%.2f nm) = %.4f (%s), k*(%.2f nm) = %.4f (%s)", td["onset_nm"], k_on, st_on,
              td["previous_nm"], k_prev, st_prev)
     onset, prev = td["onset_nm"], td["previous_nm"]
     if st_on == "found" and st_prev in ("found", "above range") and k_on < k_prev:
         k_low, k_high = k_on, k_prev
         k_cal, why = choose_k(k_low, k_high, td["k_choice"], scene["contact"].get("fallback_probability"))
         outcome = f"admissible k in ({k_low:.4f}, {k_high:.4f}]; chosen {why} (contact at {onset} nm, none at {prev} nm)"
+        check_physical(k_cal, (k_low, k_high), scene)  # (before any dataset: nothing is written)
     else:
         k_low = k_high = k_cal = np.nan
         reasons = []
@@ -383,5 +487,8 @@ def calibrate(scene: Any, inputs: SimulationInputs, scheduler: str | None = None
                      "simulations": simulations, "touchdown_method": method, "method": how,
                      "batch_seconds": round(seconds, 3) if np.isfinite(seconds) else "n/a",
                      "collapsed_from_nm": collapsed[0] if method == "exact" and collapsed else "none",
+                     "touchdown_fitted": fitted, "touchdown_source": "paper" if papers_touchdown(scene) else "scene",
+                     "touchdown_warning": warning or "none",
+                     "k_physical_min": K_PHYSICAL_MIN,
                      "paper": "the paper's calibrated k corresponds to a 32.8 % two-sided contact probability (k = 0.978)"})
     return ds

@@ -56,6 +56,12 @@ def _touchdown_section(c: SweepSlice, sweep: xr.Dataset, cal: xr.Dataset | None)
     diff = difference(fc - td, "nm") if fc is not None else "–"
     rows = [["touchdown protrusion", f"{td:g} nm (none at {paper.PREVIOUS_STEP_NM:g} nm)", ours, diff]]
     n = [f"**Touchdown.** Ours: {ours} (sweep, k = {number(k)}). Calibration: {cal_text}."]
+    if cal is not None:  # which touchdown k was fitted to, when it is not simply the paper's (calibration.nc)
+        fitted, warning = (str(cal.attrs.get(a, "")) for a in ("touchdown_fitted", "touchdown_warning"))
+        if warning not in ("", "none"):
+            n.append(f"Warning: {warning}.")
+        elif cal.attrs.get("touchdown_source") == "scene":
+            n.append(f"k was fitted to {fitted}.")
     snap = False
     if fc is not None:
         before = np.flatnonzero((x < fc) & (reg == 0))

@@ -314,8 +314,17 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "seed": Key("int", 20090601, (lambda v: 0 <= v < 2**32, "an integer in [0, 2**32 - 1]"),
                     doc="seed of the synthetic record (numpy SeedSequence; 32-bit like the realisations' seeds)"),
         "sample_rate_mhz": Key("float", paper.DMW_SAMPLE_RATE_MHZ, _pos, doc="sampling rate [MS/s] (paper)"),
-        "duration_ms": Key("float", None, _pos, doc="record length [ms] (default: the simulated duration)"),
-        "sample_rate_hz": Key("float", None, _pos, doc="sampling rate of a measured record [Hz] if it has no time axis"),
+        "duration_ms": Key("float", None, _pos,
+                           doc="record length [ms] (default: the simulated duration plus the disk's travel over the "
+                               "slider, in whole periods of the band's lower edge, 2.1 ms for 2 ms; a measured record "
+                               "shorter than that is used whole). Any record must hold the simulated duration plus the "
+                               "front pad's lead, 0.037 ms in the paper scene, plus 3 samples (docs/my-drive.md)"),
+        "sample_rate_hz": Key("float", None, _pos,
+                              doc="sampling rate of a measured record [Hz] if it has no time axis (a CSV without a "
+                                  "time column, a NetCDF variable on a dimension other than 'time')"),
+        "unit": Key("str", None, doc="unit of a measured record's values when the record states none (a CSV "
+                                     "without a header or a unit suffix, a NetCDF variable without 'units'): nm, "
+                                     "um, mm, m (displacement) or nm/s, um/s, mm/s, m/s (velocity)"),
     },
     "touchdown": {
         "onset_nm": Key("float", paper.TOUCHDOWN_NM, _nonneg, doc="measured touchdown protrusion [nm] (paper)"),

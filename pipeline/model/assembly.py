@@ -40,7 +40,7 @@ from typing import Any, Callable, Mapping
 import numpy as np
 
 from . import dynamics as dyn
-from .dmw_record import disk_speed_m_s
+from .dmw_record import check_length, disk_speed_m_s
 from .forces import RearLawRef, rear_law_ref
 from .piecewise import disk_coefficients, piecewise_coefficients
 from ..config.si import to_si
@@ -50,7 +50,7 @@ from ..physics.asperity_statistics import explicit_statistics
 from ..physics.friction import FRICTION_LAWS, friction_parts, friction_stress_table, lubricant_shear_stress
 from ..physics.geometry import friction_arm
 from ..physics.variants import Entry
-from ..units import KHZ, MS, NM
+from ..units import KHZ, NM
 from ..variables import INTERFACE
 
 
@@ -272,12 +272,7 @@ def disk_record(scene: Any, p: np.record, dmw: tuple[np.ndarray, float] | None, 
         raise ValueError("the dmw effect needs a DMW record")
     s_sol = to_si(scene).solver
     w_nm, fs = dmw
-    need = s_sol.duration + max(p.off_f, 0.0) + 2.0 / fs
-    have = (w_nm.size - 1) / fs
-    if have < need:
-        raise ValueError(f"DMW record of {have / MS:.4g} ms is shorter than the {need / MS:.4g} ms the "
-                         f"simulation needs (duration plus the pad-to-TFC travel time); set "
-                         f"dmw.duration_ms >= {np.ceil(need * 1e5) / 1e2:g}")
+    check_length(w_nm.size, fs, s_sol.duration, p.off_f, "DMW record")  # (the rule: dmw_record.needed_samples)
     coefficients = disk_coefficients(np.asarray(w_nm, float) * NM, 1.0 / fs, s_sol.interpolation_order,
                                      (p.off_c, p.off_f, p.off_r))
     p.dmw_t0, p.dmw_dt = 0.0, 1.0 / fs

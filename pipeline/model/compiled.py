@@ -92,28 +92,33 @@ def kernel_jit(module: str, **options) -> Callable[[Callable], Callable]:
     return decorate
 
 
-#: The announced entry points: ``id(dispatcher)`` -> (what is compiled, rough compile time [s]).
-_NOTICES: dict[int, tuple[str, float]] = {}
+#: The announced entry points: ``id(dispatcher)`` -> what is compiled.
+_NOTICES: dict[int, str] = {}
+#: The announced compiles under way in this process: ``id(dispatcher)`` -> their start (``time.perf_counter``).
+_STARTED: dict[int, float] = {}
 #: True in the background process of :func:`compile_ahead`: its compiles say nothing.
 _QUIET = False
 
 
-def announce(dispatcher: Any, what: str, seconds: float) -> None:
-    """Make a compile of the jitted ``dispatcher`` say that ``what`` is compiling and takes ~``seconds``
-    [s] (:func:`pipeline.progress.compile_notice`; a cache load says nothing)."""
-    _NOTICES[id(dispatcher)] = (what, seconds)
+def announce(dispatcher: Any, what: str) -> None:
+    """Make a compile of the jitted ``dispatcher`` say that ``what`` is compiling, and then how long it took
+    on this machine (:func:`pipeline.progress.compile_notice`; a cache load says nothing)."""
+    _NOTICES[id(dispatcher)] = what
 
 
 class _CompileNotice(event.Listener):
     """numba's ``numba:compile`` event (a compile after a cache miss) of an announced entry point."""
 
     def on_start(self, ev: event.Event) -> None:
-        notice = _NOTICES.get(id(ev.data["dispatcher"]))
-        if notice is not None and not _QUIET:
-            progress.compile_notice(*notice)
+        key = id(ev.data["dispatcher"])
+        if key in _NOTICES and not _QUIET:
+            _STARTED[key] = time.perf_counter()
+            progress.compile_notice(_NOTICES[key])
 
     def on_end(self, ev: event.Event) -> None:
-        pass
+        start = _STARTED.pop(id(ev.data["dispatcher"]), None)
+        if start is not None:
+            progress.compile_notice(_NOTICES[id(ev.data["dispatcher"])], time.perf_counter() - start)
 
 
 event.register("numba:compile", _CompileNotice())
@@ -136,6 +141,8 @@ def is_cached(dispatcher: Any, sig: tuple) -> bool:
 
 #: Background compiles under way: (module, name, signature) -> the process.
 _AHEAD: dict[tuple, subprocess.Popen] = {}
+#: What each background compile compiles and when this process said so: key -> (what, ``time.perf_counter``).
+_AHEAD_SAID: dict[tuple, tuple[str, float]] = {}
 _AHEAD_LOCK = threading.Lock()
 #: Work for :func:`wait_ahead` to do while a background compile runs (:func:`while_waiting`).
 _IDLE: list[Callable[[], None]] = []
@@ -218,7 +225,7 @@ def stop_ahead() -> None:
         _IDLE.clear()
 
 
-def compile_ahead(dispatcher: Any, args: tuple, what: str, seconds: float) -> bool:
+def compile_ahead(dispatcher: Any, args: tuple, what: str) -> bool:
     """Start compiling ``dispatcher`` (a jitted function of a kernel module) for the types of ``args`` in a
     background process, unless this process has it, the cache has it, one is under way, or
     ``HDI_COMPILE_AHEAD=0``; says so (:func:`pipeline.progress.compile_notice`). :func:`wait_ahead`
@@ -237,7 +244,7 @@ def compile_ahead(dispatcher: Any, args: tuple, what: str, seconds: float) -> bo
             return False
         if early is not None:  # (the console script's, started before its imports: the same compile)
             _AHEAD[key] = early
-            progress.compile_notice(f"{what} in a background process", seconds)
+            _say_ahead(key, what)
             return False
         fd, path = tempfile.mkstemp(prefix="hdi-compile-", suffix=".pkl")
         with os.fdopen(fd, "wb") as f:
@@ -246,8 +253,14 @@ def compile_ahead(dispatcher: Any, args: tuple, what: str, seconds: float) -> bo
         # (silent: a failure there is only a cache miss, and this process then compiles and reports it;
         # a Ctrl-C reaches it too, without a second traceback)
         _AHEAD[key] = first_run.background_process(code)
-        progress.compile_notice(f"{what} in a background process", seconds)
+        _say_ahead(key, what)
         return True
+
+
+def _say_ahead(key: tuple, what: str) -> None:
+    """Say that ``what`` compiles in a background process (:func:`wait_ahead` says how long it took)."""
+    _AHEAD_SAID[key] = (f"{what} in a background process", time.perf_counter())
+    progress.compile_notice(_AHEAD_SAID[key][0])
 
 
 def while_waiting(work: Callable[[], None]) -> None:
@@ -281,8 +294,13 @@ def wait_ahead() -> None:
                 log.debug("work while waiting for a compile failed: %s", exc)
         _IDLE.clear()
         for key, proc in list(_AHEAD.items()):
+            running_then = proc.poll() is None
             proc.wait()
             del _AHEAD[key]
+            what, start = _AHEAD_SAID.pop(key, (None, 0.0))
+            if what is not None and proc.returncode == 0:  # (its time from the notice, measured here)
+                progress.compile_notice(what if running_then else f"{what} (done before it was needed)",
+                                        time.perf_counter() - start)
 
 
 def pending() -> bool:

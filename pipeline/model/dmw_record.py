@@ -16,7 +16,7 @@ import numpy as np
 
 from ..config.si import to_si
 from ..physics import microwaviness as phys
-from ..units import MM
+from ..units import MM, MS
 from ..variables import TIME
 
 FILENAME = "dmw.nc"
@@ -42,7 +42,8 @@ def settings(scene: Any) -> dict[str, Any]:
     -------
     dict with ``source`` (``"synthetic"`` or an absolute path), ``quantity``, ``column``,
     ``rms_nm`` [nm], ``band_hz`` (lo, hi) [Hz], ``exponent`` [1], ``seed``, ``sample_rate_hz`` [Hz],
-    ``duration_s`` [s], ``record_rate_hz`` [Hz] or ``None``, ``disk_speed_m_s`` [m/s].
+    ``duration_s`` [s] (``duration_set``: whether ``dmw.duration_ms`` gives it), ``record_rate_hz`` [Hz] or
+    ``None``, ``unit`` (``dmw.unit``: of a measured record that states none) or ``None``, ``disk_speed_m_s`` [m/s].
     """
     d = scene["dmw"]
     si = to_si(scene)
@@ -70,6 +71,8 @@ def settings(scene: Any) -> dict[str, Any]:
         "sample_rate_hz": float(si.dmw.sample_rate),
         "duration_s": duration_s,
         "record_rate_hz": d["sample_rate_hz"],
+        "unit": d["unit"],
+        "duration_set": d["duration_ms"] is not None,
         "disk_speed_m_s": speed,
     }
 
@@ -91,6 +94,51 @@ def default_duration(sim_duration_s: float, slider: dict[str, Any], disk_speed_m
     if band_low_hz <= 0:
         return math.ceil(need * sample_rate_hz) / sample_rate_hz
     return math.ceil(need * band_low_hz * (1 - 1e-12)) / band_low_hz
+
+
+def front_pad_lead_s(scene: Any) -> float:
+    """How long before the TFC point the front pad sees a point of the disk [s]: ``(l_f + l_c) / V``, the
+    front arm plus the TFC point's arm behind the CG (``slider.length_mm / 2 -
+    slider.tfc_from_trailing_edge_um``) over the disk speed (:func:`disk_speed_m_s`; 0.0368 ms in the paper
+    scene). The dynamics reads the record that far ahead of ``t`` (:func:`pipeline.model.assembly.disk_record`)."""
+    ss = to_si(scene).slider
+    return (ss.front_arm + (ss.length / 2 - ss.tfc_from_trailing_edge)) / disk_speed_m_s(scene["dmw"])
+
+
+#: Samples a record needs beyond ``t = duration + lead``: the last sample at least two sampling intervals
+#: past it (the spline of the record's samples is evaluated up to there, :func:`needed_samples`).
+END_SAMPLES = 3
+
+
+def needed_samples(duration_s: float, lead_s: float, sample_rate_hz: float) -> int:
+    """The fewest samples [1] a DMW record at ``sample_rate_hz`` [Hz] must hold for a simulation of
+    ``duration_s`` [s] whose front pad reads ``lead_s`` [s] ahead (:func:`front_pad_lead_s`): its last sample,
+    at ``(n - 1) / fs``, at least ``duration + lead + 2 / fs``. The one rule of a record's length: the dmw stage
+    checks a record with it before writing ``dmw.nc``, the model before it runs one (:func:`check_length`)."""
+    return math.ceil((duration_s + max(lead_s, 0.0)) * sample_rate_hz * (1 - 1e-12)) + END_SAMPLES
+
+
+def check_length(samples: int, sample_rate_hz: float, duration_s: float, lead_s: float, where: str,
+                 remedy: str = "give a longer record") -> None:
+    """Refuse a DMW record of ``samples`` at ``sample_rate_hz`` [Hz] shorter than :func:`needed_samples`, in
+    one line: ``where`` (the file and what holds the record), its length, the length needed and how it is
+    made up, and what to change (``remedy``, or a shorter ``solver.duration_ms``).
+
+    Raises
+    ------
+    pipeline.physics.microwaviness.DMWError
+        The record is too short.
+    """
+    need = needed_samples(duration_s, lead_s, sample_rate_hz)
+    if samples >= need:
+        return
+    longest = (samples - END_SAMPLES) / sample_rate_hz - max(lead_s, 0.0)
+    raise phys.DMWError(
+        f"{where}: {samples} samples at {sample_rate_hz:.6g} Hz ({samples / sample_rate_hz / MS:.6g} ms); the "
+        f"simulation needs at least {need} ({need / sample_rate_hz / MS:.6g} ms): solver.duration_ms = "
+        f"{duration_s / MS:g} plus {max(lead_s, 0.0) / MS:.4g} ms, the disk's travel from the front pad to the TFC "
+        f"point, plus {END_SAMPLES} samples; {remedy}"
+        + (f", or solver.duration_ms <= {math.floor(longest / MS * 1e4) / 1e4:g}" if longest > 0 else ""))
 
 
 def load(path: str | Path) -> tuple[np.ndarray, np.ndarray, float]:

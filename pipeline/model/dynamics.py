@@ -97,11 +97,10 @@ from .stepper import (cubic_extrema, error_norm, extrema_slots, first_wrong_side
 _jit = kernel_jit(__name__)
 _inline = kernel_jit(__name__, inline="always")
 
-#: What a compile of the kernel (:func:`_integrate`) says, and its rough duration [s]: 15 s of CPU for the main
-#: scene's effects on the project's 2-core machine at a load of ~2.5 (29 s before its compile was cut), 19 s at
-#: a load of 7 (docs/kernel.md, section "Compile time").
+#: What a compile of the kernel (:func:`_integrate`) says; then how long it took, measured (15 s of CPU for the
+#: main scene's effects on the project's 2-core machine at a load of ~2.5, 19 s at a load of 7: docs/kernel.md,
+#: section "Compile time"; no time is promised before).
 KERNEL_NOTICE = "the dynamics kernel for this scene's effects"
-KERNEL_COMPILE_S = 15.0
 
 #: The rear law of :class:`Variants` with ``rear_law=None`` (the scene's default, ``air_bearing.rear_law``).
 DEFAULT_REAR_LAW = "power"
@@ -279,8 +278,7 @@ def compile_kernel_ahead(y0: np.ndarray, grid: Grid, p: np.record, tab: Tables, 
     the process (:func:`pipeline.model.compiled.compile_ahead`)."""
     if _integrate.overloads or compiled.pending():
         return False
-    return compiled.compile_ahead(_integrate, kernel_arguments(y0, grid, p, tab, var, solver), KERNEL_NOTICE,
-                                  KERNEL_COMPILE_S)
+    return compiled.compile_ahead(_integrate, kernel_arguments(y0, grid, p, tab, var, solver), KERNEL_NOTICE)
 
 
 def leaf_calls(y0: np.ndarray, grid: Grid, p: np.record, tab: Tables, var: Variants,
@@ -525,4 +523,4 @@ def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, cont
     return Y, C, info, ext
 
 
-compiled.announce(_integrate, KERNEL_NOTICE, KERNEL_COMPILE_S)
+compiled.announce(_integrate, KERNEL_NOTICE)

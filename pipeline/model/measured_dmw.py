@@ -15,7 +15,7 @@ import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Iterable, Iterator
+from typing import Any, Iterable, Iterator
 
 import numpy as np
 
@@ -102,15 +102,28 @@ _QUANTITY_UNITS = {"displacement": ("length", LENGTH_UNITS, "velocity"),
                    "velocity": ("velocity", VELOCITY_UNITS, "displacement")}
 
 
-def _value_factor(path: Path, field_name: str, unit: str | None,
-                  quantity: str) -> tuple[float, str, tuple[str, ...]]:
-    """Factor to [nm] / [nm/s] for a value column, and the unit used."""
+def _value_factor(path: Path, field_name: str, unit: str | None, quantity: str,
+                  scene_unit: str | None = None) -> tuple[float, str, tuple[str, ...]]:
+    """Factor to [nm] / [nm/s] for a value column, and the unit used: the record's own (``unit``), else
+    ``scene_unit`` (``dmw.unit``); a record stating none without ``dmw.unit`` is refused, one that states
+    another than ``dmw.unit`` too."""
     kind, units, other = _QUANTITY_UNITS[quantity]
+    notes: tuple[str, ...] = ()
+    given = _norm_unit(scene_unit) if scene_unit else None
     if unit is None or unit == "":
-        assumed = "nm" if quantity == "displacement" else "nm/s"
-        return 1.0, assumed, (f"{field_name}: no unit stated, assumed {assumed}",)
+        if given is None:
+            example = "displacement [nm]" if quantity == "displacement" else "velocity [mm/s]"
+            raise DMWError(f"{path}: {field_name}: no unit stated; expected one in the record (a CSV header such as "
+                           f"'{example}' or '{quantity}_{'nm' if quantity == 'displacement' else 'mm_s'}', a NetCDF "
+                           f"'units' attribute) or set dmw.unit (one of {', '.join(units)})")
+        unit, notes = given, (f"{field_name}: no unit stated; {given} from dmw.unit",)
+        if unit not in units:
+            field_name = "dmw.unit"
+    elif given is not None and given != unit:
+        raise DMWError(f"{path}: {field_name}: the record states {_shown(unit)} but dmw.unit = {scene_unit!r}; "
+                       f"expected them to agree (leave dmw.unit out for a record that states its unit)")
     if unit in units:
-        return units[unit], unit, ()
+        return units[unit], unit, notes
     other_kind, other_units, _ = _QUANTITY_UNITS[other]
     if unit in other_units:  # a unit of the other quantity: the scene names the wrong one
         raise DMWError(f"{path}: {field_name}: has {other_kind} units {_shown(unit)} but the quantity is "
@@ -212,18 +225,18 @@ def record_samples(path: str | Path) -> int:
         return 0
 
 
-def _read_csv(path: Path, quantity: str, column: str | None,
-              sample_rate_hz: float | None) -> tuple[np.ndarray, float, str, str, str, tuple[str, ...]]:
+def _read_csv(path: Path, quantity: str, column: str | None, sample_rate_hz: float | None,
+              unit: str | None = None) -> tuple[np.ndarray, float, str, str, str, tuple[str, ...]]:
     """Read a CSV record row by row into the two arrays it needs (a list of rows of strings took ~600
     bytes a sample: 6 GB for 10 million); a UTF-8 byte-order mark before the header is not part of it."""
     try:
-        return _parse_csv(path, quantity, column, sample_rate_hz)
+        return _parse_csv(path, quantity, column, sample_rate_hz, unit)
     except UnicodeDecodeError:
         raise DMWError(f"{path}: not a text (CSV) file; expected CSV or NetCDF (.nc)") from None
 
 
-def _parse_csv(path: Path, quantity: str, column: str | None,
-               sample_rate_hz: float | None) -> tuple[np.ndarray, float, str, str, str, tuple[str, ...]]:
+def _parse_csv(path: Path, quantity: str, column: str | None, sample_rate_hz: float | None,
+               unit: str | None = None) -> tuple[np.ndarray, float, str, str, str, tuple[str, ...]]:
     n_lines = count_lines(path)
     with open(path, "rb") as fh:
         if b"\x00" in fh.read(1 << 16):  # (a binary file, or /proc/self/environ: NUL is no CSV character)
@@ -273,7 +286,7 @@ def _parse_csv(path: Path, quantity: str, column: str | None,
     field_name = labels[val_idx]
     x = out[0, :n]
     _check_values(path, field_name, x)
-    factor, unit, notes = _value_factor(path, field_name, split_names[val_idx][1], quantity)
+    factor, unit, notes = _value_factor(path, field_name, split_names[val_idx][1], quantity, unit)
     if time_idx is not None:
         t = out[1, :n] * _time_factor(path, labels[time_idx], split_names[time_idx][1])
         rate = _rate_from_time(path, labels[time_idx], t)
@@ -326,8 +339,10 @@ def _columns(path: Path, split: list[tuple[str, str | None]], names: list[str], 
     return time_idx, val_idx
 
 
-def _read_netcdf(path: Path, quantity: str, column: str | None,
-                 sample_rate_hz: float | None) -> tuple[np.ndarray, float, str, str, str, tuple[str, ...]]:
+def _read_netcdf(path: Path, quantity: str, column: str | None, sample_rate_hz: float | None,
+                 unit: str | None = None) -> tuple[np.ndarray, float, str, str, str, tuple[str, ...]]:
+    """A NetCDF record: a variable on a ``time`` coordinate [s] (or ms, us), or, with ``sample_rate_hz``, a
+    variable on one dimension of any name (``sample``) without a time coordinate."""
     import xarray as xr
     try:
         with xr.open_dataset(path, engine="netcdf4", decode_times=False, decode_timedelta=False) as ds:
@@ -338,33 +353,43 @@ def _read_netcdf(path: Path, quantity: str, column: str | None,
     interrupts.check()  # (netCDF4's error checks can swallow a signal raised during the read)
     if "elapsed_time" in ds.variables and "time" not in ds.variables:  # a dmw.nc of this pipeline (variables.TIME)
         ds = ds.rename({"elapsed_time": "time"})
+    timed = "time" in ds.variables or "time" in ds.dims
+    if not timed and sample_rate_hz is None:
+        raise DMWError(f"{path}: no 'time' coordinate and no sample rate; expected a 'time' "
+                       f"coordinate [s] or dmw.sample_rate_hz")
+
+    def fits(v: Any) -> bool:  # (a record's variable: on 'time', or on one dimension when there is no time)
+        return ds[v].dims == ("time",) if timed else ds[v].ndim == 1
+    on = "'time'" if timed else "one dimension"
     if column is not None:
         if column not in ds.data_vars:
             raise DMWError(f"{path}: variable {column!r} not found; expected one of "
                            f"{', '.join(_shown(str(v)) for v in sorted(map(str, ds.data_vars)))} (dmw.column)")
         name = column
     else:
-        cands = [str(v) for v in ds.data_vars if ds[v].dims == ("time",)]
+        cands = [str(v) for v in ds.data_vars if fits(v)]
         named = [v for v in cands if v == quantity]
         if named:
             name = named[0]
         elif len(cands) == 1:
             name = cands[0]
         else:
-            raise DMWError(f"{path}: {len(cands)} variables on 'time' ({', '.join(map(_shown, cands))}); expected "
+            raise DMWError(f"{path}: {len(cands)} variables on {on} ({', '.join(map(_shown, cands))}); expected "
                            "one: set dmw.column")
     da = ds[name]
     field_name = f"variable {_shown(name)}"
-    if da.dims != ("time",):
-        raise DMWError(f"{path}: {field_name}: dimensions {da.dims}; expected ('time',)")
+    if not fits(name):
+        raise DMWError(f"{path}: {field_name}: dimensions {da.dims}; expected ('time',)" if timed else
+                       f"{path}: {field_name}: dimensions {da.dims}; expected one dimension (samples at "
+                       f"dmw.sample_rate_hz)")
     try:
         x = np.asarray(da.values, dtype=float)
     except (TypeError, ValueError):
         raise DMWError(f"{path}: {field_name}: non-numeric data ({da.dtype}); expected numbers") from None
     _check_values(path, field_name, x)
-    unit = da.attrs.get("units")
-    factor, unit, notes = _value_factor(path, field_name, _norm_unit(unit) if unit else None, quantity)
-    if "time" in ds.coords or "time" in ds.variables:
+    own = da.attrs.get("units")
+    factor, own, notes = _value_factor(path, field_name, _norm_unit(own) if own else None, quantity, unit)
+    if "time" in ds.variables:
         tv = ds["time"]
         try:
             t = np.asarray(tv.values, dtype=float)
@@ -379,13 +404,14 @@ def _read_netcdf(path: Path, quantity: str, column: str | None,
     elif sample_rate_hz is not None:
         rate = float(sample_rate_hz)
     else:
-        raise DMWError(f"{path}: no 'time' coordinate and no sample rate; expected a 'time' "
-                       f"coordinate [s] or dmw.sample_rate_hz")
-    return x * factor, rate, name, field_name, unit, notes
+        raise DMWError(f"{path}: dimension 'time' has no coordinate and there is no sample rate; expected a "
+                       f"'time' coordinate [s] or dmw.sample_rate_hz")
+    return x * factor, rate, name, field_name, own, notes
 
 
 def load_record(path: str | Path, quantity: str = "displacement", column: str | None = None,
-                sample_rate_hz: float | None = None, *, min_duration_s: float | None = None) -> Record:
+                sample_rate_hz: float | None = None, *, unit: str | None = None,
+                min_duration_s: float | None = None) -> Record:
     """Read and validate a measured DMW record (CSV or NetCDF).
 
     CSV (any other suffix than ``.nc``/``.nc4``/``.cdf``): comma, semicolon, tab or whitespace
@@ -394,11 +420,14 @@ def load_record(path: str | Path, quantity: str = "displacement", column: str | 
     s); without a header, a two-column file is ``time, value`` unless ``sample_rate_hz`` is given. The
     value column is ``column`` (header name, with or without its unit, or index), else the one named
     like ``quantity``, else the only non-time column. Units of values: ``nm``, ``um``, ``mm``, ``m``
-    (displacement) or ``nm/s``, ``um/s``, ``mm/s``, ``m/s`` (velocity); unstated units are assumed
-    ``nm`` / ``nm/s`` and noted in :attr:`Record.notes`.
+    (displacement) or ``nm/s``, ``um/s``, ``mm/s``, ``m/s`` (velocity); unstated units are
+    refused unless ``unit`` (``dmw.unit``) gives them (noted in :attr:`Record.notes`).
 
     NetCDF: the variable ``column``, else the one named like ``quantity``, else the only variable on
     ``time``; units from the ``units`` attributes; the ``time`` coordinate in s (or ``ms``, ``us``).
+    Without a ``time`` coordinate and with ``sample_rate_hz``: the same on any one dimension (``sample``).
+
+    The formats, with a runnable example of each: docs/my-drive.md, section "The DMW record".
 
     Parameters
     ----------
@@ -406,6 +435,8 @@ def load_record(path: str | Path, quantity: str = "displacement", column: str | 
     quantity : ``"displacement"`` [nm] or ``"velocity"`` [nm/s]
     column : column or variable name (``None``: see above)
     sample_rate_hz : sampling rate [Hz] of a record without a time axis (checked against one if present)
+    unit : unit of the values when the record states none (``"nm"``, ``"mm/s"``, ...; ``None``: the record
+        must state it)
     min_duration_s : required length [s] (``None``: no check)
 
     Returns
@@ -433,9 +464,9 @@ def load_record(path: str | Path, quantity: str = "displacement", column: str | 
     if not path.is_file():
         raise DMWError(f"{path}: record file does not exist{looked_for(path)} (dmw.source)")
     reader = _read_netcdf if path.suffix.lower() in NETCDF_SUFFIXES else _read_csv
-    x, rate, name, field_name, unit, notes = reader(path, quantity, column, sample_rate_hz)
+    x, rate, name, field_name, units, notes = reader(path, quantity, column, sample_rate_hz, unit)
     rec = Record(values=x, sample_rate_hz=float(rate), quantity=quantity, path=str(path), column=name,
-                 field=field_name, units=unit, notes=notes)
+                 field=field_name, units=units, notes=notes)
     if min_duration_s is not None and rec.duration_s < min_duration_s * (1 - 1e-9):
         raise DMWError(f"{path}: {field_name}: record is "
                        f"{rec.duration_s / MS:.6g} ms long ({x.size} samples at {rate:.6g} Hz); expected "

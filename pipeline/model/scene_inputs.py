@@ -48,17 +48,17 @@ def table_stages(scene: Any) -> tuple[str, ...]:
 def simulation_inputs(scene: Any, calibration: bool = True) -> tuple[str, ...]:
     """The inputs (named as the stages that make them) one simulation of the scene reads.
 
-    ``interface`` (:func:`needs_interface`), ``dmw`` with the dmw effect, ``bulge`` with the tabulated
+    ``dmw`` with the dmw effect, ``interface`` (:func:`needs_interface`), ``bulge`` with the tabulated
     bulge bearing (:func:`table_stages`), and ``calibrate`` when the contact effect is on and the scene
     fixes no ``contact.k`` (``calibration=False``: a parameter study, which takes k by :func:`contact_k`
     without a calibration).
     """
     up = []
+    if scene.has("dmw"):  # (first: a record the simulation cannot use is refused before any dataset is written)
+        up.append("dmw")
     if needs_interface(scene):
         up.append("interface")
     up.extend(table_stages(scene))
-    if scene.has("dmw"):
-        up.append("dmw")
     if calibration and scene.has("contact") and scene["contact"]["k"] is None:
         up.append("calibrate")
     return tuple(up)

@@ -168,4 +168,4 @@ def newton(y_start: np.ndarray, p: np.record, slots: tuple, *, scale: np.ndarray
 
 # (6-7 s of CPU for the main scene's effects on the project's 2-core machine: docs/performance.md,
 # section "The first run")
-announce(_newton, "the static solver for this scene's effects", 6.0)
+announce(_newton, "the static solver for this scene's effects")

@@ -289,6 +289,25 @@ def contact_probabilities(k: float) -> tuple[float, float]:
     return float(math.erfc(abs(k) / math.sqrt(2.0))), float(0.5 * math.erfc(k / math.sqrt(2.0)))
 
 
+#: The smallest physical contact-criterion constant [1]: ``d < k sigma`` with ``k < 0`` switches contact on
+#: only once the separation is below the mean plane of the heights, where more than half of them reach
+#: the other surface (one-sided ``P(z > k sigma) = Q(k) > 0.5``): the surfaces are then already in contact
+#: over most of the nominal area, not at its first summits. A calibrated ``k`` below it is refused
+#: (:func:`unphysical_k`; docs/model.md, section "Contact criterion").
+K_PHYSICAL_MIN = 0.0
+
+
+def unphysical_k(k: float) -> str | None:
+    """Why ``k`` [1] is no physical contact-criterion constant, or ``None`` when it is (``k >=``
+    :data:`K_PHYSICAL_MIN`, one-sided contact probability ``Q(k) <= 0.5``); a NaN (no k) is not judged."""
+    if not k < K_PHYSICAL_MIN:
+        return None
+    p1 = contact_probabilities(k)[1]
+    return (f"k = {k:.4f} is below {K_PHYSICAL_MIN:g}: its one-sided contact probability P(z > k sigma) = "
+            f"{p1:.3f} is above {contact_probabilities(K_PHYSICAL_MIN)[1]:g} (more than half of the heights "
+            f"touching before contact is declared)")
+
+
 def k_from_probability(probability: float) -> float:
     """Criterion constant ``k >= 0`` [1] whose two-sided contact probability ``2 Q(k)`` is ``probability``.
 

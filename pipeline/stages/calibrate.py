@@ -28,9 +28,9 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
     ds = calibrate(scene, sim, scheduler=inputs.options.get("scheduler"), workers=inputs.options.get("workers"))
     # timings go to the run log (.hdi/runs.jsonl), not the dataset: equal inputs, equal dataset
     inputs.record(batch_seconds=ds.attrs.pop("batch_seconds"))
-    log.info("calibration: %s", ds.attrs["outcome"])
+    log.info("calibrate: %s", ds.attrs["outcome"])
     if np.isfinite(float(ds["k_calibrated"])):
-        log.info("calibration: k = %.4f; contact probability %.3f (two-sided, the paper's convention), "
+        log.info("calibrate: k = %.4f; contact probability %.3f (two-sided, the paper's convention), "
                  "%.3f (one-sided)", float(ds["k_calibrated"]), float(ds["contact_probability_two_sided"]),
                  float(ds["contact_probability_one_sided"]))
     return ds

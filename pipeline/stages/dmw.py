@@ -26,8 +26,12 @@ a measured one).
 
 Record length: ``dmw.duration_ms`` when given; otherwise ``solver.duration_ms`` plus the disk's
 travel time over the slider (the dynamics reads the record ahead of ``t`` for the front pad), rounded
-up to whole periods of the band's lower edge: 2.1 ms (8400 samples) in the paper scene. See
-:func:`default_duration`.
+up to whole periods of the band's lower edge: 2.1 ms (8400 samples) in the paper scene
+(:func:`~pipeline.model.dmw_record.default_duration`); a measured record shorter than that is used whole.
+Whatever its length, a record must hold what the simulation reads (:func:`~pipeline.model.dmw_record.needed_samples`:
+the simulated duration, the front pad's lead and 3 samples, 8151 samples for the paper scene's 2 ms),
+checked here before anything is written, in the one message of :func:`~pipeline.model.dmw_record.check_length`.
+The formats of a measured record: docs/my-drive.md, section "The DMW record".
 
 Synthetic: :func:`pipeline.physics.microwaviness.synthesize` with ``rms_nm``, ``band_khz``, ``exponent``,
 ``seed``, ``sample_rate_mhz`` and that duration.
@@ -47,7 +51,8 @@ drawing no random numbers. A downstream stage that reads it therefore gets exact
 it forgets to check the effect, and a scene with the effect off never needs a record file.
 
 Up to date (:mod:`pipeline.runner`): the stage reads ``[dmw]``, ``solver.duration_ms``, the effects,
-the slider's length and front arm (the default record length) and the bytes of a measured record;
+the slider's length, front arm and TFC position (the default record length, the length a record must
+have) and the bytes of a measured record;
 ``dmw.nc`` is recomputed only when one of them changed (``force=True`` recomputes).
 """
 
@@ -59,7 +64,8 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from ..model.dmw_record import FILENAME, settings, synthetic_record
+from ..config.si import to_si
+from ..model.dmw_record import FILENAME, check_length, front_pad_lead_s, settings, synthetic_record
 from ..model.measured_dmw import load_record
 from ..physics import microwaviness as phys
 from ..runner import Inputs, Stage
@@ -69,11 +75,17 @@ from ..variables import DMW, TIME, coordinate
 log = logging.getLogger(__name__)
 
 
-def _measured(s: dict[str, Any]) -> tuple[np.ndarray, dict[str, Any]]:
-    """Load, process, resample and cut a measured record; raise before anything is written."""
+def _measured(s: dict[str, Any], need: tuple[float, float]) -> tuple[np.ndarray, dict[str, Any]]:
+    """Load, process, resample and cut a measured record; raise before anything is written.
+
+    ``need``: ``(simulated duration, front-pad lead)`` [s], the record's length rule
+    (:func:`pipeline.model.dmw_record.check_length`), checked at the record's own rate and after resampling.
+    """
     fs, (lo, hi), dur = s["sample_rate_hz"], s["band_hz"], s["duration_s"]
-    rec = load_record(s["source"], s["quantity"], s["column"], s["record_rate_hz"], min_duration_s=dur)
+    rec = load_record(s["source"], s["quantity"], s["column"], s["record_rate_hz"], unit=s["unit"],
+                      min_duration_s=dur if s["duration_set"] else None)
     where = f"{rec.path}: {rec.field}"
+    check_length(rec.values.size, rec.sample_rate_hz, *need, where)
     if hi > rec.sample_rate_hz / 2:
         raise phys.DMWError(f"{where}: sampled at {rec.sample_rate_hz:g} Hz, whose Nyquist frequency is "
                             f"below the band's upper edge {hi:g} Hz (dmw.band_khz); expected a record "
@@ -90,8 +102,11 @@ def _measured(s: dict[str, Any]) -> tuple[np.ndarray, dict[str, Any]]:
     x, how = phys.resample(x, rec.sample_rate_hz, fs)
     if how != "none":
         steps.append(f"resampled {rec.sample_rate_hz:g} -> {fs:g} Hz by {how}")
+    check_length(x.size, fs, *need, f"{where} (resampled to {fs:g} Hz)")
     n = phys.n_samples(dur, fs)
-    if x.size < n:  # resampling may lose the last sample or two of a record just long enough
+    if not s["duration_set"]:  # (the default length, or the whole record when it is shorter and long enough)
+        n = min(n, x.size)
+    elif x.size < n:  # resampling may lose the last sample or two of a record just long enough
         raise phys.DMWError(f"{where}: after resampling to {fs:g} Hz the record has {x.size} samples; "
                             f"expected at least {n} for dmw.duration_ms = {dur / MS:g}")
     if x.size > n:
@@ -117,7 +132,7 @@ def _measured(s: dict[str, Any]) -> tuple[np.ndarray, dict[str, Any]]:
     }
     rms = attrs["record_rms_nm"]
     if s["rms_nm"] > 0 and not (0.5 <= rms / s["rms_nm"] <= 2.0):
-        log.warning("%s: measured DMW rms %.3g nm differs from dmw.rms_nm = %.3g nm; the record is used "
+        log.warning("dmw: %s: measured DMW rms %.3g nm differs from dmw.rms_nm = %.3g nm; the record is used "
                     "as measured (check its units)", rec.path, rms, s["rms_nm"])
     return x, attrs
 
@@ -142,6 +157,10 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
     n = phys.n_samples(dur, fs)
     seed = None
     enabled = "dmw" in scene.effects
+    need = (float(to_si(scene).solver.duration), front_pad_lead_s(scene))
+    if enabled and s["duration_set"]:  # (a record of the length asked for: long enough for the simulation?)
+        check_length(n, fs, *need, f"dmw.duration_ms = {scene['dmw']['duration_ms']:g}",
+                     "set dmw.duration_ms to at least that, or leave it out (the default length is enough)")
     if not enabled:
         w = np.zeros(n)
         attrs = {"dmw_quantity": "displacement", "processing": "none (effect off)",
@@ -159,8 +178,9 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
                  "periodic": f"yes (period {dur:g} s = the record length)"}
         source = "synthetic"
     else:
-        w, attrs = _measured(s)
+        w, attrs = _measured(s, need)
         source = s["source"]
+        n, dur = w.size, w.size / fs
     time = np.arange(n) / fs
     f, p = phys.spectrum(w, fs)
     try:
@@ -190,7 +210,9 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
 
 STAGE = Stage(
     "dmw", compute, outputs=(FILENAME,),
-    # the default record length depends on the slider's size (default_duration)
-    reads=("dmw", "solver.duration_ms", "scene.effects", "slider.length_mm", "slider.front_arm_mm"),
+    # the default record length depends on the slider's size (default_duration), the length a record must
+    # have on where the TFC point lies (front_pad_lead_s)
+    reads=("dmw", "solver.duration_ms", "scene.effects", "slider.length_mm", "slider.front_arm_mm",
+           "slider.tfc_from_trailing_edge_um"),
     files=_files, order=20, main_job=True,
     doc="the disk's dynamic microwaviness, synthesised or measured, dmw.nc")

@@ -85,3 +85,70 @@ def test_k_choice_middle_and_paper():
     assert 1.2 < k_low < 1.2 + 1e-2
     with pytest.raises(ValueError, match="fallback_probability"):
         choose_k(-2.0, 1.0, "paper", None)
+
+
+IDENTIFIED = PAPER.parent / "paper-2009-identified.toml"
+
+
+def test_the_touchdown_k_is_fitted_to_is_named_and_flagged_when_the_drive_is_not_the_paper_s(tmp_path):
+    """The paper's touchdown (the keys' defaults) on the paper's drive: named, no warning; on a drive whose
+    disk, roughness or slider differ: a warning naming those keys and the touchdown keys to set; a touchdown of
+    the scene's own: named as such, no warning."""
+    (tmp_path / "dmw.csv").write_text("time_s,displacement_nm\n0,0\n")
+    fitted, warning = calibration.touchdown_provenance(load_scene(IDENTIFIED))
+    assert "touchdown.onset_nm = 9.8 nm" in fitted and "the paper's measured touchdown" in fitted and warning == ""
+    own = load_scene(IDENTIFIED, [f'dmw.source="{tmp_path / "dmw.csv"}"', "roughness.sigma_nm=0.6"])
+    assert calibration.differing_from_paper(own) == {"disk": [f"dmw.source = '{tmp_path / 'dmw.csv'}'"],
+                                                     "roughness": ["roughness.sigma_nm = 0.6"]}
+    _, warning = calibration.touchdown_provenance(own)
+    assert warning.startswith("k is fitted to the paper's touchdown (9.8 nm, none at 9.6 nm) while the disk "
+                              "(dmw.source = ") and "the roughness (roughness.sigma_nm = 0.6) differ" in warning
+    assert "set touchdown.onset_nm and touchdown.previous_nm" in warning
+    slider = load_scene(IDENTIFIED, ["air_bearing.frequencies_khz=[100.0, 280.0]"])
+    assert "the slider (air_bearing.frequencies_khz = [100.0, 280.0]) differs" in calibration.touchdown_provenance(slider)[1]
+    mine = load_scene(IDENTIFIED, [f'dmw.source="{tmp_path / "dmw.csv"}"', "touchdown.onset_nm=10.4",
+                                   "touchdown.previous_nm=10.2"])
+    fitted, warning = calibration.touchdown_provenance(mine)
+    assert "touchdown.onset_nm = 10.4 nm, none at touchdown.previous_nm = 10.2 nm: this scene's own" in fitted
+    assert warning == ""
+    for name in ("paper-2009", "paper-2009-bulge", "paper-2009-reynolds", "paper-2009-two-population",
+                 "paper-2009-two-population-identified", "sweep-3x3"):  # (the shipped scenes: the paper's drive)
+        assert calibration.differing_from_paper(load_scene(PAPER.parent / f"{name}.toml")) == {}, name
+
+
+def test_a_calibrated_k_below_the_physical_bound_is_refused_in_one_line(tmp_path):
+    """k below 0 (one-sided contact probability above 0.5) is refused naming the touchdown and the keys to set;
+    the k of `make run` (the identified scene's, 1.0736 in (-0.8407, 2.9879], one-sided 0.142) is not."""
+    (tmp_path / "dmw.csv").write_text("time_s,displacement_nm\n0,0\n")
+    own = load_scene(IDENTIFIED, [f'dmw.source="{tmp_path / "dmw.csv"}"'])
+    with pytest.raises(calibration.CalibrationError) as err:
+        calibration.check_physical(-0.86, (-0.894, -0.826), own)
+    text = str(err.value)
+    assert "\n" not in text and text.startswith("calibrate: the calibrated k = -0.8600 is below 0: its one-sided "
+                                                "contact probability P(z > k sigma) = 0.805 is above 0.5")
+    assert "the paper's measured touchdown on another drive (dmw.source = " in text
+    assert "set touchdown.onset_nm and touchdown.previous_nm" in text and text.endswith("fix contact.k (k >= 0)")
+    with pytest.raises(calibration.CalibrationError, match=r"fix contact\.k \(\[0\.0000, 0\.1668\] is the physical "
+                                                           r"part of the admissible interval\)$"):
+        calibration.check_physical(-0.0256, (-0.2179, 0.1668), load_scene(IDENTIFIED))
+    calibration.check_physical(1.0736, (-0.8407, 2.9879), load_scene(IDENTIFIED))
+    calibration.check_physical(0.0, (-0.1, 0.1), own)  # (the bound itself is physical: one-sided 0.5)
+
+
+@pytest.mark.slow
+def test_the_user_s_record_with_the_paper_s_touchdown_is_refused_before_calibration_nc(tmp_path):
+    """The case of a user's own record: a synthetic record of rms 0.42 nm (the identified scene's is 0.18 nm)
+    written as CSV; calibrating the identified scene on it to the paper's touchdown gave k = -0.87 (one-sided
+    probability 0.81) silently. Now refused, after the warning, before calibration.nc is written."""
+    from pipeline.physics.microwaviness import synthesize
+    from pipeline.runner import ensure
+    fs = 4e6
+    w = synthesize(0.40, (1e4, 5e5), -2.0, 2.1e-3, fs, 12345)
+    rec = tmp_path / "dmw.csv"
+    np.savetxt(rec, np.c_[np.arange(w.size) / fs, w], delimiter=",", header="time_s,displacement_nm", comments="")
+    scene = load_scene(IDENTIFIED, [f'dmw.source="{rec}"', "solver.duration_ms=1.0", "solver.transient_ms=0.3",
+                                    "sweep.protrusion_nm={start=9.6, stop=9.8, step=0.2}", "touchdown.curve_points=3"])
+    with pytest.raises(calibration.CalibrationError, match=r"calibrated k = -0\.\d+ is below 0.*on another drive "
+                                                           r"\(dmw\.source = "):
+        ensure("calibrate", scene, tmp_path / "out", scheduler="synchronous")
+    assert not (tmp_path / "out" / "calibration.nc").exists() and (tmp_path / "out" / "dmw.nc").is_file()

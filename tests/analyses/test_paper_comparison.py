@@ -44,3 +44,25 @@ def test_an_identify_dataset_of_the_older_layout_is_refused_in_one_line():
     new = xr.Dataset({"best": ("parameter", [0.2]), "value": (("evaluation", "target"), [[1.0]])},
                      coords={"target_units": ("target", ["%"])})
     check_identify_layout(new)
+
+
+def test_the_touchdown_note_repeats_the_calibration_s_warning_and_names_a_touchdown_of_the_scene(tmp_path):
+    """The report says which touchdown k was fitted to when it is not simply the paper's on the paper's drive:
+    the calibration's warning (the paper's touchdown on another drive), or the scene's own touchdown."""
+    import report_data
+    from pipeline.analyses.paper_comparison import _touchdown_section
+    from pipeline.analyses.sweep_slices import SweepSlice
+    report_data.write_sweep(tmp_path)
+    report_data.write_calibration(tmp_path)
+    sweep = xr.open_dataset(tmp_path / "sweep.nc").load()
+    cal = xr.open_dataset(tmp_path / "calibration.nc").load()
+    c = SweepSlice.of(sweep.isel(roughness=0, damping=0), sweep)
+    plain = _touchdown_section(c, sweep, cal)[1][0]  # (a calibration.nc without the attributes: as before)
+    assert "Warning" not in plain and "k was fitted to" not in plain
+    warning = "k is fitted to the paper's touchdown (9.8 nm, none at 9.6 nm) while the disk (dmw.source = 'a.csv') differs"
+    flagged = _touchdown_section(c, sweep, cal.assign_attrs(touchdown_warning=warning, touchdown_source="paper"))
+    assert f"Warning: {warning}." in flagged[1][0]
+    fitted = "contact at touchdown.onset_nm = 3 nm, none at touchdown.previous_nm = 2.5 nm: this scene's own touchdown"
+    own = _touchdown_section(c, sweep, cal.assign_attrs(touchdown_fitted=fitted, touchdown_warning="none",
+                                                        touchdown_source="scene"))
+    assert f"k was fitted to {fitted}." in own[1][0] and "Warning" not in own[1][0]

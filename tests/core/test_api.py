@@ -107,7 +107,7 @@ def test_a_distributed_client_is_a_scheduler(flying, tmp_path):
     with distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None) as cluster, \
             distributed.Client(cluster) as client:
         path = hdi.run_stage("sweep", flying, tmp_path / "client", scheduler=client)
-        with pytest.raises(OptionError, match="--scheduler: not used by `hdi dmw`"):
+        with pytest.raises(OptionError, match="^scheduler: not used by stage 'dmw'; only by sweep"):
             hdi.run_stage("dmw", flying, tmp_path / "dmw", scheduler=client)
     with pytest.raises(OptionError, match="the client is closed"):
         hdi.run_stage("sweep", flying, tmp_path / "closed", scheduler=client)
@@ -152,7 +152,7 @@ def test_bad_input_raises_the_errors_the_command_line_reports(flying, paper_conf
         hdi.open_dataset(tmp_path, "swep")
     with pytest.raises(ValueError, match="unknown stage 'swep'"):
         hdi.run_stage("swep", flying, tmp_path)
-    with pytest.raises(OptionError, match="--workers 0"):
+    with pytest.raises(OptionError, match="^workers = 0: expected a positive number"):
         hdi.run_stage("sweep", flying, tmp_path, workers=0)
     assert list(tmp_path.iterdir()) == []  # (refused before anything was written)
 
@@ -165,3 +165,61 @@ def test_the_api_is_no_part_of_any_stage_code_key():
         found = code_version.modules(f"pipeline.stages.{name}")
         assert "pipeline" in found and "pipeline.api" not in found, name
     assert "pipeline.model.simulation" not in code_version.modules("pipeline.stages.dmw")
+
+
+def test_simulate_refuses_duplicates_histories_off_its_protrusions_and_workers(flying):
+    """simulate(model, [9.0], histories=[10.0]) kept no history, silently; [9.0, 9.0] returned a duplicated
+    index; workers=2 was a TypeError. Each is now one line naming the Python argument, before any run."""
+    model = hdi.build_model(flying, progress=False)
+    with pytest.raises(OptionError, match=r"^histories: 10 nm not among the protrusions \(9 nm\); expected "
+                                          r"protrusions that are simulated$"):
+        hdi.simulate(model, [9.0], histories=[10.0])
+    with pytest.raises(OptionError, match=r"^protrusions: 9 nm given more than once; expected each protrusion once"):
+        hdi.simulate(model, [9.0, 4.5, 9.0])
+    with pytest.raises(OptionError, match=r"^workers = 2: simulate runs its protrusions one after another in this "
+                                          r"process .*run_stage\(\"sweep\", scene, out, workers=\.\.\.\)"):
+        hdi.simulate(model, [9.0], workers=2)
+    kept = hdi.simulate(model, [4.5], histories=[4.5 + 1e-12], progress=False)  # (to the grid's tolerance)
+    assert kept.sizes["hist_protrusion"] == 1 and kept.sizes["protrusion"] == 1
+
+
+def test_a_model_built_in_memory_says_what_it_computes_without_claiming_files(flying, caplog):
+    """build_model(scene, None) said "dmw: wrote dmw.nc" and wrote nothing; now it says it computed the record
+    in memory, and no line claims a file."""
+    import logging
+    with caplog.at_level(logging.INFO, logger="pipeline"):
+        hdi.build_model(flying.replace(dmw={"seed": 7}))
+    lines = [r.getMessage() for r in caplog.records]
+    assert "dmw: computing (in memory)" in lines, lines
+    assert any(ln.startswith("dmw: computed in memory, no file kept: the disk's dynamic microwaviness, synthesised "
+                             "or measured (") for ln in lines), lines
+    assert not any("wrote" in ln or ".nc" in ln for ln in lines), lines
+
+
+def test_run_stage_errors_name_the_python_arguments(flying, tmp_path):
+    """They named the command line's options ("--out ...: is a file", "--workers 'two'")."""
+    afile = tmp_path / "afile"
+    afile.write_text("x")
+    with pytest.raises(OptionError, match=rf"^out = '{afile}': is a file; expected a folder$"):
+        hdi.run_stage("sweep", flying, afile)
+    with pytest.raises(OptionError, match=r"^workers = 'two': expected a positive integer"):
+        hdi.run_stage("sweep", flying, tmp_path / "o", workers="two")
+    with pytest.raises(OptionError, match=r"^workers: not used by stage 'dmw'; only by sweep"):
+        hdi.run_stage("dmw", flying, tmp_path / "o", workers=2)
+    # the command line's own messages are unchanged
+    from pipeline.cli_checks import check_options
+    with pytest.raises(OptionError, match=rf"^--out {afile}: is a file"):
+        check_options("sweep", flying, out=afile)
+    with pytest.raises(OptionError, match=r"^--workers: not used by `hdi dmw`"):
+        check_options("dmw", flying, workers=2)
+
+
+def test_a_big_job_from_python_asks_for_yes_true(paper_config, tmp_path):
+    """A job beyond a size limit asks for the argument yes=True from Python, --yes on the command line."""
+    from pipeline.cli_checks import check_options
+    big = hdi.load_scene(paper_config, ["sweep.protrusion_nm={start=0.0, stop=15.0, step=0.0001}"])
+    with pytest.raises(OptionError, match=r"exceed [\d,]+; pass yes=True to run them anyway$"):
+        hdi.run_stage("sweep", big, tmp_path / "o")
+    with pytest.raises(OptionError, match=r"exceed [\d,]+; pass --yes to run them anyway$"):
+        check_options("sweep", big, out=tmp_path / "o")
+    assert not (tmp_path / "o").exists()

@@ -288,7 +288,9 @@ def test_the_calibration_does_not_depend_on_its_split(paper_config, tmp_path):
     from pipeline.io import read_dataset
     scene = load_scene(paper_config, ["solver.duration_ms=1.0", "solver.transient_ms=0.3", "touchdown.curve_points=5",
                                       'scene.effects=["air_bearing","pitch","dmw","contact","friction"]',
-                                      "sweep.protrusion_nm={start=9.6, stop=10.4, step=0.2}"])
+                                      "sweep.protrusion_nm={start=9.6, stop=10.4, step=0.2}",
+                                      # (a touchdown whose k is physical without adhesion: tests/stages/test_sweep.py)
+                                      "touchdown.onset_nm=9.6", "touchdown.previous_nm=9.4"])
     got = []
     for workers in (1, 4):
         path = ensure("calibrate", scene, tmp_path / f"w{workers}", scheduler="synchronous", workers=workers)

@@ -337,3 +337,18 @@ def test_an_api_call_shows_its_lines_without_logging_and_progress_false_shows_no
     monkeypatch.setitem(sys.modules, "ipykernel.zmqshell", object())
     with progress.shown(True):
         assert progress.display() == "bar"
+
+
+def test_a_warning_line_says_it_is_one_and_names_its_stage():
+    """"flying run collapsed at 11.8 nm ..." and "/path/dmw.csv: measured DMW rms ..." came with no stage (the
+    first with no severity either): a warning names the stage it is given in, once; INFO lines are as written."""
+    fmt = progress.LineFormat("%(message)s")
+
+    def line(level: int, text: str) -> str:
+        return fmt.format(logging.LogRecord("pipeline.x", level, __file__, 1, text, None, None))
+
+    with progress.stage("dmw"):
+        assert line(logging.WARNING, "/d/dmw.csv: measured DMW rms 0.4 nm") == "warning: dmw: /d/dmw.csv: measured DMW rms 0.4 nm"
+        assert line(logging.WARNING, "dmw: already named") == "warning: dmw: already named"
+        assert line(logging.INFO, "dmw: computing") == "dmw: computing"
+    assert line(logging.ERROR, "outside any stage") == "error: outside any stage"

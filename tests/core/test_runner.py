@@ -68,7 +68,7 @@ def _scan(path: Path, scale: float = 1.0) -> Path:
 def test_dmw_record_edited_in_place_recomputes_everything_downstream(tmp_path):
     rec = tmp_path / "ldv.csv"
     _record(rec)
-    scene = load_scene(PAPER, FLY + [f'dmw.source="{rec}"', "dmw.sample_rate_hz=4e6"])
+    scene = load_scene(PAPER, FLY + [f'dmw.source="{rec}"', "dmw.sample_rate_hz=4e6", 'dmw.unit="nm"'])
     out = tmp_path / "out"
     path = sweep_stage.run_sweep(scene, out, scheduler="synchronous")
     fhm1 = read_dataset(path).fhm_bv.values.copy()
@@ -115,8 +115,11 @@ def test_afm_scan_edited_in_place_reaches_interface_and_sweep_parts(tmp_path):
 
 def test_simulate_never_uses_a_calibration_of_other_inputs(tmp_path):
     """`hdi simulate --set lubricant.work_of_adhesion_j_m2=0` with an older calibration.nc in the folder."""
+    # (without adhesion the admissible k is (-0.2179, 0.1668]: its middle, -0.0256, is below the physical
+    # bound and refused; the k_choice "paper" takes the upper end, 0.1668)
     base = ["solver.duration_ms=1.0", "solver.transient_ms=0.3", "touchdown.curve_points=2",
-            "sweep.protrusion_nm={start=9.0, stop=10.4, step=0.2}", "tfc.protrusion_nm=5.0"]
+            "sweep.protrusion_nm={start=9.0, stop=10.4, step=0.2}", "tfc.protrusion_nm=5.0",
+            'touchdown.k_choice="paper"']
     runner.build("calibrate", load_scene(PAPER, base), tmp_path)
     old = read_dataset(tmp_path / "calibration.nc")
     assert np.isnan(float(old.k_calibrated))                  # adhesive snap-in: no admissible k
@@ -462,7 +465,7 @@ def test_registry_holds_every_stage_and_the_main_job(paper_scene):
     plan = runner.Runner(paper_scene, "unused", stages).plan(["report"])
     assert plan.index("calibrate") < plan.index("sweep") < plan.index("report")
     assert runner.Runner(paper_scene.replace(contact={"k": 0.5}), "unused", stages).plan(["sweep"]) == \
-        ["interface", "dmw", "sweep"]
+        ["dmw", "interface", "sweep"]  # (the record first: one the simulation cannot use stops it before any dataset)
 
 
 def test_a_new_stage_plugs_in_by_declaring_itself(tmp_path, paper_config, monkeypatch):

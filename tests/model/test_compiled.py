@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import subprocess
 import sys
 import textwrap
@@ -223,10 +224,10 @@ import sys
 from numba import typeof
 from pipeline.model import compiled
 from tiny_kernel import tiny
-compiled.announce(tiny, "the tiny kernel", 1.0)
+compiled.announce(tiny, "the tiny kernel")
 sig = (typeof(1.5),)
 before = compiled.is_cached(tiny, sig)
-started = compiled.compile_ahead(tiny, (1.5,), "the tiny kernel", 1.0) and compiled.pending()
+started = compiled.compile_ahead(tiny, (1.5,), "the tiny kernel") and compiled.pending()
 compiled.wait_ahead()
 after = compiled.is_cached(tiny, sig)
 value = tiny(1.5)
@@ -253,7 +254,11 @@ def test_a_kernel_compiled_ahead_is_loaded_from_the_cache_not_compiled_again(tmp
     assert out.stdout.split() == ["False", "True", "True", "False", "4.0", "1", "0"]
     # said once, by this process (no logging set up: on stderr); the background process says nothing
     assert out.stderr.count("compiling the tiny kernel") == 1
-    assert "compiling the tiny kernel in a background process (first run only, ~1 s)" in out.stderr
+    # no time promised; the time it took said when it is done, as measured on this machine
+    lines = out.stderr.strip().splitlines()
+    assert lines[0] == "compiling the tiny kernel in a background process (first run only)", out.stderr
+    assert re.fullmatch(r"compiled the tiny kernel in a background process in \d+\.\d s \(first run only: cached "
+                        r"for the next runs\)", lines[1]), out.stderr
 
 
 def test_without_compile_ahead_the_process_compiles_and_says_so(tmp_path):
@@ -261,7 +266,11 @@ def test_without_compile_ahead_the_process_compiles_and_says_so(tmp_path):
     assert out.returncode == 0, out.stderr[-2000:]
     # nothing started; the call compiles here (a miss, no hit), announced by numba's compile event
     assert out.stdout.split() == ["False", "False", "False", "False", "4.0", "0", "1"]
-    assert out.stderr.strip().splitlines() == ["compiling the tiny kernel (first run only, ~1 s)"]
+    lines = out.stderr.strip().splitlines()
+    assert lines[0] == "compiling the tiny kernel (first run only)" and len(lines) == 2, out.stderr
+    seconds = float(re.fullmatch(r"compiled the tiny kernel in (\d+\.\d) s \(first run only: cached for the next "
+                                 r"runs\)", lines[1]).group(1))
+    assert 0.0 <= seconds < 300.0
 
 
 def test_a_cached_kernel_starts_nothing_and_says_nothing(tmp_path):
@@ -281,10 +290,12 @@ def test_the_compile_notice_is_a_log_line_or_stderr(handler, caplog, capsys, mon
     # (none left by an earlier test: `hdi`'s main attaches its stderr handler once per process)
     monkeypatch.setattr(logging.getLogger("pipeline"), "handlers", [])
     with caplog.at_level(logging.INFO, logger="pipeline"):
-        progress.compile_notice("the dynamics kernel for this scene's effects", 25.4)
-    line = "compiling the dynamics kernel for this scene's effects (first run only, ~25 s)"
-    assert [r.getMessage() for r in caplog.records] == ([line] if handler else [])
-    assert capsys.readouterr().err == ("" if handler else line + "\n")
+        progress.compile_notice("the dynamics kernel for this scene's effects")
+        progress.compile_notice("the dynamics kernel for this scene's effects", 25.43)
+    lines = ["compiling the dynamics kernel for this scene's effects (first run only)",
+             "compiled the dynamics kernel for this scene's effects in 25.4 s (first run only: cached for the next runs)"]
+    assert [r.getMessage() for r in caplog.records] == (lines if handler else [])
+    assert capsys.readouterr().err == ("" if handler else "\n".join(lines) + "\n")
 
 
 class _Process:

@@ -58,16 +58,24 @@ def test_load_headerless_and_sample_rate(tmp_path):
     x = dmw.synthesize(0.5, BAND, -2.0, T, FS, seed=9)
     p1 = tmp_path / "one.csv"
     np.savetxt(p1, x)
-    rec = measured_dmw.load_record(p1, sample_rate_hz=FS)
+    # a record that states no unit is refused unless dmw.unit gives it (no silent "assumed nm")
+    with pytest.raises(dmw.DMWError, match=r"one\.csv: column 0: no unit stated; .*or set dmw\.unit"):
+        measured_dmw.load_record(p1, sample_rate_hz=FS)
+    rec = measured_dmw.load_record(p1, sample_rate_hz=FS, unit="nm")
     assert rec.sample_rate_hz == FS and np.allclose(rec.values, x)
-    assert rec.units == "nm" and "assumed nm" in rec.notes[0]
+    assert rec.units == "nm" and "nm from dmw.unit" in rec.notes[0]
+    um = measured_dmw.load_record(p1, sample_rate_hz=FS, unit="um")  # [um] -> [nm]
+    assert np.allclose(um.values, 1e3 * x) and um.units == "um"
     p2 = tmp_path / "two.txt"
     np.savetxt(p2, np.column_stack([np.arange(x.size) / FS * 1e3, x]))    # whitespace-separated
     p2h = tmp_path / "two_ms.csv"
     np.savetxt(p2h, np.column_stack([np.arange(x.size) / FS * 1e3, x]), delimiter=";",
                header="time_ms;w_nm", comments="")
     # tol: a rate from a time column's step (t/step < 1e4 over the step), a few roundings
-    assert measured_dmw.load_record(p2).sample_rate_hz == pytest.approx(FS * 1e-3, rel=1e-9)  # no unit: s
+    assert measured_dmw.load_record(p2, unit="nm").sample_rate_hz == pytest.approx(FS * 1e-3, rel=1e-9)  # time: s
+    # a unit stated in the record and another in dmw.unit: refused
+    with pytest.raises(dmw.DMWError, match=r"two_ms\.csv: column 'w_nm': the record states 'nm' but dmw\.unit = 'um'"):
+        measured_dmw.load_record(p2h, unit="um")
     # tol: a rate from a time column's step (t/step < 1e4 over the step), a few roundings
     assert measured_dmw.load_record(p2h).sample_rate_hz == pytest.approx(FS, rel=1e-9)
 
@@ -87,6 +95,30 @@ def test_load_netcdf(tmp_path):
         measured_dmw.load_record(p, column="velocity")
     with pytest.raises(dmw.DMWError, match=r"rec\.nc.*variable 'w'.*length units"):
         measured_dmw.load_record(p, quantity="velocity")
+
+
+def test_load_netcdf_on_a_sample_dimension_with_a_sample_rate(tmp_path):
+    """A NetCDF record without a time coordinate, on a dimension 'sample': read at dmw.sample_rate_hz (was
+    refused, "dimensions ('sample',); expected ('time',)"); without the rate, or with a unit stated nowhere,
+    refused in one line."""
+    import xarray as xr
+    x = dmw.synthesize(0.5, BAND, -2.0, T, FS, seed=9)
+    p = tmp_path / "samples.nc"
+    xr.Dataset({"displacement": ("sample", x, {"units": "nm"})}).to_netcdf(p, engine="netcdf4")
+    rec = measured_dmw.load_record(p, sample_rate_hz=FS)
+    assert rec.sample_rate_hz == FS and rec.units == "nm" and np.array_equal(rec.values, x)
+    with pytest.raises(dmw.DMWError, match=r"samples\.nc: no 'time' coordinate and no sample rate; .*dmw\.sample_rate_hz"):
+        measured_dmw.load_record(p)
+    bare = tmp_path / "bare.nc"
+    xr.Dataset({"w": ("sample", x)}).to_netcdf(bare, engine="netcdf4")
+    with pytest.raises(dmw.DMWError, match=r"bare\.nc: variable 'w': no unit stated; .*set dmw\.unit"):
+        measured_dmw.load_record(bare, sample_rate_hz=FS)
+    assert np.array_equal(measured_dmw.load_record(bare, sample_rate_hz=FS, unit="um").values, 1e3 * x)
+    two = tmp_path / "two.nc"
+    xr.Dataset({"w": (("run", "sample"), np.vstack([x, x]), {"units": "nm"})}).to_netcdf(two, engine="netcdf4")
+    with pytest.raises(dmw.DMWError, match=r"two\.nc: variable 'w': dimensions \('run', 'sample'\); expected one "
+                                           r"dimension"):
+        measured_dmw.load_record(two, sample_rate_hz=FS, column="w")
 
 
 def _errors(tmp_path: Path) -> dict[str, tuple[Path, dict, str]]:
@@ -140,3 +172,29 @@ def test_nan_in_netcdf_rejected(tmp_path):
                coords={"time": ("time", np.arange(10) / FS, {"units": "s"})}).to_netcdf(p, engine="netcdf4")
     with pytest.raises(dmw.DMWError, match=r"bad\.nc: variable 'displacement'.*NaN/infinite.*sample 3"):
         measured_dmw.load_record(p)
+
+
+def test_the_record_formats_of_docs_my_drive_run_and_read_back(tmp_path, monkeypatch, capsys):
+    """docs/my-drive.md, section "The DMW record": its script writes the four forms (CSV with a header and unit
+    suffix, CSV without a header, NetCDF on time, NetCDF on a sample dimension) and its `hdi dmw` commands read
+    each to the same record; its scene file loads."""
+    import re
+    import shlex
+    from pipeline import cli
+    from pipeline.io import read_dataset
+    page = (Path(__file__).resolve().parents[2] / "docs" / "my-drive.md").read_text(encoding="utf-8")
+    blocks = re.findall(r"```(\w+)\n(.*?)```", page, re.S)
+    scene = next(text for lang, text in blocks if lang == "toml")
+    section = page[page.index("## The DMW record"):page.index("## Your roughness scans")]
+    script, commands = (text for lang, text in re.findall(r"```(\w+)\n(.*?)```", section, re.S))
+    monkeypatch.chdir(tmp_path)
+    exec(compile(script, "docs/my-drive.md", "exec"), {})
+    (tmp_path / "my-drive.toml").write_text(scene)
+    records = []
+    for i, line in enumerate(c for c in commands.splitlines() if c.startswith("hdi dmw")):
+        assert cli.main(shlex.split(line)[1:] + ["--out", f"out{i}", "-q"]) == 0, capsys.readouterr().err
+        records.append(read_dataset(tmp_path / f"out{i}" / "dmw.nc").displacement.values)
+    assert len(records) == 4
+    for r in records[1:]:  # (the same record in four forms: equal to rounding of the written text)
+        assert r.size == records[0].size == 8400 and np.allclose(r, records[0], rtol=0, atol=1e-9)
+    assert 0.3 < rms(records[0]) < 0.5  # (the 0.4-nm record, band-passed again: as written)

@@ -23,13 +23,13 @@ def _calibration(k: float, outcome: str = "") -> xr.Dataset:
 
 
 @pytest.mark.parametrize("raw, calibration, inputs", [
-    ({}, True, ("interface", "dmw", "calibrate")),                            # the paper scene
-    ({}, False, ("interface", "dmw")),                                        # a parameter study
-    ({"contact": {"k": 0.978}}, True, ("interface", "dmw")),                  # k fixed: no calibration
-    ({"air_bearing": {"bulge": "reynolds"}}, True, ("interface", "bulge", "dmw", "calibrate")),
+    ({}, True, ("dmw", "interface", "calibrate")),                            # the paper scene
+    ({}, False, ("dmw", "interface")),                                        # a parameter study
+    ({"contact": {"k": 0.978}}, True, ("dmw", "interface")),                  # k fixed: no calibration
+    ({"air_bearing": {"bulge": "reynolds"}}, True, ("dmw", "interface", "bulge", "calibrate")),
     ({"scene": {"effects": ["air_bearing", "pitch"]}}, True, ()),
     ({"scene": {"effects": ["air_bearing", "pitch", "dmw"]}, "roughness": {"afm": [AFM]}}, True,
-     ("interface", "dmw")),                                                   # AFM scans: y_s from the tables
+     ("dmw", "interface")),                                                   # AFM scans: y_s from the tables
 ])
 def test_simulation_inputs_are_the_stages_it_reads(raw, calibration, inputs, repo_root, monkeypatch):
     monkeypatch.chdir(repo_root)

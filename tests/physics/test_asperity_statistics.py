@@ -136,3 +136,12 @@ def test_contact_probabilities_are_two_sided_first():
         assert st.contact_probabilities(-k)[0] == st.contact_probabilities(k)[0]
     with pytest.raises(ValueError, match=r"\(0, 1\)"):
         st.k_from_probability(1.0)
+
+
+def test_the_physical_bound_of_k_is_a_one_sided_contact_probability_of_one_half():
+    """k >= 0: Q(k) <= 0.5 (the one-sided probability at the bound is exactly 1/2); below it, why in words."""
+    assert st.K_PHYSICAL_MIN == 0.0 and st.contact_probabilities(st.K_PHYSICAL_MIN)[1] == 0.5
+    assert st.unphysical_k(0.0) is None and st.unphysical_k(1.0736) is None and st.unphysical_k(np.nan) is None
+    why = st.unphysical_k(-0.9117)  # (a user's record calibrated to the paper's touchdown)
+    assert why.startswith("k = -0.9117 is below 0: its one-sided contact probability P(z > k sigma) = 0.819")
+    assert st.contact_probabilities(-1e-9)[1] > 0.5

@@ -280,8 +280,8 @@ def _calls(scene, model, tmp: Path):
         (lambda: hdi.load_scene(PAPER, [0.5]), SceneError, r"^load_scene: overrides\[0\] = 0.5: expected a"),
         (lambda: hdi.load_scene(PAPER, None), SceneError, r"^load_scene: overrides = None: expected a list"),
         (lambda: hdi.build_model(123), SceneError, r"^scene = 123: expected a scene \(load_scene\) or the path"),
-        (lambda: hdi.build_model(scene, afile), OptionError, rf"^results {afile}: is a file; expected a folder"),
-        (lambda: hdi.build_model(scene, 42), OptionError, r"^results 42: expected a path"),
+        (lambda: hdi.build_model(scene, afile), OptionError, rf"^results = '{afile}': is a file; expected a folder"),
+        (lambda: hdi.build_model(scene, 42), OptionError, r"^results = 42: expected a path"),
         (lambda: hdi.build_model(scene, k="0.5"), SceneError, r"^k: contact\.k = '0\.5': expected a number"),
         (lambda: hdi.build_model(scene, k=math.nan), SceneError, r"^k: contact\.k = nan: expected a finite number"),
         (lambda: hdi.simulate(model, 9.0), OptionError, r"^protrusions = 9\.0: expected a list of protrusions \[nm\] "
@@ -298,19 +298,19 @@ def _calls(scene, model, tmp: Path):
         (lambda: hdi.simulate("model", [9.0]), ValueError, r"^model = 'model': expected the model of build_model"),
         (lambda: hdi.simulate(model, [9.0], counters="yes"), OptionError, r"^counters = 'yes': expected True or False"),
         (lambda: hdi.histories_of(None), ValueError, r"^histories_of: expected the dataset of simulate"),
-        (lambda: hdi.open_dataset(123, "sweep"), OptionError, r"^results 123: expected a path"),
+        (lambda: hdi.open_dataset(123, "sweep"), OptionError, r"^results = 123: expected a path"),
         (lambda: hdi.open_dataset(tmp, 7), ValueError, r"^name = 7: expected a stage"),
         (lambda: hdi.open_dataset(afile, "sweep"), DatasetError, rf"^{afile}: is a file; expected a results folder"),
         (lambda: hdi.run_stage("sweep", scene, tmp / "o", workers="2"), OptionError,
-         r"^--workers '2': expected a positive integer number of local workers \(1 or more\), got str"),
-        (lambda: hdi.run_stage("sweep", scene, tmp / "o", workers=2.0), OptionError, r"^--workers 2\.0: expected"),
+         r"^workers = '2': expected a positive integer number of local workers \(1 or more\), got str"),
+        (lambda: hdi.run_stage("sweep", scene, tmp / "o", workers=2.0), OptionError, r"^workers = 2\.0: expected"),
         (lambda: hdi.run_stage("sweep", scene, tmp / "o", scheduler=8786), OptionError,
-         r"^--scheduler 8786: expected an address"),
-        (lambda: hdi.run_stage("sweep", scene, tmp / "o", force="no"), OptionError, r"^--force 'no': expected True"),
-        (lambda: hdi.run_stage("sweep", scene, tmp / "o", yes=1), OptionError, r"^--yes 1: expected True or False"),
-        (lambda: hdi.run_stage("sweep", scene, 3.5), OptionError, r"^--out 3\.5: expected a path"),
+         r"^scheduler = 8786: expected an address"),
+        (lambda: hdi.run_stage("sweep", scene, tmp / "o", force="no"), OptionError, r"^force = 'no': expected True"),
+        (lambda: hdi.run_stage("sweep", scene, tmp / "o", yes=1), OptionError, r"^yes = 1: expected True or False"),
+        (lambda: hdi.run_stage("sweep", scene, 3.5), OptionError, r"^out = 3\.5: expected a path"),
         (lambda: hdi.run_stage(None, scene, tmp / "o"), ValueError, r"^stage = None: expected a stage name"),
-        (lambda: hdi.run(scene, afile), OptionError, rf"^--out {afile}: is a file; expected a folder"),
+        (lambda: hdi.run(scene, afile), OptionError, rf"^out = '{afile}': is a file; expected a folder"),
     ]
 
 
@@ -346,7 +346,7 @@ def test_the_api_refuses_a_folder_it_cannot_write_even_when_up_to_date(api_model
                     raise PermissionError(13, "Permission denied")
                 return real(*args, dir=dir, **kw)
             monkeypatch.setattr(tempfile, "mkstemp", refuse)
-        with pytest.raises(OptionError, match=rf"^results {folder}: not writable: Permission denied$"):
+        with pytest.raises(OptionError, match=rf"^results = '{folder}': not writable: Permission denied$"):
             hdi.build_model(scene, folder)
     finally:
         os.chmod(folder, 0o755)

@@ -92,14 +92,57 @@ def test_stage_measured_too_short_or_undersampled(tmp_path):
     rec = tmp_path / "short.csv"
     np.savetxt(rec, np.column_stack([np.arange(x.size) / FS, x]), delimiter=",",
                header="time [s],displacement [nm]", comments="")
-    with pytest.raises(dmw.DMWError, match=r"short\.csv.*1 ms long.*2\.1 ms"):
+    with pytest.raises(dmw.DMWError, match=r"short\.csv: column 'displacement \[nm\]': 4000 samples at 4e\+06 Hz "
+                                           r"\(1 ms\); the simulation needs at least 8151 \(2\.03775 ms\): "
+                                           r"solver\.duration_ms = 2 plus 0\.0368 ms.*solver\.duration_ms <= 0\.9624"):
         ensure("dmw", scene_from_dict({"dmw": {"source": str(rec)}}), tmp_path)
     slow = tmp_path / "slow.csv"
     x = dmw.synthesize(0.5, (1e4, 2e5), -2.0, 3e-3, 5e5, seed=1)
     np.savetxt(slow, x)
-    scene = scene_from_dict({"dmw": {"source": str(slow), "sample_rate_hz": 5e5}})
+    scene = scene_from_dict({"dmw": {"source": str(slow), "sample_rate_hz": 5e5, "unit": "nm"}})
     with pytest.raises(dmw.DMWError, match=r"slow\.csv: column 0: sampled at 500000 Hz.*Nyquist"):
         ensure("dmw", scene, tmp_path)
+
+
+def _record(path, duration_s, header="time [s],displacement [nm]"):
+    x = dmw.synthesize(0.5, BAND, -2.0, duration_s, FS, seed=3)
+    np.savetxt(path, np.column_stack([np.arange(x.size) / FS, x]), delimiter=",", header=header, comments="")
+    return path, x
+
+
+def test_one_rule_for_the_length_of_a_record_checked_before_anything_is_written(tmp_path):
+    """A record must hold the simulated duration plus the front pad's lead plus 3 samples
+    (dmw_record.needed_samples): 8151 samples, 2.038 ms, for the paper scene's 2 ms. A 2-ms record is refused
+    by the dmw stage in that one message (not for dmw.duration_ms, a key not set); one of 8151 samples is
+    taken whole and the model runs on it; dmw.duration_ms = 2 is refused by the dmw stage, before dmw.nc."""
+    scene = scene_from_dict({})
+    lead = dmw_record.front_pad_lead_s(scene)
+    assert lead == pytest.approx((0.30e-3 + 0.85e-3 / 2 - 8e-6) / 19.4856, rel=1e-4) == pytest.approx(36.8e-6, rel=1e-3)  # (l_f + l_c) / V [s]
+    need = dmw_record.needed_samples(2e-3, lead, FS)
+    assert need == math.ceil((2e-3 + lead) * FS) + 3 == 8151
+    two, _ = _record(tmp_path / "two_ms.csv", 2e-3)
+    with pytest.raises(dmw.DMWError, match=r"two_ms\.csv: column 'displacement \[nm\]': 8000 samples at 4e\+06 Hz "
+                                           r"\(2 ms\); the simulation needs at least 8151") as err:
+        ensure("dmw", scene_from_dict({"dmw": {"source": str(two)}}), tmp_path / "a")
+    assert "dmw.duration_ms" not in str(err.value) and not (tmp_path / "a" / "dmw.nc").exists()
+    just, x = _record(tmp_path / "just.csv", need / FS)
+    assert x.size == need
+    ds = read_dataset(ensure("dmw", scene_from_dict({"dmw": {"source": str(just)}}), tmp_path / "b"))
+    assert ds.displacement.size == need  # (shorter than the default 2.1 ms: used whole)
+    from pipeline.model import assembly
+    slider, _ = assembly.slider_from_scene(scene)
+    assert (slider.l_f + slider.l_c) / dmw_record.settings(scene)["disk_speed_m_s"] == lead  # the model's lead
+    w = ds.displacement.values
+    assembly.check_length(w.size, FS, 2e-3, lead, "DMW record")  # (the model's check takes it: the same rule)
+    with pytest.raises(dmw.DMWError, match="8150 samples"):
+        assembly.check_length(w.size - 1, FS, 2e-3, lead, "DMW record")
+    for source in ("synthetic", str(just)):
+        out = tmp_path / ("c" if source == "synthetic" else "d")
+        with pytest.raises(dmw.DMWError, match=r"^dmw\.duration_ms = 2: 8000 samples at 4e\+06 Hz \(2 ms\); the "
+                                               r"simulation needs at least 8151 \(2\.03775 ms\).*; set dmw\.duration_ms "
+                                               r"to at least that, or leave it out"):
+            ensure("dmw", scene_from_dict({"dmw": {"source": source, "duration_ms": 2.0}}), out)
+        assert not (out / "dmw.nc").exists()
 
 
 def test_failing_load_keeps_existing_dataset(tmp_path):
@@ -143,7 +186,7 @@ def test_stage_reruns_when_record_changes(tmp_path):
     rec = tmp_path / "rec.csv"
     x = dmw.synthesize(0.5, BAND, -2.0, 3e-3, FS, seed=1)
     np.savetxt(rec, x)
-    scene = scene_from_dict({"dmw": {"source": str(rec), "sample_rate_hz": FS}})
+    scene = scene_from_dict({"dmw": {"source": str(rec), "sample_rate_hz": FS, "unit": "nm"}})
     path = ensure("dmw", scene, tmp_path / "out")
     rms1 = float(read_dataset(path).rms)
     os.utime(path, (1, 1))

@@ -29,12 +29,16 @@ ROOT = Path(__file__).resolve().parents[2]
 PAPER = ROOT / "configs" / "paper-2009.toml"
 
 # A scene where the criterion decides touchdown: without adhesion there is no snap-in, so a k
-# exists that puts contact at 9.8 nm and not at 9.6 nm (the paper's procedure, docs/model.md, section "Slider dynamics").
+# exists that puts contact at the touchdown and not one step below (the paper's procedure, docs/model.md,
+# section "Contact criterion"). Its touchdown is 9.6 nm (none at 9.4 nm): at the paper's 9.8 nm the admissible
+# interval, (-0.2179, 0.1668], has its middle below the physical bound k >= 0; here it is (0.1668, 0.5514].
 FAST = [
     'scene.effects=["air_bearing","pitch","dmw","contact","friction"]',
     "solver.duration_ms=1.0",
     "solver.transient_ms=0.3",
     "touchdown.curve_points=3",
+    "touchdown.onset_nm=9.6",
+    "touchdown.previous_nm=9.4",
     "sweep.protrusion_nm={start=9.0, stop=10.4, step=0.2}",
     "sweep.batch_size=3",
 ]
@@ -66,9 +70,9 @@ def test_calibration_interval_ends_are_where_full_runs_start_touching(calibrated
     """The ends of the admissible interval are contact thresholds of full runs with the contact law on.
 
     The exact method finds k*(onset) = k_low and k*(previous) = k_high from flying runs (contact law
-    off); here :func:`calibrate.touches` runs the full model: at 9.8 nm it touches just above k_low and
-    not just below, at 9.6 nm likewise around k_high. (That the chosen k puts the sweep's first
-    contact at 9.8 nm is test_calibrated_k_puts_first_contact_at_touchdown.)
+    off); here :func:`calibrate.touches` runs the full model: at 9.6 nm it touches just above k_low and
+    not just below, at 9.4 nm likewise around k_high. (That the chosen k puts the sweep's first
+    contact at 9.6 nm is test_calibrated_k_puts_first_contact_at_touchdown.)
     """
     scene, out = calibrated
     cal = read_dataset(out / "calibration.nc")
@@ -91,16 +95,17 @@ def test_calibration_interval_ends_are_where_full_runs_start_touching(calibrated
 
 
 def test_calibrated_k_puts_first_contact_at_touchdown(calibrated, tmp_path):
-    """The sweep's first contact falls exactly at the measured touchdown (9.8 nm), none at 9.6 nm."""
+    """The sweep's first contact falls exactly at the scene's touchdown (9.6 nm), none at 9.4 nm."""
     scene, out = calibrated
+    onset, previous = scene["touchdown"]["onset_nm"], scene["touchdown"]["previous_nm"]
     _copy_inputs(out, tmp_path)
     path = sweep_stage.run_sweep(scene, tmp_path, scheduler="synchronous")
     ds = read_dataset(path)
     regime = ds.regime.isel(roughness=0, damping=0)
     touching = regime.protrusion.values[regime.values != outcomes.FLYING]
-    assert touching.min() == pytest.approx(9.8)
-    assert float(ds.min_clearance.isel(roughness=0, damping=0).sel(protrusion=9.6)) > 0
-    assert float(ds.min_clearance.isel(roughness=0, damping=0).sel(protrusion=9.8)) < 0
+    assert touching.min() == pytest.approx(onset) == 9.6
+    assert float(ds.min_clearance.isel(roughness=0, damping=0).sel(protrusion=previous)) > 0
+    assert float(ds.min_clearance.isel(roughness=0, damping=0).sel(protrusion=onset)) < 0
     assert "calibration" in ds.attrs["k_source"]
 
 
