@@ -24,6 +24,7 @@ def test_without_an_actuation_nothing_changes(paper_config):
 def test_a_touchdown_in_mw_is_the_touchdown_in_nm_through_the_efficiency(paper_config):
     scene = load_scene(paper_config, LINEAR + ["touchdown.onset_mw=78.4", "touchdown.previous_mw=76.8"])
     assert (scene["touchdown"]["onset_nm"], scene["touchdown"]["previous_nm"]) == (9.8, 9.6)  # 0.125 nm/mW
+    # tol: one division by the efficiency: one rounding of the decimal inputs
     np.testing.assert_allclose(heater_power.power_mw(scene, [9.6, 9.8]), [76.8, 78.4], rtol=1e-14)
     coord = heater_power.power_coordinates(scene, np.array([0.0, 8.0]))["heater_power"]
     assert coord.dims == ("protrusion",) and coord.attrs["units"] == "mW" and coord.values.tolist() == [0.0, 64.0]
@@ -35,8 +36,10 @@ def test_a_touchdown_in_mw_is_the_touchdown_in_nm_through_the_efficiency(paper_c
 def test_a_touchdown_in_mw_through_a_table_is_interpolated_between_its_rows(paper_config):
     scene = load_scene(paper_config, TABLE + ["touchdown.onset_mw=84.0", "touchdown.previous_mw=80.0"])
     assert scene["touchdown"]["onset_nm"] == pytest.approx(9.7, abs=1e-9) and scene["touchdown"]["previous_nm"] == 9.0
+    # tol: linear interpolation between table rows of round numbers: a few roundings
     np.testing.assert_allclose(heater_power.power_mw(scene, [2.5, 9.0, 16.0]), [20.0, 80.0, 120.0], rtol=1e-14)
     # beyond the table (an ensemble's target protrusion outside the sweep): no power, the rest kept
+    # tol: linear interpolation at a table row: exact, a rounding at most
     np.testing.assert_allclose(heater_power.power_mw(scene, [9.0, 17.0]), [80.0, np.nan], rtol=1e-14)
 
 

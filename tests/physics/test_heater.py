@@ -17,7 +17,9 @@ MW, NM = 1e-3, 1e-9
 def test_the_linear_law_and_its_inverse_give_back_the_power(eff_nm_per_mw, p_mw):
     act = heater.linear(eff_nm_per_mw * 1e-6)
     d = act.protrusion_of(p_mw * MW)
+    # tol: the same product in another order: two roundings
     assert float(d) == pytest.approx(eff_nm_per_mw * p_mw * NM, rel=1e-12)
+    # tol: the product divided back: two roundings
     assert float(act.power_of(d)) == pytest.approx(p_mw * MW, rel=1e-12, abs=1e-300)
 
 
@@ -25,11 +27,16 @@ def test_a_table_is_linear_between_its_rows_and_inverted_exactly_at_them():
     power = np.array([0.0, 40.0, 80.0, 120.0]) * MW
     prot = np.array([0.0, 5.0, 9.0, 11.0]) * NM          # a falling efficiency: 0.125, 0.1, 0.05 nm/mW
     act = heater.tabulated(power, prot)
+    # tol: np.interp at a row returns the row value exactly (slope times a zero offset); both directions
     np.testing.assert_allclose(act.protrusion_of(power), prot, rtol=0, atol=0)
+    # tol: np.interp at a row returns the row value exactly, in this direction too
     np.testing.assert_allclose(act.power_of(prot), power, rtol=0, atol=0)
+    # tol: linear interpolation halfway along a row of round numbers: a few roundings
     assert float(act.protrusion_of(60.0 * MW)) == pytest.approx(7.0 * NM, rel=1e-14)   # halfway along row 2-3
+    # tol: linear interpolation halfway along a row of round numbers: a few roundings
     assert float(act.power_of(10.0 * NM)) == pytest.approx(100.0 * MW, rel=1e-14)
     p = np.linspace(0.0, 120.0, 241) * MW
+    # tol: two linear interpolations back and forth: a few roundings each
     np.testing.assert_allclose(act.power_of(act.protrusion_of(p)), p, rtol=1e-12, atol=1e-18)
 
 
