@@ -16,15 +16,17 @@ home; this module reads the scene's keys and converts their units (docs/model.md
 
 from __future__ import annotations
 
-from typing import Any, Mapping
+from typing import TYPE_CHECKING, Any, Mapping
 
 import numpy as np
-import xarray as xr
 
 from ..physics import heater
 from ..units import MW, NM, NM_PER_MW
 from ..variables import coordinate
 from .labels import label, range_grid
+
+if TYPE_CHECKING:  # (the scene's validation imports this module: the kernel's early compile must not load xarray)
+    import xarray as xr
 
 #: The touchdown keys given in mW and the keys in nm they set.
 TOUCHDOWN_POWER_KEYS = {"onset_mw": "onset_nm", "previous_mw": "previous_nm"}

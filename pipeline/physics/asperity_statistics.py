@@ -299,7 +299,21 @@ K_PHYSICAL_MIN = 0.0
 
 def unphysical_k(k: float) -> str | None:
     """Why ``k`` [1] is no physical contact-criterion constant, or ``None`` when it is (``k >=``
-    :data:`K_PHYSICAL_MIN`, one-sided contact probability ``Q(k) <= 0.5``); a NaN (no k) is not judged."""
+    :data:`K_PHYSICAL_MIN`, one-sided contact probability ``Q(k) <= 0.5``); a NaN (no k) is not judged.
+
+    Parameters
+    ----------
+    k : the contact-criterion constant of ``d < k sigma`` [1]
+
+    Returns
+    -------
+    str or None
+        The reason, with k [1] and its one-sided contact probability [1]; ``None`` for a physical k.
+
+    References
+    ----------
+    docs/model.md, section "Contact criterion" (the physical range of k and why).
+    """
     if not k < K_PHYSICAL_MIN:
         return None
     p1 = contact_probabilities(k)[1]

@@ -132,7 +132,17 @@ BKE_STICK_FIT = (0.27, 0.35)
 def ke_limiting_interference() -> float:
     """The limiting preload of the Kogut-Etsion sliding-inception fit [KE03b]: the interference ``x =
     w / w_c`` [1] above which a summit sustains no tangential load (the root of the elastic-plastic fit of
-    :data:`KE_SLIDING_FITS`), capped at the fully plastic limit ``x = 110`` [KE02]."""
+    :data:`KE_SLIDING_FITS`), capped at the fully plastic limit ``x = 110`` [KE02].
+
+    Returns
+    -------
+    float
+        The limiting interference ``x = w / w_c`` [1] (12.26 with the fits of :data:`KE_SLIDING_FITS`).
+
+    References
+    ----------
+    [KE03b]; [KE02] for the fully plastic limit; docs/model.md, section "Static friction of the summits".
+    """
     a2, a1, a0 = KE_SLIDING_FITS[1]
     root = (-a1 - np.sqrt(a1 * a1 - 4.0 * a2 * a0)) / (2.0 * a2)
     return float(min(root, asperity.X_PLASTIC))
@@ -150,6 +160,15 @@ def ke_sliding_inception(w: np.ndarray, R: float, E: float, H: float, nu: float)
     ----------
     w : interference [m]
     R : summit radius [m]; E : composite modulus E' [Pa]; H : hardness [Pa]; nu : Poisson ratio [1]
+
+    Returns
+    -------
+    numpy.ndarray
+        ``Q_max`` [N], the shape of ``w``.
+
+    References
+    ----------
+    [KE03b], [KE04]; docs/model.md, section "Static friction of the summits".
     """
     w = np.asarray(w, dtype=float)
     wc = asperity.critical_interference(R, E, H, nu)
@@ -168,6 +187,15 @@ def bke_friction_coefficient(load_ratio: np.ndarray) -> np.ndarray:
     Parameters
     ----------
     load_ratio : ``P* = P / L_c``, the summit's normal load over the critical load [1], > 0
+
+    Returns
+    -------
+    numpy.ndarray
+        The summit's static friction coefficient ``mu`` [1], the shape of ``load_ratio``.
+
+    References
+    ----------
+    [BKE07], as cited by D. Cohen, Y. Kligerman, I. Etsion, J. Tribol. 130 (2008) 031401; docs/model.md, section "Static friction of the summits".
     """
     a, e = BKE_STICK_FIT
     return a / np.tanh(a * np.asarray(load_ratio, dtype=float) ** e)
@@ -183,6 +211,15 @@ def bke_full_stick(w: np.ndarray, R: float, E: float, H: float, nu: float) -> np
     ----------
     w : interference [m]
     R : summit radius [m]; E : composite modulus E' [Pa]; H : hardness [Pa]; nu : Poisson ratio [1]
+
+    Returns
+    -------
+    numpy.ndarray
+        ``Q_max`` [N] under full stick, the shape of ``w``.
+
+    References
+    ----------
+    [BKE07]; docs/model.md, section "Static friction of the summits".
     """
     w = np.asarray(w, dtype=float)
     wc = asperity.critical_interference(R, E, H, nu)

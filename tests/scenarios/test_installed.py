@@ -199,6 +199,45 @@ print(json.dumps({{"units": str(q["displacement"].pint.units), "ratio": float(d.
     assert got["units"] == "nanometer" and got["ratio"] == pytest.approx(1e-9, rel=1e-12)
 
 
+#: A notebook's cells, as a user of the installed wheel with the ``units`` extra runs them: a shipped scene by
+#: name, its model in memory (no results folder), two protrusions with one history kept, the history quantified
+#: with pint and plotted with its units on the axes (docs/datasets.md, "Variables, CF conventions and units")
+NOTEBOOK = """
+import json, os
+import matplotlib
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import cf_xarray.units, pint_xarray
+import pipeline as hdi
+scene = hdi.load_scene("paper-2009-identified", ["solver.duration_ms=0.6"])
+model = hdi.build_model(scene, None)
+ds = hdi.simulate(model, [9.0, 10.0], histories=[10.0])
+q = ds.pint.quantify()
+h = q["h_clearance"].sel(hist_protrusion=10.0)
+fig, ax = plt.subplots()
+ax.plot(h["elapsed_time"].pint.to("ms").pint.magnitude, h.pint.to("nm").pint.magnitude)
+ax.set_xlabel(f"elapsed time [{h['elapsed_time'].pint.to('ms').pint.units:~P}]")
+ax.set_ylabel(f"clearance [{h.pint.units:~P}]")
+fig.savefig("history.png", dpi=80)
+print(json.dumps({"units": str(h.pint.units), "time_units": str(h["elapsed_time"].pint.units),
+                  "samples": int(h.sizes["elapsed_time"]), "mean_nm": float(h.pint.to("nm").mean().pint.magnitude),
+                  "steady_nm": float(ds["clearance"].sel(protrusion=10.0)), "png": os.path.getsize("history.png"),
+                  "folders": sorted(os.listdir("."))}))
+"""
+
+
+def test_a_notebook_builds_a_model_in_memory_and_plots_a_quantified_history(wheel, tmp_path):
+    bin_dir = _install(wheel, "units", tmp_path / "units")
+    cwd = _empty(tmp_path / "cwd")
+    got = _python(bin_dir, NOTEBOOK, cwd, env={**_env(), "NUMBA_CACHE_DIR": str(tmp_path / "numba")})
+    assert got["units"] == "nanometer" and got["time_units"] == "second"
+    assert got["samples"] == 2401  # 0.6 ms at 0.25 us, both ends
+    # in light contact at 10 nm the history's mean clearance is negative (an interference), as its steady scalar
+    assert got["mean_nm"] < 0.0 and got["steady_nm"] < 0.0 and abs(got["mean_nm"] - got["steady_nm"]) < 0.5
+    assert got["png"] > 10_000
+    assert got["folders"] == ["history.png"]  # in memory: no results folder written
+
+
 #: Dask's dashboard page as a browser gets it: without bokeh >= 3.1 the scheduler serves a page that
 #: says "Dask needs bokeh>=3.1.0" instead of the dashboard
 DASHBOARD = """
