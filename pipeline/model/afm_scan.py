@@ -165,7 +165,10 @@ def read_topography(path: str | Path, channel: str | int | None = None, detrend_
     ------
     AFMError
         For a missing, empty, unreadable or corrupt file, a file that is not a 2-D topography, one
-        without a height channel, a lateral size or a height unit.
+        without a height channel, a lateral size or a height unit, and a map outside the bounds of
+        :mod:`pipeline.physics.surface` (:func:`~pipeline.physics.surface.sampling_error`,
+        :func:`~pipeline.physics.surface.heights_error`, :func:`~pipeline.physics.surface.roughness_error`:
+        sizes, pixel sizes, heights, an all-undefined or flat map), naming the bound.
     """
     from SurfaceTopography import open_topography
     from SurfaceTopography.Exceptions import CannotDetectFileFormat
@@ -208,6 +211,10 @@ def read_topography(path: str | Path, channel: str | int | None = None, detrend_
     if not _is_length_unit(topo.unit):
         raise AFMError(f"{path}: channel {info.name!r} has unit {topo.unit!r}; expected a length unit")
     topo = topo.to_unit("nm")
+    bad = sf.sampling_error(topo.physical_sizes, topo.nb_grid_pts) or \
+        sf.heights_error(np.ma.filled(np.ma.masked_invalid(topo.heights()).astype(float), np.nan))
+    if bad:
+        raise AFMError(f"{path}: channel {info.name!r}: {bad}")
     if topo.has_undefined_data:
         warnings.warn(f"{path}: channel {info.name!r} has undefined pixels; filled by harmonic "
                       f"interpolation (SurfaceTopography interpolate_undefined_data)", sf.SurfaceWarning,
@@ -216,7 +223,11 @@ def read_topography(path: str | Path, channel: str | int | None = None, detrend_
     heights = topo.heights()
     if not np.all(np.isfinite(np.ma.filled(heights, np.nan))):
         raise AFMError(f"{path}: channel {info.name!r} holds non-finite heights; the file is probably corrupt")
-    return detrend(topo, detrend_mode, info={"channel_name": info.name})
+    flat = detrend(topo, detrend_mode, info={"channel_name": info.name})
+    bad = sf.roughness_error(float(np.std(np.ma.getdata(flat.heights()))))
+    if bad:
+        raise AFMError(f"{path}: channel {info.name!r}: {bad} (detrend {detrend_mode!r})")
+    return flat
 
 
 # --------------------------------------------------------------------------------------------------
