@@ -25,13 +25,24 @@ from .schema import FREE_LIMITS, SCHEMA, Key, SceneError, is_folder_name, strip_
 MIN_STEADY_SAMPLES = 10
 
 
-def _readonly_error(name: str | None) -> TypeError:
-    sec = name or "section"
-    return TypeError(f"a loaded scene is read-only: scene[{sec!r}] cannot be changed in place; vary it with "
-                     f"scene.replace({sec}={{key: value}}), which returns a new scene validated like --set")
+class _ReadOnly:
+    """What the read-only containers of a scene share: the section they belong to (named in the error) and
+    the change that raises the ``TypeError`` naming the way to vary a scene, :meth:`Scene.replace`."""
+
+    __slots__ = ()
+    _name: str | None
+
+    def __init__(self, items: Any = (), name: str | None = None) -> None:
+        super().__init__(items)  # type: ignore[call-arg]
+        self._name = name
+
+    def _readonly(self, *args: Any, **kwargs: Any) -> None:
+        sec = self._name or "section"
+        raise TypeError(f"a loaded scene is read-only: scene[{sec!r}] cannot be changed in place; vary it with "
+                        f"scene.replace({sec}={{key: value}}), which returns a new scene validated like --set")
 
 
-class FrozenSection(dict):
+class FrozenSection(_ReadOnly, dict):
     """A read-only ``dict``: a section of a :class:`Scene` (and the table of its sections, and the tables
     inside a section's lists: ``identify.parameters``, ``sweep.roughness``).
 
@@ -41,22 +52,14 @@ class FrozenSection(dict):
     """
 
     __slots__ = ("_name",)
-
-    def __init__(self, items: Any = (), name: str | None = None) -> None:
-        super().__init__(items)
-        self._name = name
-
-    def _readonly(self, *args: Any, **kwargs: Any) -> None:
-        raise _readonly_error(self._name)
-
-    __setitem__ = __delitem__ = update = pop = popitem = clear = setdefault = __ior__ = _readonly  # type: ignore
+    __setitem__ = __delitem__ = update = pop = popitem = clear = setdefault = __ior__ = _ReadOnly._readonly  # type: ignore
 
     def __reduce__(self) -> tuple:
         # (pickled to dask workers and deep-copied: rebuilt whole, never item by item through __setitem__)
         return (type(self), (dict(self), self._name))
 
 
-class FrozenList(list):
+class FrozenList(_ReadOnly, list):
     """A read-only ``list``: a list inside a :class:`Scene` (``scene.effects``, ``air_bearing.frequencies_khz``,
     the tables of ``identify.parameters``), at any depth.
 
@@ -66,16 +69,8 @@ class FrozenList(list):
     """
 
     __slots__ = ("_name",)
-
-    def __init__(self, items: Any = (), name: str | None = None) -> None:
-        super().__init__(items)
-        self._name = name
-
-    def _readonly(self, *args: Any, **kwargs: Any) -> None:
-        raise _readonly_error(self._name)
-
     __setitem__ = __delitem__ = __iadd__ = __imul__ = append = extend = insert = pop = remove = clear = \
-        sort = reverse = _readonly  # type: ignore
+        sort = reverse = _ReadOnly._readonly  # type: ignore
 
     def __reduce__(self) -> tuple:
         # (rebuilt whole: a list subclass's default pickling and deepcopy restore the items through extend)
