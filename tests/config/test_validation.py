@@ -272,3 +272,15 @@ def test_a_long_list_of_histories_is_checked_in_linear_time(write_scene):
     msg = _error(path)
     assert time.perf_counter() - t0 < 30
     assert "report.histories_nm" in msg and f"{values[-1]:.10g} appears more than once" in msg
+
+
+def test_a_long_list_of_damping_ratios_is_checked_in_linear_time(write_scene):
+    """200,000 damping ratios: the check for repeated values counted each one in the whole list (hours)."""
+    import time
+    values = [i * 1e-6 for i in range(200_000)]
+    path = write_scene("[sweep]\ndamping_ratio = [" + ", ".join(map(repr, values + [values[7]])) + "]\n")
+    t0 = time.perf_counter()
+    msg = _error(path)
+    assert time.perf_counter() - t0 < 30
+    assert f"sweep.damping_ratio = [0.0, 1e-06, " in msg and "(200001 items)" in msg
+    assert f"{values[7]:g} appears more than once" in msg and len(msg) < 600
