@@ -255,7 +255,8 @@ def check_value(section: str, key: str, spec: Key, value: Any, where: str, base:
     Raises
     ------
     SceneError
-        For a value of the wrong kind, out of range, or naming a file that does not exist or is special.
+        For a value of the wrong kind, out of range (an integer beyond 64 bits or a value nested too deep:
+        :func:`check_plain`), or naming a file that does not exist or is special.
     """
     name = f"{section}.{key}"
     doc = f" ({spec.doc})" if spec.doc else ""
@@ -263,6 +264,7 @@ def check_value(section: str, key: str, spec: Key, value: Any, where: str, base:
     def fail(expected: str, got: Any = value) -> SceneError:
         return SceneError(f"{where}: {name} = {shown(got)}: expected {expected}{doc}")
 
+    check_plain(value, name, where)  # (before any conversion: float() of a 400-digit integer overflows)
     kind = spec.kind
     if kind == "float":
         if isinstance(value, bool) or not isinstance(value, (int, float)):
@@ -275,8 +277,6 @@ def check_value(section: str, key: str, spec: Key, value: Any, where: str, base:
     elif kind == "int":
         if isinstance(value, bool) or not isinstance(value, int):
             raise fail("an integer")
-        if abs(value) > MAX_INTEGER:
-            raise fail("an integer of magnitude at most 2**63 - 1")
     elif kind == "str":
         if not isinstance(value, str):
             raise fail("a string")
@@ -384,7 +384,6 @@ def validate(raw: dict[str, Any], path: Path | None = None, *, overrides: Iterab
         out: dict[str, Any] = {}
         for key, value in table.items():
             where = blame.get((section, key), _where(path))
-            check_plain(value, f"{section}.{key}", where)
             if key not in keys:
                 stem, unit = strip_unit(key)
                 twins = [k for k in keys if strip_unit(k)[0] == stem]

@@ -175,7 +175,7 @@ def test_nan_and_inf_inside_lists(capsys, folder, write_scene):
 
 def test_errors_from_set_name_the_set_option_not_the_file(capsys, folder):
     err = _fails(capsys, folder, "dmw", str(PAPER), "--set", "dmw.rms_nm=-1")
-    assert err.startswith("hdi dmw: error: --set dmw.rms_nm=-1: dmw.rms_nm = -1") and "expected a number >= 0" in err
+    assert err.startswith("hdi dmw: error: --set dmw.rms_nm=-1: dmw.rms_nm = -1") and "expected a number in [0, 1000] nm" in err
     assert str(PAPER) not in err
     err = _fails(capsys, folder, "dmw", str(PAPER), "--set", "dmw.rms_um=0.1")
     assert err.startswith("hdi dmw: error: --set dmw.rms_um=0.1: dmw.rms_um: wrong unit 'um'")
