@@ -334,29 +334,16 @@ def _first_line(exc: BaseException, width: int = 120) -> str:
     return text if len(text) <= width else text[:width] + "..."
 
 
-#: What to change after a failed integration, by the integrator's status (:data:`pipeline.model.state.STATUS_TEXT`).
-_INTEGRATION_HINTS = {
-    "too many steps": "shorten solver.duration_ms, or "
-                      "hold contact modes longer against chattering on the contact criterion (solver.min_dwell_ns), "
-                      "or move the protrusion or contact.k off the touchdown edge",
-    "step size underflow": "the forces change faster than any step resolves: loosen solver.rtol or solver.atol_nm, "
-                           "or check the interface keys (lubricant.work_of_adhesion_j_m2, contact.k)",
-    "state became non-finite": "a force overflowed: check the interface keys (lubricant.work_of_adhesion_j_m2, "
-                               "contact.k) and the protrusion against air_bearing.flying_height_nm",
-}
-
-
 def integration_line(exc: BaseException, scene: Any = None) -> str:
     """One line for a failed integration (:class:`pipeline.model.running.IntegrationError`, whose text names
-    the protrusion and the integrator's status): the scene (its file and name), the failure, and what to
-    change (:data:`_INTEGRATION_HINTS`)."""
-    text = _first_line(exc, 300)
-    hint = next((h for status, h in _INTEGRATION_HINTS.items() if status in text), None)
+    the protrusion, the integrator's status and the scene keys to change: :data:`pipeline.model.running.HINTS`):
+    the scene (its file and name) and that text."""
+    text = _first_line(exc, 600)
     where = ""
     if scene is not None:
         path = getattr(scene, "path", None)
         where = f"{path} (scene {scene.name}): " if path else f"scene {scene.name}: "
-    return f"{where}{text}" + (f"; {hint}" if hint else "")
+    return f"{where}{text}"
 
 
 def check_out(out: str | Path | None, option: str | None = None) -> None:

@@ -3,7 +3,6 @@
 
 from __future__ import annotations
 
-import dataclasses
 from typing import Any
 from pipeline import runner
 from pipeline.config.scene import Scene
@@ -43,11 +42,14 @@ class _Section(dict):
     __hash__ = None
 
 
-@dataclasses.dataclass
 class RecordingScene(Scene):
-    """A :class:`Scene` whose section reads (and ``effects``) are recorded while ``log`` is set."""
+    """A :class:`Scene` whose section reads (and ``effects``) are recorded while ``log`` is set.
 
-    log: set | None = None
+    ``log`` is no field of the (frozen) scene: it is set and cleared on the scene the stage reads."""
+
+    def __init__(self, path: Any, config: Any, overrides: Any = (), log: set | None = None) -> None:
+        super().__init__(path, config, list(overrides))
+        self.log = log
 
     @property
     def effects(self) -> frozenset[str]:

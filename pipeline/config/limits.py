@@ -25,8 +25,13 @@ MAX_INTERFERENCE_NM = 100.0
 #: largest default is 1e5 N/m) and far below the float range, so no conversion to SI units or size
 #: computed from it overflows (``solver.duration_ms = 1e308`` ended in an OverflowError).
 MAX_MAGNITUDE = 1e100
-#: Largest magnitude of an integer in a scene (a 64-bit integer, as numpy holds it).
+#: Largest magnitude of an integer in a scene (a 64-bit integer, as numpy holds it, and TOML's range: a
+#: 400-digit integer overflowed when converted to a float).
 MAX_INTEGER = 2**63 - 1
+#: Deepest nesting of lists and tables in a scene value: the deepest a scene writes is 3 (``sweep.roughness``,
+#: a list of tables of lists of files); TOML's parser (and Python's) met a value nested 500 deep with a
+#: RecursionError.
+MAX_NESTING = 8
 #: Rows of the interface tables (paper scene: 701), ~1 MB per million rows per quantity.
 MAX_TABLE_ROWS = 200_000
 #: Output samples of one run, duration / output step (paper: 8000); ~20 histories of 8 bytes each.

@@ -19,7 +19,8 @@ from typing import Any, Iterable
 
 from ..paths import looked_for, special_kind
 from .schema import SCHEMA, SceneError
-from .validation import Scene, validate
+from .limits import MAX_NESTING
+from .validation import Scene, check_plain, validate
 
 try:  # Python >= 3.11
     import tomllib
@@ -27,17 +28,46 @@ except ModuleNotFoundError:  # pragma: no cover - Python 3.10
     import tomli as tomllib  # type: ignore[no-redef]
 
 
+def _toml_error(exc: Exception) -> str | None:
+    """What TOML text the parser could not read was, in words (``None``: a valid document).
+
+    Beside bad syntax (:class:`tomllib.TOMLDecodeError`), the parser meets lists and tables nested a few
+    hundred deep with Python's ``RecursionError`` and an integer of more than 4,300 digits with a
+    ``ValueError`` (Python's limit on converting digits): both are text no scene writes."""
+    if isinstance(exc, RecursionError):
+        return (f"lists or tables nested too deep for the TOML parser; expected at most {MAX_NESTING} levels "
+                "(docs/cli.md, section 'Scenes')")
+    if isinstance(exc, tomllib.TOMLDecodeError):
+        return (str(exc).strip().splitlines() or [type(exc).__name__])[0]
+    return ("an integer of more than 4,300 digits; expected an integer of magnitude at most 2**63 - 1 (TOML's "
+            "64-bit integers; write a number as a float, e.g. 1e3)")
+
+
 def parse_override(text: str) -> tuple[str, str, Any]:
-    """Parse ``section.key=value`` (value in TOML syntax; bare words are strings)."""
+    """Parse ``section.key=value`` (value in TOML syntax; bare words are strings).
+
+    The value is one TOML value: text that TOML reads as more than that (a newline and a second key or
+    table, ``5\n[contact]\nk = 0.5``) is refused, never applied in part; so are a bare word over several
+    lines and a value no TOML file could hold (:func:`_toml_error`).
+    """
     m = re.fullmatch(r"\s*([A-Za-z_]+)\.([A-Za-z0-9_]+)\s*=\s*(.*)", text, re.S)
     if not m:
         raise SceneError(f"--set {text!r}: expected section.key=value")
     section, key, value = m.groups()
     try:
-        parsed = tomllib.loads(f"v = {value}")["v"]
+        doc = tomllib.loads(f"v = {value}")
     except tomllib.TOMLDecodeError:
-        parsed = value.strip()
-    return section, key, parsed
+        if "\n" in value.strip() or "\r" in value.strip():
+            raise SceneError(f"--set {text!r}: {section}.{key}: the value runs over several lines and is no TOML "
+                             "value; expected one value (a bare word is one line; quote a string)") from None
+        return section, key, value.strip()
+    except (RecursionError, ValueError) as exc:
+        raise SceneError(f"--set {section}.{key}=...: {_toml_error(exc)}") from None
+    if set(doc) != {"v"}:
+        extra = sorted(set(doc) - {"v"})
+        raise SceneError(f"--set {text!r}: {section}.{key}: the value holds more than one TOML value (a newline and "
+                         f"{extra[0]!r}); expected one value: one --set per key")
+    return section, key, doc["v"]
 
 
 #: The folder of the package that holds the shipped scenes (package data; in the repository
@@ -158,10 +188,13 @@ def _read_raw(path: Path, seen: tuple[Path, ...] = ()) -> dict[str, Any]:
         raw = tomllib.loads(path.read_text(encoding="utf-8-sig"))
     except UnicodeDecodeError as exc:
         raise SceneError(f"{path}: not UTF-8 text (byte {exc.start}); expected a TOML file in UTF-8") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise SceneError(f"{path}: not valid TOML: {exc}") from None
+    except (tomllib.TOMLDecodeError, RecursionError, ValueError) as exc:
+        raise SceneError(f"{path}: not valid TOML: {_toml_error(exc)}") from None
     except OSError as exc:
         raise SceneError(f"{path}: cannot read the scene file: {exc.strerror or exc}") from None
+    for section, table in raw.items():  # (bounded here, where the file is known: a base's number names the base)
+        for key, value in (table.items() if isinstance(table, dict) else [("", table)]):
+            check_plain(value, f"{section}.{key}" if key else section, str(path))
     for section, table in raw.items():  # (here, where the file is known: a base's error names the base)
         if section in SCHEMA and not isinstance(table, dict):
             raise SceneError(f"{path}: {section} must be a table [{section}]")

@@ -77,6 +77,23 @@ class Key:
     doc: str = ""
 
 
+def _within(lo: float, hi: float, unit: str, why: str, low_open: bool = True) -> tuple[Callable[[Any], bool], str]:
+    """The check of a physical quantity: in ``(lo, hi]`` (``[lo, hi]`` with ``low_open=False``) in the key's
+    ``unit``; ``why`` says what the bounds are (in the message of a value beyond them). The bounds are far
+    outside any head-disk interface and far inside what the model's numbers survive: a flying height of
+    1e90 nm or a density of 1e-90 kg/m^3 gave tables and statistics without a word."""
+    shown = f"{'(' if low_open else '['}{lo:g}, {hi:g}] {unit}".rstrip()
+    if low_open:
+        return (lambda v: lo < v <= hi), f"a number in {shown} ({why})"
+    return (lambda v: lo <= v <= hi), f"a number in {shown} ({why})"
+
+
+#: A length of the slider [mm]: up to 100 mm (a slider is ~1 mm; a disk's diameter is 95 mm).
+_slider_mm = _within(0.0, 100.0, "mm", "a slider is about 1 mm; a 3.5-inch disk is 95 mm across")
+#: A length of the TFC bulge [um]: 1 nm to 10 mm.
+_bulge_um = _within(1e-3, 1e4, "um", "the bulge is microns; the slider a millimetre", low_open=False)
+#: A Young's modulus [GPa]: 1 MPa (a soft polymer) to 10,000 GPa (ten times diamond's 1,050 GPa).
+_modulus_gpa = _within(1e-3, 1e4, "GPa", "from a soft polymer's 1 MPa to ten times diamond's", low_open=False)
 _pos = (lambda v: v > 0, "a positive number")
 _nonneg = (lambda v: v >= 0, "a number >= 0")
 _frac = (lambda v: 0 <= v < 1, "a number in [0, 1)")
@@ -159,12 +176,12 @@ SCHEMA: dict[str, dict[str, Key]] = {
                                         "(the base's relative file paths stay relative to the base)"),
     },
     "slider": {
-        "length_mm": Key("float", 0.85, _pos, doc="slider length [mm] (femto, recon)"),
-        "width_mm": Key("float", 0.70, _pos, doc="slider width [mm] (recon)"),
-        "thickness_mm": Key("float", 0.23, _pos, doc="slider thickness [mm] (recon)"),
-        "density_kg_m3": Key("float", 4250.0, _pos, doc="slider density [kg/m^3] (Al2O3-TiC, recon)"),
-        "front_arm_mm": Key("float", 0.30, _pos, doc="front air-bearing centre ahead of the CG [mm] (recon)"),
-        "rear_arm_mm": Key("float", 0.40, _pos, doc="rear air-bearing centre behind the CG [mm] (recon)"),
+        "length_mm": Key("float", 0.85, _slider_mm, doc="slider length [mm] (femto, recon)"),
+        "width_mm": Key("float", 0.70, _slider_mm, doc="slider width [mm] (recon)"),
+        "thickness_mm": Key("float", 0.23, _slider_mm, doc="slider thickness [mm] (recon)"),
+        "density_kg_m3": Key("float", 4250.0, _within(1.0, 1e5, "kg/m^3", "from a foam to four times osmium's 22,590", low_open=False), doc="slider density [kg/m^3] (Al2O3-TiC, recon)"),
+        "front_arm_mm": Key("float", 0.30, _slider_mm, doc="front air-bearing centre ahead of the CG [mm] (recon)"),
+        "rear_arm_mm": Key("float", 0.40, _slider_mm, doc="rear air-bearing centre behind the CG [mm] (recon)"),
         "tfc_from_trailing_edge_um": Key("float", paper.TFC_FROM_TRAILING_EDGE_UM, _nonneg,
                                          doc="TFC bulge centre from the trailing edge [um] (paper)"),
         "friction_arm": Key("str", "cg", choices=FRICTION_ARMS,
@@ -172,9 +189,10 @@ SCHEMA: dict[str, dict[str, Key]] = {
                                 "section 'Deviations', item 19)"),
     },
     "air_bearing": {
-        "flying_height_nm": Key("float", paper.FLYING_HEIGHT_NM, _pos, doc="nominal flying height FH0 [nm] (paper)"),
-        "frequencies_khz": Key("floats", [120.0, 300.0], (lambda v: all(x > 0 for x in v) and v[0] < v[1],
-                                                          "two positive increasing frequencies"), length=2,
+        "flying_height_nm": Key("float", paper.FLYING_HEIGHT_NM, _within(0.0, 1e4, "nm", "sliders fly at 3-50 nm; 10 um is a thousand times the paper's 11 nm"), doc="nominal flying height FH0 [nm] (paper)"),
+        "frequencies_khz": Key("floats", [120.0, 300.0], (lambda v: all(0.1 <= x <= 1e4 for x in v) and v[0] < v[1],
+                                                          "two increasing frequencies in [0.1, 10000] kHz (air-bearing "
+                                                          "modes lie at 50-500 kHz)"), length=2,
                                doc="air-bearing natural frequencies [kHz] (recon)"),
         "damping_ratio": Key("float", 0.05, _frac, doc="modal damping ratio [1] (recon)"),
         "rear_exponent": Key("float", 2.0, _pos, doc="rear bearing nonlinearity exponent n [1] (recon)"),
@@ -213,8 +231,8 @@ SCHEMA: dict[str, dict[str, Key]] = {
                                        doc="exponent p of the TFC stiffening law [1] (recon, docs/model.md, section 'Gap-power stiffening': ~1.5-1.75)"),
     },
     "tfc": {
-        "half_length_um": Key("float", paper.TFC_HALF_LENGTH_UM, _pos, doc="ellipsoid semi-axis along sliding a [um] (paper)"),
-        "half_width_um": Key("float", paper.TFC_HALF_WIDTH_UM, _pos, doc="ellipsoid semi-axis across b [um] (paper)"),
+        "half_length_um": Key("float", paper.TFC_HALF_LENGTH_UM, _bulge_um, doc="ellipsoid semi-axis along sliding a [um] (paper)"),
+        "half_width_um": Key("float", paper.TFC_HALF_WIDTH_UM, _bulge_um, doc="ellipsoid semi-axis across b [um] (paper)"),
         "protrusion_nm": Key("float", paper.LIGHT_CONTACT_NM, _nonneg, doc="TFC protrusion delta [nm]"),
         "actuation_nm_per_mw": Key("float", None, _pos,
                                    doc="heater actuation efficiency [nm/mW]: protrusion = efficiency x heater power; "
@@ -227,9 +245,9 @@ SCHEMA: dict[str, dict[str, Key]] = {
                                            "interpolated linearly, not extrapolated"),
     },
     "roughness": {
-        "sigma_nm": Key("float", 0.52, _pos, doc="combined rms roughness sigma [nm] (recon)"),
-        "summit_radius_um": Key("float", 5.0, _pos, doc="summit radius R [um] (recon)"),
-        "summit_density_per_um2": Key("float", 13.3, _pos,
+        "sigma_nm": Key("float", 0.52, _within(0.0, 1e3, "nm", "disk and slider roughness is 0.1-10 nm; 1 um is a hundred times the flying height"), doc="combined rms roughness sigma [nm] (recon)"),
+        "summit_radius_um": Key("float", 5.0, _within(1e-4, 1e4, "um", "from an atom's 0.1 nm to 1 cm", low_open=False), doc="summit radius R [um] (recon)"),
+        "summit_density_per_um2": Key("float", 13.3, _within(0.0, 1e6, "um^-2", "at most one summit per nm^2, the atomic scale"),
                                       doc="summit density eta [um^-2] (inferred: y_s = 0.69 nm, docs/model.md, section 'Separation datum')"),
         "afm": Key("strs", None, path=True, doc="AFM scans (any SurfaceTopography format); overrides the statistics"),
         "route": Key("str", "spectral", choices=("spectral", "summits"),
@@ -239,20 +257,20 @@ SCHEMA: dict[str, dict[str, Key]] = {
                        doc="detrending of AFM scans (SurfaceTopography detrend_mode)"),
     },
     "materials": {
-        "disk_modulus_gpa": Key("float", 150.0, _pos, doc="disk Young's modulus [GPa] (recon)"),
-        "tfc_modulus_gpa": Key("float", 200.0, _pos, doc="TFC/slider Young's modulus [GPa] (recon)"),
+        "disk_modulus_gpa": Key("float", 150.0, _modulus_gpa, doc="disk Young's modulus [GPa] (recon)"),
+        "tfc_modulus_gpa": Key("float", 200.0, _modulus_gpa, doc="TFC/slider Young's modulus [GPa] (recon)"),
         "poisson_ratio": Key("float", 0.3, (lambda v: 0 <= v < 0.5, "a number in [0, 0.5)"),
                              doc="Poisson ratio of both bodies [1] (recon)"),
-        "hardness_gpa": Key("float", None, _pos, doc="hardness of the softer body H [GPa]"),
+        "hardness_gpa": Key("float", None, _modulus_gpa, doc="hardness of the softer body H [GPa]"),
         "plasticity_index": Key("float", paper.PLASTICITY_INDEX, _pos,
                                 doc="GW plasticity index psi [1] (paper); sets H when hardness_gpa is absent"),
-        "composite_modulus_gpa": Key("float", None, _pos,
+        "composite_modulus_gpa": Key("float", None, _modulus_gpa,
                                      doc="composite modulus E' [GPa]; overrides the one from the two moduli"),
     },
     "lubricant": {
         "thickness_nm": Key("float", paper.LUBRICANT_THICKNESS_NM, _nonneg, doc="bonded lubricant thickness t [nm] (paper)"),
         "work_of_adhesion_j_m2": Key("float", 0.106, _adhesion, doc="work of adhesion dgamma [J/m^2] (recon, CML)"),
-        "intermolecular_distance_nm": Key("float", 0.3, _pos, doc="intermolecular distance eps [nm] (recon, CML)"),
+        "intermolecular_distance_nm": Key("float", 0.3, _within(0.01, 10.0, "nm", "molecular spacings are 0.1-1 nm", low_open=False), doc="intermolecular distance eps [nm] (recon, CML)"),
         "meniscus_time_us": Key("float", 0.0, _nonneg,
                                 doc="meniscus formation time tau_m [us]: the adhesion pressure relaxes towards its "
                                     "ISBL value with this time constant (docs/model.md, section 'Meniscus "
@@ -304,13 +322,13 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "quantity": Key("str", "displacement", choices=("displacement", "velocity"),
                         doc="what a measured record holds"),
         "column": Key("str", None, doc="column/variable of a measured record"),
-        "rms_nm": Key("float", 0.5, _nonneg, doc="DMW rms [nm] (recon: set for FHM ~12.5 %)"),
+        "rms_nm": Key("float", 0.5, _within(0.0, 1e3, "nm", "DMW is 0.1-1 nm; 1 um is a hundred times the flying height", low_open=False), doc="DMW rms [nm] (recon: set for FHM ~12.5 %)"),
         "band_khz": Key("floats", list(paper.DMW_BAND_KHZ), (lambda v: 0 <= v[0] < v[1], "0 <= lo < hi"), length=2,
                         doc="DMW band [kHz] (paper)"),
         "exponent": Key("float", -2.0, doc="power-law exponent of the displacement PSD [1] (recon; as a free "
                                             "parameter within [-4.5, -1], docs/model.md, section 'DMW as free parameters')"),
-        "rpm": Key("float", paper.DISK_RPM, _pos, doc="disk speed [rpm] (paper)"),
-        "radius_mm": Key("float", paper.TRACK_RADIUS_MM, _pos, doc="track radius [mm] (paper)"),
+        "rpm": Key("float", paper.DISK_RPM, _within(0.0, 1e5, "rpm", "disks spin at 3,600-15,000 rpm"), doc="disk speed [rpm] (paper)"),
+        "radius_mm": Key("float", paper.TRACK_RADIUS_MM, _within(0.0, 1e3, "mm", "a 3.5-inch disk's tracks lie within 48 mm"), doc="track radius [mm] (paper)"),
         "seed": Key("int", 20090601, (lambda v: 0 <= v < 2**32, "an integer in [0, 2**32 - 1]"),
                     doc="seed of the synthetic record (numpy SeedSequence; 32-bit like the realisations' seeds)"),
         "sample_rate_mhz": Key("float", paper.DMW_SAMPLE_RATE_MHZ, _pos, doc="sampling rate [MS/s] (paper)"),

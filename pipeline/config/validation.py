@@ -7,6 +7,7 @@ Validation errors are :class:`~pipeline.config.schema.SceneError` and always nam
 
 from __future__ import annotations
 
+import collections
 import copy
 import hashlib
 import json
@@ -18,7 +19,7 @@ from typing import Any, Iterable
 from ..paths import special_kind
 from ..units import MHZ_IN_KHZ, MS, NS
 from .heater_power import TOUCHDOWN_POWER_KEYS, resolve_touchdown
-from .limits import MAX_INTEGER, MAX_MAGNITUDE, MAX_STEPS, LimitError, check_physical
+from .limits import MAX_INTEGER, MAX_MAGNITUDE, MAX_NESTING, MAX_STEPS, LimitError, check_physical
 from ..physics.friction import FRICTION_LAWS
 from .schema import FREE_LIMITS, SCHEMA, Key, SceneError, is_folder_name, strip_unit
 
@@ -27,18 +28,15 @@ from .schema import FREE_LIMITS, SCHEMA, Key, SceneError, is_folder_name, strip_
 MIN_STEADY_SAMPLES = 10
 
 
-class FrozenSection(dict):
-    """A read-only ``dict``: a section of a :class:`Scene` (and the table of its sections).
+class _ReadOnly:
+    """What the read-only containers of a scene share: the section they belong to (named in the error) and
+    the change that raises the ``TypeError`` naming the way to vary a scene, :meth:`Scene.replace`."""
 
-    Reading is a ``dict``'s (same speed, same JSON, ``isinstance(..., dict)``); every change raises a
-    ``TypeError`` that names the way to vary a scene, :meth:`Scene.replace`. ``dict(section)`` is a
-    mutable copy. Lists inside a section (``scene.effects``) stay lists.
-    """
-
-    __slots__ = ("_name",)
+    __slots__ = ()
+    _name: str | None
 
     def __init__(self, items: Any = (), name: str | None = None) -> None:
-        super().__init__(items)
+        super().__init__(items)  # type: ignore[call-arg]
         self._name = name
 
     def _readonly(self, *args: Any, **kwargs: Any) -> None:
@@ -46,22 +44,57 @@ class FrozenSection(dict):
         raise TypeError(f"a loaded scene is read-only: scene[{sec!r}] cannot be changed in place; vary it with "
                         f"scene.replace({sec}={{key: value}}), which returns a new scene validated like --set")
 
-    __setitem__ = __delitem__ = update = pop = popitem = clear = setdefault = __ior__ = _readonly  # type: ignore
+
+class FrozenSection(_ReadOnly, dict):
+    """A read-only ``dict``: a section of a :class:`Scene` (and the table of its sections, and the tables
+    inside a section's lists: ``identify.parameters``, ``sweep.roughness``).
+
+    Reading is a ``dict``'s (same speed, same JSON, ``isinstance(..., dict)``); every change raises a
+    ``TypeError`` that names the way to vary a scene, :meth:`Scene.replace`. ``dict(section)`` is a
+    mutable copy.
+    """
+
+    __slots__ = ("_name",)
+    __setitem__ = __delitem__ = update = pop = popitem = clear = setdefault = __ior__ = _ReadOnly._readonly  # type: ignore
 
     def __reduce__(self) -> tuple:
         # (pickled to dask workers and deep-copied: rebuilt whole, never item by item through __setitem__)
         return (type(self), (dict(self), self._name))
 
 
+class FrozenList(_ReadOnly, list):
+    """A read-only ``list``: a list inside a :class:`Scene` (``scene.effects``, ``air_bearing.frequencies_khz``,
+    the tables of ``identify.parameters``), at any depth.
+
+    Reading is a ``list``'s (same JSON, ``== [...]``, ``isinstance(..., list)``, so every reader and the scene's
+    hash and text are those of a list); every change in place raises the ``TypeError`` of
+    :class:`FrozenSection`. ``list(value)`` is a mutable copy; ``value + [...]`` a new (mutable) list.
+    """
+
+    __slots__ = ("_name",)
+    __setitem__ = __delitem__ = __iadd__ = __imul__ = append = extend = insert = pop = remove = clear = \
+        sort = reverse = _ReadOnly._readonly  # type: ignore
+
+    def __reduce__(self) -> tuple:
+        # (rebuilt whole: a list subclass's default pickling and deepcopy restore the items through extend)
+        return (type(self), (list(self), self._name))
+
+    def __reduce_ex__(self, protocol: Any) -> tuple:
+        return self.__reduce__()
+
+
 def _freeze(value: Any, name: str | None = None) -> Any:
-    """``value`` with every ``dict`` in it (at any depth) a :class:`FrozenSection`."""
+    """``value`` with every ``dict`` in it (at any depth) a :class:`FrozenSection` and every ``list`` a
+    :class:`FrozenList`: nothing of a scene changes in place."""
     if isinstance(value, dict):
         return FrozenSection({k: _freeze(v, k if name is None else name) for k, v in value.items()}, name)
+    if isinstance(value, list):
+        return FrozenList([_freeze(v, name) for v in value], name)
     return value
 
 
 def _thaw(value: Any) -> Any:
-    """A mutable deep copy of a (frozen) configuration: plain ``dict``s, lists copied."""
+    """A mutable deep copy of a (frozen) configuration: plain ``dict``s and ``list``s."""
     if isinstance(value, dict):
         return {k: _thaw(v) for k, v in value.items()}
     if isinstance(value, list):
@@ -69,10 +102,45 @@ def _thaw(value: Any) -> Any:
     return copy.deepcopy(value)
 
 
-@dataclass
+def check_plain(value: Any, name: str, where: str) -> None:
+    """Refuse what no scene value holds and what would end in a traceback later: an integer beyond 64 bits
+    (:data:`~pipeline.config.limits.MAX_INTEGER`, TOML's range: ``float()`` of a 400-digit integer overflowed)
+    or lists and tables nested deeper than :data:`~pipeline.config.limits.MAX_NESTING`, at any depth of
+    ``value``.
+
+    Parameters
+    ----------
+    value
+        A value as parsed (TOML) or given (a dict of the API), before any conversion.
+    name
+        What the message names (``section.key``).
+    where
+        The culprit (the file, or ``--set TEXT``).
+
+    Raises
+    ------
+    SceneError
+        Naming ``where``, ``name`` and the bound broken.
+    """
+    todo = [(value, 0)]
+    while todo:  # (a loop, not recursion: a value nested 10,000 deep reaches its bound, not Python's)
+        item, depth = todo.pop()
+        if isinstance(item, (dict, list, tuple)):
+            if depth >= MAX_NESTING:
+                raise SceneError(f"{where}: {name}: lists or tables nested more than {MAX_NESTING} deep; expected a "
+                                 "number, a string, a list or a table of them (docs/cli.md, section 'Scenes')")
+            todo += [(v, depth + 1) for v in (item.values() if isinstance(item, dict) else item)]
+        elif isinstance(item, int) and not isinstance(item, bool) and abs(item) > MAX_INTEGER:
+            digits = int(item.bit_length() * math.log10(2)) + 1  # (str() of 5,000 digits raises)
+            raise SceneError(f"{where}: {name}: an integer of about {digits} digits; expected an integer of magnitude at "
+                             "most 2**63 - 1 (TOML's 64-bit integers; write a number as a float, e.g. 1e3)")
+
+
+@dataclass(frozen=True)
 class Scene:
-    """A validated scene: read-only (its sections are :class:`FrozenSection` s); vary it with
-    :meth:`replace`.
+    """A validated scene: read-only all the way down (its sections and the tables in their lists are
+    :class:`FrozenSection` s, its lists :class:`FrozenList` s, its attributes cannot be reassigned); vary it
+    with :meth:`replace`.
 
     Attributes
     ----------
@@ -89,7 +157,8 @@ class Scene:
     overrides: list[str] = field(default_factory=list)
 
     def __post_init__(self) -> None:
-        self.config = _freeze(self.config)
+        object.__setattr__(self, "config", _freeze(self.config))
+        object.__setattr__(self, "overrides", FrozenList(self.overrides, "overrides"))
 
     @property
     def name(self) -> str:
@@ -131,7 +200,12 @@ class Scene:
                 raise SceneError(f"scene.replace({sec}={keys!r}): expected a dict of the section's keys "
                                  f"(e.g. scene.replace(contact={{'k': 0.5}}))")
             for key, value in keys.items():
-                blame[(sec, key)] = f"scene.replace({sec}={{{key!r}: {value!r}}})"
+                check_plain(value, f"{sec}.{key}", f"scene.replace({sec}={{{key!r}: ...}})")  # (before _thaw recurses)
+                blame[(sec, key)] = f"scene.replace({sec}={{{key!r}: {shown(value)}}})"
+                if (sec, key) == ("scene", "extends"):  # (a base is merged when a file is read, not here)
+                    raise SceneError(f"{blame[(sec, key)]}: scene.extends cannot be replaced: a base scene is merged "
+                                     "when a scene file is read; load the base scene itself (load_scene) and replace "
+                                     "the keys that differ, or write `extends` in a scene file")
             cfg.setdefault(sec, {}).update(_thaw(keys))
         for mw, nm in TOUCHDOWN_POWER_KEYS.items():  # (a touchdown in nm set from mW is set again from mW)
             if cfg["touchdown"].get(mw) is not None and nm not in sections.get("touchdown", {}):
@@ -142,6 +216,16 @@ class Scene:
     def to_toml_text(self) -> str:
         """The configuration as JSON text (stored in dataset provenance)."""
         return json.dumps(self.config, sort_keys=True, default=str)
+
+
+def shown(value: Any, width: int = 200) -> str:
+    """``repr(value)``, cut to ``width`` characters with the number of items of a longer list (an error
+    quoting a list of 200,000 protrusions stays a line one can read)."""
+    text = repr(value)
+    if len(text) <= width:
+        return text
+    items = f" ({len(value)} items)" if isinstance(value, (list, tuple, dict)) else ""
+    return text[:width] + "..." + items
 
 
 def _where(path: Path | None) -> str:
@@ -176,14 +260,16 @@ def check_value(section: str, key: str, spec: Key, value: Any, where: str, base:
     Raises
     ------
     SceneError
-        For a value of the wrong kind, out of range, or naming a file that does not exist or is special.
+        For a value of the wrong kind, out of range (an integer beyond 64 bits or a value nested too deep:
+        :func:`check_plain`), or naming a file that does not exist or is special.
     """
     name = f"{section}.{key}"
     doc = f" ({spec.doc})" if spec.doc else ""
 
     def fail(expected: str, got: Any = value) -> SceneError:
-        return SceneError(f"{where}: {name} = {got!r}: expected {expected}{doc}")
+        return SceneError(f"{where}: {name} = {shown(got)}: expected {expected}{doc}")
 
+    check_plain(value, name, where)  # (before any conversion: float() of a 400-digit integer overflows)
     kind = spec.kind
     if kind == "float":
         if isinstance(value, bool) or not isinstance(value, (int, float)):
@@ -196,8 +282,6 @@ def check_value(section: str, key: str, spec: Key, value: Any, where: str, base:
     elif kind == "int":
         if isinstance(value, bool) or not isinstance(value, int):
             raise fail("an integer")
-        if abs(value) > MAX_INTEGER:
-            raise fail("an integer of magnitude at most 2**63 - 1")
     elif kind == "str":
         if not isinstance(value, str):
             raise fail("a string")
@@ -369,9 +453,11 @@ def _cross_checks(config: dict[str, dict[str, Any]], where: str) -> None:
     for section in ("sweep", "report"):  # (the sweep keeps those of report.histories_nm without its own)
         kept = config[section]["histories_nm"] or []
         # (the histories' coordinate is the protrusion: a value twice gave two equal labels, one row all NaN)
-        twice = sorted({round(h, 9) for i, h in enumerate(kept) for g in kept[:i] if abs(h - g) < 1e-9})
+        # (neighbours in sorted order: a pair within 1e-9 has such a neighbour; all pairs took hours for 200,000)
+        order = sorted(kept)
+        twice = sorted({round(b, 9) for a, b in zip(order, order[1:]) if abs(b - a) < 1e-9})
         if twice:
-            raise SceneError(f"{where}: {section}.histories_nm = {kept}: {twice[0]:.10g} appears more than once; "
+            raise SceneError(f"{where}: {section}.histories_nm = {shown(kept)}: {twice[0]:.10g} appears more than once; "
                              "expected distinct protrusions [nm] (each is a coordinate value of the kept histories)")
     if sol["duration_ms"] * (MS / NS) / sol["max_step_ns"] > MAX_STEPS:
         raise SceneError(f"{where}: solver.max_step_ns = {sol['max_step_ns']:g}: a run of solver.duration_ms = "
@@ -379,9 +465,9 @@ def _cross_checks(config: dict[str, dict[str, Any]], where: str) -> None:
                          f"steps of it, beyond the integrator's {MAX_STEPS:,}; expected at least "
                          f"{sol['duration_ms'] * (MS / NS) / MAX_STEPS:.3g} ns (default 500)")
     damping = config["sweep"]["damping_ratio"] or []
-    twice = sorted({d for d in damping if damping.count(d) > 1})
+    twice = sorted(d for d, n in collections.Counter(damping).items() if n > 1)  # (count() per item: quadratic)
     if twice:
-        raise SceneError(f"{where}: sweep.damping_ratio = {damping}: {twice[0]:g} appears more than once; "
+        raise SceneError(f"{where}: sweep.damping_ratio = {shown(damping)}: {twice[0]:g} appears more than once; "
                          "expected distinct ratios (each is a coordinate value of sweep.nc)")
     eff = set(config["scene"]["effects"])
     if "air_bearing" not in eff:

@@ -165,7 +165,10 @@ def read_topography(path: str | Path, channel: str | int | None = None, detrend_
     ------
     AFMError
         For a missing, empty, unreadable or corrupt file, a file that is not a 2-D topography, one
-        without a height channel, a lateral size or a height unit.
+        without a height channel, a lateral size or a height unit, and a map outside the bounds of
+        :mod:`pipeline.physics.surface` (:func:`~pipeline.physics.surface.sampling_error`,
+        :func:`~pipeline.physics.surface.heights_error`, :func:`~pipeline.physics.surface.roughness_error`:
+        sizes, pixel sizes, heights, an all-undefined or flat map), naming the bound.
     """
     from SurfaceTopography import open_topography
     from SurfaceTopography.Exceptions import CannotDetectFileFormat
@@ -191,6 +194,28 @@ def read_topography(path: str | Path, channel: str | int | None = None, detrend_
     except Exception as exc:  # SurfaceTopography raises many types for corrupt files
         first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
         raise AFMError(f"{path}: corrupt or unreadable topography file (expected {expect}): {first}") from None
+    try:
+        return _height_map(channels, path, channel, detrend_mode)
+    finally:
+        _close(reader)
+
+
+def _close(reader: Any) -> None:
+    """Close a reader once its map is read. SciPy's NetCDF reader warns when it closes while the heights read
+    still share its memory map ("Cannot close a netcdf_file opened with mmap=True"; the map then stays open
+    for them): no news to a user, and a second line after a one-line error."""
+    close = getattr(reader, "close", None)
+    if close is None:
+        return
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message="Cannot close a netcdf_file opened with mmap=True",
+                                category=RuntimeWarning)
+        close()
+
+
+def _height_map(channels: Sequence[Any], path: Path, channel: str | int | None, detrend_mode: str) -> Any:
+    """The detrended height map [nm] of a reader's ``channels`` (:func:`read_topography`, which names the
+    errors)."""
     info = select_height_channel(channels, path, channel)
     if info.dim != 2:
         raise AFMError(f"{path}: channel {info.name!r} is a {info.dim}-D line scan; expected a 2-D height map")
@@ -208,15 +233,23 @@ def read_topography(path: str | Path, channel: str | int | None = None, detrend_
     if not _is_length_unit(topo.unit):
         raise AFMError(f"{path}: channel {info.name!r} has unit {topo.unit!r}; expected a length unit")
     topo = topo.to_unit("nm")
+    bad = sf.sampling_error(topo.physical_sizes, topo.nb_grid_pts) or \
+        sf.heights_error(np.ma.filled(np.ma.masked_invalid(topo.heights()).astype(float), np.nan))
+    if bad:
+        raise AFMError(f"{path}: channel {info.name!r}: {bad}")
     if topo.has_undefined_data:
         warnings.warn(f"{path}: channel {info.name!r} has undefined pixels; filled by harmonic "
                       f"interpolation (SurfaceTopography interpolate_undefined_data)", sf.SurfaceWarning,
-                      stacklevel=2)
+                      stacklevel=3)
         topo = topo.interpolate_undefined_data()
     heights = topo.heights()
     if not np.all(np.isfinite(np.ma.filled(heights, np.nan))):
         raise AFMError(f"{path}: channel {info.name!r} holds non-finite heights; the file is probably corrupt")
-    return detrend(topo, detrend_mode, info={"channel_name": info.name})
+    flat = detrend(topo, detrend_mode, info={"channel_name": info.name})
+    bad = sf.roughness_error(float(np.std(np.ma.getdata(flat.heights()))))
+    if bad:
+        raise AFMError(f"{path}: channel {info.name!r}: {bad} (detrend {detrend_mode!r})")
+    return flat
 
 
 # --------------------------------------------------------------------------------------------------

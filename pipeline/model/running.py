@@ -13,7 +13,8 @@ from .forces import separation_at
 from .kernel_inputs import interface_tables, run_parameters
 from .piecewise import disk_history, ppval
 from .start import start_state
-from .state import ACCEPTED, N_STATE, OK, REJECTED, STATUS, STATUS_TEXT, THETA, Z
+from .state import ACCEPTED, MAX_STEPS as MAX_STEPS_STATUS, N_STATE, NOT_FINITE, OK, REJECTED, STATUS, STATUS_TEXT, \
+    STEP_UNDERFLOW, THETA, Z
 from ..units import NM
 
 
@@ -40,7 +41,22 @@ class Run:
 
 
 class IntegrationError(RuntimeError):
-    """The integrator failed (too many steps, step underflow, or a non-finite state)."""
+    """The integrator failed (too many steps, step underflow, or a non-finite state); its one line names
+    the protrusion, the integrator's status and the scene keys to change (:data:`HINTS`)."""
+
+
+#: What to change after a failed integration, by the integrator's status (:data:`pipeline.model.state.STATUS_TEXT`):
+#: the scene keys, in every message of the failure (the command line's, a calibration's log, a sweep's
+#: ``errors`` attribute).
+HINTS = {
+    MAX_STEPS_STATUS: "shorten solver.duration_ms, or hold contact modes longer against chattering on the contact "
+                      "criterion (solver.min_dwell_ns), or loosen solver.rtol or solver.atol_nm, or move the "
+                      "protrusion (tfc.protrusion_nm, sweep.protrusion_nm) or contact.k off the touchdown edge",
+    STEP_UNDERFLOW: "the forces change faster than any step resolves: loosen solver.rtol or solver.atol_nm, "
+                    "or check the interface keys (lubricant.work_of_adhesion_j_m2, contact.k)",
+    NOT_FINITE: "a force overflowed: check the interface keys (lubricant.work_of_adhesion_j_m2, "
+                "contact.k) and the protrusion against air_bearing.flying_height_nm",
+}
 
 
 def start(model: Model, protrusion: float) -> tuple[np.ndarray, str]:
@@ -78,8 +94,10 @@ def run_model(model: Model, protrusion: float, y0: np.ndarray | None = None, max
         y0 = np.append(y0, meniscus_equilibrium(model, p, y0))
     Y, C, info, ext = dyn.integrate(y0, grid, p, tables, variants, solver)
     if info[STATUS] != OK:
+        status = int(info[STATUS])
+        hint = f"; {HINTS[status]}" if status in HINTS else ""
         raise IntegrationError(f"integration failed at protrusion {protrusion / NM:.3g} nm: "
-                               f"{STATUS_TEXT[int(info[STATUS])]} (steps {info[ACCEPTED]}, rejected {info[REJECTED]})")
+                               f"{STATUS_TEXT[status]} (steps {info[ACCEPTED]}, rejected {info[REJECTED]}){hint}")
     return Run(model=model, protrusion=protrusion, p=p, nominal_area=An, time=t_out, state=Y, contact=C, info=info,
                d_extremes=(float(ext[0]), float(ext[1])), start=start_note)
 

@@ -46,6 +46,68 @@ class SurfaceWarning(UserWarning):
     """A surface statistic is unreliable (routes disagree, McCool's relations out of range, no summits)."""
 
 
+# --------------------------------------------------------------------------------------------------
+# Bounds of a sampled height map
+# --------------------------------------------------------------------------------------------------
+
+#: Largest magnitude of a height of a map [nm]: 100 um, beyond the z range of any AFM (about 5-20 um) and the
+#: roughness scans of a profilometer; heights of 1e80 nm overflowed the moments, 3e38 nm gave statistics.
+MAX_HEIGHT_NM = 1e5
+#: Smallest rms height of a detrended map [nm]: 1e-3 nm, a thousandth of an atomic spacing and far below the
+#: noise floor of any instrument (~0.01-0.05 nm): a flatter map (constant or planar heights) has no asperities.
+MIN_RMS_NM = 1e-3
+#: Range of a map's lateral pixel size [nm]: from 1e-3 nm (a thousandth of an atomic spacing; a lateral size
+#: of 1e-30 um gave summit densities of 1e61 um^-2) to 1e6 nm (1 mm, far coarser than any roughness scan).
+PIXEL_SIZE_BOUNDS_NM = (1e-3, 1e6)
+#: Largest lateral size of a map [nm]: 1e8 nm = 100 mm, the diameter of a 3.5-inch disk.
+MAX_SIZE_NM = 1e8
+
+
+def sampling_error(physical_sizes: Sequence[float], nb_grid_pts: Sequence[int]) -> str | None:
+    """What is wrong with a map's lateral sampling, or ``None``: positive finite sizes at most
+    :data:`MAX_SIZE_NM` and pixel sizes within :data:`PIXEL_SIZE_BOUNDS_NM`.
+
+    Parameters
+    ----------
+    physical_sizes : the map's lateral sizes ``(Lx, Ly)`` [nm]
+    nb_grid_pts : its grid points ``(nx, ny)`` [1]
+    """
+    sizes = [float(v) for v in physical_sizes]
+    shown = " x ".join(f"{v:.4g}" for v in sizes)
+    if not all(math.isfinite(v) and v > 0 for v in sizes):
+        return f"lateral size {shown} nm: expected positive finite sizes"
+    if max(sizes) > MAX_SIZE_NM:
+        return f"lateral size {shown} nm: expected at most {MAX_SIZE_NM:g} nm (100 mm, a disk's diameter)"
+    lo, hi = PIXEL_SIZE_BOUNDS_NM
+    pixels = [v / n for v, n in zip(sizes, nb_grid_pts)]
+    bad = [v for v in pixels if not lo <= v <= hi]
+    if bad:
+        return (f"pixel size {bad[0]:.4g} nm (lateral size {shown} nm over {' x '.join(map(str, nb_grid_pts))} "
+                f"points): expected {lo:g} to {hi:g} nm")
+    return None
+
+
+def heights_error(heights: np.ndarray) -> str | None:
+    """What is wrong with a map's heights [nm] (NaN where undefined), or ``None``: some defined, every
+    defined one of magnitude at most :data:`MAX_HEIGHT_NM`."""
+    h = np.asarray(heights, dtype=float)
+    defined = h[~np.isnan(h)]
+    if defined.size == 0:
+        return "every height is undefined: expected a measured height map"
+    top = float(np.max(np.abs(defined)))
+    if not top <= MAX_HEIGHT_NM:
+        return f"heights reach {top:.4g} nm: expected heights within +-{MAX_HEIGHT_NM:g} nm (100 um, any AFM's z range)"
+    return None
+
+
+def roughness_error(rms: float) -> str | None:
+    """What is wrong with the rms height [nm] of a detrended map, or ``None``: at least :data:`MIN_RMS_NM`."""
+    if not rms >= MIN_RMS_NM:
+        return (f"rms height {rms:.4g} nm after detrending: expected at least {MIN_RMS_NM:g} nm (a flatter map, "
+                "constant or planar, has no asperities)")
+    return None
+
+
 @dataclass(frozen=True)
 class RouteStatistics:
     """Asperity statistics of one surface by one route (all NaN when the route does not apply).

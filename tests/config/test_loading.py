@@ -163,3 +163,74 @@ def test_the_command_line_takes_a_name(tmp_path, monkeypatch, capsys):
     # `hdi roughness NAME`: a shipped scene's name is a scene, not an AFM file
     assert main(["roughness", "paper-2009", "--out", str(tmp_path / "out"), "-q"]) == 0
     assert (tmp_path / "out" / "roughness.nc").is_file() and list(tmp_path.iterdir()) == [tmp_path / "out"]
+
+
+# ------------------------------------------------------------------ numbers, nesting and one value per --set
+BIG = "1" + "0" * 400  # (a 400-digit integer: float() of it overflowed)
+
+
+@pytest.mark.parametrize("text, name", [
+    (f"[tfc]\nprotrusion_nm = {BIG}\n", "tfc.protrusion_nm"),
+    (f"[air_bearing]\nfrequencies_khz = [{BIG}, 300.0]\n", "air_bearing.frequencies_khz"),
+    (f"[sweep]\nprotrusion_nm = {{start = 0, stop = {BIG}, step = 1}}\n", "sweep.protrusion_nm"),
+    (f'[sweep]\nroughness = [{{label = "a", sigma_nm = {BIG}}}]\n', "sweep.roughness"),
+    ("[slider]\nlength_mm = 1000000000000000000000000000000\n", "slider.length_mm"),
+])
+def test_an_integer_beyond_64_bits_in_a_file_is_refused_naming_the_file(write_scene, text, name):
+    """A 400-digit integer in a scene file (a key, a list, a range, a table) ended in OverflowError; a 31-digit
+    one in a float key was taken as 1e30 mm. TOML's integers have 64 bits."""
+    path = write_scene(text)
+    msg = _error(path)
+    assert msg.startswith(f"{path}: {name}: an integer of about ") and "\n" not in msg
+    assert "expected an integer of magnitude at most 2**63 - 1 (TOML's 64-bit integers" in msg
+
+
+def test_an_integer_beyond_64_bits_in_a_base_scene_names_the_base(write_scene, tmp_path):
+    base = write_scene(f"[tfc]\nprotrusion_nm = {BIG}\n", "base.toml")
+    path = write_scene('[scene]\nextends = "base.toml"\nname = "derived"\n')
+    assert _error(path).startswith(f"{base}: tfc.protrusion_nm: an integer of about 401 digits")
+
+
+def test_an_integer_beyond_64_bits_in_a_set_or_the_api_is_refused(paper_config):
+    import pipeline as hdi
+    msg = _error(paper_config, [f"tfc.protrusion_nm={BIG}"])
+    assert msg.startswith(f"--set tfc.protrusion_nm={BIG}: tfc.protrusion_nm: an integer of about 401 digits")
+    msg = _error(paper_config, [f"air_bearing.frequencies_khz=[{BIG}, 300]"])
+    assert "air_bearing.frequencies_khz: an integer of about 401 digits" in msg
+    with pytest.raises(SceneError, match=r"^--set tfc\.protrusion_nm=10{400}: tfc\.protrusion_nm: an integer of about"):
+        hdi.load_scene(paper_config, {"tfc.protrusion_nm": 10**400})
+    with pytest.raises(SceneError, match=r"^--set tfc\.protrusion_nm=\.\.\.: an integer of more than 4,300 digits"):
+        load_scene(paper_config, ["tfc.protrusion_nm=" + "1" * 5000])  # (Python's own limit, a ValueError)
+
+
+@pytest.mark.parametrize("value", ["[" * 3000 + "]" * 3000, "{a = " * 2000 + "1" + "}" * 2000])
+def test_a_value_nested_deeper_than_the_parser_goes_is_one_error(write_scene, paper_config, value):
+    """Arrays or inline tables nested thousands deep ended in RecursionError (in the file and in --set)."""
+    path = write_scene(f"[tfc]\nprotrusion_nm = {value}\n")
+    msg = _error(path)
+    assert msg == (f"{path}: not valid TOML: lists or tables nested too deep for the TOML parser; expected at most 8 "
+                   "levels (docs/cli.md, section 'Scenes')")
+    assert _error(paper_config, [f"tfc.protrusion_nm={value}"]).startswith(
+        "--set tfc.protrusion_nm=...: lists or tables nested too deep for the TOML parser")
+    path = write_scene("[tfc]\nprotrusion_nm = " + "[" * 20 + "]" * 20 + "\n")  # (parsed, beyond the bound)
+    assert _error(path) == (f"{path}: tfc.protrusion_nm: lists or tables nested more than 8 deep; expected a number, "
+                            "a string, a list or a table of them (docs/cli.md, section 'Scenes')")
+
+
+@pytest.mark.parametrize("text, extra", [("tfc.protrusion_nm=5\n[contact]\nk = 0.5", "contact"),
+                                         ("tfc.protrusion_nm=5\nhalf_length_um = 4", "half_length_um")])
+def test_a_set_value_is_one_value(paper_config, text, extra):
+    """A newline in a --set value smuggled a second key or table into the parse, which was then dropped: the
+    scene ran with contact.k unset and no word. One --set is one value."""
+    with pytest.raises(SceneError) as exc:
+        parse_override(text)
+    assert str(exc.value) == (f"--set {text!r}: tfc.protrusion_nm: the value holds more than one TOML value (a "
+                              f"newline and {extra!r}); expected one value: one --set per key")
+    with pytest.raises(SceneError, match="the value runs over several lines and is no TOML value"):
+        parse_override("scene.description=abc\n[contact]\nk = = 1")  # (no TOML: not a bare word either)
+    # a value of several lines that is one TOML value is one value
+    assert parse_override("air_bearing.frequencies_khz=[120.0,\n 300.0]") == ("air_bearing", "frequencies_khz",
+                                                                               [120.0, 300.0])
+    assert parse_override("scene.description=two words") == ("scene", "description", "two words")
+    assert load_scene(paper_config, ['scene.description="a\\n[contact]\\nk = 0.5"'])["scene"]["description"] == \
+        "a\n[contact]\nk = 0.5"  # (a TOML string holding newlines is a string)

@@ -61,7 +61,8 @@ def test_every_default_passes_its_own_check_and_choices():
 
 def test_checks_refuse_what_their_expectation_excludes():
     flying, check_text = SCHEMA["air_bearing"]["flying_height_nm"].check
-    assert check_text == "a positive number" and flying(1e-3) and not flying(0.0) and not flying(-1.0)
+    assert check_text.startswith("a number in (0, 10000] nm") and flying(1e-3) and flying(1e4)
+    assert not flying(0.0) and not flying(-1.0) and not flying(1.0001e4)
     thickness, check_text = SCHEMA["lubricant"]["thickness_nm"].check
     assert check_text == "a number >= 0" and thickness(0.0) and not thickness(-1e-9)
     # a first racing stage of one DMW record is allowed (docs/model.md, "Identification"), none is not
@@ -99,3 +100,35 @@ def test_help_keys_lists_one_line_per_key():
     assert describe_keys().count("\n[") == len(SCHEMA) - 1
     with pytest.raises(SceneError, match=r"^--help-keys warp: no section \[warp\]; expected one of scene, "):
         describe_keys("warp")
+
+
+#: Absurd physical values that were taken without a word (tables, statistics and runs were made of them),
+#: each with the bound it breaks (pipeline.config.schema): key -> (value, bound in the message).
+ABSURD = {
+    "air_bearing.flying_height_nm": (1e90, "(0, 10000] nm"),
+    "air_bearing.frequencies_khz": ([1e-90, 1e90], "in [0.1, 10000] kHz"),
+    "slider.length_mm": (1e90, "(0, 100] mm"),
+    "slider.density_kg_m3": (1e-90, "[1, 100000] kg/m^3"),
+    "tfc.half_length_um": (1e-90, "[0.001, 10000] um"),
+    "roughness.sigma_nm": (1e50, "(0, 1000] nm"),
+    "roughness.summit_radius_um": (1e-60, "[0.0001, 10000] um"),
+    "roughness.summit_density_per_um2": (1e90, "(0, 1e+06] um^-2"),
+    "materials.disk_modulus_gpa": (1e-90, "[0.001, 10000] GPa"),
+    "lubricant.intermolecular_distance_nm": (1e-90, "[0.01, 10] nm"),
+    "dmw.rms_nm": (1e90, "[0, 1000] nm"),
+    "dmw.rpm": (1e90, "(0, 100000] rpm"),
+    "dmw.radius_mm": (1e9, "(0, 1000] mm"),
+}
+
+
+@pytest.mark.parametrize("name", sorted(ABSURD))
+def test_absurd_physical_values_are_refused_with_the_bound_they_break(paper_scene, name):
+    section, key = name.split(".")
+    value, bound = ABSURD[name]
+    with pytest.raises(SceneError) as exc:
+        paper_scene.replace(**{section: {key: value}})
+    msg = str(exc.value)
+    assert f"{name} = " in msg and bound in msg and "\n" not in msg
+    default = SCHEMA[section][key].default  # (the paper scene's values lie within every bound)
+    spec = SCHEMA[section][key]
+    assert spec.check[0](default if spec.kind == "floats" else float(default))

@@ -166,3 +166,127 @@ def test_per_summit_friction_laws_need_the_statistical_tables(write_scene):
     path = write_scene('[contact]\nfriction_law = "kogut-etsion"\n[interface]\nmodel = "deterministic"\n')
     msg = _error(path)
     assert str(path) in msg and "contact.friction_law = 'kogut-etsion'" in msg and "interface.model = 'statistical'" in msg
+
+
+# ------------------------------------------------------------------ read-only all the way down
+def test_a_scene_is_read_only_at_every_depth(paper_config):
+    """A list inside a loaded scene could be changed in place: a frequency set to -120 kHz after validation ran
+    as a positive one while the provenance recorded it negative; an effect 'bogus' appended was written.
+    Copies (pickled to dask workers, deep-copied) are read-only too, with the same hash and text."""
+    import copy
+    import pickle
+    scene = load_scene(paper_config)
+    before = (scene.hash, scene.to_toml_text())
+    changes = [lambda s: s["air_bearing"]["frequencies_khz"].__setitem__(0, -120.0),
+               lambda s: s["scene"]["effects"].append("bogus"),
+               lambda s: s["scene"]["effects"].extend(["bogus"]),
+               lambda s: s["dmw"]["band_khz"].__iadd__([1.0]),
+               lambda s: s["dmw"]["band_khz"].sort(reverse=True),
+               lambda s: s["identify"]["parameters"].pop(),
+               lambda s: s["identify"]["parameters"][0].__setitem__("low", -5.0),
+               lambda s: s.overrides.append("tfc.protrusion_nm=1")]
+    for copied in (scene, pickle.loads(pickle.dumps(scene)), copy.deepcopy(scene)):
+        for change in changes:
+            with pytest.raises(TypeError, match=r"read-only: scene\['\w+'\] cannot be changed in place"):
+                change(copied)
+        assert (copied.hash, copied.to_toml_text()) == before
+        for name in ("path", "config", "overrides"):
+            with pytest.raises(AttributeError):
+                setattr(copied, name, None)
+    assert scene["dmw"]["band_khz"] == [10.0, 500.0] and isinstance(scene["dmw"]["band_khz"], list)  # (read as a list)
+    mutable = list(scene["scene"]["effects"]) + ["x"]  # (copies are plain lists)
+    mutable.append("y")
+    assert len(mutable) == len(scene["scene"]["effects"]) + 2
+
+
+#: SHA-256 of each shipped scene's configuration text (``Scene.to_toml_text``, the repository's folder written
+#: ``<root>``: the bases' paths are absolute) as the scenes were before lists became read-only. The scene's
+#: hash is the SHA-256 of that text and keys the runner's cache: a change here re-runs every stage. Update
+#: a value only with a deliberate change of that scene file.
+SHIPPED_TEXT_SHA256 = {
+    "paper-2009": "73ba37576a50cb372f31ee9b305cf40013a1acf4af2f55d5368522d2faa1488b",
+    "paper-2009-bulge": "ad27f805054c1255ec1fe30ff9c1d21b3698c3bdc1488fde04495149b0dab72a",
+    "paper-2009-identified": "5aa083d3362a21542f611e8f264f1b6ead0e2c3f2d0813ee89a3483b97cef8b4",
+    "paper-2009-reynolds": "7e18a5f29600c1eaec10e9a275b04befd2cfcb1cec5f5f5f7bd47e9705c00b25",
+    "paper-2009-two-population": "a1b0e735ebf01d9f8374f05d753d78b36bf1da913ce1b2e0c1d7eea818f8c2f0",
+    "paper-2009-two-population-identified": "92db32032e19165e333714ac04077a8c32d349820b182c23ab63d47110bab496",
+    "paper-2009-two-population-rough": "42bdcbbd7c7b6be6c0263b3afd3827ae1a08a16c7402925f60c402c8c9afad0e",
+    "sweep-3x3": "a70db0515c7b7a9f477d5ed047933bd88f53029065ed25f303e9b3a23780ceb5",
+}
+
+
+@pytest.mark.parametrize("name", sorted(SHIPPED_TEXT_SHA256))
+def test_the_shipped_scenes_text_and_hash_are_unchanged(name, repo_root):
+    import hashlib
+    scene = load_scene(repo_root / "configs" / f"{name}.toml")
+    text = scene.to_toml_text()
+    assert scene.hash == hashlib.sha256(text.encode()).hexdigest()
+    root = str(repo_root.resolve())
+    assert hashlib.sha256(text.replace(root, "<root>").encode()).hexdigest() == SHIPPED_TEXT_SHA256[name]
+
+
+def test_replace_refuses_a_base_scene(paper_scene, repo_root):
+    """``replace(scene={"extends": ...})`` recorded a base in the scene's provenance and applied none of its keys."""
+    bulge = repo_root / "configs" / "paper-2009-bulge.toml"
+    with pytest.raises(SceneError, match=r"^scene\.replace\(scene=\{'extends': .*\}\): scene\.extends cannot be "
+                                         r"replaced: a base scene is merged when a scene file is read") as exc:
+        paper_scene.replace(scene={"extends": str(bulge)})
+    assert "\n" not in str(exc.value)
+
+
+# ------------------------------------------------------------------ numbers and nesting from the API
+@pytest.mark.parametrize("sections", [{"tfc": {"protrusion_nm": 10**400}},
+                                      {"air_bearing": {"frequencies_khz": [10**400, 300.0]}},
+                                      {"sweep": {"protrusion_nm": {"start": 0, "stop": 10**400, "step": 1}}},
+                                      {"identify": {"parameters": [{"key": "dmw.rms_nm", "low": 0, "high": 10**400}]}},
+                                      {"tfc": {"protrusion_nm": 2**63}}])
+def test_replace_refuses_an_integer_beyond_64_bits(paper_scene, sections):
+    """A 400-digit integer given to ``replace`` (or ``scene_from_dict``) ended in OverflowError."""
+    from pipeline.config.scene import scene_from_dict
+    (section, keys), = sections.items()
+    key = next(iter(keys))
+    for make in (lambda: paper_scene.replace(**sections), lambda: scene_from_dict(sections)):
+        with pytest.raises(SceneError, match=rf"{section}\.{key}: an integer of about \d+ digits; expected an integer "
+                                             r"of magnitude at most 2\*\*63 - 1") as exc:
+            make()
+        assert "\n" not in str(exc.value)
+    # (an integer within 64 bits is a number like any other)
+    assert paper_scene.replace(tfc={"protrusion_nm": 9}).hash == paper_scene.replace(tfc={"protrusion_nm": 9.0}).hash
+
+
+def test_replace_refuses_a_value_nested_deeper_than_any_scene(paper_scene):
+    """A list nested 5,000 deep given to ``replace`` ended in RecursionError."""
+    from pipeline.config.limits import MAX_NESTING
+    deep: list = []
+    for _ in range(5000):
+        deep = [deep]
+    with pytest.raises(SceneError, match=rf"tfc\.protrusion_nm: lists or tables nested more than {MAX_NESTING} deep"):
+        paper_scene.replace(tfc={"protrusion_nm": deep})
+    shallow: list = []
+    for _ in range(MAX_NESTING - 1):
+        shallow = [shallow]
+    with pytest.raises(SceneError, match=r"tfc\.protrusion_nm = .*: expected a number"):  # (within the bound: the key's check)
+        paper_scene.replace(tfc={"protrusion_nm": shallow})
+
+
+def test_a_long_list_of_histories_is_checked_in_linear_time(write_scene):
+    """200,000 protrusions in report.histories_nm: the check for repeated values compared every pair (hours)."""
+    import time
+    values = [i * 1e-3 for i in range(200_000)]
+    path = write_scene("[report]\nhistories_nm = [" + ", ".join(map(repr, values + [values[-1] + 1e-12])) + "]\n")
+    t0 = time.perf_counter()
+    msg = _error(path)
+    assert time.perf_counter() - t0 < 30
+    assert "report.histories_nm" in msg and f"{values[-1]:.10g} appears more than once" in msg
+
+
+def test_a_long_list_of_damping_ratios_is_checked_in_linear_time(write_scene):
+    """200,000 damping ratios: the check for repeated values counted each one in the whole list (hours)."""
+    import time
+    values = [i * 1e-6 for i in range(200_000)]
+    path = write_scene("[sweep]\ndamping_ratio = [" + ", ".join(map(repr, values + [values[7]])) + "]\n")
+    t0 = time.perf_counter()
+    msg = _error(path)
+    assert time.perf_counter() - t0 < 30
+    assert "sweep.damping_ratio = [0.0, 1e-06, " in msg and "(200001 items)" in msg
+    assert f"{values[7]:g} appears more than once" in msg and len(msg) < 600

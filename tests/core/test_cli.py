@@ -28,7 +28,7 @@ def test_a_stage_prints_its_dataset_and_a_second_run_recomputes_nothing(tmp_path
 
 @pytest.mark.parametrize("args, message", [
     (["--set", "dmw.rms_um=0.3"], r"dmw\.rms_um: wrong unit 'um'; expected 'nm'"),   # a key in the wrong unit
-    (["--set", "dmw.rms_nm=-1"], r"--set dmw\.rms_nm=-1: dmw\.rms_nm = -1: expected a number >= 0"),
+    (["--set", "dmw.rms_nm=-1"], r"--set dmw\.rms_nm=-1: dmw\.rms_nm = -1: expected a number in \[0, 1000\] nm"),
     (["--set", "nonsense"], r"--set 'nonsense': expected section\.key=value")],
     ids=["wrong-unit", "out-of-range", "no-equals-sign"])
 def test_bad_input_is_one_line_with_exit_2(tmp_path, paper_config, capsys, args, message):

@@ -4,6 +4,7 @@ channel picked, the heights equal to SurfaceTopography's own reading, and each b
 
 from __future__ import annotations
 
+import re
 import warnings
 from pathlib import Path
 
@@ -99,3 +100,78 @@ def test_truncated_file_is_reported_as_corrupt(tmp_path: Path) -> None:
     bad.write_bytes(src.read_bytes()[:4000])
     with pytest.raises(afm_scan.AFMError, match=r"cut\.ibw: cannot be read as a \.ibw file.*truncated"):
         afm_scan.read_topography(bad)
+
+
+# ---------------------------------------------------------------------------------------------------
+# Maps beyond the bounds of pipeline.physics.surface
+# ---------------------------------------------------------------------------------------------------
+
+def _map(path: Path, heights: np.ndarray, size: tuple[float, float] = (256.0, 256.0), unit: str = "nm") -> Path:
+    from SurfaceTopography import Topography
+    Topography(heights, size, periodic=True, unit=unit).to_netcdf(str(path))
+    return path
+
+
+def _rough(n: int = 32) -> np.ndarray:
+    x = np.arange(n) * 2 * np.pi / n
+    return 0.5 * np.cos(3 * x)[:, None] * np.cos(2 * x)[None, :] + 0.2 * np.sin(5 * x)[:, None]
+
+
+@pytest.mark.parametrize("name, heights, size, unit, bound", [
+    # heights of 1e80 nm overflowed the moments (a traceback); of 3e38 nm gave statistics with exit 0
+    ("huge", 1e80 * _rough(), (256.0, 256.0), "nm",
+     re.escape(f"heights reach {1e80 * np.abs(_rough()).max():.4g} nm: expected heights within +-100000 nm")),
+    ("float32-max", 3e38 * _rough(), (256.0, 256.0), "nm", re.escape(f"heights reach {3e38 * np.abs(_rough()).max():.4g} nm")),
+    # every pixel undefined: filled with zeros by the interpolation and summarised as a flat surface
+    ("undefined", np.full((32, 32), np.nan), (256.0, 256.0), "nm", r"every height is undefined"),
+    # a lateral size of 1e-30 um: summit densities of 1e61 um^-2 written with exit 0
+    ("tiny-size", _rough(), (1e-30, 1e-30), "um", r"pixel size 3\.125e-29 nm \(lateral size 1e-27 x 1e-27 nm over "
+                                                   r"32 x 32 points\): expected 0\.001 to 1e\+06 nm"),
+    ("huge-size", _rough(), (1e30, 1e30), "um", r"lateral size 1e\+33 x 1e\+33 nm: expected at most 1e\+08 nm"),
+    # a zero or negative lateral size: ZeroDivisionError and 'math domain error'
+    ("zero-size", _rough(), (0.0, 256.0), "nm", r"lateral size 0 x 256 nm: expected positive finite sizes"),
+    ("negative-size", _rough(), (-256.0, 256.0), "nm", r"lateral size -256 x 256 nm: expected positive finite sizes"),
+    # flat maps: statistics of NaN written with exit 0
+    ("constant", np.full((32, 32), 3.0), (256.0, 256.0), "nm", r"rms height .* nm after detrending: expected at least "
+                                                              r"0\.001 nm .*\(detrend 'plane'\)"),
+    ("plane", np.add.outer(np.arange(32.0), np.arange(32.0)), (256.0, 256.0), "nm", r"rms height .* after detrending"),
+    ("sub-atomic", 1e-30 * _rough(), (256.0, 256.0), "nm", r"rms height .* after detrending"),
+])
+def test_a_map_beyond_physical_bounds_is_refused_naming_the_file_and_the_bound(tmp_path: Path, name, heights, size,
+                                                                                unit, bound) -> None:
+    path = _map(tmp_path / f"{name}.nc", heights, size, unit)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with pytest.raises(afm_scan.AFMError, match=rf"^{path}: channel 'Default': {bound}") as exc:
+            afm_scan.summarise_file(path)
+    assert "\n" not in str(exc.value)
+
+
+def test_a_map_within_the_bounds_is_summarised(tmp_path: Path) -> None:
+    """The bounds refuse nothing a scan of a disk holds: a 0.3-nm map with some undefined pixels, 256 nm wide."""
+    h = _rough()
+    h[3, 4] = np.nan
+    path = _map(tmp_path / "ok.nc", h)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        s = afm_scan.summarise_file(path)
+    assert s.pixel_size == pytest.approx(8.0) and 0.1 < s.spectral.sigma < 1.0
+
+
+def test_reading_a_netcdf_map_says_nothing_of_its_memory_map(tmp_path: Path) -> None:
+    """SciPy's NetCDF reader warned "Cannot close a netcdf_file opened with mmap=True" when the reader was
+    dropped with the heights still sharing its memory map: a second line after every one-line error."""
+    import gc
+    h = _rough()
+    h[3, 4] = np.nan
+    for path in (_map(tmp_path / "part.nc", h), _map(tmp_path / "none.nc", np.full((32, 32), np.nan))):
+        with warnings.catch_warnings(record=True) as seen:
+            warnings.simplefilter("always")
+            try:
+                topo = afm_scan.read_topography(path)
+            except afm_scan.AFMError:
+                topo = None
+            gc.collect()
+        assert [str(w.message) for w in seen if issubclass(w.category, RuntimeWarning)] == []
+        if topo is not None:
+            assert np.isfinite(topo.heights()).all()

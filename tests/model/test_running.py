@@ -57,3 +57,17 @@ def test_a_failed_integration_is_one_line(flying):
     msg = str(exc.value)
     assert msg.startswith("integration failed at protrusion 5 nm: too many steps (steps ")
     assert "\n" not in msg
+    # the scene keys to change, in the error itself: a calibration's log of a collapsed flying run, a sweep's
+    # errors attribute and the command line all quote it (the command line alone had the hint)
+    assert msg.endswith("); " + running.HINTS[st.MAX_STEPS])
+    for key in ("solver.duration_ms", "solver.min_dwell_ns", "solver.rtol", "tfc.protrusion_nm", "contact.k"):
+        assert key in running.HINTS[st.MAX_STEPS]
+
+
+def test_every_failure_status_names_the_scene_keys_to_change():
+    import re
+    from pipeline.config.schema import SCHEMA
+    assert set(running.HINTS) == set(st.STATUS_TEXT) - {st.OK}
+    for hint in running.HINTS.values():
+        keys = re.findall(r"\b([a-z_]+)\.([a-z_]+)\b", hint)
+        assert keys and all(key in SCHEMA[section] for section, key in keys), hint

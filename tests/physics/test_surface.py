@@ -235,3 +235,30 @@ def test_combine_single_surface_is_a_copy() -> None:
     s = afm_scan.summarise(t, label="one")
     c = sf.combine([s])
     assert c.label == "combined" and c.spectral == s.spectral and c.summits == s.summits
+
+
+# --------------------------------------------------------------------------------------------------
+# Bounds of a sampled map
+# --------------------------------------------------------------------------------------------------
+
+def test_the_bounds_of_a_map_hold_at_their_values_and_refuse_beyond() -> None:
+    lo, hi = sf.PIXEL_SIZE_BOUNDS_NM
+    assert sf.sampling_error((64 * lo, 64 * hi), (64, 64)) is None
+    assert sf.sampling_error((256.0, 256.0), (64, 64)) is None
+    assert sf.sampling_error((0.9 * 64 * lo, 256.0), (64, 64)).startswith("pixel size 0.0009 nm")
+    assert sf.sampling_error((1e-27, 1e-27), (64, 64)).endswith(f"expected {lo:g} to {hi:g} nm")
+    assert sf.sampling_error((2 * sf.MAX_SIZE_NM, 256.0), (1 << 20, 64)).startswith("lateral size 2e+08 x 256 nm: "
+                                                                                       "expected at most 1e+08 nm")
+    for sizes in ((-256.0, 256.0), (0.0, 256.0), (math.nan, 256.0), (math.inf, 256.0)):
+        assert "expected positive finite sizes" in sf.sampling_error(sizes, (64, 64))
+    h = np.zeros((4, 4))
+    h[0, 0] = sf.MAX_HEIGHT_NM
+    assert sf.heights_error(h) is None and sf.heights_error(-h) is None
+    h[0, 0] = 3e38
+    assert sf.heights_error(h) == "heights reach 3e+38 nm: expected heights within +-100000 nm (100 um, any AFM's z range)"
+    h[1, 1] = math.nan  # (undefined pixels do not count; only defined ones are bounded)
+    assert sf.heights_error(h).startswith("heights reach 3e+38 nm")
+    assert sf.heights_error(np.full((4, 4), math.nan)) == "every height is undefined: expected a measured height map"
+    assert sf.roughness_error(sf.MIN_RMS_NM) is None and sf.roughness_error(0.5) is None
+    assert sf.roughness_error(0.0).startswith("rms height 0 nm after detrending: expected at least 0.001 nm")
+    assert sf.roughness_error(math.nan) is not None

@@ -7,8 +7,10 @@ import math
 import os
 import socket
 import tempfile
+import warnings
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from pipeline import cli
@@ -173,7 +175,7 @@ def test_nan_and_inf_inside_lists(capsys, folder, write_scene):
 
 def test_errors_from_set_name_the_set_option_not_the_file(capsys, folder):
     err = _fails(capsys, folder, "dmw", str(PAPER), "--set", "dmw.rms_nm=-1")
-    assert err.startswith("hdi dmw: error: --set dmw.rms_nm=-1: dmw.rms_nm = -1") and "expected a number >= 0" in err
+    assert err.startswith("hdi dmw: error: --set dmw.rms_nm=-1: dmw.rms_nm = -1") and "expected a number in [0, 1000] nm" in err
     assert str(PAPER) not in err
     err = _fails(capsys, folder, "dmw", str(PAPER), "--set", "dmw.rms_um=0.1")
     assert err.startswith("hdi dmw: error: --set dmw.rms_um=0.1: dmw.rms_um: wrong unit 'um'")
@@ -209,3 +211,56 @@ def test_verbose_shows_where_an_error_came_from(tmp_path, capsys):
     loud = capsys.readouterr().err.strip().splitlines()
     assert len(quiet) == 1 and "Traceback" not in quiet[0]
     assert loud[0].startswith("Traceback") and loud[-1] == quiet[0]
+
+
+# ------------------------------------------------------------------ numbers, nesting, --set values, scans
+BIG = "1" + "0" * 400
+
+
+def _scene_file(tmp_path: Path, text: str) -> Path:
+    path = tmp_path / "probe.toml"
+    path.write_text(f'[scene]\nextends = "{PAPER}"\nname = "probe"\n' + text)
+    return path
+
+
+@pytest.mark.parametrize("text, expected", [
+    (f"[tfc]\nprotrusion_nm = {BIG}\n", "tfc.protrusion_nm: an integer of about 401 digits"),  # (OverflowError)
+    (f"[air_bearing]\nfrequencies_khz = [{BIG}, 300.0]\n", "air_bearing.frequencies_khz: an integer of about 401"),
+    ("[tfc]\nprotrusion_nm = " + "[" * 3000 + "]" * 3000 + "\n", "not valid TOML: lists or tables nested too deep"),
+    ("[air_bearing]\nflying_height_nm = 1e90\n", "air_bearing.flying_height_nm = 1e+90: expected a number in (0, 10000] nm"),
+])
+def test_a_scene_file_beyond_its_bounds_is_one_line(capsys, folder, tmp_path, text, expected):
+    """Each was a traceback (OverflowError, RecursionError) or a run of an absurd scene with exit 0."""
+    path = _scene_file(tmp_path, text)
+    err = _fails(capsys, folder, "roughness", str(path))
+    assert err.startswith(f"hdi roughness: error: {path}: ") and expected in err
+
+
+@pytest.mark.parametrize("option, expected", [
+    (f"tfc.protrusion_nm={BIG}", "tfc.protrusion_nm: an integer of about 401 digits"),
+    ("tfc.protrusion_nm=" + "[" * 3000 + "]" * 3000, "lists or tables nested too deep for the TOML parser"),
+    ("tfc.protrusion_nm=5\n[contact]\nk = 0.5", "the value holds more than one TOML value (a newline and 'contact')"),
+    ("roughness.summit_density_per_um2=1e90", "expected a number in (0, 1e+06] um^-2"),
+])
+def test_a_set_beyond_its_bounds_is_one_line(capsys, folder, option, expected):
+    err = _fails(capsys, folder, "roughness", str(PAPER), "--set", option)
+    assert err.startswith("hdi roughness: error: --set ") and expected in err
+
+
+def test_an_absurd_scan_is_one_line_and_writes_nothing(capsys, folder, tmp_path):
+    """Heights of 1e80 nm ended in OverflowError; of 3e38 nm, all undefined, or over a lateral size of 1e-30 um
+    they gave statistics and exit 0."""
+    from SurfaceTopography import Topography
+    x = np.arange(32) * 2 * np.pi / 32
+    rough = np.cos(3 * x)[:, None] * np.cos(2 * x)[None, :]
+    cases = {"huge.nc": (1e80 * rough, (256.0, 256.0), "nm", "heights reach 1e+80 nm"),
+             "float32.nc": (3e38 * rough, (256.0, 256.0), "nm", "heights reach 3e+38 nm"),
+             "undefined.nc": (np.full((32, 32), np.nan), (256.0, 256.0), "nm", "every height is undefined"),
+             "tiny.nc": (rough, (1e-30, 1e-30), "um", "pixel size 3.125e-29 nm")}
+    for name, (heights, size, unit, expected) in cases.items():
+        path = tmp_path / name
+        Topography(heights, size, periodic=True, unit=unit).to_netcdf(str(path))
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            err = _fails(capsys, folder, "roughness", str(path))
+        assert err.startswith(f"hdi roughness: error: {path}: channel 'Default': {expected}"), err

@@ -225,14 +225,13 @@ def test_a_failed_integration_is_one_line_naming_the_scene_the_protrusion_and_wh
     one-line path as a traceback. The same failure here in a second: the integrator's step budget
     lowered to 200 steps (a 0.6-ms flying run needs more than 1,200 of 500 ns)."""
     from pipeline.model import running
+    from pipeline.model.state import MAX_STEPS
     monkeypatch.setattr(running.run_model, "__defaults__", (None, 200))
     args = ["simulate", str(PAPER), "--out", str(tmp_path), *_sets(FLY[:3] + ["tfc.protrusion_nm=2.0"])]
     assert cli.main(args) == 2
     line = _one_line(capsys, f"hdi simulate: error: {PAPER} (scene paper-2009): integration failed at protrusion 2 nm: "
                              "too many steps (steps 200, ")
-    assert line.endswith("shorten solver.duration_ms, or hold contact modes longer against chattering on the "
-                         "contact criterion (solver.min_dwell_ns), or move the protrusion or contact.k off the "
-                         "touchdown edge")
+    assert line.endswith("); " + running.HINTS[MAX_STEPS])  # (the scene keys to change)
 
 
 # ------------------------------------------------------------------------------ ensemble and report fan out
