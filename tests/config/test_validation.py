@@ -166,3 +166,15 @@ def test_per_summit_friction_laws_need_the_statistical_tables(write_scene):
     path = write_scene('[contact]\nfriction_law = "kogut-etsion"\n[interface]\nmodel = "deterministic"\n')
     msg = _error(path)
     assert str(path) in msg and "contact.friction_law = 'kogut-etsion'" in msg and "interface.model = 'statistical'" in msg
+
+
+def test_solid_work_of_adhesion_needs_the_adhesion_effect(write_scene):
+    path = write_scene('[scene]\neffects = ["air_bearing", "contact"]\n[lubricant]\nsolid_work_of_adhesion_j_m2 = 0.12\n')
+    msg = _error(path)
+    assert str(path) in msg and "lubricant.solid_work_of_adhesion_j_m2" in msg and "'adhesion' effect" in msg
+
+
+def test_solid_work_of_adhesion_out_of_range(write_scene):
+    path = write_scene("[lubricant]\nsolid_work_of_adhesion_j_m2 = -0.1\n")
+    msg = _error(path)
+    assert str(path) in msg and "lubricant.solid_work_of_adhesion_j_m2" in msg and "J/m^2" in msg
