@@ -261,8 +261,8 @@ SCHEMA: dict[str, dict[str, Key]] = {
                                                "a summit's work of adhesion rises linearly from "
                                                "work_of_adhesion_j_m2 at the lubricant surface to this value at "
                                                "solid contact across thickness_nm, then stays there (recon, "
-                                               "bounds 0.05-0.12: twice measured carbon-overcoat surface "
-                                               "energies, 25-60 mJ/m^2; docs/model.md, section 'Adhesion rising "
+                                               "bounds 0.05-0.10: twice measured carbon-overcoat surface "
+                                               "energies, 25-50 mJ/m^2; docs/model.md, section 'Adhesion rising "
                                                "with penetration'); absent: off"),
         "shear_stress_mpa": Key("float", 0.0, (lambda v: 0.0 <= v <= 1000.0, "a number in [0, 1000]"),
                                 doc="shear stress of the lubricant on wetted summits [MPa]: the 'lubricant shear' "
