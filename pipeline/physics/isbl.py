@@ -183,6 +183,12 @@ def _panels(a: np.ndarray, b: np.ndarray, nodes: int, panels: int, square: bool 
     return z, wt
 
 
+def _G(u: np.ndarray) -> np.ndarray:
+    """``G(u) = phi(u) - u Q(u) = int_u^inf (v - u) phi(v) dv`` [1] for the standard Gaussian (module docstring,
+    "Wetted area")."""
+    return np.exp(-0.5 * u * u) / np.sqrt(2.0 * np.pi) - u * ndtr(-u)
+
+
 def _gauss(z: np.ndarray, s: float) -> np.ndarray:
     return np.exp(-0.5 * (z / s) ** 2) / (s * np.sqrt(2.0 * np.pi))
 
@@ -318,8 +324,7 @@ def isbl_tables(d: np.ndarray, p: Interface, *, quantities=QUANTITIES, nodes: in
             out["adhesion_pressure"] = out["adhesion_pressure"] + (extra_bridges + extra_menisci)
 
     if "wetted_area_fraction" in want:  # closed form (module docstring, "Wetted area")
-        G = lambda u: np.exp(-0.5 * u * u) / np.sqrt(2.0 * np.pi) - u * ndtr(-u)  # noqa: E731
-        out["wetted_area_fraction"] = eta * 2.0 * np.pi * R * s * np.maximum(G((d - p.t) / s) - G(d / s), 0.0)
+        out["wetted_area_fraction"] = eta * 2.0 * np.pi * R * s * np.maximum(_G((d - p.t) / s) - _G(d / s), 0.0)
 
     if "contact_fraction" in want:
         out["contact_fraction"] = Q(d)
@@ -355,8 +360,7 @@ def penetration_adhesion(d: np.ndarray, p: Interface) -> tuple[np.ndarray, np.nd
     touching = np.where(d > 0, Q(d) - Q(d + asperity.X_PLASTIC * p.w_c),
                         ndtr((d + asperity.X_PLASTIC * p.w_c) / s) - ndtr(d / s))
     if t > 0.0:
-        G = lambda u: np.exp(-0.5 * u * u) / np.sqrt(2.0 * np.pi) - u * ndtr(-u)  # noqa: E731
-        ramp = np.maximum(s * (G((d - t) / s) - G(d / s)) / t - Q(d), 0.0)
+        ramp = np.maximum(s * (_G((d - t) / s) - _G(d / s)) / t - Q(d), 0.0)
     else:
         ramp = np.zeros_like(d)
     return scale * ramp, scale * touching
