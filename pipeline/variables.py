@@ -364,6 +364,7 @@ INTERFACE = _group(
     V("lubricant_thickness", "nm", "lubricant thickness", NM),
     V("work_of_adhesion", "J m-2", "work of adhesion", description="work of adhesion (of the menisci around contacts with two populations)"),
     V("bridge_work_of_adhesion", "J m-2", "bridge work of adhesion", description="work of adhesion of the bridges before solid contact"),
+    V("solid_work_of_adhesion", "J m-2", "solid work of adhesion", description="work of adhesion at solid contact through the bonded lubricant layer (docs/model.md, section 'Adhesion rising with penetration')"),
     V("intermolecular_distance", "nm", "intermolecular distance", NM),
     V("contact_pressure", "MPa", "contact pressure", MPA, dims=_S, effect="contact", description="contact pressure per nominal area"),
     V("elastic_fraction", "1", "elastic summit fraction", dims=_S, effect="contact", description="fraction of summits in elastic contact"),

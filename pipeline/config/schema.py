@@ -283,6 +283,14 @@ SCHEMA: dict[str, dict[str, Key]] = {
                                                 "recon, bounds 0.002-0.03: van der Waals across the bonded film, "
                                                 "A/(12 pi t^2) = 0.0047 for A = 1e-19 J, t = 0.75 nm; docs/model.md, "
                                                 "section 'Two adhesion populations')"),
+        "solid_work_of_adhesion_j_m2": Key("float", None, _adhesion,
+                                           doc="work of adhesion at solid contact through the bonded layer [J/m^2]: "
+                                               "a summit's work of adhesion rises linearly from "
+                                               "work_of_adhesion_j_m2 at the lubricant surface to this value at "
+                                               "solid contact across thickness_nm, then stays there (recon, "
+                                               "bounds 0.05-0.10: twice measured carbon-overcoat surface "
+                                               "energies, 25-50 mJ/m^2; docs/model.md, section 'Adhesion rising "
+                                               "with penetration'); absent: off"),
         "shear_stress_mpa": Key("float", 0.0, (lambda v: 0.0 <= v <= 1000.0, "a number in [0, 1000]"),
                                 doc="shear stress of the lubricant on wetted summits [MPa]: the 'lubricant shear' "
                                     "friction term beside the solid shear-strength law (recon, bounds 0-50; "

@@ -494,6 +494,9 @@ def _cross_checks(config: dict[str, dict[str, Any]], where: str) -> None:
     if c["friction_switching"] != "criterion" and "friction" not in eff:
         raise SceneError(f"{where}: contact.friction_switching = {c['friction_switching']!r} says how the friction "
                          "acts: it needs the 'friction' effect (or 'criterion', the default)")
+    if lub["solid_work_of_adhesion_j_m2"] is not None and "adhesion" not in eff:
+        raise SceneError(f"{where}: lubricant.solid_work_of_adhesion_j_m2 changes the adhesion of the summits that "
+                         "penetrate the bonded layer: it needs the 'adhesion' effect")
     if lub["shear_stress_mpa"] > 0 and "friction" not in eff:
         raise SceneError(f"{where}: lubricant.shear_stress_mpa > 0 is a friction term: it needs the 'friction' effect")
     if config["interface"]["model"] == "deterministic":

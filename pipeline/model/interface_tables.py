@@ -110,7 +110,8 @@ def interface_parameters(scene: Any, stats: dict[str, float]) -> isbl.Interface:
     check_materials(E, H, stats["sigma_s"], stats["R"], derived="plasticity_index" if m.hardness else "hardness")
     return isbl.Interface(sigma_s=stats["sigma_s"], eta=stats["eta"], R=stats["R"], E=E, H=H, nu=nu,
                           t=lub.thickness, dgamma=lub.work_of_adhesion, eps=lub.intermolecular_distance,
-                          dgamma_bridge=lub.bridge_work_of_adhesion, friction_law=summit_friction_law(scene))
+                          dgamma_bridge=lub.bridge_work_of_adhesion, friction_law=summit_friction_law(scene),
+                          dgamma_solid=lub.solid_work_of_adhesion)
 
 
 def summit_friction_law(scene: Any) -> str:
@@ -168,6 +169,8 @@ def interface_scalars(scene: Any, stats: dict[str, float]) -> tuple[isbl.Interfa
     }
     if p.dgamma_bridge is not None:
         scalars["bridge_work_of_adhesion"] = p.dgamma_bridge
+    if p.dgamma_solid is not None:
+        scalars["solid_work_of_adhesion"] = p.dgamma_solid
     return p, {k: INTERFACE[k].from_si(v, ()) for k, v in scalars.items()}
 
 

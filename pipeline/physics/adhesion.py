@@ -64,3 +64,45 @@ def lennard_jones_force(s: np.ndarray, R: float, dgamma: float, eps: float) -> n
     r = eps / np.maximum(np.asarray(s, dtype=float), eps)
     r2 = r * r
     return 8.0 / 3.0 * np.pi * dgamma * R * (r2 - 0.25 * r2**4)
+
+
+def penetration_fraction(penetration: np.ndarray, t: float) -> np.ndarray:
+    """How far a summit has pushed through the bonded lubricant layer, ``clip(p / t, 0, 1)`` [1].
+
+    ``p = z - (d - t)`` [m] is the summit's penetration below the lubricant surface (``z`` its height,
+    ``d`` the separation, ``t`` [m] the bonded thickness): 0 at the lubricant surface, 1 at the solid and
+    beyond (docs/model.md, section "Adhesion rising with penetration"). A film of zero thickness is a step
+    at the solid, ``p > 0``.
+    """
+    p = np.asarray(penetration, dtype=float)
+    if t <= 0.0:
+        return (p > 0.0).astype(float)
+    return np.clip(p / t, 0.0, 1.0)
+
+
+def penetration_work_of_adhesion(penetration: np.ndarray, t: float, dgamma: float, dgamma_solid: float) -> np.ndarray:
+    """Work of adhesion [J/m^2] of a summit that penetrates the bonded lubricant layer.
+
+    ``W(p) = dgamma + (dgamma_solid - dgamma) clip(p / t, 0, 1)``: the lubricant's value at the film surface,
+    rising (or falling) linearly across the bonded thickness to the solid value at solid contact, then constant
+    [VP11, VP13: the bonded lubricant as a semi-solid layer whose surface energy varies with penetration;
+    Brunner10: the adhesion across a molecularly thin PFPE film is linear in the film's surface energy, which
+    rises towards the carbon's as the film thins].
+
+    Parameters
+    ----------
+    penetration : ``z - (d - t)`` [m] (:func:`penetration_fraction`)
+    t : bonded lubricant thickness [m]
+    dgamma : work of adhesion of the lubricant [J/m^2] (the ISBL's ``dgamma``)
+    dgamma_solid : work of adhesion at solid contact through the layer [J/m^2]
+
+    References
+    ----------
+    .. [VP11] A. I. Vakis, A. A. Polycarpou, "Modeling sliding contact of rough surfaces with molecularly thin
+       lubricants", Tribol. Lett. 45 (2012) 37-48.
+    .. [VP13] A. I. Vakis, A. A. Polycarpou, Tribol. Lett. (2013): the continuum model of the same group with a
+       semi-solid bonded layer (volume and pages not verified here).
+    .. [Brunner10] R. Brunner, G. W. Tyndall, R. J. Waltman, F. E. Talke, "Adhesion between surfaces separated by
+       molecularly thin perfluoropolyether films", Tribol. Lett. 40(1) (2010).
+    """
+    return dgamma + (dgamma_solid - dgamma) * penetration_fraction(penetration, t)

@@ -50,6 +50,15 @@ is held by the van der Waals attraction across the film and the bridges of the t
 ``2 pi R dgamma``. The Lennard-Jones law of the non-wetted summits takes ``dgamma_bridge`` too, so
 it still joins the bridge value continuously at the lubricant surface.
 
+Adhesion rising with penetration
+--------------------------------
+With ``dgamma_solid`` set, a summit that pushes into the bonded lubricant layer (thickness ``t``) adheres more
+(or less) the deeper it goes: its work of adhesion rises linearly from the lubricant's ``dgamma`` at the film
+surface to ``dgamma_solid`` at solid contact and stays there for the touching summits
+(:func:`pipeline.physics.adhesion.penetration_work_of_adhesion`; [VP11]: the bonded layer as a semi-solid whose
+surface energy varies with penetration). The extra is added to both populations, in closed form
+(:func:`penetration_adhesion`); with ``dgamma_solid = dgamma`` it is 0 exactly and the tables are those without it.
+
 Wetted area
 -----------
 ``wetted_area_fraction`` is the summit surface inside the lubricant film and outside the solid contact,
@@ -66,6 +75,8 @@ References
 .. [GW66] J. A. Greenwood, J. B. P. Williamson, Proc. R. Soc. Lond. A 295 (1966) 300-319.
 .. [KE02] L. Kogut, I. Etsion, J. Appl. Mech. 69 (2002) 657-662.
 .. [Stanley90] H. M. Stanley, I. Etsion, D. B. Bogy, J. Tribol. 112 (1990) 98-104.
+.. [VP11] A. I. Vakis, A. A. Polycarpou, "Modeling sliding contact of rough surfaces with molecularly thin
+   lubricants", Tribol. Lett. 45 (2012) 37-48.
 .. [Vakis09] A. I. Vakis, S.-C. Lee, A. A. Polycarpou, IEEE Trans. Magn. 45 (2009) 4966-4971.
 .. [Ono24] K. Ono, "Physics of the sub-monolayer lubricant in the head-disk interface", Lubricants 12
    (2024) 117: the meniscus of the rarefied mobile film is the interaction force at the HDI; the
@@ -110,6 +121,10 @@ class Interface:
     dgamma_bridge : work of adhesion of the bridges before solid contact [J/m^2] (Lennard-Jones of the
         non-wetted summits, menisci of the wetted non-touching ones); ``None``: ``dgamma`` (the
         paper's ISBL, one population)
+    dgamma_solid : work of adhesion at solid contact through the bonded layer [J/m^2]: a summit's work of
+        adhesion rises linearly from the lubricant's ``dgamma`` at the film surface to this value at solid
+        contact across the thickness ``t``, then stays there (module docstring, "Adhesion rising with
+        penetration"); ``None``: off (every summit keeps its population's value)
     friction_law : the friction law whose per-summit form the ``friction_stress`` table integrates (a name
         of :data:`pipeline.physics.friction.FRICTION_LAWS`); a law without one (``"shear-strength"``,
         ``"coefficient"``) gets the shear-strength table ``eta int tau_y A phi dz``
@@ -126,6 +141,7 @@ class Interface:
     eps: float
     dgamma_bridge: float | None = None
     friction_law: str = "shear-strength"
+    dgamma_solid: float | None = None
 
     @property
     def w_c(self) -> float:
@@ -137,9 +153,9 @@ class Interface:
             v = getattr(self, name)
             if not (np.isfinite(v) and v > 0):
                 raise ValueError(f"Interface.{name} = {v!r}: expected a positive finite number")
-        for name in ("t", "dgamma", "dgamma_bridge"):
+        for name in ("t", "dgamma", "dgamma_bridge", "dgamma_solid"):
             v = getattr(self, name)
-            if v is None and name == "dgamma_bridge":
+            if v is None and name in ("dgamma_bridge", "dgamma_solid"):
                 continue
             if not (np.isfinite(v) and v >= 0):
                 raise ValueError(f"Interface.{name} = {v!r}: expected a finite number >= 0")
@@ -165,6 +181,12 @@ def _panels(a: np.ndarray, b: np.ndarray, nodes: int, panels: int, square: bool 
         z = a[:, None] + length * u
         wt = length * wu
     return z, wt
+
+
+def _G(u: np.ndarray) -> np.ndarray:
+    """``G(u) = phi(u) - u Q(u) = int_u^inf (v - u) phi(v) dv`` [1] for the standard Gaussian (module docstring,
+    "Wetted area")."""
+    return np.exp(-0.5 * u * u) / np.sqrt(2.0 * np.pi) - u * ndtr(-u)
 
 
 def _gauss(z: np.ndarray, s: float) -> np.ndarray:
@@ -300,14 +322,53 @@ def isbl_tables(d: np.ndarray, p: Interface, *, quantities=QUANTITIES, nodes: in
             out["adhesion_pressure"] = eta * (fm * wetted + lj)
         else:
             out["adhesion_pressure"] = out["adhesion_pressure_menisci"] + out["adhesion_pressure_bridges"]
+        if p.dgamma_solid is not None:  # (module docstring, "Adhesion rising with penetration")
+            extra_bridges, extra_menisci = penetration_adhesion(d, p)
+            out["adhesion_pressure_bridges"] = out["adhesion_pressure_bridges"] + extra_bridges
+            out["adhesion_pressure_menisci"] = out["adhesion_pressure_menisci"] + extra_menisci
+            out["adhesion_pressure"] = out["adhesion_pressure"] + (extra_bridges + extra_menisci)
 
     if "wetted_area_fraction" in want:  # closed form (module docstring, "Wetted area")
-        G = lambda u: np.exp(-0.5 * u * u) / np.sqrt(2.0 * np.pi) - u * ndtr(-u)  # noqa: E731
-        out["wetted_area_fraction"] = eta * 2.0 * np.pi * R * s * np.maximum(G((d - p.t) / s) - G(d / s), 0.0)
+        out["wetted_area_fraction"] = eta * 2.0 * np.pi * R * s * np.maximum(_G((d - p.t) / s) - _G(d / s), 0.0)
 
     if "contact_fraction" in want:
         out["contact_fraction"] = Q(d)
     return out
+
+
+def penetration_adhesion(d: np.ndarray, p: Interface) -> tuple[np.ndarray, np.ndarray]:
+    """The adhesion pressure [Pa] that penetration into the bonded layer adds, on the bridges and on the menisci.
+
+    Every summit that reaches the film and carries adhesion gets the extra work of adhesion
+    ``(dgamma_solid - dgamma) r``, ``r = clip((z - d + t) / t, 0, 1)``
+    (:func:`pipeline.physics.adhesion.penetration_work_of_adhesion`), so the extra force ``2 pi R`` times that:
+    on the wetted summits that do not touch (``d - t <= z < d``, the bridges' population) and on the elastic and
+    elastic-plastic ones (``d < z <= d + 110 w_c``, ``r = 1``, the menisci's); fully plastic summits carry no
+    adhesion, nor do the summits outside the film. In closed form, with ``int_a^b (z - a) phi dz =
+    sigma_s [G(a / sigma_s) - G(b / sigma_s)] - (b - a) Q(b)`` (module docstring, "Wetted area"):
+
+    ``p_b = eta 2 pi R (dgamma_solid - dgamma) ({sigma_s [G((d - t)/sigma_s) - G(d/sigma_s)]} / t - Q(d))``,
+    ``p_m = eta 2 pi R (dgamma_solid - dgamma) [Q(d) - Q(d + 110 w_c)]``
+
+    (``t = 0``: ``p_b = 0``). Both are 0 exactly when ``dgamma_solid == dgamma``. [VP11; docs/model.md,
+    section "Adhesion rising with penetration"]
+
+    Parameters
+    ----------
+    d : separation [m]
+    p : the interface, with ``dgamma_solid`` set
+    """
+    d = np.atleast_1d(np.asarray(d, dtype=float))
+    s, t = p.sigma_s, p.t
+    scale = p.eta * meniscus_force(p.R, p.dgamma_solid - p.dgamma)
+    Q = lambda x: ndtr(-x / s)  # noqa: E731 - upper tail P(z > x)
+    touching = np.where(d > 0, Q(d) - Q(d + asperity.X_PLASTIC * p.w_c),
+                        ndtr((d + asperity.X_PLASTIC * p.w_c) / s) - ndtr(d / s))
+    if t > 0.0:
+        ramp = np.maximum(s * (_G((d - t) / s) - _G(d / s)) / t - Q(d), 0.0)
+    else:
+        ramp = np.zeros_like(d)
+    return scale * ramp, scale * touching
 
 
 def _summit_integral(d: np.ndarray, p: Interface, law: SummitLaw, nodes: int, panels: int) -> np.ndarray:

@@ -290,3 +290,15 @@ def test_a_long_list_of_damping_ratios_is_checked_in_linear_time(write_scene):
     assert time.perf_counter() - t0 < 30
     assert "sweep.damping_ratio = [0.0, 1e-06, " in msg and "(200001 items)" in msg
     assert f"{values[7]:g} appears more than once" in msg and len(msg) < 600
+
+
+def test_solid_work_of_adhesion_needs_the_adhesion_effect(write_scene):
+    path = write_scene('[scene]\neffects = ["air_bearing", "contact"]\n[lubricant]\nsolid_work_of_adhesion_j_m2 = 0.12\n')
+    msg = _error(path)
+    assert str(path) in msg and "lubricant.solid_work_of_adhesion_j_m2" in msg and "'adhesion' effect" in msg
+
+
+def test_solid_work_of_adhesion_out_of_range(write_scene):
+    path = write_scene("[lubricant]\nsolid_work_of_adhesion_j_m2 = -0.1\n")
+    msg = _error(path)
+    assert str(path) in msg and "lubricant.solid_work_of_adhesion_j_m2" in msg and "J/m^2" in msg

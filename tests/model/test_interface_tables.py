@@ -31,3 +31,30 @@ def test_hardness_derived_from_a_fixed_psi_outside_physical_bounds_warns():
     with warnings.catch_warnings():
         warnings.simplefilter("error", PhysicsWarning)
         interface_tables.interface_parameters(scene, interface_tables.roughness_statistics(scene))
+
+
+IDENTIFIED = Path(__file__).resolve().parents[2] / "configs" / "paper-2009-identified.toml"
+
+
+def test_solid_work_of_adhesion_changes_the_adhesion_table_alone():
+    """lubricant.solid_work_of_adhesion_j_m2 reaches the tables through the interface parameters: at the lubricant's
+    own value every table is today's bit for bit; above it only the adhesion columns rise, by the closed form of
+    pipeline.physics.isbl.penetration_adhesion at the scene's parameters."""
+    import numpy as np
+    from pipeline.physics import isbl
+    base = load_scene(IDENTIFIED)
+    stats = interface_tables.roughness_statistics(base)
+    today = interface_tables.build_tables(base, stats)
+    w = base["lubricant"]["work_of_adhesion_j_m2"]
+    same = interface_tables.build_tables(load_scene(IDENTIFIED, [f"lubricant.solid_work_of_adhesion_j_m2={w}"]), stats)
+    assert float(same["solid_work_of_adhesion"]) == w
+    for name, var in today.data_vars.items():
+        assert np.array_equal(var.values, same[name].values), name
+    scene = load_scene(IDENTIFIED, ["lubricant.solid_work_of_adhesion_j_m2=0.149"])
+    more = interface_tables.build_tables(scene, stats)
+    changed = {n for n, v in today.data_vars.items() if not np.array_equal(v.values, more[n].values)}
+    assert changed == {"adhesion_pressure", "adhesion_pressure_bridges", "adhesion_pressure_menisci"}
+    p = interface_tables.interface_parameters(scene, stats)
+    b, m = isbl.penetration_adhesion(today["separation"].values * 1e-9, p)
+    np.testing.assert_allclose((more["adhesion_pressure"] - today["adhesion_pressure"]).values * 1e6, b + m,
+                               rtol=1e-9, atol=1e-9 * (b + m).max())

@@ -41,3 +41,22 @@ def test_lennard_jones_hand_value_and_bound():
     assert np.all(np.diff(F) < 0)          # decays monotonically beyond s = eps
     # gaps below eps are clamped (no s^-8 overflow)
     assert adhesion.lennard_jones_force(0.0, R, DG, EPS) == pytest.approx(adhesion.meniscus_force(R, DG))
+
+
+# --------------------------------------------------------------------------------------------
+# Work of adhesion rising with penetration into the bonded layer
+# --------------------------------------------------------------------------------------------
+
+def test_penetration_work_of_adhesion_ramps_across_the_bonded_layer():
+    """W(p) = dgamma at and above the film surface, dgamma_solid at and beyond the solid, linear between."""
+    t, w0, ws = 0.75e-9, 0.109, 0.12
+    p = np.array([-1e-9, 0.0, 0.25 * t, 0.5 * t, t, 3 * t])
+    W = adhesion.penetration_work_of_adhesion(p, t, w0, ws)
+    assert W[0] == W[1] == w0
+    assert W[4] == W[5] == ws
+    assert W[2] == pytest.approx(w0 + 0.25 * (ws - w0), rel=1e-15)
+    assert W[3] == pytest.approx(0.5 * (w0 + ws), rel=1e-15)
+    # equal values: the lubricant's everywhere, exactly
+    assert np.array_equal(adhesion.penetration_work_of_adhesion(p, t, w0, w0), np.full(p.shape, w0))
+    # a film of zero thickness: a step at the solid
+    np.testing.assert_array_equal(adhesion.penetration_fraction(np.array([-1e-12, 0.0, 1e-12]), 0.0), [0, 0, 1])
