@@ -49,7 +49,6 @@ import contextlib
 import contextvars
 import logging
 import os
-import signal
 import socket
 import threading
 import time
@@ -58,6 +57,7 @@ from concurrent.futures import FIRST_COMPLETED, CancelledError, ThreadPoolExecut
 from pathlib import Path
 from typing import Any, Callable, Iterable, Iterator, Sequence
 
+from . import interrupts
 from .code_version import code_key
 from .progress import Progress, end_line, env_seconds
 
@@ -295,18 +295,18 @@ def _threads(fn: Callable[..., Any], tasks: list[tuple], n: int, done: Callable[
 
 
 def _process_cluster(n: int):
-    """A ``distributed.LocalCluster`` of ``n`` single-threaded worker processes, no dashboard."""
+    """A ``distributed.LocalCluster`` of ``n`` single-threaded worker processes, no dashboard.
+
+    Started within :func:`pipeline.interrupts.shielded`: its worker processes (and multiprocessing's resource
+    tracker) have the signals a terminal sends its whole process group blocked (Ctrl-C, Ctrl-\\, a hang-up),
+    so only this process answers them (one line from the CLI, not a traceback per worker) and closes the
+    cluster; none of them is lost meanwhile (they were ignored here while the cluster started, and a
+    Ctrl-C then did nothing). A worker still dies with this process however it ends (distributed's own
+    watch of its parent)."""
     from distributed import LocalCluster
-    # The worker processes inherit an ignored SIGINT: Ctrl-C reaches the whole process group, and only
-    # this process should answer it (one line from the CLI, not a traceback per worker).
-    main = threading.current_thread() is threading.main_thread()
-    previous = signal.signal(signal.SIGINT, signal.SIG_IGN) if main else None
-    try:
+    with interrupts.shielded():
         return LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
                             silence_logs=logging.CRITICAL)  # shutdown races log CommClosedError
-    finally:
-        if previous is not None:
-            signal.signal(signal.SIGINT, previous)
 
 
 @contextlib.contextmanager
