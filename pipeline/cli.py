@@ -15,7 +15,7 @@ import sys
 import traceback
 from pathlib import Path
 
-from . import __version__, interrupts, runner
+from . import __version__, fanout, interrupts, runner
 from .io import DatasetError, os_error_line, results_dir
 from .progress import StderrHandler, interval_s
 from .config.loading import find_scene, load_scene, shipped_scenes
@@ -94,11 +94,6 @@ def _given(args: argparse.Namespace) -> dict:
                                                     "detrend", "write_scene", "force")}
 
 
-#: dask.distributed's loggers, which it configures at INFO itself.
-_DASK_LOGGERS = ("distributed", "distributed.scheduler", "distributed.nanny", "distributed.core",
-                 "distributed.http.proxy", "distributed.client")
-
-
 def _logging(verbose: int = 0, quiet: bool = False) -> None:
     """The stages' messages and progress (INFO of the ``pipeline`` loggers, :mod:`pipeline.progress`) on
     stderr; with ``quiet`` (``-q``) warnings and errors only; ``verbose`` 1 (``-v``) adds dask's own
@@ -107,9 +102,8 @@ def _logging(verbose: int = 0, quiet: bool = False) -> None:
     if not any(isinstance(h, StderrHandler) for h in log.handlers):
         log.addHandler(StderrHandler())
     log.setLevel(logging.WARNING if quiet else logging.DEBUG if verbose >= 2 else logging.INFO)
-    if not verbose:  # keep the terminal quiet (dask's shutdown races log CommClosedError)
-        for name in _DASK_LOGGERS:
-            logging.getLogger(name).setLevel(logging.CRITICAL)
+    if not verbose:  # keep the terminal quiet (dask's shutdown races log CommClosedError; a killed scheduler)
+        fanout.dask_log_level(logging.CRITICAL)
 
 
 def _ended(who: str, signum: int) -> int:
