@@ -57,7 +57,6 @@ import contextvars
 import logging
 import os
 import socket
-import threading
 import time
 import uuid
 from concurrent.futures import FIRST_COMPLETED, CancelledError, ThreadPoolExecutor, wait
@@ -261,12 +260,40 @@ def _stale(worker: str, module: str, theirs: str, ours: str) -> ClusterError:
                         "(install it where they run) and run again")
 
 
+def run_everywhere(client: Any, fn: Callable[..., Any], *args: Any, on_error: str = "raise") -> dict:
+    """``client.run(fn, *args, on_error=on_error)`` (``fn`` on every worker, outside the task graph) within the
+    stall bound (:func:`stall_s`): the scheduler waits for every worker's answer, and a worker stopped with
+    SIGSTOP never gives one (a rerun against it waited forever). On the bound, :class:`ClusterError` naming
+    the workers whose heartbeat did not move over the next few seconds (:func:`_silent_workers`).
+    (``Client.run`` takes no timeout: it is ``Client.sync`` of ``Client._run``, called here with one.)"""
+    bound = stall_s()
+    try:
+        return client.sync(client._run, fn, *args, on_error=on_error, callback_timeout=bound)
+    except TimeoutError:
+        silent = _silent_workers(client)
+        who = f"dask worker(s) {', '.join(silent)}" if silent else "a dask worker"
+        raise ClusterError(f"{who} did not answer for {bound:g} s (stopped, or the machine is unreachable; "
+                           "HDI_STALL_S sets the wait); restart or remove it and run again") from None
+
+
+def _silent_workers(client: Any) -> list[str]:
+    """The workers whose heartbeat (the scheduler's ``last_seen``) does not move within three polls."""
+    look_s = 3 * _POLL_S
+    try:
+        first = client.scheduler_info(n_workers=-1).get("workers", {})
+        time.sleep(look_s)
+        then = client.scheduler_info(n_workers=-1).get("workers", {})
+    except (OSError, TimeoutError):
+        return []
+    return sorted(w for w, info in then.items() if w in first and info.get("last_seen") == first[w].get("last_seen"))
+
+
 def check_code(client: Any, fn: Callable[..., Any]) -> None:
     """Every worker of ``client`` has this process's code key of ``fn``'s module, else :class:`ClusterError`
     naming the first worker (by address) that differs (a worker that cannot even run the check imports
     an older ``pipeline``)."""
     module, ours = _here_key(fn)
-    keys = client.run(_worker_code_key, module, on_error="return")
+    keys = run_everywhere(client, _worker_code_key, module, on_error="return")
     for worker, theirs in sorted(keys.items()):
         if isinstance(theirs, (OSError, TimeoutError)):  # (distributed's CommClosedError is an OSError)
             raise ClusterError(f"dask worker {worker} does not answer ({type(theirs).__name__}: {theirs}): it is "
@@ -420,7 +447,7 @@ def _distributed(fn: Callable[..., Any], tasks: list[tuple], scheduler: str, wor
         check_code(client, fn)
         log.info("fan-out: %d tasks on %s", len(tasks), f"{n} local processes" if scheduler == "processes" else
                  f"the dask scheduler {address} ({sum(client.nthreads().values())} worker threads)")
-        client.run(_warm_worker)
+        run_everywhere(client, _warm_worker)
         t0 = time.perf_counter()
         # (keys named after fn, as the dashboard and the workers' logs would name fn itself)
         name = getattr(fn, "__name__", "task")
