@@ -506,7 +506,7 @@ def _results(client: Any, futures: list, address: str, wait_s: float, watch: "_W
             pending.discard(fut)
             arrived = True
             yield result
-        running = watch.look({f.key for f in pending}) if pending else False
+        running = watch.look(pending) if pending else False
         if arrived or running:
             idle_since = None
             continue
@@ -567,10 +567,14 @@ class _Watch:
         except ClusterError:
             return 0
 
-    def look(self, keys: set) -> bool:
-        """Whether a worker runs one of the tasks ``keys`` now; :class:`ClusterError` naming a worker that holds
-        some of them and whose heartbeat has not moved for :meth:`bound` seconds."""
+    def look(self, pending: set) -> bool:
+        """Whether a worker runs one of the futures ``pending`` now; :class:`ClusterError` naming a worker that
+        holds some of them, running or finished with the result not yet fetched from it (the scheduler's
+        ``who_has``), and whose heartbeat has not moved for :meth:`bound` seconds."""
+        keys = {f.key for f in pending}
         processing = self._ask("processing")
+        done = [f.key for f in pending if getattr(f, "status", None) == "finished"]  # (its result on a worker)
+        holding = self._ask("who_has", keys=done) if done else {}
         workers = self._ask("identity", n_workers=-1).get("workers", {})
         now = time.monotonic()
         for worker, info in workers.items():
@@ -581,7 +585,11 @@ class _Watch:
                     self.longest_gap = max(self.longest_gap, now - before[1])
                 self.seen[worker] = (last, now)
         held = {w: sum(k in keys for k in ks) for w, ks in processing.items()}
-        for worker, n in sorted(held.items()):
+        results = dict.fromkeys(held, 0)
+        for ws in holding.values():
+            for w in ws:
+                results[w] = results.get(w, 0) + 1
+        for worker, n in sorted((w, held.get(w, 0) + results[w]) for w in results):
             since = self.seen.get(worker, (None, now))[1]
             if n and now - since > self.bound():
                 raise ClusterError(f"dask worker {worker}: no heartbeat for {now - since:.0f} s while it holds {n} "

@@ -67,7 +67,7 @@ def background_process(call: str) -> subprocess.Popen:
     :func:`pipeline.interrupts.in_background`); started from another thread (a notebook's, whose end would
     end it too) it ends with its compile."""
     parent = os.getpid() if threading.current_thread() is threading.main_thread() else None
-    first = f"from pipeline.interrupts import in_background\nin_background({parent!r})\n"
+    first = f"from pipeline.interrupts import in_background; in_background({parent!r})\n"
     return subprocess.Popen([sys.executable, "-c", f"{first}{call}\nimport os\nos._exit(0)"], stdin=subprocess.DEVNULL,
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
 

@@ -183,11 +183,15 @@ class _Scheduler:
 
     def __init__(self, processing=None, workers=(), frozen=(), answers=True):
         self._processing = processing or {}
+        self.results: dict = {}  # worker -> keys of finished tasks whose results it holds
         self.last_seen = dict.fromkeys(workers, 1000.0)
         self.frozen, self.answers = set(frozen), answers
 
     async def processing(self, workers=None):
         return self._processing
+
+    async def who_has(self, keys=()):
+        return {k: [w] for w, ks in self.results.items() for k in ks if k in keys}
 
     async def identity(self, n_workers=-1):
         for w in self.last_seen:
@@ -334,6 +338,18 @@ def test_a_worker_whose_heartbeat_stopped_while_it_holds_tasks_ends_the_wait_in_
     assert err is not None and err.startswith("dask worker tcp://w1:1: no heartbeat for 0 s while it holds 2 task(s) "
                                               "of the batch (it is stopped, or its machine is unreachable; "
                                               "HDI_STALL_S sets the wait); finished work is kept")
+
+
+def test_a_stopped_worker_holding_a_finished_tasks_result_is_named_too(polling, monkeypatch):
+    """Stopped after its task finished and before its result was fetched: no task of the batch is running
+    anywhere, and the wait ended as "1 worker(s) ran none of them" instead of naming the stopped worker."""
+    finished = _Future("a")
+    finished.status = "finished"  # (the scheduler has its result, on the stopped worker: it never arrives)
+    client = _Client(_Scheduler({"tcp://w1:1": []}, workers=["tcp://w1:1"], frozen=["tcp://w1:1"]))
+    client.scheduler.results = {"tcp://w1:1": ["a"]}
+    got, err, took = _waiting(client, [finished])
+    assert err is not None and err.startswith("dask worker tcp://w1:1: no heartbeat for 0 s while it holds 1 task(s) "
+                                              "of the batch"), err
 
 
 def test_a_live_worker_on_a_long_task_is_never_taken_for_a_stall(polling):

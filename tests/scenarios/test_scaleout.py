@@ -368,7 +368,8 @@ def test_a_stopped_worker_ends_the_sweep_in_one_line_naming_it_and_the_rerun_res
     resumed = subprocess.run(args, cwd=client, env=env, capture_output=True, text=True, timeout=300)
     assert resumed.returncode == 0, resumed.stderr
     log = [json.loads(line) for line in (client / "out" / ".hdi" / "runs.jsonl").read_text().splitlines()]
-    assert log[-1]["batches"] == 4 and log[-1]["batches_run"] == 4 - kept
+    assert log[-1]["batches"] == 4 and log[-1]["batches_run"] == 4 - kept, \
+        [ln for ln in resumed.stderr.splitlines() if "batch" in ln] + [again.stderr]
 
 
 @pytest.mark.slow
