@@ -241,3 +241,34 @@ def test_a_background_process_dies_with_its_killed_parent_and_leaves_the_group_s
         parent.kill()
         if child is not None and child.is_running():
             child.kill()
+
+
+def _catches(pid: int, signum: int) -> bool:
+    """Whether process ``pid`` has a handler for ``signum`` (its ``SigCgt`` mask, from /proc)."""
+    try:
+        with open(f"/proc/{pid}/status") as fh:
+            return bool(int(next(ln for ln in fh if ln.startswith("SigCgt:")).split()[1], 16) & (1 << (signum - 1)))
+    except (FileNotFoundError, StopIteration):
+        return False
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="/proc of Linux")
+def test_a_signal_during_the_console_scripts_imports_is_one_line_and_its_exit_code(tmp_path):
+    """The console script imports the command line for 1-6 s before the command's handlers were set: a
+    SIGTERM then killed it without a line (exit -15), a Ctrl-C printed a KeyboardInterrupt traceback."""
+    import subprocess
+    import time
+    from pathlib import Path
+    root = Path(__file__).resolve().parents[2]
+    code = "import sys; sys.argv = ['hdi'] + sys.argv[1:]; from pipeline.launch import entry; entry()"
+    proc = subprocess.Popen([sys.executable, "-c", code, "dmw", str(root / "configs" / "paper-2009.toml"), "--out",
+                             str(tmp_path / "out")], cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True)
+    deadline = time.monotonic() + 30
+    while not _catches(proc.pid, signal.SIGTERM) and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.002)
+    proc.send_signal(signal.SIGTERM)  # (at once: the command line is still being imported)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 143 and "Traceback" not in err, err
+    assert err.strip().splitlines() == ["hdi: terminated (SIGTERM); finished work is kept, run again to resume"]
+    assert not (tmp_path / "out").exists()
