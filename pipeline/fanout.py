@@ -271,18 +271,19 @@ def run_everywhere(client: Any, fn: Callable[..., Any], *args: Any, on_error: st
         return client.sync(client._run, fn, *args, on_error=on_error, callback_timeout=bound)
     except TimeoutError:
         silent = _silent_workers(client)
-        who = f"dask worker(s) {', '.join(silent)}" if silent else "a dask worker"
+        who = f"dask worker(s) {', '.join(silent)}" if silent else "a dask worker or the scheduler"
         raise ClusterError(f"{who} did not answer for {bound:g} s (stopped, or the machine is unreachable; "
                            "HDI_STALL_S sets the wait); restart or remove it and run again") from None
 
 
 def _silent_workers(client: Any) -> list[str]:
-    """The workers whose heartbeat (the scheduler's ``last_seen``) does not move within three polls."""
+    """The workers whose heartbeat (the scheduler's ``last_seen``) does not move within three polls (none
+    named when the scheduler itself does not answer within them)."""
     look_s = 3 * _POLL_S
     try:
-        first = client.scheduler_info(n_workers=-1).get("workers", {})
+        first = client.sync(client.scheduler.identity, n_workers=-1, callback_timeout=look_s).get("workers", {})
         time.sleep(look_s)
-        then = client.scheduler_info(n_workers=-1).get("workers", {})
+        then = client.sync(client.scheduler.identity, n_workers=-1, callback_timeout=look_s).get("workers", {})
     except (OSError, TimeoutError):
         return []
     return sorted(w for w, info in then.items() if w in first and info.get("last_seen") == first[w].get("last_seen"))
@@ -506,6 +507,9 @@ def _results(client: Any, futures: list, address: str, wait_s: float, watch: "_W
             pending.discard(fut)
             arrived = True
             yield result
+        if arrived and not watch.due():  # (results arriving: a look a poll at most, for the heartbeats)
+            idle_since = None
+            continue
         running = watch.look(pending) if pending else False
         if arrived or running:
             idle_since = None
@@ -541,6 +545,11 @@ class _Watch:
         self.client, self.address, self.floor_s = client, address, floor_s
         self.seen: dict[str, tuple[float, float]] = {}  # worker -> (its last_seen, when that value was first seen)
         self.longest_gap = 0.0  # [s] the longest time a worker's heartbeat took to move, seen so far
+        self.looked = -float("inf")  # (time.monotonic() of the last look)
+
+    def due(self) -> bool:
+        """Whether a poll's time has passed since the last look (:meth:`look`)."""
+        return time.monotonic() - self.looked >= _POLL_S
 
     def bound(self) -> float:
         """The stall bound [s]: :data:`STALL_S` (``HDI_STALL_S``), or :data:`STALL_HEARTBEATS` times the longest
@@ -576,7 +585,7 @@ class _Watch:
         done = [f.key for f in pending if getattr(f, "status", None) == "finished"]  # (its result on a worker)
         holding = self._ask("who_has", keys=done) if done else {}
         workers = self._ask("identity", n_workers=-1).get("workers", {})
-        now = time.monotonic()
+        now = self.looked = time.monotonic()
         for worker, info in workers.items():
             last = info.get("last_seen")
             before = self.seen.get(worker)
