@@ -562,7 +562,7 @@ class _Watch:
         try:
             return self.client.sync(getattr(self.client.scheduler, handler), callback_timeout=bound, **kwargs)
         except TimeoutError:
-            raise ClusterError(f"dask scheduler {self.address}: no answer for {bound:g} s (it is stopped, or "
+            raise ClusterError(f"dask scheduler {self.address}: no answer for {bound:.3g} s (it is stopped, or "
                                "overloaded; HDI_STALL_S sets the wait); finished work is kept, run again to "
                                "resume") from None
         except OSError as exc:
