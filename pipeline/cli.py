@@ -15,7 +15,7 @@ import sys
 import traceback
 from pathlib import Path
 
-from . import __version__, interrupts, runner
+from . import __version__, fanout, interrupts, runner
 from .io import DatasetError, os_error_line, results_dir
 from .progress import StderrHandler, interval_s
 from .config.loading import find_scene, load_scene, shipped_scenes
@@ -94,11 +94,6 @@ def _given(args: argparse.Namespace) -> dict:
                                                     "detrend", "write_scene", "force")}
 
 
-#: dask.distributed's loggers, which it configures at INFO itself.
-_DASK_LOGGERS = ("distributed", "distributed.scheduler", "distributed.nanny", "distributed.core",
-                 "distributed.http.proxy", "distributed.client")
-
-
 def _logging(verbose: int = 0, quiet: bool = False) -> None:
     """The stages' messages and progress (INFO of the ``pipeline`` loggers, :mod:`pipeline.progress`) on
     stderr; with ``quiet`` (``-q``) warnings and errors only; ``verbose`` 1 (``-v``) adds dask's own
@@ -107,21 +102,30 @@ def _logging(verbose: int = 0, quiet: bool = False) -> None:
     if not any(isinstance(h, StderrHandler) for h in log.handlers):
         log.addHandler(StderrHandler())
     log.setLevel(logging.WARNING if quiet else logging.DEBUG if verbose >= 2 else logging.INFO)
-    if not verbose:  # keep the terminal quiet (dask's shutdown races log CommClosedError)
-        for name in _DASK_LOGGERS:
-            logging.getLogger(name).setLevel(logging.CRITICAL)
+    if not verbose:  # keep the terminal quiet (dask's shutdown races log CommClosedError; a killed scheduler)
+        fanout.dask_log_level(logging.CRITICAL)
+
+
+def _ended(who: str, signum: int) -> int:
+    """Answer the signal ``signum``: its one line (:func:`pipeline.interrupts.message`), and its exit code."""
+    interrupts.answered()
+    interrupts.say(interrupts.message(who, signum))
+    return interrupts.exit_code(signum)
 
 
 def main(argv: list[str] | None = None) -> int:
+    """``hdi`` with the arguments ``argv`` (default ``sys.argv[1:]``); returns the exit code. A signal ends it
+    with its one line and 128 + its number whenever it arrives (:mod:`pipeline.interrupts`), also when it
+    made a library fail first (a worker it killed, a pipe it broke): the signal is what the user did."""
     with interrupts.handling():
-        code = _main(argv)
-    signum = interrupts.pending()
-    if signum is not None:  # (recorded, never raised to the top: swallowed where it was raised)
-        interrupts.answered()
-        if code == 0:
-            print(f"hdi: {interrupts.describe(signum)}; finished work is kept, run again to resume",
-                  file=sys.stderr)
-            code = interrupts.exit_code(signum)
+        try:
+            code = _main(argv)
+        except KeyboardInterrupt as exc:  # (outside the stage's try: parsing the arguments, just after it)
+            return _ended("hdi", interrupts.signal_of(exc))
+        with interrupts.deferred():
+            signum = interrupts.pending()
+            if signum is not None:  # (recorded, never raised to the top: swallowed where it was raised)
+                code = _ended("hdi", signum)
     return code
 
 
@@ -168,41 +172,43 @@ def _main(argv: list[str] | None = None) -> int:
         return 0
     except (SceneError, DatasetError, FileNotFoundError, ValueError) as exc:
         # bad input is one line; a ValueError from numerics would be one line too, so -v shows where
-        if args.verbose:
-            traceback.print_exc()
-        print(f"hdi {args.stage}: error: {exc}", file=sys.stderr)
-        return 2
+        return _failed(args, str(exc))
     except IntegrationError as exc:  # (a RuntimeError: the scene, the protrusion and what to change)
-        if args.verbose:
-            traceback.print_exc()
-        print(f"hdi {args.stage}: error: {integration_line(exc, scene)}", file=sys.stderr)
-        return 2
+        return _failed(args, integration_line(exc, scene))
     except MemoryError:  # (the sizes of config/limits.py are checked first; what they do not foresee)
-        if args.verbose:
-            traceback.print_exc()
-        print(f"hdi {args.stage}: error: out of memory (MemoryError); finished work is kept: ask for less (the sizes "
-              "bounded in pipeline/config/limits.py), or run on a machine with more memory", file=sys.stderr)
-        return 2
+        return _failed(args, "out of memory (MemoryError); finished work is kept: ask for less (the sizes bounded in "
+                             "pipeline/config/limits.py), or run on a machine with more memory")
     except OSError as exc:  # the file system: a full disk, permissions, a name too long, a folder for a file
-        if args.verbose:
-            traceback.print_exc()
-        print(f"hdi {args.stage}: error: {os_error_line(exc)}", file=sys.stderr)
-        return 2
+        return _failed(args, os_error_line(exc))
     except KeyboardInterrupt as exc:
-        interrupts.answered()
-        signum = interrupts.signal_of(exc)
-        print(f"hdi {args.stage}: {interrupts.describe(signum)}; finished work is kept, run again to resume",
-              file=sys.stderr)
-        return interrupts.exit_code(signum)
+        return _ended(f"hdi {args.stage}", interrupts.signal_of(exc))
+    except Exception:
+        if interrupts.pending() is None:  # (an error of hdi's own: its traceback)
+            raise
+        return _ended(f"hdi {args.stage}", interrupts.pending())  # (what a signal broke: a dask worker it killed)
 
 
-def entry(early: Early | None = None) -> None:  # pragma: no cover (the console script; tests call main)
+def _failed(args: argparse.Namespace, line: str) -> int:
+    """The one line of an error (with ``-v`` its traceback first), exit code 2; a signal received meanwhile is
+    answered instead (its effect, a broken pipe or a lost worker, is not the cause to report)."""
+    signum = interrupts.pending()
+    if signum is not None:
+        return _ended(f"hdi {args.stage}", signum)
+    if args.verbose:
+        traceback.print_exc()
+    interrupts.say(f"hdi {args.stage}: error: {line}")
+    return 2
+
+
+def entry(early: Early | None = None) -> None:  # pragma: no cover (the console script; tests run it as a process)
     """The ``hdi`` console script (:func:`pipeline.launch.entry`): :func:`main`, then a fast exit with its code.
 
     ``early``: the first run's kernel compile the console script started before importing this module
     (:func:`pipeline.model.first_run.start`), handed to the runner's compile-ahead
     (:func:`pipeline.model.compiled.adopt_early`) and stopped at the end if nothing adopted it; so is a
     background compile nothing waited for (an interrupted command: :func:`pipeline.model.compiled.stop_ahead`).
+    The signals stay answered to the last instruction (:func:`pipeline.interrupts.handling`); during this
+    clean-up one is recorded only (:func:`pipeline.interrupts.deferred`), then answered.
 
     Interpreter shutdown after a command costs ~0.3 s (numba's LLVM and the netCDF4/HDF5 teardown,
     measured on the 2-core machine: 2.0 s against 1.7 s for import + first simulation) and does
@@ -211,19 +217,27 @@ def entry(early: Early | None = None) -> None:  # pragma: no cover (the console 
     are flushed the process ends with ``os._exit``. An exception still exits the normal way, with
     its traceback.
     """
-    compiled.adopt_early(early)
-    try:
-        code = main()
-    finally:  # (an exception's traceback still ends the compiles nothing adopted or waited for)
-        compiled.stop_early()
-        compiled.stop_ahead()
-    logging.shutdown()
-    try:
-        sys.stdout.flush()
-        sys.stderr.flush()
-    except (BrokenPipeError, ValueError):  # (a reader that went away, e.g. `hdi ... | head`)
-        pass
-    os._exit(code)
+    with interrupts.handling():
+        compiled.adopt_early(early)
+        try:
+            code = main()
+        except KeyboardInterrupt as exc:  # (between main's own answer and the clean-up below)
+            code = _ended("hdi", interrupts.signal_of(exc))
+        finally:  # (an exception's traceback still ends the compiles nothing adopted or waited for)
+            with interrupts.deferred():
+                compiled.stop_early()
+                compiled.stop_ahead()
+        with interrupts.deferred():
+            signum = interrupts.pending()
+            if signum is not None:
+                code = _ended("hdi", signum)
+            logging.shutdown()
+            try:
+                sys.stdout.flush()
+                sys.stderr.flush()
+            except (OSError, ValueError):  # (a reader that went away, e.g. `hdi ... | head`; a closed terminal)
+                pass
+            os._exit(code)
 
 
 if __name__ == "__main__":  # pragma: no cover

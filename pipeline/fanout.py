@@ -39,8 +39,15 @@ On a cluster the client watches the progress while it waits: when for :data:`CLU
 (environment variable ``HDI_CLUSTER_WAIT_S``) no task finished and none was running on a worker (the
 last worker was lost, the scheduler has none, or they are all busy with other work), the command ends
 with one line (:class:`ClusterError`); finished tasks have written their outputs, so a rerun resumes.
-A scheduler lost mid-batch (stopped, or its connection broken: dask cancels the futures) ends it the
-same way.
+A scheduler lost mid-batch (its connection broken: dask cancels the futures) ends it the same way.
+
+A worker or a scheduler that is there but does not move (stopped with SIGSTOP, swapping, its machine
+unreachable while its connections stay open) is a stall (:class:`_Watch`): when a worker that holds tasks of
+the batch sends the scheduler no heartbeat, or the scheduler answers no question, for longer than the stall
+bound, the command ends with one line naming it (:class:`ClusterError`), and a rerun resumes. The bound is
+:data:`STALL_S` (``HDI_STALL_S``), or several times the longest gap between two heartbeats seen so far if
+that is longer (a loaded worker's event loop answers late): it follows dask's heartbeats, not the tasks' run
+times, so a batch that runs for hours on a live worker is never taken for a stall.
 """
 
 from __future__ import annotations
@@ -49,15 +56,14 @@ import contextlib
 import contextvars
 import logging
 import os
-import signal
 import socket
-import threading
 import time
 import uuid
 from concurrent.futures import FIRST_COMPLETED, CancelledError, ThreadPoolExecutor, wait
 from pathlib import Path
 from typing import Any, Callable, Iterable, Iterator, Sequence
 
+from . import interrupts
 from .code_version import code_key
 from .progress import Progress, end_line, env_seconds
 
@@ -68,6 +74,11 @@ LOCAL = ("synchronous", "threads", "processes")
 #: Seconds a dask.distributed cluster may go without finishing or running a task of the batch before
 #: the command ends (module docstring); ``HDI_CLUSTER_WAIT_S`` overrides it.
 CLUSTER_WAIT_S = 60.0
+#: Seconds a worker holding tasks of the batch may send no heartbeat, and the scheduler may leave a question
+#: unanswered, before the command ends as stalled (module docstring); ``HDI_STALL_S`` overrides it.
+STALL_S = 60.0
+#: The stall bound is at least this many times the longest gap between two heartbeats of a worker seen so far.
+STALL_HEARTBEATS = 5
 #: Seconds between two looks at the cluster while waiting for results.
 _POLL_S = 1.0
 #: Seconds to wait for a dask scheduler to answer a connection (dask's own default is 30 s), when the
@@ -76,6 +87,31 @@ CONNECT_TIMEOUT_S = 3.0
 #: Seconds a batch's client waits for the scheduler (dask's default: a busy scheduler of a long study
 #: answering late is no reason to stop); past them the command ends in one line.
 CLIENT_TIMEOUT_S = 30.0
+
+
+#: The loggers of dask.distributed and of what it runs on (tornado, asyncio), whose levels distributed sets from
+#: its own configuration when it is imported (:func:`dask_log_level`).
+DASK_LOGGERS = ("distributed", "distributed.client", "distributed.gc", "distributed.scheduler", "distributed.nanny",
+                "distributed.core", "distributed.http.proxy", "tornado", "tornado.application", "asyncio")
+#: The level :func:`dask_log_level` keeps those loggers at (``None``: dask's own configuration).
+_DASK_LEVEL: list[int | None] = [None]
+
+
+def dask_log_level(level: int | None) -> None:
+    """Keep the loggers of :data:`DASK_LOGGERS` at ``level``, now and after this module imports distributed
+    (whose import sets their levels again, from its configuration): how the command line keeps dask's own
+    messages and tracebacks (an ERROR with a traceback per broken connection when the scheduler is killed)
+    out of the terminal, where the one line of :class:`ClusterError` says what happened (``-v`` shows them).
+    ``None``: leave them as dask configures them."""
+    _DASK_LEVEL[0] = level
+    _keep_dask_level()
+
+
+def _keep_dask_level() -> None:
+    """Apply :func:`dask_log_level`'s level (after an import of distributed)."""
+    if _DASK_LEVEL[0] is not None:
+        for name in DASK_LOGGERS:
+            logging.getLogger(name).setLevel(_DASK_LEVEL[0])
 
 
 class ClusterError(ValueError):
@@ -104,6 +140,14 @@ def cluster_wait_s() -> float:
     (:func:`pipeline.progress.env_seconds`; a bad value is a :class:`ClusterError`)."""
     try:
         return env_seconds("HDI_CLUSTER_WAIT_S", CLUSTER_WAIT_S)
+    except ValueError as exc:
+        raise ClusterError(str(exc)) from None
+
+
+def stall_s() -> float:
+    """:data:`STALL_S` [s], or the environment variable ``HDI_STALL_S`` (a bad value is a :class:`ClusterError`)."""
+    try:
+        return env_seconds("HDI_STALL_S", STALL_S)
     except ValueError as exc:
         raise ClusterError(str(exc)) from None
 
@@ -144,6 +188,7 @@ def new_client(address: str, timeout: float) -> Any:
     (a failed connection, then a new Client in the same process). The object is made first and initialised
     second so that this function holds it when ``__init__`` raises."""
     from distributed import Client
+    _keep_dask_level()
     client = Client.__new__(Client)
     try:
         client.__init__(address, timeout=timeout, set_as_default=False)
@@ -215,13 +260,46 @@ def _stale(worker: str, module: str, theirs: str, ours: str) -> ClusterError:
                         "(install it where they run) and run again")
 
 
+def run_everywhere(client: Any, fn: Callable[..., Any], *args: Any, on_error: str = "raise") -> dict:
+    """``client.run(fn, *args, on_error=on_error)`` (``fn`` on every worker, outside the task graph) within the
+    stall bound (:func:`stall_s`): the scheduler waits for every worker's answer, and a worker stopped with
+    SIGSTOP never gives one (a rerun against it waited forever). On the bound, :class:`ClusterError` naming
+    the workers whose heartbeat did not move over the next few seconds (:func:`_silent_workers`).
+    (``Client.run`` takes no timeout: it is ``Client.sync`` of ``Client._run``, called here with one.)"""
+    bound = stall_s()
+    try:
+        return client.sync(client._run, fn, *args, on_error=on_error, callback_timeout=bound)
+    except TimeoutError:
+        silent = _silent_workers(client)
+        who = f"dask worker(s) {', '.join(silent)}" if silent else "a dask worker or the scheduler"
+        raise ClusterError(f"{who} did not answer for {bound:g} s (stopped, or the machine is unreachable; "
+                           "HDI_STALL_S sets the wait); restart or remove it and run again") from None
+
+
+def _silent_workers(client: Any) -> list[str]:
+    """The workers whose heartbeat (the scheduler's ``last_seen``) does not move within three polls (none
+    named when the scheduler itself does not answer within them)."""
+    look_s = 3 * _POLL_S
+    try:
+        first = client.sync(client.scheduler.identity, n_workers=-1, callback_timeout=look_s).get("workers", {})
+        time.sleep(look_s)
+        then = client.sync(client.scheduler.identity, n_workers=-1, callback_timeout=look_s).get("workers", {})
+    except (OSError, TimeoutError):
+        return []
+    return sorted(w for w, info in then.items() if w in first and info.get("last_seen") == first[w].get("last_seen"))
+
+
 def check_code(client: Any, fn: Callable[..., Any]) -> None:
     """Every worker of ``client`` has this process's code key of ``fn``'s module, else :class:`ClusterError`
     naming the first worker (by address) that differs (a worker that cannot even run the check imports
     an older ``pipeline``)."""
     module, ours = _here_key(fn)
-    keys = client.run(_worker_code_key, module, on_error="return")
+    keys = run_everywhere(client, _worker_code_key, module, on_error="return")
     for worker, theirs in sorted(keys.items()):
+        if isinstance(theirs, (OSError, TimeoutError)):  # (distributed's CommClosedError is an OSError)
+            raise ClusterError(f"dask worker {worker} does not answer ({type(theirs).__name__}: {theirs}): it is "
+                               "stopped, or its machine is unreachable; restart it or remove it from the cluster, "
+                               "and run again")
         if isinstance(theirs, BaseException):
             raise ClusterError(f"dask worker {worker} runs other code than this hdi: it cannot check its code key "
                                f"({type(theirs).__name__}: {theirs}); restart the workers from this version of "
@@ -295,18 +373,19 @@ def _threads(fn: Callable[..., Any], tasks: list[tuple], n: int, done: Callable[
 
 
 def _process_cluster(n: int):
-    """A ``distributed.LocalCluster`` of ``n`` single-threaded worker processes, no dashboard."""
+    """A ``distributed.LocalCluster`` of ``n`` single-threaded worker processes, no dashboard.
+
+    Started within :func:`pipeline.interrupts.shielded`: its worker processes (and multiprocessing's resource
+    tracker) have the signals a terminal sends its whole process group blocked (Ctrl-C, Ctrl-\\, a hang-up),
+    so only this process answers them (one line from the CLI, not a traceback per worker) and closes the
+    cluster; none of them is lost meanwhile (they were ignored here while the cluster started, and a
+    Ctrl-C then did nothing). A worker still dies with this process however it ends (distributed's own
+    watch of its parent)."""
     from distributed import LocalCluster
-    # The worker processes inherit an ignored SIGINT: Ctrl-C reaches the whole process group, and only
-    # this process should answer it (one line from the CLI, not a traceback per worker).
-    main = threading.current_thread() is threading.main_thread()
-    previous = signal.signal(signal.SIGINT, signal.SIG_IGN) if main else None
-    try:
+    _keep_dask_level()
+    with interrupts.shielded():
         return LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
                             silence_logs=logging.CRITICAL)  # shutdown races log CommClosedError
-    finally:
-        if previous is not None:
-            signal.signal(signal.SIGINT, previous)
 
 
 @contextlib.contextmanager
@@ -361,7 +440,7 @@ def _distributed(fn: Callable[..., Any], tasks: list[tuple], scheduler: str, wor
                  done: Callable[[Any], None]) -> float:
     """A local process cluster (``scheduler="processes"``) or the cluster at a scheduler address."""
     n = local_workers(workers, len(tasks)) if scheduler == "processes" else None
-    folder, wait_s = _SHARED.get(), cluster_wait_s()
+    folder, wait_s, stall = _SHARED.get(), cluster_wait_s(), stall_s()
     code = _here_key(fn)
     with local_cluster(scheduler, n) as address, connect(address, CLIENT_TIMEOUT_S) as client:
         if scheduler != "processes":  # (ours serves no dashboard pages: its HTTP port has dask's health routes only)
@@ -369,33 +448,38 @@ def _distributed(fn: Callable[..., Any], tasks: list[tuple], scheduler: str, wor
         check_code(client, fn)
         log.info("fan-out: %d tasks on %s", len(tasks), f"{n} local processes" if scheduler == "processes" else
                  f"the dask scheduler {address} ({sum(client.nthreads().values())} worker threads)")
-        client.run(_warm_worker)
+        run_everywhere(client, _warm_worker)
         t0 = time.perf_counter()
         # (keys named after fn, as the dashboard and the workers' logs would name fn itself)
         name = getattr(fn, "__name__", "task")
         futures = [client.submit(on_worker, folder, code, fn, *args, key=f"{name}-{uuid.uuid4().hex}", retries=2)
                    for args in tasks]
-        for result in _results(client, futures, address, wait_s):
+        for result in _results(client, futures, address, wait_s, _Watch(client, address, stall)):
             done(result)
         return time.perf_counter() - t0
 
 
-def _result(fut: Any, timeout: float) -> Any:
+def _result(fut: Any, timeout: float, address: str) -> Any:
     """The result of a finished future (:class:`TimeoutError` when it did not arrive within ``timeout``
     [s]: its worker was lost before sending it, and the task runs again); a task that killed its workers
     is one line."""
     from distributed import KilledWorker
+    from distributed.comm import CommClosedError
     try:
         return fut.result(timeout=timeout)
     except KilledWorker as exc:
         raise ClusterError(f"a task was lost with every worker that ran it ({exc}); a worker crashed or ran out "
                            "of memory: see the workers' logs; finished work is kept, run again to resume") from None
+    except CommClosedError as exc:  # (the scheduler went away while the result was fetched; a task's own
+        # OSError, a full disk on a worker, is raised as it is)
+        raise ClusterError(f"dask scheduler {address}: lost while a result was fetched "
+                           f"({type(exc).__name__}); finished work is kept, run again to resume") from None
 
 
-def _results(client: Any, futures: list, address: str, wait_s: float) -> Iterator[Any]:
+def _results(client: Any, futures: list, address: str, wait_s: float, watch: "_Watch") -> Iterator[Any]:
     """The futures' results as they arrive; :class:`ClusterError` when for ``wait_s`` [s] none arrived
     and no task of theirs was running on a worker (the last worker lost, none attached, all busy
-    elsewhere)."""
+    elsewhere), or when ``watch`` finds the scheduler or a worker running them stalled."""
     from distributed import wait as wait_any
     order = {fut: i for i, fut in enumerate(futures)}
     pending = set(futures)
@@ -414,7 +498,7 @@ def _results(client: Any, futures: list, address: str, wait_s: float) -> Iterato
             try:
                 # (bounded: a result whose worker died before sending it never arrives; the task is then
                 # computed again, so it stays pending, and the wait counts from when it was asked for)
-                result = _result(fut, timeout=max(_POLL_S, left))
+                result = _result(fut, max(_POLL_S, min(left, watch.bound())), address)
             except TimeoutError:
                 idle_since = asked if idle_since is None else idle_since
                 continue
@@ -423,16 +507,17 @@ def _results(client: Any, futures: list, address: str, wait_s: float) -> Iterato
             pending.discard(fut)
             arrived = True
             yield result
-        if arrived or _running(client, pending, address):
+        if arrived and not watch.due():  # (results arriving: a look a poll at most, for the heartbeats)
+            idle_since = None
+            continue
+        running = watch.look(pending) if pending else False
+        if arrived or running:
             idle_since = None
             continue
         now = time.monotonic()
         idle_since = now if idle_since is None else idle_since
         if now - idle_since >= wait_s:
-            try:
-                n_workers = len(client.scheduler_info(n_workers=-1).get("workers", {}))
-            except (OSError, TimeoutError):
-                n_workers = 0
+            n_workers = watch.workers()
             why = "no worker left" if n_workers == 0 else f"{n_workers} worker(s) ran none of them"
             raise ClusterError(f"dask scheduler {address}: {len(pending)} of {len(futures)} tasks waited {wait_s:g} s "
                                f"with {why} (HDI_CLUSTER_WAIT_S sets the wait); finished work is kept, start "
@@ -446,12 +531,78 @@ def _lost(address: str, pending: int, total: int) -> ClusterError:
                         "or the connection to it broke); finished work is kept, run again to resume")
 
 
-def _running(client: Any, pending: set, address: str) -> bool:
-    """Whether a worker is running one of the ``pending`` futures now."""
-    keys = {f.key for f in pending}
-    try:
-        processing = client.processing()
-    except (OSError, TimeoutError) as exc:
-        raise ClusterError(f"dask scheduler {address}: stopped answering ({exc}); finished work is kept, run "
-                           "again to resume") from None
-    return any(k in keys for ks in processing.values() for k in ks)
+class _Watch:
+    """What the client sees of the cluster while it waits for a batch (:func:`_results`): which worker holds
+    which pending task, and when each worker's heartbeat last moved; a stall ends the command.
+
+    The scheduler's ``last_seen`` of a worker (its clock) is compared only with its own earlier values, so the
+    clocks of the client and the scheduler need not agree: a worker's heartbeat *moved* when its ``last_seen``
+    changed between two looks, and is stalled when it did not move for :meth:`bound` seconds of this process's
+    clock while the worker held tasks of the batch. Every question to the scheduler waits :meth:`bound` seconds
+    at most."""
+
+    def __init__(self, client: Any, address: str, floor_s: float) -> None:
+        self.client, self.address, self.floor_s = client, address, floor_s
+        self.seen: dict[str, tuple[float, float]] = {}  # worker -> (its last_seen, when that value was first seen)
+        self.longest_gap = 0.0  # [s] the longest time a worker's heartbeat took to move, seen so far
+        self.looked = -float("inf")  # (time.monotonic() of the last look)
+
+    def due(self) -> bool:
+        """Whether a poll's time has passed since the last look (:meth:`look`)."""
+        return time.monotonic() - self.looked >= _POLL_S
+
+    def bound(self) -> float:
+        """The stall bound [s]: :data:`STALL_S` (``HDI_STALL_S``), or :data:`STALL_HEARTBEATS` times the longest
+        gap between two moves of a worker's heartbeat seen so far if that is longer."""
+        return max(self.floor_s, STALL_HEARTBEATS * self.longest_gap)
+
+    def _ask(self, handler: str, **kwargs: Any) -> Any:
+        """The scheduler's answer to ``handler``; :class:`ClusterError` when it gives none within :meth:`bound`."""
+        bound = self.bound()
+        try:
+            return self.client.sync(getattr(self.client.scheduler, handler), callback_timeout=bound, **kwargs)
+        except TimeoutError:
+            raise ClusterError(f"dask scheduler {self.address}: no answer for {bound:.3g} s (it is stopped, or "
+                               "overloaded; HDI_STALL_S sets the wait); finished work is kept, run again to "
+                               "resume") from None
+        except OSError as exc:
+            raise ClusterError(f"dask scheduler {self.address}: stopped answering ({exc}); finished work is kept, "
+                               "run again to resume") from None
+
+    def workers(self) -> int:
+        """The workers the scheduler has now (0 if it cannot say)."""
+        try:
+            return len(self._ask("identity", n_workers=-1).get("workers", {}))
+        except ClusterError:
+            return 0
+
+    def look(self, pending: set) -> bool:
+        """Whether a worker runs one of the futures ``pending`` now; :class:`ClusterError` naming a worker that
+        holds some of them, running or finished with the result not yet fetched from it (the scheduler's
+        ``who_has``), and whose heartbeat has not moved for :meth:`bound` seconds."""
+        keys = {f.key for f in pending}
+        processing = self._ask("processing")
+        done = [f.key for f in pending if getattr(f, "status", None) == "finished"]  # (its result on a worker)
+        holding = self._ask("who_has", keys=done) if done else {}
+        workers = self._ask("identity", n_workers=-1).get("workers", {})
+        now = self.looked = time.monotonic()
+        for worker, info in workers.items():
+            last = info.get("last_seen")
+            before = self.seen.get(worker)
+            if before is None or last != before[0]:
+                if before is not None:
+                    self.longest_gap = max(self.longest_gap, now - before[1])
+                self.seen[worker] = (last, now)
+        held = {w: sum(k in keys for k in ks) for w, ks in processing.items()}
+        results = dict.fromkeys(held, 0)
+        for ws in holding.values():
+            for w in ws:
+                results[w] = results.get(w, 0) + 1
+        for worker, n in sorted((w, held.get(w, 0) + results[w]) for w in results):
+            since = self.seen.get(worker, (None, now))[1]
+            if n and now - since > self.bound():
+                raise ClusterError(f"dask worker {worker}: no heartbeat for {now - since:.0f} s while it holds {n} "
+                                   f"task(s) of the batch (it is stopped, or its machine is unreachable; "
+                                   "HDI_STALL_S sets the wait); finished work is kept, restart or remove the worker "
+                                   "and run again to resume")
+        return any(held.values())

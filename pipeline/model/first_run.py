@@ -23,6 +23,7 @@ import shutil
 import subprocess
 import sys
 import tempfile
+import threading
 from typing import NamedTuple, Sequence
 
 from ..code_version import code_key
@@ -59,8 +60,15 @@ def background_process(call: str) -> subprocess.Popen:
     a kernel's compile (docs/performance.md, section "The background compile's exit"): the process that
     waits for it (:func:`pipeline.model.compiled.wait_ahead`) waits for its exit. ``call``'s own files (numba's
     cache entries) are written and closed when it returns; an exception still ends the process the usual way
-    (exit code 1, its traceback to the null device: a failed compile is only a cache miss)."""
-    return subprocess.Popen([sys.executable, "-c", f"{call}\nimport os\nos._exit(0)"], stdin=subprocess.DEVNULL,
+    (exit code 1, its traceback to the null device: a failed compile is only a cache miss).
+
+    The process leaves Ctrl-C and the other signals a terminal sends its process group to this one, and,
+    started from this process's main thread, dies with it however it ends (SIGKILL included:
+    :func:`pipeline.interrupts.in_background`); started from another thread (a notebook's, whose end would
+    end it too) it ends with its compile."""
+    parent = os.getpid() if threading.current_thread() is threading.main_thread() else None
+    first = f"from pipeline.interrupts import in_background; in_background({parent!r})\n"
+    return subprocess.Popen([sys.executable, "-c", f"{first}{call}\nimport os\nos._exit(0)"], stdin=subprocess.DEVNULL,
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
 
 

@@ -70,3 +70,53 @@ def test_the_help_lists_every_stage_and_run_and_a_bad_stage_exits_2(capsys):
     with pytest.raises(SystemExit) as done:
         cli.main(["nosuchstage", "x.toml"])
     assert done.value.code == 2 and "invalid choice: 'nosuchstage'" in capsys.readouterr().err
+
+
+# ------------------------------------------------------------------ a signal is answered before what it broke
+class _GoneStream:
+    """A stderr whose reader is gone: the terminal closed (EIO), or ``| tee log`` ended by the same hang-up."""
+
+    def write(self, text):
+        raise BrokenPipeError(32, "Broken pipe")
+
+    def flush(self):
+        raise BrokenPipeError(32, "Broken pipe")
+
+
+@pytest.mark.parametrize("failure", [ValueError("dask scheduler tcp://h:1: lost with 3 of 4 tasks unfinished"),
+                                     RuntimeError("BrokenProcessPool"), BrokenPipeError(32, "Broken pipe")],
+                         ids=["cluster-error", "unexpected", "broken-pipe"])
+def test_a_signal_that_made_the_stage_fail_is_what_the_command_answers(tmp_path, paper_config, capsys, monkeypatch,
+                                                                        failure):
+    """A hang-up kills the workers (or the reader of the pipe) as well as hdi: the error that follows is its
+    effect. It was ``error: ...`` with exit 2, or a traceback, not the signal's line and 129."""
+    import signal
+    from pipeline import interrupts
+
+    def build(self, targets, force=False):
+        interrupts._PENDING.append(signal.SIGHUP)
+        raise failure
+
+    monkeypatch.setattr(runner.Runner, "build", build)
+    assert cli.main(["sweep", str(paper_config), "--out", str(tmp_path), "-q"]) == 129
+    assert capsys.readouterr().err.strip().splitlines() == [
+        "hdi sweep: hung up (SIGHUP: the terminal closed); finished work is kept, run again to resume"]
+    assert interrupts.pending() is None
+
+
+def test_a_hang_up_under_a_pipe_is_exit_129_though_its_line_cannot_be_written(tmp_path, paper_config, monkeypatch):
+    """``hdi sweep ... 2>&1 | tee log`` and the terminal closed: the last line's write failed with a broken
+    pipe, and the command ended with exit 1 (a traceback no one saw), not 129."""
+    import signal
+    import sys
+    from pipeline import interrupts
+    from pipeline.interrupts import Terminated
+
+    def build(self, targets, force=False):
+        interrupts._PENDING.append(signal.SIGHUP)
+        raise Terminated(signal.SIGHUP)
+
+    monkeypatch.setattr(runner.Runner, "build", build)
+    monkeypatch.setattr(sys, "stderr", _GoneStream())
+    assert cli.main(["sweep", str(paper_config), "--out", str(tmp_path), "-q"]) == 129
+    assert interrupts.pending() is None

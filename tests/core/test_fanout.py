@@ -176,14 +176,58 @@ class _Future:
         return self.value
 
 
-class _NoWorkers:
-    """A stand-in for a client whose scheduler has lost its last worker."""
+class _Scheduler:
+    """A stand-in for a client's connection to its scheduler: the tasks each worker holds, and each worker's
+    ``last_seen`` (the scheduler's time of its last heartbeat), which ``beat`` moves at every question, or not
+    for the workers of ``frozen``."""
 
-    def processing(self):
-        return {}
+    def __init__(self, processing=None, workers=(), frozen=(), answers=True):
+        self._processing = processing or {}
+        self.results: dict = {}  # worker -> keys of finished tasks whose results it holds
+        self.last_seen = dict.fromkeys(workers, 1000.0)
+        self.frozen, self.answers = set(frozen), answers
+
+    async def processing(self, workers=None):
+        return self._processing
+
+    async def who_has(self, keys=()):
+        return {k: [w] for w, ks in self.results.items() for k in ks if k in keys}
+
+    async def identity(self, n_workers=-1):
+        for w in self.last_seen:
+            if w not in self.frozen:
+                self.last_seen[w] += 0.5
+        return {"workers": {w: {"last_seen": t} for w, t in self.last_seen.items()}}
+
+
+class _Client:
+    """A stand-in for a ``distributed.Client``: ``sync`` runs a coroutine function of its :class:`_Scheduler`
+    (or ``_run``, the results of ``run`` on the workers), and gives no answer within ``callback_timeout`` from
+    a scheduler that does not answer (stopped)."""
+
+    def __init__(self, scheduler=None, run=None):
+        self.scheduler = scheduler or _Scheduler()
+        self.ran = run
+
+    async def _run(self, fn, *args, on_error="raise"):
+        if self.ran is None:
+            raise TimeoutError()
+        return self.ran
+
+    def sync(self, fn, *args, callback_timeout=None, **kwargs):
+        import asyncio
+        if not self.scheduler.answers:
+            time.sleep(callback_timeout)
+            raise TimeoutError(f"timed out after {callback_timeout} s.")
+        return asyncio.run(fn(*args, **kwargs))
 
     def scheduler_info(self, n_workers=-1):
-        return {"workers": {}}
+        return self.sync(self.scheduler.identity, n_workers=n_workers)
+
+
+def _no_workers():
+    """A stand-in for a client whose scheduler has lost its last worker."""
+    return _Client(_Scheduler())
 
 
 @pytest.mark.parametrize("lost_result", [False, True])
@@ -208,7 +252,8 @@ def test_a_cluster_without_workers_ends_the_wait_in_one_line_within_the_bound(mo
     got = []
     t0 = time.monotonic()
     with pytest.raises(fanout.ClusterError) as err:
-        for result in fanout._results(_NoWorkers(), futures, "tcp://host:8786", wait_s=0.5):
+        client = _no_workers()
+        for result in fanout._results(client, futures, "tcp://host:8786", 0.5, fanout._Watch(client, "h", 60.0)):
             got.append(result)
     took = time.monotonic() - t0
     assert got == ([7] if lost_result else [])  # what arrived was handed on (its part is kept)
@@ -220,29 +265,164 @@ def test_a_cluster_without_workers_ends_the_wait_in_one_line_within_the_bound(mo
 
 
 # ------------------------------------------------------------ issue 26, 3: a worker running other code
-class _Workers:
+def _workers(keys):
     """A stand-in for a client whose workers answer ``run`` with these code keys (or exceptions)."""
-
-    def __init__(self, keys):
-        self.keys = keys
-
-    def run(self, fn, *args, on_error="raise"):
-        return self.keys
+    return _Client(run=keys)
 
 
 def test_a_worker_with_another_code_key_is_refused_in_one_line_naming_it_and_both_keys():
     from pipeline.code_version import code_key
     ours = code_key("pipeline.code_version")
     assert ours  # (a module of the package: a real key)
-    fanout.check_code(_Workers({"tcp://10.0.0.1:1": ours, "tcp://10.0.0.2:1": ours}), code_key)  # all current
+    fanout.check_code(_workers({"tcp://10.0.0.1:1": ours, "tcp://10.0.0.2:1": ours}), code_key)  # all current
     with pytest.raises(fanout.ClusterError) as err:
-        fanout.check_code(_Workers({"tcp://10.0.0.1:1": ours, "tcp://10.0.0.2:1": "ab" * 32}), code_key)
+        fanout.check_code(_workers({"tcp://10.0.0.1:1": ours, "tcp://10.0.0.2:1": "ab" * 32}), code_key)
     assert str(err.value) == (f"dask worker tcp://10.0.0.2:1 runs other code than this hdi: code key of "
                               f"pipeline.code_version {'ab' * 6} there, {ours[:12]} here; restart the workers from "
                               "this version of pipeline (install it where they run) and run again")
     with pytest.raises(fanout.ClusterError, match=r"^dask worker tcp://10.0.0.1:1 runs other code than this hdi: it "
                                                   r"cannot check its code key \(AttributeError: gone\)"):
-        fanout.check_code(_Workers({"tcp://10.0.0.1:1": AttributeError("gone")}), code_key)
+        fanout.check_code(_workers({"tcp://10.0.0.1:1": AttributeError("gone")}), code_key)
+
+
+# ------------------------------------------------------------ a stalled worker or scheduler
+def test_the_stall_bound_is_a_documented_setting(monkeypatch):
+    monkeypatch.delenv("HDI_STALL_S", raising=False)
+    assert fanout.stall_s() == fanout.STALL_S == 60.0
+    monkeypatch.setenv("HDI_STALL_S", "7.5")
+    assert fanout.stall_s() == 7.5
+    monkeypatch.setenv("HDI_STALL_S", "0")
+    with pytest.raises(fanout.ClusterError, match="HDI_STALL_S=0: expected a number of seconds > 0"):
+        fanout.stall_s()
+
+
+def _waiting(client, futures, wait_s=60.0, floor_s=0.3):
+    """Run :func:`pipeline.fanout._results` to its end: (the results handed on, the error, the seconds taken)."""
+    got, t0 = [], time.monotonic()
+    try:
+        for result in fanout._results(client, futures, "tcp://host:8786", wait_s, fanout._Watch(client, "tcp://host:8786",
+                                                                                                floor_s)):
+            got.append(result)
+    except fanout.ClusterError as exc:
+        return got, str(exc), time.monotonic() - t0
+    return got, None, time.monotonic() - t0
+
+
+@pytest.fixture()
+def polling(monkeypatch):
+    """distributed's wait, answering at once that nothing finished but the futures that have a value."""
+    import distributed
+
+    class _Done:
+        def __init__(self, done):
+            self.done = done
+
+    def wait(fs, timeout=None, return_when=None):
+        done = {f for f in fs if f.value is not None}
+        if not done:
+            time.sleep(0.02)
+        return _Done(done)
+
+    monkeypatch.setattr(distributed, "wait", wait)
+    monkeypatch.setattr(fanout, "_POLL_S", 0.02)
+
+
+def test_a_worker_whose_heartbeat_stopped_while_it_holds_tasks_ends_the_wait_in_one_line(polling):
+    """A worker stopped with SIGSTOP: the scheduler still lists its tasks as running, and the sweep waited
+    forever with a growing ETA. The other worker's heartbeat moves: only the stopped one is named."""
+    futures = [_Future("a"), _Future("b"), _Future("c")]
+    client = _Client(_Scheduler({"tcp://w1:1": ["a", "b"], "tcp://w2:1": ["c"]}, workers=["tcp://w1:1", "tcp://w2:1"],
+                                frozen=["tcp://w1:1"]))
+    got, err, took = _waiting(client, futures)
+    assert got == [] and 0.3 <= took < 3.0, took
+    assert err is not None and err.startswith("dask worker tcp://w1:1: no heartbeat for 0 s while it holds 2 task(s) "
+                                              "of the batch (it is stopped, or its machine is unreachable; "
+                                              "HDI_STALL_S sets the wait); finished work is kept")
+
+
+def test_a_stopped_worker_holding_a_finished_tasks_result_is_named_too(polling, monkeypatch):
+    """Stopped after its task finished and before its result was fetched: no task of the batch is running
+    anywhere, and the wait ended as "1 worker(s) ran none of them" instead of naming the stopped worker."""
+    finished = _Future("a")
+    finished.status = "finished"  # (the scheduler has its result, on the stopped worker: it never arrives)
+    client = _Client(_Scheduler({"tcp://w1:1": []}, workers=["tcp://w1:1"], frozen=["tcp://w1:1"]))
+    client.scheduler.results = {"tcp://w1:1": ["a"]}
+    got, err, took = _waiting(client, [finished])
+    assert err is not None and err.startswith("dask worker tcp://w1:1: no heartbeat for 0 s while it holds 1 task(s) "
+                                              "of the batch"), err
+
+
+def test_a_live_worker_on_a_long_task_is_never_taken_for_a_stall(polling):
+    """Its heartbeat moves: a batch that runs for many times the bound is waited for (the bound follows the
+    heartbeats, not the tasks' run times)."""
+    late = _Future("long")
+    client = _Client(_Scheduler({"tcp://w1:1": ["long"]}, workers=["tcp://w1:1"]))
+    timer = threading.Timer(1.5, lambda: setattr(late, "value", 42))  # (5 times the bound of 0.3 s)
+    timer.start()
+    got, err, took = _waiting(client, [late])
+    timer.join()
+    assert (got, err) == ([42], None) and took >= 1.5
+
+
+def test_the_stall_bound_follows_the_longest_heartbeat_gap_seen():
+    """A loaded worker's heartbeat comes late: the bound is 5 times the longest gap seen, if that is longer."""
+    client = _Client(_Scheduler({}, workers=["tcp://w1:1"]))
+    watch = fanout._Watch(client, "tcp://host:8786", 0.1)
+    watch.look(set())
+    client.scheduler.frozen = {"tcp://w1:1"}
+    time.sleep(0.2)
+    watch.look(set())
+    client.scheduler.frozen = set()
+    watch.look(set())  # (it moved: after a gap of 0.2 s)
+    assert 0.2 <= watch.longest_gap < 1.0 and watch.bound() == pytest.approx(fanout.STALL_HEARTBEATS * watch.longest_gap)
+
+
+def test_a_scheduler_that_stopped_answering_mid_batch_ends_the_wait_in_one_line(polling):
+    """A scheduler stopped with SIGSTOP keeps its connections open: every question waited forever."""
+    client = _Client(_Scheduler({"tcp://w1:1": ["a"]}, workers=["tcp://w1:1"], answers=False))
+    got, err, took = _waiting(client, [_Future("a")])
+    assert got == [] and 0.3 <= took < 3.0, took
+    assert err == ("dask scheduler tcp://host:8786: no answer for 0.3 s (it is stopped, or overloaded; HDI_STALL_S "
+                   "sets the wait); finished work is kept, run again to resume")
+
+
+def test_a_worker_that_does_not_answer_the_code_check_is_named_as_such(monkeypatch):
+    """A rerun against a stopped worker waited forever, or said that it "runs other code"."""
+    from pipeline.code_version import code_key
+    monkeypatch.setenv("HDI_STALL_S", "0.2")
+    client = _Client(_Scheduler({}, workers=["tcp://w1:1", "tcp://w2:1"], frozen=["tcp://w2:1"]), run=None)
+    monkeypatch.setattr(fanout, "_POLL_S", 0.05)
+    with pytest.raises(fanout.ClusterError) as err:
+        fanout.check_code(client, code_key)
+    assert str(err.value) == ("dask worker(s) tcp://w2:1 did not answer for 0.2 s (stopped, or the machine is "
+                              "unreachable; HDI_STALL_S sets the wait); restart or remove it and run again")
+    from distributed.comm import CommClosedError
+    with pytest.raises(fanout.ClusterError, match=r"^dask worker tcp://w1:1 does not answer \(CommClosedError: gone\): "
+                                                  r"it is stopped, or its machine is unreachable; restart it or "
+                                                  r"remove it from the cluster, and run again$"):
+        fanout.check_code(_workers({"tcp://w1:1": CommClosedError("gone")}), code_key)
+
+
+def test_dasks_loggers_stay_quiet_after_distributed_resets_them():
+    """distributed sets its loggers' levels from its configuration when it is imported, after the command line
+    had set them: a killed scheduler then printed ERROR tracebacks of distributed.client before the one line."""
+    import logging
+
+    import dask
+    from distributed.config import initialize_logging
+    before = {n: logging.getLogger(n).level for n in fanout.DASK_LOGGERS}
+    try:
+        fanout.dask_log_level(logging.CRITICAL)
+        initialize_logging(dask.config.config)  # (what `import distributed` does)
+        assert logging.getLogger("distributed.client").level == logging.WARNING
+        with pytest.raises(fanout.ClusterError):
+            fanout.connect("tcp://127.0.0.1:1", timeout=0.2).__enter__()
+        assert {n: logging.getLogger(n).level for n in fanout.DASK_LOGGERS} == dict.fromkeys(fanout.DASK_LOGGERS,
+                                                                                               logging.CRITICAL)
+    finally:
+        fanout.dask_log_level(None)
+        for n, level in before.items():
+            logging.getLogger(n).setLevel(level)
 
 
 def test_a_task_checks_the_code_key_on_its_worker(monkeypatch):

@@ -130,7 +130,9 @@ def test_the_early_compile_writes_its_key_in_a_private_folder_of_its_own(tmp_pat
     assert early.proc == "proc" and folder.parent == tmp_path and folder.name.startswith("hdi-kernel-")
     assert folder.stat().st_mode & 0o777 == 0o700 and list(folder.iterdir()) == []
     assert early.key_path == str(folder / first_run.KEY_FILE)
-    call = commands[0][-1].splitlines()[0]
+    guard, call = commands[0][-1].splitlines()[:2]
+    # (first: it ignores the terminal's group signals and dies with this process, started from its main thread)
+    assert guard == f"from pipeline.interrupts import in_background; in_background({os.getpid()})"
     assert call.endswith(f"compile_scene_kernel('paper-2009', ['contact.k=0.5'], {early.key_path!r})")
     early.discard()
     assert not folder.exists()
@@ -183,7 +185,7 @@ from pipeline.model import compiled
 _wait = compiled.wait_ahead
 def _spy():
     for proc in compiled._AHEAD.values():
-        print("waited for:", proc.args[-1].split(";")[0], file=sys.stderr)
+        print("waited for:", proc.args[-1].splitlines()[1].split(";")[0], file=sys.stderr)  # (after its guard)
     _wait()
 compiled.wait_ahead = _spy
 """

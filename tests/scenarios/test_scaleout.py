@@ -301,3 +301,91 @@ def test_losing_the_last_worker_ends_the_sweep_in_one_line_and_a_rerun_resumes(o
     log = [json.loads(line) for line in (client / "out" / ".hdi" / "runs.jsonl").read_text().splitlines()]
     assert log[-1]["batches"] == 4 and log[-1]["batches_run"] == 4 - kept
     assert read_dataset(client / "out" / "sweep.nc").sizes["damping"] == 2
+
+
+# ------------------------------------------------------------------ a stalled or killed cluster mid-sweep
+def _mid_sweep(cluster: Cluster, tmp_path: Path, stall_s: float):
+    """``hdi sweep`` of :data:`LOSS` on ``cluster``, returned once its first part is written: (the process, its
+    command, its environment, its working folder)."""
+    env = dict(os.environ, PYTHONPATH=str(ROOT), HDI_STALL_S=f"{stall_s:g}", HDI_CLUSTER_WAIT_S=f"{stall_s:g}")
+    args = [sys.executable, "-m", "pipeline.cli", "sweep", str(PAPER), *[a for s in LOSS for a in ("--set", s)],
+            "--scheduler", cluster.address, "--out", "out"]
+    client = tmp_path / "client"
+    client.mkdir()
+    proc = subprocess.Popen(args, cwd=client, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    end = time.monotonic() + 240
+    while not list((client / "out" / "sweep.parts").glob("batch-*.nc")) and proc.poll() is None \
+            and time.monotonic() < end:
+        time.sleep(0.05)
+    assert proc.poll() is None, proc.communicate()
+    return proc, args, env, client
+
+
+def _one_line(proc: subprocess.Popen, timeout: float, client: Path) -> str:
+    """The last line of ``proc``, which must end with exit 2, one error line, no traceback nor dask log line,
+    and the folder lock and staging folders gone."""
+    try:
+        _, err = proc.communicate(timeout=timeout)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    assert proc.returncode == 2, err
+    assert "Traceback" not in err and " - ERROR - " not in err and " - WARNING - " not in err, err
+    assert [ln for ln in err.splitlines() if ": error: " in ln] == err.strip().splitlines()[-1:], err
+    assert not (client / "out" / ".hdi.lock").exists() and not list((client / "out").glob(".hdi-staging-*"))
+    return err.strip().splitlines()[-1]
+
+
+def _freeze(p: subprocess.Popen) -> None:
+    """SIGSTOP a dask process and its children (a worker's nanny and worker process)."""
+    import psutil
+    for q in [psutil.Process(p.pid), *psutil.Process(p.pid).children(recursive=True)]:
+        q.suspend()
+
+
+@pytest.mark.slow
+def test_a_stopped_worker_ends_the_sweep_in_one_line_naming_it_and_the_rerun_resumes(one_worker, tmp_path):
+    """SIGSTOP of the worker mid-sweep: the sweep waited forever with a growing ETA, and a rerun against the
+    stopped worker said that it "runs other code"."""
+    import json
+    stall_s = 20.0
+    proc, args, env, client = _mid_sweep(one_worker, tmp_path, stall_s)
+    _freeze(one_worker.workers[0])
+    stopped = time.monotonic()
+    line = _one_line(proc, stall_s * 6 + 60, client)
+    took = time.monotonic() - stopped
+    assert line.startswith("hdi sweep: error: dask worker tcp://127.0.0.1:") and "no heartbeat for" in line \
+        and "finished work is kept" in line and "run again to resume" in line, line
+    assert stall_s <= took < stall_s * 6 + 60, took
+    kept = len(list((client / "out" / "sweep.parts").glob("batch-*.nc")))
+    assert 1 <= kept < 4
+    again = subprocess.run(args, cwd=client, env=env, capture_output=True, text=True, timeout=300)
+    assert again.returncode == 2 and "Traceback" not in again.stderr, again.stderr
+    assert "did not answer for" in again.stderr.strip().splitlines()[-1] and "runs other code" not in again.stderr
+    one_worker.kill_worker(one_worker.workers[0])  # (SIGKILL reaches a stopped process)
+    one_worker.start_workers(1)
+    resumed = subprocess.run(args, cwd=client, env=env, capture_output=True, text=True, timeout=300)
+    assert resumed.returncode == 0, resumed.stderr
+    log = [json.loads(line) for line in (client / "out" / ".hdi" / "runs.jsonl").read_text().splitlines()]
+    assert log[-1]["batches"] == 4 and log[-1]["batches_run"] == 4 - kept, \
+        [ln for ln in resumed.stderr.splitlines() if "batch" in ln] + [again.stderr]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("how", ["stopped", "killed"])
+def test_a_stopped_or_killed_scheduler_ends_the_sweep_in_one_line_without_dasks_tracebacks(one_worker, tmp_path, how):
+    """A killed scheduler printed distributed.client's ERROR tracebacks (and ended with a line of dask's comm
+    error); a stopped one (SIGSTOP) left the sweep waiting forever."""
+    stall_s = 20.0
+    proc, args, env, client = _mid_sweep(one_worker, tmp_path, stall_s)
+    scheduler = one_worker.procs[0]
+    if how == "stopped":
+        _freeze(scheduler)
+    else:
+        os.killpg(scheduler.pid, signal.SIGKILL)
+    line = _one_line(proc, stall_s * 6 + 120, client)
+    assert line.startswith(f"hdi sweep: error: dask scheduler {one_worker.address}: ") \
+        and "finished work is kept, run again to resume" in line, line
+    if how == "stopped":
+        assert "no answer for" in line, line

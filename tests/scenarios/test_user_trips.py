@@ -46,32 +46,108 @@ def test_datasets_are_created_with_the_umask_like_any_file(tmp_path, umask, mode
 
 
 # ------------------------------------------------------------------------------ 6. SIGTERM
+#: A sweep of 31 one-protrusion batches: still running when its second part is written.
+LONG = FLY[:3] + ["sweep.protrusion_nm={start=0.0, stop=6.0, step=0.2}", "sweep.batch_size=1"]
+
+
+def _sweep(out: Path, *extra: str, **popen) -> subprocess.Popen:
+    """``hdi sweep`` of :data:`LONG` into ``out`` as a process of its own session, SIGHUP at its default (as
+    from a terminal: a test session run under nohup passes it ignored)."""
+    cmd = [sys.executable, "-m", "pipeline.cli", "sweep", str(PAPER), "--out", str(out), "--workers", "2", *extra]
+    for s in LONG:
+        cmd += ["--set", s]
+    popen = {"stdout": subprocess.PIPE, "stderr": subprocess.PIPE, "text": True, **popen}
+    return subprocess.Popen(cmd, cwd=ROOT, start_new_session=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGHUP, signal.SIG_DFL), **popen)
+
+
+def _two_parts_written(out: Path, proc: subprocess.Popen) -> list:
+    """Wait until the sweep has written two parts; its descendant processes then (psutil)."""
+    import psutil
+    from pipeline.stages import sweep as sweep_stage
+    parts = out / sweep_stage.PARTS
+    deadline = time.time() + 240
+    while time.time() < deadline and len(list(parts.glob("batch-*.nc"))) < 2 and proc.poll() is None:
+        time.sleep(0.05)
+    assert proc.poll() is None and (out / runner.LOCK_NAME).exists() and list(out.glob(runner.STAGING_PREFIX + "*"))
+    return psutil.Process(proc.pid).children(recursive=True)
+
+
+def _none_alive(children: list, wait_s: float = 10.0) -> list:
+    """The processes of ``children`` still alive ``wait_s`` after their parent ended (killed here, if any)."""
+    import psutil
+    _, alive = psutil.wait_procs(children, timeout=wait_s)
+    for p in alive:
+        p.kill()
+    return [(p.pid, p.name()) for p in alive]
+
+
+def _ended_cleanly(out: Path, code: int, err: str, words: str, returncode: int) -> None:
+    from pipeline.stages import sweep as sweep_stage
+    assert returncode == code, err
+    assert "Traceback" not in err and "Error" not in err, err
+    assert err.strip().splitlines()[-1] == f"hdi sweep: {words}; finished work is kept, run again to resume"
+    assert not (out / runner.LOCK_NAME).exists()
+    assert not list(out.glob(runner.STAGING_PREFIX + "*"))
+    assert len(list((out / sweep_stage.PARTS).glob("batch-*.nc"))) >= 2
+
+
 @pytest.mark.parametrize("signum, code, words", [
     (signal.SIGTERM, 143, "terminated (SIGTERM)"),
-    (signal.SIGHUP, 129, "hung up (SIGHUP: the terminal closed)")])
+    (signal.SIGHUP, 129, "hung up (SIGHUP: the terminal closed)"),
+    (signal.SIGQUIT, 131, "quit (SIGQUIT)"),
+    (signal.SIGUSR1, 138, "ended by SIGUSR1"),
+    pytest.param(signal.SIGUSR2, 140, "ended by SIGUSR2", marks=pytest.mark.slow)])
 def test_sigterm_removes_the_lock_and_the_staging_folder_like_ctrl_c(tmp_path, signum, code, words):
     """What ``timeout``, SLURM's scancel and a requeue send (SIGTERM), and a closed terminal or a dropped ssh
-    session (SIGHUP): the lock used to stay, refusing the rerun; SIGHUP killed the command outright."""
-    from pipeline.stages import sweep as sweep_stage
-    cmd = [sys.executable, "-m", "pipeline.cli", "sweep", str(PAPER), "--out", str(tmp_path), "--workers", "2"]
-    for s in FLY[:3] + ["sweep.protrusion_nm={start=0.0, stop=6.0, step=0.2}", "sweep.batch_size=1"]:
-        cmd += ["--set", s]
-    # (SIGHUP's default in the child, as from a terminal: a test session run under nohup passes it ignored)
-    proc = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            preexec_fn=lambda: signal.signal(signal.SIGHUP, signal.SIG_DFL))
-    parts = tmp_path / sweep_stage.PARTS
-    deadline = time.time() + 180
-    while time.time() < deadline and len(list(parts.glob("batch-*.nc"))) < 2:
-        time.sleep(0.05)
-    assert (tmp_path / runner.LOCK_NAME).exists() and list(tmp_path.glob(runner.STAGING_PREFIX + "*"))
+    session (SIGHUP): the lock used to stay, refusing the rerun; SIGHUP killed the command outright, and so
+    did SIGQUIT (Ctrl-\\) and SIGUSR1/2 (a batch system's warning of its time limit), without a line."""
+    proc = _sweep(tmp_path)
+    children = _two_parts_written(tmp_path, proc)
     proc.send_signal(signum)
     _, err = proc.communicate(timeout=120)
-    assert proc.returncode == code, err
-    assert "Traceback" not in err
-    assert err.strip().splitlines()[-1] == f"hdi sweep: {words}; finished work is kept, run again to resume"
-    assert not (tmp_path / runner.LOCK_NAME).exists()
-    assert not list(tmp_path.glob(runner.STAGING_PREFIX + "*"))
-    assert len(list(parts.glob("batch-*.nc"))) >= 2
+    _ended_cleanly(tmp_path, code, err, words, proc.returncode)
+    assert _none_alive(children) == []
+
+
+def test_a_hang_up_under_a_pipe_ends_with_129(tmp_path):
+    """``hdi sweep ... 2>&1 | cat`` and the terminal closed: SIGHUP reaches both, the reader first; the last
+    line's write then failed on the broken pipe and the command ended with exit 1, not 129."""
+    log = (tmp_path / "log.txt").open("w")
+    out = tmp_path / "out"
+    proc = _sweep(out, stderr=subprocess.STDOUT, text=False)
+    reader = subprocess.Popen(["cat"], stdin=proc.stdout, stdout=log)
+    proc.stdout.close()
+    _two_parts_written(out, proc)
+    reader.send_signal(signal.SIGHUP)
+    reader.wait(timeout=20)
+    proc.send_signal(signal.SIGHUP)
+    assert proc.wait(timeout=120) == 129
+    assert not (out / runner.LOCK_NAME).exists() and not list(out.glob(runner.STAGING_PREFIX + "*"))
+
+
+@pytest.mark.slow
+def test_a_hang_up_of_the_whole_group_during_a_process_fan_out_ends_it_in_one_line_and_resumes(tmp_path):
+    """The terminal closed while dask's worker processes ran the sweep: SIGHUP reaches the whole foreground
+    group. The workers and multiprocessing's resource tracker died of it first, which printed a traceback per
+    shared-memory name and raced the clean-up. Now the command alone answers it: one line, 129, no process
+    left, the lock and the staging folder gone, and a rerun resumes from the parts kept."""
+    import json
+    proc = _sweep(tmp_path, "--scheduler", "processes")
+    children = _two_parts_written(tmp_path, proc)
+    assert len(children) >= 2  # (the two workers, the resource tracker)
+    os.killpg(proc.pid, signal.SIGHUP)
+    _, err = proc.communicate(timeout=180)
+    _ended_cleanly(tmp_path, 129, err, "hung up (SIGHUP: the terminal closed)", proc.returncode)
+    assert "resource_tracker" not in err and "KeyError" not in err, err
+    assert _none_alive(children) == []
+    from pipeline.stages import sweep as sweep_stage
+    kept = len(list((tmp_path / sweep_stage.PARTS).glob("batch-*.nc")))
+    again = _sweep(tmp_path)
+    _, err = again.communicate(timeout=600)
+    assert again.returncode == 0, err
+    runs = [json.loads(line) for line in (tmp_path / ".hdi" / "runs.jsonl").read_text().splitlines()]
+    assert runs[-1]["batches"] == 31 and runs[-1]["batches_run"] == 31 - kept
 
 
 # ------------------------------------------------------------------------------ 7. interface labels
