@@ -497,6 +497,7 @@ def test_penetration_adhesion_is_zero_where_no_summit_reaches_the_film():
     assert extra[3] < 1e-9 * _extra(p, np.array([0.0]), ws)[0]     # 4 nm = 6.5 sigma_s above the film
     # the change of the table is the closed form over the summits inside the film alone
     parts = isbl.penetration_adhesion(d, replace(p, dgamma_solid=ws))
+    # tol: a difference of two adhesion tables against the closed form: the cancellation costs ~table / extra eps (<1e4)
     np.testing.assert_allclose(parts[0] + parts[1], extra, rtol=1e-9, atol=1e-12 * abs(extra).max())
 
 
@@ -508,6 +509,7 @@ def test_penetration_adhesion_is_monotonic_and_linear_in_the_solid_value():
     for lo, hi in zip(tables[:-1], tables[1:]):
         assert np.all(hi >= lo) and np.all(hi[d < 2.0 * NM] > lo[d < 2.0 * NM])
     e1, e2 = _extra(PEN, d, PEN.dgamma + 0.02), _extra(PEN, d, PEN.dgamma + 0.04)
+    # tol: differences of tables linear in W_s: the cancellation costs ~table / extra eps (<1e4), no libm
     np.testing.assert_allclose(e2, 2 * e1, rtol=1e-9, atol=1e-9 * abs(e2).max())
 
 
