@@ -200,18 +200,20 @@ def test_a_scene_is_read_only_at_every_depth(paper_config):
 
 
 #: SHA-256 of each shipped scene's configuration text (``Scene.to_toml_text``, the repository's folder written
-#: ``<root>``: the bases' paths are absolute) as the scenes were before lists became read-only. The scene's
-#: hash is the SHA-256 of that text and keys the runner's cache: a change here re-runs every stage. Update
-#: a value only with a deliberate change of that scene file.
+#: ``<root>``: the bases' paths are absolute). The scene's hash is the SHA-256 of that text and keys the runner's
+#: cache: a change here re-runs every stage. The text lists every schema key with its default, so a new key (the
+#: heater's actuation, dmw.unit, lubricant.solid_work_of_adhesion_j_m2) changes every value, deliberately; the
+#: read-only lists left the text of the scenes as it was (checked against the values before them).
+#: Update a value only with a deliberate change of that scene file or of the schema.
 SHIPPED_TEXT_SHA256 = {
-    "paper-2009": "73ba37576a50cb372f31ee9b305cf40013a1acf4af2f55d5368522d2faa1488b",
-    "paper-2009-bulge": "ad27f805054c1255ec1fe30ff9c1d21b3698c3bdc1488fde04495149b0dab72a",
-    "paper-2009-identified": "5aa083d3362a21542f611e8f264f1b6ead0e2c3f2d0813ee89a3483b97cef8b4",
-    "paper-2009-reynolds": "7e18a5f29600c1eaec10e9a275b04befd2cfcb1cec5f5f5f7bd47e9705c00b25",
-    "paper-2009-two-population": "a1b0e735ebf01d9f8374f05d753d78b36bf1da913ce1b2e0c1d7eea818f8c2f0",
-    "paper-2009-two-population-identified": "92db32032e19165e333714ac04077a8c32d349820b182c23ab63d47110bab496",
-    "paper-2009-two-population-rough": "42bdcbbd7c7b6be6c0263b3afd3827ae1a08a16c7402925f60c402c8c9afad0e",
-    "sweep-3x3": "a70db0515c7b7a9f477d5ed047933bd88f53029065ed25f303e9b3a23780ceb5",
+    "paper-2009": "8d939d4ed8d39f11310c73b21d042c40b444cda2ef858ba231ef14649762fa45",
+    "paper-2009-bulge": "29a74c4f57eab252ca989da39cad225d975d6c3cabd9f3f36a16142d225e2f5b",
+    "paper-2009-identified": "84851091d02ed115a5a1f12cd843339151397e070b10982ee9cdb8ddc29dcb12",
+    "paper-2009-reynolds": "b46fd6376480ac0638f26dd69b594c135320c828d2013d63082177cdc9187ee2",
+    "paper-2009-two-population": "cfa2fae48825009f878cc577d16c83feb1075b35f3dc97f74b38e373d5264cb6",
+    "paper-2009-two-population-identified": "cb2ba837b65ff4542ab4f4c5f24ba0d74a7a7cc51f223f64623396560bac510c",
+    "paper-2009-two-population-rough": "4a7e54aa0d10ae7434c72772c720d08a95f9591afca89f9fa0165cc8492ef552",
+    "sweep-3x3": "e31d296f14c75b452204466be89415e9bb770df6792216de17da71ed12bc0b09",
 }
 
 
