@@ -192,6 +192,17 @@ def count_lines(path: str | Path) -> int:
     return n + (last != b"\n")
 
 
+def _ends_a_line(path: str | Path) -> bool:
+    """Whether a (non-empty) text file's last byte ends a line: what every CSV writer leaves, and a file
+    cut short does not."""
+    with open(path, "rb") as fh:
+        fh.seek(0, 2)
+        if fh.tell() == 0:
+            return True
+        fh.seek(-1, 2)
+        return fh.read(1) in (b"\n", b"\r")
+
+
 #: Suffixes of NetCDF records (any other is read as CSV).
 NETCDF_SUFFIXES = (".nc", ".nc4", ".cdf", ".netcdf")
 
@@ -254,6 +265,7 @@ def _parse_csv(path: Path, quantity: str, column: str | None,
         wanted = [val_idx] + ([time_idx] if time_idx is not None else [])
         out = np.empty((len(wanted), n_lines))
         n = 0
+        line_no = first[0]
         for line_no, ln in itertools.chain([] if header is not None else [first], lines):
             row = split(ln)
             if len(row) > ncol and any(c != "" for c in row[ncol:]):
@@ -270,6 +282,10 @@ def _parse_csv(path: Path, quantity: str, column: str | None,
             n += 1
             if n % PROGRESS_ROWS == 0:
                 log.info("dmw: %s: read %d of at most %d rows", path, n, n_lines)
+    if line_no == n_lines and not _ends_a_line(path):
+        raise DMWError(f"{path}: line {line_no}: the file ends inside this line (no line break after it), as a record "
+                       "cut short ends (an interrupted copy or download), maybe in the middle of a number; restore the "
+                       f"whole file, or end it with a line break if line {line_no} is complete")
     field_name = labels[val_idx]
     x = out[0, :n]
     _check_values(path, field_name, x)
@@ -335,6 +351,9 @@ def _read_netcdf(path: Path, quantity: str, column: str | None,
     except (OSError, ValueError) as exc:
         raise DMWError(f"{path}: not a readable NetCDF file ({exc}); expected NetCDF with a variable "
                        f"on a 'time' coordinate") from None
+    except RuntimeError as exc:  # (netCDF4's "NetCDF: HDF error": a chunk that does not decompress)
+        raise DMWError(f"{path}: its data cannot be read back ({exc}: a damaged file); restore the record "
+                       "from a copy (dmw.source)") from None
     interrupts.check()  # (netCDF4's error checks can swallow a signal raised during the read)
     if "elapsed_time" in ds.variables and "time" not in ds.variables:  # a dmw.nc of this pipeline (variables.TIME)
         ds = ds.rename({"elapsed_time": "time"})
