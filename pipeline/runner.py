@@ -513,10 +513,7 @@ class Runner:
                 written[os.path.realpath(self.out / o)] = (st.name, o)
         for name in self.plan(targets):
             for role, p in self.files(name).items():
-                hit = written.get(os.path.realpath(p))
-                if hit is None:  # (a hard link to an output is the same file too)
-                    hit = next(((s, o) for s, o in written.values()
-                                if (self.out / o).is_file() and os.path.samefile(p, self.out / o)), None)
+                hit = written.get(os.path.realpath(p))  # (a link there resolved: its target is the output's path)
                 if hit is not None:
                     raise OutputRefused(f"{role} = {p}: is the file {hit[1]} the {hit[0]} stage writes in the results "
                                         f"folder {self.out}; an input is never overwritten by an output: move it out "

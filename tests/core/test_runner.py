@@ -608,7 +608,7 @@ def test_an_input_file_is_never_an_outputs_target(tmp_path, paper_scene):
                                                        r"writes in the results folder .*; an input is never "
                                                        "overwritten by an output: move it out"):
             runner.Runner(paper_scene, out, stages).build(["h"], force=force)
-    os.link(record, tmp_path / "link.nc")                               # a hard link to it is the same file
+    (tmp_path / "link.nc").symlink_to(record)                          # a link to it names the same file
     stages["h"] = dataclasses.replace(stages["h"], files=lambda scene: {"dmw.source": tmp_path / "link.nc"})
     with pytest.raises(runner.OutputRefused, match="is the file h.nc"):
         runner.Runner(paper_scene, out, stages).build(["h"])

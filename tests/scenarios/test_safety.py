@@ -365,14 +365,17 @@ def test_a_dataset_another_process_writes_is_busy_and_never_replaced(tmp_path):
             io.read_dataset(out / "a.nc")
     assert computed == [] and netCDF4.Dataset(out / "a.nc").getncattr("edit") == "being written"
     assert not (out / runner.LOCK_NAME).exists()
-    runner.Runner(load_scene(PAPER), out, {"toy": stage}).build(["toy"])    # closed: replaced as usual
+    # closed: a user's file, replaced with force only (pipeline.runner.Runner.check_owners)
+    with pytest.raises(runner.OutputRefused, match="not written by hdi"):
+        runner.Runner(load_scene(PAPER), out, {"toy": stage}).build(["toy"])
+    runner.Runner(load_scene(PAPER), out, {"toy": stage}).build(["toy"], force=True)
     assert computed == [1] and io.read_attrs(out / "a.nc")[0][io.KEY_ATTR]
 
 
 def test_a_dataset_opened_for_writing_during_the_computation_is_not_replaced(tmp_path):
     import netCDF4
     out = tmp_path / "out"
-    io.write_dataset(_dataset(), out / "a.nc", stage="a user's")
+    io.write_dataset(_dataset(), out / "a.nc", stage="toy", extra_attrs={io.KEY_ATTR: "of other inputs"})
     held = []
 
     def compute(scene, inputs):
@@ -381,7 +384,7 @@ def test_a_dataset_opened_for_writing_during_the_computation_is_not_replaced(tmp
     with pytest.raises(io.DatasetBusy):
         runner.Runner(load_scene(PAPER), out, {"toy": runner.Stage("toy", compute, outputs=("a.nc",))}).build(["toy"])
     held[0].close()
-    assert io.read_attrs(out / "a.nc")[0]["stage"] == "a user's"
+    assert io.read_attrs(out / "a.nc")[0][io.KEY_ATTR] == "of other inputs"
     assert [p.name for p in out.iterdir() if p.name.startswith(".")] == []   # no temporary file left
     assert not io.is_busy(out / "a.nc") and not io.is_busy(out / "missing.nc")
 
