@@ -351,7 +351,9 @@ def open_dataset(results: str | Path, name: str) -> xr.Dataset:
     Raises
     ------
     pipeline.io.DatasetError
-        When the file is missing (naming the stage to run) or not a readable dataset.
+        When the file is missing (naming the stage to run) or not a readable dataset;
+        :class:`pipeline.io.DatasetDamaged` when a variable cannot be read back or differs from the checksum
+        written with it (docs/datasets.md, section "Stored datasets checked when read").
     """
     check_path_option(results, "results")
     if not isinstance(name, str):

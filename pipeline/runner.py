@@ -524,7 +524,8 @@ class Runner:
         there, or that holds another scene's results; ``force`` (``--force``) replaces them.
 
         hdi wrote a file at an output path of a stage when the stage's record (``.hdi/<stage>.json``) lists
-        it, or, for a dataset, when its provenance names the stage (attribute ``stage``, with an inputs key).
+        it, or, for a dataset, when its provenance (:func:`pipeline.io.provenance`) names the stage (attribute
+        ``stage``; ``hdi roughness FILE... --out DIR`` writes one without an inputs key).
         Its scene is the dataset's ``scene_name``, else the record's ``scene``; results of a scene of another
         name are another scene's (``results/<scene name>/`` is each scene's own folder). Only the stages this
         build computes are checked (those forced or not current).
@@ -560,7 +561,7 @@ class Runner:
                         raise
                     except (OSError, ValueError, RuntimeError):  # (unreadable: the record says whose it is)
                         attrs = {}
-                ours = attrs.get("stage") == name and KEY_ATTR in attrs
+                ours = attrs.get("stage") == name and "pipeline_version" in attrs  # (hdi's provenance, io.provenance)
                 if not ours and o not in listed:
                     raise OutputRefused(f"{p}: not written by hdi (no {name} stage's record of it), and the {name} "
                                         f"stage would replace it: move it away, choose another --out, or pass --force "
