@@ -18,9 +18,11 @@ The runner gives each stage an *inputs key*: the SHA-256 of the scene keys it re
 the files it reads, the keys of its upstream stages (so a change propagates downstream), the options
 that change its result and its code (the source of its module and of the ``pipeline`` modules that
 module imports, :func:`pipeline.code_version.code_key`). Every dataset it writes carries that key (attribute
-``inputs_key``); non-NetCDF outputs are listed with their hashes in ``.hdi/<stage>.json``. A stage
-whose outputs carry the key of its current inputs is not recomputed; otherwise it is, and everything
-downstream of it too. Datasets are written through :func:`pipeline.io.write_dataset` (temporary file
+``inputs_key``); every stage's outputs are listed in ``.hdi/<stage>.json`` with the key, the scene's name and the
+SHA-256 of each file. A stage whose outputs carry the key of its current inputs, and whose datasets read back
+equal to their checksums (:func:`pipeline.io.stored_problem`: not damaged or edited since), is not recomputed;
+otherwise it is, and everything downstream of it too. Outputs replace only files hdi wrote there for the same
+scene (:meth:`Runner.check_owners`; ``force`` lifts it), and never an input file (:meth:`Runner.check_inputs_apart`). Datasets are written through :func:`pipeline.io.write_dataset` (temporary file
 and rename), other outputs are renamed into place from the staging folder.
 
 A results folder is used by one ``hdi`` process at a time: the runner builds while holding
@@ -443,10 +445,16 @@ class Runner:
         datasets = [o for o in outputs if o.endswith(".nc")]
         others = [o for o in outputs if not o.endswith(".nc")]
         produced: list[str] | None = None
+        try:
+            manifest = json.loads(self._manifest(name).read_text())
+            if not isinstance(manifest, dict):
+                raise ValueError
+        except (OSError, ValueError):
+            manifest = None
+        # the datasets' bytes as written, when recorded for these inputs (stored_problem: read back only if changed)
+        files = manifest.get("files", {}) if manifest is not None and manifest.get("key") == key else {}
         if others:
-            try:
-                manifest = json.loads(self._manifest(name).read_text())
-            except (OSError, ValueError):
+            if manifest is None:
                 return "no record of its outputs"
             if manifest.get("key") != key:
                 return "inputs changed"
@@ -464,7 +472,7 @@ class Runner:
             have, listed = _dataset_key(p)
             if have != key:
                 return f"{o} made from other inputs" if have else f"{o} has no inputs key"
-            problem = stored_problem(p)  # (a damaged chunk, a hand edit: recomputed, never reused)
+            problem = stored_problem(p, files.get(o))  # (a damaged chunk, a hand edit: recomputed, never reused)
             if problem is not None:
                 return f"{o}: {problem}"
             if i == 0 and listed is not None:
@@ -735,13 +743,15 @@ class Runner:
                 self._hashes[target] = hashes[o]
             else:
                 target.unlink(missing_ok=True)
-        # the record of what the stage wrote here (and for which scene): whose files the outputs are (check_owners)
+        # the record of what the stage wrote here, for which scene (whose files the outputs are: check_owners) and
+        # the SHA-256 of each dataset's bytes (a dataset whose bytes are unchanged is not read back: stale_reason)
         manifest = refuse_links(self._manifest(st.name))
         manifest.parent.mkdir(parents=True, exist_ok=True)
         refuse_links(manifest)
         tmp = temporary_path(manifest)
-        tmp.write_text(json.dumps({"key": key, "outputs": produced, "hashes": hashes, "scene": self.scene.name},
-                                  indent=1))
+        files = {o: file_hash(self.out / o) for o in produced if o.endswith(".nc")}
+        tmp.write_text(json.dumps({"key": key, "outputs": produced, "hashes": hashes, "files": files,
+                                   "scene": self.scene.name}, indent=1))
         os.replace(tmp, manifest)
         return produced
 

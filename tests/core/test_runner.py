@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from pipeline import cli, runner
+from pipeline import cli, io, runner
 from pipeline.io import DatasetError, read_dataset, var
 from pipeline.physics import microwaviness as phys_dmw
 from pipeline.physics import surface as sf
@@ -555,7 +555,7 @@ def _history_stage(calls: list[str], name: str = "h", upstream: tuple[str, ...] 
     return runner.Stage(name, compute, outputs=(f"{name}.nc",), reads=("dmw.rms_nm",), upstream=upstream)
 
 
-def test_a_damaged_or_hand_edited_output_is_recomputed_never_reused(tmp_path, paper_scene, caplog):
+def test_a_damaged_or_hand_edited_output_is_recomputed_never_reused(tmp_path, paper_scene, caplog, monkeypatch):
     from damage import damage_chunk, edit_value
     calls: list[str] = []
     stages = {"h": _history_stage(calls)}
@@ -569,10 +569,15 @@ def test_a_damaged_or_hand_edited_output_is_recomputed_never_reused(tmp_path, pa
     assert build() == ["h"]
     first = read_dataset(out / "h.nc").v.values.copy()
     assert build() == []
+    reads: list[Path] = []                                  # bytes as written (the stage's record): not read back
+    monkeypatch.setattr(io, "read_dataset", lambda path, **kw: reads.append(path) or read_dataset(path, **kw))
+    io._VERIFIED.clear()
+    assert runner.Runner(paper_scene, out, stages).stale_reason("h") is None and reads == []
     damage_chunk(out / "h.nc", "v")                        # (reported "up to date" before, and used)
     with caplog.at_level("INFO", logger="pipeline.runner"):
         assert build() == ["h"]
     assert "h: computing (h.nc: variable 'v': its data cannot be read back (NetCDF: HDF error))" in caplog.text
+    assert reads[0] == out / "h.nc"                          # (changed bytes: read back, value by value)
     np.testing.assert_array_equal(read_dataset(out / "h.nc").v.values, first)
     edit_value(out / "h.nc", "v", (10,), 99.0)             # by hand, in place: the inputs key still the same
     assert build() == ["h"]
