@@ -408,7 +408,9 @@ def load_record(path: str | Path, quantity: str = "displacement", column: str | 
     """Read and validate a measured DMW record (CSV or NetCDF).
 
     CSV (any other suffix than ``.nc``/``.nc4``/``.cdf``): comma, semicolon, tab or whitespace
-    separated; ``#`` comment lines skipped; an optional header row. The time column is the one named
+    separated; ``#`` comment lines skipped; an optional header row; the last data row ends with a line break,
+    as every CSV writer ends it (a file that ends inside its last row was cut short, maybe in the middle of a
+    number that still parses, ``1.5e-0`` of ``1.5e-04``: refused naming that line). The time column is the one named
     ``time``/``t`` (unit in brackets or as a suffix: ``time [s]``, ``time (ms)``, ``time_us``; default
     s); without a header, a two-column file is ``time, value`` unless ``sample_rate_hz`` is given. The
     value column is ``column`` (header name, with or without its unit, or index), else the one named
@@ -435,7 +437,8 @@ def load_record(path: str | Path, quantity: str = "displacement", column: str | 
     Raises
     ------
     DMWError
-        Missing or unreadable file, missing column, non-numeric or NaN/infinite values, fewer than 2
+        Missing or unreadable file (a CSV file cut short, a damaged NetCDF file), missing column, non-numeric or
+        NaN/infinite values, fewer than 2
         samples, a time axis that is not strictly increasing or not uniform (relative deviation
         > :data:`TIME_JITTER_TOL`), units that contradict ``quantity``, or a record shorter than
         ``min_duration_s``. The message names the file and the field.
