@@ -541,9 +541,13 @@ def read_attrs(path: str | Path, variables: Iterable[str] = ()) -> tuple[dict[st
     return attrs, values
 
 
-def read_dataset(path: str | Path, *, stage: str | None = None, variables: Iterable[str] = ()) -> xr.Dataset:
+def read_dataset(path: str | Path, *, stage: str | None = None, variables: Iterable[str] = (),
+                 check: bool = True) -> xr.Dataset:
     """Open a stage dataset fully into memory (the file is closed afterwards), its values checked against
     the checksums written with them (:data:`CHECKSUM_ATTR`; a dataset without them is read unchecked).
+
+    ``check`` false reads a file that is no stage's output unchecked: a user's own dataset derived from one
+    (``ds.sel(...).to_netcdf(...)`` carries the checksums of the whole dataset it came from).
 
     Raises
     ------
@@ -568,7 +572,7 @@ def read_dataset(path: str | Path, *, stage: str | None = None, variables: Itera
     except RuntimeError as exc:  # (netCDF4's "NetCDF: HDF error": a chunk that does not decompress)
         raise _damaged(path, _unreadable_variable(path), f"its data cannot be read back ({exc})", stage) from None
     interrupts.check()  # (netCDF4's error checks can swallow a signal raised during the read)
-    problem = _checksum_problem(ds, seen)
+    problem = _checksum_problem(ds, seen) if check else None
     if problem is not None:
         raise _damaged(path, *problem, stage)
     if "time" in ds.variables and TIME not in ds.variables:  # (a file of the time before one name)
