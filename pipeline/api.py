@@ -374,7 +374,10 @@ def open_dataset(results: str | Path, name: str) -> xr.Dataset:
     Raises
     ------
     pipeline.io.DatasetError
-        When the file is missing (naming the stage to run) or not a readable dataset.
+        When the file is missing (naming the stage to run) or not a readable dataset;
+        :class:`pipeline.io.DatasetDamaged` when a variable of a stage's output cannot be read back or differs
+        from the checksum written with it (docs/datasets.md, section "Stored datasets checked when read"; a file
+        no stage writes is read unchecked).
     """
     check_path_option(results, "results")
     if not isinstance(name, str):
@@ -382,7 +385,8 @@ def open_dataset(results: str | Path, name: str) -> xr.Dataset:
     if Path(results).is_file():
         raise DatasetError(f"{results}: is a file; expected a results folder (hdi ... --out)")
     file, stage = _stage_of(name)
-    return read_dataset(Path(results) / file, stage=stage)
+    # (a stage's output is checked against its checksums; a file of the user's own, a subset saved, is not)
+    return read_dataset(Path(results) / file, stage=stage, check=stage is not None)
 
 
 def _client_address(scheduler: Any) -> str | None:

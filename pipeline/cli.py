@@ -69,7 +69,8 @@ def _parser(stages: dict[str, runner.Stage]) -> argparse.ArgumentParser:
     p.add_argument("--channel", default=None, help="roughness: AFM channel (default: the height channel)")
     p.add_argument("--detrend", default=None, choices=("center", "height", "plane", "curvature"),
                    help="roughness: detrending of AFM scans (default plane)")
-    p.add_argument("--force", action="store_true", help="recompute even when outputs are up to date")
+    p.add_argument("--force", action="store_true", help="recompute even when outputs are up to date, and replace files at output "
+                        "paths that hdi did not write or that hold another scene's results")
     p.add_argument("--write-scene", type=Path, default=None, metavar="PATH",
                    help="identify: also write the identified scene to PATH (it is always written into the "
                         "results folder as identified.toml); its folder must exist and be writable, and "
@@ -144,7 +145,7 @@ def _main(argv: list[str] | None = None) -> int:
     stages = runner.registry()
     args = _parser(stages).parse_args(argv)
     _logging(args.verbose, args.quiet)
-    scene = None
+    scene = out = None
     try:
         if args.stage == "roughness" and not (len(args.inputs) == 1 and _names_a_scene(args.inputs[0])):
             if args.out is None:
@@ -179,6 +180,8 @@ def _main(argv: list[str] | None = None) -> int:
         return _failed(args, "out of memory (MemoryError); finished work is kept: ask for less (the sizes bounded in "
                              "pipeline/config/limits.py), or run on a machine with more memory")
     except OSError as exc:  # the file system: a full disk, permissions, a name too long, a folder for a file
+        if exc.filename is None and exc.errno is not None and (out or args.out) is not None:
+            exc = OSError(exc.errno, exc.strerror, str(out or args.out))  # (a write that named no file: its folder)
         return _failed(args, os_error_line(exc))
     except KeyboardInterrupt as exc:
         return _ended(f"hdi {args.stage}", interrupts.signal_of(exc))

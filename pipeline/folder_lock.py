@@ -152,8 +152,12 @@ def folder_lock(out: str | Path) -> Iterator[Path]:
                 raise FolderBusy(f"{out}: in use by hdi process {pid} on {host} since {other.get('started')} "
                                  f"(lock file {path}); wait for it to finish, or delete the lock file if that "
                                  "process no longer exists") from None
-            with os.fdopen(fd, "w") as fh:
-                json.dump(me, fh)
+            try:
+                with os.fdopen(fd, "w") as fh:
+                    json.dump(me, fh)
+            except OSError as exc:  # (a full disk: no empty lock file left for the next run to take over)
+                path.unlink(missing_ok=True)
+                raise OSError(exc.errno, f"{exc.strerror} (writing the results folder's lock file)", str(path)) from None
             break
         else:
             raise FolderBusy(f"{out}: could not take the lock file {path}")
@@ -179,6 +183,10 @@ def _read_lock(path: Path) -> str:
         if exc.errno == errno.ELOOP or path.is_symlink():
             raise LinkRefused(path) from None
         raise
+    if stat.S_ISDIR(os.fstat(fd).st_mode):  # (a folder opens read-only, but is no file to read)
+        os.close(fd)
+        raise OSError(errno.EISDIR, "is a folder where hdi keeps the results folder's lock file; remove or rename "
+                                    "it (nothing else of hdi's is kept there)", str(path))
     with os.fdopen(fd, "rb") as fh:
         if not stat.S_ISREG(os.fstat(fh.fileno()).st_mode):
             raise OSError(errno.EINVAL, f"is {special_kind(path) or 'not a regular file'}, not hdi's lock file; "

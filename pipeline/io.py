@@ -5,8 +5,14 @@ Every dataset is written through :func:`write_dataset` (by :mod:`pipeline.runner
 * refuses a variable or coordinate without ``units`` and ``long_name`` (CF conventions),
 * adds the global attributes of docs/datasets.md (title, history, source, references, Conventions, the
   package's and the numerical libraries' versions, git revision, config hash, input-file hashes),
+* records a checksum of each variable's values (:data:`CHECKSUM_ATTR`, :func:`data_checksums`),
 * writes to a temporary file in the same folder and renames it into place, so an interrupted
   run never leaves a half-written file and never destroys the previous one.
+
+Every dataset is read through :func:`read_dataset`, which checks those checksums: a damaged chunk (the HDF5
+library's ``NetCDF: HDF error``) or values changed since hdi wrote them (a hand edit) is a one-line
+:class:`DatasetDamaged` naming the file and the variable, never data used (:func:`stored_problem` gives the
+runner the same verdict, to recompute such a dataset of a stage's own).
 
 Every temporary file hdi writes is named by :func:`temporary_path` (or :func:`temporary_prefix`):
 ``.NAME.hdi-RUNID[.XXXXXXXX].tmp``, with this process's :data:`RUN_ID`. :func:`is_temporary` tells
@@ -82,8 +88,56 @@ def is_temporary(name: str) -> bool:
 KEY_ATTR = "inputs_key"
 
 
+#: Global attribute of every dataset :func:`write_dataset` writes: JSON ``{variable: digest}``, a checksum of each
+#: variable's and coordinate's values as they read back (:func:`data_checksums`), checked by :func:`read_dataset`.
+CHECKSUM_ATTR = "data_checksums"
+
+
+def _canonical(values: Any, fill: Any = None) -> bytes | np.ndarray | None:
+    """The bytes :func:`data_checksums` hashes for one variable's values, the same for the values written
+    and those :func:`read_dataset` reads back: numbers (integers, flags, floats) as little-endian float64
+    with one NaN (an integer variable's declared ``_FillValue`` ``fill`` read back as NaN, as xarray decodes
+    it), labels as UTF-8 strings each preceded by its length; ``None`` for values of another kind (dates,
+    which hdi does not write)."""
+    a = np.asarray(values)
+    if a.dtype.kind in "OUS":
+        items = (x.decode("utf-8", "surrogateescape") if isinstance(x, bytes) else str(x) for x in a.ravel())
+        return b"".join(len(e).to_bytes(8, "little") + e for e in (t.encode("utf-8", "surrogatepass")
+                                                                   for t in items))
+    if a.dtype.kind not in "biuf":
+        return None
+    f = np.ascontiguousarray(a, dtype="<f8")
+    if fill is not None and a.dtype.kind in "iu":
+        f = np.where(a == np.asarray(fill).item(), np.nan, f)
+    nan = np.isnan(f)
+    if nan.any():  # (one NaN: the payload of a NaN is not a value)
+        f = np.where(nan, np.nan, f)
+    return f  # (hashed through its buffer: no copy of a float64 array)
+
+
+def data_checksums(ds: xr.Dataset, encoding: Mapping[str, Mapping[str, Any]] | None = None) -> dict[str, str]:
+    """``{name: SHA-256 hex digest}`` of every variable and coordinate of ``ds``: of its dimensions, shape
+    and values in the canonical form of :func:`_canonical`; ``encoding``: the NetCDF encoding it is written
+    with (an integer variable's ``_FillValue``)."""
+    sums = {}
+    for name, v in ds.variables.items():
+        fill = (encoding or {}).get(str(name), {}).get("_FillValue")
+        data = _canonical(v.values, fill)
+        if data is None:
+            continue
+        h = hashlib.sha256(json.dumps([list(map(str, v.dims)), list(v.shape)]).encode())
+        h.update(memoryview(data).cast("B"))
+        sums[str(name)] = h.hexdigest()
+    return sums
+
+
 class DatasetError(ValueError):
     """A dataset on disk is missing, unreadable, or lacks what a stage needs."""
+
+
+class DatasetDamaged(DatasetError):
+    """A dataset whose stored values cannot be read back (a damaged chunk) or differ from the checksums
+    written with them (:data:`CHECKSUM_ATTR`): damaged, or edited since hdi wrote it."""
 
 
 class DatasetBusy(DatasetError):
@@ -327,6 +381,7 @@ def write_dataset(ds: xr.Dataset, path: str | Path, scene: Any = None, *, stage:
     attrs.update(provenance(scene, stage=stage, inputs=inputs))
     if extra_attrs:
         attrs.update(extra_attrs)
+    attrs[CHECKSUM_ATTR] = json.dumps(data_checksums(out, encoding), sort_keys=True)
     out.attrs = {k: (json.dumps(v) if isinstance(v, (dict, list, tuple)) else v) for k, v in attrs.items()}
     fd, tmp = tempfile.mkstemp(prefix=temporary_prefix(path), suffix=".tmp", dir=path.parent)
     os.close(fd)
@@ -379,8 +434,11 @@ def write_failure(path: Path, exc: BaseException, size: int) -> OSError:
     """The :class:`OSError` naming ``path`` (never its temporary file) for a failed write of ``size``
     bytes [B]; the HDF5 library's ``NetCDF: HDF error`` says no errno, so the free space of the file
     system decides whether the disk was full."""
-    if isinstance(exc, OSError) and exc.errno is not None:
+    if isinstance(exc, OSError) and exc.errno is not None and not (
+            exc.errno in (errno.EACCES, errno.EPERM) and os.access(path.parent, os.W_OK)):
         return OSError(exc.errno, exc.strerror, str(path))
+    # (the HDF5 library says "Permission denied" for a file it failed to create in a folder this process
+    # writes to, where its temporary file was just made: a full disk, told apart by the free space)
     try:
         free = shutil.disk_usage(path.parent).free
     except OSError:
@@ -407,8 +465,8 @@ def _file_size_limit() -> int | None:
 
 #: What to do about an OSError, by errno (:func:`os_error_line`).
 _ADVICE = {
-    errno.ENOSPC: "free some space or choose another --out",
-    errno.EDQUOT: "free some space or choose another --out",
+    errno.ENOSPC: "the disk is full: free some space or choose another --out",
+    errno.EDQUOT: "the disk quota is used up: free some space or choose another --out",
     errno.EACCES: "make it writable, or choose another --out",
     errno.EPERM: "make it writable, or choose another --out",
     errno.EROFS: "choose another --out",
@@ -483,11 +541,19 @@ def read_attrs(path: str | Path, variables: Iterable[str] = ()) -> tuple[dict[st
     return attrs, values
 
 
-def read_dataset(path: str | Path, *, stage: str | None = None, variables: Iterable[str] = ()) -> xr.Dataset:
-    """Open a stage dataset fully into memory (the file is closed afterwards).
+def read_dataset(path: str | Path, *, stage: str | None = None, variables: Iterable[str] = (),
+                 check: bool = True) -> xr.Dataset:
+    """Open a stage dataset fully into memory (the file is closed afterwards), its values checked against
+    the checksums written with them (:data:`CHECKSUM_ATTR`; a dataset without them is read unchecked).
+
+    ``check`` false reads a file that is no stage's output unchecked: a user's own dataset derived from one
+    (``ds.sel(...).to_netcdf(...)`` carries the checksums of the whole dataset it came from).
 
     Raises
     ------
+    DatasetDamaged
+        When a variable cannot be read back (a damaged chunk) or its values differ from its checksum
+        (damaged or edited since hdi wrote it), naming the file and the variable.
     DatasetError
         When the file is missing, not NetCDF, or lacks one of ``variables``.
     """
@@ -497,12 +563,18 @@ def read_dataset(path: str | Path, *, stage: str | None = None, variables: Itera
         raise DatasetError(f"{path}: dataset does not exist{looked_for(path)}{hint}")
     if is_busy(path):
         raise DatasetBusy(path)
+    seen = _identity(path)
     try:
         with NETCDF_LOCK, xr.open_dataset(path, engine=ENGINE, decode_times=False, decode_timedelta=False) as ds:
             ds = ds.load()
     except (OSError, ValueError) as exc:
         raise DatasetError(f"{path}: not a readable NetCDF dataset: {exc}") from None
+    except RuntimeError as exc:  # (netCDF4's "NetCDF: HDF error": a chunk that does not decompress)
+        raise _damaged(path, _unreadable_variable(path), f"its data cannot be read back ({exc})", stage) from None
     interrupts.check()  # (netCDF4's error checks can swallow a signal raised during the read)
+    problem = _checksum_problem(ds, seen) if check else None
+    if problem is not None:
+        raise _damaged(path, *problem, stage)
     if "time" in ds.variables and TIME not in ds.variables:  # (a file of the time before one name)
         ds = ds.rename({"time": TIME})
         if ds[TIME].attrs.get("units") == OLD_TIME_UNITS:
@@ -511,6 +583,99 @@ def read_dataset(path: str | Path, *, stage: str | None = None, variables: Itera
     if missing:
         raise DatasetError(f"{path}: missing variables {missing}")
     return ds
+
+
+#: Files whose values this process found equal to their checksums, by :func:`_identity`: the runner's check of
+#: a stored dataset (:func:`stored_problem`) and the stage's read of it hash it once.
+_VERIFIED: set[tuple] = set()
+
+
+def _identity(path: Path) -> tuple | None:
+    """What identifies a file's bytes in this process: its device, inode, size, modification and change times
+    (an edit or a replacement changes one of them)."""
+    try:
+        st = os.stat(path)
+    except OSError:
+        return None
+    return os.path.abspath(path), st.st_dev, st.st_ino, st.st_size, st.st_mtime_ns, st.st_ctime_ns
+
+
+def _checksum_problem(ds: xr.Dataset, seen: tuple | None) -> tuple[str, str] | None:
+    """``(variable, what is wrong)`` when the values of ``ds`` (as read back) differ from the checksums
+    written with them; ``None`` when they agree, or the file carries none."""
+    text = ds.attrs.get(CHECKSUM_ATTR)
+    if text is None or (seen is not None and seen in _VERIFIED):
+        return None
+    try:
+        written = json.loads(text)
+        if not isinstance(written, dict):
+            raise ValueError
+    except ValueError:
+        return CHECKSUM_ATTR, "its checksums are not hdi's (not a JSON mapping of variables)"
+    found = data_checksums(ds)
+    for name, digest in written.items():
+        if name not in found:
+            return name, "missing (the dataset was written with it)"
+        if found[name] != digest:
+            return name, "values differ from the checksum written with them (damaged, or edited since hdi wrote it)"
+    extra = sorted(set(found) - set(written))
+    if extra:
+        return extra[0], "not written by hdi (added since)"
+    if seen is not None:
+        _VERIFIED.add(seen)
+    return None
+
+
+def _unreadable_variable(path: Path) -> str:
+    """The first variable of ``path`` whose values the HDF5 library cannot read back (``"?"``: none found)."""
+    import netCDF4
+    try:
+        with NETCDF_LOCK, netCDF4.Dataset(path) as nc:
+            for name, v in nc.variables.items():
+                try:
+                    v.set_auto_maskandscale(False)
+                    v[...]
+                except (RuntimeError, OSError, ValueError):
+                    return str(name)
+    except (RuntimeError, OSError, ValueError):
+        pass
+    return "?"
+
+
+def _damaged(path: Path, variable: str, what: str, stage: str | None) -> DatasetDamaged:
+    """The one line of a damaged dataset: the file, the variable, what is wrong, what to do."""
+    todo = (f"run `hdi {stage}` again: it recomputes a damaged dataset of its own" if stage else
+            "recompute it (run its stage again), or restore it from a copy")
+    return DatasetDamaged(f"{path}: variable {variable!r}: {what}; {todo}")
+
+
+def stored_problem(path: str | Path, written: str | None = None) -> str | None:
+    """Why a stored dataset of a stage cannot be reused as it is (``None``: it can): unreadable, damaged or
+    edited (its values differ from their checksums, :func:`read_dataset`), or written without checksums.
+
+    ``written``: the SHA-256 of the file's bytes as hdi wrote them (the runner's record of the stage): bytes
+    equal to those are the values written, so only a file whose bytes changed since (damaged, edited,
+    rewritten) is read back and checked value by value, which costs a full read (~10x the hash of the file
+    on ``sweep_histories.nc``: docs/datasets.md).
+    """
+    path = Path(path)
+    seen = _identity(path)
+    if seen is not None and seen in _VERIFIED:
+        return None
+    if written is not None and seen is not None and file_hash(path) == written:
+        _VERIFIED.add(seen)
+        return None
+    try:
+        ds = read_dataset(path)
+    except DatasetBusy:
+        raise
+    except DatasetDamaged as exc:
+        return str(exc).removeprefix(f"{path}: ").split("; ")[0]
+    except DatasetError as exc:
+        return str(exc).removeprefix(f"{path}: ")
+    if CHECKSUM_ATTR not in ds.attrs:
+        return "has no data checksums"
+    return None
 
 
 def results_dir(scene: Any, out: str | Path | None = None) -> Path:

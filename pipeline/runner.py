@@ -18,9 +18,11 @@ The runner gives each stage an *inputs key*: the SHA-256 of the scene keys it re
 the files it reads, the keys of its upstream stages (so a change propagates downstream), the options
 that change its result and its code (the source of its module and of the ``pipeline`` modules that
 module imports, :func:`pipeline.code_version.code_key`). Every dataset it writes carries that key (attribute
-``inputs_key``); non-NetCDF outputs are listed with their hashes in ``.hdi/<stage>.json``. A stage
-whose outputs carry the key of its current inputs is not recomputed; otherwise it is, and everything
-downstream of it too. Datasets are written through :func:`pipeline.io.write_dataset` (temporary file
+``inputs_key``); every stage's outputs are listed in ``.hdi/<stage>.json`` with the key, the scene's name and the
+SHA-256 of each file. A stage whose outputs carry the key of its current inputs, and whose datasets read back
+equal to their checksums (:func:`pipeline.io.stored_problem`: not damaged or edited since), is not recomputed;
+otherwise it is, and everything downstream of it too. Outputs replace only files hdi wrote there for the same
+scene (:meth:`Runner.check_owners`; ``force`` lifts it), and never an input file (:meth:`Runner.check_inputs_apart`). Datasets are written through :func:`pipeline.io.write_dataset` (temporary file
 and rename), other outputs are renamed into place from the staging folder.
 
 A results folder is used by one ``hdi`` process at a time: the runner builds while holding
@@ -61,7 +63,7 @@ from .model.ahead import compile_kernel_ahead
 from .model.scene_inputs import simulation_inputs as wanted_inputs
 from .folder_lock import LOCK_NAME, STAGING_PREFIX, folder_lock
 from .io import (KEY_ATTR, DatasetBusy, DatasetError, RUN_ID, file_hash, move_dataset, read_attrs, read_dataset,
-                 temporary_path, write_dataset)
+                 stored_problem, temporary_path, write_dataset)
 from .paths import append_text, looked_for, refuse_links
 
 log = logging.getLogger(__name__)
@@ -77,6 +79,10 @@ RUN_LOG = "runs.jsonl"
 _NAME_MAX_FALLBACK = 255
 
 Scene = Any
+
+
+class OutputRefused(DatasetError):
+    """An output would replace a file hdi did not write there, another scene's results, or an input file."""
 
 
 def _constant(value: Any) -> Callable[[Scene], Any]:
@@ -344,7 +350,7 @@ def _dataset_key(path: Path) -> tuple[str | None, list[str] | None]:
         attrs, _ = read_attrs(path)
     except DatasetBusy:  # (not "no inputs key": the dataset would be replaced under its writer)
         raise
-    except (OSError, ValueError):
+    except (OSError, ValueError, RuntimeError):  # (RuntimeError: the HDF5 library's "HDF error", a damaged header)
         return None, None
     outputs = attrs.get(OUTPUTS_ATTR)
     return attrs.get(KEY_ATTR), (json.loads(outputs) if outputs else None)
@@ -442,10 +448,16 @@ class Runner:
         datasets = [o for o in outputs if o.endswith(".nc")]
         others = [o for o in outputs if not o.endswith(".nc")]
         produced: list[str] | None = None
+        try:
+            manifest = json.loads(self._manifest(name).read_text())
+            if not isinstance(manifest, dict):
+                raise ValueError
+        except (OSError, ValueError):
+            manifest = None
+        # the datasets' bytes as written, when recorded for these inputs (stored_problem: read back only if changed)
+        files = manifest.get("files", {}) if manifest is not None and manifest.get("key") == key else {}
         if others:
-            try:
-                manifest = json.loads(self._manifest(name).read_text())
-            except (OSError, ValueError):
+            if manifest is None:
                 return "no record of its outputs"
             if manifest.get("key") != key:
                 return "inputs changed"
@@ -463,6 +475,9 @@ class Runner:
             have, listed = _dataset_key(p)
             if have != key:
                 return f"{o} made from other inputs" if have else f"{o} has no inputs key"
+            problem = stored_problem(p, files.get(o))  # (a damaged chunk, a hand edit: recomputed, never reused)
+            if problem is not None:
+                return f"{o}: {problem}"
             if i == 0 and listed is not None:
                 produced = listed
         return None
@@ -478,7 +493,9 @@ class Runner:
             if self.stage(name).check is not None:
                 self.stage(name).check(self.scene)
         self.check_lengths(targets)
+        self.check_inputs_apart(targets)
         with folder_lock(self.out):
+            self.check_owners(targets, force)
             self.compile_ahead(targets, force)
             for name in self.plan(targets):
                 self._make(name, force and name in targets)
@@ -486,6 +503,85 @@ class Runner:
                 if self.stage(name).finish is not None:
                     self.stage(name).finish(self.scene, self.out, {**self.options, "force": force})
         return {t: tuple(self.out / o for o in self.stage(t).output_names(self.scene)) for t in targets}
+
+    def check_inputs_apart(self, targets: Iterable[str]) -> None:
+        """Refuse, before anything is written, an input file of a stage of the build (``dmw.source``, an AFM
+        scan) that is a file some stage writes in the results folder (``results/x/dmw.nc`` given as the
+        record): the output would overwrite it. No option lifts this.
+
+        Raises
+        ------
+        OutputRefused
+            Naming the scene key, the file and the output it would become.
+        """
+        written: dict[str, tuple[str, str]] = {}
+        for st in self.stages.values():
+            try:
+                names = st.output_names(self.scene)
+            except (KeyError, TypeError, ValueError):  # (a stage this scene cannot declare outputs for)
+                continue
+            for o in names:
+                written[os.path.realpath(self.out / o)] = (st.name, o)
+        for name in self.plan(targets):
+            for role, p in self.files(name).items():
+                hit = written.get(os.path.realpath(p))  # (a link there resolved: its target is the output's path)
+                if hit is not None:
+                    raise OutputRefused(f"{role} = {p}: is the file {hit[1]} the {hit[0]} stage writes in the results "
+                                        f"folder {self.out}; an input is never overwritten by an output: move it out "
+                                        "of the results folder, or choose another --out")
+
+    def check_owners(self, targets: Iterable[str], force: bool = False) -> None:
+        """Refuse, before any stage computes, to replace a file at an output path that hdi did not write
+        there, or that holds another scene's results; ``force`` (``--force``) replaces them.
+
+        hdi wrote a file at an output path of a stage when the stage's record (``.hdi/<stage>.json``) lists
+        it, or, for a dataset, when its provenance (:func:`pipeline.io.provenance`) names the stage (attribute
+        ``stage``; ``hdi roughness FILE... --out DIR`` writes one without an inputs key).
+        Its scene is the dataset's ``scene_name``, else the record's ``scene``; results of a scene of another
+        name are another scene's (``results/<scene name>/`` is each scene's own folder). Only the stages this
+        build computes are checked (those forced or not current).
+
+        Raises
+        ------
+        OutputRefused
+            Naming the file, whose it is, and what to do.
+        """
+        if force:
+            return
+        targets = list(targets)
+        for name in self.plan(targets):
+            if self.stale_reason(name) is None:
+                continue
+            st = self.stage(name)
+            try:
+                record = json.loads(self._manifest(name).read_text())
+                if not isinstance(record, dict):
+                    record = {}
+            except (OSError, ValueError):
+                record = {}
+            listed = {*record.get("outputs", []), *record.get("hashes", {})}
+            for o in st.output_names(self.scene):
+                p = self.out / o
+                if not p.is_file() or p.is_symlink():  # (a folder, a link: refused by _check_outputs)
+                    continue
+                attrs: dict[str, Any] = {}
+                if o.endswith(".nc"):
+                    try:
+                        attrs = read_attrs(p)[0]
+                    except DatasetBusy:
+                        raise
+                    except (OSError, ValueError, RuntimeError):  # (unreadable: the record says whose it is)
+                        attrs = {}
+                ours = attrs.get("stage") == name and "pipeline_version" in attrs  # (hdi's provenance, io.provenance)
+                if not ours and o not in listed:
+                    raise OutputRefused(f"{p}: not written by hdi (no {name} stage's record of it), and the {name} "
+                                        f"stage would replace it: move it away, choose another --out, or pass --force "
+                                        "to replace it")
+                scene = attrs.get("scene_name") if ours else record.get("scene")
+                if scene is not None and scene != self.scene.name:
+                    raise OutputRefused(f"{p}: results of the scene {scene!r}, not of this run's {self.scene.name!r}; "
+                                        "run each scene into its own folder (--out; the default is results/<scene "
+                                        "name>/), or pass --force to replace them")
 
     def compile_ahead(self, targets: Iterable[str], force: bool = False) -> None:
         """Start compiling the scene's dynamics kernel in a background process when a stage this build
@@ -654,13 +750,16 @@ class Runner:
                 self._hashes[target] = hashes[o]
             else:
                 target.unlink(missing_ok=True)
-        if others:
-            manifest = refuse_links(self._manifest(st.name))
-            manifest.parent.mkdir(parents=True, exist_ok=True)
-            refuse_links(manifest)
-            tmp = temporary_path(manifest)
-            tmp.write_text(json.dumps({"key": key, "outputs": produced, "hashes": hashes}, indent=1))
-            os.replace(tmp, manifest)
+        # the record of what the stage wrote here, for which scene (whose files the outputs are: check_owners) and
+        # the SHA-256 of each dataset's bytes (a dataset whose bytes are unchanged is not read back: stale_reason)
+        manifest = refuse_links(self._manifest(st.name))
+        manifest.parent.mkdir(parents=True, exist_ok=True)
+        refuse_links(manifest)
+        tmp = temporary_path(manifest)
+        files = {o: file_hash(self.out / o) for o in produced if o.endswith(".nc")}
+        tmp.write_text(json.dumps({"key": key, "outputs": produced, "hashes": hashes, "files": files,
+                                   "scene": self.scene.name}, indent=1))
+        os.replace(tmp, manifest)
         return produced
 
     def _write_one(self, st: Stage, key: str, inputs: Inputs, name: str, ds: xr.Dataset, path: Path,

@@ -205,6 +205,17 @@ def count_lines(path: str | Path) -> int:
     return n + (last != b"\n")
 
 
+def _ends_a_line(path: str | Path) -> bool:
+    """Whether a (non-empty) text file's last byte ends a line: what every CSV writer leaves, and a file
+    cut short does not."""
+    with open(path, "rb") as fh:
+        fh.seek(0, 2)
+        if fh.tell() == 0:
+            return True
+        fh.seek(-1, 2)
+        return fh.read(1) in (b"\n", b"\r")
+
+
 #: Suffixes of NetCDF records (any other is read as CSV).
 NETCDF_SUFFIXES = (".nc", ".nc4", ".cdf", ".netcdf")
 
@@ -267,6 +278,7 @@ def _parse_csv(path: Path, quantity: str, column: str | None, sample_rate_hz: fl
         wanted = [val_idx] + ([time_idx] if time_idx is not None else [])
         out = np.empty((len(wanted), n_lines))
         n = 0
+        line_no = first[0]
         for line_no, ln in itertools.chain([] if header is not None else [first], lines):
             row = split(ln)
             if len(row) > ncol and any(c != "" for c in row[ncol:]):
@@ -283,6 +295,10 @@ def _parse_csv(path: Path, quantity: str, column: str | None, sample_rate_hz: fl
             n += 1
             if n % PROGRESS_ROWS == 0:
                 log.info("dmw: %s: read %d of at most %d rows", path, n, n_lines)
+    if line_no == n_lines and not _ends_a_line(path):
+        raise DMWError(f"{path}: line {line_no}: the file ends inside this line (no line break after it), as a record "
+                       "cut short ends (an interrupted copy or download), maybe in the middle of a number; restore the "
+                       f"whole file, or end it with a line break if line {line_no} is complete")
     field_name = labels[val_idx]
     x = out[0, :n]
     _check_values(path, field_name, x)
@@ -350,6 +366,9 @@ def _read_netcdf(path: Path, quantity: str, column: str | None, sample_rate_hz: 
     except (OSError, ValueError) as exc:
         raise DMWError(f"{path}: not a readable NetCDF file ({exc}); expected NetCDF with a variable "
                        f"on a 'time' coordinate") from None
+    except RuntimeError as exc:  # (netCDF4's "NetCDF: HDF error": a chunk that does not decompress)
+        raise DMWError(f"{path}: its data cannot be read back ({exc}: a damaged file); restore the record "
+                       "from a copy (dmw.source)") from None
     interrupts.check()  # (netCDF4's error checks can swallow a signal raised during the read)
     if "elapsed_time" in ds.variables and "time" not in ds.variables:  # a dmw.nc of this pipeline (variables.TIME)
         ds = ds.rename({"elapsed_time": "time"})
@@ -415,7 +434,9 @@ def load_record(path: str | Path, quantity: str = "displacement", column: str | 
     """Read and validate a measured DMW record (CSV or NetCDF).
 
     CSV (any other suffix than ``.nc``/``.nc4``/``.cdf``): comma, semicolon, tab or whitespace
-    separated; ``#`` comment lines skipped; an optional header row. The time column is the one named
+    separated; ``#`` comment lines skipped; an optional header row; the last data row ends with a line break,
+    as every CSV writer ends it (a file that ends inside its last row was cut short, maybe in the middle of a
+    number that still parses, ``1.5e-0`` of ``1.5e-04``: refused naming that line). The time column is the one named
     ``time``/``t`` (unit in brackets or as a suffix: ``time [s]``, ``time (ms)``, ``time_us``; default
     s); without a header, a two-column file is ``time, value`` unless ``sample_rate_hz`` is given. The
     value column is ``column`` (header name, with or without its unit, or index), else the one named
@@ -447,7 +468,8 @@ def load_record(path: str | Path, quantity: str = "displacement", column: str | 
     Raises
     ------
     DMWError
-        Missing or unreadable file, missing column, non-numeric or NaN/infinite values, fewer than 2
+        Missing or unreadable file (a CSV file cut short, a damaged NetCDF file), missing column, non-numeric or
+        NaN/infinite values, fewer than 2
         samples, a time axis that is not strictly increasing or not uniform (relative deviation
         > :data:`TIME_JITTER_TOL`), units that contradict ``quantity``, or a record shorter than
         ``min_duration_s``. The message names the file and the field.

@@ -21,7 +21,8 @@ index and its batch's coordinates (roughness label, damping ratio, protrusions),
 sweep (Ctrl-C, kill, a lost worker) picks up where it stopped and gives a dataset identical to an
 uninterrupted run (every batch is a deterministic function of its inputs; no timings or folder paths
 are stored in the datasets: the batch-phase wall time goes to the run log, ``.hdi/runs.jsonl``). A part
-copied to another batch's name, or made for other inputs, is recomputed. The interface tables of
+copied to another batch's name, made for other inputs, or damaged since it was written (its values differ from
+their checksums, :func:`pipeline.io.stored_problem`) is recomputed. The interface tables of
 the other roughness sets are kept by the runner under their own inputs keys (:func:`table_jobs`).
 
 Execution: :func:`pipeline.fanout.run_tasks` (by default a pool of one thread per core in this
@@ -48,7 +49,7 @@ import xarray as xr
 from ..model import assembly
 from ..fanout import LOCAL, local_cluster, local_workers, run_tasks
 from ..progress import Progress
-from ..io import file_hash, read_attrs, read_dataset, write_dataset
+from ..io import file_hash, read_attrs, read_dataset, stored_problem, write_dataset
 from ..paths import refuse_links
 from ..runner import KEY_ATTR, Inputs, Stage, ensure
 from ..variables import (COORDINATES, ENSEMBLE, HISTORIES, PART_STACK, PART_STACKS, RUN_GRID_DIMS, SCALARS, STEPPING,
@@ -118,7 +119,7 @@ def part_problem(path: Path, key: str, batch: Batch) -> str | None:
         return "missing"
     try:
         attrs, values = read_attrs(path, ("protrusion",))
-    except (OSError, ValueError) as exc:
+    except (OSError, ValueError, RuntimeError) as exc:  # (RuntimeError: the HDF5 library's "HDF error")
         return f"unreadable ({exc})"
     prot = np.asarray(values.get("protrusion", []), float)
     if attrs.get(KEY_ATTR) != key:
@@ -130,7 +131,7 @@ def part_problem(path: Path, key: str, batch: Batch) -> str | None:
                 f"expected {batch.label!r}, {batch.damping}")
     if prot.shape != (len(batch.protrusions),) or not np.array_equal(prot, batch.protrusions):
         return f"holds protrusions {prot.tolist()}, expected {list(batch.protrusions)}"
-    return None
+    return stored_problem(path)  # (damaged or edited since written: its values differ from their checksums)
 
 
 _MODELS: dict[tuple, assembly.Model] = {}

@@ -223,3 +223,17 @@ def test_a_big_job_from_python_asks_for_yes_true(paper_config, tmp_path):
     with pytest.raises(OptionError, match=r"exceed [\d,]+; pass --yes to run them anyway$"):
         check_options("sweep", big, out=tmp_path / "o")
     assert not (tmp_path / "o").exists()
+
+
+def test_open_dataset_checks_a_stages_output_and_reads_a_users_own_subset_unchecked(tmp_path):
+    import xarray as xr
+    from damage import edit_value
+    from pipeline import io
+    ds = xr.Dataset({"displacement": io.var(np.sin(np.arange(9000) * 0.01), "elapsed_time", "nm", "DMW")},
+                    coords={"elapsed_time": io.var(np.arange(9000) * 2.5e-7, "elapsed_time", "s", "time")})
+    io.write_dataset(ds, tmp_path / "dmw.nc", stage="dmw")
+    hdi.open_dataset(tmp_path, "dmw").isel(elapsed_time=slice(0, 10)).to_netcdf(tmp_path / "mine.nc")
+    assert hdi.open_dataset(tmp_path, "mine.nc").displacement.size == 10   # (its checksums: the whole record's)
+    edit_value(tmp_path / "dmw.nc", "displacement", (0,), 3.0)
+    with pytest.raises(io.DatasetDamaged, match=r"dmw\.nc: variable 'displacement': values differ"):
+        hdi.open_dataset(tmp_path, "dmw")

@@ -62,3 +62,25 @@ def test_two_processes_taking_over_a_stale_lock_do_not_both_hold_it(tmp_path):
     said = sorted(p.communicate(timeout=60)[0].strip() for p in procs)
     assert said == ["HOLDS", "REFUSED"]
     assert not (tmp_path / runner.LOCK_NAME).exists()
+
+
+def test_a_folder_at_the_lock_path_is_one_line_saying_so(tmp_path, paper_config, capsys):
+    (tmp_path / runner.LOCK_NAME).mkdir()
+    assert cli.main(["dmw", str(paper_config), "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == (f"hdi dmw: error: {tmp_path / runner.LOCK_NAME}: is a folder where hdi keeps the results folder's "
+                   "lock file; remove or rename it (nothing else of hdi's is kept there)")   # ("4: Is a directory")
+    assert (tmp_path / runner.LOCK_NAME).is_dir() and not (tmp_path / "dmw.nc").exists()
+
+
+def test_a_full_disk_writing_the_lock_leaves_no_empty_lock(tmp_path, paper_config, capsys, monkeypatch):
+    import errno
+
+    def full(obj, fh):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+    monkeypatch.setattr(folder_lock.json, "dump", full)
+    assert cli.main(["dmw", str(paper_config), "--out", str(tmp_path)]) == 2
+    assert capsys.readouterr().err.strip() == (
+        f"hdi dmw: error: {tmp_path / runner.LOCK_NAME}: No space left on device (writing the results folder's lock "
+        "file); the disk is full: free some space or choose another --out")
+    assert list(tmp_path.iterdir()) == []                  # (an empty lock, taken over with a warning, before)

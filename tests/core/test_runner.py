@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from pipeline import cli, runner
+from pipeline import cli, io, runner
 from pipeline.io import DatasetError, read_dataset, var
 from pipeline.physics import microwaviness as phys_dmw
 from pipeline.physics import surface as sf
@@ -164,6 +164,28 @@ def test_part_copied_to_another_batch_is_rejected_and_recomputed(tmp_path):
     path = sweep_stage.run_sweep(scene, out, scheduler="synchronous", on_batch=done.append)
     assert sorted(Path(p).name for p in done) == ["batch-00001.nc", "batch-00002.nc"]
     _identical_but_history(reference, path)
+
+
+def test_an_edited_sweep_dataset_or_part_is_remade_from_the_parts_never_reused(tmp_path):
+    from damage import edit_value
+    scene = load_scene(PAPER, FLY + ["sweep.batch_size=1"])
+    out = tmp_path / "out"
+    path = sweep_stage.run_sweep(scene, out, scheduler="synchronous")
+    fhm = read_dataset(path).fhm_bv.values.copy()
+    edit_value(path, "fhm_bv", (0, 0, 0), 50.0)             # reported "up to date" before, the edit used
+    done: list[str] = []
+    sweep_stage.run_sweep(scene, out, scheduler="synchronous", on_batch=done.append)
+    assert done == []                                        # assembled again from its parts, none rerun
+    np.testing.assert_array_equal(read_dataset(path).fhm_bv.values, fhm)
+    part = out / sweep_stage.PARTS / "batch-00001.nc"
+    stack = next(v for v in read_dataset(part).data_vars if v.startswith("stack__protrusion"))
+    edit_value(part, stack, (0, 0), 1e3)                     # a kept part damaged: that batch alone is rerun
+    assert "values differ from the checksum" in sweep_stage.part_problem(
+        part, read_dataset(path).attrs[runner.KEY_ATTR], sweep_stage.plan(scene)[3][1])
+    (out / "sweep.nc").unlink()                              # (so the sweep is not up to date: it assembles)
+    sweep_stage.run_sweep(scene, out, scheduler="synchronous", on_batch=done.append)
+    assert [Path(p).name for p in done] == ["batch-00001.nc"]
+    np.testing.assert_array_equal(read_dataset(path).fhm_bv.values, fhm)
 
 
 def test_noop_run_rewrites_nothing(tmp_path):
@@ -524,3 +546,127 @@ def test_excludes_apply_to_a_whole_section_read(paper_scene):
     assert "meniscus_time_us" not in part["lubricant"] and "thickness_nm" in part["lubricant"]
     assert scene_part(paper_scene.replace(lubricant={"meniscus_time_us": 40.0}), ("lubricant",),
                       ("lubricant.meniscus_time_us",)) == part
+
+
+# ------------------------------------------------- stored datasets checked on reuse; files that are not outputs'
+def _history_stage(calls: list[str], name: str = "h", upstream: tuple[str, ...] = ()) -> runner.Stage:
+    """A stage writing a compressed 8000-sample history (zlib chunks, :func:`pipeline.io.compression`) scaled
+    by dmw.rms_nm [nm], and reading its upstream stages' histories."""
+    def compute(scene, inputs):
+        calls.append(name)
+        base = sum(float(inputs.dataset(f"{u}.nc", stage=u).v.sum()) for u in upstream)
+        t = np.arange(8000) * 250e-9
+        return xr.Dataset({"v": var(scene["dmw"]["rms_nm"] * np.sin(t * 1e5) + base, "elapsed_time", "nm", "toy")},
+                          coords={"elapsed_time": var(t, "elapsed_time", "s", "elapsed simulated time")})
+    return runner.Stage(name, compute, outputs=(f"{name}.nc",), reads=("dmw.rms_nm",), upstream=upstream)
+
+
+def test_a_damaged_or_hand_edited_output_is_recomputed_never_reused(tmp_path, paper_scene, caplog, monkeypatch):
+    from damage import damage_chunk, edit_value
+    calls: list[str] = []
+    stages = {"h": _history_stage(calls)}
+    out = tmp_path / "out"
+
+    def build(force: bool = False) -> list[str]:
+        calls.clear()
+        runner.Runner(paper_scene, out, stages).build(["h"], force=force)
+        return list(calls)
+
+    assert build() == ["h"]
+    first = read_dataset(out / "h.nc").v.values.copy()
+    assert build() == []
+    reads: list[Path] = []                                  # bytes as written (the stage's record): not read back
+    monkeypatch.setattr(io, "read_dataset", lambda path, **kw: reads.append(path) or read_dataset(path, **kw))
+    io._VERIFIED.clear()
+    assert runner.Runner(paper_scene, out, stages).stale_reason("h") is None and reads == []
+    damage_chunk(out / "h.nc", "v")                        # (reported "up to date" before, and used)
+    with caplog.at_level("INFO", logger="pipeline.runner"):
+        assert build() == ["h"]
+    assert "h: computing (h.nc: variable 'v': its data cannot be read back (NetCDF: HDF error))" in caplog.text
+    assert reads[0] == out / "h.nc"                          # (changed bytes: read back, value by value)
+    np.testing.assert_array_equal(read_dataset(out / "h.nc").v.values, first)
+    edit_value(out / "h.nc", "v", (10,), 99.0)             # by hand, in place: the inputs key still the same
+    assert build() == ["h"]
+    np.testing.assert_array_equal(read_dataset(out / "h.nc").v.values, first)
+    edit_value(out / "h.nc", "elapsed_time", (3,), 1.0)   # a coordinate too
+    assert build() == ["h"] and build() == []
+
+
+def test_a_damaged_upstream_dataset_is_recomputed_when_its_downstream_stage_is_forced(tmp_path, paper_scene):
+    from damage import damage_chunk
+    calls: list[str] = []
+    stages = {"u": _history_stage(calls, "u"), "d": _history_stage(calls, "d", upstream=("u",))}
+    out = tmp_path / "out"
+    runner.Runner(paper_scene, out, stages).build(["d"])
+    d = read_dataset(out / "d.nc").v.values.copy()
+    damage_chunk(out / "u.nc", "v")
+    calls.clear()
+    runner.Runner(paper_scene, out, stages).build(["d"], force=True)   # (a traceback, "NetCDF: HDF error", before)
+    assert calls == ["u", "d"]
+    np.testing.assert_array_equal(read_dataset(out / "d.nc").v.values, d)
+
+
+def test_an_input_file_is_never_an_outputs_target(tmp_path, paper_scene):
+    calls: list[str] = []
+    stages = {"h": _history_stage(calls)}
+    out = tmp_path / "out"
+    out.mkdir()
+    record = out / "h.nc"
+    record.write_bytes(b"the user's own record")
+    stages["h"] = dataclasses.replace(stages["h"], files=lambda scene: {"dmw.source": record})
+    for force in (False, True):                                         # (no option lifts it)
+        with pytest.raises(runner.OutputRefused, match=rf"dmw\.source = {record}: is the file h\.nc the h stage "
+                                                       r"writes in the results folder .*; an input is never "
+                                                       "overwritten by an output: move it out"):
+            runner.Runner(paper_scene, out, stages).build(["h"], force=force)
+    (tmp_path / "link.nc").symlink_to(record)                          # a link to it names the same file
+    stages["h"] = dataclasses.replace(stages["h"], files=lambda scene: {"dmw.source": tmp_path / "link.nc"})
+    with pytest.raises(runner.OutputRefused, match="is the file h.nc"):
+        runner.Runner(paper_scene, out, stages).build(["h"])
+    assert record.read_bytes() == b"the user's own record" and calls == []
+
+
+def test_a_file_hdi_did_not_write_at_an_output_path_is_replaced_only_with_force(tmp_path, paper_scene):
+    calls: list[str] = []
+    stages = _toy_stages(calls, tmp_path)
+    (tmp_path / "input.txt").write_text("2.0\n")
+    out = tmp_path / "out"
+    (out / "notes").mkdir(parents=True)
+    (out / "notes" / "b.txt").write_text("my own notes\n")
+    with pytest.raises(runner.OutputRefused, match=r"notes/b\.txt: not written by hdi \(no b stage's record of "
+                                                   r"it\), and the b stage would replace it: move it away, choose "
+                                                   "another --out, or pass --force to replace it"):
+        runner.Runner(paper_scene, out, stages).build(["b"])
+    assert calls == [] and not (out / "a.nc").exists()                 # (refused before any stage computed)
+    assert (out / "notes" / "b.txt").read_text() == "my own notes\n"
+    xr.Dataset({"y": var(1.0, (), "nm", "mine")}).to_netcdf(out / "b_extra.nc")  # a dataset of the user's
+    (out / "notes" / "b.txt").unlink()
+    with pytest.raises(runner.OutputRefused, match=r"b_extra\.nc: not written by hdi"):
+        runner.Runner(paper_scene, out, stages).build(["b"])
+    runner.Runner(paper_scene, out, stages).build(["b"], force=True)
+    assert calls == ["a", "b"] and not (out / "b_extra.nc").exists()
+    (out / "notes" / "b.txt").write_text("edited\n")                   # a file hdi wrote, edited: hdi's to remake
+    calls.clear()
+    runner.Runner(paper_scene, out, stages).build(["b"])
+    assert calls == ["b"] and (out / "notes" / "b.txt").read_text() == "0.532\n"
+
+
+def test_another_scenes_results_are_replaced_only_with_force(tmp_path, paper_scene):
+    calls: list[str] = []
+    stages = _toy_stages(calls, tmp_path)
+    (tmp_path / "input.txt").write_text("2.0\n")
+    out = tmp_path / "out"
+    runner.Runner(paper_scene, out, stages).build(["b"])
+    before = _tree(out)
+    other = paper_scene.replace(scene={"name": "other"}, dmw={"rms_nm": 0.5})
+    with pytest.raises(runner.OutputRefused, match=rf"{out / 'a.nc'}: results of the scene 'paper-2009', not of "
+                                                   r"this run's 'other'; run each scene into its own folder \(--out"):
+        runner.Runner(other, out, stages).build(["b"])
+    assert _tree(out) == before
+    calls.clear()
+    runner.Runner(paper_scene.replace(dmw={"rms_nm": 0.5}), out, stages).build(["b"])   # the same scene, edited
+    assert calls == ["a", "b"]
+    calls.clear()
+    runner.Runner(other, out, stages).build(["b"], force=True)   # (a's inputs are now the same: a is reused)
+    assert calls == ["b"] and read_dataset(out / "b.nc").attrs["scene_name"] == "other"
+    assert json.loads((out / ".hdi" / "b.json").read_text())["scene"] == "other"

@@ -198,3 +198,23 @@ def test_the_record_formats_of_docs_my_drive_run_and_read_back(tmp_path, monkeyp
     for r in records[1:]:  # (the same record in four forms: equal to rounding of the written text)
         assert r.size == records[0].size == 8400 and np.allclose(r, records[0], rtol=0, atol=1e-9)
     assert 0.3 < rms(records[0]) < 0.5  # (the 0.4-nm record, band-passed again: as written)
+
+
+def test_a_record_cut_short_is_refused_naming_its_last_line(tmp_path):
+    x = dmw.synthesize(0.16, BAND, -2.0, 1e-4, FS, seed=3)
+    whole = tmp_path / "whole.csv"
+    np.savetxt(whole, x)
+    assert measured_dmw.load_record(whole, sample_rate_hz=FS).values.size == x.size
+    text = whole.read_bytes()
+    for cut in (2, 9, 20):                    # inside the last number: its exponent ("e-0"), its digits, its mantissa
+        part = tmp_path / f"cut{cut}.csv"
+        part.write_bytes(text[:-cut])
+        with pytest.raises(dmw.DMWError, match=rf"cut{cut}\.csv: line {x.size}: the file ends inside this line "
+                                               r"\(no line break after it\), as a record cut short ends"):
+            measured_dmw.load_record(part, sample_rate_hz=FS)
+    with_comment = tmp_path / "comment.csv"                 # a last line that is no data: not a cut record
+    with_comment.write_bytes(text + b"# end")
+    assert measured_dmw.load_record(with_comment, sample_rate_hz=FS).values.size == x.size
+    crlf = tmp_path / "crlf.csv"
+    crlf.write_bytes(text.replace(b"\n", b"\r\n"))
+    assert measured_dmw.load_record(crlf, sample_rate_hz=FS).values.size == x.size

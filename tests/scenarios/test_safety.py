@@ -20,6 +20,7 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 import xarray as xr
 
@@ -364,14 +365,17 @@ def test_a_dataset_another_process_writes_is_busy_and_never_replaced(tmp_path):
             io.read_dataset(out / "a.nc")
     assert computed == [] and netCDF4.Dataset(out / "a.nc").getncattr("edit") == "being written"
     assert not (out / runner.LOCK_NAME).exists()
-    runner.Runner(load_scene(PAPER), out, {"toy": stage}).build(["toy"])    # closed: replaced as usual
+    # closed: a user's file, replaced with force only (pipeline.runner.Runner.check_owners)
+    with pytest.raises(runner.OutputRefused, match="not written by hdi"):
+        runner.Runner(load_scene(PAPER), out, {"toy": stage}).build(["toy"])
+    runner.Runner(load_scene(PAPER), out, {"toy": stage}).build(["toy"], force=True)
     assert computed == [1] and io.read_attrs(out / "a.nc")[0][io.KEY_ATTR]
 
 
 def test_a_dataset_opened_for_writing_during_the_computation_is_not_replaced(tmp_path):
     import netCDF4
     out = tmp_path / "out"
-    io.write_dataset(_dataset(), out / "a.nc", stage="a user's")
+    io.write_dataset(_dataset(), out / "a.nc", stage="toy", extra_attrs={io.KEY_ATTR: "of other inputs"})
     held = []
 
     def compute(scene, inputs):
@@ -380,7 +384,7 @@ def test_a_dataset_opened_for_writing_during_the_computation_is_not_replaced(tmp
     with pytest.raises(io.DatasetBusy):
         runner.Runner(load_scene(PAPER), out, {"toy": runner.Stage("toy", compute, outputs=("a.nc",))}).build(["toy"])
     held[0].close()
-    assert io.read_attrs(out / "a.nc")[0]["stage"] == "a user's"
+    assert io.read_attrs(out / "a.nc")[0][io.KEY_ATTR] == "of other inputs"
     assert [p.name for p in out.iterdir() if p.name.startswith(".")] == []   # no temporary file left
     assert not io.is_busy(out / "a.nc") and not io.is_busy(out / "missing.nc")
 
@@ -505,3 +509,57 @@ def test_sigkill_of_hdi_report_during_figure_drawing_leaves_no_worker(tmp_path):
     proc = subprocess.Popen([sys.executable, "-c", _REPORT_DRAWING, str(pids), "report", str(PAPER), "--out", str(out),
                              "-q"], cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     _kill_and_expect_no_worker(proc, pids, 120)
+
+
+# ------------------------------------------ 7. stored datasets checked when read; inputs and others' files kept
+def test_a_damaged_or_hand_edited_dmw_nc_is_recomputed_and_refused_when_opened(tmp_path, capsys):
+    from damage import damage_chunk, edit_value
+    from pipeline import api
+    out = tmp_path / "out"
+    assert cli.main(["dmw", str(PAPER), "--out", str(out), "-q"]) == 0
+    w = io.read_dataset(out / "dmw.nc").displacement.values.copy()
+    damage_chunk(out / "dmw.nc", "displacement")
+    with pytest.raises(io.DatasetDamaged) as info:            # (RuntimeError: NetCDF: HDF error, before)
+        api.open_dataset(out, "dmw")
+    assert str(info.value) == (f"{out / 'dmw.nc'}: variable 'displacement': its data cannot be read back (NetCDF: "
+                               "HDF error); run `hdi dmw` again: it recomputes a damaged dataset of its own")
+    assert cli.main(["dmw", str(PAPER), "--out", str(out)]) == 0
+    assert "dmw: computing (dmw.nc: variable 'displacement': its data cannot be read back" in capsys.readouterr().err
+    np.testing.assert_array_equal(api.open_dataset(out, "dmw").displacement.values, w)
+    edit_value(out / "dmw.nc", "displacement", (0,), 5.0)   # by hand: used with no warning, before
+    with pytest.raises(io.DatasetDamaged, match="variable 'displacement': values differ from the checksum"):
+        api.open_dataset(out, "dmw")
+    assert cli.main(["dmw", str(PAPER), "--out", str(out)]) == 0
+    assert "dmw: computing (dmw.nc: variable 'displacement': values differ" in capsys.readouterr().err
+    np.testing.assert_array_equal(api.open_dataset(out, "dmw").displacement.values, w)
+
+
+def test_a_record_given_at_the_outputs_path_and_others_files_are_never_replaced(tmp_path, capsys):
+    first = tmp_path / "first"
+    assert cli.main(["dmw", str(PAPER), "--out", str(first), "-q"]) == 0
+    out = tmp_path / "out"
+    out.mkdir()
+    record = out / "dmw.nc"                                   # a user's record, under the stage's file name
+    record.write_bytes((first / "dmw.nc").read_bytes())
+    before = record.read_bytes()
+    for force in ([], ["--force"]):                          # (overwritten by the output, before)
+        assert cli.main(["dmw", str(PAPER), "--out", str(out), "--set", f'dmw.source="{record}"', *force]) == 2
+        assert capsys.readouterr().err.strip() == (
+            f"hdi dmw: error: dmw.source = {record}: is the file dmw.nc the dmw stage writes in the results folder "
+            f"{out}; an input is never overwritten by an output: move it out of the results folder, or choose "
+            "another --out")
+        assert record.read_bytes() == before
+    other = ["--set", 'scene.name="other"', "--set", "dmw.rms_nm=0.3"]   # another scene into the folder
+    assert cli.main(["dmw", str(PAPER), "--out", str(first), *other]) == 2
+    assert capsys.readouterr().err.strip() == (
+        f"hdi dmw: error: {first / 'dmw.nc'}: results of the scene 'paper-2009', not of this run's 'other'; run each "
+        "scene into its own folder (--out; the default is results/<scene name>/), or pass --force to replace them")
+    assert io.read_dataset(first / "dmw.nc").attrs["scene_name"] == "paper-2009"
+    assert cli.main(["dmw", str(PAPER), "--out", str(first), *other, "--force", "-q"]) == 0
+    assert io.read_dataset(first / "dmw.nc").attrs["scene_name"] == "other"
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "dmw.nc").write_text("my own notes, not a dataset\n")     # a file hdi did not write
+    assert cli.main(["dmw", str(PAPER), "--out", str(mine)]) == 2
+    assert "dmw.nc: not written by hdi (no dmw stage's record of it)" in capsys.readouterr().err
+    assert (mine / "dmw.nc").read_text() == "my own notes, not a dataset\n"

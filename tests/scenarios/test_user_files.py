@@ -182,8 +182,8 @@ def test_a_full_disk_is_one_line_naming_the_dataset_and_nothing_is_half_written(
         lambda tmp: OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), tmp)))
     assert cli.main(argv) == 2
     line = _one_line_error(capsys)
-    assert line == (f"hdi dmw: error: {out / 'dmw.nc'}: {os.strerror(errno.ENOSPC)}; free some space or choose "
-                    "another --out")
+    assert line == (f"hdi dmw: error: {out / 'dmw.nc'}: {os.strerror(errno.ENOSPC)}; the disk is full: free some "
+                    "space or choose another --out")
     assert _tree(out) == before                   # the previous dataset kept, no temporary left
 
 

@@ -156,7 +156,7 @@ def test_failing_load_keeps_existing_dataset(tmp_path):
     with pytest.raises(dmw.DMWError, match=r"bad\.csv.*NaN"):
         ensure("dmw", scene_from_dict({"dmw": {"source": str(bad)}}), tmp_path)
     assert good.read_bytes() == before
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.csv", "dmw.nc"]   # no temp files left
+    assert sorted(p.name for p in tmp_path.iterdir()) == [".hdi", "bad.csv", "dmw.nc"]   # no temp files left
 
 
 def test_effect_off_writes_zero_dmw_and_needs_no_record(tmp_path):
