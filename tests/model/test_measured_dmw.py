@@ -204,17 +204,17 @@ def test_a_record_cut_short_is_refused_naming_its_last_line(tmp_path):
     x = dmw.synthesize(0.16, BAND, -2.0, 1e-4, FS, seed=3)
     whole = tmp_path / "whole.csv"
     np.savetxt(whole, x)
-    assert measured_dmw.load_record(whole, sample_rate_hz=FS).values.size == x.size
+    assert measured_dmw.load_record(whole, sample_rate_hz=FS, unit="nm").values.size == x.size
     text = whole.read_bytes()
     for cut in (2, 9, 20):                    # inside the last number: its exponent ("e-0"), its digits, its mantissa
         part = tmp_path / f"cut{cut}.csv"
         part.write_bytes(text[:-cut])
         with pytest.raises(dmw.DMWError, match=rf"cut{cut}\.csv: line {x.size}: the file ends inside this line "
                                                r"\(no line break after it\), as a record cut short ends"):
-            measured_dmw.load_record(part, sample_rate_hz=FS)
+            measured_dmw.load_record(part, sample_rate_hz=FS, unit="nm")
     with_comment = tmp_path / "comment.csv"                 # a last line that is no data: not a cut record
     with_comment.write_bytes(text + b"# end")
-    assert measured_dmw.load_record(with_comment, sample_rate_hz=FS).values.size == x.size
+    assert measured_dmw.load_record(with_comment, sample_rate_hz=FS, unit="nm").values.size == x.size
     crlf = tmp_path / "crlf.csv"
     crlf.write_bytes(text.replace(b"\n", b"\r\n"))
-    assert measured_dmw.load_record(crlf, sample_rate_hz=FS).values.size == x.size
+    assert measured_dmw.load_record(crlf, sample_rate_hz=FS, unit="nm").values.size == x.size
