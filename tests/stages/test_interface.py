@@ -162,7 +162,8 @@ def test_failed_write_keeps_previous_file(tmp_path, paper_config, monkeypatch, e
     with pytest.raises(raised):
         ensure("interface", scene, tmp_path)
     assert path.read_bytes() == before                       # the old file is intact
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["interface.nc"]  # no temporary left
+    # no temporary left (beside the file, the runner's records of the first run in .hdi/)
+    assert sorted(p.name for p in tmp_path.iterdir()) == [".hdi", "interface.nc"]
     monkeypatch.undo()
     with xr.open_dataset(path, engine="netcdf4") as ds:
         assert float(ds["lubricant_thickness"]) == 0.75
@@ -178,7 +179,7 @@ def test_interrupted_cli_run_keeps_previous_file(tmp_path, paper_config, monkeyp
     monkeypatch.setattr(io, "_to_netcdf", broken)
     assert cli.main(["interface", str(paper_config), "--out", str(tmp_path), "--force"]) == 130
     assert (tmp_path / "interface.nc").read_bytes() == before
-    assert [p.name for p in tmp_path.iterdir()] == ["interface.nc"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == [".hdi", "interface.nc"]  # (.hdi/: the runner's records)
 
 
 def test_write_dataset_refuses_variables_without_units(tmp_path):
