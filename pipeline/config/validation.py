@@ -202,7 +202,9 @@ class Scene:
             for key, value in keys.items():
                 check_plain(value, f"{sec}.{key}", f"scene.replace({sec}={{{key!r}: ...}})")  # (before _thaw recurses)
                 blame[(sec, key)] = f"scene.replace({sec}={{{key!r}: {shown(value)}}})"
-                if (sec, key) == ("scene", "extends"):  # (a base is merged when a file is read, not here)
+                # (a base is merged when a file is read, not here; the scene's own value passed back unchanged, as
+                # `{**scene["scene"], ...}` does, changes nothing)
+                if (sec, key) == ("scene", "extends") and _thaw(value) != cfg.get("scene", {}).get("extends"):
                     raise SceneError(f"{blame[(sec, key)]}: scene.extends cannot be replaced: a base scene is merged "
                                      "when a scene file is read; load the base scene itself (load_scene) and replace "
                                      "the keys that differ, or write `extends` in a scene file")

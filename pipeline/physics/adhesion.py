@@ -73,6 +73,21 @@ def penetration_fraction(penetration: np.ndarray, t: float) -> np.ndarray:
     ``d`` the separation, ``t`` [m] the bonded thickness): 0 at the lubricant surface, 1 at the solid and
     beyond (docs/model.md, section "Adhesion rising with penetration"). A film of zero thickness is a step
     at the solid, ``p > 0``.
+
+    Parameters
+    ----------
+    penetration : ``z - (d - t)`` [m]
+    t : bonded lubricant thickness [m], >= 0
+
+    Returns
+    -------
+    numpy.ndarray
+        The fraction of the layer penetrated [1], in [0, 1], the shape of ``penetration``.
+
+    References
+    ----------
+    docs/model.md, section "Adhesion rising with penetration" (the sources: Vakis & Polycarpou, Tribol. Lett. 45
+    (2012) 37-48, and Brunner et al., Tribol. Lett. 40 (2010)).
     """
     p = np.asarray(penetration, dtype=float)
     if t <= 0.0:
@@ -95,6 +110,11 @@ def penetration_work_of_adhesion(penetration: np.ndarray, t: float, dgamma: floa
     t : bonded lubricant thickness [m]
     dgamma : work of adhesion of the lubricant [J/m^2] (the ISBL's ``dgamma``)
     dgamma_solid : work of adhesion at solid contact through the layer [J/m^2]
+
+    Returns
+    -------
+    numpy.ndarray
+        The work of adhesion W [J/m^2], the shape of ``penetration``.
 
     References
     ----------

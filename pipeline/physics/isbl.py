@@ -357,6 +357,16 @@ def penetration_adhesion(d: np.ndarray, p: Interface) -> tuple[np.ndarray, np.nd
     ----------
     d : separation [m]
     p : the interface, with ``dgamma_solid`` set
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(p_b, p_m)``: the extra adhesion pressure [Pa] of the bridges and of the menisci, the shape of ``d``.
+
+    References
+    ----------
+    docs/model.md, section "Adhesion rising with penetration" (the sources: Vakis & Polycarpou, Tribol. Lett. 45
+    (2012) 37-48, and Brunner et al., Tribol. Lett. 40 (2010)).
     """
     d = np.atleast_1d(np.asarray(d, dtype=float))
     s, t = p.sigma_s, p.t

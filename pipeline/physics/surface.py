@@ -71,6 +71,15 @@ def sampling_error(physical_sizes: Sequence[float], nb_grid_pts: Sequence[int]) 
     ----------
     physical_sizes : the map's lateral sizes ``(Lx, Ly)`` [nm]
     nb_grid_pts : its grid points ``(nx, ny)`` [1]
+
+    Returns
+    -------
+    str or None
+        The reason, with the sizes [nm] and pixel sizes [nm] it found; ``None`` when the sampling is physical.
+
+    References
+    ----------
+    docs/model.md, section "Asperity statistics" (the bounds of a map and why each holds).
     """
     sizes = [float(v) for v in physical_sizes]
     shown = " x ".join(f"{v:.4g}" for v in sizes)
@@ -89,7 +98,21 @@ def sampling_error(physical_sizes: Sequence[float], nb_grid_pts: Sequence[int]) 
 
 def heights_error(heights: np.ndarray) -> str | None:
     """What is wrong with a map's heights [nm] (NaN where undefined), or ``None``: some defined, every
-    defined one of magnitude at most :data:`MAX_HEIGHT_NM`."""
+    defined one of magnitude at most :data:`MAX_HEIGHT_NM`.
+
+    Parameters
+    ----------
+    heights : the map's heights [nm], NaN where undefined
+
+    Returns
+    -------
+    str or None
+        The reason, with the largest height [nm] it found; ``None`` when the heights are physical.
+
+    References
+    ----------
+    docs/model.md, section "Asperity statistics" (the bounds of a map and why each holds).
+    """
     h = np.asarray(heights, dtype=float)
     defined = h[~np.isnan(h)]
     if defined.size == 0:
@@ -101,7 +124,21 @@ def heights_error(heights: np.ndarray) -> str | None:
 
 
 def roughness_error(rms: float) -> str | None:
-    """What is wrong with the rms height [nm] of a detrended map, or ``None``: at least :data:`MIN_RMS_NM`."""
+    """What is wrong with the rms height [nm] of a detrended map, or ``None``: at least :data:`MIN_RMS_NM`.
+
+    Parameters
+    ----------
+    rms : rms height of the detrended map [nm]
+
+    Returns
+    -------
+    str or None
+        The reason, with the rms [nm]; ``None`` when the map is rough enough to have asperities.
+
+    References
+    ----------
+    docs/model.md, section "Asperity statistics" (the bounds of a map and why each holds).
+    """
     if not rms >= MIN_RMS_NM:
         return (f"rms height {rms:.4g} nm after detrending: expected at least {MIN_RMS_NM:g} nm (a flatter map, "
                 "constant or planar, has no asperities)")

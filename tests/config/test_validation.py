@@ -234,6 +234,11 @@ def test_replace_refuses_a_base_scene(paper_scene, repo_root):
                                          r"replaced: a base scene is merged when a scene file is read") as exc:
         paper_scene.replace(scene={"extends": str(bulge)})
     assert "\n" not in str(exc.value)
+    # a scene's own section passed back with a key changed (its extends as it is) is no new base
+    scene = load_scene(bulge)
+    assert scene["scene"]["extends"]
+    varied = scene.replace(scene={**scene["scene"], "effects": [e for e in scene.effects if e != "dmw"]})
+    assert varied.effects == scene.effects - {"dmw"} and varied["scene"]["extends"] == scene["scene"]["extends"]
 
 
 # ------------------------------------------------------------------ numbers and nesting from the API

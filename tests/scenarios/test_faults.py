@@ -65,7 +65,10 @@ def test_a_scheduler_lost_mid_batch_is_one_line_to_rerun():
         cluster.close()
     text = str(exc.value)
     assert "\n" not in text and len(done) == 1
-    assert text.startswith(f"dask scheduler {cluster.scheduler_address}: lost with ")
+    # (dask cancels the futures it held, or the stall watch's next question finds no scheduler first: which one
+    # comes first depends on the host's timing; both are the one line)
+    assert text.startswith(tuple(f"dask scheduler {cluster.scheduler_address}: {what}"
+                                 for what in ("lost with ", "stopped answering (")))
     assert text.endswith("finished work is kept, run again to resume")
 
 
