@@ -148,6 +148,13 @@ def ke_limiting_interference() -> float:
     return float(min(root, asperity.X_PLASTIC))
 
 
+def _summit_scales(w: np.ndarray, R: float, E: float, H: float, nu: float) -> tuple[np.ndarray, float, float]:
+    """``(w, w_c, L_c)``: the interference as a float array [m], the critical interference [m] and the critical
+    load [N] of the summit [KE02], the scales both static-friction laws normalise by."""
+    return (np.asarray(w, dtype=float), asperity.critical_interference(R, E, H, nu),
+            asperity.critical_load(R, E, H, nu))
+
+
 def ke_sliding_inception(w: np.ndarray, R: float, E: float, H: float, nu: float) -> np.ndarray:
     """Largest tangential load of one summit at the inception of sliding ``Q_max`` [N] versus its
     interference ``w`` [m], Kogut-Etsion [KE03b, KE04] (:data:`KE_SLIDING_FITS`).
@@ -170,9 +177,7 @@ def ke_sliding_inception(w: np.ndarray, R: float, E: float, H: float, nu: float)
     ----------
     [KE03b], [KE04]; docs/model.md, section "Static friction of the summits".
     """
-    w = np.asarray(w, dtype=float)
-    wc = asperity.critical_interference(R, E, H, nu)
-    Lc = asperity.critical_load(R, E, H, nu)
+    w, wc, Lc = _summit_scales(w, R, E, H, nu)
     x = np.maximum(w, 0.0) / wc
     (c, e), (a2, a1, a0) = KE_SLIDING_FITS
     return np.select([w <= 0, x <= asperity.X_ELASTIC, x <= ke_limiting_interference()],
@@ -221,9 +226,7 @@ def bke_full_stick(w: np.ndarray, R: float, E: float, H: float, nu: float) -> np
     ----------
     [BKE07]; docs/model.md, section "Static friction of the summits".
     """
-    w = np.asarray(w, dtype=float)
-    wc = asperity.critical_interference(R, E, H, nu)
-    Lc = asperity.critical_load(R, E, H, nu)
+    w, wc, Lc = _summit_scales(w, R, E, H, nu)
     P = asperity.contact_load(w, R, E, H, nu)
     on = (w > 0) & (w <= asperity.X_PLASTIC * wc)
     ratio = np.where(on, P / Lc, 1.0)
