@@ -172,7 +172,7 @@ def heated_contact(model: Model, protrusion: float, eta_f: float, speed: float) 
             return np.nan, None
         return eta_f * speed * contact_quantities(model, protrusion + x, s)["friction_force"], s
 
-    x0, s0 = 0.0, state
+    x0 = 0.0
     g0 = eta_f * speed * contact_quantities(model, protrusion, state)["friction_force"]
     x1 = g0
     g1, s1 = g(x1)
@@ -185,7 +185,7 @@ def heated_contact(model: Model, protrusion: float, eta_f: float, speed: float) 
         if abs(h1) < HEAT_TOL:
             return x1, s1, gain
         x2 = x1 - h1 * (x1 - x0) / (h1 - h0) if h1 != h0 else g1
-        x0, g0, s0 = x1, g1, s1
+        x0, g0 = x1, g1
         x1 = x2
         g1, s1 = g(x1)
     return np.nan, None, gain

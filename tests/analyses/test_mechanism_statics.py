@@ -100,8 +100,10 @@ def test_free_tfc_point_lift_is_the_bearings_compliance_and_linear_in_the_arm(mo
     s = model.slider
     a = np.array([1.0, -s.l_c])
     compliance = np.linalg.inv(s.stiffness_matrix)
+    # tol: the same few products of the same numbers, a few roundings
     assert lift == pytest.approx(float(a @ compliance @ np.array([0.0, -s.friction_arm])), rel=1e-12)
     assert lift > 0
+    # tol: doubling the arm is exact in binary; the solve's rounding
     assert ms.friction_lift(ms.with_friction_arm(model, 2 * s.friction_arm)) == pytest.approx(2 * lift, rel=1e-12)
     assert ms.friction_lift(ms.with_friction_arm(model, 0.0)) == 0.0
 
@@ -116,6 +118,7 @@ def test_map_flash_temperature_and_refusals(model, repo_root):
     assert float(d["flash_temperature"]) > 0 and 0 < float(d["heat_partition"]) < 1
     # the friction power is Q V; the summits in contact eta A_n P(z > d)
     V = disk_speed_m_s(scene["dmw"])
+    # tol: a product and a sum of the same numbers, a few roundings
     assert float(d["friction_power"]) == pytest.approx(float(d["friction_force"]) * V, rel=1e-12)  # mN x m/s = mW
     assert 0 < float(d["contact_count"]) < float(iface["summit_density"]) * 1e12 * 62.1e-12
     # without the interface dataset: no count, no flash temperature

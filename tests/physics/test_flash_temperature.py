@@ -24,12 +24,15 @@ def _disk_mean(pe: float, n_r: int = 16, n_phi: int = 32, nodes: int = 800) -> f
 
 def test_stationary_source_has_carslaw_jaegers_centre_and_mean():
     # [CJ59] 10.5: centre q a / k, mean 8 q a / (3 pi k)
+    # tol: the midpoint rule on R = 1 at every node: exact up to the rounding of the mean
     assert ft.moving_source_temperature(0.0, 0.0, 0.0) == pytest.approx(1.0, rel=1e-12)
     # tol: the edge's sqrt singularity in theta at the midpoint rule's 2000 points
     assert ft.moving_source_temperature(1.0, 0.0, 0.0) == pytest.approx(2 / np.pi, rel=1e-3)  # edge: 2/pi [CJ59]
     # tol: the 16 x 32 area quadrature of a function with a sqrt edge
     assert _disk_mean(0.0) == pytest.approx(8 / (3 * np.pi), rel=2e-3)
+    # tol: a closed form evaluated at Pe = 0: one or two roundings
     assert ft.flash_factor(0.0, "max") == pytest.approx(1.0, rel=1e-15)
+    # tol: a closed form evaluated at Pe = 0: one or two roundings
     assert ft.flash_factor(0.0, "mean") == pytest.approx(8 / (3 * np.pi), rel=1e-15)
 
 
@@ -79,12 +82,14 @@ def test_factors_fall_with_peclet_and_refuse_bad_input():
 
 def test_heat_partition_equalises_the_mean_temperatures():
     # two equal bodies both stationary: half each; a moving disk cools faster, so takes more
+    # tol: 1/2 of two equal terms: exact up to one rounding
     assert ft.heat_partition(10.0, 10.0, 0.0) == pytest.approx(0.5, rel=1e-15)
     assert ft.heat_partition(10.0, 10.0, 10.0) < 0.5
     for ks, kd, pe in ((20.0, 1.1, 80.0), (20.0, 150.0, 0.7)):
         b = ft.heat_partition(ks, kd, pe)
         slider = b / ks * ft.flash_factor(0.0, "mean")
         disk = (1 - b) / kd * ft.flash_factor(pe, "mean")
+        # tol: the partition's own definition recomputed: a few roundings
         assert slider == pytest.approx(disk, rel=1e-12)
     # a perfect conductor under the slider takes all of it
     assert ft.heat_partition(20.0, 1e12, 1.0) == pytest.approx(0.0, abs=1e-9)
@@ -95,10 +100,14 @@ def test_contact_temperature_scales_and_limits():
                 diffusivity_disk=5.4e-7)
     t = ft.contact_temperature(**base)
     a = np.sqrt(2.4e-12 / (np.pi * 440))
+    # tol: the same products recomputed: a few roundings
     assert t["radius"] == pytest.approx(a, rel=1e-12)
+    # tol: the same products recomputed: a few roundings
     assert t["peclet"] == pytest.approx(19.5 * a / (2 * 5.4e-7), rel=1e-12)
     q = 17e-3 / 2.4e-12
+    # tol: the same products recomputed: a few roundings
     assert t["temperature"] == pytest.approx(t["partition"] * q * a / 20.0, rel=1e-12)
+    # tol: a ratio of two closed-form constants: a few roundings
     assert t["mean_temperature"] / t["temperature"] == pytest.approx(8 / (3 * np.pi), rel=1e-12)
     # linear in the power; fewer, larger spots of the same area run hotter (a ~ count^-1/2)
     assert ft.contact_temperature(**{**base, "power": 34e-3})["temperature"] == pytest.approx(2 * t["temperature"])
