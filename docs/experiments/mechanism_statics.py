@@ -125,6 +125,14 @@ def main(argv: list[str] | None = None) -> None:
     args.results.mkdir(parents=True, exist_ok=True)
     ds.to_netcdf(args.results / "mechanism_statics.nc")
     print(table(ds))
+    # the thermal bounds: a glass substrate (the map's) and a metal underlayer under the contact
+    metal = ms.Thermal(k_disk=50.0, diffusivity_disk=1.5e-5)
+    for name, th in (("glass disk", ms.Thermal()), ("metal underlayer", metal)):
+        d = ms.mechanism_map(found[:1], [11.0], interface=iface, thermal=th).isel(case=0, protrusion=0)
+        print(f"11 nm, {name} (k_disk {th.k_disk:g} W/(m K), kappa {th.diffusivity_disk:g} m2/s): flash "
+              f"{float(d['flash_temperature']):.1f} K (slider share {float(d['heat_partition']):.2f}, Pe "
+              f"{float(d['contact_peclet']):.3g}, {float(d['contact_count']):.0f} summits); nominal "
+              f"{float(d['nominal_temperature']):.1f} K (slider share {float(d['nominal_heat_partition']):.2f})")
     if args.figure:
         figure(ds, args.figure)
 

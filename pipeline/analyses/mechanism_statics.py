@@ -22,7 +22,8 @@ both together (the band's precondition: the slider can fly and hold the contact 
 the contact state's interference, separation, contact, adhesion and friction forces, real area, friction
 coefficient, friction power, the heat's protrusion, and the flash temperature of the contact
 (:func:`pipeline.physics.flash_temperature.contact_temperature`, the summits in contact counted from the
-interface's ``contact_fraction``). With a mechanism at zero (``eta_f = 0``; the scene's own model) the
+interface's ``contact_fraction``) beside the rise of the friction power spread over the nominal area (the
+pole tip's bulk heating, whose slider share is what a frictional-heating efficiency ``eta_f`` scales). With a mechanism at zero (``eta_f = 0``; the scene's own model) the
 states are today's bit for bit.
 """
 
@@ -232,6 +233,11 @@ MAP = {v.name: v for v in (
     Variable("heat_partition", "1", "slider's heat share", dims=_CP,
              description="fraction of the friction heat flowing into the slider (Blok's postulate)"),
     Variable("contact_peclet", "1", "micro-contact Peclet number", dims=_CP, description="V a / (2 kappa_disk)"),
+    Variable("nominal_temperature", "K", "nominal contact temperature rise", dims=_CP,
+             description="maximum surface temperature rise of the friction power spread over the nominal area as "
+                         "one circular source (Tian-Kennedy; Blok's partition)"),
+    Variable("nominal_heat_partition", "1", "slider's heat share, nominal", dims=_CP,
+             description="fraction of the friction heat flowing into the slider at the nominal area's scale"),
 )}
 
 VALUE_UNITS = {"none": "1", "penetration-adhesion": "J m-2", "frictional-heating": "nm mW-1",
@@ -289,6 +295,10 @@ def mechanism_map(cases: Sequence[Case], protrusions, *, interface: xr.Dataset |
             tab["flash_temperature"][i, j] = t["temperature"]
             tab["heat_partition"][i, j] = t["partition"]
             tab["contact_peclet"][i, j] = t["peclet"]
+            t = contact_temperature(power, q["nominal_area"], 1.0, V, thermal.k_slider, thermal.k_disk,
+                                    thermal.diffusivity_disk)
+            tab["nominal_temperature"][i, j] = t["temperature"]
+            tab["nominal_heat_partition"][i, j] = t["partition"]
     data: dict[str, Any] = {n: MAP[n].from_si(tab[n], _CP) for n in names}
     data["mechanism"] = MAP["mechanism"].data([c.mechanism for c in cases], ("case",))
     data["value"] = MAP["value"].data([c.value for c in cases], ("case",))
