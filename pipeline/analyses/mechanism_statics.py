@@ -41,7 +41,7 @@ from ..model.assembly import Model
 from ..model.dmw_record import disk_speed_m_s
 from ..model.dynamics import with_values
 from ..model.forces import separation_at
-from ..model.piecewise import ppval
+from ..model.piecewise import ppval, static_table
 from ..physics.flash_temperature import contact_temperature
 from ..units import NM
 from ..variables import Variable
@@ -107,7 +107,8 @@ def contact_quantities(model: Model, protrusion: float, state: dict, interface: 
                        ) -> dict[str, float]:
     """The interface forces of a static state ``state`` (:func:`pipeline.model.statics.states_at`) at
     ``protrusion`` [m]: the tables the kernel reads (:func:`pipeline.model.kernel_inputs.interface_tables`) at
-    its separation ``d``, times ``A_n``, the contact ones only under the criterion (SI units; the friction
+    its separation ``d``, times ``A_n``, the contact ones only under the criterion (the adhesion at rest, the
+    continuous lubricant shear at any ``d``, as the static forces take them; SI units; the friction
     coefficient and the count of summits in contact, ``eta A_n contact_fraction(d)`` from ``interface``, [1])."""
     p, _, _ = kernel_inputs.run_parameters(model, protrusion)
     An = float(p["A_n"])
@@ -119,10 +120,16 @@ def contact_quantities(model: Model, protrusion: float, state: dict, interface: 
     def at(table: np.ndarray | None, upper: float = np.inf) -> float:
         if table is None:
             return 0.0
-        return An * float(np.clip(ppval(np.ascontiguousarray(table[:, :4]), x0, h, np.array([d]))[0], 0.0, upper))
+        return An * float(np.clip(ppval(np.ascontiguousarray(table), x0, h, np.array([d]))[0], 0.0, upper))
 
-    out = {"separation": d, "adhesion_force": at(tabs.adhesion), "contact_force": at(tabs.contact) if on else 0.0,
-           "friction_force": at(tabs.friction) if on else 0.0,
+    friction = 0.0
+    if tabs.friction is not None:  # the switched solid part in contact; the continuous lubricant shear beside it
+        friction = at(tabs.friction[:, :4]) if on else 0.0
+        if tabs.friction.shape[1] == 8:
+            friction += at(tabs.friction[:, 4:])
+    # (the adhesion at rest: with the meniscus state, its relaxing and immediate tables summed)
+    out = {"separation": d, "adhesion_force": at(static_table(tabs.adhesion)),
+           "contact_force": at(tabs.contact) if on else 0.0, "friction_force": friction,
            "real_area": at(tabs.area, tabs.area_cap) if on else 0.0, "nominal_area": An}
     out["friction_coefficient"] = out["friction_force"] / out["contact_force"] if out["contact_force"] > 0 else np.nan
     count = np.nan

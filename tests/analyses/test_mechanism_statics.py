@@ -125,3 +125,23 @@ def test_map_flash_temperature_and_refusals(model, repo_root):
     assert np.isnan(ms.mechanism_map([ms.Case("none", 0.0, model)], [11.0])["flash_temperature"]).all()
     with pytest.raises(ValueError, match="mechanism 'heat' is not one of"):
         ms.mechanism_map([ms.Case("heat", 0.0, model)], [11.0])
+
+
+@pytest.mark.parametrize("name", ["paper-2009-identified.toml", "paper-2009-two-population-identified.toml"])
+def test_contact_quantities_are_the_kernels_forces_at_rest(repo_root, name):
+    """Without the DMW a run at 11 nm settles on the static contact state: its steady-window forces are the
+    map's (the one-population scene; the two-population scene with its meniscus state's two adhesion tables
+    and the lubricant shear)."""
+    from dataclasses import replace
+    from pipeline.model import outcomes, running
+    scene = load_scene(repo_root / "configs" / name)
+    k = K_MAIN if name == "paper-2009-identified.toml" else 0.978
+    m = replace(build(scene, synthetic_record(scene, duration_s=2.2e-3), k=k), dmw=None)
+    p = 11.0 * NM
+    s = _deepest_contact(m, p)
+    q = ms.contact_quantities(m, p, s)
+    out = outcomes.summarize(running.run_model(m, p))
+    # tol: the run's transient decays to the static state within the window (1e-6 of the forces here)
+    for key in ("contact_force", "friction_force", "adhesion_force"):
+        assert out[key] == pytest.approx(q[key], rel=1e-4), key
+    assert out["interference"] == pytest.approx(-s["clearance"], rel=1e-4)
