@@ -1,9 +1,11 @@
 """Statics maps of the mechanisms (pipeline.analyses.mechanism_statics) on the identified paper scene: a
-mechanism at zero is today's statics bit for bit; the frictional heat's protrusion solves its fixed point
+mechanism at zero (no heat; the solid work of adhesion at the lubricant's) is today's statics bit for bit, and
+linear near it; the frictional heat's protrusion solves its fixed point
 and, at small eta_f, is the linear response eta_f Q V, whose effect on the interference is the statics'
 finite-difference slope times it; the friction moment's effect on the contact state is the linear
 response of the state's stiffness to the moment; the free TFC point's lift per newton of friction is the
-bearing's compliance, linear in the arm."""
+bearing's compliance, linear in the arm; the contact state's forces are those of the kernel's steady run
+without the DMW."""
 
 from __future__ import annotations
 
@@ -145,3 +147,27 @@ def test_contact_quantities_are_the_kernels_forces_at_rest(repo_root, name):
     for key in ("contact_force", "friction_force", "adhesion_force"):
         assert out[key] == pytest.approx(q[key], rel=1e-4), key
     assert out["interference"] == pytest.approx(-s["clearance"], rel=1e-4)
+
+
+def test_penetration_adhesion_at_the_lubricants_value_is_todays_map_and_linear_near_it(model):
+    """``W_s = dgamma`` (the scene's work of adhesion) gives the tables, hence the map, bit for bit; a small
+    step of ``W_s`` moves the contact state linearly (twice the step, twice the shift)."""
+    scene = model.scene
+    W = scene["lubricant"]["work_of_adhesion_j_m2"]
+    record = synthetic_record(scene, duration_s=2.2e-3)
+
+    def with_ws(ws):
+        return build(scene.replace(lubricant={"solid_work_of_adhesion_j_m2": ws}), record, k=K_MAIN)
+
+    prot = [9.6, 10.4, 11.0]
+    a = ms.mechanism_map([ms.Case("none", 0.0, model)], prot)
+    b = ms.mechanism_map([ms.Case("penetration-adhesion", W, with_ws(W))], prot)
+    for name in ("flying", "contact", "interference", "contact_force", "adhesion_force", "friction_force"):
+        assert np.array_equal(a[name].values, b[name].values, equal_nan=True), name
+    p = 11.0 * NM
+    c0 = _deepest_contact(model, p)["clearance"]
+    d1 = _deepest_contact(with_ws(W + 1e-4), p)["clearance"] - c0
+    d2 = _deepest_contact(with_ws(W + 2e-4), p)["clearance"] - c0
+    assert d1 < 0  # more adhesion at solid contact: a deeper contact
+    # tol: second order in a 2e-4 J/m^2 step of a pull of ~2.8 mN at 0.109 J/m^2, and the 1e-6-nm states
+    assert d2 == pytest.approx(2 * d1, rel=0.02)
