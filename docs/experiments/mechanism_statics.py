@@ -71,15 +71,14 @@ def cases(results: Path) -> tuple[list, object]:
 
 
 def table(ds) -> str:
-    rows = ["| case | k | lift [nm/mN] | flying at [nm] | 9.8 nm: interference / force / mu | 11 nm: interference [nm] | "
-            "force [mN] | mu | friction power [mW] | heat protrusion [nm] | flash T [K] |", "|" + "---|" * 11]
+    rows = ["| case | k | lift [nm/mN] | fold [nm] | flying at [nm] | 9.8 nm: interference / force / mu | 11 nm: interference [nm] | "
+            "force [mN] | mu | friction power [mW] | heat protrusion [nm] | flash T [K] |", "|" + "---|" * 12]
     for c in ds["case"].values:
         d = ds.sel(case=c)
         fly = d["protrusion"].values[d["flying"].values == 1]
         a, b = d.sel(protrusion=SHOWN[0]), d.sel(protrusion=SHOWN[1])
-        rows.append(f"| {c} | {float(d['k']):.4g} | {float(d['friction_lift']):.3f} | "
-                    f"{fly.min():.1f}-{fly.max():.1f} | " if fly.size else f"| {c} | {float(d['k']):.4g} | "
-                    f"{float(d['friction_lift']):.3f} | none | ")
+        head = f"| {c} | {float(d['k']):.4g} | {float(d['friction_lift']):.3f} | {float(d['fold']):.3f} | "
+        rows.append(head + (f"{fly.min():.1f}-{fly.max():.1f} | " if fly.size else "none | "))
         rows[-1] += (f"{float(a['interference']):.3f} / {float(a['contact_force']):.3f} / "
                      f"{float(a['friction_coefficient']):.3f} | {float(b['interference']):.3f} | "
                      f"{float(b['contact_force']):.3f} | {float(b['friction_coefficient']):.3f} | "

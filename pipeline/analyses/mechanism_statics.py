@@ -35,7 +35,7 @@ from typing import Any, Sequence
 import numpy as np
 import xarray as xr
 
-from ..model import kernel_inputs
+from ..model import kernel_inputs, running
 from ..model import statics as st
 from ..model.assembly import Model
 from ..model.dmw_record import disk_speed_m_s
@@ -95,6 +95,16 @@ def friction_lift(model: Model) -> float:
         return 0.0
     a = np.array([1.0, -s.l_c])
     return float(a @ np.linalg.solve(s.stiffness_matrix, np.array([0.0, -s.friction_arm])))
+
+
+def flying_fold(model: Model) -> float:
+    """Where the model's stable flying branch ends [m] (NaN: not before twice the flying height): the fold of
+    its static start (:func:`pipeline.model.start.start_state`, found once per model and kept in its
+    ``statics``), which no mechanism acting only in contact moves."""
+    if model.start != "static":
+        return np.nan
+    running.start(model, float(model.p["FH0"]))
+    return float(model.statics.get("fold", np.nan))
 
 
 def with_friction_arm(model: Model, arm: float) -> Model:
@@ -209,6 +219,10 @@ MAP = {v.name: v for v in (
              description="the mechanism's value in its own unit (J m-2, nm mW-1, nm mN-1 or nm: see value_units)"),
     Variable("value_units", "", "units of the mechanism value", dims=("case",), dtype="str"),
     Variable("k", "1", "contact criterion k", dims=("case",)),
+    Variable("fold", "nm", "end of the flying branch", NM, dims=("case",),
+             description="protrusion where the stable flying branch, continued from zero protrusion, ends (the "
+                         "saddle-node fold of the static start, bracketed to 1e-3 nm; NaN: not before twice the "
+                         "flying height)"),
     Variable("friction_lift", "nm mN-1", "free TFC-point lift per friction", NM / 1e-3, dims=("case",),
              description="lift of the TFC point per mN of friction on the air bearing alone (a K^-1 b)"),
     Variable("flying", "1", "stable flying state", dims=_CP, dtype="int8", flag_values=(0, 1),
@@ -312,6 +326,7 @@ def mechanism_map(cases: Sequence[Case], protrusions, *, interface: xr.Dataset |
     data["value_units"] = MAP["value_units"].data([VALUE_UNITS[c.mechanism] for c in cases], ("case",))
     data["k"] = MAP["k"].data([c.model.k for c in cases], ("case",))
     data["friction_lift"] = MAP["friction_lift"].from_si([friction_lift(c.model) for c in cases], ("case",))
+    data["fold"] = MAP["fold"].from_si([flying_fold(c.model) for c in cases], ("case",))
     ds = xr.Dataset(data, coords={
         "case": MAP["case"].data([c.label or f"{c.mechanism} {c.value:g}" for c in cases], ("case",)),
         "protrusion": MAP["protrusion"].data(labels, ("protrusion",))})

@@ -171,3 +171,11 @@ def test_penetration_adhesion_at_the_lubricants_value_is_todays_map_and_linear_n
     assert d1 < 0  # more adhesion at solid contact: a deeper contact
     # tol: second order in a 2e-4 J/m^2 step of a pull of ~2.8 mN at 0.109 J/m^2, and the 1e-6-nm states
     assert d2 == pytest.approx(2 * d1, rel=0.02)
+
+
+def test_the_fold_is_the_static_starts_and_bounds_the_flying_states(model):
+    fold = ms.flying_fold(model) / NM
+    ds = ms.mechanism_map([ms.Case("none", 0.0, model)], [9.4, 9.6, 9.8, 10.0])
+    assert float(ds["fold"][0]) == pytest.approx(fold, abs=1e-12)
+    flying = ds["protrusion"].values[ds["flying"].values[0] == 1]
+    assert flying.max() < fold < 9.8  # the last flying step before the fold, none after it
