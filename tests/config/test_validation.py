@@ -209,6 +209,7 @@ SHIPPED_TEXT_SHA256 = {
     "paper-2009": "8d939d4ed8d39f11310c73b21d042c40b444cda2ef858ba231ef14649762fa45",
     "paper-2009-bulge": "29a74c4f57eab252ca989da39cad225d975d6c3cabd9f3f36a16142d225e2f5b",
     "paper-2009-identified": "84851091d02ed115a5a1f12cd843339151397e070b10982ee9cdb8ddc29dcb12",
+    "paper-2009-identified-section-datum": "79da0b1094d353da12f0b78699e9aac13df8e69f6823e76153fc44c9c73ff701",
     "paper-2009-reynolds": "b46fd6376480ac0638f26dd69b594c135320c828d2013d63082177cdc9187ee2",
     "paper-2009-two-population": "cfa2fae48825009f878cc577d16c83feb1075b35f3dc97f74b38e373d5264cb6",
     "paper-2009-two-population-identified": "cb2ba837b65ff4542ab4f4c5f24ba0d74a7a7cc51f223f64623396560bac510c",
