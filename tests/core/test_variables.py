@@ -213,7 +213,7 @@ def test_pint_quantify_works_on_every_dataset(datasets):
 
 
 def test_one_name_for_the_elapsed_time_in_memory_and_in_the_files(datasets, tmp_path):
-    """Issue 35, 5: ``xr.open_dataset`` gave ``elapsed_time``, ``hdi.open_dataset`` and ``simulate`` ``time``."""
+    """``xr.open_dataset``, ``hdi.open_dataset`` and ``simulate`` all give the time as ``elapsed_time``."""
     assert TIME == "elapsed_time"
     for dataset in ("dmw", "histories", "sweep_histories", "sweep-part"):
         with xr.open_dataset(datasets[dataset], engine="netcdf4") as raw:
@@ -235,7 +235,8 @@ LONG_NAME_MAX = 40
 
 
 def test_long_names_are_short_and_the_sentence_is_the_description(datasets):
-    """Issue 35, 5: long_names were whole sentences (up to 140 characters) that clipped plot labels."""
+    """long_names fit a plot label (a whole sentence, up to 140 characters, would clip it): the sentence is the
+    description."""
     for group, variables in vs.GROUPS.items():
         for name, v in variables.items():
             assert 0 < len(v.long_name) <= LONG_NAME_MAX, (group, name, v.long_name)

@@ -145,7 +145,7 @@ def test_main_does_not_run_a_left_out_module(monkeypatch: pytest.MonkeyPatch, tm
 
 
 def test_kernel_ab_row_outside_a_git_clone_says_so_with_its_load(fake_load, tmp_path: Path) -> None:
-    """Issue 36: the A/B against 87de7e7 needs the commit; a source tree without ``.git`` gets one row per case
+    """The A/B against 87de7e7 needs the commit; a source tree without ``.git`` gets one row per case
     saying why (``failed``: skipped, not a git clone), with the load fields like every row."""
     from benchmarks import bench_kernel_ab as ab
     why = ab.base_checkout(root=tmp_path)
