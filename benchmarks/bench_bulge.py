@@ -1,6 +1,6 @@
 """Benchmark of the bulge's air-bearing table (the ``bulge`` stage, pipeline.model.bulge_table.scene_table).
 
-Target (issue 17): the Reynolds table of the paper bulge scene (configs/paper-2009-bulge.toml with
+Target: the Reynolds table of the paper bulge scene (configs/paper-2009-bulge.toml with
 ``air_bearing.bulge = "reynolds"``) under 30 s on 2 cores: what ``hdi bulge`` computes, 31 protrusions
 (0-15 nm at 0.5 nm) x 25 apex gaps (0.05-20 nm, log-spaced), the scene's Reynolds grid (32 x 12 cells per
 semi-axis, the pad ring 1 a ahead and behind), first-order slip, p_pad = 3 MPa. Baselines in the same run:

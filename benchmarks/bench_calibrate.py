@@ -1,4 +1,4 @@
-"""Calibration benchmarks (issue 12): the exact method's kernel time on the paper scene, against bisection.
+"""Calibration benchmarks: the exact method's kernel time on the paper scene, against bisection.
 
 Rows: (1) the exact k*(protrusion) over the paper grid (76 protrusions plus the two touchdown
 protrusions: two flying runs each, bisection only where the transient dips lower), in process, after
@@ -6,7 +6,7 @@ compilation: target < 1 s; (2) the bisection method for the two touchdown protru
 exact method replaces), same run, as the baseline of the speed-up; (3) `hdi calibrate` as a fresh
 process, whole command; (4) the calibration of the main scene (the Makefile's ``SCENE``: the bulge's
 tabulated lift, 76 protrusions and the two touchdown protrusions) in process on the local default (2
-threads), against the ~4 s issue 26 recorded before the static starts were compiled (target: 2x).
+threads), against the ~4 s it took with the static starts in Python (:data:`MAIN_BEFORE_S`; target: 2x).
 """
 
 from __future__ import annotations
@@ -71,7 +71,7 @@ def run(results: list[dict]) -> None:
     main_scene(results)
 
 
-#: The main scene's calibration before the static starts were compiled (issue 26: ~4 s on the 2 cores).
+#: The main scene's calibration with the static starts in Python, not compiled (~4 s on the 2 cores) [s].
 MAIN_BEFORE_S = 4.0
 
 

@@ -1,4 +1,4 @@
-"""The dynamics kernel's compile for the main scene, empty numba cache: CPU (issue 36).
+"""The dynamics kernel's compile for the main scene, empty numba cache: CPU.
 
 The first run's critical path is this compile (docs/performance.md, section "The first run"): one fresh
 process, ``NUMBA_CACHE_DIR`` empty, the main scene's kernel compiled for one run's argument types
@@ -15,7 +15,7 @@ import os
 from .common import record
 from .compile_time import measure
 
-#: The kernel's compile CPU [s] the first run needs (issue 36)
+#: The target of the kernel's compile CPU [s], the first run's critical path
 TARGET_CPU_S = 12.0
 
 

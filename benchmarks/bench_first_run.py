@@ -1,5 +1,5 @@
-"""The first run of a fresh clone (issue 18): ``make run`` with empty package and numba caches, split
-into install, compile and run. Target (issue 36): under 30 s on 2 cores (it was 60 s).
+"""The first run of a fresh clone: ``make run`` with empty package and numba caches, split
+into install, compile and run. Target: under 30 s on 2 cores.
 
 1. ``git clone`` of this repository (its committed HEAD) into a temporary folder: no ``.venv``, no
    ``.bootstrap``, no numba cache (the kernels' cache lives in the clone's ``pipeline/__pycache__``;

@@ -1,6 +1,6 @@
 """The dynamics kernel against commit 87de7e7 (before the kernel's split into modules), in the same run.
 
-Issue 36: the kernel rows of ``make bench`` had moved from 3.10 / 8.29 ms to 4.96 / 13.03 ms (flying 5 nm /
+The kernel rows of ``make bench`` can move from 3.10 / 8.29 ms to 4.96 / 13.03 ms (flying 5 nm /
 sliding 11 nm) between two runs days apart, on a shared machine; only an A/B in one run separates the code
 from the machine. This module extracts commit :data:`BASE` (``git archive``, once, into
 ``benchmarks/results/ab-<commit>/``, which keeps its numba cache between runs), captures each checkout's
@@ -30,7 +30,7 @@ from pathlib import Path
 
 from .common import ROOT, record, record_failure
 
-#: The commit before the kernel's split (issue 36)
+#: The commit before the kernel's split into its compiled helpers
 BASE = "87de7e7"
 #: Calls per timed round, by case: ~50 ms of kernel per round
 CALLS = {"flying_5": 10, "sliding_11": 4}

@@ -1,10 +1,10 @@
-"""The main job (issue 12): `hdi run` after set-up, everything recomputed (--force), on the paper scene
+"""The main job: `hdi run` after set-up, everything recomputed (--force), on the paper scene
 (``configs/paper-2009.toml``) and on the scene ``make run`` runs (:data:`MAIN`: the Reynolds bulge
-bearing's table, static starts and the calibration past the touchdown, issue 17).
+bearing's table, static starts and the calibration past the touchdown).
 
 Target: under 15 s (median of 3 fresh processes, after one untimed run that builds the inputs and the
-numba cache), with the report's checks over 8 DMW realisations (the ``ensemble`` stage, issue 17; it was
-8 s before them). Baseline of the same run: a fresh interpreter doing what every ``hdi`` command does
+numba cache), with the report's checks over 8 DMW realisations (the ``ensemble`` stage; 8 s without
+them). Baseline of the same run: a fresh interpreter doing what every ``hdi`` command does
 first (the CLI and the stage registry), the floor no recomputation can go below. The per-stage
 seconds of the last run are kept.
 

@@ -8,11 +8,11 @@ Rows, on the paper scene's protrusion grid (76 protrusions, 0-15 nm, k = 0.445):
    anew (the static start before the fold was kept per model): ratio in the first row;
 3. the fold's search alone (once per model);
 4. row 1 with Newton's method from Python (:func:`pipeline.physics.equilibrium.newton`) instead of
-   compiled (:mod:`pipeline.model.static_solver`), and row 2 likewise (the static start before
-   issue 26): ratios to the compiled rows.
+   compiled (:mod:`pipeline.model.static_solver`), and row 2 likewise (the static start in Python):
+   ratios to the compiled rows.
 
 The main scene's starts (the bulge's tabulated lift) are in the calibration's rows (bench_calibrate).
-Issue 17 measured the uncached start at ~0.1-0.2 s per protrusion past the adhesion fold.
+The uncached start takes ~0.1-0.2 s per protrusion past the adhesion fold.
 """
 
 from __future__ import annotations
@@ -67,5 +67,5 @@ def run(results: list[dict]) -> None:
     record(results, f"static starts, paper grid ({grid.size}), ladder, Newton from Python", t_cached_py,
            compiled_speedup=float(np.median(t_cached_py) / np.median(t_cached)))
     record(results, f"static starts, paper grid ({grid.size}), fold per protrusion, Newton from Python "
-           "(the start before issue 26)", t_plain_py,
+           "(the start in Python)", t_plain_py,
            compiled_speedup=float(np.median(t_plain_py) / np.median(t_plain)))

@@ -28,8 +28,8 @@ WORKERS = 2
 #: The schema's default budget of ``[identify]`` (pipeline/config/scene.py), for the projection.
 DEFAULT_BUDGET = {"population": 10, "generations": 20, "profile_points": 11, "profile_method": "optimised",
                   "profile_evaluations": 40}
-#: The default budget's identify on 8-record ensembles on the 2 cores (issue 26: ~20 min projected before
-#: the static starts were compiled) [s]
+#: The default budget's identify on 8-record ensembles on the 2 cores (~20 min projected with the static
+#: starts in Python) [s]
 DEFAULT_BUDGET_TARGET_S = 600.0
 
 

@@ -1,4 +1,4 @@
-"""Sweep and start-up benchmarks (issue 12), each as fresh `hdi` processes, all measured in this run.
+"""Sweep and start-up benchmarks, each as fresh `hdi` processes, all measured in this run.
 
 Rows and targets:
 
@@ -38,7 +38,7 @@ INPUTS = ("roughness.nc", "dmw.nc", "interface.nc", "calibration.nc")
 HOST_SHARE_TARGET = 0.9
 #: Alternated (1 worker, 2 workers) pairs of the grid command.
 GRID_PAIRS = 3
-#: The grid's whole command with 1 and 2 workers before the static starts were compiled (issue 26, quiet machine) [s]
+#: The grid's whole command with 1 and 2 workers with the static starts in Python, not compiled (quiet machine) [s]
 GRID_BEFORE_S = (9.5, 7.9)
 
 CPU: dict[str, list[float]] = {}  # CPU seconds [s] of the timed commands, by label

@@ -1,4 +1,4 @@
-"""numba's compile time of the dynamics kernel for the main scene, per compiled function (issue 36).
+"""numba's compile time of the dynamics kernel for the main scene, per compiled function.
 
 In a fresh process whose ``NUMBA_CACHE_DIR`` is an empty temporary folder: build the model of
 ``configs/paper-2009-identified.toml`` (the calibrated ``k`` of ``make run``, given: no calibration), type

@@ -1,7 +1,7 @@
 """A/B measurement of the dynamics kernel alone: instruction counts (callgrind) and interleaved timings.
 
 The kernel's own cost, free of the model assembly around it, compared between two checkouts of the
-package (issue 16: the named-parameter kernel against the positional-vector one of commit e6348f9).
+package (e.g. the named-parameter kernel against the positional-vector one of commit e6348f9).
 
 ``capture``: run the paper scene (``contact.k = 0.445``) through ``slider.run_model`` at three
 settings and pickle the arguments the kernel's ``integrate`` receives (air bearing only at 11 nm,

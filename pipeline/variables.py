@@ -1,11 +1,13 @@
 """Every output variable of the pipeline, declared once (the variable schema).
 
-Each :class:`Variable` states its name, its dataset units (the paper's units, a UDUNITS string),
+Each :class:`~pipeline.cf_variable.Variable` states its name, its dataset units (the paper's units, a UDUNITS string),
 the SI value of one dataset unit (``si_unit``; dataset value = SI value / ``si_unit``, i.e. the SI
 factor ``si_factor = 1/si_unit``), its ``long_name``, its CF
 ``standard_name`` where the CF table has one (none here: CF has no standard names for tribology,
 and ``time`` is a duration, not CF's calendar time), the dimensions it carries beyond the grid of its dataset, the scene effect that
-produces it (absent without that effect), and for flag variables their values and missing value.
+produces it (absent without that effect), for flag variables their values and missing value, and for a
+variable computed from a published formula its sources (CF's ``references``: the keys of docs/model.md and
+the section that states the formula; :class:`pipeline.cf_variable.Source`, whose module holds the type).
 
 Groups (:data:`GROUPS`) collect the variables of one kind; :data:`DATASETS` says which groups each
 dataset file may hold. Datasets (:mod:`pipeline.stages`), plots (:mod:`pipeline.analyses.plots`), the report's
@@ -33,13 +35,13 @@ How the datasets meet CF-1.8 (:func:`pipeline.io.cf_encoding`, applied by :func:
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from enum import IntEnum
 from typing import TYPE_CHECKING, Any, Iterable
 
 import numpy as np
 from .units import GPA, KHZ, MN, MPA, MS, MW, NM, PER_UM2, UM, UM2, URAD
 
+from .cf_variable import Source, Variable
 from .validity import Validity
 
 if TYPE_CHECKING:
@@ -85,109 +87,29 @@ def flag_meaning(attrs: dict[str, Any], code: Any) -> str:
         return "missing"
 
 
-@dataclass(frozen=True)
-class Variable:
-    """Declaration of one output variable.
-
-    Attributes
-    ----------
-    name : variable name in the datasets
-    units : dataset units (UDUNITS; ``""`` for labels, which have none)
-    long_name : CF ``long_name``: a few words, short enough for a plot's axis label (with the units)
-    si_unit : SI value of one dataset unit (1e-9 for nm): dataset value = SI value / ``si_unit`` (dividing
-        undoes the scene's ``x_nm * 1e-9`` exactly, multiplying by 1e9 would not)
-    standard_name : CF standard name, where CF has one
-    dims : dimensions beyond the grid of the dataset (e.g. ``(TIME,)`` for histories)
-    effect : scene effect producing the variable (``None``: always present)
-    dtype : numpy dtype on disk
-    flag_values, flag_meanings, flag_masks : for flag variables (values: one code; masks: bits)
-    fill_value : declared missing value (``_FillValue``), for integer variables
-    extra : further attributes (``rule``, ``formula``, ``axis``, ...)
-    description : the ``description`` attribute: the sentence that says what the variable is, where the
-        ``long_name`` cannot (``""``: the ``long_name`` says it all)
-    """
-
-    name: str
-    units: str
-    long_name: str
-    si_unit: float = 1.0
-    standard_name: str | None = None
-    dims: tuple[str, ...] = ()
-    effect: str | None = None
-    dtype: str = "float64"
-    flag_values: tuple[int, ...] | None = None
-    flag_meanings: str | None = None
-    flag_masks: tuple[int, ...] | None = None
-    fill_value: int | None = None
-    extra: tuple[tuple[str, str], ...] = ()
-    description: str = ""
-
-    @property
-    def sentence(self) -> str:
-        """What the variable is, in full: its :attr:`description`, else its ``long_name``."""
-        return self.description or self.long_name
-
-    @property
-    def si_factor(self) -> float:
-        """Factor from SI to dataset units [dataset unit per SI unit]."""
-        return 1.0 / self.si_unit
-
-    def attrs(self) -> dict[str, Any]:
-        """CF attributes of the variable (``_FillValue`` goes into the encoding, not here)."""
-        a: dict[str, Any] = {"long_name": self.long_name}
-        if self.description:
-            a["description"] = self.description
-        if self.units:
-            a["units"] = self.units
-        if self.standard_name:
-            a["standard_name"] = self.standard_name
-        if self.flag_values is not None:
-            a["flag_values"] = np.array(self.flag_values, dtype=self.dtype)
-            a["flag_meanings"] = self.flag_meanings
-        if self.flag_masks is not None:
-            a["flag_masks"] = np.array(self.flag_masks, dtype=self.dtype)
-            a["flag_meanings"] = self.flag_meanings
-        a.update(dict(self.extra))
-        return a
-
-    def data(self, values: Any, dims: Iterable[str], **attrs: Any) -> xr.Variable:
-        """A variable from values already in dataset units (NaN -> fill value for flags)."""
-        import xarray as xr  # (here: pipeline.model.ahead.NOT_IMPORTED_EARLY)
-        values = self.stored(values)
-        if self.dtype == "str":
-            return xr.Variable(tuple(dims), values, attrs={**self.attrs(), **attrs})
-        return xr.Variable(tuple(dims), values, attrs={**self.attrs(), **attrs}, encoding=self.encoding())
-
-    def from_si(self, values: Any, dims: Iterable[str], **attrs: Any) -> xr.Variable:
-        """A variable from SI values (divided by ``si_unit``; flags and labels unscaled)."""
-        return self.data(self.scaled(values), dims, **attrs)
-
-    def stored(self, values: Any) -> np.ndarray:
-        """The array :meth:`data` holds for ``values`` in dataset units: NaN -> the fill value for flags,
-        cast to :attr:`dtype` (``object`` for labels)."""
-        values = np.asarray(values)
-        if self.fill_value is not None:  # NaN (not computed, or a decoded fill) -> the declared fill
-            values = np.where(np.isfinite(values.astype(float)), values, self.fill_value)
-        return values.astype(object) if self.dtype == "str" else values.astype(self.dtype)
-
-    def scaled(self, values_si: Any) -> np.ndarray:
-        """SI values in dataset units, as :meth:`from_si` takes them (divided by ``si_unit``; flags and
-        labels unscaled); :meth:`stored` gives the array a variable then holds."""
-        values = np.asarray(values_si)
-        if values.dtype.kind in "fiub" and self.si_unit != 1.0:
-            values = values / self.si_unit
-        return values
-
-    def encoding(self) -> dict[str, Any]:
-        """NetCDF encoding of the variable: its declared missing value."""
-        return {"_FillValue": np.array(self.fill_value, dtype=self.dtype)} if self.fill_value is not None else {}
-
-
 def _group(*items: Variable) -> dict[str, Variable]:
     return {v.name: v for v in items}
 
 
 V = Variable
+
+#: The published sources of the variables computed from a published formula (their ``references``; the keys
+#: of docs/model.md, section "References", and the section that states the formula).
+_STATISTICS = Source(("Nayak71", "McCool86", "GW66"), "Asperity statistics")
+_PSI_GW = Source(("GW66",), "Plasticity index")
+_PSI_KE = Source(("CEB87", "KE03"), "Plasticity index")
+_ASPERITY = Source(("KE02", "Johnson85"), "Single asperity")
+_CONTACT = Source(("SP03", "LP04", "SEB90", "GW66", "KE02"), "ISBL interface")
+_ADHESION = Source(("SP03", "LP04", "SEB90", "Derjaguin34", "Israelachvili11"), "Adhesion")
+_FRICTION = Source(("BT50", "Tabor51", "KE04", "BKE07"), "Friction")
+_FHM = Source(("VLP09",), "FHM and BV")
+_CRITERION = Source(("VLP09",), "Contact criterion")
+_AIR_BEARING = Source(("ZB00",), "Air bearing")
+_BULGE = Source(("Gross62", "Burgdorfer59", "FK90"), "Bulge air bearing")
+_PH_LIMIT = Source(("Gross62",), "p h = const limit")
+_STATICS = Source(("HJJ00", "Filippov88"), "Statics map")
+_HEATER = Source(("JB07",), "Heater power")
+
 #: The elapsed simulated time [s]: its coordinate's name in memory and in the files (module docstring).
 TIME = "elapsed_time"
 
@@ -200,17 +122,17 @@ COORDINATES = _group(
     V("hist_protrusion", "nm", "history protrusion", NM, dims=("hist_protrusion",), description="protrusion of the kept histories"),
     # with a scene's heater actuation only (pipeline/config/heater_power.py): the heater power of each protrusion
     V("heater_power", "mW", "heater power", MW, dims=("protrusion",),
-      description="heater power that gives the protrusion (the scene's tfc.actuation_*; docs/model.md, section 'Heater power')"),
+      description="heater power that gives the protrusion (the scene's tfc.actuation_*; docs/model.md, section 'Heater power')", references=_HEATER),
     V("direction", "", "stepping pass",
       dims=("direction",), dtype="str", description="pass of a heater-stepping chain (up: increasing protrusion, down: decreasing)"),
     # the statistics each roughness set's interface model used (the given keys, or its AFM scans'), along
     # ``roughness``, so that runs combined on that dimension keep each set's own values
     # (:func:`pipeline.model.interface_tables.used_statistics`)
     V("roughness_sigma", "nm", "set rms roughness", NM, dims=("roughness",), description="combined rms roughness sigma of the roughness set"),
-    V("roughness_summit_radius", "um", "set summit radius", UM, dims=("roughness",), description="summit radius of the roughness set"),
-    V("roughness_summit_density", "um-2", "set summit density", PER_UM2, dims=("roughness",), description="summit density of the roughness set"),
+    V("roughness_summit_radius", "um", "set summit radius", UM, dims=("roughness",), description="summit radius of the roughness set", references=_STATISTICS),
+    V("roughness_summit_density", "um-2", "set summit density", PER_UM2, dims=("roughness",), description="summit density of the roughness set", references=_STATISTICS),
     V("roughness_plasticity_index", "1", "set plasticity index",
-      dims=("roughness",), description="plasticity index (Greenwood-Williamson form) of the roughness set"),
+      dims=("roughness",), description="plasticity index (Greenwood-Williamson form) of the roughness set", references=_PSI_GW),
 )
 
 #: Values of the whole run, one number each (0-d variables of ``summary.nc``, ``histories.nc``,
@@ -220,15 +142,15 @@ COORDINATES = _group(
 #: In ``sweep.nc`` and ``sweep_histories.nc`` those that depend on the grid carry its dimension
 #: (:data:`RUN_GRID_DIMS`); the others are one number for all the grid's models.
 RUN = _group(
-    V("k", "1", "contact criterion k", description="contact criterion k: contact where the separation is below k sigma (NaN: no contact law)"),
+    V("k", "1", "contact criterion k", description="contact criterion k: contact where the separation is below k sigma (NaN: no contact law)", references=_CRITERION),
     V("k_source", "", "source of k", dtype="str", description="where k comes from (the scene, the calibration, a rule)"),
-    V("k_sigma", "nm", "contact threshold k sigma", NM),
-    V("front_stiffness", "N m-1", "front pad stiffness", description="air-bearing stiffness of the front pad"),
-    V("rear_stiffness", "N m-1", "rear pad stiffness", description="air-bearing stiffness of the rear pad"),
-    V("front_damper", "N s m-1", "front pad damping", description="air-bearing damping coefficient of the front pad"),
-    V("rear_damper", "N s m-1", "rear pad damping", description="air-bearing damping coefficient of the rear pad"),
-    V("damping_ratio", "1", "damping ratio", description="modal damping ratio of the air bearing of the run's model"),
-    V("summit_offset", "nm", "summit mean offset y_s", NM, description="mean of summit heights minus mean of surface heights y_s"),
+    V("k_sigma", "nm", "contact threshold k sigma", NM, references=_CRITERION),
+    V("front_stiffness", "N m-1", "front pad stiffness", description="air-bearing stiffness of the front pad", references=_AIR_BEARING),
+    V("rear_stiffness", "N m-1", "rear pad stiffness", description="air-bearing stiffness of the rear pad", references=_AIR_BEARING),
+    V("front_damper", "N s m-1", "front pad damping", description="air-bearing damping coefficient of the front pad", references=_AIR_BEARING),
+    V("rear_damper", "N s m-1", "rear pad damping", description="air-bearing damping coefficient of the rear pad", references=_AIR_BEARING),
+    V("damping_ratio", "1", "damping ratio", description="modal damping ratio of the air bearing of the run's model", references=_AIR_BEARING),
+    V("summit_offset", "nm", "summit mean offset y_s", NM, description="mean of summit heights minus mean of surface heights y_s", references=_STATISTICS),
     V("steady_window_start", "ms", "start of the steady window", MS),
     V("steady_window_end", "ms", "steady window end", MS, description="end of the steady window (the simulated duration)"),
     V("tfc_stiffness", "N m-1", "TFC stiffening k_t", description="stiffness k_t of the TFC bulge's stiffening"),
@@ -250,28 +172,28 @@ RUN_GRID_COORDS: frozenset[str] = frozenset({"damping_ratio"})
 
 #: Steady-window scalars of one scene (:func:`pipeline.model.outcomes.summarize`; ``summary.nc``, ``sweep.nc``).
 SCALARS = _group(
-    V("fhm_bv", "%", "FHM/BV", description="flying-height modulation (flying) / bouncing vibration (contact), peak-to-peak over FH0"),
-    V("clearance", "nm", "mean clearance", NM, description="mean clearance d - k sigma over the steady window"),
-    V("min_clearance", "nm", "minimum clearance", NM, description="minimum clearance over the steady window"),
-    V("interference", "nm", "mean interference", NM, effect="contact", description="mean interference -(d - k sigma) while in contact"),
-    V("contact_force", "mN", "mean contact force", MN, effect="contact", description="time-mean asperity contact force"),
-    V("friction_force", "mN", "mean friction force", MN, effect="friction", description="time-mean friction force"),
-    V("adhesion_force", "mN", "mean adhesion force", MN, effect="adhesion", description="time-mean adhesion force (attractive)"),
-    V("net_force", "mN", "mean interface force", MN, description="time-mean vertical interface force on the slider (contact + damping - adhesion)"),
-    V("friction_coefficient", "1", "friction coefficient", effect="friction", description="friction coefficient: mean friction / mean contact force"),
-    V("mean_pressure", "MPa", "mean contact pressure", MPA, effect="contact", description="mean contact pressure over the real area while in contact"),
-    V("shear_stress", "MPa", "mean shear stress", MPA, effect="friction", description="mean shear stress over the real area while in contact"),
-    V("real_area", "um2", "mean real contact area", UM2, effect="contact", description="mean real contact area while in contact"),
+    V("fhm_bv", "%", "FHM/BV", description="flying-height modulation (flying) / bouncing vibration (contact), peak-to-peak over FH0", references=_FHM),
+    V("clearance", "nm", "mean clearance", NM, description="mean clearance d - k sigma over the steady window", references=_CRITERION),
+    V("min_clearance", "nm", "minimum clearance", NM, description="minimum clearance over the steady window", references=_CRITERION),
+    V("interference", "nm", "mean interference", NM, effect="contact", description="mean interference -(d - k sigma) while in contact", references=_CRITERION),
+    V("contact_force", "mN", "mean contact force", MN, effect="contact", description="time-mean asperity contact force", references=_CONTACT),
+    V("friction_force", "mN", "mean friction force", MN, effect="friction", description="time-mean friction force", references=_FRICTION),
+    V("adhesion_force", "mN", "mean adhesion force", MN, effect="adhesion", description="time-mean adhesion force (attractive)", references=_ADHESION),
+    V("net_force", "mN", "mean interface force", MN, description="time-mean vertical interface force on the slider (contact + damping - adhesion)", references=_CONTACT),
+    V("friction_coefficient", "1", "friction coefficient", effect="friction", description="friction coefficient: mean friction / mean contact force", references=_FRICTION),
+    V("mean_pressure", "MPa", "mean contact pressure", MPA, effect="contact", description="mean contact pressure over the real area while in contact", references=_CONTACT),
+    V("shear_stress", "MPa", "mean shear stress", MPA, effect="friction", description="mean shear stress over the real area while in contact", references=_FRICTION),
+    V("real_area", "um2", "mean real contact area", UM2, effect="contact", description="mean real contact area while in contact", references=_CONTACT),
     V("nominal_area", "um2", "nominal contact area", UM2, description="nominal contact area of the TFC bulge"),
     V("protrusion_radius", "um", "bulge effective radius", UM, description="effective radius of the bulge in the sliding direction"),
-    V("contact_fraction", "1", "time fraction in contact", effect="contact", description="fraction of the steady window spent in contact"),
+    V("contact_fraction", "1", "time fraction in contact", effect="contact", description="fraction of the steady window spent in contact", references=_CRITERION),
     V("contact_switches_per_ms", "ms-1", "contact switch rate", KHZ, effect="contact", description="transitions of the contact criterion d < k sigma per unit time over the "
       "steady window (counted by the integrator)"),
     V("regime", "1", "regime", effect="contact", dtype="int8",
       flag_values=tuple(int(r) for r in Regime), flag_meanings=" ".join(r.name.lower() for r in Regime),
       fill_value=REGIME_FILL,
       extra=(("rule", "flying: no contact in the steady window; surfing: in contact >= 99 % of it; "
-                      "bouncing: otherwise"),), description="regime of the steady window"),
+                      "bouncing: otherwise"),), description="regime of the steady window", references=_FHM),
     V("validity", "1", "validity flags", dtype="int8",
       flag_masks=tuple(int(v) for v in Validity), flag_meanings=" ".join(v.name.lower() for v in Validity),
       fill_value=REGIME_FILL,
@@ -284,21 +206,21 @@ SCALARS = _group(
 #: ``sweep_histories.nc``, and ``h_<name>`` in sweep part files).
 HISTORIES = _group(
     V("separation", "nm", "separation d", NM, dims=(TIME,), description="separation d of the TFC surface from the mean of summit heights"),
-    V("clearance", "nm", "clearance d - k sigma", NM, dims=(TIME,)),
+    V("clearance", "nm", "clearance d - k sigma", NM, dims=(TIME,), references=_CRITERION),
     V("disk_displacement", "nm", "disk displacement", NM, dims=(TIME,), description="disk displacement (DMW) under the TFC point"),
-    V("contact_force", "mN", "asperity contact force", MN, dims=(TIME,), effect="contact"),
+    V("contact_force", "mN", "asperity contact force", MN, dims=(TIME,), effect="contact", references=_CONTACT),
     V("contact_damping_force", "mN", "contact damping force", MN, dims=(TIME,), effect="contact"),
-    V("friction_force", "mN", "friction force", MN, dims=(TIME,), effect="friction"),
-    V("adhesion_force", "mN", "adhesion force (attractive)", MN, dims=(TIME,), effect="adhesion"),
+    V("friction_force", "mN", "friction force", MN, dims=(TIME,), effect="friction", references=_FRICTION),
+    V("adhesion_force", "mN", "adhesion force (attractive)", MN, dims=(TIME,), effect="adhesion", references=_ADHESION),
     V("net_force", "mN", "interface force", MN,
-      dims=(TIME,), description="vertical interface force on the slider (contact + damping - adhesion)"),
-    V("friction_coefficient", "1", "friction coefficient", dims=(TIME,), effect="friction", description="friction coefficient F_friction / F_contact"),
-    V("mean_pressure", "MPa", "mean contact pressure", MPA, dims=(TIME,), effect="contact", description="mean contact pressure over the real area"),
-    V("shear_stress", "MPa", "shear stress", MPA, dims=(TIME,), effect="friction", description="shear stress over the real area"),
-    V("real_area", "um2", "real contact area", UM2, dims=(TIME,), effect="contact"),
+      dims=(TIME,), description="vertical interface force on the slider (contact + damping - adhesion)", references=_CONTACT),
+    V("friction_coefficient", "1", "friction coefficient", dims=(TIME,), effect="friction", description="friction coefficient F_friction / F_contact", references=_FRICTION),
+    V("mean_pressure", "MPa", "mean contact pressure", MPA, dims=(TIME,), effect="contact", description="mean contact pressure over the real area", references=_CONTACT),
+    V("shear_stress", "MPa", "shear stress", MPA, dims=(TIME,), effect="friction", description="shear stress over the real area", references=_FRICTION),
+    V("real_area", "um2", "real contact area", UM2, dims=(TIME,), effect="contact", references=_CONTACT),
     V("in_contact", "1", "in contact", dims=(TIME,),
       effect="contact", dtype="int8", flag_values=(0, 1), flag_meanings="not_in_contact in_contact",
-      fill_value=-1, description="contact criterion d < k sigma satisfied (1) or not (0)"),
+      fill_value=-1, description="contact criterion d < k sigma satisfied (1) or not (0)", references=_CRITERION),
     V("z", "nm", "slider displacement z", NM, dims=(TIME,), description="vertical displacement of the centre of gravity (up positive)"),
     V("pitch", "urad", "pitch angle", URAD, dims=(TIME,), description="pitch angle (leading edge up positive)"),  # 0 when locked
     V("steps", "1", "accepted integrator steps", dtype="int64"),
@@ -314,20 +236,20 @@ ROUGHNESS = _group(
     V("route", "", "statistics route", dims=("route",), dtype="str", description="route to the asperity statistics ('spectral': McCool/Nayak from profile moments, "
                    "'summits': direct summit count)"),
     V("sigma", "nm", "rms roughness", NM, dims=_SR, description="rms roughness of the (detrended) surface heights"),
-    V("sigma_s", "nm", "summit height std", NM, dims=_SR, description="standard deviation of summit heights"),
-    V("y_s", "nm", "summit mean offset y_s", NM, dims=_SR, description="mean of summit heights minus mean of surface heights"),
-    V("summit_radius", "um", "summit radius", UM, dims=_SR, description="mean summit radius of curvature"),
-    V("summit_density", "um-2", "summit density", PER_UM2, dims=_SR, description="summit density (summits per nominal area)"),
-    V("bandwidth_alpha", "1", "Nayak bandwidth parameter", dims=_SR),
-    V("plasticity_index", "1", "plasticity index (GW)", dims=_SR, description="plasticity index, Greenwood-Williamson form"),
-    V("plasticity_index_ke", "1", "plasticity index (CEB/KE)", dims=_SR, description="plasticity index, CEB/Kogut-Etsion form"),
+    V("sigma_s", "nm", "summit height std", NM, dims=_SR, description="standard deviation of summit heights", references=_STATISTICS),
+    V("y_s", "nm", "summit mean offset y_s", NM, dims=_SR, description="mean of summit heights minus mean of surface heights", references=_STATISTICS),
+    V("summit_radius", "um", "summit radius", UM, dims=_SR, description="mean summit radius of curvature", references=_STATISTICS),
+    V("summit_density", "um-2", "summit density", PER_UM2, dims=_SR, description="summit density (summits per nominal area)", references=_STATISTICS),
+    V("bandwidth_alpha", "1", "Nayak bandwidth parameter", dims=_SR, references=_STATISTICS),
+    V("plasticity_index", "1", "plasticity index (GW)", dims=_SR, description="plasticity index, Greenwood-Williamson form", references=_PSI_GW),
+    V("plasticity_index_ke", "1", "plasticity index (CEB/KE)", dims=_SR, description="plasticity index, CEB/Kogut-Etsion form", references=_PSI_KE),
     V("pixel_size", "nm", "pixel size", NM,
       dims=("surface",), description="lateral sampling interval of the scan (geometric mean of x and y)"),
-    V("m0", "nm2", "spectral moment m0", 1e-18, dims=("surface",), description="profile spectral moment m0 (height variance)"),
-    V("m2", "1", "spectral moment m2", dims=("surface",), description="profile spectral moment m2 (slope variance, mean of x and y profiles)"),
+    V("m0", "nm2", "spectral moment m0", 1e-18, dims=("surface",), description="profile spectral moment m0 (height variance)", references=_STATISTICS),
+    V("m2", "1", "spectral moment m2", dims=("surface",), description="profile spectral moment m2 (slope variance, mean of x and y profiles)", references=_STATISTICS),
     V("m4", "nm-2", "spectral moment m4", 1e18,
-      dims=("surface",), description="profile spectral moment m4 (curvature variance, mean of x and y profiles)"),
-    V("summit_count", "1", "summit count", dims=("surface",), description="number of summits counted (summit route)"),
+      dims=("surface",), description="profile spectral moment m4 (curvature variance, mean of x and y profiles)", references=_STATISTICS),
+    V("summit_count", "1", "summit count", dims=("surface",), description="number of summits counted (summit route)", references=_STATISTICS),
 )
 
 #: ``dmw.nc`` (:mod:`pipeline.stages.dmw`).
@@ -350,36 +272,36 @@ INTERFACE = _group(
       description="separation of the TFC surface from the mean of summit heights (the height of the TFC flat "
                   "above the mean plane of summit heights: the vertical axis of the tables)"),
     V("sigma", "nm", "combined rms roughness", NM),
-    V("sigma_s", "nm", "summit height std", NM, description="standard deviation of summit heights"),
-    V("y_s", "nm", "summit mean offset y_s", NM, description="mean of summit heights above the mean of surface heights"),
-    V("summit_radius", "um", "summit radius", UM),
-    V("summit_density", "um-2", "summit density", PER_UM2),
-    V("bandwidth_alpha", "1", "Nayak bandwidth parameter"),
+    V("sigma_s", "nm", "summit height std", NM, description="standard deviation of summit heights", references=_STATISTICS),
+    V("y_s", "nm", "summit mean offset y_s", NM, description="mean of summit heights above the mean of surface heights", references=_STATISTICS),
+    V("summit_radius", "um", "summit radius", UM, references=_STATISTICS),
+    V("summit_density", "um-2", "summit density", PER_UM2, references=_STATISTICS),
+    V("bandwidth_alpha", "1", "Nayak bandwidth parameter", references=_STATISTICS),
     V("composite_modulus", "GPa", "composite modulus E'", GPA),
-    V("hardness", "GPa", "hardness of the softer body", GPA),
-    V("critical_interference", "nm", "critical interference w_c", NM, description="Kogut-Etsion critical interference w_c"),
-    V("shear_strength", "MPa", "shear strength tau_y", MPA, description="shear strength tau_y = H/(2.8 sqrt 3)"),
-    V("plasticity_index_gw", "1", "plasticity index (GW)", description="plasticity index, Greenwood-Williamson form"),
-    V("plasticity_index_ke", "1", "plasticity index (CEB/KE)", description="plasticity index, CEB/Kogut-Etsion form"),
+    V("hardness", "GPa", "hardness of the softer body", GPA, references=_PSI_GW),
+    V("critical_interference", "nm", "critical interference w_c", NM, description="Kogut-Etsion critical interference w_c", references=_ASPERITY),
+    V("shear_strength", "MPa", "shear strength tau_y", MPA, description="shear strength tau_y = H/(2.8 sqrt 3)", references=_FRICTION),
+    V("plasticity_index_gw", "1", "plasticity index (GW)", description="plasticity index, Greenwood-Williamson form", references=_PSI_GW),
+    V("plasticity_index_ke", "1", "plasticity index (CEB/KE)", description="plasticity index, CEB/Kogut-Etsion form", references=_PSI_KE),
     V("lubricant_thickness", "nm", "lubricant thickness", NM),
     V("work_of_adhesion", "J m-2", "work of adhesion", description="work of adhesion (of the menisci around contacts with two populations)"),
     V("bridge_work_of_adhesion", "J m-2", "bridge work of adhesion", description="work of adhesion of the bridges before solid contact"),
     V("solid_work_of_adhesion", "J m-2", "solid work of adhesion", description="work of adhesion at solid contact through the bonded lubricant layer (docs/model.md, section 'Adhesion rising with penetration')"),
     V("intermolecular_distance", "nm", "intermolecular distance", NM),
-    V("contact_pressure", "MPa", "contact pressure", MPA, dims=_S, effect="contact", description="contact pressure per nominal area"),
-    V("elastic_fraction", "1", "elastic summit fraction", dims=_S, effect="contact", description="fraction of summits in elastic contact"),
-    V("plastic_fraction", "1", "plastic summit fraction", dims=_S, effect="contact", description="fraction of summits in fully plastic contact"),
-    V("friction_stress", "MPa", "friction stress", MPA, dims=_S, effect="friction", description="friction stress per nominal area"),
-    V("real_area_fraction", "1", "real area fraction", dims=_S, effect="contact", description="real contact area per nominal area"),
+    V("contact_pressure", "MPa", "contact pressure", MPA, dims=_S, effect="contact", description="contact pressure per nominal area", references=_CONTACT),
+    V("elastic_fraction", "1", "elastic summit fraction", dims=_S, effect="contact", description="fraction of summits in elastic contact", references=_CONTACT),
+    V("plastic_fraction", "1", "plastic summit fraction", dims=_S, effect="contact", description="fraction of summits in fully plastic contact", references=_CONTACT),
+    V("friction_stress", "MPa", "friction stress", MPA, dims=_S, effect="friction", description="friction stress per nominal area", references=_FRICTION),
+    V("real_area_fraction", "1", "real area fraction", dims=_S, effect="contact", description="real contact area per nominal area", references=_CONTACT),
     V("adhesion_pressure", "MPa", "adhesion pressure", MPA, dims=_S,
-      effect="adhesion", description="adhesion pressure per nominal area (positive: attractive)"),
+      effect="adhesion", description="adhesion pressure per nominal area (positive: attractive)", references=_ADHESION),
     V("adhesion_pressure_bridges", "MPa", "bridge adhesion pressure", MPA, dims=_S, effect="adhesion", description="adhesion pressure of the bridges before solid contact per nominal area "
-      "(Lennard-Jones and menisci of non-touching summits; positive: attractive)"),
+      "(Lennard-Jones and menisci of non-touching summits; positive: attractive)", references=_ADHESION),
     V("adhesion_pressure_menisci", "MPa", "meniscus adhesion pressure", MPA, dims=_S, effect="adhesion", description="adhesion pressure of the menisci around solid contacts per nominal area "
-      "(positive: attractive)"),
+      "(positive: attractive)", references=_ADHESION),
     V("wetted_area_fraction", "1", "wetted area fraction", dims=_S, effect="friction", description="summit surface inside the lubricant film and outside solid contact per "
       "nominal area"),
-    V("contact_fraction", "1", "summit fraction in contact", dims=_S, effect="contact", description="fraction of summits in contact"),
+    V("contact_fraction", "1", "summit fraction in contact", dims=_S, effect="contact", description="fraction of summits in contact", references=_CONTACT),
     # interface.model = "deterministic": contact_pressure, real_area_fraction and friction_stress carry the
     # leading dimension `model` (statistical, deterministic), plus the solved series of the FFT
     # boundary-element solution (pipeline.model.deterministic_tables)
@@ -399,20 +321,20 @@ INTERFACE = _group(
 
 #: ``calibration.nc`` (:mod:`pipeline.stages.calibrate`).
 CALIBRATION = _group(
-    V("k", "1", "contact criterion constant", dims=("k",)),
-    V("touchdown", "nm", "touchdown protrusion", NM, dims=("k",), description="first protrusion of the sweep grid in contact"),
-    V("k_calibrated", "1", "calibrated k", description="calibrated contact criterion constant k (NaN: none admissible)"),
-    V("k_low", "1", "k interval low", description="lower (exclusive) end of the admissible k interval"),
-    V("k_high", "1", "k interval high", description="upper (inclusive) end of the admissible k interval"),
-    V("k_onset", "1", "onset k", description="smallest k giving contact at the touchdown protrusion"),
-    V("k_previous", "1", "previous-step k", description="smallest k giving contact at the previous step"),
-    V("contact_probability_one_sided", "1", "contact probability, 1-sided", description="P(z > k sigma) of the calibrated k"),
-    V("contact_probability_two_sided", "1", "contact probability, 2-sided", description="P(|z| > k sigma) of the calibrated k"),
+    V("k", "1", "contact criterion constant", dims=("k",), references=_CRITERION),
+    V("touchdown", "nm", "touchdown protrusion", NM, dims=("k",), description="first protrusion of the sweep grid in contact", references=_CRITERION),
+    V("k_calibrated", "1", "calibrated k", description="calibrated contact criterion constant k (NaN: none admissible)", references=_CRITERION),
+    V("k_low", "1", "k interval low", description="lower (exclusive) end of the admissible k interval", references=_CRITERION),
+    V("k_high", "1", "k interval high", description="upper (inclusive) end of the admissible k interval", references=_CRITERION),
+    V("k_onset", "1", "onset k", description="smallest k giving contact at the touchdown protrusion", references=_CRITERION),
+    V("k_previous", "1", "previous-step k", description="smallest k giving contact at the previous step", references=_CRITERION),
+    V("contact_probability_one_sided", "1", "contact probability, 1-sided", description="P(z > k sigma) of the calibrated k", references=_CRITERION),
+    V("contact_probability_two_sided", "1", "contact probability, 2-sided", description="P(|z| > k sigma) of the calibrated k", references=_CRITERION),
     V("sigma", "nm", "criterion rms roughness", NM, description="rms roughness of the criterion d < k sigma"),
     # the exact method (touchdown.method = "exact"): one flying run per protrusion of the grid
     V("protrusion", "nm", "TFC protrusion", NM, dims=("protrusion",), description="TFC protrusion of the sweep grid"),
     V("k_threshold", "1", "threshold k", dims=("protrusion",), description="smallest k giving contact at the protrusion (-inf: contact for every k, adhesive "
-                          "snap-in)"),
+                          "snap-in)", references=_CRITERION),
     V("min_separation", "nm", "minimum separation", NM, dims=("protrusion",), description="minimum separation over the steady window with the contact law off (-inf: "
                               "separation collapsed)"),
 )
@@ -457,10 +379,10 @@ ACCURACY = _group(
       dims=("configuration", "point"), description="wall time of the configuration: tables, record, model and simulation"),
     V("combined_simulation_time", "s", "combined simulation time", dims=("configuration", "point"), description="simulation time of the configuration"),
     # the headline outputs themselves (and their reference values) keep the units of SCALARS
-    *(V(n, v.units, v.long_name, v.si_unit, dims=_PKL, description=v.sentence + " (at this setting)")
+    *(V(n, v.units, v.long_name, v.si_unit, dims=_PKL, description=v.sentence + " (at this setting)", references=v.references)
       for n, v in SCALARS.items()),
     *(V("reference_" + n, v.units, v.long_name + ", reference", v.si_unit, dims=("point",),
-        description=v.sentence + " (reference)") for n, v in SCALARS.items()),
+        description=v.sentence + " (reference)", references=v.references) for n, v in SCALARS.items()),
 )
 
 #: Scalars whose ensemble mean and spread ``sweep.nc`` carries with ``[sweep] realisations`` > 1.
@@ -473,12 +395,14 @@ ENSEMBLE = _group(
     V("dmw_seed", "1", "DMW seed", dims=("realisation",),
       dtype="float64", description="seed of the synthetic DMW record of the realisation"),  # (32-bit seeds, exact in a double; CF-1.8 allows no int64 or unsigned int)
     *(V(n + "_mean", SCALARS[n].units, SCALARS[n].long_name + ", ensemble mean", SCALARS[n].si_unit,
-        effect=SCALARS[n].effect, description="ensemble mean of " + SCALARS[n].sentence) for n in ENSEMBLE_OF),
+        effect=SCALARS[n].effect, description="ensemble mean of " + SCALARS[n].sentence, references=SCALARS[n].references)
+      for n in ENSEMBLE_OF),
     *(V(n + "_std", SCALARS[n].units, SCALARS[n].long_name + ", ensemble std", SCALARS[n].si_unit,
-        effect=SCALARS[n].effect, description="ensemble standard deviation (ddof 1) of " + SCALARS[n].sentence)
+        effect=SCALARS[n].effect, description="ensemble standard deviation (ddof 1) of " + SCALARS[n].sentence,
+        references=SCALARS[n].references)
       for n in ENSEMBLE_OF),
     V("touchdown_probability", "1", "touchdown probability",
-      effect="contact", description="fraction of DMW realisations in contact in the steady window"),
+      effect="contact", description="fraction of DMW realisations in contact in the steady window", references=_CRITERION),
 )
 
 #: ``bulge.nc`` (:mod:`pipeline.model.bulge_table`): the bulge's air-bearing lift on protrusion x apex gap.
@@ -487,12 +411,12 @@ BULGE = _group(
     V("protrusion", "nm", "TFC protrusion", NM, dims=("protrusion",)),
     V("apex_gap", "nm", "apex gap", NM,
       dims=("apex_gap",), description="gap between the bulge apex and the mean of the disk surface heights"),
-    V("bulge_lift", "mN", "bulge lift", MN, dims=_DG, description="extra air-bearing lift of the TFC bulge at the TFC point (up positive)"),
+    V("bulge_lift", "mN", "bulge lift", MN, dims=_DG, description="extra air-bearing lift of the TFC bulge at the TFC point (up positive)", references=_BULGE),
     V("bulge_stiffness", "N m-1", "bulge lift stiffness",
-      dims=_DG, description="stiffness of the bulge lift, minus its derivative with respect to the apex gap"),
-    V("bulge_lift_ph_limit", "mN", "bulge lift, p h = const", MN, dims=_DG, description="bulge lift in the high-bearing-number limit p h = const"),
+      dims=_DG, description="stiffness of the bulge lift, minus its derivative with respect to the apex gap", references=_BULGE),
+    V("bulge_lift_ph_limit", "mN", "bulge lift, p h = const", MN, dims=_DG, description="bulge lift in the high-bearing-number limit p h = const", references=_PH_LIMIT),
     V("bearing_number", "1", "bearing number", dims=_DG, description="bearing number 6 mu U a / (p_pad h_pad^2) of the pad gap h_pad = apex gap + "
-                             "protrusion"),
+                             "protrusion", references=_PH_LIMIT),
     V("pad_pressure", "MPa", "trailing pad pressure", MPA, description="air pressure under the trailing pad around the bulge"),
 )
 
@@ -500,10 +424,10 @@ BULGE = _group(
 #: docs/model.md, section "Heater stepping"), one value per chain.
 STEPPING = _group(
     V("touchdown_protrusion", "nm", "touchdown protrusion", NM,
-      effect="contact", description="first protrusion of the upward pass whose steady window touches"),
+      effect="contact", description="first protrusion of the upward pass whose steady window touches", references=_CRITERION),
     V("takeoff_protrusion", "nm", "take-off protrusion",
-      NM, effect="contact", description="first protrusion of the downward pass whose steady window no longer touches"),
-    V("hysteresis", "nm", "touchdown hysteresis", NM, effect="contact", description="touchdown minus take-off protrusion of the heater-stepping chain"),
+      NM, effect="contact", description="first protrusion of the downward pass whose steady window no longer touches", references=_CRITERION),
+    V("hysteresis", "nm", "touchdown hysteresis", NM, effect="contact", description="touchdown minus take-off protrusion of the heater-stepping chain", references=_CRITERION),
 )
 
 #: ``statics.nc`` (:mod:`pipeline.stages.statics`, :mod:`pipeline.model.statics`): every static state of the slider
@@ -514,27 +438,27 @@ STATICS = _group(
     V("state", "1", "static state", dims=("state",),
       dtype="int32", description="index of a static state at one protrusion, from the highest clearance down"),
     V("mode", "1", "stiffness mode", dims=("mode",), dtype="int32", description="index of an eigenvalue of the static stiffness, ascending"),
-    V("clearance", "nm", "static clearance", NM, dims=_PS, description="static clearance d - k sigma of the TFC point in the state"),
+    V("clearance", "nm", "static clearance", NM, dims=_PS, description="static clearance d - k sigma of the TFC point in the state", references=_CRITERION),
     V("z", "nm", "static displacement z", NM, dims=_PS, description="vertical displacement of the centre of gravity in the state (up positive)"),
     V("pitch", "urad", "static pitch", URAD, dims=_PS, description="pitch angle in the state (leading edge up positive)"),
     V("state_type", "1", "state type", dims=_PS, dtype="int8", flag_values=(0, 1, 2),
       flag_meanings="flying contact criterion", fill_value=-1, description="where the state lies: above the contact criterion, below it, or on it (held there by "
-                         "the jump of the switched contact law)"),
+                         "the jump of the switched contact law)", references=_STATICS),
     V("stable", "1", "stable", dims=_PS, dtype="int8", flag_values=(0, 1),
-      flag_meanings="unstable stable", fill_value=-1, description="whether the state is statically stable"),
+      flag_meanings="unstable stable", fill_value=-1, description="whether the state is statically stable", references=_STATICS),
     V("barrier", "J", "energy barrier", dims=_PS, description="energy barrier out of a stable state: the rise of the static potential along the relaxed path "
-                      "to the lower neighbouring unstable state"),
-    V("potential", "J", "static potential", dims=_PS, description="static potential of the state along the relaxed path, from the deepest state"),
-    V("path_stiffness", "N m-1", "relaxed-path stiffness", dims=_PS, description="stiffness of the state at the TFC point with the pitch relaxed"),
+                      "to the lower neighbouring unstable state", references=_STATICS),
+    V("potential", "J", "static potential", dims=_PS, description="static potential of the state along the relaxed path, from the deepest state", references=_STATICS),
+    V("path_stiffness", "N m-1", "relaxed-path stiffness", dims=_PS, description="stiffness of the state at the TFC point with the pitch relaxed", references=_STATICS),
     V("stiffness_eigenvalue", "N m-1", "stiffness eigenvalue", dims=(*_PS, "mode"), description="eigenvalue (real part) of the static stiffness in the coordinates "
-                                       "(z, l_c theta)"),
+                                       "(z, l_c theta)", references=_STATICS),
     V("state_count", "1", "static states", dims=("protrusion",), dtype="int32", description="number of static states at the protrusion"),
     V("stable_count", "1", "stable states", dims=("protrusion",), dtype="int32", description="number of stable static states at the protrusion"),
     V("dmw_energy", "J", "DMW energy scale", description="DMW energy scale 0.5 k_b sigma_w^2: the air bearing's energy at the TFC point displaced "
                          "by one DMW rms"),
     V("dmw_kinetic_energy", "J", "DMW kinetic energy scale", description="DMW kinetic energy scale 0.5 m_b sigma_v^2: the TFC point's effective mass at "
                                  "the DMW's rms rate"),
-    V("bearing_stiffness_tfc", "N m-1", "bearing stiffness at TFC", description="linear air-bearing stiffness at the TFC point"),
+    V("bearing_stiffness_tfc", "N m-1", "bearing stiffness at TFC", description="linear air-bearing stiffness at the TFC point", references=_AIR_BEARING),
     V("effective_mass_tfc", "kg", "effective mass at TFC", description="effective mass of the slider at the TFC point"),
 )
 

@@ -1,4 +1,4 @@
-"""The bouncing band versus a parameter of the two-population scene (issue 27; docs/model.md, section
+"""The bouncing band versus a parameter of the two-population scene (docs/model.md, section
 "Two adhesion populations", where the table this prints is kept, and docs/figures/band_scan.png).
 
 For each value of one scene key, ``hdi sweep`` of the scene with that value over the DMW realisations

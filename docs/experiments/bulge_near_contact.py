@@ -1,4 +1,4 @@
-"""The bulge lift versus apex gap from 5 nm down to contact, for each bulge law (issue 33; docs/model.md, section
+"""The bulge lift versus apex gap from 5 nm down to contact, for each bulge law (docs/model.md, section
 "Rough-gap bulge bearing", where the table this prints is kept, and docs/figures/bulge_near_contact.png).
 
 The scene's bulge (footprint semi-axes, disk speed, roughness, lubricant thickness) at the given pad pressures

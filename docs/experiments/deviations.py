@@ -1,4 +1,4 @@
-"""What two deviations from the paper do to the main scene (issue 27, point 3; docs/model.md, section
+"""What two deviations from the paper do to the main scene (docs/model.md, section
 "Deviations", items 18-19, where the tables this prints are kept).
 
 1. The paper checks of ``configs/paper-2009-identified.toml`` (the scene ``make run`` runs) over its

@@ -1,4 +1,4 @@
-"""Switched against continuous friction on the shipped scenes (issue 33, item 3; docs/model.md, section
+"""Switched against continuous friction on the shipped scenes (docs/model.md, section
 "Switched and continuous friction", where the table this prints is kept).
 
 For each scene and each ``contact.friction_switching`` ("criterion", the default, and "continuous"), one

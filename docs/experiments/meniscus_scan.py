@@ -1,4 +1,4 @@
-"""Does a meniscus formation time give the paper's bouncing band with a heavy 11-nm contact? (issue 17)
+"""Does a meniscus formation time give the paper's bouncing band with a heavy 11-nm contact?
 
 The bulge scene (configs/paper-2009-bulge.toml: p_pad 3 MPa, static start states) with
 ``lubricant.meniscus_time_us`` = tau_m, scanned over tau_m, the protrusion and DMW seeds

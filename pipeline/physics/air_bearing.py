@@ -51,22 +51,65 @@ class Slider:
 
     @property
     def mass_matrix(self) -> np.ndarray:
-        """``M = diag(m, I)``."""
+        """``M = diag(m, I)``: the mass matrix on ``(z, theta)``.
+
+        Returns
+        -------
+        numpy.ndarray
+            The 2 x 2 matrix ``[kg, 0; 0, kg m^2]``.
+
+        References
+        ----------
+        docs/model.md, section "Slider dynamics" (the rigid slider's equations of motion ``m z'' = ...``,
+        ``I theta'' = ...``).
+        """
         return np.diag([self.m, self.I])
 
     @property
     def stiffness_matrix(self) -> np.ndarray:
-        """Linearised stiffness ``K`` in coordinates ``(z, theta)`` (docs/model.md, section "Slider dynamics")."""
+        """Linearised stiffness ``K`` in coordinates ``(z, theta)`` (:func:`pad_matrix` of ``k_f``, ``k_r``).
+
+        Returns
+        -------
+        numpy.ndarray
+            The 2 x 2 matrix ``[N/m, N/rad; N, N m/rad]``.
+
+        References
+        ----------
+        [ZB00] Q. H. Zeng, D. B. Bogy, J. Tribol. 122 (2000) 274-279 (lumped air-bearing springs); docs/model.md,
+        sections "Slider dynamics" and "Air bearing".
+        """
         return pad_matrix(self.k_f, self.k_r, self.l_f, self.l_r)
 
     @property
     def damping_matrix(self) -> np.ndarray:
-        """Damping ``C`` of the two pad dampers in ``(z, theta)``."""
+        """Damping ``C`` of the two pad dampers in ``(z, theta)`` (:func:`pad_matrix` of ``c_f``, ``c_r``).
+
+        Returns
+        -------
+        numpy.ndarray
+            The 2 x 2 matrix ``[N s/m, N s/rad; N s, N m s/rad]``.
+
+        References
+        ----------
+        [ZB00] Q. H. Zeng, D. B. Bogy, J. Tribol. 122 (2000) 274-279 (lumped air-bearing springs); docs/model.md,
+        sections "Slider dynamics" and "Air bearing".
+        """
         return pad_matrix(self.c_f, self.c_r, self.l_f, self.l_r)
 
     @property
     def rear_preload(self) -> float:
-        """``F_r0 = k_r g0 / n`` [N]: the rear law's stiffness at ``g0`` equals ``k_r`` (docs/model.md, section "Slider dynamics")."""
+        """``F_r0 = k_r g0 / n``: the rear law's stiffness at ``g0`` equals ``k_r``.
+
+        Returns
+        -------
+        float
+            The rear law's preload ``F_r0`` [N].
+
+        References
+        ----------
+        docs/model.md, section "Slider dynamics" (the rear law ``F_r = F_r0 [(g0/g)^n - 1]`` [recon]).
+        """
         return self.k_r * self.g0 / self.n
 
 

@@ -93,6 +93,21 @@ def ph_shape(x: float, profile: float) -> tuple[float, float]:
 
     Paraboloid ``f = L/x - 1``, ellipsoid ``f = 2 L/x^2 - 2/x - 1`` with ``L = -ln(1 - x)`` (module
     docstring); their Taylor series below ``x = 0.01``.
+
+    Parameters
+    ----------
+    x : the protrusion's share ``delta / (g + delta)`` of the pad gap [1], in [0, 1)
+    profile : :data:`ELLIPSOID` or :data:`PARABOLOID`
+
+    Returns
+    -------
+    f, df : tuple of float
+        ``f(x)`` [1] and its derivative ``df/dx`` [1].
+
+    References
+    ----------
+    [Gross62] W. A. Gross, Gas Film Lubrication, Wiley (1962): the high-bearing-number limit ``p h = const``;
+    docs/model.md, section "p h = const limit".
     """
     if x < _X_SERIES:
         f = 0.0
@@ -125,6 +140,16 @@ def ph_force_stiffness(g: float, delta: float, p_pad: float, a: float, b: float,
     p_pad : pad pressure [Pa]; a, b : footprint semi-axes along and across the sliding direction [m]
     profile : :data:`ELLIPSOID` or :data:`PARABOLOID`
     g_min : gap floor [m] (> 0): below it the force is held at ``F_b(g_min)``, the stiffness is 0
+
+    Returns
+    -------
+    F_b, k_b : tuple of float
+        The extra lift ``F_b`` [N] (up positive) and its stiffness ``k_b = -dF_b/dg`` [N m-1].
+
+    References
+    ----------
+    [Gross62] W. A. Gross, Gas Film Lubrication, Wiley (1962): the high-bearing-number limit ``p h = const``;
+    docs/model.md, section "p h = const limit".
     """
     gg = g if g > g_min else g_min
     if delta <= 0.0:

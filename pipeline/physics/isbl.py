@@ -145,7 +145,17 @@ class Interface:
 
     @property
     def w_c(self) -> float:
-        """Critical interference [m] [KE02]."""
+        """Critical interference of the summits (:func:`pipeline.physics.asperity.critical_interference`).
+
+        Returns
+        -------
+        float
+            ``w_c = (pi K H / (2 E'))^2 R`` [m].
+
+        References
+        ----------
+        [KE02] L. Kogut, I. Etsion, J. Appl. Mech. 69 (2002) 657-662; docs/model.md, section "Single asperity".
+        """
         return asperity.critical_interference(self.R, self.E, self.H, self.nu)
 
     def __post_init__(self) -> None:

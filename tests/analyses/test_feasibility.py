@@ -73,6 +73,12 @@ def test_keys_are_grouped_by_the_sections_that_enter_one_rule_together():
 
 
 def test_the_paper_scenes_study_boxes_are_feasible(paper_scene):
-    fe.check_study(paper_scene, "identify")
+    fe.check_study(paper_scene, "identify")                      # (raises at an infeasible bound or corner)
     fe.check_study(paper_scene, "sensitivity")
-    assert np.isfinite(fe.reference(paper_scene, [Parameter("dmw.rms_nm", 0.08, 0.3)])).all()
+    # the rule such a box can break: the sensitivity box's lowest summit density is above McCool's limit
+    density = next(p for p in paper_scene["sensitivity"]["parameters"] if p["key"].startswith("roughness.summit_d"))
+    assert density["low"] > _eta_limit(paper_scene)
+    # the scene's own values lie inside both boxes: each study's reference point is the scene itself
+    for section in ("identify", "sensitivity"):
+        params = [Parameter(p["key"], p["low"], p["high"]) for p in paper_scene[section]["parameters"]]
+        assert np.array_equal(fe.reference(paper_scene, params), [fe.scene_value(paper_scene, p) for p in params])

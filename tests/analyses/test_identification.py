@@ -1,5 +1,5 @@
 """The identification (pipeline/analyses/identification.py) on plain functions: the profile intervals (a slice
-holds the other parameters at the optimum, a profile re-optimises them; issue 26, item 5), the interval's
+holds the other parameters at the optimum, a profile re-optimises them), the interval's
 interpolated crossings, and the whole search on any evaluation callable (no stage, store or fan-out).
 Racing over the DMW records (docs/model.md, "Racing over the DMW records"): the bound, the evaluator's parts,
 and racing against the full method on a noisy stand-in and on the twin."""

@@ -92,7 +92,8 @@ def test_missing_dmw_record(write_scene, tmp_path):
 
 
 def test_set_paths_are_taken_from_the_working_directory(tmp_path, monkeypatch):
-    # issue 35, 5: --set 'roughness.afm=["../afm/x.mi"]' was taken from the scene file's folder
+    # a path given with --set ('roughness.afm=["../afm/x.mi"]') is the user's, from the working directory, not
+    # from the scene file's folder; a path in the file is from the file's folder
     scenes, work = tmp_path / "scenes", tmp_path / "work"
     (work / "afm").mkdir(parents=True)
     scenes.mkdir()

@@ -63,7 +63,7 @@ def test_split_deals_every_item_once_into_one_task_per_worker(monkeypatch):
 
 
 def test_a_cluster_split_follows_its_threads():
-    # issue 26, 3: a cluster always got 8 tasks (a 64-worker dask-jobqueue cluster ran calibrate on 8)
+    # a cluster's split has as many tasks as its worker threads (a 64-worker dask-jobqueue cluster: not a fixed 8)
     from distributed import LocalCluster
     with LocalCluster(n_workers=2, threads_per_worker=3, processes=False, dashboard_address=None) as cluster:
         assert fanout.cluster_threads(cluster.scheduler_address) == 6
@@ -118,7 +118,7 @@ def test_a_failing_task_raises():
         run_tasks(bad, [(i,) for i in range(6)], scheduler="threads", workers=2)
 
 
-# ------------------------------------------------------------ issue 28: paths on workers, a cluster that stops
+# --------------------------------------------------------------------- paths on workers, a cluster that stops
 def test_a_task_on_a_worker_that_does_not_see_the_results_folder_fails_in_one_line(tmp_path):
     missing = tmp_path / "elsewhere"
     with pytest.raises(fanout.ClusterError) as err:
@@ -130,8 +130,8 @@ def test_a_task_on_a_worker_that_does_not_see_the_results_folder_fails_in_one_li
 
 
 def test_the_runner_hands_a_stage_its_folder_as_an_absolute_path_for_its_tasks(tmp_path, monkeypatch, paper_scene):
-    # issue 28, 2: `--out relout` (or the default results/<scene>/) reached the workers as relative paths,
-    # which they resolved from their own working directory
+    # `--out relout` (or the default results/<scene>/) reaches the workers as an absolute path: a relative one
+    # would be resolved from each worker's own working directory
     import xarray as xr
 
     from pipeline import runner
@@ -232,7 +232,7 @@ def _no_workers():
 
 @pytest.mark.parametrize("lost_result", [False, True])
 def test_a_cluster_without_workers_ends_the_wait_in_one_line_within_the_bound(monkeypatch, lost_result):
-    # issue 28, 3: with the last worker killed, the client waited forever: on tasks no worker runs, or
+    # with the last worker killed, the client's wait is bounded: on tasks no worker runs, and
     # (the race the real-scheduler test can hit) on the result of a task whose worker died before sending it
     import distributed
 
@@ -264,7 +264,7 @@ def test_a_cluster_without_workers_ends_the_wait_in_one_line_within_the_bound(mo
                               "and run again to resume")
 
 
-# ------------------------------------------------------------ issue 26, 3: a worker running other code
+# ----------------------------------------------------------------------------- a worker running other code
 def _workers(keys):
     """A stand-in for a client whose workers answer ``run`` with these code keys (or exceptions)."""
     return _Client(run=keys)
@@ -435,7 +435,7 @@ def test_a_task_checks_the_code_key_on_its_worker(monkeypatch):
         fanout.on_worker(None, ("pipeline.code_version", key), square, 3)
 
 
-# ------------------------------------------------------------ issue 26, 3: the split decides where, not what
+# ----------------------------------------------------------------------- the split decides where, not what
 def _same_rows(a: list[tuple], b: list[tuple]) -> bool:
     """Realisation rows ``(realisation, outputs, kernel seconds, errors)`` equal bit for bit but the timing."""
     import numpy as np

@@ -1,4 +1,4 @@
-"""Progress of long work (issue 25, item 4): lines with an ETA in a log, a bar on a terminal, -q and -vv."""
+"""Progress of long work: lines with an ETA in a log, a bar on a terminal, -q and -vv."""
 
 from __future__ import annotations
 
@@ -91,7 +91,8 @@ def test_progress_counts_from_this_runs_rate_and_says_units_and_notes():
 
 
 def test_phases_have_their_own_total_and_eta_and_one_elapsed_clock():
-    # issue 34, 3: identify's total grew as it ran (276 -> 293 -> 317) and its elapsed time restarted per phase
+    # each phase has its own total (a total that grew as it ran, 276 -> 293 -> 317, would say nothing) and the
+    # elapsed time runs on across phases
     clock = FakeClock()
     p = progress.Progress(5, unit="generation", label="identify", timer=clock)
     p.phase("search", 5, unit="generation")
@@ -279,7 +280,7 @@ def test_a_bad_progress_interval_is_one_line(tmp_path, paper_config, monkeypatch
 
 
 def test_a_short_fan_out_on_a_cluster_says_where_it_runs_and_its_end(monkeypatch, capsys, info_logging):
-    # issue 35, 5: on a cluster a batch under HDI_PROGRESS_S said nothing at all (no fan-out line, no count)
+    # on a cluster a batch shorter than HDI_PROGRESS_S still says where it runs and when it ends (fan-out line, count)
     import operator
     distributed = pytest.importorskip("distributed")
     monkeypatch.delenv("CI", raising=False)

@@ -1,6 +1,6 @@
 """The stage runner: content-hash dependencies, no stale results, atomic and locked folders.
 
-The first tests are the reproductions of issue 11 (each failed before the runner): an input file
+The first tests are the content keys' cases: an input file
 edited in place, a dataset of another scene, a part copied to another batch's name, a no-op run that
 rewrote everything. Then the runner's machinery on toy stages (cheap, exact call counts), orphaned temporary files, and the
 registry through which a new stage plugs in. (The folder's lock: core/test_folder_lock.py.)
@@ -64,7 +64,7 @@ def _scan(path: Path, scale: float = 1.0) -> Path:
     return path
 
 
-# ------------------------------------------------------------------------- reproductions of issue 11
+# ------------------------------------------------------------------ content keys: what makes a recompute
 def test_dmw_record_edited_in_place_recomputes_everything_downstream(tmp_path):
     rec = tmp_path / "ldv.csv"
     _record(rec)
@@ -407,9 +407,9 @@ def _early_stage(seen: dict, *, same: bool = True, fail: bool = False) -> dict[s
 
 
 def test_a_dataset_written_early_is_moved_into_place_as_the_end_would_write_it(tmp_path, paper_scene):
-    """Issue 36: a dataset complete before the stage ends (the sweep's histories) is written then, into the
+    """A dataset complete before the stage ends (the sweep's histories) is written then, into the
     staging folder, and moved into place at the end with the runner's attributes; the first output (with the
-    list of outputs) and a dataset returned as another object are written at the end as before."""
+    list of outputs) and a dataset returned as another object are written at the end."""
     seen: dict = {}
     runner.Runner(paper_scene, tmp_path / "early", _early_stage(seen)).build(["x"])
     assert seen == {"staged": ["late.nc"], "out": []}  # (nothing in the results folder before the end)

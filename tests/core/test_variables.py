@@ -213,7 +213,7 @@ def test_pint_quantify_works_on_every_dataset(datasets):
 
 
 def test_one_name_for_the_elapsed_time_in_memory_and_in_the_files(datasets, tmp_path):
-    """Issue 35, 5: ``xr.open_dataset`` gave ``elapsed_time``, ``hdi.open_dataset`` and ``simulate`` ``time``."""
+    """``xr.open_dataset``, ``hdi.open_dataset`` and ``simulate`` all give the time as ``elapsed_time``."""
     assert TIME == "elapsed_time"
     for dataset in ("dmw", "histories", "sweep_histories", "sweep-part"):
         with xr.open_dataset(datasets[dataset], engine="netcdf4") as raw:
@@ -235,7 +235,8 @@ LONG_NAME_MAX = 40
 
 
 def test_long_names_are_short_and_the_sentence_is_the_description(datasets):
-    """Issue 35, 5: long_names were whole sentences (up to 140 characters) that clipped plot labels."""
+    """long_names fit a plot label (a whole sentence, up to 140 characters, would clip it): the sentence is the
+    description."""
     for group, variables in vs.GROUPS.items():
         for name, v in variables.items():
             assert 0 < len(v.long_name) <= LONG_NAME_MAX, (group, name, v.long_name)
@@ -255,3 +256,59 @@ def test_cf_xarray_finds_the_separation_axis(datasets):
         assert raw.cf.axes == {"Z": ["separation"]}
         assert raw.cf["Z"].attrs["positive"] == "up"
         np.testing.assert_array_equal(raw.cf["Z"].values, raw["separation"].values)
+
+
+#: The variables whose name says they come from a published formula (a pressure, stress, force, area, the
+#: asperity statistics and plasticity indices, FHM/BV, the contact criterion k and what it decides, the air
+#: bearing's and the bulge's laws, the statics' barriers): each must cite its sources (CF ``references``).
+FROM_A_FORMULA = (r"pressure|stress|force|real_area|fhm|plasticity|interference|shear_strength|^k$|^k_|sigma_s|^y_s$"
+                  r"|summit_(radius|density|offset)|bandwidth|lift|bearing_number|barrier|stiffness|damper$"
+                  r"|heater_power|clearance|contact_probability|touchdown|^regime$|in_contact|contact_fraction")
+#: Names that match :data:`FROM_A_FORMULA` but whose values no published formula of docs/model.md gives, and why.
+NO_FORMULA = {
+    "pad_pressure": "the scene's air pressure under the trailing pad, an input",
+    "tfc_stiffness": "the scene's stiffening k_t, an input",
+    "contact_damping_force": "the contact damping c_c dd/dt, the model's own [recon] term",
+    "k_source": "where k comes from: a label",
+    "solved_contact_pressure": "the deterministic solve, whose sources docs/deterministic_interface.md gives",
+    "solved_real_area_fraction": "the deterministic solve, whose sources docs/deterministic_interface.md gives",
+}
+
+
+def test_every_variable_from_a_published_formula_cites_its_sources_as_docs_model_md_does():
+    import re
+    from pipeline.cf_variable import CITATIONS
+    model = (ROOT / "docs" / "model.md").read_text(encoding="utf-8")
+    listed = dict(re.findall(r"^- \[([^\]]+)\] (.*(?:\n  .*)*)", model[model.index("\n## References\n"):], re.M))
+    headings = set(re.findall(r"^#{2,3} (.+)$", model, re.M))
+    for key, text in CITATIONS.items():                     # each source word for word as docs/model.md lists it
+        assert " ".join(listed[key].split()) == text, key
+    cited = 0
+    for group, variables in vs.GROUPS.items():
+        for name, v in variables.items():
+            if re.search(FROM_A_FORMULA, name) and NO_FORMULA.get(name) is None:
+                assert v.references is not None, (group, name)
+            if v.references is not None:
+                cited += 1
+                assert v.references.section in headings, (group, name, v.references.section)
+                text = v.attrs()["references"]
+                assert all(f"[{k}] {CITATIONS[k].removesuffix('.')}" in text for k in v.references.keys)
+                assert text.endswith(f'(docs/model.md, section "{v.references.section}")')
+    assert cited > 100
+    assert vs.SCALARS["fhm_bv"].attrs()["references"].startswith("[VLP09] A. I. Vakis, S.-C. Lee, A. A. Polycarpou")
+    assert vs.INTERFACE["plasticity_index_gw"].attrs()["references"] == (
+        '[GW66] J. A. Greenwood, J. B. P. Williamson, "Contact of nominally flat surfaces", Proc. R. Soc. Lond. A 295 '
+        '(1966) 300-319 (docs/model.md, section "Plasticity index")')
+
+
+def test_the_sources_reach_the_written_datasets(datasets):
+    """Every written variable carries its declaration's ``references`` (and none that its declaration lacks): the
+    attribute changes no number (the CF checker's run on these files: test_cf_checker_finds_no_error)."""
+    carried = 0
+    for dataset, path in datasets.items():
+        ds = read_dataset(path)
+        for name in list(ds.coords) + list(ds.data_vars):
+            decl = vs.declared(dataset, name)
+            assert ds[name].attrs.get("references") == decl.attrs().get("references"), (dataset, name)
+            carried += "references" in ds[name].attrs
+    assert carried > 50

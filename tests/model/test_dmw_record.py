@@ -22,4 +22,10 @@ def test_default_record_is_long_enough_for_the_dynamics(tmp_path):
     scene = scene_from_dict({"scene": {"effects": ["air_bearing", "pitch", "dmw"]}})
     _, w, fs = dmw_record.load(ensure("dmw", scene, tmp_path))
     model = assembly.build_model(scene, None, (w, fs), None)   # raises if the record is too short
-    assert model.dmw is not None
+    from pipeline.config.si import to_si
+    duration, lead = to_si(scene).solver.duration, dmw_record.front_pad_lead_s(scene)
+    # the record holds the rule's samples: the duration, the front pad's lead (l_f + l_c) / V, and the end samples
+    assert w.size >= dmw_record.needed_samples(duration, lead, fs)
+    assert model.p.off_f == lead and model.p.dmw_dt == 1.0 / fs               # (the same arms over the same speed)
+    # its pieces (one per sample interval, three columns of 4 coefficients: TFC, front and rear pad) cover the run
+    assert model.dmw.shape[1] == 12 and (model.dmw.shape[0] - 1) / fs >= duration

@@ -55,7 +55,7 @@ def test_the_start_does_not_decide_the_steady_state(delta):
     assert int(ref["regime"]) == (outcomes.FLYING if delta == 5.0 else outcomes.SURFING)
 
 
-# ------------------------------------------------ issue 26: the static start compiled, and its ladder
+# ------------------------------------------------------ the static start compiled, and its ladder
 from pipeline.model.start import SCALE, start_state, static_forces  # noqa: E402
 from pipeline.physics import equilibrium as eq  # noqa: E402
 

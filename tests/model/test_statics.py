@@ -5,8 +5,8 @@ pipeline.model.statics, the ``statics`` stage): every static state, its stabilit
 * the relaxed path of a linear 2-DOF spring system, whose path force is known in closed form;
 * the paper scene: at a small protrusion one stable flying state, the run's static start; in the adhesion
   hysteresis a flying and a contact state with the barriers between them;
-* the two-population scene: the lab baseline of issue 33 (a state on the contact criterion at 10.0-10.2 nm
-  beside a flying state at 10.0 nm), slow.
+* the two-population scene: a state on the contact criterion at 10.0-10.2 nm (at 10.0 nm
+  beside a flying state), slow.
 """
 
 from __future__ import annotations
@@ -214,11 +214,11 @@ def test_the_dataset_has_labelled_dims_and_units(paper_model):
 # ---------------------------------------------------------------------------- two-population (the lab)
 @pytest.mark.slow
 def test_the_two_population_scene_has_the_labs_state_on_the_criterion(repo_root):
-    """Issue 33's lab baseline (round 3, statics of ``paper-2009-two-population-identified.toml`` at k = 0.978):
+    """The statics of ``paper-2009-two-population-identified.toml`` at k = 0.978, against a 0.01-nm scan:
     a flying state +0.707 nm at 9.8 nm; at 10.0 nm a flying state +0.483 nm, a saddle +0.064 nm and a stable
-    state on the criterion (the lab's -0.001 nm: its linear interpolation across the jump on a 0.01-nm grid),
+    state on the criterion (the scan's -0.001 nm: its linear interpolation across the jump on the 0.01-nm grid),
     barriers 11.3e-15 J out of the flying state and 0.6e-15 J out of the criterion; at 10.2 nm the state on the
-    criterion alone (the lab's -0.006 nm); contact states -0.271 and -0.508 nm at 10.4 and 11.0 nm.
+    criterion alone (the scan's -0.006 nm); contact states -0.271 and -0.508 nm at 10.4 and 11.0 nm.
 
     Tolerances: 2e-3 nm on the smooth states (the lab's roots are linear interpolations on a 0.01-nm grid);
     one grid step on the criterion states; the criterion's barrier within one grid cell of the contact law's

@@ -98,6 +98,10 @@ def test_load_and_area_increase_within_each_regime():
 
 
 def test_vectorised_shapes():
+    # an array of interferences gives the array of each one's law, element for element, in its shape
+    # (the first is a separation: no load, no area)
     w = np.linspace(-1e-9, 1e-7, 12).reshape(3, 4)
-    assert asperity.contact_load(w, R, E, H, NU).shape == (3, 4)
-    assert asperity.contact_area(w, R, E, H, NU).shape == (3, 4)
+    for law in (asperity.contact_load, asperity.contact_area):
+        out = law(w, R, E, H, NU)
+        assert out.shape == (3, 4) and out[0, 0] == 0.0
+        assert np.array_equal(out, [[float(law(x, R, E, H, NU)) for x in row] for row in w])

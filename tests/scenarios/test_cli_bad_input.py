@@ -79,7 +79,7 @@ def _free_address() -> str:
 
 
 def test_a_scheduler_file_is_read_for_its_address_and_a_bad_one_is_one_line(capsys, folder, tmp_path):
-    # issue 26, 3: --scheduler took tcp:// addresses only (dask users hand over `dask scheduler --scheduler-file`)
+    # --scheduler takes a scheduler file as well as a tcp:// address (dask users hand over `dask scheduler --scheduler-file`)
     from pipeline.cli_checks import scheduler_address
     good = tmp_path / "scheduler.json"
     good.write_text('{"type": "Scheduler", "address": "tcp://10.1.2.3:8786", "services": {"dashboard": 8787}}')

@@ -1,6 +1,5 @@
-"""Every fault in one line (issue 38, items 4, 6 and 7): each test reproduces one probe that ended in a
-traceback, failed late or silently, or (the Python API) raised an undocumented error, and checks the one
-line or the documented error it gets now.
+"""Every fault in one line: each test is one probe that could end in a traceback, fail late or silently,
+or (the Python API) raise an undocumented error, and checks the one line or the documented error it gets.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""The corrections of docs/model.md, section "Corrections" and the named model variants (issue 10, part A).
+"""The corrections of docs/model.md, section "Corrections" and the named model variants.
 
 * 7.2 the separation datum: d to the mean of summit heights, y_s below the mean of surface heights
   to which FH0 is measured; the paper's clearances 5.8 and 2.8 nm at 4 and 7 nm protrusion.

@@ -1,4 +1,4 @@
-"""Progress from Python as a notebook user meets it (issue 35, item 3): no logging configured, stderr no
+"""Progress from Python as a notebook user meets it: no logging configured, stderr no
 terminal. Each case runs in a fresh interpreter, as a notebook kernel is one: pytest's own log capture
 puts a handler on the root logger, which a user's process does not have."""
 

@@ -1,4 +1,4 @@
-"""Nothing lost, nothing silent (issue 38, the file-system and process half): each test reproduces one probe.
+"""Nothing lost, nothing silent (the file system and the processes): each test is one probe.
 
 1. planted symbolic links inside a results folder (the lock, ``figures/``, ``.hdi/``, its run log, a
    dataset): refused in one line naming the link, the link's target untouched;
@@ -55,7 +55,7 @@ def _link_line(exc: OSError, link: Path) -> str:
 
 # ------------------------------------------------------------------------------------ 1. planted links
 def test_a_lock_file_that_is_a_link_is_refused_and_its_target_kept(tmp_path):
-    """Before: hdi "took over the lock" and unlinked the link's target."""
+    """hdi refuses a lock that is a link, rather than take the lock over and unlink the link's target."""
     victim, out = _toy(tmp_path)
     (out / runner.LOCK_NAME).symlink_to(victim)
     with pytest.raises(paths.LinkRefused) as info:
@@ -104,7 +104,7 @@ def _stage_writing(name: str, out_name: str, metrics: bool = False) -> runner.St
     ("a.nc", "a.nc", False),                         # a dataset
 ])
 def test_a_planted_link_on_the_way_to_an_output_is_refused_before_computing(tmp_path, planted, output, metrics):
-    """Before: PNGs, records and run lines were written through the link, outside the folder."""
+    """No PNG, record or run line is written through the link, outside the folder: refused first."""
     victim, out = _toy(tmp_path)
     elsewhere = tmp_path / "elsewhere"
     elsewhere.mkdir()
@@ -200,7 +200,8 @@ sys.exit(cli.main(sys.argv[1:]))
 
 
 def test_sigterm_during_the_reports_netcdf_reads_never_ends_with_exit_0(tmp_path):
-    """Before: the run went on to draw the report and exited 0 (2-3 of 10 trials with a real SIGTERM)."""
+    """A SIGTERM that a C library's error check swallows during the report's NetCDF reads still ends the run
+    (143 and one line): it never goes on to draw the report and exit 0."""
     from report_data import write_dmw, write_histories, write_roughness, write_sweep
     out = tmp_path / "out"
     out.mkdir()
@@ -264,8 +265,8 @@ def _kill_and_expect_no_worker(proc: subprocess.Popen, pids: Path, wait_s: float
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="the figure pool forks on Linux only")
 def test_figure_workers_die_with_a_killed_parent(tmp_path):
-    """Before: SIGKILL (or SIGHUP) of hdi while drawing left its workers sleeping forever, holding its
-    stdout and stderr (``hdi run ... | tee log`` never ended)."""
+    """SIGKILL (or SIGHUP) of hdi while drawing ends its figure workers too: they would otherwise sleep forever,
+    holding its stdout and stderr (``hdi run ... | tee log`` would never end)."""
     proc = subprocess.Popen([sys.executable, "-c", _DRAWING, str(tmp_path)], cwd=ROOT,
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     _kill_and_expect_no_worker(proc, tmp_path, 60)
@@ -287,7 +288,8 @@ def _one_error(done: subprocess.CompletedProcess) -> str:
 
 @pytest.mark.parametrize("kind", ["fifo", "device"])
 def test_a_special_file_as_the_dmw_record_is_refused_at_load(tmp_path, kind):
-    """Before: a FIFO or ``/dev/zero`` as ``dmw.source`` hung (the record's size was counted by reading it)."""
+    """A FIFO or ``/dev/zero`` as ``dmw.source`` is refused at load, before its size is counted by reading it
+    (which would hang)."""
     if kind == "fifo":
         source = tmp_path / "record.csv"
         os.mkfifo(source)
@@ -325,7 +327,8 @@ def test_a_fifo_as_the_scheduler_file_is_refused(tmp_path):
     (b"time [s],x [SECRET_TOKEN=abc123]\n0,1\n1e-6,2\n", {}),                          # a unit
 ])
 def test_record_errors_never_repeat_the_files_content(tmp_path, content, kw):
-    """Before: ``dmw.source = "/proc/self/environ"`` printed the environment in the error."""
+    """An error about a record names the file, never its content (``dmw.source = "/proc/self/environ"`` would
+    print the environment)."""
     from pipeline.model import measured_dmw
     from pipeline.physics.microwaviness import DMWError
     path = tmp_path / "record.csv"
@@ -348,7 +351,8 @@ def test_proc_self_environ_as_the_record_is_one_line_without_the_environment(tmp
 
 # ------------------------------------------------------------------------------------ 5. busy datasets
 def test_a_dataset_another_process_writes_is_busy_and_never_replaced(tmp_path):
-    """Before: reported as "has no inputs key" and replaced (that process's edit lost). The HDF5 file lock
+    """A dataset open for writing elsewhere is busy: never taken for one with "no inputs key" and replaced (that
+    process's edit lost). The HDF5 file lock
     of a writer in this process stands in for another's (``flock`` locks conflict between open files)."""
     import netCDF4
     out = tmp_path / "out"
@@ -391,8 +395,8 @@ def test_a_dataset_opened_for_writing_during_the_computation_is_not_replaced(tmp
 
 # ------------------------------------------------------------------------------------ 6. lengths
 def test_a_long_scene_name_no_longer_lengthens_the_identified_scenes_file(tmp_path):
-    """Before: a 250-character name failed after the whole identification (``<name>-identified.toml``); the
-    identified scene is now ``identified.toml`` whatever the name, so the length check passes before any stage."""
+    """The identified scene is ``identified.toml`` whatever the scene's name, so a 250-character name (which
+    ``<name>-identified.toml`` would exceed the file system with) passes the length check before any stage."""
     scene = load_scene(PAPER, [f'scene.name="{"a" * 250}"'])
     paths = runner.Runner(scene, tmp_path).written_paths(["identify"])
     assert f".identified.toml.hdi-{io.RUN_ID}.xxxxxxxx.tmp" in paths
@@ -401,7 +405,7 @@ def test_a_long_scene_name_no_longer_lengthens_the_identified_scenes_file(tmp_pa
 
 
 def test_a_results_folder_too_long_for_the_reports_files_is_one_line_before_any_stage(tmp_path):
-    """Before: a 4030-byte ``--out`` failed at the report, naming a temporary file."""
+    """A 4030-byte ``--out`` is refused in one line before any stage, not at the report naming a temporary file."""
     limit = os.pathconf(tmp_path, "PC_PATH_MAX")
     out = tmp_path
     while len(os.fsencode(str(out))) < limit - 66 - 200:

@@ -2,8 +2,8 @@
 working directory (not the client's): `hdi sweep --scheduler tcp://127.0.0.1:PORT` with a relative
 results folder gives the dataset of a local run; a worker that does not see the results folder, and
 the loss of the last worker mid-sweep, end the command with one line in bounded time, and a rerun
-resumes (issue 28); a scheduler file or DASK_SCHEDULER_ADDRESS names the cluster, its dashboard link
-is printed, the batches follow its threads, and a worker running other code is refused (issue 26)."""
+resumes; a scheduler file or DASK_SCHEDULER_ADDRESS names the cluster, its dashboard link
+is printed, the batches follow its threads, and a worker running other code is refused."""
 
 from __future__ import annotations
 
@@ -148,7 +148,7 @@ def one_worker(tmp_path):
 def test_sweep_on_a_remote_cluster_equals_the_local_run(cluster, tmp_path):
     sets = [a for s in SMALL for a in ("--set", s)]
     # a relative results folder (the workers run in folders of their own: each task carries absolute paths);
-    # it was "No such file or directory: 'remote/sweep.parts/...'" on the workers (issue 28)
+    # a relative one would be "No such file or directory: 'remote/sweep.parts/...'" on the workers
     remote = _hdi("sweep", str(PAPER), *sets, "--scheduler", cluster, "--out", "remote", cwd=tmp_path)
     assert remote.returncode == 0, remote.stderr
     local = _hdi("sweep", str(PAPER), *sets, "--workers", "2", "--out", str(tmp_path / "local"), cwd=tmp_path)
@@ -196,7 +196,7 @@ def _ran(address: str, name: str) -> set[str]:
 
 @pytest.mark.slow
 def test_a_scheduler_file_or_dask_scheduler_address_names_the_cluster_and_its_dashboard_is_printed(running, tmp_path):
-    # issue 26, 3: only tcp:// addresses were taken, and no dashboard link was shown
+    # a scheduler file and DASK_SCHEDULER_ADDRESS are taken as well as a tcp:// address, and the dashboard link shown
     sets = [a for s in SMALL for a in ("--set", s)]
     before = _ran(running.address, "sweep_task")
     dashboard = f"dask scheduler {running.address}: dashboard http://127.0.0.1:"
@@ -221,7 +221,7 @@ def test_the_split_follows_the_cluster_threads(cluster):
 
 @pytest.mark.slow
 def test_a_worker_running_other_code_is_refused_before_work_is_sent(cluster):
-    # issue 26, 3: a worker importing older code wrote parts stamped with the new inputs key
+    # a worker importing other code would write parts stamped with this code's inputs key: refused first
     from distributed import Client
 
     from pipeline.code_version import code_key
@@ -262,7 +262,7 @@ LOSS = ["solver.duration_ms=0.6", "solver.transient_ms=0.2", "contact.k=0.5",
 
 @pytest.mark.slow
 def test_losing_the_last_worker_ends_the_sweep_in_one_line_and_a_rerun_resumes(one_worker, tmp_path):
-    # issue 28, 3: kill the only worker mid-sweep and `hdi sweep --scheduler` printed nothing more, forever
+    # kill the only worker mid-sweep: `hdi sweep --scheduler` ends in one line within its wait, not never
     wait_s = 3.0
     env = dict(os.environ, PYTHONPATH=str(ROOT), HDI_CLUSTER_WAIT_S=f"{wait_s:g}")
     args = [sys.executable, "-m", "pipeline.cli", "sweep", str(PAPER), *[a for s in LOSS for a in ("--set", s)],

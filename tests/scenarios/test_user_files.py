@@ -1,4 +1,4 @@
-"""Nothing lost, nothing silent (issue 28, items 4-7): each test reproduces one probe that failed before.
+"""Nothing lost, nothing silent: each test is one probe of a user's files and the one line it must give.
 
 Relative paths inherited through ``scene.extends``, the leftover cleaner and a user's files, OSError
 (a full disk, wrong file types, names too long) as one line, and inputs that were silent or unbounded.

@@ -1,4 +1,4 @@
-"""What a new user trips over (issue 18): each test reproduces one probe that failed before.
+"""What a new user trips over: each test is one probe of a user's first runs and what it must give.
 
 SIGTERM, the umask of written datasets, interface coordinates ``.sel`` could not hit, unbounded sizes, and
 the smaller messages. (A scheduler address that is not a dask scheduler: ``core/test_cli_checks.py``; the

@@ -79,7 +79,7 @@ def test_report_shows_each_target_over_the_realisations_with_its_spread(run3):
     check_png(out / "figures" / "band.png")
     td, lo, hi = en.touchdown_protrusion(ens["min_clearance"])
     assert np.isfinite(td) and lo <= td <= hi
-    # short long_names (issue 35, 5); the target's sentence is the description, which the report's table shows
+    # long_names short enough for a plot label; the target's sentence is the description, which the report's table shows
     for name, v in ens.variables.items():
         assert len(v.attrs["long_name"]) <= 40, (name, v.attrs["long_name"])
     band = ens["value_bouncing"]

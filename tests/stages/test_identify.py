@@ -170,7 +170,7 @@ CORRELATED = SCENE.replace('targets = ["fhm_flying", "contact_force"]', 'targets
 
 @pytest.mark.slow  # (16-25 s on the shared 2 cores: 48 evaluations of the real slider)
 def test_twin_correlated_pair_profile_interval_is_wider_than_the_slice(write_scene, paper_config, tmp_path):
-    # issue 26, 5: a slice (the other parameter held at the optimum) is too narrow where parameters
+    # a slice (the other parameter held at the optimum) is too narrow where parameters
     # correlate; the profile re-optimises it and finds the wider interval, which holds the truth
     scene, path = _twin_scene(write_scene, paper_config, tmp_path, CORRELATED)
     out = tmp_path / "out"
@@ -203,7 +203,7 @@ def test_twin_correlated_pair_profile_interval_is_wider_than_the_slice(write_sce
     assert "profile, other parameters re-optimised" in (out / "identified.toml").read_text().splitlines()[3]
 
 
-# ------------------------------------------------------- issue 28: outputs go only where the user said
+# ---------------------------------------------------------------- outputs go only where the user said
 def _stub_batch(base, params, rows, protrusions, inputs):
     """A stand-in for the slider: FHM and contact force linear in the parameters (the written scene is
     what is tested here, not the fit)."""
@@ -226,7 +226,7 @@ def _user_scene(tmp_path, paper_config):
 
 
 def test_identify_writes_its_scene_into_the_results_folder_not_over_the_users_file(tmp_path, paper_config):
-    # issue 28, 1: `hdi identify configs/paper-2009.toml --out elsewhere` rewrote configs/paper-2009-identified.toml
+    # `hdi identify configs/paper-2009.toml --out elsewhere` writes into elsewhere/, never configs/paper-2009-identified.toml
     scene, path = _user_scene(tmp_path, paper_config)
     out = tmp_path / "elsewhere"
     nc = ensure("identify", scene, out, scheduler="synchronous", task=_stub_batch)
@@ -266,7 +266,8 @@ def _fails(capsys, *argv: str) -> str:
 
 
 def test_write_scene_is_refused_before_the_study_starts(tmp_path, paper_config, capsys):
-    # issue 28, 1 and 6: a read-only scene folder failed only after the whole study; an existing file was replaced
+    # a --write-scene that exists, lies in a folder no process may write in, in none, or is a folder: refused before
+    # the study starts (not after it), the existing file kept
     scene, path = _user_scene(tmp_path, paper_config)
     out = tmp_path / "out"
     beside = path.parent / "twin-identified.toml"
@@ -288,7 +289,7 @@ def test_write_scene_is_refused_before_the_study_starts(tmp_path, paper_config, 
                                         ("dot.toml", 'name = "."\n')])
 def test_a_scene_whose_name_leaves_the_results_folder_is_refused(tmp_path, paper_config, capsys, monkeypatch,
                                                                    name, text):
-    # issue 28, 7: a scene named `..` (or a file `...toml`) wrote results/../, the current folder
+    # a scene named `..` (or a file `...toml`) is refused: its results folder results/../ would be the current folder
     (tmp_path / name).write_text(f'[scene]\n{text}extends = "{paper_config}"\n')
     monkeypatch.chdir(tmp_path)
     err = _fails(capsys, "dmw", name)
@@ -296,7 +297,7 @@ def test_a_scene_whose_name_leaves_the_results_folder_is_refused(tmp_path, paper
     assert sorted(p.name for p in tmp_path.iterdir()) == [name]
 
 
-# ------------------------------------------- issue 34, 3: one best point, wherever the profiles found it
+# ------------------------------------------------------ one best point, wherever the profiles found it
 def _separable_batch(base, params, rows, protrusions, inputs):
     """A stand-in for the slider whose objective has its minimum at grid points of the profiles (5 points of
     the twin's bounds: dmw.rms_nm 0.165, work of adhesion 0.07): it flies everywhere, its FHM is 100 x the
@@ -328,8 +329,8 @@ polish = false
     (["identify.fhm_flying_tolerance_percent=30", "identify.contact_force_tolerance_mn=2"], None)])
 def test_a_profile_point_better_than_the_centre_is_the_one_best_point_everywhere(tmp_path, paper_config, monkeypatch,
                                                                                    caplog, tolerances, rounds):
-    # issue 34, 3: identify.nc's best_evaluation (a profile point, the lowest objective) and its *_best values and
-    # the written scene (the profiles' centre) named two different points
+    # identify.nc's best_evaluation (the lowest objective, a profile point may hold it), its *_best values and
+    # the written scene name one point
     if rounds is not None:
         monkeypatch.setattr(identification, "PROFILE_ROUNDS", rounds)
     path = tmp_path / "twin.toml"
@@ -370,7 +371,8 @@ def test_a_profile_point_better_than_the_centre_is_the_one_best_point_everywhere
 
 
 def test_identify_nc_has_parameter_target_and_bound_dimensions(tmp_path, paper_config):
-    # issue 34, 4: identify.nc had 103 variables named like air_bearing__frequencies_khz_1_slice_interval
+    # the study's results are variables on parameter, target and bound dimensions, not a variable per name
+    # (air_bearing__frequencies_khz_1_slice_interval, ...)
     path = tmp_path / "twin.toml"
     path.write_text(BEST_POINT.format(paper=paper_config))
     scene = load_scene(path, ["identify.fhm_flying_tolerance_percent=0.1", "identify.contact_force_tolerance_mn=0.01"])

@@ -135,10 +135,10 @@ _STATS = {"sigma_nm": 0.5, "summit_radius_um": 5.0, "summit_density_per_um2": 13
 
 def test_other_sets_tables_are_fanned_out_and_the_result_does_not_depend_on_workers(calibrated, tmp_path,
                                                                                   monkeypatch):
-    """Issue 36: another roughness set's interface tables are a task of the sweep's fan-out, in a first
+    """Another roughness set's interface tables are a task of the sweep's fan-out, in a first
     round alternating with the batches that do not read them, that set's batches in a second round; the
     parts are assembled as they arrive. 2 workers give the 1-worker datasets exactly, and sweep.nc holds
-    what the parts assembled in one go in batch order hold (the assembly before), variables in the same order."""
+    what the parts assembled in one go in batch order hold, variables in the same order."""
     scene_, out = calibrated
     scene = load_scene(PAPER, FAST + ['sweep.roughness=["scene", {label="rough", sigma_nm=0.8}]',
                                       "sweep.histories_nm=[9.2, 10.0]"])
@@ -239,7 +239,7 @@ def test_the_batches_that_keep_histories_are_those_of_the_first_realisation_at_a
 
 def test_the_histories_are_written_once_a_worker_is_idle_and_equal_those_written_at_the_end(calibrated, tmp_path,
                                                                                            monkeypatch):
-    """Issue 36: ``sweep_histories.nc`` is written inside the fan-out, once the batches that keep histories are
+    """``sweep_histories.nc`` is written inside the fan-out, once the batches that keep histories are
     in and a worker has no batch left to start (fewer batches to finish than workers): one worker writes it in
     the last part's turn, two while the last batch runs. The files equal those of a sweep that writes both
     datasets at the end."""
@@ -482,9 +482,9 @@ def afm_sweep(tmp_path_factory):
 
 
 def test_an_afm_roughness_set_is_described_by_the_statistics_its_interface_used(afm_sweep):
-    """Issue 34: the scan set's sigma, R and eta on ``roughness`` were NaN and ``roughness_sets`` recorded the
-    scene's defaults (0.52 nm, 5 um, 13.3 um^-2) while the interface used the scan's (3.43 nm, 2.23 um,
-    11.4 um^-2). Now every set carries the statistics its interface tables were built from: the scan's
+    """Each roughness set carries, along ``roughness``, the statistics its interface tables were built from, not
+    the scene's defaults (0.52 nm, 5 um, 13.3 um^-2) where a set's interface used its AFM scans' (3.43 nm, 2.23 um,
+    11.4 um^-2): the scan's
     (equal to its own ``interface.nc``), the given values exactly, and the GW plasticity index
     psi = (E'/H) sqrt(sigma_s/R) of each (Greenwood & Williamson 1966)."""
     import hashlib

@@ -70,20 +70,44 @@ def test_the_reference_lists_every_api_call_every_physics_module_and_every_galle
         assert (SOURCE / image).resolve().is_file(), image
 
 
+def _python_function(obj: object) -> object | None:
+    """The Python function behind ``obj``: itself, a numba dispatcher's ``py_func``, a static or class method's
+    function (``None``: not a function)."""
+    obj = getattr(obj, "__func__", obj)                       # staticmethod, classmethod
+    obj = getattr(obj, "py_func", obj)                        # numba's @njit
+    return obj if inspect.isfunction(obj) else None
+
+
+#: Return annotations of a property that is a physical quantity (a number or an array of numbers); a property
+#: that returns a law or another object (a registry entry's ``behaviour``) is not one.
+QUANTITY = ("float", "np.ndarray", "numpy.ndarray", "tuple[float, float]")
+
+
 def public_physics_functions() -> list[tuple[str, object]]:
-    """``(qualified name, function)`` of every public function of pipeline/physics/ and every public method
-    of its public classes, each defined in its module (not an imported name)."""
-    found = []
-    for name in _physics_modules():
+    """``(qualified name, function)`` of every public function of pipeline/physics/ (the package's
+    ``__init__`` included; numba-compiled ones by their Python function), every public method of its public
+    classes and every public property of theirs that is a quantity (:data:`QUANTITY`), each defined in
+    pipeline/physics/; a function defined under a private name and bound to a public one anywhere in
+    pipeline/physics/ (a re-exported helper) counts under its public name."""
+    found, seen = [], set()
+    for name in ["pipeline.physics", *_physics_modules()]:
         mod = importlib.import_module(name)
         for n, obj in vars(mod).items():
-            if n.startswith("_") or getattr(obj, "__module__", None) != name:
+            func = _python_function(obj)
+            if n.startswith("_") or not getattr(func or obj, "__module__", "").startswith("pipeline.physics"):
                 continue
-            if inspect.isfunction(obj):
-                found.append((f"{name}.{n}", obj))
-            elif inspect.isclass(obj):
-                found += [(f"{name}.{n}.{m}", f) for m, f in vars(obj).items()
-                          if not m.startswith("_") and inspect.isfunction(f)]
+            defined_here = getattr(func or obj, "__module__", None) == name
+            if func is not None and (defined_here or func.__name__.startswith("_")) and id(func) not in seen:
+                seen.add(id(func))
+                found.append((f"{name}.{n}", func))
+            elif inspect.isclass(obj) and defined_here:
+                for m, f in vars(obj).items():
+                    if m.startswith("_"):
+                        continue
+                    if _python_function(f) is not None:
+                        found.append((f"{name}.{n}.{m}", _python_function(f)))
+                    elif isinstance(f, property) and inspect.signature(f.fget).return_annotation in QUANTITY:
+                        found.append((f"{name}.{n}.{m}", f.fget))
     return found
 
 
@@ -120,6 +144,19 @@ def test_every_public_physics_function_has_parameters_returns_with_a_unit_and_re
     lacking = {name: what for name, what in lacking.items() if what}
     assert not lacking, f"{len(lacking)} of {len(functions)} public physics functions lack sections:\n" + "\n".join(
         f"{name}: {', '.join(what)}" for name, what in sorted(lacking.items()))
+
+
+def test_the_collection_sees_compiled_functions_quantity_properties_and_re_exported_helpers(monkeypatch):
+    from pipeline.physics import air_bearing, bulge_bearing, isbl
+    monkeypatch.setattr(isbl, "gauss_density", isbl._gauss, raising=False)    # a private helper made public
+    functions = dict(public_physics_functions())
+    assert functions["pipeline.physics.isbl.gauss_density"] is isbl._gauss and missing_sections(isbl._gauss)
+    assert functions["pipeline.physics.bulge_bearing.ph_force_stiffness"] is bulge_bearing.ph_force_stiffness.py_func
+    assert functions["pipeline.physics.isbl.Interface.w_c"] is isbl.Interface.w_c.fget
+    assert functions["pipeline.physics.air_bearing.Slider.mass_matrix"] is air_bearing.Slider.mass_matrix.fget
+    assert "pipeline.physics.air_bearing.RearLaw.behaviour" not in functions          # a law, not a quantity
+    assert "pipeline.physics.isbl.lennard_jones_force" not in functions           # imported: checked at home
+    assert "pipeline.physics.adhesion.lennard_jones_force" in functions
 
 
 def test_the_docstring_check_sees_a_missing_section():

@@ -1,4 +1,4 @@
-"""The README is a short front door and the docs pages hold the rest (issue 25, item 3): the README stays
+"""The README is a short front door and the docs pages hold the rest: the README stays
 under 250 lines, every relative link of the README and of docs/*.md reaches a file (and, for an
 ``#anchor`` into a markdown page, a heading of it, by GitHub's slug rule), and ``make readme`` writes the
 generated comparison into the page that holds its markers."""
@@ -151,7 +151,7 @@ NOTES = re.compile(r"\bissue \d+|\blab (?:H\d|notes?|runs?|scans?|rounds?)\b|\bS
 
 @pytest.mark.parametrize("page", PAGES, ids=lambda p: str(p.relative_to(ROOT)))
 def test_no_page_sends_its_reader_to_notes_a_clone_lacks(page):
-    """"lab H4", "issue 27" or "until merged" point at notes outside the repository: a page states the
+    """"lab H4", an issue's number or "until merged" point at notes outside the repository: a page states the
     measurement itself or links a docs page (the generated section of docs/results.md is left to
     ``make readme``)."""
     text = page.read_text(encoding="utf-8")

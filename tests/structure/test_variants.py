@@ -50,7 +50,7 @@ def _registries() -> dict[str, Registry]:
 
 def test_every_physics_registry_is_the_live_choice_list_of_its_scene_key():
     registries = _registries()
-    assert len(registries) >= 12  # (the variants of issue 37: none may drop out of the scan unnoticed)
+    assert len(registries) >= 12  # (the shipped variants' registries: none may drop out of the scan unnoticed)
     keys = variant_keys()
     for where, registry in registries.items():
         assert registry.key in keys, f"{where} ({registry.key}) is no scene key's choices"
