@@ -42,7 +42,7 @@ export PYTHONDONTWRITEBYTECODE :=
 # each module is named after its stage, tests/structure/test_registries.py): a new stage module is a new target
 STAGES := $(sort $(basename $(notdir $(filter-out %/__init__.py,$(wildcard pipeline/stages/*.py)))))
 
-.PHONY: setup run test test-fast test-slow bench sweep readme variants docs clean $(STAGES)
+.PHONY: setup run test test-fast test-slow bench bench-peers-setup sweep readme variants docs clean $(STAGES)
 
 ## the environment alone; with EXTRAS, those extras added to it (each `--extra NAME` of uv sync; kept by
 ## later targets, which sync --inexact)
@@ -103,8 +103,28 @@ test-slow: $(TEST_STAMP)
 ## speed and memory: medians and ratios against baselines measured in the same run; each row records the
 ## load average and CPUs at its start and end, NOISY when it started above load 0.75 per CPU (1.5 on 2 cores).
 ## BENCH_STUDY=0 make bench leaves out the identify and sensitivity rows (most of the time): under 15 min.
+## The peer rows (benchmarks/bench_peers.py: the kernel against numbalsoda's DOP853 and LSODA) need the `bench`
+## extra; `make bench` runs `make bench-peers-setup` first and goes on without the peers when it fails (their
+## rows then say why: not installed).
 bench: $(RUN_STAMP)
+	@$(MAKE) --no-print-directory bench-peers-setup || echo "make bench: the peers could not be installed (make bench-peers-setup failed): their rows say so"
 	$(BIN)/python -m benchmarks.run --out benchmarks/results/bench.json
+
+## the bench's peers: numbalsoda has no wheel for Python >= 3.11 on PyPI, so it builds from source (its build
+## fetches cmake and ninja from PyPI) and needs Fortran and C++ compilers. Where gfortran is missing it is
+## installed from the system's packages (apt-get, as root: Debian, Ubuntu); elsewhere install a Fortran compiler
+## first. Then the `bench` extra (pyproject.toml) into .venv, at uv.lock's version (~15 s to build).
+bench-peers-setup: $(RUN_STAMP)
+	@command -v gfortran >/dev/null 2>&1 || { \
+	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
+	    echo "make bench-peers-setup: installing gfortran (apt-get): numbalsoda builds with a Fortran compiler"; \
+	    { DEBIAN_FRONTEND=noninteractive apt-get install -y -qq gfortran g++ >/dev/null 2>&1 || \
+	      { apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq gfortran g++ >/dev/null; }; }; \
+	  else \
+	    echo "make bench-peers-setup: no Fortran compiler (gfortran) on the PATH, and no apt-get as root to install one: install gfortran, then run this again" >&2; \
+	    exit 1; \
+	  fi; }
+	$(call install,--extra bench,[bench])
 
 ## a larger default grid: paper protrusions x 3 roughness sets x 3 damping ratios
 sweep: $(RUN_STAMP)
