@@ -14,8 +14,9 @@ Tolerances: the scene's ``rtol`` and per-component ``atol`` (:func:`pipeline.mod
 numbalsoda takes one scalar ``atol``, so the integrators step the scaled state ``u = y / atol`` with
 ``atol = 1``: the same weighted error ``|e_i| / (atol_i + rtol |y_i|)`` per component. The start is the
 project's (:func:`pipeline.model.running.start`: the static equilibrium), the samples those of
-:func:`benchmarks.naive.fine_grid` with :data:`REFINE` per output step (the kernel tracks the exact extremes
-of ``d``; a sampled peer needs the finer grid for the peak-to-peak: docs/performance.md, section "The peers").
+:func:`benchmarks.naive.fine_grid` with :data:`REFINE` per output step: the kernel's output grid (the kernel
+tracks the exact extremes of ``d``; the peers' peak-to-peak of the samples agrees within the limits below,
+docs/performance.md, section "The peers: the kernel against numbalsoda").
 
 A peer's run agrees with the kernel's when its FHM/BV is within :data:`FHM_TOL` and its mean clearance within
 :data:`CLEARANCE_TOL` of the kernel's (:func:`agreement`); one that does not is void (reported, not timed).
