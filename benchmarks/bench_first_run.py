@@ -20,7 +20,10 @@ into install, compile and run. Target (issue 36): under 30 s on 2 cores (it was 
    :data:`NOTEBOOK_REPEAT` times: the kernel's compile in the background process the API starts, and the
    waiting process's own compiles (docs/performance.md, section "A notebook's first call, shared").
 
-One measurement each of 1-4 (a fresh clone is the point; about 2 minutes), 3 of 6 (~30 s).
+Each command's CPU time (user + system, the processes it waited for included) is recorded beside its wall time
+(``install_cpu_s``, ``first_run_cpu_s``, ``warm_run_cpu_s``; the notebook's ``process_cpu_s``): on a shared host
+the wall time counts the other tenants' load. One measurement each of 1-4 (a fresh clone is the point; about 2
+minutes), 3 of 6 (~30 s).
 ``BENCH_FIRST_RUN=0`` skips it.
 """
 
