@@ -190,7 +190,7 @@ def load_peers(import_module: Callable[[str], Any] = importlib.import_module) ->
         compiler = ("a Fortran compiler (gfortran) is on the PATH" if shutil.which("gfortran") else
                     "no Fortran compiler (gfortran) on the PATH: numbalsoda builds from source with one")
         why = (f"not installed: numbalsoda could not be imported ({type(exc).__name__}: {exc}); {compiler}; "
-               "`make bench-peers-setup` installs both (the `bench` extra)")
+               "`make bench-peers-setup` installs the compiler where it is missing, then the `bench` extra")
         return {name: why for name in METHODS}
     return {name: getattr(lib, fn) for name, (fn, _) in METHODS.items()}
 
