@@ -31,18 +31,30 @@ export PYTHONHASHSEED := 0
 export UV_PYTHON_DOWNLOADS := never
 # Bytecode: only for what runs. Where PYTHONDONTWRITEBYTECODE is set (as on the machines this project is
 # developed on) Python never caches it: every fresh process (each `hdi` command, each dask process
-# worker, each test that starts one) then compiled ~300 modules again, 2-5 s of its start. Compiling the
-# whole environment at install (UV_COMPILE_BYTECODE) took 14.7 s for 6,489 files of which a run imports
-# ~300; so the make targets let Python write the .pyc of what they import, lazily (an empty value:
-# writing on), and the later processes, make's or not, start from them (docs/performance.md, section "The first run").
+# worker, each test that starts one) then compiled ~900 modules again, ~4.5 s of CPU of its start. Compiling
+# the whole environment at install (UV_COMPILE_BYTECODE) took 14.7 s for 6,489 files of which a run imports
+# ~1,300; so every install imports what the commands import (BYTECODE_IMPORTS) with writing on (an empty
+# value), and the make targets let Python write the .pyc of anything else they import, lazily: the later
+# processes, make's or not, start from cached bytecode whatever the user's shell sets (docs/performance.md,
+# section "Start-up whatever the shell").
 export UV_COMPILE_BYTECODE := 0
 export PYTHONDONTWRITEBYTECODE :=
+# What the set-up imports: every module of the package (an `hdi` command imports most of them: the CLI, the
+# stage registry, the API) and the third-party modules the package imports inside functions
+# (tests/structure/test_bytecode.py checks the list against the sources)
+BYTECODE_IMPORTS := import importlib, pkgutil, pipeline; \
+  [importlib.import_module(m.name) for m in pkgutil.walk_packages(pipeline.__path__, "pipeline.")]; \
+  import ContactMechanics, ContactMechanics.Optimization, SALib.analyze, SALib.sample, SurfaceTopography, \
+  SurfaceTopography.Exceptions, SurfaceTopography.IO, SurfaceTopography.Support.UnitConversion, distributed, \
+  distributed.comm, matplotlib.axes, matplotlib.figure, netCDF4, numpy.linalg, scipy.integrate, scipy.interpolate, \
+  scipy.linalg, scipy.ndimage, scipy.optimize, scipy.signal, scipy.special, tqdm.auto, tqdm.contrib.logging, xarray, \
+  xarray.namedarray.pycompat
 
 # The stages: one make target per module of pipeline/stages/ (the runner discovers the stages there and
 # each module is named after its stage, tests/structure/test_registries.py): a new stage module is a new target
 STAGES := $(sort $(basename $(notdir $(filter-out %/__init__.py,$(wildcard pipeline/stages/*.py)))))
 
-.PHONY: setup run test test-fast test-slow bench sweep readme variants docs clean $(STAGES)
+.PHONY: setup run test test-fast test-slow bench bench-peers-setup sweep readme variants docs clean $(STAGES)
 
 ## the environment alone; with EXTRAS, those extras added to it (each `--extra NAME` of uv sync; kept by
 ## later targets, which sync --inexact)
@@ -74,6 +86,7 @@ define install
 	    test -x $(BIN)/python || $(PYTHON) -m venv $(VENV); \
 	    $(BIN)/python -m pip install --quiet -e ".$(2)"; \
 	fi
+	$(BIN)/python -c '$(BYTECODE_IMPORTS)'
 endef
 
 $(RUN_STAMP): pyproject.toml uv.lock Makefile
@@ -103,8 +116,28 @@ test-slow: $(TEST_STAMP)
 ## speed and memory: medians and ratios against baselines measured in the same run; each row records the
 ## load average and CPUs at its start and end, NOISY when it started above load 0.75 per CPU (1.5 on 2 cores).
 ## BENCH_STUDY=0 make bench leaves out the identify and sensitivity rows (most of the time): under 15 min.
+## The peer rows (benchmarks/bench_peers.py: the kernel against numbalsoda's DOP853 and LSODA) need the `bench`
+## extra; `make bench` runs `make bench-peers-setup` first and goes on without the peers when it fails (their
+## rows then say why: not installed).
 bench: $(RUN_STAMP)
+	@$(MAKE) --no-print-directory bench-peers-setup || echo "make bench: the peers could not be installed (make bench-peers-setup failed): their rows say so"
 	$(BIN)/python -m benchmarks.run --out benchmarks/results/bench.json
+
+## the bench's peers: numbalsoda has no wheel for Python >= 3.11 on PyPI, so it builds from source (its build
+## fetches cmake and ninja from PyPI) and needs Fortran and C++ compilers. Where gfortran is missing it is
+## installed from the system's packages (apt-get, as root: Debian, Ubuntu); elsewhere install a Fortran compiler
+## first. Then the `bench` extra (pyproject.toml) into .venv, at uv.lock's version (~15 s to build).
+bench-peers-setup: $(RUN_STAMP)
+	@command -v gfortran >/dev/null 2>&1 || { \
+	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
+	    echo "make bench-peers-setup: installing gfortran (apt-get): numbalsoda builds with a Fortran compiler"; \
+	    { DEBIAN_FRONTEND=noninteractive apt-get install -y -qq gfortran g++ >/dev/null 2>&1 || \
+	      { apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq gfortran g++ >/dev/null; }; }; \
+	  else \
+	    echo "make bench-peers-setup: no Fortran compiler (gfortran) on the PATH, and no apt-get as root to install one: install gfortran, then run this again" >&2; \
+	    exit 1; \
+	  fi; }
+	$(call install,--extra bench,[bench])
 
 ## a larger default grid: paper protrusions x 3 roughness sets x 3 damping ratios
 sweep: $(RUN_STAMP)

@@ -20,7 +20,10 @@ into install, compile and run. Target: under 30 s on 2 cores.
    :data:`NOTEBOOK_REPEAT` times: the kernel's compile in the background process the API starts, and the
    waiting process's own compiles (docs/performance.md, section "A notebook's first call, shared").
 
-One measurement each of 1-4 (a fresh clone is the point; about 2 minutes), 3 of 6 (~30 s).
+Each command's CPU time (user + system, the processes it waited for included) is recorded beside its wall time
+(``install_cpu_s``, ``first_run_cpu_s``, ``warm_run_cpu_s``; the notebook's ``process_cpu_s``): on a shared host
+the wall time counts the other tenants' load. One measurement each of 1-4 (a fresh clone is the point; about 2
+minutes), 3 of 6 (~30 s).
 ``BENCH_FIRST_RUN=0`` skips it.
 """
 
@@ -30,19 +33,24 @@ import os
 import shutil
 import subprocess
 import tempfile
-import time
 from pathlib import Path
 
-from benchmarks.common import ROOT, record
+from benchmarks.common import ROOT, record, run_process
 
 #: The scene of ``make run`` (the Makefile's ``SCENE``).
 SCENE = "configs/paper-2009-identified.toml"
 
 
-def _timed(cmd: list[str], cwd: Path, env: dict[str, str]) -> float:
-    t0 = time.perf_counter()
-    subprocess.run(cmd, cwd=cwd, env=env, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
-    return time.perf_counter() - t0
+#: CPU times [s] (user + system of the command and every process it waited for) of the timed commands, by label:
+#: on a shared host the wall time counts the other tenants' load, the CPU time what the command itself costs.
+CPU: dict[str, float] = {}
+
+
+def _timed(cmd: list[str], cwd: Path, env: dict[str, str], label: str) -> float:
+    """Wall time [s] of ``cmd``; its CPU time in :data:`CPU` under ``label``."""
+    wall, cpu, _ = run_process(cmd, cwd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    CPU[label] = cpu
+    return wall
 
 
 #: How often the notebook's first call is measured (each with an empty numba cache, ~8-12 s).
@@ -61,23 +69,24 @@ print(time.perf_counter() - t0)
 
 
 def notebook_first_calls(clone: Path, env: dict[str, str], scene: str, repeat: int = NOTEBOOK_REPEAT
-                         ) -> tuple[list[float], list[float]]:
+                         ) -> tuple[list[float], list[float], list[float]]:
     """Wall times [s] of a notebook's first ``build_model`` + ``simulate`` in ``clone`` (module docstring,
-    step 6): the process's own count, and the whole process's (interpreter start and exit included)."""
+    step 6): the process's own count, and the whole process's (interpreter start and exit included); and the
+    whole process's CPU time [s] (the background compile's process included)."""
     folders = [f for f in (clone / "results").iterdir() if f.is_dir()]
     if len(folders) != 1:
         raise RuntimeError(f"{clone / 'results'}: expected the one results folder of `make run`, found "
                            f"{sorted(f.name for f in folders)}")
-    inside, whole = [], []
+    inside, whole, cpus = [], [], []
     python = str(clone / ".venv" / "bin" / "python")
     for _ in range(repeat):
         with tempfile.TemporaryDirectory(prefix="hdi-numba-") as cache:
-            t0 = time.perf_counter()
-            out = subprocess.run([python, "-c", NOTEBOOK, scene, str(folders[0])], cwd=clone,
-                                 env={**env, "NUMBA_CACHE_DIR": cache}, check=True, capture_output=True, text=True)
-            whole.append(time.perf_counter() - t0)
+            wall, cpu, out = run_process([python, "-c", NOTEBOOK, scene, str(folders[0])], clone,
+                                         env={**env, "NUMBA_CACHE_DIR": cache}, capture_output=True, text=True)
+            whole.append(wall)
+            cpus.append(cpu)
         inside.append(float(out.stdout.strip().splitlines()[-1]))
-    return inside, whole
+    return inside, whole, cpus
 
 
 def run(results: list[dict]) -> None:
@@ -92,21 +101,24 @@ def run(results: list[dict]) -> None:
         if cold:
             env["UV_CACHE_DIR"] = str(Path(tmp) / "uv-cache")
             env["BOOT_CACHE"] = str(Path(tmp) / "uv-bootstrap")
-        install = _timed(["make", "setup"], clone, env)
-        first = _timed(["make", "run"], clone, env)
-        notebook, notebook_process = notebook_first_calls(clone, env, SCENE)
+        install = _timed(["make", "setup"], clone, env, "install")
+        first = _timed(["make", "run"], clone, env, "first")
+        notebook, notebook_process, notebook_cpu = notebook_first_calls(clone, env, SCENE)
         # the same command again, everything recomputed (the same scene: another scene's effects would be
         # another kernel signature, compiled in the "warm" run)
-        warm = _timed(["make", "run", "ARGS=--force"], clone, env)
+        warm = _timed(["make", "run", "ARGS=--force"], clone, env, "warm")
         shutil.rmtree(clone / "results", ignore_errors=True)
     # (the row's name kept: the bench compares rows by name; "uv cache" covers the installed uv too)
     cache = "empty uv cache (all packages from PyPI)" if cold else "the local uv cache reused (no download)"
     total = install + first
     record(results, f"fresh clone: make setup + make run, {cache}", [total], target_s=30.0,
            install_s=round(install, 1), compile_s=round(first - warm, 1), run_s=round(warm, 1),
-           first_run_s=round(first, 1), uv_cache="empty" if cold else "reused")
+           first_run_s=round(first, 1), uv_cache="empty" if cold else "reused",
+           cpu_s=round(CPU["install"] + CPU["first"], 1), install_cpu_s=round(CPU["install"], 1),
+           first_run_cpu_s=round(CPU["first"], 1), warm_run_cpu_s=round(CPU["warm"], 1))
     print(f"  install {install:.1f} s, first make run {first:.1f} s = compile {first - warm:.1f} s + run "
-          f"{warm:.1f} s ({cache})", flush=True)
+          f"{warm:.1f} s ({cache}); CPU: install {CPU['install']:.1f} s, first make run {CPU['first']:.1f} s, "
+          f"warm make run {CPU['warm']:.1f} s", flush=True)
     record(results, "a notebook's first build_model + simulate (make run's scene and results, one protrusion), "
            "empty numba cache, fresh process", notebook, target_s=10.0, scene=SCENE,
-           process_s=[round(t, 2) for t in notebook_process])
+           process_s=[round(t, 2) for t in notebook_process], process_cpu_s=[round(t, 2) for t in notebook_cpu])

@@ -84,13 +84,14 @@ def load_fields(start: dict[str, float], end: dict[str, float]) -> dict[str, Any
     return fields
 
 
-def record_failure(results: list[dict], name: str, message: str) -> dict:
-    """Append a row that could not be measured (``failed``: why), with the load at its start and end like
-    :func:`record`, so every row of bench.json says how busy the machine was."""
+def record_failure(results: list[dict], name: str, message: str, **extra: Any) -> dict:
+    """Append a row that could not be measured (``failed``: why; ``extra``: fields of its own, e.g. the numbers
+    of a peer's disagreement), with the load at its start and end like :func:`record`, so every row of
+    bench.json says how busy the machine was."""
     global _row_start
     end = LOAD_SOURCE()
-    row = {"name": name, "failed": message, **load_fields(_row_start if _row_start is not None else end, end),
-           **_reference}
+    row = {"name": name, "failed": message, **extra,
+           **load_fields(_row_start if _row_start is not None else end, end), **_reference}
     results.append(row)
     _row_start = end
     print(f"{name}: FAILED: {message}", flush=True)

@@ -36,7 +36,8 @@ output grid (:data:`REFINE`).
 from __future__ import annotations
 
 import time
-from typing import Any
+from dataclasses import dataclass
+from typing import Any, Callable
 
 import numpy as np
 from scipy.integrate import solve_ivp
@@ -98,27 +99,58 @@ def _no_disk(t: float) -> tuple[float, float]:
     return 0.0, 0.0
 
 
-def simulate_naive(scene: Any, interface_ds: Any, dmw_tuple: tuple[np.ndarray, float] | None, k: float | None,
-                   protrusion_nm: float, *, dmw_interpolation: str = "cubic",
-                   return_history: bool = False) -> dict[str, Any]:
-    """Integrate one protrusion the naive way and return its steady-window scalars.
+@dataclass
+class Physics:
+    """The naive model's constants for one protrusion (SI units), computed once: the slider's
+    (``m`` [kg], ``I`` [kg m^2], pad positions ``lf``, ``lr``, ``lc``, friction arm ``hcg`` [m], pad
+    stiffness ``kf`` [N/m], dampings ``cf``, ``cr``, ``cc`` [N s/m], rear-pad gap ``g0`` [m], exponent ``n``
+    [1], preload ``Fr0`` [N]), the separation datum ``d_nom`` [m], the DMW record's delays ``off_*`` [s]
+    and the interface tables on their separation grid ``x`` [m] (pressures [Pa], area fraction [1]): what
+    :func:`simulate_naive` and the bench's peers (:mod:`benchmarks.peers`) integrate."""
 
-    Parameters
-    ----------
-    scene : the validated scene (effects, solver settings)
-    interface_ds : the ``interface.nc`` dataset (or ``None`` without contact and adhesion)
-    dmw_tuple : ``(displacement [nm], sample rate [Hz])`` or ``None`` without the dmw effect
-    k : contact criterion constant [1]
-    protrusion_nm : TFC protrusion [nm]
-    dmw_interpolation : ``"cubic"`` (as the project) or ``"linear"`` (``np.interp``)
-    return_history : also return ``time``, ``state``, ``contact`` arrays
+    scene: Any
+    model: Any
+    m: float
+    I: float
+    lf: float
+    lr: float
+    lc: float
+    hcg: float
+    kf: float
+    cf: float
+    cr: float
+    g0: float
+    n: float
+    Fr0: float
+    FH0: float
+    delta: float
+    p_sep: Any
+    d_nom: float
+    cc: float
+    dwell: float
+    t_end: float
+    off_f: float
+    off_r: float
+    off_c: float
+    disk: Any
+    use_tables: bool
+    x: np.ndarray | None
+    pa: np.ndarray | None
+    pc: np.ndarray | None
+    ar: np.ndarray | None
+    ft: np.ndarray | None
+    sigma: float
+    s_n: float
+    An: float
+    has_contact: bool
+    ksig: float
+    pitch: bool
 
-    Returns
-    -------
-    dict
-        The keys of :func:`pipeline.model.outcomes.summarize` (SI units) plus ``rhs_evaluations``,
-        ``segments`` (``solve_ivp`` calls) and ``contact_switches``.
-    """
+
+def physics(scene: Any, interface_ds: Any, dmw_tuple: tuple[np.ndarray, float] | None, k: float | None,
+            protrusion_nm: float, dmw_interpolation: str = "cubic") -> Physics:
+    """The naive model's constants (:class:`Physics`) of ``scene`` at ``protrusion_nm`` [nm] (the arguments
+    of :func:`simulate_naive`)."""
     eff = scene.effects
     # The model constants: the same assembly as the project (parameters, not dynamics).
     model = assembly.build_model(scene, interface_ds, dmw_tuple, k)
@@ -126,25 +158,14 @@ def simulate_naive(scene: Any, interface_ds: Any, dmw_tuple: tuple[np.ndarray, f
         raise NotImplementedError("the naive baseline implements the default model only (air_bearing.rear_law = "
                                   "'power', air_bearing.tfc_stiffening = 'none')")
     s = model.slider
-    m, I, lf, lr, lc, hcg = s.m, s.I, s.l_f, s.l_r, s.l_c, s.friction_arm
-    kf, cf, cr, g0, n, Fr0 = s.k_f, s.c_f, s.c_r, s.g0, s.n, s.rear_preload
     a = scene["air_bearing"]
-    FH0 = a["flying_height_nm"] * NM
     delta = protrusion_nm * NM
     # the separation datum from its one home (pipeline.model.forces.separation_at, docs/model.md, section "Separation datum"):
     # d = d_nom + z - l_c theta - w with d_nom = FH0 - delta - y_s
     p_sep = model.p.copy()
     p_sep.delta = delta
-    d_nom = float(separation_at(p_sep, 0.0, 0.0, 0.0))
-    cc = scene["contact"]["damping_n_s_m"]
-    sol_cfg = scene["solver"]
-    dwell = sol_cfg["min_dwell_ns"] * 1e-9
-    t_end = model.duration
     dm = scene["dmw"]
     V = 2 * np.pi * dm["radius_mm"] * MM * dm["rpm"] / 60.0
-    off_f, off_r, off_c = (lf + lc) / V, (lc - lr) / V, 0.0
-    disk = _Disk(*dmw_tuple, dmw_interpolation) if "dmw" in eff else _no_disk
-
     use_tables = interface_ds is not None and bool(eff & {"contact", "adhesion"})
     if use_tables:
         x = interface_ds["separation"].values * NM
@@ -159,9 +180,24 @@ def simulate_naive(scene: Any, interface_ds: Any, dmw_tuple: tuple[np.ndarray, f
         x = pa = pc = ar = ft = None
         sigma, s_n, An = np.nan, np.nan, 0.0
     has_contact = "contact" in eff
-    ksig = k * sigma if has_contact else 0.0
-    pitch = "pitch" in eff
-    counter = [0]
+    return Physics(scene=scene, model=model, m=s.m, I=s.I, lf=s.l_f, lr=s.l_r, lc=s.l_c, hcg=s.friction_arm,
+                   kf=s.k_f, cf=s.c_f, cr=s.c_r, g0=s.g0, n=s.n, Fr0=s.rear_preload, FH0=a["flying_height_nm"] * NM,
+                   delta=delta, p_sep=p_sep, d_nom=float(separation_at(p_sep, 0.0, 0.0, 0.0)),
+                   cc=scene["contact"]["damping_n_s_m"], dwell=scene["solver"]["min_dwell_ns"] * 1e-9,
+                   t_end=model.duration, off_f=(s.l_f + s.l_c) / V, off_r=(s.l_c - s.l_r) / V, off_c=0.0,
+                   disk=_Disk(*dmw_tuple, dmw_interpolation) if "dmw" in eff else _no_disk, use_tables=use_tables,
+                   x=x, pa=pa, pc=pc, ar=ar, ft=ft, sigma=sigma, s_n=s_n, An=An, has_contact=has_contact,
+                   ksig=k * sigma if has_contact else 0.0, pitch="pitch" in eff)
+
+
+def right_hand_side(ph: Physics, counter: list[int]) -> Callable[[float, np.ndarray, bool], list[float]]:
+    """The naive right-hand side ``rhs(t [s], y, contact) -> y'`` of :class:`Physics` ``ph`` (state ``(z [m],
+    theta [rad], z' [m/s], theta' [rad/s])``, docs/model.md, section "Slider dynamics"), plain scalar Python on
+    the constants bound as locals; each call adds one to ``counter[0]``."""
+    m, I, lf, lr, lc, hcg = ph.m, ph.I, ph.lf, ph.lr, ph.lc, ph.hcg
+    kf, cf, cr, g0, n, Fr0 = ph.kf, ph.cf, ph.cr, ph.g0, ph.n, ph.Fr0
+    d_nom, cc, off_f, off_r, off_c, disk = ph.d_nom, ph.cc, ph.off_f, ph.off_r, ph.off_c, ph.disk
+    use_tables, x, pa, pc, ft, An, pitch = ph.use_tables, ph.x, ph.pa, ph.pc, ph.ft, ph.An, ph.pitch
 
     def rhs(t: float, y: np.ndarray, contact: bool) -> list[float]:
         counter[0] += 1
@@ -188,17 +224,62 @@ def simulate_naive(scene: Any, interface_ds: Any, dmw_tuple: tuple[np.ndarray, f
             return [vz, vth, (F_f + F_r + F_i) / m, (lf * F_f - lr * F_r - lc * F_i - hcg * Q) / I]
         return [vz, 0.0, (F_f + F_r + F_i) / m, 0.0]
 
+    return rhs
+
+
+def fine_grid(model: Any, refine: int = REFINE) -> np.ndarray:
+    """The output grid of :func:`pipeline.model.running.run_model` [s], refined ``refine`` times (every
+    ``refine``-th sample is an output time): where the naive run and the peers sample the state."""
+    n_coarse = int(round(model.duration / model.output_step)) + 1
+    t_coarse = np.minimum(np.arange(n_coarse) * model.output_step, model.duration)
+    t_out = (t_coarse[:, None] + np.arange(refine)[None, :] * (model.output_step / refine)).ravel()
+    t_out = t_out[: (n_coarse - 1) * refine + 1]
+    t_out[-1] = t_coarse[-1]
+    return t_out
+
+
+def summarize_samples(ph: Physics, t_fine: np.ndarray, Y_fine: np.ndarray, C_fine: np.ndarray,
+                      refine: int = REFINE) -> dict[str, float]:
+    """The steady-window scalars of :func:`pipeline.model.outcomes.summarize` (SI units) from the states
+    ``Y_fine`` and contact modes ``C_fine`` sampled at ``t_fine`` [s] (:func:`fine_grid` with ``refine``)."""
+    return _summarize(ph.scene, ph.model, t_fine, Y_fine, C_fine, refine, ph.disk, ph.off_c, ph.x, ph.pa, ph.pc,
+                      ph.ar, ph.ft, ph.An, ph.ksig, ph.cc, ph.FH0, ph.p_sep, ph.delta, ph.s_n, ph.has_contact)
+
+
+def simulate_naive(scene: Any, interface_ds: Any, dmw_tuple: tuple[np.ndarray, float] | None, k: float | None,
+                   protrusion_nm: float, *, dmw_interpolation: str = "cubic",
+                   return_history: bool = False) -> dict[str, Any]:
+    """Integrate one protrusion the naive way and return its steady-window scalars.
+
+    Parameters
+    ----------
+    scene : the validated scene (effects, solver settings)
+    interface_ds : the ``interface.nc`` dataset (or ``None`` without contact and adhesion)
+    dmw_tuple : ``(displacement [nm], sample rate [Hz])`` or ``None`` without the dmw effect
+    k : contact criterion constant [1]
+    protrusion_nm : TFC protrusion [nm]
+    dmw_interpolation : ``"cubic"`` (as the project) or ``"linear"`` (``np.interp``)
+    return_history : also return ``time``, ``state``, ``contact`` arrays
+
+    Returns
+    -------
+    dict
+        The keys of :func:`pipeline.model.outcomes.summarize` (SI units) plus ``rhs_evaluations``,
+        ``segments`` (``solve_ivp`` calls) and ``contact_switches``.
+    """
+    ph = physics(scene, interface_ds, dmw_tuple, k, protrusion_nm, dmw_interpolation)
+    model, x, pa, pc, An, ksig, disk, d_nom, lc = ph.model, ph.x, ph.pa, ph.pc, ph.An, ph.ksig, ph.disk, ph.d_nom, ph.lc
+    off_c, has_contact, dwell, t_end, eff = ph.off_c, ph.has_contact, ph.dwell, ph.t_end, scene.effects
+    counter = [0]
+    rhs = right_hand_side(ph, counter)
+
     def gap(t: float, y: np.ndarray) -> float:
         return d_nom + y[0] - lc * y[1] - disk(t + off_c)[0] - ksig
 
     # output grid, as pipeline.model.running.run_model, refined REFINE times for the peak-to-peak of d (the
     # project tracks the exact extremes of d; sampling 10x finer than the output grid comes within
     # ~0.3 % of them for the content of these runs, while the output grid alone aliases by a few %)
-    n_coarse = int(round(model.duration / model.output_step)) + 1
-    t_coarse = np.minimum(np.arange(n_coarse) * model.output_step, model.duration)
-    t_out = (t_coarse[:, None] + np.arange(REFINE)[None, :] * (model.output_step / REFINE)).ravel()
-    t_out = t_out[: (n_coarse - 1) * REFINE + 1]
-    t_out[-1] = t_coarse[-1]
+    t_out = fine_grid(model)
     n_out = t_out.size
     Y = np.full((n_out, 4), np.nan)
     C = np.zeros(n_out, dtype=bool)
@@ -269,8 +350,7 @@ def simulate_naive(scene: Any, interface_ds: Any, dmw_tuple: tuple[np.ndarray, f
                     contact = not contact
                     switches += 1
                     hold_until = t + dwell
-    out = _summarize(scene, model, t_out, Y, C, REFINE, disk, off_c, x, pa, pc, ar, ft, An, ksig, cc, FH0, p_sep,
-                     delta, s_n, has_contact)
+    out = summarize_samples(ph, t_out, Y, C)
     out.update(rhs_evaluations=counter[0], segments=segments, contact_switches=switches)
     if return_history:
         out.update(time=t_out[::REFINE], state=Y[::REFINE], contact=C[::REFINE])

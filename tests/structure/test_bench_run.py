@@ -11,26 +11,14 @@ from pathlib import Path
 
 import pytest
 
+from bench_fakes import use_fake_load
 from benchmarks import common, run
-
-
-class FakeLoad:
-    """A load source returning the given 1-minute loads in turn, on ``cpus`` CPUs."""
-
-    def __init__(self, loads: list[float], cpus: int = 2) -> None:
-        self.loads, self.cpus = list(loads), cpus
-
-    def __call__(self) -> dict[str, float]:
-        return {"load_1min": self.loads.pop(0), "cpus": self.cpus}
 
 
 @pytest.fixture
 def fake_load(monkeypatch: pytest.MonkeyPatch):
     def use(loads: list[float], cpus: int = 2) -> None:
-        monkeypatch.setattr(common, "LOAD_SOURCE", FakeLoad(loads, cpus))
-        monkeypatch.setattr(common, "REFERENCE_SOURCE", lambda: {"ref_compiled_s": 0.01, "ref_python_s": 0.02})
-        monkeypatch.setattr(common, "_row_start", None)
-        monkeypatch.setattr(common, "_reference", {})
+        use_fake_load(monkeypatch, loads, cpus)
     return use
 
 

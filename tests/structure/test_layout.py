@@ -1,6 +1,7 @@
 """The tests mirror the package: a test of ``pipeline/<layer>/<module>.py`` is ``tests/<layer>/test_<module>.py``
-(``tests/core/`` for the top-level modules ``pipeline/<module>.py``), cross-cutting scenarios are in
-``tests/scenarios/`` and the structure tests (layers, docs, lint, registries, this one) in ``tests/structure/``.
+(``tests/core/`` for the top-level modules ``pipeline/<module>.py``), a test of the bench's ``benchmarks/<module>.py``
+is ``tests/benchmarks/test_<module>.py``, cross-cutting scenarios are in ``tests/scenarios/`` and the structure
+tests (layers, docs, lint, registries, this one) in ``tests/structure/``.
 
 Checked here: no test module lies outside those folders (none at ``tests/`` itself, where only the shared helper
 modules and ``conftest.py`` live); a test module of a layer folder is named after a module of that layer; no
@@ -20,6 +21,8 @@ MIRRORED_SHARE = 0.70
 FREE_FOLDERS = ("scenarios", "structure")
 #: The folder of the tests of the package's top-level modules (``pipeline/io.py`` -> ``tests/core/test_io.py``).
 CORE = "core"
+#: The folder of the tests of the bench's modules (``benchmarks/peers.py`` -> ``tests/benchmarks/test_peers.py``).
+BENCH = "benchmarks"
 
 
 def package_modules(package: Path) -> list[Path]:
@@ -38,15 +41,22 @@ def find_test_modules(tests: Path) -> list[Path]:
     return sorted(p.relative_to(tests) for p in tests.rglob("test_*.py") if "__pycache__" not in p.parts)
 
 
-def misplaced(tests: Path, package: Path) -> list[str]:
-    """One line for each test module outside the layout: outside a layer folder, ``scenarios`` or ``structure``,
-    or in a layer folder but named after no module of that layer."""
+def misplaced(tests: Path, package: Path, bench: Path | None = None) -> list[str]:
+    """One line for each test module outside the layout: outside a layer folder, ``scenarios``, ``structure`` or
+    ``benchmarks``, in a layer folder but named after no module of that layer, or in ``benchmarks`` but named
+    after no module of the bench (the folder ``bench``, ``benchmarks/`` beside the package by default)."""
     layers = {m.parent for m in package_modules(package) if m.parent.parts} | {Path(CORE)}
     mirrors = {mirror_of(m) for m in package_modules(package)}
+    bench = package.parent / BENCH if bench is None else bench
     found = []
     for test in find_test_modules(tests):
         folder = test.parent
         if folder.parts and folder.parts[0] in FREE_FOLDERS and len(folder.parts) == 1:
+            continue
+        if folder == Path(BENCH):
+            if not (bench / f"{test.stem[5:]}.py").is_file():
+                found.append(f"tests/{test}: names no module of the bench (benchmarks/{test.stem[5:]}.py does not "
+                             "exist)")
             continue
         if folder not in layers:
             found.append(f"tests/{test}: not in a layer folder ({', '.join(sorted(map(str, layers)))}), "
@@ -109,12 +119,15 @@ def test_the_checks_see_a_misplaced_a_misnamed_and_an_importing_test_module(tmp_
                     "stages/__init__.py", "stages/sweep.py"])
     _tree(tests, ["conftest.py", "helpers.py", "test_flat.py", "misc/test_x.py", "core/test_io.py",
                   "physics/test_gas.py", "physics/test_gas_extra.py", "stages/test_sweep.py",
-                  "scenarios/test_anything.py", "structure/test_rules.py", "data/afm/scan.txt"])
+                  "scenarios/test_anything.py", "structure/test_rules.py", "data/afm/scan.txt",
+                  "benchmarks/test_peers.py", "benchmarks/test_gone.py"])
+    _tree(tmp_path / "benchmarks", ["peers.py"])
     (tests / "stages" / "test_sweep.py").write_text("import helpers\nfrom test_flat import x\nimport physics.test_gas\n")
     found = misplaced(tests, package)
-    assert [line.split(":")[0] for line in found] == ["tests/misc/test_x.py", "tests/physics/test_gas_extra.py",
-                                                      "tests/test_flat.py"]
-    assert "pipeline/physics/gas_extra.py does not exist" in found[1] and "not in a layer folder" in found[2]
+    assert [line.split(":")[0] for line in found] == ["tests/benchmarks/test_gone.py", "tests/misc/test_x.py",
+                                                      "tests/physics/test_gas_extra.py", "tests/test_flat.py"]
+    assert "benchmarks/gone.py does not exist" in found[0]
+    assert "pipeline/physics/gas_extra.py does not exist" in found[2] and "not in a layer folder" in found[3]
     assert unmirrored(tests, package) == ["cli.py", "physics/isbl.py"]
     assert imports_of_test_modules(tests) == ["tests/stages/test_sweep.py:2: imports test_flat",
                                    "tests/stages/test_sweep.py:3: imports physics.test_gas"]
