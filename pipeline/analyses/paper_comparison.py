@@ -329,7 +329,7 @@ def comparison_markdown(combos: list, data: dict, settings: ReportSettings, name
 
 # ------------------------------------------------------------------- comparison: paper / reconstructed / identified
 #: What an identify.nc made before the re-optimised profiles gave (``METHODS["slice"]`` of
-#: pipeline/analyses/identification.py, not imported: the report's code key would take in the model with it).
+#: pipeline/analyses/identification/, not imported: the report's code key would take in the model with it).
 SLICE_METHOD = "slice, other parameters held at the optimum"
 
 

@@ -18,7 +18,8 @@ from typing import Any, Callable
 
 from ..physics import paper
 from ..physics.air_bearing import REAR_LAWS, STIFFNESS_ROOTS, TFC_STIFFENING
-from ..physics.bulge_bearing import BULGE_LAWS, PROFILES, SLIP_MODELS
+from ..physics.bulge_bearing import BULGE_LAWS, PROFILES
+from ..physics.reynolds import SLIP_MODELS
 from ..physics.equilibrium import STARTS
 from ..physics.fhm import FHM_MEASURES
 from ..physics.friction import FRICTION_LAWS, FRICTION_SWITCHING

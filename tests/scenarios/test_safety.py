@@ -493,7 +493,7 @@ def drawing(i):
     (folder / f"{os.getpid()}.pid").write_text("")
     time.sleep(600)
 
-plots._draw = drawing
+plots.pool._draw = drawing
 sys.exit(cli.main(sys.argv[2:]))
 """
 

@@ -1,5 +1,5 @@
 """hdi identify: the twin experiment (targets made by the model itself), resuming, the written scene.
-(The study's parameters: analyses/test_study.py; the search on plain functions: analyses/test_identification.py;
+(The study's parameters: analyses/test_study.py; the search on plain functions: analyses/identification/;
 the evaluation store and keys: core/test_evaluations.py.)"""
 
 from __future__ import annotations
@@ -133,7 +133,7 @@ def test_a_profile_point_better_than_the_optimum_becomes_the_optimum(write_scene
     # one generation of a small population stops short of the twin's truth; the profiles find better
     # points, and the written optimum moves to them (the profiles made again around it) until none is
     # better by more than PROFILE_GAIN or the rounds run out (without the polish of the search's optimum, which
-    # takes it there before the profiles: tests/analyses/test_identification.py)
+    # takes it there before the profiles: tests/analyses/identification/test_search.py)
     scene, path = _twin_scene(write_scene, paper_config, tmp_path)
     scene = load_scene(path, ["identify.generations=1", "identify.population=4", "identify.profile_points=5",
                               "identify.seed=1", "identify.polish=false",
@@ -331,7 +331,7 @@ def test_a_profile_point_better_than_the_centre_is_the_one_best_point_everywhere
     # issue 34, 3: identify.nc's best_evaluation (a profile point, the lowest objective) and its *_best values and
     # the written scene (the profiles' centre) named two different points
     if rounds is not None:
-        monkeypatch.setattr(identification, "PROFILE_ROUNDS", rounds)
+        monkeypatch.setattr(identification.profiles, "PROFILE_ROUNDS", rounds)
     path = tmp_path / "twin.toml"
     path.write_text(BEST_POINT.format(paper=paper_config))
     scene = load_scene(path, tolerances)
