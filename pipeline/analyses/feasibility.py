@@ -17,7 +17,7 @@ candidate meets when it is built (:func:`problem`), each the model's own:
 * the air bearing's modal inversion (:func:`pipeline.model.assembly.slider_from_scene`): a real stiffness
   pair of the two frequencies that the scene's root rule accepts, pad dampers >= 0;
 * the contact criterion k without a calibration (:func:`pipeline.model.scene_inputs.contact_k`) and a
-  ``[dmw]`` key only with a synthetic record (:func:`pipeline.evaluations.candidate_inputs`).
+  ``[dmw]`` key only with a synthetic record (:func:`pipeline.candidates.candidate_inputs`).
 
 Points (:func:`check_box`): the *reference* (each key's scene value when within its bounds, else the middle
 of the bounds); each *bound alone* (the others at the reference), where a failure names the key, the bound

@@ -17,7 +17,8 @@ from pathlib import Path
 from typing import Any, Callable
 
 from ..physics import paper
-from ..physics.air_bearing import REAR_LAWS, STIFFNESS_ROOTS, TFC_STIFFENING
+from ..physics.air_bearing import REAR_LAWS, STIFFNESS_ROOTS
+from ..physics.tfc_laws import TFC_STIFFENING
 from ..physics.bulge_bearing import BULGE_LAWS, PROFILES
 from ..physics.reynolds import SLIP_MODELS
 from ..physics.equilibrium import STARTS

@@ -68,7 +68,7 @@ import numpy as np
 from numba import njit
 
 from . import gas_flow
-from .air_bearing import NO_TFC_LAW, TfcLaw
+from .tfc_laws import NO_TFC_LAW, TfcLaw
 from .variants import Registry, Variant
 
 

@@ -273,7 +273,7 @@ def test_bounds_beyond_the_band_limited_range_are_refused_naming_the_key(paper_c
 
 @pytest.mark.parametrize("exponent, rms", [(-4.0, 1.8), (-1.5, 0.12)])
 def test_an_evaluation_with_both_set_builds_the_record_of_that_rms_and_slope(paper_config, exponent, rms):
-    from pipeline import evaluations
+    from pipeline import candidates
     from pipeline.analyses import study
     from pipeline.model.inputs import SimulationInputs
     from pipeline.physics.microwaviness import power_law_fit
@@ -281,7 +281,7 @@ def test_an_evaluation_with_both_set_builds_the_record_of_that_rms_and_slope(pap
     scene = load_scene(paper_config, ['scene.effects=["air_bearing", "pitch", "dmw"]', FREE_DMW])
     params = study.parse_parameters(scene["identify"]["parameters"], "f", "identify.parameters")
     candidate = study.with_values(scene, params, [rms, exponent])
-    w, fs = evaluations.candidate_inputs(candidate, SimulationInputs()).record()
+    w, fs = candidates.candidate_inputs(candidate, SimulationInputs()).record()
     # tol: rms of a record the synthesis scaled to it: ~log2(n) roundings of the mean
     assert np.sqrt(np.mean(w**2)) == pytest.approx(rms, rel=1e-9)  # the synthesis scales to the rms [nm]
     # the slope of the record's periodogram over the 10-500 kHz band: Gaussian bins, each an exponential
@@ -290,7 +290,7 @@ def test_an_evaluation_with_both_set_builds_the_record_of_that_rms_and_slope(pap
     f = np.fft.rfftfreq(w.size, 1.0 / fs)
     slope, _ = power_law_fit(f, np.abs(c) ** 2, (10e3, 500e3))
     assert slope == pytest.approx(exponent, abs=0.2)
-    base, _ = evaluations.candidate_inputs(scene, SimulationInputs()).record()  # the scene's own: -2, 0.5 nm
+    base, _ = candidates.candidate_inputs(scene, SimulationInputs()).record()  # the scene's own: -2, 0.5 nm
     assert not np.allclose(base, w)
 
 
