@@ -14,7 +14,7 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from .analyses.study import Parameter, with_values
+from .analyses.free_parameters import Parameter, with_values
 from .model import dmw_record, scene_inputs
 from .model import assembly
 from .model.bulge_table import scene_table
@@ -159,7 +159,7 @@ class Candidates:
 
     def get(self, base: Any, inputs: Any, params: Sequence[Parameter], values: Sequence[float]) -> _Candidate:
         """The candidate ``values`` of ``params`` on ``base`` and ``inputs``: the kept one, else made
-        (:func:`pipeline.analyses.study.with_values`, :func:`pipeline.model.scene_inputs.contact_k`; their
+        (:func:`pipeline.analyses.free_parameters.with_values`, :func:`pipeline.model.scene_inputs.contact_k`; their
         errors are raised, nothing kept)."""
         key = (id(base), id(inputs), tuple(p.name for p in params), tuple(float(v) for v in values))
         with self._lock:

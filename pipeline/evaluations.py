@@ -35,7 +35,8 @@ from typing import Any, Callable, Iterable, Sequence
 
 import numpy as np
 
-from .analyses.study import Parameter, head, parse_parameters
+from .analyses.free_parameters import Parameter, parse_parameters
+from .analyses.study import head
 from .code_version import code_key
 from .config.grid import label
 from .config.schema import SceneError

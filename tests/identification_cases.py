@@ -12,6 +12,7 @@ import xarray as xr
 from pipeline import evaluations
 from pipeline.analyses import ensemble_rules as en
 from pipeline.analyses import identification, study
+from pipeline.analyses import free_parameters
 from pipeline.model.inputs import SimulationInputs, Source
 
 
@@ -41,7 +42,7 @@ def _identification(residuals) -> identification.Identification:
     return identification.Identification(evaluate, _targets(len(residuals(np.zeros(2)))), 10.0)
 
 
-PARAMS = [study.Parameter("dmw.rms_nm", -3.0, 3.0), study.Parameter("contact.damping_n_s_m", -3.0, 3.0)]
+PARAMS = [free_parameters.Parameter("dmw.rms_nm", -3.0, 3.0), free_parameters.Parameter("contact.damping_n_s_m", -3.0, 3.0)]
 
 
 def _cfg(method: str = "optimised", budget: int = 80, points: int = 25, polish: bool = True) -> dict:
@@ -73,7 +74,7 @@ def _racing_evaluator(paper_scene, tmp_path):
     """An evaluator of 8 records in racing stages of 2, 4, 8 over one parameter (``dmw.rms_nm``) at 9 nm, on
     :func:`_ensemble_task` (no simulation), and its store."""
     inputs = SimulationInputs(Source("interface", key="i"), Source("dmw", key="d"))
-    params = [study.Parameter("dmw.rms_nm", 0.0, 1.0)]
+    params = [free_parameters.Parameter("dmw.rms_nm", 0.0, 1.0)]
     store = evaluations.EvaluationStore(tmp_path / "s.jsonl")
     return evaluations.Evaluator(paper_scene, params, [9.0], inputs, store, 2, "synchronous", task=_ensemble_task,
                                  realisations=8, stages=(2, 4, 8)), store
@@ -173,7 +174,7 @@ def _ensemble_twin(write_scene, paper_config, tmp_path):
     from pipeline.config.scene import load_scene
     path = write_scene(twin.scene_text(ENSEMBLE_TWIN).format(paper=paper_config))
     scene = load_scene(path)
-    params = study.parse_parameters(scene["identify"]["parameters"], str(path), "identify.parameters")
+    params = free_parameters.parse_parameters(scene["identify"]["parameters"], str(path), "identify.parameters")
     tl = study.targets(scene)
     inputs = evaluations.prepare_inputs(scene, tmp_path / "truth")
     prots = study.target_protrusions(tl)

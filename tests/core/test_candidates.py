@@ -14,13 +14,13 @@ def test_a_candidate_kept_between_its_racing_parts_gives_the_records_of_a_fresh_
     branch is found once for all parts, and every output is the one a fresh candidate per part gives."""
     import numpy as np
     import twin
-    from pipeline.analyses import study
+    from pipeline.analyses import free_parameters
     from pipeline.config.scene import load_scene
     from pipeline.model import start
     path = write_scene(twin.scene_text('targets = ["fhm_flying", "contact_force"]\nrealisations = 4\n')
                        .format(paper=paper_config))
     scene = load_scene(path)
-    params = study.parse_parameters(scene["identify"]["parameters"], str(path), "identify.parameters")
+    params = free_parameters.parse_parameters(scene["identify"]["parameters"], str(path), "identify.parameters")
     prots = [5.0, 10.0]
     inputs = evaluations.prepare_inputs(scene, tmp_path / "base")
     ladders = []
@@ -58,12 +58,12 @@ def test_a_candidate_s_tfc_tables_are_made_once_for_its_records_and_give_the_sam
     protrusion): made once for its records, not once per record, and every output is a fresh candidate's."""
     import numpy as np
     import twin
-    from pipeline.analyses import study
+    from pipeline.analyses import free_parameters
     from pipeline.config.scene import load_scene
     from pipeline.model import kernel_inputs
     text = twin.scene_text('targets = ["fhm_flying"]\nrealisations = 3\n') + '\n[air_bearing]\nbulge = "ph-limit"\n'
     scene = load_scene(write_scene(text.format(paper=paper_config)))
-    params = study.parse_parameters(scene["identify"]["parameters"], "twin", "identify.parameters")
+    params = free_parameters.parse_parameters(scene["identify"]["parameters"], "twin", "identify.parameters")
     inputs = evaluations.prepare_inputs(scene, tmp_path / "base")
     made = []
     real = kernel_inputs._tfc_table
@@ -89,7 +89,7 @@ def test_a_candidate_s_tfc_tables_are_made_once_for_its_records_and_give_the_sam
         assert a["error"] is None and json.dumps(a["outputs"]) == json.dumps(b["outputs"])
     assert np.all(np.isfinite(np.array(kept[0]["outputs"]["fhm_bv"], float)))
     # the tables of the candidates run before the last TABLES_KEPT are dropped
-    monkeypatch.setattr(evaluations, "TABLES_KEPT", 1)
+    monkeypatch.setattr(candidates, "TABLES_KEPT", 1)
     first = candidates._CANDIDATES.get(scene, inputs, params, x)
     assert len(first.tfc_tables) == len(prots)
     evaluations.evaluate(scene, params, y, prots, inputs, 3, (0, 1))

@@ -41,8 +41,8 @@ def _counting_task(base, params, rows, protrusions, inputs):
 
 
 def test_a_short_batch_is_split_over_the_local_workers_and_gives_the_same_records(paper_scene, tmp_path):
-    from pipeline.analyses import study
-    params = [study.Parameter("dmw.rms_nm", 0.0, 1.0)]
+    from pipeline.analyses import free_parameters
+    params = [free_parameters.Parameter("dmw.rms_nm", 0.0, 1.0)]
     inputs = SimulationInputs(Source("interface", key="i"), Source("dmw", key="d"))
     points = [[0.1 * k] for k in range(1, 14)]
     sizes = {}
@@ -70,12 +70,12 @@ def test_racing_parts_on_threads_run_a_task_per_record_and_store_the_parts_of_on
     import numpy as np
     import threading
     import twin
-    from pipeline.analyses import study
+    from pipeline.analyses import free_parameters
     from pipeline.config.scene import load_scene
     path = write_scene(twin.scene_text('targets = ["fhm_flying", "contact_force"]\nrealisations = 4\n')
                        .format(paper=paper_config))
     scene = load_scene(path)
-    params = study.parse_parameters(scene["identify"]["parameters"], str(path), "identify.parameters")
+    params = free_parameters.parse_parameters(scene["identify"]["parameters"], str(path), "identify.parameters")
     inputs = evaluations.prepare_inputs(scene, tmp_path / "base")
     calls: list[tuple] = []
     lock = threading.Lock()

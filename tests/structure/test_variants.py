@@ -20,7 +20,8 @@ import pytest
 
 from pipeline import physics
 from pipeline.config.scene import SCHEMA, SceneError
-from pipeline.config.schema import describe_keys, scene_key, variant_keys, variants_table, with_variants_table
+from pipeline.config.schema import describe_keys
+from pipeline.config.variants_table import scene_key, variant_keys, variants_table, with_variants_table
 from pipeline.config.si import to_si
 from pipeline.model import assembly, bulge_table, forces, kernel_inputs, outcomes, running, scene_inputs
 from pipeline.model.dmw_record import disk_speed_m_s

@@ -9,7 +9,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from ...config.limits import POLISH_EVALUATIONS  # (the polish's budget, step 1 of the package docstring)
-from ..study import Parameter
+from ..free_parameters import Parameter
 from .gauss_newton import _correlation
 from .profiles import PROFILE_STEP, _compass, _intervals, _profile_arrays, _profile_rounds, _vertex
 from .records import Identification, _note, _point

@@ -8,6 +8,8 @@ import numpy as np
 import pytest
 
 from pipeline.analyses import identification, study
+
+from pipeline.analyses import free_parameters
 from identification_cases import _ensemble_task, _racing_evaluator
 
 
@@ -16,7 +18,7 @@ def test_the_identification_takes_any_evaluation_callable(paper_scene):
     # the first parameter, which the second does not touch; the target is 9 % within 1 %
     scene = paper_scene.replace(identify={"targets": ["fhm_touchdown"]})
     tlist = study.targets(scene)
-    params = [study.Parameter("dmw.rms_nm", 0.5, 1.5), study.Parameter("air_bearing.damping_ratio", 0.01, 0.2)]
+    params = [free_parameters.Parameter("dmw.rms_nm", 0.5, 1.5), free_parameters.Parameter("air_bearing.damping_ratio", 0.01, 0.2)]
 
     def evaluate(points):
         return [{"key": repr(tuple(x)), "params": list(map(float, x)), "protrusions": [9.0],
