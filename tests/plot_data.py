@@ -1,10 +1,13 @@
 """Hand-made histories and sweeps, in dataset units, for the tests of the figure panels
-(pipeline/analyses/plots/): a clearance and force history, a sweep and an ensemble sweep."""
+(pipeline/analyses/plots/): a clearance and force history, a sweep and an ensemble sweep; the check every panel
+passes (:func:`check_panel`)."""
 
 from __future__ import annotations
 
 import numpy as np
 import xarray as xr
+
+from pipeline.analyses import plots
 
 
 def history(n=400):
@@ -30,3 +33,13 @@ def sweep(realisations=0):
                        "bouncing_bv_median": ("protrusion", np.median(f, 1)),
                        "bv_exceedance_probability": ("protrusion", [0.0, 0.3, 1.0])},
                       coords={"protrusion": x, "realisation": np.arange(realisations)})
+
+
+def check_panel(draw, args: tuple, kw: dict, ylabel: str) -> None:
+    """A panel ``draw(*args, ax=..., **kw)`` draws on the axes it is given and returns them (the API's promise
+    for composing figures), or on a new figure's without one, with its y label ``ylabel``."""
+    fig, (mine, other) = plots.new_figure(2, 1)
+    assert draw(*args, ax=mine, **kw) is mine
+    assert mine.get_ylabel() == ylabel and mine.lines and not other.lines and not other.get_ylabel()
+    fresh = draw(*args, **kw)  # no axes given: a new figure's
+    assert fresh is not mine and fresh.figure is not fig and fresh.get_ylabel() == ylabel

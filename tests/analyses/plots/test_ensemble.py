@@ -19,8 +19,4 @@ PANELS = [
 
 @pytest.mark.parametrize("draw, args, kw, ylabel", PANELS, ids=lambda v: getattr(v, "__name__", ""))
 def test_a_panel_draws_on_the_axes_it_is_given_and_returns_them(draw, args, kw, ylabel):
-    fig, (mine, other) = plots.new_figure(2, 1)
-    assert draw(*args(), ax=mine, **kw) is mine
-    assert mine.get_ylabel() == ylabel and mine.lines and not other.lines and not other.get_ylabel()
-    fresh = draw(*args(), **kw)  # no axes given: a new figure's
-    assert fresh is not mine and fresh.figure is not fig and fresh.get_ylabel() == ylabel
+    plot_data.check_panel(draw, args(), kw, ylabel)
