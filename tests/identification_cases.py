@@ -11,8 +11,7 @@ import xarray as xr
 
 from pipeline import evaluations
 from pipeline.analyses import ensemble_rules as en
-from pipeline.analyses import identification, study
-from pipeline.analyses import free_parameters
+from pipeline.analyses import free_parameters, identification, study
 from pipeline.model.inputs import SimulationInputs, Source
 
 

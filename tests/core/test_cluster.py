@@ -37,7 +37,7 @@ def test_the_fan_outs_client_is_current_only_inside_its_connection_and_never_the
     assert dask.config.get("scheduler", None) == before
 
 
-# ------------------------------------------------------------ issue 28: paths on workers, a cluster that stops
+# ------------------------------------------------------------ paths on workers, a cluster that stops
 def test_a_task_on_a_worker_that_does_not_see_the_results_folder_fails_in_one_line(tmp_path):
     missing = tmp_path / "elsewhere"
     with pytest.raises(cluster.ClusterError) as err:
@@ -49,8 +49,8 @@ def test_a_task_on_a_worker_that_does_not_see_the_results_folder_fails_in_one_li
 
 
 def test_the_runner_hands_a_stage_its_folder_as_an_absolute_path_for_its_tasks(tmp_path, monkeypatch, paper_scene):
-    # issue 28, 2: `--out relout` (or the default results/<scene>/) reached the workers as relative paths,
-    # which they resolved from their own working directory
+    # `--out relout` (or the default results/<scene>/) reaches the workers as an absolute path, not a relative
+    # one they would resolve from their own working directory
     import xarray as xr
 
     from pipeline import runner
@@ -151,8 +151,8 @@ def _no_workers():
 
 @pytest.mark.parametrize("lost_result", [False, True])
 def test_a_cluster_without_workers_ends_the_wait_in_one_line_within_the_bound(monkeypatch, lost_result):
-    # issue 28, 3: with the last worker killed, the client waited forever: on tasks no worker runs, or
-    # (the race the real-scheduler test can hit) on the result of a task whose worker died before sending it
+    # with the last worker killed the wait ends, on tasks no worker runs and (the race the real-scheduler test
+    # can hit) on the result of a task whose worker died before sending it
     import distributed
 
     class _Done:
@@ -183,7 +183,7 @@ def test_a_cluster_without_workers_ends_the_wait_in_one_line_within_the_bound(mo
                               "and run again to resume")
 
 
-# ------------------------------------------------------------ issue 26, 3: a worker running other code
+# ------------------------------------------------------------ a worker running other code
 def _workers(keys):
     """A stand-in for a client whose workers answer ``run`` with these code keys (or exceptions)."""
     return _Client(run=keys)

@@ -59,7 +59,7 @@ def test_split_deals_every_item_once_into_one_task_per_worker(monkeypatch):
 
 
 def test_a_cluster_split_follows_its_threads():
-    # issue 26, 3: a cluster always got 8 tasks (a 64-worker dask-jobqueue cluster ran calibrate on 8)
+    # a cluster gets a task per thread, not a fixed number (a 64-worker dask-jobqueue cluster runs calibrate on 64)
     from distributed import LocalCluster
     with LocalCluster(n_workers=2, threads_per_worker=3, processes=False, dashboard_address=None) as cluster:
         assert fanout.cluster_threads(cluster.scheduler_address) == 6
@@ -93,7 +93,7 @@ def test_a_failing_task_raises():
         run_tasks(bad, [(i,) for i in range(6)], scheduler="threads", workers=2)
 
 
-# ------------------------------------------------------------ issue 26, 3: the split decides where, not what
+# ------------------------------------------------------------ the split decides where, not what
 def _same_rows(a: list[tuple], b: list[tuple]) -> bool:
     """Realisation rows ``(realisation, outputs, kernel seconds, errors)`` equal bit for bit but the timing."""
     import numpy as np

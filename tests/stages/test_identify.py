@@ -9,8 +9,7 @@ import pytest
 import xarray as xr
 
 from pipeline import evaluations
-from pipeline.analyses import identification, study
-from pipeline.analyses import free_parameters
+from pipeline.analyses import free_parameters, identification, study
 from pipeline.model import scene_inputs
 from pipeline.model.inputs import cached
 from pipeline.config.scene import load_scene

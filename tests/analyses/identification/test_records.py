@@ -7,9 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pipeline.analyses import identification, study
-
-from pipeline.analyses import free_parameters
+from pipeline.analyses import free_parameters, identification, study
 from identification_cases import _ensemble_task, _racing_evaluator
 
 
