@@ -15,7 +15,7 @@ with one line (:class:`ClusterError`); finished tasks have written their outputs
 A scheduler lost mid-batch (its connection broken: dask cancels the futures) ends it the same way.
 
 A worker or a scheduler that is there but does not move (stopped with SIGSTOP, swapping, its machine
-unreachable while its connections stay open) is a stall (:class:`_Watch`): when a worker that holds tasks of
+unreachable while its connections stay open) is a stall (:class:`Watch`): when a worker that holds tasks of
 the batch sends the scheduler no heartbeat, or the scheduler answers no question, for longer than the stall
 bound, the command ends with one line naming it (:class:`ClusterError`), and a rerun resumes. The bound is
 :data:`STALL_S` (``HDI_STALL_S``), or several times the longest gap between two heartbeats seen so far if
@@ -74,10 +74,10 @@ def dask_log_level(level: int | None) -> None:
     out of the terminal, where the one line of :class:`ClusterError` says what happened (``-v`` shows them).
     ``None``: leave them as dask configures them."""
     _DASK_LEVEL[0] = level
-    _keep_dask_level()
+    keep_dask_level()
 
 
-def _keep_dask_level() -> None:
+def keep_dask_level() -> None:
     """Apply :func:`dask_log_level`'s level (after an import of distributed)."""
     if _DASK_LEVEL[0] is not None:
         for name in DASK_LOGGERS:
@@ -90,7 +90,8 @@ class ClusterError(ValueError):
     is none (the command line says it in one line)."""
 
 
-_SHARED: contextvars.ContextVar[str | None] = contextvars.ContextVar("hdi_shared_folder", default=None)
+#: The results folder every task of a batch checks its worker sees (:func:`shared_folder`; ``None``: no check).
+SHARED_FOLDER: contextvars.ContextVar[str | None] = contextvars.ContextVar("hdi_shared_folder", default=None)
 
 
 @contextlib.contextmanager
@@ -98,11 +99,11 @@ def shared_folder(path: str | Path) -> Iterator[str]:
     """Within the block, every task sent to a dask.distributed worker first checks that the worker sees
     the folder ``path`` (made absolute: a worker's working directory is not ours)."""
     folder = str(Path(path).absolute())
-    token = _SHARED.set(folder)
+    token = SHARED_FOLDER.set(folder)
     try:
         yield folder
     finally:
-        _SHARED.reset(token)
+        SHARED_FOLDER.reset(token)
 
 
 def cluster_wait_s() -> float:
@@ -134,7 +135,7 @@ def new_client(address: str, timeout: float) -> Any:
     (a failed connection, then a new Client in the same process). The object is made first and initialised
     second so that this function holds it when ``__init__`` raises."""
     from distributed import Client
-    _keep_dask_level()
+    keep_dask_level()
     client = Client.__new__(Client)
     try:
         client.__init__(address, timeout=timeout, set_as_default=False)
@@ -193,7 +194,7 @@ def _worker_code_key(module: str) -> str:
     return code_key(module)
 
 
-def _here_key(fn: Callable[..., Any]) -> tuple[str, str]:
+def task_code(fn: Callable[..., Any]) -> tuple[str, str]:
     """The module of task function ``fn`` and its code key in this process (``""`` outside ``pipeline``)."""
     module = getattr(fn, "__module__", None) or ""
     return module, code_key(module)
@@ -239,7 +240,7 @@ def check_code(client: Any, fn: Callable[..., Any]) -> None:
     """Every worker of ``client`` has this process's code key of ``fn``'s module, else :class:`ClusterError`
     naming the first worker (by address) that differs (a worker that cannot even run the check imports
     an older ``pipeline``)."""
-    module, ours = _here_key(fn)
+    module, ours = task_code(fn)
     keys = run_everywhere(client, _worker_code_key, module, on_error="return")
     for worker, theirs in sorted(keys.items()):
         if isinstance(theirs, (OSError, TimeoutError)):  # (distributed's CommClosedError is an OSError)
@@ -295,7 +296,7 @@ def _result(fut: Any, timeout: float, address: str) -> Any:
                            f"({type(exc).__name__}); finished work is kept, run again to resume") from None
 
 
-def _results(client: Any, futures: list, address: str, wait_s: float, watch: "_Watch") -> Iterator[Any]:
+def gather_results(client: Any, futures: list, address: str, wait_s: float, watch: "Watch") -> Iterator[Any]:
     """The futures' results as they arrive; :class:`ClusterError` when for ``wait_s`` [s] none arrived
     and no task of theirs was running on a worker (the last worker lost, none attached, all busy
     elsewhere), or when ``watch`` finds the scheduler or a worker running them stalled."""
@@ -350,8 +351,8 @@ def _lost(address: str, pending: int, total: int) -> ClusterError:
                         "or the connection to it broke); finished work is kept, run again to resume")
 
 
-class _Watch:
-    """What the client sees of the cluster while it waits for a batch (:func:`_results`): which worker holds
+class Watch:
+    """What the client sees of the cluster while it waits for a batch (:func:`gather_results`): which worker holds
     which pending task, and when each worker's heartbeat last moved; a stall ends the command.
 
     The scheduler's ``last_seen`` of a worker (its clock) is compared only with its own earlier values, so the

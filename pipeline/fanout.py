@@ -46,8 +46,8 @@ from typing import Any, Callable, Iterable, Iterator, Sequence
 
 from . import interrupts
 from .progress import Progress, end_line
-from .cluster import (CLIENT_TIMEOUT_S, _SHARED, _Watch, _here_key, _keep_dask_level, _results, announce, check_code,
-                      cluster_threads, cluster_wait_s, connect, on_worker, run_everywhere, stall_s)
+from .cluster import (CLIENT_TIMEOUT_S, SHARED_FOLDER, Watch, announce, check_code, cluster_threads, cluster_wait_s,
+                      connect, gather_results, keep_dask_level, on_worker, run_everywhere, stall_s, task_code)
 
 
 log = logging.getLogger(__name__)
@@ -153,7 +153,7 @@ def _process_cluster(n: int):
     Ctrl-C then did nothing). A worker still dies with this process however it ends (distributed's own
     watch of its parent)."""
     from distributed import LocalCluster
-    _keep_dask_level()
+    keep_dask_level()
     with interrupts.shielded():
         return LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
                             silence_logs=logging.CRITICAL)  # shutdown races log CommClosedError
@@ -187,8 +187,8 @@ def _distributed(fn: Callable[..., Any], tasks: list[tuple], scheduler: str, wor
                  done: Callable[[Any], None]) -> float:
     """A local process cluster (``scheduler="processes"``) or the cluster at a scheduler address."""
     n = local_workers(workers, len(tasks)) if scheduler == "processes" else None
-    folder, wait_s, stall = _SHARED.get(), cluster_wait_s(), stall_s()
-    code = _here_key(fn)
+    folder, wait_s, stall = SHARED_FOLDER.get(), cluster_wait_s(), stall_s()
+    code = task_code(fn)
     with local_cluster(scheduler, n) as address, connect(address, CLIENT_TIMEOUT_S) as client:
         if scheduler != "processes":  # (ours serves no dashboard pages: its HTTP port has dask's health routes only)
             announce(client, address)
@@ -201,6 +201,6 @@ def _distributed(fn: Callable[..., Any], tasks: list[tuple], scheduler: str, wor
         name = getattr(fn, "__name__", "task")
         futures = [client.submit(on_worker, folder, code, fn, *args, key=f"{name}-{uuid.uuid4().hex}", retries=2)
                    for args in tasks]
-        for result in _results(client, futures, address, wait_s, _Watch(client, address, stall)):
+        for result in gather_results(client, futures, address, wait_s, Watch(client, address, stall)):
             done(result)
         return time.perf_counter() - t0

@@ -58,7 +58,7 @@ def test_the_runner_hands_a_stage_its_folder_as_an_absolute_path_for_its_tasks(t
     seen = {}
 
     def compute(scene, inputs):
-        seen.update(out=inputs.out, shared=cluster._SHARED.get())
+        seen.update(out=inputs.out, shared=cluster.SHARED_FOLDER.get())
         return xr.Dataset({"v": var(1.0, (), "1", "toy value")})
 
     monkeypatch.chdir(tmp_path)
@@ -67,7 +67,7 @@ def test_the_runner_hands_a_stage_its_folder_as_an_absolute_path_for_its_tasks(t
     assert made["toy"] == (Path("relout") / "toy.nc",)  # what the user named, as named
     assert seen["out"] == tmp_path / "relout" and seen["out"].is_absolute()
     assert seen["shared"] == str(tmp_path / "relout")
-    assert cluster._SHARED.get() is None  # only while the stage computes
+    assert cluster.SHARED_FOLDER.get() is None  # only while the stage computes
     assert runner.Inputs.folder("relout").out == tmp_path / "relout"
 
 
@@ -172,7 +172,7 @@ def test_a_cluster_without_workers_ends_the_wait_in_one_line_within_the_bound(mo
     t0 = time.monotonic()
     with pytest.raises(cluster.ClusterError) as err:
         client = _no_workers()
-        for result in cluster._results(client, futures, "tcp://host:8786", 0.5, cluster._Watch(client, "h", 60.0)):
+        for result in cluster.gather_results(client, futures, "tcp://host:8786", 0.5, cluster.Watch(client, "h", 60.0)):
             got.append(result)
     took = time.monotonic() - t0
     assert got == ([7] if lost_result else [])  # what arrived was handed on (its part is kept)
@@ -216,10 +216,10 @@ def test_the_stall_bound_is_a_documented_setting(monkeypatch):
 
 
 def _waiting(client, futures, wait_s=60.0, floor_s=0.3):
-    """Run :func:`pipeline.cluster._results` to its end: (the results handed on, the error, the seconds taken)."""
+    """Run :func:`pipeline.cluster.gather_results` to its end: (the results handed on, the error, the seconds taken)."""
     got, t0 = [], time.monotonic()
     try:
-        for result in cluster._results(client, futures, "tcp://host:8786", wait_s, cluster._Watch(client, "tcp://host:8786",
+        for result in cluster.gather_results(client, futures, "tcp://host:8786", wait_s, cluster.Watch(client, "tcp://host:8786",
                                                                                                 floor_s)):
             got.append(result)
     except cluster.ClusterError as exc:
@@ -286,7 +286,7 @@ def test_a_live_worker_on_a_long_task_is_never_taken_for_a_stall(polling):
 def test_the_stall_bound_follows_the_longest_heartbeat_gap_seen():
     """A loaded worker's heartbeat comes late: the bound is 5 times the longest gap seen, if that is longer."""
     client = _Client(_Scheduler({}, workers=["tcp://w1:1"]))
-    watch = cluster._Watch(client, "tcp://host:8786", 0.1)
+    watch = cluster.Watch(client, "tcp://host:8786", 0.1)
     watch.look(set())
     client.scheduler.frozen = {"tcp://w1:1"}
     time.sleep(0.2)

@@ -15,7 +15,7 @@ GN_STEP = 0.02
 
 
 # ----------------------------------------------------------------------------------- correlation
-def _jacobian(ident: Identification, best: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+def residual_jacobian(ident: Identification, best: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     """The central-difference Jacobian of the residuals at ``best`` in parameters scaled to their
     bounds (one fan-out, role 3), shape (targets, parameters)."""
     gn_pts, plus, minus = _gauss_newton_points(best, lo, hi)
@@ -24,7 +24,7 @@ def _jacobian(ident: Identification, best: np.ndarray, lo: np.ndarray, hi: np.nd
                      for i in range(len(best))], axis=1)
 
 
-def _correlation(J: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def gn_correlation(J: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Step 3: the Gauss-Newton correlation matrix and standard deviations [parameter units] from ``J``."""
     n = len(lo)
     JTJ = J.T @ J

@@ -8,8 +8,8 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from ..study import cost
-from .gauss_newton import _jacobian
-from .records import Identification, _note, _point
+from .gauss_newton import residual_jacobian
+from .records import Identification, point_key, progress_note
 
 
 #: Compass step of the re-optimised profiles, a fraction of each other parameter's range [1]: the others
@@ -47,7 +47,7 @@ def interval(grid: np.ndarray, metric: np.ndarray, limit: float, centre: float) 
     return walk(-1), walk(+1)
 
 
-def _profile_rounds(ident: Identification, best: np.ndarray, best_res: np.ndarray, lo: np.ndarray, hi: np.ndarray,
+def profile_rounds(ident: Identification, best: np.ndarray, best_res: np.ndarray, lo: np.ndarray, hi: np.ndarray,
                     m: int, budget: int, progress: Any | None) -> tuple:
     """Step 2 and the Jacobian of step 3, in rounds (package docstring); ``budget`` 0: slices only. Each
     round is a phase of ``progress`` (:func:`identify`) whose total, fixed when it starts, is the
@@ -65,7 +65,7 @@ def _profile_rounds(ident: Identification, best: np.ndarray, best_res: np.ndarra
         """``k`` evaluations more in this round."""
         done[0] += k
         if progress is not None:
-            progress.update(k, note=_note(ident))
+            progress.update(k, note=progress_note(ident))
 
     for rounds in range(1, PROFILE_ROUNDS + 1):
         grids = [_grid(lo[i], hi[i], m, best[i]) for i in range(n)]
@@ -80,7 +80,7 @@ def _profile_rounds(ident: Identification, best: np.ndarray, best_res: np.ndarra
         # a point this much better ends the round (a round more follows around it): not after the last round
         moved = c_best - PROFILE_GAIN if rounds < PROFILE_ROUNDS else -np.inf
         if budget and not np.nanmin(np.sum(r_round**2, axis=1), initial=np.inf) < moved:
-            J = _jacobian(ident, best, lo, hi)  # (first: it predicts the walks' first steps)
+            J = residual_jacobian(ident, best, lo, hi)  # (first: it predicts the walks' first steps)
             count(2 * n)
             within = bool(np.all(np.abs(best_res) <= 1.0))
             found, w_rows, w_res, w_full = _reoptimise(ident, best, c_best, within, slices,
@@ -94,7 +94,7 @@ def _profile_rounds(ident: Identification, best: np.ndarray, best_res: np.ndarra
         j = int(np.nanargmin(c_prof)) if np.isfinite(c_prof).any() else -1
         last = j < 0 or not c_prof[j] < c_best - PROFILE_GAIN or rounds == PROFILE_ROUNDS
         if last and not budget:  # (a slice's Jacobian after its profiles, as before the re-optimised method)
-            J = _jacobian(ident, best, lo, hi)
+            J = residual_jacobian(ident, best, lo, hi)
             count(2 * n)
         if progress is not None:  # (the budget's rest unspent, or a round that moved the optimum)
             progress.update(0, total=done[0])
@@ -145,7 +145,7 @@ def _merge(slices: list[dict], found: list[dict[float, tuple]]) -> list[dict]:
     return out
 
 
-def _intervals(profiles: list[dict], best: np.ndarray, within: bool) -> np.ndarray:
+def profile_intervals(profiles: list[dict], best: np.ndarray, within: bool) -> np.ndarray:
     """The interval of each parameter from its profile (package docstring, step 2), shape (parameters, 2)."""
     out = np.full((len(profiles), 2), np.nan)
     for i, p in enumerate(profiles):
@@ -157,7 +157,7 @@ def _intervals(profiles: list[dict], best: np.ndarray, within: bool) -> np.ndarr
     return out
 
 
-def _profile_arrays(profiles: list[dict], slices: list[dict], n: int) -> dict[str, np.ndarray]:
+def profile_arrays(profiles: list[dict], slices: list[dict], n: int) -> dict[str, np.ndarray]:
     """The profiles as padded arrays (NaN past a grid's end) for ``identify.nc``: values, objective,
     largest |residual|, every parameter at each point, the re-optimised flag and the slice's objective."""
     size = max(len(p["value"]) for p in profiles)
@@ -225,7 +225,7 @@ class _Walk:
         x[i] = self.value
         self.x, self.res, self.vertex = x, None, None
         self.slice = self.slice_at(self.value)
-        self.seen[_point(self.slice[0])] = self.slice[1]
+        self.seen[point_key(self.slice[0])] = self.slice[1]
 
     def candidates(self) -> list[np.ndarray]:
         """The points of this round not yet known: the parabolas' vertex after a poll that found nothing
@@ -233,9 +233,9 @@ class _Walk:
         if self.vertex is not None:
             self.asked = [self.vertex]
         else:
-            poll, self.polls = _compass(self.x, PROFILE_STEP, self.lo, self.hi, skip=self.i)
+            poll, self.polls = compass_poll(self.x, PROFILE_STEP, self.lo, self.hi, skip=self.i)
             self.asked = ([self.x] if self.res is None else []) + poll
-        new = {_point(p): p for p in self.asked if _point(p) not in self.seen}
+        new = {point_key(p): p for p in self.asked if point_key(p) not in self.seen}
         return list(new.values())
 
     def bound(self, p: np.ndarray) -> float:
@@ -260,12 +260,12 @@ class _Walk:
         point stopped early by racing is never taken (its residuals are a partial ensemble's: it lost to
         its bound, the point it would replace), so every profile point is a whole evaluation."""
         whole = [True] * len(pts) if full is None else [bool(f) for f in full]
-        self.seen.update((_point(p), r) for p, r in zip(pts, res))
-        self.partial.difference_update(_point(p) for p, f in zip(pts, whole) if f)
-        self.partial.update(_point(p) for p, f in zip(pts, whole) if not f)
+        self.seen.update((point_key(p), r) for p, r in zip(pts, res))
+        self.partial.difference_update(point_key(p) for p, f in zip(pts, whole) if f)
+        self.partial.update(point_key(p) for p, f in zip(pts, whole) if not f)
         pts = self.asked
-        res = [self.seen[_point(p)] for p in pts]
-        part = np.array([_point(p) in self.partial for p in pts], bool)
+        res = [self.seen[point_key(p)] for p in pts]
+        part = np.array([point_key(p) in self.partial for p in pts], bool)
         if self.vertex is not None:
             if not part[0] and self.metric(res[0]) < self.metric(self.res):
                 self.x, self.res = self.vertex, res[0]
@@ -289,8 +289,8 @@ class _Walk:
                 self._finish()
 
     def _vertex(self, c: np.ndarray) -> np.ndarray | None:
-        """:func:`_vertex` of this walk's poll (metrics ``c``) around its current point."""
-        return _vertex(self.x, self.metric(self.res), self.polls, c, self.lo, self.hi)
+        """:func:`parabola_vertex` of this walk's poll (metrics ``c``) around its current point."""
+        return parabola_vertex(self.x, self.metric(self.res), self.polls, c, self.lo, self.hi)
 
     def _finish(self) -> None:
         """The current point is re-optimised: keep it; go on to the next value unless it is outside."""
@@ -308,7 +308,7 @@ class _Walk:
         self.done = True
 
 
-def _compass(x: np.ndarray, step: float, lo: np.ndarray, hi: np.ndarray,
+def compass_poll(x: np.ndarray, step: float, lo: np.ndarray, hi: np.ndarray,
              skip: int = -1) -> tuple[list[np.ndarray], list[tuple[int, float]]]:
     """The compass poll around ``x``: each coordinate but ``skip`` moved by +- ``step`` of its range [1],
     kept inside the bounds (a move the bound cancels is left out). Returns the points and each one's
@@ -326,10 +326,10 @@ def _compass(x: np.ndarray, step: float, lo: np.ndarray, hi: np.ndarray,
     return points, polls
 
 
-def _vertex(x: np.ndarray, c0: float, polls: list[tuple[int, float]], c: np.ndarray, lo: np.ndarray,
+def parabola_vertex(x: np.ndarray, c0: float, polls: list[tuple[int, float]], c: np.ndarray, lo: np.ndarray,
             hi: np.ndarray) -> np.ndarray | None:
     """The point at the vertex of the parabola through each coordinate's two poll points (``polls`` of
-    :func:`_compass`, metrics ``c``) and ``x`` (metric ``c0``), where it curves upward (at most one step
+    :func:`compass_poll`, metrics ``c``) and ``x`` (metric ``c0``), where it curves upward (at most one step
     off), or None (no coordinate moves)."""
     step: dict[int, dict[float, tuple[float, float]]] = {}
     for (j, d), cj in zip(polls, c):

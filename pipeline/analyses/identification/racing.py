@@ -68,14 +68,14 @@ def lower_bound(res: np.ndarray, margin: np.ndarray, metric: str) -> float:
     of squares) or of the largest ``|r|`` (``"max"``)."""
     low = np.maximum(np.abs(np.asarray(res, float)) - margin, 0.0)
     low = np.where(np.isfinite(low), low, 0.0)  # (an unknown residual with an infinite margin: no bound)
-    return _metric(low, metric)
+    return metric_value(low, metric)
 
 
 def upper_bound(res: np.ndarray, margin: np.ndarray, metric: str) -> float:
     """The upper confidence bound of the metric (:func:`lower_bound`): each ``|r|`` raised by its margin."""
     high = np.abs(np.asarray(res, float)) + margin
-    return _metric(np.where(np.isnan(high), np.inf, high), metric)
+    return metric_value(np.where(np.isnan(high), np.inf, high), metric)
 
 
-def _metric(r: np.ndarray, metric: str) -> float:
+def metric_value(r: np.ndarray, metric: str) -> float:
     return float(np.max(r, initial=0.0)) if metric == "max" else float(np.sum(r**2))

@@ -11,7 +11,7 @@ import numpy as np
 
 from ..study import (ObjectiveTerm, cost, head, input_spreads, realisations_of, record_inputs,
                     residuals, score)
-from .racing import Racing, _metric
+from .racing import Racing, metric_value
 
 
 #: Role of an evaluation (``role`` variable of identify.nc).
@@ -56,7 +56,7 @@ class Identification:
         #: DMW records of each key's record; the record-to-record spreads of the whole evaluations (racing)
         self.depth: dict[str, int] = {}
         self.spreads: dict[str, np.ndarray] = {}
-        #: racing: each point's key (by :func:`_point`), the paired spreads of whole evaluations against their
+        #: racing: each point's key (by :func:`point_key`), the paired spreads of whole evaluations against their
         #: reference by role (:meth:`_race`: a poll and its walk's point are neighbours, a trial and the best
         #: point are not) and the residuals of a whole evaluation's first records, by (key, records)
         self.by_point: dict[tuple, str] = {}
@@ -106,7 +106,7 @@ class Identification:
         else:
             n = len(points)
             ref_keys = [None] * n if refs is None else \
-                [self.by_point.get(_point(y)) if np.all(np.isfinite(y)) else None
+                [self.by_point.get(point_key(y)) if np.all(np.isfinite(y)) else None
                  for y in np.broadcast_to(np.asarray(refs, float), (n, np.shape(points)[1]))]
             recs = self._race(np.asarray(points, float), role, np.broadcast_to(np.asarray(bound, float), (n,)),
                               metric, np.arange(n) if groups is None else np.broadcast_to(np.asarray(groups), (n,)),
@@ -124,7 +124,7 @@ class Identification:
             if key in self.depth and depth <= self.depth[key]:
                 continue
             self.records[key], self.depth[key] = r, depth  # (a known key keeps its place in request order)
-            self.by_point[_point(r["params"])] = key
+            self.by_point[point_key(r["params"])] = key
             vals, res, spread = score(r, self.tlist, self.missing)
             self.scores[key], self.value_spreads[key] = (vals, res), spread
             self._inputs.pop(key, None)
@@ -156,13 +156,13 @@ class Identification:
                 key = r["key"]
                 if self.is_full(key):  # (exact: both bounds are its metric)
                     alive[i] = False
-                    low[i] = high[i] = _metric(np.abs(self.scores[key][1]), metric)
+                    low[i] = high[i] = metric_value(np.abs(self.scores[key][1]), metric)
                     if refs[i] is not None and refs[i] != key and self.is_full(refs[i]):
                         self.pair_spreads.setdefault(role, []).append(
                             input_spreads(self.inputs_of(key) - self.inputs_of(refs[i])))
                     continue
                 lo_t, hi_t = self._bounds(key, refs[i], role)
-                low[i], high[i] = _metric(lo_t, metric), _metric(hi_t, metric)
+                low[i], high[i] = metric_value(lo_t, metric), metric_value(hi_t, metric)
             # the smallest upper bound of each group: the point holding it is never stopped (its lower bound is
             # below it), so a point whose lower bound exceeds it will be beaten
             best_high = {g: np.min(high[groups == g]) for g in np.unique(groups[idx])}
@@ -234,12 +234,12 @@ class Identification:
         return np.array([cost(r) for r in self.evaluate(points, role, bound, groups=groups, refs=refs)[2]])
 
 
-def _note(ident: Identification) -> str:
+def progress_note(ident: Identification) -> str:
     """The progress note: the best objective so far (one name: the log's last line says the same)."""
     return f"best objective {ident.best_cost:.4g}"
 
 
-def _point(x: np.ndarray) -> tuple[float, ...]:
+def point_key(x: np.ndarray) -> tuple[float, ...]:
     """A point's identity to 12 significant digits (a poll back to the point it left is that point, whatever
     the rounding of x + h - h; the evaluation keys round so too)."""
     return tuple(float(f"{v:.12g}") for v in x)

@@ -10,9 +10,10 @@ import numpy as np
 
 from ...config.limits import POLISH_EVALUATIONS  # (the polish's budget, step 1 of the package docstring)
 from ..free_parameters import Parameter
-from .gauss_newton import _correlation
-from .profiles import PROFILE_STEP, _compass, _intervals, _profile_arrays, _profile_rounds, _vertex
-from .records import Identification, _note, _point
+from .gauss_newton import gn_correlation
+from .profiles import (PROFILE_STEP, compass_poll, parabola_vertex, profile_arrays, profile_intervals,
+                       profile_rounds)
+from .records import Identification, point_key, progress_note
 
 
 #: The interval methods (``identify.profile_method``) and what identify.nc and the report call them.
@@ -60,7 +61,7 @@ def identify(ident: Identification, params: Sequence[Parameter], x_base: np.ndar
     m = cfg["profile_points"]
     optimised = cfg["profile_method"] == "optimised" and n > 1  # (one parameter has no others)
     budget = cfg["profile_evaluations"] if optimised else 0
-    centre, centre_res, slices, profiles, J, rounds, spent = _profile_rounds(ident, centre, centre_res, lo, hi, m,
+    centre, centre_res, slices, profiles, J, rounds, spent = profile_rounds(ident, centre, centre_res, lo, hi, m,
                                                                              budget, progress)
     # the best point: the lowest objective of every evaluation (package docstring)
     i_best = ident.best_index
@@ -69,13 +70,14 @@ def identify(ident: Identification, params: Sequence[Parameter], x_base: np.ndar
     within = bool(np.all(np.abs(best_res) <= 1.0))
     criterion = "all targets within tolerance (|r| <= 1)" if within else \
         "objective within 1 of its profile minimum (the optimum misses a target, so no range keeps all within tolerance)"
-    arrays = _profile_arrays(profiles, slices, n)
-    corr, gn_std = _correlation(J, lo, hi)
+    arrays = profile_arrays(profiles, slices, n)
+    corr, gn_std = gn_correlation(J, lo, hi)
     pts = np.array([r["params"] for r in ident.records.values()], float)
     i_centre = int(np.argmin(np.max(np.abs(pts - centre), axis=1)))  # (the centre is an evaluated point)
     return {"best": best, "best_residuals": best_res, "best_evaluation": i_best, "within": within,
             "centre": centre, "centre_evaluation": i_centre,
-            "intervals": _intervals(profiles, best, within), "slice_intervals": _intervals(slices, best, within),
+            "intervals": profile_intervals(profiles, best, within),
+            "slice_intervals": profile_intervals(slices, best, within),
             "criterion": criterion, "method": METHODS["optimised" if optimised else "slice"], **arrays,
             "correlation": corr, "gn_std": gn_std, "de_message": str(result.message),
             "de_generations": int(result.nit), "de_evaluations": int(result.nfev), "profile_rounds": rounds,
@@ -97,7 +99,7 @@ def _global_search(ident: Identification, lo: np.ndarray, hi: np.ndarray, x_base
 
     def generation(intermediate_result: Any) -> None:  # (scipy passes the best so far by this name)
         if progress is not None:  # (the best of every evaluation: the reconstructed point included)
-            progress.update(note=_note(ident))
+            progress.update(note=progress_note(ident))
 
     result = differential_evolution(objective, list(zip(lo, hi)), strategy="best1bin",
                                     maxiter=cfg["generations"], popsize=cfg["population"], tol=0.01,
@@ -113,11 +115,11 @@ def _polish(ident: Identification, lo: np.ndarray, hi: np.ndarray, first: float,
             progress: Any | None) -> dict[str, Any]:
     """The polish of step 1: a compass search over every parameter from the best point so far (package docstring).
 
-    Each poll moves every parameter by +- ``step`` of its range (:func:`_compass`; one fan-out, role 5,
+    Each poll moves every parameter by +- ``step`` of its range (:func:`compass_poll`; one fan-out, role 5,
     raced against the current point: ``bound`` its objective, ``refs`` the point, the poll one group). A
     poll that holds a whole evaluation better than the current point (:attr:`Identification.best_cost`,
     strictly) moves there and polls again at the same step; after one that does not, the vertex of the
-    parabolas through the poll (:func:`_vertex`) is tried once (raced the same way), and the step halves.
+    parabolas through the poll (:func:`parabola_vertex`) is tried once (raced the same way), and the step halves.
     It starts at ``first`` (the profile grid's spacing, a fraction of each range) and stops after the
     poll at the first step at or below :data:`PROFILE_STEP`, or before a poll that would spend more than
     ``budget`` evaluations in all. No gradients: the objective is noisy and partly piecewise constant.
@@ -135,7 +137,7 @@ def _polish(ident: Identification, lo: np.ndarray, hi: np.ndarray, first: float,
     def new(points: list[np.ndarray]) -> int:
         """How many of ``points`` are not held on every record yet (a poll after a move meets the point it
         left): what a poll spends of the budget."""
-        keys = [ident.by_point.get(_point(p)) for p in points]
+        keys = [ident.by_point.get(point_key(p)) for p in points]
         return sum(k is None or not ident.is_full(k) for k in keys)
 
     def run(points: list[np.ndarray]) -> np.ndarray:
@@ -145,19 +147,19 @@ def _polish(ident: Identification, lo: np.ndarray, hi: np.ndarray, first: float,
         _, _, r = ident.evaluate(np.array(points), 5, bound=c, metric="cost", groups=0, refs=x)
         spent, polls = spent + k, polls + 1
         if progress is not None:
-            progress.update(k, note=_note(ident))
+            progress.update(k, note=progress_note(ident))
         return np.sum(r**2, axis=1)
 
     last_step = float("nan")
     while True:
-        points, offsets = _compass(x, step, lo, hi)
+        points, offsets = compass_poll(x, step, lo, hi)
         if not points or spent + new(points) > budget:
             break
         costs, last_step = run(points), step
         if ident.best_cost < c:  # (the poll held a whole evaluation better than the current point)
             x, c, moves = np.array(ident.records[ident.best_key]["params"], float), ident.best_cost, moves + 1
             continue
-        vertex = _vertex(x, c, offsets, costs, lo, hi)
+        vertex = parabola_vertex(x, c, offsets, costs, lo, hi)
         if vertex is not None and spent + new([vertex]) <= budget:
             run([vertex])
             if ident.best_cost < c:

@@ -177,12 +177,3 @@ def runs(mask: np.ndarray) -> list[tuple[int, int]]:
     if start is not None:
         out.append((start, mask.size - 1))
     return out
-
-
-def _shade_transient(ax: Any, transient_ms: float | None) -> None:
-    if transient_ms and transient_ms > 0:
-        ax.axvspan(0.0, transient_ms, color="0.88", lw=0, zorder=0, label="start-up transient (discarded)")
-
-
-def _regime_name(code: int | None) -> str:
-    return "unknown" if code is None else {"missing": "unknown"}.get(regime_name(code), regime_name(code))

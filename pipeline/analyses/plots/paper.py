@@ -11,12 +11,21 @@ import numpy as np
 import xarray as xr
 
 from ...units import S_IN_MS
-from ...variables import TIME
-from .common import (LINE_COLOURS, _regime_name, _shade_transient, axis_label, envelope, heater_power_axis,
-                     new_figure, note, panel, runs, save, shade_regimes, title, var_label)
+from ...variables import TIME, regime_name
+from .common import (LINE_COLOURS, axis_label, envelope, heater_power_axis, new_figure, note, panel, runs, save,
+                     shade_regimes, title, var_label)
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
+
+
+def _shade_transient(ax: Any, transient_ms: float | None) -> None:
+    if transient_ms and transient_ms > 0:
+        ax.axvspan(0.0, transient_ms, color="0.88", lw=0, zorder=0, label="start-up transient (discarded)")
+
+
+def _regime_name(code: int | None) -> str:
+    return "unknown" if code is None else {"missing": "unknown"}.get(regime_name(code), regime_name(code))
 
 
 # --------------------------------------------------------------------------------------------- Fig. 3

@@ -87,7 +87,7 @@ def test_interval_interpolates_crossings():
 
 def test_a_compass_poll_keeps_inside_the_bounds_and_skips_the_profiled_parameter():
     lo, hi = np.array([0.0, 0.0, 10.0]), np.array([1.0, 2.0, 20.0])
-    pts, polls = profiles._compass(np.array([0.98, 1.0, 10.0]), 0.1, lo, hi, skip=1)
+    pts, polls = profiles.compass_poll(np.array([0.98, 1.0, 10.0]), 0.1, lo, hi, skip=1)
     # x0: +0.1 clipped to 1.0 (an offset of 0.02), -0.1; x2: +1 only (the lower bound cancels -1)
     assert polls == [(0, pytest.approx(0.02)), (0, pytest.approx(-0.1)), (2, pytest.approx(1.0))]
     # tol: clipping and one addition of exact decimals, a few roundings
@@ -95,10 +95,10 @@ def test_a_compass_poll_keeps_inside_the_bounds_and_skips_the_profiled_parameter
     # the parabola through (-h, c-), (0, c0), (h, c+) has its vertex at h (c- - c+) / (2 (c- - 2 c0 + c+)):
     # c = (x - 0.3)^2 polled at 0 +- 1 gives 0.3; x1 (curving down) stays
     x = np.array([0.0, 0.0])
-    _, polls = profiles._compass(x, 0.5, np.array([-1.0, -1.0]), np.array([1.0, 1.0]))
+    _, polls = profiles.compass_poll(x, 0.5, np.array([-1.0, -1.0]), np.array([1.0, 1.0]))
     c = np.array([(1 - 0.3)**2, (-1 - 0.3)**2, -1.0, -1.0])
     # tol: the parabola's vertex of exact inputs, tens of roundings
-    np.testing.assert_allclose(profiles._vertex(x, 0.09, polls, c, np.array([-1.0, -1.0]),
+    np.testing.assert_allclose(profiles.parabola_vertex(x, 0.09, polls, c, np.array([-1.0, -1.0]),
                                                       np.array([1.0, 1.0])), [0.3, 0.0])
 
 
