@@ -149,7 +149,7 @@ readme: $(RUN_STAMP)
 
 ## rewrite the generated "Model variants" table of docs/model.md from the registries (tests/structure/test_variants.py)
 variants: $(RUN_STAMP)
-	$(BIN)/python -c "from pipeline.config.schema import write_variants_table; write_variants_table('docs/model.md')"
+	$(BIN)/python -c "from pipeline.config.variants_table import write_variants_table; write_variants_table('docs/model.md')"
 
 ## one stage (and what it needs) on the scene: `make NAME` is `hdi NAME $(SCENE)` (sweep and identify: their own scenes)
 $(filter-out sweep identify,$(STAGES)): $(RUN_STAMP)

@@ -17,7 +17,7 @@ import numpy as np
 from benchmarks.common import record, timeit
 from pipeline.config.scene import load_scene
 from pipeline.model import bulge_table as bt
-from pipeline.physics import bulge_bearing as bb
+from pipeline.physics import reynolds
 from pipeline.units import MPA, NM, UM
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -33,9 +33,9 @@ def run(results: list[dict]) -> None:
     kw = dict(p_pad=a["pad_pressure_mpa"] * MPA, a=t["half_length_um"] * UM, b=t["half_width_um"] * UM,
               speed=ds.attrs["disk_speed_m_s"], viscosity=bt.AIR_VISCOSITY, mean_free_path=bt.AIR_MEAN_FREE_PATH,
               ambient_pressure=bt.AMBIENT_PRESSURE,
-              grid=bb.ReynoldsGrid(cells_per_a=sol["bulge_cells_per_a"], cells_per_b=sol["bulge_cells_per_b"]))
+              grid=reynolds.ReynoldsGrid(cells_per_a=sol["bulge_cells_per_a"], cells_per_b=sol["bulge_cells_per_b"]))
     cases = int((dls > 0).sum()) * gaps.size
-    row = timeit(lambda: bb.reynolds_table(gaps, dls[20:21], **kw), repeat=5)
+    row = timeit(lambda: reynolds.reynolds_table(gaps, dls[20:21], **kw), repeat=5)
     record(results, f"bulge Reynolds table, one protrusion row ({gaps.size} gaps)", row)
     full = timeit(lambda: bt.scene_table(scene), repeat=3, warmup=0)
     med_row = float(np.median(row))

@@ -55,8 +55,9 @@ import os
 from collections.abc import MutableMapping
 
 from . import progress as _progress, runner
-from .cli_checks import (OptionError, check_flag, check_options, check_out, check_path_option, check_protrusions,
-                         check_stage_options, integration_line, python_call)
+from .cli_checks import (check_flag, check_options, check_out, check_path_option, check_protrusions,
+                         check_stage_options, integration_line)
+from .options import OptionError, python_call
 from .config.grid import same_point
 from .config.loading import load_scene as _load_scene
 from .config.schema import SCHEMA, SceneError

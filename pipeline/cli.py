@@ -15,8 +15,9 @@ import sys
 import traceback
 from pathlib import Path
 
-from . import __version__, fanout, interrupts, runner
-from .io import DatasetError, os_error_line, results_dir
+from . import __version__, cluster, interrupts, runner
+from .file_errors import os_error_line
+from .io import DatasetError, results_dir
 from .progress import StderrHandler, interval_s
 from .config.loading import find_scene, load_scene, shipped_scenes
 from .config.schema import SceneError, describe_keys
@@ -104,7 +105,7 @@ def _logging(verbose: int = 0, quiet: bool = False) -> None:
         log.addHandler(StderrHandler())
     log.setLevel(logging.WARNING if quiet else logging.DEBUG if verbose >= 2 else logging.INFO)
     if not verbose:  # keep the terminal quiet (dask's shutdown races log CommClosedError; a killed scheduler)
-        fanout.dask_log_level(logging.CRITICAL)
+        cluster.dask_log_level(logging.CRITICAL)
 
 
 def _ended(who: str, signum: int) -> int:

@@ -1,13 +1,12 @@
 """Checks of the command line and of derived material parameters, before anything runs.
 
 :func:`check_options` validates the options of ``hdi STAGE`` against the stage and the scene, so a
-mistake ends in one line naming the option (exit 2, :class:`OptionError`) before any stage starts
-and before anything is written: ``--workers`` must be a positive integer, ``--scheduler`` must
-answer as a dask scheduler with workers (its handshake within :data:`CONNECT_TIMEOUT_S`, instead of
-dask's 30 s, a hang on an HTTP port or a traceback; a scheduler file is read for its address, and
-without ``--scheduler`` the variable ``DASK_SCHEDULER_ADDRESS`` is one), ``--out`` must be a folder
-we can write in, the sweep grid must not exceed :data:`MAX_SCENES` unless ``--yes``, the report's history protrusions must lie on the sweep grid, and
-an option the stage does not use is an error naming the option and the stages that use it.
+mistake ends in one line naming the option (exit 2, :class:`pipeline.options.OptionError`; how a message
+names an option: :mod:`pipeline.options`) before any stage starts and before anything is written:
+``--workers`` must be a positive integer, ``--scheduler`` must answer as a dask scheduler with workers
+(:func:`pipeline.scheduler.check_scheduler`), ``--out`` must be a folder we can write in, the sweep grid must
+not exceed :data:`MAX_SCENES` unless ``--yes``, the report's history protrusions must lie on the sweep grid,
+and an option the stage does not use is an error naming the option and the stages that use it.
 
 :func:`one_line_warnings` prints the :class:`~pipeline.physics.material_bounds.PhysicsWarning` of
 derived material parameters as one line. The checks of this module decide what runs, not what a
@@ -16,39 +15,26 @@ stage computes: :mod:`pipeline.code_version` leaves this module out of the stage
 
 from __future__ import annotations
 
-import contextlib
-import contextvars
-import json
 import math
 import os
-import socket
-import struct
 import tempfile
 import warnings
 from pathlib import Path
-from typing import Any, Iterator
-from urllib.parse import urlsplit
+from typing import Any
 
 import numpy as np
 
 from .config.grid import label, range_count, roughness_sets, same_point
 from .config.schema import SCHEMA
-from .io import is_read_only, os_error_line
+from .file_errors import is_read_only
 from .paths import looked_for, special_kind
-from . import fanout, sizing
-from .fanout import CONNECT_TIMEOUT_S, LOCAL
+from . import sizing
 from .config import limits
 from .physics.material_bounds import PhysicsWarning
+from .options import OptionError, first_line, command, flag, given, switch
+from .scheduler import check_scheduler
 
 
-class OptionError(ValueError):
-    """A command-line option is invalid for this stage or scene (one line, names the option)."""
-
-
-#: Seconds a scheduler without workers is given to get one (batch jobs starting) before giving up.
-WORKER_WAIT_S = 30.0
-#: Largest handshake [bytes] a dask server sends (it is ~100 bytes; a banner read as a length is huge).
-_HANDSHAKE_MAX = 1 << 20
 #: Largest sweep grid (protrusions x roughness sets x damping ratios) run without ``--yes``:
 #: about 30 CPU-minutes at ~20 ms per 2 ms scene on one core (docs/performance.md, "Tests and benchmarks");
 #: the other sizes are bounded in :mod:`pipeline.config.limits`.
@@ -68,46 +54,6 @@ OPTION_STAGES: dict[str, tuple[str, ...]] = {
     "detrend": ("roughness FILE...",),
 }
 _SCENE_KEY = {"channel": "roughness.channel", "detrend": "roughness.detrend"}
-
-#: Within :func:`python_call`: the checks name the arguments of a Python call (``out = '...'``), not the
-#: command line's options (``--out ...``).
-_PYTHON: contextvars.ContextVar[bool] = contextvars.ContextVar("hdi_python_call", default=False)
-
-
-@contextlib.contextmanager
-def python_call() -> Iterator[None]:
-    """Within the block (a call of :mod:`pipeline.api`), every message of these checks names the Python
-    argument (``workers = 'two'``, ``yes=True``, stage ``'dmw'``) where the command line names its option
-    (``--workers two``, ``--yes``, ```hdi dmw```): :func:`flag`, :func:`given`, :func:`switch`."""
-    token = _PYTHON.set(True)
-    try:
-        yield
-    finally:
-        _PYTHON.reset(token)
-
-
-def flag(name: str) -> str:
-    """How a message names the option ``name`` (``"write_scene"``): ``--write-scene``, or in a Python call the
-    argument ``write_scene``."""
-    return name if _PYTHON.get() else "--" + name.replace("_", "-")
-
-
-def given(name: str, value: Any, text: bool = False) -> str:
-    """The option ``name`` with its ``value`` in a message: ``--out results/x`` (``text``: the value's repr,
-    ``--workers 'two'``), or in a Python call ``out = 'results/x'``."""
-    if _PYTHON.get():
-        return f"{name} = {value!r}"
-    return f"{flag(name)} {value!r}" if text else f"{flag(name)} {value}"
-
-
-def switch(name: str) -> str:
-    """How a message asks for the switch ``name``: ``--yes``, or in a Python call ``yes=True``."""
-    return f"{name}=True" if _PYTHON.get() else flag(name)
-
-
-def command(stage: str) -> str:
-    """How a message names a stage's command: ```hdi sweep```, or in a Python call the stage ``'sweep'``."""
-    return f"stage {stage!r}" if _PYTHON.get() else f"`hdi {stage}`"
 
 
 def check_workers(workers: int | None) -> None:
@@ -169,176 +115,11 @@ def check_protrusions(values: Any, flying_height_nm: float, what: str = "protrus
     return out
 
 
-#: The environment variable dask itself reads for its ``scheduler-address`` setting.
-SCHEDULER_ENV = "DASK_SCHEDULER_ADDRESS"
-
-
-given_option = given  # (scheduler_address's argument is named ``given``)
-
-
-def scheduler_address(given: str | None) -> tuple[str | None, str]:
-    """The scheduler a run uses and how an error names it: ``--scheduler`` (a local fan-out, an address,
-    or a scheduler file), else :data:`SCHEDULER_ENV`, else ``None`` (local threads).
-
-    A scheduler file is the JSON ``dask scheduler --scheduler-file FILE`` writes: a ``--scheduler``
-    ending in ``.json``, or naming an existing file. dask's YAML config files are not read (importing
-    dask would cost every local run ~0.5 s).
-    """
-    if given is not None and not isinstance(given, (str, os.PathLike)):
-        raise OptionError(f"{given_option('scheduler', given, text=True)}: expected an address (tcp://HOST:PORT), a "
-                          f"scheduler file or one of {', '.join(LOCAL)}, got {type(given).__name__}")
-    given = os.fspath(given) if given is not None else None
-    if given is None:
-        env = os.environ.get(SCHEDULER_ENV, "").strip()
-        return (env, f"{SCHEDULER_ENV}={env}") if env else (None, "")
-    where = given_option("scheduler", given)
-    if given not in LOCAL and "://" not in given and special_kind(given) is not None:
-        # (checked before opening: reading a FIFO waits for a writer forever)
-        raise OptionError(f"{where}: is {special_kind(given)}; expected the JSON file `dask scheduler "
-                          "--scheduler-file FILE` writes, or tcp://HOST:PORT")
-    if given in LOCAL or "://" in given or not (given.endswith(".json") or Path(given).is_file()):
-        return given, where
-    try:
-        with open(given, encoding="utf-8") as f:
-            identity = json.load(f)
-    except FileNotFoundError:
-        raise OptionError(f"{where}: no such scheduler file{looked_for(given)} (expected tcp://HOST:PORT, or the JSON file "
-                          "`dask scheduler --scheduler-file FILE` writes)") from None
-    except OSError as exc:
-        raise OptionError(f"{where}: {os_error_line(exc)}") from None
-    except (UnicodeDecodeError, ValueError) as exc:
-        raise OptionError(f"{where}: not a dask scheduler file ({exc}); expected the JSON file "
-                          "`dask scheduler --scheduler-file FILE` writes") from None
-    address = identity.get("address") if isinstance(identity, dict) else None
-    if not isinstance(address, str) or not address:
-        raise OptionError(f"{where}: field \"address\": expected the scheduler's address (tcp://HOST:PORT), "
-                          f"got {address!r}")
-    return address, f"{where} (address {address})"
-
-
-def _leave(named: str) -> str:
-    """How to run locally instead, for an error about the scheduler ``named``."""
-    if named.startswith(SCHEDULER_ENV):
-        return f"or unset {SCHEDULER_ENV} (or give {given('scheduler', 'threads')}) to run locally"
-    return f"or leave {flag('scheduler')} out to use a local cluster"
-
-
-def check_scheduler(address: str | None, timeout: float = CONNECT_TIMEOUT_S,
-                    worker_wait: float = WORKER_WAIT_S) -> str | None:
-    """The scheduler the run uses (:func:`scheduler_address`), checked: absent, a local one
-    (``synchronous``, ``threads``, ``processes``: :mod:`pipeline.fanout`), or a ``[tcp://]HOST:PORT``
-    where a dask scheduler answers the handshake within ``timeout`` [s] and has a worker within
-    ``worker_wait`` [s] (``tls://``: the connection alone is checked, the handshake is encrypted).
-
-    Returns
-    -------
-    str or None
-        The address (or local name) to hand the stages; ``None``: the local default.
-    """
-    address, named = scheduler_address(address)
-    if address is None or address in LOCAL:
-        return address
-    leave = _leave(named)
-    parts = urlsplit(address if "://" in address else f"tcp://{address}")
-    if parts.scheme not in ("tcp", "tls"):
-        raise OptionError(f"{named}: expected tcp://HOST:PORT (or tls://, or a scheduler file), got scheme "
-                          f"{parts.scheme!r}")
-    try:
-        host, port = parts.hostname, parts.port
-    except ValueError:
-        host, port = None, None
-    if not host or port is None:
-        raise OptionError(f"{named}: expected tcp://HOST:PORT (or a scheduler file)")
-    # (the handshake is read here, not by distributed.Client: against an HTTP server the client hangs
-    # past its own timeout, and it reads a banner such as SSH's as a frame length, a MemoryError)
-    try:
-        with socket.create_connection((host, port), timeout=timeout) as sock:
-            what = _dask_handshake(sock, timeout) if parts.scheme == "tcp" else None
-    except OSError as exc:
-        reason = "timed out" if isinstance(exc, socket.timeout) else (exc.strerror or str(exc))
-        raise OptionError(f"{named}: no scheduler answers at {host}:{port} ({reason}, "
-                          f"{timeout:g} s connect timeout); start one (`dask scheduler`) {leave}") from None
-    if what is not None:
-        raise OptionError(f"{named}: {host}:{port} answers but is not a dask scheduler ({what}); "
-                          f"give the scheduler's address (tcp://HOST:8786 by default, not the dashboard's "
-                          f"8787) {leave}")
-    check_workers_attached(address, timeout, worker_wait, named)
-    return address
-
-
-def _dask_handshake(sock: socket.socket, timeout: float) -> str | None:
-    """Why the service on ``sock`` is not a dask.distributed server (``None``: it is one).
-
-    A dask server speaks first: on accepting a connection it sends its handshake (the comm protocol
-    of ``distributed.comm.tcp``: an 8-byte little-endian length, then msgpack frames naming
-    ``pickle-protocol`` and ``compression``). An HTTP server (a dashboard, a web service) waits for a
-    request instead, and other services send a banner: both are told apart here without sending a
-    byte, where ``distributed.Client`` would hang or read the banner as a length of exabytes.
-    """
-    sock.settimeout(timeout)
-    head = b""
-    try:
-        while len(head) < 8:
-            chunk = sock.recv(8 - len(head))
-            if not chunk:
-                return "it closed the connection without a handshake"
-            head += chunk
-        (size,) = struct.unpack("<Q", head)
-        if not 0 < size <= _HANDSHAKE_MAX:
-            return f"it sent {head[:8]!r} instead of a dask handshake"
-        body = b""
-        while len(body) < size:
-            chunk = sock.recv(min(65536, size - len(body)))
-            if not chunk:
-                break
-            body += chunk
-    except socket.timeout:
-        return f"no dask handshake within {timeout:g} s" + (", as an HTTP server or dashboard does" if not head else "")
-    return None if b"pickle-protocol" in body and b"compression" in body else "its first message is no dask handshake"
-
-
-def check_workers_attached(address: str, timeout: float = CONNECT_TIMEOUT_S,
-                           worker_wait: float = WORKER_WAIT_S, named: str | None = None) -> None:
-    """The dask scheduler at ``address`` has at least one worker, or gets one within ``worker_wait`` [s]
-    (workers submitted as batch jobs may still be starting); its dashboard link is logged
-    (:func:`pipeline.fanout.announce`). ``named``: how an error names the scheduler."""
-    import logging
-    named = named or given("scheduler", address)
-    try:
-        with fanout.new_client(address, timeout) as client:
-            fanout.announce(client, address)
-            if client.scheduler_info().get("workers"):
-                return
-            logging.getLogger("pipeline").info("scheduler %s has no workers; waiting up to %g s for one",
-                                               address, worker_wait)
-            try:
-                client.wait_for_workers(1, timeout=worker_wait)
-                return
-            except (TimeoutError, OSError):
-                pass
-    except (OSError, TimeoutError) as exc:
-        raise OptionError(f"{named}: the dask scheduler did not answer ({exc})") from None
-    except Exception as exc:  # noqa: BLE001 (fail closed: a server imitating the handshake sent garbage after it,
-        # and dask's frame reader raised struct.error; whatever dask raises on it is no scheduler)
-        raise OptionError(f"{named}: answers with a dask-like handshake but not as a dask scheduler "
-                          f"({type(exc).__name__}: {_first_line(exc)}); give the scheduler's address "
-                          f"(tcp://HOST:8786 by default) {_leave(named)}") from None
-    raise OptionError(f"{named}: the dask scheduler has no workers ({worker_wait:g} s waited); "
-                      f"start some (`dask worker {address}`) {_leave(named)}")
-
-
-def _first_line(exc: BaseException, width: int = 120) -> str:
-    """The first line of an exception's text, at most ``width`` characters (an error quoting what a server
-    sent must stay one line)."""
-    text = (str(exc).strip().splitlines() or [""])[0]
-    return text if len(text) <= width else text[:width] + "..."
-
-
 def integration_line(exc: BaseException, scene: Any = None) -> str:
     """One line for a failed integration (:class:`pipeline.model.running.IntegrationError`, whose text names
     the protrusion, the integrator's status and the scene keys to change: :data:`pipeline.model.running.HINTS`):
     the scene (its file and name) and that text."""
-    text = _first_line(exc, 600)
+    text = first_line(exc, 600)
     where = ""
     if scene is not None:
         path = getattr(scene, "path", None)

@@ -18,7 +18,8 @@ recomputation; one that changes too rarely returns a wrong result).
 
 Left out: :data:`ORCHESTRATION`, the modules that decide when and where a stage runs, not what it
 computes (the runner itself, which every stage imports for :class:`~pipeline.runner.Stage`, the
-fan-out, the command line and its option checks) and the Python API (:mod:`pipeline.api`, which calls
+fan-out with its cluster side and the scheduler's check, the command line, its option checks and how they
+name an option) and the Python API (:mod:`pipeline.api`, which calls
 the runner as the command line does; the package re-exports it, so without this every stage, through
 the package's ``__init__``, would be keyed on the whole package).
 """
@@ -35,8 +36,8 @@ from pathlib import Path
 PACKAGE = "pipeline"
 ROOT = Path(__file__).resolve().parent
 #: Modules whose code does not change a result (where and when a stage runs, not what it computes).
-ORCHESTRATION = frozenset({"pipeline.runner", "pipeline.fanout", "pipeline.cli", "pipeline.cli_checks",
-                           "pipeline.api"})
+ORCHESTRATION = frozenset({"pipeline.runner", "pipeline.fanout", "pipeline.cluster", "pipeline.scheduler",
+                           "pipeline.options", "pipeline.cli", "pipeline.cli_checks", "pipeline.api"})
 
 
 @lru_cache(maxsize=None)

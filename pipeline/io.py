@@ -2,7 +2,8 @@
 
 Every dataset is written through :func:`write_dataset` (by :mod:`pipeline.runner` for the stages), which
 
-* refuses a variable or coordinate without ``units`` and ``long_name`` (CF conventions),
+* refuses a variable or coordinate without ``units`` and ``long_name`` (CF conventions) and writes it in its
+  CF encoding, compressed and chunked (:mod:`pipeline.encoding`),
 * adds the global attributes of docs/datasets.md (title, history, source, references, Conventions, the
   package's and the numerical libraries' versions, git revision, config hash, input-file hashes),
 * records a checksum of each variable's values (:data:`CHECKSUM_ATTR`, :func:`data_checksums`),
@@ -29,8 +30,6 @@ import json
 import os
 import re
 import secrets
-import shutil
-import stat
 import subprocess
 import tempfile
 import threading
@@ -44,11 +43,8 @@ import xarray as xr
 from . import DISTRIBUTION, __version__, duck_arrays, interrupts
 from .paths import looked_for, refuse_links
 from .variables import TIME
-
-try:  # (POSIX: the file size limit, ulimit -f)
-    import resource
-except ImportError:  # pragma: no cover
-    resource = None  # type: ignore[assignment]
+from .encoding import OLD_TIME_UNITS, cf_encoding
+from .file_errors import current_umask, write_failure
 
 # xarray's duck-array and dask-collection checks answered without importing dask and pint (~0.5 s a process)
 duck_arrays.defer()
@@ -208,85 +204,6 @@ def check_cf(ds: xr.Dataset, where: str = "dataset") -> None:
         raise DatasetError(f"{where}: variables without units/long_name: {missing}")
 
 
-#: Units of the elapsed time (:data:`pipeline.variables.TIME`) in files written when its coordinate was
-#: ``time`` (read back as seconds, under its one name).
-OLD_TIME_UNITS = "s since 1970-01-01 00:00:00"
-
-
-def cf_encoding(ds: xr.Dataset, compress: bool = True) -> tuple[xr.Dataset, dict[str, dict[str, Any]]]:
-    """A copy of ``ds`` and its NetCDF encoding, arranged for CF-1.8 (see :mod:`pipeline.variables`).
-
-    Coordinates get no ``_FillValue``; labels (strings) lose ``units`` and are stored as character
-    arrays; 64-bit integers are stored as 32-bit (CF 2.2) when their values fit; numeric variables are
-    compressed and chunked (:func:`compression`; lossless: the values read back bit for bit), unless
-    ``compress`` is false (then stored contiguous). Declared missing values already in a variable's
-    encoding (``regime``) are kept.
-    """
-    out = ds.copy()
-    encoding: dict[str, dict[str, Any]] = {}
-    for name in list(out.variables):
-        v = out[name]
-        enc: dict[str, Any] = {k: val for k, val in v.encoding.items() if k == "_FillValue"}
-        if name in out.coords:
-            enc["_FillValue"] = None
-        if v.dtype.kind in "OUS":
-            out[name].attrs.pop("units", None)
-            enc["dtype"] = "S1"
-            enc.pop("_FillValue", None)
-        elif v.dtype == "int64" and (v.size == 0 or (abs(v.values).max() < 2**31)):
-            enc["dtype"] = "int32"
-        if compress and v.dtype.kind not in "OUS":
-            enc.update(compression(v.dims, v.shape, v.dtype.itemsize))
-        encoding[name] = enc
-    return out, encoding
-
-
-#: zlib level of the numeric variables hdi compresses (on the histories of ``make run``: 0.5 % larger
-#: than level 9, in 60 % of its time).
-ZLIB_LEVEL = 4
-#: Dimensions that index grid points of a study (one roughness set, one damping ratio, one DMW
-#: realisation, one pass of a stepping chain): a chunk holds one point, so reading one slice
-#: (``sw.fhm_bv.sel(roughness=..., damping=...)``) decompresses only that slice's protrusion rows.
-POINT_DIMS = frozenset({"roughness", "damping", "realisation", "direction", "protrusion", "hist_protrusion"})
-#: Dimensions a chunk spans whole (a time history, a protrusion row of the sweep's scalars).
-ROW_DIMS = (TIME, "protrusion")
-#: A variable smaller than this [B] is stored contiguous and uncompressed: HDF5 spends about 3 kB on the
-#: chunk index of every chunked variable, more than zlib saves on a few hundred doubles (measured on the
-#: datasets of ``make run``: compressing every variable made sweep.nc 105 kB instead of 50 kB).
-COMPRESS_FROM = 4 * 1024
-#: A variable smaller than this [B] is one chunk.
-WHOLE_BELOW = 64 * 1024
-#: Largest chunk [B] (reading one value decompresses its whole chunk).
-CHUNK_MAX = 4 * 1024 * 1024
-
-
-def compression(dims: tuple, shape: tuple, itemsize: int) -> dict[str, Any]:
-    """NetCDF4 encoding of a numeric variable: zlib (:data:`ZLIB_LEVEL`) with the shuffle filter, and
-    chunks fitted to how the datasets are read.
-
-    The chunk spans the variable whole along its row dimension (the first of :data:`ROW_DIMS` it has:
-    ``elapsed_time`` for a history, else ``protrusion``) and every dimension not in :data:`POINT_DIMS`,
-    and one point along the other :data:`POINT_DIMS`: in ``sweep.nc`` one chunk is the protrusion row
-    of one roughness set x damping ratio (x pass x realisation); in ``sweep_histories.nc`` one time
-    history. A variable under :data:`WHOLE_BELOW` is one chunk; a chunk above :data:`CHUNK_MAX` is
-    halved along its longest side. Variables under :data:`COMPRESS_FROM`, scalars (0-d) and empty
-    variables are stored contiguous, uncompressed (HDF5 filters need chunks, which 0-d and empty
-    variables cannot have).
-    """
-    size = int(np.prod(shape)) * itemsize
-    if not shape or size < COMPRESS_FROM:
-        return {}
-    if size < WHOLE_BELOW:
-        chunks = list(shape)
-    else:
-        row = next((d for d in ROW_DIMS if d in dims), None)
-        chunks = [n if d == row or d not in POINT_DIMS else 1 for d, n in zip(dims, shape)]
-    while int(np.prod(chunks)) * itemsize > CHUNK_MAX:
-        j = int(np.argmax(chunks))
-        chunks[j] = -(-chunks[j] // 2)
-    return {"zlib": True, "complevel": ZLIB_LEVEL, "shuffle": True, "chunksizes": tuple(chunks)}
-
-
 #: The paper the model implements, as CF's ``references`` attribute of every dataset (its DOI).
 PAPER_REFERENCE = ("A. P. Vakis, S.-C. Lee, A. A. Polycarpou, \"Dynamic head-disk interface instabilities with "
                    "friction for light contact (surfing) recording\", IEEE Trans. Magn. 45(11) 4966-4971 (2009), "
@@ -416,91 +333,6 @@ def move_dataset(written: str | Path, path: str | Path) -> Path:
         raise DatasetBusy(path)
     os.replace(written, path)
     return path
-
-
-def is_read_only(path: str | Path) -> bool:
-    """Whether a file is read-only: no write permission bit at all (what ``chmod a-w`` leaves, which
-    root could still write over), or not writable by this process."""
-    mode = os.stat(path).st_mode
-    return not mode & (stat.S_IWUSR | stat.S_IWGRP | stat.S_IWOTH) or not os.access(path, os.W_OK)
-
-
-#: Spare bytes [B] a write needs beyond a dataset's arrays (HDF5 headers and attributes): with less free
-#: space than the arrays and this, a failed write is put down to a full disk.
-_WRITE_SLACK = 1 << 20
-
-
-def write_failure(path: Path, exc: BaseException, size: int) -> OSError:
-    """The :class:`OSError` naming ``path`` (never its temporary file) for a failed write of ``size``
-    bytes [B]; the HDF5 library's ``NetCDF: HDF error`` says no errno, so the free space of the file
-    system decides whether the disk was full."""
-    if isinstance(exc, OSError) and exc.errno is not None and not (
-            exc.errno in (errno.EACCES, errno.EPERM) and os.access(path.parent, os.W_OK)):
-        return OSError(exc.errno, exc.strerror, str(path))
-    # (the HDF5 library says "Permission denied" for a file it failed to create in a folder this process
-    # writes to, where its temporary file was just made: a full disk, told apart by the free space)
-    try:
-        free = shutil.disk_usage(path.parent).free
-    except OSError:
-        free = None
-    need = size * 1.1 + _WRITE_SLACK
-    if free is not None and free < need:
-        return OSError(errno.ENOSPC, f"{os.strerror(errno.ENOSPC)} ({free / 1e6:.3g} MB free, the dataset needs "
-                                     f"about {size / 1e6:.3g} MB)", str(path))
-    limit = _file_size_limit()
-    if limit is not None and limit < need:
-        return OSError(errno.EFBIG, f"{os.strerror(errno.EFBIG)} (the file size limit is {limit / 1e6:.3g} MB, "
-                                    f"the dataset needs about {size / 1e6:.3g} MB)", str(path))
-    return OSError(errno.EIO, f"the dataset could not be written ({exc}; {free / 1e6 if free else 0:.0f} MB free)",
-                   str(path))
-
-
-def _file_size_limit() -> int | None:
-    """The largest file [B] this process may write (``ulimit -f``; ``None``: no limit, or not POSIX)."""
-    if resource is None:  # pragma: no cover (not POSIX)
-        return None
-    soft = resource.getrlimit(resource.RLIMIT_FSIZE)[0]
-    return None if soft == resource.RLIM_INFINITY else soft
-
-
-#: What to do about an OSError, by errno (:func:`os_error_line`).
-_ADVICE = {
-    errno.ENOSPC: "the disk is full: free some space or choose another --out",
-    errno.EDQUOT: "the disk quota is used up: free some space or choose another --out",
-    errno.EACCES: "make it writable, or choose another --out",
-    errno.EPERM: "make it writable, or choose another --out",
-    errno.EROFS: "choose another --out",
-    errno.ENAMETOOLONG: "choose a shorter --out or scene name",
-    errno.EISDIR: "it is a folder where hdi writes a file: remove or rename it",
-    errno.ENOTDIR: "a part of it is a file where hdi needs a folder: remove or rename that file",
-    errno.EEXIST: "it is a file where hdi needs a folder: remove or rename it",
-    errno.EFBIG: "the file size limit (ulimit -f) is too small: raise it",
-    errno.EIO: "check the file system (free space, a network mount) and run again",
-}
-
-
-def os_error_line(exc: OSError) -> str:
-    """One line for an :class:`OSError` of the file system: the path, what happened, what to do
-    (``sweep.nc: Is a directory; it is a folder where hdi writes a file: remove or rename it``)."""
-    what = exc.strerror or str(exc) or type(exc).__name__
-    where = exc.filename2 if exc.errno == errno.EISDIR and exc.filename2 else exc.filename
-    advice = None if ";" in what else _ADVICE.get(exc.errno)  # (a message of hdi's own says what to do)
-    return (f"{where}: " if where else "") + what + (f"; {advice}" if advice else "")
-
-
-def current_umask() -> int:
-    """The process's file-mode creation mask (from ``/proc`` on Linux, without changing it; else by
-    setting and restoring it)."""
-    try:
-        with open("/proc/self/status") as fh:
-            for line in fh:
-                if line.startswith("Umask:"):
-                    return int(line.split()[1], 8)
-    except (OSError, ValueError):
-        pass
-    mask = os.umask(0o022)
-    os.umask(mask)
-    return mask
 
 
 def _to_netcdf(ds: xr.Dataset, path: str, encoding: dict[str, dict[str, Any]]) -> None:

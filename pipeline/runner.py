@@ -55,7 +55,7 @@ import xarray as xr
 
 from . import interrupts
 from .code_version import code_key
-from .fanout import shared_folder
+from .cluster import shared_folder
 from .progress import stage as progress_stage
 from .model.inputs import SimulationInputs, from_folder
 from .model import compiled

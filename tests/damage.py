@@ -9,12 +9,12 @@ from pathlib import Path
 import netCDF4
 import numpy as np
 
-from pipeline.io import ZLIB_LEVEL
+from pipeline.encoding import ZLIB_LEVEL
 
 
 def chunk_offset(path: Path, name: str) -> tuple[int, int]:
     """``(offset, length)`` [B] in ``path`` of the first chunk of variable ``name`` (zlib with shuffle, as
-    :func:`pipeline.io.compression` writes it): that chunk's values shuffled and compressed again at the same
+    :func:`pipeline.encoding.compression` writes it): that chunk's values shuffled and compressed again at the same
     level give the very bytes HDF5 stored, found in the file."""
     with netCDF4.Dataset(path) as nc:
         v = nc.variables[name]

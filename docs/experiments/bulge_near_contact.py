@@ -31,7 +31,7 @@ from pipeline.config.scene import load_scene  # noqa: E402
 from pipeline.config.si import to_si  # noqa: E402
 from pipeline.model import bulge_table as bt  # noqa: E402
 from pipeline.model.dmw_record import disk_speed_m_s  # noqa: E402
-from pipeline.physics import bulge_bearing as bb  # noqa: E402
+from pipeline.physics import bulge_bearing as bb, reynolds  # noqa: E402
 
 NM = 1e-9
 GS = 1.65  # [nm] the lab's cap gap (docs/model.md, section "Lift cap (hypothesis H8)")
@@ -60,7 +60,7 @@ def main() -> None:
     si = to_si(scene)
     rough = bt.scene_roughness(scene)
     sol = scene["solver"]
-    grid = bb.ReynoldsGrid(cells_per_a=sol["bulge_cells_per_a"], cells_per_b=sol["bulge_cells_per_b"])
+    grid = reynolds.ReynoldsGrid(cells_per_a=sol["bulge_cells_per_a"], cells_per_b=sol["bulge_cells_per_b"])
     base = dict(a=si.tfc.half_length, b=si.tfc.half_width, speed=disk_speed_m_s(scene["dmw"]), grid=grid,
                 viscosity=bt.AIR_VISCOSITY, mean_free_path=bt.AIR_MEAN_FREE_PATH, ambient_pressure=bt.AMBIENT_PRESSURE)
     g = np.unique(np.concatenate([np.geomspace(0.15, 5.0, 40), SHOWN])) * NM
@@ -77,7 +77,7 @@ def main() -> None:
                 if kw is None:
                     F = bb.ph_lift(g, d * NM, p * 1e6, base["a"], base["b"])[0]
                 else:
-                    F = bb.reynolds_solve(g, d * NM, p_pad=p * 1e6, **base, **kw)["lift"]
+                    F = reynolds.reynolds_solve(g, d * NM, p_pad=p * 1e6, **base, **kw)["lift"]
                 results[(p, d, label)] = F
                 i = int(np.argmax(F))
                 at = [F[np.argmin(np.abs(g / NM - x))] * 1e3 for x in SHOWN]

@@ -51,7 +51,7 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import replace
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -400,95 +400,142 @@ def calibrate(scene: Any, inputs: SimulationInputs, scheduler: str | None = None
     tol = td["k_tolerance"]
     grid = protrusion_grid(scene)
     ks = np.linspace(k_range[0], k_range[1], td["curve_points"])
-    c = CALIBRATION
-    extra: dict[str, Any] = {}
-    collapsed: list[float] = []
     if method == "exact":
-        todo = np.union1d(grid, label([td["onset_nm"], td["previous_nm"]]))
-        found, seconds = thresholds(scene, inputs, todo, k_range, tol, scheduler, workers)
-        k_on, st_on = _status(found[float(label(td["onset_nm"]))][0], k_range)
-        k_prev, st_prev = _status(found[float(label(td["previous_nm"]))][0], k_range)
-        n_on = n_prev = 0
-        kstar = np.array([found[float(p)][0] for p in grid])
-        # the first grid protrusion with k*(protrusion) < k (no monotonicity in protrusion assumed)
-        curve = np.array([grid[np.argmax(kstar < k)] if np.any(kstar < k) else np.nan for k in ks])
-        collapsed = [float(p) for p in grid if found[float(p)][2]]
-        extra = {
-            "k_threshold": c["k_threshold"].data(kstar, ("protrusion",)),
-            "min_separation": c["min_separation"].data(np.array([found[float(p)][1] for p in grid]),
-                                                       ("protrusion",)),
-        }
-        simulations = 2 * len(todo) + sum(v[3] for v in found.values())
-        how = ("exact: k* = minimum separation / sigma of one flying run (contact law off) per protrusion; "
-               "bisection only where the transient dips below the steady window")
-        if collapsed:  # (a warning where it decides the touchdown: at or below touchdown.onset_nm)
-            (log.warning if collapsed[0] <= td["onset_nm"] else log.info)(
-                "calibrate: the flying run (contact law off) collapses from %g nm of the grid on (%s): contact "
-                "there for every k", collapsed[0], found[collapsed[0]][2])
+        th = _exact_thresholds(scene, inputs, grid, ks, k_range, tol, scheduler, workers)
     elif method == "bisection":
-        k_on, st_on, n_on = k_threshold(model, td["onset_nm"], k_range, tol)
-        k_prev, st_prev, n_prev = k_threshold(model, td["previous_nm"], k_range, tol)
-        curve = np.array([touchdown_protrusion(model, k, grid) for k in ks])
-        simulations = n_on + n_prev
-        seconds = float("nan")
-        how = "bisection on k for each protrusion; touchdown curve by bisection over the grid"
+        th = _bisection_thresholds(model, td, grid, ks, k_range, tol)
     else:  # the scene schema admits only METHODS
         raise ValueError(f"touchdown.method = {method!r}: expected one of {METHODS}")
     fitted, warning = touchdown_provenance(scene)
     log.info("calibrate: k is fitted to the touchdown (%s)", fitted)
     if warning:
         log.warning("calibrate: %s", warning)
-    log.info("calibrate: k*(%.2f nm) = %.4f (%s), k*(%.2f nm) = %.4f (%s)", td["onset_nm"], k_on, st_on,
-             td["previous_nm"], k_prev, st_prev)
-    onset, prev = td["onset_nm"], td["previous_nm"]
-    if st_on == "found" and st_prev in ("found", "above range") and k_on < k_prev:
-        k_low, k_high = k_on, k_prev
-        k_cal, why = choose_k(k_low, k_high, td["k_choice"], scene["contact"].get("fallback_probability"))
-        outcome = f"admissible k in ({k_low:.4f}, {k_high:.4f}]; chosen {why} (contact at {onset} nm, none at {prev} nm)"
-        check_physical(k_cal, (k_low, k_high), scene)  # (before any dataset: nothing is written)
-    else:
-        k_low = k_high = k_cal = np.nan
-        reasons = []
-        if st_on == "below range":
-            reasons.append(f"at {onset} nm contact happens for every k >= {k_range[0]}")
-        if st_prev == "below range":
-            reasons.append(f"at {prev} nm contact already happens for every k >= {k_range[0]}, so no k in range "
-                           f"avoids contact at the previous step")
-        if st_on == "above range":
-            reasons.append(f"at {onset} nm no k <= {k_range[1]} gives contact")
-        if st_on == "found" and st_prev == "found" and k_on >= k_prev:
-            reasons.append(f"k*({onset}) = {k_on:.4f} >= k*({prev}) = {k_prev:.4f}: touching is not monotone "
-                           "in protrusion here")
-        outcome = "no admissible k in the range " + str(list(k_range)) + ": " + "; ".join(reasons)
-    finite = curve[np.isfinite(curve)]
-    if finite.size == curve.size and np.ptp(finite) == 0:
+    log.info("calibrate: k*(%.2f nm) = %.4f (%s), k*(%.2f nm) = %.4f (%s)", td["onset_nm"], th.k_on, th.st_on,
+             td["previous_nm"], th.k_prev, th.st_prev)
+    k_low, k_high, k_cal, outcome = _admissible(scene, th, k_range)
+    finite = th.curve[np.isfinite(th.curve)]
+    if finite.size == th.curve.size and np.ptp(finite) == 0:
         outcome += (f". The touchdown protrusion is {finite[0]:g} nm for every k in the range: contact does not "
                     "depend on the criterion here, the slider is pulled into contact (adhesive snap-in) before "
                     "the separation reaches any k sigma of the range")
-    p2, p1 = contact_probabilities(k_cal) if np.isfinite(k_cal) else (np.nan, np.nan)  # two-sided first
-    data = {
-        "touchdown": c["touchdown"].data(curve, ("k",)),
-        "k_calibrated": c["k_calibrated"].data(k_cal, ()),
-        "k_low": c["k_low"].data(k_low, ()),
-        "k_high": c["k_high"].data(k_high, ()),
-        "k_onset": c["k_onset"].data(k_on, (), description=f"{c['k_onset'].sentence} ({st_on})"),
-        "k_previous": c["k_previous"].data(k_prev, (), description=f"{c['k_previous'].sentence} ({st_prev})"),
-        "contact_probability_one_sided": c["contact_probability_one_sided"].data(p1, ()),
-        "contact_probability_two_sided": c["contact_probability_two_sided"].data(p2, ()),
-        "sigma": c["sigma"].from_si(model.sigma, ()),
-    }
-    data.update(extra)
-    coords = {"k": c["k"].data(ks, ("k",))}
-    if extra:
-        coords["protrusion"] = c["protrusion"].data(grid, ("protrusion",))
-    ds = xr.Dataset(data, coords=coords)
+    ds = _calibration_dataset(th, (k_low, k_high, k_cal), ks, grid, model.sigma)
+    onset, prev = td["onset_nm"], td["previous_nm"]
     ds.attrs.update({"outcome": outcome, "touchdown_onset_nm": onset, "touchdown_previous_nm": prev,
                      "k_range": str(list(k_range)), "k_tolerance": tol,
-                     "simulations": simulations, "touchdown_method": method, "method": how,
-                     "batch_seconds": round(seconds, 3) if np.isfinite(seconds) else "n/a",
-                     "collapsed_from_nm": collapsed[0] if method == "exact" and collapsed else "none",
+                     "simulations": th.simulations, "touchdown_method": method, "method": th.how,
+                     "batch_seconds": round(th.seconds, 3) if np.isfinite(th.seconds) else "n/a",
+                     "collapsed_from_nm": th.collapsed[0] if method == "exact" and th.collapsed else "none",
                      "touchdown_fitted": fitted, "touchdown_source": "paper" if papers_touchdown(scene) else "scene",
                      "touchdown_warning": warning or "none",
                      "k_physical_min": K_PHYSICAL_MIN,
                      "paper": "the paper's calibrated k corresponds to a 32.8 % two-sided contact probability (k = 0.978)"})
     return ds
+
+
+@dataclass
+class _Thresholds:
+    """What a calibration method found: the threshold k* [1] and its status at the onset and the previous
+    protrusion, the touchdown protrusion [nm] per k of the curve, the runs it took and its batch seconds [s],
+    how it works, the exact method's per-protrusion variables and the grid protrusions [nm] where the flying run
+    collapses."""
+
+    k_on: float
+    st_on: str
+    k_prev: float
+    st_prev: str
+    curve: np.ndarray
+    simulations: int
+    seconds: float
+    how: str
+    extra: dict[str, Any] = field(default_factory=dict)
+    collapsed: list[float] = field(default_factory=list)
+
+
+def _exact_thresholds(scene: Any, inputs: SimulationInputs, grid: np.ndarray, ks: np.ndarray, k_range: tuple,
+                      tol: float, scheduler: str | None, workers: int | None) -> _Thresholds:
+    """The exact method: k* of one flying run (contact law off) per protrusion of the grid and of the onset and
+    previous protrusions (:func:`thresholds`); the touchdown curve from them."""
+    td = scene["touchdown"]
+    c = CALIBRATION
+    todo = np.union1d(grid, label([td["onset_nm"], td["previous_nm"]]))
+    found, seconds = thresholds(scene, inputs, todo, k_range, tol, scheduler, workers)
+    k_on, st_on = _status(found[float(label(td["onset_nm"]))][0], k_range)
+    k_prev, st_prev = _status(found[float(label(td["previous_nm"]))][0], k_range)
+    kstar = np.array([found[float(p)][0] for p in grid])
+    # the first grid protrusion with k*(protrusion) < k (no monotonicity in protrusion assumed)
+    curve = np.array([grid[np.argmax(kstar < k)] if np.any(kstar < k) else np.nan for k in ks])
+    collapsed = [float(p) for p in grid if found[float(p)][2]]
+    extra = {
+        "k_threshold": c["k_threshold"].data(kstar, ("protrusion",)),
+        "min_separation": c["min_separation"].data(np.array([found[float(p)][1] for p in grid]),
+                                                   ("protrusion",)),
+    }
+    simulations = 2 * len(todo) + sum(v[3] for v in found.values())
+    how = ("exact: k* = minimum separation / sigma of one flying run (contact law off) per protrusion; "
+           "bisection only where the transient dips below the steady window")
+    if collapsed:  # (a warning where it decides the touchdown: at or below touchdown.onset_nm)
+        (log.warning if collapsed[0] <= td["onset_nm"] else log.info)(
+            "calibrate: the flying run (contact law off) collapses from %g nm of the grid on (%s): contact "
+            "there for every k", collapsed[0], found[collapsed[0]][2])
+    return _Thresholds(k_on, st_on, k_prev, st_prev, curve, simulations, seconds, how, extra, collapsed)
+
+
+def _bisection_thresholds(model: Any, td: Any, grid: np.ndarray, ks: np.ndarray, k_range: tuple,
+                          tol: float) -> _Thresholds:
+    """The bisection method: k* by bisection at the onset and previous protrusions, the touchdown curve by
+    bisection over the grid."""
+    k_on, st_on, n_on = k_threshold(model, td["onset_nm"], k_range, tol)
+    k_prev, st_prev, n_prev = k_threshold(model, td["previous_nm"], k_range, tol)
+    curve = np.array([touchdown_protrusion(model, k, grid) for k in ks])
+    return _Thresholds(k_on, st_on, k_prev, st_prev, curve, n_on + n_prev, float("nan"),
+                       "bisection on k for each protrusion; touchdown curve by bisection over the grid")
+
+
+def _admissible(scene: Any, th: _Thresholds, k_range: tuple) -> tuple[float, float, float, str]:
+    """The admissible range ``(k_low, k_high]`` [1] between the thresholds, the chosen k [1] (NaN without a range)
+    and the outcome's sentence (why there is none)."""
+    td = scene["touchdown"]
+    onset, prev = td["onset_nm"], td["previous_nm"]
+    k_on, st_on, k_prev, st_prev = th.k_on, th.st_on, th.k_prev, th.st_prev
+    if st_on == "found" and st_prev in ("found", "above range") and k_on < k_prev:
+        k_low, k_high = k_on, k_prev
+        k_cal, why = choose_k(k_low, k_high, td["k_choice"], scene["contact"].get("fallback_probability"))
+        outcome = f"admissible k in ({k_low:.4f}, {k_high:.4f}]; chosen {why} (contact at {onset} nm, none at {prev} nm)"
+        check_physical(k_cal, (k_low, k_high), scene)  # (before any dataset: nothing is written)
+        return k_low, k_high, k_cal, outcome
+    reasons = []
+    if st_on == "below range":
+        reasons.append(f"at {onset} nm contact happens for every k >= {k_range[0]}")
+    if st_prev == "below range":
+        reasons.append(f"at {prev} nm contact already happens for every k >= {k_range[0]}, so no k in range "
+                       f"avoids contact at the previous step")
+    if st_on == "above range":
+        reasons.append(f"at {onset} nm no k <= {k_range[1]} gives contact")
+    if st_on == "found" and st_prev == "found" and k_on >= k_prev:
+        reasons.append(f"k*({onset}) = {k_on:.4f} >= k*({prev}) = {k_prev:.4f}: touching is not monotone "
+                       "in protrusion here")
+    return np.nan, np.nan, np.nan, "no admissible k in the range " + str(list(k_range)) + ": " + "; ".join(reasons)
+
+
+def _calibration_dataset(th: _Thresholds, ks_found: tuple[float, float, float], ks: np.ndarray, grid: np.ndarray,
+                         sigma: float) -> xr.Dataset:
+    """``calibration.nc``'s variables (in dataset units; ``sigma`` [m] of the model) without its attributes."""
+    c = CALIBRATION
+    k_low, k_high, k_cal = ks_found
+    p2, p1 = contact_probabilities(k_cal) if np.isfinite(k_cal) else (np.nan, np.nan)  # two-sided first
+    data = {
+        "touchdown": c["touchdown"].data(th.curve, ("k",)),
+        "k_calibrated": c["k_calibrated"].data(k_cal, ()),
+        "k_low": c["k_low"].data(k_low, ()),
+        "k_high": c["k_high"].data(k_high, ()),
+        "k_onset": c["k_onset"].data(th.k_on, (), description=f"{c['k_onset'].sentence} ({th.st_on})"),
+        "k_previous": c["k_previous"].data(th.k_prev, (), description=f"{c['k_previous'].sentence} ({th.st_prev})"),
+        "contact_probability_one_sided": c["contact_probability_one_sided"].data(p1, ()),
+        "contact_probability_two_sided": c["contact_probability_two_sided"].data(p2, ()),
+        "sigma": c["sigma"].from_si(sigma, ()),
+    }
+    data.update(th.extra)
+    coords = {"k": c["k"].data(ks, ("k",))}
+    if th.extra:
+        coords["protrusion"] = c["protrusion"].data(grid, ("protrusion",))
+    return xr.Dataset(data, coords=coords)

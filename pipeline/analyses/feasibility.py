@@ -6,7 +6,7 @@ has no indices (McCool's relations at ``roughness.summit_density_per_um2 = 5`` w
 and R: no summit-height variance). :func:`check_box` evaluates, before any evaluation, the rules a
 candidate meets when it is built (:func:`problem`), each the model's own:
 
-* the scene's validation and cross-checks (:func:`pipeline.analyses.study.with_values`, e.g. ``f1 < f2``);
+* the scene's validation and cross-checks (:func:`pipeline.analyses.free_parameters.with_values`, e.g. ``f1 < f2``);
 * McCool's relations of explicit roughness statistics need the bandwidth ``alpha = 2412.74 (sigma eta
   R)^2 > 0.8968`` (:data:`pipeline.physics.asperity_statistics.ALPHA_MIN`; docs/model.md, section
   "Asperity statistics");
@@ -17,7 +17,7 @@ candidate meets when it is built (:func:`problem`), each the model's own:
 * the air bearing's modal inversion (:func:`pipeline.model.assembly.slider_from_scene`): a real stiffness
   pair of the two frequencies that the scene's root rule accepts, pad dampers >= 0;
 * the contact criterion k without a calibration (:func:`pipeline.model.scene_inputs.contact_k`) and a
-  ``[dmw]`` key only with a synthetic record (:func:`pipeline.evaluations.candidate_inputs`).
+  ``[dmw]`` key only with a synthetic record (:func:`pipeline.candidates.candidate_inputs`).
 
 Points (:func:`check_box`): the *reference* (each key's scene value when within its bounds, else the middle
 of the bounds); each *bound alone* (the others at the reference), where a failure names the key, the bound
@@ -37,7 +37,7 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from .study import Parameter, parse_parameters, scene_value, with_values
+from .free_parameters import Parameter, parse_parameters, scene_value, with_values
 from ..config.schema import SceneError
 from ..model import scene_inputs
 from ..model.interface_tables import interface_parameters

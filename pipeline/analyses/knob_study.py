@@ -407,51 +407,13 @@ def study(evaluate: Evaluate, knobs: list[Knob], reference: dict[str, float], po
     if ref.failed.any():
         raise RuntimeError(f"the reference run failed: {ref.messages}")
 
-
-    n_p, n_k, n_o = len(points), len(knobs), len(HEADLINE)
-    n_l = max(len(kb.settings) for kb in knobs)
-    shape = (n_p, n_k, n_l)
-    error = np.full(shape + (n_o,), np.nan)
-    values = np.full(shape + (n_o,), np.nan)
-    sim_time = np.full(shape, np.nan)
-    setup_time = np.full((n_k, n_l), np.nan)
-    steps = np.full(shape + (3,), -1, dtype=np.int64)
-    failed = np.zeros(shape, dtype=np.int8)
-    is_ref = np.zeros((n_k, n_l), dtype=np.int8)
-    setting = np.full((n_k, n_l), np.nan)
-    results: dict[tuple[int, int], Result] = {}
-    rerun: Result | None = None  # the rows equal to the reference: one fresh run, not a copy of ``ref``
-    for ik, kb in enumerate(knobs):
-        for il, value in enumerate(kb.settings):
-            cfg = {**reference, **kb.base, **kb.solver_values(value)}
-            setting[ik, il] = value
-            same = all(cfg[key] == reference[key] for key in reference)
-            if same:
-                # a new model build and integration, so their zero error checks determinism
-                rerun = rerun or evaluate(cfg, repeat)
-                res = rerun
-            else:
-                res = evaluate(cfg, repeat)
-            is_ref[ik, il] = same
-            results[ik, il] = res
-            e = errors(res, ref)
-            error[:, ik, il] = e
-            values[:, ik, il] = res.values
-            sim_time[:, ik, il] = res.sim_time
-            setup_time[ik, il] = res.setup_time(kb.kind)
-            steps[:, ik, il] = res.info
-            failed[:, ik, il] = res.failed
-            me = max_error(e)
-            log.info(f"  {kb.name:>20} = {value:<8g} max error " + "  ".join(
-                f"{p}: {m:9.3g}" for p, m in zip(points, me))
-                + f"   time {np.nansum(res.sim_time) + res.setup_time(kb.kind):7.3f} s"
-                + ("  FAILED: " + "; ".join(res.messages) if res.failed.any() else ""))
-    wall = sim_time + setup_time[None, :, :]
-    max_err = max_error(error)
-    passes_ = np.zeros((n_k, n_l), dtype=np.int8)
+    g = _run_knobs(evaluate, knobs, reference, points, ref, repeat)
+    wall = g.sim_time + g.setup_time[None, :, :]
+    max_err = max_error(g.error)
+    passes_ = np.zeros(g.setup_time.shape, dtype=np.int8)
     for ik, kb in enumerate(knobs):
         for il in range(len(kb.settings)):
-            passes_[ik, il] = passes(error[:, ik, il], tol)
+            passes_[ik, il] = passes(g.error[:, ik, il], tol)
 
     # choose defaults, then check them together
     chosen_level = {}
@@ -465,8 +427,8 @@ def study(evaluate: Evaluate, knobs: list[Knob], reference: dict[str, float], po
     combo_cost = {c: float(np.nansum(r.sim_time) + r.setup_time("all")) for c, r in combos.items()}
     configs = {"chosen": chosen_cfg, "scene": scene_cfg}
 
-    ds = _dataset(points, knobs, setting, error, values, sim_time, setup_time, wall, max_err, steps, failed,
-                  is_ref, passes_, chosen_level, ref, combos, tol)
+    ds = _dataset(points, knobs, g.setting, g.error, g.values, g.sim_time, g.setup_time, wall, max_err, g.steps,
+                  g.failed, g.is_ref, passes_, chosen_level, ref, combos, tol)
     chosen = {kb.name: (kb.settings[chosen_level[kb.name]] if chosen_level[kb.name] is not None else None)
               for kb in knobs}
     chosen_err = {}
@@ -477,7 +439,90 @@ def study(evaluate: Evaluate, knobs: list[Knob], reference: dict[str, float], po
     comb_err = {c: {p: float(max_error(errors(r, ref))[ip]) for ip, p in enumerate(points)}
                 for c, r in combos.items()}
     rec_notes = {f"{r:g} MS/s": n for r, n in (record_notes or {}).items()}
-    attrs = {
+    ds.attrs.update(_study_attrs(knobs, reference, points, tol, combined_tol))
+    ds.attrs.update({
+        "chosen_defaults": {k_: (cast(k_, v) if v is not None else None) for k_, v in chosen.items()},
+        "chosen_defaults_errors": chosen_err,
+        "chosen_configuration": {k_: cast(k_, v) for k_, v in chosen_cfg.items()},
+        "scene_configuration": {k_: cast(k_, v) for k_, v in scene_cfg.items()},
+        "combined_max_errors": comb_err,
+        "combined_total_wall_time_s": combo_cost,
+        "chosen_adjustments": adjustments or "none",
+        "timing": f"simulation: median of {repeat} runs of simulate (run, summary, dataset) after compilation; table builds "
+                  "longer than 1 s timed once; sequential, one process",
+        "cpus": os.cpu_count() or 0,
+        "k": float(k) if k is not None else "none",
+        "k_source": k_source,
+        "dmw_record_method": rec_notes or "no dmw effect",
+        "dmw_record_check": "; ".join(f"{r}: {n}" for r, n in rec_notes.items()) or "none",
+        "failures": "; ".join(f"{kb.name}={kb.settings[il]:g}: {m}" for (ik, il), r in g.results.items()
+                              for kb in [knobs[ik]] for m in r.messages) or "none",
+    })
+    return ds, Summary(chosen, chosen_err, comb_err, configs, combo_cost)
+
+
+@dataclass
+class _Grid:
+    """Every knob's settings run against the reference, on (point, knob, level[, headline output]): the errors
+    [1] and values (dataset units) of the headline outputs, simulation times [s], setup times [s] per (knob,
+    level), step counters, failures, whether a row is the reference's, the settings and each run's result."""
+
+    error: np.ndarray
+    values: np.ndarray
+    sim_time: np.ndarray
+    setup_time: np.ndarray
+    steps: np.ndarray
+    failed: np.ndarray
+    is_ref: np.ndarray
+    setting: np.ndarray
+    results: dict[tuple[int, int], Result]
+
+
+def _run_knobs(evaluate: Evaluate, knobs: list[Knob], reference: dict[str, float], points: dict[str, float],
+               ref: Result, repeat: int) -> _Grid:
+    """Run every setting of every knob (the others at the reference; the rows equal to the reference once, a
+    fresh run whose zero error checks determinism) and compare each with the reference run ``ref``."""
+    n_p, n_k, n_o = len(points), len(knobs), len(HEADLINE)
+    n_l = max(len(kb.settings) for kb in knobs)
+    shape = (n_p, n_k, n_l)
+    g = _Grid(error=np.full(shape + (n_o,), np.nan), values=np.full(shape + (n_o,), np.nan),
+              sim_time=np.full(shape, np.nan), setup_time=np.full((n_k, n_l), np.nan),
+              steps=np.full(shape + (3,), -1, dtype=np.int64), failed=np.zeros(shape, dtype=np.int8),
+              is_ref=np.zeros((n_k, n_l), dtype=np.int8), setting=np.full((n_k, n_l), np.nan), results={})
+    rerun: Result | None = None  # the rows equal to the reference: one fresh run, not a copy of ``ref``
+    for ik, kb in enumerate(knobs):
+        for il, value in enumerate(kb.settings):
+            cfg = {**reference, **kb.base, **kb.solver_values(value)}
+            g.setting[ik, il] = value
+            same = all(cfg[key] == reference[key] for key in reference)
+            if same:
+                # a new model build and integration, so their zero error checks determinism
+                rerun = rerun or evaluate(cfg, repeat)
+                res = rerun
+            else:
+                res = evaluate(cfg, repeat)
+            g.is_ref[ik, il] = same
+            g.results[ik, il] = res
+            e = errors(res, ref)
+            g.error[:, ik, il] = e
+            g.values[:, ik, il] = res.values
+            g.sim_time[:, ik, il] = res.sim_time
+            g.setup_time[ik, il] = res.setup_time(kb.kind)
+            g.steps[:, ik, il] = res.info
+            g.failed[:, ik, il] = res.failed
+            me = max_error(e)
+            log.info(f"  {kb.name:>20} = {value:<8g} max error " + "  ".join(
+                f"{p}: {m:9.3g}" for p, m in zip(points, me))
+                + f"   time {np.nansum(res.sim_time) + res.setup_time(kb.kind):7.3f} s"
+                + ("  FAILED: " + "; ".join(res.messages) if res.failed.any() else ""))
+    return g
+
+
+def _study_attrs(knobs: list[Knob], reference: dict[str, float], points: dict[str, float], tol: float,
+                 combined_tol: float) -> dict[str, Any]:
+    """The attributes of ``accuracy.nc`` that describe the study itself: the reference and its note, the rows'
+    bases, the error's definition and floors, the tolerances and the rule that chooses the defaults."""
+    return {
         "reference_settings": {k_: cast(k_, v) for k_, v in reference.items()},
         "reference_note": "tightest settings; max_step_ns = 25 binds (fixed 25 ns DP5 step); its own "
                           "time-discretisation error is bounded by error(knob='rtol', level=0), an independent "
@@ -501,22 +546,4 @@ def study(evaluate: Evaluate, knobs: list[Knob], reference: dict[str, float], po
                        "resolved by keeping the scene's value if among them, else the most accurate; then all chosen "
                        "settings run together and, while that misses combined_tolerance, the one knob whose "
                        "one-level-tighter trial passes most cheaply (else errs least) is stepped back",
-        "chosen_defaults": {k_: (cast(k_, v) if v is not None else None) for k_, v in chosen.items()},
-        "chosen_defaults_errors": chosen_err,
-        "chosen_configuration": {k_: cast(k_, v) for k_, v in chosen_cfg.items()},
-        "scene_configuration": {k_: cast(k_, v) for k_, v in scene_cfg.items()},
-        "combined_max_errors": comb_err,
-        "combined_total_wall_time_s": combo_cost,
-        "chosen_adjustments": adjustments or "none",
-        "timing": f"simulation: median of {repeat} runs of simulate (run, summary, dataset) after compilation; table builds "
-                  "longer than 1 s timed once; sequential, one process",
-        "cpus": os.cpu_count() or 0,
-        "k": float(k) if k is not None else "none",
-        "k_source": k_source,
-        "dmw_record_method": rec_notes or "no dmw effect",
-        "dmw_record_check": "; ".join(f"{r}: {n}" for r, n in rec_notes.items()) or "none",
-        "failures": "; ".join(f"{kb.name}={kb.settings[il]:g}: {m}" for (ik, il), r in results.items()
-                              for kb in [knobs[ik]] for m in r.messages) or "none",
     }
-    ds.attrs.update(attrs)
-    return ds, Summary(chosen, chosen_err, comb_err, configs, combo_cost)

@@ -329,7 +329,7 @@ def comparison_markdown(combos: list, data: dict, settings: ReportSettings, name
 
 # ------------------------------------------------------------------- comparison: paper / reconstructed / identified
 #: What an identify.nc made before the re-optimised profiles gave (``METHODS["slice"]`` of
-#: pipeline/analyses/identification.py, not imported: the report's code key would take in the model with it).
+#: pipeline/analyses/identification/, not imported: the report's code key would take in the model with it).
 SLICE_METHOD = "slice, other parameters held at the optimum"
 
 
@@ -359,8 +359,50 @@ def identification_markdown(ident: xr.Dataset) -> str:
     An ``identify.nc`` of the older layout is refused (:func:`check_identify_layout`).
     """
     check_identify_layout(ident)
-    i0, i1 = int(ident.attrs["reconstructed_evaluation"]), int(ident.attrs["best_evaluation"])
     names = [str(t) for t in ident["target"].values]
+    rows, unreached = _target_rows(ident, names)
+    fly = ident["value"].sel(target="fhm_flying") if "fhm_flying" in names else None
+    band = ident["value"].sel(target="bouncing") if "bouncing" in names else None
+    if fly is not None and band is not None and any("bouncing" in u_ for u_ in unreached):
+        ratio = band.values / fly.values
+        ok = np.isfinite(ratio)
+        if ok.any():
+            unreached.append(f"Why the bouncing band is out of reach (measured): the smallest BV after touchdown is at "
+                             f"most {number(float(np.nanmax(ratio)))} x the flying FHM over all {int(ok.sum())} "
+                             "evaluations with both, so BV > 20 % with a flying FHM of about 12.5 % needs a "
+                             "mechanism the free parameters do not provide (docs/model.md, sections 'Gap-power stiffening' and 'Bouncing band').")
+    method = str(ident.attrs.get("interval_method", SLICE_METHOD))
+    sliced = "slice_interval" in ident  # (a slice's interval beside the re-optimised profile's)
+    prow = _parameter_rows(ident, sliced)
+    kind = method.split(",")[0]  # "profile" or "slice"
+    heads = ["parameter", "reconstructed", "identified", f"{kind} interval", *(["slice interval"] if sliced else []),
+             "unit"]
+    text = ["", "## Paper, reconstructed scene, identified scene", "",
+            f"From `identify.nc` ({ident.sizes['evaluation']} evaluations; identified scene "
+            f"`{Path(str(ident.attrs.get('identified_scene', ''))).name}`). r = residual / tolerance "
+            "(inequality targets: 0 on the admissible side); both scenes evaluated at the target protrusions "
+            "with the same k.", "",
+            table(["target", "paper", "reconstructed", "identified"], rows), "",
+            *([f"Over {int(ident.attrs['realisations'])} DMW realisations per evaluation; in brackets each value's "
+               "spread (10-90 % of the realisations, or mean ± 1 standard deviation for the light-contact state).", ""]
+              if "realisations" in ident.attrs else []),
+            table(heads, prow), "",
+            f"Interval ({method}): {ident.attrs['interval_criterion']}."
+            + (" The slice interval (the other parameters held at the optimum) is narrower where parameters "
+               "correlate." if sliced else "")
+            + f" Correlation: {ident.attrs['correlation_method']}.", ""]
+    if unreached:
+        text += ["### Targets no parameter set within the bounds reaches", ""] + [f"- {u}" for u in unreached]
+    else:
+        text += ["Every target is reached within tolerance by the identified scene."]
+    return "\n".join(text) + "\n"
+
+
+def _target_rows(ident: xr.Dataset, names: list[str]) -> tuple[list[list[str]], list[str]]:
+    """The table's row of each target of ``identify.nc`` (its description, the paper's value, the reconstructed
+    and the identified scene's values with their residuals) and a sentence for each target no evaluation brought
+    within tolerance (the closest value reached, the range over every evaluation)."""
+    i0, i1 = int(ident.attrs["reconstructed_evaluation"]), int(ident.attrs["best_evaluation"])
     res = ident["residual"].values
     rows, unreached = [], []
     for j, t in enumerate(names):
@@ -390,46 +432,18 @@ def identification_markdown(ident: xr.Dataset) -> str:
                              f"{number(vals[k]) if np.isfinite(vals[k]) else 'none'}{u} (residual {res[k, j]:+.3g}; "
                              f"tolerance {number(float(at['tolerance']))}{u}); over all evaluations it spans {span}"
                              f" ({int(np.sum(~np.isfinite(vals)))} without a value).")
-    fly = ident["value"].sel(target="fhm_flying") if "fhm_flying" in names else None
-    band = ident["value"].sel(target="bouncing") if "bouncing" in names else None
-    if fly is not None and band is not None and any("bouncing" in u_ for u_ in unreached):
-        ratio = band.values / fly.values
-        ok = np.isfinite(ratio)
-        if ok.any():
-            unreached.append(f"Why the bouncing band is out of reach (measured): the smallest BV after touchdown is at "
-                             f"most {number(float(np.nanmax(ratio)))} x the flying FHM over all {int(ok.sum())} "
-                             "evaluations with both, so BV > 20 % with a flying FHM of about 12.5 % needs a "
-                             "mechanism the free parameters do not provide (docs/model.md, sections 'Gap-power stiffening' and 'Bouncing band').")
-    params = [str(p) for p in ident["parameter"].values]
-    method = str(ident.attrs.get("interval_method", SLICE_METHOD))
-    sliced = "slice_interval" in ident  # (a slice's interval beside the re-optimised profile's)
+    return rows, unreached
+
+
+def _parameter_rows(ident: xr.Dataset, sliced: bool) -> list[list[str]]:
+    """The table's row of each free parameter of ``identify.nc``: reconstructed and identified values, the
+    interval (and the slice's, ``sliced``) and the unit."""
     prow = []
-    for p in params:
+    for p in (str(p) for p in ident["parameter"].values):
         at = ident.sel(parameter=p)
         prow.append([p, f"{number(float(at['reconstructed']))}",
                      f"{number(float(at['best']))}", _interval_text(at["interval"].values),
                      *([_interval_text(at["slice_interval"].values)] if sliced else []),
                      unit_text(str(at["parameter_units"].values))])
-    kind = method.split(",")[0]  # "profile" or "slice"
-    heads = ["parameter", "reconstructed", "identified", f"{kind} interval", *(["slice interval"] if sliced else []),
-             "unit"]
-    text = ["", "## Paper, reconstructed scene, identified scene", "",
-            f"From `identify.nc` ({ident.sizes['evaluation']} evaluations; identified scene "
-            f"`{Path(str(ident.attrs.get('identified_scene', ''))).name}`). r = residual / tolerance "
-            "(inequality targets: 0 on the admissible side); both scenes evaluated at the target protrusions "
-            "with the same k.", "",
-            table(["target", "paper", "reconstructed", "identified"], rows), "",
-            *([f"Over {int(ident.attrs['realisations'])} DMW realisations per evaluation; in brackets each value's "
-               "spread (10-90 % of the realisations, or mean ± 1 standard deviation for the light-contact state).", ""]
-              if "realisations" in ident.attrs else []),
-            table(heads, prow), "",
-            f"Interval ({method}): {ident.attrs['interval_criterion']}."
-            + (" The slice interval (the other parameters held at the optimum) is narrower where parameters "
-               "correlate." if sliced else "")
-            + f" Correlation: {ident.attrs['correlation_method']}.", ""]
-    if unreached:
-        text += ["### Targets no parameter set within the bounds reaches", ""] + [f"- {u}" for u in unreached]
-    else:
-        text += ["Every target is reached within tolerance by the identified scene."]
-    return "\n".join(text) + "\n"
+    return prow
 

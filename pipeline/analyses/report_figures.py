@@ -71,31 +71,10 @@ def figure_jobs(data: dict[str, xr.Dataset | None], combos: list, settings: Repo
     """
     jobs: list[Job] = []
     skipped: dict[str, str] = {}
-    labels0, ds0 = combos[0]
-    transient = settings.transient_ms
+    ds0 = combos[0][1]
     onset, previous = settings.onset_nm, settings.previous_nm
 
-    hist = data["sweep_histories"]
-    if hist is None:
-        for f in FIGURES[:3]:
-            skipped[f] = "sweep_histories.nc is absent (no time histories were kept by the sweep)"
-    else:
-        prots = history_protrusions(hist, settings.histories_nm)
-        high = prots[-1]
-        # every kept protrusion (the paper's Fig. 3: flying and light contact, and a step of the band when
-        # report.histories_nm names one), at most four panels: the lowest, the highest and two between
-        shown = prots if len(prots) <= 4 else [prots[0], *prots[1:-1][:2], prots[-1]]
-        panels = [(p, history_slice(hist, labels0, p), regime_at(ds0, p)) for p in dict.fromkeys(shown)]
-        jobs.append((plots.fig_clearance, (panels, name, figdir / "fig3_clearance.png", transient), {}))
-        h_high = panels[-1][1]
-        if any(v in h_high for v, _, _ in plots.FORCES):
-            jobs.append((plots.fig_forces, (h_high, high, name, figdir / "fig4_forces.png", transient), {}))
-        else:
-            skipped["fig4_forces.png"] = "the histories hold no forces (contact/adhesion effects off)"
-        if any(v in h_high for v, _ in plots.STRESSES):
-            jobs.append((plots.fig_stresses, (h_high, high, name, figdir / "fig5_stresses.png", transient), {}))
-        else:
-            skipped["fig5_stresses.png"] = "the histories hold no stresses (contact effect off)"
+    _history_jobs(data["sweep_histories"], combos, settings, name, figdir, jobs, skipped)
 
     fc = first_contact(ds0)
     jobs.append((plots.fig_fhm, (combos, name, figdir / "fig6_fhm.png"),
@@ -142,6 +121,34 @@ def figure_jobs(data: dict[str, xr.Dataset | None], combos: list, settings: Repo
     if data["interface"] is not None and "model" in data["interface"].dims:  # interface.model = "deterministic"
         jobs.append((plots.fig_interface_models, (data["interface"], name, figdir / INTERFACE_FIGURE), {}))
     return jobs, skipped
+
+
+def _history_jobs(hist: xr.Dataset | None, combos: list, settings: ReportSettings, name: str, figdir: Path,
+                  jobs: list[Job], skipped: dict[str, str]) -> None:
+    """The jobs of the figures of the kept time histories (the paper's Figs. 3-5: clearance, forces, stresses),
+    appended to ``jobs``, or the reasons they are skipped in ``skipped``."""
+    labels0, ds0 = combos[0]
+    transient = settings.transient_ms
+    if hist is None:
+        for f in FIGURES[:3]:
+            skipped[f] = "sweep_histories.nc is absent (no time histories were kept by the sweep)"
+    else:
+        prots = history_protrusions(hist, settings.histories_nm)
+        high = prots[-1]
+        # every kept protrusion (the paper's Fig. 3: flying and light contact, and a step of the band when
+        # report.histories_nm names one), at most four panels: the lowest, the highest and two between
+        shown = prots if len(prots) <= 4 else [prots[0], *prots[1:-1][:2], prots[-1]]
+        panels = [(p, history_slice(hist, labels0, p), regime_at(ds0, p)) for p in dict.fromkeys(shown)]
+        jobs.append((plots.fig_clearance, (panels, name, figdir / "fig3_clearance.png", transient), {}))
+        h_high = panels[-1][1]
+        if any(v in h_high for v, _, _ in plots.FORCES):
+            jobs.append((plots.fig_forces, (h_high, high, name, figdir / "fig4_forces.png", transient), {}))
+        else:
+            skipped["fig4_forces.png"] = "the histories hold no forces (contact/adhesion effects off)"
+        if any(v in h_high for v, _ in plots.STRESSES):
+            jobs.append((plots.fig_stresses, (h_high, high, name, figdir / "fig5_stresses.png", transient), {}))
+        else:
+            skipped["fig5_stresses.png"] = "the histories hold no stresses (contact effect off)"
 
 
 def draw(jobs: list[Job]) -> list[Path]:

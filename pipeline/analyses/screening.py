@@ -61,7 +61,8 @@ import numpy as np
 import xarray as xr
 
 from . import plots
-from .study import HEADLINES, Parameter, headline
+from .free_parameters import Parameter
+from .study import HEADLINES, headline
 from ..io import var
 
 #: An evaluation callable: the outputs of samples (shape ``(samples, parameters)``), one array per name.

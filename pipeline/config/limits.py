@@ -57,7 +57,7 @@ MAX_STEPS = 5_000_000
 #: and 1e99 overflowed the integrator with a traceback.
 MAX_WORK_OF_ADHESION = 1.0
 #: Budget of the identification's polish of the search's optimum (``identify.polish``), in evaluations per free
-#: parameter [1] (:func:`pipeline.analyses.identification._polish`; docs/model.md, section "Identification"): it
+#: parameter [1] (:func:`pipeline.analyses.identification.search._polish`; docs/model.md, section "Identification"): it
 #: also stops before it, after its poll at the first step at or below the profile walks' step that finds
 #: nothing better. Here, beside the other budgets, so that the sizes of a scene's work are checked
 #: (:mod:`pipeline.sizing`) without importing the identification.

@@ -14,7 +14,7 @@ import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Iterable
+from typing import Any, Callable, Iterable
 
 from ..paths import special_kind
 from ..units import MHZ_IN_KHZ, MS, NS
@@ -273,82 +273,125 @@ def check_value(section: str, key: str, spec: Key, value: Any, where: str, base:
 
     check_plain(value, name, where)  # (before any conversion: float() of a 400-digit integer overflows)
     kind = spec.kind
-    if kind == "float":
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise fail("a number")
-        value = float(value)
-        if value != value or value in (float("inf"), float("-inf")):
-            raise fail("a finite number")
-        if not _representable(value):
-            raise fail(_MAGNITUDE)
-    elif kind == "int":
-        if isinstance(value, bool) or not isinstance(value, int):
-            raise fail("an integer")
-    elif kind == "str":
-        if not isinstance(value, str):
-            raise fail("a string")
-        if spec.choices and value not in spec.choices:
-            raise fail("one of " + ", ".join(map(repr, spec.choices)))
-    elif kind == "bool":
-        if not isinstance(value, bool):
-            raise fail("true or false")
-    elif kind == "floats":
-        if not isinstance(value, list) or any(isinstance(v, bool) or not isinstance(v, (int, float)) for v in value):
-            raise fail("a list of numbers")
-        value = [float(v) for v in value]
-        if not all(math.isfinite(v) for v in value):
-            raise fail("a list of finite numbers (no nan or inf)")
-        if not all(map(_representable, value)):
-            raise fail("a list of " + _MAGNITUDE.replace("a number", "numbers"))
-        if spec.length is not None and len(value) != spec.length:
-            raise fail(f"a list of {spec.length} numbers")
-    elif kind == "strs":
-        if not isinstance(value, list) or any(not isinstance(v, str) for v in value):
-            raise fail("a list of strings")
-        if spec.choices:
-            bad = [v for v in value if v not in spec.choices]
-            if bad:
-                raise fail(f"names from {list(spec.choices)}; {bad[0]!r} is not an effect that exists"
-                           if key == "effects" else f"values from {list(spec.choices)}")
-            if len(set(value)) != len(value):
-                raise fail("no repeated names")
-    elif kind == "range":
-        if not isinstance(value, dict) or set(value) != {"start", "stop", "step"}:
-            raise fail("a table {start = ..., stop = ..., step = ...}")
-        if any(isinstance(v, bool) or not isinstance(v, (int, float)) for v in value.values()):
-            raise fail("numbers for start, stop and step")
-        value = {k: float(v) for k, v in value.items()}
-        if not all(math.isfinite(v) for v in value.values()):
-            raise fail("finite numbers for start, stop and step (no nan or inf)")
-        if not all(map(_representable, value.values())):
-            raise fail(_MAGNITUDE.replace("a number", "numbers") + " for start, stop and step")
-        if value["step"] <= 0:
-            raise fail("step > 0")
-        if value["stop"] < value["start"]:
-            raise fail("stop >= start (the grid is not reversed)")
-        if value["start"] < 0:
-            raise fail("protrusions >= 0 (start is negative)")
-    elif kind == "tables":
-        if not isinstance(value, list) or not value or any(not isinstance(v, (dict, str)) for v in value):
-            raise fail("a non-empty list of tables (or labels of sets defined elsewhere)")
+    if kind in _KIND_CHECKS:
+        value = _KIND_CHECKS[kind](value, spec, key, fail)
     if spec.check is not None and kind not in ("tables",):
         pred, expected = spec.check
         if not pred(value):
             raise fail(expected)
     if spec.path and value is not None:
-        items = value if isinstance(value, list) else [value]
-        resolved = []
-        for item in items:
-            p = Path(item).expanduser()
-            if not p.is_absolute() and base is not None:
-                p = (base / p).resolve()
-            if not p.exists():
-                raise SceneError(f"{where}: {name}: file {item!r} does not exist (looked for {p}){doc}")
-            if special_kind(p) not in (None, "a folder"):  # (reading a FIFO or a device never ends)
-                raise SceneError(f"{where}: {name}: {p} is {special_kind(p)}; expected a regular file{doc}")
-            resolved.append(str(p))
-        value = resolved if isinstance(value, list) else resolved[0]
+        value = _resolved_paths(value, name, where, doc, base)
     return value
+
+
+Fail = Callable[..., SceneError]
+
+
+def _check_float(value: Any, spec: Key, key: str, fail: Fail) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise fail("a number")
+    value = float(value)
+    if value != value or value in (float("inf"), float("-inf")):
+        raise fail("a finite number")
+    if not _representable(value):
+        raise fail(_MAGNITUDE)
+    return value
+
+
+def _check_int(value: Any, spec: Key, key: str, fail: Fail) -> int:
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise fail("an integer")
+    return value
+
+
+def _check_str(value: Any, spec: Key, key: str, fail: Fail) -> str:
+    if not isinstance(value, str):
+        raise fail("a string")
+    if spec.choices and value not in spec.choices:
+        raise fail("one of " + ", ".join(map(repr, spec.choices)))
+    return value
+
+
+def _check_bool(value: Any, spec: Key, key: str, fail: Fail) -> bool:
+    if not isinstance(value, bool):
+        raise fail("true or false")
+    return value
+
+
+def _check_floats(value: Any, spec: Key, key: str, fail: Fail) -> list[float]:
+    if not isinstance(value, list) or any(isinstance(v, bool) or not isinstance(v, (int, float)) for v in value):
+        raise fail("a list of numbers")
+    value = [float(v) for v in value]
+    if not all(math.isfinite(v) for v in value):
+        raise fail("a list of finite numbers (no nan or inf)")
+    if not all(map(_representable, value)):
+        raise fail("a list of " + _MAGNITUDE.replace("a number", "numbers"))
+    if spec.length is not None and len(value) != spec.length:
+        raise fail(f"a list of {spec.length} numbers")
+    return value
+
+
+def _check_strs(value: Any, spec: Key, key: str, fail: Fail) -> list[str]:
+    if not isinstance(value, list) or any(not isinstance(v, str) for v in value):
+        raise fail("a list of strings")
+    if spec.choices:
+        bad = [v for v in value if v not in spec.choices]
+        if bad:
+            raise fail(f"names from {list(spec.choices)}; {bad[0]!r} is not an effect that exists"
+                       if key == "effects" else f"values from {list(spec.choices)}")
+        if len(set(value)) != len(value):
+            raise fail("no repeated names")
+    return value
+
+
+def _check_range(value: Any, spec: Key, key: str, fail: Fail) -> dict[str, float]:
+    if not isinstance(value, dict) or set(value) != {"start", "stop", "step"}:
+        raise fail("a table {start = ..., stop = ..., step = ...}")
+    if any(isinstance(v, bool) or not isinstance(v, (int, float)) for v in value.values()):
+        raise fail("numbers for start, stop and step")
+    value = {k: float(v) for k, v in value.items()}
+    if not all(math.isfinite(v) for v in value.values()):
+        raise fail("finite numbers for start, stop and step (no nan or inf)")
+    if not all(map(_representable, value.values())):
+        raise fail(_MAGNITUDE.replace("a number", "numbers") + " for start, stop and step")
+    if value["step"] <= 0:
+        raise fail("step > 0")
+    if value["stop"] < value["start"]:
+        raise fail("stop >= start (the grid is not reversed)")
+    if value["start"] < 0:
+        raise fail("protrusions >= 0 (start is negative)")
+    return value
+
+
+def _check_tables(value: Any, spec: Key, key: str, fail: Fail) -> list:
+    if not isinstance(value, list) or not value or any(not isinstance(v, (dict, str)) for v in value):
+        raise fail("a non-empty list of tables (or labels of sets defined elsewhere)")
+    return value
+
+
+#: The check of a value of each kind of key (:func:`check_value`): ``check(value, spec, key, fail)`` returns
+#: the value normalised (numbers to float) or raises ``fail(expected)``.
+_KIND_CHECKS: dict[str, Callable[[Any, Key, str, Fail], Any]] = {
+    "float": _check_float, "int": _check_int, "str": _check_str, "bool": _check_bool, "floats": _check_floats,
+    "strs": _check_strs, "range": _check_range, "tables": _check_tables,
+}
+
+
+def _resolved_paths(value: Any, name: str, where: str, doc: str, base: Path | None) -> Any:
+    """A path key's file (or list of files) resolved against ``base``; a file that does not exist or is special
+    (a FIFO, a device: reading it never ends) is a :class:`SceneError` naming it."""
+    items = value if isinstance(value, list) else [value]
+    resolved = []
+    for item in items:
+        p = Path(item).expanduser()
+        if not p.is_absolute() and base is not None:
+            p = (base / p).resolve()
+        if not p.exists():
+            raise SceneError(f"{where}: {name}: file {item!r} does not exist (looked for {p}){doc}")
+        if special_kind(p) not in (None, "a folder"):  # (reading a FIFO or a device never ends)
+            raise SceneError(f"{where}: {name}: {p} is {special_kind(p)}; expected a regular file{doc}")
+        resolved.append(str(p))
+    return resolved if isinstance(value, list) else resolved[0]
 
 
 def validate(raw: dict[str, Any], path: Path | None = None, *, overrides: Iterable[str] = (),
@@ -429,6 +472,16 @@ def validate(raw: dict[str, Any], path: Path | None = None, *, overrides: Iterab
 
 
 def _cross_checks(config: dict[str, dict[str, Any]], where: str) -> None:
+    """The checks across keys, in order (the first that fails raises its :class:`SceneError`)."""
+    _window_checks(config, where)
+    _list_checks(config, where)
+    eff = set(config["scene"]["effects"])
+    _model_checks(config, eff, where)
+    _dmw_checks(config, eff, where)
+
+
+def _window_checks(config: dict[str, dict[str, Any]], where: str) -> None:
+    """The touchdown's two protrusions in order, and a steady window of enough samples after the transient."""
     td = config["touchdown"]
     if td["previous_nm"] >= td["onset_nm"]:
         raise SceneError(f"{where}: touchdown.previous_nm = {td['previous_nm']} must be below "
@@ -443,6 +496,12 @@ def _cross_checks(config: dict[str, dict[str, Any]], where: str) -> None:
                          f"{sol['transient_ms']:g} leaves a steady window of {steady:.3g} samples of "
                          f"output_step_ns = {sol['output_step_ns']:g}; expected at least {MIN_STEADY_SAMPLES} "
                          "samples to judge a regime and an FHM on")
+
+
+def _list_checks(config: dict[str, dict[str, Any]], where: str) -> None:
+    """The free parameters' bounds within their limits, distinct kept protrusions and damping ratios, and a run
+    that the integrator's step budget can finish."""
+    sol = config["solver"]
     for item in config["identify"]["parameters"] or []:  # (the tables' form: checked by the study reading them)
         key = item.get("key") if isinstance(item, dict) else None
         if key not in FREE_LIMITS:
@@ -471,7 +530,10 @@ def _cross_checks(config: dict[str, dict[str, Any]], where: str) -> None:
     if twice:
         raise SceneError(f"{where}: sweep.damping_ratio = {shown(damping)}: {twice[0]:g} appears more than once; "
                          "expected distinct ratios (each is a coordinate value of sweep.nc)")
-    eff = set(config["scene"]["effects"])
+
+
+def _model_checks(config: dict[str, dict[str, Any]], eff: set[str], where: str) -> None:
+    """The effects the model needs (the air bearing), those each option needs and the options it needs."""
     if "air_bearing" not in eff:
         raise SceneError(f"{where}: scene.effects = {sorted(eff)}: expected 'air_bearing' among them "
                          "(nothing else holds the slider up)")
@@ -512,6 +574,11 @@ def _cross_checks(config: dict[str, dict[str, Any]], where: str) -> None:
         raise SceneError(f"{where}: scene.effects: 'friction' needs 'contact' (friction acts only in contact)")
     if "pitch" in eff and "air_bearing" not in eff:
         raise SceneError(f"{where}: scene.effects: 'pitch' needs 'air_bearing'")
+
+
+def _dmw_checks(config: dict[str, dict[str, Any]], eff: set[str], where: str) -> None:
+    """A DMW record file that exists and is regular (resolved in place), and a DMW band below the Nyquist
+    frequency of its sample rate."""
     if "dmw" in eff:
         src = config["dmw"]["source"]
         if src != "synthetic":

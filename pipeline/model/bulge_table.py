@@ -17,6 +17,7 @@ import numpy as np
 import xarray as xr
 
 from ..physics import bulge_bearing as bb
+from ..physics.reynolds import ReynoldsGrid, reynolds_table
 from ..physics import gas_flow
 from ..config.grid import TOL_NM
 from ..config.si import to_si
@@ -60,7 +61,7 @@ def table_protrusions(stop_nm: float = 15.0, step_nm: float = 0.5) -> np.ndarray
 def bulge_table(*, model: str, p_pad: float, a: float, b: float, speed: float, gaps: np.ndarray,
                 protrusions: np.ndarray, profile: str = "ellipsoid", slip: str = "first-order",
                 viscosity: float = AIR_VISCOSITY, mean_free_path: float = AIR_MEAN_FREE_PATH,
-                ambient_pressure: float = AMBIENT_PRESSURE, grid: bb.ReynoldsGrid = bb.ReynoldsGrid(),
+                ambient_pressure: float = AMBIENT_PRESSURE, grid: ReynoldsGrid = ReynoldsGrid(),
                 roughness: gas_flow.RoughGap | None = None) -> xr.Dataset:
     """The bulge lift table of a scene as a dataset (variables :data:`pipeline.variables.BULGE`).
 
@@ -70,7 +71,7 @@ def bulge_table(*, model: str, p_pad: float, a: float, b: float, speed: float, g
         ``"rough-reynolds"`` (the Reynolds solve of the rough gap with the Boltzmann flow rate, ``slip`` ignored)
     p_pad : pad pressure [Pa]; a, b : footprint semi-axes along / across sliding [m]; speed : disk speed [m/s]
     gaps : apex gaps [m] (increasing, > 0; :func:`table_gaps`); protrusions : [m] (>= 0; :func:`table_protrusions`)
-    profile : ``"ellipsoid"`` or ``"paraboloid"``; slip : :data:`pipeline.physics.bulge_bearing.SLIP_MODELS`
+    profile : ``"ellipsoid"`` or ``"paraboloid"``; slip : :data:`pipeline.physics.reynolds.SLIP_MODELS`
     viscosity [Pa s], mean_free_path [m] at ambient_pressure [Pa]; grid : the Reynolds solver's settings
     roughness : the gap's roughness (:class:`pipeline.physics.gas_flow.RoughGap`), required by ``"rough-reynolds"``
 
@@ -94,9 +95,9 @@ def bulge_table(*, model: str, p_pad: float, a: float, b: float, speed: float, g
             raise ValueError("bulge table: air_bearing.bulge = 'rough-reynolds' needs the gap's roughness")
         slip = "boltzmann"
     if model in ("reynolds", "rough-reynolds"):
-        t = bb.reynolds_table(gaps, protrusions, p_pad=p_pad, a=a, b=b, speed=speed, viscosity=viscosity,
-                              mean_free_path=mean_free_path, ambient_pressure=ambient_pressure, profile=profile,
-                              slip=slip, grid=grid, roughness=roughness if rough else None)
+        t = reynolds_table(gaps, protrusions, p_pad=p_pad, a=a, b=b, speed=speed, viscosity=viscosity,
+                           mean_free_path=mean_free_path, ambient_pressure=ambient_pressure, profile=profile,
+                           slip=slip, grid=grid, roughness=roughness if rough else None)
         lift, stiff, lift_ph, lam = t["lift"], t["stiffness"], t["lift_ph"], t["bearing_number"]
     else:
         lift_ph, stiff = bb.ph_lift(gaps[None, :], protrusions[:, None], p_pad, a, b, profile)
@@ -168,7 +169,7 @@ def scene_table(scene: Any) -> xr.Dataset:
     :func:`table_protrusions` up to :func:`table_stop_nm`."""
     a, sol = scene["air_bearing"], scene["solver"]
     si = to_si(scene)
-    grid = bb.ReynoldsGrid(cells_per_a=sol["bulge_cells_per_a"], cells_per_b=sol["bulge_cells_per_b"])
+    grid = ReynoldsGrid(cells_per_a=sol["bulge_cells_per_a"], cells_per_b=sol["bulge_cells_per_b"])
     rough = scene_roughness(scene)
     return bulge_table(model=a["bulge"], p_pad=si.air_bearing.pad_pressure, a=si.tfc.half_length,
                        b=si.tfc.half_width, speed=disk_speed_m_s(scene["dmw"]), gaps=table_gaps(),

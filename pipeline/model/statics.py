@@ -4,9 +4,9 @@ energy barrier out of it, and the DMW's energy scale beside them (docs/model.md,
 The static forces are those of the start state (:func:`pipeline.model.start.static_forces`: the kernel's
 right-hand side at zero velocity on the mean disk, the contact law on where ``d < k sigma``). At each
 protrusion the TFC point is held at a clearance ``c = d - k sigma`` by a vertical force there, the pitch
-relaxed (:func:`pipeline.physics.equilibrium.relaxed_path`, path coordinate ``u = z - l_c theta``); the
+relaxed (:func:`pipeline.physics.statics_map.relaxed_path`, path coordinate ``u = z - l_c theta``); the
 zeros of that holding force along a clearance grid are the equilibria, the integral of the force the
-potential, its rises the barriers (:func:`pipeline.physics.equilibrium.path_equilibria`). The contact
+potential, its rises the barriers (:func:`pipeline.physics.statics_map.path_equilibria`). The contact
 criterion is the path's one break: there the force jumps by the contact law's value at ``k sigma``.
 Each smooth state's stiffness ``K = -dR/dy`` (both freedoms, central differences as the start state's)
 gives its stability and its eigenvalues.
@@ -19,7 +19,8 @@ from typing import Callable
 import numpy as np
 import xarray as xr
 
-from ..physics.equilibrium import is_stable, jacobian, path_equilibria, relaxed_path
+from ..physics.equilibrium import is_stable, jacobian
+from ..physics.statics_map import path_equilibria, relaxed_path
 from ..units import NM, URAD
 from ..variables import STATICS
 from . import dynamics as dyn
@@ -55,7 +56,7 @@ FLYING, CONTACT, CRITERION = 0, 1, 2
 @_jit
 def _path(us, a0, a1, s_start, slope_start, s_scale, tol, max_iter, params, dmw, contact, adhesion, friction, tfc,
           pitch, rear_law, gap_power_, meniscus):
-    """:func:`pipeline.physics.equilibrium.relaxed_path` on the kernel's static forces, compiled (the same secant
+    """:func:`pipeline.physics.statics_map.relaxed_path` on the kernel's static forces, compiled (the same secant
     iteration, started from a secant predictor of the two points before): returns ``(f [N], s, slope)``."""
     p = params[0]
     gap_power = dyn._unpacked(gap_power_)
@@ -200,7 +201,7 @@ def states_at(model: assembly.Model, protrusion: float, compiled: bool = True) -
     ``path_stiffness`` [N/m] (``-df/du``, NaN on the criterion) and ``eigenvalues`` [N/m] (of ``D K D``,
     ``D = diag(1, 1/l_c)``: the stiffness in the coordinates ``(z, l_c theta)``, real parts, ascending; the
     second NaN with the pitch locked, both NaN on the criterion). ``compiled``: the path solved compiled on the
-    kernel's forces (:func:`_path`, the default), else by :func:`pipeline.physics.equilibrium.relaxed_path`
+    kernel's forces (:func:`_path`, the default), else by :func:`pipeline.physics.statics_map.relaxed_path`
     from Python (the reference).
     """
     R2, _, _ = static_forces(lambda mu: kernel_inputs.run_parameters(model, mu))

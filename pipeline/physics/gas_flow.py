@@ -1,6 +1,6 @@
 """Gas flow in a nanometre gap: the Boltzmann Poiseuille flow rate and the rough-gap flow factors.
 
-Pure functions on numbers used by the rough bulge bearing (:func:`pipeline.physics.bulge_bearing.reynolds_solve`
+Pure functions on numbers used by the rough bulge bearing (:func:`pipeline.physics.reynolds.reynolds_solve`
 with ``slip="boltzmann"`` and a :class:`RoughGap`; docs/model.md, section "Rough-gap bulge bearing").
 
 Poiseuille flow rate of molecular gas lubrication

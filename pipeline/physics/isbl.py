@@ -237,113 +237,141 @@ def isbl_tables(d: np.ndarray, p: Interface, *, quantities=QUANTITIES, nodes: in
     if unknown:
         raise ValueError(f"unknown ISBL quantities {sorted(unknown)}; expected some of {QUANTITIES}")
     d = np.atleast_1d(np.asarray(d, dtype=float))
+    s = p.sigma_s
+    want = set(quantities)
+    out: dict[str, np.ndarray] = {}
+    if want & {"contact_pressure", "friction_stress", "real_area_fraction"}:
+        _contact_quantities(d, p, want, nodes, panels, out)
+    if "adhesion_pressure" in want:
+        _adhesion_quantities(d, p, nodes, panels, out)
+    if "wetted_area_fraction" in want:  # closed form (module docstring, "Wetted area")
+        out["wetted_area_fraction"] = p.eta * 2.0 * np.pi * p.R * s * np.maximum(_G((d - p.t) / s) - _G(d / s), 0.0)
+    if "contact_fraction" in want:
+        out["contact_fraction"] = _upper(d, s)
+    return out
+
+
+def _cdf(z: np.ndarray, s: float) -> np.ndarray:
+    """The Gaussian CDF of summit heights ``P(z' < z)`` [1], ``s = sigma_s`` [m]."""
+    return ndtr(z / s)
+
+
+def _upper(z: np.ndarray, s: float) -> np.ndarray:
+    """The upper tail ``P(z' > z)`` [1] as ``ndtr(-z/s)``, not ``1 - F(z)``: the difference loses all relative
+    accuracy (and monotonicity) once ``F(z)`` rounds to 1, i.e. beyond ~8 sigma_s."""
+    return ndtr(-z / s)
+
+
+def _clip(a: np.ndarray, b: np.ndarray, s: float) -> tuple[np.ndarray, np.ndarray]:
+    """A range of summit heights clipped to the tables' ``+- TAIL sigma_s`` [m]."""
+    zmax = TAIL * s
+    return np.clip(a, -zmax, zmax), np.clip(b, -zmax, zmax)
+
+
+def _contact_quantities(d: np.ndarray, p: Interface, want: set, nodes: int, panels: int,
+                        out: dict[str, np.ndarray]) -> None:
+    """The contact pressure [Pa] with the elastic and plastic fractions [1], the friction stress [Pa] and the
+    real area fraction [1] of :func:`isbl_tables` (those of ``want``) into ``out``: the summits' laws [KE02]
+    integrated over their contacting ranges, elastic, elastic-plastic (two fits), fully plastic."""
     s, eta, R, E, H, nu = p.sigma_s, p.eta, p.R, p.E, p.H, p.nu
     wc = p.w_c
-    zmax = TAIL * s
-    lo, hi = -zmax, zmax
-
-    def clip(a, b):
-        return np.clip(a, lo, hi), np.clip(b, lo, hi)
-
-    out: dict[str, np.ndarray] = {}
-    F = lambda z: ndtr(z / s)  # noqa: E731 - Gaussian CDF of summit heights
-    # Upper tail P(z > x) as ndtr(-x/s), not 1 - F(x): the difference loses all relative accuracy
-    # (and monotonicity) once F(x) rounds to 1, i.e. beyond ~8 sigma_s.
-    Q = lambda z: ndtr(-z / s)  # noqa: E731
-    want = set(quantities)
-
-    # Contacting ranges: elastic, elastic-plastic (two fits), fully plastic.
-    if want & {"contact_pressure", "friction_stress", "real_area_fraction"}:
-        Pc = asperity.critical_load(R, E, H, nu)
-        Ac = asperity.critical_area(R, E, H, nu)
-        ranges = {
-            "el": clip(d, d + wc),
-            "ep1": clip(d + wc, d + asperity.X_MID * wc),
-            "ep2": clip(d + asperity.X_MID * wc, d + asperity.X_PLASTIC * wc),
-            "pl": clip(d + asperity.X_PLASTIC * wc, np.full_like(d, np.inf)),
-        }
-        load = np.zeros_like(d)
-        area_fric = np.zeros_like(d)  # area of summits that carry friction (elastic + EP)
-        area_all = np.zeros_like(d)
-        for name, (a, b) in ranges.items():
-            z, wt = _panels(a, b, nodes, panels, square=(name == "el"))
-            w = np.maximum(z - d[:, None], 0.0)
-            wt = wt * _gauss(z, s)
-            x = w / wc
-            # the single-summit laws of the range [KE02] (pipeline.physics.asperity)
-            if name == "el":
-                P, A = asperity.hertz_load(w, R, E), asperity.hertz_area(w, R)
-            elif name in ("ep1", "ep2"):
-                fit = int(name == "ep2")
-                P = asperity.ke_fit(x, Pc, asperity.KE_LOAD_FITS[fit])
-                A = asperity.ke_fit(x, Ac, asperity.KE_AREA_FITS[fit])
-            else:
-                P, A = asperity.plastic_load(w, R, H), asperity.plastic_area(w, R)
-            load += (P * wt).sum(axis=1)
-            Aint = (A * wt).sum(axis=1)
-            area_all += Aint
-            if name != "pl":
-                area_fric += Aint
-        if "contact_pressure" in want:
-            out["contact_pressure"] = eta * load
-            out["elastic_fraction"] = np.where(d > 0, Q(d) - Q(d + wc), F(d + wc) - F(d))
-            out["plastic_fraction"] = Q(d + asperity.X_PLASTIC * wc)
-        # (The GW sum ignores the interaction of neighbouring summits, so at deep interference the
-        # area fraction can exceed 1; the tables keep the model's value, the dynamic outputs clip the
-        # real area at the nominal area: pipeline.model.outcomes.histories.)
-        if "friction_stress" in want:
-            summit = FRICTION_LAWS.lookup(p.friction_law).summit
-            if summit is None:
-                out["friction_stress"] = eta * shear_strength(H) * area_fric
-            else:
-                out["friction_stress"] = eta * _summit_integral(d, p, summit, nodes, panels)
-        if "real_area_fraction" in want:
-            out["real_area_fraction"] = eta * area_all
-
-    if "adhesion_pressure" in want:
-        fm = meniscus_force(R, p.dgamma)
-        # Wetted and elastic/elastic-plastic summits: the constant meniscus force (closed form).
-        wetted = F(d + asperity.X_PLASTIC * wc) - F(d - p.t)
-        a, b = clip(np.full_like(d, -np.inf), d - p.t)
-        # The LJ law ~ (eps/gap)^2 has a pole a distance eps beyond the top of its range (gap = 0),
-        # while the range spans up to 2 TAIL sigma_s >> eps: on uniform panels Gauss-Legendre
-        # converges very slowly (1e-3 relative error at sigma_s = 5 nm). Grade the range
-        # geometrically towards its top, sub-ranges [b - eps (4^(k+1) - 1), b - eps (4^k - 1)],
-        # so every sub-range stays well separated from the pole relative to its length.
-        levels = max(1, int(np.ceil(np.log(2.0 * zmax / p.eps + 1.0) / np.log(4.0))))
-        dist = p.eps * (4.0 ** np.arange(levels + 1) - 1.0)
-        parts = []
-        for k in range(levels):
-            top = np.maximum(b - dist[k], a)
-            bot = a if k == levels - 1 else np.maximum(b - dist[k + 1], a)
-            parts.append(_panels(bot, top, nodes, panels))
-        z = np.concatenate([zz for zz, _ in parts], axis=1)
-        wt = np.concatenate([ww for _, ww in parts], axis=1)
-        gap = d[:, None] - p.t - z + p.eps
-        dgb = p.dgamma if p.dgamma_bridge is None else p.dgamma_bridge
-        lj = (lennard_jones_force(gap, R, dgb, p.eps) * wt * _gauss(z, s)).sum(axis=1)
-        # the two populations (module docstring): upper-tail differences above the summit mean, where
-        # the CDF's differences would round away
-        touching = np.where(d > 0, Q(d) - Q(d + asperity.X_PLASTIC * wc), F(d + asperity.X_PLASTIC * wc) - F(d))
-        reaching = np.where(d - p.t > 0, Q(d - p.t) - Q(d), F(d) - F(d - p.t))
-        out["adhesion_pressure_menisci"] = eta * fm * touching
-        out["adhesion_pressure_bridges"] = eta * (meniscus_force(R, dgb) * reaching + lj)
-        if p.dgamma_bridge is None:  # the paper's ISBL, summed as it always was
-            out["adhesion_pressure"] = eta * (fm * wetted + lj)
+    Pc = asperity.critical_load(R, E, H, nu)
+    Ac = asperity.critical_area(R, E, H, nu)
+    ranges = {
+        "el": _clip(d, d + wc, s),
+        "ep1": _clip(d + wc, d + asperity.X_MID * wc, s),
+        "ep2": _clip(d + asperity.X_MID * wc, d + asperity.X_PLASTIC * wc, s),
+        "pl": _clip(d + asperity.X_PLASTIC * wc, np.full_like(d, np.inf), s),
+    }
+    load = np.zeros_like(d)
+    area_fric = np.zeros_like(d)  # area of summits that carry friction (elastic + EP)
+    area_all = np.zeros_like(d)
+    for name, (a, b) in ranges.items():
+        z, wt = _panels(a, b, nodes, panels, square=(name == "el"))
+        w = np.maximum(z - d[:, None], 0.0)
+        wt = wt * _gauss(z, s)
+        x = w / wc
+        # the single-summit laws of the range [KE02] (pipeline.physics.asperity)
+        if name == "el":
+            P, A = asperity.hertz_load(w, R, E), asperity.hertz_area(w, R)
+        elif name in ("ep1", "ep2"):
+            fit = int(name == "ep2")
+            P = asperity.ke_fit(x, Pc, asperity.KE_LOAD_FITS[fit])
+            A = asperity.ke_fit(x, Ac, asperity.KE_AREA_FITS[fit])
         else:
-            out["adhesion_pressure"] = out["adhesion_pressure_menisci"] + out["adhesion_pressure_bridges"]
-        if p.dgamma_solid is not None:  # (module docstring, "Adhesion rising with penetration")
-            extra_bridges, extra_menisci = penetration_adhesion(d, p)
-            out["adhesion_pressure_bridges"] = out["adhesion_pressure_bridges"] + extra_bridges
-            out["adhesion_pressure_menisci"] = out["adhesion_pressure_menisci"] + extra_menisci
-            out["adhesion_pressure"] = out["adhesion_pressure"] + (extra_bridges + extra_menisci)
+            P, A = asperity.plastic_load(w, R, H), asperity.plastic_area(w, R)
+        load += (P * wt).sum(axis=1)
+        Aint = (A * wt).sum(axis=1)
+        area_all += Aint
+        if name != "pl":
+            area_fric += Aint
+    if "contact_pressure" in want:
+        out["contact_pressure"] = eta * load
+        out["elastic_fraction"] = np.where(d > 0, _upper(d, s) - _upper(d + wc, s), _cdf(d + wc, s) - _cdf(d, s))
+        out["plastic_fraction"] = _upper(d + asperity.X_PLASTIC * wc, s)
+    # (The GW sum ignores the interaction of neighbouring summits, so at deep interference the
+    # area fraction can exceed 1; the tables keep the model's value, the dynamic outputs clip the
+    # real area at the nominal area: pipeline.model.outcomes.histories.)
+    if "friction_stress" in want:
+        summit = FRICTION_LAWS.lookup(p.friction_law).summit
+        if summit is None:
+            out["friction_stress"] = eta * shear_strength(H) * area_fric
+        else:
+            out["friction_stress"] = eta * _summit_integral(d, p, summit, nodes, panels)
+    if "real_area_fraction" in want:
+        out["real_area_fraction"] = eta * area_all
 
-    if "wetted_area_fraction" in want:  # closed form (module docstring, "Wetted area")
-        out["wetted_area_fraction"] = eta * 2.0 * np.pi * R * s * np.maximum(_G((d - p.t) / s) - _G(d / s), 0.0)
 
-    if "contact_fraction" in want:
-        out["contact_fraction"] = Q(d)
-    return out
+def _lj_nodes(a: np.ndarray, b: np.ndarray, p: Interface, nodes: int, panels: int) -> tuple[np.ndarray, np.ndarray]:
+    """Quadrature nodes [m] and weights of the Lennard-Jones range ``[a, b]`` of summit heights.
+
+    The LJ law ~ (eps/gap)^2 has a pole a distance eps beyond the top of its range (gap = 0), while the range
+    spans up to 2 TAIL sigma_s >> eps: on uniform panels Gauss-Legendre converges very slowly (1e-3 relative
+    error at sigma_s = 5 nm). The range is graded geometrically towards its top, sub-ranges
+    [b - eps (4^(k+1) - 1), b - eps (4^k - 1)], so every sub-range stays well separated from the pole relative
+    to its length."""
+    zmax = TAIL * p.sigma_s
+    levels = max(1, int(np.ceil(np.log(2.0 * zmax / p.eps + 1.0) / np.log(4.0))))
+    dist = p.eps * (4.0 ** np.arange(levels + 1) - 1.0)
+    parts = []
+    for k in range(levels):
+        top = np.maximum(b - dist[k], a)
+        bot = a if k == levels - 1 else np.maximum(b - dist[k + 1], a)
+        parts.append(_panels(bot, top, nodes, panels))
+    z = np.concatenate([zz for zz, _ in parts], axis=1)
+    wt = np.concatenate([ww for _, ww in parts], axis=1)
+    return z, wt
+
+
+def _adhesion_quantities(d: np.ndarray, p: Interface, nodes: int, panels: int, out: dict[str, np.ndarray]) -> None:
+    """The adhesion pressure [Pa] of :func:`isbl_tables` and its two parts, on the bridges and on the menisci
+    (module docstring, "Two adhesion populations"), into ``out``."""
+    s, eta, R = p.sigma_s, p.eta, p.R
+    wc = p.w_c
+    fm = meniscus_force(R, p.dgamma)
+    # Wetted and elastic/elastic-plastic summits: the constant meniscus force (closed form).
+    wetted = _cdf(d + asperity.X_PLASTIC * wc, s) - _cdf(d - p.t, s)
+    a, b = _clip(np.full_like(d, -np.inf), d - p.t, s)
+    z, wt = _lj_nodes(a, b, p, nodes, panels)
+    gap = d[:, None] - p.t - z + p.eps
+    dgb = p.dgamma if p.dgamma_bridge is None else p.dgamma_bridge
+    lj = (lennard_jones_force(gap, R, dgb, p.eps) * wt * _gauss(z, s)).sum(axis=1)
+    # the two populations (module docstring): upper-tail differences above the summit mean, where
+    # the CDF's differences would round away
+    touching = np.where(d > 0, _upper(d, s) - _upper(d + asperity.X_PLASTIC * wc, s),
+                        _cdf(d + asperity.X_PLASTIC * wc, s) - _cdf(d, s))
+    reaching = np.where(d - p.t > 0, _upper(d - p.t, s) - _upper(d, s), _cdf(d, s) - _cdf(d - p.t, s))
+    out["adhesion_pressure_menisci"] = eta * fm * touching
+    out["adhesion_pressure_bridges"] = eta * (meniscus_force(R, dgb) * reaching + lj)
+    if p.dgamma_bridge is None:  # the paper's ISBL, summed as it always was
+        out["adhesion_pressure"] = eta * (fm * wetted + lj)
+    else:
+        out["adhesion_pressure"] = out["adhesion_pressure_menisci"] + out["adhesion_pressure_bridges"]
+    if p.dgamma_solid is not None:  # (module docstring, "Adhesion rising with penetration")
+        extra_bridges, extra_menisci = penetration_adhesion(d, p)
+        out["adhesion_pressure_bridges"] = out["adhesion_pressure_bridges"] + extra_bridges
+        out["adhesion_pressure_menisci"] = out["adhesion_pressure_menisci"] + extra_menisci
+        out["adhesion_pressure"] = out["adhesion_pressure"] + (extra_bridges + extra_menisci)
 
 
 def penetration_adhesion(d: np.ndarray, p: Interface) -> tuple[np.ndarray, np.ndarray]:

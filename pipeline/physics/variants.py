@@ -12,11 +12,11 @@ A model variant is an entry of a :class:`Registry`: one registry per scene key (
 * ``behaviour``: what the choice does: a function (a friction law, an FHM measure), a value (a friction
   arm's fraction of the thickness) or an object (a compiled rear law's :class:`RearLaw
   <pipeline.physics.air_bearing.RearLaw>`, a TFC-point law's :class:`TfcLaw
-  <pipeline.physics.air_bearing.TfcLaw>`); ``None`` for an option that switches a part of the model off.
+  <pipeline.physics.tfc_laws.TfcLaw>`); ``None`` for an option that switches a part of the model off.
 
 Every entry type is an :class:`Entry`: :class:`Variant` is the entry whose behaviour is one function or
 value; the rear and TFC-point laws (:class:`RearLaw <pipeline.physics.air_bearing.RearLaw>`,
-:class:`TfcLaw <pipeline.physics.air_bearing.TfcLaw>`) put the kernel's fields first and are their own
+:class:`TfcLaw <pipeline.physics.tfc_laws.TfcLaw>`) put the kernel's fields first and are their own
 behaviour. :meth:`Registry.lookup` is the one lookup
 of a name (one line naming the scene key, the value and the names registered). The registry is the
 scene key's list of choices, read live (:mod:`pipeline.config.schema`): a registered entry is a choice.

@@ -66,7 +66,8 @@ from ..paths import refuse_links
 from ..runner import Inputs, Stage
 from ..analyses.identification import (GN_STEP, METHODS, PROFILE_GAIN, PROFILE_STEP, ROLES,
                                        Identification, Racing, identify)
-from ..analyses.study import Parameter, parse_parameters, scene_value, target_protrusions, targets
+from ..analyses.free_parameters import Parameter, parse_parameters, scene_value
+from ..analyses.study import target_protrusions, targets
 from ..evaluations import Evaluator, evaluate_batch, setup, upstream
 
 log = logging.getLogger(__name__)

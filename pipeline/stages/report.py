@@ -80,7 +80,8 @@ from ..analyses.report_figures import (BAND_FIGURE, BULGE_FIGURE, ENSEMBLE_FIGUR
                                       STATICS_FIGURE)
 from ..analyses.report_settings import ReportSettings, wants_ensemble
 from ..analyses.sweep_slices import combinations, split_ensemble
-from ..io import DatasetError, is_read_only, temporary_path
+from ..file_errors import is_read_only
+from ..io import DatasetError, temporary_path
 from ..paths import refuse_links
 from ..validity import OutsideValidity, describe
 from ..runner import Inputs, Stage

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from pipeline.analyses import feasibility as fe
-from pipeline.analyses.study import Parameter
+from pipeline.analyses.free_parameters import Parameter
 from pipeline.config.scene import SceneError
 from pipeline.physics.asperity_statistics import ALPHA_MIN
 

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from pipeline.analyses import screening
-from pipeline.analyses.study import Parameter
+from pipeline.analyses.free_parameters import Parameter
 
 PARAMS = [Parameter("dmw.rms_nm", 0.1, 0.3), Parameter("air_bearing.damping_ratio", 0.01, 0.21),
           Parameter("contact.damping_n_s_m", 0.0, 0.05)]

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from pipeline.analyses import study
-from pipeline.config.scene import SceneError, load_scene
+from pipeline.config.scene import load_scene
 
 import scoring_reference
 
@@ -71,39 +71,6 @@ def test_unevaluated_step_is_missing(band):
     cl = np.array([-0.1, -0.1, np.nan, -0.1, -0.1])
     t = study.Table(_record(bv[:, None], cl[:, None]))
     assert np.isnan(band.value(t)) and band.residual(t, 10.0) == 10.0
-
-
-def test_bad_parameter_key_names_the_field(paper_scene):
-    with pytest.raises(SceneError, match=r"identify.parameters\[0\].key = 'dmw.rms_um'"):
-        study.parse_parameters([{"key": "dmw.rms_um", "low": 0, "high": 1}], "f.toml", "identify.parameters")
-    with pytest.raises(SceneError, match="low < high"):
-        study.parse_parameters([{"key": "dmw.rms_nm", "low": 1, "high": 0}], "f.toml", "identify.parameters")
-    with pytest.raises(SceneError, match="index into a list"):
-        study.parse_parameters([{"key": "air_bearing.frequencies_khz[2]", "low": 1, "high": 2}], "f", "p")
-
-
-def test_list_element_parameter_sets_only_that_element(paper_scene):
-    p = study.parse_parameters([{"key": "air_bearing.frequencies_khz[1]", "low": 200, "high": 400}], "f", "p")
-    sc = study.with_values(paper_scene, p, [350.0])
-    assert sc["air_bearing"]["frequencies_khz"] == [120.0, 350.0]
-    assert study.scene_value(sc, p[0]) == 350.0
-
-
-def test_parameter_units_are_cf_for_every_numeric_scene_key():
-    import cf_units  # (a declared test dependency: pyproject.toml's `test` extra)
-    from pipeline.config.scene import SCHEMA
-    for section, keys in SCHEMA.items():
-        for key, spec in keys.items():
-            if spec.kind in ("float", "floats"):
-                units = study.Parameter(f"{section}.{key}", 0.0, 1.0).units
-                cf_units.Unit(units)  # UDUNITS parses it
-    units = {name: study.Parameter(name, 0.0, 1.0).units for name in
-             ("lubricant.work_of_adhesion_j_m2", "contact.damping_n_s_m", "roughness.summit_density_per_um2",
-              "slider.density_kg_m3", "dmw.sample_rate_mhz", "contact.section_depth_sigma")}
-    assert units == {"lubricant.work_of_adhesion_j_m2": "J m-2", "contact.damping_n_s_m": "N s m-1",
-                     "roughness.summit_density_per_um2": "um-2", "slider.density_kg_m3": "kg m-3",
-                     "dmw.sample_rate_mhz": "MHz", "contact.section_depth_sigma": "1"}
-    assert study.Parameter("air_bearing.frequencies_khz[0]", 1.0, 2.0).var_name == "air_bearing__frequencies_khz_0"
 
 
 # ------------------------------------------------ the scoring on the record's arrays against the xarray form

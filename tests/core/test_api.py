@@ -1,6 +1,6 @@
 """The public API (pipeline.api, re-exported by the package): the calls the stages make, so a model built
 from Python simulates exactly as the stages do. (The plot panels that take and return axes:
-analyses/test_plots.py.)"""
+analyses/plots/.)"""
 
 from __future__ import annotations
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import json
 
-from pipeline import evaluations
+from pipeline import candidates, evaluations
 from pipeline.model.inputs import SimulationInputs, Source
 
 
@@ -41,8 +41,8 @@ def _counting_task(base, params, rows, protrusions, inputs):
 
 
 def test_a_short_batch_is_split_over_the_local_workers_and_gives_the_same_records(paper_scene, tmp_path):
-    from pipeline.analyses import study
-    params = [study.Parameter("dmw.rms_nm", 0.0, 1.0)]
+    from pipeline.analyses import free_parameters
+    params = [free_parameters.Parameter("dmw.rms_nm", 0.0, 1.0)]
     inputs = SimulationInputs(Source("interface", key="i"), Source("dmw", key="d"))
     points = [[0.1 * k] for k in range(1, 14)]
     sizes = {}
@@ -62,48 +62,6 @@ def test_a_short_batch_is_split_over_the_local_workers_and_gives_the_same_record
     assert sizes[1, 13] == sizes[2, 13] == [5] * 10 and sizes[3, 13] == [3] * 6 + [4] * 4
 
 
-def test_a_candidate_kept_between_its_racing_parts_gives_the_records_of_a_fresh_one(write_scene, paper_config,
-                                                                                    tmp_path, monkeypatch):
-    """The racing parts of one candidate share its static starts (:class:`evaluations.Candidates`): the flying
-    branch is found once for all parts, and every output is the one a fresh candidate per part gives."""
-    import numpy as np
-    import twin
-    from pipeline.analyses import study
-    from pipeline.config.scene import load_scene
-    from pipeline.model import start
-    path = write_scene(twin.scene_text('targets = ["fhm_flying", "contact_force"]\nrealisations = 4\n')
-                       .format(paper=paper_config))
-    scene = load_scene(path)
-    params = study.parse_parameters(scene["identify"]["parameters"], str(path), "identify.parameters")
-    prots = [5.0, 10.0]
-    inputs = evaluations.prepare_inputs(scene, tmp_path / "base")
-    ladders = []
-    real = start.flying_ladder
-    monkeypatch.setattr(start, "flying_ladder", lambda *a, **k: ladders.append(1) or real(*a, **k))
-    x, parts = [0.14, 0.07], ((0, 1), (1, 2), (2, 4))
-
-    def run(fresh: bool) -> list[dict]:
-        out = []
-        for seg in parts:
-            if fresh or not out:
-                evaluations._CANDIDATES.clear()
-            out.append(evaluations.evaluate(scene, params, x, prots, inputs, 4, seg))
-        return out
-
-    kept = run(fresh=False)
-    assert len(ladders) == 1  # (one candidate: its fold once, whatever part asks)
-    fresh = run(fresh=True)
-    assert len(ladders) == 1 + len(parts)
-    for a, b in zip(kept, fresh):
-        assert a["error"] is None and b["error"] is None and a["seeds"] == b["seeds"]
-        assert a["outputs"].keys() == b["outputs"].keys()
-        for k in a["outputs"]:
-            np.testing.assert_array_equal(np.array(a["outputs"][k], float), np.array(b["outputs"][k], float))
-    # a kept candidate is one of these base objects: another base with the same values is another candidate
-    other = load_scene(path)
-    assert evaluations._CANDIDATES.get(other, inputs, params, x) is not evaluations._CANDIDATES.get(scene, inputs, params, x)
-
-
 def test_racing_parts_on_threads_run_a_task_per_record_and_store_the_parts_of_one_task(write_scene, paper_config,
                                                                                         tmp_path):
     """On the local threads a racing part runs one task per (candidate, DMW record), record-major, so that a
@@ -112,12 +70,12 @@ def test_racing_parts_on_threads_run_a_task_per_record_and_store_the_parts_of_on
     import numpy as np
     import threading
     import twin
-    from pipeline.analyses import study
+    from pipeline.analyses import free_parameters
     from pipeline.config.scene import load_scene
     path = write_scene(twin.scene_text('targets = ["fhm_flying", "contact_force"]\nrealisations = 4\n')
                        .format(paper=paper_config))
     scene = load_scene(path)
-    params = study.parse_parameters(scene["identify"]["parameters"], str(path), "identify.parameters")
+    params = free_parameters.parse_parameters(scene["identify"]["parameters"], str(path), "identify.parameters")
     inputs = evaluations.prepare_inputs(scene, tmp_path / "base")
     calls: list[tuple] = []
     lock = threading.Lock()
@@ -129,7 +87,7 @@ def test_racing_parts_on_threads_run_a_task_per_record_and_store_the_parts_of_on
 
     got = {}
     for workers in (1, 2):
-        evaluations._CANDIDATES.clear()
+        candidates._CANDIDATES.clear()
         calls.clear()
         store = evaluations.EvaluationStore(tmp_path / f"w{workers}.jsonl")
         ev = evaluations.Evaluator(scene, params, [5.0, 10.0], inputs, store, 4, None, workers, task=task,
@@ -166,51 +124,6 @@ def test_joined_parts_state_a_candidate_s_build_error_once_and_every_record_s_ow
     # a part starting at 0 names its first record; join_parts leaves that to the caller, which knows the whole
     assert "first_record" not in joined and evaluations.join_records([part(0, 1, None, ok)], 0)["first_record"] == 0
     assert "first_record" not in evaluations.join_records([part(0, 1, None, ok)], None)
-
-
-def test_a_candidate_s_tfc_tables_are_made_once_for_its_records_and_give_the_same_outputs(write_scene, paper_config,
-                                                                                           tmp_path, monkeypatch):
-    """A candidate's records share its model (``assembly.with_record``) and, while it is among the last
-    ``TABLES_KEPT`` candidates, its tabulated TFC-point forces (the bulge's law, one 4001-knot table per
-    protrusion): made once for its records, not once per record, and every output is a fresh candidate's."""
-    import numpy as np
-    import twin
-    from pipeline.analyses import study
-    from pipeline.config.scene import load_scene
-    from pipeline.model import kernel_inputs
-    text = twin.scene_text('targets = ["fhm_flying"]\nrealisations = 3\n') + '\n[air_bearing]\nbulge = "ph-limit"\n'
-    scene = load_scene(write_scene(text.format(paper=paper_config)))
-    params = study.parse_parameters(scene["identify"]["parameters"], "twin", "identify.parameters")
-    inputs = evaluations.prepare_inputs(scene, tmp_path / "base")
-    made = []
-    real = kernel_inputs._tfc_table
-    monkeypatch.setattr(kernel_inputs, "_tfc_table", lambda *a: made.append(a[2]) or real(*a))
-    prots, x, y = [5.0, 10.0], [0.14, 0.07], [0.2, 0.05]
-
-    def records(fresh: bool, point: list[float]) -> tuple[list[dict], list[int]]:
-        out, counts = [], []
-        for r in range(3):
-            if fresh or r == 0:
-                evaluations._CANDIDATES.clear()
-            n = len(made)
-            out.append(evaluations.evaluate(scene, params, point, prots, inputs, 3, (r, r + 1)))
-            counts.append(len(made) - n)
-        return out, counts
-
-    kept, counts = records(False, x)
-    # (the first record: the static starts' continuation ladder and the runs; the next ones none)
-    assert counts[0] >= len(prots) and counts[1:] == [0, 0]
-    fresh, again = records(True, x)
-    assert again == [counts[0]] * 3
-    for a, b in zip(kept, fresh):
-        assert a["error"] is None and json.dumps(a["outputs"]) == json.dumps(b["outputs"])
-    assert np.all(np.isfinite(np.array(kept[0]["outputs"]["fhm_bv"], float)))
-    # the tables of the candidates run before the last TABLES_KEPT are dropped
-    monkeypatch.setattr(evaluations, "TABLES_KEPT", 1)
-    first = evaluations._CANDIDATES.get(scene, inputs, params, x)
-    assert len(first.tfc_tables) == len(prots)
-    evaluations.evaluate(scene, params, y, prots, inputs, 3, (0, 1))
-    assert first.tfc_tables == {} and len(evaluations._CANDIDATES.get(scene, inputs, params, y).tfc_tables) == 2
 
 
 def test_racing_records_on_threads_run_in_blocks_of_as_many_candidates_as_threads(paper_scene, tmp_path):

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from pipeline import io
+from pipeline import file_errors, io
 from pipeline.variables import TIME
 
 
@@ -69,33 +69,6 @@ def test_temporary_names_are_hdis_own_of_any_run_and_no_other():
     for name in ("sweep.nc", "notes.tmp", ".sweep.nc.tmp", ".sweep.nc.hdi-0123.tmp", ".x.hdi-0123456789AB.tmp",
                  "sweep.nc.hdi-0123456789ab.tmp"):
         assert not io.is_temporary(name), name
-
-
-def test_compression_follows_the_documented_sizes():
-    # under COMPRESS_FROM (4 kB), a scalar or an empty variable: contiguous, no filter
-    assert io.compression(("protrusion",), (511,), 8) == {}
-    assert io.compression((), (), 8) == {} and io.compression(("protrusion",), (0,), 8) == {}
-    # from 4 kB to 64 kB: one chunk
-    small = io.compression(("protrusion", "roughness"), (256, 2), 8)
-    assert small == {"zlib": True, "complevel": io.ZLIB_LEVEL, "shuffle": True, "chunksizes": (256, 2)}
-    # a sweep's scalars: one protrusion row per roughness x damping point
-    assert io.compression(("protrusion", "roughness", "damping"), (200, 8, 8), 8)["chunksizes"] == (200, 1, 1)
-    # a kept history: the time axis whole per protrusion; halved along it while above CHUNK_MAX (4 MB)
-    assert io.compression(("hist_protrusion", TIME), (3, 400_000), 8)["chunksizes"] == (1, 400_000)
-    big = io.compression(("hist_protrusion", TIME), (2, 1_200_000), 8)["chunksizes"]
-    assert big == (1, 300_000) and big[1] * 8 <= io.CHUNK_MAX < 2 * big[1] * 8
-
-
-@pytest.mark.parametrize("exc, line", [
-    (OSError(errno.ENOSPC, "No space left on device", "out/sweep.nc"),
-     "out/sweep.nc: No space left on device; the disk is full: free some space or choose another --out"),
-    (IsADirectoryError(errno.EISDIR, "Is a directory", "out/.tmp", None, "out/sweep.nc"),
-     "out/sweep.nc: Is a directory; it is a folder where hdi writes a file: remove or rename it"),
-    (OSError(errno.EACCES, "already says what to do; chmod it", "x.nc"), "x.nc: already says what to do; chmod it"),
-    (OSError(errno.EBADF, "Bad file descriptor"), "Bad file descriptor")],
-    ids=["full-disk", "folder-for-a-file", "own-advice", "no-path"])
-def test_an_os_error_is_one_line_with_the_path_and_what_to_do(exc, line):
-    assert io.os_error_line(exc) == line
 
 
 def test_var_carries_units_and_long_name_and_no_units_for_a_label():
@@ -171,10 +144,10 @@ def test_a_full_disk_is_said_so_naming_the_dataset(tmp_path, monkeypatch):
     def denied(ds, path, encoding):
         raise PermissionError(errno.EACCES, "Permission denied", path)
     monkeypatch.setattr(io, "_to_netcdf", denied)
-    monkeypatch.setattr(io.shutil, "disk_usage", lambda p: _usage(4096))
+    monkeypatch.setattr(file_errors.shutil, "disk_usage", lambda p: _usage(4096))
     with pytest.raises(OSError) as info:
         io.write_dataset(_history(), tmp_path / "h.nc", stage="simulate")
-    line = io.os_error_line(info.value)
+    line = file_errors.os_error_line(info.value)
     assert line.startswith(f"{tmp_path / 'h.nc'}: No space left on device (0.0041 MB free") and \
         line.endswith("the disk is full: free some space or choose another --out"), line
     assert list(tmp_path.iterdir()) == []                                     # no temporary left
@@ -184,11 +157,11 @@ def test_a_full_disk_is_said_so_naming_the_dataset(tmp_path, monkeypatch):
     monkeypatch.setattr(io, "_to_netcdf", full)
     with pytest.raises(OSError) as info:
         io.write_dataset(_history(), tmp_path / "h.nc", stage="simulate")
-    assert io.os_error_line(info.value) == (f"{tmp_path / 'h.nc'}: No space left on device; the disk is full: "
+    assert file_errors.os_error_line(info.value) == (f"{tmp_path / 'h.nc'}: No space left on device; the disk is full: "
                                             "free some space or choose another --out")
-    monkeypatch.setattr(io.shutil, "disk_usage", lambda p: _usage(10**9))  # (space enough: denied it is)
+    monkeypatch.setattr(file_errors.shutil, "disk_usage", lambda p: _usage(10**9))  # (space enough: denied it is)
     monkeypatch.setattr(io, "_to_netcdf", denied)
-    monkeypatch.setattr(io.os, "access", lambda p, mode: False)
+    monkeypatch.setattr(file_errors.os, "access", lambda p, mode: False)
     with pytest.raises(PermissionError, match="Permission denied"):
         io.write_dataset(_history(), tmp_path / "h.nc", stage="simulate")
 

@@ -550,7 +550,7 @@ def test_excludes_apply_to_a_whole_section_read(paper_scene):
 
 # ------------------------------------------------- stored datasets checked on reuse; files that are not outputs'
 def _history_stage(calls: list[str], name: str = "h", upstream: tuple[str, ...] = ()) -> runner.Stage:
-    """A stage writing a compressed 8000-sample history (zlib chunks, :func:`pipeline.io.compression`) scaled
+    """A stage writing a compressed 8000-sample history (zlib chunks, :func:`pipeline.encoding.compression`) scaled
     by dmw.rms_nm [nm], and reading its upstream stages' histories."""
     def compute(scene, inputs):
         calls.append(name)

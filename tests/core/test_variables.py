@@ -11,7 +11,8 @@ import xarray as xr
 
 from cf_check import cf_report
 from pipeline import variables as vs
-from pipeline.io import OLD_TIME_UNITS, read_dataset, write_dataset
+from pipeline.encoding import OLD_TIME_UNITS
+from pipeline.io import read_dataset, write_dataset
 from pipeline.variables import TIME
 from pipeline.config.scene import load_scene
 from pipeline.stages import roughness, sweep

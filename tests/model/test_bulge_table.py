@@ -10,11 +10,11 @@ from cf_check import cf_report
 from pipeline.model import bulge_table as bt
 from pipeline import variables as vs
 from pipeline.io import read_dataset, write_dataset
-from pipeline.physics import bulge_bearing as bb
+from pipeline.physics import bulge_bearing as bb, reynolds
 
 NM, UM = 1e-9, 1e-6
 PAPER = dict(p_pad=1e6, a=3 * UM, b=25 * UM, speed=19.5)
-COARSE = bb.ReynoldsGrid(cells_per_a=16, cells_per_b=8)
+COARSE = reynolds.ReynoldsGrid(cells_per_a=16, cells_per_b=8)
 
 
 @pytest.fixture(scope="module")
@@ -49,10 +49,10 @@ def test_reynolds_table_read_back_off_grid_matches_direct_solves(reynolds_ds):
     F, k = bt.lift_at(reynolds_ds, g, dl)
     kw = dict(profile="ellipsoid", grid=COARSE, viscosity=bt.AIR_VISCOSITY, mean_free_path=bt.AIR_MEAN_FREE_PATH,
               ambient_pressure=bt.AMBIENT_PRESSURE, **PAPER)
-    direct = bb.reynolds_solve(g, dl, **kw)["lift"]
+    direct = reynolds.reynolds_solve(g, dl, **kw)["lift"]
     assert F == pytest.approx(direct, rel=1e-3)
     h = 1e-3 * g
-    fd = -(bb.reynolds_solve(g + h, dl, **kw)["lift"] - bb.reynolds_solve(g - h, dl, **kw)["lift"]) / (2 * h)
+    fd = -(reynolds.reynolds_solve(g + h, dl, **kw)["lift"] - reynolds.reynolds_solve(g - h, dl, **kw)["lift"]) / (2 * h)
     assert k == pytest.approx(fd, rel=1e-2)
     # and the lift's stiffness is that of the table's own variable at its nodes
     i = int(np.argmin(np.abs(reynolds_ds["protrusion"].values - 10.0)))

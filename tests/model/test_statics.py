@@ -17,7 +17,7 @@ import pytest
 from pipeline.config.scene import load_scene
 from pipeline.model import kernel_inputs, running
 from pipeline.model import statics as st
-from pipeline.physics.equilibrium import path_equilibria, relaxed_path
+from pipeline.physics.statics_map import path_equilibria, relaxed_path
 from pipeline.units import NM, URAD
 from pipeline.variables import STATICS
 from pipeline.runner import ensure
@@ -251,10 +251,10 @@ FREE_DMW = ('identify.parameters=[{key = "dmw.rms_nm", low = 0.08, high = 2.0}, 
 
 
 def test_the_two_population_scene_frees_the_dmw_exponent_and_rms_within_their_bounds(repo_root):
-    from pipeline.analyses import study
+    from pipeline.analyses import free_parameters
     from pipeline.config.scene import DMW_EXPONENT_BOUNDS
     scene = load_scene(repo_root / "configs" / "paper-2009-two-population.toml")
-    params = {p.name: p for p in study.parse_parameters(scene["identify"]["parameters"], "f", "identify.parameters")}
+    params = {p.name: p for p in free_parameters.parse_parameters(scene["identify"]["parameters"], "f", "identify.parameters")}
     assert (params["dmw.exponent"].low, params["dmw.exponent"].high) == DMW_EXPONENT_BOUNDS == (-4.5, -1.0)
     assert (params["dmw.rms_nm"].low, params["dmw.rms_nm"].high) == (0.08, 2.0)
     assert "fhm_flying" in scene["identify"]["targets"]  # the flying FHM is still fitted
@@ -273,15 +273,15 @@ def test_bounds_beyond_the_band_limited_range_are_refused_naming_the_key(paper_c
 
 @pytest.mark.parametrize("exponent, rms", [(-4.0, 1.8), (-1.5, 0.12)])
 def test_an_evaluation_with_both_set_builds_the_record_of_that_rms_and_slope(paper_config, exponent, rms):
-    from pipeline import evaluations
-    from pipeline.analyses import study
+    from pipeline import candidates
+    from pipeline.analyses import free_parameters
     from pipeline.model.inputs import SimulationInputs
     from pipeline.physics.microwaviness import power_law_fit
     # flying only: the candidate's inputs are its DMW record alone (no interface tables to build)
     scene = load_scene(paper_config, ['scene.effects=["air_bearing", "pitch", "dmw"]', FREE_DMW])
-    params = study.parse_parameters(scene["identify"]["parameters"], "f", "identify.parameters")
-    candidate = study.with_values(scene, params, [rms, exponent])
-    w, fs = evaluations.candidate_inputs(candidate, SimulationInputs()).record()
+    params = free_parameters.parse_parameters(scene["identify"]["parameters"], "f", "identify.parameters")
+    candidate = free_parameters.with_values(scene, params, [rms, exponent])
+    w, fs = candidates.candidate_inputs(candidate, SimulationInputs()).record()
     # tol: rms of a record the synthesis scaled to it: ~log2(n) roundings of the mean
     assert np.sqrt(np.mean(w**2)) == pytest.approx(rms, rel=1e-9)  # the synthesis scales to the rms [nm]
     # the slope of the record's periodogram over the 10-500 kHz band: Gaussian bins, each an exponential
@@ -290,7 +290,7 @@ def test_an_evaluation_with_both_set_builds_the_record_of_that_rms_and_slope(pap
     f = np.fft.rfftfreq(w.size, 1.0 / fs)
     slope, _ = power_law_fit(f, np.abs(c) ** 2, (10e3, 500e3))
     assert slope == pytest.approx(exponent, abs=0.2)
-    base, _ = evaluations.candidate_inputs(scene, SimulationInputs()).record()  # the scene's own: -2, 0.5 nm
+    base, _ = candidates.candidate_inputs(scene, SimulationInputs()).record()  # the scene's own: -2, 0.5 nm
     assert not np.allclose(base, w)
 
 

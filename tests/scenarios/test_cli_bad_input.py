@@ -15,7 +15,8 @@ import pytest
 
 from pipeline import cli
 from pipeline.config.scene import SceneError, load_scene
-from pipeline.cli_checks import CONNECT_TIMEOUT_S, MAX_SCENES, check_grid, check_out, grid_size
+from pipeline.cli_checks import MAX_SCENES, check_grid, check_out, grid_size
+from pipeline.cluster import CONNECT_TIMEOUT_S
 
 ROOT = Path(__file__).resolve().parents[2]
 PAPER = ROOT / "configs" / "paper-2009.toml"
@@ -80,7 +81,7 @@ def _free_address() -> str:
 
 def test_a_scheduler_file_is_read_for_its_address_and_a_bad_one_is_one_line(capsys, folder, tmp_path):
     # --scheduler takes a scheduler file as well as a tcp:// address (dask users hand over `dask scheduler --scheduler-file`)
-    from pipeline.cli_checks import scheduler_address
+    from pipeline.scheduler import scheduler_address
     good = tmp_path / "scheduler.json"
     good.write_text('{"type": "Scheduler", "address": "tcp://10.1.2.3:8786", "services": {"dashboard": 8787}}')
     assert scheduler_address(str(good)) == ("tcp://10.1.2.3:8786", f"--scheduler {good} (address tcp://10.1.2.3:8786)")

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from pipeline import io
+from pipeline import encoding, io
 from pipeline.config.grid import scene_label
 from pipeline.config.scene import load_scene
 from pipeline.stages import sweep
@@ -90,11 +90,11 @@ def _compressed(var: netCDF4.Variable) -> bool:
 
 
 def test_every_large_numeric_variable_is_compressed_and_reads_back_bit_for_bit(runs, tmp_path):
-    """Every numeric variable of at least io.COMPRESS_FROM bytes is stored with zlib and shuffle; smaller
+    """Every numeric variable of at least encoding.COMPRESS_FROM bytes is stored with zlib and shuffle; smaller
     ones contiguous (HDF5's chunk index would outweigh the saving), strings never compressed."""
     scene, path = runs["a"]
     files = [path, path.with_name("sweep_histories.nc")]
-    big = 1.0 + np.arange(2000 * 3 * 2, dtype=float).reshape(2000, 3, 2) / 7.0  # (above io.WHOLE_BELOW)
+    big = 1.0 + np.arange(2000 * 3 * 2, dtype=float).reshape(2000, 3, 2) / 7.0  # (above encoding.WHOLE_BELOW)
     grid = xr.Dataset({"fhm_bv": (("protrusion", "roughness", "damping"), big, {"units": "%", "long_name": "f"})},
                       coords={"protrusion": ("protrusion", np.arange(2000.0), {"units": "nm", "long_name": "p"}),
                               "roughness": ("roughness", ["a", "b", "c"], {"long_name": "set"}),
@@ -106,7 +106,7 @@ def test_every_large_numeric_variable_is_compressed_and_reads_back_bit_for_bit(r
         with netCDF4.Dataset(f) as nc:
             for name, v in nc.variables.items():
                 nbytes = int(np.prod(v.shape)) * v.dtype.itemsize
-                if v.dtype.kind in "fiu" and v.ndim and nbytes >= io.COMPRESS_FROM:
+                if v.dtype.kind in "fiu" and v.ndim and nbytes >= encoding.COMPRESS_FROM:
                     assert _compressed(v), (f.name, name)
                     large.append(name)
                 else:

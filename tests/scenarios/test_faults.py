@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 from pipeline import cli, fanout
+from pipeline.cluster import ClusterError
 from pipeline.cli_checks import OptionError, check_options, check_scheduler
 from pipeline.config import limits
 from pipeline.config.scene import SceneError, load_scene
@@ -58,7 +59,7 @@ def test_a_scheduler_lost_mid_batch_is_one_line_to_rerun():
             cluster.close()
 
     try:
-        with pytest.raises(fanout.ClusterError) as exc:
+        with pytest.raises(ClusterError) as exc:
             fanout.run_tasks(_slow_task, [(0.3,)] * 6, scheduler=cluster.scheduler_address, on_done=close_after_first)
     finally:
         cluster.close()
@@ -191,7 +192,7 @@ def test_a_server_imitating_the_dask_handshake_fails_closed_in_one_line(fake_das
     assert cli.main(args) == 2
     _one_line(capsys, f"hdi sweep: error: --scheduler {fake_dask_server}: answers with a dask-like handshake")
     assert not (tmp_path / "out").exists()
-    with pytest.raises(fanout.ClusterError, match=r"answers, but not as a dask scheduler \(error\)"):
+    with pytest.raises(ClusterError, match=r"answers, but not as a dask scheduler \(error\)"):
         fanout.cluster_threads(fake_dask_server)  # (a scheduler replaced mid-run: the fan-out's own connection)
     # (and the failed connections leave dask's default scheduler as it was, which tests/conftest.py's autouse
     # guard asserts after every test: xarray's to_netcdf in this process once asked for a client that did not exist)
@@ -210,7 +211,7 @@ def test_a_failed_connection_leaves_no_half_built_client_for_the_garbage_collect
     an arbitrary moment: inside the next Client's event-loop start, where it deadlocked (this file's
     handshake test, run alone, hung). It is closed where it failed."""
     assert _open_clients() == []
-    with pytest.raises(fanout.ClusterError) as exc:
+    with pytest.raises(ClusterError) as exc:
         fanout.cluster_threads(fake_dask_server)
     assert exc.value.__context__ is not None  # (the constructor's error, and its frames, are still held)
     assert _open_clients() == []

@@ -13,7 +13,7 @@ from pipeline import runner
 from pipeline.config.scene import load_scene
 from pipeline.model import bulge_table as bt
 from pipeline.model import scene_inputs
-from pipeline.physics import bulge_bearing as bb
+from pipeline.physics import bulge_bearing as bb, reynolds
 from pipeline.physics import gas_flow as gf
 
 NM, UM = 1e-9, 1e-6
@@ -21,14 +21,14 @@ A_SEMI, B_SEMI = 3 * UM, 25 * UM
 P_PAD = 2.2e6  # the pad pressure of the lab's band (docs/model.md, section "Lift cap (hypothesis H8)")
 AIR = dict(viscosity=1.81e-5, mean_free_path=65e-9, ambient_pressure=101325.0)
 U = 19.49
-COARSE = bb.ReynoldsGrid(cells_per_a=16, cells_per_b=8)
+COARSE = reynolds.ReynoldsGrid(cells_per_a=16, cells_per_b=8)
 ROUGH = gf.RoughGap(sigma=0.52 * NM, disk_share=1.0, wet_gap=0.75 * NM)  # the two-population scene's
 
 
 def solve(g, delta, **kw):
     args = dict(p_pad=P_PAD, a=A_SEMI, b=B_SEMI, speed=U, grid=COARSE, slip="boltzmann", roughness=ROUGH, **AIR)
     args.update(kw)
-    return bb.reynolds_solve(g, delta, **args)
+    return reynolds.reynolds_solve(g, delta, **args)
 
 
 def test_large_bearing_number_gives_the_rough_ph_limit():
@@ -37,7 +37,7 @@ def test_large_bearing_number_gives_the_rough_ph_limit():
     per semi-axis); and the pressure field itself conserves the Couette mass flow over the footprint."""
     g = np.array([3.0, 1.5, 0.7, 0.3]) * NM
     lim = bb.rough_ph_lift(g, 10 * NM, P_PAD, A_SEMI, B_SEMI, ROUGH)
-    grid = bb.ReynoldsGrid(cells_per_a=32, cells_per_b=12)
+    grid = reynolds.ReynoldsGrid(cells_per_a=32, cells_per_b=12)
     dev = [np.abs(solve(g, 10 * NM, speed=U * f, grid=grid)["lift"] / lim - 1).max() for f in (1, 4, 64)]
     assert 0.01 < dev[0] < 0.03 and dev[1] < dev[0] / 8 and dev[2] < 6e-4, dev
     r = solve(g[2:3], 10 * NM, speed=U * 256, grid=grid, fields=True)
@@ -79,7 +79,7 @@ def test_boltzmann_meets_first_order_slip_at_small_knudsen():
 
 def test_grid_convergence_and_mass_balance():
     g = np.array([2.0, 0.7, 0.3]) * NM
-    lifts = [solve(g, 10.4 * NM, grid=bb.ReynoldsGrid(cells_per_a=n, cells_per_b=max(n // 2, 4)))
+    lifts = [solve(g, 10.4 * NM, grid=reynolds.ReynoldsGrid(cells_per_a=n, cells_per_b=max(n // 2, 4)))
              for n in (8, 16, 32)]
     e1 = np.abs(lifts[0]["lift"] - lifts[2]["lift"])
     e2 = np.abs(lifts[1]["lift"] - lifts[2]["lift"])
@@ -109,11 +109,11 @@ def test_the_rough_table_and_its_stage(repo_root):
     assert "bulge" in scene_inputs.simulation_inputs(scene) and "bulge" in runner.main_job(scene)
     ds = bt.bulge_table(model="rough-reynolds", p_pad=P_PAD, a=A_SEMI, b=B_SEMI, speed=U,
                         gaps=bt.table_gaps(), protrusions=np.array([0.0, 10.0, 10.5]) * NM,
-                        grid=bb.ReynoldsGrid(cells_per_a=8, cells_per_b=4), roughness=ROUGH)
+                        grid=reynolds.ReynoldsGrid(cells_per_a=8, cells_per_b=4), roughness=ROUGH)
     assert ds.attrs["slip_model"] == "boltzmann" and ds.attrs["roughness_sigma_nm"] == pytest.approx(0.52)
     assert np.all(ds["bulge_lift"].values[0] == 0.0)
     g = np.array([2.0, 1.0, 0.5]) * NM
-    direct = solve(g, 10.0 * NM, grid=bb.ReynoldsGrid(cells_per_a=8, cells_per_b=4))["lift"]
+    direct = solve(g, 10.0 * NM, grid=reynolds.ReynoldsGrid(cells_per_a=8, cells_per_b=4))["lift"]
     np.testing.assert_allclose(bt.lift_at(ds, g, 10.0 * NM)[0], direct, rtol=2e-4)
     assert bt.scene_roughness(scene) == ROUGH
     assert bt.scene_roughness(scene.replace(air_bearing={"bulge": "reynolds"})) is None
@@ -139,7 +139,7 @@ def test_the_report_draws_the_bulge_figure_when_the_law_is_tabulated(repo_root, 
         assert ("bulge" in Runner(scene, tmp_path).plan(["report"])) is upstream
         assert ("bulge", "bulge") in report.OPTIONAL
     ds = bt.bulge_table(model="rough-reynolds", p_pad=P_PAD, a=A_SEMI, b=B_SEMI, speed=U, gaps=bt.table_gaps(),
-                        protrusions=np.arange(0.0, 11.5, 0.5) * NM, grid=bb.ReynoldsGrid(cells_per_a=8, cells_per_b=4),
+                        protrusions=np.arange(0.0, 11.5, 0.5) * NM, grid=reynolds.ReynoldsGrid(cells_per_a=8, cells_per_b=4),
                         roughness=ROUGH)
     settings = ReportSettings(bulge="rough-reynolds", lift_cap_nm=1.65)
     data = {"sweep_histories": None, "calibration": None, "roughness": None, "dmw": None, "interface": None,

@@ -24,7 +24,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from pipeline import cli, folder_lock, io, paths, runner
+from pipeline import cli, file_errors, folder_lock, io, paths, runner
 from pipeline.config.scene import load_scene
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -46,7 +46,7 @@ def _dataset() -> xr.Dataset:
 
 
 def _link_line(exc: OSError, link: Path) -> str:
-    line = io.os_error_line(exc)
+    line = file_errors.os_error_line(exc)
     assert "\n" not in line and line.startswith(f"{link}: is a symbolic link (to ")
     assert line.endswith("hdi writes, locks and deletes no file through a link inside its results folder: "
                          "remove the link")
@@ -169,7 +169,7 @@ def test_a_fifo_at_the_lock_name_is_refused_without_blocking(tmp_path):
     with pytest.raises(OSError) as info:
         with folder_lock.folder_lock(out):
             pass
-    assert io.os_error_line(info.value) == (f"{out.resolve() / runner.LOCK_NAME}: is a FIFO (named pipe), not hdi's "
+    assert file_errors.os_error_line(info.value) == (f"{out.resolve() / runner.LOCK_NAME}: is a FIFO (named pipe), not hdi's "
                                             "lock file; remove it")
 
 
@@ -497,7 +497,7 @@ def drawing(i):
     (folder / f"{os.getpid()}.pid").write_text("")
     time.sleep(600)
 
-plots._draw = drawing
+plots.pool._draw = drawing
 sys.exit(cli.main(sys.argv[2:]))
 """
 

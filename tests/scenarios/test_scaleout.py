@@ -174,7 +174,8 @@ def test_sweep_on_a_remote_cluster_equals_the_local_run(cluster, tmp_path):
 
 @pytest.mark.slow
 def test_a_worker_that_does_not_see_the_results_folder_is_one_line_naming_it(cluster, tmp_path):
-    from pipeline.fanout import ClusterError, available_cores, run_tasks, shared_folder
+    from pipeline.cluster import ClusterError, shared_folder
+    from pipeline.fanout import available_cores, run_tasks
     gone = tmp_path / "not-shared"  # a folder no worker sees (as on a disk local to the client's machine)
     with shared_folder(gone), pytest.raises(ClusterError) as err:
         run_tasks(available_cores, [(), ()], scheduler=cluster)
@@ -225,16 +226,17 @@ def test_a_worker_running_other_code_is_refused_before_work_is_sent(cluster):
     from distributed import Client
 
     from pipeline.code_version import code_key
-    from pipeline.fanout import ClusterError, run_tasks
+    from pipeline.cluster import ClusterError
+    from pipeline.fanout import run_tasks
 
     def make_stale():  # (nested: pickled by value, the workers import no test module)
-        import pipeline.fanout
-        pipeline.fanout.code_key = lambda module: "0" * 64
+        import pipeline.cluster
+        pipeline.cluster.code_key = lambda module: "0" * 64
 
     def restore():
+        import pipeline.cluster
         import pipeline.code_version
-        import pipeline.fanout
-        pipeline.fanout.code_key = pipeline.code_version.code_key
+        pipeline.cluster.code_key = pipeline.code_version.code_key
 
     with Client(cluster, timeout="30s") as client:
         stale = sorted(client.scheduler_info(n_workers=-1)["workers"])[1]

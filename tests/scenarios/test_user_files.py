@@ -22,7 +22,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 
-from pipeline import cli, folder_lock, io, runner, sizing
+from pipeline import cli, file_errors, folder_lock, io, runner, sizing
 from pipeline.analyses import narrative
 from pipeline.model import measured_dmw
 from pipeline.physics.microwaviness import DMWError
@@ -193,7 +193,7 @@ def test_the_hdf_error_of_a_full_disk_is_put_down_to_the_free_space(dmw_out, mon
     before = _tree(out)
     capsys.readouterr()
     monkeypatch.setattr(io, "_to_netcdf", _half_write_then(lambda tmp: RuntimeError("NetCDF: HDF error")))
-    monkeypatch.setattr(io.shutil, "disk_usage", lambda path: shutil._ntuple_diskusage(4_000_000, 4_000_000, 5_000))
+    monkeypatch.setattr(file_errors.shutil, "disk_usage", lambda path: shutil._ntuple_diskusage(4_000_000, 4_000_000, 5_000))
     assert cli.main(argv) == 2
     line = _one_line_error(capsys)
     assert line.startswith(f"hdi dmw: error: {out / 'dmw.nc'}: {os.strerror(errno.ENOSPC)} (0.005 MB free, the "
@@ -255,7 +255,7 @@ def test_an_output_folder_that_is_a_file_is_one_line_before_computing(tmp_path, 
     stage = runner.Stage("figs", lambda scene, inputs: computed.append(1), outputs=("figures/a.png",))
     with pytest.raises(FileExistsError) as info:
         runner.Runner(load_scene(PAPER), tmp_path, {"figs": stage}).build(["figs"])
-    assert io.os_error_line(info.value) == (f"{tmp_path / 'figures'}: is a file, not a folder; it is a file where "
+    assert file_errors.os_error_line(info.value) == (f"{tmp_path / 'figures'}: is a file, not a folder; it is a file where "
                                             "hdi needs a folder: remove or rename it")
     assert computed == [] and (tmp_path / "figures").read_text() == "mine"
 

@@ -1,7 +1,7 @@
 """What a new user trips over: each test is one probe of a user's first runs and what it must give.
 
 SIGTERM, the umask of written datasets, interface coordinates ``.sel`` could not hit, unbounded sizes, and
-the smaller messages. (A scheduler address that is not a dask scheduler: ``core/test_cli_checks.py``; the
+the smaller messages. (A scheduler address that is not a dask scheduler: ``core/test_scheduler.py``; the
 validity bits: ``core/test_validity.py``. The time axis and the
 ensemble's CF-1.8 are in ``core/test_variables.py`` and ``scenarios/test_realisations.py``; the resumed sweep in
 ``stages/test_sweep.py``.)

@@ -20,7 +20,7 @@ from pipeline.model import dynamics as dyn
 from pipeline.model import forces as fo
 from pipeline.model import scene_inputs
 from pipeline.model import assembly, kernel_inputs
-from pipeline.physics import bulge_bearing as bb
+from pipeline.physics import bulge_bearing as bb, reynolds
 from scene_recording import declared, recording
 
 NM = 1e-9
@@ -28,7 +28,7 @@ NM = 1e-9
 #: 1e-3 of the default grid's, tests/physics/test_bulge_bearing.py), flying only
 REYNOLDS = ['air_bearing.bulge="reynolds"', "solver.bulge_cells_per_a=16", "solver.bulge_cells_per_b=8",
             'scene.effects=["air_bearing","pitch"]']
-GRID = bb.ReynoldsGrid(cells_per_a=16, cells_per_b=8)
+GRID = reynolds.ReynoldsGrid(cells_per_a=16, cells_per_b=8)
 
 
 @pytest.fixture(scope="module")
@@ -44,7 +44,7 @@ def table(bulge_scene):
 
 
 def _solve(g, delta, ds, speed=None):
-    return bb.reynolds_solve(g, delta, p_pad=float(ds["pad_pressure"]) * 1e6, a=3e-6, b=25e-6,
+    return reynolds.reynolds_solve(g, delta, p_pad=float(ds["pad_pressure"]) * 1e6, a=3e-6, b=25e-6,
                              speed=ds.attrs["disk_speed_m_s"] if speed is None else speed,
                              viscosity=bt.AIR_VISCOSITY, mean_free_path=bt.AIR_MEAN_FREE_PATH,
                              ambient_pressure=bt.AMBIENT_PRESSURE, grid=GRID)["lift"]

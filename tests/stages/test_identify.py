@@ -1,5 +1,5 @@
 """hdi identify: the twin experiment (targets made by the model itself), resuming, the written scene.
-(The study's parameters: analyses/test_study.py; the search on plain functions: analyses/test_identification.py;
+(The study's parameters: analyses/test_study.py; the search on plain functions: analyses/identification/;
 the evaluation store and keys: core/test_evaluations.py.)"""
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ import pytest
 import xarray as xr
 
 from pipeline import evaluations
-from pipeline.analyses import identification, study
+from pipeline.analyses import free_parameters, identification, study
 from pipeline.model import scene_inputs
 from pipeline.model.inputs import cached
 from pipeline.config.scene import load_scene
@@ -35,7 +35,7 @@ def _twin_scene(write_scene, paper_config, tmp_path, text=SCENE):
     """The scene of ``text`` with every target's value set to what the model gives at :data:`TRUE`."""
     path = write_scene(text.format(paper=paper_config))
     scene = load_scene(path)
-    params = study.parse_parameters(scene["identify"]["parameters"], str(path), "identify.parameters")
+    params = free_parameters.parse_parameters(scene["identify"]["parameters"], str(path), "identify.parameters")
     tl = study.targets(scene)
     inputs = evaluations.prepare_inputs(scene, tmp_path / "out")
     rec = evaluations.evaluate(scene, params, [TRUE[p.name] for p in params], study.target_protrusions(tl), inputs)
@@ -55,7 +55,7 @@ def test_twin_experiment_recovers_the_true_parameters_within_the_reported_interv
     failures, crashed = cf_report(nc)
     assert crashed == [] and failures[3] == [] and failures[2] == [], failures
     assert ds.attrs["interval_method"] == identification.METHODS["optimised"]  # (the default)
-    for p in study.parse_parameters(scene["identify"]["parameters"], "", ""):
+    for p in free_parameters.parse_parameters(scene["identify"]["parameters"], "", ""):
         at = ds.sel(parameter=p.name)
         lo, hi = float(at["interval"].sel(bound="low")), float(at["interval"].sel(bound="high"))
         assert lo <= TRUE[p.name] <= hi, (p.name, lo, hi, float(at["best"]))
@@ -133,7 +133,7 @@ def test_a_profile_point_better_than_the_optimum_becomes_the_optimum(write_scene
     # one generation of a small population stops short of the twin's truth; the profiles find better
     # points, and the written optimum moves to them (the profiles made again around it) until none is
     # better by more than PROFILE_GAIN or the rounds run out (without the polish of the search's optimum, which
-    # takes it there before the profiles: tests/analyses/test_identification.py)
+    # takes it there before the profiles: tests/analyses/identification/test_search.py)
     scene, path = _twin_scene(write_scene, paper_config, tmp_path)
     scene = load_scene(path, ["identify.generations=1", "identify.population=4", "identify.profile_points=5",
                               "identify.seed=1", "identify.polish=false",
@@ -177,7 +177,7 @@ def test_twin_correlated_pair_profile_interval_is_wider_than_the_slice(write_sce
     ds = xr.open_dataset(ensure("identify", scene, out, scheduler="synchronous"), engine="netcdf4").load()
     assert ds.attrs["within_tolerance"] == 1 and ds.attrs["interval_method"] == identification.METHODS["optimised"]
     assert float(ds["correlation"][0, 1]) > 0.8
-    params = study.parse_parameters(scene["identify"]["parameters"], "", "")
+    params = free_parameters.parse_parameters(scene["identify"]["parameters"], "", "")
     for p in params:
         lo, hi = ds["interval"].sel(parameter=p.name).values
         slo, shi = ds["slice_interval"].sel(parameter=p.name).values
@@ -332,7 +332,7 @@ def test_a_profile_point_better_than_the_centre_is_the_one_best_point_everywhere
     # identify.nc's best_evaluation (the lowest objective, a profile point may hold it), its *_best values and
     # the written scene name one point
     if rounds is not None:
-        monkeypatch.setattr(identification, "PROFILE_ROUNDS", rounds)
+        monkeypatch.setattr(identification.profiles, "PROFILE_ROUNDS", rounds)
     path = tmp_path / "twin.toml"
     path.write_text(BEST_POINT.format(paper=paper_config))
     scene = load_scene(path, tolerances)
@@ -350,7 +350,7 @@ def test_a_profile_point_better_than_the_centre_is_the_one_best_point_everywhere
     assert objective[i_best] == np.min(objective) == ds.attrs["best_objective"]
     np.testing.assert_array_equal(ds["best"].values, ds["parameter_value"][i_best].values)
     written = load_scene(out / "identified.toml")
-    for p in study.parse_parameters(scene["identify"]["parameters"], "", ""):
+    for p in free_parameters.parse_parameters(scene["identify"]["parameters"], "", ""):
         section, key, _ = p.parts
         assert written[section][key] == pytest.approx(float(ds["best"].sel(parameter=p.name)), rel=1e-5)
     last = [r.getMessage() for r in caplog.records if "evaluations (" in r.getMessage()]

@@ -146,7 +146,7 @@ def test_bad_scene_is_a_clean_cli_error(tmp_path, paper_config, capsys):
     assert not (tmp_path / "interface.nc").exists()
 
 
-# (netCDF4's RuntimeError of a failed write is raised as an OSError naming the dataset: io.write_failure)
+# (netCDF4's RuntimeError of a failed write is raised as an OSError naming the dataset: pipeline.file_errors.write_failure)
 @pytest.mark.parametrize("exc, raised", [(RuntimeError("disk full"), OSError),
                                          (KeyboardInterrupt(), KeyboardInterrupt)])
 def test_failed_write_keeps_previous_file(tmp_path, paper_config, monkeypatch, exc, raised):

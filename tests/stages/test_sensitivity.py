@@ -148,8 +148,8 @@ def test_morris_leaves_out_trajectories_with_undefined_points(write_scene, paper
 
 def test_screening_takes_any_outputs_callable():
     # the algorithms (analyses) on a plain function: y = 2 x0 over x0 in [0, 1], x1 not seen
-    from pipeline.analyses import screening, study
-    params = [study.Parameter("dmw.rms_nm", 0.0, 1.0), study.Parameter("air_bearing.damping_ratio", 0.0, 0.5)]
+    from pipeline.analyses import free_parameters, screening
+    params = [free_parameters.Parameter("dmw.rms_nm", 0.0, 1.0), free_parameters.Parameter("air_bearing.damping_ratio", 0.0, 0.5)]
 
     def outputs(X):
         return {"y": 2.0 * X[:, 0]}

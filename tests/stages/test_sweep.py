@@ -22,7 +22,7 @@ from pipeline.stages import sweep as sweep_stage
 from pipeline.stages.simulate import model_inputs
 from pipeline.model.inputs import from_folder
 from pipeline.config.grid import roughness_label, roughness_sets, scene_label
-from pipeline import io, runner
+from pipeline import encoding, runner
 from pipeline.runner import ensure
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -209,10 +209,10 @@ def test_a_part_file_gives_back_its_batch_bit_for_bit(calibrated, tmp_path, prot
     for key, value in ds.attrs.items():
         assert back.attrs[key] == value, key
     assert sweep_stage.part_problem(path, "key", batch) is None
-    # stored uncompressed (a working file; the histories' stack is far above io.COMPRESS_FROM)
+    # stored uncompressed (a working file; the histories' stack is far above encoding.COMPRESS_FROM)
     with netCDF4.Dataset(path) as nc:
         stacks = [v for name, v in nc.variables.items() if name.startswith("stack__")]
-        assert max(int(np.prod(v.shape)) * v.dtype.itemsize for v in stacks) > 100 * io.COMPRESS_FROM
+        assert max(int(np.prod(v.shape)) * v.dtype.itemsize for v in stacks) > 100 * encoding.COMPRESS_FROM
         assert all(v.chunking() == "contiguous" and not (v.filters() or {}).get("zlib") for v in stacks)
 
 

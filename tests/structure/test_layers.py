@@ -20,14 +20,16 @@ ROOT = Path(__file__).resolve().parents[2] / "pipeline"
 
 #: Rank of each module or package prefix (longest prefix wins).
 LAYERS = {
-    "pipeline": 0, "pipeline.units": 0, "pipeline.code_version": 0, "pipeline.io": 0,
-    "pipeline.variables": 0, "pipeline.fanout": 0, "pipeline.progress": 0, "pipeline.validity": 0,
+    "pipeline": 0, "pipeline.units": 0, "pipeline.code_version": 0, "pipeline.io": 0, "pipeline.encoding": 0,
+    "pipeline.file_errors": 0,
+    "pipeline.variables": 0, "pipeline.fanout": 0, "pipeline.cluster": 0, "pipeline.scheduler": 0,
+    "pipeline.options": 0, "pipeline.progress": 0, "pipeline.validity": 0,
     "pipeline.interrupts": 0, "pipeline.paths": 0, "pipeline.folder_lock": 0, "pipeline.duck_arrays": 0,
     "pipeline.physics": 1,
     "pipeline.config": 2,
     "pipeline.model": 3,
     "pipeline.analyses": 4,
-    "pipeline.stages": 5, "pipeline.runner": 5, "pipeline.evaluations": 5,
+    "pipeline.stages": 5, "pipeline.runner": 5, "pipeline.evaluations": 5, "pipeline.candidates": 5,
     "pipeline.cli_checks": 6, "pipeline.cli": 6, "pipeline.launch": 6, "pipeline.sizing": 6, "pipeline.api": 6,
 }
 NAMES = {0: "base", 1: "physics", 2: "config", 3: "model", 4: "analyses", 5: "stages", 6: "cli"}

@@ -20,13 +20,14 @@ import pytest
 
 from pipeline import physics
 from pipeline.config.scene import SCHEMA, SceneError
-from pipeline.config.schema import describe_keys, scene_key, variant_keys, variants_table, with_variants_table
+from pipeline.config.schema import describe_keys
+from pipeline.config.variants_table import scene_key, variant_keys, variants_table, with_variants_table
 from pipeline.config.si import to_si
 from pipeline.model import assembly, bulge_table, forces, kernel_inputs, outcomes, running, scene_inputs
 from pipeline.model.dmw_record import disk_speed_m_s
 from pipeline.model.interface_tables import build_tables, roughness_statistics
 from pipeline.physics import air_bearing as ab
-from pipeline.physics import bulge_bearing as bb
+from pipeline.physics import bulge_bearing as bb, reynolds
 from pipeline.physics.variants import Entry, Registry, Variant
 from slider_scenes import FLYING, K, make_scene
 
@@ -230,7 +231,7 @@ def _bulge_slip(key, name, entry, monkeypatch):
                                  b=si.tfc.half_width, speed=disk_speed_m_s(scene["dmw"]),
                                  gaps=np.array([1.0, 2.0, 4.0, 8.0]) * NM, protrusions=np.array([0.0, 9.0]) * NM,
                                  profile="ellipsoid", slip=scene["air_bearing"]["bulge_slip"],
-                                 grid=bb.ReynoldsGrid(cells_per_a=4, cells_per_b=2))
+                                 grid=reynolds.ReynoldsGrid(cells_per_a=4, cells_per_b=2))
     assert ds.attrs["slip_model"] == name and np.all(np.isfinite(ds["bulge_lift"].values))
     assert bool(seen) == (entry.behaviour is not None)
 

@@ -1,4 +1,4 @@
-"""The --scheduler check (pipeline.cli_checks.check_scheduler): an HTTP server (a dashboard port) or a service
+"""The --scheduler check (pipeline.scheduler.check_scheduler): an HTTP server (a dashboard port) or a service
 that speaks first is no dask scheduler, said in one line within the handshake timeout, before the command writes
 anything; a scheduler without workers is reported and one with a worker passes."""
 
@@ -13,7 +13,8 @@ from pathlib import Path
 import pytest
 
 from pipeline import cli
-from pipeline.cli_checks import OptionError, check_scheduler
+from pipeline.options import OptionError
+from pipeline.scheduler import check_scheduler
 
 PAPER = Path(__file__).resolve().parents[2] / "configs" / "paper-2009.toml"
 #: A short flying sweep (the command must refuse the scheduler before it runs any of it).
