@@ -13,7 +13,7 @@ Rows (each the median of :data:`REPEAT` fresh processes, wall time and the child
 2. a study's fixed part: ``hdi sweep`` of the paper scene restricted to one protrusion (:data:`ONE_SCENE`)
    in a folder holding its inputs, the kernels loaded from the numba cache (one untimed run first): the
    interpreter, the imports, the scheduler, reading the inputs, loading the kernels, one ~5-ms scene and the
-   dataset's write. Target (issue 53) <= 1.5 s (:data:`FIXED_TARGET_S`), with and without the variable.
+   dataset's write. Target <= 1.5 s (:data:`FIXED_TARGET_S`), with and without the variable.
 
 Each row of the set ``=1`` also says how many of the modules such a process imported had no bytecode
 cached (``modules_without_bytecode`` of ``modules_imported``, :data:`WITHOUT_BYTECODE`): 0 after the set-up.
@@ -38,7 +38,7 @@ PAPER = str(ROOT / "configs" / "paper-2009.toml")
 ONE_SCENE = ("--set", "sweep.protrusion_nm={start=5.0,stop=5.0,step=0.2}")
 INPUTS = ("roughness.nc", "dmw.nc", "interface.nc", "calibration.nc")
 REPEAT = 5
-#: A study's fixed part's target [s] (issue 53: imports and the kernels from the numba cache).
+#: A study's fixed part's target [s]: the imports and the kernels loaded from the numba cache.
 FIXED_TARGET_S = 1.5
 #: Runs ``hdi ARGS`` as the console script does and, as it ends (``os._exit`` or the interpreter's exit), writes to the file
 #: ``HDI_BENCH_MODULES`` how many of the modules it imported from a ``.py`` file had no cached bytecode.
