@@ -64,14 +64,14 @@ def upstream(scene: Any) -> tuple[str, ...]:
 def base_key(scene: Any, inputs: SimulationInputs) -> str:
     """Hash of what an evaluation depends on besides its parameters and protrusions.
 
-    The scene keys a simulation reads (:data:`pipeline.model.scene_inputs.SIMULATION_EXCLUDES` left out), the
+    The scene keys a study's simulations read (:data:`pipeline.model.scene_inputs.STUDY_FIELDS`), the
     runner's keys of the base inputs, which hash AFM scans and a measured DMW record by content (a
     rescanned file under the same name is a new base, not a store to read back), and the code of this
     module and of what it imports (:func:`pipeline.code_version.code_key`).
     """
     keys = {stage: getattr(inputs, stage).key if getattr(inputs, stage) is not None else None
             for stage in ("interface", "dmw", "bulge")}
-    blob = {"scene": scene_part(scene, ("*",), scene_inputs.SIMULATION_EXCLUDES), "interface": keys["interface"],
+    blob = {"scene": scene_part(scene, scene_inputs.STUDY_FIELDS), "interface": keys["interface"],
             "dmw": keys["dmw"], "code": code_key(__name__)}
     if keys["bulge"] is not None:  # (only with the tabulated bulge bearing: other stores keep their keys)
         blob["bulge"] = keys["bulge"]

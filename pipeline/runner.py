@@ -4,12 +4,15 @@ A stage is a declaration, :class:`Stage`, bound to the name ``STAGE`` in its mod
 :mod:`pipeline.stages`; :func:`registry` discovers every such module, so a new stage plugs in by
 declaring itself (no list to edit). A declaration says
 
-* what the stage reads: scene keys (``reads``/``excludes``), files named by scene keys (``files``,
-  e.g. ``roughness.afm`` or ``dmw.source``) and other stages' datasets (``upstream``);
+* what the stage reads: scene keys (``reads``: schema keys, the union of the fields its model builders
+  declare and its own, :func:`pipeline.config.fields.fields`), files named by scene keys (``files``, e.g.
+  ``roughness.afm`` or ``dmw.source``) and other stages' datasets (``upstream``);
 * what it writes (``outputs``, paths relative to the results folder);
 * how it computes: a pure ``compute(scene, inputs) -> xr.Dataset | {output: xr.Dataset | None}``
   that reads only what it declared (through :class:`Inputs`) and writes nothing itself, except
-  non-NetCDF outputs (figures, tables) which it writes under ``inputs.staging``. A dataset complete
+  non-NetCDF outputs (figures, tables) which it writes under ``inputs.staging``. ``compute`` reads the
+  scene through :class:`pipeline.config.fields.DeclaredScene`: a key outside ``reads`` (and ``unkeyed``)
+  raises :class:`~pipeline.config.fields.UndeclaredRead`, naming the stage and the key. A dataset complete
   before the computation ends (the sweep's histories, while the last batches run) may be handed to
   :meth:`Inputs.write_early`: the runner writes it then, into the staging folder, and moves it into place
   with the others (the stage still returns it).
@@ -55,6 +58,7 @@ import xarray as xr
 
 from . import interrupts
 from .code_version import code_key
+from .config.fields import DeclaredScene, expand, fields
 from .fanout import shared_folder
 from .progress import stage as progress_stage
 from .model.inputs import SimulationInputs, from_folder
@@ -106,11 +110,15 @@ class Stage:
         Output paths relative to the results folder (a tuple, or a function of the scene). The first
         is the stage's primary output (returned by :func:`build`).
     reads
-        Scene keys the result depends on, ``"section"`` or ``"section.key"``; ``"*"`` = the whole
-        scene minus ``excludes``.
-    excludes
-        Keys removed from ``"*"`` and from a whole section read (``"lubricant"`` minus
-        ``"lubricant.meniscus_time_us"``); a section named here is removed from ``"*"``.
+        The scene keys the result depends on, each a key of the schema (``"section.key"``, checked by
+        :func:`pipeline.config.fields.fields`; ``"section.*"``: every key of the section): the fields its model
+        builders declare and its own. They make the scene part of the inputs key; ``compute`` may read no other
+        (but ``unkeyed``).
+    unkeyed
+        Scene keys ``compute`` also reads (or keys of ``reads`` left out of the key) whose effect the key
+        holds another way: through ``derived`` values
+        of them, or because they say how the work is cut, not what it computes (``sweep.batch_size``: parts
+        of another batch are recomputed, never mixed).
     files
         ``files(scene) -> {role: path}``: input files named by scene keys (hashed by content).
     upstream
@@ -161,8 +169,8 @@ class Stage:
     name: str
     compute: Callable[[Scene, "Inputs"], Any]
     outputs: tuple[str, ...] | Callable[[Scene], tuple[str, ...]]
-    reads: tuple[str, ...] = ("*",)
-    excludes: tuple[str, ...] = ()
+    reads: tuple[str, ...] = ()
+    unkeyed: tuple[str, ...] = ()
     files: Callable[[Scene], Mapping[str, str | Path]] = _constant({})
     upstream: tuple[str, ...] | Callable[[Scene], tuple[str, ...]] = ()
     options: tuple[str, ...] = ()
@@ -177,6 +185,20 @@ class Stage:
     simulates: bool = False
     lazy_imports: tuple[str, ...] = ()
     doc: str = ""
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "reads", fields(*self.reads))
+        object.__setattr__(self, "unkeyed", fields(*self.unkeyed))
+
+    def keyed(self) -> tuple[str, ...]:
+        """The scene keys of the inputs key: ``reads`` but ``unkeyed``, each ``"section.*"`` as the keys the
+        section has now (:func:`pipeline.config.fields.expand`)."""
+        unkeyed = set(expand(self.unkeyed))
+        return tuple(k for k in expand(self.reads) if k not in unkeyed)
+
+    def view(self, scene: Scene) -> DeclaredScene:
+        """The scene as ``compute`` reads it: its declared keys only (:class:`pipeline.config.fields.DeclaredScene`)."""
+        return DeclaredScene(scene, f"the {self.name} stage", (*self.reads, *self.unkeyed))
 
     def output_names(self, scene: Scene) -> tuple[str, ...]:
         return tuple(self.outputs(scene) if callable(self.outputs) else self.outputs)
@@ -294,49 +316,30 @@ def main_job(scene: Scene, stages: Mapping[str, Stage] | None = None) -> list[st
 
 
 # --------------------------------------------------------------------------------------------- keys
-#: Scene keys no stage reads: ``scene.extends`` says how the file was written (the base's absolute
-#: path), not what the scene is; its values are already in the resolved keys. Keyed, it made a scene
-#: that extends another recompute results identical to the base's, and every result stale when the
-#: project folder moved.
-NEVER_READ = ("scene.extends",)
-
-
 #: Keys of the synthetic DMW record, which a measured record (``dmw.source`` a file) leaves unused:
 #: keyed, ``--set dmw.rms_nm`` recomputed the whole chain to identical results.
 SYNTHESIS_ONLY = ("dmw.rms_nm", "dmw.exponent", "dmw.seed")
 
 
-def unused_keys(scene: Scene) -> tuple[str, ...]:
-    """Scene keys this scene states but nothing reads (beyond :data:`NEVER_READ`)."""
-    dmw = scene.config.get("dmw", {})
-    return SYNTHESIS_ONLY if dmw.get("source", "synthetic") != "synthetic" else ()
+def unused_keys(scene: Scene, reads: Iterable[str] = ("dmw.source",)) -> tuple[str, ...]:
+    """Keys of ``reads`` this scene states but nothing reads: the synthesis keys of a measured DMW record
+    (when ``reads`` holds ``dmw.source``, which says which)."""
+    if "dmw.source" in reads and scene["dmw"]["source"] != "synthetic":
+        return SYNTHESIS_ONLY
+    return ()
 
 
-def scene_part(scene: Scene, reads: Iterable[str], excludes: Iterable[str] = ()) -> dict[str, Any]:
-    """The scene keys named by ``reads``/``excludes`` (see :class:`Stage`), JSON-normalised, without
-    the :func:`unused_keys` of the scene."""
-    cfg = json.loads(json.dumps(scene.config, default=str))
-    for item in unused_keys(scene):
-        section, _, key = item.partition(".")
-        cfg.get(section, {}).pop(key, None)
+def scene_part(scene: Scene, reads: Iterable[str]) -> dict[str, Any]:
+    """The scene keys ``reads`` (a declaration, :func:`pipeline.config.fields.fields`: a stage's
+    :meth:`Stage.keyed`), JSON-normalised, without the :func:`unused_keys` of the scene: ``{"section.key": value}``."""
+    reads = expand(reads)
+    unused = set(unused_keys(scene, reads))
     picked: dict[str, Any] = {}
-    reads = tuple(reads)
-    if "*" in reads:
-        picked = {s: dict(v) for s, v in cfg.items()}
-        for item in (*excludes, *NEVER_READ):
-            section, _, key = item.partition(".")
-            if key:
-                picked.get(section, {}).pop(key, None)
-            else:
-                picked.pop(section, None)
-        picked = {"*": picked}
-    excluded = set(excludes)
     for item in reads:
-        if item == "*":
-            continue
         section, _, key = item.partition(".")
-        picked[item] = cfg[section][key] if key else \
-            {k: v for k, v in cfg[section].items() if f"{section}.{k}" not in excluded}
+        if item in unused or key not in scene[section]:
+            continue
+        picked[item] = json.loads(json.dumps(scene[section][key], default=str))
     return picked
 
 
@@ -422,7 +425,7 @@ class Runner:
             st = self.stage(name)
             payload = {
                 "stage": name, "code": code_key(st.compute.__module__),
-                "scene": scene_part(self.scene, st.reads, st.excludes),
+                "scene": scene_part(self.scene, st.keyed()),
                 "files": {role: self._hash(p) for role, p in self.files(name).items()},
                 "upstream": {u: self.key(u) for u in st.upstream_names(self.scene)},
                 "options": {o: self.options.get(o) for o in st.options},
@@ -684,7 +687,7 @@ class Runner:
                             staging=staging)
             inputs.writer = lambda output, ds: self._write_one(st, key, inputs, output, ds, staging / output)
             with shared_folder(inputs.out), progress_stage(name):  # (its progress lines carry its name)
-                result = st.compute(self.scene, inputs)
+                result = st.compute(st.view(self.scene), inputs)
             interrupts.check()  # (a signal a library swallowed during the computation: nothing is written)
             written = self._write(st, key, inputs, result, staging)
         finally:

@@ -92,3 +92,10 @@ def section_si(section: str, values: Mapping[str, Any]) -> Group:
 def to_si(scene: Any) -> Group:
     """The scene's sections as frozen groups in SI units (module docstring): ``to_si(scene).tfc.protrusion``."""
     return Group("", {s: None for s in scene.config}, lambda s: section_si(s, scene[s]))
+
+
+def si_value(si: Group, field: str) -> Any:
+    """The value of the SI view ``si`` (:func:`to_si`) a field names, ``"section.name"`` (the SI name: a
+    registry entry's parameter, :attr:`pipeline.physics.variants.Entry.parameters`)."""
+    section, _, name = field.partition(".")
+    return si[section][name]

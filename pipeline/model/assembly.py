@@ -43,7 +43,8 @@ from . import dynamics as dyn
 from .dmw_record import check_length, disk_speed_m_s
 from .forces import RearLawRef, rear_law_ref
 from .piecewise import disk_coefficients, piecewise_coefficients
-from ..config.si import to_si
+from ..config.fields import fields, parameter_fields, union
+from ..config.si import si_value, to_si
 from ..physics import air_bearing as ab
 from ..physics import bulge_bearing as bb
 from ..physics.asperity_statistics import explicit_statistics
@@ -75,6 +76,25 @@ def _bulge_table(ds: Any) -> Any:
 #: How a TFC-point law's table (:attr:`pipeline.physics.air_bearing.TfcLaw.table`) is read from its stage's
 #: dataset into the SI object its ``force`` takes.
 TABLE_READERS: Mapping[str, Callable[[Any], Any]] = {"bulge": _bulge_table}
+
+
+#: The scene keys :func:`build_model` reads (:func:`pipeline.config.fields.fields`): its steps' below, and
+#: the parameters of every entry of the registries it looks laws up in (:func:`law_parameters`).
+MODEL_FIELDS = union(
+    fields("scene.effects", "slider.length_mm", "slider.width_mm", "slider.thickness_mm", "slider.density_kg_m3",
+           "slider.front_arm_mm", "slider.rear_arm_mm", "slider.tfc_from_trailing_edge_um", "slider.friction_arm",
+           "air_bearing.flying_height_nm", "air_bearing.frequencies_khz", "air_bearing.damping_ratio",
+           "air_bearing.rear_exponent", "air_bearing.rear_reference_gap_nm", "air_bearing.stiffness_root",
+           "air_bearing.rear_law", "air_bearing.tfc_stiffening", "air_bearing.bulge", "air_bearing.lift_cap_gap_nm",
+           "tfc.half_length_um", "tfc.half_width_um", "roughness.afm", "roughness.sigma_nm",
+           "roughness.summit_radius_um", "roughness.summit_density_per_um2", "lubricant.meniscus_time_us",
+           "lubricant.shear_stress_mpa", "interface.model", "interface.adhesion", "contact.section_depth_sigma",
+           "contact.damping_n_s_m", "contact.friction_law", "contact.friction_coefficient",
+           "contact.friction_switching", "contact.area_model", "dmw.rpm", "dmw.radius_mm", "solver.rtol",
+           "solver.atol_nm", "solver.max_step_ns", "solver.stiffness_step", "solver.min_dwell_ns",
+           "solver.duration_ms", "solver.transient_ms", "solver.output_step_ns", "solver.interpolation_order",
+           "solver.start", "solver.fhm_measure"),
+    *(parameter_fields(registry.values()) for registry in (*TFC_POINT_LAWS.values(), FRICTION_LAWS)))
 
 
 @dataclass
@@ -453,4 +473,4 @@ def law_parameters(scene: Any, law: Entry) -> dict[str, Any]:
     TFC-point law's force, a friction law), read from the scene in SI units (:func:`pipeline.config.si.to_si`):
     keyword -> value."""
     si = to_si(scene)
-    return {keyword: si[where.partition(".")[0]][where.partition(".")[2]] for keyword, where in law.parameters}
+    return {keyword: si_value(si, where) for keyword, where in law.parameters}

@@ -19,6 +19,7 @@ import xarray as xr
 from ..physics import bulge_bearing as bb
 from ..physics import gas_flow
 from ..config.grid import TOL_NM
+from ..config.fields import fields
 from ..config.si import to_si
 from .dmw_record import disk_speed_m_s
 from .interface_tables import deepest_protrusion_nm
@@ -37,6 +38,15 @@ AMBIENT_PRESSURE = 101325.0
 #: tabulates (:func:`bulge_table`): the closed form, or a Reynolds solve (smooth or rough gap); ``"none"``
 #: has no table. A new law that reads the bulge table needs its solve here.
 MODELS = ("ph-limit", "reynolds", "rough-reynolds")
+
+#: The scene keys the table is made of (:func:`scene_table`; the last three only with ``"rough-reynolds"``,
+#: :func:`scene_roughness`), besides the deepest protrusion (:func:`table_stop_nm`, of :data:`DERIVED_FIELDS`).
+FIELDS = fields("air_bearing.bulge", "air_bearing.pad_pressure_mpa", "air_bearing.bulge_profile",
+                "air_bearing.bulge_slip", "tfc.half_length_um", "tfc.half_width_um", "dmw.radius_mm", "dmw.rpm",
+                "solver.bulge_cells_per_a", "solver.bulge_cells_per_b", "roughness.sigma_nm",
+                "air_bearing.disk_roughness_share", "lubricant.thickness_nm")
+#: The keys of the deepest protrusion (:func:`table_stop_nm`): the table depends on that value only.
+DERIVED_FIELDS = fields("tfc.protrusion_nm", "sweep.protrusion_nm")
 
 
 def table_gaps(low_nm: float = 0.05, high_nm: float = 20.0, points: int = 25) -> np.ndarray:

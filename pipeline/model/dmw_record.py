@@ -14,12 +14,18 @@ from typing import Any
 
 import numpy as np
 
+from ..config.fields import fields
 from ..config.si import to_si
 from ..physics import microwaviness as phys
 from ..units import MM, MS
 from ..variables import TIME
 
 FILENAME = "dmw.nc"
+
+#: The scene keys of the record (:func:`settings`; the default record length depends on the slider's size,
+#: :func:`default_duration`, the length a record must have on where the TFC point lies, :func:`front_pad_lead_s`).
+FIELDS = fields("dmw.*", "solver.duration_ms", "scene.effects", "slider.length_mm", "slider.front_arm_mm",
+                "slider.tfc_from_trailing_edge_um")
 
 
 def synthetic_record(s: dict[str, Any]) -> np.ndarray:

@@ -29,6 +29,7 @@ from ..physics.material_bounds import check_materials
 from ..physics.asperity_statistics import (composite_modulus, explicit_statistics, hardness_from_plasticity_gw,
                                   plasticity_index_gw, plasticity_index_ke)
 from ..config.grid import TOL_NM, label
+from ..config.fields import fields
 from ..config.si import to_si
 from ..units import MPA, NM, UM
 from ..variables import INTERFACE
@@ -36,6 +37,18 @@ from . import roughness_statistics as rough
 from .deterministic_tables import MODELS, deterministic_tables
 
 log = logging.getLogger(__name__)
+
+#: The scene keys the interface tables are made of (:func:`build_tables` of :func:`roughness_statistics`).
+FIELDS = fields("scene.effects", "roughness.*", "materials.*", "lubricant.thickness_nm",
+                "lubricant.work_of_adhesion_j_m2", "lubricant.intermolecular_distance_nm",
+                "lubricant.bridge_work_of_adhesion_j_m2", "lubricant.solid_work_of_adhesion_j_m2",
+                "solver.table_step_nm", "solver.table_min_sigma", "solver.table_max_nm", "solver.quadrature_nodes",
+                "solver.quadrature_panels", "solver.contact_grid_points", "air_bearing.flying_height_nm",
+                "interface.model", "interface.adhesion")
+#: The scene keys the tables read through a value derived from them (:func:`deepest_protrusion_nm`,
+#: :func:`lubricant_shear_on`, :func:`summit_friction_law`): a change that leaves the value changes nothing.
+DERIVED_FIELDS = fields("tfc.protrusion_nm", "sweep.protrusion_nm", "lubricant.shear_stress_mpa",
+                        "contact.friction_law")
 
 
 def roughness_statistics(scene: Any, roughness: str | Path | xr.Dataset | None = None) -> dict[str, float]:

@@ -19,15 +19,28 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ..config.fields import fields, union
 from ..physics.asperity_statistics import contact_probabilities, k_from_probability
-from .assembly import TFC_POINT_LAWS
+from .assembly import MODEL_FIELDS, TFC_POINT_LAWS
 
 if TYPE_CHECKING:
     import xarray as xr
 
-#: Scene keys no simulation reads (other stages' settings, names): left out of the inputs keys of the
-#: stages that simulate and of the parameter studies' evaluation store.
-SIMULATION_EXCLUDES = ("sweep", "report", "identify", "sensitivity", "scene.name", "scene.description")
+#: The scene keys of the rules of this module: which inputs a simulation reads (:func:`needs_interface`,
+#: :func:`table_stages`, :func:`needs_calibration`) and the contact criterion k (:func:`contact_k`).
+FIELDS = fields("scene.effects", "roughness.afm", "contact.k", "contact.fallback_probability",
+                *(f"air_bearing.{key}" for key in TFC_POINT_LAWS))
+
+#: The scene keys one simulation of a scene reads, besides its protrusion (``tfc.protrusion_nm``) and the
+#: datasets of its input stages (their own keys): the model (:data:`pipeline.model.assembly.MODEL_FIELDS`)
+#: and the rules of this module.
+SIMULATION_FIELDS = union(MODEL_FIELDS, FIELDS)
+
+#: The scene keys a parameter study's simulations may read: every key of the physical sections, since a
+#: study varies any of them and then makes the inputs (tables, records) of each candidate itself. The inputs
+#: key of the stages that run studies and of their evaluation store.
+STUDY_FIELDS = fields("scene.effects", "slider.*", "air_bearing.*", "tfc.*", "roughness.*", "materials.*",
+                      "lubricant.*", "interface.*", "contact.*", "dmw.*", "touchdown.*", "solver.*")
 
 
 def needs_interface(scene: Any) -> bool:
@@ -59,9 +72,15 @@ def simulation_inputs(scene: Any, calibration: bool = True) -> tuple[str, ...]:
     if needs_interface(scene):
         up.append("interface")
     up.extend(table_stages(scene))
-    if calibration and scene.has("contact") and scene["contact"]["k"] is None:
+    if calibration and needs_calibration(scene):
         up.append("calibrate")
     return tuple(up)
+
+
+def needs_calibration(scene: Any) -> bool:
+    """Whether a simulation of the scene takes k from the calibration (``hdi calibrate``): the contact effect
+    is on and the scene fixes no ``contact.k`` (:func:`contact_k`)."""
+    return scene.has("contact") and scene["contact"]["k"] is None
 
 
 def contact_k(scene: Any, calibration: xr.Dataset | None = None, override: float | None = None,

@@ -309,7 +309,7 @@ def _upstream(scene: Any) -> tuple[str, ...]:
 
 STAGE = Stage(
     "accuracy", compute, simulates=True, outputs=("accuracy.nc", "figures/work_precision.png"),
-    reads=("*",), excludes=scene_inputs.SIMULATION_EXCLUDES,
+    reads=scene_inputs.STUDY_FIELDS,
     upstream=_upstream,
     options=("points", "reference", "knobs", "only", "repeat", "tolerance", "combined_tolerance", "k"),
     order=55, doc="error and wall time of each accuracy knob, accuracy.nc and figures/work_precision.png")

@@ -65,6 +65,7 @@ import numpy as np
 import xarray as xr
 
 from ..config.si import to_si
+from ..model import dmw_record
 from ..model.dmw_record import FILENAME, check_length, front_pad_lead_s, settings, synthetic_record
 from ..model.measured_dmw import load_record
 from ..physics import microwaviness as phys
@@ -210,9 +211,6 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
 
 STAGE = Stage(
     "dmw", compute, outputs=(FILENAME,),
-    # the default record length depends on the slider's size (default_duration), the length a record must
-    # have on where the TFC point lies (front_pad_lead_s)
-    reads=("dmw", "solver.duration_ms", "scene.effects", "slider.length_mm", "slider.front_arm_mm",
-           "slider.tfc_from_trailing_edge_um"),
+    reads=dmw_record.FIELDS,
     files=_files, order=20, main_job=True,
     doc="the disk's dynamic microwaviness, synthesised or measured, dmw.nc")

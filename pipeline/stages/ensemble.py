@@ -34,8 +34,9 @@ from ..analyses import ensemble_rules as en
 from ..analyses.report_settings import wants_ensemble
 from ..analyses.study import bouncing_bv, ensemble_summary, target_protrusions, targets
 from ..analyses.sweep_slices import combinations, first_contact, split_ensemble
+from ..config.fields import section_fields
 from ..config.grid import label
-from ..config.heater_power import power_coordinates
+from ..config.heater_power import ACTUATION_FIELDS, power_coordinates
 from ..evaluations import evaluate_realisations
 from ..fanout import run_tasks, split
 from ..io import var
@@ -45,6 +46,11 @@ from ..runner import Inputs, Stage
 from ..variables import ENSEMBLE, RUN, SCALARS, coordinate
 
 log = logging.getLogger(__name__)
+
+#: The keys of ``[identify]`` that define the paper's targets (not the optimiser's settings).
+TARGET_FIELDS = section_fields("identify", "parameters", "population", "generations", "seed", "batch_size",
+                               "profile_points", "profile_method", "profile_evaluations", "polish", "realisations",
+                               "racing", "racing_records", "racing_z")
 
 #: Half-width [nm] of the protrusion window around the sweep's first contact: five 0.2-nm actuation
 #: steps, several times the touchdown's spread over DMW seeds (about one step: docs/model.md, section
@@ -189,13 +195,9 @@ def _upstream(scene: Any) -> tuple[str, ...]:
 
 STAGE = Stage(
     "ensemble", compute, simulates=True, outputs=("ensemble.nc",),
-    reads=("*",),
-    # (what a simulation reads, report.realisations and the targets' definitions in [identify]; not the
-    # optimiser's settings)
-    excludes=("tfc.protrusion_nm", "sweep", "sensitivity", "scene.name", "scene.description", "report.histories_nm",
-              "identify.parameters", "identify.population", "identify.generations", "identify.seed",
-              "identify.batch_size", "identify.profile_points", "identify.profile_method",
-              "identify.profile_evaluations", "identify.polish", "identify.realisations", "identify.racing", "identify.racing_records",
-              "identify.racing_z"),
+    # what a simulation reads, the DMW records of the realisations, report.realisations and the targets'
+    # definitions in [identify] (not the optimiser's settings)
+    reads=(*scene_inputs.SIMULATION_FIELDS, *dmw_record.FIELDS, *ACTUATION_FIELDS, "touchdown.*",
+           "report.realisations", *TARGET_FIELDS),
     upstream=_upstream, applies=applies, order=57, main_job=True,
     doc="the paper's checks over report.realisations DMW realisations (ensemble.nc, for the report)")

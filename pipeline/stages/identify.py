@@ -68,6 +68,7 @@ from ..analyses.identification import (GN_STEP, METHODS, PROFILE_GAIN, PROFILE_S
                                        Identification, Racing, identify)
 from ..analyses.study import Parameter, parse_parameters, scene_value, target_protrusions, targets
 from ..evaluations import Evaluator, evaluate_batch, setup, upstream
+from ..model.scene_inputs import STUDY_FIELDS
 
 log = logging.getLogger(__name__)
 
@@ -481,8 +482,7 @@ def _finish(scene: Any, out: Path, options: dict[str, Any]) -> None:
 
 STAGE = Stage(
     "identify", compute, simulates=True, outputs=("identify.nc", "figures/identify.png"),
-    reads=("*",), excludes=("sweep", "report", "sensitivity", "scene.name", "scene.description",
-                            "identify.batch_size"),
+    reads=(*STUDY_FIELDS, "identify.*"), unkeyed=("identify.batch_size",),
     upstream=upstream, check=box_check("identify"), finish=_finish, order=80,
     keeps=lambda scene: (identified_scene_path(scene, Path()).name, "identify.evals.jsonl"),
     doc="the free [recon] parameters fitted to the paper's targets, identify.nc and identified.toml "

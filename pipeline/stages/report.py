@@ -78,7 +78,7 @@ from ..analyses.paper_comparison import comparison_markdown, identification_mark
 from ..analyses.plots import DRAWING_MODULES
 from ..analyses.report_figures import (BAND_FIGURE, BULGE_FIGURE, ENSEMBLE_FIGURE, FIGURES, INTERFACE_FIGURE,
                                       STATICS_FIGURE)
-from ..analyses.report_settings import ReportSettings, wants_ensemble
+from ..analyses.report_settings import FIELDS as REPORT_FIELDS, ReportSettings, wants_ensemble
 from ..analyses.sweep_slices import combinations, split_ensemble
 from ..io import DatasetError, is_read_only, temporary_path
 from ..paths import refuse_links
@@ -189,7 +189,7 @@ STAGE = Stage(
     outputs=tuple(f"figures/{f}" for f in FIGURES + (ENSEMBLE_FIGURE, BAND_FIGURE, INTERFACE_FIGURE, BULGE_FIGURE,
                                                       STATICS_FIGURE))
     + ("report/summary.csv", "report/summary.md", "report/comparison.md"),
-    reads=("*",), upstream=_upstream, optional=("identify",), finish=_finish, order=60, main_job=True,
+    reads=REPORT_FIELDS, upstream=_upstream, optional=("identify",), finish=_finish, order=60, main_job=True,
     lazy_imports=DRAWING_MODULES,
     doc="the paper's figures, a summary table and the comparison with the paper")
 

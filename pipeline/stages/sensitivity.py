@@ -43,6 +43,7 @@ from ..fanout import local_cluster
 from ..runner import Inputs, Stage
 from ..analyses.screening import dataset, failures_text, figure, headline_outputs, morris, sobol
 from ..evaluations import Evaluator, evaluate_batch, setup, upstream
+from ..model.scene_inputs import STUDY_FIELDS
 from ..config.grid import protrusion_grid, range_grid
 
 log = logging.getLogger(__name__)
@@ -94,7 +95,7 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
 
 STAGE = Stage(
     "sensitivity", compute, simulates=True, outputs=("sensitivity.nc", "figures/sensitivity.png"),
-    # (the [sweep] grid is the default protrusion grid of the evaluations: not excluded)
-    reads=("*",), excludes=("report", "identify", "scene.name", "scene.description", "sensitivity.batch_size"),
+    # (the [sweep] grid is the default protrusion grid of the evaluations)
+    reads=(*STUDY_FIELDS, "sweep.*", "sensitivity.*"), unkeyed=("sensitivity.batch_size",),
     upstream=upstream, check=box_check("sensitivity"), order=85, keeps=lambda scene: ("sensitivity.evals.jsonl",),
     doc="Morris and Sobol indices of the headline outputs over the [sensitivity] parameters, sensitivity.nc")

@@ -58,5 +58,5 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset]:
 
 STAGE = Stage(
     "simulate", compute, simulates=True, outputs=("histories.nc", "summary.nc"),
-    reads=("*",), excludes=scene_inputs.SIMULATION_EXCLUDES,
+    reads=(*scene_inputs.SIMULATION_FIELDS, "tfc.protrusion_nm"),
     upstream=scene_inputs.simulation_inputs, order=45, doc="one protrusion in time, histories.nc and summary.nc")
