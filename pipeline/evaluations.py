@@ -49,7 +49,7 @@ from .model.bulge_table import scene_table
 from .model.inputs import SimulationInputs, Source, cached, for_stage
 from .model.interface_tables import build_tables, roughness_statistics
 from .model.simulation import scalars
-from .runner import Runner, scene_part, simulation_inputs
+from .runner import Runner, current_inputs, scene_part
 from .units import NM
 from .variables import SCALARS
 
@@ -57,7 +57,7 @@ from .variables import SCALARS
 def upstream(scene: Any) -> tuple[str, ...]:
     """The stages a study reads: a single simulation's inputs without the calibration (a study fixes k,
     :func:`pipeline.model.scene_inputs.contact_k` without a calibration)."""
-    return scene_inputs.simulation_inputs(scene, calibration=False)
+    return scene_inputs.input_stages(scene, calibration=False)
 
 
 # ---------------------------------------------------------------------------------- evaluations
@@ -640,4 +640,4 @@ def setup(scene: Any, stage_inputs: Any, section: str, force: bool = False) -> t
 def prepare_inputs(scene: Any, out: Path) -> SimulationInputs:
     """The base scene's inputs in ``out``, made current by the runner, by file and the inputs keys they
     carry (scripts and tests; a study stage uses :func:`setup`)."""
-    return simulation_inputs(scene, out, calibration=False)
+    return current_inputs(scene, out, calibration=False)

@@ -64,7 +64,7 @@ from .progress import stage as progress_stage
 from .model.inputs import SimulationInputs, from_folder
 from .model import compiled
 from .model.ahead import compile_kernel_ahead
-from .model.scene_inputs import simulation_inputs as wanted_inputs
+from .model.scene_inputs import input_stages
 from .folder_lock import LOCK_NAME, STAGING_PREFIX, folder_lock
 from .io import (KEY_ATTR, DatasetBusy, DatasetError, RUN_ID, file_hash, move_dataset, read_attrs, read_dataset,
                  stored_problem, temporary_path, write_dataset)
@@ -798,15 +798,15 @@ def ensure(name: str, scene: Scene, out: str | Path, **options: Any) -> Path:
     return build([name], scene, out, **options)[name][0]
 
 
-def simulation_inputs(scene: Scene, out: str | Path, calibration: bool = False,
+def current_inputs(scene: Scene, out: str | Path, calibration: bool = False,
                       k: float | None = None, in_memory: bool = False) -> SimulationInputs:
     """What one simulation of ``scene`` reads, its upstream stages made current in ``out`` first
-    (:func:`pipeline.model.scene_inputs.simulation_inputs`; scripts, benchmarks, tests, :mod:`pipeline.api`:
+    (:func:`pipeline.model.scene_inputs.input_stages`; scripts, benchmarks, tests, :mod:`pipeline.api`:
     a stage reads through :func:`pipeline.model.inputs.for_stage`). ``calibration``: also calibrate and
     resolve k; ``k``: an explicit k [1] instead, resolved without a calibration (the ``option k`` of
     :func:`pipeline.model.scene_inputs.contact_k`); ``in_memory``: ``out`` is a temporary folder
     (:attr:`Runner.in_memory`)."""
-    wanted = wanted_inputs(scene, calibration and k is None)
+    wanted = input_stages(scene, calibration and k is None)
     if wanted:
         build(wanted, scene, out, in_memory=in_memory)
     return from_folder(scene, out, calibration=calibration or k is not None, k=k)

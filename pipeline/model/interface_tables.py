@@ -161,9 +161,22 @@ def separation_labels(lo_nm: float, hi_nm: float, step_nm: float) -> np.ndarray:
     """The tables' uniform separation grid [nm]: whole multiples of ``step_nm`` from at or below
     ``lo_nm`` to at least ``hi_nm``, rounded like the protrusion grid (:func:`pipeline.config.grid.label`),
     so ``interface.sel(separation=0.0)`` hits a label (``lo + step * i`` gave -4.8999999999999995)."""
-    first = math.floor(lo_nm / step_nm + TOL_NM)
-    n = math.ceil((hi_nm - first * step_nm) / step_nm - TOL_NM) + 1
+    first, n = separation_rows(lo_nm, hi_nm, step_nm)
     return label(step_nm * (first + np.arange(n)))
+
+
+def separation_rows(lo_nm: float, hi_nm: float, step_nm: float) -> tuple[int, int]:
+    """The tables' grid (:func:`separation_labels`) as its first label's multiple of ``step_nm`` and its row count."""
+    first = math.floor(lo_nm / step_nm + TOL_NM)
+    return first, math.ceil((hi_nm - first * step_nm) / step_nm - TOL_NM) + 1
+
+
+def table_floor(scene: Any, sigmas: tuple[float, ...], deepest_nm: float) -> float:
+    """The lowest separation [m] the tables must reach: ``solver.table_min_sigma`` times each of ``sigmas``
+    [m] (the summits', the surface's), and 1 nm below the deepest nominal interference, the flying height
+    less ``deepest_nm`` (:func:`deepest_protrusion_nm`); below the table the kernel extrapolates linearly."""
+    n_sigma = scene["solver"]["table_min_sigma"]
+    return min(*(n_sigma * s for s in sigmas), (scene["air_bearing"]["flying_height_nm"] - deepest_nm - 1.0) * NM)
 
 
 def interface_scalars(scene: Any, stats: dict[str, float]) -> tuple[isbl.Interface, dict[str, xr.Variable]]:
@@ -197,12 +210,8 @@ def build_tables(scene: Any, stats: dict[str, float]) -> xr.Dataset:
         # The table must reach past the Gaussian window (TAIL sigma_s), where the contact terms vanish,
         # so that holding the last value beyond the table is exact for them (very rough surfaces).
         d_max = max(to_si(scene).solver.table_max, (isbl.TAIL + 0.5) * p.sigma_s)
-        # ... and start below every separation the slider can reach: table_min_sigma summit (and
-        # surface) sigmas, and 1 nm below the deepest nominal interference FH0 - protrusion of the scene
-        # and its sweep (below the table the kernel extrapolates linearly).
-        fh0 = scene["air_bearing"]["flying_height_nm"]
-        d_min = min(sol["table_min_sigma"] * p.sigma_s, sol["table_min_sigma"] * stats["sigma"],
-                    (fh0 - deepest_protrusion_nm(scene) - 1.0) * NM)
+        # ... and start below every separation the slider can reach (table_floor)
+        d_min = table_floor(scene, (p.sigma_s, stats["sigma"]), deepest_protrusion_nm(scene))
         d_nm = separation_labels(d_min / NM, d_max / NM, sol["table_step_nm"])
         d = d_nm * NM
         tables = isbl.isbl_tables(d, p, quantities=wanted, nodes=sol["quadrature_nodes"],

@@ -3,7 +3,7 @@
 The one home of three rules every caller (the simulate, calibrate, sweep and accuracy stages, the
 parameter studies, the benchmarks and the tests) shares:
 
-* :func:`needs_interface` and :func:`simulation_inputs`: the inputs a simulation of a scene reads
+* :func:`needs_interface`, :func:`input_stages` and :func:`needs_calibration`: the inputs a simulation of a scene reads
   (interface tables, DMW record, the calibration for k);
 * :func:`contact_k`: the contact criterion constant k and where it came from (docs/model.md, section
   "Contact criterion").
@@ -58,7 +58,7 @@ def table_stages(scene: Any) -> tuple[str, ...]:
     return tuple(dict.fromkeys(law.table for law in laws if law.table))
 
 
-def simulation_inputs(scene: Any, calibration: bool = True) -> tuple[str, ...]:
+def input_stages(scene: Any, calibration: bool = True) -> tuple[str, ...]:
     """The inputs (named as the stages that make them) one simulation of the scene reads.
 
     ``dmw`` with the dmw effect, ``interface`` (:func:`needs_interface`), ``bulge`` with the tabulated

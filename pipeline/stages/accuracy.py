@@ -302,7 +302,7 @@ def _upstream(scene: Any) -> tuple[str, ...]:
     fixes no k, the calibration (k by :func:`pipeline.model.inputs.for_stage`)."""
     up = ["roughness"] if scene["roughness"]["afm"] else []
     up.extend(scene_inputs.table_stages(scene))
-    if scene.has("contact") and scene["contact"]["k"] is None:
+    if scene_inputs.needs_calibration(scene):
         up.append("calibrate")
     return tuple(up)
 

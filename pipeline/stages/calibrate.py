@@ -42,6 +42,6 @@ STAGE = Stage(
     # touchdown curve is evaluated) and the keys whose difference from the paper's the calibration warns of
     reads=(*scene_inputs.SIMULATION_FIELDS, "touchdown.*", "sweep.protrusion_nm",
            *(key for keys in OWN_DRIVE_KEYS.values() for key in keys)),
-    upstream=lambda scene: scene_inputs.simulation_inputs(scene, calibration=False),
+    upstream=lambda scene: scene_inputs.input_stages(scene, calibration=False),
     order=40, main_job=True, applies=lambda scene: scene.has("contact"),
     doc="the contact-criterion constant k from the measured touchdown, calibration.nc")

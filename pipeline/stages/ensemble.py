@@ -190,7 +190,7 @@ def dataset(prot: list[float], seeds: list[int], outputs: list[dict[str, list[fl
 
 
 def _upstream(scene: Any) -> tuple[str, ...]:
-    return scene_inputs.simulation_inputs(scene) + ("sweep",)
+    return scene_inputs.input_stages(scene) + ("sweep",)
 
 
 STAGE = Stage(

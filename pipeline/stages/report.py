@@ -81,6 +81,7 @@ from ..analyses.report_figures import (BAND_FIGURE, BULGE_FIGURE, ENSEMBLE_FIGUR
 from ..analyses.report_settings import FIELDS as REPORT_FIELDS, ReportSettings, wants_ensemble
 from ..analyses.sweep_slices import combinations, split_ensemble
 from ..io import DatasetError, is_read_only, temporary_path
+from ..model.scene_inputs import needs_calibration
 from ..paths import refuse_links
 from ..validity import OutsideValidity, describe
 from ..runner import Inputs, Stage
@@ -169,7 +170,7 @@ def _upstream(scene: Any) -> tuple[str, ...]:
     up = ["roughness", "interface", "statics", "sweep"]
     if scene.has("dmw"):
         up.append("dmw")
-    if scene.has("contact") and scene["contact"]["k"] is None:
+    if needs_calibration(scene):
         up.append("calibrate")
     if wants_ensemble(scene):
         up.append("ensemble")

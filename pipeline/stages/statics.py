@@ -50,7 +50,7 @@ STAGE = Stage(
     # what a simulation reads, the sweep's protrusion grid (not the single protrusion) and the heater's
     # actuation (power_coordinates)
     reads=(*scene_inputs.SIMULATION_FIELDS, "sweep.protrusion_nm", *ACTUATION_FIELDS),
-    upstream=scene_inputs.simulation_inputs, order=47, main_job=True,
+    upstream=scene_inputs.input_stages, order=47, main_job=True,
     doc="every static state versus protrusion: clearance, stability, barriers, DMW energy, statics.nc")
 
 

@@ -744,6 +744,6 @@ STAGE = Stage(
     # other sets' tables depend on the single protrusion through the deepest protrusion, which the interface
     # stage's key holds, upstream)
     unkeyed=("sweep.batch_size", "tfc.protrusion_nm"),
-    files=_files, upstream=scene_inputs.simulation_inputs, order=50, main_job=True, keeps=_keeps,
+    files=_files, upstream=scene_inputs.input_stages, order=50, main_job=True, keeps=_keeps,
     doc="protrusion x roughness x damping, fanned out, sweep.nc and sweep_histories.nc")
 

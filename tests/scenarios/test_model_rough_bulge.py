@@ -106,7 +106,7 @@ def test_the_rough_table_and_its_stage(repo_root):
     scene = load_scene(repo_root / "configs" / "paper-2009-two-population-identified.toml",
                        ['air_bearing.bulge="rough-reynolds"', "air_bearing.pad_pressure_mpa=2.2",
                         "solver.bulge_cells_per_a=8", "solver.bulge_cells_per_b=4"])
-    assert "bulge" in scene_inputs.simulation_inputs(scene) and "bulge" in runner.main_job(scene)
+    assert "bulge" in scene_inputs.input_stages(scene) and "bulge" in runner.main_job(scene)
     ds = bt.bulge_table(model="rough-reynolds", p_pad=P_PAD, a=A_SEMI, b=B_SEMI, speed=U,
                         gaps=bt.table_gaps(), protrusions=np.array([0.0, 10.0, 10.5]) * NM,
                         grid=bb.ReynoldsGrid(cells_per_a=8, cells_per_b=4), roughness=ROUGH)

@@ -50,10 +50,10 @@ def _solve(g, delta, ds, speed=None):
 
 
 def test_the_stage_is_upstream_only_with_the_reynolds_law(bulge_scene):
-    assert "bulge" in scene_inputs.simulation_inputs(bulge_scene)
+    assert "bulge" in scene_inputs.input_stages(bulge_scene)
     for law in ("none", "ph-limit"):
         other = bulge_scene.replace(air_bearing={"bulge": law})
-        assert "bulge" not in scene_inputs.simulation_inputs(other)
+        assert "bulge" not in scene_inputs.input_stages(other)
         assert "bulge" not in runner.main_job(other)
     assert "bulge" in runner.main_job(bulge_scene)
     with pytest.raises(ValueError, match="needs the bulge table"):
