@@ -15,6 +15,7 @@ from __future__ import annotations
 from typing import Any, Iterable, Iterator, Mapping
 
 from .schema import SCHEMA, scene_key
+from .si import SI_VIEW
 
 
 class UndeclaredRead(Exception):
@@ -143,6 +144,9 @@ class DeclaredScene:
     def has(self, effect: str) -> bool:
         """Whether the scene asks for ``effect`` (reads ``scene.effects``)."""
         return effect in self.effects
+
+    #: the scene in SI units, read through the declaration (:data:`pipeline.config.si.SI_VIEW`)
+    si = SI_VIEW
 
     @property
     def name(self) -> str:

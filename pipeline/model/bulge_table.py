@@ -20,7 +20,6 @@ from ..physics import bulge_bearing as bb
 from ..physics import gas_flow
 from ..config.grid import TOL_NM
 from ..config.fields import fields
-from ..config.si import to_si
 from .dmw_record import disk_speed_m_s
 from .interface_tables import deepest_protrusion_nm
 from ..units import NM, UM
@@ -177,7 +176,7 @@ def scene_table(scene: Any) -> xr.Dataset:
     ``solver.bulge_cells_per_a``, ``solver.bulge_cells_per_b``; gaps :func:`table_gaps`, protrusions
     :func:`table_protrusions` up to :func:`table_stop_nm`."""
     a, sol = scene["air_bearing"], scene["solver"]
-    si = to_si(scene)
+    si = scene.si
     grid = bb.ReynoldsGrid(cells_per_a=sol["bulge_cells_per_a"], cells_per_b=sol["bulge_cells_per_b"])
     rough = scene_roughness(scene)
     return bulge_table(model=a["bulge"], p_pad=si.air_bearing.pad_pressure, a=si.tfc.half_length,
@@ -192,6 +191,6 @@ def scene_roughness(scene: Any) -> gas_flow.RoughGap | None:
     the wetting gap ``lubricant.thickness_nm`` (docs/model.md, section "Rough-gap bulge bearing")."""
     if scene["air_bearing"]["bulge"] != "rough-reynolds":
         return None
-    si = to_si(scene)
+    si = scene.si
     return gas_flow.RoughGap(sigma=si.roughness.sigma, disk_share=scene["air_bearing"]["disk_roughness_share"],
                              wet_gap=si.lubricant.thickness)

@@ -30,7 +30,6 @@ from ..physics.asperity_statistics import (composite_modulus, explicit_statistic
                                   plasticity_index_gw, plasticity_index_ke)
 from ..config.grid import TOL_NM, label
 from ..config.fields import fields
-from ..config.si import to_si
 from ..units import MPA, NM, UM
 from ..variables import INTERFACE
 from . import roughness_statistics as rough
@@ -75,7 +74,8 @@ def roughness_statistics(scene: Any, roughness: str | Path | xr.Dataset | None =
         return {"sigma": st["sigma_nm"] * NM, "sigma_s": st["sigma_s_nm"] * NM, "y_s": st["y_s_nm"] * NM,
                 "R": st["summit_radius_um"] * UM, "eta": st["summit_density_per_um2"] / UM**2,
                 "alpha": st["alpha"], "source": f"AFM ({r['route']} route): {', '.join(r['afm'])}"}
-    return {**explicit_statistics(r["sigma_nm"], r["summit_radius_um"], r["summit_density_per_um2"]),
+    sr = scene.si.roughness
+    return {**explicit_statistics(sr.sigma, sr.summit_radius, sr.summit_density),
             "source": "explicit statistics"}
 
 
@@ -115,7 +115,7 @@ def interface_parameters(scene: Any, stats: dict[str, float]) -> isbl.Interface:
     ``E'`` from the two moduli (or ``composite_modulus_gpa``); ``H`` from ``hardness_gpa`` or, when
     absent, from the GW plasticity index (docs/model.md, section "Parameters": ``H`` is set so that psi(GW) = 0.52).
     """
-    si = to_si(scene)
+    si = scene.si
     m, lub = si.materials, si.lubricant
     nu = m.poisson_ratio
     E = m.composite_modulus if m.composite_modulus else composite_modulus(m.disk_modulus, m.tfc_modulus, nu)
@@ -209,7 +209,7 @@ def build_tables(scene: Any, stats: dict[str, float]) -> xr.Dataset:
     if wanted:
         # The table must reach past the Gaussian window (TAIL sigma_s), where the contact terms vanish,
         # so that holding the last value beyond the table is exact for them (very rough surfaces).
-        d_max = max(to_si(scene).solver.table_max, (isbl.TAIL + 0.5) * p.sigma_s)
+        d_max = max(scene.si.solver.table_max, (isbl.TAIL + 0.5) * p.sigma_s)
         # ... and start below every separation the slider can reach (table_floor)
         d_min = table_floor(scene, (p.sigma_s, stats["sigma"]), deepest_protrusion_nm(scene))
         d_nm = separation_labels(d_min / NM, d_max / NM, sol["table_step_nm"])

@@ -64,7 +64,6 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from ..config.si import to_si
 from ..model import dmw_record
 from ..model.dmw_record import FILENAME, check_length, front_pad_lead_s, settings, synthetic_record
 from ..model.measured_dmw import load_record
@@ -158,7 +157,7 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
     n = phys.n_samples(dur, fs)
     seed = None
     enabled = "dmw" in scene.effects
-    need = (float(to_si(scene).solver.duration), front_pad_lead_s(scene))
+    need = (float(scene.si.solver.duration), front_pad_lead_s(scene))
     if enabled and s["duration_set"]:  # (a record of the length asked for: long enough for the simulation?)
         check_length(n, fs, *need, f"dmw.duration_ms = {scene['dmw']['duration_ms']:g}",
                      "set dmw.duration_ms to at least that, or leave it out (the default length is enough)")
