@@ -309,7 +309,8 @@ def _upstream(scene: Any) -> tuple[str, ...]:
 
 STAGE = Stage(
     "accuracy", compute, simulates=True, outputs=("accuracy.nc", "figures/work_precision.png"),
-    reads=scene_inputs.STUDY_FIELDS,
+    # (what its simulations read, with the deepest protrusion of the tables it makes at each knob)
+    reads=(*scene_inputs.STUDY_FIELDS, "sweep.protrusion_nm"),
     upstream=_upstream,
     options=("points", "reference", "knobs", "only", "repeat", "tolerance", "combined_tolerance", "k"),
     order=55, doc="error and wall time of each accuracy knob, accuracy.nc and figures/work_precision.png")

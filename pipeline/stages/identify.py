@@ -482,7 +482,8 @@ def _finish(scene: Any, out: Path, options: dict[str, Any]) -> None:
 
 STAGE = Stage(
     "identify", compute, simulates=True, outputs=("identify.nc", "figures/identify.png"),
-    reads=(*STUDY_FIELDS, "identify.*"), unkeyed=("identify.batch_size",),
+    # (what the candidates' simulations read, with the deepest protrusion their own tables reach)
+    reads=(*STUDY_FIELDS, "sweep.protrusion_nm", "identify.*"), unkeyed=("identify.batch_size",),
     upstream=upstream, check=box_check("identify"), finish=_finish, order=80,
     keeps=lambda scene: (identified_scene_path(scene, Path()).name, "identify.evals.jsonl"),
     doc="the free [recon] parameters fitted to the paper's targets, identify.nc and identified.toml "
