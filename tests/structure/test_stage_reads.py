@@ -244,3 +244,15 @@ def test_a_stage_declares_schema_keys_only():
         runner.Stage("toy", lambda scene, inputs: None, outputs=("toy.nc",), reads=("tfc.protrusion",))
     with pytest.raises(ValueError, match=r"'\*': no key of the scene schema"):
         dataclasses.replace(runner.registry()["simulate"], reads=("*",))
+
+
+@pytest.mark.parametrize("study", ["identify", "sensitivity", "accuracy"])
+def test_a_study_keys_its_candidates_inputs_within_its_declaration(study, light, tmp_path):
+    """A study makes its candidates' inputs itself (``pipeline.evaluations.candidate_inputs``: their stage keys
+    by a runner on the candidate scene, as the study reads it): every key those read is one it declares."""
+    view = runner.registry()[study].view(light)
+    r = runner.Runner(view, tmp_path)
+    for stage in ("roughness", "dmw", "interface", "bulge"):
+        assert r.key(stage) == runner.Runner(light, tmp_path).key(stage)
+    with pytest.raises(UndeclaredRead, match=rf"the {study} stage read the scene key report.realisations"):
+        runner.Runner(view, tmp_path).key("ensemble")
