@@ -3,7 +3,7 @@
 The one home of three rules every caller (the simulate, calibrate, sweep and accuracy stages, the
 parameter studies, the benchmarks and the tests) shares:
 
-* :func:`needs_interface`, :func:`input_stages` and :func:`needs_calibration`: the inputs a simulation of a scene reads
+* :func:`needs_interface`, :func:`input_stages` (and :func:`pipeline.model.contact_rule.needs_calibration`): the inputs a simulation of a scene reads
   (interface tables, DMW record, the calibration for k);
 * :func:`contact_k`: the contact criterion constant k and where it came from (docs/model.md, section
   "Contact criterion").
@@ -22,6 +22,7 @@ import numpy as np
 from ..config.fields import fields, union
 from ..physics.asperity_statistics import contact_probabilities, k_from_probability
 from .assembly import MODEL_FIELDS, TFC_POINT_LAWS
+from .contact_rule import needs_calibration
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -75,12 +76,6 @@ def input_stages(scene: Any, calibration: bool = True) -> tuple[str, ...]:
     if calibration and needs_calibration(scene):
         up.append("calibrate")
     return tuple(up)
-
-
-def needs_calibration(scene: Any) -> bool:
-    """Whether a simulation of the scene takes k from the calibration (``hdi calibrate``): the contact effect
-    is on and the scene fixes no ``contact.k`` (:func:`contact_k`)."""
-    return scene.has("contact") and scene["contact"]["k"] is None
 
 
 def contact_k(scene: Any, calibration: xr.Dataset | None = None, override: float | None = None,

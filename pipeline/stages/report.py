@@ -81,7 +81,7 @@ from ..analyses.report_figures import (BAND_FIGURE, BULGE_FIGURE, ENSEMBLE_FIGUR
 from ..analyses.report_settings import FIELDS as REPORT_FIELDS, ReportSettings, wants_ensemble
 from ..analyses.sweep_slices import combinations, split_ensemble
 from ..io import DatasetError, is_read_only, temporary_path
-from ..model.scene_inputs import needs_calibration
+from ..model.contact_rule import needs_calibration
 from ..paths import refuse_links
 from ..validity import OutsideValidity, describe
 from ..runner import Inputs, Stage
