@@ -37,11 +37,17 @@ import xarray as xr
 from . import ensemble_rules as en
 from .ensemble_comparison import SPREAD_STD
 from ..config.grid import TOL_NM, label, range_grid
-from ..config.schema import SCHEMA, SceneError, unit_suffix
+from ..config.fields import fields
+from ..config.schema import SCHEMA, SceneError, target_keys, unit_suffix
 from ..model.outcomes import touched_in_summary
 from ..physics import paper
 from ..units import cf_unit
 from ..variables import SCALARS
+
+#: The scene keys of the targets' definitions (:func:`targets`, :func:`headline`): which targets, their values,
+#: tolerances and where they are measured (the ``[identify]`` keys :func:`pipeline.config.schema.target_keys`
+#: generates), and the residual of a missing value; not the optimiser's settings.
+TARGET_FIELDS = fields("identify.targets", "identify.missing_residual", *(f"identify.{key}" for key in target_keys()))
 
 
 _KEY_RE = re.compile(r"([a-z_]+)\.([a-z0-9_]+)(?:\[(\d+)\])?")

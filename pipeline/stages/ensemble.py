@@ -32,9 +32,8 @@ import xarray as xr
 
 from ..analyses import ensemble_rules as en
 from ..analyses.report_settings import wants_ensemble
-from ..analyses.study import bouncing_bv, ensemble_summary, target_protrusions, targets
+from ..analyses.study import TARGET_FIELDS, bouncing_bv, ensemble_summary, target_protrusions, targets
 from ..analyses.sweep_slices import combinations, first_contact, split_ensemble
-from ..config.fields import section_fields
 from ..config.grid import label
 from ..config.heater_power import ACTUATION_FIELDS, power_coordinates
 from ..evaluations import evaluate_realisations
@@ -46,11 +45,6 @@ from ..runner import Inputs, Stage
 from ..variables import ENSEMBLE, RUN, SCALARS, coordinate
 
 log = logging.getLogger(__name__)
-
-#: The keys of ``[identify]`` that define the paper's targets (not the optimiser's settings).
-TARGET_FIELDS = section_fields("identify", "parameters", "population", "generations", "seed", "batch_size",
-                               "profile_points", "profile_method", "profile_evaluations", "polish", "realisations",
-                               "racing", "racing_records", "racing_z")
 
 #: Half-width [nm] of the protrusion window around the sweep's first contact: five 0.2-nm actuation
 #: steps, several times the touchdown's spread over DMW seeds (about one step: docs/model.md, section
