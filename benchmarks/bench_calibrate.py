@@ -79,11 +79,11 @@ def main_scene(results: list[dict]) -> None:
     """Row (4): the main scene's calibration, in process, local default, from its inputs made once."""
     from pipeline.analyses.calibration import calibrate
     from pipeline.model.inputs import from_folder
-    from pipeline.model.scene_inputs import simulation_inputs
+    from pipeline.model.scene_inputs import input_stages
     from pipeline.runner import build
     scene = load_scene(makefile_scene("SCENE"))
     with tempfile.TemporaryDirectory() as tmp:
-        for stage in simulation_inputs(scene, calibration=False):
+        for stage in input_stages(scene, calibration=False):
             build(stage, scene, Path(tmp))
 
         def once() -> None:

@@ -15,7 +15,7 @@ The package's front door (README, "From Python"; runnable examples in ``docs/exa
 Every function here is a call the stages and the ``hdi`` command make, not a second path to the
 results: a scene is :func:`pipeline.config.scene.load_scene` (``--set`` overrides), a model is
 :meth:`pipeline.model.inputs.SimulationInputs.model` of the inputs the runner made current
-(:func:`pipeline.runner.simulation_inputs`), a simulation is :func:`pipeline.model.simulation.simulate`,
+(:func:`pipeline.runner.current_inputs`), a simulation is :func:`pipeline.model.simulation.simulate`,
 a stage is run by :class:`pipeline.runner.Runner` after the command line's checks
 (:func:`pipeline.cli_checks.check_options`), a dataset is read by :func:`pipeline.io.read_dataset`. So a
 model built here simulates exactly as the ``simulate`` and ``sweep`` stages do.
@@ -226,9 +226,9 @@ def simulation_inputs(scene: SceneLike, results: str | Path | None = None, *,
     k = _k(k)
     with _progress.shown(progress):
         if results is not None:
-            return runner.simulation_inputs(scene, results, calibration=True, k=k)
+            return runner.current_inputs(scene, results, calibration=True, k=k)
         with tempfile.TemporaryDirectory(prefix="hdi-inputs-") as tmp:
-            sim = runner.simulation_inputs(scene, tmp, calibration=True, k=k, in_memory=True)
+            sim = runner.current_inputs(scene, tmp, calibration=True, k=k, in_memory=True)
             # read now, before the folder goes (read_dataset loads each dataset fully into memory)
             return SimulationInputs.of(sim.tables(), sim.record(), sim.bulge_table(), sim.k, sim.k_source)
 

@@ -46,7 +46,7 @@ from .model import dmw_record, scene_inputs
 from .model import assembly, copies, running
 from .model.inputs import SimulationInputs, Source, for_stage
 from .model.simulation import scalars
-from .runner import scene_part, simulation_inputs
+from .runner import current_inputs, scene_part
 from .variables import SCALARS
 from .candidates import _CANDIDATES, seeded_record
 
@@ -54,21 +54,21 @@ from .candidates import _CANDIDATES, seeded_record
 def upstream(scene: Any) -> tuple[str, ...]:
     """The stages a study reads: a single simulation's inputs without the calibration (a study fixes k,
     :func:`pipeline.model.scene_inputs.contact_k` without a calibration)."""
-    return scene_inputs.simulation_inputs(scene, calibration=False)
+    return scene_inputs.input_stages(scene, calibration=False)
 
 
 # ---------------------------------------------------------------------------------- evaluations
 def base_key(scene: Any, inputs: SimulationInputs) -> str:
     """Hash of what an evaluation depends on besides its parameters and protrusions.
 
-    The scene keys a simulation reads (:data:`pipeline.model.scene_inputs.SIMULATION_EXCLUDES` left out), the
+    The scene keys a study's simulations read (:data:`pipeline.model.scene_inputs.STUDY_FIELDS`), the
     runner's keys of the base inputs, which hash AFM scans and a measured DMW record by content (a
     rescanned file under the same name is a new base, not a store to read back), and the code of this
     module and of what it imports (:func:`pipeline.code_version.code_key`).
     """
     keys = {stage: getattr(inputs, stage).key if getattr(inputs, stage) is not None else None
             for stage in ("interface", "dmw", "bulge")}
-    blob = {"scene": scene_part(scene, ("*",), scene_inputs.SIMULATION_EXCLUDES), "interface": keys["interface"],
+    blob = {"scene": scene_part(scene, scene_inputs.STUDY_FIELDS), "interface": keys["interface"],
             "dmw": keys["dmw"], "code": code_key(__name__)}
     if keys["bulge"] is not None:  # (only with the tabulated bulge bearing: other stores keep their keys)
         blob["bulge"] = keys["bulge"]
@@ -452,4 +452,4 @@ def setup(scene: Any, stage_inputs: Any, section: str, force: bool = False) -> t
 def prepare_inputs(scene: Any, out: Path) -> SimulationInputs:
     """The base scene's inputs in ``out``, made current by the runner, by file and the inputs keys they
     carry (scripts and tests; a study stage uses :func:`setup`)."""
-    return simulation_inputs(scene, out, calibration=False)
+    return current_inputs(scene, out, calibration=False)

@@ -1,15 +1,18 @@
 """One stage runner: declared inputs hashed by content, current outputs kept, atomic writes, one lock.
 
-A stage is a declaration, :class:`Stage`, bound to the name ``STAGE`` in its module of
-:mod:`pipeline.stages`; :func:`registry` discovers every such module, so a new stage plugs in by
+A stage is a declaration, :class:`Stage` (:mod:`pipeline.stage`), bound to the name ``STAGE`` in its module
+of :mod:`pipeline.stages`; :func:`registry` discovers every such module, so a new stage plugs in by
 declaring itself (no list to edit). A declaration says
 
-* what the stage reads: scene keys (``reads``/``excludes``), files named by scene keys (``files``,
-  e.g. ``roughness.afm`` or ``dmw.source``) and other stages' datasets (``upstream``);
+* what the stage reads: scene keys (``reads``: schema keys, the union of the fields its model builders
+  declare and its own, :func:`pipeline.config.fields.fields`), files named by scene keys (``files``, e.g.
+  ``roughness.afm`` or ``dmw.source``) and other stages' datasets (``upstream``);
 * what it writes (``outputs``, paths relative to the results folder);
 * how it computes: a pure ``compute(scene, inputs) -> xr.Dataset | {output: xr.Dataset | None}``
   that reads only what it declared (through :class:`Inputs`) and writes nothing itself, except
-  non-NetCDF outputs (figures, tables) which it writes under ``inputs.staging``. A dataset complete
+  non-NetCDF outputs (figures, tables) which it writes under ``inputs.staging``. ``compute`` reads the
+  scene through :class:`pipeline.config.fields.DeclaredScene`: a key outside ``reads`` (and ``unkeyed``)
+  raises :class:`~pipeline.config.fields.UndeclaredRead`, naming the stage and the key. A dataset complete
   before the computation ends (the sweep's histories, while the last batches run) may be handed to
   :meth:`Inputs.write_early`: the runner writes it then, into the staging folder, and moves it into place
   with the others (the stage still returns it).
@@ -38,38 +41,39 @@ from __future__ import annotations
 
 import datetime as _dt
 import errno
-import hashlib
-import importlib
 import json
 import logging
 import os
-import pkgutil
 import shutil
 import tempfile
 import time
-from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Iterable, Mapping
+from typing import Any, Iterable, Mapping
 
 import xarray as xr
 
 from . import interrupts
 from .code_version import code_key
 from .cluster import shared_folder
+from .stage import Inputs, Stage, main_job, registry
+from .stage_keys import OUTPUTS_ATTR, SYNTHESIS_ONLY, dataset_key, digest, scene_part, unused_keys
 from .progress import stage as progress_stage
 from .model.inputs import SimulationInputs, from_folder
 from .model import compiled
 from .model.ahead import compile_kernel_ahead
-from .model.scene_inputs import simulation_inputs as wanted_inputs
+from .model.scene_inputs import input_stages
 from .folder_lock import LOCK_NAME, STAGING_PREFIX, folder_lock
-from .io import (KEY_ATTR, DatasetBusy, DatasetError, RUN_ID, file_hash, move_dataset, read_attrs, read_dataset,
-                 stored_problem, temporary_path, write_dataset)
+from .io import (KEY_ATTR, DatasetBusy, DatasetError, RUN_ID, file_hash, move_dataset, read_attrs, stored_problem,
+                 temporary_path, write_dataset)
 from .paths import append_text, looked_for, refuse_links
 
 log = logging.getLogger(__name__)
 
-#: Global attribute of a stage's first dataset: JSON list of the outputs this computation produced.
-OUTPUTS_ATTR = "stage_outputs"
+#: The names of the declaration and keys modules, used as ``runner.X`` by the stages and the tests.
+__all__ = ["Inputs", "KEY_ATTR", "LOCK_NAME", "OUTPUTS_ATTR", "OutputRefused", "RUN_LOG", "Runner", "STATE_DIR",
+           "SYNTHESIS_ONLY", "Stage", "build", "current_inputs", "ensure", "last_run", "main_job", "registry",
+           "scene_part", "unused_keys"]
+
 #: Hidden folder of the runner inside a results folder (manifests of non-NetCDF outputs, run log).
 STATE_DIR = ".hdi"
 #: The run log in :data:`STATE_DIR`: one JSON line of timings per computed stage.
@@ -83,277 +87,6 @@ Scene = Any
 
 class OutputRefused(DatasetError):
     """An output would replace a file hdi did not write there, another scene's results, or an input file."""
-
-
-def _constant(value: Any) -> Callable[[Scene], Any]:
-    return lambda scene: value
-
-
-@dataclass(frozen=True)
-class Stage:
-    """Declaration of a stage (bind it to ``STAGE`` in a module of :mod:`pipeline.stages`).
-
-    Attributes
-    ----------
-    name
-        The stage's name on the command line (``hdi NAME CONFIG``).
-    compute
-        ``compute(scene, inputs) -> xr.Dataset | {output: xr.Dataset | None}``: a dataset for a stage
-        with one NetCDF output, else a mapping from output name to dataset (``None``: not produced
-        this time, any old file of that name is removed). Non-NetCDF outputs are written by
-        ``compute`` under ``inputs.staging`` at their declared relative paths.
-    outputs
-        Output paths relative to the results folder (a tuple, or a function of the scene). The first
-        is the stage's primary output (returned by :func:`build`).
-    reads
-        Scene keys the result depends on, ``"section"`` or ``"section.key"``; ``"*"`` = the whole
-        scene minus ``excludes``.
-    excludes
-        Keys removed from ``"*"`` and from a whole section read (``"lubricant"`` minus
-        ``"lubricant.meniscus_time_us"``); a section named here is removed from ``"*"``.
-    files
-        ``files(scene) -> {role: path}``: input files named by scene keys (hashed by content).
-    upstream
-        Stages whose datasets this one reads (a tuple, or a function of the scene); they are made
-        current first.
-    options
-        Options (keyword arguments of :func:`build`) that change the result: part of the key.
-    order
-        Position in listings and in ``hdi run``.
-    main_job
-        Part of ``hdi run`` (when :attr:`applies` to the scene).
-    applies
-        ``applies(scene) -> bool``: whether ``hdi run`` includes the stage for this scene.
-    derived
-        ``derived(scene) -> {name: value}``: quantities computed from scene keys that the result depends on
-        instead of the keys themselves (e.g. the deepest protrusion of the interface tables, the larger
-        of two keys): a change of the keys that leaves them equal changes nothing.
-    optional
-        Stages whose primary dataset this one reads *when it is current* but does not make current
-        (e.g. ``identify`` for the report: a minutes-long study is never started by the report). The
-        key holds each one's inputs key when its dataset is current, else ``None``; ``compute`` sees
-        the same in :attr:`Inputs.optional` and must not read a dataset whose entry is ``None``.
-    check
-        ``check(scene)``: refuses, before anything is built or written, a scene the stage cannot use (a
-        one-line :class:`~pipeline.config.scene.SceneError`; e.g. a study's box the model cannot evaluate,
-        :func:`pipeline.analyses.feasibility.check_study`).
-    keeps
-        ``keeps(scene) -> (path, ...)``: the longest paths, relative to the results folder, of the files
-        the stage writes there beyond its outputs (sweep parts, an evaluation store, the identified
-        scene); only their lengths matter (:meth:`Runner.check_lengths`).
-    finish
-        ``finish(scene, out, options)``: run after the stage was asked for and is current (computed or
-        not), for side effects outside the results folder (``report --readme``); ``options`` are those
-        of :func:`build` and ``force``.
-    simulates
-        Whether ``compute`` integrates the slider's dynamics (the numba kernel, directly or through a
-        study's evaluations): when such a stage is to be computed, the runner starts compiling the scene's
-        kernel in a background process before the build's first stage, if neither this process nor the
-        on-disk cache has it (:func:`pipeline.model.ahead.compile_kernel_ahead`).
-    lazy_imports
-        Modules ``compute`` imports only when it runs (matplotlib's, ~0.7 s; several seconds in a fresh
-        environment, which writes their bytecode then): imported early, while the process waits for the
-        kernel's background compile, when the stage is to be computed (:func:`pipeline.model.compiled.while_waiting`).
-    doc
-        One line for ``hdi --help``.
-    """
-
-    name: str
-    compute: Callable[[Scene, "Inputs"], Any]
-    outputs: tuple[str, ...] | Callable[[Scene], tuple[str, ...]]
-    reads: tuple[str, ...] = ("*",)
-    excludes: tuple[str, ...] = ()
-    files: Callable[[Scene], Mapping[str, str | Path]] = _constant({})
-    upstream: tuple[str, ...] | Callable[[Scene], tuple[str, ...]] = ()
-    options: tuple[str, ...] = ()
-    order: float = 100.0
-    main_job: bool = False
-    applies: Callable[[Scene], bool] = _constant(True)
-    derived: Callable[[Scene], Mapping[str, Any]] = _constant({})
-    optional: tuple[str, ...] = ()
-    check: Callable[[Scene], None] | None = None
-    keeps: Callable[[Scene], tuple[str, ...]] = _constant(())
-    finish: Callable[[Scene, Path, dict], None] | None = None
-    simulates: bool = False
-    lazy_imports: tuple[str, ...] = ()
-    doc: str = ""
-
-    def output_names(self, scene: Scene) -> tuple[str, ...]:
-        return tuple(self.outputs(scene) if callable(self.outputs) else self.outputs)
-
-    def upstream_names(self, scene: Scene) -> tuple[str, ...]:
-        return tuple(self.upstream(scene) if callable(self.upstream) else self.upstream)
-
-
-@dataclass
-class Inputs:
-    """What a stage's ``compute`` may read, and where it writes non-NetCDF outputs.
-
-    Attributes
-    ----------
-    out
-        The results folder (upstream datasets live there, made current by the runner).
-    key
-        The stage's inputs key (e.g. to tag intermediate files it keeps, like sweep parts).
-    files
-        The declared input files, role -> path.
-    upstream
-        Keys of the upstream stages, name -> inputs key.
-    optional
-        The optional stages (:attr:`Stage.optional`), name -> inputs key when their dataset is current,
-        else ``None`` (not to be read).
-    options
-        Every option given to :func:`build` (the stage uses those it knows), and ``force``: whether
-        the stage was forced (it then also remakes what it keeps between runs, like sweep parts).
-    staging
-        Folder for non-NetCDF outputs (their declared relative paths below it).
-    writer
-        Set by the runner: writes an output dataset now (:meth:`write_early`); ``None``: no early writes.
-    early
-        The datasets written early: output name -> (the dataset, its file in the staging folder).
-    """
-
-    out: Path
-    key: str = ""
-    files: dict[str, Path] = field(default_factory=dict)
-    upstream: dict[str, str] = field(default_factory=dict)
-    optional: dict[str, str | None] = field(default_factory=dict)
-    options: dict[str, Any] = field(default_factory=dict)
-    staging: Path | None = None
-    metrics: dict[str, Any] = field(default_factory=dict)
-    writer: Callable[[str, xr.Dataset], Path] | None = field(default=None, repr=False)
-    early: dict[str, tuple[xr.Dataset, Path]] = field(default_factory=dict, repr=False)
-
-    @classmethod
-    def folder(cls, out: str | Path, **options: Any) -> "Inputs":
-        """Inputs read from ``out`` as they are, outputs written straight into it (tests, scripts).
-
-        No key is checked: the caller vouches for the datasets in ``out``.
-        """
-        out = Path(out).absolute()  # (tasks carry paths under it to workers, whose working directory is not ours)
-        return cls(out=out, options=options, staging=out)
-
-    def path(self, name: str) -> Path:
-        """Path of a file in the results folder."""
-        return self.out / name
-
-    def dataset(self, name: str, stage: str | None = None, variables: Iterable[str] = ()) -> xr.Dataset:
-        """Read an upstream (or current optional) dataset, refusing one made from other inputs than the
-        runner expects."""
-        ds = read_dataset(self.out / name, stage=stage, variables=variables)
-        want = None if stage is None else self.upstream.get(stage) or self.optional.get(stage)
-        if want is not None:
-            have = ds.attrs.get(KEY_ATTR)
-            if have != want:
-                raise DatasetError(f"{self.out / name}: made from other inputs (inputs_key {str(have)[:12]}) than "
-                                   f"this run's {stage} stage (inputs_key {want[:12]})")
-        return ds
-
-    def record(self, **metrics: Any) -> None:
-        """Numbers about this run (timings, counts) for the run log, never for the datasets."""
-        self.metrics.update(metrics)
-
-    def write_early(self, name: str, ds: xr.Dataset) -> None:
-        """Write the output dataset ``name``, complete before the computation ends, now: into the staging
-        folder, with the provenance the runner gives it (:meth:`Runner._write`, which then moves it into
-        place instead of writing it, when the stage returns this very ``ds`` for ``name``). The stage still
-        returns ``ds``; a dataset changed after this call must not be returned as the same object. The first
-        dataset output is written at the end all the same: it carries the list of outputs produced.
-
-        Why: the write (compression of a large dataset) then overlaps work still running, such as the
-        sweep's last batches, instead of adding to the command's serial end (docs/performance.md, section
-        "The grid's serial part"). Nothing happens without a runner (:meth:`folder`), and a failed early
-        write is left to the normal write at the end, which reports it."""
-        if self.writer is None:
-            return
-        try:
-            self.early[name] = (ds, self.writer(name, ds))
-        except (OSError, RuntimeError) as exc:  # (the write at the end meets it again and names the output)
-            log.debug("%s: early write failed (%s); written at the end", name, exc)
-
-
-# --------------------------------------------------------------------------------------- registry
-def registry() -> dict[str, Stage]:
-    """Every stage declared in :mod:`pipeline.stages` (a module-level ``STAGE``), in ``order``."""
-    from . import stages as package
-    found: dict[str, Stage] = {}
-    for info in pkgutil.iter_modules(package.__path__):
-        module = importlib.import_module(f"{package.__name__}.{info.name}")
-        stage = getattr(module, "STAGE", None)
-        if isinstance(stage, Stage):
-            if stage.name in found:
-                raise RuntimeError(f"stage {stage.name!r} declared twice (pipeline.stages.{info.name})")
-            found[stage.name] = stage
-    return dict(sorted(found.items(), key=lambda kv: (kv[1].order, kv[0])))
-
-
-def main_job(scene: Scene, stages: Mapping[str, Stage] | None = None) -> list[str]:
-    """The stages of ``hdi run`` for a scene, in order."""
-    stages = registry() if stages is None else stages
-    return [n for n, s in stages.items() if s.main_job and s.applies(scene)]
-
-
-# --------------------------------------------------------------------------------------------- keys
-#: Scene keys no stage reads: ``scene.extends`` says how the file was written (the base's absolute
-#: path), not what the scene is; its values are already in the resolved keys. Keyed, it made a scene
-#: that extends another recompute results identical to the base's, and every result stale when the
-#: project folder moved.
-NEVER_READ = ("scene.extends",)
-
-
-#: Keys of the synthetic DMW record, which a measured record (``dmw.source`` a file) leaves unused:
-#: keyed, ``--set dmw.rms_nm`` recomputed the whole chain to identical results.
-SYNTHESIS_ONLY = ("dmw.rms_nm", "dmw.exponent", "dmw.seed")
-
-
-def unused_keys(scene: Scene) -> tuple[str, ...]:
-    """Scene keys this scene states but nothing reads (beyond :data:`NEVER_READ`)."""
-    dmw = scene.config.get("dmw", {})
-    return SYNTHESIS_ONLY if dmw.get("source", "synthetic") != "synthetic" else ()
-
-
-def scene_part(scene: Scene, reads: Iterable[str], excludes: Iterable[str] = ()) -> dict[str, Any]:
-    """The scene keys named by ``reads``/``excludes`` (see :class:`Stage`), JSON-normalised, without
-    the :func:`unused_keys` of the scene."""
-    cfg = json.loads(json.dumps(scene.config, default=str))
-    for item in unused_keys(scene):
-        section, _, key = item.partition(".")
-        cfg.get(section, {}).pop(key, None)
-    picked: dict[str, Any] = {}
-    reads = tuple(reads)
-    if "*" in reads:
-        picked = {s: dict(v) for s, v in cfg.items()}
-        for item in (*excludes, *NEVER_READ):
-            section, _, key = item.partition(".")
-            if key:
-                picked.get(section, {}).pop(key, None)
-            else:
-                picked.pop(section, None)
-        picked = {"*": picked}
-    excluded = set(excludes)
-    for item in reads:
-        if item == "*":
-            continue
-        section, _, key = item.partition(".")
-        picked[item] = cfg[section][key] if key else \
-            {k: v for k, v in cfg[section].items() if f"{section}.{k}" not in excluded}
-    return picked
-
-
-def _digest(payload: Any) -> str:
-    return hashlib.sha256(json.dumps(payload, sort_keys=True, default=str).encode()).hexdigest()
-
-
-def _dataset_key(path: Path) -> tuple[str | None, list[str] | None]:
-    """The ``inputs_key`` and produced-outputs list of a dataset (``None`` when unreadable)."""
-    try:
-        attrs, _ = read_attrs(path)
-    except DatasetBusy:  # (not "no inputs key": the dataset would be replaced under its writer)
-        raise
-    except (OSError, ValueError, RuntimeError):  # (RuntimeError: the HDF5 library's "HDF error", a damaged header)
-        return None, None
-    outputs = attrs.get(OUTPUTS_ATTR)
-    return attrs.get(KEY_ATTR), (json.loads(outputs) if outputs else None)
 
 
 # -------------------------------------------------------------------------------------- the runner
@@ -422,14 +155,14 @@ class Runner:
             st = self.stage(name)
             payload = {
                 "stage": name, "code": code_key(st.compute.__module__),
-                "scene": scene_part(self.scene, st.reads, st.excludes),
+                "scene": scene_part(self.scene, st.keyed()),
                 "files": {role: self._hash(p) for role, p in self.files(name).items()},
                 "upstream": {u: self.key(u) for u in st.upstream_names(self.scene)},
                 "options": {o: self.options.get(o) for o in st.options},
                 "derived": dict(st.derived(self.scene)),
                 "optional": self.optional(name),
             }
-            self._keys[name] = _digest(payload)
+            self._keys[name] = digest(payload)
         return self._keys[name]
 
     def optional(self, name: str) -> dict[str, str | None]:
@@ -472,7 +205,7 @@ class Runner:
             p = self.out / o
             if not p.is_file():
                 return f"{o} missing"
-            have, listed = _dataset_key(p)
+            have, listed = dataset_key(p)
             if have != key:
                 return f"{o} made from other inputs" if have else f"{o} has no inputs key"
             problem = stored_problem(p, files.get(o))  # (a damaged chunk, a hand edit: recomputed, never reused)
@@ -684,7 +417,7 @@ class Runner:
                             staging=staging)
             inputs.writer = lambda output, ds: self._write_one(st, key, inputs, output, ds, staging / output)
             with shared_folder(inputs.out), progress_stage(name):  # (its progress lines carry its name)
-                result = st.compute(self.scene, inputs)
+                result = st.compute(st.view(self.scene), inputs)
             interrupts.check()  # (a signal a library swallowed during the computation: nothing is written)
             written = self._write(st, key, inputs, result, staging)
         finally:
@@ -795,15 +528,15 @@ def ensure(name: str, scene: Scene, out: str | Path, **options: Any) -> Path:
     return build([name], scene, out, **options)[name][0]
 
 
-def simulation_inputs(scene: Scene, out: str | Path, calibration: bool = False,
+def current_inputs(scene: Scene, out: str | Path, calibration: bool = False,
                       k: float | None = None, in_memory: bool = False) -> SimulationInputs:
     """What one simulation of ``scene`` reads, its upstream stages made current in ``out`` first
-    (:func:`pipeline.model.scene_inputs.simulation_inputs`; scripts, benchmarks, tests, :mod:`pipeline.api`:
+    (:func:`pipeline.model.scene_inputs.input_stages`; scripts, benchmarks, tests, :mod:`pipeline.api`:
     a stage reads through :func:`pipeline.model.inputs.for_stage`). ``calibration``: also calibrate and
     resolve k; ``k``: an explicit k [1] instead, resolved without a calibration (the ``option k`` of
     :func:`pipeline.model.scene_inputs.contact_k`); ``in_memory``: ``out`` is a temporary folder
     (:attr:`Runner.in_memory`)."""
-    wanted = wanted_inputs(scene, calibration and k is None)
+    wanted = input_stages(scene, calibration and k is None)
     if wanted:
         build(wanted, scene, out, in_memory=in_memory)
     return from_folder(scene, out, calibration=calibration or k is not None, k=k)

@@ -10,32 +10,30 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from .config.grid import TOL_NM, range_count
+from .config.grid import range_count
 from .config.limits import (check_physical, MAX_EVALUATIONS, MAX_HISTORY_SAMPLES, MAX_KEPT_HISTORY_SAMPLES,
                             MAX_RECORD_SAMPLES, MAX_SCENES, MAX_TABLE_ROWS, POLISH_EVALUATIONS, LimitError)
 from .model import interface_tables
 from .model.dmw_record import settings as dmw_settings
 from .model.measured_dmw import record_samples
-from .units import MS, NS, S_IN_MS
+from .units import MS, NM, NS, S_IN_MS
 
 
-def deepest_protrusion_nm(scene: Any) -> float:
+def deepest_studied_protrusion_nm(scene: Any) -> float:
     """The deepest protrusion [nm] the scene, its sweep (:func:`pipeline.model.interface_tables.deepest_protrusion_nm`,
-    the tables' own rule) or its sensitivity study ask for."""
+    the tables' own rule) or its sensitivity study ask for (a study makes tables of its own reach)."""
     deepest = interface_tables.deepest_protrusion_nm(scene)
     grid = scene["sensitivity"]["protrusion_nm"]
     return max(deepest, grid["stop"]) if grid else deepest
 
 
 def table_rows(scene: Any) -> int:
-    """Rows of the interface tables (:func:`pipeline.model.interface_tables.separation_labels`), estimated
-    from the scene's roughness sigma (an AFM surface's may differ a little)."""
+    """Rows of the interface tables (:func:`pipeline.model.interface_tables.separation_rows` from
+    :func:`~pipeline.model.interface_tables.table_floor` to ``solver.table_max_nm``), estimated from the
+    scene's roughness sigma (an AFM surface's, and the summits', may differ a little)."""
     sol = scene["solver"]
-    fh0 = scene["air_bearing"]["flying_height_nm"]
-    lo = min(sol["table_min_sigma"] * scene["roughness"]["sigma_nm"], fh0 - deepest_protrusion_nm(scene) - 1.0)
-    step = sol["table_step_nm"]
-    first = math.floor(lo / step + TOL_NM)
-    return math.ceil((sol["table_max_nm"] - first * step) / step - TOL_NM) + 1
+    lo = interface_tables.table_floor(scene, (scene["roughness"]["sigma_nm"] * NM,), deepest_studied_protrusion_nm(scene))
+    return interface_tables.separation_rows(lo / NM, sol["table_max_nm"], sol["table_step_nm"])[1]
 
 
 def _count(x: float) -> int:

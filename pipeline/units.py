@@ -85,6 +85,18 @@ SUFFIX_UNITS: dict[str, str] = {
 }
 
 
+#: Unit suffixes of an inverse unit, converted to SI by a division by their unit (``x / UM2``: a product by
+#: :data:`PER_UM2` rounds otherwise in one value of eight): the one conversion of such a key.
+SUFFIX_DIVISORS: dict[str, float] = {"per_um2": UM2}
+
+
+def to_si_value(value: float, suffix: str) -> float:
+    """A number of a scene key with unit suffix ``suffix`` in SI units: times :func:`si_factor`, or divided
+    by the unit of an inverse unit (:data:`SUFFIX_DIVISORS`)."""
+    divisor = SUFFIX_DIVISORS.get(suffix)
+    return value / divisor if divisor is not None else value * si_factor(suffix)
+
+
 def si_factor(suffix: str) -> float:
     """SI factor of a scene-key unit suffix (``"nm"`` -> 1e-9).
 

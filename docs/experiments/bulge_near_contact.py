@@ -28,7 +28,6 @@ ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
 
 from pipeline.config.scene import load_scene  # noqa: E402
-from pipeline.config.si import to_si  # noqa: E402
 from pipeline.model import bulge_table as bt  # noqa: E402
 from pipeline.model.dmw_record import disk_speed_m_s  # noqa: E402
 from pipeline.physics import bulge_bearing as bb, reynolds  # noqa: E402
@@ -57,7 +56,7 @@ def main() -> None:
     ap.add_argument("--figure", default="docs/figures/bulge_near_contact.png")
     a = ap.parse_args()
     scene = load_scene(ROOT / a.config, ['air_bearing.bulge="rough-reynolds"'])
-    si = to_si(scene)
+    si = scene.si
     rough = bt.scene_roughness(scene)
     sol = scene["solver"]
     grid = reynolds.ReynoldsGrid(cells_per_a=sol["bulge_cells_per_a"], cells_per_b=sol["bulge_cells_per_b"])

@@ -44,7 +44,6 @@ from ..model.interface_tables import interface_parameters
 from ..model.assembly import slider_from_scene
 from ..physics.asperity_statistics import ALPHA_MIN, bandwidth_alpha, explicit_statistics
 from ..physics.material_bounds import PhysicsWarning
-from ..units import NM, UM, UM2
 
 #: Sections whose keys enter one rule together (their corners are checked jointly).
 COUPLED = (("roughness", "materials"), ("slider", "air_bearing", "tfc"))
@@ -74,14 +73,15 @@ def problem(scene: Any, params: Sequence[Parameter], values: Sequence[float], pl
         return _strip(str(exc), where)
     r = cand["roughness"]
     if not r["afm"]:
-        sigma, R, eta = r["sigma_nm"] * NM, r["summit_radius_um"] * UM, r["summit_density_per_um2"] / UM2
+        sr = cand.si.roughness
+        sigma, R, eta = sr.sigma, sr.summit_radius, sr.summit_density
         alpha = bandwidth_alpha(sigma, eta, R)
         if not alpha > ALPHA_MIN:
             return (f"McCool's bandwidth alpha = {alpha:.3g} < {ALPHA_MIN} (sigma {r['sigma_nm']:g} nm, R "
                     f"{r['summit_radius_um']:g} um, eta {r['summit_density_per_um2']:g} um^-2): no summit-height "
                     "variance")
         try:
-            stats = explicit_statistics(r["sigma_nm"], r["summit_radius_um"], r["summit_density_per_um2"])
+            stats = explicit_statistics(sigma, R, eta)
         except ValueError as exc:
             return str(exc)
         if plasticity and scene_inputs.needs_interface(cand):

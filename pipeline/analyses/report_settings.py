@@ -6,7 +6,14 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
+from ..config.fields import fields
 from ..physics import paper
+
+#: The scene keys the report reads (:meth:`ReportSettings.from_scene`, :func:`wants_ensemble`).
+FIELDS = fields("air_bearing.damping_ratio", "solver.transient_ms", "touchdown.onset_nm", "touchdown.previous_nm",
+                "report.histories_nm", "report.realisations", "dmw.rms_nm", "dmw.source", "dmw.seed",
+                "materials.hardness_gpa", "materials.plasticity_index", "contact.section_depth_sigma",
+                "air_bearing.bulge", "air_bearing.lift_cap_gap_nm", "scene.effects")
 
 
 def _get(scene: Any, section: str, key: str, default: Any = None) -> Any:

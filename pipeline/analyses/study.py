@@ -36,9 +36,16 @@ import xarray as xr
 from . import ensemble_rules as en
 from .ensemble_comparison import SPREAD_STD
 from ..config.grid import TOL_NM, label, range_grid
+from ..config.fields import fields
+from ..config.schema import target_keys
 from ..model.outcomes import touched_in_summary
 from ..physics import paper
 from ..variables import SCALARS
+
+#: The scene keys of the targets' definitions (:func:`targets`, :func:`headline`): which targets, their values,
+#: tolerances and where they are measured (the ``[identify]`` keys :func:`pipeline.config.schema.target_keys`
+#: generates), and the residual of a missing value; not the optimiser's settings.
+TARGET_FIELDS = fields("identify.targets", "identify.missing_residual", *(f"identify.{key}" for key in target_keys()))
 
 
 # ------------------------------------------------------------------------------------------ targets

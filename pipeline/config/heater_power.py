@@ -32,6 +32,8 @@ if TYPE_CHECKING:  # (the scene's validation imports this module: the kernel's e
 TOUCHDOWN_POWER_KEYS = {"onset_mw": "onset_nm", "previous_mw": "previous_nm"}
 #: The ``[tfc]`` keys of an actuation.
 ACTUATION_KEYS = ("actuation_nm_per_mw", "actuation_power_mw", "actuation_protrusion_nm")
+#: The same as scene keys (:func:`pipeline.config.fields.fields`): what :func:`actuation` reads.
+ACTUATION_FIELDS = tuple(f"tfc.{key}" for key in ACTUATION_KEYS)
 
 
 def actuation(config: Mapping[str, Mapping[str, Any]]) -> heater.Actuation | None:

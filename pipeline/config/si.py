@@ -3,8 +3,9 @@
 A scene key carries its unit in its name (``flying_height_nm``, ``frequencies_khz``); :func:`to_si`
 returns each section as a frozen group whose fields drop the suffix and hold SI values
 (``to_si(scene).air_bearing.flying_height`` [m], ``.frequencies`` [Hz]), by the one units table
-(:data:`pipeline.units.SUFFIX_FACTORS`). Keys without a unit keep their name and value; lists of
-numbers convert elementwise; tables and strings are kept as they are. ``rpm`` becomes rad/s.
+(:func:`pipeline.units.to_si_value`). Keys without a unit keep their name and value; lists of
+numbers convert elementwise; tables and strings are kept as they are. ``dmw.rpm`` has no unit suffix and
+stays in rev/min: the disk speed is its one conversion (:func:`pipeline.model.dmw_record.disk_speed_m_s`).
 
 Two keys of one section that differ only by their unit suffix get distinct SI names from
 :data:`SI_NAMES` (``dmw.sample_rate_mhz``, the synthesis rate, and ``dmw.sample_rate_hz``, a measured
@@ -15,7 +16,7 @@ from __future__ import annotations
 
 from typing import Any, Mapping
 
-from ..units import si_factor
+from ..units import si_factor, to_si_value
 from .schema import strip_unit
 
 
@@ -61,30 +62,32 @@ class Group(Mapping):
         return f"Group({self._section!r}, {sorted(self._values)!r})"
 
 
-def _convert(value: Any, factor: float) -> Any:
+def _convert(value: Any, suffix: str) -> Any:
     if isinstance(value, bool) or value is None:
         return value
     if isinstance(value, (int, float)):
-        return value * factor
+        return to_si_value(value, suffix)
     if isinstance(value, list) and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value):
-        return tuple(v * factor for v in value)
+        return tuple(to_si_value(v, suffix) for v in value)
     return value
 
 
 def section_si(section: str, values: Mapping[str, Any]) -> Group:
     """One scene section in SI units (see the module docstring); each key is read from ``values`` when
     its SI name is read."""
-    keys: dict[str, tuple[str, float | None]] = {}
+    keys: dict[str, tuple[str, str | None]] = {}
     for key in values.keys():
         name, suffix = strip_unit(key)
         name = SI_NAMES.get((section, key), name)
         if name in keys:
             raise ValueError(f"[{section}] {key}: its SI name {name!r} collides with another key of the section")
-        keys[name] = (key, None if suffix is None else si_factor(suffix))
+        if suffix is not None:
+            si_factor(suffix)  # (an unknown suffix fails here, naming the known ones)
+        keys[name] = (key, suffix)
 
     def convert(name: str) -> Any:
-        key, factor = keys[name]
-        return values[key] if factor is None else _convert(values[key], factor)
+        key, suffix = keys[name]
+        return values[key] if suffix is None else _convert(values[key], suffix)
 
     return Group(section, keys, convert)
 
@@ -92,3 +95,16 @@ def section_si(section: str, values: Mapping[str, Any]) -> Group:
 def to_si(scene: Any) -> Group:
     """The scene's sections as frozen groups in SI units (module docstring): ``to_si(scene).tfc.protrusion``."""
     return Group("", {s: None for s in scene.config}, lambda s: section_si(s, scene[s]))
+
+
+#: The ``si`` attribute of a scene (:class:`pipeline.config.validation.Scene`,
+#: :class:`pipeline.config.fields.DeclaredScene`): the scene in SI units, :func:`to_si` (read through the
+#: scene, so a declared scene's SI view reads only its declared keys).
+SI_VIEW = property(lambda scene: to_si(scene), doc="The scene in SI units (pipeline.config.si.to_si).")
+
+
+def si_value(si: Group, field: str) -> Any:
+    """The value of the SI view ``si`` (:func:`to_si`) a field names, ``"section.name"`` (the SI name: a
+    registry entry's parameter, :attr:`pipeline.physics.variants.Entry.parameters`)."""
+    section, _, name = field.partition(".")
+    return si[section][name]

@@ -21,6 +21,7 @@ from ..units import MHZ_IN_KHZ, MS, NS
 from .heater_power import TOUCHDOWN_POWER_KEYS, resolve_touchdown
 from .limits import MAX_INTEGER, MAX_MAGNITUDE, MAX_NESTING, MAX_STEPS, LimitError, check_physical
 from ..physics.friction import FRICTION_LAWS
+from .si import SI_VIEW
 from .schema import FREE_LIMITS, SCHEMA, Key, SceneError, is_folder_name, strip_unit
 
 #: Fewest output samples of a run's steady window (after ``solver.transient_ms``) a scene may ask for:
@@ -174,6 +175,9 @@ class Scene:
     def has(self, effect: str) -> bool:
         """Whether the scene asks for ``effect`` (one of :data:`EFFECTS`)."""
         return effect in self.effects
+
+    #: the scene in SI units (:func:`pipeline.config.si.to_si`): ``scene.si.air_bearing.flying_height`` [m]
+    si = SI_VIEW
 
     @property
     def hash(self) -> str:

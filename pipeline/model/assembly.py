@@ -43,15 +43,16 @@ from . import dynamics as dyn
 from .dmw_record import check_length, disk_speed_m_s
 from .forces import RearLawRef, rear_law_ref
 from .piecewise import disk_coefficients, piecewise_coefficients
-from ..config.si import to_si
+from ..config.fields import fields, parameter_fields, union
+from ..config.si import si_value
 from ..physics import air_bearing as ab
 from ..physics import bulge_bearing as bb
 from ..physics.asperity_statistics import explicit_statistics
 from ..physics.friction import FRICTION_LAWS, friction_parts, friction_stress_table, lubricant_shear_stress
 from ..physics.geometry import friction_arm
 from ..physics.variants import Entry
-from ..units import KHZ, NM
-from ..variables import INTERFACE
+from ..units import KHZ
+from ..variables import DMW, INTERFACE
 
 
 #: Absolute tolerance of the meniscus state q, relative to the largest adhesion pressure of the table [1].
@@ -75,6 +76,25 @@ def _bulge_table(ds: Any) -> Any:
 #: How a TFC-point law's table (:attr:`pipeline.physics.air_bearing.TfcLaw.table`) is read from its stage's
 #: dataset into the SI object its ``force`` takes.
 TABLE_READERS: Mapping[str, Callable[[Any], Any]] = {"bulge": _bulge_table}
+
+
+#: The scene keys :func:`build_model` reads (:func:`pipeline.config.fields.fields`): its steps' below, and
+#: the parameters of every entry of the registries it looks laws up in (:func:`law_parameters`).
+MODEL_FIELDS = union(
+    fields("scene.effects", "slider.length_mm", "slider.width_mm", "slider.thickness_mm", "slider.density_kg_m3",
+           "slider.front_arm_mm", "slider.rear_arm_mm", "slider.tfc_from_trailing_edge_um", "slider.friction_arm",
+           "air_bearing.flying_height_nm", "air_bearing.frequencies_khz", "air_bearing.damping_ratio",
+           "air_bearing.rear_exponent", "air_bearing.rear_reference_gap_nm", "air_bearing.stiffness_root",
+           "air_bearing.rear_law", "air_bearing.tfc_stiffening", "air_bearing.bulge", "air_bearing.lift_cap_gap_nm",
+           "tfc.half_length_um", "tfc.half_width_um", "roughness.afm", "roughness.sigma_nm",
+           "roughness.summit_radius_um", "roughness.summit_density_per_um2", "lubricant.meniscus_time_us",
+           "lubricant.shear_stress_mpa", "interface.model", "interface.adhesion", "contact.section_depth_sigma",
+           "contact.damping_n_s_m", "contact.friction_law", "contact.friction_coefficient",
+           "contact.friction_switching", "contact.area_model", "dmw.rpm", "dmw.radius_mm", "solver.rtol",
+           "solver.atol_nm", "solver.max_step_ns", "solver.stiffness_step", "solver.min_dwell_ns",
+           "solver.duration_ms", "solver.transient_ms", "solver.output_step_ns", "solver.interpolation_order",
+           "solver.start", "solver.fhm_measure"),
+    *(parameter_fields(registry.values()) for registry in (*TFC_POINT_LAWS.values(), FRICTION_LAWS)))
 
 
 @dataclass
@@ -154,6 +174,12 @@ class Model:
         return self.k * self.sigma if np.isfinite(self.k) else 0.0
 
 
+def in_si(interface: Any, name: str) -> np.ndarray:
+    """The values of the ``interface.nc`` variable ``name`` in SI units, from its dataset units by the
+    variable schema (:data:`pipeline.variables.INTERFACE`)."""
+    return interface[name].values * INTERFACE[name].si_unit
+
+
 def slider_from_scene(scene: Any, damping_ratio: float | None = None) -> tuple[ab.Slider, dict]:
     """The rigid slider and its air bearing from ``[slider]`` and ``[air_bearing]`` (docs/model.md, section "Slider dynamics").
 
@@ -163,7 +189,7 @@ def slider_from_scene(scene: Any, damping_ratio: float | None = None) -> tuple[a
     ``slider.friction_arm`` (:func:`pipeline.physics.geometry.friction_arm`): ``T/2`` (``"cg"``, the CG
     height over the air-bearing surface) or ``T`` (``"gimbal"``; docs/model.md, section "Deviations", item 19).
     """
-    si = to_si(scene)
+    si = scene.si
     ss, sa = si.slider, si.air_bearing
     L, W, T = ss.length, ss.width, ss.thickness
     m, I = ab.mass_properties(L, W, T, ss.density)
@@ -200,7 +226,7 @@ def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float]
     eff = scene.effects
     if "air_bearing" not in eff:
         raise ValueError("scene.effects must include 'air_bearing': nothing else holds the slider up")
-    si = to_si(scene)
+    si = scene.si
     sa, sc, s_sol = si.air_bearing, si.contact, si.solver
     slider, info = slider_from_scene(scene, damping_ratio)
     p = kernel_record(slider, si)
@@ -211,7 +237,7 @@ def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float]
     dmw_c = disk_record(scene, p, dmw, info)
     interface = scene_interface(scene, interface)
     tabs = flat_tables(scene, p, interface)
-    sigma = float(interface["sigma"]) * NM if interface is not None else np.nan
+    sigma = float(in_si(interface, "sigma")) if interface is not None else np.nan
     p.y_s = summit_datum(scene, interface)
     info["y_s"] = p.y_s
     k = criterion(eff, k)
@@ -270,10 +296,10 @@ def disk_record(scene: Any, p: np.record, dmw: tuple[np.ndarray, float] | None, 
         return None
     if dmw is None:
         raise ValueError("the dmw effect needs a DMW record")
-    s_sol = to_si(scene).solver
+    s_sol = scene.si.solver
     w_nm, fs = dmw
     check_length(w_nm.size, fs, s_sol.duration, p.off_f, "DMW record")  # (the rule: dmw_record.needed_samples)
-    coefficients = disk_coefficients(np.asarray(w_nm, float) * NM, 1.0 / fs, s_sol.interpolation_order,
+    coefficients = disk_coefficients(np.asarray(w_nm, float) * DMW["displacement"].si_unit, 1.0 / fs, s_sol.interpolation_order,
                                      (p.off_c, p.off_f, p.off_r))
     p.dmw_t0, p.dmw_dt = 0.0, 1.0 / fs
     info["disk_speed_m_s"] = V
@@ -284,7 +310,7 @@ def scene_interface(scene: Any, interface: Any | None) -> Any | None:
     """The interface dataset of the scene's ``interface.model`` (a dataset of both models has the
     dimension ``model``), or ``interface`` as it is."""
     if interface is not None and "model" in interface.dims:
-        return interface.sel(model=to_si(scene).interface.model)
+        return interface.sel(model=scene.si.interface.model)
     return interface
 
 
@@ -306,9 +332,9 @@ def flat_tables(scene: Any, p: np.record, interface: Any | None) -> dict[str, np
         if eff & {"contact", "adhesion"}:
             raise ValueError("the contact/adhesion effects need interface tables (run `hdi interface`)")
         return tabs
-    si = to_si(scene)
+    si = scene.si
     order = si.solver.interpolation_order
-    x = interface["separation"].values * NM
+    x = in_si(interface, "separation")
     h = float(x[1] - x[0])
     p.tab_x0, p.tab_h, p.tab_n = x[0], h, x.size - 1
     for key, (var, effect) in TABLES.items():
@@ -316,7 +342,7 @@ def flat_tables(scene: Any, p: np.record, interface: Any | None) -> dict[str, np
             continue
         if var not in interface:
             raise ValueError(f"interface tables lack {var!r}, needed by the {effect} effect; re-run `hdi interface`")
-        values = interface[var].values * INTERFACE[var].si_unit  # dataset unit -> SI (pipeline/variables.py)
+        values = in_si(interface, var)
         if key == "friction":  # the named friction law (docs/model.md, section "Friction") acts through the table
             values, always = friction_tables(scene, interface, values)
             if always is not None:
@@ -333,9 +359,9 @@ def friction_tables(scene: Any, interface: Any, stress: np.ndarray) -> tuple[np.
     without one: ``interface.nc``'s ``friction_stress_law`` says which), switched with the contact criterion, and the part acting at every separation
     (``contact.friction_switching``, the lubricant shear of ``lubricant.shear_stress_mpa``; ``None``:
     none; docs/model.md, sections "Lubricant friction", "Switched and continuous friction")."""
-    si = to_si(scene)
+    si = scene.si
     sc = si.contact
-    pressure = interface["contact_pressure"].values * INTERFACE["contact_pressure"].si_unit
+    pressure = in_si(interface, "contact_pressure")
     law = FRICTION_LAWS.lookup(sc.friction_law)
     built = interface.attrs.get("friction_stress_law", "shear-strength")
     if built != (sc.friction_law if law.summit is not None else "shear-strength"):
@@ -359,13 +385,12 @@ def summit_datum(scene: Any, interface: Any | None) -> float:
     else McCool's of the explicit statistics (section "Asperity statistics"), what the interface stage
     would write."""
     if interface is not None and "y_s" in interface:
-        return float(interface["y_s"]) * NM
-    if to_si(scene).roughness.afm:  # y_s is a statistic of the scans: interface.nc has it
+        return float(in_si(interface, "y_s"))
+    if scene.si.roughness.afm:  # y_s is a statistic of the scans: interface.nc has it
         raise ValueError("a scene with roughness.afm needs its interface.nc (y_s of the scans) even without "
                          "contact or adhesion (pipeline.model.scene_inputs.needs_interface)")
-    # (the scene's own units: explicit_statistics converts them; to_si would divide the density differently)
-    r = scene["roughness"]
-    return explicit_statistics(r["sigma_nm"], r["summit_radius_um"], r["summit_density_per_um2"])["y_s"]
+    sr = scene.si.roughness
+    return explicit_statistics(sr.sigma, sr.summit_radius, sr.summit_density)["y_s"]
 
 
 def criterion(effects: frozenset, k: float | None) -> float:
@@ -378,7 +403,7 @@ def criterion(effects: frozenset, k: float | None) -> float:
 def tolerances(scene: Any, slider: ab.Slider) -> np.ndarray:
     """Step 6: the absolute tolerances of the state ``(z, theta, z', theta')``: ``solver.atol_nm`` on
     ``z``, over ``l_c`` on ``theta``, times the second natural frequency on the rates."""
-    atol_len = to_si(scene).solver.atol
+    atol_len = scene.si.solver.atol
     # (the hand conversion kept: to_si's frequency [Hz] would round 2 pi f_kHz 1e3 in another order)
     w2 = 2 * np.pi * scene["air_bearing"]["frequencies_khz"][1] * KHZ
     return np.array([atol_len, atol_len / slider.l_c, atol_len * w2, atol_len / slider.l_c * w2])
@@ -388,18 +413,17 @@ def meniscus_state(scene: Any, interface: Any | None, p: np.record, adhesion: np
                    atol: np.ndarray) -> tuple[float | None, np.ndarray | None, np.ndarray]:
     """Step 7: the meniscus relaxation time [s] (``lubricant.meniscus_time_us``; ``None``: off), the
     adhesion table it relaxes towards, and the tolerances with the meniscus state's appended."""
-    meniscus = to_si(scene).lubricant.meniscus_time
+    meniscus = scene.si.lubricant.meniscus_time
     if not meniscus > 0.0:
         return None, adhesion, atol
     if adhesion is None:
         raise ValueError("lubricant.meniscus_time_us > 0 relaxes the adhesion pressure: it needs the adhesion "
                          "effect in scene.effects")
-    if to_si(scene).interface.adhesion == "two-population":
+    if scene.si.interface.adhesion == "two-population":
         # the state relaxes towards the menisci around contacts; the bridges act at once (docs/model.md,
         # section "Two adhesion populations"): two tables side by side (pipeline.model.dynamics.Tables)
-        order = to_si(scene).solver.interpolation_order
-        parts = [interface[v].values * INTERFACE[v].si_unit
-                 for v in ("adhesion_pressure_menisci", "adhesion_pressure_bridges")]
+        order = scene.si.solver.interpolation_order
+        parts = [in_si(interface, v) for v in ("adhesion_pressure_menisci", "adhesion_pressure_bridges")]
         adhesion = np.ascontiguousarray(np.hstack([piecewise_coefficients(v, p.tab_h, order) for v in parts]))
     # the meniscus state q [Pa]: absolute tolerance a millionth of the largest pressure it relaxes towards
     # (the flat-section table's also with contact.area_model = "integrated": a tolerance, of the same order)
@@ -413,7 +437,7 @@ def tfc_point_laws(scene: Any, fh0: float, tables: Mapping[str, Any] | None = No
     to tabulate (:func:`pipeline.model.kernel_inputs.tfc_table`). ``fh0``: the flying height [m]; ``tables``: the datasets of the stages
     the laws read, by stage name (:attr:`pipeline.physics.air_bearing.TfcLaw.table`); a law that reads one
     gets it bound, in SI (:func:`pipeline.model.bulge_table.from_dataset`)."""
-    a, sa = scene["air_bearing"], to_si(scene).air_bearing  # (the law names, the numbers in SI)
+    a, sa = scene["air_bearing"], scene.si.air_bearing  # (the law names, the numbers in SI)
     tables = tables or {}
     gap_power, tabulated = None, []
     for key, registry in TFC_POINT_LAWS.items():
@@ -452,5 +476,5 @@ def law_parameters(scene: Any, law: Entry) -> dict[str, Any]:
     """The numbers a registry entry's behaviour takes (:attr:`pipeline.physics.variants.Entry.parameters`: a
     TFC-point law's force, a friction law), read from the scene in SI units (:func:`pipeline.config.si.to_si`):
     keyword -> value."""
-    si = to_si(scene)
-    return {keyword: si[where.partition(".")[0]][where.partition(".")[2]] for keyword, where in law.parameters}
+    si = scene.si
+    return {keyword: si_value(si, where) for keyword, where in law.parameters}

@@ -20,7 +20,7 @@ from ..physics import bulge_bearing as bb
 from ..physics.reynolds import ReynoldsGrid, reynolds_table
 from ..physics import gas_flow
 from ..config.grid import TOL_NM
-from ..config.si import to_si
+from ..config.fields import fields
 from .dmw_record import disk_speed_m_s
 from .interface_tables import deepest_protrusion_nm
 from ..units import NM, UM
@@ -38,6 +38,15 @@ AMBIENT_PRESSURE = 101325.0
 #: tabulates (:func:`bulge_table`): the closed form, or a Reynolds solve (smooth or rough gap); ``"none"``
 #: has no table. A new law that reads the bulge table needs its solve here.
 MODELS = ("ph-limit", "reynolds", "rough-reynolds")
+
+#: The scene keys the table is made of (:func:`scene_table`; the last three only with ``"rough-reynolds"``,
+#: :func:`scene_roughness`), besides the deepest protrusion (:func:`table_stop_nm`, of :data:`DERIVED_FIELDS`).
+FIELDS = fields("air_bearing.bulge", "air_bearing.pad_pressure_mpa", "air_bearing.bulge_profile",
+                "air_bearing.bulge_slip", "tfc.half_length_um", "tfc.half_width_um", "dmw.radius_mm", "dmw.rpm",
+                "solver.bulge_cells_per_a", "solver.bulge_cells_per_b", "roughness.sigma_nm",
+                "air_bearing.disk_roughness_share", "lubricant.thickness_nm")
+#: The keys of the deepest protrusion (:func:`table_stop_nm`): the table depends on that value only.
+DERIVED_FIELDS = fields("tfc.protrusion_nm", "sweep.protrusion_nm")
 
 
 def table_gaps(low_nm: float = 0.05, high_nm: float = 20.0, points: int = 25) -> np.ndarray:
@@ -168,7 +177,7 @@ def scene_table(scene: Any) -> xr.Dataset:
     ``solver.bulge_cells_per_a``, ``solver.bulge_cells_per_b``; gaps :func:`table_gaps`, protrusions
     :func:`table_protrusions` up to :func:`table_stop_nm`."""
     a, sol = scene["air_bearing"], scene["solver"]
-    si = to_si(scene)
+    si = scene.si
     grid = ReynoldsGrid(cells_per_a=sol["bulge_cells_per_a"], cells_per_b=sol["bulge_cells_per_b"])
     rough = scene_roughness(scene)
     return bulge_table(model=a["bulge"], p_pad=si.air_bearing.pad_pressure, a=si.tfc.half_length,
@@ -183,6 +192,6 @@ def scene_roughness(scene: Any) -> gas_flow.RoughGap | None:
     the wetting gap ``lubricant.thickness_nm`` (docs/model.md, section "Rough-gap bulge bearing")."""
     if scene["air_bearing"]["bulge"] != "rough-reynolds":
         return None
-    si = to_si(scene)
+    si = scene.si
     return gas_flow.RoughGap(sigma=si.roughness.sigma, disk_share=scene["air_bearing"]["disk_roughness_share"],
                              wet_gap=si.lubricant.thickness)

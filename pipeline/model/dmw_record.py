@@ -14,12 +14,17 @@ from typing import Any
 
 import numpy as np
 
-from ..config.si import to_si
+from ..config.fields import fields
 from ..physics import microwaviness as phys
 from ..units import MM, MS
 from ..variables import TIME
 
 FILENAME = "dmw.nc"
+
+#: The scene keys of the record (:func:`settings`; the default record length depends on the slider's size,
+#: :func:`default_duration`, the length a record must have on where the TFC point lies, :func:`front_pad_lead_s`).
+FIELDS = fields("dmw.*", "solver.duration_ms", "scene.effects", "slider.length_mm", "slider.front_arm_mm",
+                "slider.tfc_from_trailing_edge_um")
 
 
 def synthetic_record(s: dict[str, Any]) -> np.ndarray:
@@ -46,7 +51,7 @@ def settings(scene: Any) -> dict[str, Any]:
     ``None``, ``unit`` (``dmw.unit``: of a measured record that states none) or ``None``, ``disk_speed_m_s`` [m/s].
     """
     d = scene["dmw"]
-    si = to_si(scene)
+    si = scene.si
     band_hz = tuple(float(f) for f in si.dmw.band)
     speed = disk_speed_m_s(d)
     if d["duration_ms"] is not None:
@@ -101,7 +106,7 @@ def front_pad_lead_s(scene: Any) -> float:
     front arm plus the TFC point's arm behind the CG (``slider.length_mm / 2 -
     slider.tfc_from_trailing_edge_um``) over the disk speed (:func:`disk_speed_m_s`; 0.0368 ms in the paper
     scene). The dynamics reads the record that far ahead of ``t`` (:func:`pipeline.model.assembly.disk_record`)."""
-    ss = to_si(scene).slider
+    ss = scene.si.slider
     return (ss.front_arm + (ss.length / 2 - ss.tfc_from_trailing_edge)) / disk_speed_m_s(scene["dmw"])
 
 

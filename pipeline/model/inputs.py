@@ -1,7 +1,7 @@
 """A simulation's inputs in one object, with one caching rule.
 
 What one simulation of a scene reads besides the scene (which ones: the rule
-:func:`pipeline.model.scene_inputs.simulation_inputs`): the interface tables (``interface.nc``), the DMW
+:func:`pipeline.model.scene_inputs.input_stages`): the interface tables (``interface.nc``), the DMW
 record (``dmw.nc``), the bulge table (``bulge.nc``, with the tabulated bulge bearing) and the contact
 criterion k with its source (:func:`pipeline.model.scene_inputs.contact_k`). :class:`SimulationInputs`
 holds them; each dataset is a :class:`Source`, either in memory or a file of a results folder that is
@@ -209,7 +209,7 @@ def from_folder(scene: Any, out: str | Path, keys: Mapping[str, str | None] | No
         When no rule gives a k (:func:`pipeline.model.scene_inputs.contact_k`).
     """
     out, keys = Path(out), dict(keys or {})
-    wanted = scene_inputs.simulation_inputs(scene, calibration)
+    wanted = scene_inputs.input_stages(scene, calibration)
     sources = {stage: Source.file(stage, out / name, keys.get(stage)) if stage in wanted else None
                for stage, name in FILES.items()}
     if not calibration:

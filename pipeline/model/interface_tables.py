@@ -29,13 +29,25 @@ from ..physics.material_bounds import check_materials
 from ..physics.asperity_statistics import (composite_modulus, explicit_statistics, hardness_from_plasticity_gw,
                                   plasticity_index_gw, plasticity_index_ke)
 from ..config.grid import TOL_NM, label
-from ..config.si import to_si
+from ..config.fields import fields
 from ..units import MPA, NM, UM
 from ..variables import INTERFACE
 from . import roughness_statistics as rough
 from .deterministic_tables import MODELS, deterministic_tables
 
 log = logging.getLogger(__name__)
+
+#: The scene keys the interface tables are made of (:func:`build_tables` of :func:`roughness_statistics`).
+FIELDS = fields("scene.effects", "roughness.*", "materials.*", "lubricant.thickness_nm",
+                "lubricant.work_of_adhesion_j_m2", "lubricant.intermolecular_distance_nm",
+                "lubricant.bridge_work_of_adhesion_j_m2", "lubricant.solid_work_of_adhesion_j_m2",
+                "solver.table_step_nm", "solver.table_min_sigma", "solver.table_max_nm", "solver.quadrature_nodes",
+                "solver.quadrature_panels", "solver.contact_grid_points", "air_bearing.flying_height_nm",
+                "interface.model", "interface.adhesion")
+#: The scene keys the tables read through a value derived from them (:func:`deepest_protrusion_nm`,
+#: :func:`lubricant_shear_on`, :func:`summit_friction_law`): a change that leaves the value changes nothing.
+DERIVED_FIELDS = fields("tfc.protrusion_nm", "sweep.protrusion_nm", "lubricant.shear_stress_mpa",
+                        "contact.friction_law")
 
 
 def roughness_statistics(scene: Any, roughness: str | Path | xr.Dataset | None = None) -> dict[str, float]:
@@ -62,7 +74,8 @@ def roughness_statistics(scene: Any, roughness: str | Path | xr.Dataset | None =
         return {"sigma": st["sigma_nm"] * NM, "sigma_s": st["sigma_s_nm"] * NM, "y_s": st["y_s_nm"] * NM,
                 "R": st["summit_radius_um"] * UM, "eta": st["summit_density_per_um2"] / UM**2,
                 "alpha": st["alpha"], "source": f"AFM ({r['route']} route): {', '.join(r['afm'])}"}
-    return {**explicit_statistics(r["sigma_nm"], r["summit_radius_um"], r["summit_density_per_um2"]),
+    sr = scene.si.roughness
+    return {**explicit_statistics(sr.sigma, sr.summit_radius, sr.summit_density),
             "source": "explicit statistics"}
 
 
@@ -102,7 +115,7 @@ def interface_parameters(scene: Any, stats: dict[str, float]) -> isbl.Interface:
     ``E'`` from the two moduli (or ``composite_modulus_gpa``); ``H`` from ``hardness_gpa`` or, when
     absent, from the GW plasticity index (docs/model.md, section "Parameters": ``H`` is set so that psi(GW) = 0.52).
     """
-    si = to_si(scene)
+    si = scene.si
     m, lub = si.materials, si.lubricant
     nu = m.poisson_ratio
     E = m.composite_modulus if m.composite_modulus else composite_modulus(m.disk_modulus, m.tfc_modulus, nu)
@@ -148,9 +161,22 @@ def separation_labels(lo_nm: float, hi_nm: float, step_nm: float) -> np.ndarray:
     """The tables' uniform separation grid [nm]: whole multiples of ``step_nm`` from at or below
     ``lo_nm`` to at least ``hi_nm``, rounded like the protrusion grid (:func:`pipeline.config.grid.label`),
     so ``interface.sel(separation=0.0)`` hits a label (``lo + step * i`` gave -4.8999999999999995)."""
-    first = math.floor(lo_nm / step_nm + TOL_NM)
-    n = math.ceil((hi_nm - first * step_nm) / step_nm - TOL_NM) + 1
+    first, n = separation_rows(lo_nm, hi_nm, step_nm)
     return label(step_nm * (first + np.arange(n)))
+
+
+def separation_rows(lo_nm: float, hi_nm: float, step_nm: float) -> tuple[int, int]:
+    """The tables' grid (:func:`separation_labels`) as its first label's multiple of ``step_nm`` and its row count."""
+    first = math.floor(lo_nm / step_nm + TOL_NM)
+    return first, math.ceil((hi_nm - first * step_nm) / step_nm - TOL_NM) + 1
+
+
+def table_floor(scene: Any, sigmas: tuple[float, ...], deepest_nm: float) -> float:
+    """The lowest separation [m] the tables must reach: ``solver.table_min_sigma`` times each of ``sigmas``
+    [m] (the summits', the surface's), and 1 nm below the deepest nominal interference, the flying height
+    less ``deepest_nm`` (:func:`deepest_protrusion_nm`); below the table the kernel extrapolates linearly."""
+    n_sigma = scene["solver"]["table_min_sigma"]
+    return min(*(n_sigma * s for s in sigmas), (scene["air_bearing"]["flying_height_nm"] - deepest_nm - 1.0) * NM)
 
 
 def interface_scalars(scene: Any, stats: dict[str, float]) -> tuple[isbl.Interface, dict[str, xr.Variable]]:
@@ -183,13 +209,9 @@ def build_tables(scene: Any, stats: dict[str, float]) -> xr.Dataset:
     if wanted:
         # The table must reach past the Gaussian window (TAIL sigma_s), where the contact terms vanish,
         # so that holding the last value beyond the table is exact for them (very rough surfaces).
-        d_max = max(to_si(scene).solver.table_max, (isbl.TAIL + 0.5) * p.sigma_s)
-        # ... and start below every separation the slider can reach: table_min_sigma summit (and
-        # surface) sigmas, and 1 nm below the deepest nominal interference FH0 - protrusion of the scene
-        # and its sweep (below the table the kernel extrapolates linearly).
-        fh0 = scene["air_bearing"]["flying_height_nm"]
-        d_min = min(sol["table_min_sigma"] * p.sigma_s, sol["table_min_sigma"] * stats["sigma"],
-                    (fh0 - deepest_protrusion_nm(scene) - 1.0) * NM)
+        d_max = max(scene.si.solver.table_max, (isbl.TAIL + 0.5) * p.sigma_s)
+        # ... and start below every separation the slider can reach (table_floor)
+        d_min = table_floor(scene, (p.sigma_s, stats["sigma"]), deepest_protrusion_nm(scene))
         d_nm = separation_labels(d_min / NM, d_max / NM, sol["table_step_nm"])
         d = d_nm * NM
         tables = isbl.isbl_tables(d, p, quantities=wanted, nodes=sol["quadrature_nodes"],

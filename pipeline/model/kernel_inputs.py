@@ -25,7 +25,6 @@ from .forces import rear_law_ref
 from .piecewise import piecewise_coefficients, ppval
 from .scene_inputs import needs_interface
 from .state import N_STATE
-from ..config.si import to_si
 from ..physics import air_bearing as ab
 from ..physics.geometry import AREA_MODELS, nominal_area
 
@@ -214,7 +213,7 @@ def stand_in_arguments(scene: Any) -> tuple[np.ndarray, dyn.Grid, np.record, dyn
     :func:`kernel_slots`; tests/model/test_kernel_inputs.py checks that the signature equals the one of the
     real model's first run for every shipped scene.
     """
-    eff, si = scene.effects, to_si(scene)
+    eff, si = scene.effects, scene.si
     cubic = np.zeros((1, 4))  # (one piece of a piecewise cubic; the real tables have the same type)
     interface = needs_interface(scene)  # (build_model reads interface tables only then)
     tables = {name: cubic if name in eff and interface else None for name in ("contact", "adhesion", "friction")}

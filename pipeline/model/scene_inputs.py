@@ -3,7 +3,7 @@
 The one home of three rules every caller (the simulate, calibrate, sweep and accuracy stages, the
 parameter studies, the benchmarks and the tests) shares:
 
-* :func:`needs_interface` and :func:`simulation_inputs`: the inputs a simulation of a scene reads
+* :func:`needs_interface`, :func:`input_stages` (and :func:`pipeline.model.contact_rule.needs_calibration`): the inputs a simulation of a scene reads
   (interface tables, DMW record, the calibration for k);
 * :func:`contact_k`: the contact criterion constant k and where it came from (docs/model.md, section
   "Contact criterion").
@@ -19,15 +19,29 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ..config.fields import fields, union
 from ..physics.asperity_statistics import contact_probabilities, k_from_probability
-from .assembly import TFC_POINT_LAWS
+from .assembly import MODEL_FIELDS, TFC_POINT_LAWS
+from .contact_rule import needs_calibration
 
 if TYPE_CHECKING:
     import xarray as xr
 
-#: Scene keys no simulation reads (other stages' settings, names): left out of the inputs keys of the
-#: stages that simulate and of the parameter studies' evaluation store.
-SIMULATION_EXCLUDES = ("sweep", "report", "identify", "sensitivity", "scene.name", "scene.description")
+#: The scene keys of the rules of this module: which inputs a simulation reads (:func:`needs_interface`,
+#: :func:`table_stages`, :func:`needs_calibration`) and the contact criterion k (:func:`contact_k`).
+FIELDS = fields("scene.effects", "roughness.afm", "contact.k", "contact.fallback_probability",
+                *(f"air_bearing.{key}" for key in TFC_POINT_LAWS))
+
+#: The scene keys one simulation of a scene reads, besides its protrusion (``tfc.protrusion_nm``) and the
+#: datasets of its input stages (their own keys): the model (:data:`pipeline.model.assembly.MODEL_FIELDS`)
+#: and the rules of this module.
+SIMULATION_FIELDS = union(MODEL_FIELDS, FIELDS)
+
+#: The scene keys a parameter study's simulations may read: every key of the physical sections, since a
+#: study varies any of them and then makes the inputs (tables, records) of each candidate itself. The inputs
+#: key of the stages that run studies and of their evaluation store.
+STUDY_FIELDS = fields("scene.effects", "slider.*", "air_bearing.*", "tfc.*", "roughness.*", "materials.*",
+                      "lubricant.*", "interface.*", "contact.*", "dmw.*", "touchdown.*", "solver.*")
 
 
 def needs_interface(scene: Any) -> bool:
@@ -45,7 +59,7 @@ def table_stages(scene: Any) -> tuple[str, ...]:
     return tuple(dict.fromkeys(law.table for law in laws if law.table))
 
 
-def simulation_inputs(scene: Any, calibration: bool = True) -> tuple[str, ...]:
+def input_stages(scene: Any, calibration: bool = True) -> tuple[str, ...]:
     """The inputs (named as the stages that make them) one simulation of the scene reads.
 
     ``dmw`` with the dmw effect, ``interface`` (:func:`needs_interface`), ``bulge`` with the tabulated
@@ -59,7 +73,7 @@ def simulation_inputs(scene: Any, calibration: bool = True) -> tuple[str, ...]:
     if needs_interface(scene):
         up.append("interface")
     up.extend(table_stages(scene))
-    if calibration and scene.has("contact") and scene["contact"]["k"] is None:
+    if calibration and needs_calibration(scene):
         up.append("calibrate")
     return tuple(up)
 

@@ -17,7 +17,6 @@ import math
 from statistics import NormalDist
 
 import numpy as np
-from ..units import NM, UM, UM2
 
 #: Lower bound of the bandwidth parameter for which McCool's summit-height variance is positive.
 ALPHA_MIN = 0.8968
@@ -351,16 +350,16 @@ def k_from_probability(probability: float) -> float:
     return float(-NormalDist().inv_cdf(0.5 * probability))
 
 
-def explicit_statistics(sigma_nm: float, summit_radius_um: float, summit_density_per_um2: float) -> dict[str, float]:
-    """Summit statistics [SI] of a surface given by ``sigma`` [nm], ``R`` [um] and ``eta`` [um^-2] (the
-    scene's ``[roughness]`` keys): ``sigma``, ``sigma_s``, ``y_s``, ``R`` [m], ``eta`` [m^-2], ``alpha`` [1]
+def explicit_statistics(sigma: float, summit_radius: float, summit_density: float) -> dict[str, float]:
+    """Summit statistics [SI] of a surface given by ``sigma`` [m], ``R`` [m] and ``eta`` [m^-2] (the
+    scene's ``[roughness]`` keys in SI): ``sigma``, ``sigma_s``, ``y_s``, ``R`` [m], ``eta`` [m^-2], ``alpha`` [1]
     by McCool's relations (:func:`summit_sigma`, :func:`summit_offset`, :func:`bandwidth_alpha`; docs/model.md, section "Asperity statistics").
 
     Parameters
     ----------
-    sigma_nm : combined rms roughness [nm]
-    summit_radius_um : summit radius [um]
-    summit_density_per_um2 : summit density [um^-2]
+    sigma : combined rms roughness [m]
+    summit_radius : summit radius [m]
+    summit_density : summit density [m^-2]
 
     Returns
     -------
@@ -376,6 +375,6 @@ def explicit_statistics(sigma_nm: float, summit_radius_um: float, summit_density
     ----------
     [McCool86]; docs/model.md, section "Asperity statistics".
     """
-    sigma, R, eta = sigma_nm * NM, summit_radius_um * UM, summit_density_per_um2 / UM2
+    R, eta = summit_radius, summit_density
     return {"sigma": sigma, "sigma_s": summit_sigma(sigma, eta, R), "y_s": summit_offset(sigma, eta, R),
             "R": R, "eta": eta, "alpha": bandwidth_alpha(sigma, eta, R)}

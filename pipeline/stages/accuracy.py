@@ -302,14 +302,15 @@ def _upstream(scene: Any) -> tuple[str, ...]:
     fixes no k, the calibration (k by :func:`pipeline.model.inputs.for_stage`)."""
     up = ["roughness"] if scene["roughness"]["afm"] else []
     up.extend(scene_inputs.table_stages(scene))
-    if scene.has("contact") and scene["contact"]["k"] is None:
+    if scene_inputs.needs_calibration(scene):
         up.append("calibrate")
     return tuple(up)
 
 
 STAGE = Stage(
     "accuracy", compute, simulates=True, outputs=("accuracy.nc", "figures/work_precision.png"),
-    reads=("*",), excludes=scene_inputs.SIMULATION_EXCLUDES,
+    # (what its simulations read, with the deepest protrusion of the tables it makes at each knob)
+    reads=(*scene_inputs.STUDY_FIELDS, "sweep.protrusion_nm"),
     upstream=_upstream,
     options=("points", "reference", "knobs", "only", "repeat", "tolerance", "combined_tolerance", "k"),
     order=55, doc="error and wall time of each accuracy knob, accuracy.nc and figures/work_precision.png")

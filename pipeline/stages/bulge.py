@@ -20,17 +20,9 @@ from typing import Any
 import xarray as xr
 
 from ..io import read_dataset
-from ..model.bulge_table import scene_table, table_stop_nm
+from ..model.bulge_table import DERIVED_FIELDS, FIELDS, scene_table, table_stop_nm
 from ..model.scene_inputs import table_stages
 from ..runner import Inputs, Stage
-
-#: The scene keys the table depends on (besides the deepest protrusion, :func:`table_stop_nm`); the last
-#: three only with ``"rough-reynolds"`` (:func:`pipeline.model.bulge_table.scene_roughness`).
-READS = ("air_bearing.bulge", "air_bearing.pad_pressure_mpa", "air_bearing.bulge_profile", "air_bearing.bulge_slip",
-         "tfc.half_length_um", "tfc.half_width_um", "dmw.radius_mm", "dmw.rpm", "solver.bulge_cells_per_a",
-         "solver.bulge_cells_per_b", "roughness.sigma_nm", "air_bearing.disk_roughness_share",
-         "lubricant.thickness_nm")
-
 
 def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
     """The ``bulge.nc`` dataset of the scene (module docstring)."""
@@ -38,7 +30,7 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
 
 
 STAGE = Stage(
-    "bulge", compute, outputs=("bulge.nc",), reads=READS,
+    "bulge", compute, outputs=("bulge.nc",), reads=FIELDS, unkeyed=DERIVED_FIELDS,
     derived=lambda scene: {"table_stop_nm": table_stop_nm(scene)},
     order=35, main_job=True, applies=lambda scene: "bulge" in table_stages(scene),
     doc="the bulge's air-bearing lift (Reynolds, slip) versus apex gap and protrusion, bulge.nc")

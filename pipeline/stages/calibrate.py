@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from ..analyses.calibration import calibrate
+from ..analyses.calibration import OWN_DRIVE_KEYS, calibrate
 from ..model import scene_inputs
 from ..model.inputs import for_stage
 from ..runner import Inputs, Stage
@@ -38,10 +38,10 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
 
 STAGE = Stage(
     "calibrate", compute, simulates=True, outputs=("calibration.nc",),
-    # everything but the single protrusion, the report and the sweep (except its protrusion grid,
-    # on which the touchdown curve is evaluated)
-    reads=("*", "sweep.protrusion_nm"),
-    excludes=("tfc.protrusion_nm", *scene_inputs.SIMULATION_EXCLUDES),
-    upstream=lambda scene: scene_inputs.simulation_inputs(scene, calibration=False),
+    # what a simulation reads, the touchdown it is fitted to, the sweep's protrusion grid (on which the
+    # touchdown curve is evaluated) and the keys whose difference from the paper's the calibration warns of
+    reads=(*scene_inputs.SIMULATION_FIELDS, "touchdown.*", "sweep.protrusion_nm",
+           *(key for keys in OWN_DRIVE_KEYS.values() for key in keys)),
+    upstream=lambda scene: scene_inputs.input_stages(scene, calibration=False),
     order=40, main_job=True, applies=lambda scene: scene.has("contact"),
     doc="the contact-criterion constant k from the measured touchdown, calibration.nc")

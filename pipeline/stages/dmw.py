@@ -64,7 +64,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from ..config.si import to_si
+from ..model import dmw_record
 from ..model.dmw_record import FILENAME, check_length, front_pad_lead_s, settings, synthetic_record
 from ..model.measured_dmw import load_record
 from ..physics import microwaviness as phys
@@ -157,7 +157,7 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
     n = phys.n_samples(dur, fs)
     seed = None
     enabled = "dmw" in scene.effects
-    need = (float(to_si(scene).solver.duration), front_pad_lead_s(scene))
+    need = (float(scene.si.solver.duration), front_pad_lead_s(scene))
     if enabled and s["duration_set"]:  # (a record of the length asked for: long enough for the simulation?)
         check_length(n, fs, *need, f"dmw.duration_ms = {scene['dmw']['duration_ms']:g}",
                      "set dmw.duration_ms to at least that, or leave it out (the default length is enough)")
@@ -210,9 +210,6 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
 
 STAGE = Stage(
     "dmw", compute, outputs=(FILENAME,),
-    # the default record length depends on the slider's size (default_duration), the length a record must
-    # have on where the TFC point lies (front_pad_lead_s)
-    reads=("dmw", "solver.duration_ms", "scene.effects", "slider.length_mm", "slider.front_arm_mm",
-           "slider.tfc_from_trailing_edge_um"),
+    reads=dmw_record.FIELDS,
     files=_files, order=20, main_job=True,
     doc="the disk's dynamic microwaviness, synthesised or measured, dmw.nc")

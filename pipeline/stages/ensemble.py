@@ -32,10 +32,10 @@ import xarray as xr
 
 from ..analyses import ensemble_rules as en
 from ..analyses.report_settings import wants_ensemble
-from ..analyses.study import bouncing_bv, ensemble_summary, target_protrusions, targets
+from ..analyses.study import TARGET_FIELDS, bouncing_bv, ensemble_summary, target_protrusions, targets
 from ..analyses.sweep_slices import combinations, first_contact, split_ensemble
 from ..config.grid import label
-from ..config.heater_power import power_coordinates
+from ..config.heater_power import ACTUATION_FIELDS, power_coordinates
 from ..evaluations import evaluate_realisations
 from ..fanout import run_tasks, split
 from ..io import var
@@ -184,18 +184,14 @@ def dataset(prot: list[float], seeds: list[int], outputs: list[dict[str, list[fl
 
 
 def _upstream(scene: Any) -> tuple[str, ...]:
-    return scene_inputs.simulation_inputs(scene) + ("sweep",)
+    return scene_inputs.input_stages(scene) + ("sweep",)
 
 
 STAGE = Stage(
     "ensemble", compute, simulates=True, outputs=("ensemble.nc",),
-    reads=("*",),
-    # (what a simulation reads, report.realisations and the targets' definitions in [identify]; not the
-    # optimiser's settings)
-    excludes=("tfc.protrusion_nm", "sweep", "sensitivity", "scene.name", "scene.description", "report.histories_nm",
-              "identify.parameters", "identify.population", "identify.generations", "identify.seed",
-              "identify.batch_size", "identify.profile_points", "identify.profile_method",
-              "identify.profile_evaluations", "identify.polish", "identify.realisations", "identify.racing", "identify.racing_records",
-              "identify.racing_z"),
+    # what a simulation reads, the DMW records of the realisations, report.realisations and the targets'
+    # definitions in [identify] (not the optimiser's settings)
+    reads=(*scene_inputs.SIMULATION_FIELDS, *dmw_record.FIELDS, *ACTUATION_FIELDS, "touchdown.*",
+           "report.realisations", *TARGET_FIELDS),
     upstream=_upstream, applies=applies, order=57, main_job=True,
     doc="the paper's checks over report.realisations DMW realisations (ensemble.nc, for the report)")

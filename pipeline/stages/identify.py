@@ -69,8 +69,14 @@ from ..analyses.identification import (GN_STEP, METHODS, PROFILE_GAIN, PROFILE_S
 from ..analyses.free_parameters import Parameter, parse_parameters, scene_value
 from ..analyses.study import target_protrusions, targets
 from ..evaluations import Evaluator, evaluate_batch, setup, upstream
+from ..model.scene_inputs import STUDY_FIELDS
 
 log = logging.getLogger(__name__)
+
+
+#: The dimensions of ``identify.nc`` and the attribute naming the variable of its values' units.
+E, P, T, B, K = ("evaluation",), ("parameter",), ("target",), ("bound",), ("point",)
+PU, TU = {"unit_variable": "parameter_units"}, {"unit_variable": "target_units"}
 
 
 def dataset(ident: Identification, params: Sequence[Parameter], out: dict[str, Any], x_base: np.ndarray,
@@ -101,9 +107,18 @@ def dataset(ident: Identification, params: Sequence[Parameter], out: dict[str, A
     pts = np.array([r["params"] for r in recs], float)
     objective = np.sum(res**2, axis=1)
     i_best = int(out["best_evaluation"])
+    data = {**_parameter_variables(params, out, pts, x_base), **_target_variables(tl, vals, spr, n_real),
+            **_evaluation_variables(ident, recs, res, objective, out)}
+    ds = xr.Dataset(data, coords=_coordinates(params, tl, len(recs), out["profile_value"].shape[1]))
+    ds.attrs.update(_attributes(ident, out, ev, len(params), i_best, float(objective[i_best])))
+    return ds
+
+
+def _parameter_variables(params: Sequence[Parameter], out: dict[str, Any], pts: np.ndarray,
+                         x_base: np.ndarray) -> dict[str, Any]:
+    """The variables of ``identify.nc`` on ``parameter``: each parameter's values, its identified value,
+    bounds, interval and profile (with the slices of an optimised profile)."""
     optimised = out["method"] == METHODS["optimised"]
-    E, P, T, B, K = ("evaluation",), ("parameter",), ("target",), ("bound",), ("point",)
-    PU, TU = {"unit_variable": "parameter_units"}, {"unit_variable": "target_units"}
     data: dict[str, Any] = {
         "parameter_value": var(pts, E + P, "", "parameter value",
                                description="value of each free parameter at each evaluation", **PU),
@@ -147,7 +162,13 @@ def dataset(ident: Identification, params: Sequence[Parameter], out: dict[str, A
                                      "they are held at the optimum (past the walk's end or its budget)",
                                      flag_values=np.array([0, 1], np.int8), flag_meanings="held re_optimised"),
         })
-    data.update({
+    return data
+
+
+def _target_variables(tl: Sequence[Any], vals: np.ndarray, spr: np.ndarray, n_real: int) -> dict[str, Any]:
+    """The variables of ``identify.nc`` on ``target``: each target's goal, tolerance and description, its value
+    at each evaluation and (over DMW realisations) its spread."""
+    data: dict[str, Any] = {
         "goal": var(np.array([t.target for t in tl], float), T, "", "value each target aims at ([identify])",
                     **TU),
         "tolerance": var(np.array([t.tolerance for t in tl], float), T, "", "tolerance of each target", **TU),
@@ -158,14 +179,22 @@ def dataset(ident: Identification, params: Sequence[Parameter], out: dict[str, A
         "target_description": var(np.array([t.long_name for t in tl], dtype=object), T, "",
                                   "what each target measures"),
         "value": var(vals, E + T, "", "value of each target at each evaluation", **TU),
-    })
+    }
     if n_real > 1:  # (ensembles only: a single-record identify.nc has none)
         data["spread"] = var(spr, E + T + B, "", "target spread",
                              description="spread of each target over the DMW realisations "
                              "(target_spread says which)", **TU)
         data["target_spread"] = var(np.array([t.spread for t in tl], dtype=object), T, "",
                                     "what the spread of each target is")
-    data.update({
+    return data
+
+
+def _evaluation_variables(ident: Identification, recs: list[dict[str, Any]], res: np.ndarray, objective: np.ndarray,
+                          out: dict[str, Any]) -> dict[str, Any]:
+    """The variables of ``identify.nc`` of each evaluation: its residuals and objective, its cost, role and
+    failure, and the parameters' correlation."""
+    keys = ident.keys
+    return {
         "residual": var(res, E + T, "1", "normalised residual",
                         description="residual of each target normalised by its tolerance "
                         "(inequality targets: zero on the admissible side)"),
@@ -188,11 +217,15 @@ def dataset(ident: Identification, params: Sequence[Parameter], out: dict[str, A
         "correlation": var(out["correlation"], ("parameter", "parameter_b"), "1",
                            "parameter correlation",
                            description="correlation of the parameters, Gauss-Newton (J^T J)^+ at the optimum"),
-    })
+    }
+
+
+def _coordinates(params: Sequence[Parameter], tl: Sequence[Any], n_evaluations: int, n_points: int) -> dict[str, Any]:
+    """The coordinates of ``identify.nc``: evaluations, parameters (and their units), targets, bounds, profile points."""
     names = np.array([p.name for p in params], dtype=object)
     units = np.array([p.units for p in params], dtype=object)
-    coords = {
-        "evaluation": var(np.arange(len(recs)), E, "1", "evaluation index (request order)"),
+    return {
+        "evaluation": var(np.arange(n_evaluations), E, "1", "evaluation index (request order)"),
         "parameter": var(names, P, "", "free parameter (scene key)"),
         "parameter_b": var(names, ("parameter_b",), "", "free parameter (scene key)"),
         "parameter_units": var(units, P, "", "units of each free parameter (UDUNITS)"),
@@ -202,11 +235,17 @@ def dataset(ident: Identification, params: Sequence[Parameter], out: dict[str, A
         "target": var(np.array([t.name for t in tl], dtype=object), T, "", "target name"),
         "target_units": var(np.array([t.units for t in tl], dtype=object), T, "", "units of each target (UDUNITS)"),
         "bound": var(np.array(["low", "high"], dtype=object), B, "", "lower/upper end"),
-        "point": var(np.arange(out["profile_value"].shape[1]), K, "1", "profile point index"),
+        "point": var(np.arange(n_points), K, "1", "profile point index"),
     }
-    ds = xr.Dataset(data, coords=coords)
-    ds.attrs.update({
-        "best_evaluation": i_best, "best_objective": float(objective[i_best]),
+
+
+def _attributes(ident: Identification, out: dict[str, Any], ev: Evaluator, n_params: int, i_best: int,
+                best_objective: float) -> dict[str, Any]:
+    """The global attributes of ``identify.nc``: the best evaluation, the methods and the identification's cost."""
+    optimised = out["method"] == METHODS["optimised"]
+    n_real = ev.realisations
+    return {
+        "best_evaluation": i_best, "best_objective": best_objective,
         "profile_centre_evaluation": int(out["centre_evaluation"]), "reconstructed_evaluation": 0,
         "within_tolerance": int(out["within"]), "interval_criterion": out["criterion"],
         "optimiser": "scipy.optimize.differential_evolution best1bin, latinhypercube + reconstructed x0, "
@@ -219,7 +258,7 @@ def dataset(ident: Identification, params: Sequence[Parameter], out: dict[str, A
                                  "or the secant of the last two points, walked outward from the optimum; each walk "
                                  "stops past the first point outside the interval criterion",
             "profile_optimiser_evaluations": out["profile_optimiser_evaluations"]} if optimised else {}),
-        **_polish_attrs(out["polish"], len(params)),
+        **_polish_attrs(out["polish"], n_params),
         "correlation_method": f"Gauss-Newton (J^T J)^+ at the optimum, central differences of {GN_STEP:g} x range",
         "racing": _racing_text(ident.racing),
         # the identification's cost: (candidate, DMW record) pairs, and runs (x protrusions), store reads included
@@ -231,8 +270,7 @@ def dataset(ident: Identification, params: Sequence[Parameter], out: dict[str, A
                               "where the touchdown probability crosses 0.5 (residual on the median minimum clearance), "
                               "FHM/BV medians, the light-contact state as means"} if n_real > 1 else {}),
         # (this run's counts and fan-out time go to the run log, .hdi/runs.jsonl, not the dataset)
-    })
-    return ds
+    }
 
 
 def _polish_attrs(polish: dict[str, Any] | None, n: int) -> dict[str, Any]:
@@ -482,8 +520,8 @@ def _finish(scene: Any, out: Path, options: dict[str, Any]) -> None:
 
 STAGE = Stage(
     "identify", compute, simulates=True, outputs=("identify.nc", "figures/identify.png"),
-    reads=("*",), excludes=("sweep", "report", "sensitivity", "scene.name", "scene.description",
-                            "identify.batch_size"),
+    # (what the candidates' simulations read, with the deepest protrusion their own tables reach)
+    reads=(*STUDY_FIELDS, "sweep.protrusion_nm", "identify.*"), unkeyed=("identify.batch_size",),
     upstream=upstream, check=box_check("identify"), finish=_finish, order=80,
     keeps=lambda scene: (identified_scene_path(scene, Path()).name, "identify.evals.jsonl"),
     doc="the free [recon] parameters fitted to the paper's targets, identify.nc and identified.toml "

@@ -18,7 +18,7 @@ from typing import Any
 import xarray as xr
 
 from ..io import read_dataset
-from ..model.interface_tables import (build_tables, deepest_protrusion_nm, lubricant_shear_on, roughness_statistics,
+from ..model.interface_tables import (DERIVED_FIELDS, FIELDS, build_tables, deepest_protrusion_nm, lubricant_shear_on, roughness_statistics,
                                      summit_friction_law)
 from ..runner import Inputs, Stage
 
@@ -42,13 +42,9 @@ def _friction_table(scene: Any) -> dict[str, str]:
 
 STAGE = Stage(
     "interface", compute, outputs=("interface.nc",),
-    reads=("roughness", "materials", "lubricant", "solver.table_step_nm", "solver.table_min_sigma",
-           "solver.table_max_nm", "solver.quadrature_nodes", "solver.quadrature_panels", "scene.effects",
-           "air_bearing.flying_height_nm", "interface.model", "interface.adhesion", "solver.contact_grid_points"),
-    # properties of the dynamics, not of the tables (the lubricant shear stress scales wetted_area_fraction,
-    # which the tables hold when the term is on: `derived`; the friction law changes the friction column only
-    # when it is a per-summit law: `derived` names that law)
-    excludes=("lubricant.meniscus_time_us", "lubricant.shear_stress_mpa", "contact.friction_law"),
+    # (the lubricant shear stress scales wetted_area_fraction, which the tables hold when the term is on; the
+    # friction law changes the friction column only when it is a per-summit law: both through `derived`)
+    reads=FIELDS, unkeyed=DERIVED_FIELDS,
     derived=lambda scene: {"deepest_protrusion_nm": deepest_protrusion_nm(scene),
                            "lubricant_shear": lubricant_shear_on(scene), **_friction_table(scene)},
     upstream=lambda scene: ("roughness",) if scene["roughness"]["afm"] else (),

@@ -78,10 +78,11 @@ from ..analyses.paper_comparison import comparison_markdown, identification_mark
 from ..analyses.plots import DRAWING_MODULES
 from ..analyses.report_figures import (BAND_FIGURE, BULGE_FIGURE, ENSEMBLE_FIGURE, FIGURES, INTERFACE_FIGURE,
                                       STATICS_FIGURE)
-from ..analyses.report_settings import ReportSettings, wants_ensemble
+from ..analyses.report_settings import FIELDS as REPORT_FIELDS, ReportSettings, wants_ensemble
 from ..analyses.sweep_slices import combinations, split_ensemble
 from ..file_errors import is_read_only
 from ..io import DatasetError, temporary_path
+from ..model.contact_rule import needs_calibration
 from ..paths import refuse_links
 from ..validity import OutsideValidity, describe
 from ..runner import Inputs, Stage
@@ -170,7 +171,7 @@ def _upstream(scene: Any) -> tuple[str, ...]:
     up = ["roughness", "interface", "statics", "sweep"]
     if scene.has("dmw"):
         up.append("dmw")
-    if scene.has("contact") and scene["contact"]["k"] is None:
+    if needs_calibration(scene):
         up.append("calibrate")
     if wants_ensemble(scene):
         up.append("ensemble")
@@ -190,7 +191,7 @@ STAGE = Stage(
     outputs=tuple(f"figures/{f}" for f in FIGURES + (ENSEMBLE_FIGURE, BAND_FIGURE, INTERFACE_FIGURE, BULGE_FIGURE,
                                                       STATICS_FIGURE))
     + ("report/summary.csv", "report/summary.md", "report/comparison.md"),
-    reads=("*",), upstream=_upstream, optional=("identify",), finish=_finish, order=60, main_job=True,
+    reads=REPORT_FIELDS, upstream=_upstream, optional=("identify",), finish=_finish, order=60, main_job=True,
     lazy_imports=DRAWING_MODULES,
     doc="the paper's figures, a summary table and the comparison with the paper")
 

@@ -86,6 +86,6 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
 
 
 STAGE = Stage(
-    "roughness", compute, outputs=(FILENAME,), reads=("roughness", "materials"),
+    "roughness", compute, outputs=(FILENAME,), reads=("roughness.*", "materials.*"),
     files=lambda scene: {f"roughness.afm[{i}]": f for i, f in enumerate(scene["roughness"]["afm"] or [])},
     order=10, main_job=True, doc="AFM scans (or explicit statistics) to asperity statistics, roughness.nc")

@@ -41,8 +41,10 @@ import xarray as xr
 from ..analyses.feasibility import box_check
 from ..fanout import local_cluster
 from ..runner import Inputs, Stage
+from ..analyses.study import TARGET_FIELDS
 from ..analyses.screening import dataset, failures_text, figure, headline_outputs, morris, sobol
 from ..evaluations import Evaluator, evaluate_batch, setup, upstream
+from ..model.scene_inputs import STUDY_FIELDS
 from ..config.grid import protrusion_grid, range_grid
 
 log = logging.getLogger(__name__)
@@ -94,7 +96,8 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
 
 STAGE = Stage(
     "sensitivity", compute, simulates=True, outputs=("sensitivity.nc", "figures/sensitivity.png"),
-    # (the [sweep] grid is the default protrusion grid of the evaluations: not excluded)
-    reads=("*",), excludes=("report", "identify", "scene.name", "scene.description", "sensitivity.batch_size"),
+    # (the [sweep] grid is the default protrusion grid of the evaluations)
+    # (and the targets' definitions in [identify], which define the headline outputs)
+    reads=(*STUDY_FIELDS, "sweep.*", "sensitivity.*", *TARGET_FIELDS), unkeyed=("sensitivity.batch_size",),
     upstream=upstream, check=box_check("sensitivity"), order=85, keeps=lambda scene: ("sensitivity.evals.jsonl",),
     doc="Morris and Sobol indices of the headline outputs over the [sensitivity] parameters, sensitivity.nc")

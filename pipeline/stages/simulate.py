@@ -22,7 +22,7 @@ import xarray as xr
 from ..model import scene_inputs
 from ..model.inputs import for_stage
 from ..model.simulation import histories_of, model_attrs, run_values, simulate, summary_of
-from ..runner import Inputs, Stage, simulation_inputs
+from ..runner import Inputs, Stage, current_inputs
 from ..variables import flag_meaning
 
 log = logging.getLogger(__name__)
@@ -30,9 +30,9 @@ log = logging.getLogger(__name__)
 
 def model_inputs(scene: Any, out: Path) -> tuple[xr.Dataset | None, tuple | None]:
     """Interface tables and DMW record of a scene, its upstream made current in ``out`` first (scripts,
-    benchmarks, tests: :func:`pipeline.runner.simulation_inputs`; a stage reads through
+    benchmarks, tests: :func:`pipeline.runner.current_inputs`; a stage reads through
     :func:`pipeline.model.inputs.for_stage` instead)."""
-    inputs = simulation_inputs(scene, out)
+    inputs = current_inputs(scene, out)
     return inputs.tables(), inputs.record()
 
 
@@ -58,5 +58,5 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset]:
 
 STAGE = Stage(
     "simulate", compute, simulates=True, outputs=("histories.nc", "summary.nc"),
-    reads=("*",), excludes=scene_inputs.SIMULATION_EXCLUDES,
-    upstream=scene_inputs.simulation_inputs, order=45, doc="one protrusion in time, histories.nc and summary.nc")
+    reads=(*scene_inputs.SIMULATION_FIELDS, "tfc.protrusion_nm"),
+    upstream=scene_inputs.input_stages, order=45, doc="one protrusion in time, histories.nc and summary.nc")

@@ -19,7 +19,7 @@ from typing import Any
 import xarray as xr
 
 from ..config.grid import protrusion_grid
-from ..config.heater_power import power_coordinates
+from ..config.heater_power import ACTUATION_FIELDS, power_coordinates
 from ..io import read_dataset
 from ..model import scene_inputs
 from ..model.inputs import for_stage
@@ -47,10 +47,10 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
 
 STAGE = Stage(
     "statics", compute, outputs=("statics.nc",),
-    # what a simulation reads, and the sweep's protrusion grid (not the single protrusion)
-    reads=("*", "sweep.protrusion_nm"),
-    excludes=("tfc.protrusion_nm", *scene_inputs.SIMULATION_EXCLUDES),
-    upstream=scene_inputs.simulation_inputs, order=47, main_job=True,
+    # what a simulation reads, the sweep's protrusion grid (not the single protrusion) and the heater's
+    # actuation (power_coordinates)
+    reads=(*scene_inputs.SIMULATION_FIELDS, "sweep.protrusion_nm", *ACTUATION_FIELDS),
+    upstream=scene_inputs.input_stages, order=47, main_job=True,
     doc="every static state versus protrusion: clearance, stability, barriers, DMW energy, statics.nc")
 
 

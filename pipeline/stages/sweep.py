@@ -54,12 +54,12 @@ from ..paths import refuse_links
 from ..runner import KEY_ATTR, Inputs, Stage, ensure
 from ..variables import (COORDINATES, ENSEMBLE, HISTORIES, PART_STACK, PART_STACKS, RUN_GRID_DIMS, SCALARS, STEPPING,
                          TIME, coordinate, is_part_stack)
-from ..model import dmw_record, scene_inputs
+from ..model import dmw_record, interface_tables, scene_inputs
 from ..model.inputs import SimulationInputs, Source, for_stage
 from ..model.interface_tables import used_statistics
 from ..model.simulation import DIRECTIONS, GRID_ATTRS, grid_run_values, model_attrs, simulate
 from ..analyses import ensemble_rules as ensemble
-from ..config.heater_power import power_coordinates
+from ..config.heater_power import ACTUATION_FIELDS, power_coordinates
 from ..config.grid import damping_grid, protrusion_grid, roughness_sets, same_point, scene_label
 
 log = logging.getLogger(__name__)
@@ -736,9 +736,14 @@ def _keeps(scene: Any) -> tuple[str, ...]:
 
 STAGE = Stage(
     "sweep", compute, simulates=True, outputs=("sweep.nc", "sweep_histories.nc"),
-    reads=("*", "report.histories_nm"),
-    # (the batch size changes how the work is cut, not the result: parts of another cut are rejected)
-    excludes=("tfc.protrusion_nm", *(e for e in scene_inputs.SIMULATION_EXCLUDES if e != "sweep"), "sweep.batch_size"),
-    files=_files, upstream=scene_inputs.simulation_inputs, order=50, main_job=True, keeps=_keeps,
+    # what a simulation reads, the grid and its histories, the heater's actuation, and what the sweep makes
+    # itself: the interface tables of its other roughness sets, the DMW records of its realisations
+    reads=(*scene_inputs.SIMULATION_FIELDS, "sweep.*", "report.histories_nm", *ACTUATION_FIELDS,
+           *interface_tables.FIELDS, *dmw_record.FIELDS),
+    # (the batch size changes how the work is cut, not the result: parts of another cut are rejected; the
+    # other sets' tables depend on the single protrusion through the deepest protrusion, which the interface
+    # stage's key holds, upstream)
+    unkeyed=("sweep.batch_size", "tfc.protrusion_nm"),
+    files=_files, upstream=scene_inputs.input_stages, order=50, main_job=True, keeps=_keeps,
     doc="protrusion x roughness x damping, fanned out, sweep.nc and sweep_histories.nc")
 

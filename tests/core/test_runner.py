@@ -537,15 +537,22 @@ def test_ctrl_c_prints_one_line(tmp_path):
     assert len(list(parts.glob("batch-*.nc"))) >= 2 and not (tmp_path / runner.LOCK_NAME).exists()
 
 
-def test_excludes_apply_to_a_whole_section_read(paper_scene):
-    """A stage reading a section without some of its keys (the interface stage: ``lubricant`` without
-    the meniscus time and the lubricant shear stress, properties of the dynamics) is keyed without them:
-    before, ``excludes`` acted on ``"*"`` only, so such a stage recomputed for keys it does not read."""
+def test_the_scene_part_is_the_declared_keys(paper_scene, tmp_path):
+    """A stage is keyed by the keys it declares, each by its value (the interface stage: the lubricant's
+    thickness, not its meniscus time, a property of the dynamics); a measured DMW record's key leaves the
+    synthesis keys out."""
+    from pipeline.config.fields import expand
     from pipeline.runner import scene_part
-    part = scene_part(paper_scene, ("lubricant",), ("lubricant.meniscus_time_us",))
-    assert "meniscus_time_us" not in part["lubricant"] and "thickness_nm" in part["lubricant"]
-    assert scene_part(paper_scene.replace(lubricant={"meniscus_time_us": 40.0}), ("lubricant",),
-                      ("lubricant.meniscus_time_us",)) == part
+    reads = runner.registry()["interface"].reads
+    part = scene_part(paper_scene, reads)
+    assert set(part) == set(expand(reads)) and part["lubricant.thickness_nm"] == paper_scene["lubricant"]["thickness_nm"]
+    assert "lubricant.meniscus_time_us" not in part
+    assert scene_part(paper_scene.replace(lubricant={"meniscus_time_us": 40.0}), reads) == part
+    record = tmp_path / "w.csv"
+    record.write_text("time_s,displacement_nm\n" + "".join(f"{i * 2.5e-7},{0.1 * (i % 7)}\n" for i in range(20000)))
+    measured = paper_scene.replace(dmw={"source": str(record)})
+    dmw_reads = runner.registry()["dmw"].reads
+    assert set(scene_part(paper_scene, dmw_reads)) - set(scene_part(measured, dmw_reads)) == set(runner.SYNTHESIS_ONLY)
 
 
 # ------------------------------------------------- stored datasets checked on reuse; files that are not outputs'

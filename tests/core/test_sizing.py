@@ -26,7 +26,7 @@ def test_the_paper_sweep_is_counted_by_hand(paper_scene):
     assert got["DMW record samples"][0] == 8400                  # 2.1 ms x 4 MHz
     assert got["sweep scenes"] == (76, MAX_SCENES)               # 0 to 15 nm in 0.2 nm steps
     assert got["kept history samples"][0] == 2 * 8001            # report.histories_nm = [5, 11]
-    assert sizing.deepest_protrusion_nm(paper_scene) == 15.0 and sizing.table_rows(paper_scene) == 701
+    assert sizing.deepest_studied_protrusion_nm(paper_scene) == 15.0 and sizing.table_rows(paper_scene) == 701
 
 
 def test_each_stage_counts_only_what_it_makes(paper_scene):

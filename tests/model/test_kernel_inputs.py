@@ -52,7 +52,7 @@ def test_the_stand_ins_of_a_scene_type_as_its_models_first_kernel_call(name, tmp
     # each shipped scene's inputs made by the runner (a coarse Reynolds grid for the bulge tables: numbers
     # only), its model, and the arguments its first run hands the compiled kernel, caught there
     scene = load_scene(shipped_scenes()[name], ["solver.bulge_cells_per_a=4", "solver.bulge_cells_per_b=2"])
-    model = runner.simulation_inputs(scene, tmp_path, k=1.0).model(scene)
+    model = runner.current_inputs(scene, tmp_path, k=1.0).model(scene)
     kernel = dyn._integrate
 
     def first_call(*args):

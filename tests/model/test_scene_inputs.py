@@ -31,9 +31,9 @@ def _calibration(k: float, outcome: str = "") -> xr.Dataset:
     ({"scene": {"effects": ["air_bearing", "pitch", "dmw"]}, "roughness": {"afm": [AFM]}}, True,
      ("dmw", "interface")),                                                   # AFM scans: y_s from the tables
 ])
-def test_simulation_inputs_are_the_stages_it_reads(raw, calibration, inputs, repo_root, monkeypatch):
+def test_input_stages_are_the_stages_a_simulation_reads(raw, calibration, inputs, repo_root, monkeypatch):
     monkeypatch.chdir(repo_root)
-    assert si.simulation_inputs(scene_from_dict(raw), calibration=calibration) == inputs
+    assert si.input_stages(scene_from_dict(raw), calibration=calibration) == inputs
 
 
 def test_contact_k_precedence():

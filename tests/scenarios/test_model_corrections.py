@@ -95,7 +95,7 @@ def test_flying_scene_datum_without_interface_tables(paper):
     afm = flying.replace(roughness={"afm": [str(scan)]})
     with pytest.raises(ValueError, match="interface.nc"):
         assembly.build_model(afm, None, None, None)
-    assert "interface" in scene_inputs.simulation_inputs(afm) and "interface" not in scene_inputs.simulation_inputs(flying)
+    assert "interface" in scene_inputs.input_stages(afm) and "interface" not in scene_inputs.input_stages(flying)
 
 
 def test_separation_has_one_home(paper):

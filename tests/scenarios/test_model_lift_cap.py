@@ -72,10 +72,10 @@ def test_bad_values_are_refused(repo_root):
 
 
 def test_the_cap_is_an_input_of_the_simulations(scenes):
-    """The simulations read every key (``reads = ("*",)``): the cap changes their inputs key; the bulge
-    table does not read it (the cap acts on the model's TFC-point law, not on the table)."""
+    """The model reads the cap (:data:`pipeline.model.assembly.MODEL_FIELDS`): it changes the simulations'
+    inputs key; the bulge table does not read it (the cap acts on the model's TFC-point law, not on the table)."""
     stage = runner.registry()["sweep"]
-    parts = [runner.scene_part(scenes[c], stage.reads, stage.excludes) for c in (None, 1.65)]
+    parts = [runner.scene_part(scenes[c], stage.reads) for c in (None, 1.65)]
     assert parts[0] != parts[1]
     bulge = runner.registry()["bulge"]
     assert "air_bearing.lift_cap_gap_nm" not in bulge.reads

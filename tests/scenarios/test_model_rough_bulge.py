@@ -106,7 +106,7 @@ def test_the_rough_table_and_its_stage(repo_root):
     scene = load_scene(repo_root / "configs" / "paper-2009-two-population-identified.toml",
                        ['air_bearing.bulge="rough-reynolds"', "air_bearing.pad_pressure_mpa=2.2",
                         "solver.bulge_cells_per_a=8", "solver.bulge_cells_per_b=4"])
-    assert "bulge" in scene_inputs.simulation_inputs(scene) and "bulge" in runner.main_job(scene)
+    assert "bulge" in scene_inputs.input_stages(scene) and "bulge" in runner.main_job(scene)
     ds = bt.bulge_table(model="rough-reynolds", p_pad=P_PAD, a=A_SEMI, b=B_SEMI, speed=U,
                         gaps=bt.table_gaps(), protrusions=np.array([0.0, 10.0, 10.5]) * NM,
                         grid=reynolds.ReynoldsGrid(cells_per_a=8, cells_per_b=4), roughness=ROUGH)
@@ -154,18 +154,13 @@ def test_the_report_draws_the_bulge_figure_when_the_law_is_tabulated(repo_root, 
 
 def test_the_rough_stage_reads_only_what_it_declares(repo_root, tmp_path):
     """The rough law's table reads the roughness, the disk's share and the lubricant thickness, all declared."""
-    from scene_recording import declared, recording
-
     scene = load_scene(repo_root / "configs" / "paper-2009-bulge.toml",
                        ['air_bearing.bulge="rough-reynolds"', "solver.bulge_cells_per_a=4", "solver.bulge_cells_per_b=2"])
     stage = runner.registry()["bulge"]
-    rec = recording(scene)
-    rec.log = set()
-    stage.compute(rec, runner.Inputs.folder(tmp_path))
-    keys, rec.log = rec.log, None
-    derived = {"tfc.protrusion_nm", "sweep.protrusion_nm"}  # table_stop_nm
-    assert keys - declared(stage, scene) - derived == set()
-    assert {"roughness.sigma_nm", "air_bearing.disk_roughness_share", "lubricant.thickness_nm"} <= keys
+    stage.compute(stage.view(scene), runner.Inputs.folder(tmp_path))  # (an undeclared read raises)
+    assert {"roughness.sigma_nm", "air_bearing.disk_roughness_share", "lubricant.thickness_nm"} <= set(stage.reads)
+    smooth = stage.view(scene.replace(air_bearing={"bulge": "reynolds"}))
+    assert runner.scene_part(scene, stage.reads) != runner.scene_part(smooth.scene, stage.reads)
 
 
 @pytest.mark.slow

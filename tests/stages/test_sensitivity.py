@@ -316,7 +316,7 @@ def test_a_plasticity_index_past_the_hardness_limit_is_refused(write_scene, pape
     from pipeline.config.scene import SceneError
     from pipeline.physics.asperity_statistics import explicit_statistics
     from pipeline.physics.material_bounds import HARDNESS_RATIO_BOUNDS
-    st = explicit_statistics(0.52, 5.0, 13.3)
+    st = explicit_statistics(0.52e-9, 5.0e-6, 13.3 / 1e-12)
     limit = math.sqrt(st["sigma_s"] / st["R"]) / HARDNESS_RATIO_BOUNDS[0]
     text = f"""
 [scene]

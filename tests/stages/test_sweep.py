@@ -448,7 +448,8 @@ def test_each_roughness_set_flies_on_its_own_summit_datum(tmp_path):
                         "sweep.protrusion_nm={start=0.0, stop=2.0, step=1.0}", "report.histories_nm=[]"])
     ds = read_dataset(sweep_stage.run_sweep(scene, tmp_path))
     sets = roughness_sets(scene)
-    y_s = {label: explicit_statistics(t["sigma_nm"], t["summit_radius_um"], t["summit_density_per_um2"])["y_s"] / 1e-9
+    y_s = {label: explicit_statistics(t["sigma_nm"] * 1e-9, t["summit_radius_um"] * 1e-6,
+                                      t["summit_density_per_um2"] / 1e-12)["y_s"] / 1e-9
            for label, t in sets.items()}
     assert len(set(y_s.values())) == 3
     for label in sets:  # (the sets read no tables: their statistics are computed as the interface stage would)
@@ -505,7 +506,7 @@ def test_an_afm_roughness_set_is_described_by_the_statistics_its_interface_used(
         assert float(ds.roughness_sigma.sel(roughness=label)) == sigma
         assert float(ds.roughness_summit_radius.sel(roughness=label)) == R
         assert float(ds.roughness_summit_density.sel(roughness=label)) == eta
-        st = explicit_statistics(sigma, R, eta)
+        st = explicit_statistics(sigma * 1e-9, R * 1e-6, eta / 1e-12)
         # tol: the same formula on the same numbers, through NetCDF float64
         assert float(ds.roughness_plasticity_index.sel(roughness=label)) == pytest.approx(
             E / 1.7e9 * np.sqrt(st["sigma_s"] / st["R"]), rel=1e-12)
@@ -532,7 +533,7 @@ def test_run_numbers_that_depend_on_the_grid_carry_its_dimension(afm_sweep):
     np.testing.assert_allclose(ds.k_sigma.values, 0.5 * ds.roughness_sigma.values, rtol=1e-14)
     # tol: the same number through NetCDF float64
     assert float(ds.summit_offset.sel(roughness="afm-mi1")) == pytest.approx(float(scan.y_s), rel=1e-14)
-    y_s = explicit_statistics(0.8, 5.0, 13.3)["y_s"] / 1e-9
+    y_s = explicit_statistics(0.8e-9, 5.0e-6, 13.3 / 1e-12)["y_s"] / 1e-9
     # tol: the same McCool formula on the same numbers
     assert float(ds.summit_offset.sel(roughness="rough")) == pytest.approx(y_s, rel=1e-12)
     for name in ("front_damper", "rear_damper"):

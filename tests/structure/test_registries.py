@@ -117,7 +117,7 @@ def compute(scene, inputs):
     return xr.Dataset({"flying_height": ((), scene["slider"]["length_mm"], {"units": "mm", "long_name": "x"})})
 
 
-STAGE = Stage("dummy_stage", compute, outputs=("dummy_stage.nc",), reads=("slider",), doc="a dummy stage (test)")
+STAGE = Stage("dummy_stage", compute, outputs=("dummy_stage.nc",), reads=("slider.*",), doc="a dummy stage (test)")
 '''
 
 
