@@ -566,3 +566,19 @@ def strip_unit(key: str) -> tuple[str, str | None]:
         if key.endswith("_" + suffix):
             return key[: -len(suffix) - 1], suffix
     return key, None
+
+
+def scene_key(si_name: str) -> str:
+    """The scene key, as a scene file names it, of a value of the SI view (:func:`pipeline.config.si.to_si`):
+    ``"air_bearing.flying_height"`` -> ``"air_bearing.flying_height_nm"`` (a key without a unit: itself).
+
+    Raises
+    ------
+    KeyError
+        For a name no key of the schema has.
+    """
+    section, _, stem = si_name.partition(".")
+    for key in SCHEMA.get(section, {}):
+        if strip_unit(key)[0] == stem:
+            return f"{section}.{key}"
+    raise KeyError(f"{si_name}: no scene key of that name (with or without a unit suffix)")
