@@ -21,86 +21,13 @@ from ..units import MHZ_IN_KHZ, MS, NS
 from .heater_power import TOUCHDOWN_POWER_KEYS, resolve_touchdown
 from .limits import MAX_INTEGER, MAX_MAGNITUDE, MAX_NESTING, MAX_STEPS, LimitError, check_physical
 from ..physics.friction import FRICTION_LAWS
+from .frozen import FrozenList, freeze, thaw
 from .si import SI_VIEW
 from .schema import FREE_LIMITS, SCHEMA, Key, SceneError, is_folder_name, strip_unit
 
 #: Fewest output samples of a run's steady window (after ``solver.transient_ms``) a scene may ask for:
 #: a regime and an FHM judged on fewer say nothing (the paper scene has 6000).
 MIN_STEADY_SAMPLES = 10
-
-
-class _ReadOnly:
-    """What the read-only containers of a scene share: the section they belong to (named in the error) and
-    the change that raises the ``TypeError`` naming the way to vary a scene, :meth:`Scene.replace`."""
-
-    __slots__ = ()
-    _name: str | None
-
-    def __init__(self, items: Any = (), name: str | None = None) -> None:
-        super().__init__(items)  # type: ignore[call-arg]
-        self._name = name
-
-    def _readonly(self, *args: Any, **kwargs: Any) -> None:
-        sec = self._name or "section"
-        raise TypeError(f"a loaded scene is read-only: scene[{sec!r}] cannot be changed in place; vary it with "
-                        f"scene.replace({sec}={{key: value}}), which returns a new scene validated like --set")
-
-
-class FrozenSection(_ReadOnly, dict):
-    """A read-only ``dict``: a section of a :class:`Scene` (and the table of its sections, and the tables
-    inside a section's lists: ``identify.parameters``, ``sweep.roughness``).
-
-    Reading is a ``dict``'s (same speed, same JSON, ``isinstance(..., dict)``); every change raises a
-    ``TypeError`` that names the way to vary a scene, :meth:`Scene.replace`. ``dict(section)`` is a
-    mutable copy.
-    """
-
-    __slots__ = ("_name",)
-    __setitem__ = __delitem__ = update = pop = popitem = clear = setdefault = __ior__ = _ReadOnly._readonly  # type: ignore
-
-    def __reduce__(self) -> tuple:
-        # (pickled to dask workers and deep-copied: rebuilt whole, never item by item through __setitem__)
-        return (type(self), (dict(self), self._name))
-
-
-class FrozenList(_ReadOnly, list):
-    """A read-only ``list``: a list inside a :class:`Scene` (``scene.effects``, ``air_bearing.frequencies_khz``,
-    the tables of ``identify.parameters``), at any depth.
-
-    Reading is a ``list``'s (same JSON, ``== [...]``, ``isinstance(..., list)``, so every reader and the scene's
-    hash and text are those of a list); every change in place raises the ``TypeError`` of
-    :class:`FrozenSection`. ``list(value)`` is a mutable copy; ``value + [...]`` a new (mutable) list.
-    """
-
-    __slots__ = ("_name",)
-    __setitem__ = __delitem__ = __iadd__ = __imul__ = append = extend = insert = pop = remove = clear = \
-        sort = reverse = _ReadOnly._readonly  # type: ignore
-
-    def __reduce__(self) -> tuple:
-        # (rebuilt whole: a list subclass's default pickling and deepcopy restore the items through extend)
-        return (type(self), (list(self), self._name))
-
-    def __reduce_ex__(self, protocol: Any) -> tuple:
-        return self.__reduce__()
-
-
-def _freeze(value: Any, name: str | None = None) -> Any:
-    """``value`` with every ``dict`` in it (at any depth) a :class:`FrozenSection` and every ``list`` a
-    :class:`FrozenList`: nothing of a scene changes in place."""
-    if isinstance(value, dict):
-        return FrozenSection({k: _freeze(v, k if name is None else name) for k, v in value.items()}, name)
-    if isinstance(value, list):
-        return FrozenList([_freeze(v, name) for v in value], name)
-    return value
-
-
-def _thaw(value: Any) -> Any:
-    """A mutable deep copy of a (frozen) configuration: plain ``dict``s and ``list``s."""
-    if isinstance(value, dict):
-        return {k: _thaw(v) for k, v in value.items()}
-    if isinstance(value, list):
-        return [_thaw(v) for v in value]
-    return copy.deepcopy(value)
 
 
 def check_plain(value: Any, name: str, where: str) -> None:
@@ -140,7 +67,7 @@ def check_plain(value: Any, name: str, where: str) -> None:
 @dataclass(frozen=True)
 class Scene:
     """A validated scene: read-only all the way down (its sections and the tables in their lists are
-    :class:`FrozenSection` s, its lists :class:`FrozenList` s, its attributes cannot be reassigned); vary it
+    :class:`~pipeline.config.frozen.FrozenSection` s, its lists :class:`~pipeline.config.frozen.FrozenList` s, its attributes cannot be reassigned); vary it
     with :meth:`replace`.
 
     Attributes
@@ -158,7 +85,7 @@ class Scene:
     overrides: list[str] = field(default_factory=list)
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "config", _freeze(self.config))
+        object.__setattr__(self, "config", freeze(self.config))
         object.__setattr__(self, "overrides", FrozenList(self.overrides, "overrides"))
 
     @property
@@ -197,7 +124,7 @@ class Scene:
             An unknown section or key, or a value the key does not allow, naming ``replace``, the
             ``section.key``, the value and what was expected.
         """
-        cfg = _thaw(self.config)
+        cfg = thaw(self.config)
         blame: dict[tuple[str, str], str] = {}
         for sec, keys in sections.items():
             if not isinstance(keys, dict):
@@ -208,11 +135,11 @@ class Scene:
                 blame[(sec, key)] = f"scene.replace({sec}={{{key!r}: {shown(value)}}})"
                 # (a base is merged when a file is read, not here; the scene's own value passed back unchanged, as
                 # `{**scene["scene"], ...}` does, changes nothing)
-                if (sec, key) == ("scene", "extends") and _thaw(value) != cfg.get("scene", {}).get("extends"):
+                if (sec, key) == ("scene", "extends") and thaw(value) != cfg.get("scene", {}).get("extends"):
                     raise SceneError(f"{blame[(sec, key)]}: scene.extends cannot be replaced: a base scene is merged "
                                      "when a scene file is read; load the base scene itself (load_scene) and replace "
                                      "the keys that differ, or write `extends` in a scene file")
-            cfg.setdefault(sec, {}).update(_thaw(keys))
+            cfg.setdefault(sec, {}).update(thaw(keys))
         for mw, nm in TOUCHDOWN_POWER_KEYS.items():  # (a touchdown in nm set from mW is set again from mW)
             if cfg["touchdown"].get(mw) is not None and nm not in sections.get("touchdown", {}):
                 cfg["touchdown"].pop(nm, None)
