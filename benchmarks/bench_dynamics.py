@@ -16,7 +16,13 @@ Rows (targets from the task brief):
    both measured in this run; target speed-up >= 100 (the project row's ``target_s`` is the naive
    median / 100);
 5. the paper sweep (76 protrusions, one roughness, one damping) sequentially in one process: the
-   project over all 76, the naive over a subset, scaled to 76 (said in the row name).
+   project over all 76, the naive over a subset, scaled to 76 (said in the row name);
+6. the right-hand side's cost per call along the kernel's own trajectory (flying 5 nm, sliding 11 nm;
+   target <= 50 ns): the kernel's states at as many evenly spread times as it evaluated its right-hand
+   side, with its contact mode there, evaluated by the step's code (the disk looked up, then
+   :func:`pipeline.model.forces.rhs_at` inlined, :func:`rhs_per_call`), beside the out-of-line
+   :func:`pipeline.model.forces.rhs_slots` called at the same points (what each stage paid before the
+   step inlined its right-hand side) and the kernel's own time per evaluation; CPU time of this thread.
 """
 
 from __future__ import annotations
@@ -32,9 +38,14 @@ from pathlib import Path
 
 import numpy as np
 
+from numba import njit
+
 from benchmarks.common import record, timeit
 from benchmarks.naive import simulate_naive
-from pipeline.model import assembly, outcomes, running
+from pipeline.model import assembly, dynamics as dyn, outcomes, running
+from pipeline.model.forces import rhs_at, rhs_slots
+from pipeline.model.piecewise import disk3
+from pipeline.model.state import MENISCUS, RHS_CALLS, THETA, THETA_RATE, Z, Z_RATE
 from pipeline.config.scene import load_scene
 from pipeline.stages.simulate import model_inputs
 from pipeline.config.grid import protrusion_grid
@@ -82,6 +93,73 @@ def _fresh_process(folder: Path, repeat: int = 3, exit_: str = "fast-exit") -> t
     return times, mid
 
 
+@njit(nogil=True, error_model="numpy")
+def _inlined(T, Y, C, p, dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power, meniscus):
+    """The step's right-hand side (the disk at the time, then :func:`pipeline.model.forces.rhs_at` inlined) at
+    the times ``T`` [s], states ``Y`` and modes ``C``; returns a sum of the results (kept: nothing is pruned)."""
+    acc = 0.0
+    for j in range(T.shape[0]):
+        wc, vc, wf, vf, wr, vr = disk3(p, dmw, T[j])
+        q = 0.0
+        if meniscus is not None:
+            q = Y[j, MENISCUS]
+        a_z, a_theta, a_vz, a_vtheta, dq = rhs_at(p, C[j], Y[j, Z], Y[j, THETA], Y[j, Z_RATE], Y[j, THETA_RATE], q,
+                                                  wc, vc, wf, vf, wr, vr, contact, adhesion, friction, tfc, pitch,
+                                                  rear_law, gap_power, meniscus)
+        acc += a_z + a_theta + a_vz + a_vtheta + dq
+    return acc
+
+
+@njit(nogil=True, error_model="numpy")
+def _out_of_line(T, Y, C, p, out, dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power, meniscus):
+    """:func:`pipeline.model.forces.rhs_slots` (compiled on its own, called) at the same points as
+    :func:`_inlined`; returns a sum of the results."""
+    acc = 0.0
+    for j in range(T.shape[0]):
+        rhs_slots(T[j], Y[j], p, C[j], out, dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power,
+                  meniscus)
+        for i in range(out.shape[0]):
+            acc += out[i]
+    return acc
+
+
+def _cpu_per_point(fn, n: int, repeat: int = 21) -> list[float]:
+    """CPU times of this thread [s] of ``fn()`` over ``n`` points, per point (after one warm-up call)."""
+    fn()
+    times = []
+    for _ in range(repeat):
+        t0 = time.thread_time()
+        fn()
+        times.append((time.thread_time() - t0) / n)
+    return times
+
+
+def rhs_per_call(model: assembly.Model, protrusion: float) -> dict:
+    """The right-hand side's cost per call [s] along the kernel's trajectory at ``protrusion`` [m] (row 6):
+    ``inlined`` (the step's), ``out_of_line`` (:func:`pipeline.model.forces.rhs_slots` called) and ``kernel``
+    (the kernel's time over its evaluations), each a list of per-point CPU times; ``evaluations``, and
+    ``contact_fraction`` of the points."""
+    seen = []
+    real = dyn.integrate
+    dyn.integrate = lambda *a: (seen.append(a), real(*a))[1]
+    try:
+        run_ = running.run_model(model, protrusion)
+    finally:
+        dyn.integrate = real
+    y0, grid, p, tab, var, solver = seen[-1]
+    n = int(run_.info[RHS_CALLS])
+    T = np.linspace(0.0, grid.t_end, n)
+    Y, C, _, _ = dyn.integrate(y0, dyn.Grid(grid.t_end, T), p, tab, var, solver)
+    Y = np.ascontiguousarray(Y)
+    slots = (*tab, *var._replace(rear_law=dyn._slots(tab, var)[6]))
+    out = np.empty(Y.shape[1])
+    args = dyn.kernel_arguments(y0, grid, p, tab, var, solver)
+    return {"inlined": _cpu_per_point(lambda: _inlined(T, Y, C, p, *slots), n),
+            "out_of_line": _cpu_per_point(lambda: _out_of_line(T, Y, C, p, out, *slots), n),
+            "kernel": _cpu_per_point(lambda: dyn._integrate(*args), n),
+            "evaluations": n, "contact_fraction": float(np.mean(C))}
+
+
 def run(results: list[dict]) -> None:
     """Append the dynamics benchmark rows to ``results``."""
     scene = load_scene(CONFIG, [f"contact.k={K}"])
@@ -102,6 +180,16 @@ def run(results: list[dict]) -> None:
             proj[prot] = record(results, f"dynamics: paper scene 2 ms, {label} {prot:g} nm (run + summarize)",
                                 timeit(project(prot), repeat=21), target_s=0.05, steps=int(run_.info[1]),
                                 rejected=int(run_.info[2]), rhs_evaluations=int(run_.info[4]))
+
+        # (6) the right-hand side per call along the kernel's own trajectory
+        for label, prot in (("flying", 5.0), ("sliding", 11.0)):
+            cost = rhs_per_call(model, prot * 1e-9)
+            med = {k: statistics.median(cost[k]) for k in ("inlined", "out_of_line", "kernel")}
+            record(results, f"dynamics: right-hand side per call along the kernel's trajectory, {label} {prot:g} nm "
+                   "(the step's, inlined; CPU time per call; target <= 50 ns)", cost["inlined"], target_s=50e-9,
+                   ns_per_call=med["inlined"] * 1e9, out_of_line_ns_per_call=med["out_of_line"] * 1e9,
+                   kernel_ns_per_evaluation=med["kernel"] * 1e9, rhs_evaluations=cost["evaluations"],
+                   contact_fraction=cost["contact_fraction"])
 
         # (2) import + first call in a fresh process (numba cache warm)
         times, inner = _fresh_process(folder)

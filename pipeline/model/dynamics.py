@@ -391,9 +391,9 @@ def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, cont
     in_contact = False
     if has_contact:
         in_contact = d0 < p.k_sigma
-    rhs_slots(t, y, p, in_contact, k1, dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power,
-              meniscus)
-    info[RHS_CALLS] += 1
+    # k1 is evaluated by the next step (the first, and the first after a switch); np.bool_: a run-time bool in
+    # every assignment (numba types a literal True or False apart, and would compile the step for each)
+    fresh = np.bool_(True)
     if p.t_win <= 0.0:  # the window starts at t = 0: the initial d is one of its values (steps add their ends)
         ext[0] = d0
         ext[1] = d0
@@ -422,9 +422,7 @@ def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, cont
                 if t >= p.t_win:
                     info[WINDOW_SWITCHES] += 1
                 t_hold = t + p.dwell
-                rhs_slots(t, y, p, in_contact, k1, dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power,
-                          meniscus)
-                info[RHS_CALLS] += 1
+                fresh = np.bool_(True)
         h = min(h, h_max, h_stiff)
         if t + 1.01 * h >= t_end:  # land on t_end exactly, never leave a sliver (Hairer's DOPRI5 rule)
             h = t_end - t
@@ -433,9 +431,9 @@ def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, cont
         if h < 1e-12 * max(t, NS) or h < 1e-18:  # (h = t_end - t is never a sliver, see above)
             info[STATUS] = STEP_UNDERFLOW
             return Y, C, info, ext
-        step(t, y, k1, h, p, in_contact, ynew, k7, err, tmp, k2, k3, k4, k5, k6,
-             dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power, meniscus)
-        info[RHS_CALLS] += 6
+        info[RHS_CALLS] += step(t, y, k1, h, p, in_contact, fresh, ynew, k7, err, tmp, k2, k3, k4, k5, k6,
+                                dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power, meniscus)
+        fresh = np.bool_(False)
         e = error_norm(y, ynew, err, atol, rtol, ns)
         if not np.isfinite(e):
             h *= 0.1
@@ -485,9 +483,8 @@ def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, cont
             if hi >= 1.0:
                 break  # the switch is at the end of the step
             h_acc = hi * h_acc
-            step(t, y, k1, h_acc, p, in_contact, ev_y, ev_f, err, tmp, k2, k3, k4, k5, k6,
-                 dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power, meniscus)
-            info[RHS_CALLS] += 6
+            info[RHS_CALLS] += step(t, y, k1, h_acc, p, in_contact, fresh, ev_y, ev_f, err, tmp, k2, k3, k4, k5, k6,
+                                    dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power, meniscus)
             for i in range(ns):
                 ynew[i] = ev_y[i]
                 k7[i] = ev_f[i]
@@ -512,9 +509,7 @@ def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, cont
             if t >= p.t_win:  # (the mode changes at the step's end: counted in the window from t_win on)
                 info[WINDOW_SWITCHES] += 1
             t_hold = t + p.dwell if p.dwell > 0.0 else -1.0
-            rhs_slots(t, y, p, in_contact, k1, dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power,
-                      meniscus)
-            info[RHS_CALLS] += 1
+            fresh = np.bool_(True)
         else:
             for i in range(ns):
                 k1[i] = k7[i]

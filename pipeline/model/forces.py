@@ -311,27 +311,45 @@ def _accelerations(p, pitch, vz, vtheta, F_f, F_r, F_i, Q):
     return vz, vtheta, (F_f + F_r + F_i) / p.m, (p.l_f * F_f - p.l_r * F_r - p.l_c * F_i - p.friction_arm * Q) / p.I
 
 
-@_jit_borrowing
-def rhs_slots(t, y, p, in_contact, out, dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power,
-              meniscus):
-    """Write ``dy/dt`` into ``out`` at the time ``t`` [s] and state ``y`` in the contact mode ``in_contact``
-    (the equations of the module docstring); the slots one by one, in the order of
-    :data:`pipeline.model.dynamics.SLOTS`. What the stepper calls (the Python entry:
-    :func:`pipeline.model.dynamics.rhs`). Compiled without reference counts
-    (:data:`pipeline.model.compiled.BORROWING`): it allocates nothing."""
-    z, theta, vz, vtheta = y[Z], y[THETA], y[Z_RATE], y[THETA_RATE]
-    wc, vc, wf, vf, wr, vr = disk3(p, dmw, t)
+@_inline
+def rhs_at(p, in_contact, z, theta, vz, vtheta, q, wc, vc, wf, vf, wr, vr, contact, adhesion, friction, tfc, pitch,
+           rear_law, gap_power, meniscus):
+    """``dy/dt`` at the state ``(z, theta, vz, vtheta)`` [m, rad, m/s, rad/s] (and the meniscus state ``q``
+    [Pa], ignored without one) in the contact mode ``in_contact``, with the disk under the TFC point, the front
+    and the rear pad at ``wc, wf, wr`` [m] moving at ``vc, vf, vr`` [m/s] (:func:`pipeline.model.piecewise.disk3`
+    at the time): the equations of the module docstring, as five numbers (the last, ``dq/dt`` [Pa/s], 0
+    without the meniscus state).
+
+    The disk's position depends on the time alone, not on the state: the step looks it up for all its stages
+    before the first (:func:`pipeline.model.stepper.step`), and this, inlined into the step's loop over its
+    stages, is what each stage evaluates (:func:`rhs_slots` is the same arithmetic from arrays)."""
     lf = p.l_f
     F_f = -p.k_f * (z + lf * theta - wf) - p.c_f * (vz + lf * vtheta - vf)
     F_r = _rear_force(p, rear_law, z, theta, vz, vtheta, wr, vr)
     F_i = 0.0
     if gap_power is not None or tfc is not None:
         F_i = tfc_air_force(p, gap_power, tfc, gap_at(p, z, theta, wc))[0]
+    F_i, Q, dq = _interface_force(p, contact, adhesion, friction, meniscus, F_i, z, theta, vz, vtheta, q, wc, vc,
+                                  in_contact)
+    a_z, a_theta, a_vz, a_vtheta = _accelerations(p, pitch, vz, vtheta, F_f, F_r, F_i, Q)
+    return a_z, a_theta, a_vz, a_vtheta, dq
+
+
+@_jit_borrowing
+def rhs_slots(t, y, p, in_contact, out, dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power,
+              meniscus):
+    """Write ``dy/dt`` into ``out`` at the time ``t`` [s] and state ``y`` in the contact mode ``in_contact``
+    (the equations of the module docstring, :func:`rhs_at`); the slots one by one, in the order of
+    :data:`pipeline.model.dynamics.SLOTS`. What the kernel's loop and the static solver call (the Python entry:
+    :func:`pipeline.model.dynamics.rhs`); the step evaluates :func:`rhs_at` inlined. Compiled without
+    reference counts (:data:`pipeline.model.compiled.BORROWING`): it allocates nothing."""
+    z, theta, vz, vtheta = y[Z], y[THETA], y[Z_RATE], y[THETA_RATE]
+    wc, vc, wf, vf, wr, vr = disk3(p, dmw, t)
     q = 0.0
     if meniscus is not None:
         q = y[MENISCUS]
-    F_i, Q, dq = _interface_force(p, contact, adhesion, friction, meniscus, F_i, z, theta, vz, vtheta, q, wc, vc,
-                                  in_contact)
-    out[Z], out[THETA], out[Z_RATE], out[THETA_RATE] = _accelerations(p, pitch, vz, vtheta, F_f, F_r, F_i, Q)
+    out[Z], out[THETA], out[Z_RATE], out[THETA_RATE], dq = rhs_at(
+        p, in_contact, z, theta, vz, vtheta, q, wc, vc, wf, vf, wr, vr, contact, adhesion, friction, tfc, pitch,
+        rear_law, gap_power, meniscus)
     if meniscus is not None:
         out[MENISCUS] = dq

@@ -28,8 +28,9 @@ from __future__ import annotations
 import numpy as np
 
 from .compiled import BORROWING, kernel_jit
-from .forces import interface_stiffness, rhs_slots, separation, tfc_air_force
-from .state import N_STATE, THETA, Z, state_size
+from .forces import interface_stiffness, rhs_at, separation, tfc_air_force
+from .piecewise import disk3
+from .state import MENISCUS, N_STATE, THETA, THETA_RATE, Z, Z_RATE, state_size
 
 _jit = kernel_jit(__name__)
 _inline = kernel_jit(__name__, inline="always")
@@ -46,40 +47,78 @@ E1, E3, E4, E5, E6, E7 = (71 / 57600, -71 / 16695, 71 / 1920, -17253 / 339200, 2
 
 
 @_jit_borrowing
-def step(t, y, k1, h, p, in_contact, ynew, k7, err, tmp, k2, k3, k4, k5, k6,
+def step(t, y, k1, h, p, in_contact, fresh, ynew, k7, err, tmp, k2, k3, k4, k5, k6,
          dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power, meniscus):
     """One Dormand-Prince step: ``ynew``, its derivative ``k7`` and the error estimate ``err``
-    (``tmp``, ``k2``...``k6``: work arrays, passed one by one: an array taken out of a tuple or a
-    2-D array costs reference-count updates per use, docs/kernel.md); the slots as in
-    :data:`pipeline.model.dynamics.SLOTS`. Compiled without reference counts, as the right-hand side it calls
-    (:data:`pipeline.model.compiled.BORROWING`): it allocates nothing."""
+    (``tmp``, ``k2``...``k6``: work arrays, passed one by one); the slots as in
+    :data:`pipeline.model.dynamics.SLOTS`. With ``fresh``, the step first evaluates ``k1``, the derivative at
+    ``(t, y)`` (the first step, and the first after a contact switch; otherwise ``k1`` is the last step's
+    ``k7``: FSAL). Returns how many times it evaluated the right-hand side (6, or 7 with ``fresh``).
+    Compiled without reference counts (:data:`pipeline.model.compiled.BORROWING`): it allocates nothing.
+
+    The right-hand side (:func:`pipeline.model.forces.rhs_at`) is inlined once, in a loop over the six
+    stages (one copy: its compile), and the disk under the three points is looked up for the step's five
+    stage times before the first stage (:func:`pipeline.model.piecewise.disk3`; it depends on the time alone):
+    the DMW spline's index, division and coefficients leave the chain of the stages, each of which needs the
+    one before, and no stage pays a call with the slots' ~60 words of arguments (docs/kernel.md, section "The
+    right-hand side in the step"). The same operations in the same order as
+    :func:`pipeline.model.forces.rhs_slots` at each stage: results bit for bit those of six calls of it.
+    """
     ns = state_size(meniscus)
-    for i in range(ns):
-        tmp[i] = y[i] + h * A21 * k1[i]
-    rhs_slots(t + h / 5, tmp, p, in_contact, k2,
-              dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power, meniscus)
-    for i in range(ns):
-        tmp[i] = y[i] + h * (A31 * k1[i] + A32 * k2[i])
-    rhs_slots(t + 3 * h / 10, tmp, p, in_contact, k3,
-              dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power, meniscus)
-    for i in range(ns):
-        tmp[i] = y[i] + h * (A41 * k1[i] + A42 * k2[i] + A43 * k3[i])
-    rhs_slots(t + 4 * h / 5, tmp, p, in_contact, k4,
-              dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power, meniscus)
-    for i in range(ns):
-        tmp[i] = y[i] + h * (A51 * k1[i] + A52 * k2[i] + A53 * k3[i] + A54 * k4[i])
-    rhs_slots(t + 8 * h / 9, tmp, p, in_contact, k5,
-              dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power, meniscus)
-    for i in range(ns):
-        tmp[i] = y[i] + h * (A61 * k1[i] + A62 * k2[i] + A63 * k3[i] + A64 * k4[i] + A65 * k5[i])
-    rhs_slots(t + h, tmp, p, in_contact, k6,
-              dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power, meniscus)
-    for i in range(ns):
-        ynew[i] = y[i] + h * (B1 * k1[i] + B3 * k3[i] + B4 * k4[i] + B5 * k5[i] + B6 * k6[i])
-    rhs_slots(t + h, ynew, p, in_contact, k7,
-              dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power, meniscus)
+    # the disk at the stages' times t + c_i h (c = 0 when fresh, 1/5, 3/10, 4/5, 8/9, 1, 1)
+    w1 = disk3(p, dmw, t) if fresh else (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    w2 = disk3(p, dmw, t + h / 5)
+    w3 = disk3(p, dmw, t + 3 * h / 10)
+    w4 = disk3(p, dmw, t + 4 * h / 5)
+    w5 = disk3(p, dmw, t + 8 * h / 9)
+    w6 = disk3(p, dmw, t + h)
+    for stage in range(0 if fresh else 1, 7):
+        src = tmp
+        dst = k7
+        w = w6
+        if stage == 0:
+            src = y
+            dst = k1
+            w = w1
+        elif stage == 1:
+            for i in range(ns):
+                tmp[i] = y[i] + h * A21 * k1[i]
+            dst = k2
+            w = w2
+        elif stage == 2:
+            for i in range(ns):
+                tmp[i] = y[i] + h * (A31 * k1[i] + A32 * k2[i])
+            dst = k3
+            w = w3
+        elif stage == 3:
+            for i in range(ns):
+                tmp[i] = y[i] + h * (A41 * k1[i] + A42 * k2[i] + A43 * k3[i])
+            dst = k4
+            w = w4
+        elif stage == 4:
+            for i in range(ns):
+                tmp[i] = y[i] + h * (A51 * k1[i] + A52 * k2[i] + A53 * k3[i] + A54 * k4[i])
+            dst = k5
+            w = w5
+        elif stage == 5:
+            for i in range(ns):
+                tmp[i] = y[i] + h * (A61 * k1[i] + A62 * k2[i] + A63 * k3[i] + A64 * k4[i] + A65 * k5[i])
+            dst = k6
+        else:
+            for i in range(ns):
+                ynew[i] = y[i] + h * (B1 * k1[i] + B3 * k3[i] + B4 * k4[i] + B5 * k5[i] + B6 * k6[i])
+            src = ynew
+        q = 0.0
+        if meniscus is not None:
+            q = src[MENISCUS]
+        dst[Z], dst[THETA], dst[Z_RATE], dst[THETA_RATE], dq = rhs_at(
+            p, in_contact, src[Z], src[THETA], src[Z_RATE], src[THETA_RATE], q, w[0], w[1], w[2], w[3], w[4], w[5],
+            contact, adhesion, friction, tfc, pitch, rear_law, gap_power, meniscus)
+        if meniscus is not None:
+            dst[MENISCUS] = dq
     for i in range(ns):
         err[i] = h * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i] + E7 * k7[i])
+    return 7 if fresh else 6
 
 
 @_inline

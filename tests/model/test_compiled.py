@@ -190,20 +190,20 @@ def test_the_main_scene_compiles_one_signature_per_kernel_entry_point(tmp_path):
 def test_the_main_scene_compiles_each_kernel_function_once(tmp_path):
     # an empty cache, everything compiled in this process (no background compile): the kernel, its separately
     # compiled helpers (the step, the switch's bisection, the extrema across DMW knots, the step's cap from the
-    # interface stiffness, the separation) and the static solver once each, the right-hand side twice: the
-    # kernel's slots and the static solver's (no DMW, no meniscus state; docs/kernel.md, section "Compile time")
+    # interface stiffness, the separation), the static solver and its right-hand side once each (no DMW, no
+    # meniscus state; the kernel's step inlines its own: docs/kernel.md, section "The right-hand side in the step")
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "numba"), HDI_COMPILE_AHEAD="0")
     out = subprocess.run([sys.executable, "-c", PLAN, str(tmp_path / "results")], cwd=ROOT, capture_output=True,
                          text=True, timeout=900, env=env)
     assert out.returncode == 0, out.stderr[-2000:]
     plan = json.loads(out.stdout.strip().splitlines()[-1])
     assert plan["compiles"] == {"_integrate": 1, "step": 1, "switch_point": 1, "knot_extrema": 1, "stiffness_cap": 1,
-                                "separation": 1, "rhs_slots": 2, "_newton": 1}
+                                "separation": 1, "rhs_slots": 1, "_newton": 1}
     # the kernel's compile asked its leaf callees for exactly the signatures a process waiting for the kernel's
     # background compile compiles them for first (pipeline.model.dynamics.leaf_calls; a wrong one would be
     # compiled for nothing, and the background compile would compile the right one itself)
     assert plan["leaves_are_called"] == {"stiffness_cap": True, "knot_extrema": True}
-    # the step, the right-hand side (both signatures; inside the step too), the step's cap and the separation
+    # the step (with the right-hand side inlined), the static solver's right-hand side, the step's cap and the separation
     # without reference counts (pipeline.model.compiled.BORROWING; 15, 4 and 2 increments before, docs/kernel.md);
     # the kernel's own 8 are its allocations and returns, as many as with the separation inlined (commit 87f72a2):
     # calling it from the loop added none

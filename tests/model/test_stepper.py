@@ -1,14 +1,16 @@
 """The integrator's compiled helpers (pipeline.model.stepper): the cubic Hermite interpolant of a step
 (exact for cubics), the Hermite coefficients of the separation over a step and their interior extrema in
-closed form (the roots of the derivative in (0, 1)), and the scaled RMS error norm of the embedded error
-(docs/model.md, section "Integrator")."""
+closed form (the roots of the derivative in (0, 1)), the scaled RMS error norm of the embedded error, and one
+step against the Dormand-Prince sums of the right-hand side called on its own (docs/model.md, section
+"Integrator")."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from pipeline.model import stepper
+from pipeline.model import dynamics as dyn, kernel_inputs, running, stepper
+from slider_scenes import ALL, NM, build, make_scene
 
 
 def _cubic(t):
@@ -66,3 +68,47 @@ def test_error_norm_is_the_scaled_rms():
     # tol: the same rms formula, a few roundings apart
     assert stepper.error_norm(y, ynew, err, atol, rtol, 2) == pytest.approx(expected, rel=1e-14)
     assert stepper.error_norm(y, ynew, np.zeros(3), atol, rtol, 3) == 0.0
+
+
+def _dormand_prince(f, t, y, k1, h):
+    """One Dormand-Prince 5(4) step from the right-hand side ``f(t, y)``, in numpy, the tableau's sums in the
+    order the step writes them: ``ynew``, ``k7``, ``err``."""
+    s = stepper
+    k2 = f(t + h / 5, y + h * s.A21 * k1)
+    k3 = f(t + 3 * h / 10, y + h * (s.A31 * k1 + s.A32 * k2))
+    k4 = f(t + 4 * h / 5, y + h * (s.A41 * k1 + s.A42 * k2 + s.A43 * k3))
+    k5 = f(t + 8 * h / 9, y + h * (s.A51 * k1 + s.A52 * k2 + s.A53 * k3 + s.A54 * k4))
+    k6 = f(t + h, y + h * (s.A61 * k1 + s.A62 * k2 + s.A63 * k3 + s.A64 * k4 + s.A65 * k5))
+    ynew = y + h * (s.B1 * k1 + s.B3 * k3 + s.B4 * k4 + s.B5 * k5 + s.B6 * k6)
+    k7 = f(t + h, ynew)
+    return ynew, k7, h * (s.E1 * k1 + s.E3 * k3 + s.E4 * k4 + s.E5 * k5 + s.E6 * k6 + s.E7 * k7)
+
+
+@pytest.mark.parametrize("in_contact", [False, True])
+def test_a_step_makes_the_right_hand_sides_operations_at_each_stage(in_contact):
+    # the step's right-hand side, inlined in its loop over the stages with the disk looked up before the first
+    # stage, against the Python entry's (dynamics.rhs: forces.rhs_slots, compiled on its own) in the tableau's
+    # sums: the same operations in the same order, so equal bit for bit (numba compiles without fastmath), in
+    # and out of contact, with k1 given (FSAL) and evaluated by the step (fresh)
+    model = build(make_scene(ALL, dmw={"rms_nm": 0.163}))
+    p, tab, var = kernel_inputs.run_parameters(model, 11 * NM)
+    slots = (*tab, *var._replace(rear_law=dyn._slots(tab, var)[6]))
+
+    def f(t, y):
+        out = np.empty(y.size)
+        dyn.rhs(t, y, p, tab, var, in_contact, out)
+        return out
+
+    y = running.start(model, 11 * NM)[0] + np.array([0.3, -2e-5, 1e-4, 0.2]) * NM
+    t, h = 3.7e-4, 4.3e-7  # (a step across a DMW knot: the disk of its stages on two pieces)
+    ynew, k7, err, tmp, k2, k3, k4, k5, k6 = (np.empty(4) for _ in range(9))
+    for fresh in (False, True):
+        k1 = f(t, y) if not fresh else np.full(4, np.nan)
+        n = stepper.step(t, y, k1, h, p, in_contact, np.bool_(fresh), ynew, k7, err, tmp, k2, k3, k4, k5, k6,
+                         *slots)
+        assert n == (7 if fresh else 6)
+        np.testing.assert_array_equal(k1, f(t, y))
+        want = _dormand_prince(f, t, y, k1, h)
+        for got, expected in zip((ynew, k7, err), want):
+            np.testing.assert_array_equal(got, expected)
+    assert np.all(err != 0.0) and not np.array_equal(k7, k1)  # (a step that moved the state)
