@@ -110,7 +110,7 @@ def batch_model(scene: Any, inputs: SimulationInputs, damping: float) -> assembl
     return model
 
 
-def run_batch(scene: Any, batch: Batch, inputs: SimulationInputs, part_path: str, key: str,
+def run_batch(scene: Any, batch: Batch, inputs: SimulationInputs, path: str, key: str,
               history_nm: tuple[float, ...]) -> tuple[str, xr.Dataset]:
     """Run one batch and write its part file (executed on a worker). Returns the part's path and dataset.
 
@@ -119,7 +119,8 @@ def run_batch(scene: Any, batch: Batch, inputs: SimulationInputs, part_path: str
 
     ``scene``: the sweep's scene with the batch's roughness set; ``inputs``: its set's interface tables,
     the batch's DMW record, the bulge table and k (by file and key: read on the worker, once per process);
-    ``history_nm``: protrusions [nm] whose time histories the part keeps.
+    ``path``: the part file (:func:`pipeline.model.sweep_parts.part_path`); ``history_nm``: protrusions [nm]
+    whose time histories the part keeps.
     """
     model = batch_model(scene, inputs, batch.damping)
     ds = simulate(model, batch.protrusions, histories=history_nm, protocol=scene["sweep"]["protocol"])
@@ -127,8 +128,8 @@ def run_batch(scene: Any, batch: Batch, inputs: SimulationInputs, part_path: str
                      "batch": batch.index, "realisation": batch.realisation})
     # (uncompressed: a part is read back once, if ever, and its zlib ran under the process's NetCDF lock,
     # where the other worker's part waited for it; docs/performance.md, section "The head of a command")
-    write_dataset(pack_part(ds), part_path, scene, stage="sweep-part", compress=False)
-    return part_path, ds
+    write_dataset(pack_part(ds), path, scene, stage="sweep-part", compress=False)
+    return path, ds
 
 def _progress(total: int, initial: int) -> Progress:
     """The batches counted (:class:`pipeline.progress.Progress`: a bar on a terminal, periodic lines in a
