@@ -462,7 +462,7 @@ STATICS = _group(
     V("effective_mass_tfc", "kg", "effective mass at TFC", description="effective mass of the slider at the TFC point"),
 )
 
-#: A sweep part file's stacked variables (:func:`pipeline.stages.sweep.pack_part`): ``stack__<dims>`` holds the
+#: A sweep part file's stacked variables (:func:`pipeline.model.sweep_parts.pack_part`): ``stack__<dims>`` holds the
 #: part's variables of dimensions ``<dims>`` along ``stack__<dims>_variable`` (their names), with their units
 #: in ``stack__<dims>_units``; :func:`declared` reads ``stack__...`` names as these three.
 PART_STACK = "stack"

@@ -30,6 +30,7 @@ from ..physics.asperity_statistics import (composite_modulus, explicit_statistic
                                   plasticity_index_gw, plasticity_index_ke)
 from ..config.grid import TOL_NM, label
 from ..config.fields import fields
+from ..io import file_hash
 from ..units import MPA, NM, UM
 from ..variables import INTERFACE
 from . import roughness_statistics as rough
@@ -107,6 +108,19 @@ def used_statistics(scene: Any, interface: xr.Dataset | None = None) -> dict[str
         out.update({key: float(r[key]) for key in ("sigma_nm", "summit_radius_um", "summit_density_per_um2")})
     out["source"] = str(interface.attrs.get("roughness_source", ""))
     return out
+
+
+def roughness_record(table: dict[str, Any], statistics: dict[str, Any]) -> dict[str, Any]:
+    """A roughness set as ``sweep.nc``'s attribute ``roughness_sets`` records it: its ``[roughness]`` table with
+    the statistics its interface model used (:func:`used_statistics`) in place of the keys (an AFM set's ``sigma_nm``, ... are the scans', not the
+    scene's unused defaults), the plasticity index, the summit offset ``y_s_nm``, where they came from
+    (``statistics_source``) and, for an AFM set, each scan's SHA-256 (``afm_sha256``: path -> hex digest)."""
+    record = dict(table)
+    record.update({key: value for key, value in statistics.items() if key != "source"})
+    record["statistics_source"] = statistics.get("source", "")
+    if table.get("afm"):
+        record["afm_sha256"] = {str(f): file_hash(f) for f in table["afm"]}
+    return record
 
 
 def interface_parameters(scene: Any, stats: dict[str, float]) -> isbl.Interface:

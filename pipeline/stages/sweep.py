@@ -6,14 +6,13 @@ record and the interface tables reach the workers by file path (``dmw.nc``, ``in
 ``sweep.parts/interface-<label>/interface.nc``, and ``bulge.nc`` with the tabulated bulge bearing), not
 inside the task graph. The parts are assembled into ``sweep.nc`` (dims ``protrusion``, ``roughness``,
 ``damping``) and ``sweep_histories.nc`` (time histories of the protrusions in ``histories_nm``) by an
-:class:`Assembler`: the parts computed by this call from memory as each batch returns its dataset with
-its path (while the other batches run), the parts of an earlier run from their files at the end;
-``sweep_histories.nc`` is handed to the runner once the batches that keep histories are in
+:class:`pipeline.analyses.sweep_assembly.Assembler`: the parts computed by this call from memory as each batch
+returns its dataset with its path (while the other batches run), the parts of an earlier run from their files at
+the end; ``sweep_histories.nc`` is handed to the runner once the batches that keep histories are in
 (:func:`history_batches`) and a worker has no batch left to start (:meth:`pipeline.runner.Inputs.write_early`),
-so that its write fills that worker's idle end of the fan-out instead of ending the command. A part
-file holds its batch's variables stacked by dimensions (:func:`pack_part`: two or three NetCDF variables
-instead of ~35, each of which cost ~1 ms to write under the process's NetCDF lock) and is read back as the
-batch's dataset itself (:func:`read_part`).
+so that its write fills that worker's idle end of the fan-out instead of ending the command. The part files'
+format and the rule that keeps one are :mod:`pipeline.model.sweep_parts` (a batch's variables stacked by
+dimensions, read back as the batch's dataset itself).
 
 Resuming: a part is kept when it carries the sweep's inputs key (:mod:`pipeline.runner`: the scene,
 the bytes of every AFM scan of every roughness set, the DMW and calibration datasets), its own batch
@@ -22,7 +21,7 @@ sweep (Ctrl-C, kill, a lost worker) picks up where it stopped and gives a datase
 uninterrupted run (every batch is a deterministic function of its inputs; no timings or folder paths
 are stored in the datasets: the batch-phase wall time goes to the run log, ``.hdi/runs.jsonl``). A part
 copied to another batch's name, made for other inputs, or damaged since it was written (its values differ from
-their checksums, :func:`pipeline.io.stored_problem`) is recomputed. The interface tables of
+their checksums, :func:`pipeline.model.sweep_parts.part_problem`) is recomputed. The interface tables of
 the other roughness sets are kept by the runner under their own inputs keys (:func:`table_jobs`).
 
 Execution: :func:`pipeline.fanout.run_tasks` (by default a pool of one thread per core in this
@@ -36,10 +35,9 @@ from __future__ import annotations
 
 import contextlib
 import functools
-import json
 import logging
 import threading
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from pathlib import Path
 from typing import Any, Callable, Iterable
 
@@ -49,37 +47,20 @@ import xarray as xr
 from ..model import assembly
 from ..fanout import LOCAL, local_cluster, local_workers, run_tasks
 from ..progress import Progress
-from ..io import file_hash, read_attrs, read_dataset, stored_problem, write_dataset
+from ..io import write_dataset
 from ..paths import refuse_links
 from ..runner import KEY_ATTR, Inputs, Stage, ensure
-from ..variables import (COORDINATES, ENSEMBLE, HISTORIES, PART_STACK, PART_STACKS, RUN_GRID_DIMS, SCALARS, STEPPING,
-                         TIME, coordinate, is_part_stack)
+from ..variables import RUN_GRID_DIMS
 from ..model import dmw_record, interface_tables, scene_inputs
 from ..model.inputs import SimulationInputs, Source, for_stage
 from ..model.interface_tables import used_statistics
-from ..model.simulation import DIRECTIONS, GRID_ATTRS, grid_run_values, model_attrs, simulate
-from ..analyses import ensemble_rules as ensemble
-from ..config.heater_power import ACTUATION_FIELDS, power_coordinates
-from ..config.grid import damping_grid, protrusion_grid, roughness_sets, same_point, scene_label
+from ..model.simulation import GRID_ATTRS, grid_run_values, model_attrs, simulate
+from ..model.sweep_parts import PARTS, Batch, kept_parts, pack_part, part_path, part_problem
+from ..analyses.sweep_assembly import Assembler
+from ..config.heater_power import ACTUATION_FIELDS
+from ..config.grid import damping_grid, protrusion_grid, roughness_sets, same_point
 
 log = logging.getLogger(__name__)
-PARTS = "sweep.parts"
-
-
-@dataclass(frozen=True)
-class Batch:
-    """One task: protrusions ``indices`` of roughness set ``label`` at damping ``damping``.
-
-    ``damping``: modal damping ratio [1]; ``indices``: positions on the protrusion grid;
-    ``protrusions``: their values [nm]; ``realisation``: index of the DMW record (0: the scene's).
-    """
-
-    index: int
-    label: str
-    damping: float
-    indices: tuple[int, ...]
-    protrusions: tuple[float, ...]
-    realisation: int = 0
 
 
 def plan(scene: Any) -> tuple[np.ndarray, dict[str, dict], list[float], list[Batch]]:
@@ -103,36 +84,6 @@ def plan(scene: Any) -> tuple[np.ndarray, dict[str, dict], list[float], list[Bat
                     idx = tuple(range(start, min(start + size, len(prot))))
                     batches.append(Batch(len(batches), label, float(dz), idx, tuple(float(prot[i]) for i in idx), r))
     return prot, sets, damp, batches
-
-
-def _part_path(parts: Path, b: Batch) -> Path:
-    return parts / f"batch-{b.index:05d}.nc"
-
-
-def part_problem(path: Path, key: str, batch: Batch) -> str | None:
-    """Why a part file cannot be used for ``batch`` of the sweep with inputs ``key`` (``None``: it can).
-
-    A part must exist, be readable, carry the sweep's inputs key, and be the part of this very batch:
-    its batch index, roughness label, damping ratio and protrusions.
-    """
-    if not path.is_file():
-        return "missing"
-    try:
-        attrs, values = read_attrs(path, ("protrusion",))
-    except (OSError, ValueError, RuntimeError) as exc:  # (RuntimeError: the HDF5 library's "HDF error")
-        return f"unreadable ({exc})"
-    prot = np.asarray(values.get("protrusion", []), float)
-    if attrs.get(KEY_ATTR) != key:
-        return "made from other inputs"
-    if attrs.get("batch") != batch.index:
-        return f"holds batch {attrs.get('batch')}, not {batch.index}"
-    if attrs.get("roughness_label") != batch.label or attrs.get("damping_ratio") != batch.damping:
-        return (f"holds roughness {attrs.get('roughness_label')!r}, damping {attrs.get('damping_ratio')}; "
-                f"expected {batch.label!r}, {batch.damping}")
-    if prot.shape != (len(batch.protrusions),) or not np.array_equal(prot, batch.protrusions):
-        return f"holds protrusions {prot.tolist()}, expected {list(batch.protrusions)}"
-    return stored_problem(path)  # (damaged or edited since written: its values differ from their checksums)
-
 
 _MODELS: dict[tuple, assembly.Model] = {}
 _MODELS_LOCK = threading.Lock()
@@ -159,7 +110,7 @@ def batch_model(scene: Any, inputs: SimulationInputs, damping: float) -> assembl
     return model
 
 
-def run_batch(scene: Any, batch: Batch, inputs: SimulationInputs, part_path: str, key: str,
+def run_batch(scene: Any, batch: Batch, inputs: SimulationInputs, path: str, key: str,
               history_nm: tuple[float, ...]) -> tuple[str, xr.Dataset]:
     """Run one batch and write its part file (executed on a worker). Returns the part's path and dataset.
 
@@ -168,7 +119,8 @@ def run_batch(scene: Any, batch: Batch, inputs: SimulationInputs, part_path: str
 
     ``scene``: the sweep's scene with the batch's roughness set; ``inputs``: its set's interface tables,
     the batch's DMW record, the bulge table and k (by file and key: read on the worker, once per process);
-    ``history_nm``: protrusions [nm] whose time histories the part keeps.
+    ``path``: the part file (:func:`pipeline.model.sweep_parts.part_path`); ``history_nm``: protrusions [nm]
+    whose time histories the part keeps.
     """
     model = batch_model(scene, inputs, batch.damping)
     ds = simulate(model, batch.protrusions, histories=history_nm, protocol=scene["sweep"]["protocol"])
@@ -176,100 +128,8 @@ def run_batch(scene: Any, batch: Batch, inputs: SimulationInputs, part_path: str
                      "batch": batch.index, "realisation": batch.realisation})
     # (uncompressed: a part is read back once, if ever, and its zlib ran under the process's NetCDF lock,
     # where the other worker's part waited for it; docs/performance.md, section "The head of a command")
-    write_dataset(pack_part(ds), part_path, scene, stage="sweep-part", compress=False)
-    return part_path, ds
-
-
-#: Global attribute of a part file: its variables as :func:`unpack_part` restores them (JSON).
-LAYOUT_ATTR = "part_layout"
-
-
-def _stack_name(dims: tuple[str, ...]) -> str:
-    """The stacked variable of a part that holds its variables of dimensions ``dims``."""
-    return PART_STACK + "".join("__" + d for d in dims)
-
-
-def pack_part(ds: xr.Dataset) -> xr.Dataset:
-    """A part (a :func:`pipeline.model.simulation.simulate` dataset) as written to its file: the data
-    variables of equal dimensions stacked into one float64 variable along a new first dimension
-    (``stack__protrusion``: the scalars, ``stack__hist_protrusion__elapsed_time``: the kept histories),
-    with the names and units of its rows as coordinates.
-
-    Why: writing a NetCDF variable costs ~1 ms of Python and HDF5 whatever its size (33 variables: ~50 ms
-    per part, under the process's NetCDF lock, holding the GIL most of it), which the threads of a sweep
-    cannot share. Float64 holds every value of the parts exactly (float32 and int8 flags included), and
-    the global attribute :data:`LAYOUT_ATTR` keeps each variable's name, dtype, attributes and encoding in
-    order, so :func:`unpack_part` gives back ``ds`` itself (tests/stages/test_sweep.py).
-    """
-    variables = {name: ds.variables[name] for name in ds.data_vars}  # (Variables: no DataArray made per name)
-    groups: dict[tuple[str, ...], list[str]] = {}
-    for name, v in variables.items():
-        groups.setdefault(v.dims, []).append(name)
-    data: dict[str, xr.Variable] = {}
-    coords = {name: ds.variables[name] for name in ds.coords}
-    for dims, names in groups.items():
-        stack = _stack_name(dims)
-        row = f"{stack}_variable"
-        data[stack] = PART_STACKS[PART_STACK].data(np.stack([variables[n].values.astype(np.float64) for n in names]),
-                                                   (row, *dims), unit_variable=f"{stack}_units")
-        coords[row] = PART_STACKS[PART_STACK + "_variable"].data(names, (row,))
-        coords[f"{stack}_units"] = PART_STACKS[PART_STACK + "_units"].data(
-            [variables[n].attrs.get("units", "") for n in names], (row,))
-    layout = []
-    for name, v in variables.items():
-        enc = {k: np.dtype(val).str if k == "dtype" else _json_value(val) for k, val in v.encoding.items()
-               if k in ("_FillValue", "dtype")}
-        layout.append([name, v.dtype.str, {k: _json_value(a) for k, a in v.attrs.items()}, enc])
-    out = xr.Dataset(data, coords=coords)
-    out.attrs = dict(ds.attrs)
-    out.attrs[LAYOUT_ATTR] = json.dumps(layout)
-    return out
-
-
-def _json_value(value: Any) -> Any:
-    """An attribute's (or encoding's) value for JSON: an array or numpy scalar as its values and dtype
-    (restored by :func:`_attr_value`)."""
-    if isinstance(value, (np.ndarray, np.generic)):
-        return {"array": np.asarray(value).tolist(), "dtype": np.asarray(value).dtype.str,
-                "scalar": isinstance(value, np.generic)}
-    return value
-
-
-def _attr_value(value: Any) -> Any:
-    """The attribute value :func:`_json_value` wrote."""
-    if isinstance(value, dict) and set(value) == {"array", "dtype", "scalar"}:
-        array = np.array(value["array"], dtype=np.dtype(value["dtype"]))
-        return array[()] if value["scalar"] else array
-    return value
-
-
-def unpack_part(ds: xr.Dataset) -> xr.Dataset:
-    """The part :func:`pack_part` wrote (a part file read back): its variables, in their order, with their
-    dtypes, attributes and declared missing values; a dataset without :data:`LAYOUT_ATTR` as it is."""
-    if LAYOUT_ATTR not in ds.attrs:
-        return ds
-    rows: dict[str, tuple[xr.Variable, int]] = {}
-    for name in ds.data_vars:
-        if is_part_stack(name):
-            for i, row in enumerate(ds.variables[f"{name}_variable"].values):
-                rows[str(row)] = (ds.variables[name], i)
-    data = {}
-    for name, dtype, attrs, enc in json.loads(ds.attrs[LAYOUT_ATTR]):
-        stack, i = rows[name]
-        data[name] = xr.Variable(stack.dims[1:], stack.values[i].astype(np.dtype(dtype)),
-                                 attrs={k: _attr_value(a) for k, a in attrs.items()},
-                                 encoding={k: np.dtype(val) if k == "dtype" else _attr_value(val)
-                                           for k, val in enc.items()})
-    stacked = [n for n in ds.variables if is_part_stack(n.removesuffix("_variable").removesuffix("_units"))]
-    out = xr.Dataset(data, coords={n: ds.variables[n] for n in ds.coords if n not in stacked})
-    out.attrs = {k: v for k, v in ds.attrs.items() if k != LAYOUT_ATTR}
-    return out
-
-
-def read_part(path: str | Path) -> xr.Dataset:
-    """A part file as the batch's :func:`run_batch` made it (:func:`unpack_part` of the file)."""
-    return unpack_part(read_dataset(path))
-
+    write_dataset(pack_part(ds), path, scene, stage="sweep-part", compress=False)
+    return path, ds
 
 def _progress(total: int, initial: int) -> Progress:
     """The batches counted (:class:`pipeline.progress.Progress`: a bar on a terminal, periodic lines in a
@@ -380,107 +240,156 @@ def compute(scene: Any, inputs: Inputs) -> dict[str, xr.Dataset | None]:
     interface_paths, table_tasks = table_jobs(scene, out, sets)
     dmw_path = str(out / "dmw.nc") if scene.has("dmw") else None
     dmw_paths, seeds = realisation_inputs(scene, out, dmw_path, force)
-    parts = out / PARTS
-    hist_nm = tuple(scene["sweep"]["histories_nm"] or scene["report"]["histories_nm"])
+    todo = batches_to_run(batches, out / PARTS, key, force)
+    grid = Assembler(scene, prot, list(sets), damp, len(seeds))
+    fan = _Fanout(scene, inputs, sim, (sets, damp), (interface_paths, dmw_paths), (batches, todo), grid)
+    batch_seconds = fan.run(table_tasks, force)
+    log.info("sweep: batch phase %.2f s for %d batches and %d tables", batch_seconds, len(todo), len(table_tasks))
+    inputs.record(compute_seconds=round(batch_seconds, 3), batches_run=len(todo), batches=len(batches))
+    for b, part in kept_parts(out / PARTS, batches, key, grid.added):
+        grid.add(b, part)
+    run, attrs, stats = fan.grid_values()
+    return grid.datasets(key, sim.k_source, attrs, seeds, run, statistics=stats)
+
+
+def batches_to_run(batches: list[Batch], parts: Path, key: str, force: bool) -> list[Batch]:
+    """The batches whose part in ``parts`` cannot be kept (:func:`pipeline.model.sweep_parts.part_problem`;
+    every batch with ``force``), in batch order; why each part present is recomputed goes to the log."""
     todo = []
     for b in batches:
-        why = "forced" if force else part_problem(_part_path(parts, b), key, b)
+        why = "forced" if force else part_problem(part_path(parts, b), key, b)
         if why is not None:
             if why != "missing":
                 log.info("sweep: batch %d: part %s: recomputed", b.index, why)
             todo.append(b)
     log.info("sweep: %d batches, %d to run", len(batches), len(todo))
-    # each batch runs the scene with its roughness set: the tables are the set's, and so must be the
-    # scene the model reads (y_s of explicit statistics when a set needs no tables)
-    set_scenes = {label: scene if table == dict(scene["roughness"]) else scene.replace(roughness=dict(table))
-                  for label, table in sets.items()}
-    # time histories of the first realisation only (the scene's own record)
-    # each set's and realisation's inputs once (a file's key is read from it: a set's tables once made)
-    batch_sim = functools.cache(lambda label, r: batch_inputs(sim, interface_paths[label], dmw_paths[r]))
+    return todo
 
-    def task(b: Batch) -> tuple:
-        return ("batch", set_scenes[b.label], b, batch_sim(b.label, b.realisation), str(_part_path(parts, b)), key,
-                hist_nm if b.realisation == 0 else ())
 
-    bar = _progress(len(batches), len(batches) - len(todo))
-    done = [0]
-    stop_after, on_batch = opts.get("stop_after"), opts.get("on_batch")
-    grid = Assembler(scene, prot, list(sets), damp, len(seeds))
-    by_path = {str(_part_path(parts, b)): b for b in todo}
-    labels = list(sets)
+class _Fanout:
+    """One call's fan-out of the sweep (:func:`compute`): the batches' tasks (:meth:`task`), their parts added to
+    the :class:`~pipeline.analyses.sweep_assembly.Assembler` as each returns (:meth:`on_done`),
+    ``sweep_histories.nc`` handed to the runner once it is complete and a worker is idle, and the run values
+    of the datasets (:meth:`grid_values`).
 
-    def grid_values() -> tuple[dict[str, xr.Variable], dict[str, Any], dict[str, dict[str, Any]]]:
+    ``grid_axes``: the roughness sets by label and the damping ratios [1]; ``paths``: the interface tables'
+    path per set (filled in as another set's tables are made) and the DMW records' per realisation;
+    ``work``: every batch of the grid and those to run.
+    """
+
+    def __init__(self, scene: Any, inputs: Inputs, sim: SimulationInputs,
+                 grid_axes: tuple[dict[str, dict], list[float]],
+                 paths: tuple[dict[str, str | None], list[str | None]],
+                 work: tuple[list[Batch], list[Batch]], grid: Assembler):
+        self.scene, self.inputs, self.sim, self.grid = scene, inputs, sim, grid
+        (self.sets, self.damp), (self.interface_paths, self.dmw_paths) = grid_axes, paths
+        self.batches, self.todo = work
+        self.parts, opts = inputs.out / PARTS, inputs.options
+        # time histories of the first realisation only (the scene's own record)
+        self.hist_nm = tuple(scene["sweep"]["histories_nm"] or scene["report"]["histories_nm"])
+        # each batch runs the scene with its roughness set: the tables are the set's, and so must be the
+        # scene the model reads (y_s of explicit statistics when a set needs no tables)
+        self.set_scenes = {label: scene if table == dict(scene["roughness"]) else scene.replace(roughness=dict(table))
+                           for label, table in self.sets.items()}
+        # each set's and realisation's inputs once (a file's key is read from it: a set's tables once made)
+        self.batch_sim = functools.cache(
+            lambda label, r: batch_inputs(sim, self.interface_paths[label], self.dmw_paths[r]))
+        self.by_path = {str(part_path(self.parts, b)): b for b in self.todo}
+        self.stop_after, self.on_batch = opts.get("stop_after"), opts.get("on_batch")
+        self.done = 0
+        # sweep_histories.nc is complete once the batches that keep histories are in; it is written as soon as a
+        # worker also has no batch left to start (fewer batches to finish than local workers), so that its
+        # compression (most of the command's final write) fills that worker's idle end of the fan-out instead of
+        # following the last batch, without taking a core from a batch earlier (measured: docs/performance.md)
+        self.hist_batches = history_batches(self.batches, self.hist_nm)
+        # (kept parts come in at the end)
+        self.early = not self.hist_batches or not self.hist_batches <= {b.index for b in self.todo}
+        self.slots = 1
+        self.bar: Progress | None = None
+
+    def task(self, b: Batch) -> tuple:
+        """The fan-out task of batch ``b`` (:func:`sweep_task`, ``kind = "batch"``)."""
+        return ("batch", self.set_scenes[b.label], b, self.batch_sim(b.label, b.realisation),
+                str(part_path(self.parts, b)), self.inputs.key, self.hist_nm if b.realisation == 0 else ())
+
+    def grid_values(self) -> tuple[dict[str, xr.Variable], dict[str, Any], dict[str, dict[str, Any]]]:
         """The run values, attributes and each set's statistics of the datasets (every set's batches run)."""
+        labels, damp, k_source = list(self.sets), self.damp, self.sim.k_source
         # the run values of every set and damping ratio (the models the batches built, cached in this process)
-        models = {(label, float(d)): batch_model(set_scenes[label], batch_sim(label, 0), float(d))
-                  for label in sets for d in damp}
-        run = grid_run_values(models, labels, damp, sim.k_source)
+        models = {(label, float(d)): batch_model(self.set_scenes[label], self.batch_sim(label, 0), float(d))
+                  for label in self.sets for d in damp}
+        run = grid_run_values(models, labels, damp, k_source)
         sizes = {"roughness": len(labels), "damping": len(damp)}
-        attrs = {name: value for name, value in model_attrs(models[(labels[0], float(damp[0]))], sim.k_source).items()
+        attrs = {name: value for name, value in model_attrs(models[(labels[0], float(damp[0]))], k_source).items()
                  if name not in GRID_ATTRS or sizes[RUN_GRID_DIMS[GRID_ATTRS[name]]] == 1}  # (several: the variable has them)
         # each set's statistics as its interface model used them: its tables' (the scans'), or the given keys
         # (the tables as the batches read them: in this process's cache after a threaded batch phase)
-        stats = {label: used_statistics(set_scenes[label], batch_sim(label, 0).tables()) for label in labels}
+        stats = {label: used_statistics(self.set_scenes[label], self.batch_sim(label, 0).tables()) for label in labels}
         return run, attrs, stats
 
-    # sweep_histories.nc is complete once the batches that keep histories are in; it is written as soon as a
-    # worker also has no batch left to start (fewer batches to finish than local workers), so that its
-    # compression (most of the command's final write) fills that worker's idle end of the fan-out instead of
-    # following the last batch, without taking a core from a batch earlier (measured: docs/performance.md)
-    hist_batches = history_batches(batches, hist_nm)
-    early = [not hist_batches or not hist_batches <= {b.index for b in todo}]  # (kept parts come in at the end)
-
-    def on_done(result: tuple[str, Any]) -> None:
+    def on_done(self, result: tuple[str, Any]) -> None:
+        """A task's result, in the calling thread: a set's tables' path, or a batch's part added to the grid
+        (while the other batches run); the histories handed over once complete and a worker is idle."""
         kind, value = result
         if kind == "tables":
             label, path = value
-            interface_paths[label] = path
+            self.interface_paths[label] = path
             return
         path, part = value
-        grid.add(by_path[path], part)  # (in the calling thread, while the other batches run)
-        done[0] += 1
-        if on_batch is not None:
-            on_batch(path)
-        if bar is not None:
-            bar.update(1)
-        if not early[0] and hist_batches <= grid.added and len(todo) - done[0] < slots:
-            early[0] = True
-            run, attrs, stats = grid_values()
-            inputs.write_early("sweep_histories.nc", grid.histories(sim.k_source, attrs, run, statistics=stats))
-        if stop_after is not None and done[0] >= stop_after:
-            raise KeyboardInterrupt(f"stopped after {done[0]} batches (stop_after)")
+        self.grid.add(self.by_path[path], part)
+        self.done += 1
+        if self.on_batch is not None:
+            self.on_batch(path)
+        if self.bar is not None:
+            self.bar.update(1)
+        if not self.early and self.hist_batches <= self.grid.added and len(self.todo) - self.done < self.slots:
+            self.early = True
+            run, attrs, stats = self.grid_values()
+            self.inputs.write_early("sweep_histories.nc",
+                                    self.grid.histories(self.sim.k_source, attrs, run, statistics=stats))
+        if self.stop_after is not None and self.done >= self.stop_after:
+            raise KeyboardInterrupt(f"stopped after {self.done} batches (stop_after)")
 
-    # Two rounds of one fan-out each: the other roughness sets' interface tables with the batches that do
-    # not read them (the tables first: a pool starts tasks in order), then the batches of those sets.
-    # A table is mostly Python and numpy holding the GIL, a batch mostly the kernel releasing it: the tables
-    # alternate with batches, so that two threads run a table and a batch rather than two tables.
-    tables = [("tables", label, sub, folder, force) for label, (sub, folder) in table_tasks.items()]
-    workers = opts.get("workers")
-    # (one worker runs them in batch order: the order matters only to several)
-    where = opts.get("scheduler")
-    serial = where == "synchronous" or (where is None and local_workers(workers, max(len(todo), 1)) == 1)
-    order = list if serial else costliest_first
-    # (a cluster of other machines leaves this process's cores idle: the histories are written at once)
-    slots = 1 if serial else local_workers(workers, max(len(todo), 1)) if where in LOCAL + (None,) else len(todo) + 1
-    ready = [task(b) for b in order(b for b in todo if b.label not in table_tasks)]
-    first = [t for pair in zip(tables, ready) for t in pair] + tables[len(ready):] + ready[len(tables):]
-    later = order(b for b in todo if b.label in table_tasks)
-    batch_seconds = 0.0
-    try:  # (one process cluster for both rounds: its start-up is paid once)
-        with local_cluster(opts.get("scheduler"), workers) if first or later else \
-                contextlib.nullcontext(opts.get("scheduler")) as scheduler:
-            # (the second round's tasks are made once the tables exist: their inputs carry the tables' key)
-            for tasks in (first, lambda: [task(b) for b in later]):
-                tasks = tasks() if callable(tasks) else tasks
-                batch_seconds += run_tasks(sweep_task, tasks, scheduler=scheduler, workers=workers, on_done=on_done)
-    finally:
-        if bar is not None:
-            bar.close()
-    log.info("sweep: batch phase %.2f s for %d batches and %d tables", batch_seconds, len(todo), len(table_tasks))
-    inputs.record(compute_seconds=round(batch_seconds, 3), batches_run=len(todo), batches=len(batches))
-    add_kept_parts(grid, out, batches, key)
-    run, attrs, stats = grid_values()
-    return grid.datasets(key, sim.k_source, attrs, seeds, run, statistics=stats)
+    def rounds(self, table_tasks: dict[str, tuple], force: bool) -> tuple[list[tuple], list[Batch]]:
+        """The tasks of the first round and the batches of the second; sets :attr:`slots`, the local workers.
+
+        Two rounds of one fan-out each: the other roughness sets' interface tables with the batches that do
+        not read them (the tables first: a pool starts tasks in order), then the batches of those sets.
+        A table is mostly Python and numpy holding the GIL, a batch mostly the kernel releasing it: the tables
+        alternate with batches, so that two threads run a table and a batch rather than two tables.
+        """
+        opts, todo = self.inputs.options, self.todo
+        tables = [("tables", label, sub, folder, force) for label, (sub, folder) in table_tasks.items()]
+        workers = opts.get("workers")
+        # (one worker runs them in batch order: the order matters only to several)
+        where = opts.get("scheduler")
+        serial = where == "synchronous" or (where is None and local_workers(workers, max(len(todo), 1)) == 1)
+        order = list if serial else costliest_first
+        # (a cluster of other machines leaves this process's cores idle: the histories are written at once)
+        self.slots = 1 if serial else local_workers(workers, max(len(todo), 1)) if where in LOCAL + (None,) \
+            else len(todo) + 1
+        ready = [self.task(b) for b in order(b for b in todo if b.label not in table_tasks)]
+        first = [t for pair in zip(tables, ready) for t in pair] + tables[len(ready):] + ready[len(tables):]
+        return first, order(b for b in todo if b.label in table_tasks)
+
+    def run(self, table_tasks: dict[str, tuple], force: bool) -> float:
+        """Run both rounds (:meth:`rounds`) with the progress of the batches; returns their wall time [s]."""
+        opts = self.inputs.options
+        self.bar = _progress(len(self.batches), len(self.batches) - len(self.todo))
+        first, later = self.rounds(table_tasks, force)
+        workers, batch_seconds = opts.get("workers"), 0.0
+        try:  # (one process cluster for both rounds: its start-up is paid once)
+            with local_cluster(opts.get("scheduler"), workers) if first or later else \
+                    contextlib.nullcontext(opts.get("scheduler")) as scheduler:
+                # (the second round's tasks are made once the tables exist: their inputs carry the tables' key)
+                for tasks in (first, lambda: [self.task(b) for b in later]):
+                    tasks = tasks() if callable(tasks) else tasks
+                    batch_seconds += run_tasks(sweep_task, tasks, scheduler=scheduler, workers=workers,
+                                               on_done=self.on_done)
+        finally:
+            if self.bar is not None:
+                self.bar.close()
+        return batch_seconds
 
 
 def history_batches(batches: Iterable[Batch], histories_nm: Iterable[float]) -> set[int]:
@@ -521,200 +430,6 @@ def run_sweep(scene: Any, out: Path, scheduler: str | None = None, workers: int 
     return ensure("sweep", scene, out, force=force, scheduler=scheduler, workers=workers,
                   stop_after=stop_after, on_batch=on_batch)
 
-
-class Assembler:
-    """``sweep.nc`` and ``sweep_histories.nc`` filled part by part: :meth:`add` as each batch's part arrives
-    (the sweep calls it from the fan-out's ``on_done``, so the filling overlaps the batches still running),
-    :meth:`datasets` once every part is in.
-
-    A part's values go to its batch's slots (disjoint), and the variables are ordered as they first appear
-    in batch order (not in the order the parts arrive), so the datasets do not depend on the order of
-    :meth:`add` calls: a 2-worker run gives the file of a 1-worker run.
-    """
-
-    def __init__(self, scene: Any, prot: np.ndarray, labels: list[str], damp: list[float], n_real: int = 1):
-        self.scene, self.prot, self.labels, self.damp, self.n_real = scene, prot, labels, damp, n_real
-        self.stepping = scene["sweep"]["protocol"] == "stepping"
-        # (stepping: the scalars per pass, before the realisation, whose statistics reduce the last axis)
-        self.shape = (len(prot), len(labels), len(damp)) + ((len(DIRECTIONS),) if self.stepping else ()) \
-            + ((n_real,) if n_real > 1 else ())
-        self.chain_shape = (len(labels), len(damp)) + ((n_real,) if n_real > 1 else ())
-        self.arrays: dict[str, np.ndarray] = {}
-        self.chains: dict[str, np.ndarray] = {}
-        self.hist: dict[str, np.ndarray] = {}
-        self.hist_prot: np.ndarray | None = None
-        self.time: np.ndarray | None = None
-        self._time_from: int | None = None  # (the batch whose time axis the histories use: the first in batch order)
-        self._first: dict[str, tuple[int, int]] = {}  # variable -> (batch index, position) of its first appearance
-        self.added: set[int] = set()
-        self._histories: xr.Dataset | None = None  # (made by :meth:`histories`, until a part with histories comes)
-
-    def _seen(self, name: str, batch: int, position: int) -> None:
-        at = (batch, position)
-        if name not in self._first or at < self._first[name]:
-            self._first[name] = at
-
-    def add(self, b: Batch, ds: xr.Dataset) -> None:
-        """Put the part ``ds`` of batch ``b`` into the arrays."""
-        r, d = self.labels.index(b.label), self.damp.index(b.damping)
-        real = (b.realisation,) if self.n_real > 1 else ()
-        values = {name: ds.variables[name].values for name in ds.variables}  # (no DataArray per name: main thread)
-        for i, name in enumerate(ds.data_vars):
-            self._seen(name, b.index, i)
-            if name.startswith("h_"):
-                continue
-            if name in STEPPING:  # one value per chain
-                self.chains.setdefault(name, np.full(self.chain_shape, np.nan))[(r, d) + real] = values[name]
-                continue
-            if name not in self.arrays:  # NaN: not computed (regime: its declared _FillValue on disk)
-                self.arrays[name] = np.full(self.shape, np.nan)
-            at = (list(b.indices), r, d) + ((slice(None),) if self.stepping else ()) + real
-            self.arrays[name][at] = values[name]
-        if "hist_protrusion" in ds.coords:
-            self._histories = None
-            if self.hist_prot is None:
-                sweep, report = self.scene["sweep"], self.scene["report"]
-                self.hist_prot = np.array([h for h in sweep["histories_nm"] or report["histories_nm"]
-                                           if np.any(same_point(self.prot, h))])
-            if self._time_from is None or b.index < self._time_from:
-                self.time, self._time_from = values[TIME], b.index
-            for name in ds.data_vars:
-                if name.startswith("h_"):
-                    base = name[2:]
-                    if base not in self.hist:
-                        self.hist[base] = np.full((len(self.hist_prot), len(self.labels), len(self.damp),
-                                                   values[TIME].size), np.nan)
-                    for i, hp in enumerate(values["hist_protrusion"]):
-                        j = int(np.argmin(np.abs(self.hist_prot - hp)))
-                        self.hist[base][j, r, d] = values[name][i]
-        self.added.add(b.index)
-
-    def _ordered(self, values: dict[str, np.ndarray], prefix: str = "") -> dict[str, np.ndarray]:
-        """``values`` in the order their variables (``prefix + name``) first appear in batch order."""
-        return {name: values[name] for name in sorted(values, key=lambda n: self._first[prefix + n])}
-
-    def datasets(self, key: str, k_source: str, attrs: dict, seeds: list[int] | None = None,
-                 run: dict[str, xr.Variable] | None = None, *,
-                 statistics: dict[str, dict[str, Any]]) -> dict[str, xr.Dataset | None]:
-        """``sweep.nc`` and ``sweep_histories.nc`` from the parts added.
-
-        ``run``: the run's values (:func:`pipeline.model.simulation.grid_run_values`: 0-d, or along
-        ``roughness`` or ``damping``), written into both datasets. ``statistics``: each roughness set's
-        statistics as its interface model used them (label ->
-        :func:`pipeline.model.interface_tables.used_statistics`), which become coordinates along ``roughness``
-        (:func:`roughness_coordinates`) and, with the scans' hashes, the JSON attribute ``roughness_sets``
-        (:func:`roughness_record`). With more than one realisation the scalars gain a last dimension
-        ``realisation`` and the ensemble statistics of :func:`pipeline.analyses.ensemble_rules.statistics`
-        are added.
-        """
-        n_real, stepping = self.n_real, self.stepping
-        coords = self._coords(statistics)
-        real = ("realisation",) if n_real > 1 else ()
-        dims = ("protrusion", "roughness", "damping") + (("direction",) if stepping else ()) + real
-        data = {name: SCALARS[name].data(a, dims) for name, a in self._ordered(self.arrays).items()}
-        data.update({name: STEPPING[name].data(a, ("roughness", "damping") + real)
-                     for name, a in self._ordered(self.chains).items()})
-        if n_real > 1:
-            data["dmw_seed"] = ENSEMBLE["dmw_seed"].data(np.array(seeds), ("realisation",))
-            data.update(ensemble.statistics(data))
-        ds = xr.Dataset(data, coords=coords).assign(run or {})
-        ds.attrs.update(self._attrs(k_source, attrs, statistics))
-        return {"sweep.nc": ds, "sweep_histories.nc": self.histories(k_source, attrs, run, statistics=statistics)}
-
-    def _coords(self, statistics: dict[str, dict[str, Any]]) -> dict[str, xr.Variable]:
-        """The coordinates of ``sweep.nc`` (those of the sets' statistics included; see :meth:`datasets`)."""
-        coords = {"protrusion": coordinate("protrusion", self.prot),
-                  "roughness": coordinate("roughness", self.labels), "damping": coordinate("damping", self.damp)}
-        if self.stepping:
-            coords["direction"] = coordinate("direction", np.array(DIRECTIONS))
-        if self.n_real > 1:
-            coords["realisation"] = ENSEMBLE["realisation"].data(np.arange(self.n_real), ("realisation",))
-        coords.update(roughness_coordinates([statistics[label] for label in self.labels]))
-        coords.update(power_coordinates(self.scene, self.prot))
-        return coords
-
-    def _attrs(self, k_source: str, attrs: dict, statistics: dict[str, dict[str, Any]]) -> dict[str, Any]:
-        """The global attributes of both datasets (see :meth:`datasets`)."""
-        sets = roughness_sets(self.scene)
-        # one attribute for all sets: a label made from the values has '.', which CF's attribute names exclude
-        out = {"roughness_sets": json.dumps({label: roughness_record(sets[label], statistics[label])
-                                             for label in self.labels}, default=str)}
-        out.update(attrs)
-        out["k_source"] = k_source
-        own = scene_label(self.scene)
-        if own in self.labels:  # (the report's default slice: the scene's own roughness)
-            out["scene_roughness"] = own
-        return out
-
-    def histories(self, k_source: str, attrs: dict, run: dict[str, xr.Variable] | None = None, *,
-                  statistics: dict[str, dict[str, Any]]) -> xr.Dataset | None:
-        """``sweep_histories.nc`` from the parts added (arguments: :meth:`datasets`; ``None``: no part kept
-        histories). Made once: the same object until a part with histories is added, so that the sweep can
-        have it written while the other batches run (:meth:`pipeline.runner.Inputs.write_early`) and return
-        it with ``sweep.nc``."""
-        if not self.hist:
-            return None
-        if self._histories is None:
-            hc = {name: c for name, c in self._coords(statistics).items() if name != "realisation"}  # (realisation 0)
-            hc["protrusion"] = coordinate("protrusion", self.hist_prot)
-            hc.update(power_coordinates(self.scene, self.hist_prot))
-            hc[TIME] = coordinate(TIME, self.time)
-            hds = xr.Dataset({name: HISTORIES[name].data(a, ("protrusion", "roughness", "damping", TIME))
-                              for name, a in self._ordered(self.hist, "h_").items()}, coords=hc).assign(run or {})
-            hds.attrs.update(self._attrs(k_source, attrs, statistics))
-            self._histories = hds
-        return self._histories
-
-
-def add_kept_parts(grid: Assembler, out: Path, batches: list[Batch], key: str) -> None:
-    """Add to ``grid`` the part of every batch not added yet (those of an earlier run), read from its file
-    after :func:`part_problem` has accepted it.
-
-    Raises
-    ------
-    RuntimeError
-        When a part is missing or is not the part of its batch (:func:`part_problem`).
-    """
-    parts = out / PARTS
-    for b in batches:
-        if b.index in grid.added:
-            continue
-        path = _part_path(parts, b)
-        why = part_problem(path, key, b)
-        if why is not None:
-            raise RuntimeError(f"{path}: batch {b.index}: part {why}; run the sweep again")
-        grid.add(b, read_part(path))
-
-
-def roughness_coordinates(statistics: list[dict[str, Any]]) -> dict[str, xr.Variable]:
-    """``roughness_sigma`` [nm], ``roughness_summit_radius`` [um], ``roughness_summit_density`` [um^-2] and
-    ``roughness_plasticity_index`` [1] of each roughness set, from the statistics its interface model used
-    (:func:`pipeline.model.interface_tables.used_statistics`, in the order of the ``roughness`` dimension):
-    the given keys of explicit statistics, the scans' of an AFM set."""
-    return {name: COORDINATES[name].data([float(st[key]) for st in statistics], ("roughness",))
-            for name, key in ROUGHNESS_COORDINATES.items()}
-
-
-#: The coordinates along ``roughness`` and the statistics (:func:`pipeline.model.interface_tables.used_statistics`)
-#: they hold.
-ROUGHNESS_COORDINATES = {"roughness_sigma": "sigma_nm", "roughness_summit_radius": "summit_radius_um",
-                         "roughness_summit_density": "summit_density_per_um2",
-                         "roughness_plasticity_index": "plasticity_index"}
-
-
-def roughness_record(table: dict[str, Any], statistics: dict[str, Any]) -> dict[str, Any]:
-    """A roughness set as ``roughness_sets`` records it: its ``[roughness]`` table with the statistics its
-    interface model used in place of the keys (an AFM set's ``sigma_nm``, ... are the scans', not the
-    scene's unused defaults), the plasticity index, the summit offset ``y_s_nm``, where they came from
-    (``statistics_source``) and, for an AFM set, each scan's SHA-256 (``afm_sha256``: path -> hex digest)."""
-    record = dict(table)
-    record.update({key: value for key, value in statistics.items() if key != "source"})
-    record["statistics_source"] = statistics.get("source", "")
-    if table.get("afm"):
-        record["afm_sha256"] = {str(f): file_hash(f) for f in table["afm"]}
-    return record
-
-
 def _files(scene: Any) -> dict[str, str]:
     """The AFM scans of every roughness set (their bytes are inputs of the sweep)."""
     return {f"sweep.roughness[{label}].afm[{i}]": f
@@ -746,4 +461,3 @@ STAGE = Stage(
     unkeyed=("sweep.batch_size", "tfc.protrusion_nm"),
     files=_files, upstream=scene_inputs.input_stages, order=50, main_job=True, keeps=_keeps,
     doc="protrusion x roughness x damping, fanned out, sweep.nc and sweep_histories.nc")
-

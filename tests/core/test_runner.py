@@ -26,6 +26,7 @@ from pipeline.io import DatasetError, read_dataset, var
 from pipeline.physics import microwaviness as phys_dmw
 from pipeline.physics import surface as sf
 from pipeline.config.scene import load_scene
+from pipeline.model.sweep_parts import part_problem
 from pipeline.stages import sweep as sweep_stage
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -157,9 +158,8 @@ def test_part_copied_to_another_batch_is_rejected_and_recomputed(tmp_path):
     parts = out / sweep_stage.PARTS
     shutil.copy(parts / "batch-00000.nc", parts / "batch-00001.nc")   # the wrong batch under batch 1's name
     b1 = sweep_stage.plan(scene)[3][1]
-    assert "holds batch 0, not 1" in sweep_stage.part_problem(parts / "batch-00001.nc",
-                                                              read_dataset(parts / "batch-00000.nc").attrs[
-                                                                  runner.KEY_ATTR], b1)
+    assert "holds batch 0, not 1" in part_problem(parts / "batch-00001.nc",
+                                                  read_dataset(parts / "batch-00000.nc").attrs[runner.KEY_ATTR], b1)
     done: list[str] = []
     path = sweep_stage.run_sweep(scene, out, scheduler="synchronous", on_batch=done.append)
     assert sorted(Path(p).name for p in done) == ["batch-00001.nc", "batch-00002.nc"]
@@ -180,7 +180,7 @@ def test_an_edited_sweep_dataset_or_part_is_remade_from_the_parts_never_reused(t
     part = out / sweep_stage.PARTS / "batch-00001.nc"
     stack = next(v for v in read_dataset(part).data_vars if v.startswith("stack__protrusion"))
     edit_value(part, stack, (0, 0), 1e3)                     # a kept part damaged: that batch alone is rerun
-    assert "values differ from the checksum" in sweep_stage.part_problem(
+    assert "values differ from the checksum" in part_problem(
         part, read_dataset(path).attrs[runner.KEY_ATTR], sweep_stage.plan(scene)[3][1])
     (out / "sweep.nc").unlink()                              # (so the sweep is not up to date: it assembles)
     sweep_stage.run_sweep(scene, out, scheduler="synchronous", on_batch=done.append)
