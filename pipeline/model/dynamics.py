@@ -87,9 +87,9 @@ import numpy as np
 from ..units import NS
 from . import compiled
 from .compiled import kernel_jit
-from .forces import RearLawRef, rear_law_ref, rhs_slots, separation
+from .forces import RearLawRef, rear_law_ref, rhs_slots, separation, separation_of
 from .state import (ACCEPTED, MAX_STEPS, N_COUNTERS, NOT_FINITE, REJECTED, RHS_CALLS, STATUS, STEP_UNDERFLOW,
-                    SWITCHES, WINDOW_SWITCHES, state_size)
+                    SWITCHES, THETA, THETA_RATE, WINDOW_SWITCHES, Z, Z_RATE, state_size)
 from .stepper import (cubic_extrema, error_norm, extrema_slots, first_wrong_side, interp_state, inverse_mass_at_tfc,
                       knot_extrema, knots_in_step, sample_outputs, step, step_points, stiffness_cap, switch_point,
                       track_extremes)
@@ -342,6 +342,33 @@ def _rhs_python(t, y, params, in_contact, out, dmw, contact, adhesion, friction,
               _unpacked(gap_power_), meniscus)
 
 
+#: The relative margin of :func:`_capped` (the rounding of ``pow`` and of the products is ~1e-15 relative)
+GROWTH_MARGIN = 1.0 - 1e-6
+
+
+@_inline
+def _capped(e, h, cap):
+    """Whether the step ``h`` [s] grown by ``max(0.2, 0.9 e^(-1/5))`` (an accepted step's error norm ``e``) is
+    at least ``cap`` [s], without ``pow``: ``e < (0.9 h / cap)^5``, by products only, with the margin
+    :data:`GROWTH_MARGIN` (then ``0.9 e^(-1/5) h >= cap (1 + 2e-7)``, past any rounding). Where it holds, the
+    grown step's exact size does not matter: the next step is the cap (``min(h, h_max, h_stiff)``), and
+    ``5 h`` stands in for it."""
+    g = 0.9 * h
+    c2 = cap * cap
+    g2 = g * g
+    return e * (c2 * c2 * cap) < (g2 * g2 * g) * GROWTH_MARGIN
+
+
+@_inline
+def disk_span(p, dmw):
+    """The times [s] between which the disk lookups of the step (:func:`pipeline.model.piecewise.disk3`) and of
+    the separation (:func:`pipeline.model.piecewise.disk`) take the same piece of the DMW spline: from its start
+    to the start of its last piece (every time without a DMW record, both zero)."""
+    if dmw is None:
+        return -np.inf, np.inf
+    return p.dmw_t0, p.dmw_t0 + (dmw.shape[0] - 1) * p.dmw_dt
+
+
 @_jit
 def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, contact, adhesion, friction, tfc,
                pitch, rear_law, gap_power_, meniscus):
@@ -385,6 +412,10 @@ def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, cont
     dex = np.empty(n_max + 3)  # d at those points
     ev_y = np.empty(ns)
     ev_f = np.empty(ns)
+    w_end = np.zeros(2)  # the disk at the step's end, from the step's last stage (stepper.step)
+    # the step's end within these times: the step's lookup (stepper.step, piecewise.disk3) is the separation's
+    # (piecewise.disk), bit for bit (disk3 clamps outside the spline, disk extrapolates; docs/kernel.md)
+    t_disk_lo, t_disk_hi = disk_span(p, dmw)
     t = 0.0
     d0, dd0 = separation(p, dmw, t, y)  # d and d' at the current step start (kept step to step)
     # The initial mode follows the criterion at t = 0.
@@ -431,7 +462,7 @@ def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, cont
         if h < 1e-12 * max(t, NS) or h < 1e-18:  # (h = t_end - t is never a sliver, see above)
             info[STATUS] = STEP_UNDERFLOW
             return Y, C, info, ext
-        info[RHS_CALLS] += step(t, y, k1, h, p, in_contact, fresh, ynew, k7, err, tmp, k2, k3, k4, k5, k6,
+        info[RHS_CALLS] += step(t, y, k1, h, p, in_contact, fresh, ynew, k7, err, tmp, k2, k3, k4, k5, k6, w_end,
                                 dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power, meniscus)
         fresh = np.bool_(False)
         e = error_norm(y, ynew, err, atol, rtol, ns)
@@ -455,7 +486,11 @@ def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, cont
         d1, dd1 = d0, dd0
         n_ex = 0
         for i_redo in range(9):
-            d1, dd1 = separation(p, dmw, t + h_acc, ynew)
+            t1 = t + h_acc
+            if t_disk_lo <= t1 <= t_disk_hi:  # (the step's own lookup of the disk there)
+                d1, dd1 = separation_of(p, ynew[Z], ynew[THETA], ynew[Z_RATE], ynew[THETA_RATE], w_end[0], w_end[1])
+            else:
+                d1, dd1 = separation(p, dmw, t1, ynew)
             n_ex = 0
             n_pts = 0
             if search or t + h_acc >= p.t_win:
@@ -484,7 +519,7 @@ def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, cont
                 break  # the switch is at the end of the step
             h_acc = hi * h_acc
             info[RHS_CALLS] += step(t, y, k1, h_acc, p, in_contact, fresh, ev_y, ev_f, err, tmp, k2, k3, k4, k5, k6,
-                                    dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power, meniscus)
+                                    w_end, dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power, meniscus)
             for i in range(ns):
                 ynew[i] = ev_y[i]
                 k7[i] = ev_f[i]
@@ -513,8 +548,10 @@ def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, cont
         else:
             for i in range(ns):
                 k1[i] = k7[i]
-        # step growth 0.9 e^(-1/5) in [0.2, 5]; e < (0.9/5)^5 gives the cap without calling pow()
-        h = h * (5.0 if e < 1.889568e-4 else max(0.2, 0.9 * e ** -0.2))
+        # step growth 0.9 e^(-1/5) in [0.2, 5]; e < (0.9/5)^5 gives the cap without calling pow(), and so does an
+        # e for which the grown step would exceed the next step's cap, min(h_max, h_stiff): the loop's top then
+        # takes the cap whatever the growth (section "The step's growth" of docs/kernel.md)
+        h = h * (5.0 if e < 1.889568e-4 or _capped(e, h, min(h_max, h_stiff)) else max(0.2, 0.9 * e ** -0.2))
     return Y, C, info, ext
 
 

@@ -204,6 +204,14 @@ def separation(p, dmw, t, y):
     """
     z, theta, vz, vtheta = y[Z], y[THETA], y[Z_RATE], y[THETA_RATE]
     wc, vc = disk(p, dmw, t)
+    return separation_of(p, z, theta, vz, vtheta, wc, vc)
+
+
+@_inline
+def separation_of(p, z, theta, vz, vtheta, wc, vc):
+    """TFC separation ``d`` [m] and its rate [m/s] at the state ``(z, theta, vz, vtheta)`` [m, rad, m/s, rad/s]
+    over the disk at ``wc`` [m] moving at ``vc`` [m/s] (:func:`separation` with the disk looked up: the kernel
+    reuses the step's lookup at the step's end)."""
     return separation_at(p, z, theta, wc), vz - p.l_c * vtheta - vc
 
 

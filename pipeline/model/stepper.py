@@ -47,10 +47,12 @@ E1, E3, E4, E5, E6, E7 = (71 / 57600, -71 / 16695, 71 / 1920, -17253 / 339200, 2
 
 
 @_jit_borrowing
-def step(t, y, k1, h, p, in_contact, fresh, ynew, k7, err, tmp, k2, k3, k4, k5, k6,
+def step(t, y, k1, h, p, in_contact, fresh, ynew, k7, err, tmp, k2, k3, k4, k5, k6, w_end,
          dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power, meniscus):
     """One Dormand-Prince step: ``ynew``, its derivative ``k7`` and the error estimate ``err``
-    (``tmp``, ``k2``...``k6``: work arrays, passed one by one); the slots as in
+    (``tmp``, ``k2``...``k6``: work arrays, passed one by one), and the disk under the TFC point at the step's
+    end, ``w_end[0]`` [m] and ``w_end[1]`` [m/s] (its last stage's lookup: the separation at the end reuses
+    it, :func:`pipeline.model.forces.separation_of`); the slots as in
     :data:`pipeline.model.dynamics.SLOTS`. With ``fresh``, the step first evaluates ``k1``, the derivative at
     ``(t, y)`` (the first step, and the first after a contact switch; otherwise ``k1`` is the last step's
     ``k7``: FSAL). Returns how many times it evaluated the right-hand side (6, or 7 with ``fresh``).
@@ -118,6 +120,8 @@ def step(t, y, k1, h, p, in_contact, fresh, ynew, k7, err, tmp, k2, k3, k4, k5, 
             dst[MENISCUS] = dq
     for i in range(ns):
         err[i] = h * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i] + E7 * k7[i])
+    w_end[0] = w6[0]
+    w_end[1] = w6[1]
     return 7 if fresh else 6
 
 

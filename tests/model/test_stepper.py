@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pipeline.model import dynamics as dyn, kernel_inputs, running, stepper
+from pipeline.model import dynamics as dyn, kernel_inputs, piecewise, running, stepper
 from slider_scenes import ALL, NM, build, make_scene
 
 
@@ -102,10 +102,13 @@ def test_a_step_makes_the_right_hand_sides_operations_at_each_stage(in_contact):
     y = running.start(model, 11 * NM)[0] + np.array([0.3, -2e-5, 1e-4, 0.2]) * NM
     t, h = 3.7e-4, 4.3e-7  # (a step across a DMW knot: the disk of its stages on two pieces)
     ynew, k7, err, tmp, k2, k3, k4, k5, k6 = (np.empty(4) for _ in range(9))
+    w_end = np.empty(2)
     for fresh in (False, True):
         k1 = f(t, y) if not fresh else np.full(4, np.nan)
         n = stepper.step(t, y, k1, h, p, in_contact, np.bool_(fresh), ynew, k7, err, tmp, k2, k3, k4, k5, k6,
-                         *slots)
+                         w_end, *slots)
+        # the disk at the step's end: the separation's lookup there, bit for bit (inside the spline)
+        np.testing.assert_array_equal(w_end, np.concatenate(piecewise.disk_history(tab.dmw, p, np.array([t + h]))))
         assert n == (7 if fresh else 6)
         np.testing.assert_array_equal(k1, f(t, y))
         want = _dormand_prince(f, t, y, k1, h)
