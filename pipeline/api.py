@@ -29,11 +29,11 @@ on a terminal) or, elsewhere (a script's log), a progress line at the end and ev
 Bad input raises the exception the command line turns into its one-line error, checked as the command
 line checks it (:mod:`pipeline.cli_checks`) before anything runs or is written:
 :class:`pipeline.config.scene.SceneError` (a scene, its path or an override), :class:`pipeline.io.DatasetError`
-(a missing or foreign dataset), :class:`pipeline.cli_checks.OptionError` (an option or argument of the wrong
+(a missing or foreign dataset), :class:`pipeline.options.OptionError` (an option or argument of the wrong
 type or range: ``workers="2"``, a results folder that is a file or cannot be written, a negative or NaN
 protrusion, a protrusion given twice, a history not among the protrusions), ``ValueError``; all are
 ``ValueError``, and each names the argument of the call (``out = '...': is a file``, ``workers = 'two'``,
-``yes=True``), not the command line's option (:func:`pipeline.cli_checks.python_call`). A run whose integration fails raises
+``yes=True``), not the command line's option (:func:`pipeline.options.python_call`). A run whose integration fails raises
 :class:`pipeline.model.running.IntegrationError` in one line naming the scene, the protrusion and what to
 change (the command line's message); a file system that fails mid-run (a full disk) raises ``OSError``.
 """
@@ -216,7 +216,7 @@ def simulation_inputs(scene: SceneLike, results: str | Path | None = None, *,
 
     Raises
     ------
-    pipeline.cli_checks.OptionError
+    pipeline.options.OptionError
         ``results`` is no path, a file, or a folder that cannot be written (the runner locks it and
         keeps its datasets there, even when they are up to date).
     """
@@ -288,7 +288,7 @@ def simulate(model: Model, protrusions: Iterable[float], *, histories: Iterable[
 
     Raises
     ------
-    pipeline.cli_checks.OptionError
+    pipeline.options.OptionError
         A protrusion that is no number, NaN, negative or beyond the flying height + 100 nm, given twice, or a
         protrusion list that is a single number; a history protrusion not among ``protrusions``; ``workers``
         given; ``ValueError`` for the other arguments.
@@ -395,7 +395,7 @@ def _client_address(scheduler: Any) -> str | None:
 
     Raises
     ------
-    pipeline.cli_checks.OptionError
+    pipeline.options.OptionError
         The client is closed.
     """
     distributed = sys.modules.get("distributed")  # (a client's module is imported; never import it here)
