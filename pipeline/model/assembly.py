@@ -47,6 +47,7 @@ from ..config.fields import fields, parameter_fields, union
 from ..config.si import si_value
 from ..physics import air_bearing as ab
 from ..physics import bulge_bearing as bb
+from ..physics import tfc_laws
 from ..physics.asperity_statistics import explicit_statistics
 from ..physics.friction import FRICTION_LAWS, friction_parts, friction_stress_table, lubricant_shear_stress
 from ..physics.geometry import friction_arm
@@ -59,9 +60,9 @@ from ..variables import DMW, INTERFACE
 MENISCUS_ATOL = 1e-6
 
 
-#: Scene keys of ``[air_bearing]`` whose named laws (:class:`pipeline.physics.air_bearing.TfcLaw`) act at
+#: Scene keys of ``[air_bearing]`` whose named laws (:class:`pipeline.physics.tfc_laws.TfcLaw`) act at
 #: the TFC point, each with its registry: the selected laws are summed in the kernel's TFC-point force.
-TFC_POINT_LAWS: Mapping[str, Mapping[str, ab.TfcLaw]] = {"tfc_stiffening": ab.TFC_STIFFENING,
+TFC_POINT_LAWS: Mapping[str, Mapping[str, tfc_laws.TfcLaw]] = {"tfc_stiffening": tfc_laws.TFC_STIFFENING,
                                                         "bulge": bb.BULGE_LAWS}
 
 
@@ -73,7 +74,7 @@ def _bulge_table(ds: Any) -> Any:
     return from_dataset(ds)
 
 
-#: How a TFC-point law's table (:attr:`pipeline.physics.air_bearing.TfcLaw.table`) is read from its stage's
+#: How a TFC-point law's table (:attr:`pipeline.physics.tfc_laws.TfcLaw.table`) is read from its stage's
 #: dataset into the SI object its ``force`` takes.
 TABLE_READERS: Mapping[str, Callable[[Any], Any]] = {"bulge": _bulge_table}
 
@@ -149,7 +150,7 @@ class Model:
     info: dict = field(default_factory=dict)
     tfc_stiffening: np.record | None = None
     rear_law: RearLawRef | None = None
-    tfc_tabulated: tuple[ab.TfcLaw, ...] = ()
+    tfc_tabulated: tuple[tfc_laws.TfcLaw, ...] = ()
     scene: Any = None
     start: str = "nominal"
     meniscus: float | None = None
@@ -431,11 +432,11 @@ def meniscus_state(scene: Any, interface: Any | None, p: np.record, adhesion: np
 
 
 def tfc_point_laws(scene: Any, fh0: float, tables: Mapping[str, Any] | None = None
-                   ) -> tuple[np.record | None, tuple[ab.TfcLaw, ...]]:
+                   ) -> tuple[np.record | None, tuple[tfc_laws.TfcLaw, ...]]:
     """The scene's air-bearing laws at the TFC point (:data:`TFC_POINT_LAWS`): the parameters of the
     compiled gap-power law (a :data:`pipeline.model.dynamics.GAP_POWER` record, or ``None``) and the laws
     to tabulate (:func:`pipeline.model.kernel_inputs.tfc_table`). ``fh0``: the flying height [m]; ``tables``: the datasets of the stages
-    the laws read, by stage name (:attr:`pipeline.physics.air_bearing.TfcLaw.table`); a law that reads one
+    the laws read, by stage name (:attr:`pipeline.physics.tfc_laws.TfcLaw.table`); a law that reads one
     gets it bound, in SI (:func:`pipeline.model.bulge_table.from_dataset`)."""
     a, sa = scene["air_bearing"], scene.si.air_bearing  # (the law names, the numbers in SI)
     tables = tables or {}
@@ -446,8 +447,8 @@ def tfc_point_laws(scene: Any, fh0: float, tables: Mapping[str, Any] | None = No
             continue
         if law.closed_form == "gap-power":  # docs/model.md, section "Model variants"
             k_t, q = sa.tfc_stiffness, sa.tfc_stiffening_exponent
-            gap_power = dyn.params(dyn.GAP_POWER, k_t=k_t, q=q, g0=fh0, g_min=ab.TFC_MIN_GAP * fh0,
-                                   k_min=ab.stiffening_stiffness(ab.TFC_MIN_GAP, 1.0, k_t, q))  # at g = g_min
+            gap_power = dyn.params(dyn.GAP_POWER, k_t=k_t, q=q, g0=fh0, g_min=tfc_laws.TFC_MIN_GAP * fh0,
+                                   k_min=tfc_laws.stiffening_stiffness(tfc_laws.TFC_MIN_GAP, 1.0, k_t, q))  # at g = g_min
         elif law.closed_form is None:
             if law.table is not None:
                 ds = tables.get(law.table)

@@ -43,7 +43,7 @@ A rear-bearing law is its function of numbers in :mod:`pipeline.physics.air_bear
 force law at the TFC point (the bulge's air bearing, a "reynolds" table F(g, delta), ...) is
 tabulated, not compiled: its law is a plain Python function of the gap array and the protrusion in
 its physics module, registered with ONE line in its registry
-(:data:`pipeline.physics.air_bearing.TFC_STIFFENING`: ``"name": TfcLaw(force)``). The model assembly
+(:data:`pipeline.physics.tfc_laws.TFC_STIFFENING`: ``"name": TfcLaw(force)``). The model assembly
 (:func:`pipeline.model.kernel_inputs.tfc_table`) samples it per protrusion on a gap grid into a piecewise
 cubic (as the interface tables), which the kernel's one generic slot ``Tables.tfc`` evaluates: force
 and stiffness ``-dF/dg`` (the step-size cap) from the same cubic, so the kernel, its argument list and

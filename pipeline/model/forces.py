@@ -21,7 +21,7 @@ Equations of motion (docs/model.md, section "Slider dynamics"), state ``y = (z, 
 * the disk under each point moves with the DMW ``w(t)`` delayed by the disk's travel time.
 * an air-bearing force at the TFC point (docs/model.md, section "Model variants"): the closed-form
   gap-power stiffening spring ``F_t = k_t [G(g_n) - G(g)]``, stiffness ``-dF_t/dg = k_t [(g0/g)^p - 1]``
-  (``Variants.gap_power``, :func:`pipeline.physics.air_bearing.tfc_stiffening_force`), or any law
+  (``Variants.gap_power``, :func:`pipeline.physics.tfc_laws.tfc_stiffening_force`), or any law
   tabulated versus the gap (``Tables.tfc``, :func:`pipeline.model.kernel_inputs.tfc_table`), or both.
 
 The closed-form laws are compiled from their one definition in :mod:`pipeline.physics.air_bearing`.
@@ -50,6 +50,7 @@ from numba.core.errors import NumbaError, NumbaWarning
 from numba.extending import NativeValue, models, overload, register_model, typeof_impl, unbox
 
 from ..physics import air_bearing as ab
+from ..physics import tfc_laws
 from .compiled import BORROWING, kernel_jit
 from .piecewise import _ppat, _ppat_at, _ppindex, _ppslope_at, _ppval, disk, disk3
 from .state import MENISCUS, THETA, THETA_RATE, Z, Z_RATE
@@ -59,8 +60,8 @@ _inline = kernel_jit(__name__, inline="always")
 _jit_borrowing = kernel_jit(__name__, **BORROWING)  # (no reference counts: pipeline.model.compiled.BORROWING)
 
 # the air-bearing laws at the TFC point, compiled from their one definition in pipeline.physics.air_bearing
-_stiffening_potential = _inline(ab.stiffening_potential)
-_stiffening_stiffness = _inline(ab.stiffening_stiffness)
+_stiffening_potential = _inline(tfc_laws.stiffening_potential)
+_stiffening_stiffness = _inline(tfc_laws.stiffening_stiffness)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -25,7 +25,7 @@ from .forces import rear_law_ref
 from .piecewise import piecewise_coefficients, ppval
 from .scene_inputs import needs_interface
 from .state import N_STATE
-from ..physics import air_bearing as ab
+from ..physics import tfc_laws
 from ..physics.geometry import AREA_MODELS, nominal_area
 
 
@@ -74,7 +74,7 @@ def tfc_table(model: Model, protrusion: float) -> tuple[np.ndarray, float, float
     return _cached(model.tfc_tables, key, TFC_CACHE, lambda: _tfc_table(laws, model.p.FH0, key))
 
 
-def _tfc_table(laws: tuple[ab.TfcLaw, ...], fh0: float, protrusion: float) -> tuple[np.ndarray, float, float]:
+def _tfc_table(laws: tuple[tfc_laws.TfcLaw, ...], fh0: float, protrusion: float) -> tuple[np.ndarray, float, float]:
     """The table of :func:`tfc_table` made anew: the laws' summed force at ``protrusion`` [m] on their gap
     grid over the flying height ``fh0`` [m]."""
     g = np.linspace(min(law.gap_range[0] for law in laws) * fh0, max(law.gap_range[1] for law in laws) * fh0,
@@ -195,8 +195,8 @@ def kernel_slots(model: Model, p: np.record) -> tuple[dyn.Tables, dyn.Variants]:
 
 
 def _stiffening_potential(g: float, g0: float, q: float, g_min: float) -> float:
-    """``G(max(g, g_min))`` [m] of the stiffening law (:func:`pipeline.physics.air_bearing.tfc_stiffening_force`)."""
-    return ab.stiffening_potential(max(g, g_min), g0, q)
+    """``G(max(g, g_min))`` [m] of the stiffening law (:func:`pipeline.physics.tfc_laws.tfc_stiffening_force`)."""
+    return tfc_laws.stiffening_potential(max(g, g_min), g0, q)
 
 
 def stand_in_arguments(scene: Any) -> tuple[np.ndarray, dyn.Grid, np.record, dyn.Tables, dyn.Variants, dyn.Solver]:

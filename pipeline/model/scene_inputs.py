@@ -52,7 +52,7 @@ def needs_interface(scene: Any) -> bool:
 
 def table_stages(scene: Any) -> tuple[str, ...]:
     """The stages whose datasets the scene's air-bearing laws at the TFC point read
-    (:data:`pipeline.model.assembly.TFC_POINT_LAWS`, :attr:`pipeline.physics.air_bearing.TfcLaw.table`:
+    (:data:`pipeline.model.assembly.TFC_POINT_LAWS`, :attr:`pipeline.physics.tfc_laws.TfcLaw.table`:
     ``bulge`` for ``air_bearing.bulge = "reynolds"``)."""
     a = scene["air_bearing"]
     laws = (registry.lookup(a[key]) for key, registry in TFC_POINT_LAWS.items())

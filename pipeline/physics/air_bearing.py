@@ -21,11 +21,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from .variants import Entry, Registry, Variant
-# the TFC-point laws (defined in tfc_laws) under the names the model reads them by here
-from .tfc_laws import NO_TFC_LAW as NO_TFC_LAW, TFC_MIN_GAP as TFC_MIN_GAP, TFC_STIFFENING as TFC_STIFFENING
-from .tfc_laws import TfcLaw as TfcLaw, gap_power_force as gap_power_force
-from .tfc_laws import stiffening_potential as stiffening_potential, stiffening_stiffness as stiffening_stiffness
-from .tfc_laws import tfc_stiffening_force as tfc_stiffening_force
 
 
 @dataclass(frozen=True)

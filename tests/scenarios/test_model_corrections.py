@@ -15,6 +15,7 @@ from pipeline.model import dynamics as dyn
 from pipeline.model import forces as fo
 from pipeline.model import assembly, kernel_inputs, outcomes, running
 from pipeline.physics import air_bearing as ab
+from pipeline.physics import tfc_laws
 from pipeline.physics import microwaviness as pdmw
 from pipeline.physics import friction
 from pipeline.config.scene import SceneError, load_scene, scene_from_dict
@@ -125,23 +126,23 @@ def test_separation_has_one_home(paper):
 def test_stiffening_law_zero_force_and_stiffness_by_finite_differences(p_exp):
     g0, k_t = 11 * NM, 2e5
     for g_n in (11 * NM, 6 * NM, 1.5 * NM):
-        F, k = ab.tfc_stiffening_force(g_n, g_n, g0, k_t, p_exp)
+        F, k = tfc_laws.tfc_stiffening_force(g_n, g_n, g0, k_t, p_exp)
         assert F == 0.0  # zero force at the nominal gap of the protrusion
         g = np.linspace(0.5, 12.0, 47) * NM
         h = 1e-6 * NM
-        Fp, _ = ab.tfc_stiffening_force(g + h, g_n, g0, k_t, p_exp)
-        Fm, _ = ab.tfc_stiffening_force(g - h, g_n, g0, k_t, p_exp)
-        _, kg = ab.tfc_stiffening_force(g, g_n, g0, k_t, p_exp)
+        Fp, _ = tfc_laws.tfc_stiffening_force(g + h, g_n, g0, k_t, p_exp)
+        Fm, _ = tfc_laws.tfc_stiffening_force(g - h, g_n, g0, k_t, p_exp)
+        _, kg = tfc_laws.tfc_stiffening_force(g, g_n, g0, k_t, p_exp)
         law = k_t * ((g0 / g) ** p_exp - 1.0)
         # tol: the law's closed form, a few roundings and a libm pow (under an ulp)
         np.testing.assert_allclose(kg, law, rtol=1e-12)
         np.testing.assert_allclose(-(Fp - Fm) / (2 * h), law, rtol=1e-6, atol=1e-6 * k_t)
     # no added stiffness at g0 = FH0: the modal stiffness of the bearing is unchanged there
-    assert ab.tfc_stiffening_force(g0, g0, g0, k_t, p_exp)[1] == 0.0
+    assert tfc_laws.tfc_stiffening_force(g0, g0, g0, k_t, p_exp)[1] == 0.0
     # below TFC_MIN_GAP g0 the force continues linearly, continuous at the junction
-    gm = ab.TFC_MIN_GAP * g0
-    f_lo = ab.tfc_stiffening_force(gm * (1 - 1e-9), 6 * NM, g0, k_t, p_exp)[0]
-    f_hi = ab.tfc_stiffening_force(gm * (1 + 1e-9), 6 * NM, g0, k_t, p_exp)[0]
+    gm = tfc_laws.TFC_MIN_GAP * g0
+    f_lo = tfc_laws.tfc_stiffening_force(gm * (1 - 1e-9), 6 * NM, g0, k_t, p_exp)[0]
+    f_hi = tfc_laws.tfc_stiffening_force(gm * (1 + 1e-9), 6 * NM, g0, k_t, p_exp)[0]
     assert f_lo == pytest.approx(f_hi, rel=1e-6)
 
 
@@ -171,7 +172,7 @@ def test_stiffening_kernel_force_matches_the_law(paper):
         # displaced: the difference of the accelerations is the law's force at the TFC point
         y = np.array([-0.8 * NM, 0.3e-6, 0.0, 0.0])
         g = 11 * NM - delta + y[0] - s.l_c * y[1]
-        F, _ = ab.tfc_stiffening_force(g, 11 * NM - delta, 11 * NM, 3e5, 1.5)
+        F, _ = tfc_laws.tfc_stiffening_force(g, 11 * NM - delta, 11 * NM, 3e5, 1.5)
         dv = kernel_rhs(model, delta, y) - kernel_rhs(model, delta, y, False)
         # tol: a difference of two force sums of similar size (cancellation < 10), tens of roundings
         assert dv[2] * s.m == pytest.approx(F, rel=1e-9)

@@ -1,5 +1,5 @@
 """Model variants are open: a new air-bearing law at the TFC point is its function plus one registry
-line (pipeline.physics.air_bearing.TFC_STIFFENING), tabulated per protrusion into the kernel's generic
+line (pipeline.physics.tfc_laws.TFC_STIFFENING), tabulated per protrusion into the kernel's generic
 TFC-point slot (pipeline.model.kernel_inputs.tfc_table, pipeline.model.dynamics.Tables.tfc) with no kernel change.
 
 The laws registered here live in test-local entries (monkeypatch: the module's registry is restored
@@ -18,6 +18,7 @@ from pipeline.model import dynamics as dyn
 from pipeline.model import forces as fo
 from pipeline.model import assembly, kernel_inputs, outcomes, running
 from pipeline.physics import air_bearing as ab
+from pipeline.physics import tfc_laws
 from pipeline.units import NM
 from variant_scenes import make_scene, record
 from pipeline.model import state as st
@@ -33,10 +34,10 @@ def constant_lift(g: np.ndarray, delta: float) -> np.ndarray:
 @pytest.mark.slow  # (compiles a kernel variant of its own: 14-26 s with an empty numba cache)
 def test_a_new_tfc_law_is_its_function_and_one_registry_line(monkeypatch):
     # the whole change a new variant needs: its law (above) and one line in its registry
-    monkeypatch.setitem(ab.TFC_STIFFENING, "constant-lift", ab.TfcLaw(constant_lift))
+    monkeypatch.setitem(tfc_laws.TFC_STIFFENING, "constant-lift", tfc_laws.TfcLaw(constant_lift))
     scene = make_scene(["air_bearing", "pitch"], tfc_stiffening="constant-lift")
     model = assembly.build_model(scene, None, None, None)
-    assert model.tfc_stiffening is None and model.tfc_tabulated == (ab.TFC_STIFFENING["constant-lift"],)
+    assert model.tfc_stiffening is None and model.tfc_tabulated == (tfc_laws.TFC_STIFFENING["constant-lift"],)
     run = running.run_model(model, 5 * NM)
     # static equilibrium under the lift at the TFC point (l_c behind the CG), linear front pad and
     # power-law rear pad: F_f + F_r + L = 0, l_f F_f - l_r F_r - l_c L = 0; the damped transient
@@ -67,7 +68,7 @@ def test_a_new_tfc_law_is_its_function_and_one_registry_line(monkeypatch):
 def test_tabulated_law_reproduces_the_compiled_gap_power_law(monkeypatch):
     # The gap-power law registered a second time without its compiled form goes through the table:
     # force and stiffness at the TFC point and the whole run agree with the closed form.
-    monkeypatch.setitem(ab.TFC_STIFFENING, "gap-power-tabulated", replace(ab.TFC_STIFFENING["gap-power"], closed_form=None))
+    monkeypatch.setitem(tfc_laws.TFC_STIFFENING, "gap-power-tabulated", replace(tfc_laws.TFC_STIFFENING["gap-power"], closed_form=None))
     law = {"tfc_stiffness_n_m": 3.0e5, "tfc_stiffening_exponent": 1.5}
     effects = ["air_bearing", "pitch", "dmw"]
     compiled = make_scene(effects, tfc_stiffening="gap-power", **law)
@@ -81,7 +82,7 @@ def test_tabulated_law_reproduces_the_compiled_gap_power_law(monkeypatch):
     # measured: force within 3e-8 of its largest value over 0.25-30 nm, stiffness within 5e-8
     # relative above 1 nm (the spline's error grows towards the law's singular end at g_min = 0.22 nm)
     g = np.linspace(1.0, 20.0, 40) * NM
-    F, k = ab.tfc_stiffening_force(g, 11 * NM - delta, 11 * NM, 3.0e5, 1.5)
+    F, k = tfc_laws.tfc_stiffening_force(g, 11 * NM - delta, 11 * NM, 3.0e5, 1.5)
     kernel = np.array([fo.tfc_air_force(p, None, c, gi) for gi in g])
     np.testing.assert_allclose(kernel[:, 0], F, rtol=0, atol=1e-7 * np.abs(F).max())
     np.testing.assert_allclose(kernel[:, 1], k, rtol=1e-6)
@@ -98,6 +99,6 @@ def test_tabulated_law_reproduces_the_compiled_gap_power_law(monkeypatch):
 
 
 def test_an_unknown_compiled_form_is_refused(monkeypatch):
-    monkeypatch.setitem(ab.TFC_STIFFENING, "bogus", ab.TfcLaw(constant_lift, closed_form="bogus"))
+    monkeypatch.setitem(tfc_laws.TFC_STIFFENING, "bogus", tfc_laws.TfcLaw(constant_lift, closed_form="bogus"))
     with pytest.raises(ValueError, match="air_bearing.tfc_stiffening = 'bogus': no compiled form 'bogus'"):
         assembly.build_model(make_scene(["air_bearing"], tfc_stiffening="bogus"), None, None, None)
