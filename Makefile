@@ -40,15 +40,18 @@ export UV_PYTHON_DOWNLOADS := never
 export UV_COMPILE_BYTECODE := 0
 export PYTHONDONTWRITEBYTECODE :=
 # What the set-up imports: every module of the package (an `hdi` command imports most of them: the CLI, the
-# stage registry, the API) and the third-party modules the package imports inside functions
-# (tests/structure/test_bytecode.py checks the list against the sources)
+# stage registry, the API), the third-party modules the package imports inside functions
+# (tests/structure/test_bytecode.py checks the list against the sources) and the ~70 modules of numba's
+# implementations that numba imports when a process first loads or compiles a kernel (its CPU target's
+# refresh: without their bytecode each command with a kernel compiled them again, ~0.5-1 s of CPU)
 BYTECODE_IMPORTS := import importlib, pkgutil, pipeline; \
   [importlib.import_module(m.name) for m in pkgutil.walk_packages(pipeline.__path__, "pipeline.")]; \
   import ContactMechanics, ContactMechanics.Optimization, SALib.analyze, SALib.sample, SurfaceTopography, \
   SurfaceTopography.Exceptions, SurfaceTopography.IO, SurfaceTopography.Support.UnitConversion, distributed, \
   distributed.comm, matplotlib.axes, matplotlib.figure, netCDF4, numpy.linalg, scipy.integrate, scipy.interpolate, \
   scipy.linalg, scipy.ndimage, scipy.optimize, scipy.signal, scipy.special, tqdm.auto, tqdm.contrib.logging, xarray, \
-  xarray.namedarray.pycompat
+  xarray.namedarray.pycompat; \
+  from numba.core.registry import cpu_target; cpu_target.target_context.refresh()
 
 # The stages: one make target per module of pipeline/stages/ (the runner discovers the stages there and
 # each module is named after its stage, tests/structure/test_registries.py): a new stage module is a new target

@@ -52,15 +52,25 @@ def test_every_install_writes_the_bytecode_of_what_runs_after_the_sync():
     assert "'" not in makefile_variable("BYTECODE_IMPORTS", text)  # (inside the recipe's single quotes)
 
 
-def test_the_set_up_imports_every_package_module_and_every_lazy_third_party_import():
-    """The set-up's line, run here without writing: every module of the package and every third-party module
-    imported inside a function of it is in the process's modules (a new lazy import not in the list fails)."""
-    code = makefile_variable("BYTECODE_IMPORTS", (ROOT / "Makefile").read_text())
+def modules_after(code: str) -> set[str]:
+    """The modules a fresh process has imported after running ``code`` (without writing bytecode)."""
     env = {**os.environ, "PYTHONDONTWRITEBYTECODE": "1", "MPLBACKEND": "Agg"}
     done = subprocess.run([sys.executable, "-c", code + "; import sys; print('\\n'.join(sorted(sys.modules)))"],
                           cwd=ROOT, env=env, capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr[-2000:]
-    imported = set(done.stdout.split())
+    return set(done.stdout.split())
+
+
+def test_the_set_up_imports_every_package_module_and_every_lazy_third_party_import():
+    """The set-up's line, run here without writing: every module of the package and every third-party module
+    imported inside a function of it is in the process's modules (a new lazy import not in the list fails);
+    so are the modules numba imports when a process first loads a kernel from its cache (its CPU target's
+    additional registries: ~70 modules that every command with a kernel compiled again without them)."""
+    imported = modules_after(makefile_variable("BYTECODE_IMPORTS", (ROOT / "Makefile").read_text()))
+    numba_lazy = modules_after("import numba; from numba.core.registry import cpu_target; "
+                               "cpu_target.target_context.refresh()") - modules_after("import numba")
+    assert {"numba.np.arraymath", "numba.cpython.unicode"} <= numba_lazy  # (the check sees numba's lazy imports)
+    assert not numba_lazy - imported, sorted(numba_lazy - imported)
     package = {".".join(("pipeline", *p.relative_to(ROOT / "pipeline").with_suffix("").parts))
                for p in (ROOT / "pipeline").rglob("*.py") if p.name != "__init__.py"}
     assert len(package) > 100 and not package - imported, sorted(package - imported)
