@@ -33,22 +33,29 @@ export UV_PYTHON_DOWNLOADS := never
 # developed on) Python never caches it: every fresh process (each `hdi` command, each dask process
 # worker, each test that starts one) then compiled ~900 modules again, ~4.5 s of CPU of its start. Compiling
 # the whole environment at install (UV_COMPILE_BYTECODE) took 14.7 s for 6,489 files of which a run imports
-# ~1,300; so every install imports what the commands import (BYTECODE_IMPORTS) with writing on (an empty
+# ~1,300; so every install imports what the commands import (below) with writing on (an empty
 # value), and the make targets let Python write the .pyc of anything else they import, lazily: the later
 # processes, make's or not, start from cached bytecode whatever the user's shell sets (docs/performance.md,
 # section "Start-up whatever the shell").
 export UV_COMPILE_BYTECODE := 0
 export PYTHONDONTWRITEBYTECODE :=
-# What the set-up imports: every module of the package (an `hdi` command imports most of them: the CLI, the
-# stage registry, the API) and the third-party modules the package imports inside functions
-# (tests/structure/test_bytecode.py checks the list against the sources)
+# What the set-up imports, in two processes at once (on two cores ~9 s of the 14 s they took one after the
+# other in one process, cold, at the cost of ~1 s of CPU for the modules both compile; docs/performance.md,
+# section "The set-up's bytecode and numba's implementations"): BYTECODE_IMPORTS, every module of the package
+# (an `hdi` command imports most of them: the CLI, the stage registry, the API) and the ~70 modules of
+# numba's implementations that numba imports when a process first loads or compiles a kernel (its CPU
+# target's refresh: without their bytecode each command with a kernel compiled them again, ~0.5-1 s of CPU);
+# BYTECODE_LAZY, the third-party modules the package imports inside functions (tests/structure/
+# test_bytecode.py checks both lists against the sources and numba)
 BYTECODE_IMPORTS := import importlib, pkgutil, pipeline; \
   [importlib.import_module(m.name) for m in pkgutil.walk_packages(pipeline.__path__, "pipeline.")]; \
-  import ContactMechanics, ContactMechanics.Optimization, SALib.analyze, SALib.sample, SurfaceTopography, \
-  SurfaceTopography.Exceptions, SurfaceTopography.IO, SurfaceTopography.Support.UnitConversion, distributed, \
-  distributed.comm, matplotlib.axes, matplotlib.figure, netCDF4, numpy.linalg, scipy.integrate, scipy.interpolate, \
-  scipy.linalg, scipy.ndimage, scipy.optimize, scipy.signal, scipy.special, tqdm.auto, tqdm.contrib.logging, xarray, \
-  xarray.namedarray.pycompat
+  import numba.core.boxing, numba.core.runtime.context; \
+  from numba.core.registry import cpu_target; cpu_target.target_context.refresh()
+BYTECODE_LAZY := import ContactMechanics, ContactMechanics.Optimization, SALib.analyze, SALib.sample, \
+  SurfaceTopography, SurfaceTopography.Exceptions, SurfaceTopography.IO, SurfaceTopography.Support.UnitConversion, \
+  distributed, distributed.comm, matplotlib.axes, matplotlib.figure, netCDF4, numpy.linalg, scipy.integrate, \
+  scipy.interpolate, scipy.linalg, scipy.ndimage, scipy.optimize, scipy.signal, scipy.special, tqdm.auto, \
+  tqdm.contrib.logging, xarray, xarray.namedarray.pycompat
 
 # The stages: one make target per module of pipeline/stages/ (the runner discovers the stages there and
 # each module is named after its stage, tests/structure/test_registries.py): a new stage module is a new target
@@ -86,7 +93,8 @@ define install
 	    test -x $(BIN)/python || $(PYTHON) -m venv $(VENV); \
 	    $(BIN)/python -m pip install --quiet -e ".$(2)"; \
 	fi
-	$(BIN)/python -c '$(BYTECODE_IMPORTS)'
+	$(BIN)/python -c '$(BYTECODE_LAZY)' & lazy=$$!; $(BIN)/python -c '$(BYTECODE_IMPORTS)'; own=$$?; \
+	  wait $$lazy && exit $$own
 endef
 
 $(RUN_STAMP): pyproject.toml uv.lock Makefile

@@ -69,13 +69,22 @@ def environment(dont_write: bool) -> dict[str, str]:
     return env
 
 
-def bytecode_census(args: list[str], env: dict[str, str]) -> dict[str, Any]:
+def bytecode_census(args: list[str], env: dict[str, str], fresh: Path | None = None) -> dict[str, Any]:
     """How many modules one ``hdi ARGS`` process in ``env`` imported, and how many of them without cached
-    bytecode (:data:`WITHOUT_BYTECODE`)."""
+    bytecode (:data:`WITHOUT_BYTECODE`); with ``fresh``, in a new copy of that folder (``--out``), as the timed
+    processes run (a command whose outputs are up to date loads no kernel, nor the numba modules that go with
+    it)."""
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "modules.json"
-        run_process([sys.executable, "-c", WITHOUT_BYTECODE, *args], ROOT, env={**env, "HDI_BENCH_MODULES": str(out)},
-                    stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        extra: list[str] = []
+        if fresh is not None:
+            (Path(tmp) / "out").mkdir()
+            for name in INPUTS:
+                if (fresh / name).is_file():
+                    shutil.copy(fresh / name, Path(tmp) / "out" / name)
+            extra = ["--out", str(Path(tmp) / "out")]
+        run_process([sys.executable, "-c", WITHOUT_BYTECODE, *args, *extra], ROOT,
+                    env={**env, "HDI_BENCH_MODULES": str(out)}, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         return json.loads(out.read_text())
 
 
@@ -109,8 +118,7 @@ def run(results: list[dict]) -> None:
             setting = "PYTHONDONTWRITEBYTECODE=1" if dont_write else "PYTHONDONTWRITEBYTECODE unset"
             census = {}
             if dont_write:  # (what the set-up left: before any process of this row writes bytecode)
-                census = {"help": bytecode_census(help_, env), "sweep": bytecode_census([*sweep, "--out", str(inputs)],
-                                                                                        env)}
+                census = {"help": bytecode_census(help_, env), "sweep": bytecode_census(sweep, env, fresh=inputs)}
             else:
                 hdi(*help_, env=env)  # (writes what is missing)
             walls, cpus = _times(help_, env)

@@ -37,10 +37,12 @@ temperature".
 from __future__ import annotations
 
 import numpy as np
-from scipy.special import beta as _beta
 
-#: ``T_mean sqrt(Pe) k / (q a)`` as ``Pe -> inf``: the 1-D half-space solution averaged over the disk [1].
-MEAN_HIGH_PE = float(8.0 * _beta(0.5, 1.75) / (3.0 * np.pi ** 1.5))
+#: ``T_mean sqrt(Pe) k / (q a)`` as ``Pe -> inf``: the 1-D half-space solution averaged over the disk [1],
+#: ``8 B(1/2, 7/4) / (3 pi^1.5)`` (B the beta function). Written out: scipy.special's import (~0.2-0.5 s with
+#: the numpy modules it pulls) would be paid by every ``hdi`` command, whose stage registry imports this module;
+#: tests/physics/test_flash_temperature.py checks it against ``scipy.special.beta`` to the last bit.
+MEAN_HIGH_PE = 0.6885457813073166
 #: ``T_mean k / (q a)`` at ``Pe = 0``: the stationary uniform circular source's mean rise [CJ59] [1].
 MEAN_LOW_PE = 8.0 / (3.0 * np.pi)
 #: The mean's offset in ``C / sqrt(b + Pe)`` that gives its stationary limit [1].

@@ -88,7 +88,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.special import ndtr
 
 from . import asperity
 from .adhesion import lennard_jones_force, meniscus_force
@@ -193,10 +192,18 @@ def _panels(a: np.ndarray, b: np.ndarray, nodes: int, panels: int, square: bool 
     return z, wt
 
 
+def _ndtr(x: np.ndarray) -> np.ndarray:
+    """The standard Gaussian's CDF ``Phi(x)`` [1], ``scipy.special.ndtr``, imported at the first call: every
+    ``hdi`` command imports this module (the command line's sizing), and scipy.special's import (~0.2-0.5 s
+    with the numpy modules it pulls) is paid only by those that make interface tables."""
+    from scipy.special import ndtr as cdf
+    return cdf(x)
+
+
 def _G(u: np.ndarray) -> np.ndarray:
     """``G(u) = phi(u) - u Q(u) = int_u^inf (v - u) phi(v) dv`` [1] for the standard Gaussian (module docstring,
     "Wetted area")."""
-    return np.exp(-0.5 * u * u) / np.sqrt(2.0 * np.pi) - u * ndtr(-u)
+    return np.exp(-0.5 * u * u) / np.sqrt(2.0 * np.pi) - u * _ndtr(-u)
 
 
 def _gauss(z: np.ndarray, s: float) -> np.ndarray:
@@ -253,13 +260,13 @@ def isbl_tables(d: np.ndarray, p: Interface, *, quantities=QUANTITIES, nodes: in
 
 def _cdf(z: np.ndarray, s: float) -> np.ndarray:
     """The Gaussian CDF of summit heights ``P(z' < z)`` [1], ``s = sigma_s`` [m]."""
-    return ndtr(z / s)
+    return _ndtr(z / s)
 
 
 def _upper(z: np.ndarray, s: float) -> np.ndarray:
     """The upper tail ``P(z' > z)`` [1] as ``ndtr(-z/s)``, not ``1 - F(z)``: the difference loses all relative
     accuracy (and monotonicity) once ``F(z)`` rounds to 1, i.e. beyond ~8 sigma_s."""
-    return ndtr(-z / s)
+    return _ndtr(-z / s)
 
 
 def _clip(a: np.ndarray, b: np.ndarray, s: float) -> tuple[np.ndarray, np.ndarray]:
@@ -409,9 +416,9 @@ def penetration_adhesion(d: np.ndarray, p: Interface) -> tuple[np.ndarray, np.nd
     d = np.atleast_1d(np.asarray(d, dtype=float))
     s, t = p.sigma_s, p.t
     scale = p.eta * meniscus_force(p.R, p.dgamma_solid - p.dgamma)
-    Q = lambda x: ndtr(-x / s)  # noqa: E731 - upper tail P(z > x)
+    Q = lambda x: _ndtr(-x / s)  # noqa: E731 - upper tail P(z > x)
     touching = np.where(d > 0, Q(d) - Q(d + asperity.X_PLASTIC * p.w_c),
-                        ndtr((d + asperity.X_PLASTIC * p.w_c) / s) - ndtr(d / s))
+                        _ndtr((d + asperity.X_PLASTIC * p.w_c) / s) - _ndtr(d / s))
     if t > 0.0:
         ramp = np.maximum(s * (_G((d - t) / s) - _G(d / s)) / t - Q(d), 0.0)
     else:

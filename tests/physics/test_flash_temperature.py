@@ -36,6 +36,11 @@ def test_stationary_source_has_carslaw_jaegers_centre_and_mean():
     assert ft.flash_factor(0.0, "mean") == pytest.approx(8 / (3 * np.pi), rel=1e-15)
 
 
+def test_high_peclet_mean_is_the_beta_function_closed_form_to_the_last_bit():
+    from scipy.special import beta
+    assert ft.MEAN_HIGH_PE == float(8.0 * beta(0.5, 1.75) / (3.0 * np.pi ** 1.5))
+
+
 def test_high_peclet_limit_is_the_one_dimensional_half_space():
     # [Jaeger42]: T = (2 q / k) sqrt(kappa x / (pi V)): at the trailing end of the central chord (x = 2a)
     # 2 / sqrt(pi Pe); the exact solution approaches it as Pe grows, the closed form has it as its limit
