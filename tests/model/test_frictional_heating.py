@@ -48,6 +48,7 @@ def test_the_update_is_the_exact_lag_of_a_constant_forcing():
     for hk in h:
         df = heat_update(df, a, a, hk, tau)
     t = h.sum()
+    # tol: 2000 updates of a few operations each, ~1e-16 apiece, against one exponential of their sum
     assert df == pytest.approx(a + (df0 - a) * np.exp(-t / tau), rel=1e-12)
 
 
@@ -122,6 +123,7 @@ def test_in_flight_the_heat_decays_exponentially():
     # the heat's protrusion lowers the flying separation by itself, at once
     cold = running.run_model(m, 5 * NM, y0=np.append(y0, 0.0))
     d_hot, d_cold = outcomes.histories(run)["separation"], outcomes.histories(cold)["separation"]
+    # tol: the same state at t = 0, d = separation_at - delta_f: the difference is delta_f to d's rounding (~1e-24 m)
     assert d_hot[0] - d_cold[0] == pytest.approx(-NM, rel=1e-9)
 
 
