@@ -95,7 +95,7 @@ def run_model(model: Model, protrusion: float, y0: np.ndarray | None = None, max
             y0, heat = heated_start(model, p, tables, variants, y0)
     y0 = np.asarray(y0, float)
     if model.meniscus is not None and y0.size == 4:  # the meniscus state starts at its equilibrium
-        y0 = np.append(y0, meniscus_equilibrium(model, p, y0))
+        y0 = np.append(y0, meniscus_equilibrium(model, p, y0, heat))
     if model.heating is not None and y0.size == N_STATE + (model.meniscus is not None):
         y0 = np.append(y0, heat)  # (the last column: pipeline.model.state.output_size)
     Y, C, info, ext = dyn.integrate(y0, grid, p, tables, variants, solver)
@@ -108,12 +108,13 @@ def run_model(model: Model, protrusion: float, y0: np.ndarray | None = None, max
                d_extremes=(float(ext[0]), float(ext[1])), start=start_note)
 
 
-def meniscus_equilibrium(model: Model, p: np.record, y: np.ndarray) -> float:
+def meniscus_equilibrium(model: Model, p: np.record, y: np.ndarray, heat: float = 0.0) -> float:
     """The meniscus state's equilibrium ``q = p_a(d)`` [Pa] at the state ``y`` (z [m], theta [rad], ...)
     at ``t = 0``, the disk under the TFC point where the DMW record puts it (docs/model.md, section
-    "Meniscus formation"): the start value of ``q``."""
+    "Meniscus formation"): the start value of ``q``; ``heat``: the frictional heat's protrusion [m] at the
+    start (docs/model.md, section "Frictional heating"), which lowers ``d``."""
     w = disk_history(model.dmw, p, np.zeros(1))[0][0] if model.dmw is not None else 0.0
-    d = separation_at(p, float(y[Z]), float(y[THETA]), w)
+    d = separation_at(p, float(y[Z]), float(y[THETA]), w) - heat
     adhesion = interface_tables(model, p["delta"], p["A_n"]).adhesion
     return float(ppval(adhesion, p.tab_x0, p.tab_h, np.array([d]))[0])
 
