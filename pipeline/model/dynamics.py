@@ -253,7 +253,8 @@ def integrate(y0: np.ndarray, grid: Grid, p: np.record, tab: Tables, var: Varian
 
     Returns
     -------
-    Y : states at ``t_out`` (n_out, 4), (n_out, 5) with the meniscus state; C : contact flag at ``t_out``;
+    Y : states at ``t_out`` (n_out, 4), one more column with the meniscus state and one with the heat (last,
+        ``delta_f`` [m]); C : contact flag at ``t_out``;
     info : the counters (:data:`pipeline.model.state.STATUS`, ``ACCEPTED``, ...);
     ext : exact minimum and maximum of the separation ``d`` [m] over ``t >= p.t_win``
 
