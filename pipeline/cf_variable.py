@@ -59,6 +59,8 @@ CITATIONS: dict[str, str] = {
              'sub-boundary lubrication model", J. Tribol. 125 (2003) 193-199 (cited as the origin of the improved '
              "SBL model; the attribution was not checked against the text here)."),
     "Tabor51": "D. Tabor, The Hardness of Metals, Clarendon Press, Oxford (1951).",
+    "Blok37": 'H. Blok, "Theoretical study of temperature rise at surfaces of actual contact under oiliness lubricating conditions", Proc. General Discussion on Lubrication and Lubricants, IMechE, London, 2 (1937) 222-235 (the equal-temperature partition of frictional heat).',
+    "TK94": 'X. Tian, F. E. Kennedy, "Maximum and average flash temperatures in sliding contacts", J. Tribol. 116 (1994) 167-174.',
     "VLP09": ('A. I. Vakis, S.-C. Lee, A. A. Polycarpou, "Dynamic head-disk interface instabilities with friction '
               'for light contact (surfing) recording", IEEE Trans. Magn. 45(11) (2009) 4966-4971.'),
     "ZB00": ('Q. H. Zeng, D. B. Bogy, "A simplified 4-DOF suspension model for dynamic load/unload simulation and '

@@ -109,6 +109,7 @@ _BULGE = Source(("Gross62", "Burgdorfer59", "FK90"), "Bulge air bearing")
 _PH_LIMIT = Source(("Gross62",), "p h = const limit")
 _STATICS = Source(("HJJ00", "Filippov88"), "Statics map")
 _HEATER = Source(("JB07",), "Heater power")
+_FLASH = Source(("TK94", "Blok37"), "Flash temperature")
 
 #: The elapsed simulated time [s]: its coordinate's name in memory and in the files (module docstring).
 TIME = "elapsed_time"
@@ -187,6 +188,15 @@ SCALARS = _group(
     V("nominal_area", "um2", "nominal contact area", UM2, description="nominal contact area of the TFC bulge"),
     V("protrusion_radius", "um", "bulge effective radius", UM, description="effective radius of the bulge in the sliding direction"),
     V("contact_fraction", "1", "time fraction in contact", effect="contact", description="fraction of the steady window spent in contact", references=_CRITERION),
+    V("thermal_protrusion", "nm", "mean heat protrusion", NM, effect="friction",
+      description="time-mean protrusion delta_f of the frictional heat, d(delta_f)/dt = (eta_f Q V - delta_f) / tau_f "
+                  "(only with tfc.frictional_heating_nm_per_mw > 0)"),
+    V("friction_power", "mW", "mean friction power", 1e-3, effect="friction",
+      description="time-mean friction power Q V (only with tfc.frictional_heating_nm_per_mw > 0)", references=_FRICTION),
+    V("flash_temperature", "K", "flash temperature rise", effect="friction",
+      description="maximum surface temperature rise of the mean friction power over the mean real area as one circular "
+                  "spot, Blok's partition (an upper bound of the micro-contacts'; only with "
+                  "tfc.frictional_heating_nm_per_mw > 0)", references=_FLASH),
     V("contact_switches_per_ms", "ms-1", "contact switch rate", KHZ, effect="contact", description="transitions of the contact criterion d < k sigma per unit time over the "
       "steady window (counted by the integrator)"),
     V("regime", "1", "regime", effect="contact", dtype="int8",
@@ -387,7 +397,8 @@ ACCURACY = _group(
 
 #: Scalars whose ensemble mean and spread ``sweep.nc`` carries with ``[sweep] realisations`` > 1.
 ENSEMBLE_OF = ("fhm_bv", "clearance", "min_clearance", "interference", "contact_force", "friction_force",
-               "net_force", "mean_pressure", "contact_fraction", "contact_switches_per_ms")
+               "net_force", "mean_pressure", "contact_fraction", "contact_switches_per_ms", "thermal_protrusion",
+               "friction_power", "flash_temperature")
 
 #: ``sweep.nc`` of a DMW ensemble (:func:`pipeline.analyses.ensemble_rules.statistics`).
 ENSEMBLE = _group(

@@ -41,35 +41,17 @@ from ..model.assembly import Model
 from ..model.dmw_record import disk_speed_m_s
 from ..model.dynamics import with_values
 from ..model.forces import separation_at
+from ..model.frictional_heating import HEAT_TOL, MAX_ITER, heat_fixed_point
 from ..model.piecewise import ppval, static_table
-from ..physics.flash_temperature import contact_temperature
+from ..physics.flash_temperature import Thermal, contact_temperature
 from ..units import NM
 from ..variables import Variable
 
 #: ``eta_f`` in the map's unit [nm/mW] to SI [m/W].
 NM_PER_MW = NM / 1e-3
-#: The heat's fixed point is solved to this [m]; and at most :data:`MAX_ITER` secant steps.
-HEAT_TOL = 1e-6 * NM
-MAX_ITER = 40
 
 #: Mechanisms of a case (the ``mechanism`` coordinate).
 MECHANISMS = ("none", "penetration-adhesion", "frictional-heating", "pitch-compliance", "roughness-datum")
-
-
-@dataclass(frozen=True)
-class Thermal:
-    """Thermal properties of the contact for its flash temperature (docs/model.md, section "Flash temperature").
-
-    Attributes
-    ----------
-    k_slider : the slider's conductivity [W/(m K)] (AlTiC, 20 [recon])
-    k_disk : the disk's conductivity [W/(m K)] (a glass substrate, 1.1 [recon]; metal underlayers raise it)
-    diffusivity_disk : the disk's diffusivity [m^2/s] (glass, 5.4e-7 [recon])
-    """
-
-    k_slider: float = 20.0
-    k_disk: float = 1.1
-    diffusivity_disk: float = 5.4e-7
 
 
 @dataclass(frozen=True)
@@ -164,7 +146,7 @@ def contact_state(model: Model, protrusion: float) -> dict | None:
 def heated_contact(model: Model, protrusion: float, eta_f: float, speed: float) -> tuple[float, dict | None, float]:
     """The steady contact state with the frictional heat's protrusion: ``delta_f = eta_f V Q(delta + delta_f)``,
     ``Q`` the friction force of the model's contact state at ``delta + delta_f`` (secant iteration from
-    ``delta_f = 0``, to :data:`HEAT_TOL`).
+    ``delta_f = 0``, to :data:`HEAT_TOL`: :func:`pipeline.model.frictional_heating.heat_fixed_point`).
 
     Parameters
     ----------
@@ -183,30 +165,17 @@ def heated_contact(model: Model, protrusion: float, eta_f: float, speed: float) 
     state = contact_state(model, protrusion)
     if eta_f == 0.0 or state is None:
         return 0.0, state, 0.0
+    last: dict[float, dict | None] = {}
 
-    def g(x: float) -> tuple[float, dict | None]:
-        s = contact_state(model, protrusion + x)
+    def steady(x: float) -> float:
+        s = state if x == 0.0 else contact_state(model, protrusion + x)
+        last[x] = s
         if s is None:
-            return np.nan, None
-        return eta_f * speed * contact_quantities(model, protrusion + x, s)["friction_force"], s
+            return np.nan
+        return eta_f * speed * contact_quantities(model, protrusion + x, s)["friction_force"]
 
-    x0 = 0.0
-    g0 = eta_f * speed * contact_quantities(model, protrusion, state)["friction_force"]
-    x1 = g0
-    g1, s1 = g(x1)
-    gain = np.nan
-    for _ in range(MAX_ITER):
-        if not np.isfinite(g1):
-            return np.nan, None, np.nan
-        h0, h1 = g0 - x0, g1 - x1
-        gain = (g1 - g0) / (x1 - x0) if x1 != x0 else gain
-        if abs(h1) < HEAT_TOL:
-            return x1, s1, gain
-        x2 = x1 - h1 * (x1 - x0) / (h1 - h0) if h1 != h0 else g1
-        x0, g0 = x1, g1
-        x1 = x2
-        g1, s1 = g(x1)
-    return np.nan, None, gain
+    x, gain = heat_fixed_point(steady, HEAT_TOL, MAX_ITER)
+    return (x, last[x], gain) if np.isfinite(x) else (np.nan, None, gain)
 
 
 #: The map's variables (dataset units; SI values divided by ``si_unit``).

@@ -246,6 +246,17 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "actuation_protrusion_nm": Key("floats", None,
                                        doc="protrusions [nm] at the actuation table's powers, strictly increasing; "
                                            "interpolated linearly, not extrapolated"),
+        "frictional_heating_nm_per_mw": Key(
+            "float", 0.0, _within(0.0, 0.2, "nm/mW", "the statics' band needs 0.015-0.12 nm/mW (docs/results.md, "
+                                  "'Statics of the three mechanisms'); 0.2 nm/mW is ten heater efficiencies",
+                                  low_open=False),
+            doc="frictional-heating efficiency eta_f [nm/mW]: the contact's friction power Q V raises the TFC point "
+                "by eta_f Q V at steady state, relaxing with heating_time_us (docs/model.md, section 'Frictional "
+                "heating'); 0: off"),
+        "heating_time_us": Key("float", 200.0, _within(10.0, 5000.0, "us", "measured TFC protrusion time constants "
+                                                       "are 0.1-1 ms (docs/model.md, section 'Frictional heating')"),
+                               doc="thermal time constant tau_f [us] of the frictional heat's protrusion (read "
+                                   "with frictional_heating_nm_per_mw > 0)"),
     },
     "roughness": {
         "sigma_nm": Key("float", 0.52, _within(0.0, 1e3, "nm", "disk and slider roughness is 0.1-10 nm; 1 um is a hundred times the flying height"), doc="combined rms roughness sigma [nm] (recon)"),

@@ -89,6 +89,7 @@ MODEL_FIELDS = union(
            "air_bearing.rear_law", "air_bearing.tfc_stiffening", "air_bearing.bulge", "air_bearing.lift_cap_gap_nm",
            "tfc.half_length_um", "tfc.half_width_um", "roughness.afm", "roughness.sigma_nm",
            "roughness.summit_radius_um", "roughness.summit_density_per_um2", "lubricant.meniscus_time_us",
+           "tfc.frictional_heating_nm_per_mw", "tfc.heating_time_us",
            "lubricant.shear_stress_mpa", "interface.model", "interface.adhesion", "contact.section_depth_sigma",
            "contact.damping_n_s_m", "contact.friction_law", "contact.friction_coefficient",
            "contact.friction_switching", "contact.area_model", "dmw.rpm", "dmw.radius_mm", "solver.rtol",
@@ -155,6 +156,10 @@ class Model:
     start: str = "nominal"
     meniscus: float | None = None
     area_model: str = "flat-section"
+    #: the frictional heat's protrusion (docs/model.md, section "Frictional heating"): ``(eta_f V, tau_f)``,
+    #: its steady rise per friction force [m/N] and its time constant [s] (``None``: off;
+    #: :func:`frictional_heating`, the kernel's ``Variants.heating``)
+    heating: tuple[float, float] | None = None
     #: the static starts of this model, kept once found: the fold of its flying branch
     #: (:func:`pipeline.model.start.start_state`) and the start state per protrusion
     #: (:func:`pipeline.model.running.start`). Not an init field, so that a copy with other forces
@@ -254,7 +259,21 @@ def build_model(scene: Any, interface: Any | None, dmw: tuple[np.ndarray, float]
                  output_step=s_sol.output_step, rtol=s_sol.rtol, atol=atol,
                  max_step=s_sol.max_step, fhm_measure=s_sol.fhm_measure, effects=eff, info=info,
                  tfc_stiffening=gap_power, rear_law=rear_law, tfc_tabulated=tabulated, scene=scene,
-                 start=s_sol.start, meniscus=meniscus, area_model=sc.area_model)
+                 start=s_sol.start, meniscus=meniscus, area_model=sc.area_model,
+                 heating=frictional_heating(scene))
+
+
+def frictional_heating(scene: Any) -> tuple[float, float] | None:
+    """Step 8: the frictional heat's protrusion ``(eta_f V [m/N], tau_f [s])`` (``tfc.frictional_heating_nm_per_mw``,
+    ``tfc.heating_time_us``, the disk speed ``V`` of ``[dmw]``), ``None`` for ``eta_f = 0`` (docs/model.md,
+    section "Frictional heating")."""
+    st = scene.si.tfc
+    if not st.frictional_heating > 0.0:
+        return None
+    if "friction" not in scene.effects:
+        raise ValueError("tfc.frictional_heating_nm_per_mw > 0 heats by the friction force: it needs the friction "
+                         "effect in scene.effects")
+    return st.frictional_heating * disk_speed_m_s(scene["dmw"]), st.heating_time
 
 
 def with_record(model: Model, dmw: tuple[np.ndarray, float] | None) -> Model:

@@ -88,8 +88,9 @@ from ..units import NS
 from . import compiled
 from .compiled import kernel_jit
 from .forces import RearLawRef, rear_law_ref, rhs_slots, separation, separation_of
+from .frictional_heating import heat_friction, heat_update
 from .state import (ACCEPTED, MAX_STEPS, N_COUNTERS, NOT_FINITE, REJECTED, RHS_CALLS, STATUS, STEP_UNDERFLOW,
-                    SWITCHES, THETA, THETA_RATE, WINDOW_SWITCHES, Z, Z_RATE, state_size)
+                    SWITCHES, THETA, THETA_RATE, WINDOW_SWITCHES, Z, Z_RATE, output_size, state_size)
 from .stepper import (cubic_extrema, error_norm, extrema_slots, first_wrong_side, interp_state, inverse_mass_at_tfc,
                       knot_extrema, knots_in_step, sample_outputs, step, step_points, stiffness_cap, switch_point,
                       track_extremes)
@@ -203,12 +204,18 @@ class Variants(NamedTuple):
     meniscus : the meniscus formation time ``tau_m`` [s] (> 0): the adhesion pressure becomes the fifth
         state component ``q`` [Pa], ``dq/dt = (p_a(d) - q) / tau_m`` (docs/model.md, section "Meniscus
         formation"); the state, ``y0``, the outputs and ``Solver.atol`` then have 5 components
+    heating : the frictional heat's protrusion ``(eta_f V [m/N], tau_f [s])`` (docs/model.md, section
+        "Frictional heating"; :mod:`pipeline.model.frictional_heating`): ``y0`` and the outputs get its
+        ``delta_f`` [m] as a last column (:func:`pipeline.model.state.output_size`), the loop's own state
+        (not the step's: ``Solver.atol`` is unchanged). The loop's slot alone: it is not in :data:`SLOTS`,
+        the force functions never see it (the protrusion they read, ``p.delta``, carries it)
     """
 
     pitch: bool | None = None
     rear_law: RearLawRef | None = None
     gap_power: np.record | None = None
     meniscus: float | None = None
+    heating: tuple[float, float] | None = None
 
 
 class Solver(NamedTuple):
@@ -221,15 +228,16 @@ class Solver(NamedTuple):
     max_steps: int
 
 
-#: The kernel's slots, in the order of the compiled functions' last arguments (module docstring).
-SLOTS = Tables._fields + Variants._fields
+#: The kernel's slots, in the order of the compiled functions' last arguments (module docstring); the loop's
+#: own ``Variants.heating`` follows them as :func:`_integrate`'s last argument.
+SLOTS = Tables._fields + Variants._fields[:-1]
 
 
 def _slots(tab: Tables, var: Variants) -> tuple:
     """The slots in the order :data:`SLOTS`, as the compiled functions take them: the gap-power record as
     a one-element array (:func:`_packed`), the default rear law for ``None``."""
     rear = var.rear_law if var.rear_law is not None else rear_law_ref(DEFAULT_REAR_LAW)
-    return (*tab, *var._replace(rear_law=rear, gap_power=_packed(var.gap_power)))
+    return (*tab, *var._replace(rear_law=rear, gap_power=_packed(var.gap_power))[:-1])
 
 
 def integrate(y0: np.ndarray, grid: Grid, p: np.record, tab: Tables, var: Variants, solver: Solver
@@ -245,7 +253,8 @@ def integrate(y0: np.ndarray, grid: Grid, p: np.record, tab: Tables, var: Varian
 
     Returns
     -------
-    Y : states at ``t_out`` (n_out, 4), (n_out, 5) with the meniscus state; C : contact flag at ``t_out``;
+    Y : states at ``t_out`` (n_out, 4), one more column with the meniscus state and one with the heat (last,
+        ``delta_f`` [m]); C : contact flag at ``t_out``;
     info : the counters (:data:`pipeline.model.state.STATUS`, ``ACCEPTED``, ...);
     ext : exact minimum and maximum of the separation ``d`` [m] over ``t >= p.t_win``
 
@@ -265,7 +274,7 @@ def kernel_arguments(y0: np.ndarray, grid: Grid, p: np.record, tab: Tables, var:
     """The arguments :func:`integrate` hands the compiled :func:`_integrate` (their numba types are its
     signature: one compile per combination of the scene's effects)."""
     return (y0, grid.t_end, grid.t_out, _packed(p), solver.rtol, solver.atol, solver.h_max, solver.max_steps,
-            *_slots(tab, var))
+            *_slots(tab, var), var.heating)
 
 
 def compile_kernel_ahead(y0: np.ndarray, grid: Grid, p: np.record, tab: Tables, var: Variants,
@@ -371,7 +380,7 @@ def disk_span(p, dmw):
 
 @_jit
 def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, contact, adhesion, friction, tfc,
-               pitch, rear_law, gap_power_, meniscus):
+               pitch, rear_law, gap_power_, meniscus, heating):
     """:func:`integrate` with its bundles unpacked into the slots (``params``, ``gap_power_``: the
     records as one-element arrays, :func:`_packed`).
 
@@ -396,7 +405,7 @@ def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, cont
     ns = state_size(meniscus)
     has_contact = contact is not None
     n_out = t_out.shape[0]
-    Y = np.full((n_out, ns), np.nan)
+    Y = np.full((n_out, output_size(meniscus, heating)), np.nan)
     C = np.zeros(n_out, dtype=np.bool_)
     info = np.zeros(N_COUNTERS, dtype=np.int64)
     ext = np.array([np.inf, -np.inf])  # min and max of d over t >= p.t_win
@@ -417,11 +426,18 @@ def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, cont
     # (piecewise.disk), bit for bit (disk3 clamps outside the spline, disk extrapolates; docs/kernel.md)
     t_disk_lo, t_disk_hi = disk_span(p, dmw)
     t = 0.0
+    # the frictional heat's protrusion delta_f (frictional_heating), held over a step: the geometry sees it
+    # through p.delta (the record's copy of integrate's, _packed), its steady value a0 at the step's start
+    delta_heater, df, a0 = p.delta, 0.0, 0.0
+    if heating is not None:
+        df = y0[ns]
+        p.delta = delta_heater + df
     d0, dd0 = separation(p, dmw, t, y)  # d and d' at the current step start (kept step to step)
     # The initial mode follows the criterion at t = 0.
     in_contact = False
     if has_contact:
         in_contact = d0 < p.k_sigma
+    a0 = heat_friction(p, friction, in_contact, d0, heating)
     # k1 is evaluated by the next step (the first, and the first after a switch); np.bool_: a run-time bool in
     # every assignment (numba types a literal True or False apart, and would compile the step for each)
     fresh = np.bool_(True)
@@ -436,6 +452,8 @@ def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, cont
     while j < n_out and t_out[j] <= t:
         for i in range(ns):  # element by element: a slice assignment compiles numba's shape-error message (~3 s)
             Y[j, i] = y[i]
+        if heating is not None:
+            Y[j, ns] = df
         C[j] = in_contact
         j += 1
     steps = 0
@@ -526,7 +544,13 @@ def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, cont
         t_new = t + h_acc
         if t_new >= p.t_win:
             track_extremes(p, t, h_acc, d1, n_ex, buf, dex, ext)
-        j = sample_outputs(t, h_acc, y, k1, ynew, k7, in_contact, t_out, j, Y, C, ns)
+        j_new = sample_outputs(t, h_acc, y, k1, ynew, k7, in_contact, t_out, j, Y, C, ns)
+        df_new = df
+        if heating is not None:  # delta_f's exact lag over the step, Q linear between its ends (the step's mode)
+            df_new = heat_update(df, a0, heat_friction(p, friction, in_contact, d1, heating), h_acc, heating[1])
+            for i in range(j, j_new):  # (linear in the step: (h / tau_f)^2 of the exact lag)
+                Y[i, ns] = df + (df_new - df) * ((t_out[i] - t) / h_acc)
+        j = j_new
         for i in range(ns):
             y[i] = ynew[i]
             if not np.isfinite(y[i]):
@@ -534,6 +558,10 @@ def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, cont
                 return Y, C, info, ext
         t = t_new
         d0, dd0 = d1, dd1
+        if heating is not None:
+            p.delta = delta_heater + df_new
+            d0 -= df_new - df  # (d = ... - delta: the next step starts at the new protrusion)
+            df = df_new
         info[ACCEPTED] += 1
         h_stiff = stiffness_cap(p, in_contact, d0, h_max, m_eff_inv, contact, adhesion, tfc, gap_power,
                                 meniscus)
@@ -548,6 +576,8 @@ def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, cont
         else:
             for i in range(ns):
                 k1[i] = k7[i]
+        if heating is not None:
+            a0 = heat_friction(p, friction, in_contact, d0, heating)
         # step growth 0.9 e^(-1/5) in [0.2, 5]; e < (0.9/5)^5 gives the cap without calling pow(), and so does an
         # e for which the grown step would exceed the next step's cap, min(h_max, h_stiff): the loop's top then
         # takes the cap whatever the growth (section "The step's growth" of docs/kernel.md)

@@ -292,11 +292,22 @@ def _interface_force(p, contact, adhesion, friction, meniscus, F_i, z, theta, vz
         if contact is not None:
             if in_contact:
                 F_i += p.A_n * max(_ppat(contact, i, s), 0.0) - p.c_c * dd
-                if friction is not None:
-                    Q = p.A_n * max(_ppat(friction, i, s), 0.0)
-            if friction is not None and friction.shape[1] == 8:  # the lubricant shear, not switched
-                Q += p.A_n * max(_ppat_at(friction, i, s, 4), 0.0)
+            if friction is not None:
+                Q = friction_force(p, friction, in_contact, i, s)
     return F_i, Q, dq
+
+
+@_inline
+def friction_force(p, friction, in_contact, i, s):
+    """The friction force ``Q`` [N] at the piece ``i`` and offset ``s`` of the separation grid
+    (:func:`pipeline.model.piecewise._ppindex`): the table's (first) stress in contact, plus the continuous
+    lubricant shear where the table holds two (8 columns), in either mode."""
+    Q = 0.0
+    if in_contact:
+        Q = p.A_n * max(_ppat(friction, i, s), 0.0)
+    if friction.shape[1] == 8:  # the lubricant shear, not switched
+        Q += p.A_n * max(_ppat_at(friction, i, s, 4), 0.0)
+    return Q
 
 
 @_inline

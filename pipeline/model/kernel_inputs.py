@@ -190,7 +190,7 @@ def kernel_slots(model: Model, p: np.record) -> tuple[dyn.Tables, dyn.Variants]:
     it = interface_tables(model, delta, p["A_n"])
     tables = dyn.Tables(dmw=model.dmw, contact=it.contact, adhesion=it.adhesion, friction=it.friction, tfc=tfc)
     variants = dyn.Variants(pitch=True if model.pitch is not None else None, rear_law=model.rear_law,
-                            gap_power=gap_power, meniscus=model.meniscus)
+                            gap_power=gap_power, meniscus=model.meniscus, heating=model.heating)
     return tables, variants
 
 
@@ -220,11 +220,12 @@ def stand_in_arguments(scene: Any) -> tuple[np.ndarray, dyn.Grid, np.record, dyn
     laws = [registry.lookup(scene["air_bearing"][key]) for key, registry in TFC_POINT_LAWS.items()]
     laws = [law for law in laws if law.force is not None]  # ("none": no law)
     meniscus = si.lubricant.meniscus_time if si.lubricant.meniscus_time > 0.0 else None
+    heating = (1.0, 1.0) if si.tfc.frictional_heating > 0.0 else None  # (assembly.frictional_heating)
     tab = dyn.Tables(dmw=cubic if "dmw" in eff else None, tfc=cubic if any(law.closed_form is None for law in laws)
                      else None, **tables)
     var = dyn.Variants(pitch=True if "pitch" in eff else None, rear_law=rear_law_ref(si.air_bearing.rear_law),
                        gap_power=dyn.params(dyn.GAP_POWER) if any(law.closed_form == "gap-power" for law in laws)
-                       else None, meniscus=meniscus)
+                       else None, meniscus=meniscus, heating=heating)
     y0 = np.zeros(N_STATE)
     return y0, dyn.Grid(1.0, np.zeros(2)), dyn.params(), tab, var, dyn.Solver(1.0, y0.copy(), 1.0, 1)
 

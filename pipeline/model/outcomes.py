@@ -29,12 +29,14 @@ from typing import Any, Callable
 
 import numpy as np
 
+from .dmw_record import disk_speed_m_s
 from .forces import separation_at
 from .kernel_inputs import InterfaceTables, interface_tables
 from .piecewise import disk_history, ppval
 from .running import Run
 from .state import MENISCUS, THETA, THETA_RATE, WINDOW_SWITCHES, Z, Z_RATE
 from ..physics.fhm import fhm
+from ..physics.flash_temperature import Thermal, contact_temperature
 from ..physics.geometry import effective_radius
 from ..validity import check_run
 from ..variables import Regime
@@ -65,8 +67,13 @@ def histories(run: Run, steady: bool = False) -> dict[str, np.ndarray]:
     else:
         w, wdot = np.zeros_like(t), np.zeros_like(t)
     d = separation_at(p, Y[:, Z], Y[:, THETA], w)
+    if m.heating is not None:  # the frictional heat's protrusion, the state's last column (state.output_size)
+        out_heat = Y[:, -1]
+        d = d - out_heat
     out: dict[str, np.ndarray] = {"separation": d, "disk_displacement": w, "z": Y[:, Z], "pitch": Y[:, THETA]}
     out["clearance"] = d - m.k_sigma
+    if m.heating is not None:
+        out["thermal_protrusion"] = out_heat
     x0, h, An = p["tab_x0"], p["tab_h"], run.nominal_area  # (item access: a record's attribute is ~10x slower)
     tabs = interface_tables(m, run.protrusion, An)  # (those the kernel ran with: contact.area_model)
     net = np.zeros_like(t)
@@ -176,8 +183,26 @@ def summarize(run: Run, hist: dict[str, np.ndarray] | None = None) -> dict[str, 
             out["friction_coefficient"] = float(ff.sum() / fc_sum) if fc_sum > 0 else np.nan
             # (the friction in contact: the continuous lubricant shear also acts out of contact)
             out["shear_stress"] = float(np.where(inc, ff, 0.0).sum() / area_sum) if area_sum > 0 else np.nan
+    if m.heating is not None:
+        out.update(heating_summary(m, hist["thermal_protrusion"][win], out.get("friction_force", 0.0),
+                                   out.get("real_area", np.nan)))
     out["validity"] = int(_validity(run, hist, win))
     return out
+
+
+def heating_summary(model: Any, delta_f: np.ndarray, friction_force: float, real_area: float) -> dict[str, float]:
+    """The frictional heat's scalars of a steady window (docs/model.md, section "Frictional heating"): the mean
+    heat's protrusion ``delta_f`` [m] of its samples ``delta_f``, the mean friction power ``Q V`` [W] of the mean
+    friction force [N], and the flash temperature rise [K] of that power over the mean real area [m^2] as one
+    circular spot (:func:`pipeline.physics.flash_temperature.contact_temperature`, the default
+    :class:`pipeline.physics.flash_temperature.Thermal`): the micro-contacts' own rise is lower, the real area
+    being many smaller spots (their count is the interface's, not the run's); NaN without contact."""
+    V = disk_speed_m_s(model.scene["dmw"])
+    power = float(friction_force) * V
+    th = Thermal()
+    rise = contact_temperature(power, real_area, 1.0, V, th.k_slider, th.k_disk, th.diffusivity_disk)
+    return {"thermal_protrusion": float(np.mean(delta_f)), "friction_power": power,
+            "flash_temperature": rise["temperature"]}
 
 
 def contact_switch_rate(run: Run) -> float:

@@ -12,7 +12,8 @@ from .assembly import Model
 from .forces import separation_at
 from .kernel_inputs import interface_tables, run_parameters
 from .piecewise import disk_history, ppval
-from .start import start_state
+from .frictional_heating import heat_fixed_point
+from .start import start_state, static_forces
 from .state import ACCEPTED, MAX_STEPS as MAX_STEPS_STATUS, N_STATE, NOT_FINITE, OK, REJECTED, STATUS, STATUS_TEXT, \
     STEP_UNDERFLOW, THETA, Z
 from ..units import NM
@@ -84,14 +85,19 @@ def run_model(model: Model, protrusion: float, y0: np.ndarray | None = None, max
     start_note = "given"
     grid = dyn.Grid(model.duration, t_out)
     solver = dyn.Solver(model.rtol, model.atol, model.max_step, max_steps)
+    heat = 0.0  # the frictional heat's protrusion of a given start without it
     if y0 is None:
         # the first run of a model whose kernel is neither compiled nor cached: compile it in a background
         # process while this one finds the start state (docs/performance.md, section "The first run")
         dyn.compile_kernel_ahead(np.zeros(N_STATE), grid, p, tables, variants, solver)
         y0, start_note = start(model, protrusion)
+        if model.heating is not None:
+            y0, heat = heated_start(model, p, tables, variants, y0)
     y0 = np.asarray(y0, float)
     if model.meniscus is not None and y0.size == 4:  # the meniscus state starts at its equilibrium
-        y0 = np.append(y0, meniscus_equilibrium(model, p, y0))
+        y0 = np.append(y0, meniscus_equilibrium(model, p, y0, heat))
+    if model.heating is not None and y0.size == N_STATE + (model.meniscus is not None):
+        y0 = np.append(y0, heat)  # (the last column: pipeline.model.state.output_size)
     Y, C, info, ext = dyn.integrate(y0, grid, p, tables, variants, solver)
     if info[STATUS] != OK:
         status = int(info[STATUS])
@@ -102,11 +108,60 @@ def run_model(model: Model, protrusion: float, y0: np.ndarray | None = None, max
                d_extremes=(float(ext[0]), float(ext[1])), start=start_note)
 
 
-def meniscus_equilibrium(model: Model, p: np.record, y: np.ndarray) -> float:
+def meniscus_equilibrium(model: Model, p: np.record, y: np.ndarray, heat: float = 0.0) -> float:
     """The meniscus state's equilibrium ``q = p_a(d)`` [Pa] at the state ``y`` (z [m], theta [rad], ...)
     at ``t = 0``, the disk under the TFC point where the DMW record puts it (docs/model.md, section
-    "Meniscus formation"): the start value of ``q``."""
+    "Meniscus formation"): the start value of ``q``; ``heat``: the frictional heat's protrusion [m] at the
+    start (docs/model.md, section "Frictional heating"), which lowers ``d``."""
     w = disk_history(model.dmw, p, np.zeros(1))[0][0] if model.dmw is not None else 0.0
-    d = separation_at(p, float(y[Z]), float(y[THETA]), w)
+    d = separation_at(p, float(y[Z]), float(y[THETA]), w) - heat
     adhesion = interface_tables(model, p["delta"], p["A_n"]).adhesion
     return float(ppval(adhesion, p.tab_x0, p.tab_h, np.array([d]))[0])
+
+
+def heated_start(model: Model, p: np.record, tables: dyn.Tables, variants: dyn.Variants, y: np.ndarray
+                 ) -> tuple[np.ndarray, float]:
+    """The start of the frictional heat's protrusion ``delta_f`` [m] and the slider's start state with it
+    (docs/model.md, section "Frictional heating"): from a static contact state (``d < k sigma`` at ``w = 0``),
+    the fixed point ``delta_f = eta_f V Q(delta + delta_f)`` (:func:`pipeline.model.frictional_heating.heat_fixed_point`)
+    of the static contact state of the kernel's forces (``A_n`` and the tables at the heater's protrusion, as
+    the kernel holds them) and that state; else (flying, the nominal attitude) 0 and ``y``. Kept in the
+    model's ``statics`` (:func:`start`). A state on the way that is no stable contact state: 0 and ``y``."""
+    key = ("heated", float(p["delta"]))
+    found = model.statics.get(key)
+    if found is None:
+        found = model.statics[key] = _heated_start(model, p, tables, variants, y)
+    return found[0].copy(), found[1]
+
+
+def _heated_start(model: Model, p: np.record, tables: dyn.Tables, variants: dyn.Variants, y: np.ndarray
+                  ) -> tuple[np.ndarray, float]:
+    """:func:`heated_start` computed."""
+    if model.start == "nominal" or not separation_at(p, y[Z], y[THETA], 0.0) < p["k_sigma"]:
+        return y, 0.0
+    delta, per_newton = float(p["delta"]), model.heating[0]
+    _, _, solve = static_forces(lambda mu: (dyn.with_values(p, delta=mu), tables, variants))
+    states = {0.0: y[:2].copy()}
+
+    def steady(x: float) -> float:
+        q = dyn.with_values(p, delta=delta + x)
+        eq = solve(delta + x, states[min(states, key=lambda k: abs(k - x))])
+        d = float(separation_at(q, eq.y[0], eq.y[1], 0.0))
+        if not (eq.converged and eq.stable and d < q["k_sigma"]):
+            return np.nan
+        states[x] = eq.y
+        return per_newton * static_friction(q, tables.friction, d)
+
+    x, _ = heat_fixed_point(steady)
+    if not np.isfinite(x):
+        return y, 0.0
+    return np.array([states[x][0], states[x][1], 0.0, 0.0]), float(x)
+
+
+def static_friction(p: np.record, friction: np.ndarray, d: float) -> float:
+    """The friction force [N] in contact at the separation ``d`` [m] (:func:`pipeline.model.forces.friction_force`
+    from Python: the table's first stress and the lubricant shear beside it, each clipped at 0)."""
+    x = np.array([d])
+    parts = (friction,) if friction.shape[1] == 4 else (friction[:, :4], friction[:, 4:])
+    return float(sum(p["A_n"] * max(float(ppval(np.ascontiguousarray(c), p["tab_x0"], p["tab_h"], x)[0]), 0.0)
+                     for c in parts))

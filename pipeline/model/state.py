@@ -9,7 +9,10 @@ State ``y`` (SI units), docs/model.md, section "Slider dynamics":
   :data:`Z_RATE` [m/s], :data:`THETA_RATE` [rad/s];
 * :data:`MENISCUS` the adhesion pressure ``q`` [Pa] of the meniscus state (docs/model.md, section
   "Meniscus formation"), present only with a meniscus formation time: the state then has
-  :data:`N_STATE` + 1 components (:func:`state_size`).
+  :data:`N_STATE` + 1 components (:func:`state_size`);
+* the frictional heat's protrusion ``delta_f`` [m] (docs/model.md, section "Frictional heating"), with a
+  frictional-heating efficiency: one more column, last, of the kernel's start state and outputs
+  (:func:`output_size`), not integrated by the step (the loop updates it exactly per accepted step).
 
 Counters ``info`` of an integration (:func:`pipeline.model.dynamics.integrate`): :data:`STATUS` (one of
 the status codes below), :data:`ACCEPTED` steps, :data:`REJECTED` steps, contact :data:`SWITCHES`,
@@ -46,3 +49,12 @@ def state_size(meniscus):
     if meniscus is not None:
         return N_STATE + 1
     return N_STATE
+
+
+@kernel_jit(__name__, inline="always")
+def output_size(meniscus, heating):
+    """Length of the start state and of the outputs' rows: :func:`state_size` and, with the frictional heat
+    (``heating`` not ``None``), its protrusion last (compile-time constant, as :func:`state_size`)."""
+    if heating is not None:
+        return state_size(meniscus) + 1
+    return state_size(meniscus)

@@ -36,6 +36,8 @@ temperature".
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 #: ``T_mean sqrt(Pe) k / (q a)`` as ``Pe -> inf``: the 1-D half-space solution averaged over the disk [1],
@@ -200,3 +202,19 @@ def contact_temperature(power: float, area: float, count: float, speed: float, k
     scale = b * q * a / k_slider
     return {"temperature": scale * flash_factor(0.0, "max"), "mean_temperature": scale * flash_factor(0.0, "mean"),
             "partition": b, "peclet": pe, "radius": a}
+
+
+@dataclass(frozen=True)
+class Thermal:
+    """Thermal properties of the contact for its flash temperature (docs/model.md, section "Flash temperature").
+
+    Attributes
+    ----------
+    k_slider : the slider's conductivity [W/(m K)] (AlTiC, 20 [recon])
+    k_disk : the disk's conductivity [W/(m K)] (a glass substrate, 1.1 [recon]; metal underlayers raise it)
+    diffusivity_disk : the disk's diffusivity [m^2/s] (glass, 5.4e-7 [recon])
+    """
+
+    k_slider: float = 20.0
+    k_disk: float = 1.1
+    diffusivity_disk: float = 5.4e-7

@@ -69,7 +69,8 @@ def test_effects_off_leave_their_variables_out(datasets, tmp_path):
     ensure("simulate", scene, tmp_path)
     ds = read_dataset(tmp_path / "summary.nc")
     absent = {n for n, v in vs.SCALARS.items() if v.effect in ("friction", "adhesion")}
-    assert absent == {"friction_force", "adhesion_force", "friction_coefficient", "shear_stress"}
+    assert absent == {"friction_force", "adhesion_force", "friction_coefficient", "shear_stress", "thermal_protrusion",
+                      "friction_power", "flash_temperature"}
     assert not absent & set(ds.data_vars)
     assert {"contact_force", "regime", "interference"} <= set(ds.data_vars)
 

@@ -47,11 +47,14 @@ class _FirstCall(Exception):
     """Raised by the stand-in kernel with the arguments of the first call."""
 
 
-@pytest.mark.parametrize("name", sorted(shipped_scenes()))
+@pytest.mark.parametrize("name", sorted(shipped_scenes()) + ["paper-2009+heating"])
 def test_the_stand_ins_of_a_scene_type_as_its_models_first_kernel_call(name, tmp_path, monkeypatch):
     # each shipped scene's inputs made by the runner (a coarse Reynolds grid for the bulge tables: numbers
-    # only), its model, and the arguments its first run hands the compiled kernel, caught there
-    scene = load_scene(shipped_scenes()[name], ["solver.bulge_cells_per_a=4", "solver.bulge_cells_per_b=2"])
+    # only), its model, and the arguments its first run hands the compiled kernel, caught there; and one with
+    # the frictional heat (its loop's slot, Variants.heating)
+    base, _, heating = name.partition("+")
+    scene = load_scene(shipped_scenes()[base], ["solver.bulge_cells_per_a=4", "solver.bulge_cells_per_b=2"]
+                       + (["tfc.frictional_heating_nm_per_mw=0.05"] if heating else []))
     model = runner.current_inputs(scene, tmp_path, k=1.0).model(scene)
     kernel = dyn._integrate
 
@@ -65,10 +68,11 @@ def test_the_stand_ins_of_a_scene_type_as_its_models_first_kernel_call(name, tmp
     ahead = compiled.signature(kernel, dyn.kernel_arguments(*ki.stand_in_arguments(scene)))
     assert ahead == real
     # the scene's effects show in the slots: no DMW slot without the dmw effect, the meniscus state a float
-    slots = dict(zip(dyn.SLOTS, real[-len(dyn.SLOTS):]))
+    slots = dict(zip(dyn.SLOTS + ("heating",), real[-len(dyn.SLOTS) - 1:]))
     assert (str(slots["dmw"]) == "none") == ("dmw" not in scene.effects)
     assert (str(slots["meniscus"]) == "none") == (model.meniscus is None)
     assert (str(slots["tfc"]) == "none") == (not model.tfc_tabulated)
+    assert (str(slots["heating"]) == "none") == (model.heating is None)
 
 
 def test_the_stand_ins_tell_effects_apart():
@@ -77,9 +81,9 @@ def test_the_stand_ins_tell_effects_apart():
     other = base.replace(scene={"effects": ["air_bearing", "contact", "friction"]},
                          air_bearing={"rear_law": "linear"})
     sig = dict(zip(dyn.SLOTS, compiled.signature(dyn._integrate, dyn.kernel_arguments(
-        *ki.stand_in_arguments(other)))[-len(dyn.SLOTS):]))
+        *ki.stand_in_arguments(other)))[-len(dyn.SLOTS) - 1:-1]))
     assert [n for n, t in sig.items() if str(t) == "none"] == ["dmw", "adhesion", "tfc", "pitch", "gap_power",
                                                                "meniscus"]
     assert "linear" in str(sig["rear_law"])
     assert sig != dict(zip(dyn.SLOTS, compiled.signature(dyn._integrate, dyn.kernel_arguments(
-        *ki.stand_in_arguments(base)))[-len(dyn.SLOTS):]))
+        *ki.stand_in_arguments(base)))[-len(dyn.SLOTS) - 1:-1]))
