@@ -496,7 +496,9 @@ def test_with_two_populations_each_rises_from_its_own_surface_value():
     b1, m1 = isbl.penetration_adhesion(d, replace(p, dgamma_solid=0.05))
     b2, m2 = isbl.penetration_adhesion(d, replace(p, dgamma_solid=0.07))
     # W_s 0.05 -> 0.07: the bridges' difference 0.02 -> 0.04 (x 2), the menisci's -0.059 -> -0.039
+    # tol: the same closed form times two scale factors: a few ulps of the products
     np.testing.assert_allclose(b2, 2.0 * b1, rtol=1e-12, atol=0.0)
+    # tol: as above, the menisci's scale factors
     np.testing.assert_allclose(m2 * (0.05 - p.dgamma), m1 * (0.07 - p.dgamma), rtol=1e-12, atol=0.0)
     assert np.all(b1 >= 0.0) and b1.max() > 0.0 and np.all(m1 <= 0.0) and m1.min() < 0.0
 
