@@ -20,7 +20,7 @@ Every variant keeps the scene's k (``--set contact.k=...``: the contact state's 
 k, and no variant but the pitch root changes the flight), except the roughness datum, whose k is its reading.
 Printed: per case the protrusions with a stable flying state, the contact state's interference, contact force,
 mu and friction power at 9.8 and 11 nm, its heat's protrusion and flash temperature at 11 nm; written: the map
-(``--out``, NetCDF) and the figure.
+(``--results``/mechanism_statics.nc) and the figure.
 
 Usage (from the project root; ~2 min on 2 shared cores for the main scene, most of it the variants' interface
 tables and their first compile; the band scene's rough-gap bearing adds a bulge table per variant)::
