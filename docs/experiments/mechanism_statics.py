@@ -1,9 +1,11 @@
 """Statics maps of the three mechanisms that could deepen the 11-nm contact, and of the roughness datum, before
-any dynamics (docs/results.md, section "Statics of the three mechanisms", where the tables this prints are
-kept; docs/model.md, section "Mechanism statics"; docs/figures/mechanism_statics.png).
+any dynamics (docs/results.md, sections "Statics of the three mechanisms" and "The mechanisms on the band scene",
+where the tables this prints are kept; docs/model.md, section "Mechanism statics"; docs/figures/mechanism_statics.png,
+docs/figures/mechanism_statics_band.png).
 
-For the main scene (``configs/paper-2009-identified.toml``, its calibrated k) and each mechanism at a few
-values within its bounds (:func:`pipeline.analyses.mechanism_statics.mechanism_map`):
+For a scene (``--scene``, default the main scene ``configs/paper-2009-identified.toml``, with its ``--set``
+overrides; its k, calibrated or chosen) and each mechanism at a few values within its bounds
+(:func:`pipeline.analyses.mechanism_statics.mechanism_map`):
 
 * penetration adhesion: ``lubricant.solid_work_of_adhesion_j_m2`` = 0.05, 0.075, 0.10 J/m^2 (bounds), 0.149
   (outside: the estimate that asked for it);
@@ -11,19 +13,23 @@ values within its bounds (:func:`pipeline.analyses.mechanism_statics.mechanism_m
   slider's share of the heat);
 * pitch compliance: ``air_bearing.stiffness_root = "pitch-first"``, ``slider.friction_arm = "gimbal"``, and
   both (the value: the free TFC point's lift per mN of friction);
-* the roughness datum: ``configs/paper-2009-identified-section-datum.toml`` (k sigma = 1.56 nm).
+* the roughness datum: the contact criterion at the nominal-area section, ``contact.k = 3`` (k sigma = 1.56 nm;
+  on the main scene this is ``configs/paper-2009-identified-section-datum.toml``).
 
-Every variant keeps the main scene's calibrated k (``--set contact.k=...``: the contact state's separation
-does not depend on k, and no variant but the pitch root changes the flight), except the roughness datum,
-whose k is its reading. Printed: per case the protrusions with a stable flying state, the contact state's
-interference, contact force, mu and friction power at 9.8 and 11 nm, its heat's protrusion and flash
-temperature at 11 nm; written: the map (``--out``, NetCDF) and the figure.
+Every variant keeps the scene's k (``--set contact.k=...``: the contact state's separation does not depend on
+k, and no variant but the pitch root changes the flight), except the roughness datum, whose k is its reading.
+Printed: per case the protrusions with a stable flying state, the contact state's interference, contact force,
+mu and friction power at 9.8 and 11 nm, its heat's protrusion and flash temperature at 11 nm; written: the map
+(``--results``/mechanism_statics.nc) and the figure.
 
-Usage (from the project root; ~2 min on 2 shared cores, most of it the variants' interface tables and their
-first compile)::
+Usage (from the project root; ~2 min on 2 shared cores for the main scene, most of it the variants' interface
+tables and their first compile; the band scene's rough-gap bearing adds a bulge table per variant)::
 
     .venv/bin/python docs/experiments/mechanism_statics.py [--results results/mechanisms] \
         [--figure docs/figures/mechanism_statics.png]
+    .venv/bin/python docs/experiments/mechanism_statics.py --scene configs/paper-2009-two-population-rough.toml \
+        --set air_bearing.pad_pressure_mpa=2.2 --set dmw.exponent=-4 --set dmw.rms_nm=1.8 --name "band scene" \
+        --results results/mechanisms-band --figure docs/figures/mechanism_statics_band.png
 """
 
 from __future__ import annotations
@@ -44,50 +50,63 @@ PROTRUSIONS = np.round(np.arange(9.0, 11.41, 0.2), 1)  # [nm]
 SHOWN = (9.8, 11.0)  # [nm]
 
 
-def cases(results: Path) -> tuple[list, object]:
-    """The map's cases and the main scene's interface dataset."""
-    main = ROOT / "configs" / "paper-2009-identified.toml"
-    base = hdi.build_model(main, results / "main", progress=False)
+#: The main scene, the map's default.
+MAIN = ROOT / "configs" / "paper-2009-identified.toml"
+#: The roughness datum: the contact criterion at the nominal-area section (k = contact.section_depth_sigma).
+SECTION_DATUM = "contact.k=3.0"
+
+
+def cases(results: Path, scene: Path = MAIN, sets: tuple[str, ...] = (), name: str = "main scene"
+          ) -> tuple[list, object]:
+    """The map's cases and the scene's interface dataset (``scene`` with its ``--set`` overrides ``sets``)."""
+    base = hdi.build_model(hdi.load_scene(scene, sets), results / "main", progress=False)
     k = f"contact.k={base.k!r}"
-    out = [ms.Case("none", 0.0, base, label="main scene")]
+    out = [ms.Case("none", 0.0, base, label=name)]
     for w in (0.05, 0.075, 0.10, 0.149):
-        m = hdi.build_model(hdi.load_scene(main, [k, f"lubricant.solid_work_of_adhesion_j_m2={w}"]),
+        m = hdi.build_model(hdi.load_scene(scene, [*sets, k, f"lubricant.solid_work_of_adhesion_j_m2={w}"]),
                             results / f"ws-{w:g}", progress=False)
         out.append(ms.Case("penetration-adhesion", w, m, label=f"W_s {w:g}" + (" (outside)" if w > 0.10 else "")))
     for eta in (0.01, 0.02, 0.05, 0.1):
         out.append(ms.Case("frictional-heating", eta, base, heating=eta, label=f"eta_f {eta:g}"))
-    for sets, name in (([ 'air_bearing.stiffness_root="pitch-first"'], "pitch-first"),
-                       (['slider.friction_arm="gimbal"'], "gimbal arm"),
-                       (['air_bearing.stiffness_root="pitch-first"', 'slider.friction_arm="gimbal"'],
-                        "pitch-first, gimbal arm")):
-        m = hdi.build_model(hdi.load_scene(main, [k, *sets]), results / name.replace(", ", "-").replace(" ", "-"),
-                            progress=False)
-        out.append(ms.Case("pitch-compliance", ms.friction_lift(m) / 1e-6, m, label=name))  # [nm/mN]
-    datum = hdi.build_model(ROOT / "configs" / "paper-2009-identified-section-datum.toml", results / "datum",
-                            progress=False)
-    out.append(ms.Case("roughness-datum", datum.k_sigma / 1e-9, datum, label="section datum (k sigma 1.56 nm)"))
+    for extra, label in (([ 'air_bearing.stiffness_root="pitch-first"'], "pitch-first"),
+                         (['slider.friction_arm="gimbal"'], "gimbal arm"),
+                         (['air_bearing.stiffness_root="pitch-first"', 'slider.friction_arm="gimbal"'],
+                          "pitch-first, gimbal arm")):
+        m = hdi.build_model(hdi.load_scene(scene, [*sets, k, *extra]),
+                            results / label.replace(", ", "-").replace(" ", "-"), progress=False)
+        out.append(ms.Case("pitch-compliance", ms.friction_lift(m) / 1e-6, m, label=label))  # [nm/mN]
+    datum = hdi.build_model(hdi.load_scene(scene, [*sets, SECTION_DATUM]), results / "datum", progress=False)
+    out.append(ms.Case("roughness-datum", datum.k_sigma / 1e-9, datum,
+                       label=f"section datum (k sigma {datum.k_sigma / 1e-9:.2f} nm)"))
     iface = hdi.open_dataset(results / "main", "interface")
     return out, iface
 
 
+def _steps(d, name: str) -> str:
+    """The protrusions [nm] where the flag ``name`` is set, as ``lo-hi``, or ``none``."""
+    at = d["protrusion"].values[d[name].values == 1]
+    return f"{at.min():.1f}-{at.max():.1f}" if at.size else "none"
+
+
 def table(ds) -> str:
-    rows = ["| case | k | lift [nm/mN] | fold [nm] | flying at [nm] | 9.8 nm: interference / force / mu | 11 nm: interference [nm] | "
-            "force [mN] | mu | friction power [mW] | heat protrusion [nm] | flash T [K] |", "|" + "---|" * 12]
+    """The map's markdown table: per case the flying, contact and coexistence steps, the contact at 9.8 and 11 nm."""
+    rows = ["| case | k | lift [nm/mN] | fold [nm] | flying at [nm] | contact at [nm] | both at [nm] | "
+            "9.8 nm: interference / force / mu | 11 nm: interference [nm] | force [mN] | real area [um^2] | mu | "
+            "friction power [mW] | heat protrusion [nm] | flash T [K] |", "|" + "---|" * 15]
     for c in ds["case"].values:
         d = ds.sel(case=c)
-        fly = d["protrusion"].values[d["flying"].values == 1]
         a, b = d.sel(protrusion=SHOWN[0]), d.sel(protrusion=SHOWN[1])
-        head = f"| {c} | {float(d['k']):.4g} | {float(d['friction_lift']):.3f} | {float(d['fold']):.3f} | "
-        rows.append(head + (f"{fly.min():.1f}-{fly.max():.1f} | " if fly.size else "none | "))
-        rows[-1] += (f"{float(a['interference']):.3f} / {float(a['contact_force']):.3f} / "
-                     f"{float(a['friction_coefficient']):.3f} | {float(b['interference']):.3f} | "
-                     f"{float(b['contact_force']):.3f} | {float(b['friction_coefficient']):.3f} | "
-                     f"{float(b['friction_power']):.1f} | {float(b['thermal_protrusion']):.3f} | "
-                     f"{float(b['flash_temperature']):.1f} |")
+        rows.append(f"| {c} | {float(d['k']):.4g} | {float(d['friction_lift']):.3f} | {float(d['fold']):.3f} | "
+                    f"{_steps(d, 'flying')} | {_steps(d, 'contact')} | {_steps(d, 'coexist')} | "
+                    f"{float(a['interference']):.3f} / {float(a['contact_force']):.3f} / "
+                    f"{float(a['friction_coefficient']):.3f} | {float(b['interference']):.3f} | "
+                    f"{float(b['contact_force']):.3f} | {float(b['real_area']):.2f} | "
+                    f"{float(b['friction_coefficient']):.3f} | {float(b['friction_power']):.1f} | "
+                    f"{float(b['thermal_protrusion']):.3f} | {float(b['flash_temperature']):.1f} |")
     return "\n".join(rows)
 
 
-def figure(ds, path: Path) -> None:
+def figure(ds, path: Path, title: str = "paper-2009-identified") -> None:
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -109,17 +128,26 @@ def figure(ds, path: Path) -> None:
     for ax in axes[1]:
         ax.set_xlabel("protrusion [nm]")
     axes.flat[0].legend(fontsize=7, ncol=2)
-    fig.suptitle("Static contact state per mechanism (paper-2009-identified)")
+    fig.suptitle(f"Static contact state per mechanism ({title})")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
 
 
-def main(argv: list[str] | None = None) -> None:
+def options(argv: list[str] | None = None) -> argparse.Namespace:
+    """The command line: ``--results``, ``--figure``, ``--scene``, ``--set`` (repeatable) and ``--name``."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--results", default="results/mechanisms", type=Path)
     ap.add_argument("--figure", default=None, type=Path)
-    args = ap.parse_args(argv)
-    found, iface = cases(args.results)
+    ap.add_argument("--scene", default=MAIN, type=Path, help="the scene (default: the main scene)")
+    ap.add_argument("--set", dest="sets", action="append", default=[], metavar="SECTION.KEY=VALUE",
+                    help="override a key of the scene (TOML value syntax), as hdi's --set; repeatable")
+    ap.add_argument("--name", default="main scene", help="the scene's row in the table")
+    return ap.parse_args(argv)
+
+
+def main(argv: list[str] | None = None) -> None:
+    args = options(argv)
+    found, iface = cases(args.results, args.scene, tuple(args.sets), args.name)
     ds = ms.mechanism_map(found, PROTRUSIONS, interface=iface)
     args.results.mkdir(parents=True, exist_ok=True)
     ds.to_netcdf(args.results / "mechanism_statics.nc")
@@ -133,7 +161,8 @@ def main(argv: list[str] | None = None) -> None:
               f"{float(d['contact_peclet']):.3g}, {float(d['contact_count']):.0f} summits); nominal "
               f"{float(d['nominal_temperature']):.1f} K (slider share {float(d['nominal_heat_partition']):.2f})")
     if args.figure:
-        figure(ds, args.figure)
+        scene = found[0].model.scene.name
+        figure(ds, args.figure, scene if args.name == "main scene" else f"{args.name}: {scene}, {len(args.sets)} --set")
 
 
 if __name__ == "__main__":

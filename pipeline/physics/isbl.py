@@ -57,7 +57,10 @@ With ``dgamma_solid`` set, a summit that pushes into the bonded lubricant layer 
 surface to ``dgamma_solid`` at solid contact and stays there for the touching summits
 (:func:`pipeline.physics.adhesion.penetration_work_of_adhesion`; [VP11]: the bonded layer as a semi-solid whose
 surface energy varies with penetration). The extra is added to both populations, in closed form
-(:func:`penetration_adhesion`); with ``dgamma_solid = dgamma`` it is 0 exactly and the tables are those without it.
+(:func:`penetration_adhesion`), each from its own value at the film surface: the bridges' ``dgamma_bridge`` (with
+two populations) and the menisci's ``dgamma``, so that a summit's work of adhesion is ``dgamma_solid`` on both sides
+of touching; in the paper's ISBL, with ``dgamma_solid = dgamma``, it is 0 exactly and the tables are those without
+it.
 
 Wetted area
 -----------
@@ -385,18 +388,20 @@ def penetration_adhesion(d: np.ndarray, p: Interface) -> tuple[np.ndarray, np.nd
     """The adhesion pressure [Pa] that penetration into the bonded layer adds, on the bridges and on the menisci.
 
     Every summit that reaches the film and carries adhesion gets the extra work of adhesion
-    ``(dgamma_solid - dgamma) r``, ``r = clip((z - d + t) / t, 0, 1)``
-    (:func:`pipeline.physics.adhesion.penetration_work_of_adhesion`), so the extra force ``2 pi R`` times that:
-    on the wetted summits that do not touch (``d - t <= z < d``, the bridges' population) and on the elastic and
-    elastic-plastic ones (``d < z <= d + 110 w_c``, ``r = 1``, the menisci's); fully plastic summits carry no
-    adhesion, nor do the summits outside the film. In closed form, with ``int_a^b (z - a) phi dz =
+    ``(dgamma_solid - W_0) r``, ``r = clip((z - d + t) / t, 0, 1)``, from its population's value ``W_0`` at the
+    film surface (:func:`pipeline.physics.adhesion.penetration_work_of_adhesion`), so the extra force ``2 pi R``
+    times that: on the wetted summits that do not touch (``d - t <= z < d``, the bridges' population, ``W_0 =
+    dgamma_bridge``, or ``dgamma`` in the paper's ISBL) and on the elastic and elastic-plastic ones (``d < z <= d
+    + 110 w_c``, ``r = 1``, the menisci's, ``W_0 = dgamma``); fully plastic summits carry no adhesion, nor do the
+    summits outside the film. Each population starting from its own value makes a summit's work of adhesion
+    ``dgamma_solid`` on both sides of touching (``z = d``). In closed form, with ``int_a^b (z - a) phi dz =
     sigma_s [G(a / sigma_s) - G(b / sigma_s)] - (b - a) Q(b)`` (module docstring, "Wetted area"):
 
-    ``p_b = eta 2 pi R (dgamma_solid - dgamma) ({sigma_s [G((d - t)/sigma_s) - G(d/sigma_s)]} / t - Q(d))``,
+    ``p_b = eta 2 pi R (dgamma_solid - dgamma_bridge) ({sigma_s [G((d - t)/sigma_s) - G(d/sigma_s)]} / t - Q(d))``,
     ``p_m = eta 2 pi R (dgamma_solid - dgamma) [Q(d) - Q(d + 110 w_c)]``
 
-    (``t = 0``: ``p_b = 0``). Both are 0 exactly when ``dgamma_solid == dgamma``. [VP11; docs/model.md,
-    section "Adhesion rising with penetration"]
+    (``t = 0``: ``p_b = 0``). Each is 0 exactly when ``dgamma_solid`` is its population's surface value.
+    [VP11; docs/model.md, section "Adhesion rising with penetration"]
 
     Parameters
     ----------
@@ -416,6 +421,9 @@ def penetration_adhesion(d: np.ndarray, p: Interface) -> tuple[np.ndarray, np.nd
     d = np.atleast_1d(np.asarray(d, dtype=float))
     s, t = p.sigma_s, p.t
     scale = p.eta * meniscus_force(p.R, p.dgamma_solid - p.dgamma)
+    # the bridges rise from their own surface value, so a summit's W is dgamma_solid on both sides of touching
+    bridge = p.dgamma if p.dgamma_bridge is None else p.dgamma_bridge
+    scale_b = p.eta * meniscus_force(p.R, p.dgamma_solid - bridge)
     Q = lambda x: _ndtr(-x / s)  # noqa: E731 - upper tail P(z > x)
     touching = np.where(d > 0, Q(d) - Q(d + asperity.X_PLASTIC * p.w_c),
                         _ndtr((d + asperity.X_PLASTIC * p.w_c) / s) - _ndtr(d / s))
@@ -423,7 +431,7 @@ def penetration_adhesion(d: np.ndarray, p: Interface) -> tuple[np.ndarray, np.nd
         ramp = np.maximum(s * (_G((d - t) / s) - _G(d / s)) / t - Q(d), 0.0)
     else:
         ramp = np.zeros_like(d)
-    return scale * ramp, scale * touching
+    return scale_b * ramp, scale * touching
 
 
 def _summit_integral(d: np.ndarray, p: Interface, law: SummitLaw, nodes: int, panels: int) -> np.ndarray:

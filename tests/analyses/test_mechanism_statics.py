@@ -179,3 +179,34 @@ def test_the_fold_is_the_static_starts_and_bounds_the_flying_states(model):
     assert float(ds["fold"][0]) == pytest.approx(fold, abs=1e-12)
     flying = ds["protrusion"].values[ds["flying"].values[0] == 1]
     assert flying.max() < fold < 9.8  # the last flying step before the fold, none after it
+
+
+def _script(repo_root):
+    """docs/experiments/mechanism_statics.py as a module (the map's command line)."""
+    import importlib.util
+    spec = importlib.util.spec_from_file_location("mechanism_statics_script",
+                                                  repo_root / "docs" / "experiments" / "mechanism_statics.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_the_scripts_scene_options_and_its_datum_case(repo_root):
+    """The map's script takes another scene and its overrides (--scene, repeated --set), the main scene by default;
+    its roughness-datum variant (the scene with contact.k = 3) is, on the main scene, the shipped section-datum
+    scene but for its name and description."""
+    script = _script(repo_root)
+    default = script.options([])
+    assert default.scene == repo_root / "configs" / "paper-2009-identified.toml"
+    assert default.sets == [] and default.name == "main scene"
+    band = script.options(["--scene", "configs/paper-2009-two-population-rough.toml", "--set",
+                           "air_bearing.pad_pressure_mpa=2.2", "--set", "dmw.exponent=-4", "--name", "band scene"])
+    assert band.sets == ["air_bearing.pad_pressure_mpa=2.2", "dmw.exponent=-4"] and band.name == "band scene"
+    scene = load_scene(repo_root / "configs" / "paper-2009-two-population-rough.toml", band.sets)
+    assert scene["air_bearing"]["pad_pressure_mpa"] == 2.2 and scene["dmw"]["exponent"] == -4.0
+    datum = load_scene(default.scene, [script.SECTION_DATUM]).config
+    shipped = load_scene(repo_root / "configs" / "paper-2009-identified-section-datum.toml").config
+    assert datum["contact"]["k"] == 3.0
+    for section in shipped:
+        keys = set(shipped[section]) - ({"name", "description", "extends"} if section == "scene" else set())
+        assert {k: datum[section][k] for k in keys} == {k: shipped[section][k] for k in keys}, section

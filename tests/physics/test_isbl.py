@@ -472,16 +472,35 @@ def _extra(p: isbl.Interface, d: np.ndarray, ws: float) -> np.ndarray:
             - isbl.isbl_tables(d, p, quantities=q)["adhesion_pressure"])
 
 
-@pytest.mark.parametrize("bridge", [None, 0.0055])
-def test_penetration_with_the_lubricant_value_gives_todays_tables_bit_for_bit(bridge):
-    """dgamma_solid = dgamma adds exactly 0: every table equals the one without the option (both adhesion models)."""
-    p = replace(PEN, dgamma_bridge=bridge)
+def test_penetration_with_the_lubricant_value_gives_todays_tables_bit_for_bit():
+    """dgamma_solid = dgamma adds exactly 0 in the paper's ISBL: every table equals the one without the option."""
     d = np.linspace(-3.0, 8.0, 221) * NM
-    off = isbl.isbl_tables(d, p)
-    on = isbl.isbl_tables(d, replace(p, dgamma_solid=p.dgamma))
+    off = isbl.isbl_tables(d, PEN)
+    on = isbl.isbl_tables(d, replace(PEN, dgamma_solid=PEN.dgamma))
     assert off.keys() == on.keys()
     for k in off:
         assert np.array_equal(off[k], on[k]), k
+
+
+def test_with_two_populations_each_rises_from_its_own_surface_value():
+    """With bridges of their own work of adhesion, the bridges' extra is 0 exactly at dgamma_solid = dgamma_bridge
+    and the menisci's at dgamma_solid = dgamma (each table column then bit for bit), and each is linear in its own
+    difference: a summit's work of adhesion is dgamma_solid on both sides of touching, never below 0."""
+    p = replace(PEN, dgamma_bridge=0.03)
+    d = np.linspace(-3.0, 8.0, 221) * NM
+    off = isbl.isbl_tables(d, p)
+    at_bridge = isbl.isbl_tables(d, replace(p, dgamma_solid=0.03))
+    at_meniscus = isbl.isbl_tables(d, replace(p, dgamma_solid=p.dgamma))
+    assert np.array_equal(at_bridge["adhesion_pressure_bridges"], off["adhesion_pressure_bridges"])
+    assert np.array_equal(at_meniscus["adhesion_pressure_menisci"], off["adhesion_pressure_menisci"])
+    b1, m1 = isbl.penetration_adhesion(d, replace(p, dgamma_solid=0.05))
+    b2, m2 = isbl.penetration_adhesion(d, replace(p, dgamma_solid=0.07))
+    # W_s 0.05 -> 0.07: the bridges' difference 0.02 -> 0.04 (x 2), the menisci's -0.059 -> -0.039
+    # tol: the same closed form times two scale factors: a few ulps of the products
+    np.testing.assert_allclose(b2, 2.0 * b1, rtol=1e-12, atol=0.0)
+    # tol: as above, the menisci's scale factors
+    np.testing.assert_allclose(m2 * (0.05 - p.dgamma), m1 * (0.07 - p.dgamma), rtol=1e-12, atol=0.0)
+    assert np.all(b1 >= 0.0) and b1.max() > 0.0 and np.all(m1 <= 0.0) and m1.min() < 0.0
 
 
 def test_penetration_adhesion_is_zero_where_no_summit_reaches_the_film():
@@ -513,16 +532,18 @@ def test_penetration_adhesion_is_monotonic_and_linear_in_the_solid_value():
     np.testing.assert_allclose(e2, 2 * e1, rtol=1e-9, atol=1e-9 * abs(e2).max())
 
 
+@pytest.mark.parametrize("bridge", [None, 0.03])          # (0.03: the bridges rise from their own value)
 @pytest.mark.parametrize("hardness", [1.68e9, 0.3e9])   # (0.3 GPa: w_c 0.04 nm, plastic summits cut off)
-def test_penetration_adhesion_against_a_sampled_summit_population(hardness):
+def test_penetration_adhesion_against_a_sampled_summit_population(hardness, bridge):
     """The closed form against a direct sum over 400 000 sampled summits (fixed seed): eta mean of the per-summit
-    extra force 2 pi R (W(z) - dgamma), with no adhesion on fully plastic summits (w > 110 w_c), within four
-    standard errors."""
-    p = replace(PEN, H=hardness, dgamma_solid=0.15)
+    extra force 2 pi R (W(z) - W_0(z)), W_0 the summit's value at the film surface (the bridges' below touching,
+    dgamma above), with no adhesion on fully plastic summits (w > 110 w_c), within four standard errors."""
+    p = replace(PEN, H=hardness, dgamma_solid=0.15, dgamma_bridge=bridge)
     z = np.random.default_rng(20121).normal(0.0, p.sigma_s, 400_000)
     for d in np.array([-0.8, -0.3, 0.0, 0.3, 0.8, 1.2]) * NM:
-        W = adhesion.penetration_work_of_adhesion(z - (d - p.t), p.t, p.dgamma, p.dgamma_solid)
-        f = np.where(z - d <= asperity.X_PLASTIC * p.w_c, adhesion.meniscus_force(p.R, 1.0) * (W - p.dgamma), 0.0)
+        w0 = np.where(z < d, p.dgamma if bridge is None else bridge, p.dgamma)
+        W = adhesion.penetration_work_of_adhesion(z - (d - p.t), p.t, w0, p.dgamma_solid)
+        f = np.where(z - d <= asperity.X_PLASTIC * p.w_c, adhesion.meniscus_force(p.R, 1.0) * (W - w0), 0.0)
         mc, se = p.eta * f.mean(), p.eta * f.std(ddof=1) / np.sqrt(f.size)
         b, m = isbl.penetration_adhesion(np.array([d]), p)
         assert se < 0.05 * mc
