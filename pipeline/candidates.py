@@ -17,6 +17,7 @@ import numpy as np
 from .analyses.free_parameters import Parameter, with_values
 from .model import dmw_record, scene_inputs
 from .model import assembly
+from .model import bulge_pads
 from .model.bulge_table import scene_table
 from .model.inputs import SimulationInputs, Source, cached
 from .model.interface_tables import build_tables, roughness_statistics
@@ -45,9 +46,20 @@ def candidate_inputs(scene: Any, inputs: SimulationInputs,
             return dmw_record.synthetic_record(s), s["sample_rate_hz"]
         record = _input(inputs.dmw, "dmw", key("dmw"), synthesise)
     if "bulge" in scene_inputs.table_stages(scene):
-        # (a changed bulge key solves the table again: ~20 s on one core for the paper scene, per new value)
-        bulge = _input(inputs.bulge, "bulge", key("bulge"), lambda: scene_table(scene))
-    return SimulationInputs(interface, record, bulge)
+        if inputs.bulge_pads is not None:  # (a free pad pressure: every candidate's table interpolated, seconds)
+            bulge = _pad_table(scene, inputs.bulge_pads)
+        else:  # (a changed bulge key solves the table again: ~20 s on one core for the paper scene, per new value)
+            bulge = _input(inputs.bulge, "bulge", key("bulge"), lambda: scene_table(scene))
+    return SimulationInputs(interface, record, bulge, bulge_pads=inputs.bulge_pads)
+
+
+def _pad_table(scene: Any, pads: Source) -> Source:
+    """The candidate's bulge table interpolated at its ``air_bearing.pad_pressure_mpa`` from the study's node
+    tables ``pads`` (:func:`pipeline.model.bulge_pads.table_at`), made once per process and pad pressure. Every
+    candidate reads it so, the base scene's pad pressure too: one table law over the whole search."""
+    p_pad = float(scene["air_bearing"]["pad_pressure_mpa"])
+    key = f"{pads.key or pads.path}@{p_pad!r}"
+    return Source.memory("bulge", cached("bulge", key, lambda: bulge_pads.table_at(pads.load(), p_pad)), key)
 
 
 def _input(base: Source | None, stage: str, key: str, make: Callable[[], Any]) -> Source:

@@ -44,6 +44,7 @@ from .fanout import LOCAL, local_workers, run_tasks
 from .paths import append_text, refuse_links
 from .model import dmw_record, scene_inputs
 from .model import assembly, copies, running
+from .model.bulge_table import DERIVED_FIELDS as BULGE_DERIVED, FIELDS as BULGE_FIELDS
 from .model.inputs import SimulationInputs, Source, for_stage
 from .model.simulation import scalars
 from .runner import current_inputs, scene_part
@@ -55,6 +56,28 @@ def upstream(scene: Any) -> tuple[str, ...]:
     """The stages a study reads: a single simulation's inputs without the calibration (a study fixes k,
     :func:`pipeline.model.scene_inputs.contact_k` without a calibration)."""
     return scene_inputs.input_stages(scene, calibration=False)
+
+
+#: The free parameter whose bulge table a study interpolates (:mod:`pipeline.stages.bulge_pads`).
+PAD_KEY = "air_bearing.pad_pressure_mpa"
+
+
+def pad_bounds(scene: Any) -> tuple[float, float] | None:
+    """The bounds [MPa] of ``air_bearing.pad_pressure_mpa`` among ``identify.parameters`` when the scene's
+    bulge law reads a table and no other free parameter is a key of that table
+    (:data:`pipeline.model.bulge_table.FIELDS` and the protrusions of its depth); else ``None`` (the candidates
+    solve their own tables, as when the pad pressure is fixed)."""
+    if "bulge" not in scene_inputs.table_stages(scene):
+        return None
+    items = scene["identify"]["parameters"]
+    if not items:
+        return None
+    params = parse_parameters(items, str(scene.path or "<scene>"), "identify.parameters")
+    table_keys = set(BULGE_FIELDS) | set(BULGE_DERIVED)
+    pad = [p for p in params if p.name == PAD_KEY]
+    if not pad or any(p.name in table_keys and p.name != PAD_KEY for p in params):
+        return None
+    return float(pad[0].low), float(pad[0].high)
 
 
 # ---------------------------------------------------------------------------------- evaluations
@@ -72,6 +95,8 @@ def base_key(scene: Any, inputs: SimulationInputs) -> str:
             "dmw": keys["dmw"], "code": code_key(__name__)}
     if keys["bulge"] is not None:  # (only with the tabulated bulge bearing: other stores keep their keys)
         blob["bulge"] = keys["bulge"]
+    if inputs.bulge_pads is not None:  # (the candidates' tables interpolated in p_pad: their own store)
+        blob["bulge_pads"] = inputs.bulge_pads.key
     return hashlib.sha256(json.dumps(blob, sort_keys=True).encode()).hexdigest()
 
 

@@ -168,9 +168,10 @@ def table_stop_nm(scene: Any) -> float:
     return max(PROTRUSION_STOP_NM, float(np.ceil(deepest / PROTRUSION_STEP_NM - TOL_NM)) * PROTRUSION_STEP_NM)
 
 
-def scene_table(scene: Any) -> xr.Dataset:
+def scene_table(scene: Any, p_pad: float | None = None) -> xr.Dataset:
     """The ``bulge.nc`` dataset of a scene (:func:`bulge_table` of its keys): model ``air_bearing.bulge``,
-    pad pressure ``air_bearing.pad_pressure_mpa``, profile ``air_bearing.bulge_profile``, slip model
+    pad pressure ``air_bearing.pad_pressure_mpa`` (or ``p_pad`` [Pa] when given, which the key is then not
+    read for: the node tables of :mod:`pipeline.model.bulge_pads`), profile ``air_bearing.bulge_profile``, slip model
     ``air_bearing.bulge_slip``, the roughness of :func:`scene_roughness` (rough law), footprint semi-axes
     ``tfc.half_length_um``, ``tfc.half_width_um``, the disk speed of ``[dmw] radius_mm, rpm``
     (:func:`pipeline.model.dmw_record.disk_speed_m_s`), the Reynolds grid
@@ -180,7 +181,8 @@ def scene_table(scene: Any) -> xr.Dataset:
     si = scene.si
     grid = ReynoldsGrid(cells_per_a=sol["bulge_cells_per_a"], cells_per_b=sol["bulge_cells_per_b"])
     rough = scene_roughness(scene)
-    return bulge_table(model=a["bulge"], p_pad=si.air_bearing.pad_pressure, a=si.tfc.half_length,
+    p_pad = si.air_bearing.pad_pressure if p_pad is None else float(p_pad)
+    return bulge_table(model=a["bulge"], p_pad=p_pad, a=si.tfc.half_length,
                        b=si.tfc.half_width, speed=disk_speed_m_s(scene["dmw"]), gaps=table_gaps(),
                        protrusions=table_protrusions(table_stop_nm(scene), PROTRUSION_STEP_NM),
                        profile=a["bulge_profile"], slip=a["bulge_slip"], grid=grid, roughness=rough)

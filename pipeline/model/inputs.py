@@ -140,6 +140,9 @@ class SimulationInputs:
     k : the contact criterion constant [1] (``None``: no contact effect, or not resolved: a parameter study
         takes each candidate's own, :func:`pipeline.model.scene_inputs.contact_k`)
     k_source : where ``k`` came from
+    bulge_pads : a study's bulge tables at a few pad pressures (``bulge_pads.nc``, :mod:`pipeline.stages.bulge_pads`),
+        from which each candidate's bulge table is interpolated (:func:`pipeline.candidates.candidate_inputs`);
+        ``None``: each candidate solves its own
     """
 
     interface: Source | None = None
@@ -147,6 +150,7 @@ class SimulationInputs:
     bulge: Source | None = None
     k: float | None = None
     k_source: str = "not resolved"
+    bulge_pads: Source | None = None
 
     @classmethod
     def of(cls, interface: xr.Dataset | None = None, record: tuple[np.ndarray, float] | None = None,

@@ -50,6 +50,7 @@ from __future__ import annotations
 
 import logging
 import os
+from dataclasses import replace
 from pathlib import Path
 from typing import Any, Sequence
 
@@ -68,7 +69,8 @@ from ..analyses.identification import (GN_STEP, METHODS, PROFILE_GAIN, PROFILE_S
                                        Identification, Racing, identify)
 from ..analyses.free_parameters import Parameter, parse_parameters, scene_value
 from ..analyses.study import target_protrusions, targets
-from ..evaluations import Evaluator, evaluate_batch, setup, upstream
+from ..evaluations import Evaluator, evaluate_batch, pad_bounds, setup, upstream
+from ..model.inputs import Source
 from ..model.scene_inputs import STUDY_FIELDS
 
 log = logging.getLogger(__name__)
@@ -273,6 +275,25 @@ def _attributes(ident: Identification, out: dict[str, Any], ev: Evaluator, n_par
     }
 
 
+def _pad_attributes(pads: xr.Dataset) -> dict[str, Any]:
+    """What identify.nc says of the candidates' bulge tables when they are interpolated in p_pad
+    (``bulge_pads.nc``, :mod:`pipeline.stages.bulge_pads`): which table, its nodes and its measured error."""
+    nodes = ", ".join(f"{p:.4g}" for p in pads.attrs["pad_nodes_mpa"])
+    return {"bulge_table": f"bulge_pads.nc: the {pads.attrs['bulge_model']} bulge table at the pad pressures "
+                           f"{nodes} MPa, each candidate's interpolated at its p_pad ({pads.attrs['interpolation']}); "
+                           f"largest relative lift error half-way between the nodes "
+                           f"{float(pads.attrs['max_lift_error']):.2e}",
+            "bulge_pad_nodes_mpa": np.asarray(pads.attrs["pad_nodes_mpa"], float),
+            "bulge_pad_check_mpa": np.asarray(pads.attrs["check_pads_mpa"], float),
+            "bulge_pad_lift_error": np.asarray(pads.attrs["check_lift_error"], float)}
+
+
+def identify_upstream(scene: Any) -> tuple[str, ...]:
+    """The stages identify reads: a study's (:func:`pipeline.evaluations.upstream`) and ``bulge_pads`` when the
+    pad pressure is free on a tabulated bulge law (:func:`pipeline.evaluations.pad_bounds`)."""
+    return (*upstream(scene), *(("bulge_pads",) if pad_bounds(scene) is not None else ()))
+
+
 def _polish_attrs(polish: dict[str, Any] | None, n: int) -> dict[str, Any]:
     """What identify.nc says of the polish of the search's optimum (none when ``identify.polish`` is off:
     the dataset of before)."""
@@ -457,6 +478,11 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
                          "effect with dmw.source = \"synthetic\"; a measured record is one realisation): set "
                          "identify.realisations = 1")
     params, base_inputs, store = setup(scene, inputs, "identify", bool(opts.get("force")))
+    pads = None
+    if "bulge_pads" in inputs.upstream:  # (a free p_pad on a tabulated bulge law: tables interpolated in p_pad)
+        pads = read_dataset(Path(out) / "bulge_pads.nc", stage="bulge_pads")
+        base_inputs = replace(base_inputs, bulge_pads=Source.file("bulge_pads", Path(out) / "bulge_pads.nc",
+                                                                  inputs.upstream["bulge_pads"]))
     x_base = np.array([scene_value(scene, p) for p in params])
     if not np.all(np.isfinite(x_base)):
         bad = [p.name for p, v in zip(params, x_base) if not np.isfinite(v)]
@@ -475,6 +501,8 @@ def compute(scene: Any, inputs: Inputs) -> xr.Dataset:
         ds = dataset(ident, params, result, x_base, ev, progress=shown)
     # (its file name: the scene is in the results folder, wherever that folder is)
     ds.attrs["identified_scene"] = identified_scene_path(scene, out).name
+    if pads is not None:
+        ds.attrs.update(_pad_attributes(pads))
     figure(ds, params, scene.name, inputs.staging / "figures" / "identify.png")
     inputs.record(evaluations=int(ds.sizes["evaluation"]), evaluations_computed=ev.evaluated,
                   record_evaluations=ident.record_evaluations, record_evaluations_computed=ev.record_evaluations,
@@ -522,7 +550,7 @@ STAGE = Stage(
     "identify", compute, simulates=True, outputs=("identify.nc", "figures/identify.png"),
     # (what the candidates' simulations read, with the deepest protrusion their own tables reach)
     reads=(*STUDY_FIELDS, "sweep.protrusion_nm", "identify.*"), unkeyed=("identify.batch_size",),
-    upstream=upstream, check=box_check("identify"), finish=_finish, order=80,
+    upstream=identify_upstream, check=box_check("identify"), finish=_finish, order=80,
     keeps=lambda scene: (identified_scene_path(scene, Path()).name, "identify.evals.jsonl"),
     doc="the free [recon] parameters fitted to the paper's targets, identify.nc and identified.toml "
         "(in the results folder; --write-scene PATH for a copy)")
