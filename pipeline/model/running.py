@@ -95,7 +95,7 @@ def run_model(model: Model, protrusion: float, y0: np.ndarray | None = None, max
         dyn.compile_kernel_ahead(np.zeros(N_STATE), grid, p, tables, variants, solver)
         y0, start_note = start(model, protrusion)
         if model.heating is not None:
-            y0, heat = heated_start(model, p, tables, variants, y0)
+            y0, heat = heated_start(model, p, y0)
     y0 = np.asarray(y0, float)
     if model.heating is not None:  # the heat's grid (A_n and the TFC table at delta + delta_f), a copy of the table
         heat0 = float(y0[-1]) if y0.size > N_STATE + (model.meniscus is not None) else heat
@@ -128,24 +128,24 @@ def meniscus_equilibrium(model: Model, p: np.record, y: np.ndarray, heat: float 
     return float(ppval(adhesion, p.tab_x0, p.tab_h, np.array([d]))[0])
 
 
-def heated_start(model: Model, p: np.record, tables: dyn.Tables, variants: dyn.Variants, y: np.ndarray
-                 ) -> tuple[np.ndarray, float]:
+def heated_start(model: Model, p: np.record, y: np.ndarray) -> tuple[np.ndarray, float]:
     """The start of the frictional heat's protrusion ``delta_f`` [m] and the slider's start state with it
     (docs/model.md, section "Frictional heating"): from a static contact state (``d < k sigma`` at ``w = 0``),
-    the fixed point ``delta_f = eta_f V Q(delta + delta_f)`` (:func:`pipeline.model.frictional_heating.heat_fixed_point`)
-    of the static contact state of the kernel's forces at ``delta + delta_f`` (``A_n`` and the tables there, as
-    :func:`pipeline.analyses.mechanism_statics.heated_contact` takes them) and that state; else (flying, the nominal attitude) 0 and ``y``. Kept in the
+    the fixed point ``delta_f = eta_f V Q(delta + delta_f)``
+    (:func:`pipeline.model.frictional_heating.heat_fixed_point`) of the static contact state of the kernel's
+    forces at ``delta + delta_f`` (``A_n`` and the tables there, as
+    :func:`pipeline.analyses.mechanism_statics.heated_contact` takes them) and that state; else (flying, the
+    nominal attitude) 0 and ``y``. ``p``: the kernel's parameters at the heater's protrusion. Kept in the
     model's ``statics`` (:func:`start`). A state on the way that is no stable contact state: 0 and ``y``."""
     key = ("heated", float(p["delta"]))
     found = model.statics.get(key)
     if found is None:
-        found = model.statics[key] = _heated_start(model, p, tables, variants, y)
+        found = model.statics[key] = _heated_start(model, p, y)
     return found[0].copy(), found[1]
 
 
-def _heated_start(model: Model, p: np.record, tables: dyn.Tables, variants: dyn.Variants, y: np.ndarray
-                  ) -> tuple[np.ndarray, float]:
-    """:func:`heated_start` computed."""
+def _heated_start(model: Model, p: np.record, y: np.ndarray) -> tuple[np.ndarray, float]:
+    """:func:`heated_start` computed (the kernel's inputs at each ``delta + x``: :func:`run_parameters`)."""
     if model.start == "nominal" or not separation_at(p, y[Z], y[THETA], 0.0) < p["k_sigma"]:
         return y, 0.0
     delta, per_newton = float(p["delta"]), model.heating[0]
@@ -153,13 +153,13 @@ def _heated_start(model: Model, p: np.record, tables: dyn.Tables, variants: dyn.
     states = {0.0: y[:2].copy()}
 
     def steady(x: float) -> float:
-        q = run_parameters(model, delta + x)[0]
+        q, tab, _ = run_parameters(model, delta + x)
         eq = solve(delta + x, states[min(states, key=lambda k: abs(k - x))])
         d = float(separation_at(q, eq.y[0], eq.y[1], 0.0))
         if not (eq.converged and eq.stable and d < q["k_sigma"]):
             return np.nan
         states[x] = eq.y
-        return per_newton * static_friction(q, tables.friction, d)
+        return per_newton * static_friction(q, tab.friction, d)
 
     x, _ = heat_fixed_point(steady)
     if not np.isfinite(x):

@@ -137,14 +137,14 @@ def test_a_fast_heat_reaches_the_statics_heated_contact():
     (``heated_contact``: the model at delta + delta_f, A_n included) to the kernel's reading of A_n there, linear
     between protrusions HEAT_STEP apart (kernel_inputs.heat_grid): Q is A_n times the stress at one separation,
     so the kernel's fixed point exceeds the statics' by at most that reading's excess over the exact A_n (3.1e-4
-    for 0.38 nm of heat; measured 2.9e-4); the heated start is the statics' fixed point to 1e-6. (At tau_f = 2 us the same
-    5 % leaves the contact state for a bouncing one, with steps of 2 ns too: the lag then couples to the
+    for 0.38 nm of heat; measured 2.9e-4); the heated start is the statics' fixed point to 1e-6. (At tau_f = 2 us
+    the same 5 % leaves the contact state for a bouncing one, with steps of 2 ns too: the lag then couples to the
     slider's contact mode; docs/model.md, section "Frictional heating".)"""
     eta = 0.01
     m = heated_model(eta, 5e-6)
     y0, _ = running.start(m, 11 * NM)
-    p, tab, var = run_parameters(m, 11 * NM)
-    y_hot, x_start = running.heated_start(m, p, tab, var, y0)
+    p, _, _ = run_parameters(m, 11 * NM)
+    y_hot, x_start = running.heated_start(m, p, y0)
     # from the fixed point with 5 % less heat (the slider's state at it): back to it in the kernel's own time
     run = running.run_model(m, 11 * NM, y0=np.append(y_hot, 0.95 * x_start))
     assert run.contact.all() and run.info[WINDOW_SWITCHES] == 0  # (steady contact, no switch)
