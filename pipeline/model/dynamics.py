@@ -88,7 +88,7 @@ from ..units import NS
 from . import compiled
 from .compiled import kernel_jit
 from .forces import RearLawRef, rear_law_ref, rhs_slots, separation, separation_of
-from .frictional_heating import heat_friction, heat_update
+from .frictional_heating import RETABLE, heat_friction, heat_tables, heat_update
 from .state import (ACCEPTED, MAX_STEPS, N_COUNTERS, NOT_FINITE, REJECTED, RHS_CALLS, STATUS, STEP_UNDERFLOW,
                     SWITCHES, THETA, THETA_RATE, WINDOW_SWITCHES, Z, Z_RATE, output_size, state_size)
 from .stepper import (cubic_extrema, error_norm, extrema_slots, first_wrong_side, interp_state, inverse_mass_at_tfc,
@@ -204,7 +204,8 @@ class Variants(NamedTuple):
     meniscus : the meniscus formation time ``tau_m`` [s] (> 0): the adhesion pressure becomes the fifth
         state component ``q`` [Pa], ``dq/dt = (p_a(d) - q) / tau_m`` (docs/model.md, section "Meniscus
         formation"); the state, ``y0``, the outputs and ``Solver.atol`` then have 5 components
-    heating : the frictional heat's protrusion ``(eta_f V [m/N], tau_f [s])`` (docs/model.md, section
+    heating : the frictional heat's protrusion ``(eta_f V [m/N], tau_f [s], step [m], A_n [m^2], TFC tables)``,
+        the last two the grid :func:`pipeline.model.kernel_inputs.heat_grid` at ``delta + j step`` (docs/model.md, section
         "Frictional heating"; :mod:`pipeline.model.frictional_heating`): ``y0`` and the outputs get its
         ``delta_f`` [m] as a last column (:func:`pipeline.model.state.output_size`), the loop's own state
         (not the step's: ``Solver.atol`` is unchanged). The loop's slot alone: it is not in :data:`SLOTS`,
@@ -215,7 +216,7 @@ class Variants(NamedTuple):
     rear_law: RearLawRef | None = None
     gap_power: np.record | None = None
     meniscus: float | None = None
-    heating: tuple[float, float] | None = None
+    heating: tuple | None = None
 
 
 class Solver(NamedTuple):
@@ -427,11 +428,14 @@ def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, cont
     t_disk_lo, t_disk_hi = disk_span(p, dmw)
     t = 0.0
     # the frictional heat's protrusion delta_f (frictional_heating), held over a step: the geometry sees it
-    # through p.delta (the record's copy of integrate's, _packed), its steady value a0 at the step's start
-    delta_heater, df, a0 = p.delta, 0.0, 0.0
+    # through p.delta (the record's copy of integrate's, _packed), its steady value a0 at the step's start; A_n and
+    # the TFC table at delta + delta_f too (heat_tables; re-read when delta_f has moved by RETABLE, at df_tab)
+    delta_heater, df, a0, df_tab = p.delta, 0.0, 0.0, 0.0
     if heating is not None:
         df = y0[ns]
         p.delta = delta_heater + df
+        p.A_n = heat_tables(tfc, heating, df)
+        df_tab = df
     d0, dd0 = separation(p, dmw, t, y)  # d and d' at the current step start (kept step to step)
     # The initial mode follows the criterion at t = 0.
     in_contact = False
@@ -562,6 +566,9 @@ def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, cont
             p.delta = delta_heater + df_new
             d0 -= df_new - df  # (d = ... - delta: the next step starts at the new protrusion)
             df = df_new
+            if abs(df - df_tab) > RETABLE:
+                p.A_n = heat_tables(tfc, heating, df)
+                df_tab = df
         info[ACCEPTED] += 1
         h_stiff = stiffness_cap(p, in_contact, d0, h_max, m_eff_inv, contact, adhesion, tfc, gap_power,
                                 meniscus)

@@ -11,7 +11,10 @@ put ``delta_f`` in its error-controlled step: after each accepted step it advanc
 solution of the lag with ``Q`` linear in time between the step's ends (:func:`heat_update`; exact for a
 constant ``Q``, second order otherwise), and the next step sees the new protrusion (a splitting: within a
 step the mechanics runs at the protrusion of its start). ``Q`` between the step's ends is the force the
-step's mode gives at its end separation (:func:`heat_friction`).
+step's mode gives at its end separation (:func:`heat_friction`). The heat's protrusion is the pole tip's as the
+heater's is: the nominal area ``A_n`` and the tabulated TFC-point force (the bulge's lift) are read at
+``delta + delta_f``, linearly between tables a fixed protrusion step apart (:func:`heat_tables`;
+:func:`pipeline.model.kernel_inputs.heat_grid`).
 
 The steady state of a static contact, ``delta_f = eta_f V Q(delta + delta_f)``, is one fixed point solved by
 one rule, :func:`heat_fixed_point` (the statics map's :func:`pipeline.analyses.mechanism_statics.heated_contact`
@@ -32,6 +35,11 @@ from ..units import NM
 
 _inline = kernel_jit(__name__, inline="always")
 
+#: The kernel re-reads its tables at ``delta + delta_f`` (:func:`heat_tables`) when ``delta_f`` has moved by more
+#: than this [m] since the last read: 1e-4 nm, 2e-4 of the tables' protrusion step (the read costs a pass over
+#: the TFC table, ~4000 pieces; ``delta_f`` moves by ~1e-5 nm a step in a transient).
+RETABLE = 1e-4 * NM
+
 #: The fixed point of :func:`heat_fixed_point` is solved to this [m]; and at most :data:`MAX_ITER` secant steps.
 HEAT_TOL = 1e-6 * NM
 MAX_ITER = 40
@@ -49,6 +57,38 @@ def heat_update(delta_f, a0, a1, h, tau):
     x = h / tau
     one_minus = -math.expm1(-x)
     return a1 + (delta_f - a0) * (1.0 - one_minus) - (a1 - a0) * (one_minus / x)
+
+
+@kernel_jit(__name__)
+def heat_tables(tfc, heating, delta_f):
+    """The nominal area ``A_n`` [m^2] at ``delta + delta_f`` and the TFC table ``tfc`` (``None``: no tabulated law)
+    overwritten with its coefficients there: linear in the protrusion between the grid's tables ``heating[4]``
+    and areas ``heating[3]`` at ``delta + j heating[2]`` (:func:`pipeline.model.kernel_inputs.heat_grid`;
+    beyond the grid's last protrusion, the last interval's line). At ``delta_f = 0`` the grid's first entry bit
+    for bit; a one-entry grid (the statics' slot) is that entry."""
+    step, areas, tables = heating[2], heating[3], heating[4]
+    n = areas.shape[0]
+    if n < 2:
+        return areas[0]
+    x = delta_f / step
+    j = min(max(int(math.floor(x)), 0), n - 2)
+    s = x - j
+    if tfc is not None:
+        for i in range(tfc.shape[0]):
+            for c in range(tfc.shape[1]):
+                tfc[i, c] = tables[j, i, c] + s * (tables[j + 1, i, c] - tables[j, i, c])
+    return areas[j] + s * (areas[j + 1] - areas[j])
+
+
+def heated_areas(step: float, areas: np.ndarray, delta_f: np.ndarray) -> np.ndarray:
+    """:func:`heat_tables`'s ``A_n`` [m^2] at the heat's protrusions ``delta_f`` [m] (array), bit for bit: the
+    histories' nominal area of a heated run."""
+    x = np.asarray(delta_f, float) / step
+    j = np.clip(np.floor(x).astype(int), 0, areas.shape[0] - 2) if areas.shape[0] > 1 else np.zeros(x.shape, int)
+    if areas.shape[0] < 2:
+        return np.full(x.shape, areas[0])
+    s = x - j
+    return areas[j] + s * (areas[j + 1] - areas[j])
 
 
 @_inline

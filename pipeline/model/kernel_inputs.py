@@ -27,6 +27,7 @@ from .scene_inputs import needs_interface
 from .state import N_STATE
 from ..physics import tfc_laws
 from ..physics.geometry import AREA_MODELS, nominal_area
+from ..units import NM
 
 
 #: How many entries the integrated interface tables' cache keeps (:func:`interface_tables`): a run asks
@@ -86,11 +87,43 @@ def _tfc_table(laws: tuple[tfc_laws.TfcLaw, ...], fh0: float, protrusion: float)
 
 def run_parameters(model: Model, protrusion: float) -> tuple[np.record, dyn.Tables, dyn.Variants]:
     """The kernel's parameters, tables and variants for the model at ``protrusion`` [m]."""
-    An = float(nominal_area(protrusion, model.half_length, model.half_width, model.section_depth)) \
-        if np.isfinite(model.section_depth) else 0.0
-    p = dyn.with_values(model.p, delta=protrusion, A_n=An, k_sigma=model.k_sigma, t_win=model.transient)
+    p = dyn.with_values(model.p, delta=protrusion, A_n=_nominal_area(model, protrusion), k_sigma=model.k_sigma,
+                        t_win=model.transient)
     tables, variants = kernel_slots(model, p)
     return p, tables, variants
+
+
+def _nominal_area(model: Model, protrusion: float) -> float:
+    """The model's nominal area ``A_n`` [m^2] at ``protrusion`` [m] (0 without a section depth)."""
+    return float(nominal_area(protrusion, model.half_length, model.half_width, model.section_depth)) \
+        if np.isfinite(model.section_depth) else 0.0
+
+
+#: The frictional heat's protrusion grid (:func:`heat_grid`): its step [m] and the span above the heater's
+#: protrusion it covers at least [m] (the band scene's heat reaches 4.1 nm at ``eta_f = 0.1``).
+HEAT_STEP = 0.5 * NM
+HEAT_SPAN = 5.0 * NM
+
+
+def heat_grid(model: Model, protrusion: float, span: float = HEAT_SPAN) -> tuple:
+    """The kernel's heat slot (``dynamics.Variants.heating``) of a heated run at the heater's ``protrusion``
+    [m]: ``(eta_f V, tau_f, HEAT_STEP, A_n, tables)``, the nominal areas [m^2] and the TFC tables'
+    coefficients (stacked, ``(n, pieces, 4)``; zeros ``(n, 1, 4)`` without a tabulated law) at ``protrusion + j
+    HEAT_STEP``, ``j = 0 .. n - 1`` up to ``span`` [m] at least: the kernel reads them at ``delta + delta_f``
+    linearly in between (:func:`pipeline.model.frictional_heating.heat_tables`; docs/model.md, section
+    "Frictional heating"). The TFC tables' gap grid depends on ``FH0`` alone: one grid for all."""
+    n = int(np.ceil(span / HEAT_STEP - 1e-9)) + 1
+    mus = protrusion + HEAT_STEP * np.arange(n)
+    areas = np.array([_nominal_area(model, mu) for mu in mus])
+    tables = [tfc_table(model, float(mu)) for mu in mus]
+    stack = np.zeros((n, 1, 4)) if tables[0] is None else np.stack([t[0] for t in tables])
+    return _heat_slot(model.heating, areas, stack)
+
+
+def _heat_slot(heating: tuple[float, float], areas: np.ndarray, tables: np.ndarray) -> tuple:
+    """The kernel's heat slot of :func:`heat_grid` from its parts (the types the kernel's signature holds)."""
+    return (float(heating[0]), float(heating[1]), HEAT_STEP, np.ascontiguousarray(areas, dtype=float),
+            np.ascontiguousarray(tables, dtype=float))
 
 
 class InterfaceTables(NamedTuple):
@@ -189,8 +222,11 @@ def kernel_slots(model: Model, p: np.record) -> tuple[dyn.Tables, dyn.Variants]:
         tfc, p["tfc_x0"], p["tfc_h"] = tfc
     it = interface_tables(model, delta, p["A_n"])
     tables = dyn.Tables(dmw=model.dmw, contact=it.contact, adhesion=it.adhesion, friction=it.friction, tfc=tfc)
+    # (the heat's slot with the one protrusion: the statics' and the start's; a run takes heat_grid's)
+    heating = None if model.heating is None else \
+        _heat_slot(model.heating, np.array([p["A_n"]]), np.zeros((1, 1, 4)) if tfc is None else tfc[None])
     variants = dyn.Variants(pitch=True if model.pitch is not None else None, rear_law=model.rear_law,
-                            gap_power=gap_power, meniscus=model.meniscus, heating=model.heating)
+                            gap_power=gap_power, meniscus=model.meniscus, heating=heating)
     return tables, variants
 
 
@@ -220,7 +256,7 @@ def stand_in_arguments(scene: Any) -> tuple[np.ndarray, dyn.Grid, np.record, dyn
     laws = [registry.lookup(scene["air_bearing"][key]) for key, registry in TFC_POINT_LAWS.items()]
     laws = [law for law in laws if law.force is not None]  # ("none": no law)
     meniscus = si.lubricant.meniscus_time if si.lubricant.meniscus_time > 0.0 else None
-    heating = (1.0, 1.0) if si.tfc.frictional_heating > 0.0 else None  # (assembly.frictional_heating)
+    heating = _heat_slot((1.0, 1.0), np.ones(1), np.zeros((1, 1, 4))) if si.tfc.frictional_heating > 0.0 else None
     tab = dyn.Tables(dmw=cubic if "dmw" in eff else None, tfc=cubic if any(law.closed_form is None for law in laws)
                      else None, **tables)
     var = dyn.Variants(pitch=True if "pitch" in eff else None, rear_law=rear_law_ref(si.air_bearing.rear_law),

@@ -31,7 +31,8 @@ import numpy as np
 
 from .dmw_record import disk_speed_m_s
 from .forces import separation_at
-from .kernel_inputs import InterfaceTables, interface_tables
+from .frictional_heating import heated_areas
+from .kernel_inputs import HEAT_STEP, InterfaceTables, interface_tables
 from .piecewise import disk_history, ppval
 from .running import Run
 from .state import MENISCUS, THETA, THETA_RATE, WINDOW_SWITCHES, Z, Z_RATE
@@ -76,6 +77,8 @@ def histories(run: Run, steady: bool = False) -> dict[str, np.ndarray]:
         out["thermal_protrusion"] = out_heat
     x0, h, An = p["tab_x0"], p["tab_h"], run.nominal_area  # (item access: a record's attribute is ~10x slower)
     tabs = interface_tables(m, run.protrusion, An)  # (those the kernel ran with: contact.area_model)
+    if m.heating is not None:  # A_n at delta + delta_f, as the kernel reads it (frictional_heating.heat_tables)
+        An = heated_areas(HEAT_STEP, run.heat_areas, out_heat) if run.heat_areas is not None else An
     net = np.zeros_like(t)
     if tabs.adhesion is not None:  # (the meniscus state q is the adhesion pressure when it is on)
         out["adhesion_force"] = An * (Y[:, MENISCUS] if m.meniscus is not None else ppval(tabs.adhesion, x0, h, d))
@@ -89,7 +92,7 @@ def histories(run: Run, steady: bool = False) -> dict[str, np.ndarray]:
             """``A_n`` times a table at the samples in contact (its laws are off elsewhere: 0)."""
             v = np.zeros_like(t)
             if dc is not None:
-                v[c] = An * np.clip(ppval(table, x0, h, dc), 0.0, upper)
+                v[c] = (An[c] if np.ndim(An) else An) * np.clip(ppval(table, x0, h, dc), 0.0, upper)
             return v
 
         out["in_contact"] = c

@@ -10,7 +10,7 @@ import numpy as np
 from . import dynamics as dyn
 from .assembly import Model
 from .forces import separation_at
-from .kernel_inputs import interface_tables, run_parameters
+from .kernel_inputs import HEAT_SPAN, heat_grid, interface_tables, run_parameters
 from .piecewise import disk_history, ppval
 from .frictional_heating import heat_fixed_point
 from .start import start_state, static_forces
@@ -39,6 +39,9 @@ class Run:
     info: np.ndarray
     d_extremes: tuple[float, float] = (np.nan, np.nan)
     start: str = "given"
+    #: the heated run's nominal areas [m^2] at ``delta + j HEAT_STEP`` (the kernel's heat grid,
+    #: :func:`pipeline.model.kernel_inputs.heat_grid`): its histories' ``A_n`` at ``delta + delta_f``
+    heat_areas: np.ndarray | None = None
 
 
 class IntegrationError(RuntimeError):
@@ -92,8 +95,13 @@ def run_model(model: Model, protrusion: float, y0: np.ndarray | None = None, max
         dyn.compile_kernel_ahead(np.zeros(N_STATE), grid, p, tables, variants, solver)
         y0, start_note = start(model, protrusion)
         if model.heating is not None:
-            y0, heat = heated_start(model, p, tables, variants, y0)
+            y0, heat = heated_start(model, p, y0)
     y0 = np.asarray(y0, float)
+    if model.heating is not None:  # the heat's grid (A_n and the TFC table at delta + delta_f), a copy of the table
+        heat0 = float(y0[-1]) if y0.size > N_STATE + (model.meniscus is not None) else heat
+        variants = variants._replace(heating=heat_grid(model, protrusion, max(HEAT_SPAN, 2.0 * heat0)))
+        if tables.tfc is not None:  # (the kernel writes its table at delta + delta_f into it)
+            tables = tables._replace(tfc=variants.heating[4][0].copy())
     if model.meniscus is not None and y0.size == 4:  # the meniscus state starts at its equilibrium
         y0 = np.append(y0, meniscus_equilibrium(model, p, y0, heat))
     if model.heating is not None and y0.size == N_STATE + (model.meniscus is not None):
@@ -105,7 +113,8 @@ def run_model(model: Model, protrusion: float, y0: np.ndarray | None = None, max
         raise IntegrationError(f"integration failed at protrusion {protrusion / NM:.3g} nm: "
                                f"{STATUS_TEXT[status]} (steps {info[ACCEPTED]}, rejected {info[REJECTED]}){hint}")
     return Run(model=model, protrusion=protrusion, p=p, nominal_area=An, time=t_out, state=Y, contact=C, info=info,
-               d_extremes=(float(ext[0]), float(ext[1])), start=start_note)
+               d_extremes=(float(ext[0]), float(ext[1])), start=start_note,
+               heat_areas=None if model.heating is None else variants.heating[3])
 
 
 def meniscus_equilibrium(model: Model, p: np.record, y: np.ndarray, heat: float = 0.0) -> float:
@@ -119,38 +128,38 @@ def meniscus_equilibrium(model: Model, p: np.record, y: np.ndarray, heat: float 
     return float(ppval(adhesion, p.tab_x0, p.tab_h, np.array([d]))[0])
 
 
-def heated_start(model: Model, p: np.record, tables: dyn.Tables, variants: dyn.Variants, y: np.ndarray
-                 ) -> tuple[np.ndarray, float]:
+def heated_start(model: Model, p: np.record, y: np.ndarray) -> tuple[np.ndarray, float]:
     """The start of the frictional heat's protrusion ``delta_f`` [m] and the slider's start state with it
     (docs/model.md, section "Frictional heating"): from a static contact state (``d < k sigma`` at ``w = 0``),
-    the fixed point ``delta_f = eta_f V Q(delta + delta_f)`` (:func:`pipeline.model.frictional_heating.heat_fixed_point`)
-    of the static contact state of the kernel's forces (``A_n`` and the tables at the heater's protrusion, as
-    the kernel holds them) and that state; else (flying, the nominal attitude) 0 and ``y``. Kept in the
+    the fixed point ``delta_f = eta_f V Q(delta + delta_f)``
+    (:func:`pipeline.model.frictional_heating.heat_fixed_point`) of the static contact state of the kernel's
+    forces at ``delta + delta_f`` (``A_n`` and the tables there, as
+    :func:`pipeline.analyses.mechanism_statics.heated_contact` takes them) and that state; else (flying, the
+    nominal attitude) 0 and ``y``. ``p``: the kernel's parameters at the heater's protrusion. Kept in the
     model's ``statics`` (:func:`start`). A state on the way that is no stable contact state: 0 and ``y``."""
     key = ("heated", float(p["delta"]))
     found = model.statics.get(key)
     if found is None:
-        found = model.statics[key] = _heated_start(model, p, tables, variants, y)
+        found = model.statics[key] = _heated_start(model, p, y)
     return found[0].copy(), found[1]
 
 
-def _heated_start(model: Model, p: np.record, tables: dyn.Tables, variants: dyn.Variants, y: np.ndarray
-                  ) -> tuple[np.ndarray, float]:
-    """:func:`heated_start` computed."""
+def _heated_start(model: Model, p: np.record, y: np.ndarray) -> tuple[np.ndarray, float]:
+    """:func:`heated_start` computed (the kernel's inputs at each ``delta + x``: :func:`run_parameters`)."""
     if model.start == "nominal" or not separation_at(p, y[Z], y[THETA], 0.0) < p["k_sigma"]:
         return y, 0.0
     delta, per_newton = float(p["delta"]), model.heating[0]
-    _, _, solve = static_forces(lambda mu: (dyn.with_values(p, delta=mu), tables, variants))
+    _, _, solve = static_forces(lambda mu: run_parameters(model, mu))
     states = {0.0: y[:2].copy()}
 
     def steady(x: float) -> float:
-        q = dyn.with_values(p, delta=delta + x)
+        q, tab, _ = run_parameters(model, delta + x)
         eq = solve(delta + x, states[min(states, key=lambda k: abs(k - x))])
         d = float(separation_at(q, eq.y[0], eq.y[1], 0.0))
         if not (eq.converged and eq.stable and d < q["k_sigma"]):
             return np.nan
         states[x] = eq.y
-        return per_newton * static_friction(q, tables.friction, d)
+        return per_newton * static_friction(q, tab.friction, d)
 
     x, _ = heat_fixed_point(steady)
     if not np.isfinite(x):
