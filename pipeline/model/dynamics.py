@@ -491,6 +491,11 @@ def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, cont
                 d1, dd1 = separation_of(p, ynew[Z], ynew[THETA], ynew[Z_RATE], ynew[THETA_RATE], w_end[0], w_end[1])
             else:
                 d1, dd1 = separation(p, dmw, t1, ynew)
+            # the next step's cap, from this end (in this step's mode), before the extrema and the outputs: the
+            # next step waits for it, and so early the core computes it beside them (docs/kernel.md, section
+            # "The cap ahead of the bookkeeping")
+            h_stiff = stiffness_cap(p, in_contact, d1, h_max, m_eff_inv, contact, adhesion, tfc, gap_power,
+                                    meniscus)
             n_ex = 0
             n_pts = 0
             if search or t + h_acc >= p.t_win:
@@ -535,8 +540,6 @@ def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, cont
         t = t_new
         d0, dd0 = d1, dd1
         info[ACCEPTED] += 1
-        h_stiff = stiffness_cap(p, in_contact, d0, h_max, m_eff_inv, contact, adhesion, tfc, gap_power,
-                                meniscus)
         if t_hold > 0.0 and abs(t - t_hold) <= 1e-12 * t_hold:
             t = t_hold  # land exactly on the end of the dwell (checked at the top of the loop)
         if switched:
