@@ -90,7 +90,7 @@ from .compiled import kernel_jit
 from .forces import RearLawRef, rear_law_ref, rhs_slots, separation, separation_of
 from .state import (ACCEPTED, MAX_STEPS, N_COUNTERS, NOT_FINITE, REJECTED, RHS_CALLS, STATUS, STEP_UNDERFLOW,
                     SWITCHES, THETA, THETA_RATE, WINDOW_SWITCHES, Z, Z_RATE, state_size)
-from .stepper import (cubic_extrema, error_norm, extrema_slots, first_wrong_side, interp_state, inverse_mass_at_tfc,
+from .stepper import (cubic_extrema, error_norm, extrema_matter, extrema_slots, first_wrong_side, interp_state, inverse_mass_at_tfc,
                       knot_extrema, knots_in_step, sample_outputs, step, step_points, stiffness_cap, switch_point,
                       track_extremes)
 
@@ -501,11 +501,13 @@ def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, cont
             if search or t + h_acc >= p.t_win:
                 # the extrema of d (knot_extrema called here, not in an inlined helper: docs/kernel.md)
                 knots, i_a, s3, s2, s1 = knots_in_step(p, dmw, t, h_acc, y, k1, ynew, k7)
-                if dmw is not None:
-                    if knots:
-                        n_ex = knot_extrema(dmw, t, h_acc, p.dmw_t0, p.dmw_dt, i_a, s3, s2, s1, buf, n_max)
-                if not knots:
-                    n_ex = cubic_extrema(d0, dd0, d1, dd1, h_acc, buf)
+                # (skipped where they cannot change the search or the window's extremes: stepper.extrema_matter)
+                if extrema_matter(p, dmw, search, in_contact, knots, i_a, s3, s2, t, h_acc, d0, dd0, d1, dd1, ext):
+                    if dmw is not None:
+                        if knots:
+                            n_ex = knot_extrema(dmw, t, h_acc, p.dmw_t0, p.dmw_dt, i_a, s3, s2, s1, buf, n_max)
+                    if not knots:
+                        n_ex = cubic_extrema(d0, dd0, d1, dd1, h_acc, buf)
                 n_pts = step_points(p, search, h_acc, d0, dd0, d1, dd1, buf, n_ex)
                 for i in range(n_pts):  # d at them (separation called here: docs/kernel.md, "Compile time")
                     frac = buf[i]
