@@ -341,7 +341,7 @@ def first_wrong_side(p, in_contact, d1, n_pts, buf, dex):
     return best if best <= 1.0 else -1.0
 
 
-@_jit
+@_jit_borrowing
 def switch_point(p, dmw, in_contact, t, y, k1, ynew, k7, h, hi, ys):
     """The contact switch in the step ``[t, t + h]``, given the first fraction ``hi`` in (0, 1] where the
     criterion disagrees with the mode (:func:`first_wrong_side`): its step fraction, on the side where the
@@ -352,6 +352,9 @@ def switch_point(p, dmw, in_contact, t, y, k1, ynew, k7, h, hi, ys):
     it runs only at a switch, and its copy of the interpolant would otherwise be compiled into the kernel
     (docs/kernel.md, section "Compile time"); it calls the compiled :func:`separation`. The bisection loop
     has one exit (a counter, no ``break``): numba then prunes the reference counts of its array arguments.
+    Compiled without reference counts (:data:`pipeline.model.compiled.BORROWING`: it allocates nothing): with the
+    lookups' piece without the division (:func:`pipeline.model.piecewise.grid_piece`) numba's pruning kept a
+    reference-count pair for each of its six arrays (docs/kernel.md, section "The piece without the division").
     """
     lo = 0.0
     n = 60

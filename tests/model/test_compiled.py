@@ -162,6 +162,7 @@ def increments(f):  # NRT_incref calls in its LLVM, where this process compiled 
 print(json.dumps({"increments": {"step": increments(stepper.step), "rhs_slots": increments(forces.rhs_slots),
                                  "stiffness_cap": increments(stepper.stiffness_cap),
                                  "extrema_matter": increments(stepper.extrema_matter),
+                                 "switch_point": increments(stepper.switch_point),
                                  "separation": increments(forces.separation), "_integrate": increments(dyn._integrate)},
 "integrate": len(dyn._integrate.signatures), "newton": len(static_solver._newton.signatures),
                   "ahead_is_called": [ahead] == list(dyn._integrate.signatures),
@@ -208,8 +209,8 @@ def test_the_main_scene_compiles_each_kernel_function_once(tmp_path):
     # without reference counts (pipeline.model.compiled.BORROWING; 15, 4 and 2 increments before, docs/kernel.md);
     # the kernel's own 8 are its allocations and returns, as many as with the separation inlined (commit 87f72a2):
     # calling it from the loop added none
-    assert plan["increments"] == {"step": 0, "rhs_slots": 0, "stiffness_cap": 0, "extrema_matter": 0, "separation": 0,
-                                  "_integrate": 8}
+    assert plan["increments"] == {"step": 0, "rhs_slots": 0, "stiffness_cap": 0, "extrema_matter": 0, "switch_point": 0,
+                                  "separation": 0, "_integrate": 8}
 
 
 #: A small cached kernel in its own module, compiled ahead in a fresh process with an empty cache.
