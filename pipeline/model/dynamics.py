@@ -91,7 +91,8 @@ from .forces import RearLawRef, rear_law_ref, rhs_slots, separation, separation_
 from .frictional_heating import RETABLE, heat_friction, heat_tables, heat_update
 from .state import (ACCEPTED, MAX_STEPS, N_COUNTERS, NOT_FINITE, REJECTED, RHS_CALLS, STATUS, STEP_UNDERFLOW,
                     SWITCHES, THETA, THETA_RATE, WINDOW_SWITCHES, Z, Z_RATE, output_size, state_size)
-from .stepper import (cubic_extrema, error_norm, extrema_slots, first_wrong_side, interp_state, inverse_mass_at_tfc,
+from .stepper import (cubic_extrema, error_norm, extrema_matter, extrema_slots, first_wrong_side, interp_state,
+                      inverse_mass_at_tfc,
                       knot_extrema, knots_in_step, sample_outputs, step, step_points, stiffness_cap, switch_point,
                       track_extremes)
 
@@ -513,16 +514,23 @@ def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, cont
                 d1, dd1 = separation_of(p, ynew[Z], ynew[THETA], ynew[Z_RATE], ynew[THETA_RATE], w_end[0], w_end[1])
             else:
                 d1, dd1 = separation(p, dmw, t1, ynew)
+            # the next step's cap, from this end (in this step's mode), before the extrema and the outputs: the
+            # next step waits for it, and so early the core computes it beside them (docs/kernel.md, section
+            # "The cap ahead of the bookkeeping")
+            h_stiff = stiffness_cap(p, in_contact, d1, h_max, m_eff_inv, contact, adhesion, tfc, gap_power,
+                                    meniscus)
             n_ex = 0
             n_pts = 0
             if search or t + h_acc >= p.t_win:
                 # the extrema of d (knot_extrema called here, not in an inlined helper: docs/kernel.md)
                 knots, i_a, s3, s2, s1 = knots_in_step(p, dmw, t, h_acc, y, k1, ynew, k7)
-                if dmw is not None:
-                    if knots:
-                        n_ex = knot_extrema(dmw, t, h_acc, p.dmw_t0, p.dmw_dt, i_a, s3, s2, s1, buf, n_max)
-                if not knots:
-                    n_ex = cubic_extrema(d0, dd0, d1, dd1, h_acc, buf)
+                # (skipped where they cannot change the search or the window's extremes: stepper.extrema_matter)
+                if extrema_matter(p, dmw, search, in_contact, knots, i_a, s3, s2, t, h_acc, d0, dd0, d1, dd1, ext):
+                    if dmw is not None:
+                        if knots:
+                            n_ex = knot_extrema(dmw, t, h_acc, p.dmw_t0, p.dmw_dt, i_a, s3, s2, s1, buf, n_max)
+                    if not knots:
+                        n_ex = cubic_extrema(d0, dd0, d1, dd1, h_acc, buf)
                 n_pts = step_points(p, search, h_acc, d0, dd0, d1, dd1, buf, n_ex)
                 for i in range(n_pts):  # d at them (separation called here: docs/kernel.md, "Compile time")
                     frac = buf[i]
@@ -569,9 +577,10 @@ def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, cont
             if abs(df - df_tab) > RETABLE:
                 p.A_n = heat_tables(tfc, heating, df)
                 df_tab = df
+            # the next step's cap at the new protrusion (the cap above was taken before the heat moved d)
+            h_stiff = stiffness_cap(p, in_contact, d0, h_max, m_eff_inv, contact, adhesion, tfc, gap_power,
+                                    meniscus)
         info[ACCEPTED] += 1
-        h_stiff = stiffness_cap(p, in_contact, d0, h_max, m_eff_inv, contact, adhesion, tfc, gap_power,
-                                meniscus)
         if t_hold > 0.0 and abs(t - t_hold) <= 1e-12 * t_hold:
             t = t_hold  # land exactly on the end of the dwell (checked at the top of the loop)
         if switched:

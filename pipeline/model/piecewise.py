@@ -97,14 +97,40 @@ def _spline_grid(n: int, h: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, 
     return dx, band[0, 1:], band[1, :], band[2, :-1], x[2] - x[0], x[-1] - x[-3]
 
 
+#: Where :func:`grid_piece` takes the piece from the reciprocal's product: quotients below this [1] ...
+PIECE_PRODUCT_MAX = 1e6
+#: ... and farther than this [1] from an integer (the product is within 2.3e-10 of the quotient there)
+PIECE_EDGE = 1e-9
+
+
+@_inline
+def grid_piece(dx, h):
+    """``int(dx / h)``, the piece of an offset ``dx >= 0`` on a grid of step ``h > 0`` (both in the grid's
+    unit), bit for bit, without the division's latency where it can.
+
+    The product ``u = dx (1/h)`` is the quotient to ~2 ulp (two roundings): below
+    :data:`PIECE_PRODUCT_MAX` its error is under 2.3e-10, so where ``u`` lies farther than :data:`PIECE_EDGE`
+    from an integer the exact quotient and its rounding lie in the same piece as ``u``; elsewhere (within
+    1e-9 of a knot, 2e-9 of the lookups, a not-a-number) the division decides, as before. A lookup in the
+    kernel waits for its piece, and a division (13-15 cycles) is 3-4 times a product's latency: the step's
+    stages and the step's cap each wait for one (docs/kernel.md, section "The piece without the division").
+    ``1/h`` depends on the grid alone, computed off the chain of the state.
+    """
+    u = dx * (1.0 / h)
+    i = int(u)
+    f = u - i
+    if not (PIECE_EDGE < f < 1.0 - PIECE_EDGE and u < PIECE_PRODUCT_MAX):
+        i = int(dx / h)
+    return i
+
+
 @_inline
 def _ppval(c, x0, h, x):
     """Value and slope of the piecewise cubic at ``x`` (linear extrapolation below, constant above)."""
     n = c.shape[0]
-    u = (x - x0) / h
-    if u < 0.0:
+    if x - x0 < 0.0:  # (the sign of the quotient (x - x0) / h: grid steps h > 0 are far above 1e-300)
         return c[0, 3] + c[0, 2] * (x - x0), c[0, 2]
-    i = int(u)
+    i = grid_piece(x - x0, h)
     if i >= n:
         i = n - 1
         return ((c[i, 0] * h + c[i, 1]) * h + c[i, 2]) * h + c[i, 3], 0.0
@@ -117,10 +143,9 @@ def _ppval(c, x0, h, x):
 def _ppindex(n, x0, h, x):
     """Piece ``i`` and offset ``s`` of ``x`` on a uniform grid of ``n`` pieces (``i = -1`` below the
     grid, ``i = n`` above it): computed once and shared by the tables of one grid."""
-    u = (x - x0) / h
-    if u < 0.0:
+    if x - x0 < 0.0:
         return -1, x - x0
-    i = int(u)
+    i = grid_piece(x - x0, h)
     if i >= n:
         return n, h
     return i, x - (x0 + i * h)
@@ -152,10 +177,9 @@ def _ppat_at(c, i, s, col):
 def _ppslope_at(c, x0, h, x, col):
     """Slope of the piecewise cubic in columns ``col..col+3`` of ``c`` at ``x`` (as :func:`_ppval`)."""
     n = c.shape[0]
-    u = (x - x0) / h
-    if u < 0.0:
+    if x - x0 < 0.0:
         return c[0, col + 2]
-    i = int(u)
+    i = grid_piece(x - x0, h)
     if i >= n:
         return 0.0
     s = x - (x0 + i * h)
@@ -229,7 +253,7 @@ def disk3(p, dmw, t):
         return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     h = p.dmw_dt
     n = dmw.shape[0]
-    i = int((t - p.dmw_t0) / h)
+    i = grid_piece(t - p.dmw_t0, h) if t - p.dmw_t0 >= 0.0 else 0  # (a negative quotient's piece clamps to 0)
     i = min(max(i, 0), n - 1)
     s = t - (p.dmw_t0 + i * h)
     r = dmw[i]

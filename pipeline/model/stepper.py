@@ -238,6 +238,54 @@ def knot_extrema(dmw, t, h, t0, hd, i_a, A, B, C, buf, n_max):
     return n_b
 
 
+#: The margin [m] of :func:`extrema_matter`'s bound, over the rounding of ``d`` at a point (~1e-23 m)
+EXTREMA_MARGIN = 1e-18
+
+
+@_jit_borrowing
+def extrema_matter(p, dmw, search, in_contact, knots, i_a, A, B, t, h, d0, dd0, d1, dd1, ext):
+    """Whether the interior extrema of ``d`` in the step ``[t, t + h]`` [s] can change anything: an extremum on
+    the wrong side of ``k sigma`` (the event search, with ``search``) or outside the window's extremes ``ext``
+    (from ``p.t_win`` on). Where not, the kernel skips them (:func:`knot_extrema` or :func:`cubic_extrema`, and
+    ``d`` at each): the search and the window's extremes come out bit for bit the same.
+
+    ``d`` over the step (as a function of the step's fraction) is within ``M/8`` of its chord from ``d0`` to ``d1``
+    [m], ``M`` a bound of its second derivative: with DMW knots inside (``knots``, :func:`knots_in_step`'s
+    ``i_a``, ``A``, ``B``) that of the state's cubic ``s`` plus ``h^2`` times that of each DMW piece the step
+    spans (each linear in the time: the larger of its ends), else that of the Hermite cubic of ``d`` through
+    ``d0, dd0, d1, dd1`` [m, m/s] (:func:`_dcubic`); a jump ``J`` [m/s] of the DMW's slope at a knot inside (a
+    linear record's kinks) adds ``h |J| / 4``, and :data:`EXTREMA_MARGIN` the rounding. (The chord's error is
+    ``-int G(f, x) d''(x) dx`` with the linear interpolation's Peano kernel ``0 <= G(f, x) <= f (1 - f)``,
+    ``int G dx = f (1 - f) / 2 <= 1/8``: the remainder of linear interpolation, e.g. Burden & Faires, *Numerical
+    Analysis*, Thm. 3.3; docs/kernel.md, section "The extrema skipped where they cannot matter".) Compiled on its own without
+    reference counts (:data:`pipeline.model.compiled.BORROWING`), called from the kernel's loop.
+    """
+    kink = 0.0
+    if knots and dmw is not None:
+        m = max(abs(2.0 * B), abs(6.0 * A + 2.0 * B))
+        hd = p.dmw_dt
+        n = dmw.shape[0]
+        j_end = min(int((t + h - p.dmw_t0) / hd), n - 1)
+        w2 = 0.0
+        for j in range(min(max(i_a, 0), n - 1), j_end + 1):
+            r0, r1, r2 = dmw[j, 0], dmw[j, 1], dmw[j, 2]
+            w2 = max(w2, abs(2.0 * r1), abs(6.0 * r0 * hd + 2.0 * r1))
+            if j < j_end:  # the slope's jump at the knot after piece j (a linear record's kinks; ~0 for a spline)
+                kink += abs(dmw[j + 1, 2] - ((3.0 * r0 * hd + 2.0 * r1) * hd + r2))
+        m += h * h * w2
+    else:
+        ca, cb, cc, ce = _dcubic(d0, dd0, d1, dd1, h)
+        m = max(abs(2.0 * cb), abs(6.0 * ca + 2.0 * cb))
+    b = m / 8.0 + h * kink / 4.0 + EXTREMA_MARGIN
+    lo = min(d0, d1) - b
+    hi = max(d0, d1) + b
+    ks = p.k_sigma
+    # (written so that a NaN bound says they matter)
+    if search and (not (hi < ks) if in_contact else not (lo >= ks)):
+        return True
+    return t + h >= p.t_win and not (lo >= ext[0] and hi <= ext[1])
+
+
 @_inline
 def cubic_extrema(d0, dd0, d1, dd1, h, buf):
     """Interior extrema of ``d`` in a step ``h`` [s] without a DMW knot inside, where ``d`` is one cubic, the
@@ -293,7 +341,7 @@ def first_wrong_side(p, in_contact, d1, n_pts, buf, dex):
     return best if best <= 1.0 else -1.0
 
 
-@_jit
+@_jit_borrowing
 def switch_point(p, dmw, in_contact, t, y, k1, ynew, k7, h, hi, ys):
     """The contact switch in the step ``[t, t + h]``, given the first fraction ``hi`` in (0, 1] where the
     criterion disagrees with the mode (:func:`first_wrong_side`): its step fraction, on the side where the
@@ -304,6 +352,9 @@ def switch_point(p, dmw, in_contact, t, y, k1, ynew, k7, h, hi, ys):
     it runs only at a switch, and its copy of the interpolant would otherwise be compiled into the kernel
     (docs/kernel.md, section "Compile time"); it calls the compiled :func:`separation`. The bisection loop
     has one exit (a counter, no ``break``): numba then prunes the reference counts of its array arguments.
+    Compiled without reference counts (:data:`pipeline.model.compiled.BORROWING`: it allocates nothing): with the
+    lookups' piece without the division (:func:`pipeline.model.piecewise.grid_piece`) numba's pruning kept a
+    reference-count pair for each of its six arrays (docs/kernel.md, section "The piece without the division").
     """
     lo = 0.0
     n = 60

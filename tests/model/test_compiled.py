@@ -151,8 +151,8 @@ stand_in = compiled.signature(dyn._integrate, dyn.kernel_arguments(*kernel_input
 entry_points = [compiled.signature(f, args) in f.signatures for f, args in first_run.python_entry_points(scene)]
 leaves = {f.py_func.__name__: [compiled.signature(f, args)] == list(f.signatures)
           for f, args in dyn.leaf_calls(*kernel_inputs.stand_in_arguments(scene))}
-kernel = ("_integrate", "step", "switch_point", "knot_extrema", "stiffness_cap", "separation", "rhs_slots",
-          "_newton")
+kernel = ("_integrate", "step", "switch_point", "knot_extrema", "stiffness_cap", "extrema_matter", "separation",
+          "rhs_slots", "_newton")
 from pipeline.model import forces, stepper
 
 def increments(f):  # NRT_incref calls in its LLVM, where this process compiled it (cached code: not inspectable)
@@ -161,6 +161,8 @@ def increments(f):  # NRT_incref calls in its LLVM, where this process compiled 
 
 print(json.dumps({"increments": {"step": increments(stepper.step), "rhs_slots": increments(forces.rhs_slots),
                                  "stiffness_cap": increments(stepper.stiffness_cap),
+                                 "extrema_matter": increments(stepper.extrema_matter),
+                                 "switch_point": increments(stepper.switch_point),
                                  "separation": increments(forces.separation), "_integrate": increments(dyn._integrate)},
 "integrate": len(dyn._integrate.signatures), "newton": len(static_solver._newton.signatures),
                   "ahead_is_called": [ahead] == list(dyn._integrate.signatures),
@@ -198,7 +200,7 @@ def test_the_main_scene_compiles_each_kernel_function_once(tmp_path):
     assert out.returncode == 0, out.stderr[-2000:]
     plan = json.loads(out.stdout.strip().splitlines()[-1])
     assert plan["compiles"] == {"_integrate": 1, "step": 1, "switch_point": 1, "knot_extrema": 1, "stiffness_cap": 1,
-                                "separation": 1, "rhs_slots": 1, "_newton": 1}
+                                "extrema_matter": 1, "separation": 1, "rhs_slots": 1, "_newton": 1}
     # the kernel's compile asked its leaf callees for exactly the signatures a process waiting for the kernel's
     # background compile compiles them for first (pipeline.model.dynamics.leaf_calls; a wrong one would be
     # compiled for nothing, and the background compile would compile the right one itself)
@@ -207,7 +209,8 @@ def test_the_main_scene_compiles_each_kernel_function_once(tmp_path):
     # without reference counts (pipeline.model.compiled.BORROWING; 15, 4 and 2 increments before, docs/kernel.md);
     # the kernel's own 8 are its allocations and returns, as many as with the separation inlined (commit 87f72a2):
     # calling it from the loop added none
-    assert plan["increments"] == {"step": 0, "rhs_slots": 0, "stiffness_cap": 0, "separation": 0, "_integrate": 8}
+    assert plan["increments"] == {"step": 0, "rhs_slots": 0, "stiffness_cap": 0, "extrema_matter": 0, "switch_point": 0,
+                                  "separation": 0, "_integrate": 8}
 
 
 #: A small cached kernel in its own module, compiled ahead in a fresh process with an empty cache.

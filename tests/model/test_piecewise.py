@@ -102,3 +102,28 @@ def test_the_spline_is_scipy_s_not_a_knot_spline_bit_for_bit(n):
 def test_the_spline_refuses_values_that_are_not_finite():
     with pytest.raises(ValueError, match="finite"):
         pw.piecewise_coefficients(np.array([0.0, 1.0, np.nan, 2.0, 3.0]), 1.0, 3)
+
+
+@pw._jit
+def _pieces(dx, h):
+    out = np.empty(dx.shape[0], dtype=np.int64)
+    for j in range(dx.shape[0]):
+        out[j] = pw.grid_piece(dx[j], h)
+    return out
+
+
+@pytest.mark.parametrize("h", [5e-11, 2.5e-7, 1.0 / 3.0, 0.1])
+def test_the_piece_without_the_division_is_the_division_s(h):
+    """``grid_piece`` is ``int(dx / h)`` bit for bit: on random offsets over the kernel's range of quotients, on
+    offsets a few ulps either side of every knot (where the product and the quotient may round apart), and past
+    the product's range; the knots' neighbours do straddle pieces, so the test can tell a wrong piece."""
+    rng = np.random.default_rng(7)
+    knots = np.arange(0, 9000) * h
+    near = np.concatenate([np.nextafter(knots, np.inf * s) for s in (1, -1)] + [knots]
+                          + [knots * (1 + e) for e in (-4e-16, 4e-16, -1e-15, 1e-15)])
+    dx = np.concatenate([rng.uniform(0, 9000 * h, 100_000), near[near >= 0], rng.uniform(0, 3e6 * h, 1000)])
+    exact = (dx / h).astype(np.int64)
+    assert np.array_equal(_pieces(dx, h), exact)
+    assert len(np.unique(exact[: 100_000])) > 8000  # (the offsets span the pieces)
+    ne = dx[100_000:-1000]
+    assert np.any((ne / h).astype(np.int64) < np.rint(ne / h))  # (some neighbours of a knot are in the piece below)

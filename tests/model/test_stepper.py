@@ -115,3 +115,40 @@ def test_a_step_makes_the_right_hand_sides_operations_at_each_stage(in_contact):
         for got, expected in zip((ynew, k7, err), want):
             np.testing.assert_array_equal(got, expected)
     assert np.all(err != 0.0) and not np.array_equal(k7, k1)  # (a step that moved the state)
+
+
+@pytest.mark.parametrize("order", [1, 3])
+def test_the_extrema_are_skipped_only_where_they_lie_within_the_bound(order):
+    """``extrema_matter`` says the interior extrema of ``d`` cannot matter only where ``d`` over the step, sampled
+    finely on the state's Hermite cubic and the DMW record (a spline, and a linear record with kinks), stays within
+    the window's extremes and on the mode's side of ``k sigma``; and it does skip where the window's extremes are
+    wide (so a bound that is too loose, or one without the linear record's kinks, fails here)."""
+    rng = np.random.default_rng(3)
+    hd = 250e-9
+    w = 1e-9 * np.cumsum(rng.normal(size=400)) / 10
+    dmw = piecewise.disk_coefficients(w, hd, order, (0.0, 0.0, 0.0))
+    p = dyn.params(dmw_t0=0.0, dmw_dt=hd, l_c=1e-3, k_sigma=0.0, t_win=0.0)
+    f = np.linspace(0.0, 1.0, 4001)
+    skipped = wrong = 0
+    for _ in range(400):
+        t, h = rng.uniform(0, 300 * hd), rng.uniform(20e-9, 500e-9)
+        y, ynew = rng.normal(size=4) * [1e-9, 1e-7, 1e-3, 1e-1], rng.normal(size=4) * [1e-9, 1e-7, 1e-3, 1e-1]
+        k1, k7 = np.r_[y[2:], 0.0, 0.0], np.r_[ynew[2:], 0.0, 0.0]
+        s = np.array([stepper._hermite(y, k1, ynew, k7, h, x, 0) - p.l_c * stepper._hermite(y, k1, ynew, k7, h, x, 1)
+                      for x in f])
+        d = s - piecewise.ppval(dmw[:, :4], 0.0, hd, t + f * h)
+        wdot = [piecewise._ppval(dmw[:, :4], 0.0, hd, x)[1] for x in (t, t + h)]
+        dd0, dd1 = k1[0] - p.l_c * k1[1] - wdot[0], k7[0] - p.l_c * k7[1] - wdot[1]
+        knots, i_a, A, B, C = stepper.knots_in_step(p, dmw, t, h, y, k1, ynew, k7)
+        for lo, hi in ((d.min() - np.ptp(d), d.max() + np.ptp(d)), (d.min() + 1e-3 * np.ptp(d), d.max())):
+            ext = np.array([lo, hi])
+            matter = stepper.extrema_matter(p, dmw, False, True, knots, i_a, A, B, t, h, d[0], dd0, d[-1], dd1, ext)
+            skipped += not matter
+            wrong += (not matter) and not (lo <= d.min() and d.max() <= hi)
+        # the search: in contact, with k sigma just above the sampled maximum the extrema matter only if it is not
+        p["k_sigma"] = d.max() - 1e-3 * np.ptp(d)
+        wrong += not stepper.extrema_matter(p, dmw, True, True, knots, i_a, A, B, t, h, d[0], dd0, d[-1], dd1,
+                                            np.array([-1.0, 1.0]))
+        p["k_sigma"] = 0.0
+    assert wrong == 0
+    assert skipped > 100
