@@ -92,9 +92,8 @@ from .frictional_heating import RETABLE, heat_friction, heat_tables, heat_update
 from .state import (ACCEPTED, MAX_STEPS, N_COUNTERS, NOT_FINITE, REJECTED, RHS_CALLS, STATUS, STEP_UNDERFLOW,
                     SWITCHES, THETA, THETA_RATE, WINDOW_SWITCHES, Z, Z_RATE, output_size, state_size)
 from .stepper import (cubic_extrema, error_norm, extrema_matter, extrema_slots, first_wrong_side, interp_state,
-                      inverse_mass_at_tfc,
-                      knot_extrema, knots_in_step, sample_outputs, step, step_points, stiffness_cap, switch_point,
-                      track_extremes)
+                      inverse_mass_at_tfc, knot_extrema, knots_in_step, sample_outputs, step, step_points,
+                      stiffness_cap, switch_point, track_extremes)
 
 _jit = kernel_jit(__name__)
 _inline = kernel_jit(__name__, inline="always")
@@ -136,10 +135,9 @@ PARAMS = np.dtype((np.record, [
     ("y_s", "f8"),                   # summit mean height over the surface mean [m]: interface.nc or [roughness]
 ]), align=True)
 
-#: Parameters of the closed-form gap-power stiffening law at the TFC point (``Variants.gap_power``):
-#: stiffness scale ``k_t`` [N/m], exponent ``q`` [1], reference gap ``g0`` [m], potential at the
-#: nominal gap ``f0 = G(g_n)`` [m] (per protrusion), linear-continuation gap ``g_min`` [m] and stiffness
-#: ``k_min`` [N/m] below it.
+#: Parameters of the closed-form gap-power stiffening law at the TFC point (``Variants.gap_power``): stiffness
+#: scale ``k_t`` [N/m], exponent ``q`` [1], reference gap ``g0`` [m], potential at the nominal gap ``f0 = G(g_n)``
+#: [m] (per protrusion), linear-continuation gap ``g_min`` [m] and stiffness ``k_min`` [N/m] below it.
 GAP_POWER = np.dtype((np.record, [("k_t", "f8"), ("q", "f8"), ("g0", "f8"), ("f0", "f8"), ("g_min", "f8"),
                                   ("k_min", "f8")]), align=True)
 
@@ -205,12 +203,11 @@ class Variants(NamedTuple):
     meniscus : the meniscus formation time ``tau_m`` [s] (> 0): the adhesion pressure becomes the fifth
         state component ``q`` [Pa], ``dq/dt = (p_a(d) - q) / tau_m`` (docs/model.md, section "Meniscus
         formation"); the state, ``y0``, the outputs and ``Solver.atol`` then have 5 components
-    heating : the frictional heat's protrusion ``(eta_f V [m/N], tau_f [s], step [m], A_n [m^2], TFC tables)``,
-        the last two the grid :func:`pipeline.model.kernel_inputs.heat_grid` at ``delta + j step`` (docs/model.md, section
-        "Frictional heating"; :mod:`pipeline.model.frictional_heating`): ``y0`` and the outputs get its
-        ``delta_f`` [m] as a last column (:func:`pipeline.model.state.output_size`), the loop's own state
-        (not the step's: ``Solver.atol`` is unchanged). The loop's slot alone: it is not in :data:`SLOTS`,
-        the force functions never see it (the protrusion they read, ``p.delta``, carries it)
+    heating : the frictional heat's protrusion ``(eta_f V [m/N], tau_f [s], step [m], A_n [m^2], TFC tables)``, the
+        last two the grid :func:`pipeline.model.kernel_inputs.heat_grid` at ``delta + j step`` (docs/model.md,
+        section "Frictional heating"; :mod:`pipeline.model.frictional_heating`): ``y0`` and the outputs get its
+        ``delta_f`` [m] as a last column (:func:`pipeline.model.state.output_size`), the loop's own state (not the
+        step's: ``Solver.atol`` is unchanged), not in :data:`SLOTS`: the force functions see it as ``p.delta``
     """
 
     pitch: bool | None = None
@@ -577,9 +574,8 @@ def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, cont
             if abs(df - df_tab) > RETABLE:
                 p.A_n = heat_tables(tfc, heating, df)
                 df_tab = df
-            # the next step's cap at the new protrusion (the cap above was taken before the heat moved d)
-            h_stiff = stiffness_cap(p, in_contact, d0, h_max, m_eff_inv, contact, adhesion, tfc, gap_power,
-                                    meniscus)
+            # the next step's cap at the new protrusion (the one above was taken before the heat moved d)
+            h_stiff = stiffness_cap(p, in_contact, d0, h_max, m_eff_inv, contact, adhesion, tfc, gap_power, meniscus)
         info[ACCEPTED] += 1
         if t_hold > 0.0 and abs(t - t_hold) <= 1e-12 * t_hold:
             t = t_hold  # land exactly on the end of the dwell (checked at the top of the loop)

@@ -476,8 +476,8 @@ def test_orphaned_temporaries_are_cleaned(tmp_path, paper_config):
 # ------------------------------------------------------------------------------------------ registry
 def test_registry_holds_every_stage_and_the_main_job(paper_scene):
     stages = runner.registry()
-    assert list(stages)[:11] == ["roughness", "dmw", "interface", "bulge", "calibrate", "simulate", "statics",
-                                 "sweep", "accuracy", "ensemble", "report"]
+    assert list(stages)[:12] == ["roughness", "dmw", "interface", "bulge", "bulge_pads", "calibrate", "simulate",
+                                 "statics", "sweep", "accuracy", "ensemble", "report"]
     assert runner.main_job(paper_scene) == ["roughness", "dmw", "interface", "calibrate", "statics", "sweep",
                                             "ensemble", "report"]
     single = paper_scene.replace(report={"realisations": 1})  # (the report's checks on the scene's record alone)
