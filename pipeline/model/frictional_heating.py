@@ -84,9 +84,9 @@ def heated_areas(step: float, areas: np.ndarray, delta_f: np.ndarray) -> np.ndar
     """:func:`heat_tables`'s ``A_n`` [m^2] at the heat's protrusions ``delta_f`` [m] (array), bit for bit: the
     histories' nominal area of a heated run."""
     x = np.asarray(delta_f, float) / step
-    j = np.clip(np.floor(x).astype(int), 0, areas.shape[0] - 2) if areas.shape[0] > 1 else np.zeros(x.shape, int)
     if areas.shape[0] < 2:
         return np.full(x.shape, areas[0])
+    j = np.clip(np.floor(x).astype(int), 0, areas.shape[0] - 2)
     s = x - j
     return areas[j] + s * (areas[j + 1] - areas[j])
 
