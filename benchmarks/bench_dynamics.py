@@ -151,7 +151,7 @@ def rhs_per_call(model: assembly.Model, protrusion: float) -> dict:
     T = np.linspace(0.0, grid.t_end, n)
     Y, C, _, _ = dyn.integrate(y0, dyn.Grid(grid.t_end, T), p, tab, var, solver)
     Y = np.ascontiguousarray(Y)
-    slots = (*tab, *var._replace(rear_law=dyn._slots(tab, var)[6]))
+    slots = dyn._slots(tab, var)  # (the compiled functions' slots: without the loop's heating slot)
     out = np.empty(Y.shape[1])
     args = dyn.kernel_arguments(y0, grid, p, tab, var, solver)
     return {"inlined": _cpu_per_point(lambda: _inlined(T, Y, C, p, *slots), n),
