@@ -340,9 +340,9 @@ def rhs_at(p, in_contact, z, theta, vz, vtheta, q, wc, vc, wf, vf, wr, vr, conta
     at the time): the equations of the module docstring, as five numbers (the last, ``dq/dt`` [Pa/s], 0
     without the meniscus state).
 
-    The disk's position depends on the time alone, not on the state: the step looks it up for all its stages
-    before the first (:func:`pipeline.model.stepper.step`), and this, inlined into the step's loop over its
-    stages, is what each stage evaluates (:func:`rhs_slots` is the same arithmetic from arrays)."""
+    The disk's position depends on the time alone, not on the state: the step looks it up at each stage's time
+    beside the stage before (:func:`pipeline.model.stepper.step`), and this, inlined into the step's loop over
+    its stages, is what each stage evaluates (:func:`rhs_slots` is the same arithmetic from arrays)."""
     lf = p.l_f
     F_f = -p.k_f * (z + lf * theta - wf) - p.c_f * (vz + lf * vtheta - vf)
     F_r = _rear_force(p, rear_law, z, theta, vz, vtheta, wr, vr)

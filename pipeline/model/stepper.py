@@ -59,49 +59,46 @@ def step(t, y, k1, h, p, in_contact, fresh, ynew, k7, err, tmp, k2, k3, k4, k5, 
     Compiled without reference counts (:data:`pipeline.model.compiled.BORROWING`): it allocates nothing.
 
     The right-hand side (:func:`pipeline.model.forces.rhs_at`) is inlined once, in a loop over the six
-    stages (one copy: its compile), and the disk under the three points is looked up for the step's five
-    stage times before the first stage (:func:`pipeline.model.piecewise.disk3`; it depends on the time alone):
-    the DMW spline's index, division and coefficients leave the chain of the stages, each of which needs the
-    one before, and no stage pays a call with the slots' ~60 words of arguments (docs/kernel.md, section "The
-    right-hand side in the step"). The same operations in the same order as
-    :func:`pipeline.model.forces.rhs_slots` at each stage: results bit for bit those of six calls of it.
+    stages (one copy: its compile), and so is the disk under the three points at the stage's time
+    (:func:`pipeline.model.piecewise.disk3`, looked up at the top of each stage but the last, which shares
+    ``t + h`` with the one before): it depends on the time alone, not on the stage before, so the core looks it
+    up beside that stage's chain, and no stage pays a call with the slots' ~60 words of arguments
+    (docs/kernel.md, sections "The right-hand side in the step" and "The disk in the stage loop"). The same
+    operations in the same order as :func:`pipeline.model.forces.rhs_slots` at each stage: results bit for bit
+    those of six calls of it.
     """
     ns = state_size(meniscus)
-    # the disk at the stages' times t + c_i h (c = 0 when fresh, 1/5, 3/10, 4/5, 8/9, 1, 1)
-    w1 = disk3(p, dmw, t) if fresh else (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
-    w2 = disk3(p, dmw, t + h / 5)
-    w3 = disk3(p, dmw, t + 3 * h / 10)
-    w4 = disk3(p, dmw, t + 4 * h / 5)
-    w5 = disk3(p, dmw, t + 8 * h / 9)
-    w6 = disk3(p, dmw, t + h)
+    # the disk at the stage's time t + c_i h (c = 0 when fresh, 1/5, 3/10, 4/5, 8/9, 1, 1): the last stage's is the
+    # one before's (one copy of the lookup, inlined: docs/kernel.md, section "The disk in the stage loop")
+    w = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     for stage in range(0 if fresh else 1, 7):
         src = tmp
         dst = k7
-        w = w6
+        ts = t + h
         if stage == 0:
             src = y
             dst = k1
-            w = w1
+            ts = t
         elif stage == 1:
             for i in range(ns):
                 tmp[i] = y[i] + h * A21 * k1[i]
             dst = k2
-            w = w2
+            ts = t + h / 5
         elif stage == 2:
             for i in range(ns):
                 tmp[i] = y[i] + h * (A31 * k1[i] + A32 * k2[i])
             dst = k3
-            w = w3
+            ts = t + 3 * h / 10
         elif stage == 3:
             for i in range(ns):
                 tmp[i] = y[i] + h * (A41 * k1[i] + A42 * k2[i] + A43 * k3[i])
             dst = k4
-            w = w4
+            ts = t + 4 * h / 5
         elif stage == 4:
             for i in range(ns):
                 tmp[i] = y[i] + h * (A51 * k1[i] + A52 * k2[i] + A53 * k3[i] + A54 * k4[i])
             dst = k5
-            w = w5
+            ts = t + 8 * h / 9
         elif stage == 5:
             for i in range(ns):
                 tmp[i] = y[i] + h * (A61 * k1[i] + A62 * k2[i] + A63 * k3[i] + A64 * k4[i] + A65 * k5[i])
@@ -110,6 +107,8 @@ def step(t, y, k1, h, p, in_contact, fresh, ynew, k7, err, tmp, k2, k3, k4, k5, 
             for i in range(ns):
                 ynew[i] = y[i] + h * (B1 * k1[i] + B3 * k3[i] + B4 * k4[i] + B5 * k5[i] + B6 * k6[i])
             src = ynew
+        if stage != 6:
+            w = disk3(p, dmw, ts)
         q = 0.0
         if meniscus is not None:
             q = src[MENISCUS]
@@ -120,8 +119,8 @@ def step(t, y, k1, h, p, in_contact, fresh, ynew, k7, err, tmp, k2, k3, k4, k5, 
             dst[MENISCUS] = dq
     for i in range(ns):
         err[i] = h * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i] + E7 * k7[i])
-    w_end[0] = w6[0]
-    w_end[1] = w6[1]
+    w_end[0] = w[0]
+    w_end[1] = w[1]
     return 7 if fresh else 6
 
 
