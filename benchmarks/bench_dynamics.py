@@ -26,9 +26,8 @@ Rows (targets from the task brief):
    Both loops are compiled as the step is, without numba's reference counts
    (:data:`pipeline.model.compiled.BORROWING`): compiled with them, the loop pays an atomic
    reference-count pair per table slot at every call of the inlined right-hand side (its arrays handed to
-   inlined helpers), which the step never pays: 60-79 ns per call instead of 26-33 ns (quiet host,
-   2026-12-02; ``with_reference_counts_ns`` keeps that loop's number beside the row's, docs/performance.md,
-   section "The right-hand side's row").
+   inlined helpers), which the step never pays (measured once: 60.1 / 78.9 ns per call against 26.7 / 42.2 ns,
+   docs/performance.md, section "The right-hand side's row").
 """
 
 from __future__ import annotations
@@ -100,7 +99,8 @@ def _fresh_process(folder: Path, repeat: int = 3, exit_: str = "fast-exit") -> t
     return times, mid
 
 
-def _inlined_loop(T, Y, C, p, dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power, meniscus):
+@njit(nogil=True, error_model="numpy", **BORROWING)
+def _inlined(T, Y, C, p, dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power, meniscus):
     """The step's right-hand side (the disk at the time, then :func:`pipeline.model.forces.rhs_at` inlined) at
     the times ``T`` [s], states ``Y`` and modes ``C``; returns a sum of the results (kept: nothing is pruned)."""
     acc = 0.0
@@ -114,12 +114,6 @@ def _inlined_loop(T, Y, C, p, dmw, contact, adhesion, friction, tfc, pitch, rear
                                                   rear_law, gap_power, meniscus)
         acc += a_z + a_theta + a_vz + a_vtheta + dq
     return acc
-
-
-#: The step's right-hand side in a loop, compiled as the step is (without reference counts) ...
-_inlined = njit(nogil=True, error_model="numpy", **BORROWING)(_inlined_loop)
-#: ... and with them (the row's ``with_reference_counts_ns``: what the harness would add)
-_inlined_counted = njit(nogil=True, error_model="numpy")(_inlined_loop)
 
 
 @njit(nogil=True, error_model="numpy", **BORROWING)
@@ -148,8 +142,7 @@ def _cpu_per_point(fn, n: int, repeat: int = 21) -> list[float]:
 
 def rhs_per_call(model: assembly.Model, protrusion: float) -> dict:
     """The right-hand side's cost per call [s] along the kernel's trajectory at ``protrusion`` [m] (row 6):
-    ``inlined`` (the step's), ``counted`` (the same loop with reference counts), ``out_of_line``
-    (:func:`pipeline.model.forces.rhs_slots` called) and ``kernel``
+    ``inlined`` (the step's), ``out_of_line`` (:func:`pipeline.model.forces.rhs_slots` called) and ``kernel``
     (the kernel's time over its evaluations), each a list of per-point CPU times; ``evaluations``, and
     ``contact_fraction`` of the points."""
     seen = []
@@ -168,7 +161,6 @@ def rhs_per_call(model: assembly.Model, protrusion: float) -> dict:
     out = np.empty(Y.shape[1])
     args = dyn.kernel_arguments(y0, grid, p, tab, var, solver)
     return {"inlined": _cpu_per_point(lambda: _inlined(T, Y, C, p, *slots), n),
-            "counted": _cpu_per_point(lambda: _inlined_counted(T, Y, C, p, *slots), n),
             "out_of_line": _cpu_per_point(lambda: _out_of_line(T, Y, C, p, out, *slots), n),
             "kernel": _cpu_per_point(lambda: dyn._integrate(*args), n),
             "evaluations": n, "contact_fraction": float(np.mean(C))}
@@ -198,11 +190,10 @@ def run(results: list[dict]) -> None:
         # (6) the right-hand side per call along the kernel's own trajectory
         for label, prot in (("flying", 5.0), ("sliding", 11.0)):
             cost = rhs_per_call(model, prot * 1e-9)
-            med = {k: statistics.median(cost[k]) for k in ("inlined", "counted", "out_of_line", "kernel")}
+            med = {k: statistics.median(cost[k]) for k in ("inlined", "out_of_line", "kernel")}
             record(results, f"dynamics: right-hand side per call along the kernel's trajectory, {label} {prot:g} nm "
                    "(the step's, inlined; CPU time per call; target <= 50 ns)", cost["inlined"], target_s=50e-9,
                    ns_per_call=med["inlined"] * 1e9, out_of_line_ns_per_call=med["out_of_line"] * 1e9,
-                   with_reference_counts_ns=med["counted"] * 1e9,
                    kernel_ns_per_evaluation=med["kernel"] * 1e9, rhs_evaluations=cost["evaluations"],
                    contact_fraction=cost["contact_fraction"])
 

@@ -48,7 +48,10 @@ def _step_arguments(args: tuple) -> tuple:
     parameter record, the slots as they are."""
     import numpy as np
 
-    y0, params, slots = args[0], args[3], args[8:-1]  # (the last, the heating slot, is the loop's alone)
+    from pipeline.model.dynamics import SLOTS
+
+    y0, params = args[0], args[3]
+    slots = args[8:8 + len(SLOTS)]  # (the kernel's slots; the loop's own heating slot after them is not the step's)
     work = [np.zeros(len(y0)) for _ in range(11)]  # y, k1, ynew, k7, err, tmp, k2..k6
     return (0.0, work[0], work[1], 0.0, params[0], False, np.bool_(True), *work[2:], np.zeros(2), *slots)
 
