@@ -7,7 +7,9 @@ into install, compile and run. Target: under 30 s on 2 cores.
 2. install: ``make setup`` (uv from PyPI by pip into the user's cache, ``BOOT_CACHE``, linked as
    ``.bootstrap``, then ``uv sync`` of ``uv.lock``). uv's download cache and the installed uv are the
    user's, reused (packages downloaded before are not fetched again, uv is not installed again; the row
-   says so), unless ``BENCH_FIRST_RUN_COLD=1``, which gives both an empty folder (everything from PyPI).
+   says so); then the same again in a second fresh clone with both caches an empty folder (everything from
+   PyPI: the target's case, "a machine with no package cache"; steps 2-3 only, ``BENCH_FIRST_RUN_COLD=0``
+   leaves it out).
 3. first run: ``make run`` (nothing compiled yet).
 4. warm run: ``make run ARGS=--force`` in the same clone (the same scene, everything recomputed, kernels
    from the cache, the .pyc the first run wrote).
@@ -89,11 +91,10 @@ def notebook_first_calls(clone: Path, env: dict[str, str], scene: str, repeat: i
     return inside, whole, cpus
 
 
-def run(results: list[dict]) -> None:
-    if os.environ.get("BENCH_FIRST_RUN", "1") == "0":
-        print("bench_first_run: skipped (BENCH_FIRST_RUN=0)")
-        return
-    cold = os.environ.get("BENCH_FIRST_RUN_COLD") == "1"
+def first_run(cold: bool, notebook: bool) -> dict:
+    """One fresh clone's install and first ``make run`` (module docstring, steps 1-5; 6 with ``notebook``),
+    uv's caches the user's or (``cold``) empty folders: wall times [s], and the notebook's three lists."""
+    times: dict = {}
     with tempfile.TemporaryDirectory(prefix="hdi-first-run-") as tmp:
         clone = Path(tmp) / "hdi"
         subprocess.run(["git", "clone", "--quiet", str(ROOT), str(clone)], check=True)
@@ -101,17 +102,23 @@ def run(results: list[dict]) -> None:
         if cold:
             env["UV_CACHE_DIR"] = str(Path(tmp) / "uv-cache")
             env["BOOT_CACHE"] = str(Path(tmp) / "uv-bootstrap")
-        install = _timed(["make", "setup"], clone, env, "install")
-        first = _timed(["make", "run"], clone, env, "first")
-        notebook, notebook_process, notebook_cpu = notebook_first_calls(clone, env, SCENE)
+        times["install"] = _timed(["make", "setup"], clone, env, "install")
+        times["first"] = _timed(["make", "run"], clone, env, "first")
+        if notebook:
+            times["notebook"] = notebook_first_calls(clone, env, SCENE)
         # the same command again, everything recomputed (the same scene: another scene's effects would be
         # another kernel signature, compiled in the "warm" run)
-        warm = _timed(["make", "run", "ARGS=--force"], clone, env, "warm")
+        times["warm"] = _timed(["make", "run", "ARGS=--force"], clone, env, "warm")
         shutil.rmtree(clone / "results", ignore_errors=True)
-    # (the row's name kept: the bench compares rows by name; "uv cache" covers the installed uv too)
+    return times
+
+
+def _record_first_run(results: list[dict], times: dict, cold: bool) -> None:
+    """The row of one fresh clone (:func:`first_run`), its CPU times from :data:`CPU`."""
+    # (the rows' names kept: the bench compares rows by name; "uv cache" covers the installed uv too)
     cache = "empty uv cache (all packages from PyPI)" if cold else "the local uv cache reused (no download)"
-    total = install + first
-    record(results, f"fresh clone: make setup + make run, {cache}", [total], target_s=30.0,
+    install, first, warm = times["install"], times["first"], times["warm"]
+    record(results, f"fresh clone: make setup + make run, {cache}", [install + first], target_s=30.0,
            install_s=round(install, 1), compile_s=round(first - warm, 1), run_s=round(warm, 1),
            first_run_s=round(first, 1), uv_cache="empty" if cold else "reused",
            cpu_s=round(CPU["install"] + CPU["first"], 1), install_cpu_s=round(CPU["install"], 1),
@@ -119,6 +126,19 @@ def run(results: list[dict]) -> None:
     print(f"  install {install:.1f} s, first make run {first:.1f} s = compile {first - warm:.1f} s + run "
           f"{warm:.1f} s ({cache}); CPU: install {CPU['install']:.1f} s, first make run {CPU['first']:.1f} s, "
           f"warm make run {CPU['warm']:.1f} s", flush=True)
+
+
+def run(results: list[dict]) -> None:
+    if os.environ.get("BENCH_FIRST_RUN", "1") == "0":
+        print("bench_first_run: skipped (BENCH_FIRST_RUN=0)")
+        return
+    times = first_run(cold=False, notebook=True)
+    _record_first_run(results, times, cold=False)
+    notebook, notebook_process, notebook_cpu = times["notebook"]
     record(results, "a notebook's first build_model + simulate (make run's scene and results, one protrusion), "
            "empty numba cache, fresh process", notebook, target_s=10.0, scene=SCENE,
            process_s=[round(t, 2) for t in notebook_process], process_cpu_s=[round(t, 2) for t in notebook_cpu])
+    if os.environ.get("BENCH_FIRST_RUN_COLD", "1") == "0":
+        print("bench_first_run: the clone with an empty uv cache skipped (BENCH_FIRST_RUN_COLD=0)")
+        return
+    _record_first_run(results, first_run(cold=True, notebook=False), cold=True)
