@@ -5,7 +5,7 @@ contact: no switch) is integrated with fixed steps ``h = c / omega`` (``omega`` 
 right-hand side's Jacobian at the start: the contact mode at the TFC point), and the separation's peak-to-peak
 over the steady window (what FHM/BV measures, [m]) is compared with a tight kernel reference's exact one
 (``integrate``'s ``ext``: ``rtol = 1e-11``, the step cap 10 ns and ``stiffness_step = 0.25``). Two questions
-(docs/kernel.md, section "Fewer steps in sliding: the interpolant, not the spring"):
+(docs/kernel.md, section "Fewer steps in sliding: what limits DP5 at the cap"):
 
 ``interpolant C ...``: at each ``h omega = C``, DP5's steps, the separation's extremes taken on
 
@@ -25,9 +25,11 @@ three points against its integrator reference, the kernel's exact extremes) at t
 ``solver.stiffness_step = C``: what lifting today's cap costs in accuracy, with the kernel's interpolant.
 
 ``lawson C ...``: DP5 against its Lawson form (Lawson 1967, *SIAM J. Numer. Anal.* 4, 372; the integrating factor
-``exp(tau h L)`` of a linear part ``L`` frozen at each step's start), ``L`` the contact's part of the Jacobian (with
-the contact law minus without it: the rank-one spring and damper at the TFC point) or the whole Jacobian; the error
-of ``s = z - l_c theta`` [m] at the step ends against the reference, over the window's peak-to-peak.
+``exp(tau h L)`` of a linear part ``L`` frozen at each step's start) and Cox & Matthews' ETDRK4 (four evaluations a
+step), ``L`` the contact's part of the Jacobian (with the contact law minus without it: the spring and damper of the
+contact pressure at the TFC point), the interface's part (the Jacobian minus the pads' alone: contact, adhesion,
+friction and the TFC point's air bearing; ETDRK4 only) or the whole Jacobian; the error of ``s = z - l_c theta`` [m]
+at the step ends against the reference, over the window's peak-to-peak.
 
 Usage (a few minutes each; plain Python loops around the compiled right-hand side)::
 
@@ -80,24 +82,29 @@ class Case:
         self.l_c = float(self.p["l_c"])
         self.omega = float(np.max(np.abs(np.linalg.eigvals(self.jacobian(0.0, self.y0, True)))))
 
-    def f(self, t: float, y: np.ndarray, contact: bool = True) -> np.ndarray:
-        """``dy/dt`` (SI) in the contact mode ``contact``."""
-        self.dyn.rhs(t, y, self.p, self.tab, self.var, contact, self.out)
+    def f(self, t: float, y: np.ndarray, contact: bool = True, interface: bool = True) -> np.ndarray:
+        """``dy/dt`` (SI) in the contact mode ``contact``; without ``interface``, the pads' forces alone (the
+        interface's tables and the TFC point's air-bearing law off)."""
+        tab, var = self.tab, self.var
+        if not interface:
+            tab = tab._replace(contact=None, adhesion=None, friction=None, tfc=None)
+            var = var._replace(gap_power=None)
+        self.dyn.rhs(t, y, self.p, tab, var, contact, self.out)
         return self.out.copy()
 
     def d(self, t: float, y: np.ndarray) -> float:
         """Separation [m]."""
         return float(self._separation(self.p, self.tab.dmw, t, y)[0])
 
-    def jacobian(self, t: float, y: np.ndarray, contact: bool) -> np.ndarray:
+    def jacobian(self, t: float, y: np.ndarray, contact: bool, interface: bool = True) -> np.ndarray:
         """Forward-difference Jacobian of :meth:`f` [SI]."""
-        f0, n = self.f(t, y, contact), y.size
+        f0, n = self.f(t, y, contact, interface), y.size
         J = np.zeros((n, n))
         for j in range(n):
             e = max(abs(y[j]), 1e-12) * 1e-6
             yy = y.copy()
             yy[j] += e
-            J[:, j] = (self.f(t, yy, contact) - f0) / e
+            J[:, j] = (self.f(t, yy, contact, interface) - f0) / e
         return J
 
     def reference(self, t_out: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -251,7 +258,8 @@ def lawson(case: Case, cs: list[float], only: str | None = None) -> None:
         win = ts >= case.t_win
         bv = s_ref[win].max() - s_ref[win].min()
         for label, mode in (("DP5", "dp5"), ("Lawson, contact part", "contact"), ("Lawson, whole Jacobian", "full"),
-                            ("ETDRK4, contact part", "etd-contact"), ("ETDRK4, whole Jacobian", "etd-full")):
+                            ("ETDRK4, contact part", "etd-contact"), ("ETDRK4, interface part", "etd-interface"),
+                            ("ETDRK4, whole Jacobian", "etd-full")):
             if only is not None and only not in label:
                 continue
             t, y = 0.0, case.y0.copy()
@@ -260,6 +268,8 @@ def lawson(case: Case, cs: list[float], only: str | None = None) -> None:
                 L = None
                 if mode in ("contact", "etd-contact"):
                     L = case.jacobian(t, y, True) - case.jacobian(t, y, False)
+                elif mode == "etd-interface":
+                    L = case.jacobian(t, y, True) - case.jacobian(t, y, True, interface=False)
                 elif mode in ("full", "etd-full"):
                     L = case.jacobian(t, y, True)
                 if mode.startswith("etd"):
