@@ -4,7 +4,7 @@ The sliding 11 nm case of :mod:`benchmarks.kernel_ab` (the paper scene at ``cont
 contact: no switch) is integrated with fixed steps ``h = c / omega`` (``omega`` [rad/s] the largest frequency of the
 right-hand side's Jacobian at the start: the contact mode at the TFC point), and the separation's peak-to-peak
 over the steady window (what FHM/BV measures, [m]) is compared with a tight kernel reference's exact one
-(``integrate``'s ``ext``: ``rtol = 1e-11``, the step cap 10 ns and ``stiffness_step = 0.25``). Two questions
+(``integrate``'s ``ext``: ``rtol = 1e-11``, the step cap 10 ns and ``stiffness_step = 0.25``). Three measurements
 (docs/kernel.md, section "Fewer steps in sliding: what limits DP5 at the cap"):
 
 ``interpolant C ...``: at each ``h omega = C``, DP5's steps, the separation's extremes taken on
@@ -31,7 +31,7 @@ contact pressure at the TFC point), the interface's part (the Jacobian minus the
 friction and the TFC point's air bearing; ETDRK4 only) or the whole Jacobian; the error of ``s = z - l_c theta`` [m]
 at the step ends against the reference, over the window's peak-to-peak.
 
-Usage (a few minutes each; plain Python loops around the compiled right-hand side)::
+Usage (15 s to a few minutes each; plain Python loops around the compiled right-hand side)::
 
     .venv/bin/python -m benchmarks.sliding_methods interpolant 1 1.25 1.5
     .venv/bin/python -m benchmarks.sliding_methods lawson 1 1.5 2 3
@@ -49,6 +49,8 @@ import numpy as np
 from scipy.linalg import expm
 from scipy.optimize import minimize_scalar
 
+from pipeline.model import stepper as st
+
 from . import kernel_ab
 
 #: Samples of each interpolant a step (before the refinement).
@@ -56,12 +58,12 @@ SAMPLES = 16
 #: Steps, of the largest (smallest) samples, in which an extreme is refined.
 REFINE = 8
 
-# Dormand-Prince 5(4) (Hairer, Norsett & Wanner, Table II.5.2) and its dense output of order 4 (ibid., II.6)
+# Dormand-Prince 5(4): the kernel's tableau (pipeline.model.stepper; Hairer, Norsett & Wanner, Table II.5.2), the
+# nodes the stage times of its step; and its dense output of order 4 (ibid., II.6), which the kernel does not use
+A = ((), (st.A21,), (st.A31, st.A32), (st.A41, st.A42, st.A43), (st.A51, st.A52, st.A53, st.A54),
+     (st.A61, st.A62, st.A63, st.A64, st.A65))
 C = (0.0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1.0)
-A = ((), (1 / 5,), (3 / 40, 9 / 40), (44 / 45, -56 / 15, 32 / 9),
-     (19372 / 6561, -25360 / 2187, 64448 / 6561, -212 / 729),
-     (9017 / 3168, -355 / 33, 46732 / 5247, 49 / 176, -5103 / 18656))
-B = (35 / 384, 0.0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84)
+B = (st.B1, 0.0, st.B3, st.B4, st.B5, st.B6)
 D = (-12715105075 / 11282082432, 0.0, 87487479700 / 32700410799, -10690763975 / 1880347072,
      701980252875 / 199316789632, -1453857185 / 822651844, 69997945 / 29380423)
 
