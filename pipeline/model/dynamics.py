@@ -511,10 +511,8 @@ def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, cont
                 d1, dd1 = separation_of(p, ynew[Z], ynew[THETA], ynew[Z_RATE], ynew[THETA_RATE], w_end[0], w_end[1])
             else:
                 d1, dd1 = separation(p, dmw, t1, ynew)
-            # the next step's cap, from this end (in this step's mode), before the extrema and the outputs: the
-            # next step waits for it, and so early the core computes it beside them (docs/kernel.md, section
-            # "The cap ahead of the bookkeeping"); with the heat, the step's end moves d, and the cap is taken
-            # after it (below) instead
+            # the next step's cap, from this end, before the extrema and outputs (docs/kernel.md, "The cap ahead of
+            # the bookkeeping"); with the heat, taken once the heat has moved d (below: "The heated step's cap, once")
             if heating is None:
                 h_stiff = stiffness_cap(p, in_contact, d1, h_max, m_eff_inv, contact, adhesion, tfc, gap_power,
                                         meniscus)
