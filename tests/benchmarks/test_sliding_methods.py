@@ -109,3 +109,16 @@ def test_the_interpolants_have_their_orders():
     fb = np.array([z.deriv()(h), 0.0, z.deriv(2)(h), 0.0])
     for x in (0.1, 0.5, 0.93):
         assert sm._quintic(ya, fa, yb, fb, h, x)[0] == pytest.approx(z(x * h), abs=1e-13)
+
+
+def test_the_contact_mode_is_the_fast_pair_of_the_jacobian():
+    """On two coupled undamped oscillators (``M x'' = -K x``, frequencies far apart) the contact mode's part acts as
+    the Jacobian on the fast mode's two eigenvectors and as zero on the slow mode's."""
+    K = np.array([[4.0e4 + 1.0, -1.0], [-1.0, 2.0]])
+    J = np.block([[np.zeros((2, 2)), np.eye(2)], [-K, np.zeros((2, 2))]])
+    lam, V = np.linalg.eig(J)
+    L = sm.contact_mode(J)
+    fast = np.abs(lam) > 100.0
+    assert fast.sum() == 2
+    np.testing.assert_allclose(L @ V[:, fast], J @ V[:, fast], atol=1e-9 * np.abs(lam).max())
+    np.testing.assert_allclose(L @ V[:, ~fast], 0.0, atol=1e-9 * np.abs(lam).max())
