@@ -8,8 +8,8 @@ into install, compile and run. Target: under 30 s on 2 cores.
    ``.bootstrap``, then ``uv sync`` of ``uv.lock``). uv's download cache and the installed uv are the
    user's, reused (packages downloaded before are not fetched again, uv is not installed again; the row
    says so); then the same again in a second fresh clone with both caches an empty folder (everything from
-   PyPI: the target's case, "a machine with no package cache"; steps 2-3 only, ``BENCH_FIRST_RUN_COLD=0``
-   leaves it out).
+   PyPI: the target's case, "a machine with no package cache"; steps 1-5 without the notebook,
+   ``BENCH_FIRST_RUN_COLD=0`` leaves it out).
 3. first run: ``make run`` (nothing compiled yet).
 4. warm run: ``make run ARGS=--force`` in the same clone (the same scene, everything recomputed, kernels
    from the cache, the .pyc the first run wrote).
@@ -36,6 +36,7 @@ import shutil
 import subprocess
 import tempfile
 from pathlib import Path
+from typing import NamedTuple
 
 from benchmarks.common import ROOT, record, run_process
 
@@ -43,16 +44,11 @@ from benchmarks.common import ROOT, record, run_process
 SCENE = "configs/paper-2009-identified.toml"
 
 
-#: CPU times [s] (user + system of the command and every process it waited for) of the timed commands, by label:
-#: on a shared host the wall time counts the other tenants' load, the CPU time what the command itself costs.
-CPU: dict[str, float] = {}
-
-
-def _timed(cmd: list[str], cwd: Path, env: dict[str, str], label: str) -> float:
-    """Wall time [s] of ``cmd``; its CPU time in :data:`CPU` under ``label``."""
+def _timed(cmd: list[str], cwd: Path, env: dict[str, str]) -> tuple[float, float]:
+    """Wall time [s] of ``cmd`` and its CPU time [s] (user + system of the command and every process it waited
+    for): on a shared host the wall time counts the other tenants' load, the CPU time what the command costs."""
     wall, cpu, _ = run_process(cmd, cwd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
-    CPU[label] = cpu
-    return wall
+    return wall, cpu
 
 
 #: How often the notebook's first call is measured (each with an empty numba cache, ~8-12 s).
@@ -91,10 +87,21 @@ def notebook_first_calls(clone: Path, env: dict[str, str], scene: str, repeat: i
     return inside, whole, cpus
 
 
-def first_run(cold: bool, notebook: bool) -> dict:
-    """One fresh clone's install and first ``make run`` (module docstring, steps 1-5; 6 with ``notebook``),
-    uv's caches the user's or (``cold``) empty folders: wall times [s], and the notebook's three lists."""
-    times: dict = {}
+class Clone(NamedTuple):
+    """One fresh clone's timed commands (:func:`first_run`): ``wall`` and ``cpu`` [s] by command (``install``,
+    ``first``, ``warm``), and the notebook's first calls (:func:`notebook_first_calls`) when they were timed."""
+
+    wall: dict[str, float]
+    cpu: dict[str, float]
+    notebook: tuple[list[float], list[float], list[float]] | None
+
+
+def first_run(cold: bool, notebook: bool) -> Clone:
+    """One fresh clone's install, first and warm ``make run`` (module docstring, steps 1-5; 6 with ``notebook``),
+    uv's caches the user's or (``cold``) empty folders."""
+    wall: dict[str, float] = {}
+    cpu: dict[str, float] = {}
+    calls = None
     with tempfile.TemporaryDirectory(prefix="hdi-first-run-") as tmp:
         clone = Path(tmp) / "hdi"
         subprocess.run(["git", "clone", "--quiet", str(ROOT), str(clone)], check=True)
@@ -102,39 +109,39 @@ def first_run(cold: bool, notebook: bool) -> dict:
         if cold:
             env["UV_CACHE_DIR"] = str(Path(tmp) / "uv-cache")
             env["BOOT_CACHE"] = str(Path(tmp) / "uv-bootstrap")
-        times["install"] = _timed(["make", "setup"], clone, env, "install")
-        times["first"] = _timed(["make", "run"], clone, env, "first")
+        wall["install"], cpu["install"] = _timed(["make", "setup"], clone, env)
+        wall["first"], cpu["first"] = _timed(["make", "run"], clone, env)
         if notebook:
-            times["notebook"] = notebook_first_calls(clone, env, SCENE)
+            calls = notebook_first_calls(clone, env, SCENE)
         # the same command again, everything recomputed (the same scene: another scene's effects would be
         # another kernel signature, compiled in the "warm" run)
-        times["warm"] = _timed(["make", "run", "ARGS=--force"], clone, env, "warm")
+        wall["warm"], cpu["warm"] = _timed(["make", "run", "ARGS=--force"], clone, env)
         shutil.rmtree(clone / "results", ignore_errors=True)
-    return times
+    return Clone(wall, cpu, calls)
 
 
-def _record_first_run(results: list[dict], times: dict, cold: bool) -> None:
-    """The row of one fresh clone (:func:`first_run`), its CPU times from :data:`CPU`."""
+def _record_first_run(results: list[dict], run: Clone, cold: bool) -> None:
+    """The row of one fresh clone (:func:`first_run`)."""
     # (the rows' names kept: the bench compares rows by name; "uv cache" covers the installed uv too)
     cache = "empty uv cache (all packages from PyPI)" if cold else "the local uv cache reused (no download)"
-    install, first, warm = times["install"], times["first"], times["warm"]
+    install, first, warm, cpu = run.wall["install"], run.wall["first"], run.wall["warm"], run.cpu
     record(results, f"fresh clone: make setup + make run, {cache}", [install + first], target_s=30.0,
            install_s=round(install, 1), compile_s=round(first - warm, 1), run_s=round(warm, 1),
            first_run_s=round(first, 1), uv_cache="empty" if cold else "reused",
-           cpu_s=round(CPU["install"] + CPU["first"], 1), install_cpu_s=round(CPU["install"], 1),
-           first_run_cpu_s=round(CPU["first"], 1), warm_run_cpu_s=round(CPU["warm"], 1))
+           cpu_s=round(cpu["install"] + cpu["first"], 1), install_cpu_s=round(cpu["install"], 1),
+           first_run_cpu_s=round(cpu["first"], 1), warm_run_cpu_s=round(cpu["warm"], 1))
     print(f"  install {install:.1f} s, first make run {first:.1f} s = compile {first - warm:.1f} s + run "
-          f"{warm:.1f} s ({cache}); CPU: install {CPU['install']:.1f} s, first make run {CPU['first']:.1f} s, "
-          f"warm make run {CPU['warm']:.1f} s", flush=True)
+          f"{warm:.1f} s ({cache}); CPU: install {cpu['install']:.1f} s, first make run {cpu['first']:.1f} s, "
+          f"warm make run {cpu['warm']:.1f} s", flush=True)
 
 
 def run(results: list[dict]) -> None:
     if os.environ.get("BENCH_FIRST_RUN", "1") == "0":
         print("bench_first_run: skipped (BENCH_FIRST_RUN=0)")
         return
-    times = first_run(cold=False, notebook=True)
-    _record_first_run(results, times, cold=False)
-    notebook, notebook_process, notebook_cpu = times["notebook"]
+    reused = first_run(cold=False, notebook=True)
+    _record_first_run(results, reused, cold=False)
+    notebook, notebook_process, notebook_cpu = reused.notebook
     record(results, "a notebook's first build_model + simulate (make run's scene and results, one protrusion), "
            "empty numba cache, fresh process", notebook, target_s=10.0, scene=SCENE,
            process_s=[round(t, 2) for t in notebook_process], process_cpu_s=[round(t, 2) for t in notebook_cpu])

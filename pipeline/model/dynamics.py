@@ -574,7 +574,7 @@ def _integrate(y0, t_end, t_out, params, rtol, atol, h_max, max_steps, dmw, cont
             if abs(df - df_tab) > RETABLE:
                 p.A_n = heat_tables(tfc, heating, df)
                 df_tab = df
-            # the next step's cap at the new protrusion (the one above was taken before the heat moved d)
+            # the next step's cap at the new protrusion (the redo loop takes none with the heat)
             h_stiff = stiffness_cap(p, in_contact, d0, h_max, m_eff_inv, contact, adhesion, tfc, gap_power, meniscus)
         info[ACCEPTED] += 1
         if t_hold > 0.0 and abs(t - t_hold) <= 1e-12 * t_hold:
