@@ -24,7 +24,7 @@ each extreme sampled at :data:`SAMPLES` points a step and refined with a bounded
 three points against its integrator reference, the kernel's exact extremes) at the scene's default settings with
 ``solver.stiffness_step = C``: what lifting today's cap costs in accuracy, with the kernel's interpolant.
 
-``lawson C ...``: DP5 against its Lawson form (Lawson 1967, *SIAM J. Numer. Anal.* 4, 372; the integrating factor
+``methods C ...``: DP5 against its Lawson form (Lawson 1967, *SIAM J. Numer. Anal.* 4, 372; the integrating factor
 ``exp(tau h L)`` of a linear part ``L`` frozen at each step's start) and Cox & Matthews' ETDRK4 (four evaluations a
 step), ``L`` the contact's part of the Jacobian (with the contact law minus without it: the spring and damper of the
 contact pressure at the TFC point), the interface's part (the Jacobian minus the pads' alone: contact, adhesion,
@@ -35,7 +35,7 @@ step ends against the reference, over the window's peak-to-peak.
 Usage (15 s to a few minutes each; plain Python loops around the compiled right-hand side)::
 
     .venv/bin/python -m benchmarks.sliding_methods interpolant 1 1.25 1.5
-    .venv/bin/python -m benchmarks.sliding_methods lawson 1 1.5 2 3
+    .venv/bin/python -m benchmarks.sliding_methods methods 1 1.5 2 3
     .venv/bin/python -m benchmarks.sliding_methods cap 1 1.1 1.2 1.35 1.5
 """
 
@@ -54,6 +54,8 @@ from pipeline.model import stepper as st
 
 from . import kernel_ab
 
+#: The contact criterion of the paper scene in :mod:`benchmarks.kernel_ab`'s cases [1].
+K = 0.445
 #: Samples of each interpolant a step (before the refinement).
 SAMPLES = 16
 #: Steps, of the largest (smallest) samples, in which an extreme is refined.
@@ -112,8 +114,7 @@ class Case:
 
     def reference(self, t_out: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The tight kernel run: states at ``t_out`` [s], and the exact extremes of ``d`` over the window [m]."""
-        rec = np.empty(1, self.p.dtype)
-        rec[0] = self.p
+        rec = self.dyn._packed(self.p)
         rec["h_stiff"] = 0.25
         solver = self.solver._replace(rtol=1e-11, atol=self.solver.atol * 1e-5, h_max=10e-9)
         Y, _, _, ext = self.dyn.integrate(self.y0, self.grid._replace(t_out=t_out), rec[0], self.tab, self.var,
@@ -259,7 +260,8 @@ def contact_mode(J: np.ndarray) -> np.ndarray:
     return np.real(V @ np.diag(np.where(fast, lam, 0.0)) @ np.linalg.inv(V))
 
 
-def lawson(case: Case, cs: list[float], only: str | None = None) -> None:
+def methods(case: Case, cs: list[float], only: str | None = None) -> None:
+    """The ``methods`` measurement (module docstring): each method's error at the step ends, by ``h omega``."""
     for c in cs:
         h = c / case.omega
         m = int(case.grid.t_end / h)
@@ -301,14 +303,15 @@ def cap(cs: list[float]) -> None:
     from pipeline.analyses.knob_study import HEADLINE, POINTS, REFERENCE, errors, max_error
     from pipeline.config.loading import load_scene
     from pipeline.stages.accuracy import _evaluate, _RunCache
-    scene = load_scene(kernel_ab.ROOT / "configs" / "paper-2009.toml", ["contact.k=0.445"])
+    scene = load_scene(kernel_ab.ROOT / "configs" / "paper-2009.toml", [f"contact.k={K}"])
     current = {key: scene["solver"][key] for key in scene["solver"] if key in REFERENCE}
     current["sample_rate_mhz"] = scene["dmw"]["sample_rate_mhz"]
     with tempfile.TemporaryDirectory() as tmp:
         cache = _RunCache(scene, Path(tmp), 1)
-        ref = _evaluate(scene, {**current, **REFERENCE}, cache, 0.445, POINTS, 1)
+        # (the study's reference: its settings of the keys this scene has, as pipeline.stages.accuracy takes them)
+        ref = _evaluate(scene, {k: v for k, v in REFERENCE.items() if k in current}, cache, K, POINTS, 1)
         for c in cs:
-            res = _evaluate(scene, {**current, "stiffness_step": c}, cache, 0.445, POINTS, 5)
+            res = _evaluate(scene, {**current, "stiffness_step": c}, cache, K, POINTS, 5)
             err = errors(res, ref)
             worst = max_error(err)
             print(f"stiffness_step {c:4.2f}: " + "   ".join(
@@ -319,8 +322,8 @@ def cap(cs: list[float]) -> None:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("what", choices=("interpolant", "lawson", "cap"))
-    ap.add_argument("--only", default=None, help="lawson: only the methods whose label contains this")
+    ap.add_argument("what", choices=("interpolant", "methods", "cap"))
+    ap.add_argument("--only", default=None, help="methods: only those whose label contains this")
     ap.add_argument("c", type=float, nargs="+", help="h omega of the fixed steps")
     args = ap.parse_args()
     if args.what == "cap":
@@ -329,7 +332,7 @@ def main() -> None:
     if args.what == "interpolant":
         interpolant(case, args.c)
     else:
-        lawson(case, args.c, args.only)
+        methods(case, args.c, args.only)
 
 
 if __name__ == "__main__":
