@@ -13,7 +13,8 @@ alternately, one fresh process per measurement (:func:`benchmarks.kernel_ab.timi
 Rows, per case (flying 5 nm, sliding 11 nm): the median over the processes of this checkout's kernel [s],
 with ``base_median_s`` (87de7e7's), ``ratio_to_base`` (this / 87de7e7: below 1 is faster) and
 ``bit_identical`` (the two kernels' states, contact flags and extremes hash the same,
-:func:`benchmarks.kernel_ab.digest`). Without a
+:func:`benchmarks.kernel_ab.digest`; false since the kernel fuses products and sums, docs/kernel.md, section
+"Fused multiply-adds": the two then integrate the same problem to the last bits of each step). Without a
 git clone (a source archive has no ``.git``), or without the commit in it, the row says so and is skipped.
 """
 

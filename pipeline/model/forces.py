@@ -325,10 +325,16 @@ def interface_stiffness(p, contact, adhesion, meniscus, in_contact, kk, d):
 
 @_inline
 def _accelerations(p, pitch, vz, vtheta, F_f, F_r, F_i, Q):
-    """``dy/dt`` (4 components) from the forces [N]; the pitch rows are zero when the pitch is locked."""
+    """``dy/dt`` (4 components) from the forces [N]; the pitch rows are zero when the pitch is locked.
+
+    The forces are multiplied by ``1 / m`` and ``1 / I``, which depend on the parameters alone, rather than
+    divided: a division's latency sat on every stage's chain (docs/kernel.md, section "Fused multiply-adds").
+    """
+    inv_m = 1.0 / p.m
     if pitch is None:
-        return vz, 0.0, (F_f + F_r + F_i) / p.m, 0.0
-    return vz, vtheta, (F_f + F_r + F_i) / p.m, (p.l_f * F_f - p.l_r * F_r - p.l_c * F_i - p.friction_arm * Q) / p.I
+        return vz, 0.0, (F_f + F_r + F_i) * inv_m, 0.0
+    moment = p.l_f * F_f - p.l_r * F_r - p.l_c * F_i - p.friction_arm * Q
+    return vz, vtheta, (F_f + F_r + F_i) * inv_m, moment * (1.0 / p.I)
 
 
 @_inline

@@ -64,8 +64,9 @@ def step(t, y, k1, h, p, in_contact, fresh, ynew, k7, err, tmp, k2, k3, k4, k5, 
     ``t + h`` with the one before): it depends on the time alone, not on the stage before, so the core looks it
     up beside that stage's chain, and no stage pays a call with the slots' ~60 words of arguments
     (docs/kernel.md, sections "The right-hand side in the step" and "The disk in the stage loop"). The same
-    operations in the same order as :func:`pipeline.model.forces.rhs_slots` at each stage: results bit for bit
-    those of six calls of it.
+    operations in the same order as :func:`pipeline.model.forces.rhs_slots` at each stage: results those of six
+    calls of it to their last bits (LLVM fuses products and sums in each compiled function on its own,
+    :data:`pipeline.model.compiled.OPTIONS`).
     """
     ns = state_size(meniscus)
     # the disk at the stage's time t + c_i h (c = 0 when fresh, 1/5, 3/10, 4/5, 8/9, 1, 1): the last stage's is the

@@ -46,8 +46,9 @@ def test_datasets_are_created_with_the_umask_like_any_file(tmp_path, umask, mode
 
 
 # ------------------------------------------------------------------------------ 6. SIGTERM
-#: A sweep of 31 one-protrusion batches: still running when its second part is written.
-LONG = FLY[:3] + ["sweep.protrusion_nm={start=0.0, stop=6.0, step=0.2}", "sweep.batch_size=1"]
+#: A sweep of 301 one-protrusion batches: still running when its second part is written (31 batches of these
+#: short scenes took 0.38 s on a fast host, a signal sent after the second part could come after the end).
+LONG = FLY[:3] + ["sweep.protrusion_nm={start=0.0, stop=6.0, step=0.02}", "sweep.batch_size=1"]
 
 
 def _sweep(out: Path, *extra: str, **popen) -> subprocess.Popen:
