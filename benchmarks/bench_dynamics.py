@@ -23,7 +23,8 @@ Rows (targets from the task brief):
    :func:`pipeline.model.forces.rhs_at` inlined, :func:`rhs_per_call`), beside the out-of-line
    :func:`pipeline.model.forces.rhs_slots` called at the same points (what each stage paid before the
    step inlined its right-hand side) and the kernel's own time per evaluation; CPU time of this thread.
-   Both loops are compiled as the step is, without numba's reference counts
+   Both loops are compiled as the step is, with its products and sums fused (the kernel's ``fastmath`` flag,
+   :data:`pipeline.model.compiled.OPTIONS`) and without numba's reference counts
    (:data:`pipeline.model.compiled.BORROWING`): compiled with them, the loop pays an atomic
    reference-count pair per table slot at every call of the inlined right-hand side (its arrays handed to
    inlined helpers), which the step never pays (measured once: 60.1 / 78.9 ns per call against 26.7 / 42.2 ns,
@@ -48,7 +49,7 @@ from numba import njit
 from benchmarks.common import record, timeit
 from benchmarks.naive import simulate_naive
 from pipeline.model import assembly, dynamics as dyn, outcomes, running
-from pipeline.model.compiled import BORROWING
+from pipeline.model.compiled import BORROWING, OPTIONS
 from pipeline.model.forces import rhs_at, rhs_slots
 from pipeline.model.piecewise import disk3
 from pipeline.model.state import MENISCUS, RHS_CALLS, THETA, THETA_RATE, Z, Z_RATE
@@ -99,7 +100,7 @@ def _fresh_process(folder: Path, repeat: int = 3, exit_: str = "fast-exit") -> t
     return times, mid
 
 
-@njit(nogil=True, error_model="numpy", **BORROWING)
+@njit(nogil=True, error_model="numpy", fastmath=OPTIONS["fastmath"], **BORROWING)
 def _inlined(T, Y, C, p, dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power, meniscus):
     """The step's right-hand side (the disk at the time, then :func:`pipeline.model.forces.rhs_at` inlined) at
     the times ``T`` [s], states ``Y`` and modes ``C``; returns a sum of the results (kept: nothing is pruned)."""
@@ -116,7 +117,7 @@ def _inlined(T, Y, C, p, dmw, contact, adhesion, friction, tfc, pitch, rear_law,
     return acc
 
 
-@njit(nogil=True, error_model="numpy", **BORROWING)
+@njit(nogil=True, error_model="numpy", fastmath=OPTIONS["fastmath"], **BORROWING)
 def _out_of_line(T, Y, C, p, out, dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power, meniscus):
     """:func:`pipeline.model.forces.rhs_slots` (compiled on its own, called) at the same points as
     :func:`_inlined`; returns a sum of the results."""
