@@ -58,7 +58,7 @@ log = logging.getLogger(__name__)
 #: by zero gives inf/nan, no exception path in the machine code), and of the fast-math flags only ``contract``:
 #: LLVM may fuse a product and the sum it feeds into one fused multiply-add (one rounding instead of two, on
 #: hosts with FMA), nothing else (no reassociation, no approximate reciprocals, NaN, infinities and signed zeros
-#: as IEEE has them). The step's arithmetic then takes 11 % less time in sliding (docs/kernel.md, section "Fused
+#: as IEEE has them). The sliding scene's kernel then takes 11 % less time (docs/kernel.md, section "Fused
 #: multiply-adds"); results move in their last bits against unfused code, and are the same run after run on a
 #: host (docs/testing.md).
 OPTIONS = dict(cache=True, nogil=True, error_model="numpy", fastmath={"contract"})
