@@ -46,8 +46,9 @@ def test_datasets_are_created_with_the_umask_like_any_file(tmp_path, umask, mode
 
 
 # ------------------------------------------------------------------------------ 6. SIGTERM
-#: A sweep of 301 one-protrusion batches: still running when its second part is written (31 batches of these
-#: short scenes took 0.38 s on a fast host, a signal sent after the second part could come after the end).
+#: A sweep of :data:`LONG_BATCHES` one-protrusion batches: still running when its second part is written (31
+#: batches of these short scenes took 0.38 s on a fast host: a signal sent after the second part came after the end).
+LONG_BATCHES = 301
 LONG = FLY[:3] + ["sweep.protrusion_nm={start=0.0, stop=6.0, step=0.02}", "sweep.batch_size=1"]
 
 
@@ -148,7 +149,7 @@ def test_a_hang_up_of_the_whole_group_during_a_process_fan_out_ends_it_in_one_li
     _, err = again.communicate(timeout=600)
     assert again.returncode == 0, err
     runs = [json.loads(line) for line in (tmp_path / ".hdi" / "runs.jsonl").read_text().splitlines()]
-    assert runs[-1]["batches"] == 31 and runs[-1]["batches_run"] == 31 - kept
+    assert runs[-1]["batches"] == LONG_BATCHES and runs[-1]["batches_run"] == LONG_BATCHES - kept
 
 
 # ------------------------------------------------------------------------------ 7. interface labels
