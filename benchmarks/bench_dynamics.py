@@ -100,7 +100,13 @@ def _fresh_process(folder: Path, repeat: int = 3, exit_: str = "fast-exit") -> t
     return times, mid
 
 
-@njit(nogil=True, error_model="numpy", fastmath=OPTIONS["fastmath"], **BORROWING)
+#: The right-hand side's loops are compiled as the kernel's functions are (:data:`pipeline.model.compiled.OPTIONS`:
+#: fused products and sums included) and without reference counts, but not cached on disk: numba's cache would not
+#: see a change of the kernel's modules they inline.
+HARNESS = {**OPTIONS, "cache": False, **BORROWING}
+
+
+@njit(**HARNESS)
 def _inlined(T, Y, C, p, dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power, meniscus):
     """The step's right-hand side (the disk at the time, then :func:`pipeline.model.forces.rhs_at` inlined) at
     the times ``T`` [s], states ``Y`` and modes ``C``; returns a sum of the results (kept: nothing is pruned)."""
@@ -117,7 +123,7 @@ def _inlined(T, Y, C, p, dmw, contact, adhesion, friction, tfc, pitch, rear_law,
     return acc
 
 
-@njit(nogil=True, error_model="numpy", fastmath=OPTIONS["fastmath"], **BORROWING)
+@njit(**HARNESS)
 def _out_of_line(T, Y, C, p, out, dmw, contact, adhesion, friction, tfc, pitch, rear_law, gap_power, meniscus):
     """:func:`pipeline.model.forces.rhs_slots` (compiled on its own, called) at the same points as
     :func:`_inlined`; returns a sum of the results."""

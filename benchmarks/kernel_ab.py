@@ -38,6 +38,8 @@ from types import SimpleNamespace
 
 ROOT = Path(__file__).resolve().parents[1]
 CASES = ("air_bearing_11", "flying_5", "sliding_11")
+#: The contact criterion of the captured paper scene [1].
+K = 0.445
 
 
 def _layered() -> bool:
@@ -68,7 +70,7 @@ def capture(out: Path) -> None:
     dyn, sl, load_scene, model_inputs = _modules()
     config = Path(sl.__file__).resolve().parents[1]
     config = (config if (config / "configs").is_dir() else config.parent) / "configs" / "paper-2009.toml"
-    scene = load_scene(config, ["contact.k=0.445"])
+    scene = load_scene(config, [f"contact.k={K}"])
     seen = []
     real = dyn.integrate
     dyn.integrate = lambda *a: (seen.append(a), real(*a))[1]
@@ -76,7 +78,7 @@ def capture(out: Path) -> None:
         with tempfile.TemporaryDirectory() as tmp:
             interface, rec = model_inputs(scene, Path(tmp))
             ab_model = sl.build_model(scene.replace(scene={"effects": ["air_bearing"]}), None, None, None)
-            model = sl.build_model(scene, interface, rec, 0.445)
+            model = sl.build_model(scene, interface, rec, K)
             sl.run_model(ab_model, 11e-9)
             sl.run_model(model, 5e-9)
             sl.run_model(model, 11e-9)

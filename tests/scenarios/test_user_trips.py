@@ -46,10 +46,11 @@ def test_datasets_are_created_with_the_umask_like_any_file(tmp_path, umask, mode
 
 
 # ------------------------------------------------------------------------------ 6. SIGTERM
-#: A sweep of :data:`LONG_BATCHES` one-protrusion batches: still running when its second part is written (31
-#: batches of these short scenes took 0.38 s on a fast host: a signal sent after the second part came after the end).
-LONG_BATCHES = 301
-LONG = FLY[:3] + ["sweep.protrusion_nm={start=0.0, stop=6.0, step=0.02}", "sweep.batch_size=1"]
+#: A sweep of :data:`LONG_BATCHES` one-protrusion batches over 0-6 nm: still running when its second part is written
+#: (31 batches of these short scenes took 0.38 s on a fast host: a signal sent after the second part came after the end).
+LONG_STEP_NM = 0.02
+LONG_BATCHES = round(6.0 / LONG_STEP_NM) + 1
+LONG = FLY[:3] + [f"sweep.protrusion_nm={{start=0.0, stop=6.0, step={LONG_STEP_NM}}}", "sweep.batch_size=1"]
 
 
 def _sweep(out: Path, *extra: str, **popen) -> subprocess.Popen:
